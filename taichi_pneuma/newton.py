@@ -1,0 +1,131 @@
+"""Projected Newton with a backtracking line search over an EnergyModel.
+
+Each iteration solves  (H + sum_j c_j u_j u_j^T) d = -g,  where H is the assembled sparse
+Hessian (fixed pattern, factorised; element blocks projected to PSD) and the rank-1 parts enter
+by the Woodbury identity. H first includes the terms' indefinite parts (the chamber's pressure
+load stiffness), which keeps convergence quadratic; if that direction is not a descent direction
+(or the factorisation fails), the iteration is redone with the PSD-only Hessian.
+The step u <- u + alpha d (displacements) starts at alpha = min(1, 0.9 * max_step) (the terms' safe bound, e.g.
+no triangle inverts) and halves until the Armijo condition
+
+    E(u + alpha d) <= E(u) + c1 alpha g.d
+
+holds, or, once the predicted decrease -alpha g.d is below the model's energy resolution (a sum
+over thousands of elements cannot resolve smaller changes in float64), when the gradient norm
+decreases instead. Converged when the residual |g| / force_scale <= tol (force_scale: the sum of the
+terms' force norms, see EnergyModel.gradient). Nothing fails silently: the record says whether
+it converged and why it stopped.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .linsolve import FixedPattern, make_backend, solve_low_rank_updated
+from .model import EnergyModel
+
+ARMIJO_C1 = 1e-4
+MAX_HALVINGS = 40
+STEP_SAFETY = 0.9
+
+
+@dataclass
+class SolveRecord:
+    """What one Newton solve did."""
+
+    converged: bool = False
+    iterations: int = 0
+    residuals: list[float] = field(default_factory=list)
+    energies: list[float] = field(default_factory=list)
+    step_sizes: list[float] = field(default_factory=list)
+    line_search_trials: int = 0
+    psd_fallbacks: int = 0
+    seconds: float = 0.0
+    message: str = ""
+
+    @property
+    def residual(self) -> float:
+        return self.residuals[-1] if self.residuals else math.nan
+
+
+@dataclass
+class NewtonOptions:
+    tol: float = 1e-8
+    max_iterations: int = 40
+    linear_solver: str = "scipy"
+
+
+class NewtonSolver:
+    """Projected Newton over one EnergyModel; the sparsity pattern is analysed once."""
+
+    def __init__(self, model: EnergyModel, options: NewtonOptions | None = None):
+        self.model = model
+        self.options = options or NewtonOptions()
+        rows, cols = model.hessian_pattern()
+        self.pattern = FixedPattern(rows, cols, model.n_dofs)
+        self.backend = make_backend(self.options.linear_solver)
+
+    def _energy_at(self, u: np.ndarray) -> float:
+        self.model.set_displacements(u)
+        return self.model.energy()
+
+    def _direction(self, g: np.ndarray, psd_only: bool) -> tuple[np.ndarray, float]:
+        """Newton direction d = -H^-1 g and the slope g.d (nan when the factorisation fails)."""
+        try:
+            self.backend.factorize(self.pattern.matrix(self.model.hessian_values(psd_only)))
+            d = solve_low_rank_updated(self.backend, -g, self.model.low_rank())
+        except RuntimeError:  # singular matrix
+            return g * math.nan, math.nan
+        return d, float(g @ d)
+
+    def solve(self, u0: np.ndarray) -> tuple[np.ndarray, SolveRecord]:
+        """Minimise the model's energy over displacements from u0 (n, 2); returns the final u and the record."""
+        start = time.perf_counter()
+        model, opts = self.model, self.options
+        u = np.array(u0, dtype=np.float64).ravel()
+        record = SolveRecord()
+        energy = self._energy_at(u)
+        while True:
+            g, scale = model.gradient()
+            record.residuals.append(float(np.linalg.norm(g)) / scale)
+            record.energies.append(energy)
+            if not np.isfinite(record.residual):
+                record.message = "non-finite gradient"
+                break
+            if record.residual <= opts.tol:
+                record.converged = True
+                record.message = "converged"
+                break
+            if record.iterations >= opts.max_iterations:
+                record.message = f"no convergence in {opts.max_iterations} iterations"
+                break
+            d, slope = self._direction(g, psd_only=False)
+            if not slope < 0:
+                record.psd_fallbacks += 1
+                d, slope = self._direction(g, psd_only=True)
+            if not slope < 0:
+                record.message = f"not a descent direction (g.d = {slope:.3e})"
+                break
+            alpha = min(1.0, STEP_SAFETY * model.max_step(d))
+            for _ in range(MAX_HALVINGS):
+                record.line_search_trials += 1
+                trial = self._energy_at(u + alpha * d)
+                if trial <= energy + ARMIJO_C1 * alpha * slope:
+                    break
+                if -alpha * slope < model.energy_resolution and np.linalg.norm(model.gradient()[0]) < np.linalg.norm(g):
+                    break
+                alpha *= 0.5
+            else:
+                self.model.set_displacements(u)
+                record.message = "line search found no decrease (energy at round-off)"
+                break
+            u = u + alpha * d
+            energy = trial
+            record.iterations += 1
+            record.step_sizes.append(alpha)
+        record.seconds = time.perf_counter() - start
+        return u.reshape(-1, 2), record

@@ -1,0 +1,27 @@
+"""The single place where Taichi is initialised (float64, the caller's backend, offline kernel cache)."""
+
+from __future__ import annotations
+
+import taichi as ti
+
+from .errors import PneumaInputError
+
+ARCHES = {"cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan, "metal": ti.metal, "opengl": ti.opengl, "gpu": ti.gpu}
+_current: str | None = None
+
+
+def init(arch: str = "cpu") -> None:
+    """Initialise Taichi once with float64 fields on `arch`; a later call with the same arch is a no-op."""
+    global _current
+    if arch not in ARCHES:
+        raise PneumaInputError(f"arch = {arch!r} is not one of {', '.join(ARCHES)}")
+    if _current == arch:
+        return
+    ti.init(arch=ARCHES[arch], default_fp=ti.f64, offline_cache=True, log_level=ti.WARN)
+    _current = arch
+
+
+def ensure_initialised() -> None:
+    """Initialise on the CPU if the caller has not chosen a backend yet."""
+    if _current is None:
+        init("cpu")

@@ -1,0 +1,21 @@
+"""Energy terms. A scene's total energy is the sum of the terms it names.
+
+Every term reads the shared position field ``x`` (n, vec2, float64) and offers
+
+    energy() -> float                     its energy at the current x
+    gradient() -> (n, 2) array            dE/dx
+    hessian_pattern() -> (rows, cols)     fixed DOF indices of its sparse PSD Hessian triplets
+    hessian_values(psd_only) -> (nnz,)    the triplet values at the current x; with psd_only=True a
+                                          PSD approximation (for terms whose Hessian is indefinite)
+    low_rank() -> [(dofs, u, c)]          PSD rank-1 parts c u u^T on the DOF subset `dofs`
+    max_step(dx) -> float                 largest safe step fraction along dx (inf when unbounded)
+
+DOFs are interleaved: vertex i owns DOFs 2i (x) and 2i + 1 (y).
+"""
+
+from .base import Term, vertex_dofs
+from .chamber import AreaChamber
+from .clamp import Clamp
+from .elastic import NeoHookean
+
+__all__ = ["AreaChamber", "Clamp", "NeoHookean", "Term", "vertex_dofs"]
