@@ -1,0 +1,55 @@
+"""The inflate app as a user runs it."""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from taichi_pneuma.apps.inflate import main
+
+
+def run_cli(*args):
+    return subprocess.run([sys.executable, "-m", "taichi_pneuma.apps.inflate", *args], capture_output=True, text=True)
+
+
+def test_chamber_escaping_the_beam_is_one_clear_line():
+    proc = run_cli("--cy", "0.5")
+    assert proc.returncode == 2
+    lines = [l for l in proc.stderr.splitlines() if l.strip() and not l.startswith("[Taichi]")]
+    assert len(lines) == 1 and "cy = 0.5" in lines[0] and "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize("flags, word", [
+    (["--nu", "0.5"], "nu = 0.5"), (["--E", "-1"], "E = -1"), (["--k", "0"], "k = 0"),
+    (["--growth", "nan"], "--growth"), (["--steps", "1"], "steps = 1"),
+])
+def test_bad_values_are_refused_with_exit_2(tmp_path, capsys, flags, word):
+    assert main([*flags, "--out", str(tmp_path / "out")]) == 2
+    assert word in capsys.readouterr().err
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+def test_unwritable_output_directory(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    assert main(["--out", str(blocker / "sub"), "--steps", "2"]) == 2
+    assert "not writable" in capsys.readouterr().err
+
+
+def test_short_run_writes_history_states_and_summary(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["--cy", "0.15", "--growth", "1.5", "--steps", "4", "--max-area", "0.01", "--out", str(out),
+                 "--quiet"]) == 0
+    printed = capsys.readouterr().out
+    assert "vertices" in printed and "tip deflection" in printed and "peak chamber pressure" in printed
+    summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
+    history = np.genfromtxt(out / "inflate_cy+0.15_history.csv", delimiter=",", names=True)
+    states = np.load(out / "inflate_cy+0.15_states.npz")
+    assert len(history) == 4 and states["positions"].shape == (4, summary["vertices"], 2)
+    assert summary["all_converged"] and summary["area_ratio"] == pytest.approx(1.5, abs=0.01)
+    tip = states["positions"][-1][states["tip"]] - states["rest"][states["tip"]]
+    assert tip[:, 1].mean() == pytest.approx(summary["tip_deflection"], abs=1e-12)
+    assert not [p for p in os.listdir(out) if "partial" in p]

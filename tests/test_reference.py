@@ -1,0 +1,60 @@
+"""The reference ramp (SPEC.md) for the three chamber placements, against the reference figures."""
+
+import numpy as np
+import pytest
+
+from taichi_pneuma.geometry import BeamGeometry
+from taichi_pneuma.newton import NewtonOptions
+from taichi_pneuma.scene import BeamScene
+from taichi_pneuma.simulate import area_ramp, run_ramp
+
+pytestmark = pytest.mark.slow
+TOL = NewtonOptions().tol
+
+
+@pytest.fixture(scope="module")
+def ramps():
+    results = {}
+    for cy in (0.15, 0.0, -0.15):
+        built = BeamScene(BeamGeometry(cy=cy)).build()
+        results[cy] = (built, run_ramp(built, area_ramp(built.rest_area, 3.5, 36)))
+    return results
+
+
+@pytest.mark.parametrize("cy, tip", [(0.15, -0.278), (0.0, -0.001), (-0.15, 0.278)])
+def test_tip_deflection(ramps, cy, tip):
+    assert ramps[cy][1].tip_deflection == pytest.approx(tip, abs=0.003)
+
+
+@pytest.mark.parametrize("cy", [0.15, 0.0, -0.15])
+def test_area_ratio(ramps, cy):
+    assert ramps[cy][1].steps[-1].area_ratio == pytest.approx(3.49, abs=0.01)
+
+
+def test_area_after_ramp_and_peak_pressure(ramps):
+    built, result = ramps[0.15]
+    assert result.steps[-1].area == pytest.approx(2.052, abs=0.005)
+    assert result.peak_pressure == pytest.approx(294.8, rel=0.01)
+
+
+def test_up_and_down_chambers_are_mirror_images(ramps):
+    assert ramps[0.15][1].tip_deflection == pytest.approx(-ramps[-0.15][1].tip_deflection, abs=0.003)
+
+
+@pytest.mark.parametrize("cy", [0.15, 0.0, -0.15])
+def test_every_step_converges_without_inversion(ramps, cy):
+    built, result = ramps[cy]
+    for step, solve in zip(result.steps, result.solves):
+        assert step.converged and step.residual <= TOL, (step, solve.message)
+        assert step.min_det > 0
+        assert np.all(np.isfinite(result.states[step.step]))
+        # the energy never increased within a Newton solve (up to float64 resolution)
+        assert np.all(np.diff(solve.energies) <= built.model.energy_resolution)
+
+
+def test_pressure_rises_monotonically_and_bend_direction(ramps):
+    _, result = ramps[0.15]
+    pressure = result.column("pressure")
+    assert np.all(np.diff(pressure) > 0)
+    # a chamber above the neutral axis first lifts the tip slightly, then curls the beam down
+    assert result.column("tip_dy")[-1] < 0

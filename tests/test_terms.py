@@ -1,0 +1,158 @@
+"""Every term's gradient and Hessian against central finite differences, and the chamber as a pressure load."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from taichi_pneuma.geometry import BeamGeometry
+from taichi_pneuma.linsolve import FixedPattern, make_backend, solve_low_rank_updated
+from taichi_pneuma.scene import BeamScene
+
+H = 1e-6
+
+
+@pytest.fixture(scope="module")
+def coarse():
+    """A coarse beam (few DOFs, so dense finite differences are cheap) with the chamber commanded to 1.5x."""
+    built = BeamScene(BeamGeometry(cy=0.15, chamber_points=32, max_area=0.02)).build()
+    built.chamber.target_area = 1.5 * built.rest_area
+    return built
+
+
+def random_state(built, scale=0.02, seed=0):
+    rng = np.random.default_rng(seed)
+    return scale * rng.standard_normal(built.mesh.vertices.shape)
+
+
+def dense_hessian(n, parts, psd_only):
+    """Dense matrix of the given terms' sparse triplets plus their rank-1 parts."""
+    hessian = np.zeros((n, n))
+    for term in parts:
+        rows, cols = term.hessian_pattern()
+        hessian += sp.coo_matrix((term.hessian_values(psd_only), (rows, cols)), shape=(n, n)).toarray()
+        for dofs, u, c in term.low_rank():
+            v = np.zeros(n)
+            v[dofs] = u
+            hessian += c * np.outer(v, v)
+    return hessian
+
+
+def fd_gradient(model, term, u):
+    n = u.size
+    g = np.zeros(n)
+    for i in range(n):
+        step = np.zeros(n)
+        step[i] = H
+        model.set_displacements(u.ravel() + step)
+        e_plus = term.energy()
+        model.set_displacements(u.ravel() - step)
+        g[i] = (e_plus - term.energy()) / (2 * H)
+    return g
+
+
+def fd_hessian(model, terms, u):
+    n = u.size
+    columns = []
+    for i in range(n):
+        step = np.zeros(n)
+        step[i] = H
+        model.set_displacements(u.ravel() + step)
+        g_plus = sum(t.gradient().ravel() for t in terms)
+        model.set_displacements(u.ravel() - step)
+        columns.append((g_plus - sum(t.gradient().ravel() for t in terms)) / (2 * H))
+    return np.array(columns).T
+
+
+@pytest.mark.parametrize("index", [0, 1, 2], ids=["elastic", "chamber", "clamp"])
+def test_gradient_matches_finite_differences(coarse, index):
+    model = coarse.model
+    term = model.terms[index]
+    u = random_state(coarse)
+    model.set_displacements(u)
+    g = term.gradient().ravel()
+    g_fd = fd_gradient(model, term, u)
+    assert np.linalg.norm(g - g_fd) / np.linalg.norm(g) < 1e-5
+
+
+def test_full_hessian_matches_finite_differences(coarse):
+    """The assembled Hessian with the indefinite parts kept (elastic unprojected, chamber load stiffness)."""
+    model = coarse.model
+    u = random_state(coarse)
+    model.set_displacements(u)
+    hessian = dense_hessian(model.n_dofs, model.terms, psd_only=False)
+    h_fd = fd_hessian(model, model.terms, u)
+    assert np.linalg.norm(hessian - h_fd) / np.linalg.norm(h_fd) < 1e-6
+    assert np.allclose(hessian, hessian.T, atol=1e-9 * np.abs(hessian).max())
+
+
+def test_projected_elastic_hessian_is_exact_where_no_projection_is_active(coarse):
+    """Under uniform stretch (J > 1) every element's d2psi/dF2 is PSD, so projecting changes nothing."""
+    model = coarse.model
+    elastic = coarse.elastic
+    u = 0.05 * coarse.mesh.vertices
+    model.set_displacements(u)
+    hessian = dense_hessian(model.n_dofs, [elastic], psd_only=True)
+    h_fd = fd_hessian(model, [elastic], u)
+    assert np.linalg.norm(hessian - h_fd) / np.linalg.norm(h_fd) < 1e-6
+
+
+def test_projected_hessian_is_psd_and_differs_under_compression(coarse):
+    model = coarse.model
+    u = random_state(coarse, scale=0.03, seed=1)
+    model.set_displacements(u)
+    projected = dense_hessian(model.n_dofs, model.terms, psd_only=True)
+    exact = dense_hessian(model.n_dofs, model.terms, psd_only=False)
+    eigenvalues = np.linalg.eigvalsh(projected)
+    assert eigenvalues.min() > -1e-9 * eigenvalues.max()
+    assert np.linalg.eigvalsh(exact).min() < -1e-6 * eigenvalues.max()  # so the projection did something
+
+
+def test_chamber_force_is_a_pressure_load():
+    """For the centred chamber the net chamber force vanishes at any state: a closed loop's normals sum to zero."""
+    built = BeamScene(BeamGeometry(cy=0.0, chamber_points=32, max_area=0.02)).build()
+    built.chamber.target_area = 2.0 * built.rest_area
+    for seed in range(3):
+        built.model.set_displacements(random_state(built, seed=seed))
+        force = -built.chamber.gradient()
+        assert np.abs(force.sum(axis=0)).max() < 1e-12 * np.abs(force).sum()
+        # and it is the pressure times the wall's area gradient, pushing outward (p > 0 when A < A*)
+        assert built.chamber.pressure() > 0
+
+
+def test_rest_area_and_pressure_sign():
+    built = BeamScene().build()
+    assert built.rest_area == pytest.approx(0.587, abs=5e-4)
+    built.model.set_displacements(np.zeros_like(built.mesh.vertices))
+    assert built.chamber.area() == pytest.approx(built.rest_area, rel=1e-14)
+    built.chamber.target_area = 1.1 * built.rest_area
+    assert built.chamber.pressure() == pytest.approx(1e5 * 0.1 * built.rest_area)
+
+
+def test_fixed_pattern_and_woodbury_solve(coarse):
+    model = coarse.model
+    model.set_displacements(0.05 * coarse.mesh.vertices)
+    rows, cols = model.hessian_pattern()
+    pattern = FixedPattern(rows, cols, model.n_dofs)
+    values = model.hessian_values(psd_only=True)
+    sparse = pattern.matrix(values)
+    reference = sp.coo_matrix((values, (rows, cols)), shape=sparse.shape).toarray()
+    assert np.array_equal(sparse.toarray(), reference)
+    backend = make_backend("scipy")
+    backend.factorize(sparse)
+    rhs = np.random.default_rng(2).standard_normal(model.n_dofs)
+    d = solve_low_rank_updated(backend, rhs, model.low_rank())
+    dense = dense_hessian(model.n_dofs, model.terms, psd_only=True)
+    assert np.linalg.norm(dense @ d - rhs) < 1e-8 * np.linalg.norm(rhs)
+
+
+def test_max_step_stops_before_inversion(coarse):
+    elastic = coarse.elastic
+    coarse.model.set_displacements(np.zeros_like(coarse.mesh.vertices))
+    rng = np.random.default_rng(3)
+    dx = 0.2 * rng.standard_normal(coarse.mesh.vertices.shape)
+    alpha = elastic.max_step(dx)
+    assert 0 < alpha < np.inf
+    coarse.model.set_displacements(0.999 * alpha * dx)
+    assert elastic.min_determinant() > 0
+    coarse.model.set_displacements(1.001 * alpha * dx)
+    assert elastic.min_determinant() < 0
