@@ -1,20 +1,25 @@
 """Projected Newton with a backtracking line search over an EnergyModel.
 
 Each iteration solves  (H + sum_j c_j u_j u_j^T) d = -g,  where H is the assembled sparse
-Hessian (fixed pattern, factorised; element blocks projected to PSD) and the rank-1 parts enter
-by the Woodbury identity. H first includes the terms' indefinite parts (the chamber's pressure
-load stiffness), which keeps convergence quadratic; if that direction is not a descent direction
-(or the factorisation fails), the iteration is redone with the PSD-only Hessian.
-The step u <- u + alpha d (displacements) starts at alpha = min(1, 0.9 * max_step) (the terms' safe bound, e.g.
-no triangle inverts) and halves until the Armijo condition
+Hessian (fixed pattern, factorised) and the rank-1 parts enter by the Woodbury identity.
+
+H is the exact Hessian (unprojected elastic blocks, the chamber's pressure load stiffness) when
+the previous iteration took a full step (alpha = 1), the sign that Newton is in its quadratic
+basin, and its exact direction is a descent direction; otherwise it is the PSD one (each
+element's d2psi/dF2 eigen-clamped, the chamber's Gauss-Newton part only). Projected-only Newton
+converges linearly on this problem; the exact Hessian near equilibrium restores quadratic
+convergence, while the PSD one keeps far-off iterations stable.
+
+The step u <- u + alpha d (u: displacements) starts at alpha = min(1, 0.9 max_step), the terms'
+safe bound (no triangle inverts), and halves until the Armijo condition
 
     E(u + alpha d) <= E(u) + c1 alpha g.d
 
-holds, or, once the predicted decrease -alpha g.d is below the model's energy resolution (a sum
-over thousands of elements cannot resolve smaller changes in float64), when the gradient norm
-decreases instead. Converged when the residual |g| / force_scale <= tol (force_scale: the sum of the
-terms' force norms, see EnergyModel.gradient). Nothing fails silently: the record says whether
-it converged and why it stopped.
+holds (a NaN energy never does), or, once the predicted decrease -alpha g.d is below the model's
+energy resolution (a sum over thousands of elements cannot resolve smaller changes in float64),
+until the gradient norm decreases instead. Converged when |g| / force_scale <= tol (force_scale:
+the sum of the terms' force norms, see EnergyModel.gradient). Nothing fails silently: the
+record says whether it converged and why it stopped.
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .errors import require, require_finite
 from .linsolve import FixedPattern, make_backend, solve_low_rank_updated
 from .model import EnergyModel
 
@@ -57,6 +63,11 @@ class NewtonOptions:
     tol: float = 1e-8
     max_iterations: int = 40
     linear_solver: str = "scipy"
+
+    def __post_init__(self):
+        require(require_finite("tol", self.tol) > 0, f"tol = {self.tol!r} must be > 0")
+        require(isinstance(self.max_iterations, int) and self.max_iterations >= 1,
+                f"max_iterations = {self.max_iterations!r} must be an integer >= 1")
 
 
 class NewtonSolver:
@@ -103,8 +114,9 @@ class NewtonSolver:
             if record.iterations >= opts.max_iterations:
                 record.message = f"no convergence in {opts.max_iterations} iterations"
                 break
-            d, slope = self._direction(g, psd_only=False)
-            if not slope < 0:
+            exact = bool(record.step_sizes) and record.step_sizes[-1] == 1.0
+            d, slope = self._direction(g, psd_only=not exact)
+            if exact and not slope < 0:
                 record.psd_fallbacks += 1
                 d, slope = self._direction(g, psd_only=True)
             if not slope < 0:

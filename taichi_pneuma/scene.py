@@ -12,6 +12,7 @@ from .errors import require, require_finite
 from .geometry import BeamGeometry, Mesh, signed_area
 from .model import EnergyModel
 from .terms import AreaChamber, Clamp, NeoHookean
+from .terms.elastic import lame_parameters
 
 
 @dataclass(frozen=True)
@@ -47,10 +48,11 @@ class BeamScene:
         runtime.ensure_initialised()
         mesh = self.geometry.mesh()
         rest_area = signed_area(mesh.vertices[mesh.chamber_loop])
-        # Round-off scales: forces below 1e-6 E sqrt(body area), energies below 1e-12 E (body area).
-        e = self.material.youngs_modulus
-        model = EnergyModel(mesh.vertices, force_floor=1e-6 * e * math.sqrt(mesh.area),
-                            energy_resolution=1e-12 * e * mesh.area)
+        # Round-off scales, from the stiffest modulus (lam grows without bound as nu -> 1/2):
+        # forces below 1e-6 (mu + lam) sqrt(body area), energies below 1e-12 (mu + lam) (body area).
+        modulus = sum(lame_parameters(self.material.youngs_modulus, self.material.poisson_ratio))
+        model = EnergyModel(mesh.vertices, force_floor=1e-6 * modulus * math.sqrt(mesh.area),
+                            energy_resolution=1e-12 * modulus * mesh.area)
         config = model.config
         elastic = model.add(NeoHookean(config, mesh.triangles, self.material.youngs_modulus, self.material.poisson_ratio))
         chamber = model.add(AreaChamber(config, mesh.chamber_loop, self.chamber_stiffness, rest_area))

@@ -4,13 +4,16 @@ from __future__ import annotations
 
 import csv
 import io
-from dataclasses import asdict, dataclass
+import time
+from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-from .errors import require
+from .errors import require, require_finite
 from .newton import NewtonOptions, NewtonSolver, SolveRecord
 from .scene import BuiltScene
+
+MAX_CUTS = 8
 
 
 @dataclass
@@ -27,6 +30,8 @@ class StepRecord:
     iterations: int
     residual: float
     converged: bool
+    cuts: int
+    substeps: int
     min_det: float
     seconds: float
 
@@ -38,7 +43,7 @@ class RampResult:
     solves: list[SolveRecord]
 
     def column(self, name: str) -> np.ndarray:
-        return np.array([getattr(s, name) for s in self.steps])
+        return np.array([getattr(s, name) for s in self.steps], dtype=float)
 
     @property
     def tip_deflection(self) -> float:
@@ -50,7 +55,7 @@ class RampResult:
 
     def history_csv(self) -> str:
         buffer = io.StringIO()
-        writer = csv.DictWriter(buffer, fieldnames=list(asdict(self.steps[0])))
+        writer = csv.DictWriter(buffer, fieldnames=[f.name for f in fields(StepRecord)])
         writer.writeheader()
         writer.writerows(asdict(s) for s in self.steps)
         return buffer.getvalue()
@@ -58,33 +63,68 @@ class RampResult:
 
 def area_ramp(rest_area: float, growth: float, steps: int) -> np.ndarray:
     """Commanded areas: `steps` evenly spaced values from rest_area to growth * rest_area."""
-    require(growth > 0, f"growth = {growth!r} must be > 0")
-    require(steps >= 2, f"steps = {steps!r} must be >= 2 (the rest state and at least one increment)")
+    require(require_finite("growth", growth) > 0, f"growth = {growth!r} must be > 0")
+    require(isinstance(steps, (int, np.integer)) and steps >= 2,
+            f"steps = {steps!r} must be an integer >= 2 (the rest state and at least one increment)")
     return np.linspace(rest_area, growth * rest_area, steps)
 
 
+class RampFailed(RuntimeError):
+    """An increment found no equilibrium even after cutting it back; `partial` holds the steps done."""
+
+    def __init__(self, message: str, partial: RampResult):
+        super().__init__(message)
+        self.partial = partial
+
+
 def run_ramp(built: BuiltScene, targets: np.ndarray, options: NewtonOptions | None = None,
-             progress=None) -> RampResult:
+             progress=None, max_cuts: int = MAX_CUTS) -> RampResult:
     """Solve for equilibrium at each commanded area in turn, each solve starting from the last.
 
+    An increment whose Newton solve does not converge is cut back: the remaining change of the
+    commanded area is halved and the smaller sub-increment solved from the last equilibrium, as
+    often as max_cuts times per increment; every cut is counted in the history. If it still fails,
+    RampFailed names the step, the commanded area and the residual, and carries the steps done.
     progress, if given, is called as progress(step_record) after every increment.
     """
     solver = NewtonSolver(built.model, options)
     mesh = built.mesh
     u = np.zeros_like(mesh.vertices)
     steps, states, solves = [], [], []
+    reached = float(targets[0])
     for i, target in enumerate(targets):
-        built.chamber.target_area = float(target)
-        u, record = solver.solve(u)
-        x = mesh.vertices + u
+        start = time.perf_counter()
+        records: list[SolveRecord] = []
+        increment, cuts = float(target) - reached, 0
+        while True:
+            trial = float(target) if abs(float(target) - reached) <= abs(increment) else reached + increment
+            built.chamber.target_area = trial
+            u_trial, record = solver.solve(u)
+            records.append(record)
+            if record.converged:
+                u, reached = u_trial, trial
+                if trial == float(target):
+                    break
+            elif cuts < max_cuts:
+                cuts += 1
+                increment /= 2
+            else:
+                built.model.set_displacements(u)
+                raise RampFailed(
+                    f"step {i}: no equilibrium at commanded area {trial:.6g} ({trial / built.rest_area:.4g} x rest) "
+                    f"after {cuts} cuts; residual {record.residual:.2e} ({record.message})",
+                    RampResult(steps, np.array(states).reshape(-1, *mesh.vertices.shape), solves))
+        built.model.set_displacements(u)
         area = built.chamber.area()
         tip = u[mesh.tip].mean(axis=0)
+        final = records[-1]
         step = StepRecord(i, float(target), area, area / built.rest_area, built.chamber.pressure(),
-                          float(tip[0]), float(tip[1]), record.iterations, record.residual, record.converged,
-                          built.elastic.min_determinant(), record.seconds)
+                          float(tip[0]), float(tip[1]), sum(r.iterations for r in records), final.residual,
+                          final.converged, cuts, len(records) - cuts, built.elastic.min_determinant(),
+                          time.perf_counter() - start)
         steps.append(step)
-        states.append(x.copy())
-        solves.append(record)
+        states.append(mesh.vertices + u)
+        solves.append(final)
         if progress is not None:
             progress(step)
     return RampResult(steps, np.array(states), solves)

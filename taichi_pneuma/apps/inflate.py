@@ -21,7 +21,7 @@ from ..geometry import BeamGeometry
 from ..newton import NewtonOptions
 from ..output import prepare_directory, save_json, save_npz, save_text
 from ..scene import BeamScene, Material
-from ..simulate import area_ramp, run_ramp
+from ..simulate import MAX_CUTS, RampFailed, area_ramp, run_ramp
 
 
 def parser() -> argparse.ArgumentParser:
@@ -36,6 +36,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--k", type=float, default=1e5, help="chamber stiffness (area control penalty)")
     p.add_argument("--max-area", type=float, default=0.0012, help="Triangle's maximum triangle area")
     p.add_argument("--tol", type=float, default=1e-8, help="Newton tolerance on |gradient| / force scale")
+    p.add_argument("--max-cuts", type=int, default=MAX_CUTS,
+                   help="times a non-converging increment may be halved before the run stops")
     p.add_argument("--out", default="out", help="directory for the history (CSV), states (npz) and summary (JSON)")
     p.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
     p.add_argument("--quiet", action="store_true", help="no per-step progress lines")
@@ -45,10 +47,11 @@ def parser() -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> dict:
     for name in ("cy", "cx", "growth", "E", "nu", "k", "max_area", "tol"):
         require_finite(f"--{name.replace('_', '-')}", getattr(args, name))
-    require(args.tol > 0, f"--tol = {args.tol!r} must be > 0")
+    options = NewtonOptions(tol=args.tol)
+    require(args.max_cuts >= 0, f"--max-cuts = {args.max_cuts!r} must be >= 0")
     scene = BeamScene(BeamGeometry(cx=args.cx, cy=args.cy, max_area=args.max_area),
                       Material(args.E, args.nu), chamber_stiffness=args.k)
-    targets_check = area_ramp(1.0, args.growth, args.steps)  # validates growth and steps before any work
+    ratios = area_ramp(1.0, args.growth, args.steps)  # commanded area / rest area; validated before any work
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     built = scene.build()
@@ -59,12 +62,19 @@ def run(args: argparse.Namespace) -> dict:
 
     def progress(step):
         if not args.quiet:
-            print(f"  step {step.step:3d}/{len(targets_check) - 1}  area x{step.area_ratio:5.3f}  "
+            print(f"  step {step.step:3d}/{len(ratios) - 1}  area x{step.area_ratio:5.3f}  "
                   f"p = {step.pressure:8.2f}  tip dy = {step.tip_dy:+.4f}  {step.iterations:2d} Newton it  "
                   f"residual {step.residual:.1e}", flush=True)
 
     start = time.perf_counter()
-    result = run_ramp(built, targets_check * built.rest_area, NewtonOptions(tol=args.tol), progress)
+    stem = f"inflate_cy{args.cy:+.2f}"
+    try:
+        result = run_ramp(built, ratios * built.rest_area, options, progress, args.max_cuts)
+    except RampFailed as failure:
+        written = save_history(out, stem, built, failure.partial)
+        print(f"error: {failure}; the {len(failure.partial.steps)} converged steps are saved in "
+              + ", ".join(str(p) for p in written), file=sys.stderr)
+        return {"all_converged": False}
     wall = time.perf_counter() - start
     final = result.steps[-1]
     iterations = result.column("iterations")[1:]
@@ -76,24 +86,30 @@ def run(args: argparse.Namespace) -> dict:
         "max_residual": float(result.column("residual").max()),
         "min_det_F": float(result.column("min_det").min()),
         "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max()),
+        "increment_cuts": int(result.column("cuts").sum()),
         "wall_seconds": wall,
     }
     print(f"area: {built.rest_area:.3f} -> {final.area:.3f} (x{final.area_ratio:.2f})")
     print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}")
     print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}")
     print(f"Newton: {summary['newton_iterations_total']} iterations over {len(iterations)} solves "
-          f"(max {summary['newton_iterations_max']}), all converged: {summary['all_converged']}; ramp {wall:.2f} s")
-    stem = f"inflate_cy{args.cy:+.2f}"
-    written = [
+          f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
+          f"all converged: {summary['all_converged']}; ramp {wall:.2f} s")
+    written = save_history(out, stem, built, result) + [save_json(out / f"{stem}_summary.json", summary)]
+    print("wrote " + ", ".join(str(p) for p in written))
+    return summary
+
+
+def save_history(out, stem: str, built, result) -> list:
+    """Write the per-step history (CSV) and the states (npz) of a ramp, complete or partial."""
+    mesh = built.mesh
+    return [
         save_text(out / f"{stem}_history.csv", result.history_csv()),
         save_npz(out / f"{stem}_states.npz", positions=result.states, rest=mesh.vertices, triangles=mesh.triangles,
                  chamber_loop=mesh.chamber_loop, pinned=mesh.pinned, tip=mesh.tip,
                  target_area=result.column("target_area"), area=result.column("area"),
                  pressure=result.column("pressure")),
-        save_json(out / f"{stem}_summary.json", summary),
     ]
-    print("wrote " + ", ".join(str(p) for p in written))
-    return summary
 
 
 def main(argv: list[str] | None = None) -> int:

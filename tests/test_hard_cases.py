@@ -1,0 +1,141 @@
+"""Hard cases stay numerically stable: every step converges (or the run says clearly that it did not),
+no triangle inverts, nothing is NaN, the energy never rises within a Newton solve, and the physics is sane."""
+
+import numpy as np
+import pytest
+
+from taichi_pneuma.geometry import BeamGeometry
+from taichi_pneuma.newton import NewtonOptions, NewtonSolver
+from taichi_pneuma.scene import BeamScene, Material
+from taichi_pneuma.simulate import RampFailed, area_ramp, run_ramp
+
+LENGTH = 3.5
+REFERENCE_TIP = -0.279
+
+
+def ramp(cy=0.15, growth=3.5, steps=36, k=1e5, E=1e4, nu=0.45, max_area=0.0012):
+    built = BeamScene(BeamGeometry(cy=cy, max_area=max_area), Material(E, nu), chamber_stiffness=k).build()
+    return built, run_ramp(built, area_ramp(built.rest_area, growth, steps))
+
+
+def assert_stable(built, result):
+    """The checks every hard case must pass."""
+    tol = NewtonOptions().tol
+    for step, solve in zip(result.steps, result.solves):
+        assert step.converged and step.residual <= tol, (step, solve.message)
+        assert step.min_det > 0, step
+        assert np.all(np.diff(solve.energies) <= built.model.energy_resolution), step
+    assert np.all(np.isfinite(result.states))
+
+
+def wall_self_intersects(points):
+    """Whether a closed polygon's non-adjacent edges cross (a proper segment intersection)."""
+    a, b = points, np.roll(points, -1, axis=0)
+    cross = lambda o, p, q: (p[..., 0] - o[..., 0]) * (q[..., 1] - o[..., 1]) - (p[..., 1] - o[..., 1]) * (q[..., 0] - o[..., 0])
+    A, B, C, D = a[:, None], b[:, None], a[None, :], b[None, :]
+    crossing = (cross(A, B, C) * cross(A, B, D) < 0) & (cross(C, D, A) * cross(C, D, B) < 0)
+    n = len(points)
+    i, j = np.indices((n, n))
+    adjacent = (np.abs(i - j) <= 1) | (np.abs(i - j) == n - 1)
+    return bool(np.any(crossing & ~adjacent))
+
+
+@pytest.fixture(scope="module")
+def reference():
+    return ramp()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("growth", [6.0, 8.0])
+def test_large_growth_balloons_and_keeps_curling(growth):
+    built, result = ramp(growth=growth, steps=int(10 * growth) + 1)
+    assert_stable(built, result)
+    assert result.steps[-1].area_ratio == pytest.approx(growth, rel=0.01)
+    tips = result.column("tip_dy")
+    assert tips[-1] < -0.9 and np.all(np.diff(tips[len(tips) // 2:]) < 0)  # curls further as it balloons
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("nu", [0.49, 0.499])
+def test_near_incompressible(nu):
+    built, result = ramp(nu=nu)
+    assert_stable(built, result)
+    # still curls down, by an amount of the same order as for nu = 0.45
+    assert -0.5 < result.tip_deflection < -0.2
+
+
+@pytest.mark.slow
+def test_thin_wall_chamber_0p01_from_the_top():
+    built, result = ramp(cy=0.4 - 0.22 - 0.01)
+    assert_stable(built, result)
+    assert result.tip_deflection < REFERENCE_TIP  # the chamber further from the axis bends the beam more
+
+
+def test_single_increment_reaches_the_ramp_equilibrium(reference):
+    built, result = ramp(steps=2)
+    assert_stable(built, result)
+    assert np.abs(result.states[-1] - reference[1].states[-1]).max() < 1e-6 * LENGTH
+
+
+def test_too_few_cuts_fail_clearly_and_keep_the_steps_done():
+    built = BeamScene(BeamGeometry(cy=0.15)).build()
+    with pytest.raises(RampFailed, match=r"step 1: no equilibrium at commanded area 2\.055.* after 0 cuts; residual"):
+        run_ramp(built, area_ramp(built.rest_area, 3.5, 2), max_cuts=0)
+    try:
+        run_ramp(built, area_ramp(built.rest_area, 3.5, 2), max_cuts=0)
+    except RampFailed as failure:
+        assert len(failure.partial.steps) == 1 and failure.partial.states.shape == (1, built.mesh.n_vertices, 2)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("k", [1e8, 1e3])
+def test_chamber_stiffness_extremes(k):
+    built, result = ramp(k=k)
+    assert_stable(built, result)
+    final = result.steps[-1]
+    area_error = final.area / final.target_area - 1
+    if k == 1e8:  # a stiff chamber meets its commanded area
+        assert abs(area_error) < 1e-5
+        assert result.tip_deflection == pytest.approx(REFERENCE_TIP, abs=0.01)
+    else:  # a soft chamber falls short by p / k
+        assert area_error == pytest.approx(-final.pressure / (k * final.target_area), rel=1e-9)
+        assert area_error < -0.05
+
+
+@pytest.mark.slow
+def test_mesh_density_coarse_and_fine(reference):
+    tips = {}
+    for max_area in (0.01, 0.0002):
+        built, result = ramp(max_area=max_area)
+        assert_stable(built, result)
+        tips[max_area] = result.tip_deflection
+    reference_tip = reference[1].tip_deflection
+    # refining the mesh moves the answer less than coarsening it
+    assert abs(tips[0.0002] - reference_tip) < abs(tips[0.01] - reference_tip)
+
+
+@pytest.mark.slow
+def test_stiff_material_same_chamber_stiffness():
+    built, result = ramp(E=1e7)
+    assert_stable(built, result)
+    # the chamber cannot win against a 1000x stiffer body: the area falls far short, the pressure is huge
+    assert result.steps[-1].area_ratio < 2.0 and result.peak_pressure > 1e4
+
+
+def test_deflation_below_rest_area_keeps_the_chamber_simple():
+    built, result = ramp(growth=0.5, steps=11)
+    assert_stable(built, result)
+    assert result.steps[-1].area_ratio == pytest.approx(0.5, abs=0.01)
+    loop = built.mesh.chamber_loop
+    assert not any(wall_self_intersects(state[loop]) for state in result.states)
+
+
+def test_random_perturbation_returns_to_the_same_equilibrium(reference):
+    built, result = reference
+    solver = NewtonSolver(built.model)
+    equilibrium = result.states[-1] - built.mesh.vertices
+    built.chamber.target_area = result.steps[-1].target_area
+    noise = 1e-3 * LENGTH * np.random.default_rng(0).standard_normal(equilibrium.shape)
+    u, record = solver.solve(equilibrium + noise)
+    assert record.converged and built.elastic.min_determinant() > 0
+    assert np.abs(u - equilibrium).max() < 1e-6 * LENGTH
