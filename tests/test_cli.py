@@ -24,7 +24,9 @@ def test_chamber_escaping_the_beam_is_one_clear_line():
 
 @pytest.mark.parametrize("flags, word", [
     (["--nu", "0.5"], "nu = 0.5"), (["--E", "-1"], "E = -1"), (["--k", "0"], "k = 0"),
-    (["--growth", "nan"], "--growth"), (["--steps", "1"], "steps = 1"),
+    (["--growth", "nan"], "--growth"), (["--steps", "1"], "steps = 1"), (["--steps", "0"], "steps = 0"),
+    (["--nu", "-1"], "nu = -1"), (["--E", "inf"], "--E = inf"), (["--growth", "-1"], "growth = -1"),
+    (["--cx", "1.2"], "horizontally"), (["--max-cuts", "-1"], "--max-cuts = -1"), (["--tol", "0"], "tol = 0"),
 ])
 def test_bad_values_are_refused_with_exit_2(tmp_path, capsys, flags, word):
     assert main([*flags, "--out", str(tmp_path / "out")]) == 2
@@ -53,3 +55,15 @@ def test_short_run_writes_history_states_and_summary(tmp_path, capsys):
     tip = states["positions"][-1][states["tip"]] - states["rest"][states["tip"]]
     assert tip[:, 1].mean() == pytest.approx(summary["tip_deflection"], abs=1e-12)
     assert not [p for p in os.listdir(out) if "partial" in p]
+
+
+def test_unconverged_ramp_stops_with_one_line_and_keeps_the_steps_done(tmp_path):
+    out = tmp_path / "out"
+    proc = run_cli("--steps", "2", "--max-cuts", "0", "--quiet", "--out", str(out))
+    assert proc.returncode == 1
+    errors = [l for l in proc.stderr.splitlines() if l.startswith("error:")]
+    assert len(errors) == 1 and "step 1: no equilibrium at commanded area" in errors[0] and "residual" in errors[0]
+    assert "Traceback" not in proc.stderr
+    states = np.load(out / "inflate_cy+0.15_states.npz")
+    assert states["positions"].shape[0] == 1  # the rest state, the one step that converged
+    assert not (out / "inflate_cy+0.15_summary.json").exists()
