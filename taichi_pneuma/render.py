@@ -82,7 +82,7 @@ class GGUICanvas:
 
     def text(self, lines: list[str], x: float, y: float, width: float) -> None:
         gui = self.window.get_gui()
-        height = (len(lines) * 17 + 26) / self.height
+        height = (len(lines) * 19 + 30) / self.height
         with gui.sub_window(f"##{self._boxes}", x, 1 - y, width, height):
             for line in lines:
                 gui.text(line)

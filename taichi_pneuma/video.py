@@ -7,11 +7,15 @@ leaves no truncated file under the real name.
 
 from __future__ import annotations
 
+import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable
 
+import imageio.v3 as iio
 import imageio_ffmpeg
 import numpy as np
+from tqdm import tqdm
 
 from .errors import require, require_finite
 from .output import write_atomic
@@ -54,3 +58,36 @@ def write_video(path: Path, frames: Iterable[np.ndarray], fps: float = 12.0) -> 
 
     write_atomic(path, write)
     return count
+
+
+@dataclass
+class Export:
+    """What export() wrote and how long drawing the frames took (encoding excluded)."""
+
+    video: Path
+    png: Path
+    frames: int
+    width: int
+    height: int
+    render_seconds: float
+
+    @property
+    def ms_per_frame(self) -> float:
+        return 1000 * self.render_seconds / self.frames
+
+
+def export(renderer, video: Path, png: Path, fps: float = 12.0, quiet: bool = False) -> Export:
+    """Stream every frame of renderer (a render.FrameRenderer) into video, then save its last frame as png."""
+    render_seconds, last = 0.0, None
+
+    def frames():
+        nonlocal render_seconds, last
+        for i in tqdm(range(renderer.frames), desc="rendering", unit="frame", disable=quiet, leave=False):
+            start = time.perf_counter()
+            last = renderer.frame(i)
+            render_seconds += time.perf_counter() - start
+            yield last
+
+    count = write_video(video, frames(), fps)
+    write_atomic(Path(png), lambda tmp: iio.imwrite(tmp, last))
+    return Export(Path(video), Path(png), count, last.shape[1], last.shape[0], render_seconds)
