@@ -93,6 +93,20 @@ class GGUICanvas:
         ti.set_logging_level(ti.WARN)
         return image
 
+    def slider(self, label: str, value: float, low: float, high: float) -> float:
+        """An imgui slider at the bottom of the window; returns its value."""
+        gui = self.window.get_gui()
+        with gui.sub_window("##slider", 0.0, 1 - 60 / self.height, 1.0, 60 / self.height):
+            return gui.slider_float(label, value, low, high)
+
+    @property
+    def running(self) -> bool:
+        return self.window.running
+
+    def show(self) -> None:
+        ti.set_logging_level(ti.WARN)
+        self.window.show()
+
 
 class GUICanvas:
     """Taichi's ti.GUI software rasteriser; offscreen unless show=True."""
@@ -118,6 +132,20 @@ class GUICanvas:
 
     def image(self) -> np.ndarray:
         return _to_rgb8(self.gui.get_image())
+
+    def slider(self, label: str, value: float, low: float, high: float) -> float:
+        """ti.GUI's slider (created on first call, starting at value); returns its value."""
+        if not hasattr(self, "_slider"):
+            self._slider = self.gui.slider(label, low, high, step=(high - low) / 200)
+            self._slider.value = value
+        return float(self._slider.value)
+
+    @property
+    def running(self) -> bool:
+        return self.gui.running
+
+    def show(self) -> None:
+        self.gui.show()
 
 
 def _hex(color) -> int:
@@ -198,11 +226,13 @@ def mesh_edges(triangles: np.ndarray) -> np.ndarray:
 class FrameRenderer:
     """Draws frame i of one or more tracks of equal length: beam panels side by side, plus a trace panel.
 
-    width, height: frame size in pixels; trace: draw the area/pressure trace panel at the right.
+    width, height: frame size in pixels; trace: draw the area/pressure trace panel at the right;
+    bounds: the world box (lo, hi) every panel must show, default the bounds of all states;
+    canvas: draw on this canvas instead of opening one.
     """
 
     def __init__(self, tracks: list[Track], width: int = 960, height: int = 384, trace: bool = True,
-                 backend: str = "auto", log=print, canvas=None):
+                 backend: str = "auto", log=print, canvas=None, bounds=None):
         require(len(tracks) >= 1, "nothing to render: no tracks")
         lengths = {len(t.states) for t in tracks}
         require(len(lengths) == 1, f"tracks have different step counts {sorted(lengths)}")
@@ -215,12 +245,12 @@ class FrameRenderer:
         n = len(tracks)
         self.panels = [(beam_width * i / n, beam_width * (i + 1) / n) for i in range(n)]
         self.trace_panel = (beam_width, 1.0)
-        self._fit_view()
-
-    def _fit_view(self) -> None:
-        """One map world -> normalised canvas for every beam panel, fitted to all states, equal axes."""
         points = np.concatenate([t.states.reshape(-1, 2) for t in self.tracks])
-        lo, hi = points.min(axis=0), points.max(axis=0)
+        self._fit_view(*(bounds if bounds is not None else (points.min(axis=0), points.max(axis=0))))
+
+    def _fit_view(self, lo: np.ndarray, hi: np.ndarray) -> None:
+        """One map world -> normalised canvas for every beam panel showing the box lo..hi, equal axes."""
+        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
         centre, extent = (lo + hi) / 2, np.maximum(hi - lo, 1e-12)
         panel_px = np.array([(self.panels[0][1] - self.panels[0][0]) * self.width, self.height])
         usable = panel_px - 2 * 12 - np.array([0, 70])  # margins; room for the text overlay at the top
@@ -236,6 +266,11 @@ class FrameRenderer:
 
     def frame(self, i: int) -> np.ndarray:
         """Frame i as an (height, width, 3) uint8 image."""
+        self.draw(i)
+        return self.canvas.image()
+
+    def draw(self, i: int) -> None:
+        """Draw frame i on the canvas."""
         require(0 <= i < self.frames, f"frame {i} is outside 0..{self.frames - 1}")
         c = self.canvas
         c.begin()
@@ -254,7 +289,6 @@ class FrameRenderer:
             c.text(lines, x0 + 0.005, 0.995, x1 - x0 - 0.01)
         if self.trace:
             self._draw_trace(i)
-        return c.image()
 
     def _draw_trace(self, i: int) -> None:
         """Area / rest area and pressure against inflation %, each scaled to the plot box; cursor at step i."""

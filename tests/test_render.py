@@ -143,3 +143,27 @@ def test_interactive_without_display_is_one_clear_error(tmp_path, capsys, monkey
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
     assert inflate.main([*COARSE, "--interactive", "--out", str(tmp_path)]) == 2
     assert "--interactive needs a display" in capsys.readouterr().err
+
+
+@pytest.fixture
+def xvfb_display(monkeypatch):
+    """A virtual X display (skips when Xvfb is not installed)."""
+    import shutil
+    if not shutil.which("Xvfb"):
+        pytest.skip("Xvfb is not installed (apt-get install xvfb)")
+    proc = subprocess.Popen(["Xvfb", ":93", "-screen", "0", "800x600x24"], stderr=subprocess.DEVNULL)
+    monkeypatch.setenv("DISPLAY", ":93")
+    yield
+    proc.terminate()
+    proc.wait()
+
+
+def test_interactive_window_resolves_when_the_slider_moves(xvfb_display, monkeypatch, capsys):
+    from taichi_pneuma.interactive import explore
+
+    moves = iter([1.0, 1.0, 1.3, 1.3, 1.6])  # the slider's values on successive frames
+    monkeypatch.setattr(render.GUICanvas, "slider", lambda self, label, value, low, high: next(moves))
+    scene = BeamScene(BeamGeometry(cy=0.15, max_area=0.01))
+    assert explore(scene, 2.0, (320, 160), "gui", max_frames=5) == {"all_converged": True, "solves": 3}
+    printed = capsys.readouterr().out
+    assert "area x1.300" in printed and "area x1.600" in printed
