@@ -27,13 +27,18 @@ FORMATS = {
 }
 
 
+def check_video(path: Path, fps: float) -> tuple[str, str, list[str]]:
+    """Raise PneumaInputError unless path has a known extension and fps > 0; return its encoder settings."""
+    require(Path(path).suffix.lower() in FORMATS,
+            f"video file {str(path)!r}: extension must be one of {', '.join(FORMATS)}")
+    require(require_finite("fps", fps) > 0, f"fps = {fps!r} must be > 0")
+    return FORMATS[Path(path).suffix.lower()]
+
+
 def write_video(path: Path, frames: Iterable[np.ndarray], fps: float = 12.0) -> int:
     """Encode frames ((height, width, 3) uint8, all one size) into path; return how many were written."""
     path = Path(path)
-    require(path.suffix.lower() in FORMATS,
-            f"video file {str(path)!r}: extension must be one of {', '.join(FORMATS)}")
-    require(require_finite("fps", fps) > 0, f"fps = {fps!r} must be > 0")
-    codec, pix_fmt, params = FORMATS[path.suffix.lower()]
+    codec, pix_fmt, params = check_video(path, fps)
     count = 0
 
     def write(tmp: Path) -> None:

@@ -65,8 +65,12 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
-def frame_size(text: str) -> tuple[int, int]:
-    """'WIDTHxHEIGHT' -> (width, height), both even (H.264) and >= 64."""
+def rendering_flags(args: argparse.Namespace) -> tuple[int, int]:
+    """Check the rendering flags before any work; return --size 'WIDTHxHEIGHT' as (width, height)."""
+    from ..video import check_video
+
+    check_video(args.video or "default.mp4", args.fps)
+    text = args.size
     try:
         width, height = (int(v) for v in text.lower().split("x"))
     except ValueError:
@@ -116,7 +120,7 @@ def render_report(export, seconds_per_step: float) -> str:
 
 def run(args: argparse.Namespace) -> dict:
     scene = scene_for(args, args.cy)
-    size = frame_size(args.size)
+    size = rendering_flags(args)
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
     if args.interactive:
         require(bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")),

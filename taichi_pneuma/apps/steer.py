@@ -14,7 +14,7 @@ import sys
 from .. import runtime
 from ..errors import PneumaInputError
 from ..output import prepare_directory, save_json
-from .inflate import add_ramp_arguments, add_video_arguments, frame_size, render_report, scene_for, solve
+from .inflate import add_ramp_arguments, add_video_arguments, rendering_flags, render_report, scene_for, solve
 
 PLACEMENTS = ((0.15, "chamber high -> curls down"), (0.0, "centred -> no bend"), (-0.15, "chamber low -> curls up"))
 
@@ -29,7 +29,7 @@ def parser() -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> dict:
     scenes = [scene_for(args, cy) for cy, _ in PLACEMENTS]
-    size = frame_size(args.size)
+    size = rendering_flags(args)
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     solved = [solve(args, scene, f"cy = {cy:+.2f}") for scene, (cy, _) in zip(scenes, PLACEMENTS)]
