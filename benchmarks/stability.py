@@ -7,7 +7,6 @@ area error / wall time) and writes it with the machine and date to stability.md 
 """
 
 import argparse
-import json
 import platform
 import time
 from datetime import date

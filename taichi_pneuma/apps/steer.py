@@ -1,0 +1,67 @@
+"""Steering by chamber placement: the same inflation ramp with the chamber high, centred and low.
+
+    python -m taichi_pneuma.apps.steer
+
+Solves the three ramps (cy = +0.15, 0, -0.15), prints their tip deflections and, unless --no-video,
+plays them side by side in one video (all panels in one frame of reference) with a PNG of the last frame.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .. import runtime
+from ..output import prepare_directory, save_json
+from .inflate import (add_ramp_arguments, add_video_arguments, build, exit_code, render_report, rendering_flags,
+                      scene_for, solve)
+
+PLACEMENTS = ((0.15, "chamber high -> curls down"), (0.0, "centred -> no bend"), (-0.15, "chamber low -> curls up"))
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.steer", description=__doc__.split("\n")[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    add_ramp_arguments(p)
+    add_video_arguments(p, "1344x320")
+    return p
+
+
+def run(args: argparse.Namespace) -> dict:
+    scenes = [scene_for(args, cy) for cy, _ in PLACEMENTS]
+    size = rendering_flags(args)
+    out = prepare_directory(args.out)
+    runtime.init(args.arch)
+    built = [build(scene) for scene in scenes]
+    solved = [(b, *solve(args, b, f"cy = {cy:+.2f}")) for b, (cy, _) in zip(built, PLACEMENTS)]
+    summary = {"tip_deflection": {}, "all_converged": True}
+    for (cy, title), (built, result, wall) in zip(PLACEMENTS, solved):
+        print(f"cy = {cy:+.2f} ({title}): tip deflection {result.tip_deflection:+.4f}, "
+              f"peak |p| {result.peak_pressure:.1f}, ramp {wall:.1f} s")
+        summary["tip_deflection"][f"{cy:+.2f}"] = result.tip_deflection
+        summary["all_converged"] &= bool(all(s.converged for s in result.steps))
+    written = []
+    if not args.no_video:
+        from ..render import FrameRenderer, Track
+        from ..video import export
+
+        tracks = [Track.from_ramp(built.mesh, result, built.rest_area, f"cy = {cy:+.2f}: {title}")
+                  for (cy, title), (built, result, _) in zip(PLACEMENTS, solved)]
+        renderer = FrameRenderer(tracks, *size, trace=False, backend=args.renderer)
+        done = export(renderer, args.video or out / "steer.mp4", out / "steer.png", args.fps, args.quiet)
+        seconds_per_step = sum(float(r.column("seconds")[1:].mean()) for _, r, _ in solved) / len(solved)
+        print(render_report(done, seconds_per_step))
+        summary.update(renderer=renderer.canvas.name, video_frames=done.frames, video_size=[done.width, done.height],
+                       render_ms_per_frame=done.ms_per_frame, solve_seconds_per_step=seconds_per_step)
+        written += [done.video, done.png]
+    written.append(save_json(out / "steer_summary.json", summary))
+    print("wrote " + ", ".join(str(p) for p in written))
+    return summary
+
+
+def main(argv: list[str] | None = None) -> int:
+    return exit_code(run, parser().parse_args(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,98 @@
+"""Video export: frames streamed to ffmpeg (imageio-ffmpeg), mp4 (H.264) or gif chosen by the file extension.
+
+Frames go to the encoder one at a time (never all held in memory), into a temporary file beside the
+target that is renamed only once the encoder has finished (output.write_atomic): an interrupted export
+leaves no truncated file under the real name.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable
+
+import imageio.v3 as iio
+import imageio_ffmpeg
+import numpy as np
+from tqdm import tqdm
+
+from .errors import require, require_finite
+from .output import write_atomic
+
+# extension -> (codec, output pixel format, extra ffmpeg output parameters)
+FORMATS = {
+    ".mp4": ("libx264", "yuv420p", ["-movflags", "+faststart"]),
+    ".gif": ("gif", "rgb8", []),
+}
+
+
+def check_video(path: Path, fps: float) -> tuple[str, str, list[str]]:
+    """Raise PneumaInputError unless path has a known extension and fps > 0; return its encoder settings."""
+    require(Path(path).suffix.lower() in FORMATS,
+            f"video file {str(path)!r}: extension must be one of {', '.join(FORMATS)}")
+    require(require_finite("fps", fps) > 0, f"fps = {fps!r} must be > 0")
+    return FORMATS[Path(path).suffix.lower()]
+
+
+def write_video(path: Path, frames: Iterable[np.ndarray], fps: float = 12.0) -> int:
+    """Encode frames ((height, width, 3) uint8, all one size) into path; return how many were written."""
+    path = Path(path)
+    codec, pix_fmt, params = check_video(path, fps)
+    count = 0
+
+    def write(tmp: Path) -> None:
+        nonlocal count
+        encoder = None
+        try:
+            for frame in frames:
+                if encoder is None:
+                    size = (frame.shape[1], frame.shape[0])
+                    encoder = imageio_ffmpeg.write_frames(str(tmp), size, fps=fps, codec=codec, pix_fmt_out=pix_fmt,
+                                                          macro_block_size=1, output_params=params,
+                                                          ffmpeg_log_level="error")
+                    encoder.send(None)
+                require(frame.shape == (size[1], size[0], 3) and frame.dtype == np.uint8,
+                        f"frame {count} is {frame.shape} {frame.dtype}, expected {(size[1], size[0], 3)} uint8")
+                encoder.send(np.ascontiguousarray(frame))
+                count += 1
+            require(count > 0, f"video file {str(path)!r}: no frames to write")
+        finally:
+            if encoder is not None:
+                encoder.close()
+
+    write_atomic(path, write)
+    return count
+
+
+@dataclass
+class Export:
+    """What export() wrote and how long drawing the frames took (encoding excluded)."""
+
+    video: Path
+    png: Path
+    frames: int
+    width: int
+    height: int
+    render_seconds: float
+
+    @property
+    def ms_per_frame(self) -> float:
+        return 1000 * self.render_seconds / self.frames
+
+
+def export(renderer, video: Path, png: Path, fps: float = 12.0, quiet: bool = False) -> Export:
+    """Stream every frame of renderer (a render.FrameRenderer) into video, then save its last frame as png."""
+    render_seconds, last = 0.0, None
+
+    def frames():
+        nonlocal render_seconds, last
+        for i in tqdm(range(renderer.frames), desc="rendering", unit="frame", disable=quiet, leave=False):
+            start = time.perf_counter()
+            last = renderer.frame(i)
+            render_seconds += time.perf_counter() - start
+            yield last
+
+    count = write_video(video, frames(), fps)
+    write_atomic(Path(png), lambda tmp: iio.imwrite(tmp, last))
+    return Export(Path(video), Path(png), count, last.shape[1], last.shape[0], render_seconds)

@@ -1,0 +1,169 @@
+"""Offscreen frames, video files and the apps' rendering flags."""
+
+import json
+import os
+import subprocess
+import sys
+
+import imageio.v3 as iio
+import imageio_ffmpeg
+import numpy as np
+import pytest
+
+from taichi_pneuma import render
+from taichi_pneuma.apps import inflate, steer
+from taichi_pneuma.errors import PneumaInputError
+from taichi_pneuma.geometry import BeamGeometry
+from taichi_pneuma.render import CHAMBER_FILL, FACE, BACKGROUND, FrameRenderer, Track
+from taichi_pneuma.scene import BeamScene
+from taichi_pneuma.simulate import area_ramp, run_ramp
+from taichi_pneuma.video import write_video
+
+COARSE = ["--max-area", "0.01", "--growth", "2", "--steps", "3", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def track():
+    built = BeamScene(BeamGeometry(cy=0.15, max_area=0.01)).build()
+    result = run_ramp(built, area_ramp(built.rest_area, 2.0, 3))
+    return Track.from_ramp(built.mesh, result, built.rest_area)
+
+
+def rgb8(color):
+    return np.round(np.array(color) * 255)
+
+
+def pixels_at(renderer, image, points):
+    """Colours of the pixels under world points drawn in beam panel 0."""
+    uv = renderer.to_canvas(0, points)
+    cols = np.clip((uv[:, 0] * renderer.width).astype(int), 0, renderer.width - 1)
+    rows = np.clip(((1 - uv[:, 1]) * renderer.height).astype(int), 0, renderer.height - 1)
+    return image[rows, cols].astype(float)
+
+
+@pytest.mark.parametrize("backend", ["gui", "ggui"])
+def test_frame_shows_the_mesh_and_the_filled_chamber(track, backend, capsys):
+    try:
+        renderer = FrameRenderer([track], 480, 192, trace=True, backend=backend)
+    except PneumaInputError as exc:
+        pytest.skip(str(exc))
+    image = renderer.frame(2)
+    assert image.shape == (192, 480, 3) and image.dtype == np.uint8
+    x = track.states[2]
+    tri = track.mesh.triangles
+    centroids = x[tri].mean(axis=1)
+    face = pixels_at(renderer, image, centroids)
+    near_face = np.all(np.abs(face - rgb8(FACE)) < 40, axis=1)  # some centroids fall on a drawn edge
+    assert near_face.mean() > 0.6
+    chamber_centre = x[track.mesh.chamber_loop].mean(axis=0, keepdims=True)
+    assert np.all(np.abs(pixels_at(renderer, image, chamber_centre) - rgb8(CHAMBER_FILL)) <= 3)
+    below_beam = np.array([[x[:, 0].mean(), x[:, 1].min() - 0.05]])  # just under the bent beam: background
+    assert np.all(np.abs(pixels_at(renderer, image, below_beam) - rgb8(BACKGROUND)) <= 3)
+    # the pinned wall's square markers are dark
+    assert pixels_at(renderer, image, x[track.mesh.pinned]).max(axis=1).mean() < 100
+    assert f"renderer: {renderer.canvas.name}" in capsys.readouterr().out
+
+
+def test_view_frames_every_state(track):
+    renderer = FrameRenderer([track, track], 480, 192, trace=False, backend="gui")
+    for panel, (x0, x1) in enumerate(renderer.panels):
+        uv = renderer.to_canvas(panel, track.states.reshape(-1, 2))
+        assert uv[:, 0].min() > x0 and uv[:, 0].max() < x1 and uv[:, 1].min() > 0 and uv[:, 1].max() < 1
+
+
+@pytest.mark.parametrize("suffix", [".mp4", ".gif"])
+def test_video_has_every_frame_at_its_size(tmp_path, suffix):
+    frames = (np.full((64, 96, 3), 20 * i, np.uint8) for i in range(7))
+    assert write_video(tmp_path / f"v{suffix}", frames, fps=7) == 7
+    assert imageio_ffmpeg.count_frames_and_secs(str(tmp_path / f"v{suffix}"))[0] == 7
+    assert iio.imread(tmp_path / f"v{suffix}", index=0).shape[:2] == (64, 96)
+
+
+def test_interrupted_video_leaves_no_file(tmp_path):
+    def frames():
+        yield np.zeros((64, 64, 3), np.uint8)
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        write_video(tmp_path / "v.mp4", frames())
+    assert os.listdir(tmp_path) == []
+
+
+def test_unknown_video_extension_is_refused(tmp_path):
+    with pytest.raises(PneumaInputError, match="v.avi"):
+        write_video(tmp_path / "v.avi", iter([]))
+
+
+def test_no_video_initialises_no_renderer(tmp_path, monkeypatch):
+    def refuse(*args, **kwargs):
+        raise AssertionError("a renderer was initialised")
+
+    monkeypatch.setattr(render, "open_canvas", refuse)
+    assert inflate.main([*COARSE, "--no-video", "--out", str(tmp_path)]) == 0
+    assert sorted(p.suffix for p in tmp_path.iterdir()) == [".csv", ".json", ".npz"]
+
+
+def test_inflate_without_vulkan_falls_back_to_ti_gui_and_writes_every_frame(tmp_path):
+    env = dict(os.environ, VK_ICD_FILENAMES=str(tmp_path / "no_vulkan.json"))
+    proc = subprocess.run([sys.executable, "-m", "taichi_pneuma.apps.inflate", *COARSE, "--size", "320x160",
+                           "--out", str(tmp_path)], capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert "renderer: ti.GUI (software) (GGUI unavailable" in proc.stdout
+    video = tmp_path / "inflate_cy+0.15.mp4"
+    assert imageio_ffmpeg.count_frames_and_secs(str(video))[0] == 3
+    assert iio.imread(video, index=0).shape == (160, 320, 3)
+    summary = json.loads((tmp_path / "inflate_cy+0.15_summary.json").read_text())
+    assert summary["renderer"] == "ti.GUI (software)" and summary["video_frames"] == 3
+    assert iio.imread(tmp_path / "inflate_cy+0.15.png").shape == (160, 320, 3)
+
+
+def test_steer_plays_three_panels_in_one_video(tmp_path, capsys):
+    flags = ["--max-area", "0.01", "--growth", "1.5", "--steps", "4", "--quiet"]
+    assert steer.main([*flags, "--renderer", "gui", "--size", "384x128", "--out", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    assert all(f"cy = {cy}" in printed for cy in ("+0.15", "+0.00", "-0.15"))
+    summary = json.loads((tmp_path / "steer_summary.json").read_text())
+    tips = summary["tip_deflection"]
+    assert tips["+0.15"] == pytest.approx(-tips["-0.15"], rel=0.15)  # near mirror images (the meshes differ)
+    assert imageio_ffmpeg.count_frames_and_secs(str(tmp_path / "steer.mp4"))[0] == 4
+    assert iio.imread(tmp_path / "steer.png").shape == (128, 384, 3)
+
+
+@pytest.mark.parametrize("flags, word", [
+    (["--size", "300"], "--size = '300'"), (["--size", "99x64"], "--size = '99x64'"),
+    (["--fps", "0"], "fps = 0"), (["--video", "x.avi"], "x.avi"),
+])
+def test_bad_rendering_flags_exit_2(tmp_path, capsys, flags, word):
+    assert inflate.main([*COARSE, *flags, "--out", str(tmp_path)]) == 2
+    assert word in capsys.readouterr().err
+
+
+def test_interactive_without_display_is_one_clear_error(tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert inflate.main([*COARSE, "--interactive", "--out", str(tmp_path)]) == 2
+    assert "--interactive needs a display" in capsys.readouterr().err
+
+
+@pytest.fixture
+def xvfb_display(monkeypatch):
+    """A virtual X display (skips when Xvfb is not installed)."""
+    import shutil
+    if not shutil.which("Xvfb"):
+        pytest.skip("Xvfb is not installed (apt-get install xvfb)")
+    proc = subprocess.Popen(["Xvfb", ":93", "-screen", "0", "800x600x24"], stderr=subprocess.DEVNULL)
+    monkeypatch.setenv("DISPLAY", ":93")
+    yield
+    proc.terminate()
+    proc.wait()
+
+
+def test_interactive_window_resolves_when_the_slider_moves(xvfb_display, monkeypatch, capsys):
+    from taichi_pneuma.interactive import explore
+
+    moves = iter([1.0, 1.0, 1.3, 1.3, 1.6])  # the slider's values on successive frames
+    monkeypatch.setattr(render.GUICanvas, "slider", lambda self, label, value, low, high: next(moves))
+    scene = BeamScene(BeamGeometry(cy=0.15, max_area=0.01))
+    assert explore(scene, 2.0, (320, 160), "gui", max_frames=5) == {"all_converged": True, "solves": 3}
+    printed = capsys.readouterr().out
+    assert "area x1.300" in printed and "area x1.600" in printed
