@@ -4,13 +4,15 @@ and the Woodbury identity for the low-rank (chamber) parts kept out of the facto
     (S + U C U^T)^-1 b = y - Z (C^-1 + U^T Z)^-1 U^T y,   y = S^-1 b,  Z = S^-1 U.
 """
 
-from __future__ import annotations
+import os
+import sys
+from contextlib import contextmanager
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+import taichi as ti
 
-from .errors import PneumaInputError
 
 
 class FixedPattern:
@@ -32,25 +34,105 @@ class FixedPattern:
         return sp.csr_matrix((data, self._indices, self._indptr), shape=(self.n, self.n))
 
 
+class FactorizationError(RuntimeError):
+    """The matrix could not be factorised (singular, or not positive definite for a Cholesky backend)."""
+
+
 class ScipySuperLU:
-    """SciPy's SuperLU on the symmetric matrix (minimum-degree ordering on A^T + A)."""
+    """SciPy's SuperLU (general LU) on the symmetric matrix, minimum-degree ordering on A^T + A."""
 
     name = "scipy"
 
     def factorize(self, matrix: sp.csr_matrix) -> None:
-        self._lu = spla.splu(matrix.tocsc(), permc_spec="MMD_AT_PLUS_A")
+        try:
+            self._lu = spla.splu(matrix.tocsc(), permc_spec="MMD_AT_PLUS_A")
+        except RuntimeError as exc:
+            raise FactorizationError(str(exc)) from None
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         return self._lu.solve(rhs)
 
 
-BACKENDS = {"scipy": ScipySuperLU}
+@contextmanager
+def silenced_stderr():
+    """Send the process's file descriptor 2 to /dev/null (C libraries print there directly)."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with open(os.devnull, "w") as null:
+        os.dup2(null.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+
+
+class CholespyCholesky:
+    """Supernodal sparse Cholesky (CHOLMOD inside the cholespy wheel); refuses indefinite matrices.
+
+    CHOLMOD prints its own warning for a matrix that is not positive definite; that is silenced,
+    and FactorizationError raised instead (Newton then falls back to the PSD Hessian)."""
+
+    name = "cholespy"
+
+    def factorize(self, matrix: sp.csr_matrix) -> None:
+        from cholespy import CholeskySolverD, MatrixType
+
+        try:
+            with silenced_stderr():
+                self._factor = CholeskySolverD(matrix.shape[0], matrix.indptr.astype(np.int32),
+                                               matrix.indices.astype(np.int32), matrix.data, MatrixType.CSR)
+        except ValueError as exc:
+            raise FactorizationError(str(exc)) from None
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        rhs = np.ascontiguousarray(rhs, dtype=np.float64)
+        x = np.zeros_like(rhs)
+        self._factor.solve(rhs, x)
+        return x
+
+
+@ti.kernel
+def _fill_builder(builder: ti.types.sparse_matrix_builder(), rows: ti.types.ndarray(), cols: ti.types.ndarray(),
+                  vals: ti.types.ndarray()):
+    for i in range(rows.shape[0]):
+        builder[rows[i], cols[i]] += vals[i]
+
+
+class TaichiLLT:
+    """Taichi's SparseSolver (Eigen's simplicial LLT on the CPU); the pattern is analysed once."""
+
+    name = "taichi"
+
+    def __init__(self):
+        self._solver = None
+
+    def factorize(self, matrix: sp.csr_matrix) -> None:
+        coo = matrix.tocoo()
+        n = matrix.shape[0]
+        builder = ti.linalg.SparseMatrixBuilder(n, n, max_num_triplets=coo.nnz, dtype=ti.f64)
+        _fill_builder(builder, coo.row.astype(np.int32), coo.col.astype(np.int32), coo.data)
+        sparse = builder.build()
+        if self._solver is None:
+            self._solver = ti.linalg.SparseSolver(dtype=ti.f64, solver_type="LLT")
+            self._solver.analyze_pattern(sparse)
+        self._solver.factorize(sparse)
+        if not self._solver.info():
+            raise FactorizationError("Taichi LLT factorisation failed (matrix not positive definite)")
+        self._rhs = ti.ndarray(ti.f64, n)
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        if rhs.ndim == 2:
+            return np.column_stack([self.solve(column) for column in rhs.T])
+        self._rhs.from_numpy(np.ascontiguousarray(rhs, dtype=np.float64))
+        return self._solver.solve(self._rhs).to_numpy()
+
+
+BACKENDS = {"cholespy": CholespyCholesky, "scipy": ScipySuperLU, "taichi": TaichiLLT}
 
 
 def make_backend(name: str):
-    """A fresh linear-solver backend by name."""
-    if name not in BACKENDS:
-        raise PneumaInputError(f"linear solver = {name!r} is not one of {', '.join(BACKENDS)}")
+    """A fresh linear-solver backend by name (one of BACKENDS)."""
     return BACKENDS[name]()
 
 

@@ -26,17 +26,33 @@ from __future__ import annotations
 
 import math
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .errors import require, require_finite
-from .linsolve import FixedPattern, make_backend, solve_low_rank_updated
+from .linsolve import BACKENDS, FactorizationError, FixedPattern, make_backend, solve_low_rank_updated
 from .model import EnergyModel
 
 ARMIJO_C1 = 1e-4
 MAX_HALVINGS = 40
 STEP_SAFETY = 0.9
+
+
+class PhaseClock:
+    """Accumulates wall time per named phase into a dict: `with clock("factorize"): ...`."""
+
+    def __init__(self, seconds: dict[str, float]):
+        self.seconds = seconds
+
+    @contextmanager
+    def __call__(self, phase: str):
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.seconds[phase] = self.seconds.get(phase, 0.0) + time.perf_counter() - start
 
 
 @dataclass
@@ -50,6 +66,7 @@ class SolveRecord:
     step_sizes: list[float] = field(default_factory=list)
     line_search_trials: int = 0
     psd_fallbacks: int = 0
+    phase_seconds: dict[str, float] = field(default_factory=dict)
     seconds: float = 0.0
     message: str = ""
 
@@ -62,12 +79,14 @@ class SolveRecord:
 class NewtonOptions:
     tol: float = 1e-8
     max_iterations: int = 40
-    linear_solver: str = "scipy"
+    linear_solver: str = "cholespy"
 
     def __post_init__(self):
         require(require_finite("tol", self.tol) > 0, f"tol = {self.tol!r} must be > 0")
         require(isinstance(self.max_iterations, int) and self.max_iterations >= 1,
                 f"max_iterations = {self.max_iterations!r} must be an integer >= 1")
+        require(self.linear_solver in BACKENDS,
+                f"linear solver = {self.linear_solver!r} is not one of {', '.join(BACKENDS)}")
 
 
 class NewtonSolver:
@@ -84,13 +103,20 @@ class NewtonSolver:
         self.model.set_displacements(u)
         return self.model.energy()
 
-    def _direction(self, g: np.ndarray, psd_only: bool) -> tuple[np.ndarray, float]:
+    def _direction(self, g: np.ndarray, psd_only: bool, clock: "PhaseClock") -> tuple[np.ndarray, float]:
         """Newton direction d = -H^-1 g and the slope g.d (nan when the factorisation fails)."""
+        with clock("hessian"):
+            values = self.model.hessian_values(psd_only)
+            low_rank = self.model.low_rank()
+        with clock("assemble"):
+            matrix = self.pattern.matrix(values)
         try:
-            self.backend.factorize(self.pattern.matrix(self.model.hessian_values(psd_only)))
-            d = solve_low_rank_updated(self.backend, -g, self.model.low_rank())
-        except RuntimeError:  # singular matrix
+            with clock("factorize"):
+                self.backend.factorize(matrix)
+        except FactorizationError:  # singular, or indefinite for a Cholesky backend
             return g * math.nan, math.nan
+        with clock("solve"):
+            d = solve_low_rank_updated(self.backend, -g, low_rank)
         return d, float(g @ d)
 
     def solve(self, u0: np.ndarray) -> tuple[np.ndarray, SolveRecord]:
@@ -99,9 +125,12 @@ class NewtonSolver:
         model, opts = self.model, self.options
         u = np.array(u0, dtype=np.float64).ravel()
         record = SolveRecord()
-        energy = self._energy_at(u)
+        clock = PhaseClock(record.phase_seconds)
+        with clock("line_search"):
+            energy = self._energy_at(u)
         while True:
-            g, scale = model.gradient()
+            with clock("gradient"):
+                g, scale = model.gradient()
             record.residuals.append(float(np.linalg.norm(g)) / scale)
             record.energies.append(energy)
             if not np.isfinite(record.residual):
@@ -115,23 +144,16 @@ class NewtonSolver:
                 record.message = f"no convergence in {opts.max_iterations} iterations"
                 break
             exact = bool(record.step_sizes) and record.step_sizes[-1] == 1.0
-            d, slope = self._direction(g, psd_only=not exact)
+            d, slope = self._direction(g, not exact, clock)
             if exact and not slope < 0:
                 record.psd_fallbacks += 1
-                d, slope = self._direction(g, psd_only=True)
+                d, slope = self._direction(g, True, clock)
             if not slope < 0:
                 record.message = f"not a descent direction (g.d = {slope:.3e})"
                 break
-            alpha = min(1.0, STEP_SAFETY * model.max_step(d))
-            for _ in range(MAX_HALVINGS):
-                record.line_search_trials += 1
-                trial = self._energy_at(u + alpha * d)
-                if trial <= energy + ARMIJO_C1 * alpha * slope:
-                    break
-                if -alpha * slope < model.energy_resolution and np.linalg.norm(model.gradient()[0]) < np.linalg.norm(g):
-                    break
-                alpha *= 0.5
-            else:
+            with clock("line_search"):
+                alpha, trial = self._line_search(u, d, g, energy, slope, record)
+            if alpha == 0.0:
                 self.model.set_displacements(u)
                 record.message = "line search found no decrease (energy at round-off)"
                 break
@@ -141,3 +163,17 @@ class NewtonSolver:
             record.step_sizes.append(alpha)
         record.seconds = time.perf_counter() - start
         return u.reshape(-1, 2), record
+
+    def _line_search(self, u, d, g, energy, slope, record) -> tuple[float, float]:
+        """Backtrack from min(1, 0.9 max_step); return (alpha, energy there), or (0, nan) if nothing is accepted."""
+        model = self.model
+        alpha = min(1.0, STEP_SAFETY * model.max_step(d))
+        for _ in range(MAX_HALVINGS):
+            record.line_search_trials += 1
+            trial = self._energy_at(u + alpha * d)
+            if trial <= energy + ARMIJO_C1 * alpha * slope:
+                return alpha, trial
+            if -alpha * slope < model.energy_resolution and np.linalg.norm(model.gradient()[0]) < np.linalg.norm(g):
+                return alpha, trial
+            alpha *= 0.5
+        return 0.0, math.nan

@@ -69,6 +69,19 @@ def area_ramp(rest_area: float, growth: float, steps: int) -> np.ndarray:
     return np.linspace(rest_area, growth * rest_area, steps)
 
 
+def predict(built: BuiltScene, previous, current, value: float) -> np.ndarray:
+    """Initial guess for the equilibrium at commanded `value`: linear extrapolation through the last two
+    equilibria (a, u), u_guess = u1 + (u1 - u0) (value - a1) / (a1 - a0), unless that inverts a triangle
+    (then the last equilibrium u1)."""
+    a1, u1 = current
+    if previous is None or previous[0] == a1:
+        return u1
+    a0, u0 = previous
+    guess = u1 + (u1 - u0) * ((value - a1) / (a1 - a0))
+    built.model.set_displacements(guess)
+    return guess if built.elastic.min_determinant() > 0 else u1
+
+
 class RampFailed(RuntimeError):
     """An increment found no equilibrium even after cutting it back; `partial` holds the steps done."""
 
@@ -92,6 +105,7 @@ def run_ramp(built: BuiltScene, targets: np.ndarray, options: NewtonOptions | No
     u = np.zeros_like(mesh.vertices)
     steps, states, solves = [], [], []
     reached = float(targets[0])
+    previous = None  # (commanded value, u) of the equilibrium before the last one, for the predictor
     for i, target in enumerate(targets):
         start = time.perf_counter()
         records: list[SolveRecord] = []
@@ -99,9 +113,10 @@ def run_ramp(built: BuiltScene, targets: np.ndarray, options: NewtonOptions | No
         while True:
             trial = float(target) if abs(float(target) - reached) <= abs(increment) else reached + increment
             built.chamber.target_area = trial
-            u_trial, record = solver.solve(u)
+            u_trial, record = solver.solve(predict(built, previous, (reached, u), trial))
             records.append(record)
             if record.converged:
+                previous = (reached, u)
                 u, reached = u_trial, trial
                 if trial == float(target):
                     break

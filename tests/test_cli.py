@@ -59,7 +59,7 @@ def test_short_run_writes_history_states_and_summary(tmp_path, capsys):
 
 def test_unconverged_ramp_stops_with_one_line_and_keeps_the_steps_done(tmp_path):
     out = tmp_path / "out"
-    proc = run_cli("--steps", "2", "--max-cuts", "0", "--quiet", "--out", str(out))
+    proc = run_cli("--steps", "2", "--max-iterations", "5", "--max-cuts", "0", "--no-video", "--quiet", "--out", str(out))
     assert proc.returncode == 1
     errors = [l for l in proc.stderr.splitlines() if l.startswith("error:")]
     assert len(errors) == 1 and "step 1: no equilibrium at commanded area" in errors[0] and "residual" in errors[0]

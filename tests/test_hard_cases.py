@@ -77,12 +77,22 @@ def test_single_increment_reaches_the_ramp_equilibrium(reference):
     assert np.abs(result.states[-1] - reference[1].states[-1]).max() < 1e-6 * LENGTH
 
 
+def test_cut_back_increments_reach_the_ramp_equilibrium(reference):
+    """With 5 Newton iterations allowed, the single 1x -> 3.5x increment must be cut to get there."""
+    built = BeamScene(BeamGeometry(cy=0.15)).build()
+    result = run_ramp(built, area_ramp(built.rest_area, 3.5, 2), NewtonOptions(max_iterations=5))
+    assert_stable(built, result)
+    assert result.steps[-1].cuts >= 1 and result.steps[-1].substeps >= 2
+    assert np.abs(result.states[-1] - reference[1].states[-1]).max() < 1e-6 * LENGTH
+
+
 def test_too_few_cuts_fail_clearly_and_keep_the_steps_done():
     built = BeamScene(BeamGeometry(cy=0.15)).build()
+    five_iterations = NewtonOptions(max_iterations=5)
     with pytest.raises(RampFailed, match=r"step 1: no equilibrium at commanded area 2\.055.* after 0 cuts; residual"):
-        run_ramp(built, area_ramp(built.rest_area, 3.5, 2), max_cuts=0)
+        run_ramp(built, area_ramp(built.rest_area, 3.5, 2), five_iterations, max_cuts=0)
     try:
-        run_ramp(built, area_ramp(built.rest_area, 3.5, 2), max_cuts=0)
+        run_ramp(built, area_ramp(built.rest_area, 3.5, 2), five_iterations, max_cuts=0)
     except RampFailed as failure:
         assert len(failure.partial.steps) == 1 and failure.partial.states.shape == (1, built.mesh.n_vertices, 2)
 

@@ -37,6 +37,7 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--k", type=float, default=1e5, help="chamber stiffness (area control penalty)")
     p.add_argument("--max-area", type=float, default=0.0012, help="Triangle's maximum triangle area")
     p.add_argument("--tol", type=float, default=1e-8, help="Newton tolerance on |gradient| / force scale")
+    p.add_argument("--max-iterations", type=int, default=40, help="Newton iterations per solve before it counts as failed")
     p.add_argument("--max-cuts", type=int, default=MAX_CUTS,
                    help="times a non-converging increment may be halved before the run stops")
     p.add_argument("--out", default="out", help="directory for the result files")
@@ -81,11 +82,15 @@ def rendering_flags(args: argparse.Namespace) -> tuple[int, int]:
     return width, height
 
 
+def newton_options(args: argparse.Namespace) -> NewtonOptions:
+    return NewtonOptions(tol=args.tol, max_iterations=args.max_iterations)
+
+
 def scene_for(args: argparse.Namespace, cy: float) -> BeamScene:
     """The validated scene of the flags with its chamber at height cy (raises PneumaInputError on bad flags)."""
     for name in ("cx", "growth", "E", "nu", "k", "max_area", "tol"):
         require_finite(f"--{name.replace('_', '-')}", getattr(args, name))
-    NewtonOptions(tol=args.tol)  # validates --tol
+    newton_options(args)  # validates --tol and --max-iterations
     require(args.max_cuts >= 0, f"--max-cuts = {args.max_cuts!r} must be >= 0")
     area_ramp(1.0, args.growth, args.steps)  # validates growth and steps before any work
     return BeamScene(BeamGeometry(cx=args.cx, cy=require_finite("--cy", cy), max_area=args.max_area),
@@ -117,8 +122,8 @@ def solve(args: argparse.Namespace, built, label: str = "solving"):
 
     start = time.perf_counter()
     with bar:
-        result = run_ramp(built, area_ramp(built.rest_area, args.growth, args.steps), NewtonOptions(tol=args.tol),
-                          progress, args.max_cuts)
+        result = run_ramp(built, area_ramp(built.rest_area, args.growth, args.steps), newton_options(args), progress,
+                          args.max_cuts)
     return result, time.perf_counter() - start
 
 
@@ -138,7 +143,7 @@ def run(args: argparse.Namespace) -> dict:
     runtime.init(args.arch)
     if args.interactive:
         from ..interactive import explore
-        return explore(scene, args.growth, size, args.renderer, NewtonOptions(tol=args.tol))
+        return explore(scene, args.growth, size, args.renderer, newton_options(args))
     built = build(scene)
     mesh = built.mesh
     stem = f"inflate_cy{args.cy:+.2f}"
