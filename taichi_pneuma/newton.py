@@ -79,7 +79,7 @@ class SolveRecord:
 class NewtonOptions:
     tol: float = 1e-8
     max_iterations: int = 40
-    linear_solver: str = "cholespy"
+    linear_solver: str = "taichi"
 
     def __post_init__(self):
         require(require_finite("tol", self.tol) > 0, f"tol = {self.tol!r} must be > 0")
@@ -143,7 +143,7 @@ class NewtonSolver:
             if record.iterations >= opts.max_iterations:
                 record.message = f"no convergence in {opts.max_iterations} iterations"
                 break
-            exact = bool(record.step_sizes) and record.step_sizes[-1] == 1.0
+            exact = not record.step_sizes or record.step_sizes[-1] == 1.0
             d, slope = self._direction(g, not exact, clock)
             if exact and not slope < 0:
                 record.psd_fallbacks += 1

@@ -43,6 +43,8 @@ class AreaChamber(Term):
         self.loop.from_numpy(self.loop_vertices.astype(np.int32))
         self.area_gradient = ti.Vector.field(2, ti.f64, n)
         self.force = ti.Vector.field(2, ti.f64, config.n_vertices)
+        self.current_area = ti.field(ti.f64, ())
+        self.target = ti.field(ti.f64, ())
         self.dofs = vertex_dofs(self.loop_vertices)
         nxt = np.roll(self.loop_vertices, -1)
         xi, yi, xn, yn = 2 * self.loop_vertices, 2 * self.loop_vertices + 1, 2 * nxt, 2 * nxt + 1
@@ -66,11 +68,18 @@ class AreaChamber(Term):
             self.area_gradient[i] = 0.5 * ti.Vector([nxt[1] - prv[1], prv[0] - nxt[0]])
 
     @ti.kernel
-    def _scatter_force(self, scale: ti.f64):
-        for v in self.force:
-            self.force[v] = ti.Vector([0.0, 0.0])
+    def _compute_force(self):
+        """dE/dx = -p dA/dx on the wall vertices (the only non-zero rows of the force field)."""
+        self.current_area[None] = 0.0
         for i in range(self.n_wall):
-            self.force[self.loop[i]] += scale * self.area_gradient[i]
+            x = self.config.x(self.loop[i])
+            nxt = self.config.x(self.loop[(i + 1) % self.n_wall])
+            prv = self.config.x(self.loop[(i + self.n_wall - 1) % self.n_wall])
+            self.current_area[None] += 0.5 * x.cross(nxt)
+            self.area_gradient[i] = 0.5 * ti.Vector([nxt[1] - prv[1], prv[0] - nxt[0]])
+        pressure = self.k * (self.target[None] - self.current_area[None])
+        for i in range(self.n_wall):
+            self.force[self.loop[i]] = -pressure * self.area_gradient[i]
 
     def pressure(self) -> float:
         """p = k (A* - A): positive when the chamber pushes its walls outward."""
@@ -80,8 +89,8 @@ class AreaChamber(Term):
         return 0.5 * self.k * (self.area() - self.target_area) ** 2
 
     def gradient(self) -> np.ndarray:
-        self._compute_area_gradient()
-        self._scatter_force(-self.pressure())
+        self.target[None] = self.target_area
+        self._compute_force()
         return self.force.to_numpy()
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:

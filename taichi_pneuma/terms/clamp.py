@@ -31,8 +31,7 @@ class Clamp(Term):
 
     @ti.kernel
     def _compute_force(self):
-        for v in self.force:
-            self.force[v] = ti.Vector([0.0, 0.0])
+        """K u on the pinned vertices (the only non-zero rows of the force field)."""
         for i in range(self.n_pinned):
             self.force[self.pinned[i]] = self.k * self.config.u[self.pinned[i]]
 
