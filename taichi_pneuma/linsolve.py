@@ -54,16 +54,16 @@ class ScipySuperLU:
 
 
 @contextmanager
-def silenced_stderr():
-    """Send the process's file descriptor 2 to /dev/null (C libraries print there directly)."""
-    sys.stderr.flush()
-    saved = os.dup(2)
+def silenced_stdout():
+    """Send the process's file descriptor 1 to /dev/null (CHOLMOD prints its warnings there directly)."""
+    sys.stdout.flush()
+    saved = os.dup(1)
     with open(os.devnull, "w") as null:
-        os.dup2(null.fileno(), 2)
+        os.dup2(null.fileno(), 1)
         try:
             yield
         finally:
-            os.dup2(saved, 2)
+            os.dup2(saved, 1)
             os.close(saved)
 
 
@@ -79,7 +79,7 @@ class CholespyCholesky:
         from cholespy import CholeskySolverD, MatrixType
 
         try:
-            with silenced_stderr():
+            with silenced_stdout():
                 self._factor = CholeskySolverD(matrix.shape[0], matrix.indptr.astype(np.int32),
                                                matrix.indices.astype(np.int32), matrix.data, MatrixType.CSR)
         except ValueError as exc:

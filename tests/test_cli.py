@@ -43,7 +43,7 @@ def test_unwritable_output_directory(tmp_path, capsys):
 
 def test_short_run_writes_history_states_and_summary(tmp_path, capsys):
     out = tmp_path / "out"
-    assert main(["--cy", "0.15", "--growth", "1.5", "--steps", "4", "--max-area", "0.01", "--out", str(out),
+    assert main(["--cy", "0.15", "--growth", "1.5", "--steps", "4", "--max-area", "0.01", "--out", str(out), "--no-video",
                  "--quiet"]) == 0
     printed = capsys.readouterr().out
     assert "vertices" in printed and "tip deflection" in printed and "peak chamber pressure" in printed
@@ -67,3 +67,15 @@ def test_unconverged_ramp_stops_with_one_line_and_keeps_the_steps_done(tmp_path)
     states = np.load(out / "inflate_cy+0.15_states.npz")
     assert states["positions"].shape[0] == 1  # the rest state, the one step that converged
     assert not (out / "inflate_cy+0.15_summary.json").exists()
+
+
+def test_quality_presets_set_mesh_and_tolerance_unless_overridden(tmp_path, capsys):
+    from taichi_pneuma.apps.inflate import QUALITY
+    from taichi_pneuma.geometry import BeamGeometry
+
+    for flags, max_area in ((["--quality", "draft"], QUALITY["draft"][0]), (["--quality", "draft", "--max-area", "0.01"], 0.01)):
+        out = tmp_path / str(max_area)
+        assert main([*flags, "--steps", "3", "--growth", "1.2", "--no-video", "--quiet", "--out", str(out)]) == 0
+        summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
+        assert summary["vertices"] == BeamGeometry(cy=0.15, max_area=max_area).mesh().n_vertices
+        assert summary["max_residual"] <= QUALITY["draft"][1]

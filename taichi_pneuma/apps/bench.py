@@ -117,14 +117,16 @@ def backends() -> tuple[str, dict]:
 def accuracy(out: Path) -> tuple[str, dict]:
     """Error in tip deflection, final area and peak pressure against a converged reference, and wall time,
     for each knob in turn (the others at their defaults). Mesh errors are measured against the finest mesh;
-    tolerance and increment errors against the default mesh solved tightly (tol 1e-10, 100 increments)."""
+    tolerance and increment errors against the default mesh solved tightly (tol 1e-9, 100 increments).
+    (1e-10 is below what float64 attains here: the rest state of the finest mesh already has a residual
+    of ~2e-10.)"""
     knobs = {
         "max triangle area": [("mesh", a, dict(max_area=a)) for a in (0.01, 0.005, 0.0025, 0.0012, 0.0006, 0.0003)],
-        "Newton tolerance": [("tol", t, dict(options=NewtonOptions(tol=t))) for t in (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)],
+        "Newton tolerance": [("tol", t, dict(options=NewtonOptions(tol=t))) for t in (1e-2, 1e-3, 1e-4, 1e-6, 1e-8, 1e-9)],
         "ramp increments": [("steps", n, dict(steps=n + 1)) for n in (5, 10, 20, 35, 50, 100)],
     }
-    references = {"mesh": timed_ramp(max_area=0.00015, options=NewtonOptions(tol=1e-10))[1],
-                  "tight": timed_ramp(steps=101, options=NewtonOptions(tol=1e-10))[1]}
+    references = {"mesh": timed_ramp(max_area=0.00015, options=NewtonOptions(tol=1e-9))[1],
+                  "tight": timed_ramp(steps=101, options=NewtonOptions(tol=1e-9))[1]}
     rows, data = [], collections.defaultdict(list)
     for knob, runs in knobs.items():
         for kind, value, kwargs in runs:

@@ -27,6 +27,10 @@ from ..scene import BeamScene, Material
 from ..simulate import MAX_CUTS, RampFailed, area_ramp, run_ramp
 
 
+# --quality presets: (max triangle area, Newton tolerance); see the README's accuracy-versus-time study
+QUALITY = {"draft": (0.005, 1e-4), "default": (0.0012, 1e-6), "high": (0.0003, 1e-9)}
+
+
 def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     """The scene, ramp, solver and output flags shared by the apps (all but the chamber height)."""
     p.add_argument("--cx", type=float, default=0.0, help="chamber centre along the beam")
@@ -35,8 +39,12 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--E", type=float, default=1e4, help="Young's modulus")
     p.add_argument("--nu", type=float, default=0.45, help="Poisson's ratio, in (-1, 0.5)")
     p.add_argument("--k", type=float, default=1e5, help="chamber stiffness (area control penalty)")
-    p.add_argument("--max-area", type=float, default=0.0012, help="Triangle's maximum triangle area")
-    p.add_argument("--tol", type=float, default=1e-8, help="Newton tolerance on |gradient| / force scale")
+    p.add_argument("--quality", default="default", choices=list(QUALITY),
+                   help="mesh density and Newton tolerance, read off the accuracy-vs-time study: "
+                        + "; ".join(f"{k}: max area {a:g}, tol {t:g}" for k, (a, t) in QUALITY.items()))
+    p.add_argument("--max-area", type=float, default=None, help="Triangle's maximum triangle area (overrides --quality)")
+    p.add_argument("--tol", type=float, default=None,
+                   help="Newton tolerance on |gradient| / force scale (overrides --quality)")
     p.add_argument("--max-iterations", type=int, default=40, help="Newton iterations per solve before it counts as failed")
     p.add_argument("--max-cuts", type=int, default=MAX_CUTS,
                    help="times a non-converging increment may be halved before the run stops")
@@ -87,7 +95,12 @@ def newton_options(args: argparse.Namespace) -> NewtonOptions:
 
 
 def scene_for(args: argparse.Namespace, cy: float) -> BeamScene:
-    """The validated scene of the flags with its chamber at height cy (raises PneumaInputError on bad flags)."""
+    """The validated scene of the flags with its chamber at height cy (raises PneumaInputError on bad flags).
+
+    --max-area and --tol not given take their values from the --quality preset."""
+    max_area, tol = QUALITY[args.quality]
+    args.max_area = max_area if args.max_area is None else args.max_area
+    args.tol = tol if args.tol is None else args.tol
     for name in ("cx", "growth", "E", "nu", "k", "max_area", "tol"):
         require_finite(f"--{name.replace('_', '-')}", getattr(args, name))
     newton_options(args)  # validates --tol and --max-iterations
