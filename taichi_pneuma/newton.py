@@ -77,7 +77,7 @@ class SolveRecord:
 
 @dataclass
 class NewtonOptions:
-    tol: float = 1e-8
+    tol: float = 1e-6
     max_iterations: int = 40
     linear_solver: str = "taichi"
 

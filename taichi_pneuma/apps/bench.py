@@ -151,13 +151,17 @@ def plot_accuracy(data: dict, path: Path) -> None:
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
+        import matplotlib.ticker
     except ImportError:
         print("matplotlib is not installed (pip install .[bench]): no accuracy plot", file=sys.stderr)
         return
     fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=100)
     for knob, runs in data.items():
-        points = sorted((r["seconds"], max(r["tip"], 1e-12)) for r in runs)
-        ax.loglog([p[0] for p in points], [p[1] for p in points], "o-", label=knob)
+        times, errors = [r["seconds"] for r in runs], [max(r["tip"], 1e-12) for r in runs]
+        ax.loglog(times, errors, "o-", label=knob)  # in knob order, each point labelled with its value
+        for r, t, e in zip(runs, times, errors):
+            ax.annotate(f"{r['value']:g}", (t, e), textcoords="offset points", xytext=(4, 3), fontsize=7)
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.axhline(0.01, color="grey", lw=0.8, ls="--")
     ax.set_xlabel("wall time of the 35-increment ramp (s)")
     ax.set_ylabel("relative tip-deflection error")

@@ -28,7 +28,7 @@ from ..simulate import MAX_CUTS, RampFailed, area_ramp, run_ramp
 
 
 # --quality presets: (max triangle area, Newton tolerance); see the README's accuracy-versus-time study
-QUALITY = {"draft": (0.005, 1e-4), "default": (0.0012, 1e-6), "high": (0.0003, 1e-9)}
+QUALITY = {"draft": (0.005, 1e-4), "default": (BeamGeometry.max_area, NewtonOptions.tol), "high": (0.0003, 1e-9)}
 
 
 def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
