@@ -106,7 +106,7 @@ class BeamGeometry:
             "segment_markers": np.r_[np.full(4, OUTER_MARKER), np.full(k, CHAMBER_MARKER)],
             "holes": np.array([[self.cx, self.cy]]),
         }
-        out = triangle.triangulate(pslg, f"pqa{self.max_area:.10g}")
+        out = triangle.triangulate(pslg, f"pqa{self.max_area:.17f}")  # fixed-point: Triangle reads no exponent
         vertices = np.asarray(out["vertices"], dtype=np.float64)
         triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
         chamber_edges = out["segments"][out["segment_markers"].ravel() == CHAMBER_MARKER]

@@ -54,3 +54,14 @@ def test_named_vertex_sets():
 def test_chamber_outside_the_beam_is_refused(kwargs, word):
     with pytest.raises(PneumaInputError, match=word):
         BeamGeometry(**kwargs)
+
+
+@pytest.mark.parametrize("max_area", [1e-4, 2e-5])
+def test_small_max_area_is_honoured(max_area):
+    """Triangle's switch takes no exponent notation: 2e-05 must not be read as 2 (a coarse mesh)."""
+    mesh = BeamGeometry(max_area=max_area).mesh()
+    p0, p1, p2 = (mesh.vertices[mesh.triangles[:, i]] for i in range(3))
+    e1, e2 = p1 - p0, p2 - p0
+    areas = 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    assert areas.max() <= max_area * (1 + 1e-9)
+    assert mesh.n_vertices > 0.8 * (3.5 * 0.8 - 0.587) / max_area / 2  # about two triangles per vertex
