@@ -1,10 +1,11 @@
-"""Inflate the chamber of the reference beam and report how it bends.
+"""Run a scene's schedule (a scene file, or the reference beam by its flags) and report how it bends.
 
     python -m taichi_pneuma.apps.inflate --cy 0.15
+    python -m taichi_pneuma.apps.inflate --scene assets/scenes/bidirectional.toml
 
-Prints the mesh size, the chamber's rest area, the final area ratio, the tip deflection and the
-peak chamber pressure; writes the per-step history (CSV), the states (npz) and a summary (JSON)
-under --out.
+Prints the mesh size, the terms built, each chamber's rest area, final area ratio and pressure,
+the tip deflection and rotation and the peak chamber pressure; writes the per-step history (CSV),
+the states (npz) and a summary (JSON) under --out.
 """
 
 from __future__ import annotations
@@ -17,16 +18,18 @@ import numpy as np
 
 from .. import runtime
 from ..errors import PneumaInputError, require, require_finite
-from ..geometry import BeamGeometry
 from ..newton import NewtonOptions
 from ..output import prepare_directory, save_json, save_npz, save_text
-from ..scene import BeamScene, Material
-from ..simulate import MAX_CUTS, RampFailed, area_ramp, run_ramp
+from ..scene import reference_scene
+from ..scenefile import load_scene
+from ..simulate import MAX_CUTS, RampFailed, run_schedule
 
 
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.inflate", description=__doc__.split("\n")[0],
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--scene", help="a scene file (TOML); the reference-beam flags below are then ignored, except "
+                                   "--tol, --max-cuts, --out, --arch, --quiet")
     p.add_argument("--cy", type=float, default=0.15, help="chamber centre height (above the neutral axis curls down)")
     p.add_argument("--cx", type=float, default=0.0, help="chamber centre along the beam")
     p.add_argument("--growth", type=float, default=3.5, help="final commanded area / rest area")
@@ -49,27 +52,32 @@ def run(args: argparse.Namespace) -> dict:
         require_finite(f"--{name.replace('_', '-')}", getattr(args, name))
     options = NewtonOptions(tol=args.tol)
     require(args.max_cuts >= 0, f"--max-cuts = {args.max_cuts!r} must be >= 0")
-    scene = BeamScene(BeamGeometry(cx=args.cx, cy=args.cy, max_area=args.max_area),
-                      Material(args.E, args.nu), chamber_stiffness=args.k)
-    ratios = area_ramp(1.0, args.growth, args.steps)  # commanded area / rest area; validated before any work
+    if args.scene:
+        scene = load_scene(args.scene)
+        stem = scene.name
+    else:
+        scene = reference_scene(args.cy, args.cx, args.growth, args.steps, args.E, args.nu, args.k, args.max_area)
+        stem = f"inflate_cy{args.cy:+.2f}"
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     built = scene.build()
     mesh = built.mesh
-    print(f"mesh: {mesh.n_vertices} vertices, {mesh.n_triangles} triangles; chamber wall {len(mesh.chamber_loop)} "
-          f"vertices, clamp {len(mesh.pinned)} vertices")
-    print(f"chamber rest area: {built.rest_area:.3f}")
+    print(f"scene {scene.name}: mesh {mesh.n_vertices} vertices, {mesh.n_triangles} triangles; "
+          f"clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
+    for chamber in built.chambers:
+        print(f"chamber {chamber.chamber_name}: {chamber.control} control, wall {chamber.n_wall} vertices, "
+              f"rest area {chamber.rest_area:.3f}")
 
     def progress(step):
         if not args.quiet:
-            print(f"  step {step.step:3d}/{len(ratios) - 1}  area x{step.area_ratio:5.3f}  "
-                  f"p = {step.pressure:8.2f}  tip dy = {step.tip_dy:+.4f}  {step.iterations:2d} Newton it  "
-                  f"residual {step.residual:.1e}", flush=True)
+            chambers = "  ".join(f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}" for name, c in step.chambers.items())
+            print(f"  step {step.step:3d}/{scene.increments}  {chambers}  tip dy = {step.tip_dy:+.4f} "
+                  f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  residual {step.residual:.1e}",
+                  flush=True)
 
     start = time.perf_counter()
-    stem = f"inflate_cy{args.cy:+.2f}"
     try:
-        result = run_ramp(built, ratios * built.rest_area, options, progress, args.max_cuts)
+        result = run_schedule(built, options=options, progress=progress, max_cuts=args.max_cuts)
     except RampFailed as failure:
         written = save_history(out, stem, built, failure.partial)
         print(f"error: {failure}; the {len(failure.partial.steps)} converged steps are saved in "
@@ -79,36 +87,58 @@ def run(args: argparse.Namespace) -> dict:
     final = result.steps[-1]
     iterations = result.column("iterations")[1:]
     summary = {
-        "cx": args.cx, "cy": args.cy, "vertices": mesh.n_vertices, "triangles": mesh.n_triangles,
-        "rest_area": built.rest_area, "final_area": final.area, "area_ratio": final.area_ratio,
-        "tip_deflection": result.tip_deflection, "peak_pressure": result.peak_pressure,
+        "scene": scene.name, "terms": built.model.term_names(),
+        "vertices": mesh.n_vertices, "triangles": mesh.n_triangles,
+        "chambers": {name: {"control": c.control, "rest_area": c.area / c.area_ratio, "final_area": c.area,
+                            "area_ratio": c.area_ratio, "final_pressure": c.pressure,
+                            "peak_pressure": float(np.abs(result.column(f"{name}.pressure")).max())}
+                     for name, c in final.chambers.items()},
+        "tip_deflection": result.tip_deflection, "tip_rotation_deg": final.tip_rotation,
+        "peak_pressure": result.peak_pressure, "contact": final.contact,
         "all_converged": bool(all(s.converged for s in result.steps)),
         "max_residual": float(result.column("residual").max()),
         "min_det_F": float(result.column("min_det").min()),
-        "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max()),
+        "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max(initial=0)),
         "increment_cuts": int(result.column("cuts").sum()),
         "wall_seconds": wall,
     }
-    print(f"area: {built.rest_area:.3f} -> {final.area:.3f} (x{final.area_ratio:.2f})")
-    print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}")
+    for name, c in final.chambers.items():
+        print(f"{name}: area {c.area / c.area_ratio:.3f} -> {c.area:.3f} (x{c.area_ratio:.2f}), pressure {c.pressure:.1f}")
+    print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}; "
+          f"tip rotation {final.tip_rotation:+.1f} deg")
     print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}")
+    for name, (fx, fy, magnitude) in final.contact.items():
+        print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g})")
     print(f"Newton: {summary['newton_iterations_total']} iterations over {len(iterations)} solves "
           f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
-          f"all converged: {summary['all_converged']}; ramp {wall:.2f} s")
+          f"all converged: {summary['all_converged']}; run {wall:.2f} s")
     written = save_history(out, stem, built, result) + [save_json(out / f"{stem}_summary.json", summary)]
     print("wrote " + ", ".join(str(p) for p in written))
     return summary
 
 
 def save_history(out, stem: str, built, result) -> list:
-    """Write the per-step history (CSV) and the states (npz) of a ramp, complete or partial."""
+    """Write the per-step history (CSV) and the states (npz) of a run, complete or partial.
+
+    The npz holds positions (steps, n, 2), rest, triangles, pinned, tip, boundary, chamber_names and
+    one chamber_loop_<i> per chamber, command / area / pressure as (steps, chambers), and, where
+    the scene has them, contact_forces (steps, n, 2) and ground_height.
+    """
     mesh = built.mesh
+    names = [c.chamber_name for c in built.chambers]
+    arrays = dict(positions=result.states, rest=mesh.vertices, triangles=mesh.triangles, pinned=mesh.pinned,
+                  tip=mesh.tip, boundary=mesh.boundary, chamber_names=np.array(names),
+                  **{f"chamber_loop_{i}": loop for i, loop in enumerate(mesh.chambers)},
+                  **{key: np.column_stack([result.column(f"{n}.{key}") for n in names])
+                     for key in ("command", "area", "pressure")})
+    if result.contact_forces is not None:
+        arrays["contact_forces"] = result.contact_forces
+    for effect in built.scene.effects:
+        if effect.name == "ground":
+            arrays["ground_height"] = np.array(effect.height)
     return [
         save_text(out / f"{stem}_history.csv", result.history_csv()),
-        save_npz(out / f"{stem}_states.npz", positions=result.states, rest=mesh.vertices, triangles=mesh.triangles,
-                 chamber_loop=mesh.chamber_loop, pinned=mesh.pinned, tip=mesh.tip,
-                 target_area=result.column("target_area"), area=result.column("area"),
-                 pressure=result.column("pressure")),
+        save_npz(out / f"{stem}_states.npz", **arrays),
     ]
 
 
