@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .errors import require, require_finite
+from .terms.contact import GroundContact, SelfContact as SelfContactTerm
 from .terms.gravity import Gravity as GravityTerm
 
 
@@ -41,4 +42,40 @@ class Gravity(Effect):
         return [GravityTerm(config, self.density * lumped_area, self.g)]
 
 
-EFFECTS = {cls.name: cls for cls in (Gravity,)}
+@dataclass(frozen=True)
+class Ground(Effect):
+    """Ground contact: a log barrier (threshold dhat, stiffness kappa) keeps the body's outer boundary above y = height."""
+
+    height: float
+    dhat: float = 0.01
+    stiffness: float = 1e3
+    name = "ground"
+
+    def __post_init__(self):
+        require_finite("height", self.height)
+        _positive("dhat", self.dhat)
+        _positive("stiffness", self.stiffness)
+
+    def terms(self, config, mesh, lumped_area) -> list:
+        lowest = float(mesh.vertices[mesh.boundary, 1].min())
+        require(lowest > self.height, f"ground height = {self.height!r} must lie below the body (lowest point {lowest:.6g})")
+        return [GroundContact(config, mesh.boundary, self.height, self.dhat, self.stiffness)]
+
+
+@dataclass(frozen=True)
+class SelfContact(Effect):
+    """Self-contact of chamber walls: point-edge log barriers (threshold dhat, stiffness kappa) on every wall."""
+
+    dhat: float = 0.005
+    stiffness: float = 1e4
+    name = "self_contact"
+
+    def __post_init__(self):
+        _positive("dhat", self.dhat)
+        _positive("stiffness", self.stiffness)
+
+    def terms(self, config, mesh, lumped_area) -> list:
+        return [SelfContactTerm(config, list(mesh.chambers), self.dhat, self.stiffness)]
+
+
+EFFECTS = {cls.name: cls for cls in (Gravity, Ground, SelfContact)}
