@@ -1,6 +1,6 @@
 """Absent effects cost nothing: time the reference ramp and list the terms it builds.
 
-    python benchmarks/absent_effects.py [--repeat 3]
+    python -m benchmarks.absent_effects [--repeat 3]      (from the repository root)
 
 Run it on two commits (before and after the effects existed) on the same machine and compare the
 per-iteration times; the reference scene builds elastic + chamber + clamp only, so no kernel of
