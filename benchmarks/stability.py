@@ -13,10 +13,9 @@ from datetime import date
 from pathlib import Path
 
 from taichi_pneuma import runtime
-from taichi_pneuma.geometry import BeamGeometry
 from taichi_pneuma.output import prepare_directory, save_json, save_text
-from taichi_pneuma.scene import BeamScene, Material
-from taichi_pneuma.simulate import RampFailed, area_ramp, run_ramp
+from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.simulate import RampFailed, run_schedule
 
 CASES = [
     ("reference ramp (3.5x, 35 increments)", {}, {}),
@@ -36,20 +35,21 @@ CASES = [
 
 
 def run_case(cy=0.15, nu=0.45, k=1e5, E=1e4, max_area=0.0012, growth=3.5, steps=36) -> dict:
-    built = BeamScene(BeamGeometry(cy=cy, max_area=max_area), Material(E, nu), chamber_stiffness=k).build()
+    built = reference_scene(cy, growth=growth, steps=steps, youngs_modulus=E, poisson_ratio=nu, chamber_stiffness=k,
+                            max_area=max_area).build()
     start = time.perf_counter()
     try:
-        result = run_ramp(built, area_ramp(built.rest_area, growth, steps))
+        result = run_schedule(built)
     except RampFailed as failure:
         return {"outcome": f"refused: {failure}", "seconds": time.perf_counter() - start}
-    final = result.steps[-1]
+    final = result.steps[-1].chambers["main"]
     iterations = result.column("iterations")[1:]
     return {
         "outcome": "converged" if all(s.converged for s in result.steps) else "not converged",
         "vertices": built.mesh.n_vertices, "iterations_mean": float(iterations.mean()),
         "iterations_max": int(iterations.max()), "cuts": int(result.column("cuts").sum()),
         "tip_deflection": result.tip_deflection, "area_ratio": final.area_ratio,
-        "area_error": final.area / final.target_area - 1, "peak_pressure": result.peak_pressure,
+        "area_error": final.area_ratio / final.command - 1, "peak_pressure": result.peak_pressure,
         "min_det_F": float(result.column("min_det").min()), "seconds": time.perf_counter() - start,
     }
 

@@ -1,19 +1,22 @@
-"""Shapes -> Triangle meshes: a rectangular beam with an elliptical chamber punched out.
+"""Shapes -> Triangle meshes: a body polygon with chamber polygons punched out, and its named vertex sets.
 
-The body is meshed by Shewchuk's Triangle (``triangle`` package) with the flags
-``p q a<max_area>``: a planar straight-line graph, quality (20 degree minimum angle)
-refinement and a maximum triangle area; a hole point at the chamber centre removes
-the chamber's inside. The chamber wall is recovered from the output segments as a
-closed vertex loop oriented counter-clockwise, so its signed shoelace area
+Bodies are rectangles, polygons or unions of axis-aligned rectangles; chambers are ellipses,
+rectangles with rounded corners or polygons. Each shape yields a closed counter-clockwise
+polygon. The body is meshed by Shewchuk's Triangle (``triangle`` package) with the flags
+``p q a<max_area>``: a planar straight-line graph (the body loop, then each chamber loop),
+quality (20 degree minimum angle) refinement and a maximum triangle area; one hole point
+strictly inside each chamber removes its inside. Each chamber wall is recovered from the output
+segments as a closed vertex loop oriented counter-clockwise, so its signed shoelace area
 
     A(x) = 1/2 sum_i (x_i y_{i+1} - x_{i+1} y_i)
 
-is positive at rest.
+is positive at rest. Chambers must lie inside the body and apart from each other by at least
+MARGIN; otherwise a PneumaInputError names the chamber.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import triangle
@@ -21,7 +24,237 @@ import triangle
 from .errors import require, require_finite
 
 OUTER_MARKER = 1
-CHAMBER_MARKER = 2
+MARGIN = 1e-3
+SIDES = ("left", "right", "bottom", "top")
+
+
+def _pair(name: str, value, positive: bool = False) -> tuple[float, float]:
+    require(np.shape(value) == (2,), f"{name} = {value!r} must be a pair of numbers")
+    pair = tuple(require_finite(f"{name}", v) for v in value)
+    if positive:
+        require(min(pair) > 0, f"{name} = {value!r} must be > 0")
+    return pair
+
+
+@dataclass(frozen=True)
+class Rectangle:
+    """An axis-aligned rectangle; its polygon starts at the bottom-left corner."""
+
+    center: tuple[float, float]
+    size: tuple[float, float]
+
+    def __post_init__(self):
+        _pair("center", self.center)
+        _pair("size", self.size, positive=True)
+
+    def polygon(self) -> np.ndarray:
+        (cx, cy), (w, h) = self.center, self.size
+        return np.array([[cx - w / 2, cy - h / 2], [cx + w / 2, cy - h / 2],
+                         [cx + w / 2, cy + h / 2], [cx - w / 2, cy + h / 2]], dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class Ellipse:
+    """Ellipse with semi-axes (a, b) about center, sampled at `points` angles from 0."""
+
+    center: tuple[float, float]
+    semi_axes: tuple[float, float]
+    points: int = 128
+
+    def __post_init__(self):
+        _pair("center", self.center)
+        _pair("semi_axes", self.semi_axes, positive=True)
+        require(isinstance(self.points, (int, np.integer)) and self.points >= 8,
+                f"points = {self.points!r} must be an integer >= 8")
+
+    def polygon(self) -> np.ndarray:
+        t = np.linspace(0.0, 2.0 * np.pi, self.points, endpoint=False)
+        (cx, cy), (a, b) = self.center, self.semi_axes
+        return np.column_stack([cx + a * np.cos(t), cy + b * np.sin(t)])
+
+
+@dataclass(frozen=True)
+class RoundedRectangle:
+    """Axis-aligned rectangle whose corners are quarter circles of `radius` (< half the shorter side)."""
+
+    center: tuple[float, float]
+    size: tuple[float, float]
+    radius: float
+    corner_points: int = 6
+
+    def __post_init__(self):
+        _pair("center", self.center)
+        w, h = _pair("size", self.size, positive=True)
+        r = require_finite("radius", self.radius)
+        require(0 < r < min(w, h) / 2, f"radius = {self.radius!r} must lie in (0, {min(w, h) / 2:g}) (half the shorter side)")
+        require(isinstance(self.corner_points, (int, np.integer)) and self.corner_points >= 2,
+                f"corner_points = {self.corner_points!r} must be an integer >= 2")
+
+    def polygon(self) -> np.ndarray:
+        (cx, cy), (w, h), r = self.center, self.size, self.radius
+        corners = [(cx + w / 2 - r, cy - h / 2 + r), (cx + w / 2 - r, cy + h / 2 - r),
+                   (cx - w / 2 + r, cy + h / 2 - r), (cx - w / 2 + r, cy - h / 2 + r)]
+        points = []
+        for k, (ox, oy) in enumerate(corners):
+            t = np.linspace(-np.pi / 2 + k * np.pi / 2, k * np.pi / 2, self.corner_points)
+            points.append(np.column_stack([ox + r * np.cos(t), oy + r * np.sin(t)]))
+        return np.vstack(points)
+
+
+@dataclass(frozen=True)
+class Polygon:
+    """A simple polygon given by its vertices (either orientation; stored counter-clockwise)."""
+
+    points: tuple
+
+    def __post_init__(self):
+        pts = np.asarray(self.points, dtype=object)
+        require(pts.ndim == 2 and pts.shape[1] == 2 and len(pts) >= 3,
+                f"points = {self.points!r} must be a list of at least 3 [x, y] pairs")
+        for p in self.points:
+            _pair("points", p)
+        poly = np.asarray(self.points, dtype=np.float64)
+        require(abs(signed_area(poly)) > 0, f"points = {self.points!r} enclose no area")
+        require(not polygon_self_intersects(poly), f"points = {self.points!r} cross each other (not a simple polygon)")
+
+    def polygon(self) -> np.ndarray:
+        poly = np.asarray(self.points, dtype=np.float64)
+        return poly if signed_area(poly) > 0 else poly[::-1].copy()
+
+
+@dataclass(frozen=True)
+class RectangleUnion:
+    """The union of axis-aligned rectangles; it must form one region without holes."""
+
+    rectangles: tuple[Rectangle, ...]
+
+    def __post_init__(self):
+        require(len(self.rectangles) >= 1, "rectangles must list at least one rectangle")
+        loops = union_boundary([r.polygon() for r in self.rectangles])
+        require(len(loops) == 1, f"rectangles: their union has {len(loops)} boundary loops; it must be one "
+                                 f"connected region without holes")
+
+    def polygon(self) -> np.ndarray:
+        return union_boundary([r.polygon() for r in self.rectangles])[0]
+
+
+def union_boundary(polygons: list[np.ndarray]) -> list[np.ndarray]:
+    """Counter-clockwise boundary loops of a union of axis-aligned rectangles (each given as its 4 corners).
+
+    The rectangles' edge coordinates cut the plane into grid cells, each wholly inside or outside
+    the union; the boundary is the set of cell sides between an inside and an outside cell, directed
+    with the inside on the left, chained into loops with collinear vertices dropped.
+    """
+    boxes = np.array([[p[:, 0].min(), p[:, 1].min(), p[:, 0].max(), p[:, 1].max()] for p in polygons])
+    xs, ys = np.unique(boxes[:, [0, 2]]), np.unique(boxes[:, [1, 3]])
+    mx, my = (xs[:-1] + xs[1:]) / 2, (ys[:-1] + ys[1:]) / 2
+    inside = np.zeros((len(mx) + 2, len(my) + 2), dtype=bool)  # padded by one outside cell each side
+    for x0, y0, x1, y1 in boxes:
+        inside[1:-1, 1:-1] |= ((mx >= x0) & (mx <= x1))[:, None] & ((my >= y0) & (my <= y1))[None, :]
+    successor: dict[tuple[int, int], tuple[int, int]] = {}
+    for i, j in zip(*np.nonzero(inside)):
+        # cell (i, j) spans grid corners (i - 1 .. i, j - 1 .. j); sides with outside neighbours, CCW
+        for (di, dj), a, b in (((0, -1), (i - 1, j - 1), (i, j - 1)), ((1, 0), (i, j - 1), (i, j)),
+                               ((0, 1), (i, j), (i - 1, j)), ((-1, 0), (i - 1, j), (i - 1, j - 1))):
+            if not inside[i + di, j + dj]:
+                require(a not in successor, "rectangles: their union touches itself at a corner")
+                successor[a] = b
+    loops = []
+    while successor:
+        start = next(iter(successor))
+        loop = [start]
+        while (nxt := successor.pop(loop[-1])) != start:
+            loop.append(nxt)
+        pts = np.array([[xs[i], ys[j]] for i, j in loop])
+        prev, nxt_ = np.roll(pts, 1, axis=0), np.roll(pts, -1, axis=0)
+        turn = (pts[:, 0] - prev[:, 0]) * (nxt_[:, 1] - pts[:, 1]) - (pts[:, 1] - prev[:, 1]) * (nxt_[:, 0] - pts[:, 0])
+        loops.append(pts[turn != 0])
+    return loops
+
+
+def signed_area(polygon: np.ndarray) -> float:
+    """Shoelace area of a closed polygon (k, 2); positive when counter-clockwise."""
+    x, y = polygon[:, 0], polygon[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def _cross(o, p, q):
+    return (p[..., 0] - o[..., 0]) * (q[..., 1] - o[..., 1]) - (p[..., 1] - o[..., 1]) * (q[..., 0] - o[..., 0])
+
+
+def segments_cross(a0, a1, b0, b1) -> np.ndarray:
+    """Pairwise proper crossings between segments a (k, 2) and b (m, 2): a (k, m) boolean array."""
+    A0, A1, B0, B1 = a0[:, None], a1[:, None], b0[None, :], b1[None, :]
+    return (_cross(A0, A1, B0) * _cross(A0, A1, B1) < 0) & (_cross(B0, B1, A0) * _cross(B0, B1, A1) < 0)
+
+
+def polygon_self_intersects(points: np.ndarray) -> bool:
+    """Whether a closed polygon's non-adjacent edges cross (a proper segment intersection)."""
+    a, b = points, np.roll(points, -1, axis=0)
+    n = len(points)
+    i, j = np.indices((n, n))
+    adjacent = (np.abs(i - j) <= 1) | (np.abs(i - j) == n - 1)
+    return bool(np.any(segments_cross(a, b, a, b) & ~adjacent))
+
+
+def points_in_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """Even-odd rule: which of points (k, 2) lie inside the closed polygon (m, 2)."""
+    a, b = polygon, np.roll(polygon, -1, axis=0)
+    px, py = points[:, 0:1], points[:, 1:2]
+    straddles = (a[None, :, 1] > py) != (b[None, :, 1] > py)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x_at = a[None, :, 0] + (py - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (b[None, :, 1] - a[None, :, 1])
+    return np.count_nonzero(straddles & (px < x_at), axis=1) % 2 == 1
+
+
+def distance_to_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """Distance from each of points (k, 2) to the boundary of a closed polygon (m, 2)."""
+    a, b = polygon[None, :], np.roll(polygon, -1, axis=0)[None, :]
+    p = points[:, None]
+    e = b - a
+    t = np.clip(np.sum((p - a) * e, axis=2) / np.sum(e * e, axis=2), 0.0, 1.0)
+    return np.min(np.linalg.norm(p - (a + t[..., None] * e), axis=2), axis=1)
+
+
+def interior_point(polygon: np.ndarray) -> np.ndarray:
+    """A point strictly inside a simple polygon: the centroid of the largest triangle of its triangulation."""
+    k = len(polygon)
+    tri = triangle.triangulate({"vertices": polygon, "segments": np.column_stack([np.arange(k), (np.arange(k) + 1) % k])},
+                               "p")
+    corners = tri["vertices"][tri["triangles"]]
+    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    return corners[np.argmax(np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]))].mean(axis=0)
+
+
+@dataclass(frozen=True)
+class ClampSelection:
+    """The clamped vertices: a side of the body's bounding box (within 1e-6) or a box [x0, y0, x1, y1]."""
+
+    side: str | None = "left"
+    box: tuple | None = None
+
+    def __post_init__(self):
+        require((self.side is None) != (self.box is None), "clamp: give exactly one of 'side' and 'box'")
+        if self.side is not None:
+            require(self.side in SIDES, f"clamp.side = {self.side!r} is not one of {', '.join(SIDES)}")
+        else:
+            require(np.shape(self.box) == (4,), f"clamp.box = {self.box!r} must be [x0, y0, x1, y1]")
+            for v in self.box:
+                require_finite("clamp.box", v)
+            require(self.box[0] < self.box[2] and self.box[1] < self.box[3],
+                    f"clamp.box = {list(self.box)!r} must have x0 < x1 and y0 < y1")
+
+    def select(self, vertices: np.ndarray) -> np.ndarray:
+        x, y = vertices[:, 0], vertices[:, 1]
+        if self.side is not None:
+            chosen = {"left": x <= x.min() + 1e-6, "right": x >= x.max() - 1e-6,
+                      "bottom": y <= y.min() + 1e-6, "top": y >= y.max() - 1e-6}[self.side]
+        else:
+            x0, y0, x1, y1 = self.box
+            chosen = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)
+        pinned = np.flatnonzero(chosen)
+        require(len(pinned) > 0, f"clamp.box = {self.box!r} selects no mesh vertex")
+        return pinned
 
 
 @dataclass(frozen=True)
@@ -29,13 +262,15 @@ class Mesh:
     """A triangle mesh with the vertex sets a pneumatic scene needs.
 
     vertices: (n, 2) rest positions; triangles: (m, 3) counter-clockwise vertex indices;
-    chamber_loop: vertex indices of the chamber wall, counter-clockwise (positive area);
-    pinned: the clamped wall (x <= min x + 1e-6); tip: the right edge (x >= max x - 1e-6).
+    chambers: one vertex loop per chamber wall, counter-clockwise (positive area), in the scene's
+    order; boundary: the vertices on the body's outer boundary; pinned: the clamped vertices;
+    tip: the right edge (x >= max x - 1e-6).
     """
 
     vertices: np.ndarray
     triangles: np.ndarray
-    chamber_loop: np.ndarray
+    chambers: tuple[np.ndarray, ...]
+    boundary: np.ndarray
     pinned: np.ndarray
     tip: np.ndarray
 
@@ -50,14 +285,72 @@ class Mesh:
     @property
     def area(self) -> float:
         """Total rest area of the triangles."""
-        p0, p1, p2 = (self.vertices[self.triangles[:, i]] for i in range(3))
-        e1, e2 = p1 - p0, p2 - p0
-        return 0.5 * float(np.sum(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]))
+        return float(np.sum(triangle_areas(self.vertices, self.triangles)))
+
+
+def triangle_areas(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    p0, p1, p2 = (vertices[triangles[:, i]] for i in range(3))
+    e1, e2 = p1 - p0, p2 - p0
+    return 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """A body shape with named chamber shapes inside it, a mesh density and the clamp selection."""
+
+    body: object
+    chambers: tuple[tuple[str, object], ...]
+    max_area: float = 0.0012
+    clamp: ClampSelection = field(default_factory=ClampSelection)
+
+    def __post_init__(self):
+        require(require_finite("max_area", self.max_area) > 0, f"max_area = {self.max_area!r} must be > 0")
+        body = self.body.polygon()
+        polygons = [(name, shape.polygon()) for name, shape in self.chambers]
+        names = [name for name, _ in polygons]
+        require(len(set(names)) == len(names), f"chamber names {names!r} must be distinct")
+        for name, poly in polygons:
+            outside = ~points_in_polygon(poly, body) | (distance_to_polygon(poly, body) < MARGIN)
+            crossing = segments_cross(poly, np.roll(poly, -1, axis=0), body, np.roll(body, -1, axis=0)).any()
+            require(not outside.any() and not crossing,
+                    f"chamber {name!r} is not inside the body (a wall point at {poly[np.argmax(outside)].tolist()} "
+                    f"lies outside it or closer than {MARGIN:g} to its boundary)")
+        for i, (name_a, a) in enumerate(polygons):
+            for name_b, b in polygons[i + 1:]:
+                touching = (points_in_polygon(a, b).any() or points_in_polygon(b, a).any()
+                            or distance_to_polygon(a, b).min() < MARGIN
+                            or segments_cross(a, np.roll(a, -1, axis=0), b, np.roll(b, -1, axis=0)).any())
+                require(not touching, f"chambers {name_a!r} and {name_b!r} overlap (or are closer than {MARGIN:g})")
+
+    def mesh(self) -> Mesh:
+        """Mesh the body minus its chambers with Triangle ('pqa<max_area>') and name its vertex sets."""
+        loops = [self.body.polygon()] + [shape.polygon() for _, shape in self.chambers]
+        offsets = np.cumsum([0] + [len(p) for p in loops])
+        ring = lambda n, offset: offset + np.column_stack([np.arange(n), (np.arange(n) + 1) % n])
+        pslg = {
+            "vertices": np.vstack(loops),
+            "segments": np.vstack([ring(len(p), o) for p, o in zip(loops, offsets)]),
+            "segment_markers": np.concatenate([np.full(len(p), OUTER_MARKER + c) for c, p in enumerate(loops)]),
+        }
+        if len(loops) > 1:
+            pslg["holes"] = np.array([interior_point(p) for p in loops[1:]])
+        out = triangle.triangulate(pslg, f"pqa{self.max_area:.17f}")  # fixed-point: Triangle reads no exponent
+        vertices = np.asarray(out["vertices"], dtype=np.float64)
+        triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
+        markers = out["segment_markers"].ravel()
+        chambers = []
+        for c in range(1, len(loops)):
+            loop = chain_loop(out["segments"][markers == OUTER_MARKER + c])
+            chambers.append(loop if signed_area(vertices[loop]) > 0 else loop[::-1].copy())
+        boundary = np.unique(out["segments"][markers == OUTER_MARKER])
+        x = vertices[:, 0]
+        tip = np.flatnonzero(x >= x.max() - 1e-6)
+        return Mesh(vertices, triangles, tuple(chambers), boundary, self.clamp.select(vertices), tip)
 
 
 @dataclass(frozen=True)
 class BeamGeometry:
-    """A rectangle L x H centred at the origin with an elliptical chamber (semi-axes a, b) at (cx, cy)."""
+    """SPEC.md's beam: a rectangle L x H centred at the origin with an elliptical chamber (a, b) at (cx, cy)."""
 
     length: float = 3.5
     height: float = 0.8
@@ -77,11 +370,10 @@ class BeamGeometry:
             isinstance(self.chamber_points, (int, np.integer)) and self.chamber_points >= 8,
             f"chamber_points = {self.chamber_points!r} must be an integer >= 8",
         )
-        margin = 1e-3
         require(
-            abs(self.cy) + self.b < self.height / 2 - margin,
+            abs(self.cy) + self.b < self.height / 2 - MARGIN,
             f"chamber escapes the beam vertically: |cy| + b = {abs(self.cy) + self.b:.4g} "
-            f"(cy = {self.cy:g}, b = {self.b:g}) must be < H/2 - {margin:g} = {self.height / 2 - margin:.4g}",
+            f"(cy = {self.cy:g}, b = {self.b:g}) must be < H/2 - {MARGIN:g} = {self.height / 2 - MARGIN:.4g}",
         )
         require(
             abs(self.cx) + self.a < self.length / 2,
@@ -89,47 +381,19 @@ class BeamGeometry:
             f"(cx = {self.cx:g}, a = {self.a:g}) must be < L/2 = {self.length / 2:.4g}",
         )
 
-    def chamber_polygon(self) -> np.ndarray:
-        """The chamber's ellipse sampled at chamber_points angles, counter-clockwise, (k, 2)."""
-        t = np.linspace(0.0, 2.0 * np.pi, self.chamber_points, endpoint=False)
-        return np.column_stack([self.cx + self.a * np.cos(t), self.cy + self.b * np.sin(t)])
+    def general(self) -> Geometry:
+        """The same beam as a general Geometry (body rectangle, one ellipse chamber named 'main', left clamp)."""
+        return Geometry(Rectangle((0.0, 0.0), (self.length, self.height)),
+                        (("main", Ellipse((self.cx, self.cy), (self.a, self.b), self.chamber_points)),),
+                        self.max_area)
 
     def mesh(self) -> Mesh:
-        """Mesh the beam with Triangle ('pqa<max_area>') and name its vertex sets."""
-        half_l, half_h = self.length / 2, self.height / 2
-        outer = np.array([[-half_l, -half_h], [half_l, -half_h], [half_l, half_h], [-half_l, half_h]])
-        k = self.chamber_points
-        ring = lambda n, offset: offset + np.column_stack([np.arange(n), (np.arange(n) + 1) % n])
-        pslg = {
-            "vertices": np.vstack([outer, self.chamber_polygon()]),
-            "segments": np.vstack([ring(4, 0), ring(k, 4)]),
-            "segment_markers": np.r_[np.full(4, OUTER_MARKER), np.full(k, CHAMBER_MARKER)],
-            "holes": np.array([[self.cx, self.cy]]),
-        }
-        out = triangle.triangulate(pslg, f"pqa{self.max_area:.17f}")  # fixed-point: Triangle reads no exponent
-        vertices = np.asarray(out["vertices"], dtype=np.float64)
-        triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
-        chamber_edges = out["segments"][out["segment_markers"].ravel() == CHAMBER_MARKER]
-        loop = chain_loop(chamber_edges)
-        if signed_area(vertices[loop]) < 0:
-            loop = loop[::-1].copy()
-        x = vertices[:, 0]
-        pinned = np.flatnonzero(x <= x.min() + 1e-6)
-        tip = np.flatnonzero(x >= x.max() - 1e-6)
-        return Mesh(vertices, triangles, loop, pinned, tip)
-
-
-def signed_area(polygon: np.ndarray) -> float:
-    """Shoelace area of a closed polygon (k, 2); positive when counter-clockwise."""
-    x, y = polygon[:, 0], polygon[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+        return self.general().mesh()
 
 
 def orient_counter_clockwise(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Return triangles with every vertex triple ordered counter-clockwise."""
-    p0, p1, p2 = (vertices[triangles[:, i]] for i in range(3))
-    e1, e2 = p1 - p0, p2 - p0
-    clockwise = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0] < 0
+    clockwise = triangle_areas(vertices, triangles) < 0
     fixed = triangles.copy()
     fixed[clockwise] = fixed[clockwise][:, [0, 2, 1]]
     return fixed

@@ -10,13 +10,16 @@ import numpy as np
 
 from .newton import NewtonOptions, NewtonSolver
 from .render import FrameRenderer, Track, open_canvas
-from .scene import BeamScene
+from .scene import Scene
 
 
-def explore(scene: BeamScene, growth: float, size: tuple[int, int], backend: str = "auto",
+def explore(scene: Scene, growth: float, size: tuple[int, int], backend: str = "auto",
             options: NewtonOptions | None = None, max_frames: int | None = None) -> dict:
-    """Run the window until it is closed (or for max_frames frames); return {'all_converged', 'solves'}."""
+    """Run the window until it is closed (or for max_frames frames); return {'all_converged', 'solves'}.
+
+    The slider commands the area ratio of the scene's first chamber (area control)."""
     built = scene.build()
+    chamber = built.chambers[0]
     mesh, solver = built.mesh, NewtonSolver(built.model, options)
     canvas = open_canvas(*size, backend, show=True)
     # Fixed view: the rest beam with room for the curl of a full ramp (a third of the length up and down).
@@ -30,15 +33,15 @@ def explore(scene: BeamScene, growth: float, size: tuple[int, int], backend: str
         value = canvas.slider("area / rest", 1.0 if ratio is None else ratio, 1.0, growth)
         if value != ratio:
             ratio = value
-            built.chamber.target_area = ratio * built.rest_area
+            built.set_commands(np.array([ratio]))
             u, record = solver.solve(u)
             converged &= record.converged
             solves += 1
             tip = u[mesh.tip, 1].mean()
-            track = Track(mesh, (mesh.vertices + u)[None], np.array([ratio]), np.array([built.chamber.area()]),
-                          np.array([built.chamber.pressure()]), np.array([tip]), "interactive")
+            track = Track(mesh, (mesh.vertices + u)[None], np.array([[chamber.area() / chamber.rest_area]]),
+                          np.array([[chamber.pressure()]]), np.array([tip]), "interactive")
             renderer = FrameRenderer([track], trace=False, canvas=canvas, bounds=bounds)
-            print(f"  area x{ratio:.3f}: p = {track.pressure[0]:.2f}, tip dy = {tip:+.4f}, "
+            print(f"  area x{ratio:.3f}: p = {track.pressure[0, 0]:.2f}, tip dy = {tip:+.4f}, "
                   f"{record.iterations} Newton it, converged {record.converged}", flush=True)
         renderer.draw(0)
         canvas.show()

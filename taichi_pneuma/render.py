@@ -184,37 +184,40 @@ def open_canvas(width: int, height: int, backend: str = "auto", show: bool = Fal
 
 @dataclass(frozen=True)
 class Track:
-    """One ramp to show: its mesh, its states (steps, n, 2) and the per-step figures of the overlay."""
+    """One run to show: its mesh, its states (steps, n, 2) and the per-step figures of the overlay:
+    area_ratio and pressure as (steps, chambers), tip_dy as (steps,)."""
 
     mesh: Mesh
     states: np.ndarray
-    target_ratio: np.ndarray
     area_ratio: np.ndarray
     pressure: np.ndarray
     tip_dy: np.ndarray
     title: str = ""
 
     @classmethod
-    def from_ramp(cls, mesh: Mesh, result, rest_area: float, title: str = "") -> "Track":
-        """A track from a simulate.RampResult."""
-        return cls(mesh, result.states, result.column("target_area") / rest_area, result.column("area_ratio"),
-                   result.column("pressure"), result.column("tip_dy"), title)
+    def from_ramp(cls, mesh: Mesh, result, title: str = "") -> "Track":
+        """A track from a simulate.RampResult (every chamber of the scene)."""
+        names = list(result.steps[0].chambers)
+        columns = lambda key: np.column_stack([result.column(f"{n}.{key}") for n in names])
+        return cls(mesh, result.states, columns("area_ratio"), columns("pressure"), result.column("tip_dy"), title)
 
     @property
-    def inflation_percent(self) -> np.ndarray:
-        """Commanded inflation: 0 % at the rest area, 100 % at the final commanded area."""
-        span = self.target_ratio[-1] - self.target_ratio[0]
-        return 100 * (self.target_ratio - self.target_ratio[0]) / (span if span else 1.0)
+    def progress_percent(self) -> np.ndarray:
+        """Position in the schedule: 0 % at the first step, 100 % at the last."""
+        steps = len(self.states)
+        return 100 * np.arange(steps) / max(steps - 1, 1)
 
 
 def chamber_triangles(mesh: Mesh) -> np.ndarray:
-    """Triangulate the chamber's rest wall loop (no added points); reused on every deformed loop."""
-    loop = mesh.vertices[mesh.chamber_loop]
-    k = len(loop)
-    ring = np.column_stack([np.arange(k), (np.arange(k) + 1) % k])
-    out = triangle.triangulate({"vertices": loop, "segments": ring}, "p")
-    require(len(out["vertices"]) == k, "chamber wall loop could not be triangulated without extra points")
-    return mesh.chamber_loop[out["triangles"]]
+    """Triangulate every chamber's rest wall loop (no added points); reused on every deformed loop."""
+    parts = []
+    for loop in mesh.chambers:
+        k = len(loop)
+        ring = np.column_stack([np.arange(k), (np.arange(k) + 1) % k])
+        out = triangle.triangulate({"vertices": mesh.vertices[loop], "segments": ring}, "p")
+        require(len(out["vertices"]) == k, "chamber wall loop could not be triangulated without extra points")
+        parts.append(loop[out["triangles"]])
+    return np.concatenate(parts)
 
 
 def mesh_edges(triangles: np.ndarray) -> np.ndarray:
@@ -279,19 +282,22 @@ class FrameRenderer:
             c.triangles(x[track.mesh.triangles], FACE)
             c.segments(x[edges], EDGE, 1.0)
             c.triangles(x[chamber], CHAMBER_FILL)
-            loop = track.mesh.chamber_loop
-            c.segments(np.stack([x[loop], x[np.roll(loop, -1)]], axis=1), CHAMBER_WALL, 2.5)
+            for loop in track.mesh.chambers:
+                c.segments(np.stack([x[loop], x[np.roll(loop, -1)]], axis=1), CHAMBER_WALL, 2.5)
             c.triangles(_squares(x[track.mesh.pinned], 3.5 / np.array([self.width, self.height])), PIN)
             lines = [track.title] if track.title else []
-            lines += [f"step {i}/{self.frames - 1}   area x{track.target_ratio[i]:.2f} (commanded)",
-                      f"p = {track.pressure[i]:.1f}   tip dy = {track.tip_dy[i]:+.4f}"]
+            areas = ", ".join(f"x{r:.2f}" for r in track.area_ratio[i])
+            pressures = ", ".join(f"{p_:.1f}" for p_ in track.pressure[i])
+            lines += [f"step {i}/{self.frames - 1}   area {areas}",
+                      f"p = {pressures}   tip dy = {track.tip_dy[i]:+.4f}"]
             x0, x1 = self.panels[p]
             c.text(lines, x0 + 0.005, 0.995, x1 - x0 - 0.01)
         if self.trace:
             self._draw_trace(i)
 
     def _draw_trace(self, i: int) -> None:
-        """Area / rest area and pressure against inflation %, each scaled to the plot box; cursor at step i."""
+        """Area / rest area and pressure of every chamber against schedule progress %, each scaled to the
+        plot box; cursor at step i."""
         c = self.canvas
         x0, x1 = self.trace_panel
         box = np.array([[x0 + 0.04, 0.1], [x1 - 0.03, 0.72]])  # (left, bottom), (right, top)
@@ -299,18 +305,19 @@ class FrameRenderer:
         c.segments(np.stack([corners, np.roll(corners, -1, axis=0)], axis=1), AXES, 1.0)
         texts = []
         for track in self.tracks:
-            u = track.inflation_percent / 100
+            u = track.progress_percent / 100
             for values, color, label in ((track.area_ratio, AREA_CURVE, "area / rest"),
                                          (track.pressure, PRESSURE_CURVE, "pressure p")):
                 lo, hi = float(values.min()), float(values.max())
-                v = (values - lo) / (hi - lo if hi > lo else 1.0)
-                pts = box[0] + np.column_stack([u, v]) * (box[1] - box[0])
-                c.segments(np.stack([pts[:-1], pts[1:]], axis=1), color, 2.0)
-                c.triangles(_squares(pts[i:i + 1], 4.0 / np.array([self.width, self.height])), color)
+                for curve in values.T:  # one curve per chamber, all on the same scale
+                    v = (curve - lo) / (hi - lo if hi > lo else 1.0)
+                    pts = box[0] + np.column_stack([u, v]) * (box[1] - box[0])
+                    c.segments(np.stack([pts[:-1], pts[1:]], axis=1), color, 2.0)
+                    c.triangles(_squares(pts[i:i + 1], 4.0 / np.array([self.width, self.height])), color)
                 texts.append(f"{label}: {_nice(lo)} .. {_nice(hi)}  ({'blue' if color is AREA_CURVE else 'red'})")
-        cursor_x = box[0, 0] + self.tracks[0].inflation_percent[i] / 100 * (box[1, 0] - box[0, 0])
+        cursor_x = box[0, 0] + self.tracks[0].progress_percent[i] / 100 * (box[1, 0] - box[0, 0])
         c.segments(np.array([[[cursor_x, box[0, 1]], [cursor_x, box[1, 1]]]]), CURSOR, 1.0)
-        texts.append(f"x: inflation 0 .. 100 %   now {self.tracks[0].inflation_percent[i]:.0f} %")
+        texts.append(f"x: schedule 0 .. 100 %   now {self.tracks[0].progress_percent[i]:.0f} %")
         c.text(texts, x0 + 0.005, 0.995, x1 - x0 - 0.01)
 
 

@@ -1,16 +1,29 @@
-"""The reference scene as data, validated, and its builder: a scene -> an EnergyModel of exactly its terms."""
+"""A scene as data, validated, and its builder: a scene -> an EnergyModel of exactly the terms it names.
+
+A scene is a body with chambers (geometry.Geometry), a material (optionally one per region), a
+clamp, a schedule of chamber commands, and a tuple of effects. The builder always adds
+elasticity, one chamber term per chamber (area or pressure control) and the clamp; each effect
+the scene names adds its own term(s), and an effect it does not name adds nothing: no field is
+allocated and no kernel compiled or launched for it.
+"""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 
 from . import runtime
+from .effects import Effect
 from .errors import require, require_finite
-from .geometry import BeamGeometry, Mesh, signed_area
+from .geometry import BeamGeometry, Geometry, Mesh, triangle_areas
 from .model import EnergyModel
-from .terms import AreaChamber, Clamp, NeoHookean
+from .schedule import ChamberSchedule, Schedule, area_ramp
+from .terms import AreaChamber, Clamp, NeoHookean, PressureChamber
+from .terms.base import Term
+from .terms.chamber import Chamber
 from .terms.elastic import lame_parameters
 
 
@@ -29,41 +42,123 @@ class Material:
 
 
 @dataclass(frozen=True)
-class BeamScene:
-    """A clamped beam with one area-controlled chamber (SPEC.md's reference scene by default)."""
+class Region:
+    """A material for the triangles whose centroid lies in box [x0, y0, x1, y1]; later regions win."""
 
-    geometry: BeamGeometry = field(default_factory=BeamGeometry)
-    material: Material = field(default_factory=Material)
-    chamber_stiffness: float = 1e5
-    clamp_stiffness: float = 1e9
+    box: tuple[float, float, float, float]
+    material: Material
 
     def __post_init__(self):
-        for name, value in (("k", self.chamber_stiffness), ("K_pin", self.clamp_stiffness)):
-            require_finite(name, value)
-            require(value > 0, f"{name} = {value!r} must be > 0")
+        require(np.shape(self.box) == (4,), f"box = {self.box!r} must be [x0, y0, x1, y1]")
+        for v in self.box:
+            require_finite("box", v)
+        require(self.box[0] < self.box[2] and self.box[1] < self.box[3],
+                f"box = {list(self.box)!r} must have x0 < x1 and y0 < y1")
+
+    def contains(self, points: np.ndarray) -> np.ndarray:
+        x0, y0, x1, y1 = self.box
+        return (points[:, 0] >= x0) & (points[:, 0] <= x1) & (points[:, 1] >= y0) & (points[:, 1] <= y1)
+
+
+@dataclass(frozen=True)
+class ChamberControl:
+    """How a chamber is driven: its schedule and, under area control, the penalty stiffness k."""
+
+    schedule: ChamberSchedule
+    stiffness: float = 1e5
+
+    def __post_init__(self):
+        require_finite("stiffness", self.stiffness)
+        require(self.stiffness > 0, f"chamber stiffness k = {self.stiffness!r} must be > 0")
+
+    def term(self, config, loop: np.ndarray, name: str) -> Chamber:
+        if self.schedule.control == "area":
+            return AreaChamber(config, loop, self.stiffness, name)
+        return PressureChamber(config, loop, name)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A whole scene. controls: one ChamberControl per chamber of geometry, in the same order."""
+
+    geometry: Geometry
+    controls: tuple[ChamberControl, ...]
+    increments: int
+    material: Material = field(default_factory=Material)
+    regions: tuple[Region, ...] = ()
+    clamp_stiffness: float = 1e9
+    effects: tuple[Effect, ...] = ()
+    name: str = "scene"
+
+    def __post_init__(self):
+        require_finite("clamp stiffness", self.clamp_stiffness)
+        require(self.clamp_stiffness > 0, f"clamp stiffness = {self.clamp_stiffness!r} must be > 0")
+        require(len(self.controls) == len(self.geometry.chambers),
+                f"{len(self.controls)} chamber controls for {len(self.geometry.chambers)} chambers")
+        kinds = [e.name for e in self.effects]
+        require(len(set(kinds)) == len(kinds), f"effects {kinds!r} name one effect twice")
+
+    @property
+    def schedule(self) -> Schedule:
+        return Schedule(self.increments, tuple(c.schedule for c in self.controls))
+
+    @property
+    def chamber_names(self) -> list[str]:
+        return [name for name, _ in self.geometry.chambers]
+
+    def element_moduli(self, mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+        """Young's modulus and Poisson's ratio of every triangle (base material, then regions in order)."""
+        centroids = mesh.vertices[mesh.triangles].mean(axis=1)
+        e = np.full(mesh.n_triangles, self.material.youngs_modulus)
+        nu = np.full(mesh.n_triangles, self.material.poisson_ratio)
+        for region in self.regions:
+            inside = region.contains(centroids)
+            e[inside], nu[inside] = region.material.youngs_modulus, region.material.poisson_ratio
+        return e, nu
 
     def build(self) -> "BuiltScene":
         """Mesh the geometry and instantiate exactly the terms this scene names."""
         runtime.ensure_initialised()
         mesh = self.geometry.mesh()
-        rest_area = signed_area(mesh.vertices[mesh.chamber_loop])
+        e, nu = self.element_moduli(mesh)
         # Round-off scales, from the stiffest modulus (lam grows without bound as nu -> 1/2):
         # forces below 1e-6 (mu + lam) sqrt(body area), energies below 1e-12 (mu + lam) (body area).
-        modulus = sum(lame_parameters(self.material.youngs_modulus, self.material.poisson_ratio))
+        modulus = float(np.max(np.sum(lame_parameters(e, nu), axis=0)))
         model = EnergyModel(mesh.vertices, force_floor=1e-6 * modulus * math.sqrt(mesh.area),
                             energy_resolution=1e-12 * modulus * mesh.area)
         config = model.config
-        elastic = model.add(NeoHookean(config, mesh.triangles, self.material.youngs_modulus, self.material.poisson_ratio))
-        chamber = model.add(AreaChamber(config, mesh.chamber_loop, self.chamber_stiffness, rest_area))
+        elastic = model.add(NeoHookean(config, mesh.triangles, e, nu))
+        chambers = [model.add(control.term(config, loop, name))
+                    for control, loop, name in zip(self.controls, mesh.chambers, self.chamber_names)]
         model.add(Clamp(config, mesh.pinned, self.clamp_stiffness))
-        return BuiltScene(self, mesh, model, elastic, chamber, rest_area)
+        lumped_area = np.zeros(mesh.n_vertices)
+        np.add.at(lumped_area, mesh.triangles.ravel(), np.repeat(triangle_areas(mesh.vertices, mesh.triangles) / 3, 3))
+        effects = {effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area)]
+                   for effect in self.effects}
+        return BuiltScene(self, mesh, model, elastic, chambers, effects)
 
 
 @dataclass
 class BuiltScene:
-    scene: BeamScene
+    """A meshed scene: its EnergyModel, and handles on the terms a run drives or reports."""
+
+    scene: Scene
     mesh: Mesh
     model: EnergyModel
     elastic: NeoHookean
-    chamber: AreaChamber
-    rest_area: float
+    chambers: list[Chamber]
+    effects: dict[str, list[Term]]
+
+    def set_commands(self, commands: np.ndarray) -> None:
+        for chamber, command in zip(self.chambers, commands):
+            chamber.set_command(command)
+
+
+def reference_scene(cy: float = 0.15, cx: float = 0.0, growth: float = 3.5, steps: int = 36,
+                    youngs_modulus: float = 1e4, poisson_ratio: float = 0.45, chamber_stiffness: float = 1e5,
+                    max_area: float = 0.0012, chamber_points: int = 128) -> Scene:
+    """SPEC.md's scene: the clamped 3.5 x 0.8 beam, one ellipse chamber ramped in area from 1 to growth."""
+    beam = BeamGeometry(cx=cx, cy=cy, max_area=max_area, chamber_points=chamber_points)
+    return Scene(beam.general(), (ChamberControl(area_ramp(growth, steps), chamber_stiffness),), steps - 1,
+                 Material(youngs_modulus, poisson_ratio), name=f"reference_cy{cy:+.2f}")
+

@@ -1,32 +1,47 @@
-"""Run an inflation ramp over a built scene: one warm-started Newton equilibrium per commanded area."""
+"""Run a scene's schedule: one warm-started Newton equilibrium per increment of the chambers' commands."""
 
 from __future__ import annotations
 
 import csv
 import io
+import math
 import time
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import require, require_finite
 from .newton import NewtonOptions, NewtonSolver, SolveRecord
 from .scene import BuiltScene
+from .schedule import Schedule
 
 MAX_CUTS = 8
 
 
 @dataclass
-class StepRecord:
-    """One increment of the ramp, as measured after its solve."""
+class ChamberRecord:
+    """One chamber after a solve: its command (area ratio or pressure), area, area ratio and pressure."""
 
-    step: int
-    target_area: float
+    control: str
+    command: float
     area: float
     area_ratio: float
     pressure: float
+
+
+@dataclass
+class StepRecord:
+    """One increment of the schedule, as measured after its solve.
+
+    tip_dx, tip_dy: mean displacement of the tip (right-edge) vertices; tip_rotation: their rigid
+    rotation in degrees (counter-clockwise positive, least squares); contact: per contact term the
+    total force it exerts on the body (fx, fy) and the sum of its per-vertex force magnitudes.
+    """
+
+    step: int
+    chambers: dict[str, ChamberRecord]
     tip_dx: float
     tip_dy: float
+    tip_rotation: float
     iterations: int
     residual: float
     converged: bool
@@ -34,6 +49,20 @@ class StepRecord:
     substeps: int
     min_det: float
     seconds: float
+    contact: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+
+    def row(self) -> dict[str, float]:
+        """Flat columns: step, <chamber>.<field> for each chamber, <contact>.fx/.fy/.magnitude, solver figures."""
+        row = {"step": self.step}
+        for name, c in self.chambers.items():
+            row.update({f"{name}.command": c.command, f"{name}.area": c.area, f"{name}.area_ratio": c.area_ratio,
+                        f"{name}.pressure": c.pressure})
+        row.update({"tip_dx": self.tip_dx, "tip_dy": self.tip_dy, "tip_rotation": self.tip_rotation})
+        for name, (fx, fy, magnitude) in self.contact.items():
+            row.update({f"{name}.fx": fx, f"{name}.fy": fy, f"{name}.magnitude": magnitude})
+        row.update({"iterations": self.iterations, "residual": self.residual, "converged": self.converged,
+                    "cuts": self.cuts, "substeps": self.substeps, "min_det": self.min_det, "seconds": self.seconds})
+        return row
 
 
 @dataclass
@@ -41,9 +70,11 @@ class RampResult:
     steps: list[StepRecord]
     states: np.ndarray  # (steps, n, 2) positions
     solves: list[SolveRecord]
+    contact_forces: np.ndarray | None = None  # (steps, n, 2) summed contact force per vertex, if any contact term
 
     def column(self, name: str) -> np.ndarray:
-        return np.array([getattr(s, name) for s in self.steps], dtype=float)
+        """A column of the history by its row() name, e.g. 'tip_dy' or 'main.pressure'."""
+        return np.array([s.row()[name] for s in self.steps], dtype=float)
 
     @property
     def tip_deflection(self) -> float:
@@ -51,35 +82,35 @@ class RampResult:
 
     @property
     def peak_pressure(self) -> float:
-        return float(np.max(np.abs(self.column("pressure"))))
+        return max(abs(c.pressure) for s in self.steps for c in s.chambers.values())
 
     def history_csv(self) -> str:
         buffer = io.StringIO()
-        writer = csv.DictWriter(buffer, fieldnames=[f.name for f in fields(StepRecord)])
+        rows = [s.row() for s in self.steps]
+        writer = csv.DictWriter(buffer, fieldnames=list(rows[0]) if rows else ["step"])
         writer.writeheader()
-        writer.writerows(asdict(s) for s in self.steps)
+        writer.writerows(rows)
         return buffer.getvalue()
 
 
-def area_ramp(rest_area: float, growth: float, steps: int) -> np.ndarray:
-    """Commanded areas: `steps` evenly spaced values from rest_area to growth * rest_area."""
-    require(require_finite("growth", growth) > 0, f"growth = {growth!r} must be > 0")
-    require(isinstance(steps, (int, np.integer)) and steps >= 2,
-            f"steps = {steps!r} must be an integer >= 2 (the rest state and at least one increment)")
-    return np.linspace(rest_area, growth * rest_area, steps)
+def predict(built: BuiltScene, previous, current, commands: np.ndarray) -> np.ndarray:
+    """Initial guess for the equilibrium at `commands`: linear extrapolation through the last two
+    equilibria (c, u) along the direction the commands last moved,
 
+        u_guess = u1 + s (u1 - u0),   s = (c - c1).(c1 - c0) / |c1 - c0|^2,
 
-def predict(built: BuiltScene, previous, current, value: float) -> np.ndarray:
-    """Initial guess for the equilibrium at commanded `value`: linear extrapolation through the last two
-    equilibria (a, u), u_guess = u1 + (u1 - u0) (value - a1) / (a1 - a0), unless that inverts a triangle
-    (then the last equilibrium u1)."""
-    a1, u1 = current
-    if previous is None or previous[0] == a1:
+    unless a term's max_step forbids the step from u1 to it (an inverted triangle, a contact crossed);
+    then the last equilibrium u1."""
+    c1, u1 = current
+    if previous is None:
         return u1
-    a0, u0 = previous
-    guess = u1 + (u1 - u0) * ((value - a1) / (a1 - a0))
-    built.model.set_displacements(guess)
-    return guess if built.elastic.min_determinant() > 0 else u1
+    c0, u0 = previous
+    step = c1 - c0
+    if not np.any(step):
+        return u1
+    move = (u1 - u0) * (float(np.dot(commands - c1, step)) / float(np.dot(step, step)))
+    built.model.set_displacements(u1)
+    return u1 + move if built.model.max_step(move.ravel()) > 1.0 else u1
 
 
 class RampFailed(RuntimeError):
@@ -90,56 +121,95 @@ class RampFailed(RuntimeError):
         self.partial = partial
 
 
-def run_ramp(built: BuiltScene, targets: np.ndarray, options: NewtonOptions | None = None,
-             progress=None, max_cuts: int = MAX_CUTS) -> RampResult:
-    """Solve for equilibrium at each commanded area in turn, each solve starting from the last.
+def tip_rotation(rest: np.ndarray, current: np.ndarray) -> float:
+    """Least-squares rigid rotation (degrees) taking the centred rest points to the centred current ones."""
+    r, c = rest - rest.mean(axis=0), current - current.mean(axis=0)
+    return math.degrees(math.atan2(float(np.sum(r[:, 0] * c[:, 1] - r[:, 1] * c[:, 0])), float(np.sum(r * c))))
 
-    An increment whose Newton solve does not converge is cut back: the remaining change of the
-    commanded area is halved and the smaller sub-increment solved from the last equilibrium, as
+
+def describe_commands(built: BuiltScene, commands: np.ndarray, reached: np.ndarray) -> str:
+    """The commands of a failed solve in words, each chamber by name when there are several."""
+    parts = []
+    for chamber, command, last in zip(built.chambers, commands, reached):
+        if chamber.control == "area":
+            text = f"commanded area {command * chamber.rest_area:.6g} ({command:.4g} x rest)"
+        else:
+            text = f"pressure {command:.6g} (last equilibrium at pressure {last:.6g})"
+        parts.append(text if len(built.chambers) == 1 else f"chamber {chamber.chamber_name!r} {text}")
+    return "; ".join(parts)
+
+
+def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: NewtonOptions | None = None,
+                 progress=None, max_cuts: int = MAX_CUTS) -> RampResult:
+    """Solve for equilibrium at each step of the schedule (the scene's own by default), each from the last.
+
+    An increment whose Newton solve does not converge is cut back: the remaining change of all
+    chamber commands is halved and the smaller sub-increment solved from the last equilibrium, as
     often as max_cuts times per increment; every cut is counted in the history. If it still fails,
-    RampFailed names the step, the commanded area and the residual, and carries the steps done.
-    progress, if given, is called as progress(step_record) after every increment.
+    RampFailed names the step, the commands (for pressure control, the last pressure reached) and
+    the residual, and carries the steps done. progress, if given, is called as progress(step_record)
+    after every increment.
     """
+    schedule = schedule or built.scene.schedule
     solver = NewtonSolver(built.model, options)
     mesh = built.mesh
+    contact_terms = [(name, t) for name, terms in built.effects.items() for t in terms if t.reports_contact]
     u = np.zeros_like(mesh.vertices)
-    steps, states, solves = [], [], []
-    reached = float(targets[0])
-    previous = None  # (commanded value, u) of the equilibrium before the last one, for the predictor
-    for i, target in enumerate(targets):
+    steps, states, solves, forces = [], [], [], []
+    reached = schedule.rest_commands
+    previous = None  # (commands, u) of the equilibrium before the last one, for the predictor
+
+    def partial():
+        return RampResult(steps, np.array(states).reshape(-1, *mesh.vertices.shape), solves,
+                          np.array(forces).reshape(-1, *mesh.vertices.shape) if contact_terms else None)
+
+    for i in range(schedule.increments + 1):
         start = time.perf_counter()
         records: list[SolveRecord] = []
-        increment, cuts = float(target) - reached, 0
+        origin, target = reached, schedule.commands(i)
+        done, fraction, cuts = 0.0, 1.0, 0
         while True:
-            trial = float(target) if abs(float(target) - reached) <= abs(increment) else reached + increment
-            built.chamber.target_area = trial
-            u_trial, record = solver.solve(predict(built, previous, (reached, u), trial))
+            trial = min(1.0, done + fraction)
+            commands = origin + trial * (target - origin)
+            built.set_commands(commands)
+            u_trial, record = solver.solve(predict(built, previous, (reached, u), commands))
             records.append(record)
             if record.converged:
                 previous = (reached, u)
-                u, reached = u_trial, trial
-                if trial == float(target):
+                u, done, reached = u_trial, trial, commands
+                if trial == 1.0:
                     break
             elif cuts < max_cuts:
                 cuts += 1
-                increment /= 2
+                fraction /= 2
             else:
                 built.model.set_displacements(u)
                 raise RampFailed(
-                    f"step {i}: no equilibrium at commanded area {trial:.6g} ({trial / built.rest_area:.4g} x rest) "
-                    f"after {cuts} cuts; residual {record.residual:.2e} ({record.message})",
-                    RampResult(steps, np.array(states).reshape(-1, *mesh.vertices.shape), solves))
+                    f"step {i}: no equilibrium at {describe_commands(built, commands, reached)} after {cuts} cuts; "
+                    f"residual {record.residual:.2e} ({record.message})", partial())
+        built.set_commands(target)
         built.model.set_displacements(u)
-        area = built.chamber.area()
-        tip = u[mesh.tip].mean(axis=0)
         final = records[-1]
-        step = StepRecord(i, float(target), area, area / built.rest_area, built.chamber.pressure(),
-                          float(tip[0]), float(tip[1]), sum(r.iterations for r in records), final.residual,
-                          final.converged, cuts, len(records) - cuts, built.elastic.min_determinant(),
-                          time.perf_counter() - start)
+        chambers = {}
+        for chamber, command in zip(built.chambers, target):
+            area = chamber.area()
+            chambers[chamber.chamber_name] = ChamberRecord(chamber.control, float(command), area,
+                                                           area / chamber.rest_area, chamber.pressure())
+        contact, vertex_forces = {}, np.zeros_like(u)
+        for name, term in contact_terms:
+            f = -term.gradient()
+            vertex_forces += f
+            fx, fy = f.sum(axis=0)
+            contact[name] = (float(fx), float(fy), float(np.linalg.norm(f, axis=1).sum()))
+        tip = u[mesh.tip].mean(axis=0)
+        step = StepRecord(i, chambers, float(tip[0]), float(tip[1]),
+                          tip_rotation(mesh.vertices[mesh.tip], mesh.vertices[mesh.tip] + u[mesh.tip]),
+                          sum(r.iterations for r in records), final.residual, final.converged, cuts,
+                          len(records) - cuts, built.elastic.min_determinant(), time.perf_counter() - start, contact)
         steps.append(step)
         states.append(mesh.vertices + u)
+        forces.append(vertex_forces)
         solves.append(final)
         if progress is not None:
             progress(step)
-    return RampResult(steps, np.array(states), solves)
+    return partial()

@@ -51,7 +51,7 @@ def test_short_run_writes_history_states_and_summary(tmp_path, capsys):
     history = np.genfromtxt(out / "inflate_cy+0.15_history.csv", delimiter=",", names=True)
     states = np.load(out / "inflate_cy+0.15_states.npz")
     assert len(history) == 4 and states["positions"].shape == (4, summary["vertices"], 2)
-    assert summary["all_converged"] and summary["area_ratio"] == pytest.approx(1.5, abs=0.01)
+    assert summary["all_converged"] and summary["chambers"]["main"]["area_ratio"] == pytest.approx(1.5, abs=0.01)
     tip = states["positions"][-1][states["tip"]] - states["rest"][states["tip"]]
     assert tip[:, 1].mean() == pytest.approx(summary["tip_deflection"], abs=1e-12)
     assert not [p for p in os.listdir(out) if "partial" in p]

@@ -6,8 +6,8 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.geometry import BeamGeometry
 from taichi_pneuma.newton import NewtonOptions
 from taichi_pneuma.output import prepare_directory
-from taichi_pneuma.scene import BeamScene, Material
-from taichi_pneuma.simulate import area_ramp
+from taichi_pneuma.scene import ChamberControl, Material, reference_scene
+from taichi_pneuma.schedule import area_ramp
 
 INF, NAN = float("inf"), float("nan")
 
@@ -18,18 +18,18 @@ INF, NAN = float("inf"), float("nan")
     (lambda: Material(youngs_modulus=0.0), r"E = 0.0 must be > 0"),
     (lambda: Material(youngs_modulus=INF), r"E = inf must be a finite number"),
     (lambda: Material(poisson_ratio=NAN), r"nu = nan must be a finite number"),
-    (lambda: BeamScene(chamber_stiffness=0.0), r"k = 0.0 must be > 0"),
-    (lambda: BeamScene(chamber_stiffness=-1e5), r"k = -100000.0 must be > 0"),
-    (lambda: BeamScene(clamp_stiffness=NAN), r"K_pin = nan"),
+    (lambda: reference_scene(chamber_stiffness=0.0), r"k = 0.0 must be > 0"),
+    (lambda: ChamberControl(area_ramp(3.5, 36), stiffness=-1e5), r"k = -100000.0 must be > 0"),
+    (lambda: ChamberControl(area_ramp(3.5, 36), stiffness=NAN), r"stiffness = nan"),
     (lambda: BeamGeometry(cy=NAN), r"cy = nan"),
     (lambda: BeamGeometry(cy=0.2), r"escapes the beam vertically"),
     (lambda: BeamGeometry(chamber_points=3), r"chamber_points = 3"),
-    (lambda: area_ramp(1.0, 0.0, 36), r"growth = 0.0 must be > 0"),
-    (lambda: area_ramp(1.0, -2.0, 36), r"growth = -2.0 must be > 0"),
-    (lambda: area_ramp(1.0, INF, 36), r"growth = inf must be a finite number"),
-    (lambda: area_ramp(1.0, 3.5, 0), r"steps = 0 must be an integer >= 2"),
-    (lambda: area_ramp(1.0, 3.5, 1), r"steps = 1 must be an integer >= 2"),
-    (lambda: area_ramp(1.0, 3.5, 2.5), r"steps = 2.5 must be an integer"),
+    (lambda: area_ramp(0.0, 36), r"growth = 0.0 must be > 0"),
+    (lambda: area_ramp(-2.0, 36), r"growth = -2.0 must be > 0"),
+    (lambda: area_ramp(INF, 36), r"growth = inf must be a finite number"),
+    (lambda: area_ramp(3.5, 0), r"steps = 0 must be an integer >= 2"),
+    (lambda: area_ramp(3.5, 1), r"steps = 1 must be an integer >= 2"),
+    (lambda: area_ramp(3.5, 2.5), r"steps = 2.5 must be an integer"),
     (lambda: NewtonOptions(tol=NAN), r"tol = nan"),
     (lambda: NewtonOptions(tol=0.0), r"tol = 0.0 must be > 0"),
     (lambda: NewtonOptions(max_iterations=0), r"max_iterations = 0"),

@@ -4,16 +4,15 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from taichi_pneuma.geometry import BeamGeometry
 from taichi_pneuma.linsolve import BACKENDS, FactorizationError, FixedPattern, make_backend
 from taichi_pneuma.newton import NewtonOptions
-from taichi_pneuma.scene import BeamScene
-from taichi_pneuma.simulate import area_ramp, run_ramp
+from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.simulate import run_schedule
 
 
 @pytest.fixture(scope="module")
 def hessian():
-    built = BeamScene(BeamGeometry(cy=0.15, max_area=0.01)).build()
+    built = reference_scene(cy=0.15, max_area=0.01).build()
     built.model.set_displacements(0.05 * built.mesh.vertices)
     rows, cols = built.model.hessian_pattern()
     return FixedPattern(rows, cols, built.model.n_dofs).matrix(built.model.hessian_values(psd_only=True))
@@ -40,8 +39,8 @@ def test_cholesky_backends_refuse_indefinite(name):
 def test_ramp_is_the_same_with_every_backend():
     tips = []
     for name in sorted(BACKENDS):
-        built = BeamScene(BeamGeometry(cy=0.15, max_area=0.01)).build()
-        result = run_ramp(built, area_ramp(built.rest_area, 2.0, 6), NewtonOptions(linear_solver=name))
+        built = reference_scene(cy=0.15, growth=1.5, steps=3, max_area=0.01).build()
+        result = run_schedule(built, options=NewtonOptions(linear_solver=name))
         assert all(s.converged for s in result.steps)
         tips.append(result.states[-1])
     for state in tips[1:]:

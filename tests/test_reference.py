@@ -3,10 +3,9 @@
 import numpy as np
 import pytest
 
-from taichi_pneuma.geometry import BeamGeometry
 from taichi_pneuma.newton import NewtonOptions
-from taichi_pneuma.scene import BeamScene
-from taichi_pneuma.simulate import area_ramp, run_ramp
+from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.simulate import run_schedule
 
 pytestmark = pytest.mark.slow
 TOL = NewtonOptions().tol
@@ -16,8 +15,8 @@ TOL = NewtonOptions().tol
 def ramps():
     results = {}
     for cy in (0.15, 0.0, -0.15):
-        built = BeamScene(BeamGeometry(cy=cy)).build()
-        results[cy] = (built, run_ramp(built, area_ramp(built.rest_area, 3.5, 36)))
+        built = reference_scene(cy=cy).build()
+        results[cy] = (built, run_schedule(built))
     return results
 
 
@@ -28,12 +27,12 @@ def test_tip_deflection(ramps, cy, tip):
 
 @pytest.mark.parametrize("cy", [0.15, 0.0, -0.15])
 def test_area_ratio(ramps, cy):
-    assert ramps[cy][1].steps[-1].area_ratio == pytest.approx(3.49, abs=0.01)
+    assert ramps[cy][1].steps[-1].chambers["main"].area_ratio == pytest.approx(3.49, abs=0.01)
 
 
 def test_area_after_ramp_and_peak_pressure(ramps):
     built, result = ramps[0.15]
-    assert result.steps[-1].area == pytest.approx(2.052, abs=0.005)
+    assert result.steps[-1].chambers["main"].area == pytest.approx(2.052, abs=0.005)
     assert result.peak_pressure == pytest.approx(294.8, rel=0.01)
 
 
@@ -54,7 +53,7 @@ def test_every_step_converges_without_inversion(ramps, cy):
 
 def test_pressure_rises_monotonically_and_bend_direction(ramps):
     _, result = ramps[0.15]
-    pressure = result.column("pressure")
+    pressure = result.column("main.pressure")
     assert np.all(np.diff(pressure) > 0)
     # a chamber above the neutral axis first lifts the tip slightly, then curls the beam down
     assert result.column("tip_dy")[-1] < 0

@@ -13,10 +13,9 @@ import pytest
 from taichi_pneuma import render
 from taichi_pneuma.apps import inflate, steer
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.geometry import BeamGeometry
 from taichi_pneuma.render import CHAMBER_FILL, FACE, BACKGROUND, FrameRenderer, Track
-from taichi_pneuma.scene import BeamScene
-from taichi_pneuma.simulate import area_ramp, run_ramp
+from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.simulate import run_schedule
 from taichi_pneuma.video import write_video
 
 COARSE = ["--max-area", "0.01", "--growth", "2", "--steps", "3", "--quiet"]
@@ -24,9 +23,9 @@ COARSE = ["--max-area", "0.01", "--growth", "2", "--steps", "3", "--quiet"]
 
 @pytest.fixture(scope="module")
 def track():
-    built = BeamScene(BeamGeometry(cy=0.15, max_area=0.01)).build()
-    result = run_ramp(built, area_ramp(built.rest_area, 2.0, 3))
-    return Track.from_ramp(built.mesh, result, built.rest_area)
+    built = reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.01).build()
+    result = run_schedule(built)
+    return Track.from_ramp(built.mesh, result)
 
 
 def rgb8(color):
@@ -55,7 +54,7 @@ def test_frame_shows_the_mesh_and_the_filled_chamber(track, backend, capsys):
     face = pixels_at(renderer, image, centroids)
     near_face = np.all(np.abs(face - rgb8(FACE)) < 40, axis=1)  # some centroids fall on a drawn edge
     assert near_face.mean() > 0.6
-    chamber_centre = x[track.mesh.chamber_loop].mean(axis=0, keepdims=True)
+    chamber_centre = x[track.mesh.chambers[0]].mean(axis=0, keepdims=True)
     assert np.all(np.abs(pixels_at(renderer, image, chamber_centre) - rgb8(CHAMBER_FILL)) <= 3)
     below_beam = np.array([[x[:, 0].mean(), x[:, 1].min() - 0.05]])  # just under the bent beam: background
     assert np.all(np.abs(pixels_at(renderer, image, below_beam) - rgb8(BACKGROUND)) <= 3)
@@ -163,7 +162,7 @@ def test_interactive_window_resolves_when_the_slider_moves(xvfb_display, monkeyp
 
     moves = iter([1.0, 1.0, 1.3, 1.3, 1.6])  # the slider's values on successive frames
     monkeypatch.setattr(render.GUICanvas, "slider", lambda self, label, value, low, high: next(moves))
-    scene = BeamScene(BeamGeometry(cy=0.15, max_area=0.01))
+    scene = reference_scene(cy=0.15, max_area=0.01)
     assert explore(scene, 2.0, (320, 160), "gui", max_frames=5) == {"all_converged": True, "solves": 3}
     printed = capsys.readouterr().out
     assert "area x1.300" in printed and "area x1.600" in printed

@@ -4,9 +4,8 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from taichi_pneuma.geometry import BeamGeometry
 from taichi_pneuma.linsolve import FixedPattern, make_backend, solve_low_rank_updated
-from taichi_pneuma.scene import BeamScene
+from taichi_pneuma.scene import reference_scene
 
 H = 1e-6
 
@@ -14,8 +13,8 @@ H = 1e-6
 @pytest.fixture(scope="module")
 def coarse():
     """A coarse beam (few DOFs, so dense finite differences are cheap) with the chamber commanded to 1.5x."""
-    built = BeamScene(BeamGeometry(cy=0.15, chamber_points=32, max_area=0.02)).build()
-    built.chamber.target_area = 1.5 * built.rest_area
+    built = reference_scene(cy=0.15, chamber_points=32, max_area=0.02).build()
+    built.set_commands([1.5])
     return built
 
 
@@ -109,23 +108,25 @@ def test_projected_hessian_is_psd_and_differs_under_compression(coarse):
 
 def test_chamber_force_is_a_pressure_load():
     """For the centred chamber the net chamber force vanishes at any state: a closed loop's normals sum to zero."""
-    built = BeamScene(BeamGeometry(cy=0.0, chamber_points=32, max_area=0.02)).build()
-    built.chamber.target_area = 2.0 * built.rest_area
+    built = reference_scene(cy=0.0, chamber_points=32, max_area=0.02).build()
+    built.set_commands([2.0])
+    chamber = built.chambers[0]
     for seed in range(3):
         built.model.set_displacements(random_state(built, seed=seed))
-        force = -built.chamber.gradient()
+        force = -chamber.gradient()
         assert np.abs(force.sum(axis=0)).max() < 1e-12 * np.abs(force).sum()
         # and it is the pressure times the wall's area gradient, pushing outward (p > 0 when A < A*)
-        assert built.chamber.pressure() > 0
+        assert chamber.pressure() > 0
 
 
 def test_rest_area_and_pressure_sign():
-    built = BeamScene().build()
-    assert built.rest_area == pytest.approx(0.587, abs=5e-4)
+    built = reference_scene().build()
+    chamber = built.chambers[0]
+    assert chamber.rest_area == pytest.approx(0.587, abs=5e-4)
     built.model.set_displacements(np.zeros_like(built.mesh.vertices))
-    assert built.chamber.area() == pytest.approx(built.rest_area, rel=1e-14)
-    built.chamber.target_area = 1.1 * built.rest_area
-    assert built.chamber.pressure() == pytest.approx(1e5 * 0.1 * built.rest_area)
+    assert chamber.area() == pytest.approx(chamber.rest_area, rel=1e-14)
+    built.set_commands([1.1])
+    assert chamber.pressure() == pytest.approx(1e5 * 0.1 * chamber.rest_area)
 
 
 def test_fixed_pattern_and_woodbury_solve(coarse):

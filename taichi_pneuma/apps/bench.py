@@ -22,12 +22,11 @@ import numpy as np
 
 from .. import runtime
 from ..errors import PneumaInputError, require
-from ..geometry import BeamGeometry
 from ..linsolve import BACKENDS, FixedPattern, make_backend
 from ..newton import NewtonOptions
 from ..output import prepare_directory, save_json, save_text, write_atomic
-from ..scene import BeamScene
-from ..simulate import area_ramp, run_ramp
+from ..scene import reference_scene
+from ..simulate import run_schedule
 
 SECTIONS = ("breakdown", "backends", "accuracy", "scaling")
 REFERENCE_TUTORIAL_SECONDS = 25.0  # SPEC.md: the NumPy/SciPy tutorial's cy = 0.15 ramp on this kind of machine
@@ -46,23 +45,23 @@ def markdown(header: list[str], rows: list[list]) -> str:
 
 def timed_ramp(max_area=0.0012, steps=36, growth=3.5, options=None, cy=0.15):
     """Build, warm the kernels up on a tiny ramp, then time the ramp; return (built, result, seconds)."""
-    built = BeamScene(BeamGeometry(cy=cy, max_area=max_area)).build()
-    run_ramp(built, area_ramp(built.rest_area, 1.01, 2), options)
+    run_schedule(reference_scene(cy, growth=1.01, steps=2, max_area=max_area).build(), options=options)
+    built = reference_scene(cy, growth=growth, steps=steps, max_area=max_area).build()
     start = time.perf_counter()
-    result = run_ramp(built, area_ramp(built.rest_area, growth, steps), options)
+    result = run_schedule(built, options=options)
     return built, result, time.perf_counter() - start
 
 
 def breakdown() -> tuple[str, dict]:
     """Where the time of one reference ramp goes, with the one-off kernel compile/load separately."""
     start = time.perf_counter()
-    built = BeamScene(BeamGeometry(cy=0.15)).build()
+    built = reference_scene(0.15).build()
     build_seconds = time.perf_counter() - start
     start = time.perf_counter()
-    run_ramp(built, area_ramp(built.rest_area, 1.01, 2))
+    run_schedule(reference_scene(0.15, growth=1.01, steps=2).build())
     first_call = time.perf_counter() - start
     start = time.perf_counter()
-    result = run_ramp(built, area_ramp(built.rest_area, 3.5, 36))
+    result = run_schedule(built)
     ramp_seconds = time.perf_counter() - start
     phases = collections.Counter()
     for solve in result.solves:
@@ -134,7 +133,7 @@ def accuracy(out: Path) -> tuple[str, dict]:
             reference = references["mesh" if kind == "mesh" else "tight"]
             errors = {
                 "tip": abs(result.tip_deflection / reference.tip_deflection - 1),
-                "area": abs(result.steps[-1].area / reference.steps[-1].area - 1),
+                "area": abs(result.column("main.area")[-1] / reference.column("main.area")[-1] - 1),
                 "pressure": abs(result.peak_pressure / reference.peak_pressure - 1),
             }
             data[knob].append({"value": value, "seconds": seconds, **errors})

@@ -1,11 +1,13 @@
-"""Inflate the chamber of the reference beam and report how it bends.
+"""Run a scene's schedule (a scene file, or the reference beam by its flags) and show how it bends.
 
     python -m taichi_pneuma.apps.inflate --cy 0.15
+    python -m taichi_pneuma.apps.inflate --scene assets/scenes/bidirectional.toml
 
-Prints the mesh size, the chamber's rest area, the final area ratio, the tip deflection and the
-peak chamber pressure; writes the per-step history (CSV), the states (npz) and a summary (JSON)
-under --out, and, unless --no-video, a video of the ramp (beam beside its area/pressure trace) and
-a PNG of its last frame. --interactive instead opens a window with a slider for the commanded area.
+Prints the mesh size, the terms built, each chamber's rest area, final area ratio and pressure,
+the tip deflection and rotation and the peak chamber pressure; writes the per-step history (CSV),
+the states (npz) and a summary (JSON) under --out, and, unless --no-video, a video of the run
+(beam beside its area/pressure trace) and a PNG of its last frame. --interactive instead opens a
+window with a slider for the commanded area.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ import os
 import sys
 import time
 
+import numpy as np
 from tqdm import tqdm
 
 from .. import runtime
@@ -23,16 +26,17 @@ from ..geometry import BeamGeometry
 from ..newton import NewtonOptions
 from ..output import prepare_directory, save_json, save_npz, save_text
 from ..render import BACKENDS
-from ..scene import BeamScene, Material
-from ..simulate import MAX_CUTS, RampFailed, area_ramp, run_ramp
-
+from ..scene import Scene, reference_scene
+from ..scenefile import load_scene
+from ..schedule import area_ramp
+from ..simulate import MAX_CUTS, RampFailed, run_schedule
 
 # --quality presets: (max triangle area, Newton tolerance); see the README's accuracy-versus-time study
 QUALITY = {"draft": (0.005, 1e-4), "default": (BeamGeometry.max_area, NewtonOptions.tol), "high": (0.0003, 1e-9)}
 
 
 def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
-    """The scene, ramp, solver and output flags shared by the apps (all but the chamber height)."""
+    """The reference-beam, ramp, solver and output flags shared by the apps (all but the chamber height)."""
     p.add_argument("--cx", type=float, default=0.0, help="chamber centre along the beam")
     p.add_argument("--growth", type=float, default=3.5, help="final commanded area / rest area")
     p.add_argument("--steps", type=int, default=36, help="commanded areas in the ramp, rest included")
@@ -57,7 +61,7 @@ def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
     """The rendering flags shared by the apps."""
     p.add_argument("--video", default=None,
                    help="video file (.mp4 H.264 or .gif); default <out>/<name>.mp4")
-    p.add_argument("--fps", type=float, default=12.0, help="video frames per second (one frame per ramp step)")
+    p.add_argument("--fps", type=float, default=12.0, help="video frames per second (one frame per step)")
     p.add_argument("--size", default=size, help="frame size WIDTHxHEIGHT in pixels")
     p.add_argument("--renderer", default="auto", choices=BACKENDS,
                    help="auto: GGUI (Vulkan) if available, else ti.GUI")
@@ -67,6 +71,8 @@ def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.inflate", description=__doc__.split("\n")[0],
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--scene", help="a scene file (TOML); the reference-beam flags (--cy --cx --growth --steps --E --nu "
+                                   "--k --max-area) are then ignored")
     p.add_argument("--cy", type=float, default=0.15, help="chamber centre height (above the neutral axis curls down)")
     add_ramp_arguments(p)
     add_video_arguments(p, "960x384")
@@ -94,10 +100,8 @@ def newton_options(args: argparse.Namespace) -> NewtonOptions:
     return NewtonOptions(tol=args.tol, max_iterations=args.max_iterations)
 
 
-def scene_for(args: argparse.Namespace, cy: float) -> BeamScene:
-    """The validated scene of the flags with its chamber at height cy (raises PneumaInputError on bad flags).
-
-    --max-area and --tol not given take their values from the --quality preset."""
+def check_flags(args: argparse.Namespace) -> None:
+    """Validate the solver flags; --max-area and --tol not given take their values from --quality."""
     max_area, tol = QUALITY[args.quality]
     args.max_area = max_area if args.max_area is None else args.max_area
     args.tol = tol if args.tol is None else args.tol
@@ -105,38 +109,46 @@ def scene_for(args: argparse.Namespace, cy: float) -> BeamScene:
         require_finite(f"--{name.replace('_', '-')}", getattr(args, name))
     newton_options(args)  # validates --tol and --max-iterations
     require(args.max_cuts >= 0, f"--max-cuts = {args.max_cuts!r} must be >= 0")
-    area_ramp(1.0, args.growth, args.steps)  # validates growth and steps before any work
-    return BeamScene(BeamGeometry(cx=args.cx, cy=require_finite("--cy", cy), max_area=args.max_area),
-                     Material(args.E, args.nu), chamber_stiffness=args.k)
+    area_ramp(args.growth, args.steps)  # validates growth and steps before any work
 
 
-def build(scene: BeamScene):
-    """Mesh the scene, build its terms and print the mesh size and the chamber's rest area."""
+def scene_for(args: argparse.Namespace, cy: float) -> Scene:
+    """The validated reference scene of the flags with its chamber at height cy (PneumaInputError on bad flags)."""
+    check_flags(args)
+    return reference_scene(require_finite("--cy", cy), args.cx, args.growth, args.steps, args.E, args.nu, args.k,
+                           args.max_area)
+
+
+def build(scene: Scene):
+    """Mesh the scene, build its terms and print the mesh size, the terms and each chamber's rest area."""
     built = scene.build()
     mesh = built.mesh
-    print(f"mesh: {mesh.n_vertices} vertices, {mesh.n_triangles} triangles; chamber wall {len(mesh.chamber_loop)} "
-          f"vertices, clamp {len(mesh.pinned)} vertices")
-    print(f"chamber rest area: {built.rest_area:.3f}")
+    print(f"scene {scene.name}: mesh {mesh.n_vertices} vertices, {mesh.n_triangles} triangles; "
+          f"clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
+    for chamber in built.chambers:
+        print(f"chamber {chamber.chamber_name}: {chamber.control} control, wall {chamber.n_wall} vertices, "
+              f"rest area {chamber.rest_area:.3f}")
     return built
 
 
 def solve(args: argparse.Namespace, built, label: str = "solving"):
-    """Run the flags' ramp on a built scene with a progress bar; return (result, wall seconds).
+    """Run the scene's schedule with a progress bar; return (result, wall seconds).
 
     Raises RampFailed (carrying the converged steps) when an increment fails after its cuts."""
-    bar = tqdm(total=args.steps, desc=label, unit="step", disable=args.quiet, leave=False)
+    increments = built.scene.increments
+    bar = tqdm(total=increments + 1, desc=label, unit="step", disable=args.quiet, leave=False)
 
     def progress(step):
         bar.update()
         if not args.quiet:
-            bar.write(f"  step {step.step:3d}/{args.steps - 1}  area x{step.area_ratio:5.3f}  "
-                      f"p = {step.pressure:8.2f}  tip dy = {step.tip_dy:+.4f}  {step.iterations:2d} Newton it  "
-                      f"{step.cuts} cuts  residual {step.residual:.1e}")
+            chambers = "  ".join(f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}" for name, c in step.chambers.items())
+            bar.write(f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {step.tip_dy:+.4f} "
+                      f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  {step.cuts} cuts  "
+                      f"residual {step.residual:.1e}")
 
     start = time.perf_counter()
     with bar:
-        result = run_ramp(built, area_ramp(built.rest_area, args.growth, args.steps), newton_options(args), progress,
-                          args.max_cuts)
+        result = run_schedule(built, options=newton_options(args), progress=progress, max_cuts=args.max_cuts)
     return result, time.perf_counter() - start
 
 
@@ -146,12 +158,19 @@ def render_report(export, seconds_per_step: float) -> str:
 
 
 def run(args: argparse.Namespace) -> dict:
-    scene = scene_for(args, args.cy)
+    if args.scene:
+        check_flags(args)
+        scene = load_scene(args.scene)
+        stem = scene.name
+    else:
+        scene = scene_for(args, args.cy)
+        stem = f"inflate_cy{args.cy:+.2f}"
     size = rendering_flags(args)
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
     if args.interactive:
         require(bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")),
                 "--interactive needs a display (DISPLAY is not set); run without it for headless video output")
+        require(scene.controls[0].schedule.control == "area", "--interactive needs an area-controlled first chamber")
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     if args.interactive:
@@ -159,7 +178,6 @@ def run(args: argparse.Namespace) -> dict:
         return explore(scene, args.growth, size, args.renderer, newton_options(args))
     built = build(scene)
     mesh = built.mesh
-    stem = f"inflate_cy{args.cy:+.2f}"
     try:
         result, wall = solve(args, built)
     except RampFailed as failure:
@@ -170,29 +188,37 @@ def run(args: argparse.Namespace) -> dict:
     iterations = result.column("iterations")[1:]
     seconds_per_step = float(result.column("seconds")[1:].mean())
     summary = {
-        "cx": args.cx, "cy": args.cy, "vertices": mesh.n_vertices, "triangles": mesh.n_triangles,
-        "rest_area": built.rest_area, "final_area": final.area, "area_ratio": final.area_ratio,
-        "tip_deflection": result.tip_deflection, "peak_pressure": result.peak_pressure,
+        "scene": scene.name, "terms": built.model.term_names(),
+        "vertices": mesh.n_vertices, "triangles": mesh.n_triangles,
+        "chambers": {name: {"control": c.control, "rest_area": c.area / c.area_ratio, "final_area": c.area,
+                            "area_ratio": c.area_ratio, "final_pressure": c.pressure,
+                            "peak_pressure": float(np.abs(result.column(f"{name}.pressure")).max())}
+                     for name, c in final.chambers.items()},
+        "tip_deflection": result.tip_deflection, "tip_rotation_deg": final.tip_rotation,
+        "peak_pressure": result.peak_pressure, "contact": final.contact,
         "all_converged": bool(all(s.converged for s in result.steps)),
         "max_residual": float(result.column("residual").max()),
         "min_det_F": float(result.column("min_det").min()),
-        "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max()),
+        "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max(initial=0)),
         "increment_cuts": int(result.column("cuts").sum()),
         "wall_seconds": wall, "solve_seconds_per_step": seconds_per_step,
     }
-    print(f"area: {built.rest_area:.3f} -> {final.area:.3f} (x{final.area_ratio:.2f})")
-    print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}")
+    for name, c in final.chambers.items():
+        print(f"{name}: area {c.area / c.area_ratio:.3f} -> {c.area:.3f} (x{c.area_ratio:.2f}), pressure {c.pressure:.1f}")
+    print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}; "
+          f"tip rotation {final.tip_rotation:+.1f} deg")
     print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}")
+    for name, (fx, fy, magnitude) in final.contact.items():
+        print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g})")
     print(f"Newton: {summary['newton_iterations_total']} iterations over {len(iterations)} solves "
           f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
-          f"all converged: {summary['all_converged']}; ramp {wall:.2f} s")
+          f"all converged: {summary['all_converged']}; run {wall:.2f} s")
     written = []
     if not args.no_video:
         from ..render import FrameRenderer, Track
         from ..video import export
 
-        renderer = FrameRenderer([Track.from_ramp(mesh, result, built.rest_area)], *size, trace=True,
-                                 backend=args.renderer)
+        renderer = FrameRenderer([Track.from_ramp(mesh, result)], *size, trace=True, backend=args.renderer)
         done = export(renderer, args.video or out / f"{stem}.mp4", out / f"{stem}.png", args.fps, args.quiet)
         summary.update(renderer=renderer.canvas.name, video_frames=done.frames, video_size=[done.width, done.height],
                        render_ms_per_frame=done.ms_per_frame)
@@ -204,14 +230,27 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def save_history(out, stem: str, built, result) -> list:
-    """Write the per-step history (CSV) and the states (npz) of a ramp, complete or partial."""
+    """Write the per-step history (CSV) and the states (npz) of a run, complete or partial.
+
+    The npz holds positions (steps, n, 2), rest, triangles, pinned, tip, boundary, chamber_names and
+    one chamber_loop_<i> per chamber, command / area / pressure as (steps, chambers), and, where
+    the scene has them, contact_forces (steps, n, 2) and ground_height.
+    """
     mesh = built.mesh
+    names = [c.chamber_name for c in built.chambers]
+    arrays = dict(positions=result.states, rest=mesh.vertices, triangles=mesh.triangles, pinned=mesh.pinned,
+                  tip=mesh.tip, boundary=mesh.boundary, chamber_names=np.array(names),
+                  **{f"chamber_loop_{i}": loop for i, loop in enumerate(mesh.chambers)},
+                  **{key: np.column_stack([result.column(f"{n}.{key}") for n in names])
+                     for key in ("command", "area", "pressure")})
+    if result.contact_forces is not None:
+        arrays["contact_forces"] = result.contact_forces
+    for effect in built.scene.effects:
+        if effect.name == "ground":
+            arrays["ground_height"] = np.array(effect.height)
     return [
         save_text(out / f"{stem}_history.csv", result.history_csv()),
-        save_npz(out / f"{stem}_states.npz", positions=result.states, rest=mesh.vertices, triangles=mesh.triangles,
-                 chamber_loop=mesh.chamber_loop, pinned=mesh.pinned, tip=mesh.tip,
-                 target_area=result.column("target_area"), area=result.column("area"),
-                 pressure=result.column("pressure")),
+        save_npz(out / f"{stem}_states.npz", **arrays),
     ]
 
 

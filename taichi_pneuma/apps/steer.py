@@ -45,7 +45,7 @@ def run(args: argparse.Namespace) -> dict:
         from ..render import FrameRenderer, Track
         from ..video import export
 
-        tracks = [Track.from_ramp(built.mesh, result, built.rest_area, f"cy = {cy:+.2f}: {title}")
+        tracks = [Track.from_ramp(built.mesh, result, f"cy = {cy:+.2f}: {title}")
                   for (cy, title), (built, result, _) in zip(PLACEMENTS, solved)]
         renderer = FrameRenderer(tracks, *size, trace=False, backend=args.renderer)
         done = export(renderer, args.video or out / "steer.mp4", out / "steer.png", args.fps, args.quiet)

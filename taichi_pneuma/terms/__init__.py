@@ -14,8 +14,8 @@ DOFs are interleaved: vertex i owns DOFs 2i (x) and 2i + 1 (y).
 """
 
 from .base import Term, vertex_dofs
-from .chamber import AreaChamber
+from .chamber import AreaChamber, PressureChamber
 from .clamp import Clamp
 from .elastic import NeoHookean
 
-__all__ = ["AreaChamber", "Clamp", "NeoHookean", "Term", "vertex_dofs"]
+__all__ = ["AreaChamber", "Clamp", "NeoHookean", "PressureChamber", "Term", "vertex_dofs"]

@@ -14,9 +14,13 @@ def vertex_dofs(vertices: np.ndarray) -> np.ndarray:
 
 
 class Term:
-    """Defaults for the optional duties: no sparse Hessian, no rank-1 part, no step bound."""
+    """Defaults for the optional duties: no sparse Hessian, no rank-1 part, no step bound.
+
+    reports_contact: whether -gradient() is a contact force the history reports.
+    """
 
     name = "term"
+    reports_contact = False
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         empty = np.zeros(0, dtype=np.int64)

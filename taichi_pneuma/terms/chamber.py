@@ -1,22 +1,30 @@
-"""A sealed chamber under area ("volume") control, as Taichi kernels.
+"""A sealed chamber under area ("volume") control or pressure control, as Taichi kernels.
 
 The chamber wall is a closed counter-clockwise vertex loop x_0 .. x_{k-1}; its signed area
 
     A(x) = 1/2 sum_i x_i x x_{i+1}        (2D cross product, indices mod k)
 
 has gradient dA/dx_i = 1/2 (y_{i+1} - y_{i-1}, x_{i-1} - x_{i+1}): half the sum of the outward
-normals of the two wall edges at vertex i (outward from the chamber, into the rubber). The term
+normals of the two wall edges at vertex i (outward from the chamber, into the rubber), and the
+constant Hessian d2A/dx_i dy_{i+1} = 1/2, d2A/dy_i dx_{i+1} = -1/2 (and symmetric).
 
-    E = 1/2 k (A(x) - A*)^2,   dE/dx = k (A - A*) dA/dx = -p dA/dx,   p = k (A* - A),
+Area control (commanded area ratio r, A* = r A_rest):
 
-is therefore exactly a uniform pressure p on the wall. Its Hessian is
-
-    k dA dA^T  -  p d2A,     d2A/dx_i dy_{i+1} = 1/2,  d2A/dy_i dx_{i+1} = -1/2  (and symmetric),
+    E = 1/2 k (A(x) - A*)^2,   dE/dx = -p dA/dx,   p = k (A* - A),
+    Hessian  k dA dA^T - p d2A:
 
 a PSD rank-1 Gauss-Newton part, handed to the solver as a low-rank term, plus the load stiffness
 -p d2A of the follower pressure, which is indefinite. It does not vanish at equilibrium (there
 A - A* = -p/k), so dropping it leaves Newton converging only linearly; it is returned as sparse
-triplets unless the solver asks for the PSD (Gauss-Newton) Hessian only.
+triplets unless the solver asks for the PSD Hessian only.
+
+Pressure control (commanded pressure p): the work of a prescribed pressure,
+
+    E = -p A(x),   dE/dx = -p dA/dx,   Hessian -p d2A,
+
+which has no PSD part at all: with psd_only the term contributes nothing (the PSD elastic and
+clamp Hessians alone keep projected Newton a descent method), and the exact Hessian is used once
+Newton is in its quadratic basin. Both forms apply exactly a uniform pressure p to the wall.
 """
 
 
@@ -27,15 +35,15 @@ from .base import Term, vertex_dofs
 
 
 @ti.data_oriented
-class AreaChamber(Term):
-    """Area control of one chamber: stiffness k pulls the enclosed area A(x) to target_area."""
+class Chamber(Term):
+    """The wall loop of one named chamber: its area, area gradient and the -p d2A load stiffness."""
 
-    name = "chamber"
+    control = "chamber"
 
-    def __init__(self, config, loop: np.ndarray, stiffness: float, target_area: float):
+    def __init__(self, config, loop: np.ndarray, name: str):
         self.config = config
-        self.k = float(stiffness)
-        self.target_area = float(target_area)
+        self.chamber_name = name
+        self.name = f"chamber:{name}"
         self.loop_vertices = np.asarray(loop, dtype=np.int64)
         n = len(loop)
         self.n_wall = n
@@ -43,14 +51,14 @@ class AreaChamber(Term):
         self.loop.from_numpy(self.loop_vertices.astype(np.int32))
         self.area_gradient = ti.Vector.field(2, ti.f64, n)
         self.force = ti.Vector.field(2, ti.f64, config.n_vertices)
-        self.current_area = ti.field(ti.f64, ())
-        self.target = ti.field(ti.f64, ())
         self.dofs = vertex_dofs(self.loop_vertices)
         nxt = np.roll(self.loop_vertices, -1)
         xi, yi, xn, yn = 2 * self.loop_vertices, 2 * self.loop_vertices + 1, 2 * nxt, 2 * nxt + 1
         self._rows = np.concatenate([xi, yn, yi, xn])
         self._cols = np.concatenate([yn, xi, xn, yi])
         self._area_hessian = np.repeat([0.5, 0.5, -0.5, -0.5], n)
+        rest = config.rest_numpy[self.loop_vertices]
+        self.rest_area = 0.5 * float(np.dot(rest[:, 0], np.roll(rest[:, 1], -1)) - np.dot(np.roll(rest[:, 0], -1), rest[:, 1]))
 
     @ti.kernel
     def area(self) -> ti.f64:
@@ -68,29 +76,16 @@ class AreaChamber(Term):
             self.area_gradient[i] = 0.5 * ti.Vector([nxt[1] - prv[1], prv[0] - nxt[0]])
 
     @ti.kernel
-    def _compute_force(self):
-        """dE/dx = -p dA/dx on the wall vertices (the only non-zero rows of the force field)."""
-        self.current_area[None] = 0.0
+    def _compute_force(self, pressure: ti.f64):
+        """-p dA/dx on the wall vertices, the only non-zero rows of the force field (wall vertices are distinct)."""
         for i in range(self.n_wall):
-            x = self.config.x(self.loop[i])
             nxt = self.config.x(self.loop[(i + 1) % self.n_wall])
             prv = self.config.x(self.loop[(i + self.n_wall - 1) % self.n_wall])
-            self.current_area[None] += 0.5 * x.cross(nxt)
-            self.area_gradient[i] = 0.5 * ti.Vector([nxt[1] - prv[1], prv[0] - nxt[0]])
-        pressure = self.k * (self.target[None] - self.current_area[None])
-        for i in range(self.n_wall):
-            self.force[self.loop[i]] = -pressure * self.area_gradient[i]
-
-    def pressure(self) -> float:
-        """p = k (A* - A): positive when the chamber pushes its walls outward."""
-        return self.k * (self.target_area - self.area())
-
-    def energy(self) -> float:
-        return 0.5 * self.k * (self.area() - self.target_area) ** 2
+            self.force[self.loop[i]] = -0.5 * pressure * ti.Vector([nxt[1] - prv[1], prv[0] - nxt[0]])
 
     def gradient(self) -> np.ndarray:
-        self.target[None] = self.target_area
-        self._compute_force()
+        """dE/dx = -p dA/dx for both controls."""
+        self._compute_force(self.pressure())
         return self.force.to_numpy()
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
@@ -99,6 +94,50 @@ class AreaChamber(Term):
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
         return np.zeros(len(self._rows)) if psd_only else -self.pressure() * self._area_hessian
 
+
+@ti.data_oriented
+class AreaChamber(Chamber):
+    """Area control: stiffness k pulls the enclosed area A(x) to target_area = command x rest area."""
+
+    control = "area"
+
+    def __init__(self, config, loop: np.ndarray, stiffness: float, name: str = "main"):
+        super().__init__(config, loop, name)
+        self.k = float(stiffness)
+        self.target_area = self.rest_area
+
+    def set_command(self, ratio: float) -> None:
+        """Command the area ratio A* / A_rest."""
+        self.target_area = float(ratio) * self.rest_area
+
+    def pressure(self) -> float:
+        """p = k (A* - A): positive when the chamber pushes its walls outward."""
+        return self.k * (self.target_area - self.area())
+
+    def energy(self) -> float:
+        return 0.5 * self.k * (self.area() - self.target_area) ** 2
+
     def low_rank(self) -> list[tuple[np.ndarray, np.ndarray, float]]:
         self._compute_area_gradient()
         return [(self.dofs, self.area_gradient.to_numpy().ravel(), self.k)]
+
+
+@ti.data_oriented
+class PressureChamber(Chamber):
+    """Pressure control: a prescribed pressure p does work p A(x) on the wall."""
+
+    control = "pressure"
+
+    def __init__(self, config, loop: np.ndarray, name: str = "main"):
+        super().__init__(config, loop, name)
+        self.prescribed = 0.0
+
+    def set_command(self, pressure: float) -> None:
+        """Command the pressure p."""
+        self.prescribed = float(pressure)
+
+    def pressure(self) -> float:
+        return self.prescribed
+
+    def energy(self) -> float:
+        return -self.prescribed * self.area()

@@ -10,7 +10,7 @@ With F = Ds Dm^-1 (Ds = [x1 - x0, x2 - x0], Dm the same at rest) and g = dJ/dF =
     P = dpsi/dF = mu F - (mu + lam (1 - J)) g
     d2psi/dF2 = mu I + lam g g^T - (mu + lam (1 - J)) d2J/dF2
 
-The element Hessian is  W D^T [d2psi/dF2]_+ D  (W rest area, D = dvec(F)/dx, 6 x 4), where
+mu and lam may differ per element (a material per region). The element Hessian is  W D^T [d2psi/dF2]_+ D  (W rest area, D = dvec(F)/dx, 6 x 4), where
 [.]_+ clamps the negative eigenvalues of the 4 x 4 matrix to zero (Jacobi eigen-decomposition);
 it equals the exact Hessian wherever d2psi/dF2 is already PSD.
 """
@@ -25,8 +25,8 @@ JACOBI_SWEEPS = 8
 PAIRS = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
 
 
-def lame_parameters(youngs_modulus: float, poisson_ratio: float) -> tuple[float, float]:
-    """(mu, lam) of an isotropic material from Young's modulus and Poisson's ratio."""
+def lame_parameters(youngs_modulus, poisson_ratio):
+    """(mu, lam) of an isotropic material from Young's modulus and Poisson's ratio (scalars or arrays)."""
     e, nu = youngs_modulus, poisson_ratio
     return e / (2.0 * (1.0 + nu)), e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
 
@@ -66,16 +66,20 @@ def project_psd(M):
 
 @ti.data_oriented
 class NeoHookean(Term):
-    """Stable neo-Hookean energy of a triangle mesh with moduli (mu, lam) and the math above."""
+    """Stable neo-Hookean energy of a triangle mesh, with per-element moduli, and the math above.
+
+    youngs_modulus and poisson_ratio: scalars, or one value per triangle.
+    """
 
     name = "elastic"
 
-    def __init__(self, config, triangles: np.ndarray, youngs_modulus: float, poisson_ratio: float):
+    def __init__(self, config, triangles: np.ndarray, youngs_modulus, poisson_ratio):
         self.config = config
         rest = config.rest_numpy
         n = config.n_vertices
-        self.mu, self.lam = lame_parameters(youngs_modulus, poisson_ratio)
         m = len(triangles)
+        mu, lam = lame_parameters(np.broadcast_to(np.asarray(youngs_modulus, dtype=np.float64), (m,)),
+                                  np.broadcast_to(np.asarray(poisson_ratio, dtype=np.float64), (m,)))
         self.n_triangles = m
         edges = np.stack([rest[triangles[:, 1]] - rest[triangles[:, 0]],
                           rest[triangles[:, 2]] - rest[triangles[:, 0]]], axis=2)  # (m, 2, 2) columns e1, e2
@@ -83,6 +87,8 @@ class NeoHookean(Term):
         self.tri = ti.Vector.field(3, ti.i32, m)
         self.dm_inv = ti.Matrix.field(2, 2, ti.f64, m)
         self.area = ti.field(ti.f64, m)
+        self.mu = ti.field(ti.f64, m)
+        self.lam = ti.field(ti.f64, m)
         self.force = ti.Vector.field(2, ti.f64, n)
         self.hess = ti.field(ti.f64, (m, 36))
         self.reduction = ti.field(ti.f64, ())
@@ -90,6 +96,8 @@ class NeoHookean(Term):
         self.tri.from_numpy(triangles.astype(np.int32))
         self.dm_inv.from_numpy(np.linalg.inv(edges))
         self.area.from_numpy(self.rest_area)
+        self.mu.from_numpy(np.ascontiguousarray(mu))
+        self.lam.from_numpy(np.ascontiguousarray(lam))
         dofs = vertex_dofs(triangles.ravel()).reshape(m, 6)
         self._rows = np.repeat(dofs, 6, axis=1).ravel()
         self._cols = np.tile(dofs, (1, 6)).ravel()
@@ -101,15 +109,15 @@ class NeoHookean(Term):
         return ds @ self.dm_inv[e]
 
     @ti.func
-    def psi(self, F):
+    def psi(self, e, F):
         J = F.determinant()
-        return self.mu * (1.0 - J) + 0.5 * self.lam * (1.0 - J) ** 2 + 0.5 * self.mu * (F.norm_sqr() - 2.0)
+        return self.mu[e] * (1.0 - J) + 0.5 * self.lam[e] * (1.0 - J) ** 2 + 0.5 * self.mu[e] * (F.norm_sqr() - 2.0)
 
     @ti.kernel
     def energy(self) -> ti.f64:
         total = 0.0
         for e in range(self.n_triangles):
-            total += self.area[e] * self.psi(self.deformation_gradient(e))
+            total += self.area[e] * self.psi(e, self.deformation_gradient(e))
         return total
 
     @ti.kernel
@@ -119,7 +127,8 @@ class NeoHookean(Term):
         for e in range(self.n_triangles):
             F = self.deformation_gradient(e)
             g = cofactor(F)
-            P = self.mu * F - (self.mu + self.lam * (1.0 - F.determinant())) * ti.Matrix([[g[0], g[1]], [g[2], g[3]]])
+            mu, lam = self.mu[e], self.lam[e]
+            P = mu * F - (mu + lam * (1.0 - F.determinant())) * ti.Matrix([[g[0], g[1]], [g[2], g[3]]])
             G = self.area[e] * P @ self.dm_inv[e].transpose()
             i = self.tri[e]
             self.force[i[1]] += ti.Vector([G[0, 0], G[1, 0]])
@@ -135,10 +144,11 @@ class NeoHookean(Term):
         for e in range(self.n_triangles):
             F = self.deformation_gradient(e)
             g = cofactor(F)
-            c = self.mu + self.lam * (1.0 - F.determinant())
+            mu, lam = self.mu[e], self.lam[e]
+            c = mu + lam * (1.0 - F.determinant())
             # d2J/dF2 for vec(F) = (F00, F01, F10, F11)
             hj = ti.Matrix([[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, -1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]])
-            M = self.mu * ti.Matrix.identity(ti.f64, 4) + self.lam * g.outer_product(g) - c * hj
+            M = mu * ti.Matrix.identity(ti.f64, 4) + lam * g.outer_product(g) - c * hj
             if project:
                 M = project_psd(M)
             B = self.dm_inv[e]

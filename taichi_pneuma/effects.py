@@ -1,0 +1,81 @@
+"""Effects a scene may name, each a small spec that builds its term(s) when (and only when) it is named.
+
+An effect's terms(config, mesh, lumped_area) returns the terms it adds to the energy model;
+lumped_area[i] is a third of the rest area of the triangles at vertex i (mass = density x it).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .errors import require, require_finite
+from .terms.contact import GroundContact, SelfContact as SelfContactTerm
+from .terms.gravity import Gravity as GravityTerm
+
+
+class Effect:
+    """Base of the effect specs: a name (the key in a scene file's [effects] table) and terms()."""
+
+    name = "effect"
+
+    def terms(self, config, mesh, lumped_area) -> list:
+        raise NotImplementedError
+
+
+def _positive(name: str, value: float) -> None:
+    require(require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
+
+
+@dataclass(frozen=True)
+class Gravity(Effect):
+    """Body weight: density rho (mass per unit area) under acceleration g along -y."""
+
+    density: float
+    g: float = 9.81
+    name = "gravity"
+
+    def __post_init__(self):
+        _positive("density", self.density)
+        _positive("g", self.g)
+
+    def terms(self, config, mesh, lumped_area) -> list:
+        return [GravityTerm(config, self.density * lumped_area, self.g)]
+
+
+@dataclass(frozen=True)
+class Ground(Effect):
+    """Ground contact: a log barrier (threshold dhat, stiffness kappa) keeps the body's outer boundary above y = height."""
+
+    height: float
+    dhat: float = 0.01
+    stiffness: float = 1e3
+    name = "ground"
+
+    def __post_init__(self):
+        require_finite("height", self.height)
+        _positive("dhat", self.dhat)
+        _positive("stiffness", self.stiffness)
+
+    def terms(self, config, mesh, lumped_area) -> list:
+        lowest = float(mesh.vertices[mesh.boundary, 1].min())
+        require(lowest > self.height, f"ground height = {self.height!r} must lie below the body (lowest point {lowest:.6g})")
+        return [GroundContact(config, mesh.boundary, self.height, self.dhat, self.stiffness)]
+
+
+@dataclass(frozen=True)
+class SelfContact(Effect):
+    """Self-contact of chamber walls: point-edge log barriers (threshold dhat, stiffness kappa) on every wall."""
+
+    dhat: float = 0.005
+    stiffness: float = 1e4
+    name = "self_contact"
+
+    def __post_init__(self):
+        _positive("dhat", self.dhat)
+        _positive("stiffness", self.stiffness)
+
+    def terms(self, config, mesh, lumped_area) -> list:
+        return [SelfContactTerm(config, list(mesh.chambers), self.dhat, self.stiffness)]
+
+
+EFFECTS = {cls.name: cls for cls in (Gravity, Ground, SelfContact)}

@@ -1,0 +1,91 @@
+"""Scripted actuation: per chamber, piecewise-linear keyframes of area ratio or pressure over increments.
+
+A schedule has `increments` solves after the rest state (step 0 .. increments). A chamber's
+command at step s interpolates linearly between its keyframes (s_k, v_k); before the first
+keyframe it holds the rest value (area ratio 1, pressure 0) at s = 0, after the last it holds the
+last value. Inflate, hold and deflate are keyframes rising, constant and falling:
+
+    keyframes = [[0, 1.0], [10, 3.0], [15, 3.0], [25, 1.0]]     # area ratio: inflate, hold, deflate
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import require, require_finite
+
+CONTROLS = ("area", "pressure")
+REST_COMMAND = {"area": 1.0, "pressure": 0.0}
+
+
+@dataclass(frozen=True)
+class ChamberSchedule:
+    """Keyframes ((step, value), ...) of one chamber; value is an area ratio (> 0) or a pressure.
+
+    A pressure below zero (suction) is refused unless allow_vacuum is set.
+    """
+
+    control: str
+    keyframes: tuple[tuple[float, float], ...]
+    allow_vacuum: bool = False
+
+    def __post_init__(self):
+        require(self.control in CONTROLS, f"control = {self.control!r} is not one of {', '.join(CONTROLS)}")
+        require(len(self.keyframes) >= 1 and all(np.shape(k) == (2,) for k in self.keyframes),
+                f"keyframes = {self.keyframes!r} must be a non-empty list of [step, value] pairs")
+        steps = [require_finite("keyframes step", s) for s, _ in self.keyframes]
+        values = [require_finite("keyframes value", v) for _, v in self.keyframes]
+        require(all(float(s).is_integer() and s >= 0 for s in steps),
+                f"keyframes steps {steps!r} must be whole numbers >= 0")
+        require(all(b > a for a, b in zip(steps, steps[1:])), f"keyframes steps {steps!r} must increase")
+        if self.control == "area":
+            bad = [v for v in values if v <= 0]
+            require(not bad, f"keyframes area ratio {bad[0] if bad else ''!r} must be > 0")
+        elif not self.allow_vacuum:
+            bad = [v for v in values if v < 0]
+            require(not bad, f"keyframes pressure {bad[0] if bad else ''!r} is negative; "
+                             f"set allow_vacuum = true for suction")
+
+    @property
+    def last_step(self) -> int:
+        return int(self.keyframes[-1][0])
+
+    def command(self, step: float) -> float:
+        steps = [0.0] + [float(s) for s, _ in self.keyframes]
+        values = [REST_COMMAND[self.control]] + [float(v) for _, v in self.keyframes]
+        if steps[1] == 0.0:
+            steps, values = steps[1:], values[1:]
+        return float(np.interp(step, steps, values))
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """The increments of a run and one ChamberSchedule per chamber, in the scene's chamber order."""
+
+    increments: int
+    chambers: tuple[ChamberSchedule, ...]
+
+    def __post_init__(self):
+        require(isinstance(self.increments, (int, np.integer)) and self.increments >= 1,
+                f"increments = {self.increments!r} must be an integer >= 1")
+        for c in self.chambers:
+            require(c.last_step <= self.increments,
+                    f"keyframe step {c.last_step} lies past the last increment ({self.increments})")
+
+    def commands(self, step: float) -> np.ndarray:
+        """Every chamber's command at (possibly fractional) step."""
+        return np.array([c.command(step) for c in self.chambers])
+
+    @property
+    def rest_commands(self) -> np.ndarray:
+        return np.array([REST_COMMAND[c.control] for c in self.chambers])
+
+
+def area_ramp(growth: float, steps: int) -> ChamberSchedule:
+    """SPEC.md's ramp for one area-controlled chamber: area ratio 1 -> growth over steps - 1 increments."""
+    require(require_finite("growth", growth) > 0, f"growth = {growth!r} must be > 0")
+    require(isinstance(steps, (int, np.integer)) and steps >= 2,
+            f"steps = {steps!r} must be an integer >= 2 (the rest state and at least one increment)")
+    return ChamberSchedule("area", ((0, 1.0), (steps - 1, float(growth))))

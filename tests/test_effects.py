@@ -1,0 +1,83 @@
+"""The effect terms (gravity, ground contact, self-contact) and pressure control: finite-difference
+derivatives, step bounds that stop before contact is crossed, and exactly the terms a scene names."""
+
+import numpy as np
+import pytest
+
+from taichi_pneuma.effects import Gravity, Ground, SelfContact
+from taichi_pneuma.geometry import Ellipse, Geometry, Rectangle
+from taichi_pneuma.scene import ChamberControl, Scene, reference_scene
+from taichi_pneuma.schedule import ChamberSchedule
+
+from test_terms import dense_hessian, fd_gradient, fd_hessian
+
+
+def thin_chamber_scene(*effects, control="pressure"):
+    """A small plate with a flat elliptical chamber (gap 0.02 at its middle), coarse."""
+    geometry = Geometry(Rectangle((0.0, 0.0), (1.0, 0.3)), (("slit", Ellipse((0.0, 0.0), (0.3, 0.01), 24)),), 0.01)
+    keyframes = ((0, 1.0), (1, 0.2)) if control == "area" else ((0, 0.0), (1, 10.0))
+    return Scene(geometry, (ChamberControl(ChamberSchedule(control, keyframes)),), 1, effects=effects)
+
+
+@pytest.fixture(scope="module")
+def squeezed():
+    """Every effect, with the walls squeezed to a gap of 0.006 < dhat and the plate 0.004 above the ground."""
+    built = thin_chamber_scene(Gravity(1.0), Ground(-0.16, dhat=0.01, stiffness=100.0),
+                               SelfContact(dhat=0.008, stiffness=100.0)).build()
+    built.set_commands([5.0])
+    X = built.mesh.vertices
+    u = np.column_stack([np.zeros(len(X)), -0.7 * X[:, 1] - 0.111])  # y -> 0.3 y - 0.111: bottom at -0.156
+    u += 1e-4 * np.random.default_rng(0).standard_normal(u.shape)
+    return built, u
+
+
+def test_terms_are_exactly_those_named():
+    assert reference_scene().build().model.term_names() == ["elastic", "chamber:main", "clamp"]
+    plain = thin_chamber_scene().build().model.term_names()
+    with_gravity = thin_chamber_scene(Gravity(1.0)).build().model.term_names()
+    assert with_gravity == plain + ["gravity"]
+    everything = thin_chamber_scene(Gravity(1.0), Ground(-0.2), SelfContact()).build().model.term_names()
+    assert everything == plain + ["gravity", "ground", "self_contact"]
+
+
+@pytest.mark.parametrize("name", ["chamber:slit", "gravity", "ground", "self_contact"])
+def test_gradient_matches_finite_differences(squeezed, name):
+    built, u = squeezed
+    term = next(t for t in built.model.terms if t.name == name)
+    built.model.set_displacements(u)
+    g = term.gradient().ravel()
+    assert np.linalg.norm(g) > 0
+    g_fd = fd_gradient(built.model, term, u)
+    assert np.linalg.norm(g - g_fd) / np.linalg.norm(g) < 1e-5
+
+
+@pytest.mark.parametrize("name", ["chamber:slit", "ground", "self_contact"])
+def test_exact_hessian_matches_finite_differences_and_psd_part_is_psd(squeezed, name):
+    built, u = squeezed
+    term = next(t for t in built.model.terms if t.name == name)
+    built.model.set_displacements(u)
+    exact = dense_hessian(built.model.n_dofs, [term], psd_only=False)
+    h_fd = fd_hessian(built.model, [term], u)
+    assert np.linalg.norm(exact - h_fd) / np.linalg.norm(h_fd) < 1e-5
+    projected = dense_hessian(built.model.n_dofs, [term], psd_only=True)
+    eigenvalues = np.linalg.eigvalsh(projected)
+    assert eigenvalues.min() >= -1e-9 * max(eigenvalues.max(), 1.0)
+
+
+def test_contact_step_bounds_stop_before_the_ground_and_the_opposite_wall(squeezed):
+    built, u = squeezed
+    model = built.model
+    ground = next(t for t in model.terms if t.name == "ground")
+    contact = next(t for t in model.terms if t.name == "self_contact")
+    X = built.mesh.vertices
+    # push the whole body down, and the walls through each other
+    model.set_displacements(u)
+    down = np.tile([0.0, -1.0], (len(X), 1))
+    alpha = ground.max_step(down)
+    lowest = (X + u)[:, 1].min()
+    assert alpha == pytest.approx(lowest + 0.16, rel=1e-9)
+    squeeze = np.column_stack([np.zeros(len(X)), -np.sign(X[:, 1]) * 0.05])
+    alpha = contact.max_step(squeeze)
+    assert 0 < alpha < 1
+    model.set_displacements(u + 0.9 * alpha * squeeze)
+    assert contact.min_distance() > 0 and np.isfinite(contact.energy())
