@@ -28,7 +28,7 @@ segment (a quadratic in the step fraction), the continuous collision check.
 import numpy as np
 import taichi as ti
 
-from .base import Term, vertex_dofs
+from .base import Term, quadratic_roots, vertex_dofs
 
 
 @ti.func
@@ -270,18 +270,7 @@ class SelfContact(Term):
             c0 = e0.cross(w0)
             c1 = e0.cross(dw) + de.cross(w0)
             c2 = de.cross(dw)
-            roots = ti.Vector([ti.math.inf, ti.math.inf])
-            if ti.abs(c2) <= 1e-14 * (ti.abs(c1) + ti.abs(c0)):
-                if c1 != 0:
-                    roots[0] = -c0 / c1
-            else:
-                disc = c1 * c1 - 4.0 * c2 * c0
-                if disc >= 0:
-                    sq = ti.sqrt(disc)
-                    qq = -0.5 * (c1 + ti.select(c1 >= 0, sq, -sq))
-                    roots[0] = qq / c2
-                    if qq != 0:
-                        roots[1] = c0 / qq
+            roots = quadratic_roots(c0, c1, c2)
             for r in ti.static(range(2)):
                 t = roots[r]
                 if t >= 0 and t < ti.math.inf:

@@ -19,7 +19,7 @@ it equals the exact Hessian wherever d2psi/dF2 is already PSD.
 import numpy as np
 import taichi as ti
 
-from .base import Term, vertex_dofs
+from .base import Term, quadratic_roots, vertex_dofs
 
 JACOBI_SWEEPS = 8
 PAIRS = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
@@ -185,20 +185,11 @@ class NeoHookean(Term):
             c0 = a1.cross(a2)
             c1 = a1.cross(b2) + b1.cross(a2)
             c2 = b1.cross(b2)
+            roots = quadratic_roots(c0, c1, c2)
             root = ti.math.inf
-            if ti.abs(c2) <= 1e-14 * (ti.abs(c1) + ti.abs(c0)):
-                if c1 * c0 < 0:
-                    root = -c0 / c1
-            else:
-                disc = c1 * c1 - 4.0 * c2 * c0
-                if disc >= 0:
-                    sq = ti.sqrt(disc)
-                    q = -0.5 * (c1 + ti.select(c1 >= 0, sq, -sq))
-                    r1 = q / c2
-                    if r1 > 0:
-                        root = ti.min(root, r1)
-                    if q != 0 and c0 / q > 0:
-                        root = ti.min(root, c0 / q)
+            for r in ti.static(range(2)):
+                if roots[r] > 0:
+                    root = ti.min(root, roots[r])
             ti.atomic_min(self.reduction[None], root)
 
     def max_step(self, dx: np.ndarray) -> float:
