@@ -3,12 +3,13 @@
 Each iteration solves  (H + sum_j c_j u_j u_j^T) d = -g,  where H is the assembled sparse
 Hessian (fixed pattern, factorised) and the rank-1 parts enter by the Woodbury identity.
 
-H is the exact Hessian (unprojected elastic blocks, the chamber's pressure load stiffness) when
-the previous iteration took a full step (alpha = 1), the sign that Newton is in its quadratic
-basin, and its exact direction is a descent direction; otherwise it is the PSD one (each
-element's d2psi/dF2 eigen-clamped, the chamber's Gauss-Newton part only). Projected-only Newton
-converges linearly on this problem; the exact Hessian near equilibrium restores quadratic
-convergence, while the PSD one keeps far-off iterations stable.
+H is the exact Hessian (unprojected elastic blocks, the chamber's pressure load stiffness) on the
+first iteration and after a full step (alpha = 1, the sign that Newton is in its quadratic basin),
+unless its factorisation fails (a Cholesky backend refuses an indefinite matrix) or its direction is
+not a descent direction; otherwise it is the PSD one (each element's d2psi/dF2 eigen-clamped, the
+chamber's Gauss-Newton part only). Projected-only Newton converges linearly on this problem; the
+exact Hessian near equilibrium restores quadratic convergence, while the PSD one keeps far-off
+iterations stable.
 
 The step u <- u + alpha d (u: displacements) starts at alpha = min(1, 0.9 max_step), the terms'
 safe bound (no triangle inverts), and halves until the Armijo condition
