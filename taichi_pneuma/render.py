@@ -38,6 +38,7 @@ CHAMBER_ALPHA = 0.35
 CHAMBER_FILL = tuple(CHAMBER_ALPHA * c + (1 - CHAMBER_ALPHA) * b for c, b in zip((0.1, 0.3, 1.0), BACKGROUND))
 CHAMBER_WALL = (0.05, 0.2, 0.95)
 PIN = (0.15, 0.15, 0.15)
+GROUND = (0.45, 0.3, 0.15)
 AXES = (0.35, 0.35, 0.35)
 AREA_CURVE = (0.05, 0.2, 0.95)
 PRESSURE_CURVE = (0.85, 0.15, 0.1)
@@ -193,13 +194,15 @@ class Track:
     pressure: np.ndarray
     tip_dy: np.ndarray
     title: str = ""
+    ground: float | None = None  # height of the ground line y = ground, drawn when the scene has one
 
     @classmethod
-    def from_ramp(cls, mesh: Mesh, result, title: str = "") -> "Track":
+    def from_ramp(cls, mesh: Mesh, result, title: str = "", ground: float | None = None) -> "Track":
         """A track from a simulate.RampResult (every chamber of the scene)."""
         names = list(result.steps[0].chambers)
         columns = lambda key: np.column_stack([result.column(f"{n}.{key}") for n in names])
-        return cls(mesh, result.states, columns("area_ratio"), columns("pressure"), result.column("tip_dy"), title)
+        return cls(mesh, result.states, columns("area_ratio"), columns("pressure"), result.column("tip_dy"), title,
+                   ground)
 
     @property
     def progress_percent(self) -> np.ndarray:
@@ -249,7 +252,9 @@ class FrameRenderer:
         self.panels = [(beam_width * i / n, beam_width * (i + 1) / n) for i in range(n)]
         self.trace_panel = (beam_width, 1.0)
         points = np.concatenate([t.states.reshape(-1, 2) for t in self.tracks])
-        self._fit_view(*(bounds if bounds is not None else (points.min(axis=0), points.max(axis=0))))
+        self._lo, self._hi = (np.asarray(b, float) for b in (bounds if bounds is not None else
+                                                             (points.min(axis=0), points.max(axis=0))))
+        self._fit_view(self._lo, self._hi)
 
     def _fit_view(self, lo: np.ndarray, hi: np.ndarray) -> None:
         """One map world -> normalised canvas for every beam panel showing the box lo..hi, equal axes."""
@@ -279,6 +284,9 @@ class FrameRenderer:
         c.begin()
         for p, (track, (edges, chamber)) in enumerate(zip(self.tracks, self._art)):
             x = self.to_canvas(p, track.states[i])
+            if track.ground is not None:
+                ends = self.to_canvas(p, np.array([[self._lo[0], track.ground], [self._hi[0], track.ground]]))
+                c.segments(ends[None], GROUND, 3.0)
             c.triangles(x[track.mesh.triangles], FACE)
             c.segments(x[edges], EDGE, 1.0)
             c.triangles(x[chamber], CHAMBER_FILL)

@@ -7,13 +7,15 @@ import sys
 
 import imageio.v3 as iio
 import imageio_ffmpeg
+import dataclasses
+
 import numpy as np
 import pytest
 
 from taichi_pneuma import render
 from taichi_pneuma.apps import inflate, steer
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.render import CHAMBER_FILL, FACE, BACKGROUND, FrameRenderer, Track
+from taichi_pneuma.render import BACKGROUND, CHAMBER_FILL, FACE, GROUND, FrameRenderer, Track
 from taichi_pneuma.scene import reference_scene
 from taichi_pneuma.simulate import run_schedule
 from taichi_pneuma.video import write_video
@@ -61,6 +63,22 @@ def test_frame_shows_the_mesh_and_the_filled_chamber(track, backend, capsys):
     # the pinned wall's square markers are dark
     assert pixels_at(renderer, image, x[track.mesh.pinned]).max(axis=1).mean() < 100
     assert f"renderer: {renderer.canvas.name}" in capsys.readouterr().out
+
+
+def test_ground_line_is_drawn_where_the_ground_is(track):
+    lowest = float(track.states[..., 1].min())
+    grounded = dataclasses.replace(track, ground=lowest - 0.02)
+    points = track.states.reshape(-1, 2)
+    bounds = (points.min(axis=0) - 0.05, points.max(axis=0))
+    renderer = FrameRenderer([grounded], 480, 192, trace=False, backend="gui", bounds=bounds)
+    image = renderer.frame(0)
+    x_mid = float(track.states[0, :, 0].mean())
+    on_line = pixels_at(renderer, image, np.array([[x_mid, lowest - 0.02]]))
+    assert np.all(np.abs(on_line - rgb8(GROUND)) <= 3)
+    no_ground = FrameRenderer([track], 480, 192, trace=False, backend="gui", canvas=renderer.canvas,
+                              bounds=bounds)
+    assert np.all(np.abs(pixels_at(no_ground, no_ground.frame(0), np.array([[x_mid, lowest - 0.02]]))
+                         - rgb8(BACKGROUND)) <= 3)
 
 
 def test_view_frames_every_state(track):

@@ -218,7 +218,9 @@ def run(args: argparse.Namespace) -> dict:
         from ..render import FrameRenderer, Track
         from ..video import export
 
-        renderer = FrameRenderer([Track.from_ramp(mesh, result)], *size, trace=True, backend=args.renderer)
+        ground = next((e.height for e in scene.effects if e.name == "ground"), None)
+        renderer = FrameRenderer([Track.from_ramp(mesh, result, ground=ground)], *size, trace=True,
+                                 backend=args.renderer)
         done = export(renderer, args.video or out / f"{stem}.mp4", out / f"{stem}.png", args.fps, args.quiet)
         summary.update(renderer=renderer.canvas.name, video_frames=done.frames, video_size=[done.width, done.height],
                        render_ms_per_frame=done.ms_per_frame)
