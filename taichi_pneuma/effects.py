@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from .errors import require, require_finite
 from .terms.contact import GroundContact, SelfContact as SelfContactTerm
 from .terms.gravity import Gravity as GravityTerm
+from .terms.inertia import Inertia
 
 
 class Effect:
@@ -78,4 +79,21 @@ class SelfContact(Effect):
         return [SelfContactTerm(config, list(mesh.chambers), self.dhat, self.stiffness)]
 
 
-EFFECTS = {cls.name: cls for cls in (Gravity, Ground, SelfContact)}
+@dataclass(frozen=True)
+class Dynamics(Effect):
+    """Motion instead of quasistatics: inertia of the lumped masses (density rho), backward Euler with
+    time step dt, one time step per schedule increment."""
+
+    density: float
+    dt: float
+    name = "dynamics"
+
+    def __post_init__(self):
+        _positive("density", self.density)
+        _positive("dt", self.dt)
+
+    def terms(self, config, mesh, lumped_area) -> list:
+        return [Inertia(config, self.density * lumped_area, self.dt)]
+
+
+EFFECTS = {cls.name: cls for cls in (Gravity, Ground, SelfContact, Dynamics)}

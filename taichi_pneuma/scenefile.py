@@ -10,6 +10,7 @@
                  (allow_vacuum); keyframes = [[step, value], ...]
     [schedule]   increments
     [effects.gravity] density, g      [effects.ground] height, dhat, stiffness      [effects.self_contact] dhat, stiffness
+    [effects.dynamics] density, dt
 
 Every key is checked: an unknown key, a missing required one, or a value out of range is refused
 with its dotted path (e.g. ``chambers[1].semi_axes``).

@@ -189,6 +189,8 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
                     f"residual {record.residual:.2e} ({record.message})", partial())
         built.set_commands(target)
         built.model.set_displacements(u)
+        for term in built.model.terms:
+            term.advance(u)
         final = records[-1]
         chambers = {}
         for chamber, command in zip(built.chambers, target):

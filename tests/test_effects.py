@@ -81,3 +81,31 @@ def test_contact_step_bounds_stop_before_the_ground_and_the_opposite_wall(squeez
     assert 0 < alpha < 1
     model.set_displacements(u + 0.9 * alpha * squeeze)
     assert contact.min_distance() > 0 and np.isfinite(contact.energy())
+
+
+def test_dynamics_step_response_overshoots_then_decays_to_the_static_shape():
+    """Backward Euler with inertia: a sudden chamber inflation (1x -> 2x in one 0.02 s step, then held)
+    swings the tip past the quasistatic equilibrium, then oscillates about it with decaying amplitude
+    (backward Euler dissipates); the first peak comes about half a bending period in (~1 s here)."""
+    import dataclasses
+
+    from taichi_pneuma.effects import Dynamics
+    from taichi_pneuma.scene import ChamberControl, reference_scene
+    from taichi_pneuma.schedule import ChamberSchedule
+    from taichi_pneuma.simulate import run_schedule
+
+    steps, dt = 100, 0.02
+    jump = (ChamberControl(ChamberSchedule("area", ((0, 1.0), (1, 2.0), (steps, 2.0)))),)
+    quasistatic = dataclasses.replace(reference_scene(cy=0.15, max_area=0.01), controls=jump, increments=steps)
+    static_tip = run_schedule(quasistatic.build()).column("tip_dy")[-1]
+    built = dataclasses.replace(quasistatic, effects=(Dynamics(density=1.0, dt=dt),)).build()
+    assert built.model.term_names() == ["elastic", "chamber:main", "clamp", "inertia"]
+    result = run_schedule(built)
+    assert all(s.converged for s in result.steps)
+    tip = result.column("tip_dy")
+    first_peak = int(np.argmax(tip[:50]))
+    assert 0.3 < first_peak * dt < 0.8
+    assert tip[first_peak] > 1.3 * static_tip  # overshoot
+    assert tip[first_peak:first_peak + 30].min() < static_tip  # swings back below the static shape
+    second_peak = tip[first_peak + 25:].max()
+    assert static_tip < second_peak < tip[first_peak]  # and the swing decays

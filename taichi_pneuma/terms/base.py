@@ -54,3 +54,6 @@ class Term:
 
     def max_step(self, dx: np.ndarray) -> float:
         return math.inf
+
+    def advance(self, u: np.ndarray) -> None:
+        """Called with the displacements that end each increment; time-dependent terms update their state."""
