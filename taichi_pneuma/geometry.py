@@ -238,11 +238,7 @@ class ClampSelection:
         if self.side is not None:
             require(self.side in SIDES, f"clamp.side = {self.side!r} is not one of {', '.join(SIDES)}")
         else:
-            require(np.shape(self.box) == (4,), f"clamp.box = {self.box!r} must be [x0, y0, x1, y1]")
-            for v in self.box:
-                require_finite("clamp.box", v)
-            require(self.box[0] < self.box[2] and self.box[1] < self.box[3],
-                    f"clamp.box = {list(self.box)!r} must have x0 < x1 and y0 < y1")
+            require_box("clamp.box", self.box)
 
     def select(self, vertices: np.ndarray) -> np.ndarray:
         x, y = vertices[:, 0], vertices[:, 1]
@@ -250,11 +246,24 @@ class ClampSelection:
             chosen = {"left": x <= x.min() + 1e-6, "right": x >= x.max() - 1e-6,
                       "bottom": y <= y.min() + 1e-6, "top": y >= y.max() - 1e-6}[self.side]
         else:
-            x0, y0, x1, y1 = self.box
-            chosen = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)
+            chosen = in_box(vertices, self.box)
         pinned = np.flatnonzero(chosen)
         require(len(pinned) > 0, f"clamp.box = {self.box!r} selects no mesh vertex")
         return pinned
+
+
+def require_box(name: str, box) -> None:
+    """Refuse, naming it, a box that is not four finite numbers [x0, y0, x1, y1] with x0 < x1, y0 < y1."""
+    require(np.shape(box) == (4,), f"{name} = {box!r} must be [x0, y0, x1, y1]")
+    for v in box:
+        require_finite(name, v)
+    require(box[0] < box[2] and box[1] < box[3], f"{name} = {list(box)!r} must have x0 < x1 and y0 < y1")
+
+
+def in_box(points: np.ndarray, box) -> np.ndarray:
+    """Which points (k, 2) lie in the closed box [x0, y0, x1, y1]."""
+    x0, y0, x1, y1 = box
+    return (points[:, 0] >= x0) & (points[:, 0] <= x1) & (points[:, 1] >= y0) & (points[:, 1] <= y1)
 
 
 @dataclass(frozen=True)

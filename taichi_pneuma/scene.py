@@ -18,7 +18,7 @@ import numpy as np
 from . import runtime
 from .effects import Effect
 from .errors import require, require_finite
-from .geometry import BeamGeometry, Geometry, Mesh, triangle_areas
+from .geometry import BeamGeometry, Geometry, Mesh, in_box, require_box, triangle_areas
 from .model import EnergyModel
 from .schedule import ChamberSchedule, Schedule, area_ramp
 from .terms import AreaChamber, Clamp, NeoHookean, PressureChamber
@@ -49,15 +49,10 @@ class Region:
     material: Material
 
     def __post_init__(self):
-        require(np.shape(self.box) == (4,), f"box = {self.box!r} must be [x0, y0, x1, y1]")
-        for v in self.box:
-            require_finite("box", v)
-        require(self.box[0] < self.box[2] and self.box[1] < self.box[3],
-                f"box = {list(self.box)!r} must have x0 < x1 and y0 < y1")
+        require_box("box", self.box)
 
     def contains(self, points: np.ndarray) -> np.ndarray:
-        x0, y0, x1, y1 = self.box
-        return (points[:, 0] >= x0) & (points[:, 0] <= x1) & (points[:, 1] >= y0) & (points[:, 1] <= y1)
+        return in_box(points, self.box)
 
 
 @dataclass(frozen=True)
