@@ -31,10 +31,23 @@ Newton is in its quadratic basin. Both forms apply exactly a uniform pressure p 
 import numpy as np
 import taichi as ti
 
-from .base import Term, vertex_dofs
+from .base import Indices, Term, Vec2s, int32s, position, vertex_dofs
 
 
-@ti.data_oriented
+@ti.kernel
+def wall_area(rest: Vec2s, u: Vec2s, loop: Indices, gradient: Vec2s) -> ti.f64:
+    """The signed shoelace area A(x) of the wall loop; gradient[i] = dA/dx of loop vertex i."""
+    total = 0.0
+    k = loop.shape[0]
+    for i in range(k):
+        here = position(rest, u, loop[i])
+        nxt = position(rest, u, loop[(i + 1) % k])
+        prv = position(rest, u, loop[(i + k - 1) % k])
+        total += 0.5 * here.cross(nxt)
+        gradient[i] = 0.5 * ti.Vector([nxt[1] - prv[1], prv[0] - nxt[0]])
+    return total
+
+
 class Chamber(Term):
     """The wall loop of one named chamber: its area, area gradient and the -p d2A load stiffness."""
 
@@ -45,48 +58,35 @@ class Chamber(Term):
         self.chamber_name = name
         self.name = f"chamber:{name}"
         self.loop_vertices = np.asarray(loop, dtype=np.int64)
-        n = len(loop)
-        self.n_wall = n
-        self.loop = ti.field(ti.i32, n)
-        self.loop.from_numpy(self.loop_vertices.astype(np.int32))
-        self.area_gradient = ti.Vector.field(2, ti.f64, n)
-        self.force = ti.Vector.field(2, ti.f64, config.n_vertices)
+        self.loop = int32s(loop)
         self.dofs = vertex_dofs(self.loop_vertices)
+        self.n_wall = n = len(loop)
         nxt = np.roll(self.loop_vertices, -1)
         xi, yi, xn, yn = 2 * self.loop_vertices, 2 * self.loop_vertices + 1, 2 * nxt, 2 * nxt + 1
         self._rows = np.concatenate([xi, yn, yi, xn])
         self._cols = np.concatenate([yn, xi, xn, yi])
         self._area_hessian = np.repeat([0.5, 0.5, -0.5, -0.5], n)
-        rest = config.rest_numpy[self.loop_vertices]
+        rest = config.rest[self.loop_vertices]
         self.rest_area = 0.5 * float(np.dot(rest[:, 0], np.roll(rest[:, 1], -1)) - np.dot(np.roll(rest[:, 0], -1), rest[:, 1]))
 
-    @ti.kernel
-    def area(self) -> ti.f64:
+    def area_and_gradient(self) -> tuple[float, np.ndarray]:
+        """A(x) and dA/dx on the wall vertices, (k, 2) in loop order."""
+        gradient = np.empty((len(self.loop), 2))
+        return wall_area(self.config.rest, self.config.u, self.loop, gradient), gradient
+
+    def area(self) -> float:
         """The signed shoelace area A(x) of the wall loop."""
-        total = 0.0
-        for i in range(self.n_wall):
-            total += 0.5 * self.config.x(self.loop[i]).cross(self.config.x(self.loop[(i + 1) % self.n_wall]))
-        return total
-
-    @ti.kernel
-    def _compute_area_gradient(self):
-        for i in range(self.n_wall):
-            nxt = self.config.x(self.loop[(i + 1) % self.n_wall])
-            prv = self.config.x(self.loop[(i + self.n_wall - 1) % self.n_wall])
-            self.area_gradient[i] = 0.5 * ti.Vector([nxt[1] - prv[1], prv[0] - nxt[0]])
-
-    @ti.kernel
-    def _compute_force(self, pressure: ti.f64):
-        """-p dA/dx on the wall vertices, the only non-zero rows of the force field (wall vertices are distinct)."""
-        for i in range(self.n_wall):
-            nxt = self.config.x(self.loop[(i + 1) % self.n_wall])
-            prv = self.config.x(self.loop[(i + self.n_wall - 1) % self.n_wall])
-            self.force[self.loop[i]] = -0.5 * pressure * ti.Vector([nxt[1] - prv[1], prv[0] - nxt[0]])
+        return self.area_and_gradient()[0]
 
     def gradient(self) -> np.ndarray:
-        """dE/dx = -p dA/dx for both controls."""
-        self._compute_force(self.pressure())
-        return self.force.to_numpy()
+        """dE/dx = -p dA/dx for both controls, non-zero on the wall vertices only."""
+        area, area_gradient = self.area_and_gradient()
+        force = np.zeros_like(self.config.u)
+        force[self.loop_vertices] = -self.pressure_at(area) * area_gradient
+        return force
+
+    def pressure(self) -> float:
+        return self.pressure_at(self.area())
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         return self._rows, self._cols
@@ -95,7 +95,6 @@ class Chamber(Term):
         return np.zeros(len(self._rows)) if psd_only else -self.pressure() * self._area_hessian
 
 
-@ti.data_oriented
 class AreaChamber(Chamber):
     """Area control: stiffness k pulls the enclosed area A(x) to target_area = command x rest area."""
 
@@ -110,19 +109,17 @@ class AreaChamber(Chamber):
         """Command the area ratio A* / A_rest."""
         self.target_area = float(ratio) * self.rest_area
 
-    def pressure(self) -> float:
+    def pressure_at(self, area: float) -> float:
         """p = k (A* - A): positive when the chamber pushes its walls outward."""
-        return self.k * (self.target_area - self.area())
+        return self.k * (self.target_area - area)
 
     def energy(self) -> float:
         return 0.5 * self.k * (self.area() - self.target_area) ** 2
 
     def low_rank(self) -> list[tuple[np.ndarray, np.ndarray, float]]:
-        self._compute_area_gradient()
-        return [(self.dofs, self.area_gradient.to_numpy().ravel(), self.k)]
+        return [(self.dofs, self.area_and_gradient()[1].ravel(), self.k)]
 
 
-@ti.data_oriented
 class PressureChamber(Chamber):
     """Pressure control: a prescribed pressure p does work p A(x) on the wall."""
 
@@ -135,6 +132,9 @@ class PressureChamber(Chamber):
     def set_command(self, pressure: float) -> None:
         """Command the pressure p."""
         self.prescribed = float(pressure)
+
+    def pressure_at(self, area: float) -> float:
+        return self.prescribed
 
     def pressure(self) -> float:
         return self.prescribed

@@ -7,22 +7,34 @@ Per unit rest area (Macklin-Mueller form, rest-stable, finite for inverted eleme
 
 With F = Ds Dm^-1 (Ds = [x1 - x0, x2 - x0], Dm the same at rest) and g = dJ/dF = cof F:
 
-    P = dpsi/dF = mu F - (mu + lam (1 - J)) g
-    d2psi/dF2 = mu I + lam g g^T - (mu + lam (1 - J)) d2J/dF2
+    P = dpsi/dF = mu F - c g,   c = mu + lam (1 - J),
+    M = d2psi/dF2 = mu I + lam g g^T - c H_J,   H_J = d2J/dF2 (constant),
 
-mu and lam may differ per element (a material per region). The element Hessian is  W D^T [d2psi/dF2]_+ D  (W rest area, D = dvec(F)/dx, 6 x 4), where
-[.]_+ clamps the negative eigenvalues of the 4 x 4 matrix to zero (Jacobi eigen-decomposition);
-it equals the exact Hessian wherever d2psi/dF2 is already PSD.
+mu and lam may differ per element (a material per region). The element Hessian is  W D^T M D
+(W rest area, D = dvec(F)/dx, 4 x 6); the projected one uses [M]_+, M with its negative
+eigenvalues clamped to zero, which equals M wherever M is already PSD.
+
+The eigensystem of M is analytic. With vec(F) = (F00, F01, F10, F11), H_J has eigenvalue +1 on
+span{(1,0,0,1), (0,1,-1,0)} and -1 on span{(1,0,0,-1), (0,1,1,0)}, so mu I - c H_J is mu - c on the
+first plane and mu + c on the second. Split g = a u_+ + b u_- into its parts in the two planes
+(a, b >= 0, u_+- unit) and let w_+- complete each plane. Then
+
+    M = (mu - c) w_+ w_+^T + (mu + c) w_- w_-^T + [u_+ u_-] B [u_+ u_-]^T,
+    B = [[mu - c + lam a^2, lam a b], [lam a b, mu + c + lam b^2]],
+
+and the 2 x 2 block B has closed-form eigenpairs: four eigenpairs of M, no iteration.
 """
 
 
 import numpy as np
 import taichi as ti
 
-from .base import Term, quadratic_roots, vertex_dofs
+from .base import Scalars, Table, Term, Triples, Vec2s, block_pattern, edge, int32s, smallest_positive_root
 
-JACOBI_SWEEPS = 8
-PAIRS = [(0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)]
+Mat2s = ti.types.ndarray(dtype=ti.types.matrix(2, 2, ti.f64), ndim=1)  # (m, 2, 2): Dm^-1 per triangle
+VEC3 = ti.types.vector(3, ti.f64)
+Params = ti.types.ndarray(dtype=VEC3, ndim=1)  # (m, 3): rest area W, mu, lam per triangle
+SQRT_HALF = 0.7071067811865476
 
 
 def lame_parameters(youngs_modulus, poisson_ratio):
@@ -32,39 +44,123 @@ def lame_parameters(youngs_modulus, poisson_ratio):
 
 
 @ti.func
+def deformation_gradient(rest: ti.template(), u: ti.template(), tri: ti.template(), dm_inv: ti.template(), e):
+    i = tri[e]
+    return ti.Matrix.cols([edge(rest, u, i[0], i[1]), edge(rest, u, i[0], i[2])]) @ dm_inv[e]
+
+
+@ti.func
 def cofactor(F):
     """dJ/dF of a 2 x 2 matrix, flattened row-major as vec(F) = (F00, F01, F10, F11)."""
     return ti.Vector([F[1, 1], -F[1, 0], -F[0, 1], F[0, 0]])
 
 
 @ti.func
-def project_psd(M):
-    """Clamp the negative eigenvalues of a symmetric 4 x 4 matrix to zero (cyclic Jacobi)."""
-    A = M
-    V = ti.Matrix.identity(ti.f64, 4)
-    for _ in range(JACOBI_SWEEPS):
-        for p, q in ti.static(PAIRS):
-            if ti.abs(A[p, q]) > 1e-300:
-                theta = (A[q, q] - A[p, p]) / (2.0 * A[p, q])
-                t = 1.0 / (ti.abs(theta) + ti.sqrt(theta * theta + 1.0))
-                if theta < 0:
-                    t = -t
-                c = 1.0 / ti.sqrt(t * t + 1.0)
-                s = t * c
-                R = ti.Matrix.identity(ti.f64, 4)
-                R[p, p] = c
-                R[q, q] = c
-                R[p, q] = s
-                R[q, p] = -s
-                A = R.transpose() @ A @ R
-                V = V @ R
-    D = ti.Matrix.zero(ti.f64, 4, 4)
-    for i in ti.static(range(4)):
-        D[i, i] = ti.max(A[i, i], 0.0)
-    return V @ D @ V.transpose()
+def psi(F, mu, lam):
+    J = F.determinant()
+    return mu * (1.0 - J) + 0.5 * lam * (1.0 - J) ** 2 + 0.5 * mu * (F.norm_sqr() - 2.0)
 
 
-@ti.data_oriented
+@ti.func
+def plane_split(g, p, q):
+    """The part of g in the plane spanned by orthonormal p, q: its length a, unit direction u, and the
+    unit w completing the plane (u = p, w = q when that part vanishes)."""
+    s, t = g.dot(p), g.dot(q)
+    a = ti.sqrt(s * s + t * t)
+    uu, ww = p, q
+    if a > 0:
+        uu = (s * p + t * q) / a
+        ww = (-t * p + s * q) / a
+    return a, uu, ww
+
+
+@ti.func
+def stress_hessian(F, mu, lam, project):
+    """d2psi/dF2 (4 x 4), with its negative eigenvalues clamped to zero when project != 0."""
+    g = cofactor(F)
+    c = mu + lam * (1.0 - F.determinant())
+    r = SQRT_HALF
+    a, u_p, w_p = plane_split(g, ti.Vector([r, 0.0, 0.0, r]), ti.Vector([0.0, r, -r, 0.0]))
+    b, u_m, w_m = plane_split(g, ti.Vector([r, 0.0, 0.0, -r]), ti.Vector([0.0, r, r, 0.0]))
+    p, q, s = mu - c + lam * a * a, lam * a * b, mu + c + lam * b * b  # B = [[p, q], [q, s]]
+    mean, half = 0.5 * (p + s), ti.sqrt(0.25 * (p - s) ** 2 + q * q)
+    theta = 0.5 * ti.atan2(2.0 * q, p - s)  # (cos, sin) theta: the eigenvector of mean + half
+    v1 = ti.cos(theta) * u_p + ti.sin(theta) * u_m
+    v2 = -ti.sin(theta) * u_p + ti.cos(theta) * u_m
+    lambdas = ti.Vector([mu - c, mu + c, mean + half, mean - half])
+    if project:
+        lambdas = ti.max(lambdas, 0.0)
+    return (lambdas[0] * w_p.outer_product(w_p) + lambdas[1] * w_m.outer_product(w_m)
+            + lambdas[2] * v1.outer_product(v1) + lambdas[3] * v2.outer_product(v2))
+
+
+@ti.kernel
+def elastic_energy(rest: Vec2s, u: Vec2s, tri: Triples, dm_inv: Mat2s, params: Params) -> ti.f64:
+    """sum_e W_e psi(F_e)."""
+    total = 0.0
+    for e in range(tri.shape[0]):
+        total += params[e][0] * psi(deformation_gradient(rest, u, tri, dm_inv, e), params[e][1], params[e][2])
+    return total
+
+
+@ti.kernel
+def elastic_gradient(rest: Vec2s, u: Vec2s, tri: Triples, dm_inv: Mat2s, params: Params, out: Vec2s):
+    """out = dE/dx: W P Dm^-T scattered to the triangles' vertices."""
+    for v in range(out.shape[0]):
+        out[v] = ti.Vector([0.0, 0.0])
+    for e in range(tri.shape[0]):
+        F = deformation_gradient(rest, u, tri, dm_inv, e)
+        g = cofactor(F)
+        w, mu, lam = params[e][0], params[e][1], params[e][2]
+        P = mu * F - (mu + lam * (1.0 - F.determinant())) * ti.Matrix([[g[0], g[1]], [g[2], g[3]]])
+        G = w * P @ dm_inv[e].transpose()
+        i = tri[e]
+        out[i[1]] += ti.Vector([G[0, 0], G[1, 0]])
+        out[i[2]] += ti.Vector([G[0, 1], G[1, 1]])
+        out[i[0]] -= ti.Vector([G[0, 0] + G[0, 1], G[1, 0] + G[1, 1]])
+
+
+@ti.kernel
+def elastic_hessian(rest: Vec2s, u: Vec2s, tri: Triples, dm_inv: Mat2s, params: Params, project: ti.i32, out: Table):
+    """out[e] = the 6 x 6 block W D^T M D of triangle e, row-major (M projected to PSD if project)."""
+    for e in range(tri.shape[0]):
+        M = stress_hessian(deformation_gradient(rest, u, tri, dm_inv, e), params[e][1], params[e][2], project)
+        B = dm_inv[e]
+        # D[r, 2a + d] = dvec(F)_r / dx_{a,d}, r = 2 i + j:  dF_ij/dx_{a,d} = delta_id * dB_aj
+        # with dB_1j = B[0, j], dB_2j = B[1, j], dB_0j = -(B[0, j] + B[1, j]).
+        D = ti.Matrix.zero(ti.f64, 4, 6)
+        for i, j in ti.static(ti.ndrange(2, 2)):
+            D[2 * i + j, 2 * 1 + i] = B[0, j]
+            D[2 * i + j, 2 * 2 + i] = B[1, j]
+            D[2 * i + j, 2 * 0 + i] = -(B[0, j] + B[1, j])
+        K = params[e][0] * D.transpose() @ M @ D
+        for a in ti.static(range(6)):
+            for b in ti.static(range(6)):
+                out[e, 6 * a + b] = K[a, b]
+
+
+@ti.kernel
+def inversion_step(rest: Vec2s, u: Vec2s, dx: Vec2s, tri: Triples) -> ti.f64:
+    """Smallest alpha > 0 with det(Ds + alpha dDs) = 0 over all triangles (inf if none)."""
+    bound = ti.math.inf
+    for e in range(tri.shape[0]):
+        i = tri[e]
+        a1, a2 = edge(rest, u, i[0], i[1]), edge(rest, u, i[0], i[2])
+        b1, b2 = dx[i[1]] - dx[i[0]], dx[i[2]] - dx[i[0]]
+        # det(a + t b) = c0 + c1 t + c2 t^2 with det([p, q]) = p x q
+        ti.atomic_min(bound, smallest_positive_root(a1.cross(a2), a1.cross(b2) + b1.cross(a2), b1.cross(b2)))
+    return bound
+
+
+@ti.kernel
+def min_determinant(rest: Vec2s, u: Vec2s, tri: Triples, dm_inv: Mat2s) -> ti.f64:
+    """min_e det F_e."""
+    smallest = ti.math.inf
+    for e in range(tri.shape[0]):
+        ti.atomic_min(smallest, deformation_gradient(rest, u, tri, dm_inv, e).determinant())
+    return smallest
+
+
 class NeoHookean(Term):
     """Stable neo-Hookean energy of a triangle mesh, with per-element moduli, and the math above.
 
@@ -75,8 +171,7 @@ class NeoHookean(Term):
 
     def __init__(self, config, triangles: np.ndarray, youngs_modulus, poisson_ratio):
         self.config = config
-        rest = config.rest_numpy
-        n = config.n_vertices
+        rest = config.rest
         m = len(triangles)
         mu, lam = lame_parameters(np.broadcast_to(np.asarray(youngs_modulus, dtype=np.float64), (m,)),
                                   np.broadcast_to(np.asarray(poisson_ratio, dtype=np.float64), (m,)))
@@ -84,127 +179,34 @@ class NeoHookean(Term):
         edges = np.stack([rest[triangles[:, 1]] - rest[triangles[:, 0]],
                           rest[triangles[:, 2]] - rest[triangles[:, 0]]], axis=2)  # (m, 2, 2) columns e1, e2
         self.rest_area = 0.5 * np.linalg.det(edges)
-        self.tri = ti.Vector.field(3, ti.i32, m)
-        self.dm_inv = ti.Matrix.field(2, 2, ti.f64, m)
-        self.area = ti.field(ti.f64, m)
-        self.mu = ti.field(ti.f64, m)
-        self.lam = ti.field(ti.f64, m)
-        self.force = ti.Vector.field(2, ti.f64, n)
-        self.hess = ti.field(ti.f64, (m, 36))
-        self.reduction = ti.field(ti.f64, ())
-        self.dx = ti.Vector.field(2, ti.f64, n)
-        self.tri.from_numpy(triangles.astype(np.int32))
-        self.dm_inv.from_numpy(np.linalg.inv(edges))
-        self.area.from_numpy(self.rest_area)
-        self.mu.from_numpy(np.ascontiguousarray(mu))
-        self.lam.from_numpy(np.ascontiguousarray(lam))
-        dofs = vertex_dofs(triangles.ravel()).reshape(m, 6)
-        self._rows = np.repeat(dofs, 6, axis=1).ravel()
-        self._cols = np.tile(dofs, (1, 6)).ravel()
+        self.tri = int32s(triangles)
+        self.dm_inv = np.ascontiguousarray(np.linalg.inv(edges))
+        self.params = np.ascontiguousarray(np.column_stack([self.rest_area, mu, lam]))
+        self._rows, self._cols = block_pattern(triangles)
 
-    @ti.func
-    def deformation_gradient(self, e):
-        i = self.tri[e]
-        ds = ti.Matrix.cols([self.config.edge(i[0], i[1]), self.config.edge(i[0], i[2])])
-        return ds @ self.dm_inv[e]
+    def _mesh(self):
+        return self.config.rest, self.config.u, self.tri, self.dm_inv
 
-    @ti.func
-    def psi(self, e, F):
-        J = F.determinant()
-        return self.mu[e] * (1.0 - J) + 0.5 * self.lam[e] * (1.0 - J) ** 2 + 0.5 * self.mu[e] * (F.norm_sqr() - 2.0)
-
-    @ti.kernel
-    def energy(self) -> ti.f64:
-        total = 0.0
-        for e in range(self.n_triangles):
-            total += self.area[e] * self.psi(e, self.deformation_gradient(e))
-        return total
-
-    @ti.kernel
-    def _compute_force(self):
-        for v in self.force:
-            self.force[v] = ti.Vector([0.0, 0.0])
-        for e in range(self.n_triangles):
-            F = self.deformation_gradient(e)
-            g = cofactor(F)
-            mu, lam = self.mu[e], self.lam[e]
-            P = mu * F - (mu + lam * (1.0 - F.determinant())) * ti.Matrix([[g[0], g[1]], [g[2], g[3]]])
-            G = self.area[e] * P @ self.dm_inv[e].transpose()
-            i = self.tri[e]
-            self.force[i[1]] += ti.Vector([G[0, 0], G[1, 0]])
-            self.force[i[2]] += ti.Vector([G[0, 1], G[1, 1]])
-            self.force[i[0]] -= ti.Vector([G[0, 0] + G[0, 1], G[1, 0] + G[1, 1]])
+    def energy(self) -> float:
+        return elastic_energy(*self._mesh(), self.params)
 
     def gradient(self) -> np.ndarray:
-        self._compute_force()
-        return self.force.to_numpy()
-
-    @ti.kernel
-    def _compute_hessian(self, project: ti.i32):
-        for e in range(self.n_triangles):
-            F = self.deformation_gradient(e)
-            g = cofactor(F)
-            mu, lam = self.mu[e], self.lam[e]
-            c = mu + lam * (1.0 - F.determinant())
-            # d2J/dF2 for vec(F) = (F00, F01, F10, F11)
-            hj = ti.Matrix([[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, -1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]])
-            M = mu * ti.Matrix.identity(ti.f64, 4) + lam * g.outer_product(g) - c * hj
-            if project:
-                M = project_psd(M)
-            B = self.dm_inv[e]
-            # D[r, 2a + d] = dvec(F)_r / dx_{a,d}, r = 2 i + j:  dF_ij/dx_{a,d} = delta_id * dB_aj
-            # with dB_1j = B[0, j], dB_2j = B[1, j], dB_0j = -(B[0, j] + B[1, j]).
-            D = ti.Matrix.zero(ti.f64, 4, 6)
-            for i, j in ti.static(ti.ndrange(2, 2)):
-                D[2 * i + j, 2 * 1 + i] = B[0, j]
-                D[2 * i + j, 2 * 2 + i] = B[1, j]
-                D[2 * i + j, 2 * 0 + i] = -(B[0, j] + B[1, j])
-            K = self.area[e] * D.transpose() @ M @ D
-            for a in ti.static(range(6)):
-                for b in ti.static(range(6)):
-                    self.hess[e, 6 * a + b] = K[a, b]
+        out = np.empty_like(self.config.rest)
+        elastic_gradient(*self._mesh(), self.params, out)
+        return out
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         return self._rows, self._cols
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
-        self._compute_hessian(psd_only)
-        return self.hess.to_numpy().ravel()
-
-    @ti.kernel
-    def _compute_step_bound(self):
-        """Smallest alpha > 0 with det(Ds + alpha dDs) = 0 over all elements (inf if none)."""
-        self.reduction[None] = ti.math.inf
-        for e in range(self.n_triangles):
-            i = self.tri[e]
-            a1 = self.config.edge(i[0], i[1])
-            a2 = self.config.edge(i[0], i[2])
-            b1 = self.dx[i[1]] - self.dx[i[0]]
-            b2 = self.dx[i[2]] - self.dx[i[0]]
-            # det(a + t b) = c0 + c1 t + c2 t^2 with det([u, v]) = u x v
-            c0 = a1.cross(a2)
-            c1 = a1.cross(b2) + b1.cross(a2)
-            c2 = b1.cross(b2)
-            roots = quadratic_roots(c0, c1, c2)
-            root = ti.math.inf
-            for r in ti.static(range(2)):
-                if roots[r] > 0:
-                    root = ti.min(root, roots[r])
-            ti.atomic_min(self.reduction[None], root)
+        out = np.empty((self.n_triangles, 36))
+        elastic_hessian(*self._mesh(), self.params, int(psd_only), out)
+        return out.ravel()
 
     def max_step(self, dx: np.ndarray) -> float:
         """Largest step fraction along dx that keeps every triangle's determinant positive."""
-        self.dx.from_numpy(dx)
-        self._compute_step_bound()
-        return float(self.reduction[None])
+        return inversion_step(self.config.rest, self.config.u, np.ascontiguousarray(dx, dtype=np.float64), self.tri)
 
     def min_determinant(self) -> float:
         """Smallest det F over the mesh (negative when a triangle is inverted)."""
-        self._compute_min_det()
-        return float(self.reduction[None])
-
-    @ti.kernel
-    def _compute_min_det(self):
-        self.reduction[None] = ti.math.inf
-        for e in range(self.n_triangles):
-            ti.atomic_min(self.reduction[None], self.deformation_gradient(e).determinant())
+        return min_determinant(*self._mesh())
