@@ -1,6 +1,6 @@
-"""What accuracy costs in time: timing breakdown, solver backends, accuracy-vs-time study, scaling.
+"""What accuracy costs in time: start-up, timing breakdown, solver backends, accuracy-vs-time study, scaling.
 
-    python -m taichi_pneuma.apps.bench [--sections breakdown,backends,accuracy,scaling] [--out benchmarks/results]
+    python -m taichi_pneuma.apps.bench [--sections startup,breakdown,backends,accuracy,scaling] [--out benchmarks/results]
 
 Every section prints a Markdown table and saves it (bench_<section>.md, .json) under --out, headed
 with the machine and date; the accuracy section also plots error against wall time (log-log, one
@@ -12,8 +12,11 @@ import argparse
 import collections
 import os
 import platform
+import re
 import resource
+import subprocess
 import sys
+import tempfile
 import time
 from datetime import date
 from pathlib import Path
@@ -26,10 +29,11 @@ from ..linsolve import BACKENDS, FixedPattern, make_backend
 from ..newton import NewtonOptions
 from ..output import prepare_directory, save_json, save_text, write_atomic
 from ..scene import reference_scene
+from ..scenefile import load_scene
 from ..schedule import Schedule, area_ramp
 from ..simulate import run_schedule
 
-SECTIONS = ("breakdown", "backends", "accuracy", "scaling")
+SECTIONS = ("startup", "breakdown", "backends", "accuracy", "scaling")
 REFERENCE_TUTORIAL_SECONDS = 25.0  # SPEC.md: the NumPy/SciPy tutorial's cy = 0.15 ramp on this kind of machine
 PHASES = ("gradient", "hessian", "assemble", "factorize", "solve", "line_search")
 
@@ -56,6 +60,65 @@ def timed_ramp(max_area=0.0012, steps=36, growth=3.5, options=None, cy=0.15):
     start = time.perf_counter()
     result = run_schedule(built, options=options)
     return built, result, time.perf_counter() - start
+
+
+MAIN_COMMAND = ("--cy", "0.15", "--no-video")
+FIRST_INCREMENT = re.compile(r"step\s+1/")
+SCENES_DIR = Path(__file__).resolve().parents[2] / "assets" / "scenes"
+
+
+def main_command_process(cache_dir: str, out: str) -> tuple[float, float]:
+    """Run the main command (--no-video) in a fresh process with Taichi's offline kernel cache in cache_dir;
+    return (seconds until its first increment's line is printed, seconds until the process exits)."""
+    env = {**os.environ, "TI_OFFLINE_CACHE_FILE_PATH": cache_dir, "PYTHONUNBUFFERED": "1"}
+    command = [sys.executable, "-m", "taichi_pneuma.apps.inflate", *MAIN_COMMAND, "--out", out]
+    start = time.perf_counter()
+    first = float("nan")
+    with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env) as proc:
+        for line in proc.stdout:
+            if first != first and FIRST_INCREMENT.search(line):
+                first = time.perf_counter() - start
+    require(proc.returncode == 0, f"the main command exited with {proc.returncode}")
+    return first, time.perf_counter() - start
+
+
+def first_versus_typical(result) -> tuple[float, float]:
+    """(seconds of increments 1 and 2, median seconds of two increments over the rest of the ramp)."""
+    seconds = result.column("seconds")
+    return float(seconds[1:3].sum()), 2.0 * float(np.median(seconds[3:]))
+
+
+def startup() -> tuple[str, dict]:
+    """Kernel compilation at start-up. The main command's whole process, and its time to the first
+    increment, from an empty kernel cache (as on a fresh machine) and then from the cache it left; and,
+    in this process, three scenes in turn that differ in mesh size, E, nu, k and number of chambers:
+    their build time and their first two increments against two typical ones."""
+    rows, data = [], {"process": {}, "scenes": []}
+    with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as out:
+        for label in ("empty kernel cache", "warm kernel cache"):
+            first, whole = main_command_process(cache, out)
+            data["process"][label] = {"first_increment_s": first, "whole_s": whole}
+            rows.append([f"main command `{' '.join(MAIN_COMMAND)}`, {label}", f"{whole:.2f}", f"{first:.2f}",
+                         f"{REFERENCE_TUTORIAL_SECONDS / whole:.1f}x faster than the tutorial's ramp alone"])
+    table = markdown(["whole process", "s", "to first increment (s)", "against SPEC.md's 25 s reference"], rows)
+    scenes = [("reference cy=+0.15 (first in process)", lambda: reference_scene(0.15)),
+              ("cy=+0.10, max area 0.002, E 2e4, nu 0.4, k 2e5",
+               lambda: reference_scene(0.10, youngs_modulus=2e4, poisson_ratio=0.4, chamber_stiffness=2e5,
+                                       max_area=0.002)),
+              ("bidirectional.toml (2 chambers)", lambda: load_scene(SCENES_DIR / "bidirectional.toml"))]
+    rows = []
+    for label, make in scenes:
+        start = time.perf_counter()
+        built = make().build()
+        build_seconds = time.perf_counter() - start
+        first, typical = first_versus_typical(run_schedule(built))
+        data["scenes"].append({"scene": label, "vertices": built.mesh.n_vertices, "build_s": build_seconds,
+                               "first_two_increments_s": first, "two_typical_increments_s": typical})
+        rows.append([label, built.mesh.n_vertices, f"{1e3 * build_seconds:.0f}", f"{1e3 * first:.0f}",
+                     f"{1e3 * typical:.0f}", f"{first / typical:.1f}x"])
+    table += "\n" + markdown(["scene, in one process", "vertices", "build (ms)", "increments 1-2 (ms)",
+                               "two typical increments (ms)", "ratio"], rows)
+    return table, data
 
 
 def breakdown() -> tuple[str, dict]:
@@ -213,8 +276,8 @@ def main(argv: list[str] | None = None) -> int:
     heading = f"Machine: {machine()}, Taichi arch {args.arch}\n\n"
     for section in sections:
         print(f"## {section}", flush=True)
-        table, data = accuracy(out) if section == "accuracy" else {"breakdown": breakdown, "backends": backends,
-                                                                    "scaling": scaling}[section]()
+        table, data = accuracy(out) if section == "accuracy" else {"startup": startup, "breakdown": breakdown,
+                                                                    "backends": backends, "scaling": scaling}[section]()
         print(heading + table, flush=True)
         save_text(out / f"bench_{section}.md", heading + table)
         save_json(out / f"bench_{section}.json", {"machine": machine(), "arch": args.arch, **{"data": data}})

@@ -75,8 +75,8 @@ def plane_split(g, p, q):
 
 
 @ti.func
-def stress_hessian(F, mu, lam, project):
-    """d2psi/dF2 (4 x 4), with its negative eigenvalues clamped to zero when project != 0."""
+def stress_eigensystem(F, mu, lam):
+    """Eigenvalues (4-vector) and unit eigenvectors (the rows of a 4 x 4 matrix) of d2psi/dF2."""
     g = cofactor(F)
     c = mu + lam * (1.0 - F.determinant())
     r = SQRT_HALF
@@ -87,20 +87,19 @@ def stress_hessian(F, mu, lam, project):
     theta = 0.5 * ti.atan2(2.0 * q, p - s)  # (cos, sin) theta: the eigenvector of mean + half
     v1 = ti.cos(theta) * u_p + ti.sin(theta) * u_m
     v2 = -ti.sin(theta) * u_p + ti.cos(theta) * u_m
-    lambdas = ti.Vector([mu - c, mu + c, mean + half, mean - half])
-    if project:
-        lambdas = ti.max(lambdas, 0.0)
-    return (lambdas[0] * w_p.outer_product(w_p) + lambdas[1] * w_m.outer_product(w_m)
-            + lambdas[2] * v1.outer_product(v1) + lambdas[3] * v2.outer_product(v2))
+    return ti.Vector([mu - c, mu + c, mean + half, mean - half]), ti.Matrix.rows([w_p, w_m, v1, v2])
 
 
 @ti.kernel
-def elastic_energy(rest: Vec2s, u: Vec2s, tri: Triples, dm_inv: Mat2s, params: Params) -> ti.f64:
-    """sum_e W_e psi(F_e)."""
+def elastic_energy(rest: Vec2s, u: Vec2s, tri: Triples, dm_inv: Mat2s, params: Params) -> tuple[ti.f64, ti.f64]:
+    """(sum_e W_e psi(F_e), min_e det F_e): the energy, and whether a triangle is inverted."""
     total = 0.0
+    smallest = ti.math.inf
     for e in range(tri.shape[0]):
-        total += params[e][0] * psi(deformation_gradient(rest, u, tri, dm_inv, e), params[e][1], params[e][2])
-    return total
+        F = deformation_gradient(rest, u, tri, dm_inv, e)
+        total += params[e][0] * psi(F, params[e][1], params[e][2])
+        ti.atomic_min(smallest, F.determinant())
+    return total, smallest
 
 
 @ti.kernel
@@ -122,21 +121,26 @@ def elastic_gradient(rest: Vec2s, u: Vec2s, tri: Triples, dm_inv: Mat2s, params:
 
 @ti.kernel
 def elastic_hessian(rest: Vec2s, u: Vec2s, tri: Triples, dm_inv: Mat2s, params: Params, project: ti.i32, out: Table):
-    """out[e] = the 6 x 6 block W D^T M D of triangle e, row-major (M projected to PSD if project)."""
+    """out[e] = the 6 x 6 block W D^T M D of triangle e, row-major (M projected to PSD if project), summed
+    over the eigenpairs of M as W sum_k lambda_k q_k q_k^T, q_k = D^T v_k.
+
+    D = dvec(F)/dx: with G the 3 x 2 matrix whose row a holds the weights of x_a in F's columns
+    (-(B0 + B1), B0, B1 for the rows B0, B1 of Dm^-1), (D^T v)_{2a+d} = sum_j G[a, j] v[2d + j].
+    (Runtime loops, not unrolled ones: Taichi traces the body once, which keeps its compile time short.)"""
     for e in range(tri.shape[0]):
-        M = stress_hessian(deformation_gradient(rest, u, tri, dm_inv, e), params[e][1], params[e][2], project)
+        lambdas, vectors = stress_eigensystem(deformation_gradient(rest, u, tri, dm_inv, e), params[e][1], params[e][2])
+        if project:
+            lambdas = ti.max(lambdas, 0.0)
         B = dm_inv[e]
-        # D[r, 2a + d] = dvec(F)_r / dx_{a,d}, r = 2 i + j:  dF_ij/dx_{a,d} = delta_id * dB_aj
-        # with dB_1j = B[0, j], dB_2j = B[1, j], dB_0j = -(B[0, j] + B[1, j]).
-        D = ti.Matrix.zero(ti.f64, 4, 6)
-        for i, j in ti.static(ti.ndrange(2, 2)):
-            D[2 * i + j, 2 * 1 + i] = B[0, j]
-            D[2 * i + j, 2 * 2 + i] = B[1, j]
-            D[2 * i + j, 2 * 0 + i] = -(B[0, j] + B[1, j])
-        K = params[e][0] * D.transpose() @ M @ D
-        for a in ti.static(range(6)):
-            for b in ti.static(range(6)):
-                out[e, 6 * a + b] = K[a, b]
+        G = ti.Matrix([[-B[0, 0] - B[1, 0], -B[0, 1] - B[1, 1]], [B[0, 0], B[0, 1]], [B[1, 0], B[1, 1]]])
+        Q = ti.Matrix.zero(ti.f64, 4, 6)
+        for k, a, d in ti.ndrange(4, 3, 2):
+            Q[k, 2 * a + d] = G[a, 0] * vectors[k, 2 * d] + G[a, 1] * vectors[k, 2 * d + 1]
+        for i, j in ti.ndrange(6, 6):
+            h = 0.0
+            for k in range(4):
+                h += lambdas[k] * Q[k, i] * Q[k, j]
+            out[e, 6 * i + j] = params[e][0] * h
 
 
 @ti.kernel
@@ -150,15 +154,6 @@ def inversion_step(rest: Vec2s, u: Vec2s, dx: Vec2s, tri: Triples) -> ti.f64:
         # det(a + t b) = c0 + c1 t + c2 t^2 with det([p, q]) = p x q
         ti.atomic_min(bound, smallest_positive_root(a1.cross(a2), a1.cross(b2) + b1.cross(a2), b1.cross(b2)))
     return bound
-
-
-@ti.kernel
-def min_determinant(rest: Vec2s, u: Vec2s, tri: Triples, dm_inv: Mat2s) -> ti.f64:
-    """min_e det F_e."""
-    smallest = ti.math.inf
-    for e in range(tri.shape[0]):
-        ti.atomic_min(smallest, deformation_gradient(rest, u, tri, dm_inv, e).determinant())
-    return smallest
 
 
 class NeoHookean(Term):
@@ -188,7 +183,7 @@ class NeoHookean(Term):
         return self.config.rest, self.config.u, self.tri, self.dm_inv
 
     def energy(self) -> float:
-        return elastic_energy(*self._mesh(), self.params)
+        return elastic_energy(*self._mesh(), self.params)[0]
 
     def gradient(self) -> np.ndarray:
         out = np.empty_like(self.config.rest)
@@ -209,4 +204,4 @@ class NeoHookean(Term):
 
     def min_determinant(self) -> float:
         """Smallest det F over the mesh (negative when a triangle is inverted)."""
-        return min_determinant(*self._mesh())
+        return elastic_energy(*self._mesh(), self.params)[1]
