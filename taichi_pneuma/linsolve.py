@@ -13,6 +13,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 import taichi as ti
 
+from . import runtime
+
 
 
 class FixedPattern:
@@ -138,7 +140,10 @@ BACKENDS = {"cholespy": CholespyCholesky, "scipy": ScipySuperLU, "taichi": Taich
 
 
 def make_backend(name: str):
-    """A fresh linear-solver backend by name (one of BACKENDS)."""
+    """A fresh linear-solver backend by name: one of BACKENDS, or "auto": Taichi's LLT when Taichi runs on
+    the CPU, CHOLMOD otherwise (Taichi's sparse solvers are float32-only on CUDA; the solve stays float64)."""
+    if name == "auto":
+        name = "taichi" if runtime.current_arch() in (None, "cpu") else "cholespy"
     return BACKENDS[name]()
 
 
