@@ -26,6 +26,8 @@ from .errors import require, require_finite
 OUTER_MARKER = 1
 MARGIN = 1e-3
 SIDES = ("left", "right", "bottom", "top")
+ORDERS = (1, 2)
+TRIANGLE_O2_COLUMNS = [0, 1, 2, 5, 3, 4]  # Triangle's o2 lists the midside nodes opposite corners 0, 1, 2
 
 
 def _pair(name: str, value, positive: bool = False) -> tuple[float, float]:
@@ -270,10 +272,11 @@ def in_box(points: np.ndarray, box) -> np.ndarray:
 class Mesh:
     """A triangle mesh with the vertex sets a pneumatic scene needs.
 
-    vertices: (n, 2) rest positions; triangles: (m, 3) counter-clockwise vertex indices;
-    chambers: one vertex loop per chamber wall, counter-clockwise (positive area), in the scene's
-    order; boundary: the vertices on the body's outer boundary; pinned: the clamped vertices;
-    tip: the right edge (x >= max x - 1e-6).
+    vertices: (n, 2) rest positions (the nodes); triangles: (m, 3) counter-clockwise corner indices
+    (linear elements), or (m, 6) for quadratic ones: the corners, then the midside nodes of edges 01,
+    12 and 20; chambers: one node loop per chamber wall, counter-clockwise (positive area), in the
+    scene's order (quadratic: corner, midside, corner, ...); boundary: the nodes on the body's outer
+    boundary; pinned: the clamped nodes; tip: the right edge (x >= max x - 1e-6).
     """
 
     vertices: np.ndarray
@@ -292,9 +295,32 @@ class Mesh:
         return len(self.triangles)
 
     @property
+    def order(self) -> int:
+        """1 for linear triangles, 2 for quadratic ones."""
+        return 1 if self.triangles.shape[1] == 3 else 2
+
+    @property
     def area(self) -> float:
         """Total rest area of the triangles."""
         return float(np.sum(triangle_areas(self.vertices, self.triangles)))
+
+    def display_triangles(self) -> np.ndarray:
+        """Linear triangles to draw: the triangles themselves, or each quadratic one split in four at its
+        midside nodes (corner triangles, then the middle one)."""
+        if self.order == 1:
+            return self.triangles
+        c0, c1, c2, m01, m12, m20 = self.triangles.T
+        return np.vstack([np.column_stack(t) for t in ((c0, m01, m20), (m01, c1, m12), (m20, m12, c2), (m01, m12, m20))])
+
+    def nodal_areas(self) -> np.ndarray:
+        """The integral of each node's shape function over the body, sum_t int_t N_a dA: a third of the
+        area of the triangles at a node for linear elements; for quadratic ones 0 at corners and a third
+        of each adjacent triangle's area at midside nodes (exact weights of a load linear in x)."""
+        areas = triangle_areas(self.vertices, self.triangles)
+        nodes = self.triangles[:, :3] if self.order == 1 else self.triangles[:, 3:]
+        out = np.zeros(self.n_vertices)
+        np.add.at(out, nodes.ravel(), np.repeat(areas / 3, 3))
+        return out
 
 
 def triangle_areas(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
@@ -311,9 +337,11 @@ class Geometry:
     chambers: tuple[tuple[str, object], ...]
     max_area: float = 0.0012
     clamp: ClampSelection = field(default_factory=ClampSelection)
+    order: int = 1
 
     def __post_init__(self):
         require(require_finite("max_area", self.max_area) > 0, f"max_area = {self.max_area!r} must be > 0")
+        require(self.order in ORDERS, f"order = {self.order!r} must be 1 (linear triangles) or 2 (quadratic)")
         body = self.body.polygon()
         polygons = [(name, shape.polygon()) for name, shape in self.chambers]
         names = [name for name, _ in polygons]
@@ -332,7 +360,8 @@ class Geometry:
                 require(not touching, f"chambers {name_a!r} and {name_b!r} overlap (or are closer than {MARGIN:g})")
 
     def mesh(self) -> Mesh:
-        """Mesh the body minus its chambers with Triangle ('pqa<max_area>') and name its vertex sets."""
+        """Mesh the body minus its chambers with Triangle ('pqa<max_area>', plus 'o2' for quadratic
+        triangles) and name its node sets."""
         loops = [self.body.polygon()] + [shape.polygon() for _, shape in self.chambers]
         offsets = np.cumsum([0] + [len(p) for p in loops])
         ring = lambda n, offset: offset + np.column_stack([np.arange(n), (np.arange(n) + 1) % n])
@@ -343,18 +372,42 @@ class Geometry:
         }
         if len(loops) > 1:
             pslg["holes"] = np.array([interior_point(p) for p in loops[1:]])
-        out = triangle.triangulate(pslg, f"pqa{self.max_area:.17f}")  # fixed-point: Triangle reads no exponent
+        flags = f"pqa{self.max_area:.17f}" + ("o2" if self.order == 2 else "")  # fixed-point: Triangle reads no exponent
+        out = triangle.triangulate(pslg, flags)
         vertices = np.asarray(out["vertices"], dtype=np.float64)
-        triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
+        triangles = np.asarray(out["triangles"], dtype=np.int64)
+        if self.order == 2:
+            triangles = triangles[:, TRIANGLE_O2_COLUMNS]
+        triangles = orient_counter_clockwise(vertices, triangles)
+        midside = midside_nodes(triangles)
         markers = out["segment_markers"].ravel()
         chambers = []
         for c in range(1, len(loops)):
             loop = chain_loop(out["segments"][markers == OUTER_MARKER + c])
-            chambers.append(loop if signed_area(vertices[loop]) > 0 else loop[::-1].copy())
-        boundary = np.unique(out["segments"][markers == OUTER_MARKER])
+            loop = loop if signed_area(vertices[loop]) > 0 else loop[::-1].copy()
+            chambers.append(with_midside_nodes(loop, midside))
+        outer = out["segments"][markers == OUTER_MARKER]
+        boundary = np.unique(np.concatenate([outer.ravel()] + ([[midside[tuple(sorted(e))] for e in outer]]
+                                                                if midside else [])))
         x = vertices[:, 0]
         tip = np.flatnonzero(x >= x.max() - 1e-6)
         return Mesh(vertices, triangles, tuple(chambers), boundary, self.clamp.select(vertices), tip)
+
+
+def midside_nodes(triangles: np.ndarray) -> dict[tuple[int, int], int]:
+    """{(corner, corner) sorted: the midside node of that edge} of quadratic triangles ({} for linear ones)."""
+    if triangles.shape[1] == 3:
+        return {}
+    pairs = ((0, 1, 3), (1, 2, 4), (2, 0, 5))
+    return {tuple(sorted((int(t[i]), int(t[j])))): int(t[k]) for t in triangles for i, j, k in pairs}
+
+
+def with_midside_nodes(loop: np.ndarray, midside: dict[tuple[int, int], int]) -> np.ndarray:
+    """A corner loop with the midside node of each of its edges inserted after the edge's first corner."""
+    if not midside:
+        return loop
+    mids = [midside[tuple(sorted((int(a), int(b))))] for a, b in zip(loop, np.roll(loop, -1))]
+    return np.column_stack([loop, mids]).ravel()
 
 
 @dataclass(frozen=True)
@@ -369,6 +422,7 @@ class BeamGeometry:
     cy: float = 0.0
     chamber_points: int = 128
     max_area: float = 0.0012
+    order: int = 1
 
     def __post_init__(self):
         for name in ("length", "height", "a", "b", "cx", "cy", "max_area"):
@@ -394,7 +448,7 @@ class BeamGeometry:
         """The same beam as a general Geometry (body rectangle, one ellipse chamber named 'main', left clamp)."""
         return Geometry(Rectangle((0.0, 0.0), (self.length, self.height)),
                         (("main", Ellipse((self.cx, self.cy), (self.a, self.b), self.chamber_points)),),
-                        self.max_area)
+                        self.max_area, order=self.order)
 
     def mesh(self) -> Mesh:
         return self.general().mesh()
@@ -404,7 +458,7 @@ def orient_counter_clockwise(vertices: np.ndarray, triangles: np.ndarray) -> np.
     """Return triangles with every vertex triple ordered counter-clockwise."""
     clockwise = triangle_areas(vertices, triangles) < 0
     fixed = triangles.copy()
-    fixed[clockwise] = fixed[clockwise][:, [0, 2, 1]]
+    fixed[clockwise] = fixed[clockwise][:, [0, 2, 1, 5, 4, 3][:triangles.shape[1]]]  # midside nodes follow their edges
     return fixed
 
 

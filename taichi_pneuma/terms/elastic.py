@@ -1,18 +1,27 @@
-"""Stable neo-Hookean elasticity on linear triangles (plane strain), as Taichi kernels.
+"""Stable neo-Hookean elasticity on linear (P1) or quadratic (P2) triangles, plane strain, as Taichi kernels.
 
 Per unit rest area (Macklin-Mueller form, rest-stable, finite for inverted elements):
 
     psi(F) = mu (1 - J) + lam/2 (1 - J)^2 + mu/2 (|F|_F^2 - 2),   J = det F,
     mu = E / (2 (1 + nu)),   lam = E nu / ((1 + nu)(1 - 2 nu)).
 
-With F = Ds Dm^-1 (Ds = [x1 - x0, x2 - x0], Dm the same at rest) and g = dJ/dF = cof F:
+The energy is integrated by quadrature, E = sum_q W_q psi(F_q): at quadrature point q of an element
+with nodes a = 0..k-1 and rest shape-function gradients G_qa = dN_a/dX,
 
-    P = dpsi/dF = mu F - c g,   c = mu + lam (1 - J),
-    M = d2psi/dF2 = mu I + lam g g^T - c H_J,   H_J = d2J/dF2 (constant),
+    F_q = sum_a x_a G_qa^T = sum_{a >= 1} (x_a - x_0) G_qa^T      (sum_a G_qa = 0),
 
-mu and lam may differ per element (a material per region). The element Hessian is  W D^T M D
-(W rest area, D = dvec(F)/dx, 4 x 6); the projected one uses [M]_+, M with its negative
-eigenvalues clamped to zero, which equals M wherever M is already PSD.
+so every kernel runs over elements and their quadrature points, whatever the element: P1 has one point
+per triangle (k = 3, F constant, W = the area), P2 three (k = 6, the 3-point rule of degree 2 at
+barycentric (2/3, 1/6, 1/6) and permutations, W = area / 3: exact for the P2 stiffness of small strain).
+
+With g = dJ/dF = cof F and c = mu + lam (1 - J):
+
+    P = dpsi/dF = mu F - c g,   M = d2psi/dF2 = mu I + lam g g^T - c H_J,   H_J = d2J/dF2 (constant),
+
+the nodal force is W_q P G_qa and the Hessian block of nodes (a, b) is W_q sum over M's eigenpairs
+lambda_k (D^T v_k)_a (D^T v_k)_b^T, with (D^T v)_a = V G_qa for v = vec(V). The projected Hessian
+clamps the negative lambda_k to zero at each quadrature point, which equals the exact one wherever
+M is already PSD.
 
 The eigensystem of M is analytic. With vec(F) = (F00, F01, F10, F11), H_J has eigenvalue +1 on
 span{(1,0,0,1), (0,1,-1,0)} and -1 on span{(1,0,0,-1), (0,1,1,0)}, so mu I - c H_J is mu - c on the
@@ -29,12 +38,42 @@ and the 2 x 2 block B has closed-form eigenpairs: four eigenpairs of M, no itera
 import numpy as np
 import taichi as ti
 
-from .base import Scalars, Table, Term, Triples, Vec2s, block_pattern, edge, int32s, smallest_positive_root
+from .base import Table, Term, Vec2s, block_pattern, edge, smallest_positive_root
 
-Mat2s = ti.types.ndarray(dtype=ti.types.matrix(2, 2, ti.f64), ndim=1)  # (m, 2, 2): Dm^-1 per triangle
-VEC3 = ti.types.vector(3, ti.f64)
-Params = ti.types.ndarray(dtype=VEC3, ndim=1)  # (m, 3): rest area W, mu, lam per triangle
+Nodes = ti.types.ndarray(dtype=ti.i32, ndim=2)  # (m, k): the nodes of each element
+Gradients = ti.types.ndarray(dtype=ti.f64, ndim=4)  # (m, nq, k, 2): dN_a/dX at each quadrature point
+Weights = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (m, nq): the quadrature weights W
+Moduli = ti.types.ndarray(dtype=ti.types.vector(2, ti.f64), ndim=1)  # (m, 2): mu, lam per element
 SQRT_HALF = 0.7071067811865476
+MAX_NODES = 6
+
+# Reference triangle (xi, eta) = barycentric (1 - xi - eta, xi, eta); P2 node order: corners 0, 1, 2,
+# then the midside nodes of edges 01, 12, 20. Rules: (points, weights summing to 1).
+RULES = {1: (np.array([[1 / 3, 1 / 3]]), np.array([1.0])),
+         2: (np.array([[1 / 6, 1 / 6], [2 / 3, 1 / 6], [1 / 6, 2 / 3]]), np.full(3, 1 / 3))}
+
+
+def shape_gradients(order: int, xi: float, eta: float) -> np.ndarray:
+    """dN_a/d(xi, eta) of the P1 (3 x 2) or P2 (6 x 2) shape functions at (xi, eta)."""
+    l0, l1, l2 = 1.0 - xi - eta, xi, eta
+    dl = np.array([[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])  # dL_i/d(xi, eta)
+    if order == 1:
+        return dl
+    corners = [(4 * l - 1) * dl[i] for i, l in enumerate((l0, l1, l2))]  # N_i = L_i (2 L_i - 1)
+    mids = [4 * (la * dl[j] + lb * dl[i]) for i, j, la, lb in ((0, 1, l0, l1), (1, 2, l1, l2), (2, 0, l2, l0))]
+    return np.array(corners + mids)  # N = 4 L_i L_j on edge ij
+
+
+def quadrature(vertices: np.ndarray, elements: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rest gradients G (m, nq, k, 2) and weights W (m, nq) at the quadrature points of straight-sided
+    P1 (m, 3) or P2 (m, 6) elements."""
+    order = 1 if elements.shape[1] == 3 else 2
+    points, weights = RULES[order]
+    corners = vertices[elements[:, :3]]
+    jacobian = np.stack([corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]], axis=2)  # dX/d(xi, eta)
+    inverse, area = np.linalg.inv(jacobian), 0.5 * np.linalg.det(jacobian)
+    gradients = np.stack([shape_gradients(order, *p) @ inverse for p in points], axis=1)
+    return gradients, area[:, None] * weights[None, :]
 
 
 def lame_parameters(youngs_modulus, poisson_ratio):
@@ -44,9 +83,18 @@ def lame_parameters(youngs_modulus, poisson_ratio):
 
 
 @ti.func
-def deformation_gradient(rest: ti.template(), u: ti.template(), tri: ti.template(), dm_inv: ti.template(), e):
-    i = tri[e]
-    return ti.Matrix.cols([edge(rest, u, i[0], i[1]), edge(rest, u, i[0], i[2])]) @ dm_inv[e]
+def shape_gradient(grads: ti.template(), e, q, a):
+    """G_qa of element e as a 2-vector."""
+    return ti.Vector([grads[e, q, a, 0], grads[e, q, a, 1]])
+
+
+@ti.func
+def deformation_gradient(rest: ti.template(), u: ti.template(), nodes: ti.template(), grads: ti.template(), e, q):
+    """F at quadrature point q of element e, from the edges to its first node."""
+    F = ti.Matrix.zero(ti.f64, 2, 2)
+    for a in range(1, nodes.shape[1]):
+        F += edge(rest, u, nodes[e, 0], nodes[e, a]).outer_product(shape_gradient(grads, e, q, a))
+    return F
 
 
 @ti.func
@@ -91,117 +139,118 @@ def stress_eigensystem(F, mu, lam):
 
 
 @ti.kernel
-def elastic_energy(rest: Vec2s, u: Vec2s, tri: Triples, dm_inv: Mat2s, params: Params) -> tuple[ti.f64, ti.f64]:
-    """(sum_e W_e psi(F_e), min_e det F_e): the energy, and whether a triangle is inverted."""
+def elastic_energy(rest: Vec2s, u: Vec2s, nodes: Nodes, grads: Gradients, weights: Weights,
+                   moduli: Moduli) -> tuple[ti.f64, ti.f64]:
+    """(sum_q W_q psi(F_q), min_q det F_q): the energy, and whether an element is inverted somewhere."""
     total = 0.0
     smallest = ti.math.inf
-    for e in range(tri.shape[0]):
-        F = deformation_gradient(rest, u, tri, dm_inv, e)
-        total += params[e][0] * psi(F, params[e][1], params[e][2])
+    for e, q in ti.ndrange(nodes.shape[0], weights.shape[1]):
+        F = deformation_gradient(rest, u, nodes, grads, e, q)
+        total += weights[e, q] * psi(F, moduli[e][0], moduli[e][1])
         ti.atomic_min(smallest, F.determinant())
     return total, smallest
 
 
 @ti.kernel
-def elastic_gradient(rest: Vec2s, u: Vec2s, tri: Triples, dm_inv: Mat2s, params: Params, out: Vec2s):
-    """out = dE/dx: W P Dm^-T scattered to the triangles' vertices."""
+def elastic_gradient(rest: Vec2s, u: Vec2s, nodes: Nodes, grads: Gradients, weights: Weights, moduli: Moduli,
+                     out: Vec2s):
+    """out = dE/dx: W_q P_q G_qa scattered to the nodes."""
     for v in range(out.shape[0]):
         out[v] = ti.Vector([0.0, 0.0])
-    for e in range(tri.shape[0]):
-        F = deformation_gradient(rest, u, tri, dm_inv, e)
+    for e, q in ti.ndrange(nodes.shape[0], weights.shape[1]):
+        F = deformation_gradient(rest, u, nodes, grads, e, q)
         g = cofactor(F)
-        w, mu, lam = params[e][0], params[e][1], params[e][2]
-        P = mu * F - (mu + lam * (1.0 - F.determinant())) * ti.Matrix([[g[0], g[1]], [g[2], g[3]]])
-        G = w * P @ dm_inv[e].transpose()
-        i = tri[e]
-        out[i[1]] += ti.Vector([G[0, 0], G[1, 0]])
-        out[i[2]] += ti.Vector([G[0, 1], G[1, 1]])
-        out[i[0]] -= ti.Vector([G[0, 0] + G[0, 1], G[1, 0] + G[1, 1]])
+        mu, lam = moduli[e][0], moduli[e][1]
+        P = weights[e, q] * (mu * F - (mu + lam * (1.0 - F.determinant())) * ti.Matrix([[g[0], g[1]], [g[2], g[3]]]))
+        for a in range(nodes.shape[1]):
+            out[nodes[e, a]] += P @ shape_gradient(grads, e, q, a)
 
 
 @ti.kernel
-def elastic_hessian(rest: Vec2s, u: Vec2s, tri: Triples, dm_inv: Mat2s, params: Params, project: ti.i32, out: Table):
-    """out[e] = the 6 x 6 block W D^T M D of triangle e, row-major (M projected to PSD if project), summed
-    over the eigenpairs of M as W sum_k lambda_k q_k q_k^T, q_k = D^T v_k.
-
-    D = dvec(F)/dx: with G the 3 x 2 matrix whose row a holds the weights of x_a in F's columns
-    (-(B0 + B1), B0, B1 for the rows B0, B1 of Dm^-1), (D^T v)_{2a+d} = sum_j G[a, j] v[2d + j].
-    (Runtime loops, not unrolled ones: Taichi traces the body once, which keeps its compile time short.)"""
-    for e in range(tri.shape[0]):
-        lambdas, vectors = stress_eigensystem(deformation_gradient(rest, u, tri, dm_inv, e), params[e][1], params[e][2])
-        if project:
-            lambdas = ti.max(lambdas, 0.0)
-        B = dm_inv[e]
-        G = ti.Matrix([[-B[0, 0] - B[1, 0], -B[0, 1] - B[1, 1]], [B[0, 0], B[0, 1]], [B[1, 0], B[1, 1]]])
-        Q = ti.Matrix.zero(ti.f64, 4, 6)
-        for k, a, d in ti.ndrange(4, 3, 2):
-            Q[k, 2 * a + d] = G[a, 0] * vectors[k, 2 * d] + G[a, 1] * vectors[k, 2 * d + 1]
-        for i, j in ti.ndrange(6, 6):
-            h = 0.0
-            for k in range(4):
-                h += lambdas[k] * Q[k, i] * Q[k, j]
-            out[e, 6 * i + j] = params[e][0] * h
+def elastic_hessian(rest: Vec2s, u: Vec2s, nodes: Nodes, grads: Gradients, weights: Weights, moduli: Moduli,
+                    project: ti.i32, out: Table):
+    """out[e] = the 2k x 2k block sum_q W_q sum_k lambda_qk Q_qk Q_qk^T of element e, row-major, with
+    Q_qk[2a + d] = (V_qk G_qa)_d (M's eigenvalues clamped to >= 0 if project). Runtime loops, not unrolled
+    ones: Taichi traces the body once, which keeps its compile time short."""
+    for e in range(nodes.shape[0]):
+        n = 2 * nodes.shape[1]
+        for i in range(n * n):
+            out[e, i] = 0.0
+        for q in range(weights.shape[1]):
+            lambdas, vectors = stress_eigensystem(deformation_gradient(rest, u, nodes, grads, e, q), moduli[e][0],
+                                                  moduli[e][1])
+            if project:
+                lambdas = ti.max(lambdas, 0.0)
+            Q = ti.Matrix.zero(ti.f64, 4, 2 * MAX_NODES)
+            for k, a, d in ti.ndrange(4, nodes.shape[1], 2):
+                Q[k, 2 * a + d] = vectors[k, 2 * d] * grads[e, q, a, 0] + vectors[k, 2 * d + 1] * grads[e, q, a, 1]
+            for i, j in ti.ndrange(n, n):
+                h = 0.0
+                for k in range(4):
+                    h += lambdas[k] * Q[k, i] * Q[k, j]
+                out[e, n * i + j] += weights[e, q] * h
 
 
 @ti.kernel
-def inversion_step(rest: Vec2s, u: Vec2s, dx: Vec2s, tri: Triples) -> ti.f64:
-    """Smallest alpha > 0 with det(Ds + alpha dDs) = 0 over all triangles (inf if none)."""
+def inversion_step(rest: Vec2s, u: Vec2s, dx: Vec2s, nodes: Nodes, grads: Gradients) -> ti.f64:
+    """Smallest alpha > 0 with det(F_q + alpha dF_q) = 0 over all quadrature points (inf if none):
+    det F + alpha cof F : dF + alpha^2 det dF."""
     bound = ti.math.inf
-    for e in range(tri.shape[0]):
-        i = tri[e]
-        a1, a2 = edge(rest, u, i[0], i[1]), edge(rest, u, i[0], i[2])
-        b1, b2 = dx[i[1]] - dx[i[0]], dx[i[2]] - dx[i[0]]
-        # det(a + t b) = c0 + c1 t + c2 t^2 with det([p, q]) = p x q
-        ti.atomic_min(bound, smallest_positive_root(a1.cross(a2), a1.cross(b2) + b1.cross(a2), b1.cross(b2)))
+    for e, q in ti.ndrange(nodes.shape[0], grads.shape[1]):
+        F = deformation_gradient(rest, u, nodes, grads, e, q)
+        dF = ti.Matrix.zero(ti.f64, 2, 2)
+        for a in range(1, nodes.shape[1]):
+            dF += (dx[nodes[e, a]] - dx[nodes[e, 0]]).outer_product(shape_gradient(grads, e, q, a))
+        cross = F[0, 0] * dF[1, 1] + F[1, 1] * dF[0, 0] - F[0, 1] * dF[1, 0] - F[1, 0] * dF[0, 1]
+        ti.atomic_min(bound, smallest_positive_root(F.determinant(), cross, dF.determinant()))
     return bound
 
 
 class NeoHookean(Term):
-    """Stable neo-Hookean energy of a triangle mesh, with per-element moduli, and the math above.
+    """Stable neo-Hookean energy of a P1 (m, 3) or P2 (m, 6) triangle mesh, with per-element moduli.
 
-    youngs_modulus and poisson_ratio: scalars, or one value per triangle.
+    youngs_modulus and poisson_ratio: scalars, or one value per element.
     """
 
     name = "elastic"
 
-    def __init__(self, config, triangles: np.ndarray, youngs_modulus, poisson_ratio):
+    def __init__(self, config, elements: np.ndarray, youngs_modulus, poisson_ratio):
         self.config = config
-        rest = config.rest
-        m = len(triangles)
+        m = len(elements)
         mu, lam = lame_parameters(np.broadcast_to(np.asarray(youngs_modulus, dtype=np.float64), (m,)),
                                   np.broadcast_to(np.asarray(poisson_ratio, dtype=np.float64), (m,)))
-        self.n_triangles = m
-        edges = np.stack([rest[triangles[:, 1]] - rest[triangles[:, 0]],
-                          rest[triangles[:, 2]] - rest[triangles[:, 0]]], axis=2)  # (m, 2, 2) columns e1, e2
-        self.rest_area = 0.5 * np.linalg.det(edges)
-        self.tri = int32s(triangles)
-        self.dm_inv = np.ascontiguousarray(np.linalg.inv(edges))
-        self.params = np.ascontiguousarray(np.column_stack([self.rest_area, mu, lam]))
-        self._rows, self._cols = block_pattern(triangles)
+        grads, weights = quadrature(config.rest, elements)
+        self.nodes = np.ascontiguousarray(elements, dtype=np.int32)
+        self.grads = np.ascontiguousarray(grads)
+        self.weights = np.ascontiguousarray(weights)
+        self.moduli = np.ascontiguousarray(np.column_stack([mu, lam]))
+        self._rows, self._cols = block_pattern(self.nodes)
 
     def _mesh(self):
-        return self.config.rest, self.config.u, self.tri, self.dm_inv
+        return self.config.rest, self.config.u, self.nodes, self.grads
 
     def energy(self) -> float:
-        return elastic_energy(*self._mesh(), self.params)[0]
+        return elastic_energy(*self._mesh(), self.weights, self.moduli)[0]
 
     def gradient(self) -> np.ndarray:
         out = np.empty_like(self.config.rest)
-        elastic_gradient(*self._mesh(), self.params, out)
+        elastic_gradient(*self._mesh(), self.weights, self.moduli, out)
         return out
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         return self._rows, self._cols
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
-        out = np.empty((self.n_triangles, 36))
-        elastic_hessian(*self._mesh(), self.params, int(psd_only), out)
+        n = 2 * self.nodes.shape[1]
+        out = np.empty((len(self.nodes), n * n))
+        elastic_hessian(*self._mesh(), self.weights, self.moduli, int(psd_only), out)
         return out.ravel()
 
     def max_step(self, dx: np.ndarray) -> float:
-        """Largest step fraction along dx that keeps every triangle's determinant positive."""
-        return inversion_step(self.config.rest, self.config.u, np.ascontiguousarray(dx, dtype=np.float64), self.tri)
+        """Largest step fraction along dx that keeps det F positive at every quadrature point."""
+        return inversion_step(self.config.rest, self.config.u, np.ascontiguousarray(dx, dtype=np.float64),
+                              self.nodes, self.grads)
 
     def min_determinant(self) -> float:
-        """Smallest det F over the mesh (negative when a triangle is inverted)."""
-        return elastic_energy(*self._mesh(), self.params)[1]
+        """Smallest det F over the quadrature points (negative where an element is inverted)."""
+        return elastic_energy(*self._mesh(), self.weights, self.moduli)[1]
