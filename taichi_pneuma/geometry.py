@@ -27,7 +27,7 @@ OUTER_MARKER = 1
 MARGIN = 1e-3
 SIDES = ("left", "right", "bottom", "top")
 ORDERS = (1, 2)
-TRIANGLE_O2_COLUMNS = [0, 1, 2, 5, 3, 4]  # Triangle's o2 lists the midside nodes opposite corners 0, 1, 2
+MAX_REFINEMENTS = 4
 
 
 def _pair(name: str, value, positive: bool = False) -> tuple[float, float]:
@@ -307,10 +307,7 @@ class Mesh:
     def display_triangles(self) -> np.ndarray:
         """Linear triangles to draw: the triangles themselves, or each quadratic one split in four at its
         midside nodes (corner triangles, then the middle one)."""
-        if self.order == 1:
-            return self.triangles
-        c0, c1, c2, m01, m12, m20 = self.triangles.T
-        return np.vstack([np.column_stack(t) for t in ((c0, m01, m20), (m01, c1, m12), (m20, m12, c2), (m01, m12, m20))])
+        return self.triangles if self.order == 1 else split_in_four(self.triangles)
 
     def nodal_areas(self) -> np.ndarray:
         """The integral of each node's shape function over the body, sum_t int_t N_a dA: a third of the
@@ -338,10 +335,13 @@ class Geometry:
     max_area: float = 0.0012
     clamp: ClampSelection = field(default_factory=ClampSelection)
     order: int = 1
+    refinements: int = 0
 
     def __post_init__(self):
         require(require_finite("max_area", self.max_area) > 0, f"max_area = {self.max_area!r} must be > 0")
         require(self.order in ORDERS, f"order = {self.order!r} must be 1 (linear triangles) or 2 (quadratic)")
+        require(self.refinements in range(MAX_REFINEMENTS + 1),
+                f"refinements = {self.refinements!r} must be an integer from 0 to {MAX_REFINEMENTS}")
         body = self.body.polygon()
         polygons = [(name, shape.polygon()) for name, shape in self.chambers]
         names = [name for name, _ in polygons]
@@ -360,8 +360,9 @@ class Geometry:
                 require(not touching, f"chambers {name_a!r} and {name_b!r} overlap (or are closer than {MARGIN:g})")
 
     def mesh(self) -> Mesh:
-        """Mesh the body minus its chambers with Triangle ('pqa<max_area>', plus 'o2' for quadratic
-        triangles) and name its node sets."""
+        """Mesh the body minus its chambers with Triangle ('pqa<max_area>'), split every triangle in four
+        `refinements` times (uniform refinement: the same boundary polygons, h halved each time), add a
+        midside node to every edge for quadratic triangles, and name the node sets."""
         loops = [self.body.polygon()] + [shape.polygon() for _, shape in self.chambers]
         offsets = np.cumsum([0] + [len(p) for p in loops])
         ring = lambda n, offset: offset + np.column_stack([np.arange(n), (np.arange(n) + 1) % n])
@@ -372,42 +373,52 @@ class Geometry:
         }
         if len(loops) > 1:
             pslg["holes"] = np.array([interior_point(p) for p in loops[1:]])
-        flags = f"pqa{self.max_area:.17f}" + ("o2" if self.order == 2 else "")  # fixed-point: Triangle reads no exponent
-        out = triangle.triangulate(pslg, flags)
+        out = triangle.triangulate(pslg, f"pqa{self.max_area:.17f}")  # fixed-point: Triangle reads no exponent
         vertices = np.asarray(out["vertices"], dtype=np.float64)
-        triangles = np.asarray(out["triangles"], dtype=np.int64)
+        triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
+        segments, markers = np.asarray(out["segments"], dtype=np.int64), out["segment_markers"].ravel()
+        for _ in range(self.refinements):
+            vertices, mid = with_edge_midpoints(vertices, triangles)
+            triangles = split_in_four(np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])]))
+            halves = mid(segments[:, 0], segments[:, 1])
+            segments = np.vstack([np.column_stack([segments[:, 0], halves]), np.column_stack([halves, segments[:, 1]])])
+            markers = np.concatenate([markers, markers])
+        mid = None
         if self.order == 2:
-            triangles = triangles[:, TRIANGLE_O2_COLUMNS]
-        triangles = orient_counter_clockwise(vertices, triangles)
-        midside = midside_nodes(triangles)
-        markers = out["segment_markers"].ravel()
+            vertices, mid = with_edge_midpoints(vertices, triangles)
+            triangles = np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])])
         chambers = []
         for c in range(1, len(loops)):
-            loop = chain_loop(out["segments"][markers == OUTER_MARKER + c])
+            loop = chain_loop(segments[markers == OUTER_MARKER + c])
             loop = loop if signed_area(vertices[loop]) > 0 else loop[::-1].copy()
-            chambers.append(with_midside_nodes(loop, midside))
-        outer = out["segments"][markers == OUTER_MARKER]
-        boundary = np.unique(np.concatenate([outer.ravel()] + ([[midside[tuple(sorted(e))] for e in outer]]
-                                                                if midside else [])))
+            chambers.append(loop if mid is None else np.column_stack([loop, mid(loop, np.roll(loop, -1))]).ravel())
+        outer = segments[markers == OUTER_MARKER]
+        boundary = np.unique(outer if mid is None else np.column_stack([outer, mid(outer[:, 0], outer[:, 1])]))
         x = vertices[:, 0]
         tip = np.flatnonzero(x >= x.max() - 1e-6)
         return Mesh(vertices, triangles, tuple(chambers), boundary, self.clamp.select(vertices), tip)
 
 
-def midside_nodes(triangles: np.ndarray) -> dict[tuple[int, int], int]:
-    """{(corner, corner) sorted: the midside node of that edge} of quadratic triangles ({} for linear ones)."""
-    if triangles.shape[1] == 3:
-        return {}
-    pairs = ((0, 1, 3), (1, 2, 4), (2, 0, 5))
-    return {tuple(sorted((int(t[i]), int(t[j])))): int(t[k]) for t in triangles for i, j, k in pairs}
+def with_edge_midpoints(vertices: np.ndarray, triangles: np.ndarray):
+    """The vertices with the midpoint of every edge of the (corner) triangles appended, and mid(a, b): the
+    index of the midpoint of edge (a, b), elementwise over index arrays."""
+    edges = np.sort(np.vstack([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1)
+    unique = np.unique(edges, axis=0)
+    n = len(vertices)
+    keys = unique[:, 0] * n + unique[:, 1]
+
+    def mid(a, b):
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        return n + np.searchsorted(keys, lo * n + hi)
+
+    return np.vstack([vertices, 0.5 * (vertices[unique[:, 0]] + vertices[unique[:, 1]])]), mid
 
 
-def with_midside_nodes(loop: np.ndarray, midside: dict[tuple[int, int], int]) -> np.ndarray:
-    """A corner loop with the midside node of each of its edges inserted after the edge's first corner."""
-    if not midside:
-        return loop
-    mids = [midside[tuple(sorted((int(a), int(b))))] for a, b in zip(loop, np.roll(loop, -1))]
-    return np.column_stack([loop, mids]).ravel()
+def split_in_four(triangles: np.ndarray) -> np.ndarray:
+    """The four corner-and-midpoint triangles of each (m, 6) triangle (corners, then edge midpoints 01, 12,
+    20): the three corner triangles, then the middle one; all counter-clockwise when the input is."""
+    c0, c1, c2, m01, m12, m20 = triangles.T
+    return np.vstack([np.column_stack(t) for t in ((c0, m01, m20), (m01, c1, m12), (m20, m12, c2), (m01, m12, m20))])
 
 
 @dataclass(frozen=True)
@@ -423,6 +434,7 @@ class BeamGeometry:
     chamber_points: int = 128
     max_area: float = 0.0012
     order: int = 1
+    refinements: int = 0
 
     def __post_init__(self):
         for name in ("length", "height", "a", "b", "cx", "cy", "max_area"):
@@ -448,7 +460,7 @@ class BeamGeometry:
         """The same beam as a general Geometry (body rectangle, one ellipse chamber named 'main', left clamp)."""
         return Geometry(Rectangle((0.0, 0.0), (self.length, self.height)),
                         (("main", Ellipse((self.cx, self.cy), (self.a, self.b), self.chamber_points)),),
-                        self.max_area, order=self.order)
+                        self.max_area, order=self.order, refinements=self.refinements)
 
     def mesh(self) -> Mesh:
         return self.general().mesh()
@@ -458,7 +470,7 @@ def orient_counter_clockwise(vertices: np.ndarray, triangles: np.ndarray) -> np.
     """Return triangles with every vertex triple ordered counter-clockwise."""
     clockwise = triangle_areas(vertices, triangles) < 0
     fixed = triangles.copy()
-    fixed[clockwise] = fixed[clockwise][:, [0, 2, 1, 5, 4, 3][:triangles.shape[1]]]  # midside nodes follow their edges
+    fixed[clockwise] = fixed[clockwise][:, [0, 2, 1]]
     return fixed
 
 

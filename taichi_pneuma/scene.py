@@ -150,10 +150,12 @@ class BuiltScene:
 
 def reference_scene(cy: float = 0.15, cx: float = 0.0, growth: float = 3.5, steps: int = 36,
                     youngs_modulus: float = 1e4, poisson_ratio: float = 0.45, chamber_stiffness: float = 1e5,
-                    max_area: float = 0.0012, chamber_points: int = 128, order: int = 1) -> Scene:
+                    max_area: float = 0.0012, chamber_points: int = 128, order: int = 1,
+                    refinements: int = 0) -> Scene:
     """SPEC.md's scene: the clamped 3.5 x 0.8 beam, one ellipse chamber ramped in area from 1 to growth;
-    order 2 meshes it with quadratic triangles."""
-    beam = BeamGeometry(cx=cx, cy=cy, max_area=max_area, chamber_points=chamber_points, order=order)
+    order 2 meshes it with quadratic triangles, refinements splits every triangle in four that often."""
+    beam = BeamGeometry(cx=cx, cy=cy, max_area=max_area, chamber_points=chamber_points, order=order,
+                        refinements=refinements)
     return Scene(beam.general(), (ChamberControl(area_ramp(growth, steps), chamber_stiffness),), steps - 1,
                  Material(youngs_modulus, poisson_ratio), name=f"reference_cy{cy:+.2f}")
 
