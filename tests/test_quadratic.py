@@ -2,6 +2,7 @@
 the reference ramp against an independent code, and the convergence order under uniform refinement."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -136,3 +137,29 @@ def test_convergence_order_under_uniform_refinement():
         f = tip_under_refinement(order)
         orders[order] = math.log2(abs(f[0] - f[1]) / abs(f[1] - f[2]))
     assert orders[1] < 1.5 and orders[2] > 2.5
+
+
+def test_order_flag_quality_preset_and_scene_key(tmp_path, capsys):
+    import json
+
+    from taichi_pneuma.apps.inflate import QUALITY, main
+    from taichi_pneuma.errors import PneumaInputError
+    from taichi_pneuma.geometry import BeamGeometry
+    from taichi_pneuma.scenefile import load_scene
+
+    for flags in (["--order", "2", "--max-area", "0.02"], ["--quality", "high", "--max-area", "0.02"]):
+        out = tmp_path / flags[1]
+        assert main([*flags, "--steps", "3", "--growth", "1.2", "--no-video", "--quiet", "--out", str(out)]) == 0
+        summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
+        assert summary["element_order"] == 2 and summary["all_converged"]
+        assert summary["vertices"] == BeamGeometry(cy=0.15, max_area=0.02, order=2).mesh().n_vertices
+    assert QUALITY["default"][:2] == (0.0012, 1)  # the main command keeps SPEC.md's linear mesh
+    reference = (Path(__file__).resolve().parents[1] / "assets" / "scenes" / "reference_beam.toml").read_text()
+    for order in (2, 3):
+        path = tmp_path / f"order{order}.toml"
+        path.write_text(reference.replace("[mesh]", f"[mesh]\norder = {order}"))
+        if order == 2:
+            assert load_scene(path).geometry.order == 2
+        else:
+            with pytest.raises(PneumaInputError, match="order = 3"):
+                load_scene(path)
