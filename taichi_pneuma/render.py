@@ -223,9 +223,12 @@ def chamber_triangles(mesh: Mesh) -> np.ndarray:
     return np.concatenate(parts)
 
 
-def mesh_edges(triangles: np.ndarray) -> np.ndarray:
-    """Unique undirected edges (e, 2) of a triangle list."""
-    edges = np.sort(np.vstack([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1)
+def mesh_edges(mesh: Mesh) -> np.ndarray:
+    """Unique undirected edges (e, 2) of the element outlines: a quadratic triangle's sides are drawn as
+    two segments each, through their midside nodes."""
+    ring = [0, 1, 2] if mesh.order == 1 else [0, 3, 1, 4, 2, 5]
+    t = mesh.triangles[:, ring]
+    edges = np.sort(np.stack([t, np.roll(t, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
     return np.unique(edges, axis=0)
 
 
@@ -246,7 +249,7 @@ class FrameRenderer:
         self.frames = lengths.pop()
         self.canvas = canvas or open_canvas(width, height, backend, log=log)
         self.width, self.height = self.canvas.width, self.canvas.height
-        self._art = [(mesh_edges(t.mesh.triangles), chamber_triangles(t.mesh)) for t in tracks]
+        self._art = [(mesh_edges(t.mesh), t.mesh.display_triangles(), chamber_triangles(t.mesh)) for t in tracks]
         beam_width = 0.62 if trace else 1.0
         n = len(tracks)
         self.panels = [(beam_width * i / n, beam_width * (i + 1) / n) for i in range(n)]
@@ -282,12 +285,12 @@ class FrameRenderer:
         require(0 <= i < self.frames, f"frame {i} is outside 0..{self.frames - 1}")
         c = self.canvas
         c.begin()
-        for p, (track, (edges, chamber)) in enumerate(zip(self.tracks, self._art)):
+        for p, (track, (edges, faces, chamber)) in enumerate(zip(self.tracks, self._art)):
             x = self.to_canvas(p, track.states[i])
             if track.ground is not None:
                 ends = self.to_canvas(p, np.array([[self._lo[0], track.ground], [self._hi[0], track.ground]]))
                 c.segments(ends[None], GROUND, 3.0)
-            c.triangles(x[track.mesh.triangles], FACE)
+            c.triangles(x[faces], FACE)
             c.segments(x[edges], EDGE, 1.0)
             c.triangles(x[chamber], CHAMBER_FILL)
             for loop in track.mesh.chambers:

@@ -163,3 +163,23 @@ def test_order_flag_quality_preset_and_scene_key(tmp_path, capsys):
         else:
             with pytest.raises(PneumaInputError, match="order = 3"):
                 load_scene(path)
+
+
+def test_quadratic_frame_fills_every_subtriangle_and_draws_curved_walls():
+    from taichi_pneuma.render import CHAMBER_FILL, CHAMBER_WALL, FACE, FrameRenderer, Track
+
+    from test_render import pixels_at, rgb8
+
+    built = reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.02, order=2).build()
+    track = Track.from_ramp(built.mesh, run_schedule(built))
+    renderer = FrameRenderer([track], 480, 192, trace=False, backend="gui")
+    image = renderer.frame(2)
+    x = track.states[2]
+    faces = built.mesh.display_triangles()
+    assert len(faces) == 4 * built.mesh.n_triangles
+    on_face = np.all(np.abs(pixels_at(renderer, image, x[faces].mean(axis=1)) - rgb8(FACE)) < 40, axis=1)
+    assert on_face.mean() > 0.6  # the rest fall on drawn element outlines
+    loop = built.mesh.chambers[0]
+    assert np.all(np.abs(pixels_at(renderer, image, x[loop].mean(axis=0, keepdims=True)) - rgb8(CHAMBER_FILL)) <= 3)
+    walls = pixels_at(renderer, image, x[loop[1::2]])  # the midside nodes lie on the drawn wall
+    assert np.mean(np.all(np.abs(walls - rgb8(CHAMBER_WALL)) < 60, axis=1)) > 0.8
