@@ -28,6 +28,7 @@ bound are named (e.g. "unreachable: closest tip error 0.12; chamber 'top' at its
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -41,7 +42,7 @@ from .newton import NewtonOptions, NewtonSolver
 from .scene import BuiltScene, Scene
 from .sensitivity import sensitivity
 from .schedule import REST_COMMAND
-from .simulate import MAX_CUTS, NoEquilibrium, settle, tip_measures
+from .simulate import MAX_CUTS, NoEquilibrium, RampResult, StepRecord, chamber_records, settle, tip_measures
 from .targets import Target
 
 ARMIJO = 1e-4
@@ -96,12 +97,16 @@ class ReachOptions:
 
 @dataclass
 class Pose:
-    """An equilibrium: the commands, the displacements (n, 2), the tip point (scene coordinates) and rotation."""
+    """An equilibrium: the commands, the displacements (n, 2), the tip point (scene coordinates) and
+    rotation (degrees), and the forward solve that found it (Newton iterations, residual, seconds)."""
 
     commands: np.ndarray
     u: np.ndarray
     tip: np.ndarray
     rotation: float
+    iterations: int = 0
+    residual: float = 0.0
+    seconds: float = 0.0
 
 
 @dataclass
@@ -141,6 +146,9 @@ class Objective:
 
     def __init__(self, reacher: "Reacher", target: Target):
         self.target, self.reacher = target, reacher
+        require(target.angle is None or len(reacher.built.mesh.tip) >= 2,
+                f"target angle {target.angle!r}: the tip rotation needs at least 2 tip vertices "
+                f"(this mesh has {len(reacher.built.mesh.tip)})")
         self.rows = [0, 1] + ([2] if target.angle is not None else [])
         self.rho = reacher.options.regularization if len(reacher.names) > len(self.rows) else 0.0
         self.span = reacher.hi - reacher.lo
@@ -196,13 +204,17 @@ class Reacher:
         """The equilibrium at `commands` (clipped to the bounds), from the current one; it becomes current.
         Raises simulate.NoEquilibrium (the current pose unchanged) when there is none."""
         commands = np.clip(np.asarray(commands, float), self.lo, self.hi)
+        start = time.perf_counter()
         try:
             u, _, previous, records, _ = settle(self.built, self.solver, self.pose.commands, self.pose.u, commands,
                                                 self._previous, self.max_cuts)
         finally:
             self.forward_solves += 1
-        self.newton_iterations += sum(r.iterations for r in records)
-        self._previous, self.pose = previous, self._pose(commands, u)
+        iterations = sum(r.iterations for r in records)
+        self.newton_iterations += iterations
+        self._previous = previous
+        self.pose = dataclasses.replace(self._pose(commands, u), iterations=iterations, residual=records[-1].residual,
+                                        seconds=time.perf_counter() - start)
         return self.pose
 
     def _errors(self, target: Target, pose: Pose) -> tuple[float, float | None]:
@@ -299,3 +311,46 @@ class Reacher:
             if progress is not None:
                 progress(results[-1])
         return results
+
+
+@dataclass
+class ReachStep(StepRecord):
+    """One frame of a reach or trajectory: the equilibrium's StepRecord, the target pursued (its index
+    and x, y, angle; nan for a free angle), the tip point and its distance to the target."""
+
+    target: int = 0
+    target_x: float = math.nan
+    target_y: float = math.nan
+    target_angle: float = math.nan
+    tip_x: float = math.nan
+    tip_y: float = math.nan
+    tip_error: float = math.nan
+
+    def row(self) -> dict[str, float]:
+        row = super().row()
+        row.update(target=self.target, target_x=self.target_x, target_y=self.target_y, target_angle=self.target_angle,
+                   tip_x=self.tip_x, tip_y=self.tip_y, tip_error=self.tip_error)
+        return row
+
+
+def frames(reacher: Reacher, results: list[ReachResult]) -> RampResult:
+    """Every accepted equilibrium of a sequence of reaches, in order, as a RampResult of ReachSteps
+    (the history CSV, the states and the video of simulate/render take it as they take a ramp)."""
+    built, mesh = reacher.built, reacher.built.mesh
+    rest_tip = mesh.vertices[mesh.tip].mean(axis=0)
+    steps, states = [], []
+    for k, result in enumerate(results):
+        target = result.target
+        for pose in result.path[1 if k else 0:]:
+            built.set_commands(pose.commands)
+            built.model.set_displacements(pose.u)
+            dx, dy = pose.tip - rest_tip
+            steps.append(ReachStep(len(steps), chamber_records(built, pose.commands), float(dx), float(dy),
+                                   pose.rotation, pose.iterations, pose.residual, True, 0, 1,
+                                   built.elastic.min_determinant(), pose.seconds, {}, k, *target.tip,
+                                   math.nan if target.angle is None else target.angle, *pose.tip,
+                                   float(np.hypot(*(pose.tip - target.tip)))))
+            states.append(mesh.vertices + pose.u)
+    built.set_commands(reacher.pose.commands)
+    built.model.set_displacements(reacher.pose.u)
+    return RampResult(steps, np.array(states), [])

@@ -5,6 +5,7 @@ One frame shows, for each ramp (a *track*), a beam panel:
 - the chamber, its deformed wall loop filled translucent blue (alpha-blended onto the background:
   the chamber is a hole in the mesh, so only background lies under it) and outlined in strong blue;
 - the pinned vertices as dark square markers;
+- for inverse control, the target as a red cross and the tip's path so far in orange;
 - a text overlay: step, commanded area ratio, chamber pressure, tip deflection (and the panel's title).
 and, optionally, beside the beam panels a trace panel: chamber area / rest area (blue) and chamber
 pressure (red) against inflation %, each scaled to the panel, with a cursor at the current step.
@@ -43,6 +44,8 @@ AXES = (0.35, 0.35, 0.35)
 AREA_CURVE = (0.05, 0.2, 0.95)
 PRESSURE_CURVE = (0.85, 0.15, 0.1)
 CURSOR = (0.2, 0.2, 0.2)
+TARGET = (0.9, 0.1, 0.1)
+TIP_PATH = (0.95, 0.55, 0.0)
 
 
 # --- backends: one canvas of (width, height) pixels, coordinates normalised to [0, 1], origin bottom-left ---
@@ -195,6 +198,7 @@ class Track:
     tip_dy: np.ndarray
     title: str = ""
     ground: float | None = None  # height of the ground line y = ground, drawn when the scene has one
+    targets: np.ndarray | None = None  # (steps, 2) inverse control's target point per frame: a cross and the tip's path
 
     @classmethod
     def from_ramp(cls, mesh: Mesh, result, title: str = "", ground: float | None = None) -> "Track":
@@ -251,7 +255,8 @@ class FrameRenderer:
         n = len(tracks)
         self.panels = [(beam_width * i / n, beam_width * (i + 1) / n) for i in range(n)]
         self.trace_panel = (beam_width, 1.0)
-        points = np.concatenate([t.states.reshape(-1, 2) for t in self.tracks])
+        points = np.concatenate([t.states.reshape(-1, 2) for t in self.tracks]
+                                + [t.targets for t in self.tracks if t.targets is not None])
         self._lo, self._hi = (np.asarray(b, float) for b in (bounds if bounds is not None else
                                                              (points.min(axis=0), points.max(axis=0))))
         self._fit_view(self._lo, self._hi)
@@ -293,6 +298,8 @@ class FrameRenderer:
             for loop in track.mesh.chambers:
                 c.segments(np.stack([x[loop], x[np.roll(loop, -1)]], axis=1), CHAMBER_WALL, 2.5)
             c.triangles(_squares(x[track.mesh.pinned], 3.5 / np.array([self.width, self.height])), PIN)
+            if track.targets is not None:
+                self._draw_target(p, track, i)
             lines = [track.title] if track.title else []
             areas = ", ".join(f"x{r:.2f}" for r in track.area_ratio[i])
             pressures = ", ".join(f"{p_:.1f}" for p_ in track.pressure[i])
@@ -302,6 +309,17 @@ class FrameRenderer:
             c.text(lines, x0 + 0.005, 0.995, x1 - x0 - 0.01)
         if self.trace:
             self._draw_trace(i)
+
+    def _draw_target(self, panel: int, track: Track, i: int) -> None:
+        """The tip's path up to frame i (the mean of the tip vertices) and a cross at frame i's target."""
+        c = self.canvas
+        path = self.to_canvas(panel, track.states[:i + 1, track.mesh.tip].mean(axis=1))
+        if len(path) > 1:
+            c.segments(np.stack([path[:-1], path[1:]], axis=1), TIP_PATH, 2.0)
+        centre = self.to_canvas(panel, track.targets[i])
+        arm = 9.0 / np.array([self.width, self.height])
+        c.segments(np.array([[centre - arm, centre + arm], [centre + arm * (-1, 1), centre + arm * (1, -1)]]),
+                   TARGET, 3.0)
 
     def _draw_trace(self, i: int) -> None:
         """Area / rest area and pressure of every chamber against schedule progress %, each scaled to the

@@ -113,6 +113,16 @@ def predict(built: BuiltScene, previous, current, commands: np.ndarray) -> np.nd
     return u1 + move if built.model.max_step(move.ravel()) > 1.0 else u1
 
 
+def chamber_records(built: BuiltScene, commands: np.ndarray) -> dict[str, ChamberRecord]:
+    """Each chamber's command, area, area ratio and pressure in the model's current state, by name."""
+    records = {}
+    for chamber, command in zip(built.chambers, commands):
+        area = chamber.area()
+        records[chamber.chamber_name] = ChamberRecord(chamber.control, float(command), area, area / chamber.rest_area,
+                                                      chamber.pressure())
+    return records
+
+
 class RampFailed(RuntimeError):
     """An increment found no equilibrium even after cutting it back; `partial` holds the steps done."""
 
@@ -218,11 +228,7 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
         for term in built.model.terms:
             term.advance(u)
         final = records[-1]
-        chambers = {}
-        for chamber, command in zip(built.chambers, target):
-            area = chamber.area()
-            chambers[chamber.chamber_name] = ChamberRecord(chamber.control, float(command), area,
-                                                           area / chamber.rest_area, chamber.pressure())
+        chambers = chamber_records(built, target)
         contact, vertex_forces = {}, np.zeros_like(u)
         for name, term in contact_terms:
             f = -term.gradient()
