@@ -200,14 +200,21 @@ class Reacher:
         rest_tip = self.built.mesh.vertices[self.built.mesh.tip].mean(axis=0)
         return Pose(np.array(commands, float), u, rest_tip + (dx, dy), rotation)
 
-    def settle(self, commands: np.ndarray) -> Pose:
+    def settle(self, commands: np.ndarray, tangent: np.ndarray | None = None) -> Pose:
         """The equilibrium at `commands` (clipped to the bounds), from the current one; it becomes current.
-        Raises simulate.NoEquilibrium (the current pose unchanged) when there is none."""
+        Raises simulate.NoEquilibrium (the current pose unchanged) when there is none.
+
+        tangent: du/dq (n, 2, m) at the current pose, for the first guess u + du/dq dq (Newton then often
+        needs one iteration): handed to simulate.predict as a previous equilibrium on the tangent line."""
         commands = np.clip(np.asarray(commands, float), self.lo, self.hi)
+        previous = self._previous
+        if tangent is not None:
+            dq = commands - self.pose.commands
+            previous = (self.pose.commands - dq, self.pose.u - tangent @ dq)
         start = time.perf_counter()
         try:
             u, _, previous, records, _ = settle(self.built, self.solver, self.pose.commands, self.pose.u, commands,
-                                                self._previous, self.max_cuts)
+                                                previous, self.max_cuts)
         finally:
             self.forward_solves += 1
         iterations = sum(r.iterations for r in records)
@@ -277,8 +284,8 @@ class Reacher:
             if goal.done(self.pose):
                 return True, iteration
             f, s, phi = goal.value(self.pose)
-            jac = goal.scale[:, None] * sensitivity(self.built, self.pose.commands, self.pose.u, self.solver.pattern,
-                                                    self.solver.backend).tip[goal.rows] * goal.span
+            sens = sensitivity(self.built, self.pose.commands, self.pose.u, self.solver.pattern, self.solver.backend)
+            jac = goal.scale[:, None] * sens.tip[goal.rows] * goal.span
             a = np.vstack([jac, goal.rho * np.eye(len(s))])
             b = np.concatenate([-f, -goal.rho * (s - goal.s_ref)])
             ds = lsq_linear(a, b, bounds=(-s, 1.0 - s), method="bvls").x
@@ -288,7 +295,7 @@ class Reacher:
                 predicted = phi - float(np.sum((a @ ds - b) ** 2))
                 current = self.pose, self._previous
                 try:
-                    trial = self.settle(self.lo + np.clip(s + ds, 0.0, 1.0) * goal.span)
+                    trial = self.settle(self.lo + np.clip(s + ds, 0.0, 1.0) * goal.span, sens.displacements)
                     decrease = phi - goal.value(trial)[2]
                     if decrease >= ARMIJO * predicted:
                         break

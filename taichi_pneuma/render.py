@@ -54,6 +54,7 @@ class GGUICanvas:
     """Taichi GGUI (Vulkan) window; offscreen unless show=True. Text goes into small imgui boxes."""
 
     name = "GGUI (Vulkan)"
+    slider_row_px = 45  # each slider takes a row this high at the bottom of the window
 
     def __init__(self, width: int, height: int, show: bool = False, title: str = "taichi-pneuma"):
         self.width, self.height = width, height
@@ -97,11 +98,18 @@ class GGUICanvas:
         ti.set_logging_level(ti.WARN)
         return image
 
-    def slider(self, label: str, value: float, low: float, high: float) -> float:
-        """An imgui slider at the bottom of the window; returns its value."""
+    def slider(self, label: str, value: float, low: float, high: float, row: int = 0) -> float:
+        """An imgui slider showing value, in row `row` (slider_row_px high) counted up from the bottom
+        of the window; returns its value (the user's, if they moved it)."""
         gui = self.window.get_gui()
-        with gui.sub_window("##slider", 0.0, 1 - 60 / self.height, 1.0, 60 / self.height):
+        height = self.slider_row_px / self.height
+        with gui.sub_window(f"##slider{row}", 0.0, 1 - (row + 1) * height, 1.0, height):
             return gui.slider_float(label, value, low, high)
+
+    def mouse(self) -> tuple[float, float, bool]:
+        """The cursor (normalised, origin bottom-left) and whether the left button is down."""
+        x, y = self.window.get_cursor_pos()
+        return float(x), float(y), bool(self.window.is_pressed(ti.ui.LMB))
 
     @property
     def running(self) -> bool:
@@ -116,6 +124,7 @@ class GUICanvas:
     """Taichi's ti.GUI software rasteriser; offscreen unless show=True."""
 
     name = "ti.GUI (software)"
+    slider_row_px = 0  # ti.GUI draws its sliders over the top of the window, taking no row
 
     def __init__(self, width: int, height: int, show: bool = False, title: str = "taichi-pneuma"):
         self.width, self.height = width, height
@@ -137,12 +146,25 @@ class GUICanvas:
     def image(self) -> np.ndarray:
         return _to_rgb8(self.gui.get_image())
 
-    def slider(self, label: str, value: float, low: float, high: float) -> float:
-        """ti.GUI's slider (created on first call, starting at value); returns its value."""
-        if not hasattr(self, "_slider"):
-            self._slider = self.gui.slider(label, low, high, step=(high - low) / 200)
-            self._slider.value = value
-        return float(self._slider.value)
+    def slider(self, label: str, value: float, low: float, high: float, row: int = 0) -> float:
+        """ti.GUI's slider named label (created on first call): shows value unless the user moved it
+        since the last call; returns its value (the user's, if they moved it). row: unused (ti.GUI
+        stacks its sliders itself)."""
+        sliders = self.__dict__.setdefault("_sliders", {})
+        if label not in sliders:
+            sliders[label] = [self.gui.slider(label, low, high, step=(high - low) / 200), value]
+            sliders[label][0].value = value
+        widget, shown = sliders[label]
+        if widget.value == shown:  # not moved by the user: show the caller's value
+            widget.value = value
+        sliders[label][1] = float(widget.value)
+        return sliders[label][1]
+
+    def mouse(self) -> tuple[float, float, bool]:
+        """The cursor (normalised, origin bottom-left) and whether the left button is down."""
+        list(self.gui.get_events())  # consuming the events updates the pressed keys
+        x, y = self.gui.get_cursor_pos()
+        return float(x), float(y), bool(self.gui.is_pressed(ti.GUI.LMB))
 
     @property
     def running(self) -> bool:
@@ -276,6 +298,12 @@ class FrameRenderer:
         centre_px = np.array([(x0 + x1) / 2 * self.width, self.height / 2]) + self._offset_px
         px = centre_px + (points - self._centre) * self._scale
         return px / np.array([self.width, self.height])
+
+    def to_world(self, panel: int, uv: np.ndarray) -> np.ndarray:
+        """Normalised canvas coordinates (..., 2) inside beam panel `panel` -> world points (to_canvas inverted)."""
+        x0, x1 = self.panels[panel]
+        centre_px = np.array([(x0 + x1) / 2 * self.width, self.height / 2]) + self._offset_px
+        return self._centre + (np.asarray(uv) * np.array([self.width, self.height]) - centre_px) / self._scale
 
     def frame(self, i: int) -> np.ndarray:
         """Frame i as an (height, width, 3) uint8 image."""

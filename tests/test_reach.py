@@ -15,6 +15,7 @@ from taichi_pneuma.scene import reference_scene
 from taichi_pneuma.scenefile import load_scene
 from taichi_pneuma.simulate import run_schedule
 from test_inverse import SCENES, forward
+from test_render import xvfb_display  # noqa: F401 (a fixture)
 
 BIDIRECTIONAL = str(SCENES / "bidirectional.toml")
 QUIET = ["--no-video", "--quiet"]
@@ -158,3 +159,42 @@ def test_design_out_of_range_is_unreachable(tmp_path, capsys):
     assert main(["--design", "cy", "--tip-dy", "-5", *COARSE_RAMP, "--out", str(tmp_path)]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("unreachable: tip dy -5 lies outside what cy in [")
+
+
+def test_live_drag_resolves_on_every_move_and_sliders_command_directly(xvfb_display, monkeypatch, capsys, bidirectional):
+    """Under Xvfb, in a real ti.GUI window; the canvas's mouse query is scripted (the button held at two
+    target positions, then released) and on the last frame the 'top' slider returns a value the user set."""
+    from taichi_pneuma import render
+    from taichi_pneuma.interactive import fixed_view, follow_mouse
+
+    size = (480, 192)
+    view = FrameRenderer([Track(bidirectional.mesh, bidirectional.mesh.vertices[None], np.ones((1, 2)),
+                                np.zeros((1, 2)), np.zeros(1))], *size, trace=False, backend="gui",
+                         bounds=fixed_view(bidirectional.mesh), log=lambda *_: None)
+    tips = [forward(bidirectional, q)[0] for q in ([1.6, 1.2], [1.9, 1.3])]  # reachable targets
+    at = [tuple(view.to_canvas(0, tip)) for tip in tips]
+    script = iter([(*at[0], True), (*at[0], True), (*at[1], True), (*at[1], False), (0.5, 0.5, False)])
+    top_calls = []
+
+    def slider(self, label, value, low, high, row=0):
+        if label == "top":
+            top_calls.append(value)
+            if len(top_calls) == 5:  # the last frame: the user has moved the top slider to 2.0
+                return 2.0
+        return value
+
+    monkeypatch.setattr(render.GUICanvas, "mouse", lambda self: next(script))
+    monkeypatch.setattr(render.GUICanvas, "slider", slider)
+    result = follow_mouse(load_scene(BIDIRECTIONAL), ([1.0, 1.0], [2.5, 2.5]), size, "gui", max_frames=5)
+    assert result["reaches"] == 2 and result["all_converged"]  # a reach per move, each within 1e-3 L
+    assert result["target"] == pytest.approx(list(tips[1]), abs=1e-9)
+    assert result["direct"] == 1 and result["commands"][0] == pytest.approx(2.0)
+    assert top_calls[3] == pytest.approx(1.9, abs=0.01)  # the sliders follow the commands the drag found
+    assert "2 reaches, 1 direct commands, 5 frames" in capsys.readouterr().out
+
+
+def test_interactive_without_display_is_one_clear_error(tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert main(["--scene", BIDIRECTIONAL, "--interactive", "--out", str(tmp_path)]) == 2
+    assert "--interactive needs a display" in capsys.readouterr().err

@@ -80,15 +80,17 @@ def with_bounds(scene: Scene, bounds: list[list[str]]) -> Scene:
     return dataclasses.replace(scene, controls=tuple(controls))
 
 
-def targets_of(args: argparse.Namespace, scene: Scene) -> list[Target]:
-    """--tip (with --angle, --weights), else --targets FILE.csv, else the scene file's [[targets]]."""
+def targets_of(args: argparse.Namespace, scene: Scene, required: bool = True) -> list[Target]:
+    """--tip (with --angle, --weights), else --targets FILE.csv, else the scene file's [[targets]] (if not
+    required, else none)."""
     require(args.tip is None or args.targets is None, "give --tip or --targets, not both")
     require(args.angle is None or args.tip is not None, "--angle needs --tip")
     if args.tip is not None:
         return [Target(tuple(args.tip), args.angle, tuple(args.weights))]
     if args.targets is not None:
         return read_targets_csv(args.targets)
-    require(bool(scene.targets), "no target: give --tip X Y, --targets FILE.csv, or [[targets]] in the scene file")
+    require(bool(scene.targets) or not required,
+            "no target: give --tip X Y, --targets FILE.csv, or [[targets]] in the scene file")
     return list(scene.targets)
 
 
@@ -111,6 +113,7 @@ def run(args: argparse.Namespace) -> dict:
     if args.design:
         return run_design(args)
     require(args.tip_dy is None, "--tip-dy needs --design cy")
+    explicit_tol = args.tol is not None  # live mode keeps interactive.LIVE_TOL unless --tol is given
     check_flags(args)
     if args.scene:
         scene = load_scene(args.scene)
@@ -120,7 +123,7 @@ def run(args: argparse.Namespace) -> dict:
         stem = f"reach_cy{args.cy:+.2f}"
     scene = with_bounds(scene, args.bounds)
     lo, hi = command_bounds(scene)
-    targets = targets_of(args, scene)
+    targets = targets_of(args, scene, required=not args.interactive)
     options = ReachOptions(args.tip_tol, args.angle_tol, restarts=args.restarts)
     size = rendering_flags(args)
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
@@ -131,7 +134,8 @@ def run(args: argparse.Namespace) -> dict:
     runtime.init(args.arch)
     if args.interactive:
         from ..interactive import follow_mouse
-        return follow_mouse(scene, (lo, hi), size, args.renderer, options, newton_options(args), targets[0])
+        return follow_mouse(scene, (lo, hi), size, args.renderer, options,
+                            newton_options(args) if explicit_tol else None, targets[0] if targets else None)
     built = build(scene)
     start = time.perf_counter()
     reacher = Reacher(built, (lo, hi), options, newton_options(args), args.max_cuts)
