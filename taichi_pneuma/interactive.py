@@ -77,7 +77,8 @@ def follow_mouse(scene: Scene, bounds, size: tuple[int, int], backend: str = "au
     from .targets import Target
 
     built = scene.build()
-    options = dataclasses.replace(options or ReachOptions(), restarts=0)  # a drag follows the closest pose nearby
+    # a drag follows the closest pose nearby; one factorisation per frame
+    options = dataclasses.replace(options or ReachOptions(), restarts=0, reuse_factor=True)
     reacher = Reacher(built, bounds, options, newton or NewtonOptions(tol=LIVE_TOL))
     mesh = built.mesh
     canvas = open_canvas(*size, backend, show=True)

@@ -75,7 +75,10 @@ class ReachOptions:
     """tol: tip position tolerance, a fraction of the body length; angle_tol: degrees; regularization:
     rho of the module docstring; step_tol: smallest move of the scaled commands that counts as progress;
     stall: a descent whose step decreases Phi by less than this fraction of it stops (a minimum short of
-    the target); restarts: descents from other commands after one that stops short."""
+    the target); restarts: descents from other commands after one that stops short; reuse_factor: take
+    the Jacobian from Newton's last factorisation of the exact Hessian (within one Newton step of the
+    equilibrium) instead of factorising it at the equilibrium: a little less exact, one factorisation
+    fewer per iteration (live mode)."""
 
     tol: float = 1e-3
     angle_tol: float = 0.5
@@ -85,6 +88,7 @@ class ReachOptions:
     step_tol: float = 1e-9
     stall: float = 1e-3
     restarts: int = 4
+    reuse_factor: bool = False
 
     def __post_init__(self):
         for name in ("tol", "angle_tol", "step_tol"):
@@ -192,7 +196,7 @@ class Reacher:
         self.length = body_length(built)
         self.forward_solves = self.newton_iterations = 0
         rest = built.scene.schedule.rest_commands
-        self.pose, self._previous = self._pose(rest, np.zeros_like(built.mesh.vertices)), None
+        self.pose, self._previous, self._factored = self._pose(rest, np.zeros_like(built.mesh.vertices)), None, None
         self.settle((self.lo + self.hi) / 2 if start is None else start)
 
     def _pose(self, commands: np.ndarray, u: np.ndarray) -> Pose:
@@ -222,6 +226,8 @@ class Reacher:
         self._previous = previous
         self.pose = dataclasses.replace(self._pose(commands, u), iterations=iterations, residual=records[-1].residual,
                                         seconds=time.perf_counter() - start)
+        # Newton's last factor: the exact Hessian within one Newton step of this equilibrium
+        self._factored = self.pose if records[-1].iterations and records[-1].exact_factor else None
         return self.pose
 
     def _errors(self, target: Target, pose: Pose) -> tuple[float, float | None]:
@@ -284,7 +290,8 @@ class Reacher:
             if goal.done(self.pose):
                 return True, iteration
             f, s, phi = goal.value(self.pose)
-            sens = sensitivity(self.built, self.pose.commands, self.pose.u, self.solver.pattern, self.solver.backend)
+            sens = sensitivity(self.built, self.pose.commands, self.pose.u, self.solver.pattern, self.solver.backend,
+                               factorised=self.options.reuse_factor and self._factored is self.pose)
             jac = goal.scale[:, None] * sens.tip[goal.rows] * goal.span
             a = np.vstack([jac, goal.rho * np.eye(len(s))])
             b = np.concatenate([-f, -goal.rho * (s - goal.s_ref)])

@@ -71,29 +71,34 @@ def tip_rotation_gradient(rest_tip: np.ndarray, current_tip: np.ndarray) -> np.n
     return (cc * d_s - s * r) / (s * s + cc * cc)
 
 
-def solve_exact(built: BuiltScene, rhs: np.ndarray, pattern: FixedPattern | None = None, backend=None):
+def solve_exact(built: BuiltScene, rhs: np.ndarray, pattern: FixedPattern | None = None, backend=None,
+                factorised: bool = False):
     """Solve H x = rhs with H the exact Hessian at the model's current state; return (x, backend name).
 
-    pattern, backend: reuse a Newton solver's (its symbolic analysis) instead of new ones."""
+    pattern, backend: reuse a Newton solver's (its symbolic analysis) instead of new ones; factorised:
+    the backend already holds S factorised (Newton's last exact factor, from within its last step of
+    the equilibrium: an approximation, for inverse control's iterations), so only the solves remain."""
     model = built.model
-    if pattern is None:
-        pattern = FixedPattern(*model.hessian_pattern(), model.n_dofs)
-    matrix = pattern.matrix(model.hessian_values(psd_only=False))
     backend = backend or make_backend("auto")
-    try:
-        backend.factorize(matrix)
-    except FactorizationError:
-        backend = make_backend("scipy")
-        backend.factorize(matrix)
+    if not factorised:
+        if pattern is None:
+            pattern = FixedPattern(*model.hessian_pattern(), model.n_dofs)
+        matrix = pattern.matrix(model.hessian_values(psd_only=False))
+        try:
+            backend.factorize(matrix)
+        except FactorizationError:
+            backend = make_backend("scipy")
+            backend.factorize(matrix)
     return solve_low_rank_updated(backend, rhs, model.low_rank()), backend.name
 
 
 def sensitivity(built: BuiltScene, commands: np.ndarray, u: np.ndarray, pattern: FixedPattern | None = None,
-                backend=None) -> Sensitivity:
-    """du/dq and the tip Jacobian at the equilibrium u (n, 2) of `commands`; leaves them set on `built`."""
+                backend=None, factorised: bool = False) -> Sensitivity:
+    """du/dq and the tip Jacobian at the equilibrium u (n, 2) of `commands`; leaves them set on `built`.
+    pattern, backend, factorised: see solve_exact."""
     built.set_commands(commands)
     built.model.set_displacements(u)
-    du, name = solve_exact(built, command_forces(built), pattern, backend)
+    du, name = solve_exact(built, command_forces(built), pattern, backend, factorised)
     du = du.reshape(-1, 2, len(built.chambers))
     mesh = built.mesh
     tip_du = du[mesh.tip]  # (k, 2, m)
