@@ -139,3 +139,16 @@ def test_bounds_from_the_scene_file_and_defaults(tmp_path):
 def test_bad_input_is_refused(make, pattern):
     with pytest.raises(PneumaInputError, match=pattern):
         make()
+
+
+def test_trajectory_with_newtons_factor_reused_reaches_every_target(built):
+    """follow() warm-starts each target from the last; with reuse_factor (live mode) the Jacobian comes from
+    Newton's last exact factorisation: every target is still reached, each in a few forward solves."""
+    built = built("bidirectional")
+    path = [(1.5, 1.2), (1.6, 1.25), (1.7, 1.3), (1.8, 1.3)]
+    targets = [Target(tuple(forward(built, q)[0])) for q in path]
+    reacher = Reacher(built, options=ReachOptions(restarts=0, reuse_factor=True))
+    results = reacher.follow(targets)
+    assert all(r.reached and r.error <= 1e-3 * body_length(built) for r in results)
+    assert all(r.forward_solves <= 3 for r in results[1:])
+    assert results[-1].pose.commands == pytest.approx(path[-1], rel=1e-2)  # unique, but only to tol 1e-3 L
