@@ -16,14 +16,19 @@ method) and takes the bounded least-squares step (SciPy's lsq_linear, BVLS: exac
 
     min_ds |f + J ds|^2 + rho^2 |s + ds - s_ref|^2,    -s <= ds <= 1 - s,
 
-then solves the equilibrium at the new commands (simulate.settle, warm-started from the last one).
-A step that does not decrease Phi by a fraction 1e-4 of its predicted decrease is halved and solved
-again from the last accepted equilibrium. Every iterate lies inside the bounds.
+then solves the equilibrium at the new commands (simulate.settle, from the last one, with the
+first guess u + du/dq dq on the tangent). A step that does not decrease Phi by a fraction 1e-4 of
+its predicted decrease is halved and solved again from the last accepted equilibrium. Every
+iterate lies inside the bounds.
 
-Stops *reached* when |(x, y) - t| <= tol L (and |theta - theta_t| <= angle_tol when the rotation is
-targeted); *unreachable* when a step no longer moves the scaled commands by step_tol, the
-halvings run out or max_iterations pass: the closest pose found is kept, and the chambers at a
-bound are named (e.g. "unreachable: closest tip error 0.12; chamber 'top' at its max pressure 900").
+A descent stops *reached* when |(x, y) - t| <= tol L (and |theta - theta_t| <= angle_tol when the
+rotation is targeted); short of it when a step no longer moves the scaled commands by step_tol,
+decreases Phi by less than a fraction `stall` of it, or the halvings or max_iterations run out.
+Then the descent starts again from the centre of the command box and from quasi-random commands
+(`restarts` in all: Phi need not be convex, e.g. the reference tip first lifts, then curls down as
+the chamber grows). If none reaches the target it is *unreachable*: the closest pose found is kept,
+and the chambers at a bound are named ("unreachable: closest tip error 0.12; chamber 'top' at its
+max pressure 900").
 """
 
 from __future__ import annotations
@@ -97,6 +102,9 @@ class ReachOptions:
                 f"regularization = {self.regularization!r} must be >= 0")
         require(isinstance(self.max_iterations, int) and self.max_iterations >= 1,
                 f"max_iterations = {self.max_iterations!r} must be an integer >= 1")
+        for name in ("max_halvings", "restarts"):
+            value = getattr(self, name)
+            require(isinstance(value, int) and value >= 0, f"{name} = {value!r} must be an integer >= 0")
 
 
 @dataclass

@@ -135,6 +135,7 @@ def test_bounds_from_the_scene_file_and_defaults(tmp_path):
     (lambda: ChamberControl(ChamberSchedule("area", ((1, 2.0),)), bounds=(0.0, 2.0)), "area ratio must be > 0"),
     (lambda: ChamberControl(ChamberSchedule("pressure", ((1, 10.0),)), bounds=(-5.0, 2.0)), "allow_vacuum"),
     (lambda: ReachOptions(tol=0.0), "tol = 0.0 must be > 0"),
+    (lambda: ReachOptions(restarts=-1), "restarts = -1 must be an integer >= 0"),
 ])
 def test_bad_input_is_refused(make, pattern):
     with pytest.raises(PneumaInputError, match=pattern):
