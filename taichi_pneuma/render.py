@@ -5,6 +5,7 @@ One frame shows, for each ramp (a *track*), a beam panel:
 - the chamber, its deformed wall loop filled translucent blue (alpha-blended onto the background:
   the chamber is a hole in the mesh, so only background lies under it) and outlined in strong blue;
 - the pinned vertices as dark square markers;
+- for inverse control, the target as a red cross and the tip's path so far in orange;
 - a text overlay: step, commanded area ratio, chamber pressure, tip deflection (and the panel's title).
 and, optionally, beside the beam panels a trace panel: chamber area / rest area (blue) and chamber
 pressure (red) against inflation %, each scaled to the panel, with a cursor at the current step.
@@ -43,6 +44,8 @@ AXES = (0.35, 0.35, 0.35)
 AREA_CURVE = (0.05, 0.2, 0.95)
 PRESSURE_CURVE = (0.85, 0.15, 0.1)
 CURSOR = (0.2, 0.2, 0.2)
+TARGET = (0.9, 0.1, 0.1)
+TIP_PATH = (0.95, 0.55, 0.0)
 
 
 # --- backends: one canvas of (width, height) pixels, coordinates normalised to [0, 1], origin bottom-left ---
@@ -51,6 +54,7 @@ class GGUICanvas:
     """Taichi GGUI (Vulkan) window; offscreen unless show=True. Text goes into small imgui boxes."""
 
     name = "GGUI (Vulkan)"
+    slider_row_px = 45  # each slider takes a row this high at the bottom of the window
 
     def __init__(self, width: int, height: int, show: bool = False, title: str = "taichi-pneuma"):
         self.width, self.height = width, height
@@ -94,11 +98,18 @@ class GGUICanvas:
         ti.set_logging_level(ti.WARN)
         return image
 
-    def slider(self, label: str, value: float, low: float, high: float) -> float:
-        """An imgui slider at the bottom of the window; returns its value."""
+    def slider(self, label: str, value: float, low: float, high: float, row: int = 0) -> float:
+        """An imgui slider showing value, in row `row` (slider_row_px high) counted up from the bottom
+        of the window; returns its value (the user's, if they moved it)."""
         gui = self.window.get_gui()
-        with gui.sub_window("##slider", 0.0, 1 - 60 / self.height, 1.0, 60 / self.height):
+        height = self.slider_row_px / self.height
+        with gui.sub_window(f"##slider{row}", 0.0, 1 - (row + 1) * height, 1.0, height):
             return gui.slider_float(label, value, low, high)
+
+    def mouse(self) -> tuple[float, float, bool]:
+        """The cursor (normalised, origin bottom-left) and whether the left button is down."""
+        x, y = self.window.get_cursor_pos()
+        return float(x), float(y), bool(self.window.is_pressed(ti.ui.LMB))
 
     @property
     def running(self) -> bool:
@@ -113,6 +124,7 @@ class GUICanvas:
     """Taichi's ti.GUI software rasteriser; offscreen unless show=True."""
 
     name = "ti.GUI (software)"
+    slider_row_px = 0  # ti.GUI draws its sliders over the top of the window, taking no row
 
     def __init__(self, width: int, height: int, show: bool = False, title: str = "taichi-pneuma"):
         self.width, self.height = width, height
@@ -134,12 +146,25 @@ class GUICanvas:
     def image(self) -> np.ndarray:
         return _to_rgb8(self.gui.get_image())
 
-    def slider(self, label: str, value: float, low: float, high: float) -> float:
-        """ti.GUI's slider (created on first call, starting at value); returns its value."""
-        if not hasattr(self, "_slider"):
-            self._slider = self.gui.slider(label, low, high, step=(high - low) / 200)
-            self._slider.value = value
-        return float(self._slider.value)
+    def slider(self, label: str, value: float, low: float, high: float, row: int = 0) -> float:
+        """ti.GUI's slider named label (created on first call): shows value unless the user moved it
+        since the last call; returns its value (the user's, if they moved it). row: unused (ti.GUI
+        stacks its sliders itself)."""
+        sliders = self.__dict__.setdefault("_sliders", {})
+        if label not in sliders:
+            sliders[label] = [self.gui.slider(label, low, high, step=(high - low) / 200), value]
+            sliders[label][0].value = value
+        widget, shown = sliders[label]
+        if widget.value == shown:  # not moved by the user: show the caller's value
+            widget.value = value
+        sliders[label][1] = float(widget.value)
+        return sliders[label][1]
+
+    def mouse(self) -> tuple[float, float, bool]:
+        """The cursor (normalised, origin bottom-left) and whether the left button is down."""
+        list(self.gui.get_events())  # consuming the events updates the pressed keys
+        x, y = self.gui.get_cursor_pos()
+        return float(x), float(y), bool(self.gui.is_pressed(ti.GUI.LMB))
 
     @property
     def running(self) -> bool:
@@ -195,6 +220,7 @@ class Track:
     tip_dy: np.ndarray
     title: str = ""
     ground: float | None = None  # height of the ground line y = ground, drawn when the scene has one
+    targets: np.ndarray | None = None  # (steps, 2) inverse control's target point per frame: a cross and the tip's path
 
     @classmethod
     def from_ramp(cls, mesh: Mesh, result, title: str = "", ground: float | None = None) -> "Track":
@@ -254,7 +280,8 @@ class FrameRenderer:
         n = len(tracks)
         self.panels = [(beam_width * i / n, beam_width * (i + 1) / n) for i in range(n)]
         self.trace_panel = (beam_width, 1.0)
-        points = np.concatenate([t.states.reshape(-1, 2) for t in self.tracks])
+        points = np.concatenate([t.states.reshape(-1, 2) for t in self.tracks]
+                                + [t.targets for t in self.tracks if t.targets is not None])
         self._lo, self._hi = (np.asarray(b, float) for b in (bounds if bounds is not None else
                                                              (points.min(axis=0), points.max(axis=0))))
         self._fit_view(self._lo, self._hi)
@@ -274,6 +301,12 @@ class FrameRenderer:
         centre_px = np.array([(x0 + x1) / 2 * self.width, self.height / 2]) + self._offset_px
         px = centre_px + (points - self._centre) * self._scale
         return px / np.array([self.width, self.height])
+
+    def to_world(self, panel: int, uv: np.ndarray) -> np.ndarray:
+        """Normalised canvas coordinates (..., 2) inside beam panel `panel` -> world points (to_canvas inverted)."""
+        x0, x1 = self.panels[panel]
+        centre_px = np.array([(x0 + x1) / 2 * self.width, self.height / 2]) + self._offset_px
+        return self._centre + (np.asarray(uv) * np.array([self.width, self.height]) - centre_px) / self._scale
 
     def frame(self, i: int) -> np.ndarray:
         """Frame i as an (height, width, 3) uint8 image."""
@@ -296,6 +329,8 @@ class FrameRenderer:
             for loop in track.mesh.chambers:
                 c.segments(np.stack([x[loop], x[np.roll(loop, -1)]], axis=1), CHAMBER_WALL, 2.5)
             c.triangles(_squares(x[track.mesh.pinned], 3.5 / np.array([self.width, self.height])), PIN)
+            if track.targets is not None:
+                self._draw_target(p, track, i)
             lines = [track.title] if track.title else []
             areas = ", ".join(f"x{r:.2f}" for r in track.area_ratio[i])
             pressures = ", ".join(f"{p_:.1f}" for p_ in track.pressure[i])
@@ -305,6 +340,17 @@ class FrameRenderer:
             c.text(lines, x0 + 0.005, 0.995, x1 - x0 - 0.01)
         if self.trace:
             self._draw_trace(i)
+
+    def _draw_target(self, panel: int, track: Track, i: int) -> None:
+        """The tip's path up to frame i (the mean of the tip vertices) and a cross at frame i's target."""
+        c = self.canvas
+        path = self.to_canvas(panel, track.states[:i + 1, track.mesh.tip].mean(axis=1))
+        if len(path) > 1:
+            c.segments(np.stack([path[:-1], path[1:]], axis=1), TIP_PATH, 2.0)
+        centre = self.to_canvas(panel, track.targets[i])
+        arm = 9.0 / np.array([self.width, self.height])
+        c.segments(np.array([[centre - arm, centre + arm], [centre + arm * (-1, 1), centre + arm * (1, -1)]]),
+                   TARGET, 3.0)
 
     def _draw_trace(self, i: int) -> None:
         """Area / rest area and pressure of every chamber against schedule progress %, each scaled to the

@@ -7,10 +7,11 @@
     [clamp]      side = "left" | "right" | "bottom" | "top"  or  box = [x0, y0, x1, y1];  stiffness
     [[chambers]] name, shape = "ellipse" (center, semi_axes, points) | "rounded_rectangle" (center, size,
                  radius, corner_points) | "polygon" (points); control = "area" (stiffness) | "pressure"
-                 (allow_vacuum); keyframes = [[step, value], ...]
+                 (allow_vacuum); keyframes = [[step, value], ...]; bounds = [min, max] (inverse control)
     [schedule]   increments
     [effects.gravity] density, g      [effects.ground] height, dhat, stiffness      [effects.self_contact] dhat, stiffness
     [effects.dynamics] density, dt
+    [[targets]]  tip = [x, y], angle (degrees, optional), weights = [w_x, w_y, w_angle]  (inverse control, in order)
 
 Every key is checked: an unknown key, a missing required one, or a value out of range is refused
 with its dotted path (e.g. ``chambers[1].semi_axes``).
@@ -27,6 +28,7 @@ from .errors import PneumaInputError, require
 from .geometry import ClampSelection, Ellipse, Geometry, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 from .scene import ChamberControl, Material, Region, Scene
 from .schedule import ChamberSchedule
+from .targets import Target
 
 REQUIRED = object()
 
@@ -119,8 +121,16 @@ def read_chamber(t: Table) -> tuple[str, object, ChamberControl]:
     keyframes = tuple(tuple(k) if isinstance(k, list) else k for k in t.take("keyframes", kind=list))
     allow_vacuum = t.take("allow_vacuum", False, bool) if control == "pressure" else False
     schedule = build(t, lambda: ChamberSchedule(control, keyframes, allow_vacuum))
+    bounds = t.take("bounds", None, list)
     t.close()
-    return name, shape, build(t, lambda: ChamberControl(schedule, stiffness))
+    return name, shape, build(t, lambda: ChamberControl(schedule, stiffness, None if bounds is None else tuple(bounds)))
+
+
+def read_target(t: Table) -> Target:
+    target = build(t, lambda: Target(tuple(t.take("tip", kind=list)), t.take("angle", None, float),
+                                     tuple(t.take("weights", [1.0, 1.0, 1.0], list))))
+    t.close()
+    return target
 
 
 def read_material(t: Table | None) -> tuple[Material, tuple[Region, ...]]:
@@ -171,10 +181,11 @@ def read_scene(data: dict, name: str) -> Scene:
     effects_t = top.table("effects", {})
     effects = tuple(read_effect(key, effects_t.table(key)) for key in list(effects_t.data))
     effects_t.known |= set(effects_t.data)
+    targets = tuple(read_target(t) for t in top.tables("targets"))
     top.close()
     geometry = build(top, lambda: Geometry(body, tuple((n, s) for n, s, _ in chambers), max_area, clamp, order))
     return build(top, lambda: Scene(geometry, tuple(c for _, _, c in chambers), increments, material, regions,
-                                    clamp_stiffness, effects, scene_name))
+                                    clamp_stiffness, effects, scene_name, targets))
 
 
 def load_scene(path: str | os.PathLike) -> Scene:
