@@ -12,6 +12,10 @@ segments as a closed vertex loop oriented counter-clockwise, so its signed shoel
 
 is positive at rest. Chambers must lie inside the body and apart from each other by at least
 MARGIN; otherwise a PneumaInputError names the chamber.
+
+Checking that takes time and memory quadratic in the outline points, so a geometry has at most
+MAX_SHAPES chambers (a union at most MAX_SHAPES rectangles) and MAX_WALL_POINTS outline points in all
+(2000 points: 0.7 s and 190 MB for the self-crossing test of one polygon).
 """
 
 from __future__ import annotations
@@ -25,6 +29,8 @@ from .errors import require, require_finite
 
 OUTER_MARKER = 1
 MARGIN = 1e-3
+MAX_WALL_POINTS = 2000
+MAX_SHAPES = 64
 SIDES = ("left", "right", "bottom", "top")
 
 
@@ -64,8 +70,8 @@ class Ellipse:
     def __post_init__(self):
         _pair("center", self.center)
         _pair("semi_axes", self.semi_axes, positive=True)
-        require(isinstance(self.points, (int, np.integer)) and self.points >= 8,
-                f"points = {self.points!r} must be an integer >= 8")
+        require(isinstance(self.points, (int, np.integer)) and 8 <= self.points <= MAX_WALL_POINTS,
+                f"points = {self.points!r} must be an integer in [8, {MAX_WALL_POINTS}]")
 
     def polygon(self) -> np.ndarray:
         t = np.linspace(0.0, 2.0 * np.pi, self.points, endpoint=False)
@@ -87,8 +93,8 @@ class RoundedRectangle:
         w, h = _pair("size", self.size, positive=True)
         r = require_finite("radius", self.radius)
         require(0 < r < min(w, h) / 2, f"radius = {self.radius!r} must lie in (0, {min(w, h) / 2:g}) (half the shorter side)")
-        require(isinstance(self.corner_points, (int, np.integer)) and self.corner_points >= 2,
-                f"corner_points = {self.corner_points!r} must be an integer >= 2")
+        require(isinstance(self.corner_points, (int, np.integer)) and 2 <= self.corner_points <= MAX_WALL_POINTS // 4,
+                f"corner_points = {self.corner_points!r} must be an integer in [2, {MAX_WALL_POINTS // 4}]")
 
     def polygon(self) -> np.ndarray:
         (cx, cy), (w, h), r = self.center, self.size, self.radius
@@ -109,6 +115,7 @@ class Polygon:
 
     def __post_init__(self):
         pts = np.asarray(self.points, dtype=object)
+        require(len(pts) <= MAX_WALL_POINTS, f"points: {len(pts)} given, at most {MAX_WALL_POINTS} are allowed")
         require(pts.ndim == 2 and pts.shape[1] == 2 and len(pts) >= 3,
                 f"points = {self.points!r} must be a list of at least 3 [x, y] pairs")
         for p in self.points:
@@ -129,7 +136,7 @@ class RectangleUnion:
     rectangles: tuple[Rectangle, ...]
 
     def __post_init__(self):
-        require(len(self.rectangles) >= 1, "rectangles must list at least one rectangle")
+        require(1 <= len(self.rectangles) <= MAX_SHAPES, f"rectangles must list 1 to {MAX_SHAPES} rectangles")
         loops = union_boundary([r.polygon() for r in self.rectangles])
         require(len(loops) == 1, f"rectangles: their union has {len(loops)} boundary loops; it must be one "
                                  f"connected region without holes")
@@ -314,8 +321,12 @@ class Geometry:
 
     def __post_init__(self):
         require(require_finite("max_area", self.max_area) > 0, f"max_area = {self.max_area!r} must be > 0")
+        require(len(self.chambers) <= MAX_SHAPES, f"{len(self.chambers)} chambers: at most {MAX_SHAPES} are allowed")
         body = self.body.polygon()
         polygons = [(name, shape.polygon()) for name, shape in self.chambers]
+        points = len(body) + sum(len(p) for _, p in polygons)
+        require(points <= MAX_WALL_POINTS, f"the body and chamber outlines have {points} points in all; "
+                                           f"at most {MAX_WALL_POINTS} are allowed")
         names = [name for name, _ in polygons]
         require(len(set(names)) == len(names), f"chamber names {names!r} must be distinct")
         for name, poly in polygons:

@@ -113,12 +113,20 @@ def predict(built: BuiltScene, previous, current, commands: np.ndarray) -> np.nd
     return u1 + move if built.model.max_step(move.ravel()) > 1.0 else u1
 
 
-class RampFailed(RuntimeError):
-    """An increment found no equilibrium even after cutting it back; `partial` holds the steps done."""
+class RampStopped(RuntimeError):
+    """The ramp ended before its last increment; `partial` holds the steps done."""
 
     def __init__(self, message: str, partial: RampResult):
         super().__init__(message)
         self.partial = partial
+
+
+class RampFailed(RampStopped):
+    """An increment found no equilibrium even after cutting it back."""
+
+
+class RampInterrupted(RampStopped):
+    """The caller's stop() asked the ramp to end after an increment (e.g. on Ctrl-C)."""
 
 
 def tip_rotation(rest: np.ndarray, current: np.ndarray) -> float:
@@ -140,7 +148,7 @@ def describe_commands(built: BuiltScene, commands: np.ndarray, reached: np.ndarr
 
 
 def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: NewtonOptions | None = None,
-                 progress=None, max_cuts: int = MAX_CUTS) -> RampResult:
+                 progress=None, max_cuts: int = MAX_CUTS, stop=None) -> RampResult:
     """Solve for equilibrium at each step of the schedule (the scene's own by default), each from the last.
 
     An increment whose Newton solve does not converge is cut back: the remaining change of all
@@ -148,7 +156,8 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     often as max_cuts times per increment; every cut is counted in the history. If it still fails,
     RampFailed names the step, the commands (for pressure control, the last pressure reached) and
     the residual, and carries the steps done. progress, if given, is called as progress(step_record)
-    after every increment.
+    after every increment; stop, if given, is asked stop() after every increment but the last, and
+    when it returns True the ramp ends there with RampInterrupted carrying the steps done.
     """
     schedule = schedule or built.scene.schedule
     solver = NewtonSolver(built.model, options)
@@ -214,4 +223,6 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
         solves.append(final)
         if progress is not None:
             progress(step)
+        if stop is not None and i < schedule.increments and stop():
+            raise RampInterrupted(f"interrupted after step {i} of {schedule.increments}", partial())
     return partial()
