@@ -11,7 +11,9 @@ segments as a closed vertex loop oriented counter-clockwise, so its signed shoel
     A(x) = 1/2 sum_i (x_i y_{i+1} - x_{i+1} y_i)
 
 is positive at rest. Chambers must lie inside the body and apart from each other by at least
-MARGIN; otherwise a PneumaInputError names the chamber.
+MARGIN; otherwise a PneumaInputError names the chamber. No two points of one outline may lie closer
+than MIN_SPACING times its size (Triangle crashes on coincident points), and a geometry Triangle cannot
+mesh (it runs out of floating-point precision) is a PneumaInputError too.
 
 Checking that takes time and memory quadratic in the outline points, so a geometry has at most
 MAX_SHAPES chambers (a union at most MAX_SHAPES rectangles) and MAX_WALL_POINTS outline points in all
@@ -24,18 +26,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import triangle
+from scipy.spatial import cKDTree
 
-from .errors import require, require_finite
+from .errors import PneumaInputError, require, require_finite, shape_of
 
 OUTER_MARKER = 1
 MARGIN = 1e-3
 MAX_WALL_POINTS = 2000
 MAX_SHAPES = 64
+MIN_SPACING = 1e-9
 SIDES = ("left", "right", "bottom", "top")
 
 
 def _pair(name: str, value, positive: bool = False) -> tuple[float, float]:
-    require(np.shape(value) == (2,), f"{name} = {value!r} must be a pair of numbers")
+    require(shape_of(value) == (2,), f"{name} = {value!r} must be a pair of numbers")
     pair = tuple(require_finite(f"{name}", v) for v in value)
     if positive:
         require(min(pair) > 0, f"{name} = {value!r} must be > 0")
@@ -226,8 +230,7 @@ def distance_to_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
 def interior_point(polygon: np.ndarray) -> np.ndarray:
     """A point strictly inside a simple polygon: the centroid of the largest triangle of its triangulation."""
     k = len(polygon)
-    tri = triangle.triangulate({"vertices": polygon, "segments": np.column_stack([np.arange(k), (np.arange(k) + 1) % k])},
-                               "p")
+    tri = triangulate({"vertices": polygon, "segments": np.column_stack([np.arange(k), (np.arange(k) + 1) % k])}, "p")
     corners = tri["vertices"][tri["triangles"]]
     e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
     return corners[np.argmax(np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]))].mean(axis=0)
@@ -261,7 +264,7 @@ class ClampSelection:
 
 def require_box(name: str, box) -> None:
     """Refuse, naming it, a box that is not four finite numbers [x0, y0, x1, y1] with x0 < x1, y0 < y1."""
-    require(np.shape(box) == (4,), f"{name} = {box!r} must be [x0, y0, x1, y1]")
+    require(shape_of(box) == (4,), f"{name} = {box!r} must be [x0, y0, x1, y1]")
     for v in box:
         require_finite(name, v)
     require(box[0] < box[2] and box[1] < box[3], f"{name} = {list(box)!r} must have x0 < x1 and y0 < y1")
@@ -329,6 +332,12 @@ class Geometry:
                                            f"at most {MAX_WALL_POINTS} are allowed")
         names = [name for name, _ in polygons]
         require(len(set(names)) == len(names), f"chamber names {names!r} must be distinct")
+        for what, poly in [("the body", body)] + [(f"chamber {name!r}", poly) for name, poly in polygons]:
+            size = float(np.ptp(poly, axis=0).max())
+            require(np.isfinite(size), f"{what}: its outline points overflow to infinity")
+            require(not cKDTree((poly - poly.min(axis=0)) / size).query_pairs(MIN_SPACING),
+                    f"{what}: two of its outline points lie closer than {MIN_SPACING:g} of its size {size:.3g} "
+                    f"(a radius, size or point spacing too small to mesh)")
         for name, poly in polygons:
             outside = ~points_in_polygon(poly, body) | (distance_to_polygon(poly, body) < MARGIN)
             crossing = segments_cross(poly, np.roll(poly, -1, axis=0), body, np.roll(body, -1, axis=0)).any()
@@ -354,7 +363,7 @@ class Geometry:
         }
         if len(loops) > 1:
             pslg["holes"] = np.array([interior_point(p) for p in loops[1:]])
-        out = triangle.triangulate(pslg, f"pqa{self.max_area:.17f}")  # fixed-point: Triangle reads no exponent
+        out = triangulate(pslg, f"pqa{self.max_area:.17f}")  # fixed-point: Triangle reads no exponent
         vertices = np.asarray(out["vertices"], dtype=np.float64)
         triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
         markers = out["segment_markers"].ravel()
@@ -411,6 +420,17 @@ class BeamGeometry:
         return self.general().mesh()
 
 
+def triangulate(pslg: dict, flags: str) -> dict:
+    """triangle.triangulate, with its failure (RuntimeError, or no triangle made) a PneumaInputError."""
+    try:
+        out = triangle.triangulate(pslg, flags)
+    except RuntimeError:
+        out = {}
+    require(len(out.get("triangles", ())) > 0, "Triangle could not mesh the geometry (it ran out of floating-point "
+                                               "precision: features too small for the body's size?)")
+    return out
+
+
 def orient_counter_clockwise(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Return triangles with every vertex triple ordered counter-clockwise."""
     clockwise = triangle_areas(vertices, triangles) < 0
@@ -426,7 +446,7 @@ def chain_loop(edges: np.ndarray) -> np.ndarray:
         neighbours.setdefault(int(i), []).append(int(j))
         neighbours.setdefault(int(j), []).append(int(i))
     if any(len(n) != 2 for n in neighbours.values()):
-        raise RuntimeError("chamber wall segments do not form a simple closed loop")
+        raise PneumaInputError("Triangle could not keep a chamber wall a simple closed loop")
     start = int(edges[0][0])
     loop, previous, current = [start], None, start
     while True:
@@ -437,5 +457,5 @@ def chain_loop(edges: np.ndarray) -> np.ndarray:
         loop.append(nxt)
         previous, current = current, nxt
     if len(loop) != len(neighbours):
-        raise RuntimeError("chamber wall segments form more than one loop")
+        raise PneumaInputError("Triangle split a chamber wall into more than one loop")
     return np.array(loop, dtype=np.int64)

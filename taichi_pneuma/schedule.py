@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import require, require_finite
+from .errors import require, require_finite, shape_of
 
 CONTROLS = ("area", "pressure")
 REST_COMMAND = {"area": 1.0, "pressure": 0.0}
@@ -33,7 +33,7 @@ class ChamberSchedule:
 
     def __post_init__(self):
         require(self.control in CONTROLS, f"control = {self.control!r} is not one of {', '.join(CONTROLS)}")
-        require(len(self.keyframes) >= 1 and all(np.shape(k) == (2,) for k in self.keyframes),
+        require(len(self.keyframes) >= 1 and all(shape_of(k) == (2,) for k in self.keyframes),
                 f"keyframes = {self.keyframes!r} must be a non-empty list of [step, value] pairs")
         steps = [require_finite("keyframes step", s) for s, _ in self.keyframes]
         values = [require_finite("keyframes value", v) for _, v in self.keyframes]
