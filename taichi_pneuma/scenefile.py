@@ -73,11 +73,11 @@ class Table:
 
 
 def build(table: Table, make):
-    """Call make() and prefix any PneumaInputError it raises with the table's path."""
+    """Call make() and prefix any PneumaInputError it raises with the table's path (unless it names a key in it)."""
     try:
         return make()
     except PneumaInputError as exc:
-        if not table.path:
+        if not table.path or f"{table.path}." in str(exc):
             raise
         raise PneumaInputError(f"{table.path}: {exc}") from None
 

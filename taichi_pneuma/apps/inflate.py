@@ -310,9 +310,13 @@ def save_history(out, stem: str, built, result) -> list:
 
 def exit_code(app_run, args: argparse.Namespace) -> int:
     """Run an app; bad input is one line and exit 2, a ramp with no equilibrium one line and exit 1,
-    Ctrl-C one line and exit 130 (128 + SIGINT, as shells report it)."""
+    Ctrl-C one line and exit 130 (128 + SIGINT, as shells report it).
+
+    NumPy's floating-point warnings (overflow, invalid value) are silenced: a huge input value overflows
+    harmlessly in a check that then refuses it, and a solve that produces NaN or inf fails its own checks."""
     try:
-        summary = app_run(args)
+        with np.errstate(all="ignore"):
+            summary = app_run(args)
     except PneumaInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
