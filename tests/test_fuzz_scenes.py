@@ -20,12 +20,12 @@ from datetime import timedelta
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, note, settings, strategies as st
 
 from taichi_pneuma.apps.inflate import main
 
 SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
-INCREMENTS = 4
+INCREMENTS = 3
 FLAGS = ["--no-video", "--quiet", "--max-triangles", "3000", "--max-increments", "20", "--max-iterations", "20",
          "--max-cuts", "2"]
 TIME_BOUND = 10.0  # seconds per example
@@ -168,7 +168,7 @@ def test_cheap_bases_run(capsys):
 @given(st.data())
 def test_mutated_scene_files_run_or_stop_with_one_error_line(capsys, data):
     description, text = scene_text(data.draw)
-    data.note(description)
+    note(description)
     code, lines, outside, seconds = run_in_sandbox(text, capsys)
     assert not outside, f"files written outside --out: {outside}"
     assert seconds < TIME_BOUND

@@ -129,7 +129,8 @@ def test_the_triangle_estimate_is_close_to_the_mesh_triangle_makes(scene):
      "the schedule has 1000000000 increments; the limit is 2000 (--max-increments raises it)"),
     (("points = 128", "points = 1000000000"), f"points = 1000000000 must be an integer in [8, {MAX_WALL_POINTS}]"),
     ((CHAMBER, "".join(CHAMBER.replace('"main"', f'"c{i}"') for i in range(65))), "65 chambers: at most 64 are allowed"),
-], ids=["increments", "wall points", "chambers"])
+    (("[2, 1.3]", "[2, 1e300]"), "keyframes area ratio 1e+300 must lie in (0, 1000]"),
+], ids=["increments", "wall points", "chambers", "area ratio"])
 def test_absurd_sizes_are_refused_at_once(tmp_path, capsys, replacement, words):
     path = reference_with(tmp_path, replacement)
     start = time.perf_counter()
