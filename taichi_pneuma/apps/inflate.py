@@ -242,7 +242,8 @@ def run(args: argparse.Namespace) -> dict:
     print(f"Newton: {summary['newton_iterations_total']} iterations over {summary['steps'] - 1} solves "
           f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
           f"all converged: {summary['all_converged']}; run {wall:.2f} s")
-    written = save_history(out, stem, built, result)  # before rendering: a Ctrl-C there loses no results
+    summary_path = out / f"{stem}_summary.json"  # results saved before rendering: a Ctrl-C there loses none
+    written = save_history(out, stem, built, result) + [save_json(summary_path, summary)]
     if not args.no_video:
         from ..render import FrameRenderer, Track
         from ..video import export
@@ -255,7 +256,7 @@ def run(args: argparse.Namespace) -> dict:
                        render_ms_per_frame=done.ms_per_frame)
         print(render_report(done, summary["solve_seconds_per_step"]))
         written = [done.video, done.png] + written
-    written.append(save_json(out / f"{stem}_summary.json", summary))
+        save_json(summary_path, summary)
     print("wrote " + ", ".join(str(p) for p in written))
     return summary
 
