@@ -94,31 +94,35 @@ def mutate(scene: dict, draw) -> str:
             copied["name"] = "copy"
         chambers.append(copied)
         return "overlap: chambers[0] duplicated"
-    located = list(paths(scene))
-    if not located:
-        return f"{kind} (empty scene)"
-    path, value = draw(st.sampled_from(located))
-    parent = scene
-    for key in path[:-1]:
-        parent = parent[key]
-    key = path[-1]
-    if kind == "value":
-        parent[key] = copy.deepcopy(draw(st.sampled_from(NUMBERS + WRONG_TYPES)))
-    elif kind == "scale" and isinstance(value, (int, float)) and not isinstance(value, bool):
-        parent[key] = value * draw(st.sampled_from([-1, 0, 1e-6, 1e-3, 0.5, 2, 1e3, 1e6]))
-    elif kind == "delete":
-        del parent[key]
-        return f"delete {path}"
-    elif kind == "extra" and isinstance(value, dict):
-        value[draw(st.sampled_from(EXTRA_KEYS))] = copy.deepcopy(draw(st.sampled_from(NUMBERS + WRONG_TYPES)))
-    elif kind == "length" and isinstance(value, list):
+    fits = {"value": lambda v: True, "delete": lambda v: True, "extra": lambda v: isinstance(v, dict),
+            "scale": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool),
+            "length": lambda v: isinstance(v, list)}[kind]
+    candidates = [(path, value) for path, value in [((), scene)] * (kind == "extra") + list(paths(scene))
+                  if fits(value)]
+    if not candidates:
+        return f"{kind} (nothing to mutate)"
+    path, value = draw(st.sampled_from(candidates))
+    if kind == "extra":
+        extra = draw(st.sampled_from(EXTRA_KEYS))
+        value[extra] = copy.deepcopy(draw(st.sampled_from(NUMBERS + WRONG_TYPES)))
+        return f"extra {extra!r} = {value[extra]!r} in {path}"
+    if kind == "length":
         if value and draw(st.booleans()):
             value.pop()
         else:
             value.append(copy.deepcopy(value[-1]) if value else 1.0)
+        return f"length at {path}: {value!r}"
+    parent = scene
+    for key in path[:-1]:
+        parent = parent[key]
+    if kind == "delete":
+        del parent[path[-1]]
+        return f"delete {path}"
+    if kind == "scale":
+        parent[path[-1]] = value * draw(st.sampled_from([-1, 0, 1e-6, 1e-3, 0.5, 2, 1e3, 1e6]))
     else:
-        return f"{kind} (not applicable at {path})"
-    return f"{kind} at {path}"
+        parent[path[-1]] = copy.deepcopy(draw(st.sampled_from(NUMBERS + WRONG_TYPES)))
+    return f"{kind} at {path}: {parent[path[-1]]!r}"
 
 
 def scene_text(draw) -> tuple[str, bytes]:

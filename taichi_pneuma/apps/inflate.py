@@ -124,7 +124,7 @@ def check_flags(args: argparse.Namespace) -> None:
     newton_options(args)  # validates --tol and --max-iterations
     require(args.max_cuts >= 0, f"--max-cuts = {args.max_cuts!r} must be >= 0")
     for name in ("max_triangles", "max_increments", "max_frame_pixels"):
-        require(getattr(args, name, 1) >= 1, f"--{name.replace('_', '-')} = {getattr(args, name)!r} must be >= 1")
+        require(getattr(args, name) >= 1, f"--{name.replace('_', '-')} = {getattr(args, name)!r} must be >= 1")
     area_ramp(args.growth, args.steps)  # validates growth and steps before any work
 
 
