@@ -19,8 +19,10 @@ def require_finite(name: str, value: float) -> float:
         if isinstance(value, (str, bytes, bool)):
             raise TypeError
         v = float(value)
-    except (TypeError, ValueError, OverflowError):
+    except (TypeError, ValueError):
         raise PneumaInputError(f"{name} = {value!r} is not a number") from None
+    except OverflowError:  # an integer past the float range
+        v = float("inf")
     require(v == v and abs(v) != float("inf"), f"{name} = {value!r} must be a finite number")
     return v
 

@@ -139,6 +139,25 @@ def test_absurd_sizes_are_refused_at_once(tmp_path, capsys, replacement, words):
     assert words in error_line(capsys)
 
 
+ELLIPSE = 'shape = "ellipse"\ncenter = [0.0, 0.15]\nsemi_axes = [0.85, 0.22]\npoints = 128'
+
+
+@pytest.mark.parametrize("replacements, words", [
+    ([(ELLIPSE, 'shape = "rounded_rectangle"\ncenter = [0.0, 0.15]\nsize = [1.0, 0.3]\nradius = 1e-300')],
+     "chamber 'main': two of its outline points lie closer than 1e-09 of its size 1"),
+    ([("size = [3.5, 0.8]", "size = [1e17, 1e17]"), ("max_area = 0.02", "max_area = 1e33")],
+     "Triangle could not mesh the geometry"),
+    ([("size = [3.5, 0.8]", "size = [[3.5], 0.8]")], "body: size = ([3.5], 0.8) must be a pair of numbers"),
+    ([("center = [0.0, 0.15]", 'center = ["0.0", 0.15]')], "chambers[0]: center = '0.0' is not a number"),
+    ([("E = 1e4", "E = 1" + "0" * 400)], "material: E = 1" + "0" * 400 + " must be a finite number"),
+], ids=["coincident points", "out of precision", "ragged list", "numeric string", "huge integer"])
+def test_what_the_fuzzer_found_is_one_error_line(tmp_path, capsys, replacements, words):
+    """Before: a segfault of the whole process, Triangle's RuntimeError, ValueError, TypeError, OverflowError."""
+    path = reference_with(tmp_path, *replacements)
+    assert main(["--scene", str(path), "--out", str(tmp_path / "out"), *QUICK]) == 2
+    assert words in error_line(capsys)
+
+
 def test_absurd_flags_are_refused_naming_the_flag(tmp_path, capsys):
     out = str(tmp_path / "out")
     assert main(["--steps", "100000", "--out", out, *QUICK]) == 2
