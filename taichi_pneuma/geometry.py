@@ -336,8 +336,8 @@ class Geometry:
             size = float(np.ptp(poly, axis=0).max())
             require(np.isfinite(size), f"{what}: its outline points overflow to infinity")
             require(not cKDTree((poly - poly.min(axis=0)) / size).query_pairs(MIN_SPACING),
-                    f"{what}: two of its outline points lie closer than {MIN_SPACING:g} of its size {size:.3g} "
-                    f"(a radius, size or point spacing too small to mesh)")
+                    f"{what}: two of its outline points coincide (closer than {MIN_SPACING:g} of its size {size:.3g}): "
+                    f"a radius, size or point spacing too small, or coordinates too large, to mesh")
         for name, poly in polygons:
             outside = ~points_in_polygon(poly, body) | (distance_to_polygon(poly, body) < MARGIN)
             crossing = segments_cross(poly, np.roll(poly, -1, axis=0), body, np.roll(body, -1, axis=0)).any()

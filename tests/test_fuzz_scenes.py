@@ -87,7 +87,7 @@ def mutate(scene: dict, draw) -> str:
         owner = draw(st.sampled_from([scene] + [c for c in chambers if isinstance(c, dict)]
                                      if isinstance(chambers, list) else [scene]))
         owner["name"] = draw(st.sampled_from(ODD_NAMES))
-        return f"name = {owner['name']!r}"
+        return f"{'scene' if owner is scene else 'chamber'} name = {owner['name']!r}"
     if kind == "overlap":
         if not isinstance(chambers, list) or not chambers:
             return "overlap (no chambers)"

@@ -144,7 +144,7 @@ ELLIPSE = 'shape = "ellipse"\ncenter = [0.0, 0.15]\nsemi_axes = [0.85, 0.22]\npo
 
 @pytest.mark.parametrize("replacements, words", [
     ([(ELLIPSE, 'shape = "rounded_rectangle"\ncenter = [0.0, 0.15]\nsize = [1.0, 0.3]\nradius = 1e-300')],
-     "chamber 'main': two of its outline points lie closer than 1e-09 of its size 1"),
+     "chamber 'main': two of its outline points coincide (closer than 1e-09 of its size 1)"),
     ([("size = [3.5, 0.8]", "size = [1e17, 1e17]"), ("max_area = 0.02", "max_area = 1e33")],
      "Triangle could not mesh the geometry"),
     ([("size = [3.5, 0.8]", "size = [[3.5], 0.8]")], "body: size = ([3.5], 0.8) must be a pair of numbers"),
