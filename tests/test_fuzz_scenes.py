@@ -6,7 +6,8 @@ either run or stop with one `error:` line, within TIME_BOUND, with no traceback 
 Each example runs in this process (apps.inflate.main), so its cost is capped: every shipped scene is
 first made cheap (max_area 0.02 and its schedule squeezed into INCREMENTS increments), and the run
 flags (FLAGS) set low resource limits and few Newton iterations, so that a mutation which makes a
-scene big or slow is refused by the resource guards, as any such scene would be.
+scene big or slow is refused by the resource guards, as any such scene would be. A traceback is an
+exception escaping main(), which fails the example; stderr and warnings are captured per example.
 """
 
 import copy
@@ -34,6 +35,7 @@ TIME_BOUND = 20.0  # seconds per example (a guarded example takes well under 1 s
 
 NUMBERS = [math.nan, math.inf, -math.inf, 0, 0.0, -1, -1.0, -0.5, 1e-300, 1e300, -1e300, 10**30, 10**9, 2.5]
 WRONG_TYPES = ["text", "", True, [], [1.0], [1, 2, 3], [[0, 1], [2]], {"x": 1}, "1e4"]
+# {WORK} becomes the example's own temporary folder: an absolute name that escaped would land there, not in /
 ODD_NAMES = ["../escaped", "../../etc/evil", "{WORK}/absolute", "a/b", "a\\b", ".hidden", "..", ".", "", " ",
              "x" * 300, "naïve", "tab\tname", "new\nline", "nul\u0000", "-rf", "*", "~", "$HOME", "con", "ok_name"]
 EXTRA_KEYS = ["extra", "centre", "Name", "max_area", "E", "ε"]
