@@ -20,6 +20,7 @@ from .effects import Effect
 from .errors import require, require_finite
 from .geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
 from .model import EnergyModel
+from .output import check_stem
 from .schedule import ChamberSchedule, Schedule, area_ramp
 from .terms import AreaChamber, Clamp, NeoHookean, PressureChamber
 from .terms.base import Term
@@ -98,6 +99,7 @@ class Scene:
     targets: tuple = ()  # targets.Target poses for inverse control (apps.reach), in order
 
     def __post_init__(self):
+        check_stem(self.name)  # the result files are named after the scene
         require_finite("clamp stiffness", self.clamp_stiffness)
         require(self.clamp_stiffness > 0, f"clamp stiffness = {self.clamp_stiffness!r} must be > 0")
         require(len(self.controls) == len(self.geometry.chambers),

@@ -14,7 +14,8 @@
     [[targets]]  tip = [x, y], angle (degrees, optional), weights = [w_x, w_y, w_angle]  (inverse control, in order)
 
 Every key is checked: an unknown key, a missing required one, or a value out of range is refused
-with its dotted path (e.g. ``chambers[1].semi_axes``).
+with its dotted path (e.g. ``chambers[1].semi_axes``). A file over MAX_SCENE_BYTES is refused unread;
+``name`` must be a plain file name (output.check_stem); without it the file's own name, reduced to one, is used.
 """
 
 from __future__ import annotations
@@ -26,11 +27,13 @@ import tomllib
 from .effects import EFFECTS
 from .errors import PneumaInputError, require
 from .geometry import ClampSelection, Ellipse, Geometry, Polygon, Rectangle, RectangleUnion, RoundedRectangle
+from .output import reduce_to_stem
 from .scene import ChamberControl, Material, Region, Scene
 from .schedule import ChamberSchedule
 from .targets import Target
 
 REQUIRED = object()
+MAX_SCENE_BYTES = 1_000_000
 
 
 class Table:
@@ -72,11 +75,11 @@ class Table:
 
 
 def build(table: Table, make):
-    """Call make() and prefix any PneumaInputError it raises with the table's path."""
+    """Call make() and prefix any PneumaInputError it raises with the table's path (unless it names a key in it)."""
     try:
         return make()
     except PneumaInputError as exc:
-        if not table.path:
+        if not table.path or f"{table.path}." in str(exc):
             raise
         raise PneumaInputError(f"{table.path}: {exc}") from None
 
@@ -192,12 +195,19 @@ def load_scene(path: str | os.PathLike) -> Scene:
     """Read and validate a scene file; errors are PneumaInputError prefixed with the file name."""
     try:
         with open(path, "rb") as f:
-            data = tomllib.load(f)
+            raw = f.read(MAX_SCENE_BYTES + 1)
     except OSError as exc:
         raise PneumaInputError(f"scene file {str(path)!r} cannot be read ({exc.strerror})") from None
+    require(len(raw) <= MAX_SCENE_BYTES, f"{path}: larger than {MAX_SCENE_BYTES} bytes, the most a scene file may be")
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise PneumaInputError(f"{path}: not valid TOML (not UTF-8: {exc.reason} at byte {exc.start})") from None
     except tomllib.TOMLDecodeError as exc:
         raise PneumaInputError(f"{path}: not valid TOML ({exc})") from None
+    except RecursionError:
+        raise PneumaInputError(f"{path}: not valid TOML (arrays or tables nested too deeply)") from None
     try:
-        return read_scene(data, os.path.splitext(os.path.basename(path))[0])
+        return read_scene(data, reduce_to_stem(os.path.splitext(os.path.basename(path))[0]))
     except PneumaInputError as exc:
         raise PneumaInputError(f"{path}: {exc}") from None

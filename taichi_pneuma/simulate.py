@@ -123,12 +123,20 @@ def chamber_records(built: BuiltScene, commands: np.ndarray) -> dict[str, Chambe
     return records
 
 
-class RampFailed(RuntimeError):
-    """An increment found no equilibrium even after cutting it back; `partial` holds the steps done."""
+class RampStopped(RuntimeError):
+    """The ramp ended before its last increment; `partial` holds the steps done."""
 
     def __init__(self, message: str, partial: RampResult):
         super().__init__(message)
         self.partial = partial
+
+
+class RampFailed(RampStopped):
+    """An increment found no equilibrium even after cutting it back."""
+
+
+class RampInterrupted(RampStopped):
+    """The caller's stop() asked the ramp to end after an increment (e.g. on Ctrl-C)."""
 
 
 def tip_rotation(rest: np.ndarray, current: np.ndarray) -> float:
@@ -193,7 +201,7 @@ def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.n
 
 
 def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: NewtonOptions | None = None,
-                 progress=None, max_cuts: int = MAX_CUTS) -> RampResult:
+                 progress=None, max_cuts: int = MAX_CUTS, stop=None) -> RampResult:
     """Solve for equilibrium at each step of the schedule (the scene's own by default), each from the last.
 
     An increment whose Newton solve does not converge is cut back: the remaining change of all
@@ -201,7 +209,8 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     often as max_cuts times per increment; every cut is counted in the history. If it still fails,
     RampFailed names the step, the commands (for pressure control, the last pressure reached) and
     the residual, and carries the steps done. progress, if given, is called as progress(step_record)
-    after every increment.
+    after every increment; stop, if given, is asked stop() after every increment but the last, and
+    when it returns True the ramp ends there with RampInterrupted carrying the steps done.
     """
     schedule = schedule or built.scene.schedule
     solver = NewtonSolver(built.model, options)
@@ -244,4 +253,6 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
         solves.append(final)
         if progress is not None:
             progress(step)
+        if stop is not None and i < schedule.increments and stop():
+            raise RampInterrupted(f"interrupted after step {i} of {schedule.increments}", partial())
     return partial()

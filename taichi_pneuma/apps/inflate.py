@@ -8,19 +8,26 @@ the tip deflection and rotation and the peak chamber pressure; writes the per-st
 the states (npz) and a summary (JSON) under --out, and, unless --no-video, a video of the run
 (beam beside its area/pressure trace) and a PNG of its last frame. --interactive instead opens a
 window with a slider for the commanded area.
+
+Before any work, a run past the resource limits (estimated triangles, increments, frame pixels; see
+limits.py) is refused in one line naming the flag that raises the limit. Ctrl-C during the ramp
+stops it after the current increment, saves the steps done (summary marked interrupted) and exits 130.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
+import threading
 import time
+from contextlib import contextmanager
 
 import numpy as np
 from tqdm import tqdm
 
-from .. import runtime
+from .. import limits, runtime
 from ..errors import PneumaInputError, require, require_finite
 from ..geometry import BeamGeometry
 from ..newton import NewtonOptions
@@ -29,7 +36,7 @@ from ..render import BACKENDS
 from ..scene import Scene, reference_scene
 from ..scenefile import load_scene
 from ..schedule import area_ramp
-from ..simulate import MAX_CUTS, RampFailed, run_schedule
+from ..simulate import MAX_CUTS, RampFailed, RampInterrupted, RampStopped, run_schedule
 
 # --quality presets: (max triangle area, element order, Newton tolerance); see the README's accuracy study
 QUALITY = {"draft": (0.005, 1, 1e-4), "default": (BeamGeometry.max_area, 1, NewtonOptions.tol),
@@ -55,6 +62,10 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-iterations", type=int, default=40, help="Newton iterations per solve before it counts as failed")
     p.add_argument("--max-cuts", type=int, default=MAX_CUTS,
                    help="times a non-converging increment may be halved before the run stops")
+    p.add_argument("--max-triangles", type=int, default=limits.MAX_TRIANGLES,
+                   help="refuse a scene whose mesh is estimated (before meshing) to have more triangles")
+    p.add_argument("--max-increments", type=int, default=limits.MAX_INCREMENTS,
+                   help="refuse a schedule of more increments")
     p.add_argument("--out", default="out", help="directory for the result files")
     p.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
     p.add_argument("--quiet", action="store_true", help="no per-step lines, no progress bars")
@@ -69,6 +80,8 @@ def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
     p.add_argument("--renderer", default="auto", choices=BACKENDS,
                    help="auto: GGUI (Vulkan) if available, else ti.GUI")
     p.add_argument("--no-video", action="store_true", help="no rendering at all: no video, no PNG")
+    p.add_argument("--max-frame-pixels", type=int, default=limits.MAX_FRAME_PIXELS,
+                   help="refuse a --size of more pixels per frame")
 
 
 def parser() -> argparse.ArgumentParser:
@@ -96,6 +109,7 @@ def rendering_flags(args: argparse.Namespace) -> tuple[int, int]:
         raise PneumaInputError(f"--size = {text!r} must look like 960x384") from None
     require(width >= 64 and height >= 64 and width % 2 == 0 and height % 2 == 0,
             f"--size = {text!r}: width and height must be even and >= 64")
+    limits.check_frame(width, height, args.max_frame_pixels)
     return width, height
 
 
@@ -113,14 +127,18 @@ def check_flags(args: argparse.Namespace) -> None:
         require_finite(f"--{name.replace('_', '-')}", getattr(args, name))
     newton_options(args)  # validates --tol and --max-iterations
     require(args.max_cuts >= 0, f"--max-cuts = {args.max_cuts!r} must be >= 0")
+    for name in ("max_triangles", "max_increments", "max_frame_pixels"):
+        require(getattr(args, name) >= 1, f"--{name.replace('_', '-')} = {getattr(args, name)!r} must be >= 1")
     area_ramp(args.growth, args.steps)  # validates growth and steps before any work
 
 
 def scene_for(args: argparse.Namespace, cy: float) -> Scene:
     """The validated reference scene of the flags with its chamber at height cy (PneumaInputError on bad flags)."""
     check_flags(args)
-    return reference_scene(require_finite("--cy", cy), args.cx, args.growth, args.steps, args.E, args.nu, args.k,
-                           args.max_area, order=args.order)
+    scene = reference_scene(require_finite("--cy", cy), args.cx, args.growth, args.steps, args.E, args.nu, args.k,
+                            args.max_area, order=args.order)
+    limits.check_scene(scene, args.max_triangles, args.max_increments)
+    return scene
 
 
 def build(scene: Scene):
@@ -136,10 +154,33 @@ def build(scene: Scene):
     return built
 
 
+@contextmanager
+def stop_on_interrupt():
+    """Yield a threading.Event that the first Ctrl-C (SIGINT) sets instead of raising KeyboardInterrupt;
+    a second Ctrl-C interrupts at once. Outside the main thread (no signal handling) the event never sets."""
+    requested = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield requested
+        return
+    previous = signal.getsignal(signal.SIGINT)
+
+    def handler(signum, frame):
+        requested.set()
+        signal.signal(signal.SIGINT, previous)
+        print("interrupt: stopping after the current increment (Ctrl-C again to stop at once)", file=sys.stderr)
+
+    signal.signal(signal.SIGINT, handler)
+    try:
+        yield requested
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def solve(args: argparse.Namespace, built, label: str = "solving"):
     """Run the scene's schedule with a progress bar; return (result, wall seconds).
 
-    Raises RampFailed (carrying the converged steps) when an increment fails after its cuts."""
+    Raises RampFailed when an increment fails after its cuts, RampInterrupted after the increment
+    during which Ctrl-C was pressed; both carry the steps done."""
     increments = built.scene.increments
     bar = tqdm(total=increments + 1, desc=label, unit="step", disable=args.quiet, leave=False)
 
@@ -152,8 +193,9 @@ def solve(args: argparse.Namespace, built, label: str = "solving"):
                       f"residual {step.residual:.1e}")
 
     start = time.perf_counter()
-    with bar:
-        result = run_schedule(built, options=newton_options(args), progress=progress, max_cuts=args.max_cuts)
+    with bar, stop_on_interrupt() as interrupted:
+        result = run_schedule(built, options=newton_options(args), progress=progress, max_cuts=args.max_cuts,
+                              stop=interrupted.is_set)
     return result, time.perf_counter() - start
 
 
@@ -166,7 +208,8 @@ def run(args: argparse.Namespace) -> dict:
     if args.scene:
         check_flags(args)
         scene = load_scene(args.scene)
-        stem = scene.name
+        limits.check_scene(scene, args.max_triangles, args.max_increments)
+        stem = scene.name  # a plain file name (Scene checks it): every result file lands inside --out
     else:
         scene = scene_for(args, args.cy)
         stem = f"inflate_cy{args.cy:+.2f}"
@@ -185,15 +228,50 @@ def run(args: argparse.Namespace) -> dict:
     mesh = built.mesh
     try:
         result, wall = solve(args, built)
-    except RampFailed as failure:
-        written = save_history(out, stem, built, failure.partial)
-        print(f"saved the {len(failure.partial.steps)} converged steps in " + ", ".join(str(p) for p in written))
+    except RampStopped as stopped:
+        written = save_history(out, stem, built, stopped.partial)
+        if isinstance(stopped, RampInterrupted):
+            summary = summarise(built, stopped.partial, float(stopped.partial.column("seconds").sum()), interrupted=True)
+            written.append(save_json(out / f"{stem}_summary.json", summary))
+        print(f"saved the {len(stopped.partial.steps)} steps done in " + ", ".join(str(p) for p in written))
         raise
+    summary = summarise(built, result, wall)
     final = result.steps[-1]
-    iterations = result.column("iterations")[1:]
-    seconds_per_step = float(result.column("seconds")[1:].mean())
-    summary = {
-        "scene": scene.name, "terms": built.model.term_names(),
+    for name, c in final.chambers.items():
+        print(f"{name}: area {c.area / c.area_ratio:.3f} -> {c.area:.3f} (x{c.area_ratio:.2f}), pressure {c.pressure:.1f}")
+    print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}; "
+          f"tip rotation {final.tip_rotation:+.1f} deg")
+    print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}")
+    for name, (fx, fy, magnitude) in final.contact.items():
+        print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g})")
+    print(f"Newton: {summary['newton_iterations_total']} iterations over {summary['steps'] - 1} solves "
+          f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
+          f"all converged: {summary['all_converged']}; run {wall:.2f} s")
+    summary_path = out / f"{stem}_summary.json"  # results saved before rendering: a Ctrl-C there loses none
+    written = save_history(out, stem, built, result) + [save_json(summary_path, summary)]
+    if not args.no_video:
+        from ..render import FrameRenderer, Track
+        from ..video import export
+
+        ground = next((e.height for e in scene.effects if e.name == "ground"), None)
+        renderer = FrameRenderer([Track.from_ramp(mesh, result, ground=ground)], *size, trace=True,
+                                 backend=args.renderer)
+        done = export(renderer, args.video or out / f"{stem}.mp4", out / f"{stem}.png", args.fps, args.quiet)
+        summary.update(renderer=renderer.canvas.name, video_frames=done.frames, video_size=[done.width, done.height],
+                       render_ms_per_frame=done.ms_per_frame)
+        print(render_report(done, summary["solve_seconds_per_step"]))
+        written = [done.video, done.png] + written
+        save_json(summary_path, summary)
+    print("wrote " + ", ".join(str(p) for p in written))
+    return summary
+
+
+def summarise(built, result, wall: float, interrupted: bool = False) -> dict:
+    """The figures of a run (complete, or interrupted after result.steps) for the summary JSON."""
+    mesh, final = built.mesh, result.steps[-1]
+    iterations, seconds = result.column("iterations")[1:], result.column("seconds")[1:]
+    return {
+        "scene": built.scene.name, "terms": built.model.term_names(),
         "vertices": mesh.n_vertices, "triangles": mesh.n_triangles, "element_order": mesh.order,
         "chambers": {name: {"control": c.control, "rest_area": c.area / c.area_ratio, "final_area": c.area,
                             "area_ratio": c.area_ratio, "final_pressure": c.pressure,
@@ -206,34 +284,9 @@ def run(args: argparse.Namespace) -> dict:
         "min_det_F": float(result.column("min_det").min()),
         "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max(initial=0)),
         "increment_cuts": int(result.column("cuts").sum()),
-        "wall_seconds": wall, "solve_seconds_per_step": seconds_per_step,
+        "wall_seconds": wall, "solve_seconds_per_step": float(seconds.mean()) if len(seconds) else 0.0,
+        "steps": len(result.steps), "interrupted": interrupted,
     }
-    for name, c in final.chambers.items():
-        print(f"{name}: area {c.area / c.area_ratio:.3f} -> {c.area:.3f} (x{c.area_ratio:.2f}), pressure {c.pressure:.1f}")
-    print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}; "
-          f"tip rotation {final.tip_rotation:+.1f} deg")
-    print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}")
-    for name, (fx, fy, magnitude) in final.contact.items():
-        print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g})")
-    print(f"Newton: {summary['newton_iterations_total']} iterations over {len(iterations)} solves "
-          f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
-          f"all converged: {summary['all_converged']}; run {wall:.2f} s")
-    written = []
-    if not args.no_video:
-        from ..render import FrameRenderer, Track
-        from ..video import export
-
-        ground = next((e.height for e in scene.effects if e.name == "ground"), None)
-        renderer = FrameRenderer([Track.from_ramp(mesh, result, ground=ground)], *size, trace=True,
-                                 backend=args.renderer)
-        done = export(renderer, args.video or out / f"{stem}.mp4", out / f"{stem}.png", args.fps, args.quiet)
-        summary.update(renderer=renderer.canvas.name, video_frames=done.frames, video_size=[done.width, done.height],
-                       render_ms_per_frame=done.ms_per_frame)
-        print(render_report(done, seconds_per_step))
-        written += [done.video, done.png]
-    written += save_history(out, stem, built, result) + [save_json(out / f"{stem}_summary.json", summary)]
-    print("wrote " + ", ".join(str(p) for p in written))
-    return summary
 
 
 def save_history(out, stem: str, built, result) -> list:
@@ -262,15 +315,26 @@ def save_history(out, stem: str, built, result) -> list:
 
 
 def exit_code(app_run, args: argparse.Namespace) -> int:
-    """Run an app; bad input is one line and exit 2, a ramp with no equilibrium one line and exit 1."""
+    """Run an app; bad input is one line and exit 2, a ramp with no equilibrium one line and exit 1,
+    Ctrl-C one line and exit 130 (128 + SIGINT, as shells report it).
+
+    NumPy's floating-point warnings (overflow, invalid value) are silenced: a huge input value overflows
+    harmlessly in a check that then refuses it, and a solve that produces NaN or inf fails its own checks."""
     try:
-        summary = app_run(args)
+        with np.errstate(all="ignore"):
+            summary = app_run(args)
     except PneumaInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except RampFailed as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
+    except RampInterrupted as exc:
+        print(f"error: {exc} (Ctrl-C)", file=sys.stderr)
+        return 130
+    except KeyboardInterrupt:
+        print("error: interrupted (Ctrl-C)", file=sys.stderr)
+        return 130
     return 0 if summary["all_converged"] else 1
 
 
