@@ -104,8 +104,9 @@ def _fill_builder(builder: ti.types.sparse_matrix_builder(), rows: ti.types.ndar
 class TaichiLLT:
     """Taichi's SparseSolver (Eigen's simplicial LLT on the CPU); the pattern is analysed once.
 
-    The triplet indices of the CSR pattern are converted once per pattern (FixedPattern hands out
-    the same index arrays for every matrix)."""
+    Eigen's LLT reads the lower triangle only, so only the entries with row >= col are handed over
+    (about half the triplets to build); their indices are converted once per pattern (FixedPattern
+    hands out the same index arrays for every matrix)."""
 
     name = "taichi"
 
@@ -117,11 +118,12 @@ class TaichiLLT:
         n = matrix.shape[0]
         if matrix.indptr is not self._indptr:
             self._indptr = matrix.indptr
-            self._rows = np.repeat(np.arange(n, dtype=np.int32), np.diff(matrix.indptr))
-            self._cols = matrix.indices.astype(np.int32)
+            rows = np.repeat(np.arange(n, dtype=np.int32), np.diff(matrix.indptr))
+            self._lower = rows >= matrix.indices
+            self._rows, self._cols = rows[self._lower], matrix.indices[self._lower].astype(np.int32)
             self._solver = None
         builder = ti.linalg.SparseMatrixBuilder(n, n, max_num_triplets=len(self._rows), dtype=ti.f64)
-        _fill_builder(builder, self._rows, self._cols, matrix.data)
+        _fill_builder(builder, self._rows, self._cols, np.ascontiguousarray(matrix.data[self._lower]))
         sparse = builder.build()
         if self._solver is None:
             self._solver = ti.linalg.SparseSolver(dtype=ti.f64, solver_type="LLT")
