@@ -43,7 +43,7 @@ def explore(scene: Scene, growth: float, size: tuple[int, int], backend: str = "
             renderer = FrameRenderer([track], trace=False, canvas=canvas, bounds=bounds)
             print(f"  area x{ratio:.3f}: p = {track.pressure[0, 0]:.2f}, tip dy = {tip:+.4f}, "
                   f"{record.iterations} Newton it, converged {record.converged}", flush=True)
-        renderer.draw(0)
+        canvas.show_image(renderer.frame(0))
         canvas.show()
         frames += 1
     return {"all_converged": bool(converged), "solves": solves}
