@@ -126,6 +126,10 @@ class GGUICanvas:
         ti.set_logging_level(ti.WARN)
         self.window.show()
 
+    def close(self) -> None:
+        """Destroy the window now (GGUI allows one live window per process; garbage collection may come late)."""
+        self.window.destroy()
+
 
 class GUICanvas:
     """Taichi's ti.GUI software rasteriser; offscreen unless show=True."""
@@ -168,6 +172,9 @@ class GUICanvas:
 
     def show(self) -> None:
         self.gui.show()
+
+    def close(self) -> None:
+        self.gui.close()
 
 
 def _hex(color) -> int:

@@ -1,0 +1,52 @@
+"""A run's history as a matplotlib figure with axes: four panels, one curve per chamber.
+
+    pressure against area ratio        tip deflection against the command
+    area ratio against the command     pressure against the command
+
+"The command" is the chambers' commanded value (area ratio or pressure) when every chamber gets the
+same command at every step (one chamber, or chambers driven together); otherwise the step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+COMMAND_LABEL = {"area": "commanded area ratio", "pressure": "commanded pressure"}
+
+
+def command_axis(result) -> tuple[np.ndarray, str]:
+    """The x values and label of the 'against the command' panels (see the module docstring)."""
+    command = result.command
+    controls = {c.control for c in result.steps[0].chambers.values()}
+    if len(controls) == 1 and np.array_equal(command, np.repeat(command[:, :1], command.shape[1], axis=1)):
+        return command[:, 0], COMMAND_LABEL[controls.pop()]
+    return np.arange(len(command), dtype=float), "step"
+
+
+def history_figure(result, figure=None):
+    """Draw the history of an api.Result on `figure` (a new matplotlib Figure, no pyplot, by default)."""
+    from matplotlib.figure import Figure
+
+    fig = figure if figure is not None else Figure(figsize=(10, 7), layout="constrained")
+    (pa, tip), (area, pressure) = fig.subplots(2, 2)
+    x, x_label = command_axis(result)
+    for c, name in enumerate(result.chamber_names):
+        pa.plot(result.area_ratio[:, c], result.pressure[:, c], ".-", label=name)
+        area.plot(x, result.area_ratio[:, c], ".-", label=name)
+        pressure.plot(x, result.pressure[:, c], ".-", label=name)
+    tip.plot(x, result.history["tip_dy"], ".-", color="k")
+    for ax, xl, yl, title in ((pa, "area ratio A / A_rest", "pressure p", "pressure against area ratio"),
+                              (tip, x_label, "tip deflection dy", "tip deflection (mean y displacement of the tip)"),
+                              (area, x_label, "area ratio A / A_rest", "chamber area"),
+                              (pressure, x_label, "pressure p", "chamber pressure")):
+        ax.set(xlabel=xl, ylabel=yl, title=title)
+        ax.grid(True, alpha=0.3)
+    if len(result.chamber_names) > 1:
+        pa.legend(fontsize="small")
+    fig.suptitle(result.scene.name)
+    return fig
+
+
+def save_history_png(result, path) -> None:
+    """Write the history figure to path (PNG)."""
+    history_figure(result).savefig(path, dpi=100, format="png")
