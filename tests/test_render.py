@@ -117,7 +117,9 @@ def test_no_video_initialises_no_renderer(tmp_path, monkeypatch):
 
     monkeypatch.setattr(render, "open_canvas", refuse)
     assert inflate.main([*COARSE, "--no-video", "--out", str(tmp_path)]) == 0
-    assert sorted(p.suffix for p in tmp_path.iterdir()) == [".csv", ".json", ".npz"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        f"inflate_cy+0.15{end}" for end in (".pvd", "_history.csv", "_plot.png", "_scene.toml", "_states.npz",
+                                             "_summary.json", "_vtk")]
 
 
 def test_inflate_without_vulkan_falls_back_to_ti_gui_and_writes_every_frame(tmp_path):
