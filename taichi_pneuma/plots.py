@@ -14,12 +14,11 @@ import numpy as np
 COMMAND_LABEL = {"area": "commanded area ratio", "pressure": "commanded pressure"}
 
 
-def command_axis(result) -> tuple[np.ndarray, str]:
-    """The x values and label of the 'against the command' panels (see the module docstring)."""
-    command = result.command
-    controls = {c.control for c in result.steps[0].chambers.values()}
-    if len(controls) == 1 and np.array_equal(command, np.repeat(command[:, :1], command.shape[1], axis=1)):
-        return command[:, 0], COMMAND_LABEL[controls.pop()]
+def command_axis(command: np.ndarray, controls: list[str]) -> tuple[np.ndarray, str]:
+    """The x values and label of the 'against the command' panels: command (steps, chambers) and each
+    chamber's control ('area' or 'pressure'); see the module docstring."""
+    if len(set(controls)) == 1 and np.all(command == command[:, :1]):
+        return command[:, 0], COMMAND_LABEL[controls[0]]
     return np.arange(len(command), dtype=float), "step"
 
 
@@ -29,7 +28,7 @@ def history_figure(result, figure=None):
 
     fig = figure if figure is not None else Figure(figsize=(10, 7), layout="constrained")
     (pa, tip), (area, pressure) = fig.subplots(2, 2)
-    x, x_label = command_axis(result)
+    x, x_label = command_axis(result.command, [c.schedule.control for c in result.scene.controls])
     for c, name in enumerate(result.chamber_names):
         pa.plot(result.area_ratio[:, c], result.pressure[:, c], ".-", label=name)
         area.plot(x, result.area_ratio[:, c], ".-", label=name)
