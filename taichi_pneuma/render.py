@@ -110,7 +110,7 @@ class GGUICanvas:
 
     def show_image(self, image: np.ndarray) -> None:
         """Put an (height, width, 3) uint8 image on the canvas (for a shown window)."""
-        self.canvas.set_image(_from_rgb8(image).astype(np.float32) / 255)
+        self.canvas.set_image(_from_rgb8(image))
 
     def slider(self, label: str, value: float, low: float, high: float) -> float:
         """An imgui slider at the bottom of the window; returns its value."""
