@@ -132,7 +132,7 @@ class Result:
         iterations = self.history["iterations"][1:]
         return {
             "scene": self.scene.name, "terms": self.built.model.term_names(),
-            "vertices": self.mesh.n_vertices, "triangles": self.mesh.n_triangles,
+            "vertices": self.mesh.n_vertices, "triangles": self.mesh.n_triangles, "element_order": self.mesh.order,
             "chambers": {name: {"control": c.control, "rest_area": c.area / c.area_ratio, "final_area": c.area,
                                 "area_ratio": c.area_ratio, "final_pressure": c.pressure,
                                 "peak_pressure": float(np.abs(self.history[f"{name}.pressure"]).max())}

@@ -1,7 +1,8 @@
 """Effects a scene may name, each a small spec that builds its term(s) when (and only when) it is named.
 
 An effect's terms(config, mesh, lumped_area) returns the terms it adds to the energy model;
-lumped_area[i] is a third of the rest area of the triangles at vertex i (mass = density x it).
+lumped_area[i] is the integral of node i's shape function over the body (mesh.nodal_areas(): a third of
+the rest area of the triangles at a linear-element vertex; mass = density x it).
 """
 
 from __future__ import annotations
@@ -93,6 +94,8 @@ class Dynamics(Effect):
         _positive("dt", self.dt)
 
     def terms(self, config, mesh, lumped_area) -> list:
+        require(mesh.order == 1, "dynamics needs linear triangles (order = 1): the quadratic triangle's "
+                                 "row-sum lumped mass vanishes at its corners")
         return [Inertia(config, self.density * lumped_area, self.dt)]
 
 

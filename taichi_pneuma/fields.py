@@ -1,9 +1,14 @@
-"""Per-triangle fields of a deformed mesh, in NumPy (vectorised over triangles): for output, not the solve.
+"""Per-element fields of a deformed mesh, in NumPy (vectorised over elements): for output, not the solve.
 
-On a linear triangle with rest corners X0, X1, X2 and current ones x0, x1, x2 the deformation
-gradient is constant:
+At quadrature point q of an element with nodes a and rest shape-function gradients G_qa (the elastic
+term's own points and weights, terms/elastic.quadrature: one point for linear triangles, where F is
+constant, three for quadratic ones)
 
-    F = Ds Dm^-1,   Ds = [x1 - x0, x2 - x0],   Dm = [X1 - X0, X2 - X0],   J = det F.
+    F_q = sum_a x_a G_qa^T,   J = det F.
+
+Each field is reported per element as its quadrature-weighted mean over the element (linear triangles:
+the one value). The mean of det F is then the element's current area over its rest area, exactly
+(det F is of degree 2 on a quadratic triangle, which the 3-point rule integrates exactly).
 
 Largest principal stretch: the largest singular value of F, sqrt of the largest eigenvalue of
 C = F^T F (in plane; the out-of-plane stretch is 1 in plane strain).
@@ -30,14 +35,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from .terms.elastic import quadrature
 
-def deformation_gradients(rest: np.ndarray, positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """F of every triangle, (m, 2, 2), from rest and current vertex positions (n, 2)."""
-    def edges(points):
-        p = points[triangles]
-        return np.stack([p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]], axis=2)  # columns are the two edges
 
-    return edges(positions) @ np.linalg.inv(edges(rest))
+def deformation_gradients(rest: np.ndarray, positions: np.ndarray, elements: np.ndarray):
+    """F (m, nq, 2, 2) at the quadrature points of every element (m, 3 or 6) and the weights W (m, nq),
+    from rest and current node positions (n, 2)."""
+    gradients, weights = quadrature(rest, elements)
+    return np.einsum("mai,mqaj->mqij", positions[elements], gradients), weights
 
 
 def max_stretch(F: np.ndarray) -> np.ndarray:
@@ -67,8 +72,18 @@ def von_mises(sigma: np.ndarray) -> np.ndarray:
     return np.sqrt(0.5 * normal + 3.0 * shear)
 
 
-def triangle_fields(rest: np.ndarray, positions: np.ndarray, triangles: np.ndarray, mu, lam) -> dict[str, np.ndarray]:
-    """det_F, max_stretch, stress (m, 3, 3) and von_mises of every triangle."""
-    F = deformation_gradients(rest, positions, triangles)
-    sigma = cauchy_stress(F, mu, lam)
-    return {"det_F": np.linalg.det(F), "max_stretch": max_stretch(F), "stress": sigma, "von_mises": von_mises(sigma)}
+def triangle_fields(rest: np.ndarray, positions: np.ndarray, elements: np.ndarray, mu=None, lam=None
+                    ) -> dict[str, np.ndarray]:
+    """Per element (quadrature-weighted means): det_F and max_stretch, and, given the Lame parameters mu,
+    lam (scalars or one per element), stress (the mean Cauchy stress, (m, 3, 3)) and von_mises (of it)."""
+    F, weights = deformation_gradients(rest, positions, elements)
+    m, nq = weights.shape
+    mean = lambda values: np.einsum("mq,mq...->m...", weights, values.reshape(m, nq, *values.shape[1:])) \
+        / weights.sum(axis=1).reshape(-1, *([1] * (values.ndim - 1)))
+    flat = F.reshape(-1, 2, 2)
+    fields = {"det_F": mean(np.linalg.det(flat)), "max_stretch": mean(max_stretch(flat))}
+    if mu is not None:
+        per_point = lambda v: np.repeat(np.broadcast_to(v, (m,)), nq)
+        fields["stress"] = mean(cauchy_stress(flat, per_point(mu), per_point(lam)))
+        fields["von_mises"] = von_mises(fields["stress"])
+    return fields

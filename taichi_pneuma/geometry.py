@@ -26,6 +26,8 @@ from .errors import require, require_finite
 OUTER_MARKER = 1
 MARGIN = 1e-3
 SIDES = ("left", "right", "bottom", "top")
+ORDERS = (1, 2)
+MAX_REFINEMENTS = 4
 
 
 def _pair(name: str, value, positive: bool = False) -> tuple[float, float]:
@@ -270,10 +272,11 @@ def in_box(points: np.ndarray, box) -> np.ndarray:
 class Mesh:
     """A triangle mesh with the vertex sets a pneumatic scene needs.
 
-    vertices: (n, 2) rest positions; triangles: (m, 3) counter-clockwise vertex indices;
-    chambers: one vertex loop per chamber wall, counter-clockwise (positive area), in the scene's
-    order; boundary: the vertices on the body's outer boundary; pinned: the clamped vertices;
-    tip: the right edge (x >= max x - 1e-6).
+    vertices: (n, 2) rest positions (the nodes); triangles: (m, 3) counter-clockwise corner indices
+    (linear elements), or (m, 6) for quadratic ones: the corners, then the midside nodes of edges 01,
+    12 and 20; chambers: one node loop per chamber wall, counter-clockwise (positive area), in the
+    scene's order (quadratic: corner, midside, corner, ...); boundary: the nodes on the body's outer
+    boundary; pinned: the clamped nodes; tip: the right edge (x >= max x - 1e-6).
     """
 
     vertices: np.ndarray
@@ -292,9 +295,29 @@ class Mesh:
         return len(self.triangles)
 
     @property
+    def order(self) -> int:
+        """1 for linear triangles, 2 for quadratic ones."""
+        return 1 if self.triangles.shape[1] == 3 else 2
+
+    @property
     def area(self) -> float:
         """Total rest area of the triangles."""
         return float(np.sum(triangle_areas(self.vertices, self.triangles)))
+
+    def display_triangles(self) -> np.ndarray:
+        """Linear triangles to draw: the triangles themselves, or each quadratic one split in four at its
+        midside nodes (corner triangles, then the middle one)."""
+        return self.triangles if self.order == 1 else split_in_four(self.triangles)
+
+    def nodal_areas(self) -> np.ndarray:
+        """The integral of each node's shape function over the body, sum_t int_t N_a dA: a third of the
+        area of the triangles at a node for linear elements; for quadratic ones 0 at corners and a third
+        of each adjacent triangle's area at midside nodes (exact weights of a load linear in x)."""
+        areas = triangle_areas(self.vertices, self.triangles)
+        nodes = self.triangles[:, :3] if self.order == 1 else self.triangles[:, 3:]
+        out = np.zeros(self.n_vertices)
+        np.add.at(out, nodes.ravel(), np.repeat(areas / 3, 3))
+        return out
 
 
 def triangle_areas(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
@@ -311,9 +334,14 @@ class Geometry:
     chambers: tuple[tuple[str, object], ...]
     max_area: float = 0.0012
     clamp: ClampSelection = field(default_factory=ClampSelection)
+    order: int = 1
+    refinements: int = 0
 
     def __post_init__(self):
         require(require_finite("max_area", self.max_area) > 0, f"max_area = {self.max_area!r} must be > 0")
+        require(self.order in ORDERS, f"order = {self.order!r} must be 1 (linear triangles) or 2 (quadratic)")
+        require(self.refinements in range(MAX_REFINEMENTS + 1),
+                f"refinements = {self.refinements!r} must be an integer from 0 to {MAX_REFINEMENTS}")
         body = self.body.polygon()
         polygons = [(name, shape.polygon()) for name, shape in self.chambers]
         names = [name for name, _ in polygons]
@@ -332,7 +360,9 @@ class Geometry:
                 require(not touching, f"chambers {name_a!r} and {name_b!r} overlap (or are closer than {MARGIN:g})")
 
     def mesh(self) -> Mesh:
-        """Mesh the body minus its chambers with Triangle ('pqa<max_area>') and name its vertex sets."""
+        """Mesh the body minus its chambers with Triangle ('pqa<max_area>'), split every triangle in four
+        `refinements` times (uniform refinement: the same boundary polygons, h halved each time), add a
+        midside node to every edge for quadratic triangles, and name the node sets."""
         loops = [self.body.polygon()] + [shape.polygon() for _, shape in self.chambers]
         offsets = np.cumsum([0] + [len(p) for p in loops])
         ring = lambda n, offset: offset + np.column_stack([np.arange(n), (np.arange(n) + 1) % n])
@@ -346,15 +376,49 @@ class Geometry:
         out = triangle.triangulate(pslg, f"pqa{self.max_area:.17f}")  # fixed-point: Triangle reads no exponent
         vertices = np.asarray(out["vertices"], dtype=np.float64)
         triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
-        markers = out["segment_markers"].ravel()
+        segments, markers = np.asarray(out["segments"], dtype=np.int64), out["segment_markers"].ravel()
+        for _ in range(self.refinements):
+            vertices, mid = with_edge_midpoints(vertices, triangles)
+            triangles = split_in_four(np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])]))
+            halves = mid(segments[:, 0], segments[:, 1])
+            segments = np.vstack([np.column_stack([segments[:, 0], halves]), np.column_stack([halves, segments[:, 1]])])
+            markers = np.concatenate([markers, markers])
+        mid = None
+        if self.order == 2:
+            vertices, mid = with_edge_midpoints(vertices, triangles)
+            triangles = np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])])
         chambers = []
         for c in range(1, len(loops)):
-            loop = chain_loop(out["segments"][markers == OUTER_MARKER + c])
-            chambers.append(loop if signed_area(vertices[loop]) > 0 else loop[::-1].copy())
-        boundary = np.unique(out["segments"][markers == OUTER_MARKER])
+            loop = chain_loop(segments[markers == OUTER_MARKER + c])
+            loop = loop if signed_area(vertices[loop]) > 0 else loop[::-1].copy()
+            chambers.append(loop if mid is None else np.column_stack([loop, mid(loop, np.roll(loop, -1))]).ravel())
+        outer = segments[markers == OUTER_MARKER]
+        boundary = np.unique(outer if mid is None else np.column_stack([outer, mid(outer[:, 0], outer[:, 1])]))
         x = vertices[:, 0]
         tip = np.flatnonzero(x >= x.max() - 1e-6)
         return Mesh(vertices, triangles, tuple(chambers), boundary, self.clamp.select(vertices), tip)
+
+
+def with_edge_midpoints(vertices: np.ndarray, triangles: np.ndarray):
+    """The vertices with the midpoint of every edge of the (corner) triangles appended, and mid(a, b): the
+    index of the midpoint of edge (a, b), elementwise over index arrays."""
+    edges = np.sort(np.vstack([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1)
+    unique = np.unique(edges, axis=0)
+    n = len(vertices)
+    keys = unique[:, 0] * n + unique[:, 1]
+
+    def mid(a, b):
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        return n + np.searchsorted(keys, lo * n + hi)
+
+    return np.vstack([vertices, 0.5 * (vertices[unique[:, 0]] + vertices[unique[:, 1]])]), mid
+
+
+def split_in_four(triangles: np.ndarray) -> np.ndarray:
+    """The four corner-and-midpoint triangles of each (m, 6) triangle (corners, then edge midpoints 01, 12,
+    20): the three corner triangles, then the middle one; all counter-clockwise when the input is."""
+    c0, c1, c2, m01, m12, m20 = triangles.T
+    return np.vstack([np.column_stack(t) for t in ((c0, m01, m20), (m01, c1, m12), (m20, m12, c2), (m01, m12, m20))])
 
 
 @dataclass(frozen=True)
@@ -369,6 +433,8 @@ class BeamGeometry:
     cy: float = 0.0
     chamber_points: int = 128
     max_area: float = 0.0012
+    order: int = 1
+    refinements: int = 0
 
     def __post_init__(self):
         for name in ("length", "height", "a", "b", "cx", "cy", "max_area"):
@@ -394,7 +460,7 @@ class BeamGeometry:
         """The same beam as a general Geometry (body rectangle, one ellipse chamber named 'main', left clamp)."""
         return Geometry(Rectangle((0.0, 0.0), (self.length, self.height)),
                         (("main", Ellipse((self.cx, self.cy), (self.a, self.b), self.chamber_points)),),
-                        self.max_area)
+                        self.max_area, order=self.order, refinements=self.refinements)
 
     def mesh(self) -> Mesh:
         return self.general().mesh()

@@ -13,6 +13,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 import taichi as ti
 
+from . import runtime
+
 
 
 class FixedPattern:
@@ -100,18 +102,26 @@ def _fill_builder(builder: ti.types.sparse_matrix_builder(), rows: ti.types.ndar
 
 
 class TaichiLLT:
-    """Taichi's SparseSolver (Eigen's simplicial LLT on the CPU); the pattern is analysed once."""
+    """Taichi's SparseSolver (Eigen's simplicial LLT on the CPU); the pattern is analysed once.
+
+    The triplet indices of the CSR pattern are converted once per pattern (FixedPattern hands out
+    the same index arrays for every matrix)."""
 
     name = "taichi"
 
     def __init__(self):
         self._solver = None
+        self._indptr = None
 
     def factorize(self, matrix: sp.csr_matrix) -> None:
-        coo = matrix.tocoo()
         n = matrix.shape[0]
-        builder = ti.linalg.SparseMatrixBuilder(n, n, max_num_triplets=coo.nnz, dtype=ti.f64)
-        _fill_builder(builder, coo.row.astype(np.int32), coo.col.astype(np.int32), coo.data)
+        if matrix.indptr is not self._indptr:
+            self._indptr = matrix.indptr
+            self._rows = np.repeat(np.arange(n, dtype=np.int32), np.diff(matrix.indptr))
+            self._cols = matrix.indices.astype(np.int32)
+            self._solver = None
+        builder = ti.linalg.SparseMatrixBuilder(n, n, max_num_triplets=len(self._rows), dtype=ti.f64)
+        _fill_builder(builder, self._rows, self._cols, matrix.data)
         sparse = builder.build()
         if self._solver is None:
             self._solver = ti.linalg.SparseSolver(dtype=ti.f64, solver_type="LLT")
@@ -119,20 +129,21 @@ class TaichiLLT:
         self._solver.factorize(sparse)
         if not self._solver.info():
             raise FactorizationError("Taichi LLT factorisation failed (matrix not positive definite)")
-        self._rhs = ti.ndarray(ti.f64, n)
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         if rhs.ndim == 2:
             return np.column_stack([self.solve(column) for column in rhs.T])
-        self._rhs.from_numpy(np.ascontiguousarray(rhs, dtype=np.float64))
-        return self._solver.solve(self._rhs).to_numpy()
+        return self._solver.solve(np.ascontiguousarray(rhs, dtype=np.float64))
 
 
 BACKENDS = {"cholespy": CholespyCholesky, "scipy": ScipySuperLU, "taichi": TaichiLLT}
 
 
 def make_backend(name: str):
-    """A fresh linear-solver backend by name (one of BACKENDS)."""
+    """A fresh linear-solver backend by name: one of BACKENDS, or "auto": Taichi's LLT when Taichi runs on
+    the CPU, CHOLMOD otherwise (Taichi's sparse solvers are float32-only on CUDA; the solve stays float64)."""
+    if name == "auto":
+        name = "taichi" if runtime.current_arch() in (None, "cpu") else "cholespy"
     return BACKENDS[name]()
 
 

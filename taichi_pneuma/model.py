@@ -10,39 +10,26 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import taichi as ti
 
 from .terms import Term
 
 
-@ti.data_oriented
 class Configuration:
-    """Rest positions X and displacements u of n vertices; x = X + u."""
+    """Rest positions X and displacements u of n vertices, (n, 2) float64 NumPy arrays; x = X + u.
+
+    The terms' kernels take both as array arguments; set_displacements overwrites u in place."""
 
     def __init__(self, rest: np.ndarray):
-        n = len(rest)
-        self.rest = ti.Vector.field(2, ti.f64, n)
-        self.u = ti.Vector.field(2, ti.f64, n)
-        self.rest.from_numpy(np.asarray(rest, dtype=np.float64))
-        self.rest_numpy = np.asarray(rest, dtype=np.float64).copy()
+        self.rest = np.array(rest, dtype=np.float64, order="C")
+        self.u = np.zeros_like(self.rest)
 
     @property
     def n_vertices(self) -> int:
-        return self.u.shape[0]
-
-    @ti.func
-    def x(self, i):
-        """Current position of vertex i."""
-        return self.rest[i] + self.u[i]
-
-    @ti.func
-    def edge(self, i, j):
-        """x_j - x_i, formed from rest and displacement differences so short edges keep their digits."""
-        return (self.rest[j] - self.rest[i]) + (self.u[j] - self.u[i])
+        return len(self.rest)
 
 
 class EnergyModel:
-    """E(x) = sum of its terms' energies, over positions held in one Taichi field.
+    """E(x) = sum of its terms' energies, over the displacements held in one Configuration.
 
     force_floor: the smallest force scale used to judge convergence (see gradient());
     energy_resolution: energy changes below it are round-off (the line search then uses |g|).
@@ -66,7 +53,7 @@ class EnergyModel:
         return [t.name for t in self.terms]
 
     def set_displacements(self, u: np.ndarray) -> None:
-        self.config.u.from_numpy(np.ascontiguousarray(u, dtype=np.float64).reshape(-1, 2))
+        self.config.u[:] = np.reshape(u, (-1, 2))
 
     def energy(self) -> float:
         return float(sum(t.energy() for t in self.terms))

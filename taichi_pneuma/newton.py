@@ -80,14 +80,14 @@ class SolveRecord:
 class NewtonOptions:
     tol: float = 1e-6
     max_iterations: int = 40
-    linear_solver: str = "taichi"
+    linear_solver: str = "auto"
 
     def __post_init__(self):
         require(require_finite("tol", self.tol) > 0, f"tol = {self.tol!r} must be > 0")
         require(isinstance(self.max_iterations, int) and self.max_iterations >= 1,
                 f"max_iterations = {self.max_iterations!r} must be an integer >= 1")
-        require(self.linear_solver in BACKENDS,
-                f"linear solver = {self.linear_solver!r} is not one of {', '.join(BACKENDS)}")
+        require(self.linear_solver in ("auto", *BACKENDS),
+                f"linear solver = {self.linear_solver!r} is not one of auto, {', '.join(BACKENDS)}")
 
 
 class NewtonSolver:

@@ -36,7 +36,7 @@ import triangle
 
 from . import runtime
 from .errors import PneumaInputError, require
-from .fields import deformation_gradients, max_stretch
+from .fields import triangle_fields
 from .geometry import Mesh
 
 BACKENDS = ("auto", "ggui", "gui")
@@ -55,8 +55,8 @@ AREA_CURVE = (0.05, 0.2, 0.95)
 PRESSURE_CURVE = (0.85, 0.15, 0.1)
 CURSOR = (0.2, 0.2, 0.2)
 COLORMAP = "viridis"
-# the fields a body can be coloured by: name -> (label, value per triangle from F (m, 2, 2))
-COLOR_FIELDS = {"stretch": ("max stretch", max_stretch), "detF": ("det F", np.linalg.det)}
+# the fields a body can be coloured by: name -> (label, key of fields.triangle_fields)
+COLOR_FIELDS = {"stretch": ("max stretch", "max_stretch"), "detF": ("det F", "det_F")}
 FONT_PX, LINE_PX, MARGIN_PX = 13, 17, 10
 COLORBAR_PX = 96  # width of the colour bar strip
 
@@ -279,8 +279,8 @@ def colormap(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
 @dataclass(frozen=True)
 class Track:
     """One run to show: its mesh, its states (steps, n, 2) and the per-step figures of the overlay:
-    area_ratio and pressure as (steps, chambers), tip_dy as (steps,); color: a value per triangle
-    (steps, m) to colour the body by, named color_label."""
+    area_ratio and pressure as (steps, chambers), tip_dy as (steps,); color: a value per element
+    (steps, m) to colour the body by (fields.py's element mean), named color_label."""
 
     mesh: Mesh
     states: np.ndarray
@@ -302,8 +302,8 @@ class Track:
         columns = lambda key: np.column_stack([result.column(f"{n}.{key}") for n in names])
         values, label = None, ""
         if color != "none":
-            label, of_f = COLOR_FIELDS[color]
-            values = np.array([of_f(deformation_gradients(mesh.vertices, x, mesh.triangles)) for x in result.states])
+            label, key = COLOR_FIELDS[color]
+            values = np.array([triangle_fields(mesh.vertices, x, mesh.triangles)[key] for x in result.states])
         return cls(mesh, result.states, columns("area_ratio"), columns("pressure"), result.column("tip_dy"), title,
                    ground, values, label)
 
@@ -327,9 +327,13 @@ def chamber_triangles(mesh: Mesh) -> np.ndarray:
     return np.concatenate(parts)
 
 
-def mesh_edges(triangles: np.ndarray, boundary_only: bool = False) -> np.ndarray:
-    """Unique undirected edges (e, 2) of a triangle list; boundary_only: those of one triangle only."""
-    edges = np.sort(np.vstack([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1)
+def mesh_edges(mesh: Mesh, boundary_only: bool = False) -> np.ndarray:
+    """Unique undirected edges (e, 2) of the element outlines: a quadratic triangle's sides are drawn as
+    two segments each, through their midside nodes; boundary_only: the edges of one element only (the
+    body's outline and the chamber walls)."""
+    ring = [0, 1, 2] if mesh.order == 1 else [0, 3, 1, 4, 2, 5]
+    t = mesh.triangles[:, ring]
+    edges = np.sort(np.stack([t, np.roll(t, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
     unique, counts = np.unique(edges, axis=0, return_counts=True)
     return unique[counts == 1] if boundary_only else unique
 
@@ -357,8 +361,8 @@ class FrameRenderer:
         if colored:
             values = np.concatenate([t.color.ravel() for t in colored])
             self.color_range = (float(values.min()), float(values.max()))
-        self._art = [(mesh_edges(t.mesh.triangles, boundary_only=t.color is not None), chamber_triangles(t.mesh))
-                     for t in tracks]
+        self._art = [(mesh_edges(t.mesh, boundary_only=t.color is not None), t.mesh.display_triangles(),
+                      chamber_triangles(t.mesh)) for t in tracks]
         # horizontal layout in normalised units: beam panels | colour bar | trace panel
         trace_w = 0.38 if trace else 0.0
         bar_w = COLORBAR_PX / self.width if colored else 0.0
@@ -404,16 +408,17 @@ class FrameRenderer:
         c = self.canvas
         c.begin()
         labels = []
-        for p, (track, (edges, chamber)) in enumerate(zip(self.tracks, self._art)):
+        for p, (track, (edges, faces, chamber)) in enumerate(zip(self.tracks, self._art)):
             x = self.to_canvas(p, track.states[i])
             if track.ground is not None:
                 ends = self.to_canvas(p, np.array([[self._lo[0], track.ground], [self._hi[0], track.ground]]))
                 c.segments(ends[None], GROUND, 3.0)
             if track.color is None:
-                c.triangles(x[track.mesh.triangles], FACE)
+                c.triangles(x[faces], FACE)
                 c.segments(x[edges], EDGE, 1.0)
-            else:
-                c.triangles(x[track.mesh.triangles], colormap(track.color[i], *self.color_range))
+            else:  # a quadratic element's four display triangles share its value (split_in_four's order)
+                c.triangles(x[faces], colormap(np.tile(track.color[i], len(faces) // len(track.color[i])),
+                                               *self.color_range))
                 c.segments(x[edges], OUTLINE, 1.0)
             c.triangles(x[chamber], CHAMBER_FILL)
             for loop in track.mesh.chambers:

@@ -21,6 +21,11 @@ def init(arch: str = "cpu") -> None:
     _current = arch
 
 
+def current_arch() -> str | None:
+    """The backend Taichi was initialised on (None before init)."""
+    return _current
+
+
 def ensure_initialised() -> None:
     """Initialise on the CPU if the caller has not chosen a backend yet."""
     if _current is None:

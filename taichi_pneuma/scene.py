@@ -18,7 +18,7 @@ import numpy as np
 from . import runtime
 from .effects import Effect
 from .errors import require, require_finite
-from .geometry import BeamGeometry, Geometry, Mesh, in_box, require_box, triangle_areas
+from .geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
 from .model import EnergyModel
 from .schedule import ChamberSchedule, Schedule, area_ramp
 from .terms import AreaChamber, Clamp, NeoHookean, PressureChamber
@@ -66,10 +66,10 @@ class ChamberControl:
         require_finite("stiffness", self.stiffness)
         require(self.stiffness > 0, f"chamber stiffness k = {self.stiffness!r} must be > 0")
 
-    def term(self, config, loop: np.ndarray, name: str) -> Chamber:
+    def term(self, config, loop: np.ndarray, name: str, order: int) -> Chamber:
         if self.schedule.control == "area":
-            return AreaChamber(config, loop, self.stiffness, name)
-        return PressureChamber(config, loop, name)
+            return AreaChamber(config, loop, self.stiffness, name, order)
+        return PressureChamber(config, loop, name, order)
 
 
 @dataclass(frozen=True)
@@ -139,11 +139,10 @@ class Scene:
                             energy_resolution=1e-12 * modulus * mesh.area)
         config = model.config
         elastic = model.add(NeoHookean(config, mesh.triangles, e, nu))
-        chambers = [model.add(control.term(config, loop, name))
+        chambers = [model.add(control.term(config, loop, name, mesh.order))
                     for control, loop, name in zip(self.controls, mesh.chambers, self.chamber_names)]
         model.add(Clamp(config, mesh.pinned, self.clamp_stiffness))
-        lumped_area = np.zeros(mesh.n_vertices)
-        np.add.at(lumped_area, mesh.triangles.ravel(), np.repeat(triangle_areas(mesh.vertices, mesh.triangles) / 3, 3))
+        lumped_area = mesh.nodal_areas()
         effects = {effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area)]
                    for effect in self.effects}
         return BuiltScene(self, mesh, model, elastic, chambers, effects)
@@ -167,9 +166,12 @@ class BuiltScene:
 
 def reference_scene(cy: float = 0.15, cx: float = 0.0, growth: float = 3.5, steps: int = 36,
                     youngs_modulus: float = 1e4, poisson_ratio: float = 0.45, chamber_stiffness: float = 1e5,
-                    max_area: float = 0.0012, chamber_points: int = 128) -> Scene:
-    """SPEC.md's scene: the clamped 3.5 x 0.8 beam, one ellipse chamber ramped in area from 1 to growth."""
-    beam = BeamGeometry(cx=cx, cy=cy, max_area=max_area, chamber_points=chamber_points)
+                    max_area: float = 0.0012, chamber_points: int = 128, order: int = 1,
+                    refinements: int = 0) -> Scene:
+    """SPEC.md's scene: the clamped 3.5 x 0.8 beam, one ellipse chamber ramped in area from 1 to growth;
+    order 2 meshes it with quadratic triangles, refinements splits every triangle in four that often."""
+    beam = BeamGeometry(cx=cx, cy=cy, max_area=max_area, chamber_points=chamber_points, order=order,
+                        refinements=refinements)
     return Scene(beam.general(), (ChamberControl(area_ramp(growth, steps), chamber_stiffness),), steps - 1,
                  Material(youngs_modulus, poisson_ratio), name=f"reference_cy{cy:+.2f}")
 

@@ -2,7 +2,7 @@
 
     name = "bidirectional"
     [body]       shape = "rectangle" (center, size) | "polygon" (points) | "union" (rectangles = [{center, size}, ...])
-    [mesh]       max_area
+    [mesh]       max_area, order = 1 (linear triangles) | 2 (quadratic)
     [material]   E, nu, regions = [{box = [x0, y0, x1, y1], E, nu}, ...]   (E, nu of a region default to the base)
     [clamp]      side = "left" | "right" | "bottom" | "top"  or  box = [x0, y0, x1, y1];  stiffness
     [[chambers]] name, shape = "ellipse" (center, semi_axes, points) | "rounded_rectangle" (center, size,
@@ -154,6 +154,7 @@ def read_scene(data: dict, name: str) -> Scene:
     body = read_body(top.table("body"))
     mesh = top.table("mesh", {})
     max_area = mesh.take("max_area", 0.0012, float)
+    order = mesh.take("order", 1, int)
     mesh.close()
     material, regions = read_material(top.table("material", None))
     clamp_t = top.table("clamp", {})
@@ -171,7 +172,7 @@ def read_scene(data: dict, name: str) -> Scene:
     effects = tuple(read_effect(key, effects_t.table(key)) for key in list(effects_t.data))
     effects_t.known |= set(effects_t.data)
     top.close()
-    geometry = build(top, lambda: Geometry(body, tuple((n, s) for n, s, _ in chambers), max_area, clamp))
+    geometry = build(top, lambda: Geometry(body, tuple((n, s) for n, s, _ in chambers), max_area, clamp, order))
     return build(top, lambda: Scene(geometry, tuple(c for _, _, c in chambers), increments, material, regions,
                                     clamp_stiffness, effects, scene_name))
 

@@ -52,6 +52,8 @@ def shape_data(shape) -> dict:
 def scene_data(scene) -> dict:
     """The scene as the data of a scene file (every key explicit), ready for TOML."""
     geometry = scene.geometry
+    require(geometry.refinements == 0, f"a geometry refined {geometry.refinements} times has no scene-file form "
+                                       f"(scene files have no refinements key)")
     chambers = []
     for (name, shape), control in zip(geometry.chambers, scene.controls):
         schedule = control.schedule
@@ -70,7 +72,7 @@ def scene_data(scene) -> dict:
     data = {
         "name": scene.name,
         "body": shape_data(geometry.body),
-        "mesh": {"max_area": geometry.max_area},
+        "mesh": {"max_area": geometry.max_area, "order": geometry.order},
         "material": material,
         "clamp": {**({"side": clamp.side} if clamp.side is not None else {"box": clamp.box}),
                   "stiffness": scene.clamp_stiffness},

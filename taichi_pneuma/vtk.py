@@ -4,12 +4,14 @@
     <out>/<stem>_vtk/<stem>_0000.vtu     step 0, 1, ... each written whole (output.write_atomic)
 
 The PVD is rewritten after every step, so a run that stops early leaves its finished steps readable.
-Each VTU holds the rest mesh (points padded with z = 0, linear triangles) and
+Each VTU holds the rest mesh (points padded with z = 0; linear triangles, or quadratic ones as VTK's
+6-node triangle, whose midside-node order 01, 12, 20 the mesh shares) and
 - point data: displacement (x, y, 0): ParaView's Warp By Vector with it shows the deformed body;
   chamber: the index (scene order) of the chamber whose wall the vertex is on, -1 elsewhere;
   contact_force (x, y, 0), summed over the contact terms, when the scene has contact;
-- cell data (fields.py): det_F, max_stretch, stress (Cauchy, 6 components in ParaView's symmetric-tensor
-  order XX, YY, ZZ, XY, YZ, XZ; ZZ the plane-strain out-of-plane stress) and von_mises;
+- cell data (fields.py: element means over the quadrature points): det_F, max_stretch, stress (Cauchy,
+  6 components in ParaView's symmetric-tensor order XX, YY, ZZ, XY, YZ, XZ; ZZ the plane-strain
+  out-of-plane stress) and von_mises (of that stress);
 - field data: the step's history row (per chamber <name>.command/.area/.area_ratio/.pressure, tip_dx,
   tip_dy, tip_rotation, solver figures), one value each.
 meshio 5.3 reads FieldData but does not write it: write_vtu adds the block (ASCII) to meshio's file.
@@ -76,7 +78,8 @@ class VtkSeries:
         point_data = {"displacement": pad3(positions - mesh.vertices), "chamber": self.chamber}
         if contact_force is not None:
             point_data["contact_force"] = pad3(contact_force)
-        grid = meshio.Mesh(pad3(mesh.vertices), [("triangle", mesh.triangles)], point_data=point_data,
+        cell_type = "triangle" if mesh.order == 1 else "triangle6"
+        grid = meshio.Mesh(pad3(mesh.vertices), [(cell_type, mesh.triangles)], point_data=point_data,
                            cell_data={"det_F": [fields["det_F"]], "max_stretch": [fields["max_stretch"]],
                                       "stress": [stress], "von_mises": [fields["von_mises"]]})
         path = self.folder / f"{self.stem}_{step.step:04d}.vtu"

@@ -170,12 +170,17 @@ def test_interactive_without_display_is_one_clear_error(tmp_path, capsys, monkey
 
 @pytest.fixture
 def xvfb_display(monkeypatch):
-    """A virtual X display (skips when Xvfb is not installed)."""
+    """A virtual X display on a free display number, ready when yielded (skips when Xvfb is not installed)."""
     import shutil
     if not shutil.which("Xvfb"):
         pytest.skip("Xvfb is not installed (apt-get install xvfb)")
-    proc = subprocess.Popen(["Xvfb", ":93", "-screen", "0", "800x600x24"], stderr=subprocess.DEVNULL)
-    monkeypatch.setenv("DISPLAY", ":93")
+    read_end, write_end = os.pipe()
+    proc = subprocess.Popen(["Xvfb", "-displayfd", str(write_end), "-screen", "0", "800x600x24"],
+                            pass_fds=(write_end,), stderr=subprocess.DEVNULL)
+    os.close(write_end)
+    with os.fdopen(read_end) as ready:
+        number = ready.readline().strip()  # Xvfb writes its display number once it accepts connections
+    monkeypatch.setenv("DISPLAY", f":{number}")
     yield
     proc.terminate()
     proc.wait()

@@ -1,6 +1,8 @@
-"""What accuracy costs in time: timing breakdown, solver backends, accuracy-vs-time study, scaling.
+"""What accuracy costs in time: start-up, timing breakdown, solver backends, accuracy-vs-time study (P1 and P2),
+near-incompressible convergence, scaling.
 
-    python -m taichi_pneuma.apps.bench [--sections breakdown,backends,accuracy,scaling] [--out benchmarks/results]
+    python -m taichi_pneuma.apps.bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling]
+                                       [--out benchmarks/results]
 
 Every section prints a Markdown table and saves it (bench_<section>.md, .json) under --out, headed
 with the machine and date; the accuracy section also plots error against wall time (log-log, one
@@ -12,8 +14,11 @@ import argparse
 import collections
 import os
 import platform
+import re
 import resource
+import subprocess
 import sys
+import tempfile
 import time
 from datetime import date
 from pathlib import Path
@@ -26,10 +31,11 @@ from ..linsolve import BACKENDS, FixedPattern, make_backend
 from ..newton import NewtonOptions
 from ..output import prepare_directory, save_json, save_text, write_atomic
 from ..scene import reference_scene
+from ..scenefile import load_scene
 from ..schedule import Schedule, area_ramp
 from ..simulate import run_schedule
 
-SECTIONS = ("breakdown", "backends", "accuracy", "scaling")
+SECTIONS = ("startup", "breakdown", "backends", "accuracy", "incompressible", "scaling")
 REFERENCE_TUTORIAL_SECONDS = 25.0  # SPEC.md: the NumPy/SciPy tutorial's cy = 0.15 ramp on this kind of machine
 PHASES = ("gradient", "hessian", "assemble", "factorize", "solve", "line_search")
 
@@ -49,13 +55,73 @@ def warm_up(built, options=None) -> None:
     run_schedule(built, Schedule(1, (area_ramp(1.01, 2),)), options)
 
 
-def timed_ramp(max_area=0.0012, steps=36, growth=3.5, options=None, cy=0.15):
-    """Build, warm the kernels up on a tiny ramp, then time the ramp; return (built, result, seconds)."""
-    built = reference_scene(cy, growth=growth, steps=steps, max_area=max_area).build()
+def timed_ramp(max_area=0.0012, steps=36, growth=3.5, options=None, cy=0.15, **scene):
+    """Build, warm the kernels up on a tiny ramp, then time the ramp; return (built, result, seconds).
+    scene: further reference_scene arguments (order, refinements, poisson_ratio)."""
+    built = reference_scene(cy, growth=growth, steps=steps, max_area=max_area, **scene).build()
     warm_up(built, options)
     start = time.perf_counter()
     result = run_schedule(built, options=options)
     return built, result, time.perf_counter() - start
+
+
+MAIN_COMMAND = ("--cy", "0.15", "--no-video")
+FIRST_INCREMENT = re.compile(r"step\s+1/")
+SCENES_DIR = Path(__file__).resolve().parents[2] / "assets" / "scenes"
+
+
+def main_command_process(cache_dir: str, out: str) -> tuple[float, float]:
+    """Run the main command (--no-video) in a fresh process with Taichi's offline kernel cache in cache_dir;
+    return (seconds until its first increment's line is printed, seconds until the process exits)."""
+    env = {**os.environ, "TI_OFFLINE_CACHE_FILE_PATH": cache_dir, "PYTHONUNBUFFERED": "1"}
+    command = [sys.executable, "-m", "taichi_pneuma.apps.inflate", *MAIN_COMMAND, "--out", out]
+    start = time.perf_counter()
+    first = float("nan")
+    with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env) as proc:
+        for line in proc.stdout:
+            if first != first and FIRST_INCREMENT.search(line):
+                first = time.perf_counter() - start
+    require(proc.returncode == 0, f"the main command exited with {proc.returncode}")
+    return first, time.perf_counter() - start
+
+
+def first_versus_typical(result) -> tuple[float, float]:
+    """(seconds of increments 1 and 2, median seconds of two increments over the rest of the ramp)."""
+    seconds = result.column("seconds")
+    return float(seconds[1:3].sum()), 2.0 * float(np.median(seconds[3:]))
+
+
+def startup() -> tuple[str, dict]:
+    """Kernel compilation at start-up. The main command's whole process, and its time to the first
+    increment, from an empty kernel cache (as on a fresh machine) and then from the cache it left; and,
+    in this process, three scenes in turn that differ in mesh size, E, nu, k and number of chambers:
+    their build time and their first two increments against two typical ones."""
+    rows, data = [], {"process": {}, "scenes": []}
+    with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as out:
+        for label in ("empty kernel cache", "warm kernel cache"):
+            first, whole = main_command_process(cache, out)
+            data["process"][label] = {"first_increment_s": first, "whole_s": whole}
+            rows.append([f"main command `{' '.join(MAIN_COMMAND)}`, {label}", f"{whole:.2f}", f"{first:.2f}",
+                         f"{REFERENCE_TUTORIAL_SECONDS / whole:.1f}x faster than the tutorial's ramp alone"])
+    table = markdown(["whole process", "s", "to first increment (s)", "against SPEC.md's 25 s reference"], rows)
+    scenes = [("reference cy=+0.15 (first in process)", lambda: reference_scene(0.15)),
+              ("cy=+0.10, max area 0.002, E 2e4, nu 0.4, k 2e5",
+               lambda: reference_scene(0.10, youngs_modulus=2e4, poisson_ratio=0.4, chamber_stiffness=2e5,
+                                       max_area=0.002)),
+              ("bidirectional.toml (2 chambers)", lambda: load_scene(SCENES_DIR / "bidirectional.toml"))]
+    rows = []
+    for label, make in scenes:
+        start = time.perf_counter()
+        built = make().build()
+        build_seconds = time.perf_counter() - start
+        first, typical = first_versus_typical(run_schedule(built))
+        data["scenes"].append({"scene": label, "vertices": built.mesh.n_vertices, "build_s": build_seconds,
+                               "first_two_increments_s": first, "two_typical_increments_s": typical})
+        rows.append([label, built.mesh.n_vertices, f"{1e3 * build_seconds:.0f}", f"{1e3 * first:.0f}",
+                     f"{1e3 * typical:.0f}", f"{first / typical:.1f}x"])
+    table += "\n" + markdown(["scene, in one process", "vertices", "build (ms)", "increments 1-2 (ms)",
+                               "two typical increments (ms)", "ratio"], rows)
+    return table, data
 
 
 def breakdown() -> tuple[str, dict]:
@@ -119,35 +185,86 @@ def backends() -> tuple[str, dict]:
     return f"matrix: {matrix.shape[0]} DOFs, {matrix.nnz} non-zeros\n\n" + markdown(header, rows), data
 
 
+MESHES = {1: (0.005, 0.0025, 0.0012, 0.0006, 0.0003, 0.00015), 2: (0.02, 0.01, 0.005, 0.0025, 0.0012)}
+STUDY_NU = (0.45, 0.499)
+
+
+def converged_tip(poisson_ratio: float, levels: int = 3) -> dict:
+    """The reference: P2 on the reference mesh (max area 0.0012) refined uniformly 0 .. levels-1 times, with
+    10 increments (the area-controlled equilibrium does not depend on the path: see the knobs below).
+    Returns the tips per level, the observed order p = log2(|f0 - f1| / |f1 - f2|) and the finest tip."""
+    tips, nodes = [], []
+    for level in range(levels):
+        built, result, _ = timed_ramp(steps=11, order=2, refinements=level, poisson_ratio=poisson_ratio)
+        tips.append(result.tip_deflection)
+        nodes.append(built.mesh.n_vertices)
+        print(f"  reference nu={poisson_ratio}: level {level}, {nodes[-1]} nodes, tip {tips[-1]:+.6f}",
+              file=sys.stderr, flush=True)
+    order = float(np.log2(abs(tips[0] - tips[1]) / abs(tips[1] - tips[2])))
+    return {"tips": tips, "nodes": nodes, "observed_order": order, "tip": tips[-1],
+            "remaining_error_estimate": abs(tips[2] - tips[1]) / (2 ** order - 1) / abs(tips[-1])}
+
+
 def accuracy(out: Path) -> tuple[str, dict]:
-    """Error in tip deflection, final area and peak pressure against a converged reference, and wall time,
-    for each knob in turn (the others at their defaults). Mesh errors are measured against the finest mesh;
-    tolerance and increment errors against the default mesh solved tightly (tol 1e-9, 100 increments).
-    (1e-10 is below what float64 attains here: the rest state of the finest mesh already has a residual
-    of ~2e-10.)"""
-    knobs = {
-        "max triangle area": [("mesh", a, dict(max_area=a)) for a in (0.01, 0.005, 0.0025, 0.0012, 0.0006, 0.0003)],
-        "Newton tolerance": [("tol", t, dict(options=NewtonOptions(tol=t))) for t in (1e-2, 1e-3, 1e-4, 1e-6, 1e-8, 1e-9)],
-        "ramp increments": [("steps", n, dict(steps=n + 1)) for n in (5, 10, 20, 35, 50, 100)],
-    }
-    references = {"mesh": timed_ramp(max_area=0.00015, options=NewtonOptions(tol=1e-9))[1],
-                  "tight": timed_ramp(steps=101, options=NewtonOptions(tol=1e-9))[1]}
-    rows, data = [], collections.defaultdict(list)
+    """What accuracy costs: linear (P1) and quadratic (P2) triangles at several mesh densities, nu = 0.45
+    and 0.499, error of the tip deflection against a converged P2 reference (converged_tip) and wall time
+    of the 35-increment ramp; then the Newton tolerance and the number of increments on the default P1
+    mesh, against the same mesh solved tightly (tol 1e-9, 100 increments). Plots error against time."""
+    rows, data = [], {"elements": collections.defaultdict(list), "references": {}}
+    for nu in STUDY_NU:
+        reference = converged_tip(nu)
+        data["references"][nu] = reference
+        for order, areas in MESHES.items():
+            for max_area in areas:
+                built, result, seconds = timed_ramp(max_area=max_area, order=order, poisson_ratio=nu)
+                error = abs(result.tip_deflection / reference["tip"] - 1)
+                data["elements"][f"P{order}, nu = {nu}"].append(
+                    {"value": max_area, "nodes": built.mesh.n_vertices, "seconds": seconds, "tip": error})
+                rows.append([f"P{order}, nu = {nu}", f"{max_area:g}", built.mesh.n_vertices, f"{1e3 * seconds:.0f}",
+                             f"{result.tip_deflection:+.5f}", f"{100 * error:.2f} %"])
+    table = markdown(["elements", "max area", "nodes", "ramp (ms)", "tip dy", "tip error"], rows)
+    table += "\n" + markdown(["nu", "P2 reference tips, levels 0 / 1 / 2 (nodes)", "observed order",
+                              "estimated error of the finest"],
+                             [[nu, " / ".join(f"{t:+.5f} ({n})" for t, n in zip(r["tips"], r["nodes"])),
+                               f"{r['observed_order']:.2f}", f"{100 * r['remaining_error_estimate']:.3f} %"]
+                              for nu, r in data["references"].items()])
+    knobs = {"Newton tolerance": [(t, dict(options=NewtonOptions(tol=t))) for t in (1e-2, 1e-4, 1e-6, 1e-9)],
+             "ramp increments": [(n, dict(steps=n + 1)) for n in (5, 10, 35, 100)]}
+    tight = timed_ramp(steps=101, options=NewtonOptions(tol=1e-9))[1].tip_deflection
+    rows = []
     for knob, runs in knobs.items():
-        for kind, value, kwargs in runs:
+        for value, kwargs in runs:
             _, result, seconds = timed_ramp(**kwargs)
-            reference = references["mesh" if kind == "mesh" else "tight"]
-            errors = {
-                "tip": abs(result.tip_deflection / reference.tip_deflection - 1),
-                "area": abs(result.column("main.area")[-1] / reference.column("main.area")[-1] - 1),
-                "pressure": abs(result.peak_pressure / reference.peak_pressure - 1),
-            }
-            data[knob].append({"value": value, "seconds": seconds, **errors})
-            rows.append([knob, f"{value:g}", f"{1e3 * seconds:.0f}", f"{errors['tip']:.1e}", f"{errors['area']:.1e}",
-                         f"{errors['pressure']:.1e}"])
-    table = markdown(["knob", "value", "ramp (ms)", "tip error", "area error", "peak p error"], rows)
-    plot_accuracy(data, out / "bench_accuracy.png")
-    return table, dict(data)
+            rows.append([knob, f"{value:g}", f"{1e3 * seconds:.0f}", f"{abs(result.tip_deflection / tight - 1):.1e}"])
+    table += "\n" + markdown(["knob (P1, max area 0.0012)", "value", "ramp (ms)", "tip error vs tight solve"], rows)
+    plot_accuracy(data["elements"], out / "bench_accuracy.png")
+    return table, {"elements": dict(data["elements"]), "references": data["references"]}
+
+
+LOCKING_NU = (0.45, 0.49, 0.499, 0.4999)
+LOCKING_BASE = {1: 0.0012, 2: 0.005}
+
+
+def incompressible() -> tuple[str, dict]:
+    """Near incompressibility: the tip deflection of P1 (base max area 0.0012) and P2 (base 0.005) meshes
+    refined uniformly 0, 1, 2 times (10 increments to 3.5x), at nu = 0.45 ... 0.4999, with the observed
+    order p = log2(|f0 - f1| / |f1 - f2|) and the change between the two finest levels."""
+    rows, data = [], []
+    for nu in LOCKING_NU:
+        for order, max_area in LOCKING_BASE.items():
+            runs = [timed_ramp(max_area=max_area, steps=11, order=order, refinements=level, poisson_ratio=nu)
+                    for level in range(3)]
+            tips = [result.tip_deflection for _, result, _ in runs]
+            nodes = [built.mesh.n_vertices for built, _, _ in runs]
+            p = float(np.log2(abs(tips[0] - tips[1]) / abs(tips[1] - tips[2])))
+            record = {"nu": nu, "order": order, "nodes": nodes, "tips": tips, "observed_order": p,
+                      "last_change": abs(tips[2] / tips[1] - 1), "seconds": [s for _, _, s in runs]}
+            data.append(record)
+            print(f"  incompressible: {record}", file=sys.stderr, flush=True)
+            rows.append([nu, f"P{order}", " / ".join(f"{t:+.4f} ({n})" for t, n in zip(tips, nodes)), f"{p:.2f}",
+                         f"{100 * record['last_change']:.2f} %"])
+    header = ["nu", "elements", "tip dy, levels 0 / 1 / 2 (nodes)", "observed order", "change level 1 -> 2"]
+    return markdown(header, rows), {"runs": data}
 
 
 def plot_accuracy(data: dict, path: Path) -> None:
@@ -163,14 +280,14 @@ def plot_accuracy(data: dict, path: Path) -> None:
     fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=100)
     for knob, runs in data.items():
         times, errors = [r["seconds"] for r in runs], [max(r["tip"], 1e-12) for r in runs]
-        ax.loglog(times, errors, "o-", label=knob)  # in knob order, each point labelled with its value
+        ax.loglog(times, errors, "o-" if knob.startswith("P2") else "s--", label=knob)  # points labelled by max area
         for r, t, e in zip(runs, times, errors):
             ax.annotate(f"{r['value']:g}", (t, e), textcoords="offset points", xytext=(4, 3), fontsize=7)
     ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax.axhline(0.01, color="grey", lw=0.8, ls="--")
     ax.set_xlabel("wall time of the 35-increment ramp (s)")
     ax.set_ylabel("relative tip-deflection error")
-    ax.set_title("Accuracy versus time (cy = +0.15, CPU)")
+    ax.set_title("Tip error versus time: linear and quadratic triangles (cy = +0.15, CPU)")
     ax.legend()
     fig.tight_layout()
     write_atomic(path, lambda tmp: fig.savefig(tmp, format="png"))
@@ -213,7 +330,8 @@ def main(argv: list[str] | None = None) -> int:
     heading = f"Machine: {machine()}, Taichi arch {args.arch}\n\n"
     for section in sections:
         print(f"## {section}", flush=True)
-        table, data = accuracy(out) if section == "accuracy" else {"breakdown": breakdown, "backends": backends,
+        table, data = accuracy(out) if section == "accuracy" else {"startup": startup, "breakdown": breakdown,
+                                                                    "backends": backends, "incompressible": incompressible,
                                                                     "scaling": scaling}[section]()
         print(heading + table, flush=True)
         save_text(out / f"bench_{section}.md", heading + table)

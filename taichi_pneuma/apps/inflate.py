@@ -34,8 +34,9 @@ from ..schedule import area_ramp
 from ..simulate import MAX_CUTS, RampFailed
 from ..vtk import VtkSeries
 
-# --quality presets: (max triangle area, Newton tolerance); see the README's accuracy-versus-time study
-QUALITY = {"draft": (0.005, 1e-4), "default": (BeamGeometry.max_area, NewtonOptions.tol), "high": (0.0003, 1e-9)}
+# --quality presets: (max triangle area, element order, Newton tolerance); see the README's accuracy study
+QUALITY = {"draft": (0.005, 1, 1e-4), "default": (BeamGeometry.max_area, 1, NewtonOptions.tol),
+           "high": (0.005, 2, 1e-6), "accurate": (0.0012, 2, 1e-9)}
 
 
 def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
@@ -47,9 +48,11 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--nu", type=float, default=0.45, help="Poisson's ratio, in (-1, 0.5)")
     p.add_argument("--k", type=float, default=1e5, help="chamber stiffness (area control penalty)")
     p.add_argument("--quality", default="default", choices=list(QUALITY),
-                   help="mesh density and Newton tolerance, read off the accuracy-vs-time study: "
-                        + "; ".join(f"{k}: max area {a:g}, tol {t:g}" for k, (a, t) in QUALITY.items()))
+                   help="mesh density, element order and Newton tolerance, read off the accuracy-vs-time study: "
+                        + "; ".join(f"{k}: max area {a:g}, order {o}, tol {t:g}" for k, (a, o, t) in QUALITY.items()))
     p.add_argument("--max-area", type=float, default=None, help="Triangle's maximum triangle area (overrides --quality)")
+    p.add_argument("--order", type=int, default=None, choices=(1, 2),
+                   help="1: linear triangles, 2: quadratic triangles (overrides --quality)")
     p.add_argument("--tol", type=float, default=None,
                    help="Newton tolerance on |gradient| / force scale (overrides --quality)")
     p.add_argument("--max-iterations", type=int, default=40, help="Newton iterations per solve before it counts as failed")
@@ -77,7 +80,7 @@ def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.inflate", description=__doc__.split("\n")[0],
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--scene", help="a scene file (TOML); the reference-beam flags (--cy --cx --growth --steps --E --nu "
-                                   "--k --max-area) are then ignored")
+                                   "--k --max-area --order) are then ignored")
     p.add_argument("--cy", type=float, default=0.15, help="chamber centre height (above the neutral axis curls down)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="change a dotted scene-file key, e.g. --set chambers[0].center[1]=0.1 --set material.E=2e4 "
@@ -110,8 +113,9 @@ def newton_options(args: argparse.Namespace) -> NewtonOptions:
 
 def check_flags(args: argparse.Namespace) -> None:
     """Validate the solver flags; --max-area and --tol not given take their values from --quality."""
-    max_area, tol = QUALITY[args.quality]
+    max_area, order, tol = QUALITY[args.quality]
     args.max_area = max_area if args.max_area is None else args.max_area
+    args.order = order if args.order is None else args.order
     args.tol = tol if args.tol is None else args.tol
     for name in ("cx", "growth", "E", "nu", "k", "max_area", "tol"):
         require_finite(f"--{name.replace('_', '-')}", getattr(args, name))
@@ -124,15 +128,16 @@ def scene_for(args: argparse.Namespace, cy: float) -> Scene:
     """The validated reference scene of the flags with its chamber at height cy (PneumaInputError on bad flags)."""
     check_flags(args)
     return reference_scene(require_finite("--cy", cy), args.cx, args.growth, args.steps, args.E, args.nu, args.k,
-                           args.max_area)
+                           args.max_area, order=args.order)
 
 
 def build(scene: Scene):
     """Mesh the scene, build its terms and print the mesh size, the terms and each chamber's rest area."""
     built = scene.build()
     mesh = built.mesh
-    print(f"scene {scene.name}: mesh {mesh.n_vertices} vertices, {mesh.n_triangles} triangles; "
-          f"clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
+    kind = "triangles" if mesh.order == 1 else "quadratic triangles"
+    print(f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
+          f"{mesh.n_triangles} {kind}; clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
     for chamber in built.chambers:
         print(f"chamber {chamber.chamber_name}: {chamber.control} control, wall {chamber.n_wall} vertices, "
               f"rest area {chamber.rest_area:.3f}")

@@ -1,6 +1,7 @@
 """Energy terms. A scene's total energy is the sum of the terms it names.
 
-Every term reads the shared position field ``x`` (n, vec2, float64) and offers
+Every term reads the model's Configuration (rest positions X and displacements u, (n, 2) NumPy
+arrays; x = X + u) and offers
 
     energy() -> float                     its energy at the current x
     gradient() -> (n, 2) array            dE/dx

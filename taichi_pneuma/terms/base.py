@@ -1,15 +1,53 @@
-"""The common shape of an energy term and the DOF numbering helper."""
+"""The common shape of an energy term, the DOF numbering helper, and the kernel argument types.
+
+Kernels are module-level functions of arrays: mesh data, per-element parameters, the rest positions
+X and the displacements u arrive as `ti.types.ndarray` arguments (NumPy arrays on the caller's side),
+scalars as runtime arguments. Taichi's compile key holds an ndarray's dtype and ndim, not its shape,
+so a kernel is compiled once per process whatever the mesh, material or scene.
+"""
 
 import math
 
 import numpy as np
 import taichi as ti
 
+VEC2 = ti.types.vector(2, ti.f64)
+Vec2s = ti.types.ndarray(dtype=VEC2, ndim=1)  # (n, 2) float64: positions, displacements, forces
+Scalars = ti.types.ndarray(dtype=ti.f64, ndim=1)  # (m,) float64
+Table = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (m, k) float64: per-element Hessian blocks
+Indices = ti.types.ndarray(dtype=ti.i32, ndim=1)  # (m,) int32 vertex indices
+Triples = ti.types.ndarray(dtype=ti.types.vector(3, ti.i32), ndim=1)  # (m, 3) int32 vertex triples
+
 
 def vertex_dofs(vertices: np.ndarray) -> np.ndarray:
     """Interleaved DOF indices [2v0, 2v0+1, 2v1, 2v1+1, ...] of the given vertices."""
     vertices = np.asarray(vertices, dtype=np.int64)
     return np.column_stack([2 * vertices, 2 * vertices + 1]).ravel()
+
+
+def block_pattern(blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, cols) of dense 2k x 2k Hessian blocks, one per row of `blocks` (m, k) vertex indices,
+    each block stored row-major: entry 2k a + b of block e is (dof a, dof b) of its vertices."""
+    m, k = blocks.shape
+    dofs = vertex_dofs(blocks.ravel()).reshape(m, 2 * k)
+    return np.repeat(dofs, 2 * k, axis=1).ravel(), np.tile(dofs, (1, 2 * k)).ravel()
+
+
+def int32s(values) -> np.ndarray:
+    """A contiguous int32 copy of index data, as the kernels take it."""
+    return np.ascontiguousarray(values, dtype=np.int32)
+
+
+@ti.func
+def position(rest: ti.template(), u: ti.template(), i):
+    """Current position x_i = X_i + u_i."""
+    return rest[i] + u[i]
+
+
+@ti.func
+def edge(rest: ti.template(), u: ti.template(), i, j):
+    """x_j - x_i, formed from rest and displacement differences so short edges keep their digits."""
+    return (rest[j] - rest[i]) + (u[j] - u[i])
 
 
 @ti.func
@@ -33,9 +71,22 @@ def quadratic_roots(c0, c1, c2):
     return roots
 
 
+@ti.func
+def smallest_positive_root(c0, c1, c2):
+    """The smallest root t > 0 of c0 + c1 t + c2 t^2 (inf if none)."""
+    roots = quadratic_roots(c0, c1, c2)
+    root = ti.math.inf
+    for r in ti.static(range(2)):
+        if roots[r] > 0:
+            root = ti.min(root, roots[r])
+    return root
+
+
 class Term:
     """Defaults for the optional duties: no sparse Hessian, no rank-1 part, no step bound.
 
+    A term holds the model's Configuration (config.rest, config.u: (n, 2) NumPy arrays) and its own
+    data as NumPy arrays, and evaluates itself by calling module-level kernels on them.
     reports_contact: whether -gradient() is a contact force the history reports.
     """
 

@@ -28,7 +28,9 @@ segment (a quadratic in the step fraction), the continuous collision check.
 import numpy as np
 import taichi as ti
 
-from .base import Term, quadratic_roots, vertex_dofs
+from .base import Indices, Table, Term, Triples, Vec2s, block_pattern, edge, int32s, position, quadratic_roots
+
+Vec6 = ti.types.vector(6, ti.f64)
 
 
 @ti.func
@@ -44,7 +46,44 @@ def barrier(d, dhat, kappa):
     return b, db, ddb
 
 
-@ti.data_oriented
+@ti.kernel
+def ground_energy(rest: Vec2s, u: Vec2s, verts: Indices, height: ti.f64, dhat: ti.f64,
+                  kappa: ti.f64) -> tuple[ti.f64, ti.f64]:
+    """(sum of the barriers over the vertices above the ground, smallest distance to it)."""
+    total = 0.0
+    nearest = ti.math.inf
+    for k in range(verts.shape[0]):
+        d = position(rest, u, verts[k])[1] - height
+        ti.atomic_min(nearest, d)
+        if d > 0:
+            total += barrier(d, dhat, kappa)[0]
+    return total, nearest
+
+
+@ti.kernel
+def ground_derivatives(rest: Vec2s, u: Vec2s, verts: Indices, height: ti.f64, dhat: ti.f64, kappa: ti.f64,
+                       gradient: Vec2s, hessian: ti.types.ndarray(dtype=ti.f64, ndim=1)):
+    """gradient = dE/dx (zero off the listed vertices); hessian[k] = b''(d_k), the y-y entry of vertex k."""
+    for v in range(gradient.shape[0]):
+        gradient[v] = ti.Vector([0.0, 0.0])
+    for k in range(verts.shape[0]):
+        d = position(rest, u, verts[k])[1] - height
+        _, db, ddb = barrier(d, dhat, kappa)
+        gradient[verts[k]] = ti.Vector([0.0, db])
+        hessian[k] = ddb
+
+
+@ti.kernel
+def ground_step(rest: Vec2s, u: Vec2s, dx: Vec2s, verts: Indices, height: ti.f64) -> ti.f64:
+    """Smallest alpha > 0 at which a listed vertex moving along dx reaches the ground (inf if none)."""
+    bound = ti.math.inf
+    for k in range(verts.shape[0]):
+        dy = dx[verts[k]][1]
+        if dy < 0:
+            ti.atomic_min(bound, (position(rest, u, verts[k])[1] - height) / -dy)
+    return bound
+
+
 class GroundContact(Term):
     """Barrier keeping the given vertices above the line y = height."""
 
@@ -54,63 +93,31 @@ class GroundContact(Term):
     def __init__(self, config, vertices: np.ndarray, height: float, dhat: float, stiffness: float):
         self.config = config
         self.height, self.dhat, self.kappa = float(height), float(dhat), float(stiffness)
-        self.n = len(vertices)
-        self.verts = ti.field(ti.i32, self.n)
-        self.verts.from_numpy(np.asarray(vertices, dtype=np.int32))
-        self.force = ti.Vector.field(2, ti.f64, config.n_vertices)
-        self.hess = ti.field(ti.f64, self.n)
-        self.dx = ti.Vector.field(2, ti.f64, config.n_vertices)
-        self.reduction = ti.field(ti.f64, ())
+        self.verts = int32s(vertices)
         self._dofs = 2 * np.asarray(vertices, dtype=np.int64) + 1
 
-    @ti.kernel
-    def _energy(self) -> ti.f64:
-        total = 0.0
-        self.reduction[None] = ti.math.inf
-        for k in range(self.n):
-            d = self.config.x(self.verts[k])[1] - self.height
-            ti.atomic_min(self.reduction[None], d)
-            if d > 0:
-                total += barrier(d, self.dhat, self.kappa)[0]
-        return total
-
     def energy(self) -> float:
-        total = self._energy()
-        return total if self.reduction[None] > 0 else np.inf
+        total, nearest = ground_energy(self.config.rest, self.config.u, self.verts, self.height, self.dhat, self.kappa)
+        return total if nearest > 0 else np.inf
 
-    @ti.kernel
-    def _compute(self):
-        for v in self.force:
-            self.force[v] = ti.Vector([0.0, 0.0])
-        for k in range(self.n):
-            d = self.config.x(self.verts[k])[1] - self.height
-            _, db, ddb = barrier(d, self.dhat, self.kappa)
-            self.force[self.verts[k]] = ti.Vector([0.0, db])
-            self.hess[k] = ddb
+    def _derivatives(self) -> tuple[np.ndarray, np.ndarray]:
+        gradient, hessian = np.empty_like(self.config.u), np.empty(len(self.verts))
+        ground_derivatives(self.config.rest, self.config.u, self.verts, self.height, self.dhat, self.kappa,
+                           gradient, hessian)
+        return gradient, hessian
 
     def gradient(self) -> np.ndarray:
-        self._compute()
-        return self.force.to_numpy()
+        return self._derivatives()[0]
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         return self._dofs, self._dofs
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
-        self._compute()
-        return self.hess.to_numpy()
-
-    @ti.kernel
-    def _step_bound(self):
-        self.reduction[None] = ti.math.inf
-        for k in range(self.n):
-            dy = self.dx[self.verts[k]][1]
-            if dy < 0:
-                ti.atomic_min(self.reduction[None], (self.config.x(self.verts[k])[1] - self.height) / -dy)
+        return self._derivatives()[1]
 
     def max_step(self, dx: np.ndarray) -> float:
-        self.dx.from_numpy(dx)
-        self._step_bound()
-        return float(self.reduction[None])
+        return ground_step(self.config.rest, self.config.u, np.ascontiguousarray(dx, dtype=np.float64), self.verts,
+                           self.height)
 
 
 @ti.func
@@ -134,7 +141,111 @@ def point_point(r, slot: ti.template()):
     return r.norm_sqr(), g, H
 
 
-@ti.data_oriented
+@ti.func
+def squared_distance(rest: ti.template(), u: ti.template(), pairs: ti.template(), q):
+    """s = d^2 of pair q = (p, a, b) and its gradient (6) and Hessian (6 x 6) over (p, a, b)."""
+    idx = pairs[q]
+    p, a, b = position(rest, u, idx[0]), position(rest, u, idx[1]), position(rest, u, idx[2])
+    e = edge(rest, u, idx[1], idx[2])
+    w = edge(rest, u, idx[1], idx[0])
+    L = e.norm_sqr()
+    t = w.dot(e) / L
+    s = 0.0
+    g = ti.Vector.zero(ti.f64, 6)
+    H = ti.Matrix.zero(ti.f64, 6, 6)
+    if t <= 0.0:
+        s, g, H = point_point(p - a, 1)
+    elif t >= 1.0:
+        s, g, H = point_point(p - b, 2)
+    else:
+        c = e.cross(w)
+        s = c * c / L
+        dc_p = perp(e)
+        dc_b = ti.Vector([w[1], -w[0]])
+        dc = ti.Vector([dc_p[0], dc_p[1], -dc_p[0] - dc_b[0], -dc_p[1] - dc_b[1], dc_b[0], dc_b[1]])
+        dL = ti.Vector([0.0, 0.0, -2.0 * e[0], -2.0 * e[1], 2.0 * e[0], 2.0 * e[1]])
+        g = 2.0 * c / L * dc - c * c / (L * L) * dL
+        # d2c: c = b x p + a x b + p x a; d2(u x v)/du dv = [[0, 1], [-1, 0]]
+        d2c = ti.Matrix.zero(ti.f64, 6, 6)
+        d2L = ti.Matrix.zero(ti.f64, 6, 6)
+        for m, n in ti.static(((2, 0), (1, 2), (0, 1))):  # (b, p), (a, b), (p, a) as vertex slots
+            d2c[2 * m, 2 * n + 1] += 1.0
+            d2c[2 * m + 1, 2 * n] -= 1.0
+            d2c[2 * n + 1, 2 * m] += 1.0
+            d2c[2 * n, 2 * m + 1] -= 1.0
+        for k in ti.static(range(2)):
+            d2L[2 + k, 2 + k] = 2.0
+            d2L[4 + k, 4 + k] = 2.0
+            d2L[2 + k, 4 + k] = -2.0
+            d2L[4 + k, 2 + k] = -2.0
+        cross_terms = dc.outer_product(dL) + dL.outer_product(dc)
+        H = (2.0 / L * dc.outer_product(dc) + 2.0 * c / L * d2c - 2.0 * c / (L * L) * cross_terms
+             + 2.0 * c * c / (L * L * L) * dL.outer_product(dL) - c * c / (L * L) * d2L)
+    return s, g, H
+
+
+@ti.kernel
+def self_contact_energy(rest: Vec2s, u: Vec2s, pairs: Triples, dhat: ti.f64,
+                        kappa: ti.f64) -> tuple[ti.f64, ti.f64]:
+    """(sum of the barriers over the pairs at positive distance, smallest squared distance)."""
+    total = 0.0
+    nearest = ti.math.inf
+    for q in range(pairs.shape[0]):
+        s, _grad, _hess = squared_distance(rest, u, pairs, q)
+        ti.atomic_min(nearest, s)
+        if s > 0:
+            total += barrier(ti.sqrt(s), dhat, kappa)[0]
+    return total, nearest
+
+
+@ti.kernel
+def self_contact_derivatives(rest: Vec2s, u: Vec2s, pairs: Triples, dhat: ti.f64, kappa: ti.f64, exact: ti.i32,
+                             gradient: Vec2s, hessian: Table):
+    """gradient = dE/dx; hessian[q] = the 6 x 6 block of pair q, row-major (Gauss-Newton part unless exact)."""
+    for v in range(gradient.shape[0]):
+        gradient[v] = ti.Vector([0.0, 0.0])
+    for q in range(pairs.shape[0]):
+        s, gs, Hs = squared_distance(rest, u, pairs, q)
+        d = ti.sqrt(s)
+        K = ti.Matrix.zero(ti.f64, 6, 6)
+        if d < dhat:
+            _, db, ddb = barrier(d, dhat, kappa)
+            gd = gs / (2.0 * d)
+            f = db * gd
+            idx = pairs[q]
+            for k in ti.static(range(3)):
+                gradient[idx[k]] += ti.Vector([f[2 * k], f[2 * k + 1]])
+            K = ddb * gd.outer_product(gd)
+            if exact:
+                K += db * (Hs / (2.0 * d) - gs.outer_product(gs) / (4.0 * d * d * d))
+        for r in ti.static(range(6)):
+            for c in ti.static(range(6)):
+                hessian[q, 6 * r + c] = K[r, c]
+
+
+@ti.kernel
+def self_contact_step(rest: Vec2s, u: Vec2s, dx: Vec2s, pairs: Triples) -> ti.f64:
+    """Smallest alpha > 0 at which a point becomes collinear with a non-incident wall edge, on the edge."""
+    bound = ti.math.inf
+    for q in range(pairs.shape[0]):
+        idx = pairs[q]
+        e0 = edge(rest, u, idx[1], idx[2])
+        w0 = edge(rest, u, idx[1], idx[0])
+        de = dx[idx[2]] - dx[idx[1]]
+        dw = dx[idx[0]] - dx[idx[1]]
+        # cross(e0 + t de, w0 + t dw) = c0 + c1 t + c2 t^2
+        roots = quadratic_roots(e0.cross(w0), e0.cross(dw) + de.cross(w0), de.cross(dw))
+        for r in ti.static(range(2)):
+            t = roots[r]
+            if t >= 0 and t < ti.math.inf:
+                e = e0 + t * de
+                w = w0 + t * dw
+                along = w.dot(e) / e.norm_sqr()
+                if along >= -1e-9 and along <= 1.0 + 1e-9:
+                    ti.atomic_min(bound, t)
+    return bound
+
+
 class SelfContact(Term):
     """Point-edge barriers between the vertices and edges of each chamber wall loop."""
 
@@ -144,7 +255,7 @@ class SelfContact(Term):
     def __init__(self, config, loops: list[np.ndarray], dhat: float, stiffness: float):
         self.config = config
         self.dhat, self.kappa = float(dhat), float(stiffness)
-        rest = config.rest_numpy
+        rest = config.rest
         pairs = []
         for loop in loops:
             loop = np.asarray(loop, dtype=np.int64)
@@ -155,140 +266,37 @@ class SelfContact(Term):
             far = point_segment_distance(rest[p], rest[a], rest[b]) >= 2.0 * self.dhat
             pairs.append(np.column_stack([p, a, b])[far])
         pairs = np.vstack(pairs)
-        self.n_pairs = len(pairs)
-        self.pairs = ti.Vector.field(3, ti.i32, self.n_pairs)
-        self.pairs.from_numpy(pairs.astype(np.int32))
-        self.force = ti.Vector.field(2, ti.f64, config.n_vertices)
-        self.hess = ti.field(ti.f64, (self.n_pairs, 36))
-        self.dx = ti.Vector.field(2, ti.f64, config.n_vertices)
-        self.reduction = ti.field(ti.f64, ())
-        dofs = vertex_dofs(pairs.ravel()).reshape(self.n_pairs, 6)
-        self._rows = np.repeat(dofs, 6, axis=1).ravel()
-        self._cols = np.tile(dofs, (1, 6)).ravel()
+        self.pairs = int32s(pairs)
+        self._rows, self._cols = block_pattern(pairs)
 
-    @ti.func
-    def squared_distance(self, q):
-        """s = d^2 of pair q and its gradient (6) and Hessian (6 x 6) over (p, a, b)."""
-        idx = self.pairs[q]
-        p, a, b = self.config.x(idx[0]), self.config.x(idx[1]), self.config.x(idx[2])
-        e = self.config.edge(idx[1], idx[2])
-        w = self.config.edge(idx[1], idx[0])
-        L = e.norm_sqr()
-        t = w.dot(e) / L
-        s = 0.0
-        g = ti.Vector.zero(ti.f64, 6)
-        H = ti.Matrix.zero(ti.f64, 6, 6)
-        if t <= 0.0:
-            s, g, H = point_point(p - a, 1)
-        elif t >= 1.0:
-            s, g, H = point_point(p - b, 2)
-        else:
-            c = e.cross(w)
-            s = c * c / L
-            dc_p = perp(e)
-            dc_b = ti.Vector([w[1], -w[0]])
-            dc = ti.Vector([dc_p[0], dc_p[1], -dc_p[0] - dc_b[0], -dc_p[1] - dc_b[1], dc_b[0], dc_b[1]])
-            dL = ti.Vector([0.0, 0.0, -2.0 * e[0], -2.0 * e[1], 2.0 * e[0], 2.0 * e[1]])
-            g = 2.0 * c / L * dc - c * c / (L * L) * dL
-            # d2c: c = b x p + a x b + p x a; d2(u x v)/du dv = [[0, 1], [-1, 0]]
-            d2c = ti.Matrix.zero(ti.f64, 6, 6)
-            d2L = ti.Matrix.zero(ti.f64, 6, 6)
-            for u, v in ti.static(((2, 0), (1, 2), (0, 1))):  # (b, p), (a, b), (p, a) as vertex slots
-                d2c[2 * u, 2 * v + 1] += 1.0
-                d2c[2 * u + 1, 2 * v] -= 1.0
-                d2c[2 * v + 1, 2 * u] += 1.0
-                d2c[2 * v, 2 * u + 1] -= 1.0
-            for k in ti.static(range(2)):
-                d2L[2 + k, 2 + k] = 2.0
-                d2L[4 + k, 4 + k] = 2.0
-                d2L[2 + k, 4 + k] = -2.0
-                d2L[4 + k, 2 + k] = -2.0
-            cross_terms = dc.outer_product(dL) + dL.outer_product(dc)
-            H = (2.0 / L * dc.outer_product(dc) + 2.0 * c / L * d2c - 2.0 * c / (L * L) * cross_terms
-                 + 2.0 * c * c / (L * L * L) * dL.outer_product(dL) - c * c / (L * L) * d2L)
-        return s, g, H
-
-    @ti.kernel
-    def _energy(self) -> ti.f64:
-        total = 0.0
-        self.reduction[None] = ti.math.inf
-        for q in range(self.n_pairs):
-            s, _grad, _hess = self.squared_distance(q)
-            ti.atomic_min(self.reduction[None], s)
-            if s > 0:
-                total += barrier(ti.sqrt(s), self.dhat, self.kappa)[0]
-        return total
+    def _energy(self) -> tuple[float, float]:
+        return self_contact_energy(self.config.rest, self.config.u, self.pairs, self.dhat, self.kappa)
 
     def energy(self) -> float:
-        total = self._energy()
-        return total if self.reduction[None] > 0 else np.inf
+        total, nearest = self._energy()
+        return total if nearest > 0 else np.inf
 
-    @ti.kernel
-    def _compute(self, exact: ti.i32):
-        for v in self.force:
-            self.force[v] = ti.Vector([0.0, 0.0])
-        for q in range(self.n_pairs):
-            s, gs, Hs = self.squared_distance(q)
-            d = ti.sqrt(s)
-            K = ti.Matrix.zero(ti.f64, 6, 6)
-            if d < self.dhat:
-                _, db, ddb = barrier(d, self.dhat, self.kappa)
-                gd = gs / (2.0 * d)
-                f = db * gd
-                idx = self.pairs[q]
-                for k in ti.static(range(3)):
-                    self.force[idx[k]] += ti.Vector([f[2 * k], f[2 * k + 1]])
-                K = ddb * gd.outer_product(gd)
-                if exact:
-                    K += db * (Hs / (2.0 * d) - gs.outer_product(gs) / (4.0 * d * d * d))
-            for r in ti.static(range(6)):
-                for c in ti.static(range(6)):
-                    self.hess[q, 6 * r + c] = K[r, c]
+    def _derivatives(self, exact: bool) -> tuple[np.ndarray, np.ndarray]:
+        gradient, hessian = np.empty_like(self.config.u), np.empty((len(self.pairs), 36))
+        self_contact_derivatives(self.config.rest, self.config.u, self.pairs, self.dhat, self.kappa, int(exact),
+                                 gradient, hessian)
+        return gradient, hessian.ravel()
 
     def gradient(self) -> np.ndarray:
-        self._compute(0)
-        return self.force.to_numpy()
+        return self._derivatives(False)[0]
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         return self._rows, self._cols
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
-        self._compute(0 if psd_only else 1)
-        return self.hess.to_numpy().ravel()
-
-    @ti.kernel
-    def _step_bound(self):
-        """Smallest alpha > 0 at which a point becomes collinear with a non-incident wall edge, on the edge."""
-        self.reduction[None] = ti.math.inf
-        for q in range(self.n_pairs):
-            idx = self.pairs[q]
-            e0 = self.config.edge(idx[1], idx[2])
-            w0 = self.config.edge(idx[1], idx[0])
-            de = self.dx[idx[2]] - self.dx[idx[1]]
-            dw = self.dx[idx[0]] - self.dx[idx[1]]
-            # cross(e0 + t de, w0 + t dw) = c0 + c1 t + c2 t^2
-            c0 = e0.cross(w0)
-            c1 = e0.cross(dw) + de.cross(w0)
-            c2 = de.cross(dw)
-            roots = quadratic_roots(c0, c1, c2)
-            for r in ti.static(range(2)):
-                t = roots[r]
-                if t >= 0 and t < ti.math.inf:
-                    e = e0 + t * de
-                    w = w0 + t * dw
-                    along = w.dot(e) / e.norm_sqr()
-                    if along >= -1e-9 and along <= 1.0 + 1e-9:
-                        ti.atomic_min(self.reduction[None], t)
+        return self._derivatives(not psd_only)[1]
 
     def max_step(self, dx: np.ndarray) -> float:
-        self.dx.from_numpy(dx)
-        self._step_bound()
-        return float(self.reduction[None])
+        return self_contact_step(self.config.rest, self.config.u, np.ascontiguousarray(dx, dtype=np.float64), self.pairs)
 
     def min_distance(self) -> float:
         """Smallest point-edge distance over all pairs."""
-        self._energy()
-        return float(np.sqrt(max(self.reduction[None], 0.0)))
+        return float(np.sqrt(max(self._energy()[1], 0.0)))
 
 
 def point_segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:

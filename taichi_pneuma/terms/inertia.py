@@ -7,16 +7,15 @@ One time step of size h from (x_n, v_n) minimises
 whose stationarity condition m_i (x_i - xhat_i) / h^2 = -dE/dx_i is backward Euler; afterwards
 v_{n+1} = (x_{n+1} - x_n) / h. In displacements, with v_n = (u_n - u_{n-1}) / h, the target is
 uhat = 2 u_n - u_{n-1}. Gradient m_i / h^2 (u_i - uhat_i); Hessian diag(m_i / h^2), constant and PSD.
+Quadratic and per vertex: one NumPy expression each, no kernel.
 """
 
 
 import numpy as np
-import taichi as ti
 
 from .base import Term, vertex_dofs
 
 
-@ti.data_oriented
 class Inertia(Term):
     """Lumped vertex masses m_i stepping by backward Euler with time step h; advance() ends a step."""
 
@@ -26,29 +25,17 @@ class Inertia(Term):
         self.config = config
         n = config.n_vertices
         masses = np.asarray(masses, dtype=np.float64)
-        self.mass_over_h2 = ti.field(ti.f64, n)
-        self.mass_over_h2.from_numpy(masses / dt**2)
-        self.target = ti.Vector.field(2, ti.f64, n)  # uhat, zero at rest (u_0 = 0, v_0 = 0)
-        self.force = ti.Vector.field(2, ti.f64, n)
+        self.mass_over_h2 = masses / dt**2
+        self.target = np.zeros((n, 2))  # uhat, zero at rest (u_0 = 0, v_0 = 0)
         self._previous = np.zeros((n, 2))
         self._dofs = vertex_dofs(np.arange(n))
-        self._diagonal = np.repeat(masses / dt**2, 2)
+        self._diagonal = np.repeat(self.mass_over_h2, 2)
 
-    @ti.kernel
-    def energy(self) -> ti.f64:
-        total = 0.0
-        for i in self.target:
-            total += 0.5 * self.mass_over_h2[i] * (self.config.u[i] - self.target[i]).norm_sqr()
-        return total
-
-    @ti.kernel
-    def _compute_force(self):
-        for i in self.target:
-            self.force[i] = self.mass_over_h2[i] * (self.config.u[i] - self.target[i])
+    def energy(self) -> float:
+        return 0.5 * float(self.mass_over_h2 @ np.sum((self.config.u - self.target) ** 2, axis=1))
 
     def gradient(self) -> np.ndarray:
-        self._compute_force()
-        return self.force.to_numpy()
+        return self.mass_over_h2[:, None] * (self.config.u - self.target)
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         return self._dofs, self._dofs
@@ -58,5 +45,5 @@ class Inertia(Term):
 
     def advance(self, u: np.ndarray) -> None:
         """End the time step at displacements u: the next target is 2 u - u_previous."""
-        self.target.from_numpy(2.0 * u - self._previous)
+        self.target = 2.0 * u - self._previous
         self._previous = np.array(u, dtype=np.float64)
