@@ -106,7 +106,6 @@ def test_readme_api_example_runs_as_shown(tmp_path, monkeypatch, capsys):
     assert f"tip deflection {result.tip_deflection:+.4f}" in capsys.readouterr().out
 
 
-@pytest.mark.slow
 def test_example_script_runs(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     runpy.run_path(str(ROOT / "examples" / "chamber_height_sweep.py"), run_name="__main__")

@@ -268,3 +268,19 @@ def test_trace_axis_numbers_match_the_drawn_curves(track):
             assert np.min(np.abs(patch - rgb8(color)).max(axis=1)) < 40, (color, step)
             checked += 1
     assert checked >= 2
+
+
+def test_quadratic_elements_are_coloured_by_their_own_value():
+    """Each P2 element's four display triangles take its value: the middle one's centroid shows it."""
+    import matplotlib
+
+    built = reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.02, order=2).build()
+    result = run_schedule(built)
+    colored = Track.from_ramp(built.mesh, result, color="stretch")
+    renderer = FrameRenderer([colored], 480, 192, trace=False, backend="gui")
+    image = renderer.frame(2)
+    lo, hi = renderer.color_range
+    expected = np.asarray(matplotlib.colormaps["viridis"]((colored.color[2] - lo) / (hi - lo)))[:, :3] * 255
+    middle = result.states[2][built.mesh.triangles[:, 3:]].mean(axis=1)
+    close = np.all(np.abs(pixels_at(renderer, image, middle) - expected) < 20, axis=1)
+    assert close.mean() > 0.6

@@ -99,3 +99,21 @@ def test_contact_scenes_write_the_contact_force(tmp_path):
     assert np.allclose(force[:, :2], result.ramp.contact_forces[-1], rtol=0, atol=1e-12) and np.all(force[:, 2] == 0)
     assert force[:, 1].sum() == pytest.approx(result.steps[-1].contact["ground"][1], rel=1e-9)
     assert force[:, 1].sum() > 0  # the ground pushes up
+
+
+def test_quadratic_elements_are_vtk_six_node_triangles_with_their_mean_det_f(tmp_path):
+    """P2: cells are 'triangle6' on the mesh's nodes; det F is the element's mean, its curved current area
+    (parabolic sides a, m, b: 1/6 (4 a x m + 4 m x b - a x b) each) over its rest area."""
+    result = tp.simulate(tp.reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.02, order=2))
+    entries = read_pvd(VtkSeries(tmp_path, "p2", result.built).write_all(result.ramp))
+    grid = meshio.read(entries[-1][1])
+    elements = grid.cells_dict["triangle6"]
+    assert np.array_equal(elements, result.mesh.triangles)
+    x = grid.points[:, :2] + grid.point_data["displacement"][:, :2]
+    cross = lambda a, b: a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    area = lambda p: sum((4 * cross(p[a], p[m]) + 4 * cross(p[m], p[b]) - cross(p[a], p[b])) / 6
+                         for a, m, b in ((0, 3, 1), (1, 4, 2), (2, 5, 0)))
+    rest = grid.points[:, :2]
+    ratio = area(np.swapaxes(x[elements], 0, 1)) / area(np.swapaxes(rest[elements], 0, 1))
+    assert grid.cell_data["det_F"][0] == pytest.approx(ratio, rel=1e-10)
+    assert np.ptp(ratio) > 0.05  # a real, uneven deformation
