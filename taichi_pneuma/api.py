@@ -92,21 +92,10 @@ class Result:
     def _chambers(self, key: str) -> np.ndarray:
         return np.column_stack([self.history[f"{name}.{key}"] for name in self.chamber_names])
 
-    @property
-    def command(self) -> np.ndarray:
-        return self._chambers("command")
-
-    @property
-    def area(self) -> np.ndarray:
-        return self._chambers("area")
-
-    @property
-    def area_ratio(self) -> np.ndarray:
-        return self._chambers("area_ratio")
-
-    @property
-    def pressure(self) -> np.ndarray:
-        return self._chambers("pressure")
+    command = property(lambda self: self._chambers("command"), doc="(steps, chambers) commanded area ratio or pressure")
+    area = property(lambda self: self._chambers("area"), doc="(steps, chambers) chamber areas")
+    area_ratio = property(lambda self: self._chambers("area_ratio"), doc="(steps, chambers) area / rest area")
+    pressure = property(lambda self: self._chambers("pressure"), doc="(steps, chambers) chamber pressures")
 
     @property
     def tip_deflection(self) -> float:
