@@ -192,11 +192,8 @@ class Result:
 
     def plot(self):
         """The history as a matplotlib Figure with axes (plots.py): pressure against area ratio, and tip
-        deflection, area ratio and pressure against the command."""
-        import sys
-
+        deflection, area ratio and pressure against the command. A notebook shows it as a PNG; in a
+        script, fig.savefig("x.png")."""
         from .plots import history_figure
 
-        if "IPython" in sys.modules:  # in a notebook, pyplot's inline backend is what displays Figure objects
-            import matplotlib.pyplot  # noqa: F401
         return history_figure(self)

@@ -9,7 +9,10 @@ same command at every step (one chamber, or chambers driven together); otherwise
 
 from __future__ import annotations
 
+import io
+
 import numpy as np
+from matplotlib.figure import Figure
 
 COMMAND_LABEL = {"area": "commanded area ratio", "pressure": "commanded pressure"}
 
@@ -22,11 +25,19 @@ def command_axis(command: np.ndarray, controls: list[str]) -> tuple[np.ndarray, 
     return np.arange(len(command), dtype=float), "step"
 
 
-def history_figure(result, figure=None):
-    """Draw the history of an api.Result on `figure` (a new matplotlib Figure, no pyplot, by default)."""
-    from matplotlib.figure import Figure
+class NotebookFigure(Figure):
+    """A matplotlib Figure made without pyplot (no global state, nothing left open) that a notebook shows:
+    IPython displays an object's _repr_png_."""
 
-    fig = figure if figure is not None else Figure(figsize=(10, 7), layout="constrained")
+    def _repr_png_(self) -> bytes:
+        buffer = io.BytesIO()
+        self.savefig(buffer, format="png", dpi=100)
+        return buffer.getvalue()
+
+
+def history_figure(result, figure=None):
+    """Draw the history of an api.Result on `figure` (a new NotebookFigure by default)."""
+    fig = figure if figure is not None else NotebookFigure(figsize=(10, 7), layout="constrained")
     (pa, tip), (area, pressure) = fig.subplots(2, 2)
     x, x_label = command_axis(result.command, [c.schedule.control for c in result.scene.controls])
     for c, name in enumerate(result.chamber_names):

@@ -393,10 +393,6 @@ class FrameRenderer:
         px = centre_px + (points - self._centre) * self._scale
         return px / np.array([self.width, self.height])
 
-    def _px(self, u: float, v: float) -> tuple[float, float]:
-        """Normalised canvas (origin bottom-left) -> pixel (origin top-left) for labels."""
-        return u * self.width, (1 - v) * self.height
-
     def frame(self, i: int) -> np.ndarray:
         """Frame i as an (height, width, 3) uint8 image, text included."""
         labels = self.draw(i)

@@ -3,7 +3,8 @@
     <out>/<stem>.pvd                     the collection: open this in ParaView (timestep = step)
     <out>/<stem>_vtk/<stem>_0000.vtu     step 0, 1, ... each written whole (output.write_atomic)
 
-The PVD is rewritten after every step, so a run that stops early leaves its finished steps readable.
+The PVD is rewritten after every step, so a run that stops early leaves its finished steps readable;
+VTU files of the same stem left in the folder by an earlier run are removed when a series starts.
 Each VTU holds the rest mesh (points padded with z = 0; linear triangles, or quadratic ones as VTK's
 6-node triangle, whose midside-node order 01, 12, 20 the mesh shares) and
 - point data: displacement (x, y, 0): ParaView's Warp By Vector with it shows the deformed body;

@@ -126,6 +126,7 @@ def test_plot_shows_the_history_on_labelled_axes(small):
     assert np.array_equal(tip.lines[0].get_ydata(), small.history["tip_dy"])
     assert np.array_equal(pressure.lines[0].get_ydata(), small.pressure[:, 0])
     assert small.command[:, 0].tolist() == [1.0, 1.5, 2.0]
+    assert fig._repr_png_().startswith(b"\x89PNG")  # what a notebook displays
 
 
 @pytest.mark.parametrize("name, label", [("bidirectional", "step"), ("pneunet_finger", "commanded pressure")])
