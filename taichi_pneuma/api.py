@@ -24,26 +24,27 @@ from .fields import triangle_fields
 from .newton import NewtonOptions
 from .output import prepare_directory, save_json, save_npz, save_text, write_atomic
 from .scene import BuiltScene, Scene
-from .simulate import MAX_CUTS, RampFailed, RampResult, run_schedule
+from .simulate import MAX_CUTS, RampResult, RampStopped, run_schedule
 from .terms.elastic import lame_parameters
 
 
 def simulate(scene: Scene | BuiltScene, *, tol: float = NewtonOptions.tol,
              max_iterations: int = NewtonOptions.max_iterations, max_cuts: int = MAX_CUTS,
-             progress=None) -> "Result":
+             progress=None, stop=None) -> "Result":
     """Run the scene's schedule (meshing it first unless it is already built) and return its Result.
 
     tol: Newton tolerance on |gradient| / force scale; max_iterations per solve; max_cuts: halvings of an
     increment that does not converge. progress(step_record, positions, contact_force) is called after
-    every increment. Raises RampFailed when an increment finds no equilibrium; its .result is the
+    every increment; stop() after every increment but the last, ending the run with RampInterrupted when
+    it returns True. Raises RampFailed when an increment finds no equilibrium; both carry .result, the
     Result of the steps done. Initialises Taichi on the CPU unless runtime.init chose a backend."""
     runtime.ensure_initialised()
     built = scene if isinstance(scene, BuiltScene) else scene.build()
     options = NewtonOptions(tol=tol, max_iterations=max_iterations)
     start = time.perf_counter()
     try:
-        ramp = run_schedule(built, options=options, progress=progress, max_cuts=max_cuts)
-    except RampFailed as failure:
+        ramp = run_schedule(built, options=options, progress=progress, max_cuts=max_cuts, stop=stop)
+    except RampStopped as failure:
         failure.result = Result(built, failure.partial, time.perf_counter() - start)
         raise
     return Result(built, ramp, time.perf_counter() - start)
@@ -115,10 +116,10 @@ class Result:
         mu, lam = lame_parameters(*self.scene.element_moduli(self.mesh))
         return triangle_fields(self.mesh.vertices, self.positions[step], self.mesh.triangles, mu, lam)
 
-    def summary(self) -> dict:
-        """The figures of the run (the summary JSON)."""
+    def summary(self, interrupted: bool = False) -> dict:
+        """The figures of the run (the summary JSON); interrupted: the run was stopped after these steps."""
         final = self.steps[-1]
-        iterations = self.history["iterations"][1:]
+        iterations, seconds = self.history["iterations"][1:], self.history["seconds"][1:]
         return {
             "scene": self.scene.name, "terms": self.built.model.term_names(),
             "vertices": self.mesh.n_vertices, "triangles": self.mesh.n_triangles, "element_order": self.mesh.order,
@@ -133,8 +134,8 @@ class Result:
             "min_det_F": float(self.history["min_det"].min()),
             "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max(initial=0)),
             "increment_cuts": int(self.history["cuts"].sum()),
-            "wall_seconds": self.seconds,
-            "solve_seconds_per_step": float(self.history["seconds"][1:].mean()) if len(self.steps) > 1 else math.nan,
+            "wall_seconds": self.seconds, "solve_seconds_per_step": float(seconds.mean()) if len(seconds) else 0.0,
+            "steps": len(self.steps), "interrupted": interrupted,
         }
 
     def save_history(self, directory, stem: str | None = None) -> list[Path]:

@@ -1,5 +1,7 @@
 """The one exception type for mistakes a user can make (bad parameters, bad files, bad paths)."""
 
+import numpy as np
+
 
 class PneumaInputError(ValueError):
     """A user-supplied value is not allowed; the message names the value and what is allowed."""
@@ -14,8 +16,20 @@ def require(condition: bool, message: str) -> None:
 def require_finite(name: str, value: float) -> float:
     """Return value as float if it is a finite number, else raise naming it."""
     try:
+        if isinstance(value, (str, bytes, bool)):
+            raise TypeError
         v = float(value)
     except (TypeError, ValueError):
         raise PneumaInputError(f"{name} = {value!r} is not a number") from None
+    except OverflowError:  # an integer past the float range
+        v = float("inf")
     require(v == v and abs(v) != float("inf"), f"{name} = {value!r} must be a finite number")
     return v
+
+
+def shape_of(value) -> tuple | None:
+    """np.shape(value), or None where value is ragged (lists of different lengths) and has no shape."""
+    try:
+        return np.shape(value)
+    except ValueError:
+        return None

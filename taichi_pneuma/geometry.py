@@ -11,7 +11,13 @@ segments as a closed vertex loop oriented counter-clockwise, so its signed shoel
     A(x) = 1/2 sum_i (x_i y_{i+1} - x_{i+1} y_i)
 
 is positive at rest. Chambers must lie inside the body and apart from each other by at least
-MARGIN; otherwise a PneumaInputError names the chamber.
+MARGIN; otherwise a PneumaInputError names the chamber. No two points of one outline may lie closer
+than MIN_SPACING times its size (Triangle crashes on coincident points), and a geometry Triangle cannot
+mesh (it runs out of floating-point precision) is a PneumaInputError too.
+
+Checking that takes time and memory quadratic in the outline points, so a geometry has at most
+MAX_SHAPES chambers (a union at most MAX_SHAPES rectangles) and MAX_WALL_POINTS outline points in all
+(2000 points: 0.7 s and 190 MB for the self-crossing test of one polygon).
 """
 
 from __future__ import annotations
@@ -20,18 +26,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import triangle
+from scipy.spatial import cKDTree
 
-from .errors import require, require_finite
+from .errors import PneumaInputError, require, require_finite, shape_of
 
 OUTER_MARKER = 1
 MARGIN = 1e-3
+MAX_WALL_POINTS = 2000
+MAX_SHAPES = 64
+MIN_SPACING = 1e-9
 SIDES = ("left", "right", "bottom", "top")
 ORDERS = (1, 2)
 MAX_REFINEMENTS = 4
 
 
 def _pair(name: str, value, positive: bool = False) -> tuple[float, float]:
-    require(np.shape(value) == (2,), f"{name} = {value!r} must be a pair of numbers")
+    require(shape_of(value) == (2,), f"{name} = {value!r} must be a pair of numbers")
     pair = tuple(require_finite(f"{name}", v) for v in value)
     if positive:
         require(min(pair) > 0, f"{name} = {value!r} must be > 0")
@@ -66,8 +76,8 @@ class Ellipse:
     def __post_init__(self):
         _pair("center", self.center)
         _pair("semi_axes", self.semi_axes, positive=True)
-        require(isinstance(self.points, (int, np.integer)) and self.points >= 8,
-                f"points = {self.points!r} must be an integer >= 8")
+        require(isinstance(self.points, (int, np.integer)) and 8 <= self.points <= MAX_WALL_POINTS,
+                f"points = {self.points!r} must be an integer in [8, {MAX_WALL_POINTS}]")
 
     def polygon(self) -> np.ndarray:
         t = np.linspace(0.0, 2.0 * np.pi, self.points, endpoint=False)
@@ -89,8 +99,8 @@ class RoundedRectangle:
         w, h = _pair("size", self.size, positive=True)
         r = require_finite("radius", self.radius)
         require(0 < r < min(w, h) / 2, f"radius = {self.radius!r} must lie in (0, {min(w, h) / 2:g}) (half the shorter side)")
-        require(isinstance(self.corner_points, (int, np.integer)) and self.corner_points >= 2,
-                f"corner_points = {self.corner_points!r} must be an integer >= 2")
+        require(isinstance(self.corner_points, (int, np.integer)) and 2 <= self.corner_points <= MAX_WALL_POINTS // 4,
+                f"corner_points = {self.corner_points!r} must be an integer in [2, {MAX_WALL_POINTS // 4}]")
 
     def polygon(self) -> np.ndarray:
         (cx, cy), (w, h), r = self.center, self.size, self.radius
@@ -111,6 +121,7 @@ class Polygon:
 
     def __post_init__(self):
         pts = np.asarray(self.points, dtype=object)
+        require(len(pts) <= MAX_WALL_POINTS, f"points: {len(pts)} given, at most {MAX_WALL_POINTS} are allowed")
         require(pts.ndim == 2 and pts.shape[1] == 2 and len(pts) >= 3,
                 f"points = {self.points!r} must be a list of at least 3 [x, y] pairs")
         for p in self.points:
@@ -131,7 +142,7 @@ class RectangleUnion:
     rectangles: tuple[Rectangle, ...]
 
     def __post_init__(self):
-        require(len(self.rectangles) >= 1, "rectangles must list at least one rectangle")
+        require(1 <= len(self.rectangles) <= MAX_SHAPES, f"rectangles must list 1 to {MAX_SHAPES} rectangles")
         loops = union_boundary([r.polygon() for r in self.rectangles])
         require(len(loops) == 1, f"rectangles: their union has {len(loops)} boundary loops; it must be one "
                                  f"connected region without holes")
@@ -221,8 +232,7 @@ def distance_to_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
 def interior_point(polygon: np.ndarray) -> np.ndarray:
     """A point strictly inside a simple polygon: the centroid of the largest triangle of its triangulation."""
     k = len(polygon)
-    tri = triangle.triangulate({"vertices": polygon, "segments": np.column_stack([np.arange(k), (np.arange(k) + 1) % k])},
-                               "p")
+    tri = triangulate({"vertices": polygon, "segments": np.column_stack([np.arange(k), (np.arange(k) + 1) % k])}, "p")
     corners = tri["vertices"][tri["triangles"]]
     e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
     return corners[np.argmax(np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]))].mean(axis=0)
@@ -256,7 +266,7 @@ class ClampSelection:
 
 def require_box(name: str, box) -> None:
     """Refuse, naming it, a box that is not four finite numbers [x0, y0, x1, y1] with x0 < x1, y0 < y1."""
-    require(np.shape(box) == (4,), f"{name} = {box!r} must be [x0, y0, x1, y1]")
+    require(shape_of(box) == (4,), f"{name} = {box!r} must be [x0, y0, x1, y1]")
     for v in box:
         require_finite(name, v)
     require(box[0] < box[2] and box[1] < box[3], f"{name} = {list(box)!r} must have x0 < x1 and y0 < y1")
@@ -342,10 +352,20 @@ class Geometry:
         require(self.order in ORDERS, f"order = {self.order!r} must be 1 (linear triangles) or 2 (quadratic)")
         require(self.refinements in range(MAX_REFINEMENTS + 1),
                 f"refinements = {self.refinements!r} must be an integer from 0 to {MAX_REFINEMENTS}")
+        require(len(self.chambers) <= MAX_SHAPES, f"{len(self.chambers)} chambers: at most {MAX_SHAPES} are allowed")
         body = self.body.polygon()
         polygons = [(name, shape.polygon()) for name, shape in self.chambers]
+        points = len(body) + sum(len(p) for _, p in polygons)
+        require(points <= MAX_WALL_POINTS, f"the body and chamber outlines have {points} points in all; "
+                                           f"at most {MAX_WALL_POINTS} are allowed")
         names = [name for name, _ in polygons]
         require(len(set(names)) == len(names), f"chamber names {names!r} must be distinct")
+        for what, poly in [("the body", body)] + [(f"chamber {name!r}", poly) for name, poly in polygons]:
+            size = float(np.ptp(poly, axis=0).max())
+            require(np.isfinite(size), f"{what}: its outline points overflow to infinity")
+            require(not cKDTree((poly - poly.min(axis=0)) / size).query_pairs(MIN_SPACING),
+                    f"{what}: two of its outline points coincide (closer than {MIN_SPACING:g} of its size {size:.3g}): "
+                    f"a radius, size or point spacing too small, or coordinates too large, to mesh")
         for name, poly in polygons:
             outside = ~points_in_polygon(poly, body) | (distance_to_polygon(poly, body) < MARGIN)
             crossing = segments_cross(poly, np.roll(poly, -1, axis=0), body, np.roll(body, -1, axis=0)).any()
@@ -373,7 +393,7 @@ class Geometry:
         }
         if len(loops) > 1:
             pslg["holes"] = np.array([interior_point(p) for p in loops[1:]])
-        out = triangle.triangulate(pslg, f"pqa{self.max_area:.17f}")  # fixed-point: Triangle reads no exponent
+        out = triangulate(pslg, f"pqa{self.max_area:.17f}")  # fixed-point: Triangle reads no exponent
         vertices = np.asarray(out["vertices"], dtype=np.float64)
         triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
         segments, markers = np.asarray(out["segments"], dtype=np.int64), out["segment_markers"].ravel()
@@ -466,6 +486,17 @@ class BeamGeometry:
         return self.general().mesh()
 
 
+def triangulate(pslg: dict, flags: str) -> dict:
+    """triangle.triangulate, with its failure (RuntimeError, or no triangle made) a PneumaInputError."""
+    try:
+        out = triangle.triangulate(pslg, flags)
+    except RuntimeError:
+        out = {}
+    require(len(out.get("triangles", ())) > 0, "Triangle could not mesh the geometry (it ran out of floating-point "
+                                               "precision: features too small for the body's size?)")
+    return out
+
+
 def orient_counter_clockwise(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Return triangles with every vertex triple ordered counter-clockwise."""
     clockwise = triangle_areas(vertices, triangles) < 0
@@ -481,7 +512,7 @@ def chain_loop(edges: np.ndarray) -> np.ndarray:
         neighbours.setdefault(int(i), []).append(int(j))
         neighbours.setdefault(int(j), []).append(int(i))
     if any(len(n) != 2 for n in neighbours.values()):
-        raise RuntimeError("chamber wall segments do not form a simple closed loop")
+        raise PneumaInputError("Triangle could not keep a chamber wall a simple closed loop")
     start = int(edges[0][0])
     loop, previous, current = [start], None, start
     while True:
@@ -492,5 +523,5 @@ def chain_loop(edges: np.ndarray) -> np.ndarray:
         loop.append(nxt)
         previous, current = current, nxt
     if len(loop) != len(neighbours):
-        raise RuntimeError("chamber wall segments form more than one loop")
+        raise PneumaInputError("Triangle split a chamber wall into more than one loop")
     return np.array(loop, dtype=np.int64)

@@ -2,15 +2,32 @@
 
 Each time the slider's value changes, the equilibrium at the new commanded area is solved, warm-started
 from the one on screen, and the beam panel (mesh, chamber, clamp, overlay) is redrawn. Needs a display.
+follow_mouse is inverse control live: drag the target, the chambers follow.
 """
 
 from __future__ import annotations
+
+import dataclasses
+import time
 
 import numpy as np
 
 from .newton import NewtonOptions, NewtonSolver
 from .render import FrameRenderer, Track, open_canvas
 from .scene import Scene
+
+
+# Newton tolerance of live forward solves: with the tangent predictor one Newton iteration reaches it
+# (the default 1e-6 often takes two); it moves the tip by ~1e-6 of the body length, far below the 1e-3 target tolerance.
+LIVE_TOL = 1e-5
+
+
+def fixed_view(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """The world box a live window shows: the rest body with room for the curl of a full ramp
+    (a third of the length up and down)."""
+    lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
+    room = np.array([0.05, 0.35]) * (hi[0] - lo[0])
+    return lo - room, hi + room
 
 
 def explore(scene: Scene, growth: float, size: tuple[int, int], backend: str = "auto",
@@ -22,10 +39,7 @@ def explore(scene: Scene, growth: float, size: tuple[int, int], backend: str = "
     chamber = built.chambers[0]
     mesh, solver = built.mesh, NewtonSolver(built.model, options)
     canvas = open_canvas(*size, backend, show=True)
-    # Fixed view: the rest beam with room for the curl of a full ramp (a third of the length up and down).
-    lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
-    reach = np.array([0.05, 0.35]) * (hi[0] - lo[0])
-    bounds = (lo - reach, hi + reach)
+    bounds = fixed_view(mesh)
     u, ratio, renderer = np.zeros_like(mesh.vertices), None, None
     converged, solves, frames = True, 0, 0
     print(f"interactive: drag the slider (commanded area / rest area, 1 .. {growth:g}); close the window to quit")
@@ -47,3 +61,73 @@ def explore(scene: Scene, growth: float, size: tuple[int, int], backend: str = "
         canvas.show()
         frames += 1
     return {"all_converged": bool(converged), "solves": solves}
+
+
+def follow_mouse(scene: Scene, bounds, size: tuple[int, int], backend: str = "auto", options=None,
+                 newton: NewtonOptions | None = None, target=None, max_frames: int | None = None) -> dict:
+    """Inverse control live: drag the target (a red cross) with the left mouse button and the chambers
+    follow, re-solved (inverse.Reacher.reach, warm-started, without restarts: an unreachable target
+    leaves the closest pose near the last one) on every move; a slider per chamber (bottom rows)
+    commands it directly. Runs until the window is closed (or for max_frames frames).
+
+    Returns {'all_converged': every reach reached its target, 'reaches', 'direct', 'frames',
+    'drag_fps': frames per second over the frames that re-solved a moved target, after the first
+    (warm-up), 'ms_per_reach', 'forward_solves_per_reach'}."""
+    from .inverse import Reacher, ReachOptions
+    from .targets import Target
+
+    built = scene.build()
+    # a drag follows the closest pose nearby; one factorisation per frame
+    options = dataclasses.replace(options or ReachOptions(), restarts=0, reuse_factor=True)
+    reacher = Reacher(built, bounds, options, newton or NewtonOptions(tol=LIVE_TOL))
+    mesh = built.mesh
+    canvas = open_canvas(*size, backend, show=True)
+    target = np.array(target.tip if target is not None else reacher.pose.tip, float)
+    track = Track(mesh, (mesh.vertices + reacher.pose.u)[None], np.ones((1, len(built.chambers))),
+                  np.zeros((1, len(built.chambers))), np.zeros(1), "drag the red cross", targets=target[None].copy())
+    renderer = FrameRenderer([track], trace=False, canvas=canvas, bounds=fixed_view(mesh))
+    strip = len(built.chambers) * canvas.slider_row_px / canvas.height  # the sliders' rows at the bottom
+    reached, reaches, direct, frames, drag_seconds, solves = True, [], 0, 0, [], 0
+    print(f"interactive: drag the target with the left mouse button; {len(built.chambers)} sliders below; "
+          f"close the window to quit")
+
+    def show(pose):
+        track.states[0] = mesh.vertices + pose.u
+        track.targets[0] = target
+        for j, chamber in enumerate(built.chambers):
+            track.area_ratio[0, j], track.pressure[0, j] = chamber.area() / chamber.rest_area, chamber.pressure()
+        track.tip_dy[0] = pose.tip[1] - mesh.vertices[mesh.tip, 1].mean()
+
+    show(reacher.pose)
+    while canvas.running and (max_frames is None or frames < max_frames):
+        start = time.perf_counter()
+        q = reacher.pose.commands
+        moved = np.array([canvas.slider(name, value, low, high, row=j) for j, (name, value, low, high)
+                          in enumerate(zip(reacher.names, q, reacher.lo, reacher.hi))])
+        x, y, pressed = canvas.mouse()
+        pointed = renderer.to_world(0, np.array([x, y]))
+        dragged = pressed and y > strip and not np.array_equal(pointed, target)
+        if np.any(np.abs(moved - q) > 1e-6 * (reacher.hi - reacher.lo)):  # sliders hold float32 values
+            show(reacher.settle(moved))
+            direct += 1
+        elif dragged:
+            target = pointed
+            result = reacher.reach(Target(tuple(target)))
+            reached &= result.reached
+            solves += result.forward_solves
+            reaches.append(result.seconds)
+            show(result.pose)
+        canvas.show_image(renderer.frame(0))  # shapes, then the text drawn onto the read-back image
+        canvas.show()
+        frames += 1
+        if dragged and len(reaches) > 1:  # a frame that re-solved a moved target, after the first (warm-up)
+            drag_seconds.append(time.perf_counter() - start)
+    summary = {"all_converged": bool(reached), "reaches": len(reaches), "direct": direct, "frames": frames,
+               "commands": reacher.pose.commands.tolist(), "tip": reacher.pose.tip.tolist(), "target": target.tolist(),
+               "drag_fps": 1 / float(np.mean(drag_seconds)) if drag_seconds else None,
+               "ms_per_reach": 1000 * float(np.mean(reaches)) if reaches else None,
+               "forward_solves_per_reach": solves / len(reaches) if reaches else None}
+    print(f"interactive: {summary['reaches']} reaches, {direct} direct commands, {frames} frames; "
+          + (f"while dragging {summary['drag_fps']:.1f} frames/s, {summary['ms_per_reach']:.1f} ms and "
+             f"{summary['forward_solves_per_reach']:.2f} forward solves per reach" if drag_seconds else "no drag"))
+    return summary

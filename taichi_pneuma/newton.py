@@ -67,6 +67,7 @@ class SolveRecord:
     step_sizes: list[float] = field(default_factory=list)
     line_search_trials: int = 0
     psd_fallbacks: int = 0
+    exact_factor: bool = False  # the backend holds the exact Hessian of the last iteration's start point
     phase_seconds: dict[str, float] = field(default_factory=dict)
     seconds: float = 0.0
     message: str = ""
@@ -148,7 +149,9 @@ class NewtonSolver:
             d, slope = self._direction(g, not exact, clock)
             if exact and not slope < 0:
                 record.psd_fallbacks += 1
+                exact = False
                 d, slope = self._direction(g, True, clock)
+            record.exact_factor = exact
             if not slope < 0:
                 record.message = f"not a descent direction (g.d = {slope:.3e})"
                 break

@@ -8,6 +8,7 @@ One frame shows, for each ramp (a *track*), a beam panel:
 - the chamber, its deformed wall loop filled translucent blue (alpha-blended onto the background:
   the chamber is a hole in the mesh, so only background lies under it) and outlined in strong blue;
 - the pinned vertices as dark square markers; the ground line, if the scene has one;
+- for inverse control, the target as a red cross and the tip's path so far in orange;
 - a header above the body: the panel's title, step, area ratio, pressure and tip deflection;
 and, optionally, beside them a trace panel with axes: chamber area / rest area (blue, numbered left
 axis) and pressure (red, numbered right axis) against the step, with a cursor at the current step.
@@ -59,6 +60,8 @@ COLORMAP = "viridis"
 COLOR_FIELDS = {"stretch": ("max stretch", "max_stretch"), "detF": ("det F", "det_F")}
 FONT_PX, LINE_PX, MARGIN_PX = 13, 17, 10
 COLORBAR_PX = 96  # width of the colour bar strip
+TARGET = (0.9, 0.1, 0.1)
+TIP_PATH = (0.95, 0.55, 0.0)
 
 
 # --- backends: one canvas of (width, height) pixels, coordinates normalised to [0, 1], origin bottom-left ---
@@ -67,6 +70,7 @@ class GGUICanvas:
     """Taichi GGUI (Vulkan) window; offscreen unless show=True."""
 
     name = "GGUI (Vulkan)"
+    slider_row_px = 45  # each slider takes a row this high at the bottom of the window
 
     def __init__(self, width: int, height: int, show: bool = False, title: str = "taichi-pneuma"):
         self.width, self.height = width, height
@@ -112,11 +116,18 @@ class GGUICanvas:
         """Put an (height, width, 3) uint8 image on the canvas (for a shown window)."""
         self.canvas.set_image(_from_rgb8(image))
 
-    def slider(self, label: str, value: float, low: float, high: float) -> float:
-        """An imgui slider at the bottom of the window; returns its value."""
+    def slider(self, label: str, value: float, low: float, high: float, row: int = 0) -> float:
+        """An imgui slider showing value, in row `row` (slider_row_px high) counted up from the bottom
+        of the window; returns its value (the user's, if they moved it)."""
         gui = self.window.get_gui()
-        with gui.sub_window("##slider", 0.0, 1 - 60 / self.height, 1.0, 60 / self.height):
+        height = self.slider_row_px / self.height
+        with gui.sub_window(f"##slider{row}", 0.0, 1 - (row + 1) * height, 1.0, height):
             return gui.slider_float(label, value, low, high)
+
+    def mouse(self) -> tuple[float, float, bool]:
+        """The cursor (normalised, origin bottom-left) and whether the left button is down."""
+        x, y = self.window.get_cursor_pos()
+        return float(x), float(y), bool(self.window.is_pressed(ti.ui.LMB))
 
     @property
     def running(self) -> bool:
@@ -135,6 +146,7 @@ class GUICanvas:
     """Taichi's ti.GUI software rasteriser; offscreen unless show=True."""
 
     name = "ti.GUI (software)"
+    slider_row_px = 0  # ti.GUI draws its sliders over the top of the window, taking no row
 
     def __init__(self, width: int, height: int, show: bool = False, title: str = "taichi-pneuma"):
         self.width, self.height = width, height
@@ -159,12 +171,25 @@ class GUICanvas:
         """Put an (height, width, 3) uint8 image on the canvas (for a shown window)."""
         self.gui.set_image(_from_rgb8(image))
 
-    def slider(self, label: str, value: float, low: float, high: float) -> float:
-        """ti.GUI's slider (created on first call, starting at value); returns its value."""
-        if not hasattr(self, "_slider"):
-            self._slider = self.gui.slider(label, low, high, step=(high - low) / 200)
-            self._slider.value = value
-        return float(self._slider.value)
+    def slider(self, label: str, value: float, low: float, high: float, row: int = 0) -> float:
+        """ti.GUI's slider named label (created on first call): shows value unless the user moved it
+        since the last call; returns its value (the user's, if they moved it). row: unused (ti.GUI
+        stacks its sliders itself)."""
+        sliders = self.__dict__.setdefault("_sliders", {})
+        if label not in sliders:
+            sliders[label] = [self.gui.slider(label, low, high, step=(high - low) / 200), value]
+            sliders[label][0].value = value
+        widget, shown = sliders[label]
+        if widget.value == shown:  # not moved by the user: show the caller's value
+            widget.value = value
+        sliders[label][1] = float(widget.value)
+        return sliders[label][1]
+
+    def mouse(self) -> tuple[float, float, bool]:
+        """The cursor (normalised, origin bottom-left) and whether the left button is down."""
+        list(self.gui.get_events())  # consuming the events updates the pressed keys
+        x, y = self.gui.get_cursor_pos()
+        return float(x), float(y), bool(self.gui.is_pressed(ti.GUI.LMB))
 
     @property
     def running(self) -> bool:
@@ -289,6 +314,7 @@ class Track:
     tip_dy: np.ndarray
     title: str = ""
     ground: float | None = None  # height of the ground line y = ground, drawn when the scene has one
+    targets: np.ndarray | None = None  # (steps, 2) inverse control's target point per frame: a cross and the tip's path
     color: np.ndarray | None = None
     color_label: str = ""
 
@@ -305,7 +331,7 @@ class Track:
             label, key = COLOR_FIELDS[color]
             values = np.array([triangle_fields(mesh.vertices, x, mesh.triangles)[key] for x in result.states])
         return cls(mesh, result.states, columns("area_ratio"), columns("pressure"), result.column("tip_dy"), title,
-                   ground, values, label)
+                   ground, color=values, color_label=label)
 
     def header(self, i: int) -> list[str]:
         """The lines above the body at step i."""
@@ -372,7 +398,8 @@ class FrameRenderer:
         self.colorbar_panel = (beam_w, beam_w + bar_w)
         self.trace_panel = (beam_w + bar_w, 1.0)
         self.header_px = MARGIN_PX + LINE_PX * max(len(t.header(0)) for t in tracks)
-        points = np.concatenate([t.states.reshape(-1, 2) for t in self.tracks])
+        points = np.concatenate([t.states.reshape(-1, 2) for t in self.tracks]
+                                + [t.targets for t in self.tracks if t.targets is not None])
         self._lo, self._hi = (np.asarray(b, float) for b in (bounds if bounds is not None else
                                                              (points.min(axis=0), points.max(axis=0))))
         self._fit_view(self._lo, self._hi)
@@ -392,6 +419,12 @@ class FrameRenderer:
         centre_px = np.array([(x0 + x1) / 2 * self.width, self.height / 2]) + self._offset_px
         px = centre_px + (points - self._centre) * self._scale
         return px / np.array([self.width, self.height])
+
+    def to_world(self, panel: int, uv: np.ndarray) -> np.ndarray:
+        """Normalised canvas coordinates (..., 2) inside beam panel `panel` -> world points (to_canvas inverted)."""
+        x0, x1 = self.panels[panel]
+        centre_px = np.array([(x0 + x1) / 2 * self.width, self.height / 2]) + self._offset_px
+        return self._centre + (np.asarray(uv) * np.array([self.width, self.height]) - centre_px) / self._scale
 
     def frame(self, i: int) -> np.ndarray:
         """Frame i as an (height, width, 3) uint8 image, text included."""
@@ -420,6 +453,8 @@ class FrameRenderer:
             for loop in track.mesh.chambers:
                 c.segments(np.stack([x[loop], x[np.roll(loop, -1)]], axis=1), CHAMBER_WALL, 2.5)
             c.triangles(_squares(x[track.mesh.pinned], 3.5 / np.array([self.width, self.height])), PIN)
+            if track.targets is not None:
+                self._draw_target(p, track, i)
             left = self.panels[p][0] * self.width + MARGIN_PX
             labels += [Label(line, left, MARGIN_PX / 2 + LINE_PX * k) for k, line in enumerate(track.header(i))]
         if self.color_range is not None:
@@ -427,6 +462,17 @@ class FrameRenderer:
         if self.trace:
             labels += self._draw_trace(i)
         return labels
+
+    def _draw_target(self, panel: int, track: Track, i: int) -> None:
+        """The tip's path up to frame i (the mean of the tip vertices) and a cross at frame i's target."""
+        c = self.canvas
+        path = self.to_canvas(panel, track.states[:i + 1, track.mesh.tip].mean(axis=1))
+        if len(path) > 1:
+            c.segments(np.stack([path[:-1], path[1:]], axis=1), TIP_PATH, 2.0)
+        centre = self.to_canvas(panel, track.targets[i])
+        arm = 9.0 / np.array([self.width, self.height])
+        c.segments(np.array([[centre - arm, centre + arm], [centre + arm * (-1, 1), centre + arm * (1, -1)]]),
+                   TARGET, 3.0)
 
     def _draw_colorbar(self) -> list[Label]:
         """A vertical colour bar with numbered ticks over the colour range."""

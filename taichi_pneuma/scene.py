@@ -20,6 +20,7 @@ from .effects import Effect
 from .errors import require, require_finite
 from .geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
 from .model import EnergyModel
+from .output import check_stem
 from .schedule import ChamberSchedule, Schedule, area_ramp
 from .terms import AreaChamber, Clamp, NeoHookean, PressureChamber
 from .terms.base import Term
@@ -57,14 +58,25 @@ class Region:
 
 @dataclass(frozen=True)
 class ChamberControl:
-    """How a chamber is driven: its schedule and, under area control, the penalty stiffness k."""
+    """How a chamber is driven: its schedule, under area control the penalty stiffness k, and the
+    (min, max) command bounds inverse control keeps to (None: inverse.command_bounds's default)."""
 
     schedule: ChamberSchedule
     stiffness: float = 1e5
+    bounds: tuple[float, float] | None = None
 
     def __post_init__(self):
         require_finite("stiffness", self.stiffness)
         require(self.stiffness > 0, f"chamber stiffness k = {self.stiffness!r} must be > 0")
+        if self.bounds is not None:
+            require(len(self.bounds) == 2, f"bounds = {list(self.bounds)!r} must be [min, max]")
+            low, high = (require_finite("bounds", b) for b in self.bounds)
+            require(low < high, f"bounds = {list(self.bounds)!r}: min {low:g} must be < max {high:g}")
+            if self.schedule.control == "area":
+                require(low > 0, f"bounds = {list(self.bounds)!r}: an area ratio must be > 0")
+            else:
+                require(low >= 0 or self.schedule.allow_vacuum,
+                        f"bounds = {list(self.bounds)!r}: a negative pressure needs allow_vacuum = true")
 
     def term(self, config, loop: np.ndarray, name: str, order: int) -> Chamber:
         if self.schedule.control == "area":
@@ -84,8 +96,10 @@ class Scene:
     clamp_stiffness: float = 1e9
     effects: tuple[Effect, ...] = ()
     name: str = "scene"
+    targets: tuple = ()  # targets.Target poses for inverse control (apps.reach), in order
 
     def __post_init__(self):
+        check_stem(self.name)  # the result files are named after the scene
         require_finite("clamp stiffness", self.clamp_stiffness)
         require(self.clamp_stiffness > 0, f"clamp stiffness = {self.clamp_stiffness!r} must be > 0")
         require(len(self.controls) == len(self.geometry.chambers),

@@ -7,13 +7,15 @@
     [clamp]      side = "left" | "right" | "bottom" | "top"  or  box = [x0, y0, x1, y1];  stiffness
     [[chambers]] name, shape = "ellipse" (center, semi_axes, points) | "rounded_rectangle" (center, size,
                  radius, corner_points) | "polygon" (points); control = "area" (stiffness) | "pressure"
-                 (allow_vacuum); keyframes = [[step, value], ...]
+                 (allow_vacuum); keyframes = [[step, value], ...]; bounds = [min, max] (inverse control)
     [schedule]   increments
     [effects.gravity] density, g      [effects.ground] height, dhat, stiffness      [effects.self_contact] dhat, stiffness
     [effects.dynamics] density, dt
+    [[targets]]  tip = [x, y], angle (degrees, optional), weights = [w_x, w_y, w_angle]  (inverse control, in order)
 
 Every key is checked: an unknown key, a missing required one, or a value out of range is refused
-with its dotted path (e.g. ``chambers[1].semi_axes``).
+with its dotted path (e.g. ``chambers[1].semi_axes``). A file over MAX_SCENE_BYTES is refused unread;
+``name`` must be a plain file name (output.check_stem); without it the file's own name, reduced to one, is used.
 """
 
 from __future__ import annotations
@@ -25,10 +27,13 @@ import tomllib
 from .effects import EFFECTS
 from .errors import PneumaInputError, require
 from .geometry import ClampSelection, Ellipse, Geometry, Polygon, Rectangle, RectangleUnion, RoundedRectangle
+from .output import reduce_to_stem
 from .scene import ChamberControl, Material, Region, Scene
 from .schedule import ChamberSchedule
+from .targets import Target
 
 REQUIRED = object()
+MAX_SCENE_BYTES = 1_000_000
 
 
 class Table:
@@ -70,11 +75,11 @@ class Table:
 
 
 def build(table: Table, make):
-    """Call make() and prefix any PneumaInputError it raises with the table's path."""
+    """Call make() and prefix any PneumaInputError it raises with the table's path (unless it names a key in it)."""
     try:
         return make()
     except PneumaInputError as exc:
-        if not table.path:
+        if not table.path or f"{table.path}." in str(exc):
             raise
         raise PneumaInputError(f"{table.path}: {exc}") from None
 
@@ -119,8 +124,16 @@ def read_chamber(t: Table) -> tuple[str, object, ChamberControl]:
     keyframes = tuple(tuple(k) if isinstance(k, list) else k for k in t.take("keyframes", kind=list))
     allow_vacuum = t.take("allow_vacuum", False, bool) if control == "pressure" else False
     schedule = build(t, lambda: ChamberSchedule(control, keyframes, allow_vacuum))
+    bounds = t.take("bounds", None, list)
     t.close()
-    return name, shape, build(t, lambda: ChamberControl(schedule, stiffness))
+    return name, shape, build(t, lambda: ChamberControl(schedule, stiffness, None if bounds is None else tuple(bounds)))
+
+
+def read_target(t: Table) -> Target:
+    target = build(t, lambda: Target(tuple(t.take("tip", kind=list)), t.take("angle", None, float),
+                                     tuple(t.take("weights", [1.0, 1.0, 1.0], list))))
+    t.close()
+    return target
 
 
 def read_material(t: Table | None) -> tuple[Material, tuple[Region, ...]]:
@@ -171,22 +184,30 @@ def read_scene(data: dict, name: str) -> Scene:
     effects_t = top.table("effects", {})
     effects = tuple(read_effect(key, effects_t.table(key)) for key in list(effects_t.data))
     effects_t.known |= set(effects_t.data)
+    targets = tuple(read_target(t) for t in top.tables("targets"))
     top.close()
     geometry = build(top, lambda: Geometry(body, tuple((n, s) for n, s, _ in chambers), max_area, clamp, order))
     return build(top, lambda: Scene(geometry, tuple(c for _, _, c in chambers), increments, material, regions,
-                                    clamp_stiffness, effects, scene_name))
+                                    clamp_stiffness, effects, scene_name, targets))
 
 
 def load_scene(path: str | os.PathLike) -> Scene:
     """Read and validate a scene file; errors are PneumaInputError prefixed with the file name."""
     try:
         with open(path, "rb") as f:
-            data = tomllib.load(f)
+            raw = f.read(MAX_SCENE_BYTES + 1)
     except OSError as exc:
         raise PneumaInputError(f"scene file {str(path)!r} cannot be read ({exc.strerror})") from None
+    require(len(raw) <= MAX_SCENE_BYTES, f"{path}: larger than {MAX_SCENE_BYTES} bytes, the most a scene file may be")
+    try:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise PneumaInputError(f"{path}: not valid TOML (not UTF-8: {exc.reason} at byte {exc.start})") from None
     except tomllib.TOMLDecodeError as exc:
         raise PneumaInputError(f"{path}: not valid TOML ({exc})") from None
+    except RecursionError:
+        raise PneumaInputError(f"{path}: not valid TOML (arrays or tables nested too deeply)") from None
     try:
-        return read_scene(data, os.path.splitext(os.path.basename(path))[0])
+        return read_scene(data, reduce_to_stem(os.path.splitext(os.path.basename(path))[0]))
     except PneumaInputError as exc:
         raise PneumaInputError(f"{path}: {exc}") from None

@@ -14,15 +14,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import require, require_finite
+from .errors import require, require_finite, shape_of
 
 CONTROLS = ("area", "pressure")
 REST_COMMAND = {"area": 1.0, "pressure": 0.0}
+MAX_AREA_RATIO = 1e3  # far past any rubber (the hard cases reach 8); keeps (A - A*)^2 from overflowing
 
 
 @dataclass(frozen=True)
 class ChamberSchedule:
-    """Keyframes ((step, value), ...) of one chamber; value is an area ratio (> 0) or a pressure.
+    """Keyframes ((step, value), ...) of one chamber; value is an area ratio in (0, MAX_AREA_RATIO] or a pressure.
 
     A pressure below zero (suction) is refused unless allow_vacuum is set.
     """
@@ -33,7 +34,7 @@ class ChamberSchedule:
 
     def __post_init__(self):
         require(self.control in CONTROLS, f"control = {self.control!r} is not one of {', '.join(CONTROLS)}")
-        require(len(self.keyframes) >= 1 and all(np.shape(k) == (2,) for k in self.keyframes),
+        require(len(self.keyframes) >= 1 and all(shape_of(k) == (2,) for k in self.keyframes),
                 f"keyframes = {self.keyframes!r} must be a non-empty list of [step, value] pairs")
         steps = [require_finite("keyframes step", s) for s, _ in self.keyframes]
         values = [require_finite("keyframes value", v) for _, v in self.keyframes]
@@ -41,8 +42,8 @@ class ChamberSchedule:
                 f"keyframes steps {steps!r} must be whole numbers >= 0")
         require(all(b > a for a, b in zip(steps, steps[1:])), f"keyframes steps {steps!r} must increase")
         if self.control == "area":
-            bad = [v for v in values if v <= 0]
-            require(not bad, f"keyframes area ratio {bad[0] if bad else ''!r} must be > 0")
+            bad = [v for v in values if not 0 < v <= MAX_AREA_RATIO]
+            require(not bad, f"keyframes area ratio {bad[0] if bad else ''!r} must lie in (0, {MAX_AREA_RATIO:g}]")
         elif not self.allow_vacuum:
             bad = [v for v in values if v < 0]
             require(not bad, f"keyframes pressure {bad[0] if bad else ''!r} is negative; "

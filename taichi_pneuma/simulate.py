@@ -113,18 +113,42 @@ def predict(built: BuiltScene, previous, current, commands: np.ndarray) -> np.nd
     return u1 + move if built.model.max_step(move.ravel()) > 1.0 else u1
 
 
-class RampFailed(RuntimeError):
-    """An increment found no equilibrium even after cutting it back; `partial` holds the steps done."""
+def chamber_records(built: BuiltScene, commands: np.ndarray) -> dict[str, ChamberRecord]:
+    """Each chamber's command, area, area ratio and pressure in the model's current state, by name."""
+    records = {}
+    for chamber, command in zip(built.chambers, commands):
+        area = chamber.area()
+        records[chamber.chamber_name] = ChamberRecord(chamber.control, float(command), area, area / chamber.rest_area,
+                                                      chamber.pressure())
+    return records
+
+
+class RampStopped(RuntimeError):
+    """The ramp ended before its last increment; `partial` holds the steps done."""
 
     def __init__(self, message: str, partial: RampResult):
         super().__init__(message)
         self.partial = partial
 
 
+class RampFailed(RampStopped):
+    """An increment found no equilibrium even after cutting it back."""
+
+
+class RampInterrupted(RampStopped):
+    """The caller's stop() asked the ramp to end after an increment (e.g. on Ctrl-C)."""
+
+
 def tip_rotation(rest: np.ndarray, current: np.ndarray) -> float:
     """Least-squares rigid rotation (degrees) taking the centred rest points to the centred current ones."""
     r, c = rest - rest.mean(axis=0), current - current.mean(axis=0)
     return math.degrees(math.atan2(float(np.sum(r[:, 0] * c[:, 1] - r[:, 1] * c[:, 0])), float(np.sum(r * c))))
+
+
+def tip_measures(mesh, u: np.ndarray) -> tuple[float, float, float]:
+    """(dx, dy, rotation in degrees) of the tip: the mean displacement of the tip vertices and their rigid rotation."""
+    dx, dy = u[mesh.tip].mean(axis=0)
+    return float(dx), float(dy), tip_rotation(mesh.vertices[mesh.tip], mesh.vertices[mesh.tip] + u[mesh.tip])
 
 
 def describe_commands(built: BuiltScene, commands: np.ndarray, reached: np.ndarray) -> str:
@@ -139,8 +163,45 @@ def describe_commands(built: BuiltScene, commands: np.ndarray, reached: np.ndarr
     return "; ".join(parts)
 
 
+class NoEquilibrium(RuntimeError):
+    """settle() found no equilibrium even after cutting back; the model holds the last equilibrium's u."""
+
+
+def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.ndarray, target: np.ndarray,
+           previous=None, max_cuts: int = MAX_CUTS):
+    """Solve the equilibrium at commands `target`, starting from the equilibrium u at commands `reached`.
+
+    A Newton solve that does not converge is cut back: the remaining change of all chamber commands is
+    halved and the smaller sub-increment solved from the last equilibrium, at most max_cuts times.
+    previous: the equilibrium (commands, u) before (reached, u), for the predictor, or None.
+    Returns (u, commands reached, previous, the SolveRecords, cuts); raises NoEquilibrium naming the
+    commands and the residual when the cuts run out.
+    """
+    records: list[SolveRecord] = []
+    origin = reached
+    done, fraction, cuts = 0.0, 1.0, 0
+    while True:
+        trial = min(1.0, done + fraction)
+        commands = origin + trial * (target - origin)
+        built.set_commands(commands)
+        u_trial, record = solver.solve(predict(built, previous, (reached, u), commands))
+        records.append(record)
+        if record.converged:
+            previous = (reached, u)
+            u, done, reached = u_trial, trial, commands
+            if trial == 1.0:
+                return u, reached, previous, records, cuts
+        elif cuts < max_cuts:
+            cuts += 1
+            fraction /= 2
+        else:
+            built.model.set_displacements(u)
+            raise NoEquilibrium(f"no equilibrium at {describe_commands(built, commands, reached)} after {cuts} cuts; "
+                                f"residual {record.residual:.2e} ({record.message})")
+
+
 def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: NewtonOptions | None = None,
-                 progress=None, max_cuts: int = MAX_CUTS) -> RampResult:
+                 progress=None, max_cuts: int = MAX_CUTS, stop=None) -> RampResult:
     """Solve for equilibrium at each step of the schedule (the scene's own by default), each from the last.
 
     An increment whose Newton solve does not converge is cut back: the remaining change of all
@@ -149,7 +210,9 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     RampFailed names the step, the commands (for pressure control, the last pressure reached) and
     the residual, and carries the steps done. progress, if given, is called after every increment as
     progress(step_record, positions, contact_force): the positions (n, 2) and, if the scene has contact,
-    the summed contact force per vertex (n, 2), else None.
+    the summed contact force per vertex (n, 2), else None; stop, if given, is asked stop() after every
+    increment but the last, and when it returns True the ramp ends there with RampInterrupted carrying
+    the steps done.
     """
     schedule = schedule or built.scene.schedule
     solver = NewtonSolver(built.model, options)
@@ -166,47 +229,24 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
 
     for i in range(schedule.increments + 1):
         start = time.perf_counter()
-        records: list[SolveRecord] = []
-        origin, target = reached, schedule.commands(i)
-        done, fraction, cuts = 0.0, 1.0, 0
-        while True:
-            trial = min(1.0, done + fraction)
-            commands = origin + trial * (target - origin)
-            built.set_commands(commands)
-            u_trial, record = solver.solve(predict(built, previous, (reached, u), commands))
-            records.append(record)
-            if record.converged:
-                previous = (reached, u)
-                u, done, reached = u_trial, trial, commands
-                if trial == 1.0:
-                    break
-            elif cuts < max_cuts:
-                cuts += 1
-                fraction /= 2
-            else:
-                built.model.set_displacements(u)
-                raise RampFailed(
-                    f"step {i}: no equilibrium at {describe_commands(built, commands, reached)} after {cuts} cuts; "
-                    f"residual {record.residual:.2e} ({record.message})", partial())
+        target = schedule.commands(i)
+        try:
+            u, reached, previous, records, cuts = settle(built, solver, reached, u, target, previous, max_cuts)
+        except NoEquilibrium as failure:
+            raise RampFailed(f"step {i}: {failure}", partial()) from None
         built.set_commands(target)
         built.model.set_displacements(u)
         for term in built.model.terms:
             term.advance(u)
         final = records[-1]
-        chambers = {}
-        for chamber, command in zip(built.chambers, target):
-            area = chamber.area()
-            chambers[chamber.chamber_name] = ChamberRecord(chamber.control, float(command), area,
-                                                           area / chamber.rest_area, chamber.pressure())
+        chambers = chamber_records(built, target)
         contact, vertex_forces = {}, np.zeros_like(u)
         for name, term in contact_terms:
             f = -term.gradient()
             vertex_forces += f
             fx, fy = f.sum(axis=0)
             contact[name] = (float(fx), float(fy), float(np.linalg.norm(f, axis=1).sum()))
-        tip = u[mesh.tip].mean(axis=0)
-        step = StepRecord(i, chambers, float(tip[0]), float(tip[1]),
-                          tip_rotation(mesh.vertices[mesh.tip], mesh.vertices[mesh.tip] + u[mesh.tip]),
+        step = StepRecord(i, chambers, *tip_measures(mesh, u),
                           sum(r.iterations for r in records), final.residual, final.converged, cuts,
                           len(records) - cuts, built.elastic.min_determinant(), time.perf_counter() - start, contact)
         steps.append(step)
@@ -215,4 +255,6 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
         solves.append(final)
         if progress is not None:
             progress(step, states[-1], vertex_forces if contact_terms else None)
+        if stop is not None and i < schedule.increments and stop():
+            raise RampInterrupted(f"interrupted after step {i} of {schedule.increments}", partial())
     return partial()

@@ -10,28 +10,36 @@ ParaView files (a VTU per step as it is solved, indexed by a PVD) under --out, a
 a video of the run (body coloured by --color beside its area/pressure trace) and a PNG of its last frame.
 --set KEY=VALUE changes any dotted scene-file key. --interactive instead opens a window with a slider
 for the commanded area.
+
+Before any work, a run past the resource limits (estimated triangles, increments, frame pixels; see
+limits.py) is refused in one line naming the flag that raises the limit. Ctrl-C during the ramp
+stops it after the current increment, saves the steps done (summary marked interrupted) and exits 130.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
+import threading
+from contextlib import contextmanager
 
+import numpy as np
 from tqdm import tqdm
 
-from .. import runtime
-from ..api import simulate
+from .. import limits, runtime
+from ..api import Result, simulate
 from ..errors import PneumaInputError, require, require_finite
 from ..geometry import BeamGeometry
 from ..newton import NewtonOptions
-from ..output import prepare_directory
+from ..output import prepare_directory, save_json
 from ..render import BACKENDS, COLOR_FIELDS
 from ..scene import Scene, reference_scene
 from ..scenefile import load_scene
 from ..scenetoml import parse_assignment
 from ..schedule import area_ramp
-from ..simulate import MAX_CUTS, RampFailed
+from ..simulate import MAX_CUTS, RampFailed, RampInterrupted, RampStopped
 from ..vtk import VtkSeries
 
 # --quality presets: (max triangle area, element order, Newton tolerance); see the README's accuracy study
@@ -58,6 +66,10 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-iterations", type=int, default=40, help="Newton iterations per solve before it counts as failed")
     p.add_argument("--max-cuts", type=int, default=MAX_CUTS,
                    help="times a non-converging increment may be halved before the run stops")
+    p.add_argument("--max-triangles", type=int, default=limits.MAX_TRIANGLES,
+                   help="refuse a scene whose mesh is estimated (before meshing) to have more triangles")
+    p.add_argument("--max-increments", type=int, default=limits.MAX_INCREMENTS,
+                   help="refuse a schedule of more increments")
     p.add_argument("--out", default="out", help="directory for the result files")
     p.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
     p.add_argument("--quiet", action="store_true", help="no per-step lines, no progress bars")
@@ -74,6 +86,8 @@ def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
     p.add_argument("--no-video", action="store_true", help="no rendering at all: no video, no PNG")
     p.add_argument("--color", default="stretch", choices=["none", *COLOR_FIELDS],
                    help="colour the body by a field: the largest principal stretch, det F, or none (mesh edges)")
+    p.add_argument("--max-frame-pixels", type=int, default=limits.MAX_FRAME_PIXELS,
+                   help="refuse a --size of more pixels per frame")
 
 
 def parser() -> argparse.ArgumentParser:
@@ -104,6 +118,7 @@ def rendering_flags(args: argparse.Namespace) -> tuple[int, int]:
         raise PneumaInputError(f"--size = {text!r} must look like 960x384") from None
     require(width >= 64 and height >= 64 and width % 2 == 0 and height % 2 == 0,
             f"--size = {text!r}: width and height must be even and >= 64")
+    limits.check_frame(width, height, args.max_frame_pixels)
     return width, height
 
 
@@ -121,14 +136,18 @@ def check_flags(args: argparse.Namespace) -> None:
         require_finite(f"--{name.replace('_', '-')}", getattr(args, name))
     newton_options(args)  # validates --tol and --max-iterations
     require(args.max_cuts >= 0, f"--max-cuts = {args.max_cuts!r} must be >= 0")
+    for name in ("max_triangles", "max_increments", "max_frame_pixels"):
+        require(getattr(args, name) >= 1, f"--{name.replace('_', '-')} = {getattr(args, name)!r} must be >= 1")
     area_ramp(args.growth, args.steps)  # validates growth and steps before any work
 
 
 def scene_for(args: argparse.Namespace, cy: float) -> Scene:
     """The validated reference scene of the flags with its chamber at height cy (PneumaInputError on bad flags)."""
     check_flags(args)
-    return reference_scene(require_finite("--cy", cy), args.cx, args.growth, args.steps, args.E, args.nu, args.k,
-                           args.max_area, order=args.order)
+    scene = reference_scene(require_finite("--cy", cy), args.cx, args.growth, args.steps, args.E, args.nu, args.k,
+                            args.max_area, order=args.order)
+    limits.check_scene(scene, args.max_triangles, args.max_increments)
+    return scene
 
 
 def build(scene: Scene):
@@ -144,12 +163,35 @@ def build(scene: Scene):
     return built
 
 
-def solve(args: argparse.Namespace, built, label: str = "solving", vtk: VtkSeries | None = None):
+@contextmanager
+def stop_on_interrupt():
+    """Yield a threading.Event that the first Ctrl-C (SIGINT) sets instead of raising KeyboardInterrupt;
+    a second Ctrl-C interrupts at once. Outside the main thread (no signal handling) the event never sets."""
+    requested = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield requested
+        return
+    previous = signal.getsignal(signal.SIGINT)
+
+    def handler(signum, frame):
+        requested.set()
+        signal.signal(signal.SIGINT, previous)
+        print("interrupt: stopping after the current increment (Ctrl-C again to stop at once)", file=sys.stderr)
+
+    signal.signal(signal.SIGINT, handler)
+    try:
+        yield requested
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def solve(args: argparse.Namespace, built, label: str = "solving", vtk: VtkSeries | None = None) -> Result:
     """Run the scene's schedule, printing a line per step, with a progress bar on a terminal only (the
     lines go through the bar, tqdm.write; piped or logged output gets the lines alone); write each
     step's VTU as it is solved if vtk is given. Returns an api.Result.
 
-    Raises RampFailed (its .result: the converged steps) when an increment fails after its cuts."""
+    Raises RampFailed when an increment fails after its cuts, RampInterrupted after the increment
+    during which Ctrl-C was pressed; both carry the steps done (.result)."""
     increments = built.scene.increments
     bar = tqdm(total=increments + 1, desc=label, unit="step", disable=True if args.quiet else None, leave=False)
 
@@ -163,9 +205,9 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk: VtkSerie
                        f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  {step.cuts} cuts  "
                        f"residual {step.residual:.1e}")
 
-    with bar:
+    with bar, stop_on_interrupt() as interrupted:
         return simulate(built, tol=args.tol, max_iterations=args.max_iterations, max_cuts=args.max_cuts,
-                        progress=progress)
+                        progress=progress, stop=interrupted.is_set)
 
 
 def render_report(export, seconds_per_step: float) -> str:
@@ -187,12 +229,12 @@ def apply_set(scene: Scene, assignments: list[str]) -> Scene:
 def run(args: argparse.Namespace) -> dict:
     if args.scene:
         check_flags(args)
-        scene = load_scene(args.scene)
-        stem = scene.name
+        scene = apply_set(load_scene(args.scene), args.set)
+        stem = scene.name  # a plain file name (Scene checks it): every result file lands inside --out
     else:
-        scene = scene_for(args, args.cy)
+        scene = apply_set(scene_for(args, args.cy), args.set)
         stem = f"inflate_cy{args.cy:+.2f}"
-    scene = apply_set(scene, args.set)
+    limits.check_scene(scene, args.max_triangles, args.max_increments)  # after --set, which may raise them
     size = rendering_flags(args)
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
     if args.interactive:
@@ -208,9 +250,11 @@ def run(args: argparse.Namespace) -> dict:
     vtk = VtkSeries(out, stem, built)
     try:
         result = solve(args, built, vtk=vtk)
-    except RampFailed as failure:
-        written = failure.result.save_history(out, stem) + [vtk.pvd]
-        print(f"saved the {len(failure.partial.steps)} converged steps in " + ", ".join(str(p) for p in written))
+    except RampStopped as stopped:
+        written = stopped.result.save_history(out, stem) + [vtk.pvd]
+        if isinstance(stopped, RampInterrupted):
+            written.append(save_json(out / f"{stem}_summary.json", stopped.result.summary(interrupted=True)))
+        print(f"saved the {len(stopped.partial.steps)} steps done in " + ", ".join(str(p) for p in written))
         raise
     final, summary = result.steps[-1], result.summary()
     for name, c in final.chambers.items():
@@ -220,32 +264,49 @@ def run(args: argparse.Namespace) -> dict:
     print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}")
     for name, (fx, fy, magnitude) in final.contact.items():
         print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g})")
-    print(f"Newton: {summary['newton_iterations_total']} iterations over {len(result.steps) - 1} solves "
+    print(f"Newton: {summary['newton_iterations_total']} iterations over {summary['steps'] - 1} solves "
           f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
           f"all converged: {summary['all_converged']}; run {result.seconds:.2f} s")
-    written, video = [], {}
+    # results saved before rendering: a Ctrl-C there loses none
+    written = result.save(out, stem, vtk=False) + [vtk.pvd]
     if not args.no_video:
         done = result.video(args.video or out / f"{stem}.mp4", out / f"{stem}.png", size, args.fps, args.color,
                             args.renderer, quiet=args.quiet)
-        video = dict(renderer=done.renderer, video_frames=done.frames, video_size=[done.width, done.height],
-                     render_ms_per_frame=done.ms_per_frame)
+        summary.update(renderer=done.renderer, video_frames=done.frames, video_size=[done.width, done.height],
+                       render_ms_per_frame=done.ms_per_frame)
         print(render_report(done, summary["solve_seconds_per_step"]))
-        written += [done.video, done.png]
-    written += result.save(out, stem, vtk=False, extra=video) + [vtk.pvd]
+        written = [done.video, done.png] + written
+        save_json(out / f"{stem}_summary.json", summary)
     print("wrote " + ", ".join(str(p) for p in written) + f" (+ {len(vtk.entries)} VTU files in {vtk.folder})")
-    return {**summary, **video}
+    return summary
+
+
+def save_history(out, stem: str, built, ramp) -> list:
+    """Write the per-step history (CSV) and states (npz) of a simulate.RampResult (api.Result.save_history)."""
+    return Result(built, ramp).save_history(out, stem)
 
 
 def exit_code(app_run, args: argparse.Namespace) -> int:
-    """Run an app; bad input is one line and exit 2, a ramp with no equilibrium one line and exit 1."""
+    """Run an app; bad input is one line and exit 2, a ramp with no equilibrium one line and exit 1,
+    Ctrl-C one line and exit 130 (128 + SIGINT, as shells report it).
+
+    NumPy's floating-point warnings (overflow, invalid value) are silenced: a huge input value overflows
+    harmlessly in a check that then refuses it, and a solve that produces NaN or inf fails its own checks."""
     try:
-        summary = app_run(args)
+        with np.errstate(all="ignore"):
+            summary = app_run(args)
     except PneumaInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except RampFailed as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
+    except RampInterrupted as exc:
+        print(f"error: {exc} (Ctrl-C)", file=sys.stderr)
+        return 130
+    except KeyboardInterrupt:
+        print("error: interrupted (Ctrl-C)", file=sys.stderr)
+        return 130
     return 0 if summary["all_converged"] else 1
 
 

@@ -1,0 +1,254 @@
+"""Inverse control: find the chamber commands that put the tip where you want it.
+
+    python -m taichi_pneuma.apps.reach --scene assets/scenes/bidirectional.toml --tip 1.8 -0.1
+    python -m taichi_pneuma.apps.reach --scene FILE --targets path.csv     (or the scene's [[targets]])
+    python -m taichi_pneuma.apps.reach --design cy --tip-dy -0.2
+
+X Y is where the tip point (the mean of the tip vertices, as in inflate's tip deflection) should be,
+in scene coordinates; --angle DEG adds the tip rotation. Commands stay inside each chamber's bounds
+(--bounds NAME MIN MAX, the scene file's `bounds`, or the range its keyframes drive). Prints the
+commands found and a summary line starting with `reached:`; an unreachable target prints
+`unreachable: ...` (the closest pose, the chambers at a bound) and exits with 1, its files still
+written. Writes under --out the video (the target marker and the tip's path), its last frame,
+the per-frame history CSV (commands, tip, target, error), the states and a summary JSON.
+--design cy --tip-dy D instead finds the chamber height cy at which the reference ramp ends at tip
+deflection D.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import os
+import sys
+import time
+
+import numpy as np
+from tqdm import tqdm
+
+from .. import runtime
+from ..design import solve_design
+from ..errors import PneumaInputError, require, require_finite
+from ..geometry import BeamGeometry
+from ..inverse import Reacher, ReachOptions, command_bounds, frames
+from ..output import prepare_directory, save_json
+from ..scene import Scene
+from ..scenefile import load_scene
+from ..simulate import NoEquilibrium, run_schedule
+from ..targets import Target, read_targets_csv
+from .inflate import (add_ramp_arguments, add_video_arguments, build, check_flags, exit_code, newton_options,
+                      render_report, rendering_flags, save_history, scene_for)
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.reach", description=__doc__.split("\n")[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--scene", help="a scene file (TOML); default the reference beam of the flags below")
+    p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
+    p.add_argument("--tip", nargs=2, type=float, metavar=("X", "Y"), help="target position of the tip point")
+    p.add_argument("--angle", type=float, default=None, help="target tip rotation in degrees (with --tip)")
+    p.add_argument("--weights", nargs=3, type=float, default=[1.0, 1.0, 1.0], metavar=("WX", "WY", "WANGLE"),
+                   help="weights of the x, y and rotation errors (with --tip)")
+    p.add_argument("--targets", help="CSV of targets followed in order (columns x, y, optional angle, wx, wy, wangle)")
+    p.add_argument("--bounds", nargs=3, action="append", default=[], metavar=("CHAMBER", "MIN", "MAX"),
+                   help="command bounds of a chamber (pressure or area ratio); repeatable")
+    p.add_argument("--tip-tol", type=float, default=ReachOptions.tol, help="tip tolerance, a fraction of the body length")
+    p.add_argument("--angle-tol", type=float, default=ReachOptions.angle_tol, help="rotation tolerance, degrees")
+    p.add_argument("--restarts", type=int, default=ReachOptions.restarts,
+                   help="descents from other commands when one stops short of the target")
+    p.add_argument("--design", choices=["cy"], help="find the reference chamber height cy for --tip-dy instead")
+    p.add_argument("--tip-dy", type=float, help="with --design cy: the tip deflection the ramp should end at")
+    add_ramp_arguments(p)
+    add_video_arguments(p, "960x384")
+    p.add_argument("--interactive", action="store_true",
+                   help="a window (needs a display): drag the target with the mouse, a slider per chamber")
+    return p
+
+
+def with_bounds(scene: Scene, bounds: list[list[str]]) -> Scene:
+    """The scene with each --bounds NAME MIN MAX applied to its chamber (checked as the scene file's are)."""
+    names = scene.chamber_names
+    controls = list(scene.controls)
+    for name, low, high in bounds:
+        require(name in names, f"--bounds: unknown chamber {name!r} (chambers: {', '.join(names)})")
+        i = names.index(name)
+        try:
+            controls[i] = dataclasses.replace(controls[i], bounds=(require_finite("min", low),
+                                                                   require_finite("max", high)))
+        except PneumaInputError as exc:
+            raise PneumaInputError(f"--bounds {name}: {exc}") from None
+    return dataclasses.replace(scene, controls=tuple(controls))
+
+
+def targets_of(args: argparse.Namespace, scene: Scene, required: bool = True) -> list[Target]:
+    """--tip (with --angle, --weights), else --targets FILE.csv, else the scene file's [[targets]] (if not
+    required, else none)."""
+    require(args.tip is None or args.targets is None, "give --tip or --targets, not both")
+    require(args.angle is None or args.tip is not None, "--angle needs --tip")
+    if args.tip is not None:
+        return [Target(tuple(args.tip), args.angle, tuple(args.weights))]
+    if args.targets is not None:
+        return read_targets_csv(args.targets)
+    require(bool(scene.targets) or not required,
+            "no target: give --tip X Y, --targets FILE.csv, or [[targets]] in the scene file")
+    return list(scene.targets)
+
+
+def describe(reacher: Reacher, commands: np.ndarray) -> str:
+    return ", ".join(f"{name} = {q:.6g} ({unit})" for name, unit, q in zip(reacher.names, reacher.units, commands))
+
+
+def reach_record(reacher: Reacher, result) -> dict:
+    return {"target": {"tip": list(result.target.tip), "angle": result.target.angle,
+                       "weights": list(result.target.weights)},
+            "tip": result.pose.tip.tolist(), "tip_rotation_deg": result.pose.rotation, "tip_error": result.error,
+            "angle_error_deg": result.angle_error, "reached": result.reached,
+            "commands": dict(zip(reacher.names, result.pose.commands.tolist())),
+            "active_bounds": [{"chamber": n, "bound": side, "value": v} for n, side, _, v in result.active],
+            "iterations": result.iterations, "forward_solves": result.forward_solves,
+            "newton_iterations": result.newton_iterations, "seconds": result.seconds}
+
+
+def run(args: argparse.Namespace) -> dict:
+    if args.design:
+        return run_design(args)
+    require(args.tip_dy is None, "--tip-dy needs --design cy")
+    explicit_tol = args.tol is not None  # live mode keeps interactive.LIVE_TOL unless --tol is given
+    check_flags(args)
+    if args.scene:
+        scene = load_scene(args.scene)
+        stem = f"reach_{scene.name}"
+    else:
+        scene = scene_for(args, args.cy)
+        stem = f"reach_cy{args.cy:+.2f}"
+    scene = with_bounds(scene, args.bounds)
+    lo, hi = command_bounds(scene)
+    targets = targets_of(args, scene, required=not args.interactive)
+    options = ReachOptions(args.tip_tol, args.angle_tol, restarts=args.restarts)
+    size = rendering_flags(args)
+    require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
+    if args.interactive:
+        require(bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")),
+                "--interactive needs a display (DISPLAY is not set)")
+    out = prepare_directory(args.out)
+    runtime.init(args.arch)
+    if args.interactive:
+        from ..interactive import follow_mouse
+        return follow_mouse(scene, (lo, hi), size, args.renderer, options,
+                            newton_options(args) if explicit_tol else None, targets[0] if targets else None)
+    built = build(scene)
+    start = time.perf_counter()
+    reacher = Reacher(built, (lo, hi), options, newton_options(args), args.max_cuts)
+    print(f"bounds: " + ", ".join(f"{n} {a:g} .. {b:g}" for n, a, b in zip(reacher.names, lo, hi))
+          + f"; start (box centre) solved in {time.perf_counter() - start:.2f} s")
+    bar = tqdm(total=len(targets), desc="reaching", unit="target", disable=args.quiet or len(targets) < 2,
+               leave=False)
+
+    done = 0
+
+    def progress(result):
+        nonlocal done
+        done += 1
+        bar.update()
+        if not args.quiet:
+            bar.write(f"  target {done}/{len(targets)} {tuple(result.target.tip)}: {describe(reacher, result.pose.commands)}; "
+                      f"tip error {result.error:.3g}; {result.forward_solves} forward solves, {result.seconds:.2f} s")
+
+    with bar:
+        results = reacher.follow(targets, progress)
+    last = results[-1]
+    ramp = frames(reacher, results)
+    solves = [r.forward_solves for r in results]
+    seconds = [r.seconds for r in results]
+    summary = {
+        "scene": scene.name, "vertices": built.mesh.n_vertices, "triangles": built.mesh.n_triangles,
+        "body_length": reacher.length, "bounds": {n: [a, b] for n, a, b in zip(reacher.names, lo, hi)},
+        **reach_record(reacher, last),
+        "targets_reached": sum(r.reached for r in results), "targets": len(results),
+        "worst_tip_error": max(r.error for r in results),
+        "forward_solves_per_reach": float(np.mean(solves)), "seconds_per_reach": float(np.mean(seconds)),
+        "reaches": [reach_record(reacher, r) for r in results],
+        "all_converged": all(r.reached for r in results),
+    }
+    print("commands: " + describe(reacher, last.pose.commands))
+    print(f"forward solves: {sum(solves)} for {len(results)} target(s) ({np.mean(solves):.1f} per reach, "
+          f"{sum(r.newton_iterations for r in results)} Newton iterations); {np.mean(seconds):.3f} s per reach")
+    written = []
+    if not args.no_video:
+        from ..render import FrameRenderer, Track
+        from ..video import export
+
+        ground = next((e.height for e in scene.effects if e.name == "ground"), None)
+        track = dataclasses.replace(Track.from_ramp(built.mesh, ramp, ground=ground),
+                                    targets=np.column_stack([ramp.column("target_x"), ramp.column("target_y")]))
+        renderer = FrameRenderer([track], *size, trace=True, backend=args.renderer)
+        done = export(renderer, args.video or out / f"{stem}.mp4", out / f"{stem}.png", args.fps, args.quiet)
+        summary.update(renderer=renderer.canvas.name, video_frames=done.frames, video_size=[done.width, done.height])
+        print(render_report(done, float(np.mean([s.seconds for s in ramp.steps]))))
+        written += [done.video, done.png]
+    written += save_history(out, stem, built, ramp) + [save_json(out / f"{stem}_summary.json", summary)]
+    print("wrote " + ", ".join(str(p) for p in written))
+    unreached = [(k, r) for k, r in enumerate(results, start=1) if not r.reached]
+    if not unreached:
+        if len(results) == 1:
+            print(last.summary_line())
+        else:
+            x, y = last.pose.tip
+            print(f"reached: all {len(results)} targets in order; last tip ({x:.6g}, {y:.6g}); "
+                  f"worst tip error {summary['worst_tip_error']:.3g}")
+    else:
+        k, first = unreached[0]
+        where = "" if len(results) == 1 else f"target {k} of {len(results)} ({len(unreached)} unreachable): "
+        print(where + first.summary_line(), file=sys.stderr)
+    return summary
+
+
+def run_design(args: argparse.Namespace) -> dict:
+    """--design cy --tip-dy D: the chamber height at which the reference ramp ends at tip deflection D."""
+    require(args.tip_dy is not None, "--design cy needs --tip-dy D")
+    wanted = require_finite("--tip-dy", args.tip_dy)
+    require(not args.scene and args.tip is None and args.targets is None and not args.interactive,
+            "--design cy works on the reference beam of the flags (no --scene, --tip, --targets, --interactive)")
+    scene_for(args, 0.0)  # validates the reference-beam flags
+    out = prepare_directory(args.out)
+    runtime.init(args.arch)
+    beam = BeamGeometry()
+    limit = beam.height / 2 - beam.b - 1e-3 - 1e-6  # the valid range: |cy| + b < H/2 - 1e-3
+    options = newton_options(args)
+
+    def tip_dy(cy: float) -> float:
+        started = time.perf_counter()
+        result = run_schedule(scene_for(args, cy).build(), options=options, max_cuts=args.max_cuts)
+        if not args.quiet:
+            print(f"  cy = {cy:+.6f}: tip dy {result.tip_deflection:+.6f} ({time.perf_counter() - started:.2f} s)",
+                  flush=True)
+        return result.tip_deflection
+
+    result = solve_design(tip_dy, -limit, limit, wanted)
+    summary = {"design": "cy", "tip_dy_wanted": wanted, "cy": result.value, "tip_dy": result.measure,
+               "tip_dy_error": abs(result.measure - wanted), "found": result.found, "range": [-limit, limit],
+               "evaluations": len(result.evaluations), "seconds": result.seconds,
+               "history": [{"cy": c, "tip_dy": m} for c, m in result.evaluations], "all_converged": result.found}
+    path = save_json(out / "design_cy_summary.json", summary)
+    print(f"evaluations: {len(result.evaluations)} ramps (a new mesh each) in {result.seconds:.1f} s; wrote {path}")
+    if result.found:
+        print(f"reached: cy = {result.value:+.6f} ends the ramp at tip dy {result.measure:+.6f} "
+              f"(error {abs(result.measure - wanted):.2g})")
+    else:
+        print(f"unreachable: tip dy {wanted:+.6g} lies outside what cy in [{-limit:+.6f}, {limit:+.6f}] gives "
+              f"({min(m for _, m in result.evaluations):+.6f} .. {max(m for _, m in result.evaluations):+.6f}); "
+              f"closest cy = {result.value:+.6f}, tip dy {result.measure:+.6f}", file=sys.stderr)
+    return summary
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    try:
+        return exit_code(run, args)
+    except NoEquilibrium as exc:  # the start (the centre of the command box) has no equilibrium
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,108 @@
+"""Sensitivities of a converged equilibrium to the chamber commands, by the direct method.
+
+At an equilibrium the residual r(u, q) = dE/du vanishes; q are the chamber commands (area ratio
+under area control, pressure under pressure control). Differentiating r(u(q), q) = 0:
+
+    H du/dq_j = -dr/dq_j,      H = d2E/du2, the *exact* Hessian at the equilibrium,
+
+    area control      r_c = -k (ratio A_rest - A) grad A   ->  dr/d(ratio) = -k A_rest grad A
+    pressure control  r_c = -p grad A                      ->  dr/dp       = -grad A
+
+H is the sparse exact Hessian S (unprojected elastic blocks, the chambers' load stiffness -p d2A,
+contact's b' Hess d, the clamp) plus the area chambers' rank-1 parts k gA gA^T, which enter by
+the Woodbury identity (linsolve.solve_low_rank_updated), as in Newton. One factorisation of S
+serves every command (one right-hand side each). The PSD-projected Hessian is not the derivative
+of r and gives wrong sensitivities: it is never used here. A stable equilibrium has H positive
+definite, so a Cholesky backend normally works; if it refuses S (S alone may be indefinite:
+it lacks k gA gA^T), SciPy's LU factorises it instead.
+
+The adjoint form of one output o(u) is do/dq = -lambda^T dr/dq with H lambda = do/du: one solve
+per output instead of one per command. With at most a handful of chambers the direct form costs
+the same and also gives every vertex's du/dq, so that is what is computed.
+
+Tip outputs (simulate.tip_measures): the tip point is the mean of the tip vertices, so its
+Jacobian is the mean of their rows of du/dq. The tip rotation is the least-squares rigid
+rotation theta = atan2(S, C), S = sum_i r_i x c_i, C = sum_i r_i . c_i, with r_i the centred
+rest and c_i the centred current tip positions; since sum_i r_i = 0 the centring of du drops out:
+
+    d theta = (C dS - S dC) / (S^2 + C^2),   dS = sum_i r_i x du_i,   dC = sum_i r_i . du_i.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .linsolve import FactorizationError, FixedPattern, make_backend, solve_low_rank_updated
+from .scene import BuiltScene
+
+
+@dataclass
+class Sensitivity:
+    """d(state)/d(commands) at one equilibrium; m = number of chambers, in the scene's order.
+
+    displacements: (n, 2, m) du/dq of every vertex; tip: (3, m) d(tip dx, tip dy, tip rotation in
+    degrees)/dq; backend: the linear solver that factorised the exact Hessian."""
+
+    displacements: np.ndarray
+    tip: np.ndarray
+    backend: str
+
+
+def command_forces(built: BuiltScene) -> np.ndarray:
+    """-dr/dq as an (n_dofs, m) matrix: column j is c_j grad A_j on chamber j's wall DOFs,
+    c_j = k A_rest (area control) or 1 (pressure control)."""
+    rhs = np.zeros((built.model.n_dofs, len(built.chambers)))
+    for j, chamber in enumerate(built.chambers):
+        scale = chamber.k * chamber.rest_area if chamber.control == "area" else 1.0
+        rhs[chamber.dofs, j] = scale * chamber.area_and_gradient()[1].ravel()
+    return rhs
+
+
+def tip_rotation_gradient(rest_tip: np.ndarray, current_tip: np.ndarray) -> np.ndarray:
+    """d theta / du_i (radians) of the least-squares tip rotation, (k, 2) for the k tip vertices."""
+    r = rest_tip - rest_tip.mean(axis=0)
+    c = current_tip - current_tip.mean(axis=0)
+    s = float(np.sum(r[:, 0] * c[:, 1] - r[:, 1] * c[:, 0]))
+    cc = float(np.sum(r * c))
+    d_s = np.column_stack([-r[:, 1], r[:, 0]])  # dS/du_i = (-r_y, r_x)
+    return (cc * d_s - s * r) / (s * s + cc * cc)
+
+
+def solve_exact(built: BuiltScene, rhs: np.ndarray, pattern: FixedPattern | None = None, backend=None,
+                factorised: bool = False):
+    """Solve H x = rhs with H the exact Hessian at the model's current state; return (x, backend name).
+
+    pattern, backend: reuse a Newton solver's (its symbolic analysis) instead of new ones; factorised:
+    the backend already holds S factorised (Newton's last exact factor, from within its last step of
+    the equilibrium: an approximation, for inverse control's iterations), so only the solves remain."""
+    model = built.model
+    backend = backend or make_backend("auto")
+    if not factorised:
+        if pattern is None:
+            pattern = FixedPattern(*model.hessian_pattern(), model.n_dofs)
+        matrix = pattern.matrix(model.hessian_values(psd_only=False))
+        try:
+            backend.factorize(matrix)
+        except FactorizationError:
+            backend = make_backend("scipy")
+            backend.factorize(matrix)
+    return solve_low_rank_updated(backend, rhs, model.low_rank()), backend.name
+
+
+def sensitivity(built: BuiltScene, commands: np.ndarray, u: np.ndarray, pattern: FixedPattern | None = None,
+                backend=None, factorised: bool = False) -> Sensitivity:
+    """du/dq and the tip Jacobian at the equilibrium u (n, 2) of `commands`; leaves them set on `built`.
+    pattern, backend, factorised: see solve_exact."""
+    built.set_commands(commands)
+    built.model.set_displacements(u)
+    du, name = solve_exact(built, command_forces(built), pattern, backend, factorised)
+    du = du.reshape(-1, 2, len(built.chambers))
+    mesh = built.mesh
+    tip_du = du[mesh.tip]  # (k, 2, m)
+    rest_tip = mesh.vertices[mesh.tip]
+    rotation = tip_rotation_gradient(rest_tip, rest_tip + np.reshape(u, (-1, 2))[mesh.tip])
+    d_theta = np.einsum("kd,kdm->m", rotation, tip_du)
+    return Sensitivity(du, np.vstack([tip_du.mean(axis=0), math.degrees(1.0) * d_theta]), name)

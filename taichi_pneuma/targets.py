@@ -1,0 +1,64 @@
+"""Targets of inverse control: a tip point (optionally a tip rotation) to reach, each with a weight.
+
+The tip point is the mean of the tip vertices (as in inflate's tip deflection), in scene
+coordinates; the rotation is their least-squares rigid rotation, in degrees, counter-clockwise.
+A list of targets comes from a scene file's [[targets]] tables or from a CSV file with a header
+naming the columns x, y and, optionally, angle, wx, wy, wangle (weights; an empty angle cell
+leaves the rotation free).
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+from dataclasses import dataclass
+
+from .errors import PneumaInputError, require, require_finite
+
+COLUMNS = ("x", "y", "angle", "wx", "wy", "wangle")
+
+
+@dataclass(frozen=True)
+class Target:
+    """tip: (x, y) to reach; angle: tip rotation in degrees, or None to leave it free;
+    weights: (w_x, w_y, w_angle) >= 0 of the three errors in the least-squares objective."""
+
+    tip: tuple[float, float]
+    angle: float | None = None
+    weights: tuple[float, float, float] = (1.0, 1.0, 1.0)
+
+    def __post_init__(self):
+        require(len(self.tip) == 2, f"target tip = {list(self.tip)!r} must be [x, y]")
+        object.__setattr__(self, "tip", tuple(require_finite("target tip", v) for v in self.tip))
+        if self.angle is not None:
+            object.__setattr__(self, "angle", require_finite("target angle", self.angle))
+        require(len(self.weights) == 3, f"target weights = {list(self.weights)!r} must be [w_x, w_y, w_angle]")
+        weights = tuple(require_finite("target weight", w) for w in self.weights)
+        require(all(w >= 0 for w in weights) and (weights[0] > 0 or weights[1] > 0),
+                f"target weights = {list(self.weights)!r} must be >= 0, w_x or w_y > 0")
+        object.__setattr__(self, "weights", weights)
+
+
+def read_targets_csv(path: str | os.PathLike) -> list[Target]:
+    """Targets, one per row of a CSV file with a header (x, y required; angle, wx, wy, wangle optional)."""
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.DictReader(f))
+            header = rows[0].keys() if rows else []
+    except OSError as exc:
+        raise PneumaInputError(f"targets file {str(path)!r} cannot be read ({exc.strerror})") from None
+    except (csv.Error, UnicodeDecodeError) as exc:
+        raise PneumaInputError(f"{path}: not a CSV file ({exc})") from None
+    require(rows, f"{path}: no targets (a header line x,y[,angle,...] and one row per target)")
+    unknown = sorted(set(header) - set(COLUMNS), key=str)
+    require(not unknown and {"x", "y"} <= set(header),
+            f"{path}: columns {list(header)!r} must include x and y and be among {', '.join(COLUMNS)}")
+    targets = []
+    for i, row in enumerate(rows, start=2):
+        cell = lambda key, default=None: default if not (row.get(key) or "").strip() else row[key]
+        try:
+            targets.append(Target((cell("x"), cell("y")), cell("angle"),
+                                  (cell("wx", 1.0), cell("wy", 1.0), cell("wangle", 1.0))))
+        except PneumaInputError as exc:
+            raise PneumaInputError(f"{path}, line {i}: {exc}") from None
+    return targets

@@ -1,0 +1,190 @@
+"""Fuzzing the scene files (Hypothesis): the shipped scenes, mutated (wrong types, missing and extra
+keys, NaN and inf, huge, zero and negative numbers, overlapping chambers, odd names, cut-off files),
+either run or stop with one `error:` line, within TIME_BOUND, with no traceback and no file outside
+--out.
+
+Each example runs in this process (apps.inflate.main), so its cost is capped: every shipped scene is
+first made cheap (max_area 0.02 and its schedule squeezed into INCREMENTS increments), and the run
+flags (FLAGS) set low resource limits and few Newton iterations, so that a mutation which makes a
+scene big or slow is refused by the resource guards, as any such scene would be. A traceback is an
+exception escaping main(), which fails the example; stderr and warnings are captured per example.
+"""
+
+import copy
+import io
+import json
+import math
+import tempfile
+import time
+import tomllib
+import warnings
+from contextlib import redirect_stderr, redirect_stdout
+from datetime import timedelta
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, note, settings, strategies as st
+
+from taichi_pneuma.apps.inflate import main
+
+SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
+INCREMENTS = 3
+FLAGS = ["--no-video", "--quiet", "--max-triangles", "3000", "--max-increments", "20", "--max-iterations", "20",
+         "--max-cuts", "2"]
+TIME_BOUND = 20.0  # seconds per example (a guarded example takes well under 1 s)
+
+NUMBERS = [math.nan, math.inf, -math.inf, 0, 0.0, -1, -1.0, -0.5, 1e-300, 1e300, -1e300, 10**30, 10**9, 2.5]
+WRONG_TYPES = ["text", "", True, [], [1.0], [1, 2, 3], [[0, 1], [2]], {"x": 1}, "1e4"]
+# {WORK} becomes the example's own temporary folder: an absolute name that escaped would land there, not in /
+ODD_NAMES = ["../escaped", "../../etc/evil", "{WORK}/absolute", "a/b", "a\\b", ".hidden", "..", ".", "", " ",
+             "x" * 300, "naïve", "tab\tname", "new\nline", "nul\u0000", "-rf", "*", "~", "$HOME", "con", "ok_name"]
+EXTRA_KEYS = ["extra", "centre", "Name", "max_area", "E", "ε"]
+
+
+def cheap(scene: dict) -> dict:
+    """The scene with a coarse mesh and its keyframes squeezed into INCREMENTS increments."""
+    scene = copy.deepcopy(scene)
+    scene["mesh"] = {"max_area": 0.02}
+    n = scene["schedule"]["increments"]
+    scene["schedule"]["increments"] = INCREMENTS
+    for chamber in scene["chambers"]:
+        squeezed = {round(INCREMENTS * step / n): value for step, value in chamber["keyframes"]}
+        chamber["keyframes"] = [[step, value] for step, value in squeezed.items()]
+    return scene
+
+
+BASES = {path.stem: cheap(tomllib.loads(path.read_text())) for path in sorted(SCENES.glob("*.toml"))}
+
+
+def toml_value(value) -> str:
+    """value as a TOML value (inline tables and arrays; JSON's string escapes are TOML's)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return "nan" if math.isnan(value) else {math.inf: "inf", -math.inf: "-inf"}.get(value, repr(value))
+    if isinstance(value, (int, str)):
+        return json.dumps(value, ensure_ascii=False)
+    if isinstance(value, list):
+        return "[" + ", ".join(map(toml_value, value)) + "]"
+    return "{" + ", ".join(f"{json.dumps(k, ensure_ascii=False)} = {toml_value(v)}" for k, v in value.items()) + "}"
+
+
+def to_toml(scene: dict) -> str:
+    return "".join(f"{json.dumps(k, ensure_ascii=False)} = {toml_value(v)}\n" for k, v in scene.items())
+
+
+def paths(node, prefix=()):
+    """Every (path, value) below node: dict keys and list indices, containers included."""
+    items = node.items() if isinstance(node, dict) else enumerate(node) if isinstance(node, list) else ()
+    for key, value in items:
+        yield prefix + (key,), value
+        yield from paths(value, prefix + (key,))
+
+
+def mutate(scene: dict, draw) -> str:
+    """Apply one mutation to scene (in place), choosing with draw(strategy); return what it did."""
+    kind = draw(st.sampled_from(["value", "value", "scale", "delete", "extra", "name", "overlap", "length"]))
+    chambers = scene.get("chambers")
+    if kind == "name":
+        owner = draw(st.sampled_from([scene] + [c for c in chambers if isinstance(c, dict)]
+                                     if isinstance(chambers, list) else [scene]))
+        owner["name"] = draw(st.sampled_from(ODD_NAMES))
+        return f"{'scene' if owner is scene else 'chamber'} name = {owner['name']!r}"
+    if kind == "overlap":
+        if not isinstance(chambers, list) or not chambers:
+            return "overlap (no chambers)"
+        copied = copy.deepcopy(chambers[0])
+        if isinstance(copied, dict):
+            copied["name"] = "copy"
+        chambers.append(copied)
+        return "overlap: chambers[0] duplicated"
+    fits = {"value": lambda v: True, "delete": lambda v: True, "extra": lambda v: isinstance(v, dict),
+            "scale": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool),
+            "length": lambda v: isinstance(v, list)}[kind]
+    candidates = [(path, value) for path, value in [((), scene)] * (kind == "extra") + list(paths(scene))
+                  if fits(value)]
+    if not candidates:
+        return f"{kind} (nothing to mutate)"
+    path, value = draw(st.sampled_from(candidates))
+    if kind == "extra":
+        extra = draw(st.sampled_from(EXTRA_KEYS))
+        value[extra] = copy.deepcopy(draw(st.sampled_from(NUMBERS + WRONG_TYPES)))
+        return f"extra {extra!r} = {value[extra]!r} in {path}"
+    if kind == "length":
+        if value and draw(st.booleans()):
+            value.pop()
+        else:
+            value.append(copy.deepcopy(value[-1]) if value else 1.0)
+        return f"length at {path}: {value!r}"
+    parent = scene
+    for key in path[:-1]:
+        parent = parent[key]
+    if kind == "delete":
+        del parent[path[-1]]
+        return f"delete {path}"
+    if kind == "scale":
+        parent[path[-1]] = value * draw(st.sampled_from([-1, 0, 1e-6, 1e-3, 0.5, 2, 1e3, 1e6]))
+    else:
+        parent[path[-1]] = copy.deepcopy(draw(st.sampled_from(NUMBERS + WRONG_TYPES)))
+    return f"{kind} at {path}: {parent[path[-1]]!r}"
+
+
+def scene_text(draw) -> tuple[str, bytes]:
+    """A mutated shipped scene: its description and the TOML file bytes (sometimes cut off)."""
+    base = draw(st.sampled_from(sorted(BASES)))
+    scene = copy.deepcopy(BASES[base])
+    done = [mutate(scene, draw) for _ in range(draw(st.integers(1, 3)))]
+    text = to_toml(scene).encode()
+    if draw(st.integers(0, 9)) == 0:
+        text = text[:draw(st.integers(0, len(text)))]
+        done.append("cut off")
+    return f"{base}: " + "; ".join(done), text
+
+
+def run_in_sandbox(text: bytes) -> tuple[int, list[str], list[str], float]:
+    """Run the inflate app on a scene file in a fresh directory; return (exit code, the lines it wrote
+    to stderr and the warnings it raised, files written outside --out, seconds)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        scene, out = work / "sandbox" / "scene.toml", work / "sandbox" / "out"
+        scene.parent.mkdir()
+        scene.write_bytes(text.replace(b"{WORK}", str(work).encode()))
+        err = io.StringIO()
+        start = time.perf_counter()
+        with warnings.catch_warnings(record=True) as caught, redirect_stderr(err), redirect_stdout(io.StringIO()):
+            warnings.simplefilter("always")  # as a user would see them
+            code = main(["--scene", str(scene), "--out", str(out), *FLAGS])
+        seconds = time.perf_counter() - start
+        lines = [line for line in err.getvalue().splitlines() if line.strip()]
+        lines += [f"{w.category.__name__}: {w.message}" for w in caught]
+        outside = [str(p) for p in work.rglob("*") if p.is_file() and p != scene and out not in p.parents]
+        if code == 0:
+            names = {p.name.split("_")[-1] for p in out.iterdir()}
+            assert names == {"history.csv", "states.npz", "summary.json"}, names
+        return code, lines, outside, seconds
+
+
+@pytest.fixture(scope="module")
+def bases_outcomes():
+    """Every cheap base scene run once: (exit code, stderr lines, files outside --out) by name. This also
+    loads every kernel before the timed examples."""
+    return {name: run_in_sandbox(to_toml(scene).encode())[:3] for name, scene in BASES.items()}
+
+
+def test_cheap_bases_run(bases_outcomes):
+    assert bases_outcomes == {name: (0, [], []) for name in BASES}
+
+
+@settings(max_examples=300, deadline=timedelta(seconds=TIME_BOUND), derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(st.data())
+def test_mutated_scene_files_run_or_stop_with_one_error_line(bases_outcomes, data):
+    description, text = scene_text(data.draw)
+    note(description)
+    code, lines, outside, seconds = run_in_sandbox(text)
+    assert not outside, f"files written outside --out: {outside}"
+    assert seconds < TIME_BOUND
+    if code == 0:
+        assert lines == []
+    else:
+        assert code in (1, 2) and len(lines) == 1 and lines[0].startswith("error: "), (code, lines)
