@@ -10,6 +10,7 @@ same command at every step (one chamber, or chambers driven together); otherwise
 from __future__ import annotations
 
 import io
+import warnings
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -41,9 +42,9 @@ def history_figure(result, figure=None):
     (pa, tip), (area, pressure) = fig.subplots(2, 2)
     x, x_label = command_axis(result.command, [c.schedule.control for c in result.scene.controls])
     for c, name in enumerate(result.chamber_names):
-        pa.plot(result.area_ratio[:, c], result.pressure[:, c], ".-", label=name)
-        area.plot(x, result.area_ratio[:, c], ".-", label=name)
-        pressure.plot(x, result.pressure[:, c], ".-", label=name)
+        pa.plot(result.area_ratio[:, c], result.pressure[:, c], ".-", label=short(name))
+        area.plot(x, result.area_ratio[:, c], ".-", label=short(name))
+        pressure.plot(x, result.pressure[:, c], ".-", label=short(name))
     tip.plot(x, result.history["tip_dy"], ".-", color="k")
     for ax, xl, yl, title in ((pa, "area ratio A / A_rest", "pressure p", "pressure against area ratio"),
                               (tip, x_label, "tip deflection dy", "tip deflection (mean y displacement of the tip)"),
@@ -53,10 +54,19 @@ def history_figure(result, figure=None):
         ax.grid(True, alpha=0.3)
     if len(result.chamber_names) > 1:
         pa.legend(fontsize="small")
-    fig.suptitle(result.scene.name)
+    fig.suptitle(short(result.scene.name, 80))
     return fig
 
 
+def short(text: str, most: int = 24) -> str:
+    """A name cut to `most` characters for a legend or title (scene names can be long)."""
+    return text if len(text) <= most else text[:most - 3] + "..."
+
+
 def save_history_png(result, path) -> None:
-    """Write the history figure to path (PNG)."""
-    history_figure(result).savefig(path, dpi=100, format="png")
+    """Write the history figure to path (PNG). Where many chambers' legend leaves the axes no room,
+    matplotlib drops its constrained layout and says so; the figure is still whole, so that is not
+    passed on as a warning."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="constrained_layout not applied")
+        history_figure(result).savefig(path, dpi=100, format="png")

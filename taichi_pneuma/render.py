@@ -59,6 +59,7 @@ COLORMAP = "viridis"
 # the fields a body can be coloured by: name -> (label, key of fields.triangle_fields)
 COLOR_FIELDS = {"stretch": ("max stretch", "max_stretch"), "detF": ("det F", "det_F")}
 FONT_PX, LINE_PX, MARGIN_PX = 13, 17, 10
+HEADER_LINES = 3  # title (if any), step and area, pressure and tip: the band above the body, title or not
 COLORBAR_PX = 96  # width of the colour bar strip
 TARGET = (0.9, 0.1, 0.1)
 TIP_PATH = (0.95, 0.55, 0.0)
@@ -397,7 +398,7 @@ class FrameRenderer:
         self.panels = [(beam_w * i / n, beam_w * (i + 1) / n) for i in range(n)]
         self.colorbar_panel = (beam_w, beam_w + bar_w)
         self.trace_panel = (beam_w + bar_w, 1.0)
-        self.header_px = MARGIN_PX + LINE_PX * max(len(t.header(0)) for t in tracks)
+        self.header_px = MARGIN_PX + LINE_PX * HEADER_LINES  # the same view whether a track has a title or not
         points = np.concatenate([t.states.reshape(-1, 2) for t in self.tracks]
                                 + [t.targets for t in self.tracks if t.targets is not None])
         self._lo, self._hi = (np.asarray(b, float) for b in (bounds if bounds is not None else
