@@ -27,6 +27,14 @@ def require_finite(name: str, value: float) -> float:
     return v
 
 
+def parse_number(name: str, text: str) -> float:
+    """Text (a command-line or CSV field) as a float; whether it is finite and in range is the caller's check."""
+    try:
+        return float(text)
+    except ValueError:
+        raise PneumaInputError(f"{name} = {text!r} is not a number") from None
+
+
 def shape_of(value) -> tuple | None:
     """np.shape(value), or None where value is ragged (lists of different lengths) and has no shape."""
     try:

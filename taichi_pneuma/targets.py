@@ -13,7 +13,7 @@ import csv
 import os
 from dataclasses import dataclass
 
-from .errors import PneumaInputError, require, require_finite
+from .errors import PneumaInputError, parse_number, require, require_finite
 
 COLUMNS = ("x", "y", "angle", "wx", "wy", "wangle")
 
@@ -55,8 +55,8 @@ def read_targets_csv(path: str | os.PathLike) -> list[Target]:
             f"{path}: columns {list(header)!r} must include x and y and be among {', '.join(COLUMNS)}")
     targets = []
     for i, row in enumerate(rows, start=2):
-        cell = lambda key, default=None: default if not (row.get(key) or "").strip() else row[key]
         try:
+            cell = lambda key, default=None: default if not (row.get(key) or "").strip() else parse_number(key, row[key])
             targets.append(Target((cell("x"), cell("y")), cell("angle"),
                                   (cell("wx", 1.0), cell("wy", 1.0), cell("wangle", 1.0))))
         except PneumaInputError as exc:

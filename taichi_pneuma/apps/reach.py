@@ -28,7 +28,7 @@ from tqdm import tqdm
 
 from .. import runtime
 from ..design import solve_design
-from ..errors import PneumaInputError, require, require_finite
+from ..errors import PneumaInputError, parse_number, require, require_finite
 from ..geometry import BeamGeometry
 from ..inverse import Reacher, ReachOptions, command_bounds, frames
 from ..output import prepare_directory, save_json
@@ -73,8 +73,8 @@ def with_bounds(scene: Scene, bounds: list[list[str]]) -> Scene:
         require(name in names, f"--bounds: unknown chamber {name!r} (chambers: {', '.join(names)})")
         i = names.index(name)
         try:
-            controls[i] = dataclasses.replace(controls[i], bounds=(require_finite("min", low),
-                                                                   require_finite("max", high)))
+            controls[i] = dataclasses.replace(controls[i], bounds=(parse_number("min", low),
+                                                                   parse_number("max", high)))
         except PneumaInputError as exc:
             raise PneumaInputError(f"--bounds {name}: {exc}") from None
     return dataclasses.replace(scene, controls=tuple(controls))
