@@ -59,14 +59,16 @@ def history_figure(result, figure=None):
 
 
 def short(text: str, most: int = 24) -> str:
-    """A name cut to `most` characters for a legend or title (scene names can be long)."""
+    """A name for a legend or title: cut to `most` characters, unprintable characters (tabs, ...) as '?'."""
+    text = "".join(c if c.isprintable() else "?" for c in text)
     return text if len(text) <= most else text[:most - 3] + "..."
 
 
 def save_history_png(result, path) -> None:
     """Write the history figure to path (PNG). Where many chambers' legend leaves the axes no room,
-    matplotlib drops its constrained layout and says so; the figure is still whole, so that is not
-    passed on as a warning."""
+    matplotlib drops its constrained layout, and a name's character without a glyph in the font is drawn
+    as a box; it says so each time, but the figure is still whole, so neither is passed on as a warning."""
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="constrained_layout not applied")
+        warnings.filterwarnings("ignore", message="Glyph .* missing from font")
         history_figure(result).savefig(path, dpi=100, format="png")
