@@ -57,7 +57,7 @@ def explore(scene: Scene, growth: float, size: tuple[int, int], backend: str = "
             renderer = FrameRenderer([track], trace=False, canvas=canvas, bounds=bounds)
             print(f"  area x{ratio:.3f}: p = {track.pressure[0, 0]:.2f}, tip dy = {tip:+.4f}, "
                   f"{record.iterations} Newton it, converged {record.converged}", flush=True)
-        renderer.draw(0)
+        canvas.show_image(renderer.frame(0))
         canvas.show()
         frames += 1
     return {"all_converged": bool(converged), "solves": solves}
@@ -117,7 +117,7 @@ def follow_mouse(scene: Scene, bounds, size: tuple[int, int], backend: str = "au
             solves += result.forward_solves
             reaches.append(result.seconds)
             show(result.pose)
-        renderer.draw(0)
+        canvas.show_image(renderer.frame(0))  # shapes, then the text drawn onto the read-back image
         canvas.show()
         frames += 1
         if dragged and len(reaches) > 1:  # a frame that re-solved a moved target, after the first (warm-up)

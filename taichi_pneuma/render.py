@@ -1,27 +1,35 @@
-"""Offscreen frames of inflation ramps, drawn by Taichi's own renderers.
+"""Offscreen frames of inflation ramps, drawn by Taichi's own renderers, labelled with numbers.
 
 One frame shows, for each ramp (a *track*), a beam panel:
-- the body mesh, faces filled light green, edges darker green;
+- the body mesh: faces filled light green with darker green edges, or, with a colour field
+  (Track.color: the largest principal stretch or det F per triangle), each triangle in the colour
+  of its value on one scale for all tracks and steps (viridis) and only the outline drawn, with a
+  colour bar (numbered) beside the panels;
 - the chamber, its deformed wall loop filled translucent blue (alpha-blended onto the background:
   the chamber is a hole in the mesh, so only background lies under it) and outlined in strong blue;
-- the pinned vertices as dark square markers;
+- the pinned vertices as dark square markers; the ground line, if the scene has one;
 - for inverse control, the target as a red cross and the tip's path so far in orange;
-- a text overlay: step, commanded area ratio, chamber pressure, tip deflection (and the panel's title).
-and, optionally, beside the beam panels a trace panel: chamber area / rest area (blue) and chamber
-pressure (red) against inflation %, each scaled to the panel, with a cursor at the current step.
+- a header above the body: the panel's title, step, area ratio, pressure and tip deflection;
+and, optionally, beside them a trace panel with axes: chamber area / rest area (blue, numbered left
+axis) and pressure (red, numbered right axis) against the step, with a cursor at the current step.
 
 Every beam panel uses one world-to-pixel map (equal x and y scale) fitted to the bounds of all
-states of all tracks, so panels share a frame of reference and the beam is never cropped.
+states of all tracks below the header band, so panels share a frame of reference, the beam is
+never cropped and no text covers it.
 
-Two backends draw the same primitives (filled triangles, line segments, text):
+Two backends draw the same primitives (filled triangles, line segments):
 - GGUI offscreen, ti.ui.Window(show_window=False), when Vulkan is available; on CPU-only machines
   mesa's lavapipe (apt-get install mesa-vulkan-drivers) provides it, and it works with ti.cpu;
 - ti.GUI(show_gui=False), a software rasteriser, otherwise.
+Text is drawn afterwards onto the image read back from the canvas (Pillow, matplotlib's DejaVu Sans),
+the same on both backends.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 import taichi as ti
@@ -29,21 +37,30 @@ import triangle
 
 from . import runtime
 from .errors import PneumaInputError, require
+from .fields import triangle_fields
 from .geometry import Mesh
 
 BACKENDS = ("auto", "ggui", "gui")
 BACKGROUND = (1.0, 1.0, 1.0)
 FACE = (0.72, 0.89, 0.66)
 EDGE = (0.18, 0.49, 0.20)
+OUTLINE = (0.2, 0.2, 0.2)
 CHAMBER_ALPHA = 0.35
 CHAMBER_FILL = tuple(CHAMBER_ALPHA * c + (1 - CHAMBER_ALPHA) * b for c, b in zip((0.1, 0.3, 1.0), BACKGROUND))
 CHAMBER_WALL = (0.05, 0.2, 0.95)
 PIN = (0.15, 0.15, 0.15)
 GROUND = (0.45, 0.3, 0.15)
 AXES = (0.35, 0.35, 0.35)
+TEXT = (0.1, 0.1, 0.1)
 AREA_CURVE = (0.05, 0.2, 0.95)
 PRESSURE_CURVE = (0.85, 0.15, 0.1)
 CURSOR = (0.2, 0.2, 0.2)
+COLORMAP = "viridis"
+# the fields a body can be coloured by: name -> (label, key of fields.triangle_fields)
+COLOR_FIELDS = {"stretch": ("max stretch", "max_stretch"), "detF": ("det F", "det_F")}
+FONT_PX, LINE_PX, MARGIN_PX = 13, 17, 10
+HEADER_LINES = 3  # title (if any), step and area, pressure and tip: the band above the body, title or not
+COLORBAR_PX = 96  # width of the colour bar strip
 TARGET = (0.9, 0.1, 0.1)
 TIP_PATH = (0.95, 0.55, 0.0)
 
@@ -51,7 +68,7 @@ TIP_PATH = (0.95, 0.55, 0.0)
 # --- backends: one canvas of (width, height) pixels, coordinates normalised to [0, 1], origin bottom-left ---
 
 class GGUICanvas:
-    """Taichi GGUI (Vulkan) window; offscreen unless show=True. Text goes into small imgui boxes."""
+    """Taichi GGUI (Vulkan) window; offscreen unless show=True."""
 
     name = "GGUI (Vulkan)"
     slider_row_px = 45  # each slider takes a row this high at the bottom of the window
@@ -60,43 +77,45 @@ class GGUICanvas:
         self.width, self.height = width, height
         self.window = ti.ui.Window(title, (width, height), show_window=show, vsync=False)
         self.canvas = self.window.get_canvas()
-        self._fields: dict[tuple[int, int], ti.Field] = {}
+        self._fields: dict[tuple[int, int, int], ti.Field] = {}
         self._calls = 0
-        self._boxes = 0
 
     def begin(self) -> None:
         # GGUI's own staging kernels warn "f32 <- f64" when compiled under default_fp=f64; they are harmless.
         ti.set_logging_level(ti.ERROR)
         self.canvas.set_background_color(BACKGROUND)
-        self._calls = self._boxes = 0
+        self._calls = 0
 
-    def _points(self, points: np.ndarray):
-        key = (self._calls, len(points))
+    def _field(self, values: np.ndarray):
+        """A float32 vector field holding values (k, 2 or 3); one per draw call, reused frame to frame."""
+        key = (self._calls, len(values), values.shape[1])
         self._calls += 1
         if key not in self._fields:
-            self._fields[key] = ti.Vector.field(2, ti.f32, len(points))
+            self._fields[key] = ti.Vector.field(values.shape[1], ti.f32, len(values))
         field = self._fields[key]
-        field.from_numpy(points.astype(np.float32))
+        field.from_numpy(values.astype(np.float32))
         return field
 
     def triangles(self, corners: np.ndarray, color) -> None:
-        self.canvas.triangles(self._points(corners.reshape(-1, 2)), color=tuple(color))
+        """corners (m, 3, 2); color: one RGB, or one RGB per triangle (m, 3)."""
+        color = np.asarray(color, dtype=float)
+        points = self._field(corners.reshape(-1, 2))
+        if color.ndim == 1:
+            self.canvas.triangles(points, color=tuple(color))
+        else:
+            self.canvas.triangles(points, per_vertex_color=self._field(np.repeat(color, 3, axis=0)))
 
     def segments(self, ends: np.ndarray, color, width_px: float) -> None:
-        self.canvas.lines(self._points(ends.reshape(-1, 2)), width_px / self.height, color=tuple(color))
-
-    def text(self, lines: list[str], x: float, y: float, width: float) -> None:
-        gui = self.window.get_gui()
-        height = (len(lines) * 19 + 30) / self.height
-        with gui.sub_window(f"##{self._boxes}", x, 1 - y, width, height):
-            for line in lines:
-                gui.text(line)
-        self._boxes += 1
+        self.canvas.lines(self._field(ends.reshape(-1, 2)), width_px / self.height, color=tuple(color))
 
     def image(self) -> np.ndarray:
         image = _to_rgb8(self.window.get_image_buffer_as_numpy())
         ti.set_logging_level(ti.WARN)
         return image
+
+    def show_image(self, image: np.ndarray) -> None:
+        """Put an (height, width, 3) uint8 image on the canvas (for a shown window)."""
+        self.canvas.set_image(_from_rgb8(image))
 
     def slider(self, label: str, value: float, low: float, high: float, row: int = 0) -> float:
         """An imgui slider showing value, in row `row` (slider_row_px high) counted up from the bottom
@@ -119,6 +138,10 @@ class GGUICanvas:
         ti.set_logging_level(ti.WARN)
         self.window.show()
 
+    def close(self) -> None:
+        """Destroy the window now (GGUI allows one live window per process; garbage collection may come late)."""
+        self.window.destroy()
+
 
 class GUICanvas:
     """Taichi's ti.GUI software rasteriser; offscreen unless show=True."""
@@ -134,17 +157,20 @@ class GUICanvas:
         self.gui.clear(_hex(BACKGROUND))
 
     def triangles(self, corners: np.ndarray, color) -> None:
-        self.gui.triangles(corners[:, 0], corners[:, 1], corners[:, 2], color=_hex(color))
+        """corners (m, 3, 2); color: one RGB, or one RGB per triangle (m, 3)."""
+        color = np.asarray(color, dtype=float)
+        colors = _hex(color) if color.ndim == 1 else np.array([_hex(c) for c in color], dtype=np.uint32)
+        self.gui.triangles(corners[:, 0], corners[:, 1], corners[:, 2], color=colors)
 
     def segments(self, ends: np.ndarray, color, width_px: float) -> None:
         self.gui.lines(ends[:, 0], ends[:, 1], radius=width_px / 2, color=_hex(color))
 
-    def text(self, lines: list[str], x: float, y: float, width: float) -> None:
-        for i, line in enumerate(lines):
-            self.gui.text(line, (x + 4 / self.width, y - (4 + 16 * i) / self.height), font_size=15, color=0x202020)
-
     def image(self) -> np.ndarray:
         return _to_rgb8(self.gui.get_image())
+
+    def show_image(self, image: np.ndarray) -> None:
+        """Put an (height, width, 3) uint8 image on the canvas (for a shown window)."""
+        self.gui.set_image(_from_rgb8(image))
 
     def slider(self, label: str, value: float, low: float, high: float, row: int = 0) -> float:
         """ti.GUI's slider named label (created on first call): shows value unless the user moved it
@@ -173,6 +199,9 @@ class GUICanvas:
     def show(self) -> None:
         self.gui.show()
 
+    def close(self) -> None:
+        self.gui.close()
+
 
 def _hex(color) -> int:
     r, g, b = (int(round(255 * c)) for c in color)
@@ -182,6 +211,11 @@ def _hex(color) -> int:
 def _to_rgb8(buffer: np.ndarray) -> np.ndarray:
     """(width, height, 4) float buffer, origin bottom-left -> (height, width, 3) uint8, top row first."""
     return np.ascontiguousarray((np.clip(np.rot90(buffer[:, :, :3]), 0, 1) * 255 + 0.5).astype(np.uint8))
+
+
+def _from_rgb8(image: np.ndarray) -> np.ndarray:
+    """The inverse of _to_rgb8: (height, width, 3), top row first -> (width, height, 3), origin bottom-left."""
+    return np.ascontiguousarray(np.rot90(image, -1))
 
 
 def open_canvas(width: int, height: int, backend: str = "auto", show: bool = False, log=print):
@@ -206,12 +240,73 @@ def open_canvas(width: int, height: int, backend: str = "auto", show: bool = Fal
     return GUICanvas(width, height, show)
 
 
+# --- text, drawn onto the finished image ---
+
+@dataclass(frozen=True)
+class Label:
+    """A line of text at pixel (x, y) (origin top-left); anchor as Pillow's: 'la' left-ascender, 'rm'
+    right-middle, 'mt' middle-top, ..."""
+
+    text: str
+    x: float
+    y: float
+    anchor: str = "la"
+    color: tuple = TEXT
+
+
+@lru_cache(maxsize=None)
+def _font():
+    import matplotlib
+    from PIL import ImageFont
+
+    return ImageFont.truetype(str(Path(matplotlib.get_data_path()) / "fonts" / "ttf" / "DejaVuSans.ttf"), FONT_PX)
+
+
+def label_box(label: Label) -> tuple[float, float, float, float]:
+    """The pixel box (left, top, right, bottom) the label's text covers."""
+    from PIL import Image, ImageDraw
+
+    return ImageDraw.Draw(Image.new("RGB", (1, 1))).textbbox((label.x, label.y), label.text, font=_font(),
+                                                             anchor=label.anchor)
+
+
+def draw_labels(image: np.ndarray, labels: list[Label]) -> np.ndarray:
+    """The image (height, width, 3) uint8 with the labels written on it."""
+    from PIL import Image, ImageDraw
+
+    picture = Image.fromarray(image)
+    draw = ImageDraw.Draw(picture)
+    for label in labels:
+        draw.text((label.x, label.y), label.text, fill=tuple(int(round(255 * c)) for c in label.color),
+                  font=_font(), anchor=label.anchor)
+    return np.asarray(picture)
+
+
+def nice_ticks(lo: float, hi: float, integer: bool = False) -> np.ndarray:
+    """Round tick values (1-2-5 steps, matplotlib's MaxNLocator) whose first and last enclose [lo, hi]."""
+    from matplotlib.ticker import MaxNLocator
+
+    if hi <= lo:
+        pad = 0.1 * abs(lo) if lo != 0 else 1.0
+        lo, hi = lo - pad, hi + pad
+    return MaxNLocator(nbins=5, integer=integer, min_n_ticks=3).tick_values(lo, hi)
+
+
+def colormap(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """RGB (k, 3) of values on the colour map, lo..hi mapped to its ends."""
+    import matplotlib
+
+    t = np.clip((values - lo) / (hi - lo if hi > lo else 1.0), 0.0, 1.0)
+    return matplotlib.colormaps[COLORMAP](t)[:, :3]
+
+
 # --- what is drawn ---
 
 @dataclass(frozen=True)
 class Track:
     """One run to show: its mesh, its states (steps, n, 2) and the per-step figures of the overlay:
-    area_ratio and pressure as (steps, chambers), tip_dy as (steps,)."""
+    area_ratio and pressure as (steps, chambers), tip_dy as (steps,); color: a value per element
+    (steps, m) to colour the body by (fields.py's element mean), named color_label."""
 
     mesh: Mesh
     states: np.ndarray
@@ -221,20 +316,30 @@ class Track:
     title: str = ""
     ground: float | None = None  # height of the ground line y = ground, drawn when the scene has one
     targets: np.ndarray | None = None  # (steps, 2) inverse control's target point per frame: a cross and the tip's path
+    color: np.ndarray | None = None
+    color_label: str = ""
 
     @classmethod
-    def from_ramp(cls, mesh: Mesh, result, title: str = "", ground: float | None = None) -> "Track":
-        """A track from a simulate.RampResult (every chamber of the scene)."""
+    def from_ramp(cls, mesh: Mesh, result, title: str = "", ground: float | None = None,
+                  color: str = "none") -> "Track":
+        """A track from a simulate.RampResult (every chamber of the scene); color: 'none' or a COLOR_FIELDS key."""
+        require(color == "none" or color in COLOR_FIELDS,
+                f"color = {color!r} is not one of none, {', '.join(COLOR_FIELDS)}")
         names = list(result.steps[0].chambers)
         columns = lambda key: np.column_stack([result.column(f"{n}.{key}") for n in names])
+        values, label = None, ""
+        if color != "none":
+            label, key = COLOR_FIELDS[color]
+            values = np.array([triangle_fields(mesh.vertices, x, mesh.triangles)[key] for x in result.states])
         return cls(mesh, result.states, columns("area_ratio"), columns("pressure"), result.column("tip_dy"), title,
-                   ground)
+                   ground, color=values, color_label=label)
 
-    @property
-    def progress_percent(self) -> np.ndarray:
-        """Position in the schedule: 0 % at the first step, 100 % at the last."""
-        steps = len(self.states)
-        return 100 * np.arange(steps) / max(steps - 1, 1)
+    def header(self, i: int) -> list[str]:
+        """The lines above the body at step i."""
+        areas = ", ".join(f"x{r:.2f}" for r in self.area_ratio[i])
+        pressures = ", ".join(f"{p:.1f}" for p in self.pressure[i])
+        return ([self.title] if self.title else []) + [
+            f"step {i}/{len(self.states) - 1}   area {areas}", f"p = {pressures}   tip dy = {self.tip_dy[i]:+.4f}"]
 
 
 def chamber_triangles(mesh: Mesh) -> np.ndarray:
@@ -249,17 +354,20 @@ def chamber_triangles(mesh: Mesh) -> np.ndarray:
     return np.concatenate(parts)
 
 
-def mesh_edges(mesh: Mesh) -> np.ndarray:
+def mesh_edges(mesh: Mesh, boundary_only: bool = False) -> np.ndarray:
     """Unique undirected edges (e, 2) of the element outlines: a quadratic triangle's sides are drawn as
-    two segments each, through their midside nodes."""
+    two segments each, through their midside nodes; boundary_only: the edges of one element only (the
+    body's outline and the chamber walls)."""
     ring = [0, 1, 2] if mesh.order == 1 else [0, 3, 1, 4, 2, 5]
     t = mesh.triangles[:, ring]
     edges = np.sort(np.stack([t, np.roll(t, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
-    return np.unique(edges, axis=0)
+    unique, counts = np.unique(edges, axis=0, return_counts=True)
+    return unique[counts == 1] if boundary_only else unique
 
 
 class FrameRenderer:
-    """Draws frame i of one or more tracks of equal length: beam panels side by side, plus a trace panel.
+    """Draws frame i of one or more tracks of equal length: beam panels side by side, a colour bar when
+    the tracks are coloured, and a trace panel.
 
     width, height: frame size in pixels; trace: draw the area/pressure trace panel at the right;
     bounds: the world box (lo, hi) every panel must show, default the bounds of all states;
@@ -275,11 +383,22 @@ class FrameRenderer:
         self.frames = lengths.pop()
         self.canvas = canvas or open_canvas(width, height, backend, log=log)
         self.width, self.height = self.canvas.width, self.canvas.height
-        self._art = [(mesh_edges(t.mesh), t.mesh.display_triangles(), chamber_triangles(t.mesh)) for t in tracks]
-        beam_width = 0.62 if trace else 1.0
+        colored = [t for t in tracks if t.color is not None]
+        self.color_range = None
+        if colored:
+            values = np.concatenate([t.color.ravel() for t in colored])
+            self.color_range = (float(values.min()), float(values.max()))
+        self._art = [(mesh_edges(t.mesh, boundary_only=t.color is not None), t.mesh.display_triangles(),
+                      chamber_triangles(t.mesh)) for t in tracks]
+        # horizontal layout in normalised units: beam panels | colour bar | trace panel
+        trace_w = 0.38 if trace else 0.0
+        bar_w = COLORBAR_PX / self.width if colored else 0.0
+        beam_w = 1.0 - trace_w - bar_w
         n = len(tracks)
-        self.panels = [(beam_width * i / n, beam_width * (i + 1) / n) for i in range(n)]
-        self.trace_panel = (beam_width, 1.0)
+        self.panels = [(beam_w * i / n, beam_w * (i + 1) / n) for i in range(n)]
+        self.colorbar_panel = (beam_w, beam_w + bar_w)
+        self.trace_panel = (beam_w + bar_w, 1.0)
+        self.header_px = MARGIN_PX + LINE_PX * HEADER_LINES  # the same view whether a track has a title or not
         points = np.concatenate([t.states.reshape(-1, 2) for t in self.tracks]
                                 + [t.targets for t in self.tracks if t.targets is not None])
         self._lo, self._hi = (np.asarray(b, float) for b in (bounds if bounds is not None else
@@ -287,13 +406,13 @@ class FrameRenderer:
         self._fit_view(self._lo, self._hi)
 
     def _fit_view(self, lo: np.ndarray, hi: np.ndarray) -> None:
-        """One map world -> normalised canvas for every beam panel showing the box lo..hi, equal axes."""
-        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+        """One map world -> normalised canvas for every beam panel showing the box lo..hi, equal axes,
+        below the header band."""
         centre, extent = (lo + hi) / 2, np.maximum(hi - lo, 1e-12)
         panel_px = np.array([(self.panels[0][1] - self.panels[0][0]) * self.width, self.height])
-        usable = panel_px - 2 * 12 - np.array([0, 70])  # margins; room for the text overlay at the top
+        usable = panel_px - 2 * MARGIN_PX - np.array([0, self.header_px])
         self._scale = float(np.min(usable / extent))  # pixels per world unit
-        self._centre, self._offset_px = centre, np.array([0.0, -35.0])
+        self._centre, self._offset_px = centre, np.array([0.0, -self.header_px / 2])
 
     def to_canvas(self, panel: int, points: np.ndarray) -> np.ndarray:
         """World points (..., 2) -> normalised canvas coordinates inside beam panel `panel`."""
@@ -309,37 +428,41 @@ class FrameRenderer:
         return self._centre + (np.asarray(uv) * np.array([self.width, self.height]) - centre_px) / self._scale
 
     def frame(self, i: int) -> np.ndarray:
-        """Frame i as an (height, width, 3) uint8 image."""
-        self.draw(i)
-        return self.canvas.image()
+        """Frame i as an (height, width, 3) uint8 image, text included."""
+        labels = self.draw(i)
+        return draw_labels(self.canvas.image(), labels)
 
-    def draw(self, i: int) -> None:
-        """Draw frame i on the canvas."""
+    def draw(self, i: int) -> list[Label]:
+        """Draw frame i's shapes on the canvas; return its text labels (drawn by frame())."""
         require(0 <= i < self.frames, f"frame {i} is outside 0..{self.frames - 1}")
         c = self.canvas
         c.begin()
+        labels = []
         for p, (track, (edges, faces, chamber)) in enumerate(zip(self.tracks, self._art)):
             x = self.to_canvas(p, track.states[i])
             if track.ground is not None:
                 ends = self.to_canvas(p, np.array([[self._lo[0], track.ground], [self._hi[0], track.ground]]))
                 c.segments(ends[None], GROUND, 3.0)
-            c.triangles(x[faces], FACE)
-            c.segments(x[edges], EDGE, 1.0)
+            if track.color is None:
+                c.triangles(x[faces], FACE)
+                c.segments(x[edges], EDGE, 1.0)
+            else:  # a quadratic element's four display triangles share its value (split_in_four's order)
+                c.triangles(x[faces], colormap(np.tile(track.color[i], len(faces) // len(track.color[i])),
+                                               *self.color_range))
+                c.segments(x[edges], OUTLINE, 1.0)
             c.triangles(x[chamber], CHAMBER_FILL)
             for loop in track.mesh.chambers:
                 c.segments(np.stack([x[loop], x[np.roll(loop, -1)]], axis=1), CHAMBER_WALL, 2.5)
             c.triangles(_squares(x[track.mesh.pinned], 3.5 / np.array([self.width, self.height])), PIN)
             if track.targets is not None:
                 self._draw_target(p, track, i)
-            lines = [track.title] if track.title else []
-            areas = ", ".join(f"x{r:.2f}" for r in track.area_ratio[i])
-            pressures = ", ".join(f"{p_:.1f}" for p_ in track.pressure[i])
-            lines += [f"step {i}/{self.frames - 1}   area {areas}",
-                      f"p = {pressures}   tip dy = {track.tip_dy[i]:+.4f}"]
-            x0, x1 = self.panels[p]
-            c.text(lines, x0 + 0.005, 0.995, x1 - x0 - 0.01)
+            left = self.panels[p][0] * self.width + MARGIN_PX
+            labels += [Label(line, left, MARGIN_PX / 2 + LINE_PX * k) for k, line in enumerate(track.header(i))]
+        if self.color_range is not None:
+            labels += self._draw_colorbar()
         if self.trace:
-            self._draw_trace(i)
+            labels += self._draw_trace(i)
+        return labels
 
     def _draw_target(self, panel: int, track: Track, i: int) -> None:
         """The tip's path up to frame i (the mean of the tip vertices) and a cross at frame i's target."""
@@ -352,34 +475,87 @@ class FrameRenderer:
         c.segments(np.array([[centre - arm, centre + arm], [centre + arm * (-1, 1), centre + arm * (1, -1)]]),
                    TARGET, 3.0)
 
-    def _draw_trace(self, i: int) -> None:
-        """Area / rest area and pressure of every chamber against schedule progress %, each scaled to the
-        plot box; cursor at step i."""
-        c = self.canvas
-        x0, x1 = self.trace_panel
-        box = np.array([[x0 + 0.04, 0.1], [x1 - 0.03, 0.72]])  # (left, bottom), (right, top)
-        corners = np.array([box[0], [box[1, 0], box[0, 1]], box[1], [box[0, 0], box[1, 1]]])
-        c.segments(np.stack([corners, np.roll(corners, -1, axis=0)], axis=1), AXES, 1.0)
-        texts = []
+    def _draw_colorbar(self) -> list[Label]:
+        """A vertical colour bar with numbered ticks over the colour range."""
+        c, (lo, hi) = self.canvas, self.color_range
+        ticks = nice_ticks(lo, hi)
+        ticks = ticks[(ticks >= lo - 1e-12) & (ticks <= hi + 1e-12)]
+        x0 = self.colorbar_panel[0] * self.width + 8
+        top, bottom = self.header_px + LINE_PX + 4, self.height - MARGIN_PX - 8
+        k = 64
+        ys = np.linspace(bottom, top, k + 1)
+        quads = np.array([[[x0, a], [x0 + 14, a], [x0 + 14, b]] for a, b in zip(ys[:-1], ys[1:])] +
+                         [[[x0, a], [x0 + 14, b], [x0, b]] for a, b in zip(ys[:-1], ys[1:])])
+        colors = colormap(lo + (hi - lo) * (np.arange(k) + 0.5) / k, lo, hi)
+        c.triangles(self._norm(quads), np.vstack([colors, colors]))
+        labels = [Label(self.tracks[0].color_label if all(t.color_label == self.tracks[0].color_label
+                                                          for t in self.tracks) else "colour", x0 - 4,
+                        self.header_px)]
+        span = hi - lo if hi > lo else 1.0
+        for t in ticks:
+            y = bottom + (top - bottom) * (t - lo) / span
+            c.segments(self._norm(np.array([[[x0 + 14, y], [x0 + 19, y]]])), AXES, 1.0)
+            labels.append(Label(_nice(t), x0 + 22, y, "lm"))
+        return labels
+
+    def _norm(self, px: np.ndarray) -> np.ndarray:
+        """Pixel coordinates (origin top-left) -> normalised canvas coordinates (origin bottom-left)."""
+        return np.stack([px[..., 0] / self.width, 1 - px[..., 1] / self.height], axis=-1)
+
+    def trace_axes(self) -> dict:
+        """The trace panel's plot box in pixels (left, top, right, bottom) and its three axes as
+        (lo, hi, ticks): 'step' (x), 'area' (left y), 'pressure' (right y)."""
+        x0, x1 = (v * self.width for v in self.trace_panel)
+        box = (x0 + 58, MARGIN_PX + 3 * LINE_PX + 8, x1 - 58, self.height - 2 * LINE_PX - 12)
+        axes = {"step": (0.0, float(self.frames - 1), nice_ticks(0, max(self.frames - 1, 1), integer=True))}
+        for key, attr in (("area", "area_ratio"), ("pressure", "pressure")):
+            values = np.concatenate([getattr(t, attr).ravel() for t in self.tracks])
+            ticks = nice_ticks(float(values.min()), float(values.max()))
+            axes[key] = (float(ticks[0]), float(ticks[-1]), ticks)
+        return {"box": box, **axes}
+
+    def _draw_trace(self, i: int) -> list[Label]:
+        """Area / rest area (left axis) and pressure (right axis) of every chamber against the step, on
+        numbered axes; cursor at step i."""
+        c, spec = self.canvas, self.trace_axes()
+        left, top, right, bottom = spec["box"]
+        corners = np.array([[left, bottom], [right, bottom], [right, top], [left, top]])
+        c.segments(self._norm(np.stack([corners, np.roll(corners, -1, axis=0)], axis=1)), AXES, 1.0)
+        to_x = lambda s: left + (right - left) * s / max(self.frames - 1, 1)
+
+        def to_y(axis, v):
+            lo, hi, _ = spec[axis]
+            return bottom + (top - bottom) * (v - lo) / (hi - lo)
+
+        labels, ticks = [], []
+        for s in spec["step"][2]:
+            if 0 <= s <= self.frames - 1:
+                ticks.append([[to_x(s), bottom], [to_x(s), bottom + 5]])
+                labels.append(Label(f"{s:g}", to_x(s), bottom + 7, "mt"))
+        labels.append(Label("step", (left + right) / 2, bottom + 7 + LINE_PX, "mt"))
+        for axis, x, sign, anchor, color in (("area", left, -1, "rm", AREA_CURVE),
+                                             ("pressure", right, 1, "lm", PRESSURE_CURVE)):
+            for v in spec[axis][2]:
+                ticks.append([[x, to_y(axis, v)], [x + 5 * sign, to_y(axis, v)]])
+                labels.append(Label(_nice(v), x + 7 * sign, to_y(axis, v), anchor, color))
+        c.segments(self._norm(np.array(ticks)), AXES, 1.0)
+        steps = np.arange(self.frames)
         for track in self.tracks:
-            u = track.progress_percent / 100
-            for values, color, label in ((track.area_ratio, AREA_CURVE, "area / rest"),
-                                         (track.pressure, PRESSURE_CURVE, "pressure p")):
-                lo, hi = float(values.min()), float(values.max())
-                for curve in values.T:  # one curve per chamber, all on the same scale
-                    v = (curve - lo) / (hi - lo if hi > lo else 1.0)
-                    pts = box[0] + np.column_stack([u, v]) * (box[1] - box[0])
-                    c.segments(np.stack([pts[:-1], pts[1:]], axis=1), color, 2.0)
-                    c.triangles(_squares(pts[i:i + 1], 4.0 / np.array([self.width, self.height])), color)
-                texts.append(f"{label}: {_nice(lo)} .. {_nice(hi)}  ({'blue' if color is AREA_CURVE else 'red'})")
-        cursor_x = box[0, 0] + self.tracks[0].progress_percent[i] / 100 * (box[1, 0] - box[0, 0])
-        c.segments(np.array([[[cursor_x, box[0, 1]], [cursor_x, box[1, 1]]]]), CURSOR, 1.0)
-        texts.append(f"x: schedule 0 .. 100 %   now {self.tracks[0].progress_percent[i]:.0f} %")
-        c.text(texts, x0 + 0.005, 0.995, x1 - x0 - 0.01)
+            for axis, values, color in (("area", track.area_ratio, AREA_CURVE), ("pressure", track.pressure, PRESSURE_CURVE)):
+                for curve in values.T:  # one curve per chamber, all on the same axis
+                    pts = np.column_stack([to_x(steps), to_y(axis, curve)])
+                    c.segments(self._norm(np.stack([pts[:-1], pts[1:]], axis=1)), color, 2.0)
+                    c.triangles(_squares(self._norm(pts[i:i + 1]), 4.0 / np.array([self.width, self.height])), color)
+        c.segments(self._norm(np.array([[[to_x(i), bottom], [to_x(i), top]]])), CURSOR, 1.0)
+        x_text = self.trace_panel[0] * self.width + MARGIN_PX
+        labels += [Label("area / rest area (left axis)", x_text, MARGIN_PX / 2, color=AREA_CURVE),
+                   Label("pressure p (right axis)", x_text, MARGIN_PX / 2 + LINE_PX, color=PRESSURE_CURVE),
+                   Label(f"cursor: step {i}", x_text, MARGIN_PX / 2 + 2 * LINE_PX)]
+        return labels
 
 
 def _nice(value: float) -> str:
-    """A figure for the trace legend: 4 significant digits, round-off below 1e-9 shown as 0."""
+    """A tick figure: 4 significant digits, round-off below 1e-9 shown as 0."""
     return f"{value if abs(value) > 1e-9 else 0.0:.4g}"
 
 

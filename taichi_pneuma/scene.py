@@ -106,6 +106,22 @@ class Scene:
                 f"{len(self.controls)} chamber controls for {len(self.geometry.chambers)} chambers")
         kinds = [e.name for e in self.effects]
         require(len(set(kinds)) == len(kinds), f"effects {kinds!r} name one effect twice")
+        self.schedule  # validates the increments against the keyframes
+
+    def to_toml(self) -> str:
+        """This scene as a scene file (TOML); scenefile.load_scene reads it back to an equal scene."""
+        from .scenetoml import to_toml
+        return to_toml(self)
+
+    def with_value(self, key: str, value) -> "Scene":
+        """A copy with one dotted scene-file key changed (e.g. "chambers[0].center[1]", 0.1), validated
+        like a scene file; a bad key or value raises PneumaInputError naming the key."""
+        return self.with_values({key: value})
+
+    def with_values(self, values: dict) -> "Scene":
+        """A copy with several dotted keys changed at once (validated once, after all are set)."""
+        from .scenetoml import with_values
+        return with_values(self, values)
 
     @property
     def schedule(self) -> Schedule:

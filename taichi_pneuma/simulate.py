@@ -208,9 +208,11 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     chamber commands is halved and the smaller sub-increment solved from the last equilibrium, as
     often as max_cuts times per increment; every cut is counted in the history. If it still fails,
     RampFailed names the step, the commands (for pressure control, the last pressure reached) and
-    the residual, and carries the steps done. progress, if given, is called as progress(step_record)
-    after every increment; stop, if given, is asked stop() after every increment but the last, and
-    when it returns True the ramp ends there with RampInterrupted carrying the steps done.
+    the residual, and carries the steps done. progress, if given, is called after every increment as
+    progress(step_record, positions, contact_force): the positions (n, 2) and, if the scene has contact,
+    the summed contact force per vertex (n, 2), else None; stop, if given, is asked stop() after every
+    increment but the last, and when it returns True the ramp ends there with RampInterrupted carrying
+    the steps done.
     """
     schedule = schedule or built.scene.schedule
     solver = NewtonSolver(built.model, options)
@@ -252,7 +254,7 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
         forces.append(vertex_forces)
         solves.append(final)
         if progress is not None:
-            progress(step)
+            progress(step, states[-1], vertex_forces if contact_terms else None)
         if stop is not None and i < schedule.increments and stop():
             raise RampInterrupted(f"interrupted after step {i} of {schedule.increments}", partial())
     return partial()

@@ -70,29 +70,34 @@ class Export:
     """What export() wrote and how long drawing the frames took (encoding excluded)."""
 
     video: Path
-    png: Path
+    png: Path | None
     frames: int
     width: int
     height: int
     render_seconds: float
+    renderer: str = ""
 
     @property
     def ms_per_frame(self) -> float:
         return 1000 * self.render_seconds / self.frames
 
 
-def export(renderer, video: Path, png: Path, fps: float = 12.0, quiet: bool = False) -> Export:
-    """Stream every frame of renderer (a render.FrameRenderer) into video, then save its last frame as png."""
+def export(renderer, video: Path, png: Path | None, fps: float = 12.0, quiet: bool = False) -> Export:
+    """Stream every frame of renderer (a render.FrameRenderer) into video, then save its last frame as png
+    (if given). The progress bar shows on a terminal only (never in a log: tqdm's disable=None)."""
     render_seconds, last = 0.0, None
 
     def frames():
         nonlocal render_seconds, last
-        for i in tqdm(range(renderer.frames), desc="rendering", unit="frame", disable=quiet, leave=False):
+        for i in tqdm(range(renderer.frames), desc="rendering", unit="frame", disable=True if quiet else None,
+                      leave=False):
             start = time.perf_counter()
             last = renderer.frame(i)
             render_seconds += time.perf_counter() - start
             yield last
 
     count = write_video(video, frames(), fps)
-    write_atomic(Path(png), lambda tmp: iio.imwrite(tmp, last))
-    return Export(Path(video), Path(png), count, last.shape[1], last.shape[0], render_seconds)
+    if png is not None:
+        write_atomic(Path(png), lambda tmp: iio.imwrite(tmp, last))
+    return Export(Path(video), None if png is None else Path(png), count, last.shape[1], last.shape[0],
+                  render_seconds, renderer.canvas.name)

@@ -79,3 +79,40 @@ def test_quality_presets_set_mesh_and_tolerance_unless_overridden(tmp_path, caps
         summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
         assert summary["vertices"] == BeamGeometry(cy=0.15, max_area=max_area).mesh().n_vertices
         assert summary["max_residual"] <= QUALITY["draft"][2]
+
+
+def test_set_changes_the_run(tmp_path, capsys):
+    """--set moves the chamber below the axis (the beam curls up instead of down) and stops the inflation
+    at 3x; the scene file written beside the results says so."""
+    flags = ["--growth", "3.5", "--steps", "4", "--max-area", "0.01", "--no-video", "--quiet"]
+    tips = {}
+    for name, extra in (("default", []), ("set", ["--set", "chambers[0].center[1]=-0.15", "--set", "chambers[0].keyframes=[[3, 3.0]]"])):
+        out = tmp_path / name
+        assert main([*flags, *extra, "--out", str(out)]) == 0
+        summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
+        tips[name], ratio = summary["tip_deflection"], summary["chambers"]["main"]["area_ratio"]
+    assert tips["default"] < -0.1 and tips["set"] > 0.1 and ratio == pytest.approx(3.0, abs=0.01)
+    from taichi_pneuma.scenefile import load_scene
+    scene = load_scene(tmp_path / "set" / "inflate_cy+0.15_scene.toml")
+    assert scene.geometry.chambers[0][1].center == (0.0, -0.15) and scene.controls[0].schedule.keyframes == ((3, 3.0),)
+
+
+@pytest.mark.parametrize("assignment, word", [
+    ("material.nu=0.5", "material.nu"), ("chambers[1].center=[0, 0]", "chambers[1].center"),
+    ("mesh.maxarea=0.1", "mesh.maxarea"), ("material.E", "KEY=VALUE"),
+])
+def test_bad_set_is_one_line_and_exit_2(tmp_path, capsys, assignment, word):
+    assert main(["--set", assignment, "--steps", "2", "--no-video", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: --set") and word in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_step_lines_are_whole_lines_when_output_is_not_a_terminal(tmp_path, capsys):
+    """Piped or logged output gets one line per step and no progress-bar redraws (no carriage returns)."""
+    assert main(["--steps", "4", "--growth", "1.5", "--max-area", "0.01", "--no-video", "--out", str(tmp_path)]) == 0
+    captured = capsys.readouterr()
+    assert "\r" not in captured.out and "\r" not in captured.err
+    steps = [line for line in captured.out.splitlines() if line.startswith("  step")]
+    assert [line.split()[1] for line in steps] == ["0/3", "1/3", "2/3", "3/3"]
+    assert all(line.rstrip().endswith(tuple("0123456789")) for line in steps)  # each ends with its residual

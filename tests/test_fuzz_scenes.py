@@ -159,8 +159,9 @@ def run_in_sandbox(text: bytes) -> tuple[int, list[str], list[str], float]:
         lines += [f"{w.category.__name__}: {w.message}" for w in caught]
         outside = [str(p) for p in work.rglob("*") if p.is_file() and p != scene and out not in p.parents]
         if code == 0:
-            names = {p.name.split("_")[-1] for p in out.iterdir()}
-            assert names == {"history.csv", "states.npz", "summary.json"}, names
+            names = sorted(p.name for p in out.iterdir())
+            endings = ("_history.csv", "_states.npz", "_summary.json", "_plot.png", "_scene.toml", ".pvd", "_vtk")
+            assert len(names) == len(endings) and all(any(n.endswith(e) for n in names) for e in endings), names
         return code, lines, outside, seconds
 
 

@@ -24,10 +24,14 @@ COARSE = ["--max-area", "0.01", "--growth", "2", "--steps", "3", "--quiet"]
 
 
 @pytest.fixture(scope="module")
-def track():
+def ramp():
     built = reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.01).build()
-    result = run_schedule(built)
-    return Track.from_ramp(built.mesh, result)
+    return built.mesh, run_schedule(built)
+
+
+@pytest.fixture(scope="module")
+def track(ramp):
+    return Track.from_ramp(*ramp)
 
 
 def rgb8(color):
@@ -117,7 +121,9 @@ def test_no_video_initialises_no_renderer(tmp_path, monkeypatch):
 
     monkeypatch.setattr(render, "open_canvas", refuse)
     assert inflate.main([*COARSE, "--no-video", "--out", str(tmp_path)]) == 0
-    assert sorted(p.suffix for p in tmp_path.iterdir()) == [".csv", ".json", ".npz"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        f"inflate_cy+0.15{end}" for end in (".pvd", "_history.csv", "_plot.png", "_scene.toml", "_states.npz",
+                                             "_summary.json", "_vtk")]
 
 
 def test_inflate_without_vulkan_falls_back_to_ti_gui_and_writes_every_frame(tmp_path):
@@ -189,3 +195,92 @@ def test_interactive_window_resolves_when_the_slider_moves(xvfb_display, monkeyp
     assert explore(scene, 2.0, (320, 160), "gui", max_frames=5) == {"all_converged": True, "solves": 3}
     printed = capsys.readouterr().out
     assert "area x1.300" in printed and "area x1.600" in printed
+
+
+def pixel(image, x, y):
+    return image[int(round(y)), int(round(x))].astype(float)
+
+
+def test_text_never_covers_the_body(track):
+    """Three titled panels (the steering picture's layout): every label's box lies off the body's pixels
+    in every frame."""
+    titled = [dataclasses.replace(track, title=f"cy = +0.15: chamber high -> curls down {k}") for k in range(3)]
+    renderer = FrameRenderer(titled, 1344, 320, trace=False, backend="gui")
+    for i in range(renderer.frames):
+        boxes = np.array([render.label_box(label) for label in renderer.draw(i)])
+        for p, t in enumerate(titled):
+            uv = renderer.to_canvas(p, t.states[i])
+            px = np.column_stack([uv[:, 0] * renderer.width, (1 - uv[:, 1]) * renderer.height])
+            inside = ((px[:, None, 0] >= boxes[None, :, 0]) & (px[:, None, 0] <= boxes[None, :, 2])
+                      & (px[:, None, 1] >= boxes[None, :, 1]) & (px[:, None, 1] <= boxes[None, :, 3]))
+            assert not inside.any()
+
+
+def test_body_colours_follow_det_f_and_the_colour_bar_numbers(ramp):
+    """Each triangle is drawn in viridis(det F) on the run's det F range, and each number of the colour
+    bar sits beside the colour of its value."""
+    import matplotlib
+
+    mesh, result = ramp
+    colored = Track.from_ramp(mesh, result, color="detF")
+    def areas(x):
+        a, b, c = (x[mesh.triangles[:, k]] for k in range(3))
+        return (b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0]
+    det = np.array([areas(x) / areas(mesh.vertices) for x in result.states])  # det F = area ratio
+    assert colored.color == pytest.approx(det, rel=1e-10) and colored.color_label == "det F"
+    renderer = FrameRenderer([colored], 480, 192, trace=False, backend="gui")
+    image = renderer.frame(2)
+    lo, hi = det.min(), det.max()
+    assert renderer.color_range == pytest.approx((lo, hi)) and hi - lo > 0.02
+    viridis = lambda v: np.asarray(matplotlib.colormaps["viridis"]((np.asarray(v) - lo) / (hi - lo)))[..., :3] * 255
+    centroids = result.states[2][mesh.triangles].mean(axis=1)
+    close = np.all(np.abs(pixels_at(renderer, image, centroids) - viridis(det[2])) < 20, axis=1)
+    assert close.mean() > 0.6  # the rest fall on the drawn outline or the chamber wall
+    ticks = [label for label in renderer.draw(2) if label.anchor == "lm"]
+    assert len(ticks) >= 3
+    for label in ticks:
+        bar = pixel(image, label.x - 15, label.y)  # the bar's middle column, at the tick's height
+        assert np.all(np.abs(bar - viridis(float(label.text))) < 12), label
+
+
+def test_trace_axis_numbers_match_the_drawn_curves(track):
+    """The numbers on the trace panel's axes put each curve where its values are: the pixel at (step, value)
+    mapped through the tick labels is the curve's colour (where the two curves do not cross)."""
+    renderer = FrameRenderer([track], 960, 384, trace=True, backend="gui")
+    labels = renderer.draw(0)
+    image = renderer.frame(0)
+    step_x = {float(l.text): l.x for l in labels if l.anchor == "mt" and l.text.replace(".", "").isdigit()}
+    assert set(step_x) >= {0.0, 1.0, 2.0}
+    y_of = {}
+    for anchor, color, values in (("rm", render.AREA_CURVE, track.area_ratio[:, 0]),
+                                  ("lm", render.PRESSURE_CURVE, track.pressure[:, 0])):
+        ticks = [(float(l.text), l.y) for l in labels if l.anchor == anchor and l.color == color]
+        assert len(ticks) >= 3
+        (v0, y0), (v1, y1) = ticks[0], ticks[-1]
+        y_of[color] = y0 + (values - v0) * (y1 - y0) / (v1 - v0)
+    checked = 0
+    for color, other in ((render.AREA_CURVE, render.PRESSURE_CURVE), (render.PRESSURE_CURVE, render.AREA_CURVE)):
+        for step in (0, 1, 2):
+            y, x = y_of[color][step], step_x[float(step)]
+            if abs(y - y_of[other][step]) < 8:
+                continue  # the curves meet here
+            patch = image[int(y) - 2:int(y) + 3, int(x) - 2:int(x) + 3].reshape(-1, 3)
+            assert np.min(np.abs(patch - rgb8(color)).max(axis=1)) < 40, (color, step)
+            checked += 1
+    assert checked >= 2
+
+
+def test_quadratic_elements_are_coloured_by_their_own_value():
+    """Each P2 element's four display triangles take its value: the middle one's centroid shows it."""
+    import matplotlib
+
+    built = reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.02, order=2).build()
+    result = run_schedule(built)
+    colored = Track.from_ramp(built.mesh, result, color="stretch")
+    renderer = FrameRenderer([colored], 480, 192, trace=False, backend="gui")
+    image = renderer.frame(2)
+    lo, hi = renderer.color_range
+    expected = np.asarray(matplotlib.colormaps["viridis"]((colored.color[2] - lo) / (hi - lo)))[:, :3] * 255
+    middle = result.states[2][built.mesh.triangles[:, 3:]].mean(axis=1)
+    close = np.all(np.abs(pixels_at(renderer, image, middle) - expected) < 20, axis=1)
+    assert close.mean() > 0.6

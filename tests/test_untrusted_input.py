@@ -69,8 +69,11 @@ def test_without_a_name_the_file_name_is_reduced_to_a_plain_one_and_everything_l
     path = reference_with(tmp_path, ('name = "reference_beam"\n', ""), file_name="..my beam (v2).toml")
     out = tmp_path / "out"
     assert main(["--scene", str(path), "--out", str(out), *QUICK]) == 0
-    assert files_under(tmp_path) == {"scenes/..my beam (v2).toml"} | {
-        f"out/my_beam__v2__{suffix}" for suffix in ("history.csv", "states.npz", "summary.json")}
+    steps = json.loads((out / "my_beam__v2__summary.json").read_text())["steps"]
+    assert files_under(tmp_path) == {"scenes/..my beam (v2).toml", "out/my_beam__v2_.pvd"} | {
+        f"out/my_beam__v2__{suffix}" for suffix in ("history.csv", "states.npz", "summary.json", "plot.png",
+                                                    "scene.toml")} | {
+        f"out/my_beam__v2__vtk/my_beam__v2__{i:04d}.vtu" for i in range(steps)}
 
 
 def test_a_file_that_cannot_be_written_is_one_error_naming_it(tmp_path):
@@ -192,5 +195,8 @@ def test_ctrl_c_during_a_ramp_keeps_the_steps_done_and_exits_130(tmp_path):
     assert summary["interrupted"] is True and summary["steps"] == done + 1
     assert len(history) == done + 1 and states["positions"].shape[0] == done + 1
     assert history["step"][-1] == done and summary["all_converged"]
-    assert sorted(os.listdir(out)) == ["inflate_cy+0.15_history.csv", "inflate_cy+0.15_states.npz",
-                                       "inflate_cy+0.15_summary.json"]
+    assert sorted(os.listdir(out)) == ["inflate_cy+0.15.pvd", "inflate_cy+0.15_history.csv",
+                                       "inflate_cy+0.15_states.npz", "inflate_cy+0.15_summary.json",
+                                       "inflate_cy+0.15_vtk"]
+    assert len(os.listdir(out / "inflate_cy+0.15_vtk")) == done + 1  # the VTU of every step done
+    assert (out / "inflate_cy+0.15.pvd").read_text().count("<DataSet ") == done + 1

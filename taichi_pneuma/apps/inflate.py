@@ -5,9 +5,11 @@
 
 Prints the mesh size, the terms built, each chamber's rest area, final area ratio and pressure,
 the tip deflection and rotation and the peak chamber pressure; writes the per-step history (CSV),
-the states (npz) and a summary (JSON) under --out, and, unless --no-video, a video of the run
-(beam beside its area/pressure trace) and a PNG of its last frame. --interactive instead opens a
-window with a slider for the commanded area.
+the states (npz), a summary (JSON), the scene as run (TOML), a plot of the history (PNG) and the
+ParaView files (a VTU per step as it is solved, indexed by a PVD) under --out, and, unless --no-video,
+a video of the run (body coloured by --color beside its area/pressure trace) and a PNG of its last frame.
+--set KEY=VALUE changes any dotted scene-file key. --interactive instead opens a window with a slider
+for the commanded area.
 
 Before any work, a run past the resource limits (estimated triangles, increments, frame pixels; see
 limits.py) is refused in one line naming the flag that raises the limit. Ctrl-C during the ramp
@@ -21,22 +23,24 @@ import os
 import signal
 import sys
 import threading
-import time
 from contextlib import contextmanager
 
 import numpy as np
 from tqdm import tqdm
 
 from .. import limits, runtime
+from ..api import Result, simulate
 from ..errors import PneumaInputError, require, require_finite
 from ..geometry import BeamGeometry
 from ..newton import NewtonOptions
-from ..output import prepare_directory, save_json, save_npz, save_text
-from ..render import BACKENDS
+from ..output import prepare_directory, save_json
+from ..render import BACKENDS, COLOR_FIELDS
 from ..scene import Scene, reference_scene
 from ..scenefile import load_scene
+from ..scenetoml import parse_assignment
 from ..schedule import area_ramp
-from ..simulate import MAX_CUTS, RampFailed, RampInterrupted, RampStopped, run_schedule
+from ..simulate import MAX_CUTS, RampFailed, RampInterrupted, RampStopped
+from ..vtk import VtkSeries
 
 # --quality presets: (max triangle area, element order, Newton tolerance); see the README's accuracy study
 QUALITY = {"draft": (0.005, 1, 1e-4), "default": (BeamGeometry.max_area, 1, NewtonOptions.tol),
@@ -80,6 +84,8 @@ def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
     p.add_argument("--renderer", default="auto", choices=BACKENDS,
                    help="auto: GGUI (Vulkan) if available, else ti.GUI")
     p.add_argument("--no-video", action="store_true", help="no rendering at all: no video, no PNG")
+    p.add_argument("--color", default="stretch", choices=["none", *COLOR_FIELDS],
+                   help="colour the body by a field: the largest principal stretch, det F, or none (mesh edges)")
     p.add_argument("--max-frame-pixels", type=int, default=limits.MAX_FRAME_PIXELS,
                    help="refuse a --size of more pixels per frame")
 
@@ -90,6 +96,9 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--scene", help="a scene file (TOML); the reference-beam flags (--cy --cx --growth --steps --E --nu "
                                    "--k --max-area --order) are then ignored")
     p.add_argument("--cy", type=float, default=0.15, help="chamber centre height (above the neutral axis curls down)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="change a dotted scene-file key, e.g. --set chambers[0].center[1]=0.1 --set material.E=2e4 "
+                        "(repeatable; the reference beam's keys are those of assets/scenes/reference_beam.toml)")
     add_ramp_arguments(p)
     add_video_arguments(p, "960x384")
     p.add_argument("--interactive", action="store_true",
@@ -176,27 +185,29 @@ def stop_on_interrupt():
         signal.signal(signal.SIGINT, previous)
 
 
-def solve(args: argparse.Namespace, built, label: str = "solving"):
-    """Run the scene's schedule with a progress bar; return (result, wall seconds).
+def solve(args: argparse.Namespace, built, label: str = "solving", vtk: VtkSeries | None = None) -> Result:
+    """Run the scene's schedule, printing a line per step, with a progress bar on a terminal only (the
+    lines go through the bar, tqdm.write; piped or logged output gets the lines alone); write each
+    step's VTU as it is solved if vtk is given. Returns an api.Result.
 
     Raises RampFailed when an increment fails after its cuts, RampInterrupted after the increment
-    during which Ctrl-C was pressed; both carry the steps done."""
+    during which Ctrl-C was pressed; both carry the steps done (.result)."""
     increments = built.scene.increments
-    bar = tqdm(total=increments + 1, desc=label, unit="step", disable=args.quiet, leave=False)
+    bar = tqdm(total=increments + 1, desc=label, unit="step", disable=True if args.quiet else None, leave=False)
 
-    def progress(step):
+    def progress(step, positions, contact_force):
+        if vtk is not None:
+            vtk.write(step, positions, contact_force)
         bar.update()
         if not args.quiet:
             chambers = "  ".join(f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}" for name, c in step.chambers.items())
-            bar.write(f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {step.tip_dy:+.4f} "
-                      f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  {step.cuts} cuts  "
-                      f"residual {step.residual:.1e}")
+            tqdm.write(f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {step.tip_dy:+.4f} "
+                       f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  {step.cuts} cuts  "
+                       f"residual {step.residual:.1e}")
 
-    start = time.perf_counter()
     with bar, stop_on_interrupt() as interrupted:
-        result = run_schedule(built, options=newton_options(args), progress=progress, max_cuts=args.max_cuts,
-                              stop=interrupted.is_set)
-    return result, time.perf_counter() - start
+        return simulate(built, tol=args.tol, max_iterations=args.max_iterations, max_cuts=args.max_cuts,
+                        progress=progress, stop=interrupted.is_set)
 
 
 def render_report(export, seconds_per_step: float) -> str:
@@ -204,15 +215,26 @@ def render_report(export, seconds_per_step: float) -> str:
             f"ms/frame vs solving {1000 * seconds_per_step:.0f} ms/step")
 
 
+def apply_set(scene: Scene, assignments: list[str]) -> Scene:
+    """The scene with every --set KEY=VALUE applied (validated once, like a scene file)."""
+    if not assignments:
+        return scene
+    values = dict(parse_assignment(text) for text in assignments)
+    try:
+        return scene.with_values(values)
+    except PneumaInputError as exc:
+        raise PneumaInputError(f"--set: {exc}") from None
+
+
 def run(args: argparse.Namespace) -> dict:
     if args.scene:
         check_flags(args)
-        scene = load_scene(args.scene)
-        limits.check_scene(scene, args.max_triangles, args.max_increments)
+        scene = apply_set(load_scene(args.scene), args.set)
         stem = scene.name  # a plain file name (Scene checks it): every result file lands inside --out
     else:
-        scene = scene_for(args, args.cy)
+        scene = apply_set(scene_for(args, args.cy), args.set)
         stem = f"inflate_cy{args.cy:+.2f}"
+    limits.check_scene(scene, args.max_triangles, args.max_increments)  # after --set, which may raise them
     size = rendering_flags(args)
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
     if args.interactive:
@@ -225,18 +247,16 @@ def run(args: argparse.Namespace) -> dict:
         from ..interactive import explore
         return explore(scene, args.growth, size, args.renderer, newton_options(args))
     built = build(scene)
-    mesh = built.mesh
+    vtk = VtkSeries(out, stem, built)
     try:
-        result, wall = solve(args, built)
+        result = solve(args, built, vtk=vtk)
     except RampStopped as stopped:
-        written = save_history(out, stem, built, stopped.partial)
+        written = stopped.result.save_history(out, stem) + [vtk.pvd]
         if isinstance(stopped, RampInterrupted):
-            summary = summarise(built, stopped.partial, float(stopped.partial.column("seconds").sum()), interrupted=True)
-            written.append(save_json(out / f"{stem}_summary.json", summary))
+            written.append(save_json(out / f"{stem}_summary.json", stopped.result.summary(interrupted=True)))
         print(f"saved the {len(stopped.partial.steps)} steps done in " + ", ".join(str(p) for p in written))
         raise
-    summary = summarise(built, result, wall)
-    final = result.steps[-1]
+    final, summary = result.steps[-1], result.summary()
     for name, c in final.chambers.items():
         print(f"{name}: area {c.area / c.area_ratio:.3f} -> {c.area:.3f} (x{c.area_ratio:.2f}), pressure {c.pressure:.1f}")
     print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}; "
@@ -246,72 +266,24 @@ def run(args: argparse.Namespace) -> dict:
         print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g})")
     print(f"Newton: {summary['newton_iterations_total']} iterations over {summary['steps'] - 1} solves "
           f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
-          f"all converged: {summary['all_converged']}; run {wall:.2f} s")
-    summary_path = out / f"{stem}_summary.json"  # results saved before rendering: a Ctrl-C there loses none
-    written = save_history(out, stem, built, result) + [save_json(summary_path, summary)]
+          f"all converged: {summary['all_converged']}; run {result.seconds:.2f} s")
+    # results saved before rendering: a Ctrl-C there loses none
+    written = result.save(out, stem, vtk=False) + [vtk.pvd]
     if not args.no_video:
-        from ..render import FrameRenderer, Track
-        from ..video import export
-
-        ground = next((e.height for e in scene.effects if e.name == "ground"), None)
-        renderer = FrameRenderer([Track.from_ramp(mesh, result, ground=ground)], *size, trace=True,
-                                 backend=args.renderer)
-        done = export(renderer, args.video or out / f"{stem}.mp4", out / f"{stem}.png", args.fps, args.quiet)
-        summary.update(renderer=renderer.canvas.name, video_frames=done.frames, video_size=[done.width, done.height],
+        done = result.video(args.video or out / f"{stem}.mp4", out / f"{stem}.png", size, args.fps, args.color,
+                            args.renderer, quiet=args.quiet)
+        summary.update(renderer=done.renderer, video_frames=done.frames, video_size=[done.width, done.height],
                        render_ms_per_frame=done.ms_per_frame)
         print(render_report(done, summary["solve_seconds_per_step"]))
         written = [done.video, done.png] + written
-        save_json(summary_path, summary)
-    print("wrote " + ", ".join(str(p) for p in written))
+        save_json(out / f"{stem}_summary.json", summary)
+    print("wrote " + ", ".join(str(p) for p in written) + f" (+ {len(vtk.entries)} VTU files in {vtk.folder})")
     return summary
 
 
-def summarise(built, result, wall: float, interrupted: bool = False) -> dict:
-    """The figures of a run (complete, or interrupted after result.steps) for the summary JSON."""
-    mesh, final = built.mesh, result.steps[-1]
-    iterations, seconds = result.column("iterations")[1:], result.column("seconds")[1:]
-    return {
-        "scene": built.scene.name, "terms": built.model.term_names(),
-        "vertices": mesh.n_vertices, "triangles": mesh.n_triangles, "element_order": mesh.order,
-        "chambers": {name: {"control": c.control, "rest_area": c.area / c.area_ratio, "final_area": c.area,
-                            "area_ratio": c.area_ratio, "final_pressure": c.pressure,
-                            "peak_pressure": float(np.abs(result.column(f"{name}.pressure")).max())}
-                     for name, c in final.chambers.items()},
-        "tip_deflection": result.tip_deflection, "tip_rotation_deg": final.tip_rotation,
-        "peak_pressure": result.peak_pressure, "contact": final.contact,
-        "all_converged": bool(all(s.converged for s in result.steps)),
-        "max_residual": float(result.column("residual").max()),
-        "min_det_F": float(result.column("min_det").min()),
-        "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max(initial=0)),
-        "increment_cuts": int(result.column("cuts").sum()),
-        "wall_seconds": wall, "solve_seconds_per_step": float(seconds.mean()) if len(seconds) else 0.0,
-        "steps": len(result.steps), "interrupted": interrupted,
-    }
-
-
-def save_history(out, stem: str, built, result) -> list:
-    """Write the per-step history (CSV) and the states (npz) of a run, complete or partial.
-
-    The npz holds positions (steps, n, 2), rest, triangles, pinned, tip, boundary, chamber_names and
-    one chamber_loop_<i> per chamber, command / area / pressure as (steps, chambers), and, where
-    the scene has them, contact_forces (steps, n, 2) and ground_height.
-    """
-    mesh = built.mesh
-    names = [c.chamber_name for c in built.chambers]
-    arrays = dict(positions=result.states, rest=mesh.vertices, triangles=mesh.triangles, pinned=mesh.pinned,
-                  tip=mesh.tip, boundary=mesh.boundary, chamber_names=np.array(names),
-                  **{f"chamber_loop_{i}": loop for i, loop in enumerate(mesh.chambers)},
-                  **{key: np.column_stack([result.column(f"{n}.{key}") for n in names])
-                     for key in ("command", "area", "pressure")})
-    if result.contact_forces is not None:
-        arrays["contact_forces"] = result.contact_forces
-    for effect in built.scene.effects:
-        if effect.name == "ground":
-            arrays["ground_height"] = np.array(effect.height)
-    return [
-        save_text(out / f"{stem}_history.csv", result.history_csv()),
-        save_npz(out / f"{stem}_states.npz", **arrays),
-    ]
+def save_history(out, stem: str, built, ramp) -> list:
+    """Write the per-step history (CSV) and states (npz) of a simulate.RampResult (api.Result.save_history)."""
+    return Result(built, ramp).save_history(out, stem)
 
 
 def exit_code(app_run, args: argparse.Namespace) -> int:

@@ -2,8 +2,9 @@
 
     python -m taichi_pneuma.apps.steer
 
-Solves the three ramps (cy = +0.15, 0, -0.15), prints their tip deflections and, unless --no-video,
-plays them side by side in one video (all panels in one frame of reference) with a PNG of the last frame.
+Solves the three ramps (cy = +0.15, 0, -0.15), prints their tip deflections, writes each ramp's ParaView
+files (steer_cy+0.15.pvd, ...) and, unless --no-video, plays them side by side in one video (all panels in
+one frame of reference, bodies coloured by --color on one scale) with a PNG of the last frame.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import sys
 
 from .. import runtime
 from ..output import prepare_directory, save_json
+from ..vtk import VtkSeries
 from .inflate import (add_ramp_arguments, add_video_arguments, build, exit_code, render_report, rendering_flags,
                       scene_for, solve)
 
@@ -33,25 +35,29 @@ def run(args: argparse.Namespace) -> dict:
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     built = [build(scene) for scene in scenes]
-    solved = [(b, *solve(args, b, f"cy = {cy:+.2f}")) for b, (cy, _) in zip(built, PLACEMENTS)]
+    series = [VtkSeries(out, f"steer_cy{cy:+.2f}", b) for b, (cy, _) in zip(built, PLACEMENTS)]
+    solved = [solve(args, b, f"cy = {cy:+.2f}", vtk) for b, vtk, (cy, _) in zip(built, series, PLACEMENTS)]
     summary = {"tip_deflection": {}, "all_converged": True}
-    for (cy, title), (built, result, wall) in zip(PLACEMENTS, solved):
+    for (cy, title), result in zip(PLACEMENTS, solved):
         print(f"cy = {cy:+.2f} ({title}): tip deflection {result.tip_deflection:+.4f}, "
-              f"peak |p| {result.peak_pressure:.1f}, ramp {wall:.1f} s")
+              f"peak |p| {result.peak_pressure:.1f}, ramp {result.seconds:.1f} s")
         summary["tip_deflection"][f"{cy:+.2f}"] = result.tip_deflection
-        summary["all_converged"] &= bool(all(s.converged for s in result.steps))
-    written = []
+        summary["all_converged"] &= result.converged
+    written = [vtk.pvd for vtk in series]
     if not args.no_video:
         from ..render import FrameRenderer, Track
         from ..video import export
 
-        tracks = [Track.from_ramp(built.mesh, result, f"cy = {cy:+.2f}: {title}")
-                  for (cy, title), (built, result, _) in zip(PLACEMENTS, solved)]
+        tracks = [Track.from_ramp(result.mesh, result.ramp, f"cy = {cy:+.2f}: {title}", color=args.color)
+                  for (cy, title), result in zip(PLACEMENTS, solved)]
         renderer = FrameRenderer(tracks, *size, trace=False, backend=args.renderer)
-        done = export(renderer, args.video or out / "steer.mp4", out / "steer.png", args.fps, args.quiet)
-        seconds_per_step = sum(float(r.column("seconds")[1:].mean()) for _, r, _ in solved) / len(solved)
+        try:
+            done = export(renderer, args.video or out / "steer.mp4", out / "steer.png", args.fps, args.quiet)
+        finally:
+            renderer.canvas.close()
+        seconds_per_step = sum(r.summary()["solve_seconds_per_step"] for r in solved) / len(solved)
         print(render_report(done, seconds_per_step))
-        summary.update(renderer=renderer.canvas.name, video_frames=done.frames, video_size=[done.width, done.height],
+        summary.update(renderer=done.renderer, video_frames=done.frames, video_size=[done.width, done.height],
                        render_ms_per_frame=done.ms_per_frame, solve_seconds_per_step=seconds_per_step)
         written += [done.video, done.png]
     written.append(save_json(out / "steer_summary.json", summary))

@@ -1,0 +1,74 @@
+"""A run's history as a matplotlib figure with axes: four panels, one curve per chamber.
+
+    pressure against area ratio        tip deflection against the command
+    area ratio against the command     pressure against the command
+
+"The command" is the chambers' commanded value (area ratio or pressure) when every chamber gets the
+same command at every step (one chamber, or chambers driven together); otherwise the step.
+"""
+
+from __future__ import annotations
+
+import io
+import warnings
+
+import numpy as np
+from matplotlib.figure import Figure
+
+COMMAND_LABEL = {"area": "commanded area ratio", "pressure": "commanded pressure"}
+
+
+def command_axis(command: np.ndarray, controls: list[str]) -> tuple[np.ndarray, str]:
+    """The x values and label of the 'against the command' panels: command (steps, chambers) and each
+    chamber's control ('area' or 'pressure'); see the module docstring."""
+    if len(set(controls)) == 1 and np.all(command == command[:, :1]):
+        return command[:, 0], COMMAND_LABEL[controls[0]]
+    return np.arange(len(command), dtype=float), "step"
+
+
+class NotebookFigure(Figure):
+    """A matplotlib Figure made without pyplot (no global state, nothing left open) that a notebook shows:
+    IPython displays an object's _repr_png_."""
+
+    def _repr_png_(self) -> bytes:
+        buffer = io.BytesIO()
+        self.savefig(buffer, format="png", dpi=100)
+        return buffer.getvalue()
+
+
+def history_figure(result, figure=None):
+    """Draw the history of an api.Result on `figure` (a new NotebookFigure by default)."""
+    fig = figure if figure is not None else NotebookFigure(figsize=(10, 7), layout="constrained")
+    (pa, tip), (area, pressure) = fig.subplots(2, 2)
+    x, x_label = command_axis(result.command, [c.schedule.control for c in result.scene.controls])
+    for c, name in enumerate(result.chamber_names):
+        pa.plot(result.area_ratio[:, c], result.pressure[:, c], ".-", label=short(name))
+        area.plot(x, result.area_ratio[:, c], ".-", label=short(name))
+        pressure.plot(x, result.pressure[:, c], ".-", label=short(name))
+    tip.plot(x, result.history["tip_dy"], ".-", color="k")
+    for ax, xl, yl, title in ((pa, "area ratio A / A_rest", "pressure p", "pressure against area ratio"),
+                              (tip, x_label, "tip deflection dy", "tip deflection (mean y displacement of the tip)"),
+                              (area, x_label, "area ratio A / A_rest", "chamber area"),
+                              (pressure, x_label, "pressure p", "chamber pressure")):
+        ax.set(xlabel=xl, ylabel=yl, title=title)
+        ax.grid(True, alpha=0.3)
+    if len(result.chamber_names) > 1:
+        pa.legend(fontsize="small")
+    fig.suptitle(short(result.scene.name, 80))
+    return fig
+
+
+def short(text: str, most: int = 24) -> str:
+    """A name for a legend or title: cut to `most` characters, unprintable characters (tabs, ...) as '?'."""
+    text = "".join(c if c.isprintable() else "?" for c in text)
+    return text if len(text) <= most else text[:most - 3] + "..."
+
+
+def save_history_png(result, path) -> None:
+    """Write the history figure to path (PNG). Where many chambers' legend leaves the axes no room,
+    matplotlib drops its constrained layout, and a name's character without a glyph in the font is drawn
+    as a box; it says so each time, but the figure is still whole, so neither is passed on as a warning."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="constrained_layout not applied")
+        warnings.filterwarnings("ignore", message="Glyph .* missing from font")
+        history_figure(result).savefig(path, dpi=100, format="png")

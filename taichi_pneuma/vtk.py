@@ -1,0 +1,97 @@
+"""ParaView output: one VTU file per step (meshio) and a PVD collection indexing them by step.
+
+    <out>/<stem>.pvd                     the collection: open this in ParaView (timestep = step)
+    <out>/<stem>_vtk/<stem>_0000.vtu     step 0, 1, ... each written whole (output.write_atomic)
+
+The PVD is rewritten after every step, so a run that stops early leaves its finished steps readable;
+VTU files of the same stem left in the folder by an earlier run are removed when a series starts.
+Each VTU holds the rest mesh (points padded with z = 0; linear triangles, or quadratic ones as VTK's
+6-node triangle, whose midside-node order 01, 12, 20 the mesh shares) and
+- point data: displacement (x, y, 0): ParaView's Warp By Vector with it shows the deformed body;
+  chamber: the index (scene order) of the chamber whose wall the vertex is on, -1 elsewhere;
+  contact_force (x, y, 0), summed over the contact terms, when the scene has contact;
+- cell data (fields.py: element means over the quadrature points): det_F, max_stretch, stress (Cauchy,
+  6 components in ParaView's symmetric-tensor order XX, YY, ZZ, XY, YZ, XZ; ZZ the plane-strain
+  out-of-plane stress) and von_mises (of that stress);
+- field data: the step's history row (per chamber <name>.command/.area/.area_ratio/.pressure, tip_dx,
+  tip_dy, tip_rotation, solver figures), one value each.
+meshio 5.3 reads FieldData but does not write it: write_vtu adds the block (ASCII) to meshio's file.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import meshio
+import numpy as np
+
+from .fields import triangle_fields
+from .output import save_text, write_atomic
+from .terms.elastic import lame_parameters
+
+SYMMETRIC_TENSOR = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))  # ParaView's 6-component order
+
+
+def pad3(vectors: np.ndarray) -> np.ndarray:
+    """(n, 2) -> (n, 3) with z = 0."""
+    return np.column_stack([vectors, np.zeros(len(vectors))])
+
+
+def write_vtu(path: Path, mesh: meshio.Mesh, field_data: dict[str, float]) -> None:
+    """meshio's VTU file plus a FieldData block of one Float64 value per name."""
+    meshio.write(path, mesh, file_format="vtu")
+    arrays = "".join(f'<DataArray type="Float64" Name={quoteattr(name)} NumberOfTuples="1" format="ascii">'
+                     f"{float(value)!r}</DataArray>" for name, value in field_data.items())
+    text = Path(path).read_text()
+    Path(path).write_text(text.replace("<UnstructuredGrid>", f"<UnstructuredGrid><FieldData>{arrays}</FieldData>", 1))
+
+
+def pvd_text(entries: list[tuple[float, str]]) -> str:
+    """A PVD collection of (timestep, relative file name) entries."""
+    rows = "".join(f'    <DataSet timestep="{t!r}" part="0" file={quoteattr(name)}/>\n' for t, name in entries)
+    return (f'<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n{rows}'
+            f"  </Collection>\n</VTKFile>\n")
+
+
+class VtkSeries:
+    """Writes the VTU of each step as it comes (write()) and keeps <stem>.pvd indexing those written."""
+
+    def __init__(self, directory: str | Path, stem: str, built):
+        mesh = built.mesh
+        self.directory, self.stem, self.mesh = Path(directory), stem, mesh
+        self.folder = self.directory / f"{stem}_vtk"
+        self.folder.mkdir(parents=True, exist_ok=True)
+        for stale in self.folder.glob(f"{stem}_[0-9][0-9][0-9][0-9].vtu"):  # from an earlier run of this name
+            stale.unlink()
+        self.pvd = self.directory / f"{stem}.pvd"
+        self.mu, self.lam = lame_parameters(*built.scene.element_moduli(mesh))
+        self.chamber = np.full(mesh.n_vertices, -1, dtype=np.int32)
+        for index, loop in enumerate(mesh.chambers):
+            self.chamber[loop] = index
+        self.entries: list[tuple[float, str]] = []
+
+    def write(self, step, positions: np.ndarray, contact_force: np.ndarray | None = None) -> Path:
+        """Write step (a simulate.StepRecord) at positions (n, 2); return the VTU's path."""
+        mesh = self.mesh
+        fields = triangle_fields(mesh.vertices, positions, mesh.triangles, self.mu, self.lam)
+        stress = np.column_stack([fields["stress"][:, i, j] for i, j in SYMMETRIC_TENSOR])
+        point_data = {"displacement": pad3(positions - mesh.vertices), "chamber": self.chamber}
+        if contact_force is not None:
+            point_data["contact_force"] = pad3(contact_force)
+        cell_type = "triangle" if mesh.order == 1 else "triangle6"
+        grid = meshio.Mesh(pad3(mesh.vertices), [(cell_type, mesh.triangles)], point_data=point_data,
+                           cell_data={"det_F": [fields["det_F"]], "max_stretch": [fields["max_stretch"]],
+                                      "stress": [stress], "von_mises": [fields["von_mises"]]})
+        path = self.folder / f"{self.stem}_{step.step:04d}.vtu"
+        write_atomic(path, lambda tmp: write_vtu(tmp, grid, step.row()))
+        self.entries.append((float(step.step), f"{self.folder.name}/{path.name}"))
+        save_text(self.pvd, pvd_text(self.entries))
+        return path
+
+    def write_all(self, result) -> Path:
+        """Write every step of a simulate.RampResult; return the PVD's path."""
+        forces = result.contact_forces
+        for i, step in enumerate(result.steps):
+            self.write(step, result.states[i], None if forces is None else forces[i])
+        return self.pvd
