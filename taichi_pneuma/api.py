@@ -159,10 +159,12 @@ class Result:
         return [save_text(out / f"{stem}_history.csv", self.ramp.history_csv()),
                 save_npz(out / f"{stem}_states.npz", **arrays)]
 
-    def save(self, directory, stem: str | None = None, vtk: bool = True, extra: dict | None = None) -> list[Path]:
+    def save(self, directory, stem: str | None = None, vtk: bool = True, extra: dict | None = None,
+             plot: bool = True) -> list[Path]:
         """Write the result files under directory, named <stem>_* (default: the scene's name): history CSV,
-        states npz, the plot PNG, the scene TOML, the summary JSON (with `extra` merged in) and, unless
-        vtk is False, the ParaView files <stem>.pvd + <stem>_vtk/*.vtu. Returns the paths written."""
+        states npz, the plot PNG (unless plot is False), the scene TOML, the summary JSON (with `extra`
+        merged in) and, unless vtk is False, the ParaView files <stem>.pvd + <stem>_vtk/*.vtu. Returns the
+        paths written."""
         from .plots import save_history_png
         from .vtk import VtkSeries
 
@@ -170,7 +172,8 @@ class Result:
         written = self.save_history(out, stem)
         if vtk:
             written.append(VtkSeries(out, stem, self.built).write_all(self.ramp))
-        written.append(write_atomic(out / f"{stem}_plot.png", lambda tmp: save_history_png(self, tmp)))
+        if plot:
+            written.append(write_atomic(out / f"{stem}_plot.png", lambda tmp: save_history_png(self, tmp)))
         written.append(save_text(out / f"{stem}_scene.toml", self.scene.to_toml()))
         written.append(save_json(out / f"{stem}_summary.json", {**self.summary(), **(extra or {})}))
         return written

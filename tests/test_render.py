@@ -115,15 +115,15 @@ def test_unknown_video_extension_is_refused(tmp_path):
         write_video(tmp_path / "v.avi", iter([]))
 
 
-def test_no_video_initialises_no_renderer(tmp_path, monkeypatch):
+def test_no_video_initialises_no_renderer_and_draws_no_picture(tmp_path, monkeypatch):
     def refuse(*args, **kwargs):
         raise AssertionError("a renderer was initialised")
 
     monkeypatch.setattr(render, "open_canvas", refuse)
     assert inflate.main([*COARSE, "--no-video", "--out", str(tmp_path)]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == [
-        f"inflate_cy+0.15{end}" for end in (".pvd", "_history.csv", "_plot.png", "_scene.toml", "_states.npz",
-                                             "_summary.json", "_vtk")]
+        f"inflate_cy+0.15{end}" for end in (".pvd", "_history.csv", "_scene.toml", "_states.npz", "_summary.json",
+                                             "_vtk")]
 
 
 def test_inflate_without_vulkan_falls_back_to_ti_gui_and_writes_every_frame(tmp_path):

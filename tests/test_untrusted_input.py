@@ -71,8 +71,7 @@ def test_without_a_name_the_file_name_is_reduced_to_a_plain_one_and_everything_l
     assert main(["--scene", str(path), "--out", str(out), *QUICK]) == 0
     steps = json.loads((out / "my_beam__v2__summary.json").read_text())["steps"]
     assert files_under(tmp_path) == {"scenes/..my beam (v2).toml", "out/my_beam__v2_.pvd"} | {
-        f"out/my_beam__v2__{suffix}" for suffix in ("history.csv", "states.npz", "summary.json", "plot.png",
-                                                    "scene.toml")} | {
+        f"out/my_beam__v2__{suffix}" for suffix in ("history.csv", "states.npz", "summary.json", "scene.toml")} | {
         f"out/my_beam__v2__vtk/my_beam__v2__{i:04d}.vtu" for i in range(steps)}
 
 

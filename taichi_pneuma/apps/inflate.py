@@ -83,7 +83,7 @@ def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
     p.add_argument("--size", default=size, help="frame size WIDTHxHEIGHT in pixels")
     p.add_argument("--renderer", default="auto", choices=BACKENDS,
                    help="auto: GGUI (Vulkan) if available, else ti.GUI")
-    p.add_argument("--no-video", action="store_true", help="no rendering at all: no video, no PNG")
+    p.add_argument("--no-video", action="store_true", help="no rendering at all: no video, no frame PNG, no plot PNG")
     p.add_argument("--color", default="stretch", choices=["none", *COLOR_FIELDS],
                    help="colour the body by a field: the largest principal stretch, det F, or none (mesh edges)")
     p.add_argument("--max-frame-pixels", type=int, default=limits.MAX_FRAME_PIXELS,
@@ -268,7 +268,7 @@ def run(args: argparse.Namespace) -> dict:
           f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
           f"all converged: {summary['all_converged']}; run {result.seconds:.2f} s")
     # results saved before rendering: a Ctrl-C there loses none
-    written = result.save(out, stem, vtk=False) + [vtk.pvd]
+    written = result.save(out, stem, vtk=False, plot=not args.no_video) + [vtk.pvd]
     if not args.no_video:
         done = result.video(args.video or out / f"{stem}.mp4", out / f"{stem}.png", size, args.fps, args.color,
                             args.renderer, quiet=args.quiet)
