@@ -39,7 +39,8 @@ def test_round_tripped_scene_gives_the_same_mesh_and_tip_deflection(small, tmp_p
     again = tp.simulate(tp.load_scene(tmp_path / "s.toml"))
     assert np.array_equal(again.mesh.vertices, small.mesh.vertices)
     assert np.array_equal(again.mesh.triangles, small.mesh.triangles)
-    assert again.tip_deflection == small.tip_deflection and again.tip_deflection != 0
+    # the same to round-off: the kernels' parallel scatter-adds sum in a thread-dependent order
+    assert again.tip_deflection == pytest.approx(small.tip_deflection, rel=1e-9) and again.tip_deflection != 0
 
 
 def test_with_value_changes_exactly_one_key():
