@@ -15,7 +15,8 @@ from taichi_pneuma.schedule import ChamberSchedule
 from taichi_pneuma.simulate import run_schedule
 from taichi_pneuma.terms import PressureChamber
 
-from test_terms import dense_hessian, fd_gradient, fd_hessian, random_state
+from test_terms import (assert_gradient_matches_finite_differences, assert_max_step_stops_before_inversion, dense_hessian,
+                        fd_hessian, random_state)
 
 # scikit-fem (an independent code, same model): P2 on the reference mesh refined twice, 96,384 nodes
 INDEPENDENT_CONVERGED_TIP = -0.2583
@@ -47,11 +48,7 @@ def test_quadratic_mesh_has_midside_nodes_everywhere(coarse_p2):
 @pytest.mark.parametrize("name", ["elastic", "chamber:main", "clamp", "gravity", "ground"])
 def test_gradient_matches_finite_differences(coarse_p2, name):
     built, u = coarse_p2
-    term = next(t for t in built.model.terms if t.name == name)
-    built.model.set_displacements(u)
-    g = term.gradient().ravel()
-    assert np.linalg.norm(g) > 0
-    assert np.linalg.norm(g - fd_gradient(built.model, term, u)) / np.linalg.norm(g) < 1e-5
+    assert_gradient_matches_finite_differences(built, name, u)
 
 
 def test_full_hessian_matches_finite_differences(coarse_p2):
@@ -73,16 +70,7 @@ def test_projected_hessian_is_psd(coarse_p2):
 
 
 def test_max_step_keeps_every_quadrature_point_uninverted(coarse_p2):
-    built, _ = coarse_p2
-    elastic = built.elastic
-    built.model.set_displacements(np.zeros_like(built.mesh.vertices))
-    dx = 0.2 * np.random.default_rng(3).standard_normal(built.mesh.vertices.shape)
-    alpha = elastic.max_step(dx)
-    assert 0 < alpha < np.inf
-    built.model.set_displacements(0.999 * alpha * dx)
-    assert elastic.min_determinant() > 0
-    built.model.set_displacements(1.001 * alpha * dx)
-    assert elastic.min_determinant() < 0
+    assert_max_step_stops_before_inversion(coarse_p2[0])
 
 
 def test_curved_wall_area_is_exact_for_parabolic_sides():

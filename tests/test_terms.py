@@ -146,17 +146,29 @@ def test_fixed_pattern_and_woodbury_solve(coarse):
     assert np.linalg.norm(dense @ d - rhs) < 1e-8 * np.linalg.norm(rhs)
 
 
-def test_max_step_stops_before_inversion(coarse):
-    elastic = coarse.elastic
-    coarse.model.set_displacements(np.zeros_like(coarse.mesh.vertices))
-    rng = np.random.default_rng(3)
-    dx = 0.2 * rng.standard_normal(coarse.mesh.vertices.shape)
+def assert_max_step_stops_before_inversion(built):
+    """A random step: at 0.999 of max_step no element is inverted anywhere, at 1.001 one is."""
+    elastic = built.elastic
+    built.model.set_displacements(np.zeros_like(built.mesh.vertices))
+    dx = 0.2 * np.random.default_rng(3).standard_normal(built.mesh.vertices.shape)
     alpha = elastic.max_step(dx)
     assert 0 < alpha < np.inf
-    coarse.model.set_displacements(0.999 * alpha * dx)
+    built.model.set_displacements(0.999 * alpha * dx)
     assert elastic.min_determinant() > 0
-    coarse.model.set_displacements(1.001 * alpha * dx)
+    built.model.set_displacements(1.001 * alpha * dx)
     assert elastic.min_determinant() < 0
+
+
+def assert_gradient_matches_finite_differences(built, name, u):
+    term = next(t for t in built.model.terms if t.name == name)
+    built.model.set_displacements(u)
+    g = term.gradient().ravel()
+    assert np.linalg.norm(g) > 0
+    assert np.linalg.norm(g - fd_gradient(built.model, term, u)) / np.linalg.norm(g) < 1e-5
+
+
+def test_max_step_stops_before_inversion(coarse):
+    assert_max_step_stops_before_inversion(coarse)
 
 
 def test_projected_element_blocks_equal_eigen_clamped_blocks(coarse):
