@@ -472,8 +472,9 @@ class Sweep:
         figures = ["tip_dx", "tip_dy", "tip_rotation"] + [f"{c}.{f}" for c in base.chamber_names
                                                           for f in ("area_ratio", "peak_pressure")]
         self.columns = self.keys + figures + ["converged", "iterations", "increments", "vertices", "seconds", "error"]
+        check_stem(name)
         out = prepare_directory(out)
-        self.csv, self.json, self.png = (out / f"{check_stem(name)}{suffix}" for suffix in (".csv", ".json", ".png"))
+        self.csv, self.json, self.png = (out / f"{name}{suffix}" for suffix in (".csv", ".json", ".png"))
         self.identity = {"keys": self.keys, "base_scene": self.scene_toml, "options": asdict(options)}
         self.done = self._read_done(retry_failed)
         self.todo = [run for run in self.runs if run_key(run) not in self.done]
@@ -573,64 +574,80 @@ class Sweep:
 
 def _positions(values: list) -> tuple[np.ndarray, list | None]:
     """Numbers as they are; anything else as category indices (returned with their labels)."""
-    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+    if all(is_number(v) for v in values):
         return np.array(values, dtype=float), None
     labels = list(dict.fromkeys(cell(v) for v in values))
     return np.array([labels.index(cell(v)) for v in values], dtype=float), labels
 
 
+def _edges(centres: np.ndarray) -> np.ndarray:
+    """Cell edges around sorted cell centres (midpoints; one centre gets a cell of its own size)."""
+    if len(centres) == 1:
+        half = 0.5 * (abs(centres[0]) or 1.0)
+        return np.array([centres[0] - half, centres[0] + half])
+    mid = 0.5 * (centres[1:] + centres[:-1])
+    return np.concatenate([[2 * centres[0] - mid[0]], mid, [2 * centres[-1] - mid[-1]]])
+
+
 def study_figure(rows: list[dict], keys: list[str], sampled: bool = False):
-    """Tip deflection against the varied keys (a matplotlib Figure, no pyplot): curves of tip dy and dx
-    for one key; for two, a heatmap of tip dy (a scatter coloured by it for a sampled study); for more,
-    tip dy against each key. Failed runs are left out (one key: marked on the axis)."""
+    """Tip deflection against the varied keys (a matplotlib Figure, no pyplot). One key: curves of tip
+    dy and dx. Two: a heatmap of tip dy over the grid (red up, blue down; a scatter coloured by it for
+    a sampled study). More: tip dy against each key. Failed runs are marked x (left out for 3+ keys)."""
     from matplotlib.figure import Figure
 
     ok = [r for r in rows if r.get("error") is None and r.get("tip_dy") is not None]
     failed = [r for r in rows if r.get("error") is not None]
+    n = len(ok)
     tip = np.array([r["tip_dy"] for r in ok], dtype=float)
-    title = "tip deflection at the last step" + (f" ({len(failed)} failed runs not shown)" if failed and len(keys) > 1
-                                                 else "")
-    if len(keys) == 1:
-        figure = Figure(figsize=(6, 4), layout="constrained")
-        ax = figure.add_subplot()
-        x, labels = _positions([r[keys[0]] for r in ok + failed])
-        order = np.argsort(x[:len(ok)], kind="stable")
-        ax.plot(x[:len(ok)][order], tip[order], "o-", label="tip dy")
-        ax.plot(x[:len(ok)][order], np.array([r["tip_dx"] for r in ok])[order], "s--", label="tip dx")
-        if failed:
-            ax.plot(x[len(ok):], np.zeros(len(failed)), "x", color="tab:red", ms=9, label="failed run")
-        if labels:
-            ax.set_xticks(range(len(labels)), labels)
-        ax.axhline(0, color="0.7", lw=0.8)
-        ax.set(xlabel=keys[0], ylabel="tip displacement", title=title)
-        ax.legend()
+    title = "tip deflection at the last step"
+    if len(keys) > 2:
+        figure = Figure(figsize=(4 * len(keys), 3.6), layout="constrained")
+        axes = figure.subplots(1, len(keys), sharey=True)
+        for ax, key in zip(axes, keys):
+            x, labels = _positions([r[key] for r in ok])
+            ax.plot(x, tip, "o", ms=4)
+            if labels:
+                ax.set_xticks(range(len(labels)), labels)
+            ax.set(xlabel=key)
+        axes[0].set_ylabel("tip dy")
+        figure.suptitle(title + (f" ({len(failed)} failed runs not shown)" if failed else ""))
         return figure
-    if len(keys) == 2:
-        figure = Figure(figsize=(6.5, 4.5), layout="constrained")
-        ax = figure.add_subplot()
-        (x, xl), (y, yl) = (_positions([r[k] for r in ok]) for k in keys)
+    figure = Figure(figsize=(6.5, 4.5), layout="constrained")
+    ax = figure.add_subplot()
+    positions = [_positions([r[k] for r in ok + failed]) for k in keys]
+    x, xl = positions[0]
+    if len(keys) == 1:
+        order = np.argsort(x[:n], kind="stable")
+        ax.plot(x[:n][order], tip[order], "o-", label="tip dy")
+        ax.plot(x[:n][order], np.array([r["tip_dx"] for r in ok])[order], "s--", label="tip dx")
+        y = np.zeros(len(x))
+        ax.axhline(0, color="0.7", lw=0.8)
+        ax.set(ylabel="tip displacement")
+    else:
+        y, yl = positions[1]
+        limit = float(np.abs(tip).max()) or 1.0
+        colours = dict(cmap="coolwarm", vmin=-limit, vmax=limit)
         if sampled:
-            image = ax.scatter(x, y, c=tip, cmap="coolwarm", s=40, edgecolors="k", linewidths=0.3)
+            image = ax.scatter(x[:n], y[:n], c=tip, s=40, edgecolors="k", linewidths=0.3, **colours)
         else:
             xs, ys = np.unique(x), np.unique(y)
             grid = np.full((len(ys), len(xs)), np.nan)
-            grid[np.searchsorted(ys, y), np.searchsorted(xs, x)] = tip
-            image = ax.pcolormesh(xs, ys, np.ma.masked_invalid(grid), shading="nearest", cmap="coolwarm")
-        if xl:
-            ax.set_xticks(range(len(xl)), xl)
+            grid[np.searchsorted(ys, y[:n]), np.searchsorted(xs, x[:n])] = tip
+            image = ax.pcolormesh(_edges(xs), _edges(ys), np.ma.masked_invalid(grid), **colours)
+            if grid.size <= 64:
+                for (i, j), value in np.ndenumerate(grid):
+                    if np.isfinite(value):
+                        ax.text(xs[j], ys[i], f"{value:+.3f}", ha="center", va="center", fontsize=8,
+                                color="w" if abs(value) > 0.6 * limit else "k")
+        figure.colorbar(image, ax=ax, label="tip dy")
         if yl:
             ax.set_yticks(range(len(yl)), yl)
-        figure.colorbar(image, ax=ax, label="tip dy")
-        ax.set(xlabel=keys[0], ylabel=keys[1], title=title)
-        return figure
-    figure = Figure(figsize=(4 * len(keys), 3.6), layout="constrained")
-    axes = figure.subplots(1, len(keys), sharey=True)
-    for ax, key in zip(axes, keys):
-        x, labels = _positions([r[key] for r in ok])
-        ax.plot(x, tip, "o", ms=4)
-        if labels:
-            ax.set_xticks(range(len(labels)), labels)
-        ax.set(xlabel=key)
-    axes[0].set_ylabel("tip dy")
-    figure.suptitle(title)
+        ax.set(ylabel=keys[1])
+    if failed:
+        ax.plot(x[n:], y[n:], "x", color="tab:red" if len(keys) == 1 else "k", ms=9, mew=2, label="failed run")
+    if xl:
+        ax.set_xticks(range(len(xl)), xl)
+    ax.set(xlabel=keys[0], title=title)
+    if len(keys) == 1 or failed:
+        ax.legend()
     return figure
