@@ -308,10 +308,13 @@ class LocalPool:
 
         def outcome(future):
             pending.discard(future)
+            i = futures[future]
             try:
-                return futures[future], future.result()
+                return i, future.result()
             except BrokenProcessPool:
-                return futures[future], None
+                return i, None
+            except Exception as exc:  # noqa: BLE001 -- run_task does not raise; this is the pool failing
+                return i, {**tasks[i].values, "error": f"{type(exc).__name__}: {one_line(exc)}"}
 
         try:
             for future in as_completed(futures):
