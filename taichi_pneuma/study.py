@@ -362,9 +362,10 @@ class RayCluster:
         import ray
 
         if not ray.is_initialized():
+            # address "local": a new Ray even where one runs already (ray.init(None) would join that one)
             local = {"num_cpus": self.workers or os.cpu_count()} if self.address is None else {}
             try:
-                ray.init(address=self.address, include_dashboard=False, log_to_driver=False,
+                ray.init(address=self.address or "local", include_dashboard=False, log_to_driver=False,
                          runtime_env={"env_vars": WORKER_ENV}, **local)
             except (ConnectionError, ValueError, RuntimeError) as exc:
                 raise PneumaInputError(f"--ray {self.address or ''}: {one_line(exc)}") from None
