@@ -10,14 +10,18 @@ ARCHES = {"cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan, "metal": ti.metal
 _current: str | None = None
 
 
-def init(arch: str = "cpu") -> None:
-    """Initialise Taichi once with float64 fields on `arch`; a later call with the same arch is a no-op."""
+def init(arch: str = "cpu", cpu_threads: int | None = None) -> None:
+    """Initialise Taichi once with float64 fields on `arch`; a later call with the same arch is a no-op.
+
+    cpu_threads: the size of Taichi's CPU thread pool (default: every core); a study's worker
+    processes use 1 each, so that N workers keep N cores busy."""
     global _current
     if arch not in ARCHES:
         raise PneumaInputError(f"arch = {arch!r} is not one of {', '.join(ARCHES)}")
     if _current == arch:
         return
-    ti.init(arch=ARCHES[arch], default_fp=ti.f64, offline_cache=True, log_level=ti.WARN)
+    threads = {} if cpu_threads is None else {"cpu_max_num_threads": cpu_threads}
+    ti.init(arch=ARCHES[arch], default_fp=ti.f64, offline_cache=True, log_level=ti.WARN, **threads)
     _current = arch
 
 

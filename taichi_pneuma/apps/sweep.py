@@ -1,0 +1,130 @@
+"""A design study: run a scene with dotted scene keys varied over a grid (or a Latin hypercube sample),
+on every core of this machine or on a Ray cluster; one CSV row per run, resumable.
+
+    python -m taichi_pneuma.apps.sweep --vary cy=-0.15,0,0.15
+    python -m taichi_pneuma.apps.sweep --scene assets/scenes/bidirectional.toml \\
+        --vary material.E=5e3:2e4:4 --vary chambers[0].center[1]=0.15:0.25:3 --workers 2
+    python -m taichi_pneuma.apps.sweep --vary cy=-0.2:0.2 --vary E=5e3:2e4 --samples 32 --ray 10.0.0.1:6379
+
+Writes <out>/<name>.csv (a row per run: the varied values, tip dx/dy/rotation, each chamber's final
+area ratio and peak |pressure|, converged, Newton iterations, increments done, vertices, seconds, error),
+<name>.json (the grid, the base scene, solver options, versions, machine, executor, counts) and
+<name>.png (tip deflection against the varied keys). A run that fails (an invalid scene, no
+equilibrium) is a row with its error, never the end of the study. The same command again runs only
+the runs that have no row yet (--retry-failed: also those with an error).
+
+Exit codes: 0 when every run has its row (failed runs included), 1 when runs were lost with a
+crashed worker process (the same command runs them), 2 for bad input (one `error:` line), 130 on
+Ctrl-C (runs in flight finish and are kept; the same command resumes).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from tqdm import tqdm
+
+from .. import limits
+from ..scenefile import load_scene
+from ..study import ALIASES, MAX_RUNS, LocalPool, RayCluster, RunOptions, Sweep, parse_vary
+from .inflate import add_ramp_arguments, apply_set, check_flags, exit_code, scene_for
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.sweep", description=__doc__.split("\n")[0],
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--vary", action="append", default=[], metavar="KEY=SPEC", required=True,
+                   help="a dotted scene key and its values: start:stop:count (evenly spaced, ends included; "
+                        "integers if both ends are), start:stop (with --samples) or v1,v2,...; repeatable (a full "
+                        "grid over all). Short keys: " + ", ".join(f"{k} = {v}" for k, v in ALIASES.items()))
+    p.add_argument("--samples", type=int, default=None,
+                   help="run N points of a Latin hypercube over the ranges (a list is sampled by its items; a "
+                        "range's count is ignored) instead of the full grid")
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed of the Latin hypercube (the same seed plans the same runs)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="worker processes (default: every core); with --ray and no address, the local Ray's CPUs")
+    p.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
+                   help="run the tasks on Ray (pip install 'taichi-pneuma[ray]'): a local Ray started for the "
+                        "study without ADDRESS, else the cluster whose head is at ADDRESS (HOST:PORT, auto, "
+                        "ray://HOST:PORT)")
+    p.add_argument("--name", default="sweep", help="the result files are <out>/<name>.csv, .json and .png")
+    p.add_argument("--retry-failed", action="store_true", help="run again the runs recorded with an error")
+    p.add_argument("--max-runs", type=int, default=MAX_RUNS, help="refuse a study of more runs")
+    p.add_argument("--scene", help="the base scene file (TOML); the reference-beam flags (--cy --cx --growth --steps "
+                                   "--E --nu --k --max-area --order) are then ignored")
+    p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="change a dotted key of the base scene for every run (repeatable)")
+    add_ramp_arguments(p)
+    p.set_defaults(max_frame_pixels=limits.MAX_FRAME_PIXELS)  # checked by inflate.check_flags; no video here
+    return p
+
+
+def base_scene(args: argparse.Namespace):
+    """The validated base scene: --scene (or the reference beam of the flags) with --set applied."""
+    if args.scene:
+        check_flags(args)
+        scene = apply_set(load_scene(args.scene), args.set)
+    else:
+        scene = apply_set(scene_for(args, args.cy), args.set)
+    limits.check_scene(scene, args.max_triangles, args.max_increments)
+    return scene
+
+
+def row_line(row: dict, keys: list[str]) -> str:
+    values = ", ".join(f"{k} = {row[k]}" for k in keys)
+    if row.get("error") is not None:
+        return f"  {values}: error: {row['error']} ({row['seconds']:.1f} s)"
+    return (f"  {values}: tip dy {row['tip_dy']:+.4f} dx {row['tip_dx']:+.4f} rot {row['tip_rotation']:+.1f} deg, "
+            f"{row['iterations']} Newton it ({row['seconds']:.1f} s)")
+
+
+def run(args: argparse.Namespace) -> dict:
+    axes = [parse_vary(text) for text in args.vary]
+    base = base_scene(args)
+    executor = LocalPool(args.workers) if args.ray is None else RayCluster(args.ray or None, args.workers)
+    options = RunOptions(args.tol, args.max_iterations, args.max_cuts, args.max_triangles, args.max_increments,
+                         args.arch)
+    sweep = Sweep(base, axes, args.out, args.name, args.samples, args.seed, options, args.retry_failed, args.max_runs)
+    where = "a local Ray" if args.ray == "" else f"Ray at {args.ray}" if args.ray else \
+        f"a process pool of {min(executor.workers, len(sweep.todo))} workers"
+    print(f"study {args.name}: {len(sweep.runs)} runs ({'full grid' if args.samples is None else 'Latin hypercube'} "
+          f"over {', '.join(sweep.keys)}); {len(sweep.runs) - len(sweep.todo)} done before, {len(sweep.todo)} to run"
+          + (f" on {where}" if sweep.todo else ""))
+    bar = tqdm(total=len(sweep.todo), desc="runs", unit="run", disable=True if args.quiet else None, leave=False)
+
+    def on_row(row):
+        bar.update()
+        if not args.quiet:
+            tqdm.write(row_line(row, sweep.keys))
+
+    try:
+        with bar:
+            if sweep.todo:
+                with executor:
+                    report = sweep.run(executor, on_row)
+            else:
+                report = sweep.run(None)
+    except KeyboardInterrupt:
+        print(f"kept the rows done in {sweep.csv}; the same command runs the rest", file=sys.stderr)
+        raise
+    ok = len(report.rows) - report.failed
+    rate = f"; {report.ran / report.seconds:.2f} runs/s" if report.ran else ""
+    print(f"{report.planned} runs: {ok} without error, {report.failed} failed, {report.ran} run now in "
+          f"{report.seconds:.1f} s{rate}")
+    if report.lost:
+        print(f"error: {report.lost} runs lost with a crashed worker process; the same command runs them",
+              file=sys.stderr)
+    print("wrote " + ", ".join(str(p) for p in report.files))
+    # exit_code's contract: 0 when "all_converged"; here, when every planned run has its row
+    return {"all_converged": report.lost == 0}
+
+
+def main(argv: list[str] | None = None) -> int:
+    return exit_code(run, parser().parse_args(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
