@@ -160,7 +160,7 @@ def run_in_sandbox(text: bytes) -> tuple[int, list[str], list[str], float]:
         outside = [str(p) for p in work.rglob("*") if p.is_file() and p != scene and out not in p.parents]
         if code == 0:
             names = sorted(p.name for p in out.iterdir())
-            endings = ("_history.csv", "_states.npz", "_summary.json", "_plot.png", "_scene.toml", ".pvd", "_vtk")
+            endings = ("_history.csv", "_states.npz", "_summary.json", "_scene.toml", ".pvd", "_vtk")  # --no-video: no PNG
             assert len(names) == len(endings) and all(any(n.endswith(e) for n in names) for e in endings), names
         return code, lines, outside, seconds
 
