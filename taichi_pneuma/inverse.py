@@ -250,7 +250,7 @@ class Reacher:
         The descent starts from the current pose; if that ends short of the target, it starts again
         from the centre of the command box, then from quasi-random commands (`restarts` in all),
         and keeps the closest pose found."""
-        opts, start = self.options, time.perf_counter()
+        start = time.perf_counter()
         solves0, newton0 = self.forward_solves, self.newton_iterations
         goal = Objective(self, target)
         path, iterations = [self.pose], 0

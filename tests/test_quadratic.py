@@ -10,8 +10,7 @@ import pytest
 from taichi_pneuma.effects import Gravity, Ground
 from taichi_pneuma.geometry import Ellipse, Geometry, Rectangle
 from taichi_pneuma.model import Configuration
-from taichi_pneuma.scene import ChamberControl, Scene, reference_scene
-from taichi_pneuma.schedule import ChamberSchedule
+from taichi_pneuma.scene import Scene, reference_scene
 from taichi_pneuma.simulate import run_schedule
 from taichi_pneuma.terms import PressureChamber
 

@@ -139,7 +139,7 @@ def run(args: argparse.Namespace) -> dict:
     built = build(scene)
     start = time.perf_counter()
     reacher = Reacher(built, (lo, hi), options, newton_options(args), args.max_cuts)
-    print(f"bounds: " + ", ".join(f"{n} {a:g} .. {b:g}" for n, a, b in zip(reacher.names, lo, hi))
+    print("bounds: " + ", ".join(f"{n} {a:g} .. {b:g}" for n, a, b in zip(reacher.names, lo, hi))
           + f"; start (box centre) solved in {time.perf_counter() - start:.2f} s")
     bar = tqdm(total=len(targets), desc="reaching", unit="target", disable=args.quiet or len(targets) < 2,
                leave=False)
