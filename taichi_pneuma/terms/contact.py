@@ -30,8 +30,6 @@ import taichi as ti
 
 from .base import Indices, Table, Term, Triples, Vec2s, block_pattern, edge, int32s, position, quadratic_roots
 
-Vec6 = ti.types.vector(6, ti.f64)
-
 
 @ti.func
 def barrier(d, dhat, kappa):

@@ -38,7 +38,7 @@ and the 2 x 2 block B has closed-form eigenpairs: four eigenpairs of M, no itera
 import numpy as np
 import taichi as ti
 
-from .base import Table, Term, Vec2s, block_pattern, edge, smallest_positive_root
+from .base import Table, Term, Vec2s, block_pattern, edge, int32s, smallest_positive_root
 
 Nodes = ti.types.ndarray(dtype=ti.i32, ndim=2)  # (m, k): the nodes of each element
 Gradients = ti.types.ndarray(dtype=ti.f64, ndim=4)  # (m, nq, k, 2): dN_a/dX at each quadrature point
@@ -220,7 +220,7 @@ class NeoHookean(Term):
         mu, lam = lame_parameters(np.broadcast_to(np.asarray(youngs_modulus, dtype=np.float64), (m,)),
                                   np.broadcast_to(np.asarray(poisson_ratio, dtype=np.float64), (m,)))
         grads, weights = quadrature(config.rest, elements)
-        self.nodes = np.ascontiguousarray(elements, dtype=np.int32)
+        self.nodes = int32s(elements)
         self.grads = np.ascontiguousarray(grads)
         self.weights = np.ascontiguousarray(weights)
         self.moduli = np.ascontiguousarray(np.column_stack([mu, lam]))
