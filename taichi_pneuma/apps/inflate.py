@@ -281,11 +281,6 @@ def run(args: argparse.Namespace) -> dict:
     return summary
 
 
-def save_history(out, stem: str, built, ramp) -> list:
-    """Write the per-step history (CSV) and states (npz) of a simulate.RampResult (api.Result.save_history)."""
-    return Result(built, ramp).save_history(out, stem)
-
-
 def exit_code(app_run, args: argparse.Namespace) -> int:
     """Run an app; bad input is one line and exit 2, a ramp with no equilibrium one line and exit 1,
     Ctrl-C one line and exit 130 (128 + SIGINT, as shells report it).

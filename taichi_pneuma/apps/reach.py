@@ -27,6 +27,7 @@ import numpy as np
 from tqdm import tqdm
 
 from .. import runtime
+from ..api import Result
 from ..design import solve_design
 from ..errors import PneumaInputError, parse_number, require, require_finite
 from ..geometry import BeamGeometry
@@ -37,7 +38,7 @@ from ..scenefile import load_scene
 from ..simulate import NoEquilibrium, run_schedule
 from ..targets import Target, read_targets_csv
 from .inflate import (add_ramp_arguments, add_video_arguments, build, check_flags, exit_code, newton_options,
-                      render_report, rendering_flags, save_history, scene_for)
+                      render_report, rendering_flags, scene_for)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -186,7 +187,7 @@ def run(args: argparse.Namespace) -> dict:
         summary.update(renderer=renderer.canvas.name, video_frames=done.frames, video_size=[done.width, done.height])
         print(render_report(done, float(np.mean([s.seconds for s in ramp.steps]))))
         written += [done.video, done.png]
-    written += save_history(out, stem, built, ramp) + [save_json(out / f"{stem}_summary.json", summary)]
+    written += Result(built, ramp).save_history(out, stem) + [save_json(out / f"{stem}_summary.json", summary)]
     print("wrote " + ", ".join(str(p) for p in written))
     unreached = [(k, r) for k, r in enumerate(results, start=1) if not r.reached]
     if not unreached:
