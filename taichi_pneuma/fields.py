@@ -38,11 +38,32 @@ import numpy as np
 from .terms.elastic import quadrature
 
 
-def deformation_gradients(rest: np.ndarray, positions: np.ndarray, elements: np.ndarray):
-    """F (m, nq, 2, 2) at the quadrature points of every element (m, 3 or 6) and the weights W (m, nq),
-    from rest and current node positions (n, 2)."""
-    gradients, weights = quadrature(rest, elements)
-    return np.einsum("mai,mqaj->mqij", positions[elements], gradients), weights
+class ElementFields:
+    """The fields of one mesh at any positions: the quadrature (rest shape-function gradients G (m, nq, k, 2)
+    and weights W (m, nq)) depends on the rest mesh only, so it is computed once, here."""
+
+    def __init__(self, rest: np.ndarray, elements: np.ndarray):
+        self.elements = elements
+        self.gradients, self.weights = quadrature(rest, elements)
+
+    def deformation_gradients(self, positions: np.ndarray) -> np.ndarray:
+        """F (m, nq, 2, 2) at the quadrature points, from the current node positions (n, 2)."""
+        return np.einsum("mai,mqaj->mqij", positions[self.elements], self.gradients)
+
+    def at(self, positions: np.ndarray, mu=None, lam=None) -> dict[str, np.ndarray]:
+        """Per element (quadrature-weighted means): det_F and max_stretch, and, given the Lame parameters
+        mu, lam (scalars or one per element), stress (the mean Cauchy stress, (m, 3, 3)) and von_mises (of it)."""
+        F, weights = self.deformation_gradients(positions), self.weights
+        m, nq = weights.shape
+        mean = lambda values: np.einsum("mq,mq...->m...", weights, values.reshape(m, nq, *values.shape[1:])) \
+            / weights.sum(axis=1).reshape(-1, *([1] * (values.ndim - 1)))
+        flat = F.reshape(-1, 2, 2)
+        fields = {"det_F": mean(np.linalg.det(flat)), "max_stretch": mean(max_stretch(flat))}
+        if mu is not None:
+            per_point = lambda v: np.repeat(np.broadcast_to(v, (m,)), nq)
+            fields["stress"] = mean(cauchy_stress(flat, per_point(mu), per_point(lam)))
+            fields["von_mises"] = von_mises(fields["stress"])
+        return fields
 
 
 def max_stretch(F: np.ndarray) -> np.ndarray:
@@ -74,16 +95,5 @@ def von_mises(sigma: np.ndarray) -> np.ndarray:
 
 def triangle_fields(rest: np.ndarray, positions: np.ndarray, elements: np.ndarray, mu=None, lam=None
                     ) -> dict[str, np.ndarray]:
-    """Per element (quadrature-weighted means): det_F and max_stretch, and, given the Lame parameters mu,
-    lam (scalars or one per element), stress (the mean Cauchy stress, (m, 3, 3)) and von_mises (of it)."""
-    F, weights = deformation_gradients(rest, positions, elements)
-    m, nq = weights.shape
-    mean = lambda values: np.einsum("mq,mq...->m...", weights, values.reshape(m, nq, *values.shape[1:])) \
-        / weights.sum(axis=1).reshape(-1, *([1] * (values.ndim - 1)))
-    flat = F.reshape(-1, 2, 2)
-    fields = {"det_F": mean(np.linalg.det(flat)), "max_stretch": mean(max_stretch(flat))}
-    if mu is not None:
-        per_point = lambda v: np.repeat(np.broadcast_to(v, (m,)), nq)
-        fields["stress"] = mean(cauchy_stress(flat, per_point(mu), per_point(lam)))
-        fields["von_mises"] = von_mises(fields["stress"])
-    return fields
+    """ElementFields(rest, elements).at(positions, mu, lam), for one state."""
+    return ElementFields(rest, elements).at(positions, mu, lam)

@@ -37,7 +37,7 @@ import triangle
 
 from . import runtime
 from .errors import PneumaInputError, require
-from .fields import triangle_fields
+from .fields import ElementFields
 from .geometry import Mesh
 
 BACKENDS = ("auto", "ggui", "gui")
@@ -56,7 +56,7 @@ AREA_CURVE = (0.05, 0.2, 0.95)
 PRESSURE_CURVE = (0.85, 0.15, 0.1)
 CURSOR = (0.2, 0.2, 0.2)
 COLORMAP = "viridis"
-# the fields a body can be coloured by: name -> (label, key of fields.triangle_fields)
+# the fields a body can be coloured by: name -> (label, key of fields.ElementFields.at)
 COLOR_FIELDS = {"stretch": ("max stretch", "max_stretch"), "detF": ("det F", "det_F")}
 FONT_PX, LINE_PX, MARGIN_PX = 13, 17, 10
 HEADER_LINES = 3  # title (if any), step and area, pressure and tip: the band above the body, title or not
@@ -330,7 +330,8 @@ class Track:
         values, label = None, ""
         if color != "none":
             label, key = COLOR_FIELDS[color]
-            values = np.array([triangle_fields(mesh.vertices, x, mesh.triangles)[key] for x in result.states])
+            fields = ElementFields(mesh.vertices, mesh.triangles)
+            values = np.array([fields.at(x)[key] for x in result.states])
         return cls(mesh, result.states, columns("area_ratio"), columns("pressure"), result.column("tip_dy"), title,
                    ground, color=values, color_label=label)
 

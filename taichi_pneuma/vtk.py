@@ -26,7 +26,7 @@ from xml.sax.saxutils import quoteattr
 import meshio
 import numpy as np
 
-from .fields import triangle_fields
+from .fields import ElementFields
 from .output import save_text, write_atomic
 from .terms.elastic import lame_parameters
 
@@ -67,6 +67,7 @@ class VtkSeries:
             stale.unlink()
         self.pvd = self.directory / f"{stem}.pvd"
         self.mu, self.lam = lame_parameters(*built.scene.element_moduli(mesh))
+        self.fields = ElementFields(mesh.vertices, mesh.triangles)
         self.chamber = np.full(mesh.n_vertices, -1, dtype=np.int32)
         for index, loop in enumerate(mesh.chambers):
             self.chamber[loop] = index
@@ -75,7 +76,7 @@ class VtkSeries:
     def write(self, step, positions: np.ndarray, contact_force: np.ndarray | None = None) -> Path:
         """Write step (a simulate.StepRecord) at positions (n, 2); return the VTU's path."""
         mesh = self.mesh
-        fields = triangle_fields(mesh.vertices, positions, mesh.triangles, self.mu, self.lam)
+        fields = self.fields.at(positions, self.mu, self.lam)
         stress = np.column_stack([fields["stress"][:, i, j] for i, j in SYMMETRIC_TENSOR])
         point_data = {"displacement": pad3(positions - mesh.vertices), "chamber": self.chamber}
         if contact_force is not None:
