@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from taichi_pneuma.apps.bench import markdown
 from taichi_pneuma.output import prepare_directory, save_json, save_text
 from taichi_pneuma.scene import reference_scene
 from taichi_pneuma.study import LocalPool, RayCluster, Sweep, Task, machine, parse_vary, versions
@@ -76,18 +77,19 @@ def main() -> None:
         studies[f"local Ray, {n} CPUs"] = timed_study(RayCluster(None, n))
         overheads["Ray"] = timed_overhead(RayCluster(None, n), n)
     one = studies["pool, 1 worker"]["wall_s"]
-    rows = [f"| {name} | {s['runs']} | {s['wall_s']:.1f} | {s['start_s']:.1f} | {s['runs_per_s']:.2f} | "
-            f"{one / s['wall_s']:.2f} | {s['mean_run_s']:.2f} |" for name, s in studies.items()]
-    study_table = ("| executor | runs | wall (s) | of which executor start (s) | runs/s | speedup vs 1 worker | "
-                   "mean run (s, inside the worker) |\n|---|---|---|---|---|---|---|\n" + "\n".join(rows))
-    rows = [f"| {name} | {o['tasks']} | {o['wall_per_task_ms']:.1f} | {o['inside_ms']:.1f} | {o['overhead_ms']:.1f} |"
-            for name, o in overheads.items()]
-    overhead_table = (f"| executor ({n} workers, warm) | tiny tasks | wall per task (ms) | inside a task (ms) | "
-                      "overhead per task (ms) |\n|---|---|---|---|---|\n" + "\n".join(rows))
+    study_table = markdown(
+        ["executor", "runs", "wall (s)", "of which executor start (s)", "runs/s", "speedup vs 1 worker",
+         "mean run (s, inside the worker)"],
+        [[name, s["runs"], f"{s['wall_s']:.1f}", f"{s['start_s']:.1f}", f"{s['runs_per_s']:.2f}",
+          f"{one / s['wall_s']:.2f}", f"{s['mean_run_s']:.2f}"] for name, s in studies.items()])
+    overhead_table = markdown(
+        [f"executor ({n} workers, warm)", "tiny tasks", "wall per task (ms)", "inside a task (ms)", "overhead per task (ms)"],
+        [[name, o["tasks"], f"{o['wall_per_task_ms']:.1f}", f"{o['inside_ms']:.1f}", f"{o['overhead_ms']:.1f}"]
+         for name, o in overheads.items()])
     info = machine()
     where = f"{info['machine']}, {info['cpu']}, {info['cores']} cores, {date.today()}"
     text = (f"Machine: {where}\n\n24-run study (reference beam, cy x E = 6 x 4, 35 increments each):\n\n"
-            f"{study_table}\n\nPer-task overhead:\n\n{overhead_table}\n")
+            f"{study_table}\nPer-task overhead:\n\n{overhead_table}")
     print(text)
     save_text(Path(out) / "bench_sweep.md", text)
     save_json(Path(out) / "bench_sweep.json", {"machine": info, "date": str(date.today()),
