@@ -12,7 +12,7 @@ import time
 
 from taichi_pneuma import runtime
 from taichi_pneuma.scene import reference_scene
-from taichi_pneuma.simulate import run_schedule
+from taichi_pneuma.solve.simulate import run_schedule
 
 
 def main() -> None:

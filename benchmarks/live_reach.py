@@ -15,11 +15,12 @@ from pathlib import Path
 
 import numpy as np
 
-from taichi_pneuma import render, runtime
-from taichi_pneuma.interactive import fixed_view, follow_mouse
-from taichi_pneuma.inverse import Reacher, command_bounds
-from taichi_pneuma.newton import NewtonOptions
-from taichi_pneuma.scenefile import load_scene
+from taichi_pneuma import runtime
+from taichi_pneuma.render import frames as render
+from taichi_pneuma.control.inverse import Reacher, command_bounds
+from taichi_pneuma.io.scenefile import load_scene
+from taichi_pneuma.render.interactive import fixed_view, follow_mouse
+from taichi_pneuma.solve.newton import NewtonOptions
 
 SCENE = Path(__file__).resolve().parent.parent / "assets" / "scenes" / "bidirectional.toml"
 

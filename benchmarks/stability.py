@@ -13,9 +13,9 @@ from datetime import date
 from pathlib import Path
 
 from taichi_pneuma import runtime
-from taichi_pneuma.output import prepare_directory, save_json, save_text
+from taichi_pneuma.io.output import prepare_directory, save_json, save_text
 from taichi_pneuma.scene import reference_scene
-from taichi_pneuma.simulate import RampFailed, run_schedule
+from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 
 CASES = [
     ("reference ramp (3.5x, 35 increments)", {}, {}),

@@ -12,9 +12,9 @@ Taichi is initialised on the CPU by the first simulate() unless tp.init("cuda"),
 
 from .api import Result, simulate
 from .errors import PneumaInputError
+from .io.scenefile import load_scene
 from .runtime import init
 from .scene import Scene, reference_scene
-from .scenefile import load_scene
-from .simulate import RampFailed
+from .solve.simulate import RampFailed
 
 __all__ = ["PneumaInputError", "RampFailed", "Result", "Scene", "init", "load_scene", "reference_scene", "simulate"]

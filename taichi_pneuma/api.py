@@ -20,11 +20,11 @@ from pathlib import Path
 import numpy as np
 
 from . import runtime
-from .fields import triangle_fields
-from .newton import NewtonOptions
-from .output import prepare_directory, save_json, save_npz, save_text, write_atomic
+from .fem.fields import triangle_fields
+from .io.output import prepare_directory, save_json, save_npz, save_text, write_atomic
 from .scene import BuiltScene, Scene
-from .simulate import MAX_CUTS, RampResult, RampStopped, run_schedule
+from .solve.newton import NewtonOptions
+from .solve.simulate import MAX_CUTS, RampResult, RampStopped, run_schedule
 from .terms.elastic import lame_parameters
 
 
@@ -165,8 +165,8 @@ class Result:
         states npz, the plot PNG (unless plot is False), the scene TOML, the summary JSON (with `extra`
         merged in) and, unless vtk is False, the ParaView files <stem>.pvd + <stem>_vtk/*.vtu. Returns the
         paths written."""
-        from .plots import save_history_png
-        from .vtk import VtkSeries
+        from .io.vtk import VtkSeries
+        from .render.plots import save_history_png
 
         out, stem = prepare_directory(directory), stem or self.scene.name
         written = self.save_history(out, stem)
@@ -182,8 +182,8 @@ class Result:
               renderer: str = "auto", trace: bool = True, quiet: bool = True, log=print):
         """Render one frame per step into path (.mp4 or .gif), and the last frame into png if given;
         color: 'stretch', 'detF' or 'none'; renderer: 'auto', 'ggui' or 'gui'. Returns a video.Export."""
-        from .render import FrameRenderer, Track
-        from .video import check_video, export
+        from .render.frames import FrameRenderer, Track
+        from .render.video import check_video, export
 
         check_video(path, fps)
         ground = next((e.height for e in self.scene.effects if e.name == "ground"), None)
@@ -198,6 +198,6 @@ class Result:
         """The history as a matplotlib Figure with axes (plots.py): pressure against area ratio, and tip
         deflection, area ratio and pressure against the command. A notebook shows it as a PNG; in a
         script, fig.savefig("x.png")."""
-        from .plots import history_figure
+        from .render.plots import history_figure
 
         return history_figure(self)

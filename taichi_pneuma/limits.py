@@ -16,7 +16,7 @@ a quadratic triangle counts as 4 linear ones (it has as many nodes, and a Hessia
 from __future__ import annotations
 
 from .errors import require
-from .geometry import signed_area
+from .fem.geometry import signed_area
 
 MAX_TRIANGLES = 200_000
 MAX_INCREMENTS = 2_000

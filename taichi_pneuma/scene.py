@@ -14,17 +14,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-
 from . import runtime
-from .effects import Effect
 from .errors import require, require_finite
-from .geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
-from .model import EnergyModel
-from .output import check_stem
-from .schedule import ChamberSchedule, Schedule, area_ramp
+from .fem.geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
+from .io.output import check_stem
+from .solve.model import EnergyModel
+from .solve.schedule import ChamberSchedule, Schedule, area_ramp
 from .terms import AreaChamber, Clamp, NeoHookean, PressureChamber
 from .terms.base import Term
 from .terms.chamber import Chamber
+from .terms.effects import Effect
 from .terms.elastic import lame_parameters
 
 
@@ -110,7 +109,7 @@ class Scene:
 
     def to_toml(self) -> str:
         """This scene as a scene file (TOML); scenefile.load_scene reads it back to an equal scene."""
-        from .scenetoml import to_toml
+        from .io.scenetoml import to_toml
         return to_toml(self)
 
     def with_value(self, key: str, value) -> "Scene":
@@ -120,7 +119,7 @@ class Scene:
 
     def with_values(self, values: dict) -> "Scene":
         """A copy with several dotted keys changed at once (validated once, after all are set)."""
-        from .scenetoml import with_values
+        from .io.scenetoml import with_values
         return with_values(self, values)
 
     @property

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import taichi_pneuma as tp
-from taichi_pneuma.plots import command_axis
-from taichi_pneuma.scenetoml import parse_assignment, scene_data
+from taichi_pneuma.io.scenetoml import parse_assignment, scene_data
+from taichi_pneuma.render.plots import command_axis
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = sorted((ROOT / "assets" / "scenes").glob("*.toml"))

@@ -71,7 +71,7 @@ def test_unconverged_ramp_stops_with_one_line_and_keeps_the_steps_done(tmp_path)
 
 def test_quality_presets_set_mesh_and_tolerance_unless_overridden(tmp_path, capsys):
     from taichi_pneuma.apps.inflate import QUALITY
-    from taichi_pneuma.geometry import BeamGeometry
+    from taichi_pneuma.fem.geometry import BeamGeometry
 
     for flags, max_area in ((["--quality", "draft"], QUALITY["draft"][0]), (["--quality", "draft", "--max-area", "0.01"], 0.01)):
         out = tmp_path / str(max_area)
@@ -92,7 +92,7 @@ def test_set_changes_the_run(tmp_path, capsys):
         summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
         tips[name], ratio = summary["tip_deflection"], summary["chambers"]["main"]["area_ratio"]
     assert tips["default"] < -0.1 and tips["set"] > 0.1 and ratio == pytest.approx(3.0, abs=0.01)
-    from taichi_pneuma.scenefile import load_scene
+    from taichi_pneuma.io.scenefile import load_scene
     scene = load_scene(tmp_path / "set" / "inflate_cy+0.15_scene.toml")
     assert scene.geometry.chambers[0][1].center == (0.0, -0.15) and scene.controls[0].schedule.keyframes == ((3, 3.0),)
 

@@ -8,11 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
-from taichi_pneuma import linsolve
-from taichi_pneuma.newton import NewtonSolver
+from taichi_pneuma.solve import linsolve
+from taichi_pneuma.io.scenefile import load_scene
 from taichi_pneuma.scene import reference_scene
-from taichi_pneuma.scenefile import load_scene
-from taichi_pneuma.simulate import run_schedule
+from taichi_pneuma.solve.newton import NewtonSolver
+from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms import chamber, contact, elastic
 
 SCENES = Path(__file__).resolve().parents[1] / "assets" / "scenes"

@@ -3,13 +3,12 @@ derivatives, step bounds that stop before contact is crossed, and exactly the te
 
 import numpy as np
 import pytest
-
-from taichi_pneuma.effects import Gravity, Ground, SelfContact
-from taichi_pneuma.geometry import Ellipse, Geometry, Rectangle
-from taichi_pneuma.scene import ChamberControl, Scene, reference_scene
-from taichi_pneuma.schedule import ChamberSchedule
-
 from test_terms import assert_gradient_matches_finite_differences, dense_hessian, fd_hessian
+
+from taichi_pneuma.fem.geometry import Ellipse, Geometry, Rectangle
+from taichi_pneuma.scene import ChamberControl, Scene, reference_scene
+from taichi_pneuma.solve.schedule import ChamberSchedule
+from taichi_pneuma.terms.effects import Gravity, Ground, SelfContact
 
 
 def thin_chamber_scene(*effects, control="pressure"):
@@ -84,10 +83,10 @@ def test_dynamics_step_response_overshoots_then_decays_to_the_static_shape():
     (backward Euler dissipates); the first peak comes about half a bending period in (~1 s here)."""
     import dataclasses
 
-    from taichi_pneuma.effects import Dynamics
     from taichi_pneuma.scene import ChamberControl, reference_scene
-    from taichi_pneuma.schedule import ChamberSchedule
-    from taichi_pneuma.simulate import run_schedule
+    from taichi_pneuma.solve.schedule import ChamberSchedule
+    from taichi_pneuma.solve.simulate import run_schedule
+    from taichi_pneuma.terms.effects import Dynamics
 
     steps, dt = 100, 0.02
     jump = (ChamberControl(ChamberSchedule("area", ((0, 1.0), (1, 2.0), (steps, 2.0)))),)

@@ -4,7 +4,7 @@ the elastic term's own gradient."""
 import numpy as np
 import pytest
 
-from taichi_pneuma.fields import cauchy_stress, max_stretch, triangle_fields, von_mises
+from taichi_pneuma.fem.fields import cauchy_stress, max_stretch, triangle_fields, von_mises
 from taichi_pneuma.scene import reference_scene
 from taichi_pneuma.terms.elastic import lame_parameters
 

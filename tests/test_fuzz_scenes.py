@@ -16,14 +16,15 @@ import json
 import math
 import tempfile
 import time
-import tomllib
 import warnings
 from contextlib import redirect_stderr, redirect_stdout
 from datetime import timedelta
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, note, settings, strategies as st
+import tomllib
+from hypothesis import HealthCheck, given, note, settings
+from hypothesis import strategies as st
 
 from taichi_pneuma.apps.inflate import main
 

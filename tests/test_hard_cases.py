@@ -4,10 +4,10 @@ no triangle inverts, nothing is NaN, the energy never rises within a Newton solv
 import numpy as np
 import pytest
 
-from taichi_pneuma.geometry import polygon_self_intersects
-from taichi_pneuma.newton import NewtonOptions, NewtonSolver
+from taichi_pneuma.fem.geometry import polygon_self_intersects
 from taichi_pneuma.scene import reference_scene
-from taichi_pneuma.simulate import RampFailed, run_schedule
+from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
+from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 
 LENGTH = 3.5
 REFERENCE_TIP = -0.279

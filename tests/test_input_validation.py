@@ -3,11 +3,11 @@
 import pytest
 
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.geometry import BeamGeometry
-from taichi_pneuma.newton import NewtonOptions
-from taichi_pneuma.output import prepare_directory
+from taichi_pneuma.fem.geometry import BeamGeometry
+from taichi_pneuma.io.output import prepare_directory
 from taichi_pneuma.scene import ChamberControl, Material, reference_scene
-from taichi_pneuma.schedule import area_ramp
+from taichi_pneuma.solve.newton import NewtonOptions
+from taichi_pneuma.solve.schedule import area_ramp
 
 INF, NAN = float("inf"), float("nan")
 

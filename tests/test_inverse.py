@@ -7,14 +7,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from taichi_pneuma.control.inverse import Reacher, ReachOptions, body_length, command_bounds
+from taichi_pneuma.control.targets import Target
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.inverse import Reacher, ReachOptions, body_length, command_bounds
-from taichi_pneuma.newton import NewtonOptions, NewtonSolver
+from taichi_pneuma.io.scenefile import load_scene
 from taichi_pneuma.scene import ChamberControl, reference_scene
-from taichi_pneuma.scenefile import load_scene
-from taichi_pneuma.schedule import ChamberSchedule
-from taichi_pneuma.simulate import settle, tip_measures
-from taichi_pneuma.targets import Target
+from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
+from taichi_pneuma.solve.schedule import ChamberSchedule
+from taichi_pneuma.solve.simulate import settle, tip_measures
 
 SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
 TIGHT = NewtonOptions(tol=1e-9)

@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from taichi_pneuma.linsolve import BACKENDS, FactorizationError, FixedPattern, make_backend
-from taichi_pneuma.newton import NewtonOptions
 from taichi_pneuma.scene import reference_scene
-from taichi_pneuma.simulate import run_schedule
+from taichi_pneuma.solve.linsolve import BACKENDS, FactorizationError, FixedPattern, make_backend
+from taichi_pneuma.solve.newton import NewtonOptions
+from taichi_pneuma.solve.simulate import run_schedule
 
 
 @pytest.fixture(scope="module")

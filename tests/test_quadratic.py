@@ -6,16 +6,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_terms import (
+    assert_gradient_matches_finite_differences,
+    assert_max_step_stops_before_inversion,
+    dense_hessian,
+    fd_hessian,
+    random_state,
+)
 
-from taichi_pneuma.effects import Gravity, Ground
-from taichi_pneuma.geometry import Ellipse, Geometry, Rectangle
-from taichi_pneuma.model import Configuration
+from taichi_pneuma.fem.geometry import Ellipse, Geometry, Rectangle
 from taichi_pneuma.scene import Scene, reference_scene
-from taichi_pneuma.simulate import run_schedule
+from taichi_pneuma.solve.model import Configuration
+from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms import PressureChamber
-
-from test_terms import (assert_gradient_matches_finite_differences, assert_max_step_stops_before_inversion, dense_hessian,
-                        fd_hessian, random_state)
+from taichi_pneuma.terms.effects import Gravity, Ground
 
 # scikit-fem (an independent code, same model): P2 on the reference mesh refined twice, 96,384 nodes
 INDEPENDENT_CONVERGED_TIP = -0.2583
@@ -131,8 +135,8 @@ def test_order_flag_quality_preset_and_scene_key(tmp_path, capsys):
 
     from taichi_pneuma.apps.inflate import QUALITY, main
     from taichi_pneuma.errors import PneumaInputError
-    from taichi_pneuma.geometry import BeamGeometry
-    from taichi_pneuma.scenefile import load_scene
+    from taichi_pneuma.fem.geometry import BeamGeometry
+    from taichi_pneuma.io.scenefile import load_scene
 
     for flags in (["--order", "2", "--max-area", "0.02"], ["--quality", "high", "--max-area", "0.02"]):
         out = tmp_path / flags[1]
@@ -153,9 +157,9 @@ def test_order_flag_quality_preset_and_scene_key(tmp_path, capsys):
 
 
 def test_quadratic_frame_fills_every_subtriangle_and_draws_curved_walls():
-    from taichi_pneuma.render import CHAMBER_FILL, CHAMBER_WALL, FACE, FrameRenderer, Track
-
     from test_render import pixels_at, rgb8
+
+    from taichi_pneuma.render.frames import CHAMBER_FILL, CHAMBER_WALL, FACE, FrameRenderer, Track
 
     built = reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.02, order=2).build()
     track = Track.from_ramp(built.mesh, run_schedule(built))

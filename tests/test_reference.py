@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from taichi_pneuma.newton import NewtonOptions
 from taichi_pneuma.scene import reference_scene
-from taichi_pneuma.simulate import run_schedule
+from taichi_pneuma.solve.newton import NewtonOptions
+from taichi_pneuma.solve.simulate import run_schedule
 
 pytestmark = pytest.mark.slow
 TOL = NewtonOptions().tol

@@ -1,5 +1,6 @@
 """Offscreen frames, video files and the apps' rendering flags."""
 
+import dataclasses
 import json
 import os
 import subprocess
@@ -7,18 +8,16 @@ import sys
 
 import imageio.v3 as iio
 import imageio_ffmpeg
-import dataclasses
-
 import numpy as np
 import pytest
 
-from taichi_pneuma import render
+from taichi_pneuma.render import frames as render
 from taichi_pneuma.apps import inflate, steer
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.render import BACKGROUND, CHAMBER_FILL, FACE, GROUND, FrameRenderer, Track
+from taichi_pneuma.render.frames import BACKGROUND, CHAMBER_FILL, FACE, GROUND, FrameRenderer, Track
+from taichi_pneuma.render.video import write_video
 from taichi_pneuma.scene import reference_scene
-from taichi_pneuma.simulate import run_schedule
-from taichi_pneuma.video import write_video
+from taichi_pneuma.solve.simulate import run_schedule
 
 COARSE = ["--max-area", "0.01", "--growth", "2", "--steps", "3", "--quiet"]
 
@@ -187,7 +186,7 @@ def xvfb_display(monkeypatch):
 
 
 def test_interactive_window_resolves_when_the_slider_moves(xvfb_display, monkeypatch, capsys):
-    from taichi_pneuma.interactive import explore
+    from taichi_pneuma.render.interactive import explore
 
     moves = iter([1.0, 1.0, 1.3, 1.3, 1.6])  # the slider's values on successive frames
     monkeypatch.setattr(render.GUICanvas, "slider", lambda self, label, value, low, high: next(moves))

@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from taichi_pneuma.apps.inflate import main
-from taichi_pneuma.effects import SelfContact
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.geometry import polygon_self_intersects
+from taichi_pneuma.fem.geometry import polygon_self_intersects
+from taichi_pneuma.io.scenefile import load_scene
 from taichi_pneuma.scene import ChamberControl, reference_scene
-from taichi_pneuma.scenefile import load_scene
-from taichi_pneuma.schedule import ChamberSchedule
-from taichi_pneuma.simulate import RampFailed, run_schedule
+from taichi_pneuma.solve.schedule import ChamberSchedule
+from taichi_pneuma.solve.simulate import RampFailed, run_schedule
+from taichi_pneuma.terms.effects import SelfContact
 
 SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
 LENGTH = 3.5

@@ -13,12 +13,12 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from taichi_pneuma.linsolve import FixedPattern
-from taichi_pneuma.newton import NewtonOptions, NewtonSolver
+from taichi_pneuma.io.scenefile import load_scene
 from taichi_pneuma.scene import reference_scene
-from taichi_pneuma.scenefile import load_scene
-from taichi_pneuma.sensitivity import command_forces, sensitivity
-from taichi_pneuma.simulate import settle, tip_measures
+from taichi_pneuma.solve.linsolve import FixedPattern
+from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
+from taichi_pneuma.solve.sensitivity import command_forces, sensitivity
+from taichi_pneuma.solve.simulate import settle, tip_measures
 
 SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
 TIGHT = NewtonOptions(tol=1e-10)

@@ -5,15 +5,15 @@ import csv
 import json
 import subprocess
 import sys
-import tomllib
 
 import numpy as np
 import pytest
+import tomllib
 
 import taichi_pneuma as tp
 from taichi_pneuma.apps.sweep import main
-from taichi_pneuma.scenefile import read_scene
-from taichi_pneuma.study import RunOptions, Task, check_axes, parse_vary, plan, run_task, study_figure
+from taichi_pneuma.control.study import RunOptions, Task, check_axes, parse_vary, plan, run_task, study_figure
+from taichi_pneuma.io.scenefile import read_scene
 
 CY = "chambers[0].center[1]"
 REFERENCE_TIP = {-0.15: 0.2790, 0.0: -0.0011, 0.15: -0.2790}  # SPEC.md, solved to a small gradient

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from taichi_pneuma.linsolve import FixedPattern, make_backend, solve_low_rank_updated
 from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.solve.linsolve import FixedPattern, make_backend, solve_low_rank_updated
 
 H = 1e-6
 

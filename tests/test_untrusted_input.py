@@ -16,9 +16,9 @@ import pytest
 from taichi_pneuma import limits
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.geometry import MAX_WALL_POINTS
-from taichi_pneuma.output import check_stem, save_text
-from taichi_pneuma.scenefile import MAX_SCENE_BYTES, load_scene
+from taichi_pneuma.fem.geometry import MAX_WALL_POINTS
+from taichi_pneuma.io.output import check_stem, save_text
+from taichi_pneuma.io.scenefile import MAX_SCENE_BYTES, load_scene
 
 SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
 # the reference scene file made cheap: a coarse mesh, 2 increments

@@ -27,13 +27,13 @@ import numpy as np
 
 from .. import runtime
 from ..errors import PneumaInputError, require
-from ..linsolve import BACKENDS, FixedPattern, make_backend
-from ..newton import NewtonOptions
-from ..output import prepare_directory, save_json, save_text, write_atomic
+from ..io.output import prepare_directory, save_json, save_text, write_atomic
+from ..io.scenefile import load_scene
 from ..scene import reference_scene
-from ..scenefile import load_scene
-from ..schedule import Schedule, area_ramp
-from ..simulate import run_schedule
+from ..solve.linsolve import BACKENDS, FixedPattern, make_backend
+from ..solve.newton import NewtonOptions
+from ..solve.schedule import Schedule, area_ramp
+from ..solve.simulate import run_schedule
 
 SECTIONS = ("startup", "breakdown", "backends", "accuracy", "incompressible", "scaling")
 REFERENCE_TUTORIAL_SECONDS = 25.0  # SPEC.md: the NumPy/SciPy tutorial's cy = 0.15 ramp on this kind of machine

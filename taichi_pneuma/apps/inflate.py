@@ -31,16 +31,16 @@ from tqdm import tqdm
 from .. import limits, runtime
 from ..api import Result, simulate
 from ..errors import PneumaInputError, require, require_finite
-from ..geometry import BeamGeometry
-from ..newton import NewtonOptions
-from ..output import prepare_directory, save_json
-from ..render import BACKENDS, COLOR_FIELDS
+from ..fem.geometry import BeamGeometry
+from ..io.output import prepare_directory, save_json
+from ..io.scenefile import load_scene
+from ..io.scenetoml import parse_assignment
+from ..io.vtk import VtkSeries
+from ..render.frames import BACKENDS, COLOR_FIELDS
 from ..scene import Scene, reference_scene
-from ..scenefile import load_scene
-from ..scenetoml import parse_assignment
-from ..schedule import area_ramp
-from ..simulate import MAX_CUTS, RampFailed, RampInterrupted, RampStopped
-from ..vtk import VtkSeries
+from ..solve.newton import NewtonOptions
+from ..solve.schedule import area_ramp
+from ..solve.simulate import MAX_CUTS, RampFailed, RampInterrupted, RampStopped
 
 # --quality presets: (max triangle area, element order, Newton tolerance); see the README's accuracy study
 QUALITY = {"draft": (0.005, 1, 1e-4), "default": (BeamGeometry.max_area, 1, NewtonOptions.tol),
@@ -108,7 +108,7 @@ def parser() -> argparse.ArgumentParser:
 
 def rendering_flags(args: argparse.Namespace) -> tuple[int, int]:
     """Check the rendering flags before any work; return --size 'WIDTHxHEIGHT' as (width, height)."""
-    from ..video import check_video
+    from ..render.video import check_video
 
     check_video(args.video or "default.mp4", args.fps)
     text = args.size
@@ -244,7 +244,7 @@ def run(args: argparse.Namespace) -> dict:
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     if args.interactive:
-        from ..interactive import explore
+        from ..render.interactive import explore
         return explore(scene, args.growth, size, args.renderer, newton_options(args))
     built = build(scene)
     vtk = VtkSeries(out, stem, built)

@@ -28,17 +28,26 @@ from tqdm import tqdm
 
 from .. import runtime
 from ..api import Result
-from ..design import solve_design
+from ..control.design import solve_design
+from ..control.inverse import Reacher, ReachOptions, command_bounds, frames
+from ..control.targets import Target, read_targets_csv
 from ..errors import PneumaInputError, parse_number, require, require_finite
-from ..geometry import BeamGeometry
-from ..inverse import Reacher, ReachOptions, command_bounds, frames
-from ..output import prepare_directory, save_json
+from ..fem.geometry import BeamGeometry
+from ..io.output import prepare_directory, save_json
+from ..io.scenefile import load_scene
 from ..scene import Scene
-from ..scenefile import load_scene
-from ..simulate import NoEquilibrium, run_schedule
-from ..targets import Target, read_targets_csv
-from .inflate import (add_ramp_arguments, add_video_arguments, build, check_flags, exit_code, newton_options,
-                      render_report, rendering_flags, scene_for)
+from ..solve.simulate import NoEquilibrium, run_schedule
+from .inflate import (
+    add_ramp_arguments,
+    add_video_arguments,
+    build,
+    check_flags,
+    exit_code,
+    newton_options,
+    render_report,
+    rendering_flags,
+    scene_for,
+)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -134,7 +143,7 @@ def run(args: argparse.Namespace) -> dict:
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     if args.interactive:
-        from ..interactive import follow_mouse
+        from ..render.interactive import follow_mouse
         return follow_mouse(scene, (lo, hi), size, args.renderer, options,
                             newton_options(args) if explicit_tol else None, targets[0] if targets else None)
     built = build(scene)
@@ -176,8 +185,8 @@ def run(args: argparse.Namespace) -> dict:
           f"{sum(r.newton_iterations for r in results)} Newton iterations); {np.mean(seconds):.3f} s per reach")
     written = []
     if not args.no_video:
-        from ..render import FrameRenderer, Track
-        from ..video import export
+        from ..render.frames import FrameRenderer, Track
+        from ..render.video import export
 
         ground = next((e.height for e in scene.effects if e.name == "ground"), None)
         track = dataclasses.replace(Track.from_ramp(built.mesh, ramp, ground=ground),

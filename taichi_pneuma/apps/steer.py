@@ -13,10 +13,18 @@ import argparse
 import sys
 
 from .. import runtime
-from ..output import prepare_directory, save_json
-from ..vtk import VtkSeries
-from .inflate import (add_ramp_arguments, add_video_arguments, build, exit_code, render_report, rendering_flags,
-                      scene_for, solve)
+from ..io.output import prepare_directory, save_json
+from ..io.vtk import VtkSeries
+from .inflate import (
+    add_ramp_arguments,
+    add_video_arguments,
+    build,
+    exit_code,
+    render_report,
+    rendering_flags,
+    scene_for,
+    solve,
+)
 
 PLACEMENTS = ((0.15, "chamber high -> curls down"), (0.0, "centred -> no bend"), (-0.15, "chamber low -> curls up"))
 
@@ -45,8 +53,8 @@ def run(args: argparse.Namespace) -> dict:
         summary["all_converged"] &= result.converged
     written = [vtk.pvd for vtk in series]
     if not args.no_video:
-        from ..render import FrameRenderer, Track
-        from ..video import export
+        from ..render.frames import FrameRenderer, Track
+        from ..render.video import export
 
         tracks = [Track.from_ramp(result.mesh, result.ramp, f"cy = {cy:+.2f}: {title}", color=args.color)
                   for (cy, title), result in zip(PLACEMENTS, solved)]

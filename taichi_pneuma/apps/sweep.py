@@ -26,8 +26,8 @@ import sys
 from tqdm import tqdm
 
 from .. import limits
-from ..scenefile import load_scene
-from ..study import ALIASES, MAX_RUNS, LocalPool, RayCluster, RunOptions, Sweep, parse_vary
+from ..control.study import ALIASES, MAX_RUNS, LocalPool, RayCluster, RunOptions, Sweep, parse_vary
+from ..io.scenefile import load_scene
 from .inflate import add_ramp_arguments, apply_set, check_flags, exit_code, scene_for
 
 

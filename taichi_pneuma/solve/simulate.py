@@ -10,8 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..scene import BuiltScene
 from .newton import NewtonOptions, NewtonSolver, SolveRecord
-from .scene import BuiltScene
 from .schedule import Schedule
 
 MAX_CUTS = 8

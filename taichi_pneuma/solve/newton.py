@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import require, require_finite
+from ..errors import require, require_finite
 from .linsolve import BACKENDS, FactorizationError, FixedPattern, make_backend, solve_low_rank_updated
 from .model import EnergyModel
 

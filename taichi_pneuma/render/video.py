@@ -17,8 +17,8 @@ import imageio_ffmpeg
 import numpy as np
 from tqdm import tqdm
 
-from .errors import require, require_finite
-from .output import write_atomic
+from ..errors import require, require_finite
+from ..io.output import write_atomic
 
 # extension -> (codec, output pixel format, extra ffmpeg output parameters)
 FORMATS = {

@@ -26,9 +26,9 @@ from xml.sax.saxutils import quoteattr
 import meshio
 import numpy as np
 
-from .fields import ElementFields
+from ..fem.fields import ElementFields
+from ..terms.elastic import lame_parameters
 from .output import save_text, write_atomic
-from .terms.elastic import lame_parameters
 
 SYMMETRIC_TENSOR = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))  # ParaView's 6-component order
 

@@ -13,7 +13,7 @@ import csv
 import os
 from dataclasses import dataclass
 
-from .errors import PneumaInputError, parse_number, require, require_finite
+from ..errors import PneumaInputError, parse_number, require, require_finite
 
 COLUMNS = ("x", "y", "angle", "wx", "wy", "wangle")
 

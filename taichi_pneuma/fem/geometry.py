@@ -28,7 +28,7 @@ import numpy as np
 import triangle
 from scipy.spatial import cKDTree
 
-from .errors import PneumaInputError, require, require_finite, shape_of
+from ..errors import PneumaInputError, require, require_finite, shape_of
 
 OUTER_MARKER = 1
 MARGIN = 1e-3

@@ -35,8 +35,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..scene import BuiltScene
 from .linsolve import FactorizationError, FixedPattern, make_backend, solve_low_rank_updated
-from .scene import BuiltScene
 
 
 @dataclass

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .terms.elastic import quadrature
+from ..terms.elastic import quadrature
 
 
 class ElementFields:

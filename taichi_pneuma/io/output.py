@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import PneumaInputError, require
+from ..errors import PneumaInputError, require
 
 MAX_NAME = 100
 STEM = re.compile(r"[A-Za-z0-9_+-][A-Za-z0-9_.+-]*")

@@ -13,8 +13,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 import taichi as ti
 
-from . import runtime
-
+from .. import runtime
 
 
 class FixedPattern:

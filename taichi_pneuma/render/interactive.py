@@ -12,10 +12,9 @@ import time
 
 import numpy as np
 
-from .newton import NewtonOptions, NewtonSolver
-from .render import FrameRenderer, Track, open_canvas
-from .scene import Scene
-
+from ..scene import Scene
+from ..solve.newton import NewtonOptions, NewtonSolver
+from .frames import FrameRenderer, Track, open_canvas
 
 # Newton tolerance of live forward solves: with the tangent predictor one Newton iteration reaches it
 # (the default 1e-6 often takes two); it moves the tip by ~1e-6 of the body length, far below the 1e-3 target tolerance.
@@ -73,8 +72,8 @@ def follow_mouse(scene: Scene, bounds, size: tuple[int, int], backend: str = "au
     Returns {'all_converged': every reach reached its target, 'reaches', 'direct', 'frames',
     'drag_fps': frames per second over the frames that re-solved a moved target, after the first
     (warm-up), 'ms_per_reach', 'forward_solves_per_reach'}."""
-    from .inverse import Reacher, ReachOptions
-    from .targets import Target
+    from ..control.inverse import Reacher, ReachOptions
+    from ..control.targets import Target
 
     built = scene.build()
     # a drag follows the closest pose nearby; one factorisation per frame

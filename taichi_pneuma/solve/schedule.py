@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import require, require_finite, shape_of
+from ..errors import require, require_finite, shape_of
 
 CONTROLS = ("area", "pressure")
 REST_COMMAND = {"area": 1.0, "pressure": 0.0}

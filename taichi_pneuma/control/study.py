@@ -24,7 +24,6 @@ import platform
 import signal
 import socket
 import time
-import tomllib
 from concurrent.futures import ProcessPoolExecutor, as_completed, wait
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import redirect_stdout
@@ -36,16 +35,17 @@ from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
+import tomllib
 from scipy.stats import qmc
 
-from . import limits, runtime
-from .errors import PneumaInputError, require, require_finite
-from .newton import NewtonOptions
-from .output import check_stem, prepare_directory, save_json, write_atomic
-from .scene import Scene
-from .scenefile import read_scene
-from .scenetoml import parse_assignment, parse_key, scene_data
-from .simulate import MAX_CUTS, RampStopped
+from .. import limits, runtime
+from ..errors import PneumaInputError, require, require_finite
+from ..io.output import check_stem, prepare_directory, save_json, write_atomic
+from ..io.scenefile import read_scene
+from ..io.scenetoml import parse_assignment, parse_key, scene_data
+from ..scene import Scene
+from ..solve.newton import NewtonOptions
+from ..solve.simulate import MAX_CUTS, RampStopped
 
 # Short names for the keys of the reference beam's flags
 ALIASES = {"cy": "chambers[0].center[1]", "cx": "chambers[0].center[0]", "E": "material.E", "nu": "material.nu",
@@ -245,7 +245,7 @@ def measures(result) -> dict:
 def run_task(task: Task) -> dict:
     """Run one scene of a study; never raises. Returns the row: the varied values, the figures (those of
     the steps done, for a ramp that stopped), converged, seconds, and error (None, or one line)."""
-    from .api import simulate
+    from ..api import simulate
 
     start = time.perf_counter()
     row = dict(task.values)

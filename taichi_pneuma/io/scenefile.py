@@ -22,15 +22,16 @@ from __future__ import annotations
 
 import dataclasses
 import os
+
 import tomllib
 
-from .effects import EFFECTS
-from .errors import PneumaInputError, require
-from .geometry import ClampSelection, Ellipse, Geometry, Polygon, Rectangle, RectangleUnion, RoundedRectangle
+from ..control.targets import Target
+from ..errors import PneumaInputError, require
+from ..fem.geometry import ClampSelection, Ellipse, Geometry, Polygon, Rectangle, RectangleUnion, RoundedRectangle
+from ..scene import ChamberControl, Material, Region, Scene
+from ..solve.schedule import ChamberSchedule
+from ..terms.effects import EFFECTS
 from .output import reduce_to_stem
-from .scene import ChamberControl, Material, Region, Scene
-from .schedule import ChamberSchedule
-from .targets import Target
 
 REQUIRED = object()
 MAX_SCENE_BYTES = 1_000_000

@@ -35,10 +35,10 @@ import numpy as np
 import taichi as ti
 import triangle
 
-from . import runtime
-from .errors import PneumaInputError, require
-from .fields import ElementFields
-from .geometry import Mesh
+from .. import runtime
+from ..errors import PneumaInputError, require
+from ..fem.fields import ElementFields
+from ..fem.geometry import Mesh
 
 BACKENDS = ("auto", "ggui", "gui")
 BACKGROUND = (1.0, 1.0, 1.0)

@@ -42,12 +42,12 @@ import numpy as np
 from scipy.optimize import lsq_linear
 from scipy.stats import qmc
 
-from .errors import require, require_finite
-from .newton import NewtonOptions, NewtonSolver
-from .scene import BuiltScene, Scene
-from .sensitivity import sensitivity
-from .schedule import REST_COMMAND
-from .simulate import MAX_CUTS, NoEquilibrium, RampResult, StepRecord, chamber_records, settle, tip_measures
+from ..errors import require, require_finite
+from ..scene import BuiltScene, Scene
+from ..solve.newton import NewtonOptions, NewtonSolver
+from ..solve.schedule import REST_COMMAND
+from ..solve.sensitivity import sensitivity
+from ..solve.simulate import MAX_CUTS, NoEquilibrium, RampResult, StepRecord, chamber_records, settle, tip_measures
 from .targets import Target
 
 ARMIJO = 1e-4

@@ -12,12 +12,12 @@ from __future__ import annotations
 import dataclasses
 import json
 import re
-import tomllib
 
 import numpy as np
+import tomllib
 
-from .errors import PneumaInputError, require
-from .geometry import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
+from ..errors import PneumaInputError, require
+from ..fem.geometry import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 
 KEY_PART = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)")
 

@@ -9,10 +9,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .errors import require, require_finite
-from .terms.contact import GroundContact, SelfContact as SelfContactTerm
-from .terms.gravity import Gravity as GravityTerm
-from .terms.inertia import Inertia
+from ..errors import require, require_finite
+from .contact import GroundContact
+from .contact import SelfContact as SelfContactTerm
+from .gravity import Gravity as GravityTerm
+from .inertia import Inertia
 
 
 class Effect:

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .terms import Term
+from ..terms import Term
 
 
 class Configuration:

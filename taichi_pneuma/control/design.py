@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from scipy.optimize import brentq
 
-from .errors import require, require_finite
+from ..errors import require, require_finite
 
 
 @dataclass
