@@ -27,7 +27,7 @@ def main() -> None:
         start = time.perf_counter()
         result = run_schedule(built)
         wall = time.perf_counter() - start
-        iterations = int(result.column("iterations").sum())
+        iterations = int(result.history["iterations"].sum())
         print(f"reference ramp: {wall:.2f} s, {iterations} Newton iterations, {1e3 * wall / iterations:.1f} ms/iteration, "
               f"tip {result.tip_deflection:+.4f}")
 

@@ -43,14 +43,14 @@ def run_case(cy=0.15, nu=0.45, k=1e5, E=1e4, max_area=0.0012, growth=3.5, steps=
     except RampFailed as failure:
         return {"outcome": f"refused: {failure}", "seconds": time.perf_counter() - start}
     final = result.steps[-1].chambers["main"]
-    iterations = result.column("iterations")[1:]
+    iterations = result.history["iterations"][1:]
     return {
         "outcome": "converged" if all(s.converged for s in result.steps) else "not converged",
         "vertices": built.mesh.n_vertices, "iterations_mean": float(iterations.mean()),
-        "iterations_max": int(iterations.max()), "cuts": int(result.column("cuts").sum()),
+        "iterations_max": int(iterations.max()), "cuts": int(result.history["cuts"].sum()),
         "tip_deflection": result.tip_deflection, "area_ratio": final.area_ratio,
         "area_error": final.area_ratio / final.command - 1, "peak_pressure": result.peak_pressure,
-        "min_det_F": float(result.column("min_det").min()), "seconds": time.perf_counter() - start,
+        "min_det_F": float(result.history["min_det"].min()), "seconds": time.perf_counter() - start,
     }
 
 

@@ -11,26 +11,18 @@
 
 from __future__ import annotations
 
-import math
-import time
-from dataclasses import dataclass
-from functools import cached_property
-from pathlib import Path
-
-import numpy as np
-
 from . import runtime
-from .fem.fields import triangle_fields
-from .io.output import prepare_directory, save_json, save_npz, save_text, write_atomic
 from .scene import BuiltScene, Scene
 from .solve.newton import NewtonOptions
-from .solve.simulate import MAX_CUTS, RampResult, RampStopped, run_schedule
-from .terms.elastic import lame_parameters
+from .solve.result import Result
+from .solve.simulate import MAX_CUTS, run_schedule
+
+__all__ = ["Result", "simulate"]
 
 
 def simulate(scene: Scene | BuiltScene, *, tol: float = NewtonOptions.tol,
              max_iterations: int = NewtonOptions.max_iterations, max_cuts: int = MAX_CUTS,
-             progress=None, stop=None) -> "Result":
+             progress=None, stop=None) -> Result:
     """Run the scene's schedule (meshing it first unless it is already built) and return its Result.
 
     tol: Newton tolerance on |gradient| / force scale; max_iterations per solve; max_cuts: halvings of an
@@ -40,164 +32,5 @@ def simulate(scene: Scene | BuiltScene, *, tol: float = NewtonOptions.tol,
     Result of the steps done. Initialises Taichi on the CPU unless runtime.init chose a backend."""
     runtime.ensure_initialised()
     built = scene if isinstance(scene, BuiltScene) else scene.build()
-    options = NewtonOptions(tol=tol, max_iterations=max_iterations)
-    start = time.perf_counter()
-    try:
-        ramp = run_schedule(built, options=options, progress=progress, max_cuts=max_cuts, stop=stop)
-    except RampStopped as failure:
-        failure.result = Result(built, failure.partial, time.perf_counter() - start)
-        raise
-    return Result(built, ramp, time.perf_counter() - start)
-
-
-@dataclass
-class Result:
-    """A finished (or, from RampFailed.result, partial) run: the built scene, its states and history.
-
-    Arrays are per step (rest state first): positions (steps, n, 2); command, area, area_ratio,
-    pressure (steps, chambers) in the order of chamber_names; history: every column of the history
-    CSV by name ('tip_dy', 'main.pressure', 'iterations', ...)."""
-
-    built: BuiltScene
-    ramp: RampResult
-    seconds: float = math.nan  # wall time of the run
-
-    @property
-    def scene(self) -> Scene:
-        return self.built.scene
-
-    @property
-    def mesh(self):
-        return self.built.mesh
-
-    @property
-    def steps(self):
-        return self.ramp.steps
-
-    @property
-    def positions(self) -> np.ndarray:
-        return self.ramp.states
-
-    @property
-    def displacements(self) -> np.ndarray:
-        return self.ramp.states - self.mesh.vertices
-
-    @property
-    def chamber_names(self) -> list[str]:
-        return self.scene.chamber_names
-
-    @cached_property
-    def history(self) -> dict[str, np.ndarray]:
-        return {name: self.ramp.column(name) for name in self.steps[0].row()}
-
-    def _chambers(self, key: str) -> np.ndarray:
-        return np.column_stack([self.history[f"{name}.{key}"] for name in self.chamber_names])
-
-    command = property(lambda self: self._chambers("command"), doc="(steps, chambers) commanded area ratio or pressure")
-    area = property(lambda self: self._chambers("area"), doc="(steps, chambers) chamber areas")
-    area_ratio = property(lambda self: self._chambers("area_ratio"), doc="(steps, chambers) area / rest area")
-    pressure = property(lambda self: self._chambers("pressure"), doc="(steps, chambers) chamber pressures")
-
-    @property
-    def tip_deflection(self) -> float:
-        """Mean y displacement of the tip vertices at the last step."""
-        return self.ramp.tip_deflection
-
-    @property
-    def peak_pressure(self) -> float:
-        return self.ramp.peak_pressure
-
-    @property
-    def converged(self) -> bool:
-        return bool(all(s.converged for s in self.steps))
-
-    def fields(self, step: int = -1) -> dict[str, np.ndarray]:
-        """Per triangle at a step: det_F, max_stretch, stress (Cauchy, (m, 3, 3)), von_mises (fields.py)."""
-        mu, lam = lame_parameters(*self.scene.element_moduli(self.mesh))
-        return triangle_fields(self.mesh.vertices, self.positions[step], self.mesh.triangles, mu, lam)
-
-    def summary(self, interrupted: bool = False) -> dict:
-        """The figures of the run (the summary JSON); interrupted: the run was stopped after these steps."""
-        final = self.steps[-1]
-        iterations, seconds = self.history["iterations"][1:], self.history["seconds"][1:]
-        return {
-            "scene": self.scene.name, "terms": self.built.model.term_names(),
-            "vertices": self.mesh.n_vertices, "triangles": self.mesh.n_triangles, "element_order": self.mesh.order,
-            "chambers": {name: {"control": c.control, "rest_area": c.area / c.area_ratio, "final_area": c.area,
-                                "area_ratio": c.area_ratio, "final_pressure": c.pressure,
-                                "peak_pressure": float(np.abs(self.history[f"{name}.pressure"]).max())}
-                         for name, c in final.chambers.items()},
-            "tip_deflection": self.tip_deflection, "tip_rotation_deg": final.tip_rotation,
-            "peak_pressure": self.peak_pressure, "contact": final.contact,
-            "all_converged": self.converged,
-            "max_residual": float(self.history["residual"].max()),
-            "min_det_F": float(self.history["min_det"].min()),
-            "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max(initial=0)),
-            "increment_cuts": int(self.history["cuts"].sum()),
-            "wall_seconds": self.seconds, "solve_seconds_per_step": float(seconds.mean()) if len(seconds) else 0.0,
-            "steps": len(self.steps), "interrupted": interrupted,
-        }
-
-    def save_history(self, directory, stem: str | None = None) -> list[Path]:
-        """Write <stem>_history.csv and <stem>_states.npz (also for a partial run); return their paths.
-
-        The npz holds positions (steps, n, 2), rest, triangles, pinned, tip, boundary, chamber_names and
-        one chamber_loop_<i> per chamber, command / area / pressure as (steps, chambers), and, where
-        the scene has them, contact_forces (steps, n, 2) and ground_height.
-        """
-        out, stem = prepare_directory(directory), stem or self.scene.name
-        mesh = self.mesh
-        arrays = dict(positions=self.positions, rest=mesh.vertices, triangles=mesh.triangles, pinned=mesh.pinned,
-                      tip=mesh.tip, boundary=mesh.boundary, chamber_names=np.array(self.chamber_names),
-                      **{f"chamber_loop_{i}": loop for i, loop in enumerate(mesh.chambers)},
-                      command=self.command, area=self.area, pressure=self.pressure)
-        if self.ramp.contact_forces is not None:
-            arrays["contact_forces"] = self.ramp.contact_forces
-        for effect in self.scene.effects:
-            if effect.name == "ground":
-                arrays["ground_height"] = np.array(effect.height)
-        return [save_text(out / f"{stem}_history.csv", self.ramp.history_csv()),
-                save_npz(out / f"{stem}_states.npz", **arrays)]
-
-    def save(self, directory, stem: str | None = None, vtk: bool = True, extra: dict | None = None,
-             plot: bool = True) -> list[Path]:
-        """Write the result files under directory, named <stem>_* (default: the scene's name): history CSV,
-        states npz, the plot PNG (unless plot is False), the scene TOML, the summary JSON (with `extra`
-        merged in) and, unless vtk is False, the ParaView files <stem>.pvd + <stem>_vtk/*.vtu. Returns the
-        paths written."""
-        from .io.vtk import VtkSeries
-        from .render.plots import save_history_png
-
-        out, stem = prepare_directory(directory), stem or self.scene.name
-        written = self.save_history(out, stem)
-        if vtk:
-            written.append(VtkSeries(out, stem, self.built).write_all(self.ramp))
-        if plot:
-            written.append(write_atomic(out / f"{stem}_plot.png", lambda tmp: save_history_png(self, tmp)))
-        written.append(save_text(out / f"{stem}_scene.toml", self.scene.to_toml()))
-        written.append(save_json(out / f"{stem}_summary.json", {**self.summary(), **(extra or {})}))
-        return written
-
-    def video(self, path, png=None, size: tuple[int, int] = (960, 384), fps: float = 12.0, color: str = "stretch",
-              renderer: str = "auto", trace: bool = True, quiet: bool = True, log=print):
-        """Render one frame per step into path (.mp4 or .gif), and the last frame into png if given;
-        color: 'stretch', 'detF' or 'none'; renderer: 'auto', 'ggui' or 'gui'. Returns a video.Export."""
-        from .render.frames import FrameRenderer, Track
-        from .render.video import check_video, export
-
-        check_video(path, fps)
-        ground = next((e.height for e in self.scene.effects if e.name == "ground"), None)
-        frames = FrameRenderer([Track.from_ramp(self.mesh, self.ramp, ground=ground, color=color)], *size,
-                               trace=trace, backend=renderer, log=log)
-        try:
-            return export(frames, Path(path), None if png is None else Path(png), fps, quiet)
-        finally:
-            frames.canvas.close()
-
-    def plot(self):
-        """The history as a matplotlib Figure with axes (plots.py): pressure against area ratio, and tip
-        deflection, area ratio and pressure against the command. A notebook shows it as a PNG; in a
-        script, fig.savefig("x.png")."""
-        from .render.plots import history_figure
-
-        return history_figure(self)
+    return run_schedule(built, options=NewtonOptions(tol=tol, max_iterations=max_iterations), progress=progress,
+                        max_cuts=max_cuts, stop=stop)

@@ -33,7 +33,7 @@ def check_scene(scene, max_triangles: int = MAX_TRIANGLES, max_increments: int =
     triangles = (1.6 * area / geometry.max_area + 3 * points) * 4 ** geometry.refinements
     linear = triangles * (4 if geometry.order == 2 else 1)
     vertices = linear / 2 + points
-    per_step = 2 if any(e.name in ("ground", "self_contact") for e in scene.effects) else 1
+    per_step = 2 if any(e.contact for e in scene.effects) else 1
     memory = BYTES_PER_TRIANGLE * linear + 16 * per_step * vertices * (scene.increments + 1)
     quadratic = " quadratic triangles, counted 4 times" if geometry.order == 2 else " triangles"
     require(linear <= max_triangles,

@@ -70,7 +70,7 @@ def test_unconverged_ramp_stops_with_one_line_and_keeps_the_steps_done(tmp_path)
 
 
 def test_quality_presets_set_mesh_and_tolerance_unless_overridden(tmp_path, capsys):
-    from taichi_pneuma.apps.inflate import QUALITY
+    from taichi_pneuma.apps.cli import QUALITY
     from taichi_pneuma.fem.geometry import BeamGeometry
 
     for flags, max_area in ((["--quality", "draft"], QUALITY["draft"][0]), (["--quality", "draft", "--max-area", "0.01"], 0.01)):

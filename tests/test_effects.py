@@ -91,12 +91,12 @@ def test_dynamics_step_response_overshoots_then_decays_to_the_static_shape():
     steps, dt = 100, 0.02
     jump = (ChamberControl(ChamberSchedule("area", ((0, 1.0), (1, 2.0), (steps, 2.0)))),)
     quasistatic = dataclasses.replace(reference_scene(cy=0.15, max_area=0.01), controls=jump, increments=steps)
-    static_tip = run_schedule(quasistatic.build()).column("tip_dy")[-1]
+    static_tip = run_schedule(quasistatic.build()).history["tip_dy"][-1]
     built = dataclasses.replace(quasistatic, effects=(Dynamics(density=1.0, dt=dt),)).build()
     assert built.model.term_names() == ["elastic", "chamber:main", "clamp", "inertia"]
     result = run_schedule(built)
     assert all(s.converged for s in result.steps)
-    tip = result.column("tip_dy")
+    tip = result.history["tip_dy"]
     first_peak = int(np.argmax(tip[:50]))
     assert 0.3 < first_peak * dt < 0.8
     assert tip[first_peak] > 1.3 * static_tip  # overshoot

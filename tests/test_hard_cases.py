@@ -26,7 +26,7 @@ def assert_stable(built, result):
         assert step.converged and step.residual <= tol, (step, solve.message)
         assert step.min_det > 0, step
         assert np.all(np.diff(solve.energies) <= built.model.energy_resolution), step
-    assert np.all(np.isfinite(result.states))
+    assert np.all(np.isfinite(result.positions))
 
 
 @pytest.fixture(scope="module")
@@ -40,7 +40,7 @@ def test_large_growth_balloons_and_keeps_curling(growth):
     built, result = ramp(growth=growth, steps=int(10 * growth) + 1)
     assert_stable(built, result)
     assert result.steps[-1].chambers["main"].area_ratio == pytest.approx(growth, rel=0.01)
-    tips = result.column("tip_dy")
+    tips = result.history["tip_dy"]
     assert tips[-1] < -0.9 and np.all(np.diff(tips[len(tips) // 2:]) < 0)  # curls further as it balloons
 
 
@@ -63,7 +63,7 @@ def test_thin_wall_chamber_0p01_from_the_top():
 def test_single_increment_reaches_the_ramp_equilibrium(reference):
     built, result = ramp(steps=2)
     assert_stable(built, result)
-    assert np.abs(result.states[-1] - reference[1].states[-1]).max() < 1e-6 * LENGTH
+    assert np.abs(result.positions[-1] - reference[1].positions[-1]).max() < 1e-6 * LENGTH
 
 
 def test_cut_back_increments_reach_the_ramp_equilibrium(reference):
@@ -72,7 +72,7 @@ def test_cut_back_increments_reach_the_ramp_equilibrium(reference):
     result = run_schedule(built, options=NewtonOptions(max_iterations=5))
     assert_stable(built, result)
     assert result.steps[-1].cuts >= 1 and result.steps[-1].substeps >= 2
-    assert np.abs(result.states[-1] - reference[1].states[-1]).max() < 1e-6 * LENGTH
+    assert np.abs(result.positions[-1] - reference[1].positions[-1]).max() < 1e-6 * LENGTH
 
 
 def test_too_few_cuts_fail_clearly_and_keep_the_steps_done():
@@ -83,7 +83,7 @@ def test_too_few_cuts_fail_clearly_and_keep_the_steps_done():
     try:
         run_schedule(built, options=five_iterations, max_cuts=0)
     except RampFailed as failure:
-        assert len(failure.partial.steps) == 1 and failure.partial.states.shape == (1, built.mesh.n_vertices, 2)
+        assert len(failure.result.steps) == 1 and failure.result.positions.shape == (1, built.mesh.n_vertices, 2)
 
 
 @pytest.mark.slow
@@ -126,13 +126,13 @@ def test_deflation_below_rest_area_keeps_the_chamber_simple():
     assert_stable(built, result)
     assert result.steps[-1].chambers["main"].area_ratio == pytest.approx(0.5, abs=0.01)
     loop = built.mesh.chambers[0]
-    assert not any(polygon_self_intersects(state[loop]) for state in result.states)
+    assert not any(polygon_self_intersects(state[loop]) for state in result.positions)
 
 
 def test_random_perturbation_returns_to_the_same_equilibrium(reference):
     built, result = reference
     solver = NewtonSolver(built.model)
-    equilibrium = result.states[-1] - built.mesh.vertices
+    equilibrium = result.positions[-1] - built.mesh.vertices
     built.set_commands([result.steps[-1].chambers["main"].command])
     noise = 1e-3 * LENGTH * np.random.default_rng(0).standard_normal(equilibrium.shape)
     u, record = solver.solve(equilibrium + noise)

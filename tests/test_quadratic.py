@@ -108,9 +108,9 @@ def test_nodal_areas_integrate_linear_loads_exactly():
 @pytest.mark.slow
 def test_reference_ramp_on_p2_is_within_one_percent_of_the_converged_figure():
     result = run_schedule(reference_scene(0.15, max_area=0.005, order=2).build())
-    assert all(s.converged for s in result.steps) and result.column("min_det").min() > 0
+    assert all(s.converged for s in result.steps) and result.history["min_det"].min() > 0
     assert result.tip_deflection == pytest.approx(INDEPENDENT_CONVERGED_TIP, rel=0.01)
-    assert result.column("main.area")[-1] / result.column("main.area")[0] == pytest.approx(3.5, rel=2e-3)
+    assert result.history["main.area"][-1] / result.history["main.area"][0] == pytest.approx(3.5, rel=2e-3)
 
 
 def tip_under_refinement(order: int) -> list[float]:
@@ -133,7 +133,8 @@ def test_convergence_order_under_uniform_refinement():
 def test_order_flag_quality_preset_and_scene_key(tmp_path, capsys):
     import json
 
-    from taichi_pneuma.apps.inflate import QUALITY, main
+    from taichi_pneuma.apps.cli import QUALITY
+    from taichi_pneuma.apps.inflate import main
     from taichi_pneuma.errors import PneumaInputError
     from taichi_pneuma.fem.geometry import BeamGeometry
     from taichi_pneuma.io.scenefile import load_scene
@@ -162,7 +163,7 @@ def test_quadratic_frame_fills_every_subtriangle_and_draws_curved_walls():
     from taichi_pneuma.render.frames import CHAMBER_FILL, CHAMBER_WALL, FACE, FrameRenderer, Track
 
     built = reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.02, order=2).build()
-    track = Track.from_ramp(built.mesh, run_schedule(built))
+    track = Track.from_result(run_schedule(built))
     renderer = FrameRenderer([track], 480, 192, trace=False, backend="gui")
     image = renderer.frame(2)
     x = track.states[2]

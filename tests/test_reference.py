@@ -46,14 +46,14 @@ def test_every_step_converges_without_inversion(ramps, cy):
     for step, solve in zip(result.steps, result.solves):
         assert step.converged and step.residual <= TOL, (step, solve.message)
         assert step.min_det > 0
-        assert np.all(np.isfinite(result.states[step.step]))
+        assert np.all(np.isfinite(result.positions[step.step]))
         # the energy never increased within a Newton solve (up to float64 resolution)
         assert np.all(np.diff(solve.energies) <= built.model.energy_resolution)
 
 
 def test_pressure_rises_monotonically_and_bend_direction(ramps):
     _, result = ramps[0.15]
-    pressure = result.column("main.pressure")
+    pressure = result.history["main.pressure"]
     assert np.all(np.diff(pressure) > 0)
     # a chamber above the neutral axis first lifts the tip slightly, then curls the beam down
-    assert result.column("tip_dy")[-1] < 0
+    assert result.history["tip_dy"][-1] < 0

@@ -30,7 +30,7 @@ def ramp():
 
 @pytest.fixture(scope="module")
 def track(ramp):
-    return Track.from_ramp(*ramp)
+    return Track.from_result(ramp[1])
 
 
 def rgb8(color):
@@ -221,18 +221,18 @@ def test_body_colours_follow_det_f_and_the_colour_bar_numbers(ramp):
     import matplotlib
 
     mesh, result = ramp
-    colored = Track.from_ramp(mesh, result, color="detF")
+    colored = Track.from_result(result, color="detF")
     def areas(x):
         a, b, c = (x[mesh.triangles[:, k]] for k in range(3))
         return (b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0]
-    det = np.array([areas(x) / areas(mesh.vertices) for x in result.states])  # det F = area ratio
+    det = np.array([areas(x) / areas(mesh.vertices) for x in result.positions])  # det F = area ratio
     assert colored.color == pytest.approx(det, rel=1e-10) and colored.color_label == "det F"
     renderer = FrameRenderer([colored], 480, 192, trace=False, backend="gui")
     image = renderer.frame(2)
     lo, hi = det.min(), det.max()
     assert renderer.color_range == pytest.approx((lo, hi)) and hi - lo > 0.02
     viridis = lambda v: np.asarray(matplotlib.colormaps["viridis"]((np.asarray(v) - lo) / (hi - lo)))[..., :3] * 255
-    centroids = result.states[2][mesh.triangles].mean(axis=1)
+    centroids = result.positions[2][mesh.triangles].mean(axis=1)
     close = np.all(np.abs(pixels_at(renderer, image, centroids) - viridis(det[2])) < 20, axis=1)
     assert close.mean() > 0.6  # the rest fall on the drawn outline or the chamber wall
     ticks = [label for label in renderer.draw(2) if label.anchor == "lm"]
@@ -275,11 +275,11 @@ def test_quadratic_elements_are_coloured_by_their_own_value():
 
     built = reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.02, order=2).build()
     result = run_schedule(built)
-    colored = Track.from_ramp(built.mesh, result, color="stretch")
+    colored = Track.from_result(result, color="stretch")
     renderer = FrameRenderer([colored], 480, 192, trace=False, backend="gui")
     image = renderer.frame(2)
     lo, hi = renderer.color_range
     expected = np.asarray(matplotlib.colormaps["viridis"]((colored.color[2] - lo) / (hi - lo)))[:, :3] * 255
-    middle = result.states[2][built.mesh.triangles[:, 3:]].mean(axis=1)
+    middle = result.positions[2][built.mesh.triangles[:, 3:]].mean(axis=1)
     close = np.all(np.abs(pixels_at(renderer, image, middle) - expected) < 20, axis=1)
     assert close.mean() > 0.6

@@ -36,7 +36,7 @@ def run():
 
 
 def test_every_step_reads_back_with_its_fields(run, tmp_path):
-    pvd = VtkSeries(tmp_path, "ramp", run.built).write_all(run.ramp)
+    pvd = VtkSeries(tmp_path, "ramp", run.built).write_all(run)
     entries = read_pvd(pvd)
     assert [t for t, _ in entries] == [0.0, 1.0, 2.0, 3.0]
     mesh, (mu, lam) = run.mesh, lame_parameters(1e4, 0.45)
@@ -94,9 +94,9 @@ def test_contact_scenes_write_the_contact_force(tmp_path):
     scene = tp.load_scene("assets/scenes/finger_on_ground.toml").with_values(
         {"mesh.max_area": 0.02, "schedule.increments": 2, **{f"chambers[{i}].keyframes": [[2, 200.0]] for i in range(5)}})
     result = tp.simulate(scene)
-    entries = read_pvd(VtkSeries(tmp_path, "f", result.built).write_all(result.ramp))
+    entries = read_pvd(VtkSeries(tmp_path, "f", result.built).write_all(result))
     force = meshio.read(entries[-1][1]).point_data["contact_force"]
-    assert np.allclose(force[:, :2], result.ramp.contact_forces[-1], rtol=0, atol=1e-12) and np.all(force[:, 2] == 0)
+    assert np.allclose(force[:, :2], result.contact_forces[-1], rtol=0, atol=1e-12) and np.all(force[:, 2] == 0)
     assert force[:, 1].sum() == pytest.approx(result.steps[-1].contact["ground"][1], rel=1e-9)
     assert force[:, 1].sum() > 0  # the ground pushes up
 
@@ -105,7 +105,7 @@ def test_quadratic_elements_are_vtk_six_node_triangles_with_their_mean_det_f(tmp
     """P2: cells are 'triangle6' on the mesh's nodes; det F is the element's mean, its curved current area
     (parabolic sides a, m, b: 1/6 (4 a x m + 4 m x b - a x b) each) over its rest area."""
     result = tp.simulate(tp.reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.02, order=2))
-    entries = read_pvd(VtkSeries(tmp_path, "p2", result.built).write_all(result.ramp))
+    entries = read_pvd(VtkSeries(tmp_path, "p2", result.built).write_all(result))
     grid = meshio.read(entries[-1][1])
     elements = grid.cells_dict["triangle6"]
     assert np.array_equal(elements, result.mesh.triangles)

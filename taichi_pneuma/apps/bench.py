@@ -87,7 +87,7 @@ def main_command_process(cache_dir: str, out: str) -> tuple[float, float]:
 
 def first_versus_typical(result) -> tuple[float, float]:
     """(seconds of increments 1 and 2, median seconds of two increments over the rest of the ramp)."""
-    seconds = result.column("seconds")
+    seconds = result.history["seconds"]
     return float(seconds[1:3].sum()), 2.0 * float(np.median(seconds[3:]))
 
 
@@ -138,7 +138,7 @@ def breakdown() -> tuple[str, dict]:
     phases = collections.Counter()
     for solve in result.solves:
         phases.update(solve.phase_seconds)
-    iterations = int(result.column("iterations").sum())
+    iterations = int(result.history["iterations"].sum())
     increments = len(result.steps) - 1
     rows = [["mesh + terms (Triangle, fields)", f"{1e3 * build_seconds:.0f}", "once"],
             ["first solve: kernel compile / cache load", f"{1e3 * first_call:.0f}", "once per process"]]
@@ -160,7 +160,7 @@ def backends() -> tuple[str, dict]:
     """Each backend on the same matrices (the final reference state), then each on the whole ramp."""
     built, result, _ = timed_ramp()
     model = built.model
-    model.set_displacements(result.states[-1] - built.mesh.vertices)
+    model.set_displacements(result.positions[-1] - built.mesh.vertices)
     rows_, cols_ = model.hessian_pattern()
     matrix = FixedPattern(rows_, cols_, model.n_dofs).matrix(model.hessian_values(psd_only=True))
     rhs = np.random.default_rng(0).standard_normal(model.n_dofs)
@@ -299,7 +299,7 @@ def scaling() -> tuple[str, dict]:
     rows, data = [], []
     for max_area in (0.005, 0.0012, 0.0003, 0.0001, 0.00003, 0.00002):
         built, result, seconds = timed_ramp(max_area=max_area, steps=4, growth=1.5)
-        iterations = int(result.column("iterations").sum())
+        iterations = int(result.history["iterations"].sum())
         record = {"vertices": built.mesh.n_vertices, "ms_per_iteration": 1e3 * seconds / iterations,
                   "ms_per_increment": 1e3 * seconds / 3, "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
         data.append(record)

@@ -27,7 +27,6 @@ import numpy as np
 from tqdm import tqdm
 
 from .. import runtime
-from ..api import Result
 from ..control.design import solve_design
 from ..control.inverse import Reacher, ReachOptions, command_bounds, frames
 from ..control.targets import Target, read_targets_csv
@@ -36,8 +35,8 @@ from ..fem.geometry import BeamGeometry
 from ..io.output import prepare_directory, save_json
 from ..io.scenefile import load_scene
 from ..scene import Scene
-from ..solve.simulate import NoEquilibrium, run_schedule
-from .inflate import (
+from ..solve.simulate import run_schedule
+from .cli import (
     add_ramp_arguments,
     add_video_arguments,
     build,
@@ -167,7 +166,7 @@ def run(args: argparse.Namespace) -> dict:
     with bar:
         results = reacher.follow(targets, progress)
     last = results[-1]
-    ramp = frames(reacher, results)
+    trajectory = frames(reacher, results)  # every accepted equilibrium, as one run
     solves = [r.forward_solves for r in results]
     seconds = [r.seconds for r in results]
     summary = {
@@ -185,18 +184,12 @@ def run(args: argparse.Namespace) -> dict:
           f"{sum(r.newton_iterations for r in results)} Newton iterations); {np.mean(seconds):.3f} s per reach")
     written = []
     if not args.no_video:
-        from ..render.frames import FrameRenderer, Track
-        from ..render.video import export
-
-        ground = next((e.height for e in scene.effects if e.name == "ground"), None)
-        track = dataclasses.replace(Track.from_ramp(built.mesh, ramp, ground=ground),
-                                    targets=np.column_stack([ramp.column("target_x"), ramp.column("target_y")]))
-        renderer = FrameRenderer([track], *size, trace=True, backend=args.renderer)
-        done = export(renderer, args.video or out / f"{stem}.mp4", out / f"{stem}.png", args.fps, args.quiet)
-        summary.update(renderer=renderer.canvas.name, video_frames=done.frames, video_size=[done.width, done.height])
-        print(render_report(done, float(np.mean([s.seconds for s in ramp.steps]))))
+        done = trajectory.video(args.video or out / f"{stem}.mp4", out / f"{stem}.png", size, args.fps,
+                                args.color, args.renderer, quiet=args.quiet)
+        summary.update(renderer=done.renderer, video_frames=done.frames, video_size=[done.width, done.height])
+        print(render_report(done, float(np.mean([s.seconds for s in trajectory.steps]))))
         written += [done.video, done.png]
-    written += Result(built, ramp).save_history(out, stem) + [save_json(out / f"{stem}_summary.json", summary)]
+    written += trajectory.save_history(out, stem) + [save_json(out / f"{stem}_summary.json", summary)]
     print("wrote " + ", ".join(str(p) for p in written))
     unreached = [(k, r) for k, r in enumerate(results, start=1) if not r.reached]
     if not unreached:
@@ -252,12 +245,7 @@ def run_design(args: argparse.Namespace) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = parser().parse_args(argv)
-    try:
-        return exit_code(run, args)
-    except NoEquilibrium as exc:  # the start (the centre of the command box) has no equilibrium
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
+    return exit_code(run, parser().parse_args(argv))
 
 
 if __name__ == "__main__":

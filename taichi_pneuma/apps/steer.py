@@ -15,7 +15,7 @@ import sys
 from .. import runtime
 from ..io.output import prepare_directory, save_json
 from ..io.vtk import VtkSeries
-from .inflate import (
+from .cli import (
     add_ramp_arguments,
     add_video_arguments,
     build,
@@ -53,16 +53,11 @@ def run(args: argparse.Namespace) -> dict:
         summary["all_converged"] &= result.converged
     written = [vtk.pvd for vtk in series]
     if not args.no_video:
-        from ..render.frames import FrameRenderer, Track
-        from ..render.video import export
+        from ..render.video import render_video
 
-        tracks = [Track.from_ramp(result.mesh, result.ramp, f"cy = {cy:+.2f}: {title}", color=args.color)
-                  for (cy, title), result in zip(PLACEMENTS, solved)]
-        renderer = FrameRenderer(tracks, *size, trace=False, backend=args.renderer)
-        try:
-            done = export(renderer, args.video or out / "steer.mp4", out / "steer.png", args.fps, args.quiet)
-        finally:
-            renderer.canvas.close()
+        done = render_video(solved, args.video or out / "steer.mp4", out / "steer.png", size, args.fps, args.color,
+                            args.renderer, trace=False, titles=[f"cy = {cy:+.2f}: {title}" for cy, title in PLACEMENTS],
+                            quiet=args.quiet)
         seconds_per_step = sum(r.summary()["solve_seconds_per_step"] for r in solved) / len(solved)
         print(render_report(done, seconds_per_step))
         summary.update(renderer=done.renderer, video_frames=done.frames, video_size=[done.width, done.height],

@@ -27,8 +27,7 @@ from tqdm import tqdm
 
 from .. import limits
 from ..control.study import ALIASES, MAX_RUNS, LocalPool, RayCluster, RunOptions, Sweep, parse_vary
-from ..io.scenefile import load_scene
-from .inflate import add_ramp_arguments, apply_set, check_flags, exit_code, scene_for
+from .cli import add_ramp_arguments, exit_code, scene_of_flags
 
 
 def parser() -> argparse.ArgumentParser:
@@ -58,19 +57,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="change a dotted key of the base scene for every run (repeatable)")
     add_ramp_arguments(p)
-    p.set_defaults(max_frame_pixels=limits.MAX_FRAME_PIXELS)  # checked by inflate.check_flags; no video here
+    p.set_defaults(max_frame_pixels=limits.MAX_FRAME_PIXELS)  # checked by cli.check_flags; no video here
     return p
-
-
-def base_scene(args: argparse.Namespace):
-    """The validated base scene: --scene (or the reference beam of the flags) with --set applied."""
-    if args.scene:
-        check_flags(args)
-        scene = apply_set(load_scene(args.scene), args.set)
-    else:
-        scene = apply_set(scene_for(args, args.cy), args.set)
-    limits.check_scene(scene, args.max_triangles, args.max_increments)
-    return scene
 
 
 def row_line(row: dict, keys: list[str]) -> str:
@@ -83,7 +71,7 @@ def row_line(row: dict, keys: list[str]) -> str:
 
 def run(args: argparse.Namespace) -> dict:
     axes = [parse_vary(text) for text in args.vary]
-    base = base_scene(args)
+    base = scene_of_flags(args)
     executor = LocalPool(args.workers) if args.ray is None else RayCluster(args.ray or None, args.workers)
     options = RunOptions(args.tol, args.max_iterations, args.max_cuts, args.max_triangles, args.max_increments,
                          args.arch)

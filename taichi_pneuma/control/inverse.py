@@ -47,7 +47,8 @@ from ..scene import BuiltScene, Scene
 from ..solve.newton import NewtonOptions, NewtonSolver
 from ..solve.schedule import REST_COMMAND
 from ..solve.sensitivity import sensitivity
-from ..solve.simulate import MAX_CUTS, NoEquilibrium, RampResult, StepRecord, chamber_records, settle, tip_measures
+from ..solve.result import Result
+from ..solve.simulate import MAX_CUTS, NoEquilibrium, StepRecord, chamber_records, settle, tip_measures
 from .targets import Target
 
 ARMIJO = 1e-4
@@ -335,29 +336,11 @@ class Reacher:
         return results
 
 
-@dataclass
-class ReachStep(StepRecord):
-    """One frame of a reach or trajectory: the equilibrium's StepRecord, the target pursued (its index
-    and x, y, angle; nan for a free angle), the tip point and its distance to the target."""
-
-    target: int = 0
-    target_x: float = math.nan
-    target_y: float = math.nan
-    target_angle: float = math.nan
-    tip_x: float = math.nan
-    tip_y: float = math.nan
-    tip_error: float = math.nan
-
-    def row(self) -> dict[str, float]:
-        row = super().row()
-        row.update(target=self.target, target_x=self.target_x, target_y=self.target_y, target_angle=self.target_angle,
-                   tip_x=self.tip_x, tip_y=self.tip_y, tip_error=self.tip_error)
-        return row
-
-
-def frames(reacher: Reacher, results: list[ReachResult]) -> RampResult:
-    """Every accepted equilibrium of a sequence of reaches, in order, as a RampResult of ReachSteps
-    (the history CSV, the states and the video of simulate/render take it as they take a ramp)."""
+def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
+    """Every accepted equilibrium of a sequence of reaches, in order, as one run's Result (its history CSV,
+    states and video are made as a ramp's are): each step's record carries the extra columns target (the
+    index of the target pursued), target_x, target_y, target_angle (nan for a free angle), the tip point
+    tip_x, tip_y and its distance to the target, tip_error."""
     built, mesh = reacher.built, reacher.built.mesh
     rest_tip = mesh.vertices[mesh.tip].mean(axis=0)
     steps, states = [], []
@@ -367,12 +350,13 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> RampResult:
             built.set_commands(pose.commands)
             built.model.set_displacements(pose.u)
             dx, dy = pose.tip - rest_tip
-            steps.append(ReachStep(len(steps), chamber_records(built, pose.commands), float(dx), float(dy),
-                                   pose.rotation, pose.iterations, pose.residual, True, 0, 1,
-                                   built.elastic.min_determinant(), pose.seconds, {}, k, *target.tip,
-                                   math.nan if target.angle is None else target.angle, *pose.tip,
-                                   float(np.hypot(*(pose.tip - target.tip)))))
+            extra = {"target": k, "target_x": target.tip[0], "target_y": target.tip[1],
+                     "target_angle": math.nan if target.angle is None else target.angle,
+                     "tip_x": pose.tip[0], "tip_y": pose.tip[1], "tip_error": float(np.hypot(*(pose.tip - target.tip)))}
+            steps.append(StepRecord(len(steps), chamber_records(built, pose.commands), float(dx), float(dy),
+                                    pose.rotation, pose.iterations, pose.residual, True, 0, 1,
+                                    built.elastic.min_determinant(), pose.seconds, extra=extra))
             states.append(mesh.vertices + pose.u)
     built.set_commands(reacher.pose.commands)
     built.model.set_displacements(reacher.pose.u)
-    return RampResult(steps, np.array(states), [])
+    return Result(built, steps, np.array(states), seconds=sum(r.seconds for r in results))

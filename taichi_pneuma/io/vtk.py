@@ -92,8 +92,8 @@ class VtkSeries:
         return path
 
     def write_all(self, result) -> Path:
-        """Write every step of a simulate.RampResult; return the PVD's path."""
+        """Write every step of a run (a solve.result.Result); return the PVD's path."""
         forces = result.contact_forces
         for i, step in enumerate(result.steps):
-            self.write(step, result.states[i], None if forces is None else forces[i])
+            self.write(step, result.positions[i], None if forces is None else forces[i])
         return self.pvd

@@ -320,20 +320,20 @@ class Track:
     color_label: str = ""
 
     @classmethod
-    def from_ramp(cls, mesh: Mesh, result, title: str = "", ground: float | None = None,
-                  color: str = "none") -> "Track":
-        """A track from a simulate.RampResult (every chamber of the scene); color: 'none' or a COLOR_FIELDS key."""
+    def from_result(cls, result, title: str = "", color: str = "none") -> "Track":
+        """A track of a run (a solve.result.Result: every chamber of its scene, its ground line, a reach's
+        targets from its target_x/target_y columns); color: 'none' or a COLOR_FIELDS key."""
         require(color == "none" or color in COLOR_FIELDS,
                 f"color = {color!r} is not one of none, {', '.join(COLOR_FIELDS)}")
-        names = list(result.steps[0].chambers)
-        columns = lambda key: np.column_stack([result.column(f"{n}.{key}") for n in names])
+        mesh, history = result.mesh, result.history
         values, label = None, ""
         if color != "none":
             label, key = COLOR_FIELDS[color]
             fields = ElementFields(mesh.vertices, mesh.triangles)
-            values = np.array([fields.at(x)[key] for x in result.states])
-        return cls(mesh, result.states, columns("area_ratio"), columns("pressure"), result.column("tip_dy"), title,
-                   ground, color=values, color_label=label)
+            values = np.array([fields.at(x)[key] for x in result.positions])
+        targets = np.column_stack([history["target_x"], history["target_y"]]) if "target_x" in history else None
+        return cls(mesh, result.positions, result.area_ratio, result.pressure, history["tip_dy"], title,
+                   result.ground_height, targets, values, label)
 
     def header(self, i: int) -> list[str]:
         """The lines above the body at step i."""

@@ -1,4 +1,5 @@
-"""Video export: frames streamed to ffmpeg (imageio-ffmpeg), mp4 (H.264) or gif chosen by the file extension.
+"""Video export: frames streamed to ffmpeg (imageio-ffmpeg), mp4 (H.264) or gif chosen by the file extension;
+render_video: the whole sequence from runs to a video file, as every app and Result.video use it.
 
 Frames go to the encoder one at a time (never all held in memory), into a temporary file beside the
 target that is renamed only once the encoder has finished (output.write_atomic): an interrupted export
@@ -101,3 +102,21 @@ def export(renderer, video: Path, png: Path | None, fps: float = 12.0, quiet: bo
         write_atomic(Path(png), lambda tmp: iio.imwrite(tmp, last))
     return Export(Path(video), None if png is None else Path(png), count, last.shape[1], last.shape[0],
                   render_seconds, renderer.canvas.name)
+
+
+def render_video(runs: list, video, png=None, size: tuple[int, int] = (960, 384), fps: float = 12.0,
+                 color: str = "stretch", backend: str = "auto", trace: bool = True, titles: list[str] | None = None,
+                 quiet: bool = True, log=print) -> Export:
+    """Render runs (solve.result.Result, all of one length) side by side, one beam panel each (titled by
+    titles), one frame per step, into video (.mp4 or .gif) and the last frame into png if given; color:
+    'stretch', 'detF' or 'none'; backend: 'auto', 'ggui' or 'gui'; trace: the area/pressure trace panel.
+    The canvas is opened for it and closed after (also when the export fails)."""
+    from .frames import FrameRenderer, Track
+
+    check_video(video, fps)
+    tracks = [Track.from_result(run, title, color) for run, title in zip(runs, titles or [""] * len(runs))]
+    renderer = FrameRenderer(tracks, *size, trace=trace, backend=backend, log=log)
+    try:
+        return export(renderer, Path(video), None if png is None else Path(png), fps, quiet)
+    finally:
+        renderer.canvas.close()

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 import time
 from dataclasses import dataclass, field
@@ -12,6 +10,7 @@ import numpy as np
 
 from ..scene import BuiltScene
 from .newton import NewtonOptions, NewtonSolver, SolveRecord
+from .result import Result
 from .schedule import Schedule
 
 MAX_CUTS = 8
@@ -34,7 +33,8 @@ class StepRecord:
 
     tip_dx, tip_dy: mean displacement of the tip (right-edge) vertices; tip_rotation: their rigid
     rotation in degrees (counter-clockwise positive, least squares); contact: per contact term the
-    total force it exerts on the body (fx, fy) and the sum of its per-vertex force magnitudes.
+    total force it exerts on the body (fx, fy) and the sum of its per-vertex force magnitudes; extra:
+    further columns by name, last in the row (a reach's target and tip error, inverse.frames).
     """
 
     step: int
@@ -50,9 +50,11 @@ class StepRecord:
     min_det: float
     seconds: float
     contact: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    extra: dict[str, float] = field(default_factory=dict)
 
     def row(self) -> dict[str, float]:
-        """Flat columns: step, <chamber>.<field> for each chamber, <contact>.fx/.fy/.magnitude, solver figures."""
+        """Flat columns: step, <chamber>.<field> for each chamber, <contact>.fx/.fy/.magnitude, solver figures,
+        the extra columns."""
         row = {"step": self.step}
         for name, c in self.chambers.items():
             row.update({f"{name}.command": c.command, f"{name}.area": c.area, f"{name}.area_ratio": c.area_ratio,
@@ -62,35 +64,8 @@ class StepRecord:
             row.update({f"{name}.fx": fx, f"{name}.fy": fy, f"{name}.magnitude": magnitude})
         row.update({"iterations": self.iterations, "residual": self.residual, "converged": self.converged,
                     "cuts": self.cuts, "substeps": self.substeps, "min_det": self.min_det, "seconds": self.seconds})
+        row.update(self.extra)
         return row
-
-
-@dataclass
-class RampResult:
-    steps: list[StepRecord]
-    states: np.ndarray  # (steps, n, 2) positions
-    solves: list[SolveRecord]
-    contact_forces: np.ndarray | None = None  # (steps, n, 2) summed contact force per vertex, if any contact term
-
-    def column(self, name: str) -> np.ndarray:
-        """A column of the history by its row() name, e.g. 'tip_dy' or 'main.pressure'."""
-        return np.array([s.row()[name] for s in self.steps], dtype=float)
-
-    @property
-    def tip_deflection(self) -> float:
-        return self.steps[-1].tip_dy
-
-    @property
-    def peak_pressure(self) -> float:
-        return max(abs(c.pressure) for s in self.steps for c in s.chambers.values())
-
-    def history_csv(self) -> str:
-        buffer = io.StringIO()
-        rows = [s.row() for s in self.steps]
-        writer = csv.DictWriter(buffer, fieldnames=list(rows[0]) if rows else ["step"])
-        writer.writeheader()
-        writer.writerows(rows)
-        return buffer.getvalue()
 
 
 def predict(built: BuiltScene, previous, current, commands: np.ndarray) -> np.ndarray:
@@ -124,11 +99,11 @@ def chamber_records(built: BuiltScene, commands: np.ndarray) -> dict[str, Chambe
 
 
 class RampStopped(RuntimeError):
-    """The ramp ended before its last increment; `partial` holds the steps done."""
+    """The ramp ended before its last increment; `result` holds the steps done."""
 
-    def __init__(self, message: str, partial: RampResult):
+    def __init__(self, message: str, result: Result):
         super().__init__(message)
-        self.partial = partial
+        self.result = result
 
 
 class RampFailed(RampStopped):
@@ -201,7 +176,7 @@ def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.n
 
 
 def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: NewtonOptions | None = None,
-                 progress=None, max_cuts: int = MAX_CUTS, stop=None) -> RampResult:
+                 progress=None, max_cuts: int = MAX_CUTS, stop=None) -> Result:
     """Solve for equilibrium at each step of the schedule (the scene's own by default), each from the last.
 
     An increment whose Newton solve does not converge is cut back: the remaining change of all
@@ -212,8 +187,9 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     progress(step_record, positions, contact_force): the positions (n, 2) and, if the scene has contact,
     the summed contact force per vertex (n, 2), else None; stop, if given, is asked stop() after every
     increment but the last, and when it returns True the ramp ends there with RampInterrupted carrying
-    the steps done.
+    the steps done. Returns the run's Result (its seconds: the wall time of this call).
     """
+    started = time.perf_counter()
     schedule = schedule or built.scene.schedule
     solver = NewtonSolver(built.model, options)
     mesh = built.mesh
@@ -224,8 +200,9 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     previous = None  # (commands, u) of the equilibrium before the last one, for the predictor
 
     def partial():
-        return RampResult(steps, np.array(states).reshape(-1, *mesh.vertices.shape), solves,
-                          np.array(forces).reshape(-1, *mesh.vertices.shape) if contact_terms else None)
+        return Result(built, steps, np.array(states).reshape(-1, *mesh.vertices.shape), solves,
+                      np.array(forces).reshape(-1, *mesh.vertices.shape) if contact_terms else None,
+                      time.perf_counter() - started)
 
     for i in range(schedule.increments + 1):
         start = time.perf_counter()

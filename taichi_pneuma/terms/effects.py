@@ -17,9 +17,15 @@ from .inertia import Inertia
 
 
 class Effect:
-    """Base of the effect specs: a name (the key in a scene file's [effects] table) and terms()."""
+    """Base of the effect specs: a name (the key in a scene file's [effects] table) and terms().
+
+    What the rest of the program asks of an effect without knowing it: contact, whether its terms report
+    contact forces (stored per vertex and step, and counted by limits.py); ground_height, the height y of
+    a ground line the output draws (npz ground_height, the video), or None."""
 
     name = "effect"
+    contact = False
+    ground_height = None
 
     def terms(self, config, mesh, lumped_area) -> list:
         raise NotImplementedError
@@ -53,6 +59,11 @@ class Ground(Effect):
     dhat: float = 0.01
     stiffness: float = 1e3
     name = "ground"
+    contact = True
+
+    @property
+    def ground_height(self) -> float:
+        return self.height
 
     def __post_init__(self):
         require_finite("height", self.height)
@@ -72,6 +83,7 @@ class SelfContact(Effect):
     dhat: float = 0.005
     stiffness: float = 1e4
     name = "self_contact"
+    contact = True
 
     def __post_init__(self):
         _positive("dhat", self.dhat)

@@ -1,0 +1,233 @@
+"""The command-line plumbing every app shares: the reference-beam, solver, output and rendering flags and
+their checks (before any work), the scene of the flags (--scene, --set), building it with its one-line
+description, a ramp run with a line per step and Ctrl-C handled, the render report line, and the exit
+codes: 0 done, 1 no equilibrium (or a target not reached, a run lost), 2 bad input (one `error:` line),
+130 Ctrl-C."""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+from contextlib import contextmanager
+
+import numpy as np
+from tqdm import tqdm
+
+from .. import limits, runtime
+from ..api import Result, simulate
+from ..errors import PneumaInputError, require, require_finite
+from ..fem.geometry import BeamGeometry
+from ..io.scenefile import load_scene
+from ..io.scenetoml import parse_assignment
+from ..io.vtk import VtkSeries
+from ..render.frames import BACKENDS, COLOR_FIELDS
+from ..scene import Scene, reference_scene
+from ..solve.newton import NewtonOptions
+from ..solve.schedule import area_ramp
+from ..solve.simulate import MAX_CUTS, NoEquilibrium, RampFailed, RampInterrupted
+
+# --quality presets: (max triangle area, element order, Newton tolerance); see the README's accuracy study
+QUALITY = {"draft": (0.005, 1, 1e-4), "default": (BeamGeometry.max_area, 1, NewtonOptions.tol),
+           "high": (0.005, 2, 1e-6), "accurate": (0.0012, 2, 1e-9)}
+
+
+def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
+    """The reference-beam, ramp, solver and output flags shared by the apps (all but the chamber height)."""
+    p.add_argument("--cx", type=float, default=0.0, help="chamber centre along the beam")
+    p.add_argument("--growth", type=float, default=3.5, help="final commanded area / rest area")
+    p.add_argument("--steps", type=int, default=36, help="commanded areas in the ramp, rest included")
+    p.add_argument("--E", type=float, default=1e4, help="Young's modulus")
+    p.add_argument("--nu", type=float, default=0.45, help="Poisson's ratio, in (-1, 0.5)")
+    p.add_argument("--k", type=float, default=1e5, help="chamber stiffness (area control penalty)")
+    p.add_argument("--quality", default="default", choices=list(QUALITY),
+                   help="mesh density, element order and Newton tolerance, read off the accuracy-vs-time study: "
+                        + "; ".join(f"{k}: max area {a:g}, order {o}, tol {t:g}" for k, (a, o, t) in QUALITY.items()))
+    p.add_argument("--max-area", type=float, default=None, help="Triangle's maximum triangle area (overrides --quality)")
+    p.add_argument("--order", type=int, default=None, choices=(1, 2),
+                   help="1: linear triangles, 2: quadratic triangles (overrides --quality)")
+    p.add_argument("--tol", type=float, default=None,
+                   help="Newton tolerance on |gradient| / force scale (overrides --quality)")
+    p.add_argument("--max-iterations", type=int, default=40, help="Newton iterations per solve before it counts as failed")
+    p.add_argument("--max-cuts", type=int, default=MAX_CUTS,
+                   help="times a non-converging increment may be halved before the run stops")
+    p.add_argument("--max-triangles", type=int, default=limits.MAX_TRIANGLES,
+                   help="refuse a scene whose mesh is estimated (before meshing) to have more triangles")
+    p.add_argument("--max-increments", type=int, default=limits.MAX_INCREMENTS,
+                   help="refuse a schedule of more increments")
+    p.add_argument("--out", default="out", help="directory for the result files")
+    p.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
+    p.add_argument("--quiet", action="store_true", help="no per-step lines, no progress bars")
+
+
+def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
+    """The rendering flags shared by the apps."""
+    p.add_argument("--video", default=None,
+                   help="video file (.mp4 H.264 or .gif); default <out>/<name>.mp4")
+    p.add_argument("--fps", type=float, default=12.0, help="video frames per second (one frame per step)")
+    p.add_argument("--size", default=size, help="frame size WIDTHxHEIGHT in pixels")
+    p.add_argument("--renderer", default="auto", choices=BACKENDS,
+                   help="auto: GGUI (Vulkan) if available, else ti.GUI")
+    p.add_argument("--no-video", action="store_true", help="no rendering at all: no video, no frame PNG, no plot PNG")
+    p.add_argument("--color", default="stretch", choices=["none", *COLOR_FIELDS],
+                   help="colour the body by a field: the largest principal stretch, det F, or none (mesh edges)")
+    p.add_argument("--max-frame-pixels", type=int, default=limits.MAX_FRAME_PIXELS,
+                   help="refuse a --size of more pixels per frame")
+
+
+def rendering_flags(args: argparse.Namespace) -> tuple[int, int]:
+    """Check the rendering flags before any work; return --size 'WIDTHxHEIGHT' as (width, height)."""
+    from ..render.video import check_video
+
+    check_video(args.video or "default.mp4", args.fps)
+    text = args.size
+    try:
+        width, height = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise PneumaInputError(f"--size = {text!r} must look like 960x384") from None
+    require(width >= 64 and height >= 64 and width % 2 == 0 and height % 2 == 0,
+            f"--size = {text!r}: width and height must be even and >= 64")
+    limits.check_frame(width, height, args.max_frame_pixels)
+    return width, height
+
+
+def newton_options(args: argparse.Namespace) -> NewtonOptions:
+    return NewtonOptions(tol=args.tol, max_iterations=args.max_iterations)
+
+
+def check_flags(args: argparse.Namespace) -> None:
+    """Validate the solver flags; --max-area and --tol not given take their values from --quality."""
+    max_area, order, tol = QUALITY[args.quality]
+    args.max_area = max_area if args.max_area is None else args.max_area
+    args.order = order if args.order is None else args.order
+    args.tol = tol if args.tol is None else args.tol
+    for name in ("cx", "growth", "E", "nu", "k", "max_area", "tol"):
+        require_finite(f"--{name.replace('_', '-')}", getattr(args, name))
+    newton_options(args)  # validates --tol and --max-iterations
+    require(args.max_cuts >= 0, f"--max-cuts = {args.max_cuts!r} must be >= 0")
+    for name in ("max_triangles", "max_increments", "max_frame_pixels"):
+        require(getattr(args, name) >= 1, f"--{name.replace('_', '-')} = {getattr(args, name)!r} must be >= 1")
+    area_ramp(args.growth, args.steps)  # validates growth and steps before any work
+
+
+def scene_for(args: argparse.Namespace, cy: float) -> Scene:
+    """The validated reference scene of the flags with its chamber at height cy (PneumaInputError on bad flags)."""
+    check_flags(args)
+    scene = reference_scene(require_finite("--cy", cy), args.cx, args.growth, args.steps, args.E, args.nu, args.k,
+                            args.max_area, order=args.order)
+    limits.check_scene(scene, args.max_triangles, args.max_increments)
+    return scene
+
+
+def scene_of_flags(args: argparse.Namespace) -> Scene:
+    """The validated scene of the flags: --scene (or the reference beam of the flags, its chamber at --cy)
+    with every --set applied, then checked against the resource limits (which --set may have raised)."""
+    if args.scene:
+        check_flags(args)
+        scene = apply_set(load_scene(args.scene), args.set)
+    else:
+        scene = apply_set(scene_for(args, args.cy), args.set)
+    limits.check_scene(scene, args.max_triangles, args.max_increments)
+    return scene
+
+
+def build(scene: Scene):
+    """Mesh the scene, build its terms and print the mesh size, the terms and each chamber's rest area."""
+    built = scene.build()
+    mesh = built.mesh
+    kind = "triangles" if mesh.order == 1 else "quadratic triangles"
+    print(f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
+          f"{mesh.n_triangles} {kind}; clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
+    for chamber in built.chambers:
+        print(f"chamber {chamber.chamber_name}: {chamber.control} control, wall {chamber.n_wall} vertices, "
+              f"rest area {chamber.rest_area:.3f}")
+    return built
+
+
+@contextmanager
+def stop_on_interrupt():
+    """Yield a threading.Event that the first Ctrl-C (SIGINT) sets instead of raising KeyboardInterrupt;
+    a second Ctrl-C interrupts at once. Outside the main thread (no signal handling) the event never sets."""
+    requested = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield requested
+        return
+    previous = signal.getsignal(signal.SIGINT)
+
+    def handler(signum, frame):
+        requested.set()
+        signal.signal(signal.SIGINT, previous)
+        print("interrupt: stopping after the current increment (Ctrl-C again to stop at once)", file=sys.stderr)
+
+    signal.signal(signal.SIGINT, handler)
+    try:
+        yield requested
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def solve(args: argparse.Namespace, built, label: str = "solving", vtk: VtkSeries | None = None) -> Result:
+    """Run the scene's schedule, printing a line per step, with a progress bar on a terminal only (the
+    lines go through the bar, tqdm.write; piped or logged output gets the lines alone); write each
+    step's VTU as it is solved if vtk is given. Returns an api.Result.
+
+    Raises RampFailed when an increment fails after its cuts, RampInterrupted after the increment
+    during which Ctrl-C was pressed; both carry the steps done (.result)."""
+    increments = built.scene.increments
+    bar = tqdm(total=increments + 1, desc=label, unit="step", disable=True if args.quiet else None, leave=False)
+
+    def progress(step, positions, contact_force):
+        if vtk is not None:
+            vtk.write(step, positions, contact_force)
+        bar.update()
+        if not args.quiet:
+            chambers = "  ".join(f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}" for name, c in step.chambers.items())
+            tqdm.write(f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {step.tip_dy:+.4f} "
+                       f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  {step.cuts} cuts  "
+                       f"residual {step.residual:.1e}")
+
+    with bar, stop_on_interrupt() as interrupted:
+        return simulate(built, tol=args.tol, max_iterations=args.max_iterations, max_cuts=args.max_cuts,
+                        progress=progress, stop=interrupted.is_set)
+
+
+def render_report(export, seconds_per_step: float) -> str:
+    return (f"video: {export.frames} frames {export.width}x{export.height}; rendering {export.ms_per_frame:.1f} "
+            f"ms/frame vs solving {1000 * seconds_per_step:.0f} ms/step")
+
+
+def apply_set(scene: Scene, assignments: list[str]) -> Scene:
+    """The scene with every --set KEY=VALUE applied (validated once, like a scene file)."""
+    if not assignments:
+        return scene
+    values = dict(parse_assignment(text) for text in assignments)
+    try:
+        return scene.with_values(values)
+    except PneumaInputError as exc:
+        raise PneumaInputError(f"--set: {exc}") from None
+
+
+def exit_code(app_run, args: argparse.Namespace) -> int:
+    """Run an app; bad input is one line and exit 2, a ramp (or a reach's start) with no equilibrium one line
+    and exit 1,
+    Ctrl-C one line and exit 130 (128 + SIGINT, as shells report it).
+
+    NumPy's floating-point warnings (overflow, invalid value) are silenced: a huge input value overflows
+    harmlessly in a check that then refuses it, and a solve that produces NaN or inf fails its own checks."""
+    try:
+        with np.errstate(all="ignore"):
+            summary = app_run(args)
+    except PneumaInputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except (RampFailed, NoEquilibrium) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    except RampInterrupted as exc:
+        print(f"error: {exc} (Ctrl-C)", file=sys.stderr)
+        return 130
+    except KeyboardInterrupt:
+        print("error: interrupted (Ctrl-C)", file=sys.stderr)
+        return 130
+    return 0 if summary["all_converged"] else 1

@@ -1,0 +1,175 @@
+"""The result of a run, one type for all: a ramp (simulate.run_schedule, tp.simulate), the steps a stopped
+ramp did (RampStopped.result), the frames of a sequence of reaches (inverse.frames). What to look at
+(history, per-chamber arrays, fields), and the files and pictures made from it (save, video, plot)."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+
+from ..fem.fields import triangle_fields
+from ..io.output import prepare_directory, save_json, save_npz, save_text, write_atomic
+from ..scene import BuiltScene, Scene
+from ..terms.elastic import lame_parameters
+
+
+@dataclass
+class Result:
+    """A run: the built scene and, per step (rest state first), its simulate.StepRecord and positions.
+
+    positions (steps, n, 2); solves: the last Newton SolveRecord of each step (none for reaches);
+    contact_forces (steps, n, 2): the summed contact force per vertex, when the scene has contact;
+    seconds: wall time of the run. command, area, area_ratio, pressure: (steps, chambers) in the order
+    of chamber_names; history: every column of the history CSV by name ('tip_dy', 'main.pressure',
+    'iterations', and a reach's 'target_x', 'tip_error', ...)."""
+
+    built: BuiltScene
+    steps: list
+    positions: np.ndarray
+    solves: list = field(default_factory=list)
+    contact_forces: np.ndarray | None = None
+    seconds: float = math.nan
+
+    @property
+    def scene(self) -> Scene:
+        return self.built.scene
+
+    @property
+    def mesh(self):
+        return self.built.mesh
+
+    @property
+    def displacements(self) -> np.ndarray:
+        return self.positions - self.mesh.vertices
+
+    @property
+    def chamber_names(self) -> list[str]:
+        return self.scene.chamber_names
+
+    @cached_property
+    def history(self) -> dict[str, np.ndarray]:
+        rows = [s.row() for s in self.steps]
+        return {name: np.array([row[name] for row in rows], dtype=float) for name in (rows[0] if rows else ())}
+
+    def _chambers(self, key: str) -> np.ndarray:
+        return np.column_stack([self.history[f"{name}.{key}"] for name in self.chamber_names])
+
+    command = property(lambda self: self._chambers("command"), doc="(steps, chambers) commanded area ratio or pressure")
+    area = property(lambda self: self._chambers("area"), doc="(steps, chambers) chamber areas")
+    area_ratio = property(lambda self: self._chambers("area_ratio"), doc="(steps, chambers) area / rest area")
+    pressure = property(lambda self: self._chambers("pressure"), doc="(steps, chambers) chamber pressures")
+
+    @property
+    def tip_deflection(self) -> float:
+        """Mean y displacement of the tip vertices at the last step."""
+        return self.steps[-1].tip_dy
+
+    @property
+    def peak_pressure(self) -> float:
+        return max(abs(c.pressure) for s in self.steps for c in s.chambers.values())
+
+    @property
+    def converged(self) -> bool:
+        return bool(all(s.converged for s in self.steps))
+
+    @property
+    def ground_height(self) -> float | None:
+        """The height of the scene's ground line (the effect that has one), or None."""
+        return next((e.ground_height for e in self.scene.effects if e.ground_height is not None), None)
+
+    def fields(self, step: int = -1) -> dict[str, np.ndarray]:
+        """Per triangle at a step: det_F, max_stretch, stress (Cauchy, (m, 3, 3)), von_mises (fields.py)."""
+        mu, lam = lame_parameters(*self.scene.element_moduli(self.mesh))
+        return triangle_fields(self.mesh.vertices, self.positions[step], self.mesh.triangles, mu, lam)
+
+    def summary(self, interrupted: bool = False) -> dict:
+        """The figures of the run (the summary JSON); interrupted: the run was stopped after these steps."""
+        final = self.steps[-1]
+        iterations, seconds = self.history["iterations"][1:], self.history["seconds"][1:]
+        return {
+            "scene": self.scene.name, "terms": self.built.model.term_names(),
+            "vertices": self.mesh.n_vertices, "triangles": self.mesh.n_triangles, "element_order": self.mesh.order,
+            "chambers": {name: {"control": c.control, "rest_area": c.area / c.area_ratio, "final_area": c.area,
+                                "area_ratio": c.area_ratio, "final_pressure": c.pressure,
+                                "peak_pressure": float(np.abs(self.history[f"{name}.pressure"]).max())}
+                         for name, c in final.chambers.items()},
+            "tip_deflection": self.tip_deflection, "tip_rotation_deg": final.tip_rotation,
+            "peak_pressure": self.peak_pressure, "contact": final.contact,
+            "all_converged": self.converged,
+            "max_residual": float(self.history["residual"].max()),
+            "min_det_F": float(self.history["min_det"].min()),
+            "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max(initial=0)),
+            "increment_cuts": int(self.history["cuts"].sum()),
+            "wall_seconds": self.seconds, "solve_seconds_per_step": float(seconds.mean()) if len(seconds) else 0.0,
+            "steps": len(self.steps), "interrupted": interrupted,
+        }
+
+    def history_csv(self) -> str:
+        """The history as CSV text: a header, then one row per step (StepRecord.row)."""
+        buffer = io.StringIO()
+        rows = [s.row() for s in self.steps]
+        writer = csv.DictWriter(buffer, fieldnames=list(rows[0]) if rows else ["step"])
+        writer.writeheader()
+        writer.writerows(rows)
+        return buffer.getvalue()
+
+    def save_history(self, directory, stem: str | None = None) -> list[Path]:
+        """Write <stem>_history.csv and <stem>_states.npz (also for a partial run); return their paths.
+
+        The npz holds positions (steps, n, 2), rest, triangles, pinned, tip, boundary, chamber_names and
+        one chamber_loop_<i> per chamber, command / area / pressure as (steps, chambers), and, where
+        the scene has them, contact_forces (steps, n, 2) and ground_height.
+        """
+        out, stem = prepare_directory(directory), stem or self.scene.name
+        mesh = self.mesh
+        arrays = dict(positions=self.positions, rest=mesh.vertices, triangles=mesh.triangles, pinned=mesh.pinned,
+                      tip=mesh.tip, boundary=mesh.boundary, chamber_names=np.array(self.chamber_names),
+                      **{f"chamber_loop_{i}": loop for i, loop in enumerate(mesh.chambers)},
+                      command=self.command, area=self.area, pressure=self.pressure)
+        if self.contact_forces is not None:
+            arrays["contact_forces"] = self.contact_forces
+        if self.ground_height is not None:
+            arrays["ground_height"] = np.array(self.ground_height)
+        return [save_text(out / f"{stem}_history.csv", self.history_csv()),
+                save_npz(out / f"{stem}_states.npz", **arrays)]
+
+    def save(self, directory, stem: str | None = None, vtk: bool = True, extra: dict | None = None,
+             plot: bool = True) -> list[Path]:
+        """Write the result files under directory, named <stem>_* (default: the scene's name): history CSV,
+        states npz, the plot PNG (unless plot is False), the scene TOML, the summary JSON (with `extra`
+        merged in) and, unless vtk is False, the ParaView files <stem>.pvd + <stem>_vtk/*.vtu. Returns the
+        paths written."""
+        from ..io.vtk import VtkSeries
+        from ..render.plots import save_history_png
+
+        out, stem = prepare_directory(directory), stem or self.scene.name
+        written = self.save_history(out, stem)
+        if vtk:
+            written.append(VtkSeries(out, stem, self.built).write_all(self))
+        if plot:
+            written.append(write_atomic(out / f"{stem}_plot.png", lambda tmp: save_history_png(self, tmp)))
+        written.append(save_text(out / f"{stem}_scene.toml", self.scene.to_toml()))
+        written.append(save_json(out / f"{stem}_summary.json", {**self.summary(), **(extra or {})}))
+        return written
+
+    def video(self, path, png=None, size: tuple[int, int] = (960, 384), fps: float = 12.0, color: str = "stretch",
+              renderer: str = "auto", trace: bool = True, quiet: bool = True, log=print):
+        """Render one frame per step into path (.mp4 or .gif), and the last frame into png if given;
+        color: 'stretch', 'detF' or 'none'; renderer: 'auto', 'ggui' or 'gui'. Returns a video.Export."""
+        from ..render.video import render_video
+
+        return render_video([self], path, png, size, fps, color, renderer, trace, quiet=quiet, log=log)
+
+    def plot(self):
+        """The history as a matplotlib Figure with axes (plots.py): pressure against area ratio, and tip
+        deflection, area ratio and pressure against the command. A notebook shows it as a PNG; in a
+        script, fig.savefig("x.png")."""
+        from ..render.plots import history_figure
+
+        return history_figure(self)
