@@ -41,6 +41,7 @@ from ..scene import Scene, reference_scene
 from ..solve.newton import NewtonOptions
 from ..solve.schedule import area_ramp
 from ..solve.simulate import MAX_CUTS, RampFailed, RampInterrupted, RampStopped
+from ..terms.chambers import AreaControl
 
 # --quality presets: (max triangle area, element order, Newton tolerance); see the README's accuracy study
 QUALITY = {"draft": (0.005, 1, 1e-4), "default": (BeamGeometry.max_area, 1, NewtonOptions.tol),
@@ -158,7 +159,7 @@ def build(scene: Scene):
     print(f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
           f"{mesh.n_triangles} {kind}; clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
     for chamber in built.chambers:
-        print(f"chamber {chamber.chamber_name}: {chamber.control} control, wall {chamber.n_wall} vertices, "
+        print(f"chamber {chamber.chamber_name}: {chamber.kind.name} control, wall {chamber.n_wall} vertices, "
               f"rest area {chamber.rest_area:.3f}")
     return built
 
@@ -240,7 +241,7 @@ def run(args: argparse.Namespace) -> dict:
     if args.interactive:
         require(bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")),
                 "--interactive needs a display (DISPLAY is not set); run without it for headless video output")
-        require(scene.controls[0].schedule.control == "area", "--interactive needs an area-controlled first chamber")
+        require(isinstance(scene.controls[0].kind, AreaControl), "--interactive needs an area-controlled first chamber")
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     if args.interactive:
