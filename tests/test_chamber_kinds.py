@@ -4,6 +4,7 @@ scene files, the ramp, sensitivities, inverse control's units, the plots and the
 every kind's validation naming the value."""
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -174,3 +175,10 @@ def test_suction_with_allow_vacuum_and_a_taken_name():
 
     with pytest.raises(ValueError, match="'area' is taken by AreaControl"):
         register(Impostor)
+
+
+def test_the_extending_page_shows_this_example():
+    """docs/extending.md's code of the closed gas kind is the code these tests run."""
+    page = (Path(__file__).resolve().parents[1] / "docs" / "extending.md").read_text()
+    block = next(b.split("```")[0] for b in page.split("```python\n")[1:] if "class ClosedGas" in b)
+    assert block in (Path(__file__).resolve().parent / "closed_gas.py").read_text()
