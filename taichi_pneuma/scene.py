@@ -2,7 +2,7 @@
 
 A scene is a body with chambers (geometry.Geometry), a material (optionally one per region), a
 clamp, a schedule of chamber commands, and a tuple of effects. The builder always adds
-elasticity, one chamber term per chamber (area or pressure control) and the clamp; each effect
+elasticity, one chamber term per chamber (of the chamber's kind) and the clamp; each effect
 the scene names adds its own term(s), and an effect it does not name adds nothing: no field is
 allocated and no kernel compiled or launched for it.
 """
@@ -20,9 +20,9 @@ from .fem.geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
 from .io.output import check_stem
 from .solve.model import EnergyModel
 from .solve.schedule import ChamberSchedule, Schedule, area_ramp
-from .terms import AreaChamber, Clamp, NeoHookean, PressureChamber
+from .terms import Clamp, NeoHookean
 from .terms.base import Term
-from .terms.chamber import Chamber
+from .terms.chambers import Chamber, ChamberKind
 from .terms.effects import Effect
 from .terms.elastic import lame_parameters
 
@@ -57,30 +57,26 @@ class Region:
 
 @dataclass(frozen=True)
 class ChamberControl:
-    """How a chamber is driven: its schedule, under area control the penalty stiffness k, and the
-    (min, max) command bounds inverse control keeps to (None: inverse.command_bounds's default)."""
+    """How a chamber is driven: its schedule (whose kind carries the kind's parameters, e.g. the area
+    penalty's stiffness) and the (min, max) command bounds inverse control keeps to (None: the kind's
+    default_bounds of the schedule)."""
 
     schedule: ChamberSchedule
-    stiffness: float = 1e5
     bounds: tuple[float, float] | None = None
 
     def __post_init__(self):
-        require_finite("stiffness", self.stiffness)
-        require(self.stiffness > 0, f"chamber stiffness k = {self.stiffness!r} must be > 0")
         if self.bounds is not None:
             require(len(self.bounds) == 2, f"bounds = {list(self.bounds)!r} must be [min, max]")
             low, high = (require_finite("bounds", b) for b in self.bounds)
             require(low < high, f"bounds = {list(self.bounds)!r}: min {low:g} must be < max {high:g}")
-            if self.schedule.control == "area":
-                require(low > 0, f"bounds = {list(self.bounds)!r}: an area ratio must be > 0")
-            else:
-                require(low >= 0 or self.schedule.allow_vacuum,
-                        f"bounds = {list(self.bounds)!r}: a negative pressure needs allow_vacuum = true")
+            self.kind.check(f"bounds = {list(self.bounds)!r}:", [low, high])
+
+    @property
+    def kind(self) -> ChamberKind:
+        return self.schedule.kind
 
     def term(self, config, loop: np.ndarray, name: str, order: int) -> Chamber:
-        if self.schedule.control == "area":
-            return AreaChamber(config, loop, self.stiffness, name, order)
-        return PressureChamber(config, loop, name, order)
+        return self.kind.term(config, loop, name, order)
 
 
 @dataclass(frozen=True)
@@ -185,6 +181,6 @@ def reference_scene(cy: float = 0.15, cx: float = 0.0, growth: float = 3.5, step
     order 2 meshes it with quadratic triangles, refinements splits every triangle in four that often."""
     beam = BeamGeometry(cx=cx, cy=cy, max_area=max_area, chamber_points=chamber_points, order=order,
                         refinements=refinements)
-    return Scene(beam.general(), (ChamberControl(area_ramp(growth, steps), chamber_stiffness),), steps - 1,
+    return Scene(beam.general(), (ChamberControl(area_ramp(growth, steps, chamber_stiffness)),), steps - 1,
                  Material(youngs_modulus, poisson_ratio), name=f"reference_cy{cy:+.2f}")
 

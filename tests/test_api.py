@@ -134,6 +134,6 @@ def test_plot_shows_the_history_on_labelled_axes(small):
 def test_plots_are_against_the_command_when_all_chambers_share_it(name, label):
     scene = tp.load_scene(ROOT / "assets" / "scenes" / f"{name}.toml")
     command = np.array([scene.schedule.commands(i) for i in range(scene.increments + 1)])
-    x, x_label = command_axis(command, [c.schedule.control for c in scene.controls])
+    x, x_label = command_axis(command, [c.kind.quantity for c in scene.controls])
     assert x_label == label
     assert np.array_equal(x, np.arange(scene.increments + 1) if label == "step" else command[:, 0])

@@ -132,8 +132,10 @@ def test_bounds_from_the_scene_file_and_defaults(tmp_path):
     (lambda: Target((1.0,),), r"target tip = \[1.0\] must be \[x, y\]"),
     (lambda: Target((1.0, 0.0), None, (0.0, 0.0, 1.0)), "w_x or w_y > 0"),
     (lambda: ChamberControl(ChamberSchedule("pressure", ((1, 10.0),)), bounds=(900.0, 0.0)), "min 900 must be < max 0"),
-    (lambda: ChamberControl(ChamberSchedule("area", ((1, 2.0),)), bounds=(0.0, 2.0)), "area ratio must be > 0"),
-    (lambda: ChamberControl(ChamberSchedule("pressure", ((1, 10.0),)), bounds=(-5.0, 2.0)), "allow_vacuum"),
+    (lambda: ChamberControl(ChamberSchedule("area", ((1, 2.0),)), bounds=(0.0, 2.0)),
+     r"bounds = \[0.0, 2.0\]: area ratio 0.0 must lie in \(0, 1000\]"),
+    (lambda: ChamberControl(ChamberSchedule("pressure", ((1, 10.0),)), bounds=(-5.0, 2.0)),
+     "pressure -5.0 is negative; set allow_vacuum"),
     (lambda: ReachOptions(tol=0.0), "tol = 0.0 must be > 0"),
     (lambda: ReachOptions(restarts=-1), "restarts = -1 must be an integer >= 0"),
 ])

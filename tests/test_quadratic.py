@@ -18,7 +18,7 @@ from taichi_pneuma.fem.geometry import Ellipse, Geometry, Rectangle
 from taichi_pneuma.scene import Scene, reference_scene
 from taichi_pneuma.solve.model import Configuration
 from taichi_pneuma.solve.simulate import run_schedule
-from taichi_pneuma.terms import PressureChamber
+from taichi_pneuma.terms.chambers import PressureControl
 from taichi_pneuma.terms.effects import Gravity, Ground
 
 # scikit-fem (an independent code, same model): P2 on the reference mesh refined twice, 96,384 nodes
@@ -84,7 +84,7 @@ def test_curved_wall_area_is_exact_for_parabolic_sides():
     outward = np.array([[0.0, -1.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0]])
     mids = 0.5 * (corners + np.roll(corners, -1, axis=0)) + h * outward
     nodes = np.column_stack([corners, mids]).reshape(-1, 2)  # corner, midside, corner, ...
-    chamber = PressureChamber(Configuration(nodes), np.arange(8), order=2)
+    chamber = PressureControl().term(Configuration(nodes), np.arange(8), "main", order=2)
     assert chamber.rest_area == pytest.approx(s * s + 4 * 2 / 3 * s * h, rel=1e-14)
     assert chamber.area() == pytest.approx(chamber.rest_area, rel=1e-14)
 

@@ -113,7 +113,7 @@ increments = 2
     (["--tip", "1.8", "0", "--weights", "0", "0", "1"], "w_x or w_y > 0"),
     (["--tip", "1.8", "0", "--bounds", "top", "3", "2"], "--bounds top: bounds = [3.0, 2.0]: min 3 must be < max 2"),
     (["--tip", "1.8", "0", "--bounds", "middle", "1", "2"], "unknown chamber 'middle' (chambers: top, bottom)"),
-    (["--tip", "1.8", "0", "--bounds", "top", "0", "2"], "an area ratio must be > 0"),
+    (["--tip", "1.8", "0", "--bounds", "top", "0", "2"], "area ratio 0.0 must lie in (0, 1000]"),
     (["--angle", "5"], "--angle needs --tip"),
     (["--tip", "1.8", "0", "--targets", "t.csv"], "give --tip or --targets, not both"),
     (["--targets", "missing.csv"], "'missing.csv' cannot be read"),

@@ -43,7 +43,7 @@ def finite_differences(built, solver, commands, u):
     """Central differences of (tip dx, dy, rotation) (3, m) and of every displacement (n, 2, m)."""
     tips, states = [], []
     for j, chamber in enumerate(built.chambers):
-        h = STEP[chamber.control]
+        h = STEP[chamber.kind.name]
         plus, minus = (settle(built, solver, commands, u, commands + sign * h * np.eye(len(commands))[j])[0]
                        for sign in (1, -1))
         tips.append((np.array(tip_measures(built.mesh, plus)) - tip_measures(built.mesh, minus)) / (2 * h))

@@ -140,7 +140,7 @@ def build(scene: Scene):
     print(f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
           f"{mesh.n_triangles} {kind}; clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
     for chamber in built.chambers:
-        print(f"chamber {chamber.chamber_name}: {chamber.control} control, wall {chamber.n_wall} vertices, "
+        print(f"chamber {chamber.chamber_name}: {chamber.kind.name} control, wall {chamber.n_wall} vertices, "
               f"rest area {chamber.rest_area:.3f}")
     return built
 

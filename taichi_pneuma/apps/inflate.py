@@ -27,6 +27,7 @@ from ..errors import require
 from ..io.output import prepare_directory, save_json
 from ..io.vtk import VtkSeries
 from ..solve.simulate import RampInterrupted, RampStopped
+from ..terms.chambers import AreaControl
 from .cli import (
     add_ramp_arguments,
     add_video_arguments,
@@ -65,7 +66,7 @@ def run(args: argparse.Namespace) -> dict:
     if args.interactive:
         require(bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")),
                 "--interactive needs a display (DISPLAY is not set); run without it for headless video output")
-        require(scene.controls[0].schedule.control == "area", "--interactive needs an area-controlled first chamber")
+        require(isinstance(scene.controls[0].kind, AreaControl), "--interactive needs an area-controlled first chamber")
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     if args.interactive:

@@ -45,26 +45,23 @@ from scipy.stats import qmc
 from ..errors import require, require_finite
 from ..scene import BuiltScene, Scene
 from ..solve.newton import NewtonOptions, NewtonSolver
-from ..solve.schedule import REST_COMMAND
 from ..solve.sensitivity import sensitivity
 from ..solve.result import Result
 from ..solve.simulate import MAX_CUTS, NoEquilibrium, StepRecord, chamber_records, settle, tip_measures
 from .targets import Target
 
 ARMIJO = 1e-4
-UNIT = {"area": "area ratio", "pressure": "pressure"}
 
 
 def command_bounds(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """(lo, hi) per chamber: the scene's `bounds`, or by default the range its schedule drives
-    (the rest command and every keyframe value)."""
+    """(lo, hi) per chamber: the scene's `bounds`, or by default its kind's default_bounds of its keyframe
+    values (the range its schedule drives: the rest command and every keyframe value)."""
     lo, hi = [], []
     for (name, _), control in zip(scene.geometry.chambers, scene.controls):
         if control.bounds is not None:
             low, high = control.bounds
         else:
-            values = [REST_COMMAND[control.schedule.control]] + [float(v) for _, v in control.schedule.keyframes]
-            low, high = min(values), max(values)
+            low, high = control.kind.default_bounds([float(v) for _, v in control.schedule.keyframes])
             require(low < high, f"chamber {name!r}: its keyframes span no range of commands; give it bounds = [min, max]")
         lo.append(low)
         hi.append(high)
@@ -131,7 +128,7 @@ class ReachResult:
     error: float
     angle_error: float | None
     reached: bool
-    active: list[tuple[str, str, str, float]]  # (chamber, "min" | "max", "pressure" | "area ratio", value)
+    active: list[tuple[str, str, str, float]]  # (chamber, "min" | "max", its kind's quantity, value)
     iterations: int
     forward_solves: int
     newton_iterations: int
@@ -197,7 +194,7 @@ class Reacher:
         self.built, self.options, self.max_cuts = built, options or ReachOptions(), max_cuts
         self.solver = NewtonSolver(built.model, newton)
         self.names = [c.chamber_name for c in built.chambers]
-        self.units = [UNIT[c.control] for c in built.chambers]
+        self.units = [c.kind.quantity for c in built.chambers]
         lo, hi = bounds if bounds is not None else command_bounds(built.scene)
         self.lo, self.hi = np.asarray(lo, float), np.asarray(hi, float)
         require(self.lo.shape == self.hi.shape == (len(self.names),) and np.all(self.lo < self.hi),

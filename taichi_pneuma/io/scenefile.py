@@ -6,8 +6,9 @@
     [material]   E, nu, regions = [{box = [x0, y0, x1, y1], E, nu}, ...]   (E, nu of a region default to the base)
     [clamp]      side = "left" | "right" | "bottom" | "top"  or  box = [x0, y0, x1, y1];  stiffness
     [[chambers]] name, shape = "ellipse" (center, semi_axes, points) | "rounded_rectangle" (center, size,
-                 radius, corner_points) | "polygon" (points); control = "area" (stiffness) | "pressure"
-                 (allow_vacuum); keyframes = [[step, value], ...]; bounds = [min, max] (inverse control)
+                 radius, corner_points) | "polygon" (points); control = a chamber kind's name, "area"
+                 (stiffness) | "pressure" (allow_vacuum) | ..., with that kind's parameters;
+                 keyframes = [[step, value], ...]; bounds = [min, max] (inverse control)
     [schedule]   increments
     [effects.gravity] density, g      [effects.ground] height, dhat, stiffness      [effects.self_contact] dhat, stiffness
     [effects.dynamics] density, dt
@@ -30,6 +31,7 @@ from ..errors import PneumaInputError, require
 from ..fem.geometry import ClampSelection, Ellipse, Geometry, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 from ..scene import ChamberControl, Material, Region, Scene
 from ..solve.schedule import ChamberSchedule
+from ..terms.chambers import chamber_kind
 from ..terms.effects import EFFECTS
 from .output import reduce_to_stem
 
@@ -121,13 +123,14 @@ def read_chamber(t: Table) -> tuple[str, object, ChamberControl]:
     name = t.take("name", kind=str)
     shape = read_chamber_shape(t)
     control = t.take("control", "area", str)
-    stiffness = t.take("stiffness", 1e5, float) if control == "area" else 1e5
+    kind = build(t, lambda: chamber_kind(control))
+    parameters = {key: t.take(key, REQUIRED if default is dataclasses.MISSING else default, type_)
+                  for key, (type_, default) in kind.parameters().items()}
     keyframes = tuple(tuple(k) if isinstance(k, list) else k for k in t.take("keyframes", kind=list))
-    allow_vacuum = t.take("allow_vacuum", False, bool) if control == "pressure" else False
-    schedule = build(t, lambda: ChamberSchedule(control, keyframes, allow_vacuum))
+    schedule = build(t, lambda: ChamberSchedule(kind(**parameters), keyframes))
     bounds = t.take("bounds", None, list)
     t.close()
-    return name, shape, build(t, lambda: ChamberControl(schedule, stiffness, None if bounds is None else tuple(bounds)))
+    return name, shape, build(t, lambda: ChamberControl(schedule, None if bounds is None else tuple(bounds)))
 
 
 def read_target(t: Table) -> Target:

@@ -56,13 +56,9 @@ def scene_data(scene) -> dict:
                                        f"(scene files have no refinements key)")
     chambers = []
     for (name, shape), control in zip(geometry.chambers, scene.controls):
-        schedule = control.schedule
-        chamber = {"name": name, **shape_data(shape), "control": schedule.control}
-        if schedule.control == "area":
-            chamber["stiffness"] = control.stiffness
-        else:
-            chamber["allow_vacuum"] = schedule.allow_vacuum
-        chamber["keyframes"] = schedule.keyframes
+        kind = control.kind
+        chamber = {"name": name, **shape_data(shape), "control": kind.name,
+                   **{key: getattr(kind, key) for key in kind.parameters()}, "keyframes": control.schedule.keyframes}
         chambers.append(chamber)
     material = {"E": scene.material.youngs_modulus, "nu": scene.material.poisson_ratio}
     if scene.regions:

@@ -15,14 +15,12 @@ import warnings
 import numpy as np
 from matplotlib.figure import Figure
 
-COMMAND_LABEL = {"area": "commanded area ratio", "pressure": "commanded pressure"}
 
-
-def command_axis(command: np.ndarray, controls: list[str]) -> tuple[np.ndarray, str]:
-    """The x values and label of the 'against the command' panels: command (steps, chambers) and each
-    chamber's control ('area' or 'pressure'); see the module docstring."""
-    if len(set(controls)) == 1 and np.all(command == command[:, :1]):
-        return command[:, 0], COMMAND_LABEL[controls[0]]
+def command_axis(command: np.ndarray, quantities: list[str]) -> tuple[np.ndarray, str]:
+    """The x values and label of the 'against the command' panels: command (steps, chambers) and what each
+    chamber's command is (its kind's quantity: 'area ratio', 'pressure'); see the module docstring."""
+    if len(set(quantities)) == 1 and np.all(command == command[:, :1]):
+        return command[:, 0], f"commanded {quantities[0]}"
     return np.arange(len(command), dtype=float), "step"
 
 
@@ -40,7 +38,7 @@ def history_figure(result, figure=None):
     """Draw the history of an api.Result on `figure` (a new NotebookFigure by default)."""
     fig = figure if figure is not None else NotebookFigure(figsize=(10, 7), layout="constrained")
     (pa, tip), (area, pressure) = fig.subplots(2, 2)
-    x, x_label = command_axis(result.command, [c.schedule.control for c in result.scene.controls])
+    x, x_label = command_axis(result.command, [c.kind.quantity for c in result.scene.controls])
     for c, name in enumerate(result.chamber_names):
         pa.plot(result.area_ratio[:, c], result.pressure[:, c], ".-", label=short(name))
         area.plot(x, result.area_ratio[:, c], ".-", label=short(name))

@@ -1,9 +1,10 @@
-"""Scripted actuation: per chamber, piecewise-linear keyframes of area ratio or pressure over increments.
+"""Scripted actuation: per chamber, piecewise-linear keyframes of its kind's command (area ratio, pressure, ...)
+over increments.
 
 A schedule has `increments` solves after the rest state (step 0 .. increments). A chamber's
 command at step s interpolates linearly between its keyframes (s_k, v_k); before the first
-keyframe it holds the rest value (area ratio 1, pressure 0) at s = 0, after the last it holds the
-last value. Inflate, hold and deflate are keyframes rising, constant and falling:
+keyframe it holds its kind's rest value (area ratio 1, pressure 0) at s = 0, after the last it
+holds the last value. Inflate, hold and deflate are keyframes rising, constant and falling:
 
     keyframes = [[0, 1.0], [10, 3.0], [15, 3.0], [25, 1.0]]     # area ratio: inflate, hold, deflate
 """
@@ -15,25 +16,22 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import require, require_finite, shape_of
-
-CONTROLS = ("area", "pressure")
-REST_COMMAND = {"area": 1.0, "pressure": 0.0}
-MAX_AREA_RATIO = 1e3  # far past any rubber (the hard cases reach 8); keeps (A - A*)^2 from overflowing
+from ..terms.chambers import AreaControl, ChamberKind, chamber_kind
 
 
 @dataclass(frozen=True)
 class ChamberSchedule:
-    """Keyframes ((step, value), ...) of one chamber; value is an area ratio in (0, MAX_AREA_RATIO] or a pressure.
+    """Keyframes ((step, value), ...) of one chamber driven by `kind`, whose check() the values pass.
 
-    A pressure below zero (suction) is refused unless allow_vacuum is set.
-    """
+    kind: a ChamberKind with its parameters (e.g. AreaControl(stiffness=1e5)), or the name of a
+    registered kind for its default parameters ("area", "pressure")."""
 
-    control: str
+    kind: ChamberKind | str
     keyframes: tuple[tuple[float, float], ...]
-    allow_vacuum: bool = False
 
     def __post_init__(self):
-        require(self.control in CONTROLS, f"control = {self.control!r} is not one of {', '.join(CONTROLS)}")
+        if not isinstance(self.kind, ChamberKind):
+            object.__setattr__(self, "kind", chamber_kind(self.kind)())
         require(len(self.keyframes) >= 1 and all(shape_of(k) == (2,) for k in self.keyframes),
                 f"keyframes = {self.keyframes!r} must be a non-empty list of [step, value] pairs")
         steps = [require_finite("keyframes step", s) for s, _ in self.keyframes]
@@ -41,13 +39,7 @@ class ChamberSchedule:
         require(all(float(s).is_integer() and s >= 0 for s in steps),
                 f"keyframes steps {steps!r} must be whole numbers >= 0")
         require(all(b > a for a, b in zip(steps, steps[1:])), f"keyframes steps {steps!r} must increase")
-        if self.control == "area":
-            bad = [v for v in values if not 0 < v <= MAX_AREA_RATIO]
-            require(not bad, f"keyframes area ratio {bad[0] if bad else ''!r} must lie in (0, {MAX_AREA_RATIO:g}]")
-        elif not self.allow_vacuum:
-            bad = [v for v in values if v < 0]
-            require(not bad, f"keyframes pressure {bad[0] if bad else ''!r} is negative; "
-                             f"set allow_vacuum = true for suction")
+        self.kind.check("keyframes", values)
 
     @property
     def last_step(self) -> int:
@@ -55,7 +47,7 @@ class ChamberSchedule:
 
     def command(self, step: float) -> float:
         steps = [0.0] + [float(s) for s, _ in self.keyframes]
-        values = [REST_COMMAND[self.control]] + [float(v) for _, v in self.keyframes]
+        values = [self.kind.rest] + [float(v) for _, v in self.keyframes]
         if steps[1] == 0.0:
             steps, values = steps[1:], values[1:]
         return float(np.interp(step, steps, values))
@@ -81,12 +73,12 @@ class Schedule:
 
     @property
     def rest_commands(self) -> np.ndarray:
-        return np.array([REST_COMMAND[c.control] for c in self.chambers])
+        return np.array([c.kind.rest for c in self.chambers])
 
 
-def area_ramp(growth: float, steps: int) -> ChamberSchedule:
-    """SPEC.md's ramp for one area-controlled chamber: area ratio 1 -> growth over steps - 1 increments."""
+def area_ramp(growth: float, steps: int, stiffness: float = 1e5) -> ChamberSchedule:
+    """SPEC.md's ramp for one area-controlled chamber (stiffness k): area ratio 1 -> growth over steps - 1 increments."""
     require(require_finite("growth", growth) > 0, f"growth = {growth!r} must be > 0")
     require(isinstance(steps, (int, np.integer)) and steps >= 2,
             f"steps = {steps!r} must be an integer >= 2 (the rest state and at least one increment)")
-    return ChamberSchedule("area", ((0, 1.0), (steps - 1, float(growth))))
+    return ChamberSchedule(AreaControl(stiffness), ((0, 1.0), (steps - 1, float(growth))))

@@ -1,15 +1,17 @@
 """Sensitivities of a converged equilibrium to the chamber commands, by the direct method.
 
-At an equilibrium the residual r(u, q) = dE/du vanishes; q are the chamber commands (area ratio
-under area control, pressure under pressure control). Differentiating r(u(q), q) = 0:
+At an equilibrium the residual r(u, q) = dE/du vanishes; q are the chamber commands (each its
+kind's: area ratio under area control, pressure under pressure control). Differentiating r(u(q), q) = 0:
 
     H du/dq_j = -dr/dq_j,      H = d2E/du2, the *exact* Hessian at the equilibrium,
+
+with -dr/dq_j from chamber j's term (command_force), non-zero on its wall only:
 
     area control      r_c = -k (ratio A_rest - A) grad A   ->  dr/d(ratio) = -k A_rest grad A
     pressure control  r_c = -p grad A                      ->  dr/dp       = -grad A
 
 H is the sparse exact Hessian S (unprojected elastic blocks, the chambers' load stiffness -p d2A,
-contact's b' Hess d, the clamp) plus the area chambers' rank-1 parts k gA gA^T, which enter by
+contact's b' Hess d, the clamp) plus the chambers' rank-1 parts (k gA gA^T under area control), which enter by
 the Woodbury identity (linsolve.solve_low_rank_updated), as in Newton. One factorisation of S
 serves every command (one right-hand side each). The PSD-projected Hessian is not the derivative
 of r and gives wrong sensitivities: it is never used here. A stable equilibrium has H positive
@@ -52,12 +54,11 @@ class Sensitivity:
 
 
 def command_forces(built: BuiltScene) -> np.ndarray:
-    """-dr/dq as an (n_dofs, m) matrix: column j is c_j grad A_j on chamber j's wall DOFs,
-    c_j = k A_rest (area control) or 1 (pressure control)."""
+    """-dr/dq as an (n_dofs, m) matrix: column j is chamber j's command_force() on its wall DOFs
+    (k A_rest grad A under area control, grad A under pressure control)."""
     rhs = np.zeros((built.model.n_dofs, len(built.chambers)))
     for j, chamber in enumerate(built.chambers):
-        scale = chamber.k * chamber.rest_area if chamber.control == "area" else 1.0
-        rhs[chamber.dofs, j] = scale * chamber.area_and_gradient()[1].ravel()
+        rhs[chamber.dofs, j] = chamber.command_force()
     return rhs
 
 

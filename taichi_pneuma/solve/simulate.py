@@ -18,7 +18,8 @@ MAX_CUTS = 8
 
 @dataclass
 class ChamberRecord:
-    """One chamber after a solve: its command (area ratio or pressure), area, area ratio and pressure."""
+    """One chamber after a solve: its kind's name, its command (area ratio, pressure, ...), area, area ratio
+    and pressure."""
 
     control: str
     command: float
@@ -93,7 +94,7 @@ def chamber_records(built: BuiltScene, commands: np.ndarray) -> dict[str, Chambe
     records = {}
     for chamber, command in zip(built.chambers, commands):
         area = chamber.area()
-        records[chamber.chamber_name] = ChamberRecord(chamber.control, float(command), area, area / chamber.rest_area,
+        records[chamber.chamber_name] = ChamberRecord(chamber.kind.name, float(command), area, area / chamber.rest_area,
                                                       chamber.pressure())
     return records
 
@@ -130,10 +131,7 @@ def describe_commands(built: BuiltScene, commands: np.ndarray, reached: np.ndarr
     """The commands of a failed solve in words, each chamber by name when there are several."""
     parts = []
     for chamber, command, last in zip(built.chambers, commands, reached):
-        if chamber.control == "area":
-            text = f"commanded area {command * chamber.rest_area:.6g} ({command:.4g} x rest)"
-        else:
-            text = f"pressure {command:.6g} (last equilibrium at pressure {last:.6g})"
+        text = chamber.describe(command, last)
         parts.append(text if len(built.chambers) == 1 else f"chamber {chamber.chamber_name!r} {text}")
     return "; ".join(parts)
 

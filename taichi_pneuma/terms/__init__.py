@@ -15,7 +15,7 @@ DOFs are interleaved: vertex i owns DOFs 2i (x) and 2i + 1 (y).
 """
 
 from .base import Term, vertex_dofs
-from .chamber import AreaChamber, PressureChamber
+from .chambers import AreaChamber, PressureChamber
 from .clamp import Clamp
 from .elastic import NeoHookean
 

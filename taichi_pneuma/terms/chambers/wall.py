@@ -1,4 +1,4 @@
-"""A sealed chamber under area ("volume") control or pressure control, as Taichi kernels.
+"""The wall of a sealed chamber: its enclosed area, the area's gradient and the load stiffness, as a Taichi kernel.
 
 The chamber wall is a closed counter-clockwise loop of straight edges (linear elements: nodes
 x_0 .. x_{k-1}) or of quadratic edges (quadratic elements: corner a, midside m, corner b, ...). Its
@@ -13,30 +13,20 @@ form: with d(p x q)/dp = (q_y, -q_x) and d(p x q)/dq = (-p_y, p_x) its gradient 
 outward normal of the wall (outward from the chamber, into the rubber), and its Hessian is constant,
 d2A/dx_i dy_j = c_t, d2A/dy_i dx_j = -c_t (and symmetric) for each pair t.
 
-Area control (commanded area ratio r, A* = r A_rest):
+Every chamber kind (kind.py) loads its wall with a uniform pressure p(A) that the kind defines:
 
-    E = 1/2 k (A(x) - A*)^2,   dE/dx = -p dA/dx,   p = k (A* - A),
-    Hessian  k dA dA^T - p d2A:
+    dE/dx = -p dA/dx,   Hessian  -p'(A) dA dA^T - p d2A.
 
-a PSD rank-1 Gauss-Newton part, handed to the solver as a low-rank term, plus the load stiffness
--p d2A of the follower pressure, which is indefinite. It does not vanish at equilibrium (there
-A - A* = -p/k), so dropping it leaves Newton converging only linearly; it is returned as sparse
-triplets unless the solver asks for the PSD Hessian only.
-
-Pressure control (commanded pressure p): the work of a prescribed pressure,
-
-    E = -p A(x),   dE/dx = -p dA/dx,   Hessian -p d2A,
-
-which has no PSD part at all: with psd_only the term contributes nothing (the PSD elastic and
-clamp Hessians alone keep projected Newton a descent method), and the exact Hessian is used once
-Newton is in its quadratic basin. Both forms apply exactly a uniform pressure p to the wall.
+The first part is the kind's (a PSD rank-1 low-rank part when p falls as A grows); the second, the load
+stiffness of the follower pressure, is shared here. It is indefinite and does not vanish at equilibrium,
+so it is returned as sparse triplets unless the solver asks for the PSD Hessian only (then nothing: the
+PSD elastic and clamp Hessians keep projected Newton a descent method).
 """
-
 
 import numpy as np
 import taichi as ti
 
-from .base import Indices, Scalars, Term, Vec2s, int32s, position, vertex_dofs
+from ..base import Indices, Scalars, Term, Vec2s, int32s, position, vertex_dofs
 
 Pairs = ti.types.ndarray(dtype=ti.types.vector(2, ti.i32), ndim=1)  # (P, 2) int32 index pairs
 
@@ -70,11 +60,12 @@ def area_form(k: int, order: int) -> tuple[np.ndarray, np.ndarray]:
 class Chamber(Term):
     """The wall loop of one named chamber: its area, area gradient and the -p d2A load stiffness.
 
+    A kind's term subclasses it with set_command(q), pressure_at(A), energy(), command_force() and,
+    where p depends on A, low_rank(). kind: the ChamberKind (with its parameters) that made it;
     order: 1 for a loop of straight edges, 2 for one of quadratic edges (corner, midside, corner, ...)."""
 
-    control = "chamber"
-
-    def __init__(self, config, loop: np.ndarray, name: str, order: int = 1):
+    def __init__(self, kind, config, loop: np.ndarray, name: str = "main", order: int = 1):
+        self.kind = kind
         self.config = config
         self.chamber_name = name
         self.name = f"chamber:{name}"
@@ -103,65 +94,24 @@ class Chamber(Term):
         return self.area_and_gradient()[0]
 
     def gradient(self) -> np.ndarray:
-        """dE/dx = -p dA/dx for both controls, non-zero on the wall nodes only."""
+        """dE/dx = -p dA/dx, non-zero on the wall nodes only."""
         area, area_gradient = self.area_and_gradient()
         force = np.zeros_like(self.config.u)
         force[self.loop_vertices] = -self.pressure_at(area) * area_gradient
         return force
 
     def pressure(self) -> float:
+        """The chamber's (gauge) pressure p in the current state: positive when it pushes its walls outward."""
         return self.pressure_at(self.area())
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         return self._rows, self._cols
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
+        """The load stiffness -p d2A (nothing with psd_only)."""
         return np.zeros(len(self._rows)) if psd_only else -self.pressure() * self._area_hessian
 
-
-class AreaChamber(Chamber):
-    """Area control: stiffness k pulls the enclosed area A(x) to target_area = command x rest area."""
-
-    control = "area"
-
-    def __init__(self, config, loop: np.ndarray, stiffness: float, name: str = "main", order: int = 1):
-        super().__init__(config, loop, name, order)
-        self.k = float(stiffness)
-        self.target_area = self.rest_area
-
-    def set_command(self, ratio: float) -> None:
-        """Command the area ratio A* / A_rest."""
-        self.target_area = float(ratio) * self.rest_area
-
-    def pressure_at(self, area: float) -> float:
-        """p = k (A* - A): positive when the chamber pushes its walls outward."""
-        return self.k * (self.target_area - area)
-
-    def energy(self) -> float:
-        return 0.5 * self.k * (self.area() - self.target_area) ** 2
-
-    def low_rank(self) -> list[tuple[np.ndarray, np.ndarray, float]]:
-        return [(self.dofs, self.area_and_gradient()[1].ravel(), self.k)]
-
-
-class PressureChamber(Chamber):
-    """Pressure control: a prescribed pressure p does work p A(x) on the wall."""
-
-    control = "pressure"
-
-    def __init__(self, config, loop: np.ndarray, name: str = "main", order: int = 1):
-        super().__init__(config, loop, name, order)
-        self.prescribed = 0.0
-
-    def set_command(self, pressure: float) -> None:
-        """Command the pressure p."""
-        self.prescribed = float(pressure)
-
-    def pressure_at(self, area: float) -> float:
-        return self.prescribed
-
-    def pressure(self) -> float:
-        return self.prescribed
-
-    def energy(self) -> float:
-        return -self.prescribed * self.area()
+    def describe(self, command: float, reached: float) -> str:
+        """A command of a failed solve in words, with the last command that reached an equilibrium."""
+        quantity = self.kind.quantity
+        return f"{quantity} {command:.6g} (last equilibrium at {quantity} {reached:.6g})"

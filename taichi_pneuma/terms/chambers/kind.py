@@ -1,0 +1,71 @@
+"""What a chamber kind is (a way of driving a chamber), and the registry of kinds by name.
+
+A kind is a frozen dataclass whose fields are its parameters: the keys a scene file's chamber table
+takes besides its name, shape, control, keyframes and bounds, with their types and defaults (the
+scene schema asks parameters() for them). Its class attributes describe its command q:
+
+    name       the scene file's `control = "..."`; aliases: other names it is read by
+    quantity   what q is, in words, for labels and messages ("area ratio", "pressure")
+    rest       q of the unloaded chamber, where every schedule starts (1.0, 0.0)
+
+and its methods do the rest: check() refuses values q cannot take, default_bounds() gives the range
+inverse control keeps to when the scene names none, term() builds the chamber's energy term (a
+wall.Chamber subclass: energy, pressure, and -d(residual)/dq for sensitivities). Decorate the class
+with @register to make scenes and scene files find it by name.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import typing
+from typing import ClassVar
+
+from ...errors import require
+
+
+class ChamberKind:
+    """The base of the kinds: the class attributes and methods described in the module docstring."""
+
+    name: ClassVar[str]
+    aliases: ClassVar[tuple[str, ...]] = ()
+    quantity: ClassVar[str]
+    rest: ClassVar[float]
+
+    @classmethod
+    def parameters(cls) -> dict[str, tuple[type, object]]:
+        """name -> (type, default) of the kind's parameters (its dataclass fields); default
+        dataclasses.MISSING where the parameter is required."""
+        types = typing.get_type_hints(cls)
+        return {f.name: (types[f.name], f.default) for f in dataclasses.fields(cls)}
+
+    def check(self, what: str, values: list[float]) -> None:
+        """Refuse (PneumaInputError naming `what` and the value) a command this kind cannot take;
+        what: where the values come from ("keyframes", "bounds = [...]:"). Every finite value by default."""
+
+    def default_bounds(self, values: list[float]) -> tuple[float, float]:
+        """(min, max) command for inverse control when the scene gives no bounds, from the keyframe
+        values: by default the range the schedule drives (the rest command and every keyframe value)."""
+        values = [self.rest, *values]
+        return min(values), max(values)
+
+    def term(self, config, loop, name: str, order: int):
+        """The chamber's energy term (a wall.Chamber) on the wall loop `loop` of the model's config."""
+        raise NotImplementedError
+
+
+KINDS: dict[str, type[ChamberKind]] = {}
+
+
+def register(kind: type[ChamberKind]) -> type[ChamberKind]:
+    """Class decorator: make a kind known to scenes by its name and aliases."""
+    for name in (kind.name, *kind.aliases):
+        if KINDS.get(name, kind) is not kind:
+            raise ValueError(f"chamber kind name {name!r} is taken by {KINDS[name].__name__}")
+        KINDS[name] = kind
+    return kind
+
+
+def chamber_kind(name: str) -> type[ChamberKind]:
+    """The kind registered under `name` (PneumaInputError naming it and the known ones otherwise)."""
+    require(isinstance(name, str) and name in KINDS, f"control = {name!r} is not one of {', '.join(KINDS)}")
+    return KINDS[name]
