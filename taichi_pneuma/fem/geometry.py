@@ -296,10 +296,12 @@ def cut_by_lines(polygon: np.ndarray, lines, tol: float, what: str) -> tuple[np.
     on = np.column_stack([np.abs((polygon - p) @ n) <= tol for n, p in cutting])
     cap = on.any(axis=1)
     starts, ends = np.flatnonzero(cap & ~np.roll(cap, 1)), np.flatnonzero(cap & ~np.roll(cap, -1))
-    require(len(starts) == 1, f"{what} is cut by the symmetry lines into more than one wall (between two parallel "
-                              f"lines, or crossing a line more than twice): not supported")
+    single = f"{what}: the symmetry lines must cut it into one wall from line to line (not between two parallel " \
+             f"lines, nor crossing a line more than twice)"
+    require(len(starts) == 1, single)
     k, m, count = starts[0], ends[0], len(polygon)
     wall = polygon[(m + np.arange((k - m) % count + 1)) % count]
+    require(len(wall) >= 3, single)
     holding = on[(k + np.arange((m - k) % count + 1)) % count]
     if holding.all(axis=0).any():
         return wall, 0.5 * (wall[0] + wall[-1])
@@ -327,7 +329,7 @@ def notch(outline: np.ndarray, markers: np.ndarray, wall: np.ndarray, origin: np
         d = np.linalg.norm(point - (a + t[:, None] * e), axis=1)
         d[markers != OUTER_MARKER] = np.inf
         i = int(np.argmin(d))
-        require(d[i] <= tol, f"{what} ends at {point.tolist()} on a symmetry line, off the body's edge")
+        require(d[i] <= tol, f"{what} ends at {point.tolist()} on a symmetry line, off the body's edge (outside the body, or in another chamber)")
         return i, t[i]
 
     (ia, ta), (ib, tb) = locate(wall[0]), locate(wall[-1])

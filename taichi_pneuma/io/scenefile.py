@@ -167,15 +167,16 @@ def read_effect(name: str, t: Table):
 
 def read_point_set(t: Table, default_side: str) -> PointSet:
     """A [clamp] or [tip] table's node set: side, or box (then no side); the caller reads its other keys."""
-    return build(t, lambda: PointSet(t.take("side", None if "box" in t.data else default_side, str),
-                                     t.take("box", None, list)))
+    box = t.take("box", None, list)
+    return build(t, lambda: PointSet(t.take("side", None if box is not None else default_side, str),
+                                     None if box is None else tuple(box)))
 
 
 def read_roller(t: Table) -> Roller:
     """One [[rollers]] table: normal, point (a line) or box, tolerance."""
-    point = t.take("point", None, list)
+    point, box = t.take("point", None, list), t.take("box", None, list)
     roller = build(t, lambda: Roller(tuple(t.take("normal", kind=list)), None if point is None else tuple(point),
-                                     t.take("box", None, list), t.take("tolerance", 1e-6, float)))
+                                     None if box is None else tuple(box), t.take("tolerance", 1e-6, float)))
     t.close()
     return roller
 
