@@ -1,4 +1,5 @@
-"""Shapes -> Triangle meshes: a body polygon with chamber polygons punched out, and its named vertex sets.
+"""Shapes -> Triangle meshes: a body polygon with chamber polygons punched out (or notched in at symmetry
+lines), and its named vertex sets: the clamp, the tip, the rollers.
 
 Bodies are rectangles, polygons or unions of axis-aligned rectangles; chambers are ellipses,
 rectangles with rounded corners or polygons. Each shape yields a closed counter-clockwise
@@ -11,7 +12,16 @@ segments as a closed vertex loop oriented counter-clockwise, so its signed shoel
     A(x) = 1/2 sum_i (x_i y_{i+1} - x_{i+1} y_i)
 
 is positive at rest. Chambers must lie inside the body and apart from each other by at least
-MARGIN; otherwise a PneumaInputError names the chamber. No two points of one outline may lie closer
+MARGIN; otherwise a PneumaInputError names the chamber.
+
+Half and quarter models: a roller line along an edge of the body is a symmetry line, and a chamber may
+cross it. Such a chamber is clipped to the body's side of its lines and notched into the body's outline
+(no hole point); its wall is recovered as an open chain from line to line, and its area is closed by
+the flat cap along the lines: with the origin o on them (their crossing, for two), the cap adds nothing,
+
+    A(x) = 1/2 sum_i (x_i - o) x (x_{i+1} - o)      over the open chain,
+
+oriented positive at rest. A chamber between two parallel lines (a channel) is refused. No two points of one outline may lie closer
 than MIN_SPACING times its size (Triangle crashes on coincident points), and a geometry Triangle cannot
 mesh (it runs out of floating-point precision) is a PneumaInputError too.
 
