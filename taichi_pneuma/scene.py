@@ -1,8 +1,9 @@
 """A scene as data, validated, and its builder: a scene -> an EnergyModel of exactly the terms it names.
 
-A scene is a body with chambers (geometry.Geometry), a material (optionally one per region), a
-clamp, a schedule of chamber commands, and a tuple of effects. The builder always adds
-elasticity, one chamber term per chamber (of the chamber's kind) and the clamp; each effect
+A scene is a body with chambers (geometry.Geometry: also the clamped nodes, the rollers and the tip),
+a material (optionally one per region), a schedule of chamber commands, and a tuple of effects. The
+builder always adds elasticity, one chamber term per chamber (of the chamber's kind), the clamp,
+and a roller term per roller of the geometry (both of stiffness clamp_stiffness); each effect
 the scene names adds its own term(s), and an effect it does not name adds nothing: no field is
 allocated and no kernel compiled or launched for it.
 """
@@ -20,7 +21,7 @@ from .fem.geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
 from .io.output import check_stem
 from .solve.model import EnergyModel
 from .solve.schedule import ChamberSchedule, Schedule, area_ramp
-from .terms import Clamp, NeoHookean
+from .terms import Clamp, NeoHookean, NormalClamp
 from .terms.base import Term
 from .terms.chambers import Chamber, ChamberKind
 from .terms.effects import Effect
@@ -75,8 +76,8 @@ class ChamberControl:
     def kind(self) -> ChamberKind:
         return self.schedule.kind
 
-    def term(self, config, loop: np.ndarray, name: str, order: int) -> Chamber:
-        return self.kind.term(config, loop, name, order)
+    def term(self, config, loop: np.ndarray, name: str, order: int, origin: np.ndarray | None = None) -> Chamber:
+        return self.kind.term(config, loop, name, order, origin)
 
 
 @dataclass(frozen=True)
@@ -148,9 +149,11 @@ class Scene:
                             energy_resolution=1e-12 * modulus * mesh.area)
         config = model.config
         elastic = model.add(NeoHookean(config, mesh.triangles, e, nu))
-        chambers = [model.add(control.term(config, loop, name, mesh.order))
-                    for control, loop, name in zip(self.controls, mesh.chambers, self.chamber_names)]
+        chambers = [model.add(control.term(config, loop, name, mesh.order, origin)) for control, loop, origin, name
+                    in zip(self.controls, mesh.chambers, mesh.wall_origins, self.chamber_names)]
         model.add(Clamp(config, mesh.pinned, self.clamp_stiffness))
+        for nodes, normal in mesh.rollers:
+            model.add(NormalClamp(config, nodes, normal, self.clamp_stiffness))
         lumped_area = mesh.nodal_areas()
         effects = {effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area)]
                    for effect in self.effects}

@@ -33,13 +33,13 @@ class ClosedGas(ChamberKind):
         for value in values:
             require(value > 0, f"{what} gas amount {value!r} must be > 0")
 
-    def term(self, config, loop, name, order):
-        return ClosedGasChamber(self, config, loop, name, order)
+    def term(self, config, loop, name, order, origin=None):
+        return ClosedGasChamber(self, config, loop, name, order, origin)
 
 
 class ClosedGasChamber(Chamber):
-    def __init__(self, kind, config, loop, name="main", order=1):
-        super().__init__(kind, config, loop, name, order)
+    def __init__(self, kind, config, loop, name="main", order=1, origin=None):
+        super().__init__(kind, config, loop, name, order, origin)
         self.set_command(kind.rest)
 
     def set_command(self, amount):

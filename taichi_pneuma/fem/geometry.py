@@ -1,4 +1,5 @@
-"""Shapes -> Triangle meshes: a body polygon with chamber polygons punched out, and its named vertex sets.
+"""Shapes -> Triangle meshes: a body polygon with chamber polygons punched out (or notched in at symmetry
+lines), and its named vertex sets: the clamp, the tip, the rollers.
 
 Bodies are rectangles, polygons or unions of axis-aligned rectangles; chambers are ellipses,
 rectangles with rounded corners or polygons. Each shape yields a closed counter-clockwise
@@ -11,7 +12,16 @@ segments as a closed vertex loop oriented counter-clockwise, so its signed shoel
     A(x) = 1/2 sum_i (x_i y_{i+1} - x_{i+1} y_i)
 
 is positive at rest. Chambers must lie inside the body and apart from each other by at least
-MARGIN; otherwise a PneumaInputError names the chamber. No two points of one outline may lie closer
+MARGIN; otherwise a PneumaInputError names the chamber.
+
+Half and quarter models: a roller line along an edge of the body is a symmetry line, and a chamber may
+cross it. Such a chamber is clipped to the body's side of its lines and notched into the body's outline
+(no hole point); its wall is recovered as an open chain from line to line, and its area is closed by
+the flat cap along the lines: with the origin o on them (their crossing, for two), the cap adds nothing,
+
+    A(x) = 1/2 sum_i (x_i - o) x (x_{i+1} - o)      over the open chain,
+
+oriented positive at rest. A chamber between two parallel lines (a channel) is refused. No two points of one outline may lie closer
 than MIN_SPACING times its size (Triangle crashes on coincident points), and a geometry Triangle cannot
 mesh (it runs out of floating-point precision) is a PneumaInputError too.
 
@@ -35,6 +45,7 @@ MARGIN = 1e-3
 MAX_WALL_POINTS = 2000
 MAX_SHAPES = 64
 MIN_SPACING = 1e-9
+CUT_TOLERANCE = 1e-9  # points this close to a symmetry line, relative to the body's size, lie on it
 SIDES = ("left", "right", "bottom", "top")
 ORDERS = (1, 2)
 MAX_REFINEMENTS = 4
@@ -238,30 +249,175 @@ def interior_point(polygon: np.ndarray) -> np.ndarray:
     return corners[np.argmax(np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]))].mean(axis=0)
 
 
-@dataclass(frozen=True)
-class ClampSelection:
-    """The clamped vertices: a side of the body's bounding box (within 1e-6) or a box [x0, y0, x1, y1]."""
+def enclosed_area(points: np.ndarray, origin: np.ndarray | None = None) -> float:
+    """The signed area a chamber wall encloses: the shoelace area of a closed loop (origin None), or for an
+    open wall from symmetry line to symmetry line 1/2 sum_i (x_i - o) x (x_{i+1} - o), with the origin o on
+    the lines (their intersection for two): the flat cap along the lines adds nothing."""
+    if origin is None:
+        return signed_area(points)
+    r = points - origin
+    return 0.5 * float(np.sum(r[:-1, 0] * r[1:, 1] - r[:-1, 1] * r[1:, 0]))
 
-    side: str | None = "left"
+
+def symmetry_lines(body: np.ndarray, rollers, tol: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The roller lines that run along an edge of the body (the body on one side, two of its vertices on the
+    line, within tol), each as (unit normal pointing into the body, a point of the line)."""
+    lines = []
+    for roller in rollers:
+        if roller.point is None:
+            continue
+        n, p = roller.unit_normal, np.asarray(roller.point, dtype=np.float64)
+        s = (body - p) @ n
+        if s.max() <= tol:
+            n, s = -n, -s
+        if s.min() >= -tol and np.count_nonzero(np.abs(s) <= tol) >= 2:
+            lines.append((n, p))
+    return lines
+
+
+def clip(polygon: np.ndarray, n: np.ndarray, p: np.ndarray, tol: float) -> np.ndarray:
+    """Sutherland-Hodgman: the part of a closed polygon on the side n . (x - p) >= 0. A vertex within tol of the
+    line is moved onto it and kept; an edge crossing the line adds its crossing point."""
+    s = (polygon - p) @ n
+    out = []
+    for i in range(len(polygon)):
+        j = (i + 1) % len(polygon)
+        if s[i] >= -tol:
+            out.append(polygon[i] - s[i] * n if s[i] <= tol else polygon[i])
+        if (s[i] > tol and s[j] < -tol) or (s[i] < -tol and s[j] > tol):
+            out.append(polygon[i] + s[i] / (s[i] - s[j]) * (polygon[j] - polygon[i]))
+    return np.array(out).reshape(-1, 2)
+
+
+def cut_by_lines(polygon: np.ndarray, lines, tol: float, what: str) -> tuple[np.ndarray, np.ndarray | None]:
+    """A chamber polygon (counter-clockwise) cut by the symmetry lines it crosses, as (wall, origin).
+
+    Uncut: the polygon itself and None. Cut: the part on the body's side of the lines; its points on the lines
+    (the cap) must be one run, on one line or on two crossing ones; the wall is the rest, an open chain from
+    line to line that keeps the chamber on its left, and the origin of its enclosed area is the middle of the
+    cap (one line) or the lines' crossing (two). A chamber cut into more than one wall (e.g. by two parallel
+    lines) is refused: its cap would not be flat."""
+    cutting = [(n, p) for n, p in lines if ((polygon - p) @ n).min() < -tol]
+    if not cutting:
+        return polygon, None
+    for n, p in cutting:
+        polygon = clip(polygon, n, p, tol)
+        require(len(polygon) >= 3, f"{what} lies beyond a symmetry line")
+    on = np.column_stack([np.abs((polygon - p) @ n) <= tol for n, p in cutting])
+    cap = on.any(axis=1)
+    starts, ends = np.flatnonzero(cap & ~np.roll(cap, 1)), np.flatnonzero(cap & ~np.roll(cap, -1))
+    single = f"{what}: the symmetry lines must cut it into one wall from line to line (not between two parallel " \
+             f"lines, nor crossing a line more than twice)"
+    require(len(starts) == 1, single)
+    k, m, count = starts[0], ends[0], len(polygon)
+    wall = polygon[(m + np.arange((k - m) % count + 1)) % count]
+    require(len(wall) >= 3, single)
+    holding = on[(k + np.arange((m - k) % count + 1)) % count]
+    if holding.all(axis=0).any():
+        return wall, 0.5 * (wall[0] + wall[-1])
+    used = np.flatnonzero(holding.any(axis=0))
+    normals = np.array([cutting[i][0] for i in used])
+    require(len(used) == 2 and abs(np.linalg.det(normals)) > 1e-12,
+            f"{what}: its cap runs along {len(used)} symmetry lines; a cap on one line or two crossing ones is supported")
+    origin = np.linalg.solve(normals, [normals[i] @ cutting[line][1] for i, line in enumerate(used)])
+    return wall, origin
+
+
+def notch(outline: np.ndarray, markers: np.ndarray, wall: np.ndarray, origin: np.ndarray, marker: int, tol: float,
+          what: str):
+    """The outline (counter-clockwise, with per-segment markers) with the cap between an open wall's ends cut
+    out and the wall put in its place, reversed (the material on the left); the wall's segments get `marker`.
+
+    Each end must lie on a body segment (marker OUTER_MARKER); the part of the outline left out must be the
+    cap: the outline's area must drop by the wall's enclosed area (origin: see cut_by_lines)."""
+    a, b = outline, np.roll(outline, -1, axis=0)
+    e = b - a
+    count = len(outline)
+
+    def locate(point):
+        t = np.clip(np.sum((point - a) * e, axis=1) / np.sum(e * e, axis=1), 0.0, 1.0)
+        d = np.linalg.norm(point - (a + t[:, None] * e), axis=1)
+        d[markers != OUTER_MARKER] = np.inf
+        i = int(np.argmin(d))
+        require(d[i] <= tol, f"{what} ends at {point.tolist()} on a symmetry line, off the body's edge (outside the body, or in another chamber)")
+        return i, t[i]
+
+    (ia, ta), (ib, tb) = locate(wall[0]), locate(wall[-1])
+    steps = count if ia == ib and tb < ta else (ib - ia) % count
+    walk = (ia + 1 + np.arange(steps)) % count
+    cut = np.vstack([wall[:1], outline[walk], wall[-1:], wall[-2:0:-1]])
+    expected = signed_area(outline) - enclosed_area(wall, origin)
+    require(steps > 0 and abs(signed_area(cut) - expected) <= 1e-9 * abs(signed_area(outline)),
+            f"{what}: the symmetry lines cut it off the body's edge (its cap is not a part of that edge)")
+    return cut, np.concatenate([[markers[ia]], markers[walk], np.full(len(wall) - 1, marker)])
+
+
+@dataclass(frozen=True)
+class PointSet:
+    """Named mesh nodes (the clamp, the tip): a side of the body's bounding box (within 1e-6) or those in a
+    closed box [x0, y0, x1, y1]."""
+
+    side: str | None = None
     box: tuple | None = None
 
     def __post_init__(self):
-        require((self.side is None) != (self.box is None), "clamp: give exactly one of 'side' and 'box'")
+        require((self.side is None) != (self.box is None), "give exactly one of 'side' and 'box'")
         if self.side is not None:
-            require(self.side in SIDES, f"clamp.side = {self.side!r} is not one of {', '.join(SIDES)}")
+            require(self.side in SIDES, f"side = {self.side!r} is not one of {', '.join(SIDES)}")
         else:
-            require_box("clamp.box", self.box)
+            require_box("box", self.box)
 
-    def select(self, vertices: np.ndarray) -> np.ndarray:
+    def select(self, vertices: np.ndarray, what: str) -> np.ndarray:
+        """The indices of the chosen vertices; choosing none is a PneumaInputError naming `what` (e.g. 'tip')."""
         x, y = vertices[:, 0], vertices[:, 1]
         if self.side is not None:
             chosen = {"left": x <= x.min() + 1e-6, "right": x >= x.max() - 1e-6,
                       "bottom": y <= y.min() + 1e-6, "top": y >= y.max() - 1e-6}[self.side]
         else:
             chosen = in_box(vertices, self.box)
-        pinned = np.flatnonzero(chosen)
-        require(len(pinned) > 0, f"clamp.box = {self.box!r} selects no mesh vertex")
-        return pinned
+        nodes = np.flatnonzero(chosen)
+        require(len(nodes) > 0, f"{what}.box = {self.box!r} selects no mesh vertex")
+        return nodes
+
+
+@dataclass(frozen=True)
+class Roller:
+    """A roller support: nodes whose displacement along `normal` is held, their tangential motion free.
+
+    The nodes are those within `tolerance` of the line n . (X - point) = 0, or those in the closed box
+    [x0, y0, x1, y1]. A roller line along an edge of the body is a symmetry line: a chamber may be cut by it
+    (see Geometry), which is how half and quarter models of symmetric actuators are built."""
+
+    normal: tuple[float, float]
+    point: tuple[float, float] | None = None
+    box: tuple | None = None
+    tolerance: float = 1e-6
+
+    def __post_init__(self):
+        require(_pair("normal", self.normal) != (0.0, 0.0), f"normal = {list(self.normal)!r} must not be zero")
+        require((self.point is None) != (self.box is None),
+                "give exactly one of 'point' (the roller line through it) and 'box'")
+        if self.point is not None:
+            _pair("point", self.point)
+        else:
+            require_box("box", self.box)
+        require(require_finite("tolerance", self.tolerance) > 0, f"tolerance = {self.tolerance!r} must be > 0")
+
+    @property
+    def unit_normal(self) -> np.ndarray:
+        n = np.asarray(self.normal, dtype=np.float64)
+        return n / np.linalg.norm(n)
+
+    def select(self, vertices: np.ndarray) -> np.ndarray:
+        """The indices of the held vertices; holding none is a PneumaInputError."""
+        if self.point is not None:
+            chosen = np.abs((vertices - np.asarray(self.point, dtype=np.float64)) @ self.unit_normal) <= self.tolerance
+        else:
+            chosen = in_box(vertices, self.box)
+        nodes = np.flatnonzero(chosen)
+        where = f"point = {list(self.point)!r}" if self.point is not None else f"box = {list(self.box)!r}"
+        require(len(nodes) > 0, f"roller (normal = {list(self.normal)!r}, {where}) holds no mesh vertex")
+        return nodes
 
 
 def require_box(name: str, box) -> None:
@@ -284,9 +440,12 @@ class Mesh:
 
     vertices: (n, 2) rest positions (the nodes); triangles: (m, 3) counter-clockwise corner indices
     (linear elements), or (m, 6) for quadratic ones: the corners, then the midside nodes of edges 01,
-    12 and 20; chambers: one node loop per chamber wall, counter-clockwise (positive area), in the
-    scene's order (quadratic: corner, midside, corner, ...); boundary: the nodes on the body's outer
-    boundary; pinned: the clamped nodes; tip: the right edge (x >= max x - 1e-6).
+    12 and 20; chambers: the nodes of each chamber wall in the scene's order (quadratic: corner, midside,
+    corner, ...), a closed loop, or for a chamber cut by symmetry lines an open chain from line to line,
+    oriented so its enclosed area (enclosed_area with wall_origins) is positive; wall_origins: per chamber
+    None (a closed loop) or the origin o of an open wall's area, on the lines; boundary: the nodes on the
+    body's outer boundary; pinned: the clamped nodes; tip: the tip's nodes (the right edge by default);
+    rollers: per roller, (its held nodes, its unit normal).
     """
 
     vertices: np.ndarray
@@ -295,6 +454,8 @@ class Mesh:
     boundary: np.ndarray
     pinned: np.ndarray
     tip: np.ndarray
+    wall_origins: tuple[np.ndarray | None, ...]
+    rollers: tuple[tuple[np.ndarray, np.ndarray], ...]
 
     @property
     def n_vertices(self) -> int:
@@ -338,14 +499,21 @@ def triangle_areas(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Geometry:
-    """A body shape with named chamber shapes inside it, a mesh density and the clamp selection."""
+    """A body shape with named chamber shapes, a mesh density and the named node sets: the clamp, the tip
+    (the right edge by default) and the rollers.
+
+    A chamber lies inside the body, or is cut by symmetry lines: roller lines along an edge of the body. A
+    chamber crossing such lines keeps its part on the body's side (cut_by_lines), a notch in the body's
+    outline whose wall runs from line to line; its area is closed by the flat cap along the lines."""
 
     body: object
     chambers: tuple[tuple[str, object], ...]
     max_area: float = 0.0012
-    clamp: ClampSelection = field(default_factory=ClampSelection)
+    clamp: PointSet = field(default_factory=lambda: PointSet("left"))
     order: int = 1
     refinements: int = 0
+    tip: PointSet = field(default_factory=lambda: PointSet("right"))
+    rollers: tuple[Roller, ...] = ()
 
     def __post_init__(self):
         require(require_finite("max_area", self.max_area) > 0, f"max_area = {self.max_area!r} must be > 0")
@@ -353,6 +521,7 @@ class Geometry:
         require(self.refinements in range(MAX_REFINEMENTS + 1),
                 f"refinements = {self.refinements!r} must be an integer from 0 to {MAX_REFINEMENTS}")
         require(len(self.chambers) <= MAX_SHAPES, f"{len(self.chambers)} chambers: at most {MAX_SHAPES} are allowed")
+        require(len(self.rollers) <= MAX_SHAPES, f"{len(self.rollers)} rollers: at most {MAX_SHAPES} are allowed")
         body = self.body.polygon()
         polygons = [(name, shape.polygon()) for name, shape in self.chambers]
         points = len(body) + sum(len(p) for _, p in polygons)
@@ -361,14 +530,16 @@ class Geometry:
         names = [name for name, _ in polygons]
         require(len(set(names)) == len(names), f"chamber names {names!r} must be distinct")
         for what, poly in [("the body", body)] + [(f"chamber {name!r}", poly) for name, poly in polygons]:
-            size = float(np.ptp(poly, axis=0).max())
-            require(np.isfinite(size), f"{what}: its outline points overflow to infinity")
-            require(not cKDTree((poly - poly.min(axis=0)) / size).query_pairs(MIN_SPACING),
-                    f"{what}: two of its outline points coincide (closer than {MIN_SPACING:g} of its size {size:.3g}): "
-                    f"a radius, size or point spacing too small, or coordinates too large, to mesh")
+            require_spaced(what, poly)
+        outline, _, walls = self.outline()
+        if any(origin is not None for _, origin in walls):
+            require_spaced("the body with its cut chambers", outline)
+            require(not polygon_self_intersects(outline), "the body's outline, with the chambers cut by symmetry "
+                                                          "lines notched into it, crosses itself")
+        polygons = [(name, poly) for (name, poly), (_, origin) in zip(polygons, walls) if origin is None]
         for name, poly in polygons:
-            outside = ~points_in_polygon(poly, body) | (distance_to_polygon(poly, body) < MARGIN)
-            crossing = segments_cross(poly, np.roll(poly, -1, axis=0), body, np.roll(body, -1, axis=0)).any()
+            outside = ~points_in_polygon(poly, outline) | (distance_to_polygon(poly, outline) < MARGIN)
+            crossing = segments_cross(poly, np.roll(poly, -1, axis=0), outline, np.roll(outline, -1, axis=0)).any()
             require(not outside.any() and not crossing,
                     f"chamber {name!r} is not inside the body (a wall point at {poly[np.argmax(outside)].tolist()} "
                     f"lies outside it or closer than {MARGIN:g} to its boundary)")
@@ -379,19 +550,37 @@ class Geometry:
                             or segments_cross(a, np.roll(a, -1, axis=0), b, np.roll(b, -1, axis=0)).any())
                 require(not touching, f"chambers {name_a!r} and {name_b!r} overlap (or are closer than {MARGIN:g})")
 
+    def outline(self) -> tuple[np.ndarray, np.ndarray, list]:
+        """(outline, markers, walls): the body's outline with the chambers cut by symmetry lines notched into it
+        (the body polygon itself when none is), its per-segment markers (OUTER_MARKER on the body, OUTER_MARKER + c
+        on the wall of chamber c = 1, 2, ...), and per chamber (wall points, origin) as cut_by_lines gives them."""
+        body = self.body.polygon()
+        tol = CUT_TOLERANCE * float(np.ptp(body, axis=0).max())
+        lines = symmetry_lines(body, self.rollers, tol)
+        outline, markers, walls = body, np.full(len(body), OUTER_MARKER), []
+        for c, (name, shape) in enumerate(self.chambers, start=1):
+            wall, origin = cut_by_lines(shape.polygon(), lines, tol, f"chamber {name!r}")
+            if origin is not None:
+                outline, markers = notch(outline, markers, wall, origin, OUTER_MARKER + c, tol, f"chamber {name!r}")
+            walls.append((wall, origin))
+        return outline, markers, walls
+
     def mesh(self) -> Mesh:
         """Mesh the body minus its chambers with Triangle ('pqa<max_area>'), split every triangle in four
         `refinements` times (uniform refinement: the same boundary polygons, h halved each time), add a
         midside node to every edge for quadratic triangles, and name the node sets."""
-        loops = [self.body.polygon()] + [shape.polygon() for _, shape in self.chambers]
+        outline, outline_markers, walls = self.outline()
+        closed = [c for c, (_, origin) in enumerate(walls, start=1) if origin is None]
+        loops = [outline] + [walls[c - 1][0] for c in closed]
         offsets = np.cumsum([0] + [len(p) for p in loops])
         ring = lambda n, offset: offset + np.column_stack([np.arange(n), (np.arange(n) + 1) % n])
         pslg = {
             "vertices": np.vstack(loops),
             "segments": np.vstack([ring(len(p), o) for p, o in zip(loops, offsets)]),
-            "segment_markers": np.concatenate([np.full(len(p), OUTER_MARKER + c) for c, p in enumerate(loops)]),
+            "segment_markers": np.concatenate([outline_markers] + [np.full(len(walls[c - 1][0]), OUTER_MARKER + c)
+                                                                   for c in closed]),
         }
-        if len(loops) > 1:
+        if closed:
             pslg["holes"] = np.array([interior_point(p) for p in loops[1:]])
         out = triangulate(pslg, f"pqa{self.max_area:.17f}")  # fixed-point: Triangle reads no exponent
         vertices = np.asarray(out["vertices"], dtype=np.float64)
@@ -408,15 +597,28 @@ class Geometry:
             vertices, mid = with_edge_midpoints(vertices, triangles)
             triangles = np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])])
         chambers = []
-        for c in range(1, len(loops)):
-            loop = chain_loop(segments[markers == OUTER_MARKER + c])
-            loop = loop if signed_area(vertices[loop]) > 0 else loop[::-1].copy()
-            chambers.append(loop if mid is None else np.column_stack([loop, mid(loop, np.roll(loop, -1))]).ravel())
+        for c, (_, origin) in enumerate(walls, start=1):
+            nodes = chain(segments[markers == OUTER_MARKER + c], closed=origin is None)
+            nodes = nodes if enclosed_area(vertices[nodes], origin) > 0 else nodes[::-1].copy()
+            if mid is not None:  # corner, midside, corner, ...: each edge from its first corner
+                starts = nodes if origin is None else nodes[:-1]
+                edges = np.column_stack([starts, mid(starts, np.roll(nodes, -1)[:len(starts)])]).ravel()
+                nodes = edges if origin is None else np.append(edges, nodes[-1])
+            chambers.append(nodes)
         outer = segments[markers == OUTER_MARKER]
         boundary = np.unique(outer if mid is None else np.column_stack([outer, mid(outer[:, 0], outer[:, 1])]))
-        x = vertices[:, 0]
-        tip = np.flatnonzero(x >= x.max() - 1e-6)
-        return Mesh(vertices, triangles, tuple(chambers), boundary, self.clamp.select(vertices), tip)
+        return Mesh(vertices, triangles, tuple(chambers), boundary, self.clamp.select(vertices, "clamp"),
+                    self.tip.select(vertices, "tip"), tuple(origin for _, origin in walls),
+                    tuple((roller.select(vertices), roller.unit_normal) for roller in self.rollers))
+
+
+def require_spaced(what: str, polygon: np.ndarray) -> None:
+    """Refuse an outline with two points closer than MIN_SPACING of its size (Triangle crashes on them)."""
+    size = float(np.ptp(polygon, axis=0).max())
+    require(np.isfinite(size), f"{what}: its outline points overflow to infinity")
+    require(not cKDTree((polygon - polygon.min(axis=0)) / size).query_pairs(MIN_SPACING),
+            f"{what}: two of its outline points coincide (closer than {MIN_SPACING:g} of its size {size:.3g}): "
+            f"a radius, size or point spacing too small, or coordinates too large, to mesh")
 
 
 def with_edge_midpoints(vertices: np.ndarray, triangles: np.ndarray):
@@ -505,23 +707,24 @@ def orient_counter_clockwise(vertices: np.ndarray, triangles: np.ndarray) -> np.
     return fixed
 
 
-def chain_loop(edges: np.ndarray) -> np.ndarray:
-    """Order the undirected edges of one closed curve into a vertex loop (first vertex not repeated)."""
+def chain(edges: np.ndarray, closed: bool = True) -> np.ndarray:
+    """Order the undirected edges of one curve into its nodes: a closed loop (first node not repeated) or an
+    open chain from one end to the other."""
     neighbours: dict[int, list[int]] = {}
     for i, j in edges:
         neighbours.setdefault(int(i), []).append(int(j))
         neighbours.setdefault(int(j), []).append(int(i))
-    if any(len(n) != 2 for n in neighbours.values()):
-        raise PneumaInputError("Triangle could not keep a chamber wall a simple closed loop")
-    start = int(edges[0][0])
-    loop, previous, current = [start], None, start
+    ends = [v for v, n in neighbours.items() if len(n) == 1]
+    if any(len(n) > 2 for n in neighbours.values()) or len(ends) != (0 if closed else 2):
+        raise PneumaInputError(f"Triangle could not keep a chamber wall a simple {'closed loop' if closed else 'open chain'}")
+    start = int(edges[0][0]) if closed else ends[0]
+    nodes, previous, current = [start], None, start
     while True:
-        a, b = neighbours[current]
-        nxt = a if a != previous else b
-        if nxt == start:
+        following = [v for v in neighbours[current] if v != previous]
+        if not following or following[0] == start:
             break
-        loop.append(nxt)
-        previous, current = current, nxt
-    if len(loop) != len(neighbours):
-        raise PneumaInputError("Triangle split a chamber wall into more than one loop")
-    return np.array(loop, dtype=np.int64)
+        previous, current = current, following[0]
+        nodes.append(current)
+    if len(nodes) != len(neighbours):
+        raise PneumaInputError("Triangle split a chamber wall into more than one piece")
+    return np.array(nodes, dtype=np.int64)

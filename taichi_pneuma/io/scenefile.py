@@ -4,7 +4,12 @@
     [body]       shape = "rectangle" (center, size) | "polygon" (points) | "union" (rectangles = [{center, size}, ...])
     [mesh]       max_area, order = 1 (linear triangles) | 2 (quadratic)
     [material]   E, nu, regions = [{box = [x0, y0, x1, y1], E, nu}, ...]   (E, nu of a region default to the base)
-    [clamp]      side = "left" | "right" | "bottom" | "top"  or  box = [x0, y0, x1, y1];  stiffness
+    [clamp]      side = "left" | "right" | "bottom" | "top"  or  box = [x0, y0, x1, y1];  stiffness (also the rollers')
+    [tip]        side = "right" (default) | "left" | "bottom" | "top"  or  box = [x0, y0, x1, y1]: the nodes whose
+                 mean displacement and rotation the history (tip_dx, tip_dy, tip_rotation), sensitivities and reach use
+    [[rollers]]  normal = [nx, ny]; point = [x, y] (the nodes within tolerance of the line through it, normal to
+                 normal) or box = [x0, y0, x1, y1]; tolerance = 1e-6. A roller line along the body's edge is a
+                 symmetry line: a chamber crossing it is cut there, its area closed by the flat cap on the line
     [[chambers]] name, shape = "ellipse" (center, semi_axes, points) | "rounded_rectangle" (center, size,
                  radius, corner_points) | "polygon" (points); control = a chamber kind's name, "area"
                  (stiffness) | "pressure" (allow_vacuum) | ..., with that kind's parameters;
@@ -28,7 +33,7 @@ import tomllib
 
 from ..control.targets import Target
 from ..errors import PneumaInputError, require
-from ..fem.geometry import ClampSelection, Ellipse, Geometry, Polygon, Rectangle, RectangleUnion, RoundedRectangle
+from ..fem.geometry import Ellipse, Geometry, PointSet, Polygon, Rectangle, RectangleUnion, Roller, RoundedRectangle
 from ..scene import ChamberControl, Material, Region, Scene
 from ..solve.schedule import ChamberSchedule
 from ..terms.chambers import chamber_kind
@@ -163,6 +168,22 @@ def read_effect(name: str, t: Table):
     return build(t, lambda: cls(**kwargs))
 
 
+def read_point_set(t: Table, default_side: str) -> PointSet:
+    """A [clamp] or [tip] table's node set: side, or box (then no side); the caller reads its other keys."""
+    box = t.take("box", None, list)
+    return build(t, lambda: PointSet(t.take("side", None if box is not None else default_side, str),
+                                     None if box is None else tuple(box)))
+
+
+def read_roller(t: Table) -> Roller:
+    """One [[rollers]] table: normal, point (a line) or box, tolerance."""
+    point, box = t.take("point", None, list), t.take("box", None, list)
+    roller = build(t, lambda: Roller(tuple(t.take("normal", kind=list)), None if point is None else tuple(point),
+                                     None if box is None else tuple(box), t.take("tolerance", 1e-6, float)))
+    t.close()
+    return roller
+
+
 def read_scene(data: dict, name: str) -> Scene:
     """Build a Scene from parsed TOML; every error names its dotted key."""
     top = Table(data, "")
@@ -175,10 +196,13 @@ def read_scene(data: dict, name: str) -> Scene:
     mesh.close()
     material, regions = read_material(top.table("material", None))
     clamp_t = top.table("clamp", {})
-    clamp = build(clamp_t, lambda: ClampSelection(clamp_t.take("side", None if "box" in clamp_t.data else "left", str),
-                                                  clamp_t.take("box", None, list)))
+    clamp = read_point_set(clamp_t, "left")
     clamp_stiffness = clamp_t.take("stiffness", 1e9, float)
     clamp_t.close()
+    tip_t = top.table("tip", {})
+    tip = read_point_set(tip_t, "right")
+    tip_t.close()
+    rollers = tuple(read_roller(t) for t in top.tables("rollers"))
     chamber_tables = top.tables("chambers")
     require(chamber_tables, "scene names no chamber: add at least one [[chambers]] table")
     chambers = [read_chamber(t) for t in chamber_tables]
@@ -190,7 +214,8 @@ def read_scene(data: dict, name: str) -> Scene:
     effects_t.known |= set(effects_t.data)
     targets = tuple(read_target(t) for t in top.tables("targets"))
     top.close()
-    geometry = build(top, lambda: Geometry(body, tuple((n, s) for n, s, _ in chambers), max_area, clamp, order))
+    geometry = build(top, lambda: Geometry(body, tuple((n, s) for n, s, _ in chambers), max_area, clamp, order,
+                                           tip=tip, rollers=rollers))
     return build(top, lambda: Scene(geometry, tuple(c for _, _, c in chambers), increments, material, regions,
                                     clamp_stiffness, effects, scene_name, targets))
 

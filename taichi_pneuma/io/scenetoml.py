@@ -49,6 +49,17 @@ def shape_data(shape) -> dict:
     raise TypeError(f"no scene-file form for the shape {shape!r}")
 
 
+def point_set_data(points) -> dict:
+    """The keys of a [clamp] or [tip] node set: side or box."""
+    return {"side": points.side} if points.side is not None else {"box": points.box}
+
+
+def roller_data(roller) -> dict:
+    """The keys of one [[rollers]] table."""
+    where = {"point": roller.point} if roller.point is not None else {"box": roller.box}
+    return {"normal": roller.normal, **where, "tolerance": roller.tolerance}
+
+
 def scene_data(scene) -> dict:
     """The scene as the data of a scene file (every key explicit), ready for TOML."""
     geometry = scene.geometry
@@ -64,17 +75,18 @@ def scene_data(scene) -> dict:
     if scene.regions:
         material["regions"] = [{"box": r.box, "E": r.material.youngs_modulus, "nu": r.material.poisson_ratio}
                                for r in scene.regions]
-    clamp = geometry.clamp
     data = {
         "name": scene.name,
         "body": shape_data(geometry.body),
         "mesh": {"max_area": geometry.max_area, "order": geometry.order},
         "material": material,
-        "clamp": {**({"side": clamp.side} if clamp.side is not None else {"box": clamp.box}),
-                  "stiffness": scene.clamp_stiffness},
+        "clamp": {**point_set_data(geometry.clamp), "stiffness": scene.clamp_stiffness},
+        "tip": point_set_data(geometry.tip),
         "chambers": chambers,
         "schedule": {"increments": scene.increments},
     }
+    if geometry.rollers:
+        data["rollers"] = [roller_data(r) for r in geometry.rollers]
     if scene.effects:
         data["effects"] = {e.name: {f.name: getattr(e, f.name) for f in dataclasses.fields(e)} for e in scene.effects}
     return plain(data)

@@ -32,7 +32,7 @@ class ChamberRecord:
 class StepRecord:
     """One increment of the schedule, as measured after its solve.
 
-    tip_dx, tip_dy: mean displacement of the tip (right-edge) vertices; tip_rotation: their rigid
+    tip_dx, tip_dy: mean displacement of the tip vertices (mesh.tip); tip_rotation: their rigid
     rotation in degrees (counter-clockwise positive, least squares); contact: per contact term the
     total force it exerts on the body (fx, fy) and the sum of its per-vertex force magnitudes; extra:
     further columns by name, last in the row (a reach's target and tip error, inverse.frames).
@@ -122,7 +122,8 @@ def tip_rotation(rest: np.ndarray, current: np.ndarray) -> float:
 
 
 def tip_measures(mesh, u: np.ndarray) -> tuple[float, float, float]:
-    """(dx, dy, rotation in degrees) of the tip: the mean displacement of the tip vertices and their rigid rotation."""
+    """(dx, dy, rotation in degrees) of the tip: the mean displacement of the mesh's tip nodes (the geometry's
+    named tip, the right edge by default) and their rigid rotation."""
     dx, dy = u[mesh.tip].mean(axis=0)
     return float(dx), float(dy), tip_rotation(mesh.vertices[mesh.tip], mesh.vertices[mesh.tip] + u[mesh.tip])
 

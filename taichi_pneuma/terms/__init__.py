@@ -16,7 +16,7 @@ DOFs are interleaved: vertex i owns DOFs 2i (x) and 2i + 1 (y).
 
 from .base import Term, vertex_dofs
 from .chambers import AreaChamber, PressureChamber
-from .clamp import Clamp
+from .constraints import Clamp, NormalClamp
 from .elastic import NeoHookean
 
-__all__ = ["AreaChamber", "Clamp", "NeoHookean", "PressureChamber", "Term", "vertex_dofs"]
+__all__ = ["AreaChamber", "Clamp", "NeoHookean", "NormalClamp", "PressureChamber", "Term", "vertex_dofs"]

@@ -90,6 +90,8 @@ class SelfContact(Effect):
         _positive("stiffness", self.stiffness)
 
     def terms(self, config, mesh, lumped_area) -> list:
+        require(all(origin is None for origin in mesh.wall_origins),
+                "self_contact: a chamber cut by a symmetry line is not supported (its wall would meet its mirror image)")
         return [SelfContactTerm(config, list(mesh.chambers), self.dhat, self.stiffness)]
 
 

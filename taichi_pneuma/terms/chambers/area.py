@@ -41,15 +41,15 @@ class AreaControl(ChamberKind):
         for value in values:
             require(0 < value <= MAX_AREA_RATIO, f"{what} area ratio {value!r} must lie in (0, {MAX_AREA_RATIO:g}]")
 
-    def term(self, config, loop, name: str, order: int) -> "AreaChamber":
-        return AreaChamber(self, config, loop, name, order)
+    def term(self, config, loop, name: str, order: int, origin=None) -> "AreaChamber":
+        return AreaChamber(self, config, loop, name, order, origin)
 
 
 class AreaChamber(Chamber):
     """Stiffness k pulls the enclosed area A(x) to target_area = command x rest area."""
 
-    def __init__(self, kind: AreaControl, config, loop: np.ndarray, name: str = "main", order: int = 1):
-        super().__init__(kind, config, loop, name, order)
+    def __init__(self, kind: AreaControl, config, loop: np.ndarray, name: str = "main", order: int = 1, origin=None):
+        super().__init__(kind, config, loop, name, order, origin)
         self.k = float(kind.stiffness)
         self.target_area = self.rest_area
 

@@ -48,8 +48,9 @@ class ChamberKind:
         values = [self.rest, *values]
         return min(values), max(values)
 
-    def term(self, config, loop, name: str, order: int):
-        """The chamber's energy term (a wall.Chamber) on the wall loop `loop` of the model's config."""
+    def term(self, config, loop, name: str, order: int, origin=None):
+        """The chamber's energy term (a wall.Chamber) on the wall loop `loop` of the model's config (an open
+        wall closed along symmetry lines through `origin`, if given)."""
         raise NotImplementedError
 
 

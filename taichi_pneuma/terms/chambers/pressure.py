@@ -31,15 +31,16 @@ class PressureControl(ChamberKind):
             require(value >= 0 or self.allow_vacuum,
                     f"{what} pressure {value!r} is negative; set allow_vacuum = true for suction")
 
-    def term(self, config, loop, name: str, order: int) -> "PressureChamber":
-        return PressureChamber(self, config, loop, name, order)
+    def term(self, config, loop, name: str, order: int, origin=None) -> "PressureChamber":
+        return PressureChamber(self, config, loop, name, order, origin)
 
 
 class PressureChamber(Chamber):
     """A prescribed pressure p does work p A(x) on the wall."""
 
-    def __init__(self, kind: PressureControl, config, loop: np.ndarray, name: str = "main", order: int = 1):
-        super().__init__(kind, config, loop, name, order)
+    def __init__(self, kind: PressureControl, config, loop: np.ndarray, name: str = "main", order: int = 1,
+                 origin=None):
+        super().__init__(kind, config, loop, name, order, origin)
         self.prescribed = 0.0
 
     def set_command(self, pressure: float) -> None:

@@ -13,6 +13,14 @@ form: with d(p x q)/dp = (q_y, -q_x) and d(p x q)/dq = (-p_y, p_x) its gradient 
 outward normal of the wall (outward from the chamber, into the rubber), and its Hessian is constant,
 d2A/dx_i dy_j = c_t, d2A/dy_i dx_j = -c_t (and symmetric) for each pair t.
 
+A wall that ends on symmetry lines (a half or quarter model) is an open chain x_0 .. x_{k-1} from line to
+line; with the origin o of the integral on the lines (their crossing for two), the flat cap along them adds
+nothing and the enclosed area is the same form without the closing edge, on positions relative to o:
+
+    A(x) = sum_t c_t (x_i(t) - o) x (x_j(t) - o)      (open wall: pairs (i, i+1) and no (k-1, 0)),
+
+computed by the same kernel on rest positions shifted by -o; d2A is unchanged (o is fixed).
+
 Every chamber kind (kind.py) loads its wall with a uniform pressure p(A) that the kind defines:
 
     dE/dx = -p dA/dx,   Hessian  -p'(A) dA dA^T - p d2A.
@@ -47,12 +55,15 @@ def wall_area(rest: Vec2s, u: Vec2s, loop: Indices, pairs: Pairs, weights: Scala
     return total
 
 
-def area_form(k: int, order: int) -> tuple[np.ndarray, np.ndarray]:
-    """The (pairs (P, 2) of loop positions, weights (P,)) with A = sum_t w_t x_i x x_j for a loop of k nodes."""
+def area_form(k: int, order: int, closed: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """The (pairs (P, 2) of wall positions, weights (P,)) with A = sum_t w_t x_i x x_j for a wall of k nodes:
+    a closed loop, or an open chain (no edge from its last node back to its first)."""
     ring = np.arange(k)
     if order == 1:
-        return np.column_stack([ring, np.roll(ring, -1)]), np.full(k, 0.5)
-    a, m, b = ring[0::2], ring[1::2], np.roll(ring[0::2], -1)
+        pairs = np.column_stack([ring, np.roll(ring, -1)])[:k if closed else k - 1]
+        return pairs, np.full(len(pairs), 0.5)
+    a = ring[0::2] if closed else ring[0:-1:2]
+    m, b = a + 1, (a + 2) % k
     pairs = np.vstack([np.column_stack(p) for p in ((a, m), (m, b), (a, b))])
     return pairs, np.repeat([2 / 3, 2 / 3, -1 / 6], len(a))
 
@@ -62,32 +73,36 @@ class Chamber(Term):
 
     A kind's term subclasses it with set_command(q), pressure_at(A), energy(), command_force() and,
     where p depends on A, low_rank(). kind: the ChamberKind (with its parameters) that made it;
-    order: 1 for a loop of straight edges, 2 for one of quadratic edges (corner, midside, corner, ...)."""
+    order: 1 for a loop of straight edges, 2 for one of quadratic edges (corner, midside, corner, ...);
+    origin: None for a closed loop, else the wall is open, closed by the cap along the symmetry lines through
+    the origin o."""
 
-    def __init__(self, kind, config, loop: np.ndarray, name: str = "main", order: int = 1):
+    def __init__(self, kind, config, loop: np.ndarray, name: str = "main", order: int = 1,
+                 origin: np.ndarray | None = None):
         self.kind = kind
         self.config = config
+        self.rest = config.rest if origin is None else config.rest - np.asarray(origin, dtype=np.float64)
         self.chamber_name = name
         self.name = f"chamber:{name}"
         self.loop_vertices = np.asarray(loop, dtype=np.int64)
         self.loop = int32s(loop)
         self.dofs = vertex_dofs(self.loop_vertices)
         self.n_wall = len(loop)
-        pairs, self.weights = area_form(self.n_wall, order)
+        pairs, self.weights = area_form(self.n_wall, order, closed=origin is None)
         self.pairs = int32s(pairs)
         xi, yi = 2 * self.loop_vertices[pairs[:, 0]], 2 * self.loop_vertices[pairs[:, 0]] + 1
         xj, yj = 2 * self.loop_vertices[pairs[:, 1]], 2 * self.loop_vertices[pairs[:, 1]] + 1
         self._rows = np.concatenate([xi, yj, yi, xj])
         self._cols = np.concatenate([yj, xi, xj, yi])
         self._area_hessian = np.concatenate([self.weights, self.weights, -self.weights, -self.weights])
-        rest = config.rest[self.loop_vertices]
+        rest = self.rest[self.loop_vertices]
         p, q = rest[pairs[:, 0]], rest[pairs[:, 1]]
         self.rest_area = float(self.weights @ (p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0]))
 
     def area_and_gradient(self) -> tuple[float, np.ndarray]:
         """A(x) and dA/dx on the wall nodes, (k, 2) in loop order."""
         gradient = np.empty((self.n_wall, 2))
-        return wall_area(self.config.rest, self.config.u, self.loop, self.pairs, self.weights, gradient), gradient
+        return wall_area(self.rest, self.config.u, self.loop, self.pairs, self.weights, gradient), gradient
 
     def area(self) -> float:
         """The signed area A(x) enclosed by the wall."""
