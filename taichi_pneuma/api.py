@@ -25,7 +25,6 @@ from .io.output import prepare_directory, save_json, save_npz, save_text, write_
 from .scene import BuiltScene, Scene
 from .solve.newton import NewtonOptions
 from .solve.simulate import MAX_CUTS, RampResult, RampStopped, run_schedule
-from .terms.elastic import lame_parameters
 
 
 def simulate(scene: Scene | BuiltScene, *, tol: float = NewtonOptions.tol,
@@ -113,8 +112,8 @@ class Result:
 
     def fields(self, step: int = -1) -> dict[str, np.ndarray]:
         """Per triangle at a step: det_F, max_stretch, stress (Cauchy, (m, 3, 3)), von_mises (fields.py)."""
-        mu, lam = lame_parameters(*self.scene.element_moduli(self.mesh))
-        return triangle_fields(self.mesh.vertices, self.positions[step], self.mesh.triangles, mu, lam)
+        return triangle_fields(self.mesh.vertices, self.positions[step], self.mesh.triangles,
+                               *self.scene.element_material(self.mesh))
 
     def summary(self, interrupted: bool = False) -> dict:
         """The figures of the run (the summary JSON); interrupted: the run was stopped after these steps."""

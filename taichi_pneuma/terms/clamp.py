@@ -17,7 +17,7 @@ class Clamp(Term):
         self.config = config
         self.k = float(stiffness)
         self.pinned = np.asarray(pinned, dtype=np.int64)
-        self._dofs = vertex_dofs(pinned)
+        self._dofs = vertex_dofs(pinned, config.dim)
 
     def energy(self) -> float:
         return 0.5 * self.k * float(np.sum(self.config.u[self.pinned] ** 2))
