@@ -49,6 +49,15 @@ class Law:
         raise NotImplementedError
 
 
+LAWS: dict[str, type[Law]] = {}
+
+
+def register(law: type[Law]) -> type[Law]:
+    """Class decorator: add a law to LAWS under its name."""
+    LAWS[law.name] = law
+    return law
+
+
 @ti.func
 def embedded(F, d: ti.template()):
     """The 3 x 3 deformation gradient whose leading d x d block is F (d x d) and whose rest is the identity."""

@@ -27,7 +27,7 @@ and the 2 x 2 block B has closed-form eigenpairs: four eigenpairs of M, no itera
 import numpy as np
 import taichi as ti
 
-from .law import Law
+from .law import Law, register
 
 SQRT_HALF = 0.7071067811865476
 
@@ -61,6 +61,7 @@ def plane_split(g, p, q):
     return a, uu, ww
 
 
+@register
 class StableNeoHookean(Law):
     name = "stable_neo_hookean"
     parameter_names = ("mu", "lam")
