@@ -71,12 +71,12 @@ def elastic_gradient(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal
     for e, q in ti.ndrange(nodes.shape[0], weights.shape[1]):
         F = embedded(deformation_gradient(rest, u, nodes, grads, e, q, d), d)
         P = weights[e, q] * law.stress(F, element_parameters(law, parameters, e))
+        P_d = ti.Matrix([[P[i, j] for j in ti.static(range(d))] for i in ti.static(range(d))], dt=ti.f64)
         for a in range(nodes.shape[1]):
+            force = P_d @ ti.Vector([grads[e, q, a, j] for j in ti.static(range(d))], dt=ti.f64)
+            node = nodes[e, a]
             for i in ti.static(range(d)):
-                force = 0.0
-                for j in ti.static(range(d)):
-                    force += P[i, j] * grads[e, q, a, j]
-                out[nodes[e, a], i] += force
+                out[node, i] += force[i]
 
 
 @ti.kernel
