@@ -18,9 +18,9 @@ from . import runtime
 from .errors import require, require_finite
 from .fem.geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
 from .io.output import check_stem
+from .materials import StableNeoHookean
 from .solve.model import EnergyModel
 from .solve.schedule import ChamberSchedule, Schedule, area_ramp
-from .materials import StableNeoHookean
 from .terms import AreaChamber, Clamp, Elasticity, PressureChamber
 from .terms.base import Term
 from .terms.chamber import Chamber
