@@ -19,18 +19,19 @@ from . import runtime
 from .errors import require, require_finite
 from .fem.geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
 from .io.output import check_stem
+from .materials import StableNeoHookean
 from .solve.model import EnergyModel
 from .solve.schedule import ChamberSchedule, Schedule, area_ramp
-from .terms import Clamp, NeoHookean, NormalClamp
+from .terms import Clamp, Elasticity, NormalClamp
 from .terms.base import Term
 from .terms.chambers import Chamber, ChamberKind
 from .terms.effects import Effect
-from .terms.elastic import lame_parameters
 
 
 @dataclass(frozen=True)
 class Material:
-    """Isotropic stable neo-Hookean material: Young's modulus E > 0, Poisson's ratio -1 < nu < 0.5."""
+    """Isotropic material of the stable neo-Hookean law (materials/neo_hookean.py): Young's modulus E > 0,
+    Poisson's ratio -1 < nu < 0.5."""
 
     youngs_modulus: float = 1e4
     poisson_ratio: float = 0.45
@@ -137,18 +138,22 @@ class Scene:
             e[inside], nu[inside] = region.material.youngs_modulus, region.material.poisson_ratio
         return e, nu
 
+    def element_material(self, mesh: Mesh) -> tuple[type, np.ndarray]:
+        """The material law of the body and its parameter vector for every element, (m, p)."""
+        return StableNeoHookean, StableNeoHookean.parameters(*self.element_moduli(mesh))
+
     def build(self) -> "BuiltScene":
         """Mesh the geometry and instantiate exactly the terms this scene names."""
         runtime.ensure_initialised()
         mesh = self.geometry.mesh()
-        e, nu = self.element_moduli(mesh)
-        # Round-off scales, from the stiffest modulus (lam grows without bound as nu -> 1/2):
-        # forces below 1e-6 (mu + lam) sqrt(body area), energies below 1e-12 (mu + lam) (body area).
-        modulus = float(np.max(np.sum(lame_parameters(e, nu), axis=0)))
+        law, parameters = self.element_material(mesh)
+        # Round-off scales, from the stiffest modulus (neo-Hookean: mu + lam, which grows without bound as
+        # nu -> 1/2): forces below 1e-6 modulus sqrt(body area), energies below 1e-12 modulus (body area).
+        modulus = float(np.max(law.modulus(parameters)))
         model = EnergyModel(mesh.vertices, force_floor=1e-6 * modulus * math.sqrt(mesh.area),
                             energy_resolution=1e-12 * modulus * mesh.area)
         config = model.config
-        elastic = model.add(NeoHookean(config, mesh.triangles, e, nu))
+        elastic = model.add(Elasticity(config, mesh.triangles, law, parameters))
         chambers = [model.add(control.term(config, loop, name, mesh.order, origin)) for control, loop, origin, name
                     in zip(self.controls, mesh.chambers, mesh.wall_origins, self.chamber_names)]
         model.add(Clamp(config, mesh.pinned, self.clamp_stiffness))
@@ -167,7 +172,7 @@ class BuiltScene:
     scene: Scene
     mesh: Mesh
     model: EnergyModel
-    elastic: NeoHookean
+    elastic: Elasticity
     chambers: list[Chamber]
     effects: dict[str, list[Term]]
 

@@ -1,14 +1,30 @@
-"""Per-triangle output fields: Cauchy stress, largest stretch and det F against hand formulas and against
-the elastic term's own gradient."""
+"""Per-triangle output fields: Cauchy stress (from the material law's own P), largest stretch and det F against
+hand formulas and against the elastic term's own gradient."""
 
 import numpy as np
 import pytest
 
 from taichi_pneuma.fem.fields import cauchy_stress, max_stretch, triangle_fields, von_mises
+from taichi_pneuma.materials import StableNeoHookean, lame_parameters
 from taichi_pneuma.scene import reference_scene
-from taichi_pneuma.terms.elastic import lame_parameters
 
 MU, LAM = lame_parameters(1e4, 0.45)
+
+
+def neo_hookean_stress(F):
+    """The fields' Cauchy stress of each F (N, d, d) under the reference material."""
+    return cauchy_stress(F, StableNeoHookean, np.tile([MU, LAM], (len(F), 1)))
+
+
+def test_uniaxial_plane_strain_stretch_matches_the_closed_form():
+    """F = diag(s, 1, 1), J = s: P = mu F - (mu + lam (1 - J)) cof F with cof F = diag(1, s, s), so
+    sigma = P F^T / J = diag(mu s - c, mu / s - c, mu / s - c), c = mu + lam (1 - s); the same from the 2D
+    and the 3D form of F."""
+    for s in (0.7, 1.0, 1.3):
+        c = MU + LAM * (1 - s)
+        expected = np.diag([MU * s - c, MU / s - c, MU / s - c])
+        assert neo_hookean_stress(np.diag([s, 1.0])[None])[0] == pytest.approx(expected, rel=1e-12, abs=1e-9)
+        assert neo_hookean_stress(np.diag([s, 1.0, 1.0])[None])[0] == pytest.approx(expected, rel=1e-12, abs=1e-9)
 
 
 def hand_von_mises(xx, yy, zz, xy):
@@ -18,7 +34,7 @@ def hand_von_mises(xx, yy, zz, xy):
 def test_simple_shear_and_biaxial_stretch_match_hand_formulas():
     g, a, b = 0.3, 1.4, 0.8
     F = np.array([[[1.0, g], [0.0, 1.0]], [[a, 0.0], [0.0, b]]])
-    s = cauchy_stress(F, MU, LAM)
+    s = neo_hookean_stress(F)
     # simple shear, J = 1: sigma = mu (F F^T - I) = mu [[g^2, g], [g, 0]], no out-of-plane stress
     assert s[0] == pytest.approx(np.array([[MU * g * g, MU * g, 0], [MU * g, 0, 0], [0, 0, 0]]), abs=1e-9)
     # stretch diag(a, b), J = ab: sigma_ii = mu (F_ii^2 / J - 1) + lam (J - 1); zz with F_zz = 1
@@ -27,7 +43,7 @@ def test_simple_shear_and_biaxial_stretch_match_hand_formulas():
     assert s[1] == pytest.approx(np.diag([xx, yy, zz]), rel=1e-12)
     assert von_mises(s) == pytest.approx([hand_von_mises(MU * g * g, 0, 0, MU * g), hand_von_mises(xx, yy, zz, 0)])
     assert max_stretch(F) == pytest.approx([(g + np.sqrt(g * g + 4)) / 2, a], rel=1e-12)
-    assert np.all(cauchy_stress(np.eye(2)[None], MU, LAM) == 0)  # stress-free at rest
+    assert np.all(neo_hookean_stress(np.eye(2)[None]) == 0)  # stress-free at rest
 
 
 def test_fields_are_objective():
@@ -36,7 +52,7 @@ def test_fields_are_objective():
     F = F[np.linalg.det(F) > 0.2]
     t = 0.7
     R = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
-    s, s_rot = cauchy_stress(F, MU, LAM), cauchy_stress(R @ F, MU, LAM)
+    s, s_rot = neo_hookean_stress(F), neo_hookean_stress(R @ F)
     assert s_rot[:, :2, :2] == pytest.approx(R @ s[:, :2, :2] @ R.T, abs=1e-8)
     assert von_mises(s_rot) == pytest.approx(von_mises(s), rel=1e-10)
     assert max_stretch(R @ F) == pytest.approx(np.linalg.svd(F, compute_uv=False)[:, 0], rel=1e-12)
@@ -55,7 +71,7 @@ def test_stress_matches_the_elastic_terms_gradient_under_a_homogeneous_deformati
     g = built.elastic.gradient()
     measured = np.array([[np.sum(g * (X @ np.outer(np.eye(2)[a], np.eye(2)[b]).T)) for b in range(2)]
                          for a in range(2)]) / built.mesh.area
-    fields = triangle_fields(X, positions, built.mesh.triangles, MU, LAM)
+    fields = triangle_fields(X, positions, built.mesh.triangles, *built.scene.element_material(built.mesh))
     sigma = fields["stress"][0, :2, :2]
     J = np.linalg.det(F)
     assert fields["det_F"] == pytest.approx(J, rel=1e-12) and len(fields["det_F"]) == built.mesh.n_triangles

@@ -11,9 +11,9 @@ import imageio_ffmpeg
 import numpy as np
 import pytest
 
-from taichi_pneuma.render import frames as render
 from taichi_pneuma.apps import inflate, steer
 from taichi_pneuma.errors import PneumaInputError
+from taichi_pneuma.render import frames as render
 from taichi_pneuma.render.frames import BACKGROUND, CHAMBER_FILL, FACE, GROUND, FrameRenderer, Track
 from taichi_pneuma.render.video import write_video
 from taichi_pneuma.scene import reference_scene

@@ -21,8 +21,17 @@ import numpy as np
 import pytest
 
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.geometry import (BeamGeometry, Ellipse, Geometry, Mesh, PointSet, Rectangle, Roller,
-                                        enclosed_area, signed_area)
+from taichi_pneuma.fem.geometry import (
+    BeamGeometry,
+    Ellipse,
+    Geometry,
+    Mesh,
+    PointSet,
+    Rectangle,
+    Roller,
+    enclosed_area,
+    signed_area,
+)
 from taichi_pneuma.scene import ChamberControl, Scene
 from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.solve.schedule import area_ramp

@@ -181,7 +181,7 @@ def test_projected_element_blocks_equal_eigen_clamped_blocks(coarse):
     G = elastic.grads[:, 0]  # (m, k, 2) dN_a/dX at the one quadrature point of each linear triangle
     F = np.einsum("qai,qaj->qij", x[elastic.nodes], G)
     J = np.linalg.det(F)
-    w, (mu, lam) = elastic.weights[:, 0], elastic.moduli.T
+    w, (mu, lam) = elastic.weights[:, 0], elastic.parameters.T
     g = np.stack([F[:, 1, 1], -F[:, 1, 0], -F[:, 0, 1], F[:, 0, 0]], axis=1)
     hj = np.array([[0, 0, 0, 1], [0, 0, -1, 0], [0, -1, 0, 0], [1, 0, 0, 0]], dtype=float)
     M = (mu[:, None, None] * np.eye(4) + lam[:, None, None] * g[:, :, None] * g[:, None, :]

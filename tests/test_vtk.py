@@ -9,7 +9,7 @@ import pytest
 import taichi_pneuma as tp
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.io.vtk import VtkSeries
-from taichi_pneuma.terms.elastic import lame_parameters
+from taichi_pneuma.materials import lame_parameters
 
 
 def read_pvd(path):

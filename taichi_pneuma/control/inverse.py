@@ -45,8 +45,8 @@ from scipy.stats import qmc
 from ..errors import require, require_finite
 from ..scene import BuiltScene, Scene
 from ..solve.newton import NewtonOptions, NewtonSolver
-from ..solve.sensitivity import sensitivity
 from ..solve.result import Result
+from ..solve.sensitivity import sensitivity
 from ..solve.simulate import MAX_CUTS, NoEquilibrium, StepRecord, chamber_records, settle, tip_measures
 from .targets import Target
 

@@ -27,7 +27,6 @@ import meshio
 import numpy as np
 
 from ..fem.fields import ElementFields
-from ..terms.elastic import lame_parameters
 from .output import save_text, write_atomic
 
 SYMMETRIC_TENSOR = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))  # ParaView's 6-component order
@@ -66,7 +65,7 @@ class VtkSeries:
         for stale in self.folder.glob(f"{stem}_[0-9][0-9][0-9][0-9].vtu"):  # from an earlier run of this name
             stale.unlink()
         self.pvd = self.directory / f"{stem}.pvd"
-        self.mu, self.lam = lame_parameters(*built.scene.element_moduli(mesh))
+        self.material = built.elastic.law, built.elastic.parameters
         self.fields = ElementFields(mesh.vertices, mesh.triangles)
         self.chamber = np.full(mesh.n_vertices, -1, dtype=np.int32)
         for index, loop in enumerate(mesh.chambers):
@@ -76,7 +75,7 @@ class VtkSeries:
     def write(self, step, positions: np.ndarray, contact_force: np.ndarray | None = None) -> Path:
         """Write step (a simulate.StepRecord) at positions (n, 2); return the VTU's path."""
         mesh = self.mesh
-        fields = self.fields.at(positions, self.mu, self.lam)
+        fields = self.fields.at(positions, *self.material)
         stress = np.column_stack([fields["stress"][:, i, j] for i, j in SYMMETRIC_TENSOR])
         point_data = {"displacement": pad3(positions - mesh.vertices), "chamber": self.chamber}
         if contact_force is not None:

@@ -15,7 +15,7 @@ from ..terms import Term
 
 
 class Configuration:
-    """Rest positions X and displacements u of n vertices, (n, 2) float64 NumPy arrays; x = X + u.
+    """Rest positions X and displacements u of n vertices in dimension d, (n, d) float64 NumPy arrays; x = X + u.
 
     The terms' kernels take both as array arguments; set_displacements overwrites u in place."""
 
@@ -26,6 +26,10 @@ class Configuration:
     @property
     def n_vertices(self) -> int:
         return len(self.rest)
+
+    @property
+    def dim(self) -> int:
+        return self.rest.shape[1]
 
 
 class EnergyModel:
@@ -43,7 +47,7 @@ class EnergyModel:
 
     @property
     def n_dofs(self) -> int:
-        return 2 * self.config.n_vertices
+        return self.config.dim * self.config.n_vertices
 
     def add(self, term: Term) -> Term:
         self.terms.append(term)
@@ -53,7 +57,7 @@ class EnergyModel:
         return [t.name for t in self.terms]
 
     def set_displacements(self, u: np.ndarray) -> None:
-        self.config.u[:] = np.reshape(u, (-1, 2))
+        self.config.u[:] = np.reshape(u, self.config.u.shape)
 
     def energy(self) -> float:
         return float(sum(t.energy() for t in self.terms))
@@ -79,4 +83,4 @@ class EnergyModel:
         return [part for t in self.terms for part in t.low_rank()]
 
     def max_step(self, dx: np.ndarray) -> float:
-        return min((t.max_step(dx.reshape(-1, 2)) for t in self.terms), default=math.inf)
+        return min((t.max_step(dx.reshape(self.config.u.shape)) for t in self.terms), default=math.inf)

@@ -122,7 +122,7 @@ class NewtonSolver:
         return d, float(g @ d)
 
     def solve(self, u0: np.ndarray) -> tuple[np.ndarray, SolveRecord]:
-        """Minimise the model's energy over displacements from u0 (n, 2); returns the final u and the record."""
+        """Minimise the model's energy over displacements from u0 (n, d); returns the final u (n, d) and the record."""
         start = time.perf_counter()
         model, opts = self.model, self.options
         u = np.array(u0, dtype=np.float64).ravel()
@@ -166,7 +166,7 @@ class NewtonSolver:
             record.iterations += 1
             record.step_sizes.append(alpha)
         record.seconds = time.perf_counter() - start
-        return u.reshape(-1, 2), record
+        return u.reshape(model.config.u.shape), record
 
     def _line_search(self, u, d, g, energy, slope, record) -> tuple[float, float]:
         """Backtrack from min(1, 0.9 max_step); return (alpha, energy there), or (0, nan) if nothing is accepted."""

@@ -16,7 +16,6 @@ import numpy as np
 from ..fem.fields import triangle_fields
 from ..io.output import prepare_directory, save_json, save_npz, save_text, write_atomic
 from ..scene import BuiltScene, Scene
-from ..terms.elastic import lame_parameters
 
 
 @dataclass
@@ -85,8 +84,8 @@ class Result:
 
     def fields(self, step: int = -1) -> dict[str, np.ndarray]:
         """Per triangle at a step: det_F, max_stretch, stress (Cauchy, (m, 3, 3)), von_mises (fields.py)."""
-        mu, lam = lame_parameters(*self.scene.element_moduli(self.mesh))
-        return triangle_fields(self.mesh.vertices, self.positions[step], self.mesh.triangles, mu, lam)
+        return triangle_fields(self.mesh.vertices, self.positions[step], self.mesh.triangles,
+                               *self.scene.element_material(self.mesh))
 
     def summary(self, interrupted: bool = False) -> dict:
         """The figures of the run (the summary JSON); interrupted: the run was stopped after these steps."""

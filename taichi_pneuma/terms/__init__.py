@@ -1,22 +1,22 @@
 """Energy terms. A scene's total energy is the sum of the terms it names.
 
-Every term reads the model's Configuration (rest positions X and displacements u, (n, 2) NumPy
+Every term reads the model's Configuration (rest positions X and displacements u, (n, d) NumPy
 arrays; x = X + u) and offers
 
     energy() -> float                     its energy at the current x
-    gradient() -> (n, 2) array            dE/dx
+    gradient() -> (n, d) array            dE/dx
     hessian_pattern() -> (rows, cols)     fixed DOF indices of its sparse PSD Hessian triplets
     hessian_values(psd_only) -> (nnz,)    the triplet values at the current x; with psd_only=True a
                                           PSD approximation (for terms whose Hessian is indefinite)
     low_rank() -> [(dofs, u, c)]          PSD rank-1 parts c u u^T on the DOF subset `dofs`
     max_step(dx) -> float                 largest safe step fraction along dx (inf when unbounded)
 
-DOFs are interleaved: vertex i owns DOFs 2i (x) and 2i + 1 (y).
+DOFs are interleaved: vertex i owns DOFs d i .. d i + d - 1 (x, y, (z)).
 """
 
 from .base import Term, vertex_dofs
 from .chambers import AreaChamber, PressureChamber
 from .constraints import Clamp, NormalClamp
-from .elastic import NeoHookean
+from .elastic import Elasticity
 
-__all__ = ["AreaChamber", "Clamp", "NeoHookean", "NormalClamp", "PressureChamber", "Term", "vertex_dofs"]
+__all__ = ["AreaChamber", "Clamp", "Elasticity", "NormalClamp", "PressureChamber", "Term", "vertex_dofs"]

@@ -11,26 +11,33 @@ import math
 import numpy as np
 import taichi as ti
 
-VEC2 = ti.types.vector(2, ti.f64)
-Vec2s = ti.types.ndarray(dtype=VEC2, ndim=1)  # (n, 2) float64: positions, displacements, forces
+Nodal = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (n, d) float64: positions, displacements, forces, any d
 Scalars = ti.types.ndarray(dtype=ti.f64, ndim=1)  # (m,) float64
 Table = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (m, k) float64: per-element Hessian blocks
 Indices = ti.types.ndarray(dtype=ti.i32, ndim=1)  # (m,) int32 vertex indices
 Triples = ti.types.ndarray(dtype=ti.types.vector(3, ti.i32), ndim=1)  # (m, 3) int32 vertex triples
 
 
-def vertex_dofs(vertices: np.ndarray) -> np.ndarray:
-    """Interleaved DOF indices [2v0, 2v0+1, 2v1, 2v1+1, ...] of the given vertices."""
+def vectors(d: int):
+    """The kernel argument type of (n, d) float64 nodal data as n d-vectors (a Taichi vector has a fixed size)."""
+    return ti.types.ndarray(dtype=ti.types.vector(d, ti.f64), ndim=1)
+
+
+Vec2s = vectors(2)  # (n, 2) float64, for the planar terms' kernels
+
+
+def vertex_dofs(vertices: np.ndarray, d: int) -> np.ndarray:
+    """Interleaved DOF indices [d v0, d v0 + 1, ..., d v0 + d - 1, d v1, ...] of the given vertices in dimension d."""
     vertices = np.asarray(vertices, dtype=np.int64)
-    return np.column_stack([2 * vertices, 2 * vertices + 1]).ravel()
+    return (d * vertices[:, None] + np.arange(d)).ravel()
 
 
-def block_pattern(blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(rows, cols) of dense 2k x 2k Hessian blocks, one per row of `blocks` (m, k) vertex indices,
-    each block stored row-major: entry 2k a + b of block e is (dof a, dof b) of its vertices."""
+def block_pattern(blocks: np.ndarray, d: int) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, cols) of dense dk x dk Hessian blocks, one per row of `blocks` (m, k) vertex indices in dimension
+    d, each block stored row-major: entry dk i + j of block e is (dof i, dof j) of its vertices' DOFs."""
     m, k = blocks.shape
-    dofs = vertex_dofs(blocks.ravel()).reshape(m, 2 * k)
-    return np.repeat(dofs, 2 * k, axis=1).ravel(), np.tile(dofs, (1, 2 * k)).ravel()
+    dofs = vertex_dofs(blocks.ravel(), d).reshape(m, d * k)
+    return np.repeat(dofs, d * k, axis=1).ravel(), np.tile(dofs, (1, d * k)).ravel()
 
 
 def int32s(values) -> np.ndarray:
@@ -85,7 +92,7 @@ def smallest_positive_root(c0, c1, c2):
 class Term:
     """Defaults for the optional duties: no sparse Hessian, no rank-1 part, no step bound.
 
-    A term holds the model's Configuration (config.rest, config.u: (n, 2) NumPy arrays) and its own
+    A term holds the model's Configuration (config.rest, config.u: (n, d) NumPy arrays) and its own
     data as NumPy arrays, and evaluates itself by calling module-level kernels on them.
     reports_contact: whether -gradient() is a contact force the history reports.
     """

@@ -265,7 +265,7 @@ class SelfContact(Term):
             pairs.append(np.column_stack([p, a, b])[far])
         pairs = np.vstack(pairs)
         self.pairs = int32s(pairs)
-        self._rows, self._cols = block_pattern(pairs)
+        self._rows, self._cols = block_pattern(pairs, config.dim)
 
     def _energy(self) -> tuple[float, float]:
         return self_contact_energy(self.config.rest, self.config.u, self.pairs, self.dhat, self.kappa)

@@ -26,10 +26,10 @@ class Inertia(Term):
         n = config.n_vertices
         masses = np.asarray(masses, dtype=np.float64)
         self.mass_over_h2 = masses / dt**2
-        self.target = np.zeros((n, 2))  # uhat, zero at rest (u_0 = 0, v_0 = 0)
-        self._previous = np.zeros((n, 2))
-        self._dofs = vertex_dofs(np.arange(n))
-        self._diagonal = np.repeat(self.mass_over_h2, 2)
+        self.target = np.zeros_like(config.rest)  # uhat, zero at rest (u_0 = 0, v_0 = 0)
+        self._previous = np.zeros_like(config.rest)
+        self._dofs = vertex_dofs(np.arange(n), config.dim)
+        self._diagonal = np.repeat(self.mass_over_h2, config.dim)
 
     def energy(self) -> float:
         return 0.5 * float(self.mass_over_h2 @ np.sum((self.config.u - self.target) ** 2, axis=1))

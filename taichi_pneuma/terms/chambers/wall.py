@@ -86,7 +86,7 @@ class Chamber(Term):
         self.name = f"chamber:{name}"
         self.loop_vertices = np.asarray(loop, dtype=np.int64)
         self.loop = int32s(loop)
-        self.dofs = vertex_dofs(self.loop_vertices)
+        self.dofs = vertex_dofs(self.loop_vertices, config.dim)
         self.n_wall = len(loop)
         pairs, self.weights = area_form(self.n_wall, order, closed=origin is None)
         self.pairs = int32s(pairs)

@@ -1,0 +1,123 @@
+"""Stable neo-Hookean (Macklin-Mueller form): rest-stable, finite for inverted elements.
+
+Per unit rest volume, with J = det F and Lame-like parameters p = (mu, lam),
+
+    psi(F) = mu (1 - J) + lam/2 (1 - J)^2 + mu/2 (|F|_F^2 - 3),
+    mu = E / (2 (1 + nu)),   lam = E nu / ((1 + nu)(1 - 2 nu)).
+
+In plane strain (F_33 = 1) |F|^2 - 3 = |F2|^2 - 2 and J = det F2: the 2D law of the reference scene.
+With g = dJ/dF = cof F and c = mu + lam (1 - J):
+
+    P = dpsi/dF = mu F - c g,   M = d2psi/dF2 = mu I + lam g g^T - c H_J,   H_J = d2J/dF2,
+    (H_J)_(ij)(kl) = e_ikm e_jln F_mn   (e: the permutation symbol),
+
+which in the plane is constant: with vec(F) = (F00, F01, F10, F11), H_J has eigenvalue +1 on
+span{(1,0,0,1), (0,1,-1,0)} and -1 on span{(1,0,0,-1), (0,1,1,0)}.
+
+The 2D eigensystem of M is analytic (the fast path; 3D uses the Jacobi iteration until its closed form
+is added). mu I - c H_J is mu - c on the first plane and mu + c on the second. Split g = a u_+ + b u_-
+into its parts in the two planes (a, b >= 0, u_+- unit) and let w_+- complete each plane. Then
+
+    M = (mu - c) w_+ w_+^T + (mu + c) w_- w_-^T + [u_+ u_-] B [u_+ u_-]^T,
+    B = [[mu - c + lam a^2, lam a b], [lam a b, mu + c + lam b^2]],
+
+and the 2 x 2 block B has closed-form eigenpairs: four eigenpairs of M, no iteration.
+"""
+
+import numpy as np
+import taichi as ti
+
+from .law import Law, register
+
+SQRT_HALF = 0.7071067811865476
+
+
+def lame_parameters(youngs_modulus, poisson_ratio):
+    """(mu, lam) of an isotropic material from Young's modulus and Poisson's ratio (scalars or arrays)."""
+    e, nu = youngs_modulus, poisson_ratio
+    return e / (2.0 * (1.0 + nu)), e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+
+
+@ti.func
+def cofactor(F):
+    """cof F = dJ/dF of a 3 x 3 matrix: (cof F)_ij = F_(i+1)(j+1) F_(i+2)(j+2) - F_(i+1)(j+2) F_(i+2)(j+1), mod 3."""
+    C = ti.Matrix.zero(ti.f64, 3, 3)
+    for i, j in ti.static(ti.ndrange(3, 3)):
+        C[i, j] = F[(i + 1) % 3, (j + 1) % 3] * F[(i + 2) % 3, (j + 2) % 3] \
+            - F[(i + 1) % 3, (j + 2) % 3] * F[(i + 2) % 3, (j + 1) % 3]
+    return C
+
+
+@ti.func
+def plane_split(g, p, q):
+    """The part of g in the plane spanned by orthonormal p, q: its length a, unit direction u, and the
+    unit w completing the plane (u = p, w = q when that part vanishes)."""
+    s, t = g.dot(p), g.dot(q)
+    a = ti.sqrt(s * s + t * t)
+    uu, ww = p, q
+    if a > 0:
+        uu = (s * p + t * q) / a
+        ww = (-t * p + s * q) / a
+    return a, uu, ww
+
+
+@register
+class StableNeoHookean(Law):
+    name = "stable_neo_hookean"
+    parameter_names = ("mu", "lam")
+    analytic_dims = (2,)
+
+    @staticmethod
+    def parameters(youngs_modulus, poisson_ratio) -> np.ndarray:
+        return np.column_stack(lame_parameters(np.asarray(youngs_modulus, dtype=np.float64),
+                                               np.asarray(poisson_ratio, dtype=np.float64)))
+
+    @staticmethod
+    def modulus(parameters) -> np.ndarray:
+        return parameters[:, 0] + parameters[:, 1]
+
+    @staticmethod
+    @ti.func
+    def energy(F, p):
+        mu, lam = p[0], p[1]
+        J = F.determinant()
+        return mu * (1.0 - J) + 0.5 * lam * (1.0 - J) ** 2 + 0.5 * mu * (F.norm_sqr() - 3.0)
+
+    @staticmethod
+    @ti.func
+    def stress(F, p):
+        mu, lam = p[0], p[1]
+        return mu * F - (mu + lam * (1.0 - F.determinant())) * cofactor(F)
+
+    @staticmethod
+    @ti.func
+    def stress_derivative(F, p):
+        mu, lam = p[0], p[1]
+        g = cofactor(F)
+        c = mu + lam * (1.0 - F.determinant())
+        M = ti.Matrix.zero(ti.f64, 9, 9)
+        for i, j, k, l in ti.ndrange(3, 3, 3, 3):
+            h = 0.0  # (H_J)_(ij)(kl): nonzero for i != k, j != l, with m, n the third indices
+            if i != k and j != l:
+                sign = (1.0 if (k - i + 3) % 3 == 1 else -1.0) * (1.0 if (l - j + 3) % 3 == 1 else -1.0)
+                h = sign * F[3 - i - k, 3 - j - l]
+            M[3 * i + j, 3 * k + l] = lam * g[i, j] * g[k, l] - c * h + (mu if i == k and j == l else 0.0)
+        return M
+
+    @staticmethod
+    @ti.func
+    def eigensystem(F, p, d: ti.template()):
+        """The four eigenvalues and unit eigenvectors (rows of a 4 x 4 matrix) of the in-plane M (module docstring)."""
+        ti.static_assert(d == 2)
+        mu, lam = p[0], p[1]
+        g = ti.Vector([F[1, 1], -F[1, 0], -F[0, 1], F[0, 0]])  # cof of the in-plane block, = that of F
+        c = mu + lam * (1.0 - F.determinant())
+        r = SQRT_HALF
+        a, u_p, w_p = plane_split(g, ti.Vector([r, 0.0, 0.0, r]), ti.Vector([0.0, r, -r, 0.0]))
+        b, u_m, w_m = plane_split(g, ti.Vector([r, 0.0, 0.0, -r]), ti.Vector([0.0, r, r, 0.0]))
+        pp, q, s = mu - c + lam * a * a, lam * a * b, mu + c + lam * b * b  # B = [[pp, q], [q, s]]
+        mean, half = 0.5 * (pp + s), ti.sqrt(0.25 * (pp - s) ** 2 + q * q)
+        theta = 0.5 * ti.atan2(2.0 * q, pp - s)  # (cos, sin) theta: the eigenvector of mean + half
+        v1 = ti.cos(theta) * u_p + ti.sin(theta) * u_m
+        v2 = -ti.sin(theta) * u_p + ti.cos(theta) * u_m
+        return ti.Vector([mu - c, mu + c, mean + half, mean - half]), ti.Matrix.rows([w_p, w_m, v1, v2])

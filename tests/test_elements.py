@@ -1,0 +1,94 @@
+"""Element families: shape functions (interpolation, partition of unity, gradients by finite differences),
+quadrature rules exact to their degree and no further, the quadrature of a mesh, and boundary facets."""
+
+import math
+from itertools import product
+
+import numpy as np
+import pytest
+
+from taichi_pneuma.errors import PneumaInputError
+from taichi_pneuma.fem.elements import FAMILIES, TRIANGLE_P1, TRIANGLE_P2, boundary_facets, family_of
+from taichi_pneuma.scene import reference_scene
+
+RNG = np.random.default_rng(7)
+
+
+def random_reference_points(dim, count=20):
+    """Points inside the reference simplex (uniform barycentric weights, last one dropped)."""
+    weights = RNG.dirichlet(np.ones(dim + 1), size=count)
+    return weights[:, 1:]
+
+
+@pytest.mark.parametrize("family", FAMILIES, ids=lambda f: f.name)
+def test_shape_functions_interpolate_and_sum_to_one(family):
+    assert family.n_nodes == len(family.reference_nodes)
+    assert np.allclose(family.shape_functions(family.reference_nodes), np.eye(family.n_nodes), atol=1e-15)
+    points = random_reference_points(family.dim)
+    assert np.allclose(family.shape_functions(points).sum(axis=1), 1.0, atol=1e-14)
+    assert np.allclose(family.shape_gradients(points).sum(axis=1), 0.0, atol=1e-13)
+    # order p reproduces polynomials of degree p: sum_a N_a(x) f(X_a) = f(x) for f = x^i y^j, i + j <= order
+    for powers in product(range(family.order + 1), repeat=family.dim):
+        if sum(powers) <= family.order:
+            nodal = np.prod(family.reference_nodes ** np.array(powers), axis=1)
+            exact = np.prod(points ** np.array(powers), axis=1)
+            assert np.allclose(family.shape_functions(points) @ nodal, exact, atol=1e-14)
+
+
+@pytest.mark.parametrize("family", FAMILIES, ids=lambda f: f.name)
+def test_shape_gradients_match_finite_differences(family):
+    points, h = random_reference_points(family.dim), 1e-6
+    gradients = family.shape_gradients(points)
+    for i in range(family.dim):
+        step = h * np.eye(family.dim)[i]
+        fd = (family.shape_functions(points + step) - family.shape_functions(points - step)) / (2 * h)
+        assert np.abs(gradients[:, :, i] - fd).max() < 1e-8
+
+
+def monomial_mean(powers):
+    """The mean of prod x_i^p_i over the reference simplex: (prod p_i!) d! / (sum p_i + d)!."""
+    d = len(powers)
+    return math.prod(math.factorial(p) for p in powers) * math.factorial(d) / math.factorial(sum(powers) + d)
+
+
+@pytest.mark.parametrize("family", FAMILIES, ids=lambda f: f.name)
+def test_each_rule_is_exact_to_its_degree_and_no_further(family):
+    for degree, (points, weights) in family.cell.rules.items():
+        errors = {}
+        for powers in product(range(degree + 2), repeat=family.dim):
+            if sum(powers) <= degree + 1:
+                value = weights @ np.prod(points ** np.array(powers), axis=1)
+                errors[powers] = abs(value - monomial_mean(powers))
+        assert max(e for p, e in errors.items() if sum(p) <= degree) < 1e-15
+        assert max(e for p, e in errors.items() if sum(p) == degree + 1) > 1e-3
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_mesh_quadrature_weighs_the_area_and_differentiates_linear_fields_exactly(order):
+    mesh = reference_scene(cy=0.15, max_area=0.02, chamber_points=32, order=order).build().mesh
+    family = family_of(mesh.triangles, 2)
+    assert family is (TRIANGLE_P1 if order == 1 else TRIANGLE_P2)
+    gradients, weights = family.quadrature(mesh.vertices, mesh.triangles)
+    assert weights.shape == (mesh.n_triangles, len(family.rule[1])) and np.all(weights > 0)
+    assert weights.sum() == pytest.approx(mesh.area, rel=1e-12)
+    A = np.array([[0.3, -1.2], [0.7, 2.0]])  # a linear field f(X) = A X has gradient A at every point
+    assert np.allclose(np.einsum("mai,mqaj->mqij", (mesh.vertices @ A.T)[mesh.triangles], gradients), A, atol=1e-11)
+
+
+def test_unknown_element_table_names_the_families():
+    with pytest.raises(PneumaInputError, match="4 nodes in 2D.*P1 triangle"):
+        family_of(np.zeros((3, 4), dtype=int), 2)
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_boundary_facets_are_the_mesh_boundary_traversed_with_the_body_on_the_left(order):
+    mesh = reference_scene(cy=0.0, max_area=0.05, chamber_points=16, order=order).build().mesh
+    facets = boundary_facets(family_of(mesh.triangles, 2), mesh.triangles)
+    chamber_nodes = np.concatenate(mesh.chambers)
+    assert set(np.unique(facets)) == set(mesh.boundary) | set(chamber_nodes)
+    # each facet's corners run counter-clockwise around the body and clockwise around a hole (the outward
+    # normal lies to the right): the shoelace sum over the facets is the body's area
+    a, b = mesh.vertices[facets[:, 0]], mesh.vertices[facets[:, 1]]
+    assert 0.5 * np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) == pytest.approx(mesh.area, rel=1e-12)
+    if order == 2:  # the third node is the facet's midpoint
+        assert np.allclose(mesh.vertices[facets[:, 2]], 0.5 * (a + b), atol=1e-14)
