@@ -10,8 +10,6 @@ to that which fills the rest chamber at atmospheric pressure p_atm: n R T = q p_
 import math
 from dataclasses import dataclass
 
-import numpy as np
-
 from taichi_pneuma.errors import require, require_finite
 from taichi_pneuma.terms.chambers import Chamber, ChamberKind, register
 
