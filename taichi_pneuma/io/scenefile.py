@@ -14,7 +14,7 @@
     [[targets]]  tip = [x, y], angle (degrees, optional), weights = [w_x, w_y, w_angle]  (inverse control, in order)
 
 Every key is checked: an unknown key, a missing required one, or a value out of range is refused
-with its dotted path (e.g. ``chambers[1].semi_axes``). The format is declared once, in schema.py;
+with its dotted path (e.g. ``chambers[1].semi_axes``). The format is declared once, in sceneformat.py;
 key_reference() lists every key with its type, default and allowed values. A file over MAX_SCENE_BYTES is refused unread;
 ``name`` must be a plain file name (output.check_stem); without it the file's own name, reduced to one, is used.
 """
@@ -27,7 +27,8 @@ import tomllib
 
 from ..errors import PneumaInputError, require
 from ..scene import Scene
-from . import schema
+from . import sceneformat
+from .schema import KeyInfo
 from .output import reduce_to_stem
 
 MAX_SCENE_BYTES = 1_000_000
@@ -35,12 +36,12 @@ MAX_SCENE_BYTES = 1_000_000
 
 def read_scene(data: dict, name: str) -> Scene:
     """A Scene from parsed TOML (named `name` unless it has a name key); every error names its dotted key."""
-    return schema.read_scene(data, name, Scene)
+    return sceneformat.read_scene(data, name, Scene)
 
 
-def key_reference() -> list[schema.KeyInfo]:
+def key_reference() -> list[KeyInfo]:
     """Every key a scene file may have: its type, default, allowed values, when it applies and what it means."""
-    return schema.key_reference(Scene)
+    return sceneformat.key_reference(Scene)
 
 
 def load_scene(path: str | os.PathLike) -> Scene:

@@ -1,22 +1,19 @@
-"""The scene file's one declaration: reading (TOML data -> Scene), writing (Scene -> data), editing by dotted
-keys and the key reference all come from it, so the writer cannot drift from the reader.
+"""A file format declared once: from one tree of entries come reading (data -> objects, every error naming
+its dotted key), writing (objects -> data), editing by dotted keys and the key reference.
 
-A declaration is a tree of five kinds of entry:
-
-    Key(type, default, doc)           a value: float (any number), int, str, bool; tuple (an array, read as
+    Key(type, default, doc, allowed)  a value: float (any number), int, str, bool; tuple (an array, read as
                                       nested tuples) or list (an array, read as is). default: REQUIRED, a
-                                      value, None (optional: absent reads as None, None is not written) or
-                                      Same("material.E") (the value of a key read before)
+                                      value, or None (optional: absent reads as None, None is not written)
     Table(keys, make, parts)          a table: make(values by key) builds its object, parts(object) gives the
-                                      values back (read(write(x)) == x is the contract a property test checks)
+                                      values back; read(write(x)) == x is the contract (a property test checks it)
     Tables(table)                     an array of tables ([[chambers]], regions = [{...}, ...]), read as a tuple
     Variant(options, choose)          a tag key (shape = "ellipse") choosing the Table of further keys its table
                                       has; choose(object) names the option an object is written as
-    Named(registry, table)            optional named tables in the file's order (the effects)
+    Named(registry)                   optional tables named by a registry of dataclasses, in the file's order;
+                                      a dataclass's fields are its keys, typed by their annotations
 
-Reading checks every key's type, refuses unknown keys, and prefixes any error a constructor raises with the
-table's dotted path (``chambers[1]: ...``). The Scene's own classes (Material, Region, ChamberControl) come
-from the annotations of the Scene class passed in, so scene.py can import this module without a cycle.
+Reading checks every key's type, refuses unknown keys, and prefixes an error a constructor raises with
+the table's dotted path (``chambers[1]: ...``).
 """
 
 from __future__ import annotations
@@ -31,12 +28,7 @@ from typing import Callable
 import numpy as np
 import tomllib
 
-from ..control.targets import Target
 from ..errors import PneumaInputError, require
-from ..fem.geometry import (ORDERS, SIDES, ClampSelection, Ellipse, Geometry, Polygon, Rectangle, RectangleUnion,
-                            RoundedRectangle)
-from ..solve.schedule import ChamberSchedule
-from ..terms.effects import EFFECTS
 from .tomltext import dumps
 
 REQUIRED = object()
@@ -45,10 +37,15 @@ TYPE_NAMES = {float: "number", int: "integer", str: "string", bool: "boolean", t
 
 
 @dataclass(frozen=True)
-class Same:
-    """A default: the value of another key read before (``Same("material.E")``)."""
+class KeyInfo:
+    """One row of the key reference. key: dotted, [] for any item of an array of tables (chambers[].center)."""
 
     key: str
+    type: str
+    default: str
+    allowed: str = ""
+    when: str = ""  # the tag choosing the key, e.g. chambers[].shape = "ellipse"
+    doc: str = ""
 
 
 @dataclass(frozen=True)
@@ -58,6 +55,30 @@ class Key:
     doc: str = ""
     allowed: tuple = ()
 
+    def read(self, data: dict, name: str, path: str, known: set):
+        full = join(path, name)
+        if name not in data:
+            require(self.default is not REQUIRED, f"missing key '{full}'")
+            return self.default
+        value = data[name]
+        if self.type is float:
+            require(isinstance(value, (int, float)) and not isinstance(value, bool), f"{full} = {value!r} must be a number")
+        else:
+            kind = list if self.type is tuple else self.type
+            require(isinstance(value, kind) and not (kind is int and isinstance(value, bool)),
+                    f"{full} = {value!r} must be of type {kind.__name__}")
+        require(not self.allowed or value in self.allowed,
+                f"{full} = {value!r} is not one of {', '.join(map(str, self.allowed))}")
+        return freeze(value) if self.type is tuple else value
+
+    def write(self, value, name: str, data: dict) -> None:
+        if value is not None:
+            data[name] = plain(value)
+
+    def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
+        return [KeyInfo(join(path, name), TYPE_NAMES[self.type], default_text(self.default),
+                        ", ".join(map(str, self.allowed)), when, self.doc)]
+
 
 @dataclass(frozen=True)
 class Table:
@@ -65,8 +86,34 @@ class Table:
     make: Callable = dict
     parts: Callable = dict
     optional: bool = False  # absent: read as an empty table (every key at its default)
-    cls: type | None = None  # the class make() builds, where a Variant chooses by it
+    cls: type | None = None  # the class make() builds, by which a Variant knows an object's option
     doc: str = ""
+
+    def read(self, data: dict, name: str, path: str, known: set):
+        return self.read_table(data.get(name, {} if self.optional else None), join(path, name))
+
+    def read_table(self, data, path: str):
+        require(data is not None, f"missing key '{path}'")
+        require(isinstance(data, dict), f"{path or 'scene'} must be a table, not {data!r}")
+        known = set()
+        values = read_keys(self.keys, data, path, known)
+        unknown = sorted(set(data) - known)
+        require(not unknown, f"unknown key '{join(path, unknown[0]) if unknown else ''}' "
+                             f"(allowed here: {', '.join(sorted(known))})")
+        return build(path, lambda: self.make(values))
+
+    def write(self, value, name: str, data: dict) -> None:
+        data[name] = self.write_table(value)
+
+    def write_table(self, obj) -> dict:
+        data = {}
+        write_keys(self.keys, self.parts(obj), data)
+        return data
+
+    def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
+        key = join(path, name)
+        return [KeyInfo(key, "table", "{}" if self.optional else "required", "", when, self.doc)] + \
+            key_rows(self.keys, key)
 
 
 @dataclass(frozen=True)
@@ -74,25 +121,70 @@ class Tables:
     table: Table
     doc: str = ""
 
+    def read(self, data: dict, name: str, path: str, known: set) -> tuple:
+        items = Key(list, []).read(data, name, path, known)
+        return tuple(self.table.read_table(item, f"{join(path, name)}[{i}]") for i, item in enumerate(items))
+
+    def write(self, value, name: str, data: dict) -> None:
+        if value:
+            data[name] = [self.table.write_table(item) for item in value]
+
+    def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
+        key = join(path, name)
+        return [KeyInfo(key, "array of tables", "[]", "", when, self.doc)] + key_rows(self.table.keys, f"{key}[]")
+
 
 @dataclass(frozen=True)
 class Variant:
     options: dict
-    choose: Callable | None = None  # object -> option name; None: the option whose cls the object is
+    choose: Callable | None = None  # object -> its option's name; None: the option whose cls it is
     default: object = REQUIRED
     doc: str = ""
 
-    def name_of(self, obj) -> str:
-        if self.choose is not None:
-            return self.choose(obj)
-        return next(name for name, table in self.options.items() if isinstance(obj, table.cls))
+    def read(self, data: dict, name: str, path: str, known: set):
+        option = self.options[Key(str, self.default, allowed=tuple(self.options)).read(data, name, path, known)]
+        values = read_keys(option.keys, data, path, known)
+        return build(path, lambda: option.make(values))
+
+    def write(self, value, name: str, data: dict) -> None:
+        tag = self.choose(value) if self.choose else next(k for k, t in self.options.items() if isinstance(value, t.cls))
+        data[name] = tag
+        write_keys(self.options[tag].keys, self.options[tag].parts(value), data)
+
+    def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
+        key = join(path, name)
+        rows = [KeyInfo(key, "string", default_text(self.default), ", ".join(self.options), when, self.doc)]
+        for option, table in self.options.items():
+            rows += key_rows(table.keys, path, f'{key} = "{option}"')
+        return rows
 
 
 @dataclass(frozen=True)
 class Named:
-    registry: dict
-    table: Callable  # registered class -> its Table
+    registry: dict  # name -> dataclass
     doc: str = ""
+
+    def read(self, data: dict, name: str, path: str, known: set) -> tuple:
+        key, tables = join(path, name), data.get(name, {})
+        require(isinstance(tables, dict), f"{key} must be a table, not {tables!r}")
+        for option in tables:
+            require(option in self.registry, f"unknown key '{join(key, option)}' (allowed here: {', '.join(self.registry)})")
+        return tuple(dataclass_table(self.registry[option]).read_table(table, join(key, option))
+                     for option, table in tables.items())
+
+    def write(self, value, name: str, data: dict) -> None:
+        names = {cls: option for option, cls in self.registry.items()}
+        if value:
+            data[name] = {names[type(item)]: dataclass_table(type(item)).write_table(item) for item in value}
+
+    def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
+        key = join(path, name)
+        rows = [KeyInfo(key, "table", "{}", ", ".join(self.registry), when, self.doc)]
+        for option, cls in self.registry.items():
+            table = dataclass_table(cls)
+            rows += [KeyInfo(join(key, option), "table", "none", "", when, table.doc)] + \
+                key_rows(table.keys, join(key, option))
+        return rows
 
 
 def record(cls, doc: str = "", **keys) -> Table:
@@ -101,8 +193,9 @@ def record(cls, doc: str = "", **keys) -> Table:
                  cls=cls, doc=doc)
 
 
-def effect_table(cls) -> Table:
-    """An effect's table: its dataclass fields, typed by their annotations (float, int, str, bool, tuple, list)."""
+@functools.cache
+def dataclass_table(cls) -> Table:
+    """A table of every field of the dataclass cls, typed by its annotation (float, int, str, bool, tuple, list)."""
     hints = typing.get_type_hints(cls)
     keys = {}
     for f in dataclasses.fields(cls):
@@ -115,7 +208,22 @@ def effect_table(cls) -> Table:
     return record(cls, " ".join((cls.__doc__ or "").split("\n\n")[0].split()), **keys)
 
 
-# --- reading ---
+def read_keys(keys: dict, data: dict, path: str, known: set) -> dict:
+    """The values of keys (and of the keys their variants choose) in the table data at path."""
+    known |= set(keys)
+    return {name: entry.read(data, name, path, known) for name, entry in keys.items()}
+
+
+def write_keys(keys: dict, values: dict, data: dict) -> None:
+    if set(values) != set(keys):
+        raise TypeError(f"parts() gave the keys {sorted(values)}; the declaration has {sorted(keys)}")
+    for name, entry in keys.items():
+        entry.write(values[name], name, data)
+
+
+def key_rows(keys: dict, path: str, when: str = "") -> list[KeyInfo]:
+    return [row for name, entry in keys.items() for row in entry.rows(path, name, when)]
+
 
 def join(path: str, key: str) -> str:
     return f"{path}.{key}" if path else key
@@ -126,76 +234,6 @@ def freeze(value: list) -> tuple:
     inner lists, which the constructors refuse showing them as written)."""
     return tuple(freeze(v) for v in value) if all(isinstance(v, list) for v in value) else tuple(value)
 
-
-def build(path: str, make):
-    """make(), with any PneumaInputError it raises prefixed with the table's path (unless it names a key in it)."""
-    try:
-        return make()
-    except PneumaInputError as exc:
-        if not path or f"{path}." in str(exc):
-            raise
-        raise PneumaInputError(f"{path}: {exc}") from None
-
-
-def read_key(key: Key, data: dict, name: str, path: str, scope: dict):
-    full = join(path, name)
-    if name not in data:
-        require(key.default is not REQUIRED, f"missing key '{full}'")
-        return scope[key.default.key] if isinstance(key.default, Same) else key.default
-    value = data[name]
-    if key.type is float:
-        require(isinstance(value, (int, float)) and not isinstance(value, bool), f"{full} = {value!r} must be a number")
-    else:
-        kind = list if key.type is tuple else key.type
-        require(isinstance(value, kind) and not (kind is int and isinstance(value, bool)),
-                f"{full} = {value!r} must be of type {kind.__name__}")
-    require(not key.allowed or value in key.allowed,
-            f"{full} = {value!r} is not one of {', '.join(map(str, key.allowed))}")
-    return freeze(value) if key.type is tuple else value
-
-
-def read_keys(keys: dict, data: dict, path: str, scope: dict, known: set) -> dict:
-    """The values of keys (and of the keys of the options their variants choose) in data."""
-    values = {}
-    for name, entry in keys.items():
-        known.add(name)
-        if isinstance(entry, Key):
-            values[name] = scope[re.sub(r"\[\d+\]", "[]", join(path, name))] = read_key(entry, data, name, path, scope)
-        elif isinstance(entry, Variant):
-            tag = read_key(Key(str, entry.default, allowed=tuple(entry.options)), data, name, path, scope)
-            option = entry.options[tag]
-            option_values = read_keys(option.keys, data, path, scope, known)
-            values[name] = build(path, lambda: option.make(option_values))
-        elif isinstance(entry, Table):
-            values[name] = read_table(entry, data.get(name, {} if entry.optional else None), join(path, name), scope)
-        elif isinstance(entry, Tables):
-            items = read_key(Key(list, []), data, name, path, scope)
-            values[name] = tuple(read_table(entry.table, item, f"{join(path, name)}[{i}]", scope)
-                                 for i, item in enumerate(items))
-        else:  # Named
-            named = data.get(name, {})
-            require(isinstance(named, dict), f"{join(path, name)} must be a table, not {named!r}")
-            for key in named:
-                require(key in entry.registry, f"unknown key '{join(join(path, name), key)}' "
-                                               f"(allowed here: {', '.join(entry.registry)})")
-            values[name] = tuple(read_table(entry.table(entry.registry[key]), item, join(join(path, name), key), scope)
-                                 for key, item in named.items())
-    return values
-
-
-def read_table(table: Table, data, path: str, scope: dict):
-    if data is None:
-        raise PneumaInputError(f"missing key '{path}'")
-    require(isinstance(data, dict), f"{path or 'scene'} must be a table, not {data!r}")
-    known = set()
-    values = read_keys(table.keys, data, path, scope, known)
-    unknown = sorted(set(data) - known)
-    require(not unknown, f"unknown key '{join(path, unknown[0]) if unknown else ''}' "
-                         f"(allowed here: {', '.join(sorted(known))})")
-    return build(path, lambda: table.make(values))
-
-
-# --- writing ---
 
 def plain(value):
     """Tuples to lists and NumPy scalars/arrays to Python numbers, recursively."""
@@ -208,229 +246,32 @@ def plain(value):
     return value
 
 
-def write_keys(keys: dict, values: dict, data: dict) -> None:
-    """Write the values of keys into data; None, no tables and no named tables are not written."""
-    if set(values) != set(keys):
-        raise TypeError(f"parts() gave the keys {sorted(values)}, the declaration has {sorted(keys)}")
-    for name, entry in keys.items():
-        value = values[name]
-        if isinstance(entry, Key):
-            written = plain(value)
-        elif isinstance(entry, Variant):
-            written = entry.name_of(value)
-        elif isinstance(entry, Table):
-            written = write_table(entry, value)
-        elif isinstance(entry, Tables):
-            written = [write_table(entry.table, item) for item in value] or None
-        else:  # Named
-            written = {item.name: write_table(entry.table(type(item)), item) for item in value} or None
-        if written is not None:
-            data[name] = written
-        if isinstance(entry, Variant):
-            option = entry.options[written]
-            write_keys(option.keys, option.parts(value), data)
-
-
-def write_table(table: Table, obj) -> dict:
-    data = {}
-    write_keys(table.keys, table.parts(obj), data)
-    return data
-
-
-# --- the key reference ---
-
-@dataclass(frozen=True)
-class KeyInfo:
-    """One row of the key reference. key: dotted, [] for any item of an array of tables (chambers[].center)."""
-
-    key: str
-    type: str
-    default: str
-    allowed: str = ""
-    when: str = ""  # the variant choosing the key, e.g. chambers[].shape = "ellipse"
-    doc: str = ""
+def build(path: str, make):
+    """make(), with a PneumaInputError it raises prefixed with the table's path (unless it names a key in it)."""
+    try:
+        return make()
+    except PneumaInputError as exc:
+        if not path or f"{path}." in str(exc):
+            raise
+        raise PneumaInputError(f"{path}: {exc}") from None
 
 
 def default_text(default) -> str:
     if default is REQUIRED:
         return "required"
-    if default is None:
-        return "none"
-    if isinstance(default, Same):
-        return f"same as {default.key}"
-    return dumps({"v": plain(default)})[4:].strip()
-
-
-def key_rows(keys: dict, path: str, when: str = "") -> list[KeyInfo]:
-    rows = []
-    for name, entry in keys.items():
-        key = join(path, name)
-        if isinstance(entry, Key):
-            rows.append(KeyInfo(key, TYPE_NAMES[entry.type], default_text(entry.default),
-                                ", ".join(map(str, entry.allowed)), when, entry.doc))
-        elif isinstance(entry, Variant):
-            rows.append(KeyInfo(key, "string", default_text(entry.default), ", ".join(entry.options), when, entry.doc))
-            for option, table in entry.options.items():
-                rows += key_rows(table.keys, path, f'{key} = "{option}"')
-        elif isinstance(entry, Table):
-            rows.append(KeyInfo(key, "table", "{}" if entry.optional else "required", "", when, entry.doc))
-            rows += key_rows(entry.keys, key, when)
-        elif isinstance(entry, Tables):
-            rows.append(KeyInfo(key, "array of tables", "[]", "", when, entry.doc))
-            rows += key_rows(entry.table.keys, f"{key}[]", when)
-        else:  # Named
-            rows.append(KeyInfo(key, "table", "{}", ", ".join(entry.registry), when, entry.doc))
-            for option, cls in entry.registry.items():
-                table = entry.table(cls)
-                rows.append(KeyInfo(join(key, option), "table", "none", "", when, table.doc))
-                rows += key_rows(table.keys, join(key, option))
-    return rows
-
-
-# --- the scene file ---
-
-PAIR, BOX = "[x, y]", "[x0, y0, x1, y1]"
-POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3"))
-BODY_SHAPES = Variant({
-    "rectangle": record(Rectangle, "an axis-aligned rectangle", center=Key(tuple, (0.0, 0.0), PAIR),
-                        size=Key(tuple, doc="[width, height]")),
-    "polygon": POLYGON,
-    "union": record(RectangleUnion, "a union of axis-aligned rectangles (one region, no holes)",
-                    rectangles=Tables(record(Rectangle, center=Key(tuple, doc=PAIR), size=Key(tuple, doc="[w, h]")))),
-}, doc="the body's outline")
-CHAMBER_SHAPES = Variant({
-    "ellipse": record(Ellipse, "an ellipse", center=Key(tuple, doc=PAIR), semi_axes=Key(tuple, doc="[a, b]"),
-                      points=Key(int, 64, "wall points, 8 or more")),
-    "rounded_rectangle": record(RoundedRectangle, "a rectangle with quarter-circle corners",
-                                center=Key(tuple, doc=PAIR), size=Key(tuple, doc="[w, h]"),
-                                radius=Key(float, doc="corner radius, below half the shorter side"),
-                                corner_points=Key(int, 6, "points per corner")),
-    "polygon": POLYGON,
-}, doc="the chamber's wall")
-TARGET = record(Target, "a pose the tip should reach (inverse control)", tip=Key(tuple, doc=PAIR),
-                angle=Key(float, None, "tip rotation in degrees (none: free)"),
-                weights=Key(tuple, (1.0, 1.0, 1.0), "[w_x, w_y, w_angle]"))
-
-
-def chamber_controls(control_class) -> tuple[Variant, Callable]:
-    """The chamber control kinds in ONE place: the keys each adds to a [[chambers]] table, and
-    make(kind, params, keyframes, bounds) -> control_class, the inverse of the Variant's parts."""
-    area = Table({"stiffness": Key(float, 1e5, "penalty stiffness k of the area constraint")},
-                 make=lambda v: ("area", v), parts=lambda c: {"stiffness": c.stiffness})
-    pressure = Table({"allow_vacuum": Key(bool, False, "allow a negative pressure (suction)")},
-                     make=lambda v: ("pressure", v), parts=lambda c: {"allow_vacuum": c.schedule.allow_vacuum})
-
-    def make(kind: str, params: dict, keyframes, bounds):
-        if kind == "area":
-            return control_class(ChamberSchedule(kind, keyframes), params["stiffness"], bounds)
-        return control_class(ChamberSchedule(kind, keyframes, params["allow_vacuum"]), bounds=bounds)
-
-    variant = Variant({"area": area, "pressure": pressure}, lambda c: c.schedule.control, "area",
-                      "what the keyframes' values are: area ratios or pressures")
-    return variant, make
-
-
-def item_type(hint):
-    """tuple[X, ...] -> X; X -> X."""
-    return typing.get_args(hint)[0] if typing.get_origin(hint) is tuple else hint
-
-
-@functools.cache
-def scene_table(scene_class) -> Table:
-    """The declaration of a scene file for scene_class (scene.Scene), whose annotations name the classes
-    of its material, regions and controls."""
-    hints = typing.get_type_hints(scene_class)
-    material_class, region_class, control_class = (item_type(hints[k]) for k in ("material", "regions", "controls"))
-    controls, make_control = chamber_controls(control_class)
-    region = Table({"box": Key(tuple, doc=BOX), "E": Key(float, Same("material.E")), "nu": Key(float, Same("material.nu"))},
-                   make=lambda v: region_class(v["box"], material_class(v["E"], v["nu"])),
-                   parts=lambda r: {"box": r.box, "E": r.material.youngs_modulus, "nu": r.material.poisson_ratio},
-                   doc="a material for the triangles whose centroid lies in box; later regions win")
-    material = Table({"E": Key(float, 1e4, "Young's modulus, > 0"), "nu": Key(float, 0.45, "Poisson's ratio, in (-1, 0.5)"),
-                      "regions": Tables(region)},
-                     make=lambda v: (material_class(v["E"], v["nu"]), v["regions"]),
-                     parts=lambda s: {"E": s.material.youngs_modulus, "nu": s.material.poisson_ratio,
-                                      "regions": s.regions},
-                     optional=True, doc="the stable neo-Hookean material")
-    chamber = Table({"name": Key(str, doc="distinct among the chambers"), "shape": CHAMBER_SHAPES, "control": controls,
-                     "keyframes": Key(tuple, doc="[[step, value], ...], steps whole and increasing"),
-                     "bounds": Key(tuple, None, "[min, max] of the command under inverse control")},
-                    make=lambda v: (v["name"], v["shape"], make_control(*v["control"], v["keyframes"], v["bounds"])),
-                    parts=lambda c: {"name": c[0], "shape": c[1], "control": c[2],
-                                     "keyframes": c[2].schedule.keyframes, "bounds": c[2].bounds})
-
-    def make_scene(v):
-        require(v["chambers"], "scene names no chamber: add at least one [[chambers]] table")
-        (material, regions), (clamp, clamp_stiffness) = v["material"], v["clamp"]
-        geometry = Geometry(v["body"], tuple((name, shape) for name, shape, _ in v["chambers"]),
-                            v["mesh"]["max_area"], clamp, v["mesh"]["order"])
-        return scene_class(geometry, tuple(control for *_, control in v["chambers"]), v["schedule"]["increments"],
-                           material, regions, clamp_stiffness, v["effects"], v["name"], v["targets"])
-
-    def mesh_parts(geometry):
-        require(geometry.refinements == 0, f"a geometry refined {geometry.refinements} times has no scene-file form "
-                                           f"(scene files have no refinements key)")
-        return {"max_area": geometry.max_area, "order": geometry.order}
-
-    return Table({
-        "name": Key(str, None, "names the result files (a plain file name); none: the scene file's own name"),
-        "description": Key(str, "", "free text, not kept"),
-        "body": Table({"shape": BODY_SHAPES}, make=lambda v: v["shape"], parts=lambda body: {"shape": body}),
-        "mesh": Table({"max_area": Key(float, 0.0012, "largest triangle area"),
-                       "order": Key(int, 1, "1: linear triangles, 2: quadratic", ORDERS)},
-                      parts=mesh_parts, optional=True),
-        "material": material,
-        "clamp": Table({"side": Key(str, None, "the clamped side (without box: left)", SIDES),
-                        "box": Key(tuple, None, f"{BOX}: the vertices in it are clamped"),
-                        "stiffness": Key(float, 1e9, "penalty stiffness of the clamp")},
-                       make=lambda v: (ClampSelection("left" if v["side"] is None and v["box"] is None else v["side"],
-                                                      v["box"]), v["stiffness"]),
-                       parts=lambda s: {"side": s.geometry.clamp.side, "box": s.geometry.clamp.box,
-                                        "stiffness": s.clamp_stiffness}, optional=True),
-        "chambers": Tables(chamber, "the chambers, at least one"),
-        "schedule": Table({"increments": Key(int, doc="solves after the rest state")},
-                          parts=lambda s: {"increments": s.increments}),
-        "effects": Named(EFFECTS, effect_table, "the effects the scene adds, by name"),
-        "targets": Tables(TARGET, "poses for inverse control, in order"),
-    }, make=make_scene, parts=lambda s: {
-        "name": s.name, "description": None, "body": s.geometry.body, "mesh": s.geometry, "material": s, "clamp": s,
-        "chambers": [(name, shape, control) for (name, shape), control in zip(s.geometry.chambers, s.controls)],
-        "schedule": s, "effects": s.effects, "targets": s.targets})
-
-
-def read_scene(data: dict, name: str, scene_class):
-    """A scene_class from the data of a scene file; name when it has no name key. Errors name their dotted key."""
-    if isinstance(data, dict):
-        data = {"name": name, **data}
-    return read_table(scene_table(scene_class), data, "", {})
-
-
-def scene_data(scene) -> dict:
-    """The scene as the data of a scene file, every key explicit (defaults included) but for absent optional ones."""
-    return write_table(scene_table(type(scene)), scene)
-
-
-def to_toml(scene) -> str:
-    """The scene as a scene file (TOML text) that reads back to an equal scene."""
-    return dumps(scene_data(scene))
-
-
-def key_reference(scene_class) -> list[KeyInfo]:
-    """Every key of the scene file: its type, default, allowed values, when it applies and what it means."""
-    return key_rows(scene_table(scene_class).keys, "")
+    return "none" if default is None else dumps({"v": plain(default)})[4:].strip()
 
 
 # --- editing by dotted keys ---
 
-def with_values(scene, values: dict):
-    """A copy of scene with the dotted keys of `values` set, validated like a scene file.
-
-    A bad key or value raises one PneumaInputError naming the key."""
-    data = scene_data(scene)
+def edited(root: Table, obj, values: dict):
+    """A copy of obj with the dotted keys of `values` set in its data, read back (validated) through root;
+    a bad key or value raises one PneumaInputError naming the key."""
+    data = root.write_table(obj)
     for key, value in values.items():
         set_key(data, key, plain(value))
     try:
-        return read_scene(data, scene.name, type(scene))
+        return root.read_table(data, "")
     except PneumaInputError as exc:
         message = str(exc)
         if not any(key in message for key in values):
@@ -450,7 +291,7 @@ def parse_key(key: str) -> list:
 
 
 def set_key(data: dict, key: str, value) -> None:
-    """Set a dotted key in nested scene data; missing tables on the way are created (e.g. a new effect)."""
+    """Set a dotted key in nested data; missing tables on the way are created (e.g. a new effect)."""
     parts = parse_key(key)
     node, path = data, ""
     for i, part in enumerate(parts):

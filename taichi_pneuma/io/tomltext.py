@@ -57,7 +57,8 @@ def _value(v) -> str:
     if isinstance(v, float):
         require(np.isfinite(v), f"{v!r} cannot be written to a scene file")
         if v != 0 and not 1e-3 <= abs(v) < 1e5:  # 1e+09 rather than 1000000000.0: the shortest exact form
-            return next(s for s in (f"{v:.{p}e}" for p in range(17)) if float(s) == v)
+            # (none for a subnormal once Taichi has set flush-to-zero: repr then)
+            return next((s for s in (f"{v:.{p}e}" for p in range(17)) if float(s) == v), repr(v))
         return repr(v)
     if isinstance(v, str):
         return _string(v)
