@@ -7,8 +7,9 @@ its dotted key), writing (objects -> data), editing by dotted keys and the key r
     Table(keys, make, parts)          a table: make(values by key) builds its object, parts(object) gives the
                                       values back; read(write(x)) == x is the contract (a property test checks it)
     Tables(table)                     an array of tables ([[chambers]], regions = [{...}, ...]), read as a tuple
-    Variant(options, choose)          a tag key (shape = "ellipse") choosing the Table of further keys its table
-                                      has; choose(object) names the option an object is written as
+    Variant(options, choose)          a tag key (shape = "ellipse") choosing the Table (or the registered
+                                      dataclass) of further keys its table has; choose(object) names the
+                                      option an object is written as
     Named(registry)                   optional tables named by a registry of dataclasses, in the file's order;
                                       a dataclass's fields are its keys, typed by their annotations
 
@@ -136,26 +137,30 @@ class Tables:
 
 @dataclass(frozen=True)
 class Variant:
-    options: dict
-    choose: Callable | None = None  # object -> its option's name; None: the option whose cls it is
+    options: dict  # name -> Table, or a registry: name -> dataclass (its fields are the option's keys)
+    choose: Callable | None = None  # object -> its option's name; None: the option whose class it is
     default: object = REQUIRED
     doc: str = ""
 
+    def table(self, option: str) -> Table:
+        entry = self.options[option]
+        return entry if isinstance(entry, Table) else dataclass_table(entry)
+
     def read(self, data: dict, name: str, path: str, known: set):
-        option = self.options[Key(str, self.default, allowed=tuple(self.options)).read(data, name, path, known)]
+        option = self.table(Key(str, self.default, allowed=tuple(self.options)).read(data, name, path, known))
         values = read_keys(option.keys, data, path, known)
         return build(path, lambda: option.make(values))
 
     def write(self, value, name: str, data: dict) -> None:
-        tag = self.choose(value) if self.choose else next(k for k, t in self.options.items() if isinstance(value, t.cls))
+        tag = self.choose(value) if self.choose else next(k for k in self.options if isinstance(value, self.table(k).cls))
         data[name] = tag
-        write_keys(self.options[tag].keys, self.options[tag].parts(value), data)
+        write_keys(self.table(tag).keys, self.table(tag).parts(value), data)
 
     def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
         key = join(path, name)
         rows = [KeyInfo(key, "string", default_text(self.default), ", ".join(self.options), when, self.doc)]
-        for option, table in self.options.items():
-            rows += key_rows(table.keys, path, f'{key} = "{option}"')
+        for option in self.options:
+            rows += key_rows(self.table(option).keys, path, f'{key} = "{option}"')
         return rows
 
 
