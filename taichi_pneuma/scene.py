@@ -18,6 +18,7 @@ import numpy as np
 from . import runtime
 from .errors import require, require_finite
 from .fem.geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
+from .io import sceneformat
 from .io.output import check_stem
 from .materials import StableNeoHookean
 from .solve.model import EnergyModel
@@ -107,8 +108,7 @@ class Scene:
 
     def to_toml(self) -> str:
         """This scene as a scene file (TOML); scenefile.load_scene reads it back to an equal scene."""
-        from .io.scenetoml import to_toml
-        return to_toml(self)
+        return sceneformat.to_toml(self)
 
     def with_value(self, key: str, value) -> "Scene":
         """A copy with one dotted scene-file key changed (e.g. "chambers[0].center[1]", 0.1), validated
@@ -117,8 +117,7 @@ class Scene:
 
     def with_values(self, values: dict) -> "Scene":
         """A copy with several dotted keys changed at once (validated once, after all are set)."""
-        from .io.scenetoml import with_values
-        return with_values(self, values)
+        return sceneformat.with_values(self, values)
 
     @property
     def schedule(self) -> Schedule:

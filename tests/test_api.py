@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 import taichi_pneuma as tp
-from taichi_pneuma.io.scenetoml import parse_assignment, scene_data
+from taichi_pneuma.io.sceneformat import scene_data
+from taichi_pneuma.io.schema import parse_assignment
 from taichi_pneuma.render.plots import command_axis
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -6,7 +6,7 @@ import pytest
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.geometry import Ellipse, Geometry, PointSet, Rectangle, Roller
 from taichi_pneuma.io.scenefile import read_scene
-from taichi_pneuma.io.scenetoml import scene_data
+from taichi_pneuma.io.sceneformat import scene_data
 from taichi_pneuma.scene import Scene, reference_scene
 from taichi_pneuma.solve.model import Configuration
 from taichi_pneuma.solve.simulate import run_schedule

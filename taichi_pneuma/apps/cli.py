@@ -20,7 +20,7 @@ from ..api import Result, simulate
 from ..errors import PneumaInputError, require, require_finite
 from ..fem.geometry import BeamGeometry
 from ..io.scenefile import load_scene
-from ..io.scenetoml import parse_assignment
+from ..io.schema import parse_assignment
 from ..io.vtk import VtkSeries
 from ..render.frames import BACKENDS, COLOR_FIELDS
 from ..scene import Scene, reference_scene

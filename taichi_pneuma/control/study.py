@@ -42,7 +42,8 @@ from .. import limits, runtime
 from ..errors import PneumaInputError, require, require_finite
 from ..io.output import check_stem, prepare_directory, save_json, write_atomic
 from ..io.scenefile import read_scene
-from ..io.scenetoml import parse_assignment, parse_key, scene_data
+from ..io.sceneformat import scene_data
+from ..io.schema import parse_assignment, parse_key
 from ..scene import Scene
 from ..solve.newton import NewtonOptions
 from ..solve.simulate import MAX_CUTS, RampStopped

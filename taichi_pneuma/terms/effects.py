@@ -1,6 +1,9 @@
 """Effects a scene may name, each a small spec that builds its term(s) when (and only when) it is named.
 
-An effect's terms(config, mesh, lumped_area) returns the terms it adds to the energy model;
+An effect is a frozen dataclass registered in EFFECTS under its name: its fields are the keys of its
+[effects.<name>] table in a scene file, read and written with the types their annotations declare
+(float: any number; int, str, bool; tuple or list: an array), a field's default being the key's.
+Its terms(config, mesh, lumped_area) returns the terms it adds to the energy model;
 lumped_area[i] is the integral of node i's shape function over the body (mesh.nodal_areas(): a third of
 the rest area of the triangles at a linear-element vertex; mass = density x it).
 """

@@ -1,0 +1,171 @@
+"""The scene file's format, declared once (schema.py's entries): read, written, edited by dotted keys and
+listed in the key reference from this one declaration.
+
+The classes the scene module defines (the scene, its material, regions and chamber controls) are taken
+from the annotations of the Scene class passed in, so that scene.py imports this module without a cycle.
+"""
+
+from __future__ import annotations
+
+import functools
+import typing
+
+from ..control.targets import Target
+from ..errors import require
+from ..fem.geometry import (
+    ORDERS,
+    SIDES,
+    Ellipse,
+    Geometry,
+    PointSet,
+    Polygon,
+    Rectangle,
+    RectangleUnion,
+    Roller,
+    RoundedRectangle,
+)
+from ..solve.schedule import ChamberSchedule
+from ..terms.chambers import KINDS
+from ..terms.effects import EFFECTS
+from .schema import Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
+from .tomltext import dumps
+
+PAIR, BOX = "[x, y]", "[x0, y0, x1, y1]"
+POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3"))
+BODY_SHAPES = Variant({
+    "rectangle": record(Rectangle, "an axis-aligned rectangle", center=Key(tuple, (0.0, 0.0), PAIR),
+                        size=Key(tuple, doc="[width, height]")),
+    "polygon": POLYGON,
+    "union": record(RectangleUnion, "a union of axis-aligned rectangles (one region, no holes)",
+                    rectangles=Tables(record(Rectangle, center=Key(tuple, doc=PAIR), size=Key(tuple, doc="[w, h]")))),
+}, doc="the body's outline")
+CHAMBER_SHAPES = Variant({
+    "ellipse": record(Ellipse, "an ellipse", center=Key(tuple, doc=PAIR), semi_axes=Key(tuple, doc="[a, b]"),
+                      points=Key(int, 64, "wall points, 8 or more")),
+    "rounded_rectangle": record(RoundedRectangle, "a rectangle with quarter-circle corners",
+                                center=Key(tuple, doc=PAIR), size=Key(tuple, doc="[w, h]"),
+                                radius=Key(float, doc="corner radius, below half the shorter side"),
+                                corner_points=Key(int, 6, "points per corner")),
+    "polygon": POLYGON,
+}, doc="the chamber's wall")
+TARGET = record(Target, "a pose the tip should reach (inverse control)", tip=Key(tuple, doc=PAIR),
+                angle=Key(float, None, "tip rotation in degrees (none: free)"),
+                weights=Key(tuple, (1.0, 1.0, 1.0), "[w_x, w_y, w_angle]"))
+
+
+ROLLER = record(Roller, "a roller support: the nodes' displacement along normal held, tangential motion free",
+                normal=Key(tuple, doc="[nx, ny]"),
+                point=Key(tuple, None, "[x, y]: the nodes within tolerance of the line through it, normal to normal"),
+                box=Key(tuple, None, f"{BOX}: the nodes in it (instead of point)"), tolerance=Key(float, 1e-6))
+
+
+def point_set(default_side: str, **more) -> dict:
+    """The keys of a [clamp] or [tip] node set: side, or box (then no side)."""
+    return {"side": Key(str, None, f"a side of the body's bounding box (without box: {default_side})", SIDES),
+            "box": Key(tuple, None, f"{BOX}: the nodes in it"), **more}
+
+
+def make_point_set(v: dict, default_side: str) -> PointSet:
+    return PointSet(default_side if v["side"] is None and v["box"] is None else v["side"], v["box"])
+
+
+def item_type(hint):
+    """tuple[X, ...] -> X; X -> X."""
+    return typing.get_args(hint)[0] if typing.get_origin(hint) is tuple else hint
+
+
+@functools.cache
+def scene_table(scene_class) -> Table:
+    """The declaration of a scene file of scene_class (scene.Scene)."""
+    hints = typing.get_type_hints(scene_class)
+    material_class, region_class, control_class = (item_type(hints[k]) for k in ("material", "regions", "controls"))
+    region = Table({"box": Key(tuple, doc=BOX), "E": Key(float, None, "none: material.E"),
+                    "nu": Key(float, None, "none: material.nu")},
+                   parts=lambda r: {"box": r.box, "E": r.material.youngs_modulus, "nu": r.material.poisson_ratio},
+                   doc="a material for the triangles whose centroid lies in box; later regions win")
+
+    def make_material(v):  # the base first, then each region (its E and nu by default the base's)
+        base = material_class(v["E"], v["nu"])
+        return base, tuple(build(f"material.regions[{i}]", lambda: region_class(r["box"], material_class(
+            base.youngs_modulus if r["E"] is None else r["E"], base.poisson_ratio if r["nu"] is None else r["nu"])))
+            for i, r in enumerate(v["regions"]))
+
+    material = Table({"E": Key(float, 1e4, "Young's modulus, > 0"),
+                      "nu": Key(float, 0.45, "Poisson's ratio, in (-1, 0.5)"), "regions": Tables(region)},
+                     make=make_material,
+                     parts=lambda s: {"E": s.material.youngs_modulus, "nu": s.material.poisson_ratio,
+                                      "regions": s.regions},
+                     optional=True, doc="the stable neo-Hookean material")
+    chamber = Table({"name": Key(str, doc="distinct among the chambers"), "shape": CHAMBER_SHAPES,
+                     "control": Variant(KINDS, lambda kind: kind.name, "area", "the chamber kind (its keys its parameters)"),
+                     "keyframes": Key(tuple, doc="[[step, command], ...], steps whole and increasing"),
+                     "bounds": Key(tuple, None, "[min, max] of the command under inverse control")},
+                    make=lambda v: (v["name"], v["shape"],
+                                    control_class(ChamberSchedule(v["control"], v["keyframes"]), v["bounds"])),
+                    parts=lambda c: {"name": c[0], "shape": c[1], "control": c[2].kind,
+                                     "keyframes": c[2].schedule.keyframes, "bounds": c[2].bounds})
+
+    def make_scene(v):
+        require(v["chambers"], "scene names no chamber: add at least one [[chambers]] table")
+        (material, regions), (clamp, clamp_stiffness) = v["material"], v["clamp"]
+        geometry = Geometry(v["body"], tuple((name, shape) for name, shape, _ in v["chambers"]),
+                            v["mesh"]["max_area"], clamp, v["mesh"]["order"], tip=v["tip"], rollers=v["rollers"])
+        return scene_class(geometry, tuple(control for *_, control in v["chambers"]), v["schedule"]["increments"],
+                           material, regions, clamp_stiffness, v["effects"], v["name"], v["targets"])
+
+    def mesh_parts(geometry):
+        require(geometry.refinements == 0, f"a geometry refined {geometry.refinements} times has no scene-file form "
+                                           f"(scene files have no refinements key)")
+        return {"max_area": geometry.max_area, "order": geometry.order}
+
+    return Table({
+        "name": Key(str, None, "names the result files (a plain file name); none: the scene file's own name"),
+        "description": Key(str, "", "free text, not kept"),
+        "body": Table({"shape": BODY_SHAPES}, make=lambda v: v["shape"], parts=lambda body: {"shape": body}),
+        "mesh": Table({"max_area": Key(float, 0.0012, "largest triangle area"),
+                       "order": Key(int, 1, "1: linear triangles, 2: quadratic", ORDERS)},
+                      parts=mesh_parts, optional=True),
+        "material": material,
+        "clamp": Table(point_set("left", stiffness=Key(float, 1e9, "penalty stiffness of the clamp and the rollers")),
+                       make=lambda v: (make_point_set(v, "left"), v["stiffness"]),
+                       parts=lambda s: {"side": s.geometry.clamp.side, "box": s.geometry.clamp.box,
+                                        "stiffness": s.clamp_stiffness}, optional=True, doc="the clamped nodes"),
+        "tip": Table(point_set("right"), make=lambda v: make_point_set(v, "right"),
+                     parts=lambda g: {"side": g.tip.side, "box": g.tip.box}, optional=True,
+                     doc="the nodes whose mean displacement and rotation the history, sensitivities and reach use"),
+        "rollers": Tables(ROLLER, "roller supports; one along a body edge is a symmetry line that may cut chambers"),
+        "chambers": Tables(chamber, "the chambers, at least one"),
+        "schedule": Table({"increments": Key(int, doc="solves after the rest state")},
+                          parts=lambda s: {"increments": s.increments}),
+        "effects": Named(EFFECTS, "the effects the scene adds, by name"),
+        "targets": Tables(TARGET, "poses for inverse control, in order"),
+    }, make=make_scene, parts=lambda s: {
+        "name": s.name, "description": None, "body": s.geometry.body, "mesh": s.geometry, "material": s, "clamp": s,
+        "tip": s.geometry, "rollers": s.geometry.rollers,
+        "chambers": [(name, shape, control) for (name, shape), control in zip(s.geometry.chambers, s.controls)],
+        "schedule": s, "effects": s.effects, "targets": s.targets})
+
+
+def read_scene(data: dict, name: str, scene_class):
+    """A scene_class from the data of a scene file, named `name` unless it has a name key."""
+    return scene_table(scene_class).read_table({"name": name, **data} if isinstance(data, dict) else data, "")
+
+
+def scene_data(scene) -> dict:
+    """The scene as the data of a scene file: every key explicit, defaults included, but absent optional ones."""
+    return scene_table(type(scene)).write_table(scene)
+
+
+def to_toml(scene) -> str:
+    """The scene as a scene file (TOML text) that reads back to an equal scene."""
+    return dumps(scene_data(scene))
+
+
+def with_values(scene, values: dict):
+    """A copy of scene with the dotted keys of `values` set, validated like a scene file."""
+    return edited(scene_table(type(scene)), scene, values)
+
+
+def key_reference(scene_class) -> list[KeyInfo]:
+    """Every key of the scene file: its type, default, allowed values, when it applies and what it means."""
+    return key_rows(scene_table(scene_class).keys, "")

@@ -1,0 +1,327 @@
+"""A file format declared once: from one tree of entries come reading (data -> objects, every error naming
+its dotted key), writing (objects -> data), editing by dotted keys and the key reference.
+
+    Key(type, default, doc, allowed)  a value: float (any number), int, str, bool; tuple (an array, read as
+                                      nested tuples) or list (an array, read as is). default: REQUIRED, a
+                                      value, or None (optional: absent reads as None, None is not written)
+    Table(keys, make, parts)          a table: make(values by key) builds its object, parts(object) gives the
+                                      values back; read(write(x)) == x is the contract (a property test checks it)
+    Tables(table)                     an array of tables ([[chambers]], regions = [{...}, ...]), read as a tuple
+    Variant(options, choose)          a tag key (shape = "ellipse") choosing the Table (or the registered
+                                      dataclass) of further keys its table has; choose(object) names the
+                                      option an object is written as
+    Named(registry)                   optional tables named by a registry of dataclasses, in the file's order;
+                                      a dataclass's fields are its keys, typed by their annotations
+
+Reading checks every key's type, refuses unknown keys, and prefixes an error a constructor raises with
+the table's dotted path (``chambers[1]: ...``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import re
+import typing
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+import tomllib
+
+from ..errors import PneumaInputError, require
+from .tomltext import dumps
+
+REQUIRED = object()
+KEY_PART = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)")
+TYPE_NAMES = {float: "number", int: "integer", str: "string", bool: "boolean", tuple: "array", list: "array"}
+
+
+@dataclass(frozen=True)
+class KeyInfo:
+    """One row of the key reference. key: dotted, [] for any item of an array of tables (chambers[].center)."""
+
+    key: str
+    type: str
+    default: str
+    allowed: str = ""
+    when: str = ""  # the tag choosing the key, e.g. chambers[].shape = "ellipse"
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Key:
+    type: type
+    default: object = REQUIRED
+    doc: str = ""
+    allowed: tuple = ()
+
+    def read(self, data: dict, name: str, path: str, known: set):
+        full = join(path, name)
+        if name not in data:
+            require(self.default is not REQUIRED, f"missing key '{full}'")
+            return self.default
+        value = data[name]
+        if self.type is float:
+            require(isinstance(value, (int, float)) and not isinstance(value, bool), f"{full} = {value!r} must be a number")
+        else:
+            kind = list if self.type is tuple else self.type
+            require(isinstance(value, kind) and not (kind is int and isinstance(value, bool)),
+                    f"{full} = {value!r} must be of type {kind.__name__}")
+        require(not self.allowed or value in self.allowed,
+                f"{full} = {value!r} is not one of {', '.join(map(str, self.allowed))}")
+        return freeze(value) if self.type is tuple else value
+
+    def write(self, value, name: str, data: dict) -> None:
+        if value is not None:
+            data[name] = plain(value)
+
+    def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
+        return [KeyInfo(join(path, name), TYPE_NAMES[self.type], default_text(self.default),
+                        ", ".join(map(str, self.allowed)), when, self.doc)]
+
+
+@dataclass(frozen=True)
+class Table:
+    keys: dict
+    make: Callable = dict
+    parts: Callable = dict
+    optional: bool = False  # absent: read as an empty table (every key at its default)
+    cls: type | None = None  # the class make() builds, by which a Variant knows an object's option
+    doc: str = ""
+
+    def read(self, data: dict, name: str, path: str, known: set):
+        return self.read_table(data.get(name, {} if self.optional else None), join(path, name))
+
+    def read_table(self, data, path: str):
+        require(data is not None, f"missing key '{path}'")
+        require(isinstance(data, dict), f"{path or 'scene'} must be a table, not {data!r}")
+        known = set()
+        values = read_keys(self.keys, data, path, known)
+        unknown = sorted(set(data) - known)
+        require(not unknown, f"unknown key '{join(path, unknown[0]) if unknown else ''}' "
+                             f"(allowed here: {', '.join(sorted(known))})")
+        return build(path, lambda: self.make(values))
+
+    def write(self, value, name: str, data: dict) -> None:
+        data[name] = self.write_table(value)
+
+    def write_table(self, obj) -> dict:
+        data = {}
+        write_keys(self.keys, self.parts(obj), data)
+        return data
+
+    def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
+        key = join(path, name)
+        return [KeyInfo(key, "table", "{}" if self.optional else "required", "", when, self.doc)] + \
+            key_rows(self.keys, key)
+
+
+@dataclass(frozen=True)
+class Tables:
+    table: Table
+    doc: str = ""
+
+    def read(self, data: dict, name: str, path: str, known: set) -> tuple:
+        items = Key(list, []).read(data, name, path, known)
+        return tuple(self.table.read_table(item, f"{join(path, name)}[{i}]") for i, item in enumerate(items))
+
+    def write(self, value, name: str, data: dict) -> None:
+        if value:
+            data[name] = [self.table.write_table(item) for item in value]
+
+    def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
+        key = join(path, name)
+        return [KeyInfo(key, "array of tables", "[]", "", when, self.doc)] + key_rows(self.table.keys, f"{key}[]")
+
+
+@dataclass(frozen=True)
+class Variant:
+    options: dict  # name -> Table, or a registry: name -> dataclass (its fields are the option's keys)
+    choose: Callable | None = None  # object -> its option's name; None: the option whose class it is
+    default: object = REQUIRED
+    doc: str = ""
+
+    def table(self, option: str) -> Table:
+        entry = self.options[option]
+        return entry if isinstance(entry, Table) else dataclass_table(entry)
+
+    def read(self, data: dict, name: str, path: str, known: set):
+        option = self.table(Key(str, self.default, allowed=tuple(self.options)).read(data, name, path, known))
+        values = read_keys(option.keys, data, path, known)
+        return build(path, lambda: option.make(values))
+
+    def write(self, value, name: str, data: dict) -> None:
+        tag = self.choose(value) if self.choose else next(k for k in self.options if isinstance(value, self.table(k).cls))
+        data[name] = tag
+        write_keys(self.table(tag).keys, self.table(tag).parts(value), data)
+
+    def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
+        key = join(path, name)
+        rows = [KeyInfo(key, "string", default_text(self.default), ", ".join(self.options), when, self.doc)]
+        for option in self.options:
+            rows += key_rows(self.table(option).keys, path, f'{key} = "{option}"')
+        return rows
+
+
+@dataclass(frozen=True)
+class Named:
+    registry: dict  # name -> dataclass
+    doc: str = ""
+
+    def read(self, data: dict, name: str, path: str, known: set) -> tuple:
+        key, tables = join(path, name), data.get(name, {})
+        require(isinstance(tables, dict), f"{key} must be a table, not {tables!r}")
+        for option in tables:
+            require(option in self.registry, f"unknown key '{join(key, option)}' (allowed here: {', '.join(self.registry)})")
+        return tuple(dataclass_table(self.registry[option]).read_table(table, join(key, option))
+                     for option, table in tables.items())
+
+    def write(self, value, name: str, data: dict) -> None:
+        names = {cls: option for option, cls in self.registry.items()}
+        if value:
+            data[name] = {names[type(item)]: dataclass_table(type(item)).write_table(item) for item in value}
+
+    def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
+        key = join(path, name)
+        rows = [KeyInfo(key, "table", "{}", ", ".join(self.registry), when, self.doc)]
+        for option, cls in self.registry.items():
+            table = dataclass_table(cls)
+            rows += [KeyInfo(join(key, option), "table", "none", "", when, table.doc)] + \
+                key_rows(table.keys, join(key, option))
+        return rows
+
+
+def record(cls, doc: str = "", **keys) -> Table:
+    """A table whose keys are fields of the dataclass cls."""
+    return Table(keys, make=lambda values: cls(**values), parts=lambda obj: {k: getattr(obj, k) for k in keys},
+                 cls=cls, doc=doc)
+
+
+@functools.cache
+def dataclass_table(cls) -> Table:
+    """A table of every field of the dataclass cls, typed by its annotation (float, int, str, bool, tuple, list)."""
+    hints = typing.get_type_hints(cls)
+    keys = {}
+    for f in dataclasses.fields(cls):
+        kind = typing.get_origin(hints[f.name]) or hints[f.name]
+        if kind not in TYPE_NAMES:
+            raise TypeError(f"{cls.__name__}.{f.name}: {hints[f.name]} has no scene-file form")
+        default = (f.default if f.default is not dataclasses.MISSING else
+                   f.default_factory() if f.default_factory is not dataclasses.MISSING else REQUIRED)
+        keys[f.name] = Key(kind, default)
+    return record(cls, " ".join((cls.__doc__ or "").split("\n\n")[0].split()), **keys)
+
+
+def read_keys(keys: dict, data: dict, path: str, known: set) -> dict:
+    """The values of keys (and of the keys their variants choose) in the table data at path."""
+    known |= set(keys)
+    return {name: entry.read(data, name, path, known) for name, entry in keys.items()}
+
+
+def write_keys(keys: dict, values: dict, data: dict) -> None:
+    if set(values) != set(keys):
+        raise TypeError(f"parts() gave the keys {sorted(values)}; the declaration has {sorted(keys)}")
+    for name, entry in keys.items():
+        entry.write(values[name], name, data)
+
+
+def key_rows(keys: dict, path: str, when: str = "") -> list[KeyInfo]:
+    return [row for name, entry in keys.items() for row in entry.rows(path, name, when)]
+
+
+def join(path: str, key: str) -> str:
+    return f"{path}.{key}" if path else key
+
+
+def freeze(value: list) -> tuple:
+    """An array as a tuple; an array of arrays as a tuple of tuples, recursively (a mixed one keeps its
+    inner lists, which the constructors refuse showing them as written)."""
+    return tuple(freeze(v) for v in value) if all(isinstance(v, list) for v in value) else tuple(value)
+
+
+def plain(value):
+    """Tuples to lists and NumPy scalars/arrays to Python numbers, recursively."""
+    if isinstance(value, dict):
+        return {k: plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [plain(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def build(path: str, make):
+    """make(), with a PneumaInputError it raises prefixed with the table's path (unless it names a key in it)."""
+    try:
+        return make()
+    except PneumaInputError as exc:
+        if not path or f"{path}." in str(exc):
+            raise
+        raise PneumaInputError(f"{path}: {exc}") from None
+
+
+def default_text(default) -> str:
+    if default is REQUIRED:
+        return "required"
+    return "none" if default is None else dumps({"v": plain(default)})[4:].strip()
+
+
+# --- editing by dotted keys ---
+
+def edited(root: Table, obj, values: dict):
+    """A copy of obj with the dotted keys of `values` set in its data, read back (validated) through root;
+    a bad key or value raises one PneumaInputError naming the key."""
+    data = root.write_table(obj)
+    for key, value in values.items():
+        set_key(data, key, plain(value))
+    try:
+        return root.read_table(data, "")
+    except PneumaInputError as exc:
+        message = str(exc)
+        if not any(key in message for key in values):
+            message = f"{', '.join(f'{k} = {v!r}' for k, v in values.items())}: {message}"
+        raise PneumaInputError(message) from None
+
+
+def parse_key(key: str) -> list:
+    """'chambers[0].center[1]' -> ['chambers', 0, 'center', 1]."""
+    parts = []
+    for segment in key.split("."):
+        match = KEY_PART.fullmatch(segment)
+        require(match is not None, f"{key!r} is not a dotted scene key (like material.E or chambers[0].center[1])")
+        parts.append(match.group(1))
+        parts += [int(i) for i in re.findall(r"\[(\d+)\]", match.group(2))]
+    return parts
+
+
+def set_key(data: dict, key: str, value) -> None:
+    """Set a dotted key in nested data; missing tables on the way are created (e.g. a new effect)."""
+    parts = parse_key(key)
+    node, path = data, ""
+    for i, part in enumerate(parts):
+        last = i == len(parts) - 1
+        if isinstance(part, int):
+            require(isinstance(node, list), f"{key}: {path} is not a list")
+            require(part < len(node), f"{key}: {path} has {len(node)} items, there is no [{part}]")
+            path += f"[{part}]"
+        else:
+            require(isinstance(node, dict), f"{key}: {path} is not a table")
+            if not last and part not in node:
+                node[part] = {}
+            path += f".{part}" if path else part
+        if last:
+            node[part] = value
+        else:
+            node = node[part]
+
+
+def parse_assignment(text: str) -> tuple[str, object]:
+    """'KEY=VALUE' -> (key, value); VALUE is read as a TOML value (1e4, true, [0, 0.1], "x"), else as a string."""
+    key, sep, raw = text.partition("=")
+    require(bool(sep) and key.strip(), f"--set {text!r} must look like KEY=VALUE (e.g. material.E=2e4)")
+    try:
+        value = tomllib.loads(f"v = {raw.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw.strip()
+    return key.strip(), value
