@@ -21,6 +21,7 @@ from ..errors import PneumaInputError, require, require_finite
 from ..fem.geometry import BeamGeometry
 from ..io.scenefile import load_scene
 from ..io.schema import parse_assignment
+from ..io.units import AREA, LENGTH, PRESSURE
 from ..io.vtk import VtkSeries
 from ..render.frames import BACKENDS, COLOR_FIELDS
 from ..scene import Scene, reference_scene
@@ -141,7 +142,7 @@ def build(scene: Scene):
           f"{mesh.n_triangles} {kind}; clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
     for chamber in built.chambers:
         print(f"chamber {chamber.chamber_name}: {chamber.kind.name} control, wall {chamber.n_wall} vertices, "
-              f"rest area {chamber.rest_area:.3f}")
+              f"rest area {chamber.rest_area:.3f}{scene.units.suffix(AREA)}")
     return built
 
 
@@ -174,7 +175,7 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk: VtkSerie
 
     Raises RampFailed when an increment fails after its cuts, RampInterrupted after the increment
     during which Ctrl-C was pressed; both carry the steps done (.result)."""
-    increments = built.scene.increments
+    increments, units = built.scene.increments, built.scene.units
     bar = tqdm(total=increments + 1, desc=label, unit="step", disable=True if args.quiet else None, leave=False)
 
     def progress(step, positions, contact_force):
@@ -182,8 +183,9 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk: VtkSerie
             vtk.write(step, positions, contact_force)
         bar.update()
         if not args.quiet:
-            chambers = "  ".join(f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}" for name, c in step.chambers.items())
-            tqdm.write(f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {step.tip_dy:+.4f} "
+            chambers = "  ".join(f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}{units.suffix(PRESSURE)}"
+                                 for name, c in step.chambers.items())
+            tqdm.write(f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {step.tip_dy:+.4f}{units.suffix(LENGTH)} "
                        f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  {step.cuts} cuts  "
                        f"residual {step.residual:.1e}")
 

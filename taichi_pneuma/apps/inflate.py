@@ -25,6 +25,7 @@ import sys
 from .. import runtime
 from ..errors import require
 from ..io.output import prepare_directory, save_json
+from ..io.units import AREA, FORCE, LENGTH, PRESSURE
 from ..io.vtk import VtkSeries
 from ..solve.simulate import RampInterrupted, RampStopped
 from ..terms.chambers import AreaControl
@@ -83,13 +84,15 @@ def run(args: argparse.Namespace) -> dict:
         print(f"saved the {len(stopped.result.steps)} steps done in " + ", ".join(str(p) for p in written))
         raise
     final, summary = result.steps[-1], result.summary()
+    area, length, pressure, force = (scene.units.suffix(d) for d in (AREA, LENGTH, PRESSURE, FORCE))
     for name, c in final.chambers.items():
-        print(f"{name}: area {c.area / c.area_ratio:.3f} -> {c.area:.3f} (x{c.area_ratio:.2f}), pressure {c.pressure:.1f}")
-    print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}; "
+        print(f"{name}: area {c.area / c.area_ratio:.3f} -> {c.area:.3f}{area} (x{c.area_ratio:.2f}), "
+              f"pressure {c.pressure:.1f}{pressure}")
+    print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}{length}; "
           f"tip rotation {final.tip_rotation:+.1f} deg")
-    print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}")
+    print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}{pressure}")
     for name, (fx, fy, magnitude) in final.contact.items():
-        print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g})")
+        print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g}){force}")
     print(f"Newton: {summary['newton_iterations_total']} iterations over {summary['steps'] - 1} solves "
           f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
           f"all converged: {summary['all_converged']}; run {result.seconds:.2f} s")

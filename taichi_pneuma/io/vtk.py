@@ -15,6 +15,8 @@ Each VTU holds the rest mesh (points padded with z = 0; linear triangles, or qua
   out-of-plane stress) and von_mises (of that stress);
 - field data: the step's history row (per chamber <name>.command/.area/.area_ratio/.pressure, tip_dx,
   tip_dy, tip_rotation, solver figures), one value each.
+In a scene with units every array's name carries its unit (io/units.py): "displacement [mm]",
+"stress [kPa]", "main.pressure [kPa]".
 meshio 5.3 reads FieldData but does not write it: write_vtu adds the block (ASCII) to meshio's file.
 """
 
@@ -28,6 +30,7 @@ import numpy as np
 
 from ..fem.fields import ElementFields
 from .output import save_text, write_atomic
+from .units import FORCE, LENGTH, PRESSURE, history_dimensions
 
 SYMMETRIC_TENSOR = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))  # ParaView's 6-component order
 
@@ -65,6 +68,7 @@ class VtkSeries:
         for stale in self.folder.glob(f"{stem}_[0-9][0-9][0-9][0-9].vtu"):  # from an earlier run of this name
             stale.unlink()
         self.pvd = self.directory / f"{stem}.pvd"
+        self.scene = built.scene
         self.material = built.elastic.law, built.elastic.parameters
         self.fields = ElementFields(mesh.vertices, mesh.triangles)
         self.chamber = np.full(mesh.n_vertices, -1, dtype=np.int32)
@@ -77,15 +81,19 @@ class VtkSeries:
         mesh = self.mesh
         fields = self.fields.at(positions, *self.material)
         stress = np.column_stack([fields["stress"][:, i, j] for i, j in SYMMETRIC_TENSOR])
-        point_data = {"displacement": pad3(positions - mesh.vertices), "chamber": self.chamber}
+        units = self.scene.units
+        point_data = {units.label("displacement", LENGTH): pad3(positions - mesh.vertices), "chamber": self.chamber}
         if contact_force is not None:
-            point_data["contact_force"] = pad3(contact_force)
+            point_data[units.label("contact_force", FORCE)] = pad3(contact_force)
         cell_type = "triangle" if mesh.order == 1 else "triangle6"
         grid = meshio.Mesh(pad3(mesh.vertices), [(cell_type, mesh.triangles)], point_data=point_data,
                            cell_data={"det_F": [fields["det_F"]], "max_stretch": [fields["max_stretch"]],
-                                      "stress": [stress], "von_mises": [fields["von_mises"]]})
+                                      units.label("stress", PRESSURE): [stress],
+                                      units.label("von_mises", PRESSURE): [fields["von_mises"]]})
+        dimensions = history_dimensions(self.scene, step.contact)
+        row = {units.label(name, dimensions.get(name, "")): value for name, value in step.row().items()}
         path = self.folder / f"{self.stem}_{step.step:04d}.vtu"
-        write_atomic(path, lambda tmp: write_vtu(tmp, grid, step.row()))
+        write_atomic(path, lambda tmp: write_vtu(tmp, grid, row))
         self.entries.append((float(step.step), f"{self.folder.name}/{path.name}"))
         save_text(self.pvd, pvd_text(self.entries))
         return path

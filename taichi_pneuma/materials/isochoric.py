@@ -143,6 +143,10 @@ class IsochoricMaterial:
         require(np.all(np.isfinite(row)), f"K = {row[-1]!r} from nu = {self.poisson_ratio!r} is not finite")
         return row
 
+    def law_parameters(self, units=None) -> tuple[type, np.ndarray]:
+        """The law and its parameter vector (the coefficients are in the scene's units already)."""
+        return IsochoricPolynomial, self.row()
+
     def scaled(self, factor: float) -> "IsochoricMaterial":
         """The same material with every modulus (coefficients and a given K) multiplied by factor (a unit change)."""
         return IsochoricMaterial(self.law, *(factor * getattr(self, n) for n in COEFFICIENTS),

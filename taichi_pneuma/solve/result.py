@@ -15,6 +15,7 @@ import numpy as np
 
 from ..fem.fields import triangle_fields
 from ..io.output import prepare_directory, save_json, save_npz, save_text, write_atomic
+from ..io.units import history_dimensions
 from ..scene import BuiltScene, Scene
 
 
@@ -106,16 +107,19 @@ class Result:
             "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max(initial=0)),
             "increment_cuts": int(self.history["cuts"].sum()),
             "wall_seconds": self.seconds, "solve_seconds_per_step": float(seconds.mean()) if len(seconds) else 0.0,
-            "steps": len(self.steps), "interrupted": interrupted,
+            "steps": len(self.steps), "interrupted": interrupted, "units": self.scene.units.summary(),
         }
 
     def history_csv(self) -> str:
-        """The history as CSV text: a header, then one row per step (StepRecord.row)."""
+        """The history as CSV text: a header (the columns' names, each with its unit in a scene with units:
+        "main.pressure [kPa]"), then one row per step (StepRecord.row)."""
         buffer = io.StringIO()
         rows = [s.row() for s in self.steps]
-        writer = csv.DictWriter(buffer, fieldnames=list(rows[0]) if rows else ["step"])
-        writer.writeheader()
-        writer.writerows(rows)
+        columns = list(rows[0]) if rows else ["step"]
+        dimensions = history_dimensions(self.scene, self.steps[0].contact if self.steps else ())
+        writer = csv.writer(buffer)
+        writer.writerow([self.scene.units.label(c, dimensions.get(c, "")) for c in columns])
+        writer.writerows([[row[c] for c in columns] for row in rows])
         return buffer.getvalue()
 
     def save_history(self, directory, stem: str | None = None) -> list[Path]:

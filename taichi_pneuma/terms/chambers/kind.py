@@ -7,6 +7,8 @@ scene schema asks parameters() for them). Its class attributes describe its comm
     name       the scene file's `control = "..."`; aliases: other names it is read by
     quantity   what q is, in words, for labels and messages ("area ratio", "pressure")
     rest       q of the unloaded chamber, where every schedule starts (1.0, 0.0)
+    dimension  q's dimension (io/units.py: "" none, "pressure", "area"), the unit outputs give it in a scene
+               with units
 
 and its methods do the rest: check() refuses values q cannot take, default_bounds() gives the range
 inverse control keeps to when the scene names none, term() builds the chamber's energy term (a
@@ -30,6 +32,7 @@ class ChamberKind:
     aliases: ClassVar[tuple[str, ...]] = ()
     quantity: ClassVar[str]
     rest: ClassVar[float]
+    dimension: ClassVar[str] = ""
 
     @classmethod
     def parameters(cls) -> dict[str, tuple[type, object]]:
