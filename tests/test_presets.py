@@ -5,6 +5,7 @@ errors, and every output of a scene with units saying its unit (a unitless scene
 import csv
 import dataclasses
 import io
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -177,3 +178,20 @@ def test_a_unitless_scenes_outputs_are_named_as_before():
     assert header == list(result.history) and "main.pressure" in header
     assert result.summary()["units"] is None
     assert history_figure(result).axes[0].get_ylabel() == "pressure p"
+
+
+@pytest.mark.slow
+def test_the_pneunet_scene_curls_towards_its_paper_layer_which_does_not_stretch():
+    """assets/scenes/pneunet_mm_kpa.toml: the tip turns clockwise (towards the paper), more with every 10 kPa; the
+    bottom edge (the paper) keeps its length within 0.05 % while the top edge stretches by more than 10 %."""
+    result = tp.simulate(tp.load_scene(Path(__file__).resolve().parent.parent / "assets" / "scenes" /
+                                       "pneunet_mm_kpa.toml"))
+    assert result.converged and result.scene.units is UNITS["mm-kPa"]
+    rotation = result.history["tip_rotation"]
+    assert np.all(np.diff(rotation) < 0) and rotation[-1] < -45.0
+    rest, final = result.mesh.vertices, result.positions[-1]
+    for y, stretch in ((0.0, lambda s: abs(s - 1) < 5e-4), (11.0, lambda s: s > 1.1)):
+        edge = np.flatnonzero(np.isclose(rest[:, 1], y))
+        edge = edge[np.argsort(rest[edge, 0])]
+        length = np.linalg.norm(np.diff(final[edge], axis=0), axis=1).sum()
+        assert stretch(length / 60.0)
