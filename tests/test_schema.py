@@ -1,5 +1,6 @@
 """The scene schema: one declaration reads, writes and edits scene files. Generated valid scenes (every body
-and chamber shape, both controls, regions, effects, bounds, targets) read back equal from their TOML text;
+and chamber shape, both controls, units, every kind of material and region, effects, bounds, targets) read
+back equal from their TOML text;
 bounds and targets survive with_value; effect parameters keep their declared types; the key reference
 lists exactly the keys the reader accepts; scene.py imports the schema without an import cycle."""
 
@@ -228,7 +229,8 @@ BOX = (-1.75, -0.4, -1.7, 0.4)
 
 def covering_scenes() -> list[Scene]:
     """Scenes that between them have every key of the file: each body and chamber shape, both controls,
-    both forms of the clamp, the tip and rollers, a region, every effect, targets with an angle."""
+    both forms of the clamp, the tip and rollers, a region, every effect, targets with an angle, every unit
+    system and every material key (presets, each form of the isochoric law, K and nu)."""
     core = tp.reference_scene()
     chambers = (("e", Ellipse((-1.0, 0.0), (0.3, 0.2), 16)), ("r", RoundedRectangle((0.0, 0.0), (0.5, 0.4), 0.1)),
                 ("p", Polygon(((0.8, -0.2), (1.2, -0.2), (1.0, 0.2)))))
