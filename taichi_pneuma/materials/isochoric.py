@@ -77,22 +77,27 @@ class IsochoricPolynomial(Law):
     @staticmethod
     @ti.func
     def stress(F, p):
-        I1, _, J = isochoric_invariants(F)
-        a = I1 - 3.0
+        W1, _, J = slopes(F, p)
         dI1, dI2, dJ = isochoric_gradients(F)
-        P = (p[0] + 2.0 * p[2] * a + 3.0 * p[3] * a * a) * dI1 + p[1] * dI2 + p[4] * (J - 1.0) * dJ
+        P = W1 * dI1 + p[1] * dI2 + p[4] * (J - 1.0) * dJ
         return ti.Matrix([[P[3 * i + j] for j in ti.static(range(3))] for i in ti.static(range(3))], dt=ti.f64)
 
     @staticmethod
     @ti.func
     def stress_derivative(F, p):
-        I1, _, J = isochoric_invariants(F)
-        a = I1 - 3.0
+        W1, W11, J = slopes(F, p)
         dI1, _, dJ = isochoric_gradients(F)
         d2I1, d2I2, d2J = isochoric_hessians(F)
-        return ((2.0 * p[2] + 6.0 * p[3] * a) * dI1.outer_product(dI1)
-                + (p[0] + 2.0 * p[2] * a + 3.0 * p[3] * a * a) * d2I1 + p[1] * d2I2
+        return (W11 * dI1.outer_product(dI1) + W1 * d2I1 + p[1] * d2I2
                 + p[4] * dJ.outer_product(dJ) + p[4] * (J - 1.0) * d2J)
+
+
+@ti.func
+def slopes(F, p):
+    """(W1, W11, J): dW/dIbar1 = C10 + 2 C20 a + 3 C30 a^2 and d2W/dIbar1^2 = 2 C20 + 6 C30 a, a = Ibar1 - 3."""
+    I1, _, J = isochoric_invariants(F)
+    a = I1 - 3.0
+    return p[0] + 2.0 * p[2] * a + 3.0 * p[3] * a * a, 2.0 * p[2] + 6.0 * p[3] * a, J
 
 
 @dataclass(frozen=True)
