@@ -185,7 +185,8 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk: VtkSerie
         if not args.quiet:
             chambers = "  ".join(f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}{units.suffix(PRESSURE)}"
                                  for name, c in step.chambers.items())
-            tqdm.write(f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {step.tip_dy:+.4f}{units.suffix(LENGTH)} "
+            tip = f"{step.tip_dy:+.4f}{units.suffix(LENGTH)}"
+            tqdm.write(f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {tip} "
                        f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  {step.cuts} cuts  "
                        f"residual {step.residual:.1e}")
 

@@ -198,7 +198,8 @@ def scene_table(scene_class) -> Table:
         "effects": Named(EFFECTS, "the effects the scene adds, by name"),
         "targets": Tables(TARGET, "poses for inverse control, in order"),
     }, make=make_scene, parts=lambda s: {
-        "name": s.name, "description": None, "units": s.units.name, "body": s.geometry.body, "mesh": s.geometry, "material": s, "clamp": s,
+        "name": s.name, "description": None, "units": s.units.name, "body": s.geometry.body, "mesh": s.geometry,
+        "material": s, "clamp": s,
         "tip": s.geometry, "rollers": s.geometry.rollers,
         "chambers": [(name, shape, control) for (name, shape), control in zip(s.geometry.chambers, s.controls)],
         "schedule": s, "effects": s.effects, "targets": s.targets})
