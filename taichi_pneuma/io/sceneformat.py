@@ -143,10 +143,10 @@ def scene_table(scene_class) -> Table:
         return base, tuple(build(f"material.regions[{i}]", lambda: region(r)) for i, r in enumerate(v["regions"]))
 
     region = Table({"box": Key(tuple, doc=BOX), **MATERIAL_KEYS},
-                   parts=lambda r: {"box": r.box, **material_keys(r.material)},
-                   doc="a material for the triangles whose centroid lies in box; later regions win. Keys as "
-                       "material's; unless it names a preset or law, each key it omits is material's")
-    material = Table({**MATERIAL_KEYS, "regions": Tables(region)}, make=make_material,
+                   parts=lambda r: {"box": r.box, **material_keys(r.material)})
+    regions = Tables(region, "materials for the triangles whose centroid lies in box (later regions win); keys as "
+                             "material's, and unless a region names a preset or law, each key it omits is material's")
+    material = Table({**MATERIAL_KEYS, "regions": regions}, make=make_material,
                      parts=lambda s: {**material_keys(s.material), "regions": s.regions}, optional=True,
                      doc="the body's material: the stable neo-Hookean one of E and nu (no law or preset), a form of "
                          "the isochoric law (law = neo_hookean, mooney_rivlin, yeoh: C10, ... and K or nu, in the "
