@@ -5,20 +5,23 @@ body with every chamber and region shape. The chamber pieces inside the body are
 removed (pieces outside the body are dropped); every other piece inside the body is rubber, tagged with
 the last region whose shape contains it (0: the base material). A chamber wall is the part of the
 cavity's boundary shared with the rubber; where a chamber crosses the body's boundary (a symmetry plane
-of a half model) its wall is open and its cap lies on that boundary. Physical groups name what is read
+of a half model) its wall is open, its rim on that plane, and the flat cap across it is not meshed (no
+rubber there): with an origin o on the plane, V = 1/3 int_wall (x - o) . n dA, as x - o is normal to n on the
+cap. Whether such a plane is a symmetry plane (rollers) is the scene's check. Physical groups name what is read
 back: the volume groups 'body' and each region, a surface group per chamber.
 
-Mesh size: tetrahedra of edge length about `size`, graded down to `near_chambers` on the chamber walls
-(gmsh Distance + Threshold fields: the size grows linearly from near_chambers at the wall to size at
-`distance` from it). Before meshing, the tetrahedron count is estimated as the volume over the volume
-of a regular tetrahedron of the local edge length h, h^3 / (6 sqrt 2):
+Mesh size: tetrahedra of edge length about `size` in the bulk and `near` (MeshSizes.near_chambers)
+within `near` of the chamber walls, growing linearly to `size` over the grading distance d beyond
+(gmsh Distance and Threshold fields). Before meshing, the tetrahedron count is estimated as the volume
+over the volume of a regular tetrahedron of the local edge length h, h^3 / (6 sqrt 2):
 
-    tets ~ 6 sqrt 2 [ (V - A d) / size^3 + A int_0^d ds / h(s)^3 ],   h(s) = near + (size - near) s / d
+    tets ~ 6 sqrt 2 [ (V - A t) / size^3 + A int_0^t ds / h(s)^3 ],   t = near + d,
 
-with V the rubber's volume and A the chamber walls' area (from OpenCASCADE), d the grading distance;
-gmsh's Delaunay meshes have 0.55-0.75 times that many (fewer the finer the mesh), so the estimate is
-a safe upper bound for the budget check: a solid whose estimate exceeds max_tets is refused before
-meshing, and a mesh that still comes out larger is refused after.
+with V the rubber's volume and A the chamber walls' area (from OpenCASCADE). gmsh's Delaunay meshes
+have 0.55-0.95 times that many, fewer the finer the mesh (more only where the mesh is much coarser than
+the thinnest wall, e.g. 2.5 times for the PneuNet at size 0.2 > its 0.08 walls): a solid whose
+estimate exceeds max_tets is refused before meshing, and a mesh that still comes out larger is refused
+after.
 
 Returned arrays (SolidMesh): vertices (n, 3); tets (m, 4), each positively oriented,
 det[x1 - x0, x2 - x0, x3 - x0] > 0; per chamber its wall triangles (f, 3) oriented outward from the
@@ -27,12 +30,12 @@ cavity, i.e. (x1 - x0) x (x2 - x0) points from the air into the rubber, so that 
     V = 1/3 sum_faces (centroid . n) area = 1/6 sum_faces x0 . (x1 x x2) > 0
 
 is the cavity's volume; boundary (b, 3): the triangles of the body's outer surface (cavity walls
-excluded, caps on symmetry planes included), oriented outward from the body; regions (m,) the tag of
-each tetrahedron, k >= 1 the k-th entry of `regions`.
+excluded), oriented outward from the body; regions (m,) the tag of each tetrahedron, k >= 1 the k-th
+entry of Solid.regions (region_names).
 
 gmsh is a GPL-licensed optional dependency (pip install 'taichi-pneuma[3d]'); each call initialises it,
 works silently in a model of its own and finalises it (or, if the caller has gmsh initialised already,
-removes only its own model).
+removes only its own model and restores the options it set).
 """
 
 from __future__ import annotations
@@ -49,6 +52,9 @@ MAX_SHAPES = 64
 INSTALL = "pip install 'taichi-pneuma[3d]'"
 REGULAR_TET = 1 / (6 * np.sqrt(2))  # volume of the regular tetrahedron of unit edge
 BODY_GROUP = "body"
+# the global gmsh options meshing sets; a caller's gmsh session gets its values back afterwards
+OPTIONS = ("General.Terminal", "Mesh.MeshSizeMax", "Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature",
+           "Mesh.MeshSizeExtendFromBoundary")
 MAX_SAMPLING = 200  # points per direction on a wall surface for its distance field
 # a tetrahedron's four faces (corners in its local numbering), each oriented outward for a positive tetrahedron
 TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
@@ -56,8 +62,8 @@ TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
 
 @dataclass(frozen=True)
 class MeshSizes:
-    """Target tetrahedron edge length: `size` in the bulk, `near_chambers` on the chamber walls (default
-    size), growing linearly over `distance` from them (default 2 size)."""
+    """Target tetrahedron edge length: `size` in the bulk, `near_chambers` (default size) within that
+    distance of the chamber walls, growing linearly to `size` over `distance` (default 2 size) beyond."""
 
     size: float
     near_chambers: float | None = None
@@ -135,12 +141,15 @@ def _gmsh():
 
 @contextmanager
 def _session(verbose: bool = False):
-    """gmsh with a model of its own, silent unless verbose; initialised and finalised around the block."""
+    """gmsh with a model of its own, silent unless verbose; initialised and finalised around the block (in a
+    caller's gmsh session: its current model and the options set here are restored instead). A gmsh
+    exception becomes a PneumaInputError quoting gmsh's last error lines."""
     gmsh = _gmsh()
     owner = not gmsh.isInitialized()
     if owner:
         gmsh.initialize(readConfigFiles=False, interruptible=False)
     gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
+    callers = None if owner else (gmsh.model.getCurrent(), {name: gmsh.option.getNumber(name) for name in OPTIONS})
     gmsh.logger.start()
     gmsh.model.add("taichi_pneuma_solid")
     try:
@@ -156,6 +165,9 @@ def _session(verbose: bool = False):
             gmsh.finalize()
         else:
             gmsh.model.remove()
+            gmsh.model.setCurrent(callers[0])
+            for name, value in callers[1].items():
+                gmsh.option.setNumber(name, value)
 
 
 class _Pieces:
