@@ -194,15 +194,12 @@ class _Pieces:
         for k, region in enumerate(regions, start=1):
             self.rubber.update({tag: k for tag in region if tag in self.rubber})
         require(self.rubber, "the chambers fill the whole body: no rubber is left")
-        rubber_faces = {abs(t) for _, t in gmsh.model.getBoundary([(3, v) for v in self.rubber], combined=False,
-                                                                 oriented=False)}
+        rubber_faces = _faces(gmsh, self.rubber, combined=False)
         self.walls = {}
         for (name, _), cavity in zip(solid.chambers, cavities):
-            surface = {abs(t) for _, t in gmsh.model.getBoundary([(3, v) for v in cavity], oriented=False)}
+            surface = _faces(gmsh, cavity)
             others = set().union(*(c for c in cavities if c is not cavity))
-            touching = surface & {abs(t) for _, t in gmsh.model.getBoundary([(3, v) for v in others],
-                                                                           combined=False, oriented=False)} if others else set()
-            require(not touching, f"chamber {name!r} touches another chamber")
+            require(not surface & _faces(gmsh, others, combined=False), f"chamber {name!r} touches another chamber")
             self.walls[name] = sorted(surface & rubber_faces)
             require(self.walls[name], f"chamber {name!r} has no wall inside the body")
         dropped = set().union(*volumes) - set(self.rubber)
@@ -210,6 +207,13 @@ class _Pieces:
         occ.synchronize()
         self.volume = sum(occ.getMass(3, v) for v in self.rubber)
         self.wall_area = sum(occ.getMass(2, s) for walls in self.walls.values() for s in walls)
+
+
+def _faces(gmsh, volumes, combined: bool = True) -> set[int]:
+    """The surface tags bounding the volumes: of their union (combined), or of each one."""
+    if not volumes:
+        return set()
+    return {abs(t) for _, t in gmsh.model.getBoundary([(3, v) for v in volumes], combined=combined, oriented=False)}
 
 
 def estimate_tets(solid: Solid, sizes: MeshSizes) -> float:
