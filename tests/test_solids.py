@@ -238,3 +238,20 @@ def test_pneunet_without_layer_or_rounding():
     assert mesh.region_names == () and not mesh.regions.any()
     for wall in mesh.chambers.values():
         assert cavity_volume(mesh.vertices, wall) == pytest.approx(0.4 * 0.5 * 0.6, rel=1e-12)
+
+
+def test_proposed_scene_maps_one_to_one_onto_the_generator():
+    """The proposed pneunet_3d.toml: its [body] keys are PneuNet's fields, its [mesh] keys MeshSizes' (and the
+    order), its chambers and its region name the generated solid's surface and volume groups."""
+    import dataclasses
+    import tomllib
+    from pathlib import Path
+
+    scene = tomllib.loads((Path(__file__).parents[1] / "assets/scenes/proposed/pneunet_3d.toml").read_text())
+    body = {k: v for k, v in scene["body"].items() if k != "shape"}
+    assert scene["body"]["shape"] == "pneunet" and set(body) == {f.name for f in dataclasses.fields(PneuNet)}
+    mesh = {k: v for k, v in scene["mesh"].items() if k != "order"}
+    assert set(mesh) <= {f.name for f in dataclasses.fields(MeshSizes)}
+    solid, _ = PneuNet(**body).solid(), MeshSizes(**mesh)
+    assert [c["group"] for c in scene["chambers"]] == [name for name, _ in solid.chambers]
+    assert [r["group"] for r in scene["material"]["regions"]] == [name for name, _ in solid.regions]

@@ -8,7 +8,7 @@ z the depth (a 2D shape in the x-y plane is extruded along z). Shapes are axis-a
   i.e. the inner box (size - 2 radius) swept by a ball of that radius;
 - Ellipsoid(center, semi_axes): sum ((x_i - c_i) / a_i)^2 <= 1;
 - Cylinder(center, radius, length, axis): a circular cylinder along axis 'x', 'y' or 'z';
-- Extrusion(shape, depth, z): a 2D shape of the scene format (fem.geometry: Rectangle, Ellipse,
+- Extrusion(profile, depth, z): a 2D shape of the scene format (fem.geometry: Rectangle, Ellipse,
   RoundedRectangle, Polygon, RectangleUnion) swept along z from z - depth / 2 to z + depth / 2.
   Rectangles, ellipses and rounded rectangles are built from their exact curves (the 2D shape's
   `points` sampling does not apply: the 3D mesh size does); any other shape from its polygon().
@@ -122,21 +122,21 @@ class Cylinder:
 
 @dataclass(frozen=True)
 class Extrusion:
-    """A 2D shape (in the x-y plane, with a polygon() method) swept along z over depth, centred on z."""
+    """A 2D profile shape (in the x-y plane, with a polygon() method) swept along z over depth, centred on z."""
 
-    shape: object
+    profile: object
     depth: float
     z: float = 0.0
 
     def __post_init__(self):
-        require(callable(getattr(self.shape, "polygon", None)),
-                f"shape = {self.shape!r} is not a 2D shape (rectangle, ellipse, rounded_rectangle, polygon or union)")
+        require(callable(getattr(self.profile, "polygon", None)),
+                f"profile = {self.profile!r} is not a 2D shape (rectangle, ellipse, rounded_rectangle, polygon or union)")
         _positive("depth", self.depth)
         require_finite("z", self.z)
 
     def build(self, occ) -> int:
         z0 = self.z - self.depth / 2
-        surface = _section(occ, self.shape, z0)
+        surface = _section(occ, self.profile, z0)
         extruded = occ.extrude([(2, surface)], 0.0, 0.0, self.depth)
         return next(tag for dim, tag in extruded if dim == 3)
 
