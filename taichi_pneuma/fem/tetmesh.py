@@ -148,8 +148,8 @@ def _session(verbose: bool = False):
     owner = not gmsh.isInitialized()
     if owner:
         gmsh.initialize(readConfigFiles=False, interruptible=False)
-    gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
     callers = None if owner else (gmsh.model.getCurrent(), {name: gmsh.option.getNumber(name) for name in OPTIONS})
+    gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
     gmsh.logger.start()
     gmsh.model.add("taichi_pneuma_solid")
     try:
@@ -240,10 +240,9 @@ def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose
                 f"the mesh would have about {estimate:.3g} tetrahedra (volume {pieces.volume:.4g}, size {sizes.size:g}, "
                 f"near chambers {sizes.near:g}); the limit is {max_tets} tetrahedra (--max-tets raises it)")
         model = gmsh.model
-        model.addPhysicalGroup(3, [v for v, k in pieces.rubber.items() if k == 0], name=BODY_GROUP)
-        for k, (name, _) in enumerate(solid.regions, start=1):
+        for k, name in enumerate([BODY_GROUP] + [name for name, _ in solid.regions]):
             tags = [v for v, r in pieces.rubber.items() if r == k]
-            if tags:
+            if tags:  # a region wholly overridden by later ones has no group
                 model.addPhysicalGroup(3, tags, name=name)
         for name, walls in pieces.walls.items():
             model.addPhysicalGroup(2, walls, name=name)
