@@ -6,12 +6,15 @@ Meshing: PneuNet() at the sizes below, wall time of mesh_solid (OpenCASCADE geom
 Delaunay, reading the arrays back), tetrahedra, surface triangles, and the estimate mesh_solid checks.
 Rendering: the PneuNet's surface (outer faces and chamber walls) bent by an analytic displacement over
 `frames` steps, drawn at 960 x 540 (trace panel and colour bar included) by the NumPy rasteriser and by
-GGUI's scene (lavapipe on a CPU-only machine); ms per frame after one warm-up frame. Wall times on a
-shared machine: compare ratios within one run.
+GGUI's scene (lavapipe on a CPU-only machine); ms per frame after one warm-up frame, wall-clock and
+CPU time of the process (all its threads: lavapipe's included), the latter steadier on a shared machine. With a display
+(DISPLAY set; e.g. Xvfb), the interactive window's redraw rate on the coarse PneuNet (six sliders, the
+camera spinning, no solve). Wall times on a shared machine: compare ratios within one run.
 """
 
 import argparse
 import json
+import os
 import time
 from pathlib import Path
 
@@ -23,6 +26,7 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.fem.tetmesh import MeshSizes, estimate_tets, mesh_solid
 from taichi_pneuma.render.frames3d import FrameRenderer3D, Track3D
+from taichi_pneuma.render.interactive3d import Slider, explore_3d
 
 MESH_SIZES = {"coarse (interactive)": MeshSizes(0.3), "scene default": MeshSizes(0.1),
               "fine": MeshSizes(0.05)}
@@ -70,24 +74,38 @@ def main() -> None:
                 continue
             try:
                 renderer.frame(0)
-                start = time.perf_counter()
+                start, cpu = time.perf_counter(), time.process_time()
                 for i in range(args.frames):
                     renderer.frame(i)
                 ms = 1e3 * (time.perf_counter() - start) / args.frames
+                cpu_ms = 1e3 * (time.process_time() - cpu) / args.frames
             finally:
                 renderer.canvas.close()
             data["rendering"].append({"mesh": label, "surface_triangles": faces, "drawn_triangles": len(renderer.kept)
-                                      + len(renderer.walls), "view": renderer.canvas.name, "ms_per_frame": ms})
+                                      + len(renderer.walls), "view": renderer.canvas.name, "ms_per_frame": ms,
+                                      "cpu_ms_per_frame": cpu_ms})
             print(data["rendering"][-1], flush=True)
+    if os.environ.get("DISPLAY"):
+        mesh = mesh_solid(solid, MESH_SIZES["coarse (interactive)"])
+        states = bent(mesh.vertices, 11)
+        summary = explore_3d(lambda q: (states[int(round(10 * q[0]))], [f"c1 = {q[0]:.2f}"]),
+                             [Slider(name, 0.0, 1.0, 0.0) for name in mesh.chambers], mesh.vertices, mesh.boundary,
+                             tuple(mesh.chambers.values()), size=(960, 640), spin=2.0, max_frames=60)
+        data["interactive"] = {"tets": len(mesh.tets), "frames_per_second": summary["fps"]}
+        print(data["interactive"], flush=True)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "render3d.json").write_text(json.dumps({"machine": machine(), "data": data}, indent=2))
     lines = [f"Machine: {machine()}", "", "| PneuNet mesh | size | tetrahedra | nodes | surface triangles | "
              "estimate | meshing (s) |", "|---|---|---|---|---|---|---|"]
     lines += [f"| {r['mesh']} | {r['size']:g} | {r['tets']} | {r['nodes']} | {r['surface_triangles']} | "
               f"{r['estimate']:.0f} | {r['seconds']:.2f} |" for r in data["meshing"]]
-    lines += ["", "| surface | triangles (drawn after the section) | view | ms / frame (960 x 540) |", "|---|---|---|---|"]
+    lines += ["", "| surface | triangles (drawn after the section) | view | ms / frame (960 x 540) | CPU ms / frame |",
+              "|---|---|---|---|---|"]
     lines += [f"| {r['mesh']} | {r['surface_triangles']} ({r['drawn_triangles']}) | {r['view']} | "
-              f"{r['ms_per_frame']:.0f} |" for r in data["rendering"]]
+              f"{r['ms_per_frame']:.0f} | {r['cpu_ms_per_frame']:.0f} |" for r in data["rendering"]]
+    if "interactive" in data:
+        lines += ["", f"Interactive window (960 x 640, coarse PneuNet of {data['interactive']['tets']} tetrahedra, "
+                      f"no solve): {data['interactive']['frames_per_second']:.0f} frames/s"]
     (args.out / "render3d.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 

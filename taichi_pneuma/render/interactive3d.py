@@ -71,7 +71,7 @@ def explore_3d(solve, sliders: list[Slider], rest: np.ndarray, boundary: np.ndar
     camera = (camera or Camera()).fitted(rest, width, height, margin=0.2)
     walls = np.concatenate(chambers) if len(chambers) else np.zeros((0, 3), np.int64)
     faces = boundary[section_faces(rest, boundary, camera)] if section and len(chambers) else boundary
-    shown = np.array([s.value for s in sliders])
+    shown = np.array([s.value for s in sliders], dtype=float)
     x, caption = solve(shown)
     solves, frames, seconds, last = 1, 0, 0.0, None
     print(f"interactive: {len(sliders)} sliders (top left); drag to turn the view; close the window to quit")

@@ -47,7 +47,7 @@ def rasterise(pixels: np.ndarray, depth: np.ndarray, colors: np.ndarray, width: 
     corner depths (f, 3) (> 0: in front of the eye; triangles with a corner behind are skipped) and corner
     colours (f, 3, 3) or one colour per triangle (f, 3)."""
     colors = np.asarray(colors, float)
-    image = np.empty((height * width, 3))
+    image = np.empty((height * width, 3), dtype=np.float32)
     image[:] = background
     edges = _edge_functions(pixels)
     pixel, face = _covered(pixels, depth, edges, width, height)
