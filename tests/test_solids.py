@@ -219,7 +219,8 @@ def test_pneunet_dimensions_chambers_and_layer():
     length, height, width = finger.size
     assert (length, height, width) == pytest.approx((4.0, 0.8, 0.76))
     mesh = mesh_solid(finger.solid(), MeshSizes(0.2, near_chambers=0.05, distance=0.05))
-    assert np.allclose(mesh.vertices.min(axis=0), [-2.0, -0.4, -0.38]) and np.allclose(mesh.vertices.max(axis=0), [2.0, 0.4, 0.38])
+    assert np.allclose(mesh.vertices.min(axis=0), [-2.0, -0.4, -0.38])
+    assert np.allclose(mesh.vertices.max(axis=0), [2.0, 0.4, 0.38])
     assert list(mesh.chambers) == [f"c{i}" for i in range(1, 7)] and mesh.region_names == ("layer",)
     exact = rounded_box_volume((0.4, 0.5, 0.6), 0.08)
     centres = []

@@ -19,7 +19,8 @@ over the volume of a regular tetrahedron of the local edge length h, h^3 / (6 sq
 
 with V the rubber's volume and A the chamber walls' area (from OpenCASCADE). gmsh's Delaunay meshes
 have 0.55-0.95 times that many, fewer the finer the mesh (more only where the mesh is much coarser than
-the thinnest wall, e.g. 2.5 times for the PneuNet at size 0.2 > its 0.08 walls): a solid whose
+the thinnest wall, where the walls, not the size, set the count: the PneuNet, 0.08 walls, has 2.5 times
+the estimate at size 0.2 and 5 times at 0.3, a few thousand tetrahedra either way): a solid whose
 estimate exceeds max_tets is refused before meshing, and a mesh that still comes out larger is refused
 after.
 

@@ -7,10 +7,10 @@ pixel gets the perspective-correct interpolation of the corners' depth and colou
     1 / z = sum_k b_k / z_k,    c = z sum_k b_k c_k / z_k,
 
 and the nearest triangle wins (a buffer of the largest 1 / z, filled by np.maximum.at; the colour is
-interpolated for the winners only). The covered pixels are found
-row by row: on a pixel row each weight b_k is linear in x, so b_k >= 0 bounds the row's columns from one
-side, and all triangles' rows and then their pixels are enumerated at once (ragged arrays, no loop
-over triangles). Cost: proportional to the covered pixels, times the overdraw.
+interpolated for the winners only). The covered pixels are found row by row: on a pixel row each weight
+b_k is linear in x, so b_k >= 0 bounds the row's columns from one side, and all triangles' rows and then
+their pixels are enumerated at once (ragged arrays, no loop over triangles). Cost: proportional to the
+covered pixels, times the overdraw.
 
 Shading (shade_faces) is flat, two-sided Lambert under a headlight: a face's colour is scaled by
 AMBIENT + (1 - AMBIENT) |n . l|, l the direction from the face to a light just above and left of the
