@@ -257,8 +257,8 @@ def test_the_apps_ask_the_kind():
     (lambda: ClosedGas(atmosphere=0.0), r"atmosphere = 0.0 must be > 0"),
     (lambda: ClosedGas(gamma=0.9), r"gamma = 0.9 must lie in \[1, 5/3\]"),
     (lambda: ClosedGas(gamma=float("nan")), r"gamma = nan must be a finite number"),
-    (lambda: ChamberSchedule("bellows", ((1, 1.0),)), r"control = 'bellows' is not one of area, volume, closed_gas, "
-                                                      r"pressure, syringe"),
+    (lambda: ChamberSchedule("bellows", ((1, 1.0),)),
+     r"control = 'bellows' is not one of area, volume, closed_gas, pressure, syringe"),
     (lambda: ChamberSchedule("syringe", ((1, 1.0),)), r"control = 'syringe' has no default for syringe_volume"),
     (lambda: Syringe(syringe_volume=0.0), r"syringe_volume = 0.0 must be > 0"),
     (lambda: Syringe(syringe_volume=1.0, dead_volume=-0.1), r"dead_volume = -0.1 must be >= 0"),

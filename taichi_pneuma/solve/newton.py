@@ -110,7 +110,7 @@ class NewtonSolver:
         self.model.set_displacements(u)
         return self.model.energy()
 
-    def _direction(self, g: np.ndarray, psd_only: bool, clock: "PhaseClock",
+    def _direction(self, g: np.ndarray, psd_only: bool, clock: PhaseClock,
                    indefinite: bool = False) -> tuple[np.ndarray, float]:
         """Newton direction d = -H^-1 g and the slope g.d (nan when the factorisation fails); indefinite: an
         exact H the backend refuses goes to SciPy's LU (see the module docstring)."""
