@@ -246,8 +246,9 @@ def covering_scenes() -> list[Scene]:
                                                         clamp=PointSet(None, BOX), tip=PointSet(None, BOX)))
     polygon = dataclasses.replace(core, geometry=Geometry(Polygon(((-1.75, -0.4), (1.75, -0.4), (0.0, 0.9))),
                                                           (("c", Ellipse((0.0, 0.0), (0.2, 0.1))),)))
-    kinds = [dataclasses.replace(core, increments=4, controls=(ChamberControl(ChamberSchedule(kind(), ((4, 2.0),))),))
-             for kind in set(KINDS.values())]  # every registered chamber kind (tests register more), with its defaults
+    kinds = [dataclasses.replace(core, increments=4, controls=(ChamberControl(ChamberSchedule(kind(**{
+        name: 3.0 for name, (_, default) in kind.parameters().items() if default is dataclasses.MISSING}), ((4, 2.0),))),))
+             for kind in set(KINDS.values())]  # every registered kind (tests register more): defaults, 3.0 if required
     box = (-1.75, -0.4, 1.75, -0.3)
     silicones = [dataclasses.replace(core, units=units, material=material, regions=tuple(Region(box, m) for m in regions))
                  for units, material, regions in (

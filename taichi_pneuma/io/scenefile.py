@@ -12,7 +12,8 @@
                  symmetry line: a chamber crossing it is cut there, its area closed by the flat cap on the line
     [[chambers]] name, shape = "ellipse" (center, semi_axes, points) | "rounded_rectangle" (center, size,
                  radius, corner_points) | "polygon" (points); control = a chamber kind's name, "area"
-                 (stiffness) | "pressure" (allow_vacuum) | ..., with that kind's parameters;
+                 (stiffness) | "pressure" (allow_vacuum) | "closed_gas" (atmosphere, gamma) | "syringe"
+                 (syringe_volume, dead_volume, atmosphere, gamma) | ..., with that kind's parameters;
                  keyframes = [[step, value], ...]; bounds = [min, max] (inverse control)
     [schedule]   increments
     [effects.gravity] density, g      [effects.ground] height, dhat, stiffness      [effects.self_contact] dhat, stiffness

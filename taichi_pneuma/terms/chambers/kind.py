@@ -73,3 +73,13 @@ def chamber_kind(name: str) -> type[ChamberKind]:
     """The kind registered under `name` (PneumaInputError naming it and the known ones otherwise)."""
     require(isinstance(name, str) and name in KINDS, f"control = {name!r} is not one of {', '.join(KINDS)}")
     return KINDS[name]
+
+
+def default_kind(name: str) -> ChamberKind:
+    """The kind registered under `name` with its default parameters (PneumaInputError naming the parameters
+    it has no default for: such a kind is given with them, e.g. Syringe(syringe_volume=1.0))."""
+    kind = chamber_kind(name)
+    required = [key for key, (_, default) in kind.parameters().items() if default is dataclasses.MISSING]
+    require(not required, f"control = {name!r} has no default for {', '.join(required)}: "
+                          f"give {kind.__name__}({', '.join(f'{key}=...' for key in required)})")
+    return kind()

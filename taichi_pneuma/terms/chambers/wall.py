@@ -99,10 +99,11 @@ class Chamber(Term):
         p, q = rest[pairs[:, 0]], rest[pairs[:, 1]]
         self.rest_area = float(self.weights @ (p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0]))
 
-    def area_and_gradient(self) -> tuple[float, np.ndarray]:
-        """A(x) and dA/dx on the wall nodes, (k, 2) in loop order."""
+    def area_and_gradient(self, u: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+        """A(x) and dA/dx on the wall nodes, (k, 2) in loop order, at the model's displacements or at u (n, 2)."""
         gradient = np.empty((self.n_wall, 2))
-        return wall_area(self.rest, self.config.u, self.loop, self.pairs, self.weights, gradient), gradient
+        u = self.config.u if u is None else np.ascontiguousarray(u, dtype=np.float64)
+        return wall_area(self.rest, u, self.loop, self.pairs, self.weights, gradient), gradient
 
     def area(self) -> float:
         """The signed area A(x) enclosed by the wall."""
