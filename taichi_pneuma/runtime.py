@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import taichi as ti
+from taichi.lang import impl
 
 from .errors import PneumaInputError
 
 ARCHES = {"cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan, "metal": ti.metal, "opengl": ti.opengl, "gpu": ti.gpu}
+F64_ARCHES = (ti.x64, ti.arm64, ti.cuda)  # the backends whose kernels have 64-bit floats (and atan2 of them)
 _current: str | None = None
 
 
@@ -21,7 +23,15 @@ def init(arch: str = "cpu", cpu_threads: int | None = None) -> None:
     if _current == arch:
         return
     threads = {} if cpu_threads is None else {"cpu_max_num_threads": cpu_threads}
-    ti.init(arch=ARCHES[arch], default_fp=ti.f64, offline_cache=True, log_level=ti.WARN, **threads)
+    try:
+        ti.init(arch=ARCHES[arch], default_fp=ti.f64, offline_cache=True, log_level=ti.WARN, **threads)
+    except RuntimeError as exc:
+        raise PneumaInputError(f"arch = {arch!r}: Taichi cannot start it here ({exc})") from None
+    chosen = impl.current_cfg().arch  # ti.gpu is whichever GPU backend is found, the CPU if none
+    if chosen not in F64_ARCHES:
+        ti.reset()
+        raise PneumaInputError(f"arch = {arch!r} gives Taichi's {chosen.name} backend here, which cannot run this "
+                               f"program's 64-bit kernels; use cpu, or cuda (an NVIDIA GPU)")
     _current = arch
 
 

@@ -38,6 +38,7 @@ import numpy as np
 import triangle
 from scipy.spatial import cKDTree
 
+from .. import limits
 from ..errors import PneumaInputError, require, require_finite, shape_of
 
 OUTER_MARKER = 1
@@ -568,7 +569,8 @@ class Geometry:
     def mesh(self) -> Mesh:
         """Mesh the body minus its chambers with Triangle ('pqa<max_area>'), split every triangle in four
         `refinements` times (uniform refinement: the same boundary polygons, h halved each time), add a
-        midside node to every edge for quadratic triangles, and name the node sets."""
+        midside node to every edge for quadratic triangles, and name the node sets. In a limits.budget,
+        Triangle adds at most limits.element_cap points and a mesh past the budget is refused."""
         outline, outline_markers, walls = self.outline()
         closed = [c for c, (_, origin) in enumerate(walls, start=1) if origin is None]
         loops = [outline] + [walls[c - 1][0] for c in closed]
@@ -582,7 +584,11 @@ class Geometry:
         }
         if closed:
             pslg["holes"] = np.array([interior_point(p) for p in loops[1:]])
-        out = triangulate(pslg, f"pqa{self.max_area:.17f}")  # fixed-point: Triangle reads no exponent
+        weight = 4 ** self.refinements * (4 if self.order == 2 else 1)  # linear triangles per Triangle's one
+        cap = limits.element_cap(weight)  # Triangle adds at most this many points (S), then stops
+        out = triangulate(pslg, f"pqa{self.max_area:.17f}" + ("" if cap is None else f"S{cap}"))  # no exponent
+        added = len(out["vertices"]) - len(pslg["vertices"])
+        limits.check_mesh(len(out["triangles"]), weight, "Triangle", cap if cap is not None and added >= cap else None)
         vertices = np.asarray(out["vertices"], dtype=np.float64)
         triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
         segments, markers = np.asarray(out["segments"], dtype=np.int64), out["segment_markers"].ravel()

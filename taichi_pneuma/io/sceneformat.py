@@ -10,7 +10,7 @@ from __future__ import annotations
 import functools
 import typing
 
-from ..control.targets import Target
+from ..control.targets import MAX_TARGETS, Target
 from ..errors import require
 from ..fem.geometry import (
     ORDERS,
@@ -27,6 +27,7 @@ from ..fem.geometry import (
 from ..solve.schedule import ChamberSchedule
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
+from .output import check_heading
 from .schema import Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
 from .tomltext import dumps
 
@@ -96,17 +97,20 @@ def scene_table(scene_class) -> Table:
                      parts=lambda s: {"E": s.material.youngs_modulus, "nu": s.material.poisson_ratio,
                                       "regions": s.regions},
                      optional=True, doc="the stable neo-Hookean material")
-    chamber = Table({"name": Key(str, doc="distinct among the chambers"), "shape": CHAMBER_SHAPES,
+    chamber = Table({"name": Key(str, doc="distinct among the chambers, not starting with = + - @ (it heads CSV "
+                                          "columns)"), "shape": CHAMBER_SHAPES,
                      "control": Variant(KINDS, lambda kind: kind.name, "area", "the chamber kind (its keys its parameters)"),
                      "keyframes": Key(tuple, doc="[[step, command], ...], steps whole and increasing"),
                      "bounds": Key(tuple, None, "[min, max] of the command under inverse control")},
-                    make=lambda v: (v["name"], v["shape"],
+                    make=lambda v: (check_heading("name", v["name"]), v["shape"],
                                     control_class(ChamberSchedule(v["control"], v["keyframes"]), v["bounds"])),
                     parts=lambda c: {"name": c[0], "shape": c[1], "control": c[2].kind,
                                      "keyframes": c[2].schedule.keyframes, "bounds": c[2].bounds})
 
     def make_scene(v):
         require(v["chambers"], "scene names no chamber: add at least one [[chambers]] table")
+        require(len(v["targets"]) <= MAX_TARGETS, f"{len(v['targets'])} [[targets]]: at most {MAX_TARGETS} are "
+                                                  f"allowed (each is a reach)")
         (material, regions), (clamp, clamp_stiffness) = v["material"], v["clamp"]
         geometry = Geometry(v["body"], tuple((name, shape) for name, shape, _ in v["chambers"]),
                             v["mesh"]["max_area"], clamp, v["mesh"]["order"], tip=v["tip"], rollers=v["rollers"])
