@@ -16,13 +16,16 @@ def init(arch: str = "cpu", cpu_threads: int | None = None) -> None:
     """Initialise Taichi once with float64 fields on `arch`; a later call with the same arch is a no-op.
 
     cpu_threads: the size of Taichi's CPU thread pool (default: every core); a study's worker
-    processes use 1 each, so that N workers keep N cores busy."""
+    processes use 1 each, so that N workers keep N cores busy. A backend Taichi cannot start, or one
+    whose kernels have no 64-bit floats (what "gpu" gives without CUDA: Vulkan, Metal, OpenGL), is a
+    PneumaInputError."""
     global _current
     if arch not in ARCHES:
         raise PneumaInputError(f"arch = {arch!r} is not one of {', '.join(ARCHES)}")
     if _current == arch:
         return
     threads = {} if cpu_threads is None else {"cpu_max_num_threads": cpu_threads}
+    _current = None  # ti.init resets whatever ran before; until it succeeds, nothing runs
     try:
         ti.init(arch=ARCHES[arch], default_fp=ti.f64, offline_cache=True, log_level=ti.WARN, **threads)
     except RuntimeError as exc:

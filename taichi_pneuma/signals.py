@@ -9,7 +9,8 @@
     ignored()        while a pool starts its workers: SIGINT and SIGHUP ignored, which the workers inherit
     quiet_while_loading()  called first by the package: when the program is one of its commands, a signal
                      before the command has set its own handlers (while the modules load) ends it with one
-                     error line and 128 + signal, not a traceback of the imports
+                     error line and 128 + signal, not a traceback of the imports; finished() when its run
+                     is over: a signal while the interpreter shuts down changes nothing
 
 Signal handlers belong to the main thread: in any other thread these change nothing.
 """
@@ -141,6 +142,8 @@ def launched_as_command() -> bool:
     """Whether this program is one of the package's commands: python -m taichi_pneuma.apps.<name>, or a
     pneuma-<name> script."""
     argv = getattr(sys, "orig_argv", [])
+    if "--multiprocessing-fork" in argv:  # a pool's worker (its sys.argv is its parent's)
+        return False
     module = next((argv[i + 1] for i, arg in enumerate(argv[:-1]) if arg == "-m"), "")
     script = os.path.basename(sys.argv[0]) if sys.argv else ""
     return module.startswith("taichi_pneuma.apps.") or script.startswith("pneuma-")
@@ -149,6 +152,14 @@ def launched_as_command() -> bool:
 def exit_quietly(signum: int) -> None:
     print(f"error: interrupted ({NAMES[signum]})", file=sys.stderr)
     raise SystemExit(128 + signum)
+
+
+def finished() -> None:
+    """If the program is one of the commands, its run is over (files written, exit code decided): a signal
+    from now on changes nothing (it would only come while the interpreter shuts down)."""
+    if launched_as_command() and in_main_thread():
+        for s in NAMES:
+            signal.signal(s, signal.SIG_IGN)
 
 
 def quiet_while_loading() -> None:

@@ -327,6 +327,8 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP: the sections done are written
         print(f"error: interrupted ({signals.name_of(exc)})", file=sys.stderr)
         return signals.exit_code_of(exc)
+    finally:
+        signals.finished()
 
 
 def run(args: argparse.Namespace) -> int:

@@ -211,4 +211,6 @@ def exit_code(app_run, args: argparse.Namespace) -> int:
     except KeyboardInterrupt as exc:
         print(f"error: interrupted ({signals.name_of(exc)})", file=sys.stderr)
         return signals.exit_code_of(exc)
+    finally:
+        signals.finished()
     return 0 if summary["all_converged"] else 1

@@ -56,7 +56,7 @@ from ..io.output import (
 )
 from ..io.scenefile import read_scene
 from ..io.sceneformat import scene_data
-from ..io.schema import parse_assignment, parse_key
+from ..io.schema import parse_key, parse_value
 from ..scene import Scene
 from ..solve.newton import NewtonOptions
 from ..solve.simulate import MAX_CUTS, RampStopped
@@ -126,9 +126,6 @@ class Axis:
         return [float(v) for v in self.low + u * (self.high - self.low)]
 
 
-def parse_value(text: str):
-    """A value as TOML reads it (1e4, 3, true, "x"); a bare word is a string."""
-    return parse_assignment(f"v={text}")[1]
 
 
 def parse_vary(text: str) -> Axis:
@@ -142,19 +139,19 @@ def parse_vary(text: str) -> Axis:
     if ":" in spec:
         parts = spec.split(":")
         require(len(parts) in (2, 3), f"{where}: a range is start:stop:count (or start:stop with --samples)")
-        ends = [parse_value(p) for p in parts[:2]]
+        ends = [parse_value(p, where) for p in parts[:2]]
         for end in ends:
             require(is_number(end), f"{where}: {end!r} is not a number")
             require_finite(where, end)
         count = None
         if len(parts) == 3:
-            count = parse_value(parts[2])
+            count = parse_value(parts[2], where)
             require(isinstance(count, int) and not isinstance(count, bool) and 1 <= count <= MAX_RUNS,
                     f"{where}: count {parts[2]!r} must be an integer from 1 to {MAX_RUNS}")
         return Axis(key, spec, ends[0], ends[1], count)
     items = [p.strip() for p in spec.split(",")]
     require(all(items), f"{where}: an empty value in the list")
-    values = tuple(parse_value(p) for p in items)
+    values = tuple(parse_value(p, where) for p in items)
     require(all(len(cell(v)) <= MAX_CELL for v in values),
             f"--vary {key}: a value of more than {MAX_CELL} characters (as a CSV cell)")
     require(len({cell(v) for v in values}) == len(values), f"{where}: a value is listed twice")

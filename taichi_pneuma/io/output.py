@@ -121,7 +121,7 @@ class Subfolder:
         except OSError as exc:
             raise PneumaInputError(f"cannot make the folder {str(self.path)!r} ({exc.strerror})") from None
         try:
-            self.fd = os.open(self.path, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0) | NOFOLLOW)
+            self.fd = os.open(self.path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_DIRECTORY", 0) | NOFOLLOW)
         except OSError:
             kind = "a link" if self.path.is_symlink() else "a file"
             raise PneumaInputError(f"{str(self.path)!r} is {kind}, not a folder: the results cannot go in it "

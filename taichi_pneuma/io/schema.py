@@ -333,22 +333,27 @@ def set_key(data: dict, key: str, value) -> None:
 
 
 def parse_assignment(text: str) -> tuple[str, object]:
-    """'KEY=VALUE' -> (key, value); VALUE is read as a TOML value (1e4, true, [0, 0.1], "x"), else as a string."""
+    """'KEY=VALUE' -> (key, parse_value(VALUE))."""
     key, sep, raw = text.partition("=")
     require(bool(sep) and key.strip(), f"--set {text[:100]!r} must look like KEY=VALUE (e.g. material.E=2e4)")
-    require(len(raw) <= MAX_VALUE_CHARS, f"--set {key.strip()[:40]}=...: the value has {len(raw)} characters; "
-                                         f"at most {MAX_VALUE_CHARS} are allowed")
+    return key.strip(), parse_value(raw, f"--set {key.strip()[:40]}")
+
+
+def parse_value(raw: str, what: str):
+    """A value as TOML reads it (1e4, true, [0, 0.1], "x"), else the text (stripped) as a string; refused
+    (naming `what`) past MAX_VALUE_CHARS characters, nested past MAX_DEPTH, or not valid UTF-8."""
+    require(len(raw) <= MAX_VALUE_CHARS, f"{what}: the value has {len(raw)} characters; at most {MAX_VALUE_CHARS} "
+                                         f"are allowed")
     try:
-        text.encode("utf-8")
+        raw.encode("utf-8")
     except UnicodeEncodeError:
-        raise PneumaInputError(f"--set {text[:100]!r} is not valid UTF-8 (bytes the terminal could not decode)") from None
+        raise PneumaInputError(f"{what}: {raw[:60]!r} is not valid UTF-8 (bytes the terminal could not decode)") from None
     try:
-        value = parse_toml(f"v = {raw.strip()}", "the value")["v"]
+        return parse_toml(f"v = {raw.strip()}", "the value")["v"]
     except PneumaInputError as exc:
         if "nested" in str(exc) or "parts" in str(exc):
-            raise PneumaInputError(f"--set {key.strip()[:40]}=...: {exc}") from None
-        value = raw.strip()
-    return key.strip(), value
+            raise PneumaInputError(f"{what}: {exc}") from None
+        return raw.strip()
 
 
 def nested_past(data, depth: int) -> bool:
