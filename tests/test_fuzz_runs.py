@@ -19,7 +19,6 @@ from io import StringIO
 from pathlib import Path
 
 import numpy as np
-import pytest
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 

@@ -220,7 +220,7 @@ def acquire(directory: Path, stem: str) -> int:
 def lock_stem(directory: str | os.PathLike, stem: str):
     """Hold the lock of the result files named `stem` in directory for the block (re-entrant in a process);
     the lock file is removed afterwards."""
-    directory = Path(directory)
+    directory, stem = Path(directory), check_stem(stem)
     info = os.stat(directory)
     key = (info.st_dev, info.st_ino, stem)
     if key not in _locks:
