@@ -150,8 +150,12 @@ def launched_as_command() -> bool:
 
 
 def exit_quietly(signum: int) -> None:
+    """One error line and exit 128 + signum at once: while the modules load nothing is written yet, and an
+    exception could be swallowed (Taichi imports optional modules under a bare `except:`)."""
     print(f"error: interrupted ({NAMES[signum]})", file=sys.stderr)
-    raise SystemExit(128 + signum)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(128 + signum)
 
 
 def finished() -> None:

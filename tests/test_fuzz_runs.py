@@ -19,6 +19,7 @@ from io import StringIO
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 
@@ -117,6 +118,7 @@ def consistent(out: Path) -> None:
         assert all((out / f).is_file() for f in listed)
 
 
+@pytest.mark.slow
 def test_signals_at_random_times_end_with_128_plus_signal_and_consistent_files(tmp_path):
     """Four runs, each sent SIGINT, SIGTERM or SIGHUP at a random time (seeded): while loading, during
     the ramp or while saving."""
@@ -133,6 +135,7 @@ def test_signals_at_random_times_end_with_128_plus_signal_and_consistent_files(t
             consistent(tmp_path / f"out{k}")
 
 
+@pytest.mark.slow
 def test_runs_of_one_scene_at_once_never_interleave(tmp_path):
     """Three runs of the same scene into one --out: each ends done or refused (another run holds the
     stem); the files left are one run's, whole."""

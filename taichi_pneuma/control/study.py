@@ -126,8 +126,6 @@ class Axis:
         return [float(v) for v in self.low + u * (self.high - self.low)]
 
 
-
-
 def parse_vary(text: str) -> Axis:
     """'KEY=start:stop:count' (or start:stop with --samples) or 'KEY=v1,v2,...' -> Axis. KEY is a dotted
     scene key (material.E, chambers[0].center[1]) or one of ALIASES (cy, cx, E, nu, k, max_area)."""
@@ -535,7 +533,7 @@ class Sweep:
         self.out = prepare_directory(out)
         self.csv, self.json, self.png = (self.out / f"{name}{suffix}" for suffix in (".csv", ".json", ".png"))
         self.identity = {"keys": self.keys, "base_scene": self.scene_toml, "options": asdict(options)}
-        with lock_stem(self.out, name):  # the app holds it from here to the end of run()
+        with lock_stem(self.out, name):  # (the sweep app holds it from before this to the end of run())
             self.done = self._read_done(retry_failed)
         self.todo = [run for run in self.runs if run_key(run) not in self.done]
 

@@ -341,18 +341,17 @@ def parse_assignment(text: str) -> tuple[str, object]:
 
 def parse_value(raw: str, what: str):
     """A value as TOML reads it (1e4, true, [0, 0.1], "x"), else the text (stripped) as a string; refused
-    (naming `what`) past MAX_VALUE_CHARS characters, nested past MAX_DEPTH, or not valid UTF-8."""
+    (naming `what`) past MAX_VALUE_CHARS characters, past the limits of read_toml, or not valid UTF-8."""
     require(len(raw) <= MAX_VALUE_CHARS, f"{what}: the value has {len(raw)} characters; at most {MAX_VALUE_CHARS} "
                                          f"are allowed")
     try:
         raw.encode("utf-8")
     except UnicodeEncodeError:
-        raise PneumaInputError(f"{what}: {raw[:60]!r} is not valid UTF-8 (bytes the terminal could not decode)") from None
+        raise PneumaInputError(f"{what}: {raw[:60]!r} is not valid UTF-8 (bytes the terminal could not "
+                               f"decode)") from None
     try:
-        return parse_toml(f"v = {raw.strip()}", "the value")["v"]
-    except PneumaInputError as exc:
-        if "nested" in str(exc) or "parts" in str(exc):
-            raise PneumaInputError(f"{what}: {exc}") from None
+        return read_toml(f"v = {raw.strip()}", what)["v"]
+    except tomllib.TOMLDecodeError:
         return raw.strip()
 
 
@@ -369,18 +368,24 @@ def nested_past(data, depth: int) -> bool:
     return False
 
 
-def parse_toml(text: str, what: str) -> dict:
-    """tomllib.loads(text) within the limits of the module docstring; any failure is one PneumaInputError
-    naming `what` (a file name): not valid TOML (tomllib's reason), a key of too many parts, nesting too deep."""
+def read_toml(text: str, what: str) -> dict:
+    """tomllib.loads(text) within the limits of the module docstring (PneumaInputError naming `what` past
+    them); text that is not TOML raises tomllib.TOMLDecodeError."""
     stripped = TOML_STRING_OR_COMMENT.sub(lambda m: "" if m.group().startswith("#") else '""', text)
     require(TOML_KEY_RUN.search(stripped) is None,
             f"{what}: a dotted key of more than {MAX_KEY_PARTS} parts (the scene format has none deeper than 5)")
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise PneumaInputError(f"{what}: not valid TOML ({exc})") from None
     except RecursionError:
         data = None
     require(data is not None and not nested_past(data, MAX_DEPTH),
-            f"{what}: not valid TOML (arrays or tables nested too deeply: at most {MAX_DEPTH} levels)")
+            f"{what}: arrays or tables nested too deeply (at most {MAX_DEPTH} levels)")
     return data
+
+
+def parse_toml(text: str, what: str) -> dict:
+    """read_toml(text, what), text that is not TOML a PneumaInputError too (naming `what` and tomllib's reason)."""
+    try:
+        return read_toml(text, what)
+    except tomllib.TOMLDecodeError as exc:
+        raise PneumaInputError(f"{what}: not valid TOML ({exc})") from None
