@@ -27,7 +27,8 @@ mesh (it runs out of floating-point precision) is a PneumaInputError too.
 
 Checking that takes time and memory quadratic in the outline points, so a geometry has at most
 MAX_SHAPES chambers (a union at most MAX_SHAPES rectangles) and MAX_WALL_POINTS outline points in all
-(2000 points: 0.7 s and 190 MB for the self-crossing test of one polygon).
+(2000 points: 0.7 s and 190 MB for the self-crossing test of one polygon). Chamber names are distinct
+and head CSV columns, so none starts like a spreadsheet formula (output.check_heading).
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ from scipy.spatial import cKDTree
 
 from .. import limits
 from ..errors import PneumaInputError, require, require_finite, shape_of
+from ..io.output import check_heading
 
 OUTER_MARKER = 1
 MARGIN = 1e-3
@@ -530,6 +532,8 @@ class Geometry:
                                            f"at most {MAX_WALL_POINTS} are allowed")
         names = [name for name, _ in polygons]
         require(len(set(names)) == len(names), f"chamber names {names!r} must be distinct")
+        for name in names:
+            check_heading("chamber name", name)
         for what, poly in [("the body", body)] + [(f"chamber {name!r}", poly) for name, poly in polygons]:
             require_spaced(what, poly)
         outline, _, walls = self.outline()

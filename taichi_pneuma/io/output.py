@@ -52,12 +52,12 @@ def check_stem(name) -> str:
     return name
 
 
-def check_heading(what: str, name: str) -> str:
-    """Return name if it can head CSV columns (a chamber's name: <name>.pressure), else raise: a name
-    starting with one of FORMULA would make a spreadsheet read the heading as a formula."""
-    require(not name.startswith(FORMULA), f"{what} = {name!r} cannot start with = + - @, a tab or a carriage return: "
-                                          f"it heads CSV columns, which a spreadsheet would read as a formula")
-    return name
+def check_heading(what: str, name) -> None:
+    """Refuse a name that heads CSV columns (a chamber's: <name>.pressure) if it starts with one of FORMULA,
+    which would make a spreadsheet read the heading as a formula."""
+    require(not (isinstance(name, str) and name.startswith(FORMULA)),
+            f"{what} {name!r} cannot start with = + - @, a tab or a carriage return: it heads CSV columns, which a "
+            f"spreadsheet would read as a formula")
 
 
 def reduce_to_stem(text: str) -> str:

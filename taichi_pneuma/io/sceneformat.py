@@ -27,7 +27,6 @@ from ..fem.geometry import (
 from ..solve.schedule import ChamberSchedule
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
-from .output import check_heading
 from .schema import Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
 from .tomltext import dumps
 
@@ -102,7 +101,7 @@ def scene_table(scene_class) -> Table:
                      "control": Variant(KINDS, lambda kind: kind.name, "area", "the chamber kind (its keys its parameters)"),
                      "keyframes": Key(tuple, doc="[[step, command], ...], steps whole and increasing"),
                      "bounds": Key(tuple, None, "[min, max] of the command under inverse control")},
-                    make=lambda v: (check_heading("name", v["name"]), v["shape"],
+                    make=lambda v: (v["name"], v["shape"],
                                     control_class(ChamberSchedule(v["control"], v["keyframes"]), v["bounds"])),
                     parts=lambda c: {"name": c[0], "shape": c[1], "control": c[2].kind,
                                      "keyframes": c[2].schedule.keyframes, "bounds": c[2].bounds})
