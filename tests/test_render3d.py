@@ -8,6 +8,7 @@ import imageio.v3 as iio
 import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
+from test_render import xvfb_display  # noqa: F401  (the virtual display fixture)
 
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.render import interactive3d
@@ -15,8 +16,6 @@ from taichi_pneuma.render.camera import MAX_ELEVATION, Camera
 from taichi_pneuma.render.frames3d import CHAMBER, FrameRenderer3D, Track3D, open_view, render_video_3d
 from taichi_pneuma.render.interactive3d import Slider, commands_from, dragged, explore_3d
 from taichi_pneuma.render.surface import AMBIENT, BACK_FACE, NumpyView, rasterise, shade_faces
-
-from test_render import xvfb_display  # noqa: F401  (the virtual display fixture)
 
 CUBE = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
 

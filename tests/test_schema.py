@@ -29,6 +29,7 @@ from taichi_pneuma.fem.geometry import (
     Roller,
     RoundedRectangle,
 )
+from taichi_pneuma.io.output import FORMULA
 from taichi_pneuma.io.scenefile import key_reference, read_scene
 from taichi_pneuma.io.sceneformat import scene_data
 from taichi_pneuma.io.units import UNITLESS, UNITS
@@ -126,8 +127,8 @@ def scenes(draw):
     """Valid scenes: chambers in separate cells of the body's core rectangle, every key of the file drawn."""
     cx, cy, w, h = draw(grid(-2, 2)), draw(grid(-2, 2)), draw(grid(2, 4)), draw(grid(0.5, 1.0))
     body = draw(bodies(cx, cy, w, h))
-    names = draw(st.lists(st.text(st.characters(blacklist_categories=("Cs",)), min_size=1, max_size=6),
-                          min_size=1, max_size=3, unique=True))
+    names = draw(st.lists(st.text(st.characters(blacklist_categories=("Cs",)), min_size=1, max_size=6)
+                          .filter(lambda name: not name.startswith(FORMULA)), min_size=1, max_size=3, unique=True))
     cell = w / len(names)
     shapes = [draw(chamber_shapes(cx - w / 2 + (i + 0.5) * cell, cy, cell / 2 - 0.05, h / 2 - 0.05))
               for i in range(len(names))]

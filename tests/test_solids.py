@@ -245,8 +245,9 @@ def test_proposed_scene_maps_one_to_one_onto_the_generator():
     """The proposed pneunet_3d.toml: its [body] keys are PneuNet's fields, its [mesh] keys MeshSizes' (and the
     order), its chambers and its region name the generated solid's surface and volume groups."""
     import dataclasses
-    import tomllib
     from pathlib import Path
+
+    import tomllib
 
     scene = tomllib.loads((Path(__file__).parents[1] / "assets/scenes/proposed/pneunet_3d.toml").read_text())
     body = {k: v for k, v in scene["body"].items() if k != "shape"}

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import runtime
+from .. import runtime, signals
 from ..errors import PneumaInputError, require
 from ..io.output import prepare_directory, save_json, save_text, write_atomic
 from ..io.scenefile import load_scene
@@ -319,13 +319,23 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
     args = parser.parse_args(argv)
     try:
-        sections = [s.strip() for s in args.sections.split(",") if s.strip()]
-        for s in sections:
-            require(s in SECTIONS, f"--sections: {s!r} is not one of {', '.join(SECTIONS)}")
-        out = prepare_directory(args.out)
+        with signals.interrupting():
+            return run(args)
     except PneumaInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP: the sections done are written
+        print(f"error: interrupted ({signals.name_of(exc)})", file=sys.stderr)
+        return signals.exit_code_of(exc)
+    finally:
+        signals.finished()
+
+
+def run(args: argparse.Namespace) -> int:
+    sections = [s.strip() for s in args.sections.split(",") if s.strip()]
+    for s in sections:
+        require(s in SECTIONS, f"--sections: {s!r} is not one of {', '.join(SECTIONS)}")
+    out = prepare_directory(args.out)
     runtime.init(args.arch)
     heading = f"Machine: {machine()}, Taichi arch {args.arch}\n\n"
     for section in sections:

@@ -24,9 +24,10 @@ import sys
 
 from .. import runtime
 from ..errors import require
-from ..io.output import prepare_directory, save_json
+from ..io.output import lock_stems, prepare_directory, save_json
 from ..io.units import AREA, FORCE, LENGTH, PRESSURE
 from ..io.vtk import VtkSeries
+from ..signals import holding
 from ..solve.simulate import RampInterrupted, RampStopped
 from ..terms.chambers import AreaControl
 from .cli import (
@@ -73,15 +74,22 @@ def run(args: argparse.Namespace) -> dict:
     if args.interactive:
         from ..render.interactive import explore
         return explore(scene, args.growth, size, args.renderer, newton_options(args))
+    with lock_stems(out, stem):  # no other run writes these files meanwhile
+        return run_scene(args, scene, stem, size, out)
+
+
+def run_scene(args: argparse.Namespace, scene, stem: str, size: tuple[int, int], out) -> dict:
     built = build(scene)
     vtk = VtkSeries(out, stem, built)
     try:
         result = solve(args, built, vtk=vtk)
     except RampStopped as stopped:
-        written = stopped.result.save_history(out, stem) + [vtk.pvd]
-        if isinstance(stopped, RampInterrupted):
-            written.append(save_json(out / f"{stem}_summary.json", stopped.result.summary(interrupted=True)))
-        print(f"saved the {len(stopped.result.steps)} steps done in " + ", ".join(str(p) for p in written))
+        if stopped.result.steps:  # none when the rest state itself has no equilibrium
+            with holding():  # a second signal waits for these files
+                written = stopped.result.save_history(out, stem) + [vtk.pvd]
+                if isinstance(stopped, RampInterrupted):
+                    written.append(save_json(out / f"{stem}_summary.json", stopped.result.summary(interrupted=True)))
+            print(f"saved the {len(stopped.result.steps)} steps done in " + ", ".join(str(p) for p in written))
         raise
     final, summary = result.steps[-1], result.summary()
     area, length, pressure, force = (scene.units.suffix(d) for d in (AREA, LENGTH, PRESSURE, FORCE))

@@ -10,7 +10,7 @@ from __future__ import annotations
 import functools
 import typing
 
-from ..control.targets import Target
+from ..control.targets import MAX_TARGETS, Target
 from ..errors import require
 from ..fem.geometry import (
     ORDERS,
@@ -24,10 +24,10 @@ from ..fem.geometry import (
     Roller,
     RoundedRectangle,
 )
-from ..solve.schedule import ChamberSchedule
-from ..terms.chambers import KINDS
 from ..materials import FORMS, IsochoricMaterial
 from ..materials.presets import PRESETS, PresetMaterial
+from ..solve.schedule import ChamberSchedule
+from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
 from .schema import Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
 from .tomltext import dumps
@@ -151,7 +151,8 @@ def scene_table(scene_class) -> Table:
                      doc="the body's material: the stable neo-Hookean one of E and nu (no law or preset), a form of "
                          "the isochoric law (law = neo_hookean, mooney_rivlin, yeoh: C10, ... and K or nu, in the "
                          "scene's pressure unit), or a preset (docs/materials.md)")
-    chamber = Table({"name": Key(str, doc="distinct among the chambers"), "shape": CHAMBER_SHAPES,
+    chamber = Table({"name": Key(str, doc="distinct among the chambers, not starting with = + - @ (it heads CSV "
+                                          "columns)"), "shape": CHAMBER_SHAPES,
                      "control": Variant(KINDS, lambda kind: kind.name, "area", "the chamber kind (its keys its parameters)"),
                      "keyframes": Key(tuple, doc="[[step, command], ...], steps whole and increasing"),
                      "bounds": Key(tuple, None, "[min, max] of the command under inverse control")},
@@ -162,6 +163,8 @@ def scene_table(scene_class) -> Table:
 
     def make_scene(v):
         require(v["chambers"], "scene names no chamber: add at least one [[chambers]] table")
+        require(len(v["targets"]) <= MAX_TARGETS, f"{len(v['targets'])} [[targets]]: at most {MAX_TARGETS} are "
+                                                  f"allowed (each is a reach)")
         (material, regions), (clamp, clamp_stiffness) = v["material"], v["clamp"]
         geometry = Geometry(v["body"], tuple((name, shape) for name, shape, _ in v["chambers"]),
                             v["mesh"]["max_area"], clamp, v["mesh"]["order"], tip=v["tip"], rollers=v["rollers"])

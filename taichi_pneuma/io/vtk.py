@@ -4,7 +4,9 @@
     <out>/<stem>_vtk/<stem>_0000.vtu     step 0, 1, ... each written whole (output.write_atomic)
 
 The PVD is rewritten after every step, so a run that stops early leaves its finished steps readable;
-VTU files of the same stem left in the folder by an earlier run are removed when a series starts.
+VTU files of the same stem left in the folder by an earlier run, and the .partial files of one killed
+while writing, are removed when a series starts. The folder is an output.Subfolder: a link or a file at
+its name is refused before any step is solved, and no link in it is followed.
 Each VTU holds the rest mesh (points padded with z = 0; linear triangles, or quadratic ones as VTK's
 6-node triangle, whose midside-node order 01, 12, 20 the mesh shares) and
 - point data: displacement (x, y, 0): ParaView's Warp By Vector with it shows the deformed body;
@@ -22,6 +24,7 @@ meshio 5.3 reads FieldData but does not write it: write_vtu adds the block (ASCI
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -29,7 +32,7 @@ import meshio
 import numpy as np
 
 from ..fem.fields import ElementFields
-from .output import save_text, write_atomic
+from .output import Subfolder, save_text, write_atomic
 from .units import FORCE, LENGTH, PRESSURE, history_dimensions
 
 SYMMETRIC_TENSOR = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))  # ParaView's 6-component order
@@ -63,10 +66,12 @@ class VtkSeries:
     def __init__(self, directory: str | Path, stem: str, built):
         mesh = built.mesh
         self.directory, self.stem, self.mesh = Path(directory), stem, mesh
-        self.folder = self.directory / f"{stem}_vtk"
-        self.folder.mkdir(parents=True, exist_ok=True)
-        for stale in self.folder.glob(f"{stem}_[0-9][0-9][0-9][0-9].vtu"):  # from an earlier run of this name
-            stale.unlink()
+        self._folder = Subfolder(self.directory, f"{stem}_vtk")
+        self.folder = self._folder.path
+        stale = re.compile(rf"{re.escape(stem)}_\d{{4,}}\.vtu|\..*\.partial.*")  # an earlier run's steps, a killed write
+        for name in self._folder.names():
+            if stale.fullmatch(name):
+                self._folder.remove(name)
         self.pvd = self.directory / f"{stem}.pvd"
         self.scene = built.scene
         self.material = built.elastic.law, built.elastic.parameters
@@ -93,7 +98,7 @@ class VtkSeries:
         dimensions = history_dimensions(self.scene, step.contact)
         row = {units.label(name, dimensions.get(name, "")): value for name, value in step.row().items()}
         path = self.folder / f"{self.stem}_{step.step:04d}.vtu"
-        write_atomic(path, lambda tmp: write_vtu(tmp, grid, row))
+        write_atomic(path, lambda tmp: write_vtu(tmp, grid, row), self._folder)
         self.entries.append((float(step.step), f"{self.folder.name}/{path.name}"))
         save_text(self.pvd, pvd_text(self.entries))
         return path

@@ -28,6 +28,7 @@ segment (a quadratic in the step fraction), the continuous collision check.
 import numpy as np
 import taichi as ti
 
+from .. import limits
 from .base import Indices, Table, Term, Triples, Vec2s, block_pattern, edge, int32s, position, quadratic_roots
 
 
@@ -254,6 +255,7 @@ class SelfContact(Term):
         self.config = config
         self.dhat, self.kappa = float(dhat), float(stiffness)
         rest = config.rest
+        limits.check_pairs(limits.wall_pairs([len(loop) for loop in loops]), "self-contact")  # before allocating them
         pairs = []
         for loop in loops:
             loop = np.asarray(loop, dtype=np.int64)
