@@ -1,12 +1,11 @@
-"""The single place where Taichi is initialised (float64, the caller's backend, offline kernel cache)."""
+"""The single place where Taichi (or Quadrants, see backend.py) is initialised: float64, the caller's arch,
+offline kernel cache."""
 
 from __future__ import annotations
 
-import taichi as ti
-
+from .backend import ARCHES, ti
 from .errors import PneumaInputError
 
-ARCHES = {"cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan, "metal": ti.metal, "opengl": ti.opengl, "gpu": ti.gpu}
 _current: str | None = None
 
 

@@ -21,7 +21,7 @@ plane strain), by the kernel cauchy_stresses.
 """
 
 import numpy as np
-import taichi as ti
+from ..backend import ti
 
 from .eigen import symmetric_eigensystem
 

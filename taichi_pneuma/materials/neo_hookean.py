@@ -25,7 +25,7 @@ and the 2 x 2 block B has closed-form eigenpairs: four eigenpairs of M, no itera
 """
 
 import numpy as np
-import taichi as ti
+from ..backend import ti
 
 from .law import Law, register
 

@@ -11,7 +11,7 @@ from contextlib import contextmanager
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-import taichi as ti
+from ..backend import ti
 
 from .. import runtime
 

@@ -22,7 +22,7 @@ which keeps its compile time short.
 """
 
 import numpy as np
-import taichi as ti
+from ..backend import ti
 
 from ..fem.elements import FAMILIES, family_of
 from ..materials.law import element_parameters, embedded, stress_eigensystem

@@ -32,7 +32,7 @@ PSD elastic and clamp Hessians keep projected Newton a descent method).
 """
 
 import numpy as np
-import taichi as ti
+from ...backend import ti
 
 from ..base import Indices, Scalars, Term, Vec2s, int32s, position, vertex_dofs
 

@@ -1,0 +1,61 @@
+"""A canvas that needs no Taichi GUI: Pillow draws the frame's triangles and segments into an RGB image.
+
+It has the primitives of the GGUI and ti.GUI canvases in frames.py (normalised coordinates, origin
+bottom-left; filled triangles, one colour or one per triangle; segments of a width in pixels), so
+FrameRenderer draws the same picture on it; it is the renderer where neither GUI exists (Quadrants
+has neither). It is offscreen only: it opens no window, so a live window refuses it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from PIL import Image, ImageDraw
+
+from ..errors import PneumaInputError
+
+
+class PillowCanvas:
+    """Pillow's ImageDraw on an RGB image of (width, height) pixels; offscreen only."""
+
+    name = "Pillow (software)"
+    slider_row_px = 0
+
+    def __init__(self, width: int, height: int, show: bool = False, title: str = "taichi-pneuma",
+                 background=(1.0, 1.0, 1.0)):
+        if show:
+            raise PneumaInputError("the Pillow renderer draws offscreen only and opens no window")
+        self.width, self.height = width, height
+        self._background = _rgb8(background)
+        self._picture = Image.new("RGB", (width, height), self._background)
+        self._draw = ImageDraw.Draw(self._picture)
+
+    def begin(self) -> None:
+        self._draw.rectangle((0, 0, self.width, self.height), fill=self._background)
+
+    def _pixels(self, points: np.ndarray) -> np.ndarray:
+        """Normalised points (..., 2), origin bottom-left -> pixel coordinates, origin top-left."""
+        return np.stack([points[..., 0] * self.width, (1.0 - points[..., 1]) * self.height], axis=-1)
+
+    def triangles(self, corners: np.ndarray, color) -> None:
+        """corners (m, 3, 2); color: one RGB, or one RGB per triangle (m, 3)."""
+        color = np.asarray(color, dtype=float)
+        fills = [_rgb8(color)] * len(corners) if color.ndim == 1 else [_rgb8(c) for c in color]
+        for triangle, fill in zip(self._pixels(corners).tolist(), fills):
+            self._draw.polygon([tuple(p) for p in triangle], fill=fill)
+
+    def segments(self, ends: np.ndarray, color, width_px: float) -> None:
+        """ends (k, 2, 2): each segment's two ends; width_px: the line width, rounded to whole pixels."""
+        fill, width = _rgb8(color), max(1, int(round(width_px)))
+        for (a, b) in self._pixels(ends).tolist():
+            self._draw.line([tuple(a), tuple(b)], fill=fill, width=width)
+
+    def image(self) -> np.ndarray:
+        """The frame as an (height, width, 3) uint8 image, top row first."""
+        return np.asarray(self._picture).copy()
+
+    def close(self) -> None:
+        pass
+
+
+def _rgb8(color) -> tuple[int, int, int]:
+    return tuple(int(round(255 * c)) for c in color)
