@@ -38,7 +38,7 @@ import numpy as np
 import tomllib
 from scipy.stats import qmc
 
-from .. import limits, runtime
+from .. import backend, limits, runtime
 from ..errors import PneumaInputError, require, require_finite
 from ..io.output import check_stem, prepare_directory, save_json, write_atomic
 from ..io.scenefile import read_scene
@@ -54,7 +54,7 @@ ALIASES = {"cy": "chambers[0].center[1]", "cx": "chambers[0].center[0]", "E": "m
 MAX_RUNS = 100_000
 # Worker processes: one thread each (Taichi's pool is set by runtime.init), no Taichi banner per worker
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-              "ENABLE_TAICHI_HEADER_PRINT": "0"}
+              backend.environment_name("banner"): "0"}
 
 
 # --- the varied keys -------------------------------------------------------------------------------
@@ -423,7 +423,7 @@ def run_key(values: dict) -> tuple:
 
 
 def versions(ray: bool = False) -> dict:
-    names = ["taichi-pneuma", "taichi", "numpy", "scipy"] + (["ray"] if ray else [])
+    names = ["taichi-pneuma", backend.NAME, "numpy", "scipy"] + (["ray"] if ray else [])
     found = {}
     for name in names:
         try:

@@ -3,8 +3,9 @@
 Two bindings run the same C code (Triangle 1.6): `triangle` (wheels for Python <= 3.13 on Linux x86_64,
 macOS arm64, Windows) and `meshpy` (its meshpy.triangle; wheels for Python 3.10-3.15 on Linux x86_64
 and aarch64, macOS, Windows). Both are called with the same switches, Triangle's 'Qz' (quiet, zero-based
-numbering) followed by the caller's, so they return the same mesh, vertex for vertex
-(tests/test_triangulation.py compares them where both are installed). `triangle` is used when it
+numbering) followed by the caller's, so they return the same mesh, vertex for vertex, once each
+triangle's corners start at its smallest vertex number (tests/test_triangulation.py compares them where
+both are installed). `triangle` is used when it
 imports, else `meshpy`; PNEUMA_TRIANGLE=triangle|meshpy forces one.
 """
 
@@ -111,7 +112,13 @@ def _meshpy_triangulate(pslg: dict, flags: str) -> dict:
 
 
 def _normalised(vertices, triangles, segments, markers) -> dict:
+    """The output as arrays, each triangle's corners rotated to start at its smallest vertex number: the
+    bindings' builds of Triangle may start a triangle at another of its corners (the same triangle, the
+    same orientation), which would change the order of floating-point sums over its corners."""
+    triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    first = np.argmin(triangles, axis=1)
+    triangles = np.take_along_axis(triangles, (first[:, None] + np.arange(3)) % 3, axis=1)
     return {"vertices": np.asarray(vertices, dtype=np.float64).reshape(-1, 2),
-            "triangles": np.asarray(triangles, dtype=np.int64).reshape(-1, 3),
+            "triangles": triangles,
             "segments": np.asarray(segments, dtype=np.int64).reshape(-1, 2),
             "segment_markers": np.asarray(markers, dtype=np.int64).ravel()}

@@ -15,10 +15,12 @@ from ..errors import PneumaInputError
 
 
 class PillowCanvas:
-    """Pillow's ImageDraw on an RGB image of (width, height) pixels; offscreen only."""
+    """Pillow's ImageDraw on an RGB image of (width, height) pixels, drawn SUPERSAMPLE times larger and
+    averaged down (anti-aliased edges, line widths in fractions of a pixel); offscreen only."""
 
     name = "Pillow (software)"
     slider_row_px = 0
+    SUPERSAMPLE = 4
 
     def __init__(self, width: int, height: int, show: bool = False, title: str = "taichi-pneuma",
                  background=(1.0, 1.0, 1.0)):
@@ -26,15 +28,15 @@ class PillowCanvas:
             raise PneumaInputError("the Pillow renderer draws offscreen only and opens no window")
         self.width, self.height = width, height
         self._background = _rgb8(background)
-        self._picture = Image.new("RGB", (width, height), self._background)
+        self._picture = Image.new("RGB", (width * self.SUPERSAMPLE, height * self.SUPERSAMPLE), self._background)
         self._draw = ImageDraw.Draw(self._picture)
 
     def begin(self) -> None:
-        self._draw.rectangle((0, 0, self.width, self.height), fill=self._background)
+        self._draw.rectangle((0, 0, *self._picture.size), fill=self._background)
 
     def _pixels(self, points: np.ndarray) -> np.ndarray:
-        """Normalised points (..., 2), origin bottom-left -> pixel coordinates, origin top-left."""
-        return np.stack([points[..., 0] * self.width, (1.0 - points[..., 1]) * self.height], axis=-1)
+        """Normalised points (..., 2), origin bottom-left -> coordinates on the large image, origin top-left."""
+        return np.stack([points[..., 0] * self.width, (1.0 - points[..., 1]) * self.height], axis=-1) * self.SUPERSAMPLE
 
     def triangles(self, corners: np.ndarray, color) -> None:
         """corners (m, 3, 2); color: one RGB, or one RGB per triangle (m, 3)."""
@@ -44,14 +46,14 @@ class PillowCanvas:
             self._draw.polygon([tuple(p) for p in triangle], fill=fill)
 
     def segments(self, ends: np.ndarray, color, width_px: float) -> None:
-        """ends (k, 2, 2): each segment's two ends; width_px: the line width, rounded to whole pixels."""
-        fill, width = _rgb8(color), max(1, int(round(width_px)))
+        """ends (k, 2, 2): each segment's two ends; width_px: the line width in pixels."""
+        fill, width = _rgb8(color), max(1, int(round(width_px * self.SUPERSAMPLE)))
         for (a, b) in self._pixels(ends).tolist():
             self._draw.line([tuple(a), tuple(b)], fill=fill, width=width)
 
     def image(self) -> np.ndarray:
         """The frame as an (height, width, 3) uint8 image, top row first."""
-        return np.asarray(self._picture).copy()
+        return np.asarray(self._picture.reduce(self.SUPERSAMPLE))
 
     def close(self) -> None:
         pass
