@@ -28,7 +28,7 @@ def package_kernels() -> dict[str, object]:
     for info in pkgutil.walk_packages(taichi_pneuma.__path__, "taichi_pneuma."):
         module = importlib.import_module(info.name)
         for name, obj in vars(module).items():
-            if hasattr(obj, "_primal") and obj.__module__ == module.__name__:
+            if getattr(obj, "_primal", None) is not None and obj.__module__ == module.__name__:  # Quadrants' funcs: None
                 kernels[f"{module.__name__}.{name}"] = obj
     return kernels
 

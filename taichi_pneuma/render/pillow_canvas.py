@@ -35,8 +35,11 @@ class PillowCanvas:
         self._draw.rectangle((0, 0, *self._picture.size), fill=self._background)
 
     def _pixels(self, points: np.ndarray) -> np.ndarray:
-        """Normalised points (..., 2), origin bottom-left -> coordinates on the large image, origin top-left."""
-        return np.stack([points[..., 0] * self.width, (1.0 - points[..., 1]) * self.height], axis=-1) * self.SUPERSAMPLE
+        """Normalised points (..., 2), origin bottom-left -> coordinates on the large image, origin top-left
+        (Pillow samples its pixel k at coordinate k: pixel i of the frame, [i, i + 1), is large pixels
+        S i .. S i + S - 1 at coordinates S x - 1/2)."""
+        pixels = np.stack([points[..., 0] * self.width, (1.0 - points[..., 1]) * self.height], axis=-1)
+        return pixels * self.SUPERSAMPLE - 0.5
 
     def triangles(self, corners: np.ndarray, color) -> None:
         """corners (m, 3, 2); color: one RGB, or one RGB per triangle (m, 3)."""
