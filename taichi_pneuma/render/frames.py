@@ -17,7 +17,7 @@ Every beam panel uses one world-to-pixel map (equal x and y scale) fitted to the
 states of all tracks below the header band, so panels share a frame of reference, the beam is
 never cropped and no text covers it.
 
-Two backends draw the same primitives (filled triangles, line segments):
+Three canvases draw the same primitives (filled triangles, line segments):
 - GGUI offscreen, ti.ui.Window(show_window=False), when Vulkan is available; on CPU-only machines
   mesa's lavapipe (apt-get install mesa-vulkan-drivers) provides it, and it works with ti.cpu;
 - ti.GUI(show_gui=False), a software rasteriser, otherwise;
@@ -33,7 +33,7 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-from ..backend import NAME, VERSION, INSTALL, has_ggui, has_gui, ti
+from ..backend import INSTALL, NAME, VERSION, has_ggui, has_gui, ti
 
 from .. import runtime
 from ..errors import PneumaInputError, require

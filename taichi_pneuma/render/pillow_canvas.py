@@ -20,7 +20,7 @@ class PillowCanvas:
 
     name = "Pillow (software)"
     slider_row_px = 0
-    SUPERSAMPLE = 4
+    SUPERSAMPLE = 3
 
     def __init__(self, width: int, height: int, show: bool = False, title: str = "taichi-pneuma",
                  background=(1.0, 1.0, 1.0)):
@@ -44,15 +44,20 @@ class PillowCanvas:
     def triangles(self, corners: np.ndarray, color) -> None:
         """corners (m, 3, 2); color: one RGB, or one RGB per triangle (m, 3)."""
         color = np.asarray(color, dtype=float)
-        fills = [_rgb8(color)] * len(corners) if color.ndim == 1 else [_rgb8(c) for c in color]
-        for triangle, fill in zip(self._pixels(corners).tolist(), fills):
-            self._draw.polygon([tuple(p) for p in triangle], fill=fill)
+        polygon, flat = self._draw.polygon, self._pixels(corners).reshape(-1, 6).tolist()
+        if color.ndim == 1:
+            fill = _rgb8(color)
+            for triangle in flat:
+                polygon(triangle, fill=fill)
+        else:
+            for triangle, fill in zip(flat, map(tuple, np.rint(255 * color).astype(int).tolist())):
+                polygon(triangle, fill=fill)
 
     def segments(self, ends: np.ndarray, color, width_px: float) -> None:
         """ends (k, 2, 2): each segment's two ends; width_px: the line width in pixels."""
-        fill, width = _rgb8(color), max(1, int(round(width_px * self.SUPERSAMPLE)))
-        for (a, b) in self._pixels(ends).tolist():
-            self._draw.line([tuple(a), tuple(b)], fill=fill, width=width)
+        fill, width, line = _rgb8(color), max(1, int(round(width_px * self.SUPERSAMPLE))), self._draw.line
+        for segment in self._pixels(ends).reshape(-1, 4).tolist():
+            line(segment, fill=fill, width=width)
 
     def image(self) -> np.ndarray:
         """The frame as an (height, width, 3) uint8 image, top row first."""
