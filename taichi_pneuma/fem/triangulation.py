@@ -5,13 +5,13 @@ macOS arm64, Windows) and `meshpy` (its meshpy.triangle; wheels for Python 3.10-
 and aarch64, macOS, Windows). Both are called with the same switches, Triangle's 'Qz' (quiet, zero-based
 numbering) followed by the caller's, so they return the same mesh, vertex for vertex, once each
 triangle's corners start at its smallest vertex number (tests/test_triangulation.py compares them where
-both are installed). `triangle` is used when it
-imports, else `meshpy`; PNEUMA_TRIANGLE=triangle|meshpy forces one.
+both are installed). `triangle` is used when it is installed, else `meshpy`; PNEUMA_TRIANGLE=triangle|meshpy
+forces one.
 """
 
 from __future__ import annotations
 
-import importlib
+import importlib.util
 import os
 import pickle
 import sys
@@ -24,15 +24,8 @@ CHOICE_VARIABLE = "PNEUMA_TRIANGLE"
 
 
 def installed() -> tuple[str, ...]:
-    """The bindings that import here, in order of preference."""
-    found = []
-    for name in BINDINGS:
-        try:
-            importlib.import_module(name)
-            found.append(name)
-        except ImportError:
-            continue
-    return tuple(found)
+    """The bindings installed here, in order of preference."""
+    return tuple(name for name in BINDINGS if importlib.util.find_spec(name) is not None)
 
 
 def default_binding() -> str:
@@ -53,7 +46,8 @@ def triangulate(pslg: dict, flags: str, binding: str | None = None) -> dict:
 
     pslg: 'vertices' (n, 2), 'segments' (s, 2) and optionally 'segment_markers' (s,) and 'holes' (h, 2).
     Returns 'vertices' (N, 2) float64, 'triangles' (M, 3), 'segments' (S, 2) and 'segment_markers' (S,; empty
-    unless the pslg has them) as int64. Triangle's failure (it runs out of precision) is a RuntimeError, as in the `triangle` package."""
+    unless the pslg has them) as int64. Triangle's failure (it runs out of precision) is a RuntimeError on
+    either binding, as in the `triangle` package."""
     return (_with_triangle if (binding or default_binding()) == "triangle" else _with_meshpy)(pslg, flags)
 
 

@@ -3,7 +3,8 @@
 It has the primitives of the GGUI and ti.GUI canvases in frames.py (normalised coordinates, origin
 bottom-left; filled triangles, one colour or one per triangle; segments of a width in pixels), so
 FrameRenderer draws the same picture on it; it is the renderer where neither GUI exists (Quadrants
-has neither). It is offscreen only: it opens no window, so a live window refuses it.
+has neither). It is offscreen only: it opens no window, so a live window refuses it. (frames.py imports
+it when it opens one.)
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from ..errors import PneumaInputError
+from .frames import BACKGROUND
 
 
 class PillowCanvas:
@@ -22,12 +24,11 @@ class PillowCanvas:
     slider_row_px = 0
     SUPERSAMPLE = 3
 
-    def __init__(self, width: int, height: int, show: bool = False, title: str = "taichi-pneuma",
-                 background=(1.0, 1.0, 1.0)):
+    def __init__(self, width: int, height: int, show: bool = False):
         if show:
             raise PneumaInputError("the Pillow renderer draws offscreen only and opens no window")
         self.width, self.height = width, height
-        self._background = _rgb8(background)
+        self._background = _rgb8(BACKGROUND)
         self._picture = Image.new("RGB", (width * self.SUPERSAMPLE, height * self.SUPERSAMPLE), self._background)
         self._draw = ImageDraw.Draw(self._picture)
 
