@@ -1,14 +1,13 @@
-"""The single place where Taichi is initialised (float64, the caller's backend, offline kernel cache)."""
+"""The single place where Taichi (or Quadrants, see backend.py) is initialised: float64, the caller's arch,
+offline kernel cache."""
 
 from __future__ import annotations
 
-import taichi as ti
-from taichi.lang import impl
-
+from .backend import ARCHES, ti
 from .errors import PneumaInputError
 
-ARCHES = {"cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan, "metal": ti.metal, "opengl": ti.opengl, "gpu": ti.gpu}
 F64_ARCHES = (ti.x64, ti.arm64, ti.cuda)  # the backends whose kernels have 64-bit floats (and atan2 of them)
+
 _current: str | None = None
 
 
@@ -30,7 +29,7 @@ def init(arch: str = "cpu", cpu_threads: int | None = None) -> None:
         ti.init(arch=ARCHES[arch], default_fp=ti.f64, offline_cache=True, log_level=ti.WARN, **threads)
     except RuntimeError as exc:
         raise PneumaInputError(f"arch = {arch!r}: Taichi cannot start it here ({exc})") from None
-    chosen = impl.current_cfg().arch  # ti.gpu is whichever GPU backend is found, the CPU if none
+    chosen = ti.lang.impl.current_cfg().arch  # ti.gpu is whichever GPU backend is found, the CPU if none
     if chosen not in F64_ARCHES:
         ti.reset()
         raise PneumaInputError(f"arch = {arch!r} gives Taichi's {chosen.name} backend here, which cannot run this "

@@ -4,9 +4,9 @@ the generic (Jacobi) eigensystem against the analytic one."""
 
 import numpy as np
 import pytest
-import taichi as ti
 from test_terms import dense_hessian, fd_gradient, fd_hessian
 
+from taichi_pneuma.backend import ti
 from taichi_pneuma.materials import LAWS, Law, StableNeoHookean, lame_parameters, register
 from taichi_pneuma.materials.law import element_parameters, stress_eigensystem
 from taichi_pneuma.scene import reference_scene

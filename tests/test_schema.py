@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 import tomllib
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import taichi_pneuma as tp
@@ -140,8 +140,11 @@ def scenes(draw):
                            draw(number(1e-9, 1e-2))) if draw(st.booleans()) else
                     Roller((1.0, 0.0), None, (cx - w / 2, cy - h / 2, cx - w / 2 + 0.1, cy + h / 2))
                     for _ in range(draw(st.integers(0, 2))))
-    geometry = Geometry(body, tuple(zip(names, shapes)), draw(number(1e-4, 1.0)), clamp, draw(st.sampled_from([1, 2])),
-                        tip=tip, rollers=rollers)
+    try:  # rarely, drawn outlines are too close to mesh (Geometry refuses them): not a scene to round-trip
+        geometry = Geometry(body, tuple(zip(names, shapes)), draw(number(1e-4, 1.0)), clamp,
+                            draw(st.sampled_from([1, 2])), tip=tip, rollers=rollers)
+    except PneumaInputError:
+        assume(False)
     units = draw(st.sampled_from([UNITLESS, *UNITS.values()]))
     if draw(st.booleans()):  # the stable neo-Hookean material, or (one law per body) the isochoric law's
         materials = st.builds(Material, number(1e-3, 1e12) | st.integers(1, 10**6), number(-0.99, 0.499))

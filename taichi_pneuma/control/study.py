@@ -42,7 +42,7 @@ import numpy as np
 import tomllib
 from scipy.stats import qmc
 
-from .. import limits, runtime, signals
+from .. import backend, limits, runtime, signals
 from ..errors import PneumaInputError, require, require_finite
 from ..io.output import (
     FORMULA,
@@ -72,7 +72,7 @@ MAX_DRAWN = 1e100  # numbers the plot draws as such (matplotlib's axis arithmeti
 PR_SET_PDEATHSIG = 1  # prctl's option: the signal a process gets when its parent dies (Linux)
 # Worker processes: one thread each (Taichi's pool is set by runtime.init), no Taichi banner per worker
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-              "ENABLE_TAICHI_HEADER_PRINT": "0"}
+              backend.environment_name("banner"): "0"}
 
 
 # --- the varied keys -------------------------------------------------------------------------------
@@ -475,7 +475,7 @@ def run_key(values: dict) -> tuple:
 
 
 def versions(ray: bool = False) -> dict:
-    names = ["taichi-pneuma", "taichi", "numpy", "scipy"] + (["ray"] if ray else [])
+    names = ["taichi-pneuma", backend.NAME, "numpy", "scipy"] + (["ray"] if ray else [])
     found = {}
     for name in names:
         try:

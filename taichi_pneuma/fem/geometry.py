@@ -3,7 +3,7 @@ lines), and its named vertex sets: the clamp, the tip, the rollers.
 
 Bodies are rectangles, polygons or unions of axis-aligned rectangles; chambers are ellipses,
 rectangles with rounded corners or polygons. Each shape yields a closed counter-clockwise
-polygon. The body is meshed by Shewchuk's Triangle (``triangle`` package) with the flags
+polygon. The body is meshed by Shewchuk's Triangle (through triangulation.py's binding) with the flags
 ``p q a<max_area>``: a planar straight-line graph (the body loop, then each chamber loop),
 quality (20 degree minimum angle) refinement and a maximum triangle area; one hole point
 strictly inside each chamber removes its inside. Each chamber wall is recovered from the output
@@ -36,12 +36,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import triangle
 from scipy.spatial import cKDTree
 
 from .. import limits
 from ..errors import PneumaInputError, require, require_finite, shape_of
 from ..io.output import check_heading
+from . import triangulation
 
 OUTER_MARKER = 1
 MARGIN = 1e-3
@@ -699,9 +699,9 @@ class BeamGeometry:
 
 
 def triangulate(pslg: dict, flags: str) -> dict:
-    """triangle.triangulate, with its failure (RuntimeError, or no triangle made) a PneumaInputError."""
+    """triangulation.triangulate, with its failure (RuntimeError, or no triangle made) a PneumaInputError."""
     try:
-        out = triangle.triangulate(pslg, flags)
+        out = triangulation.triangulate(pslg, flags)
     except RuntimeError:
         out = {}
     require(len(out.get("triangles", ())) > 0, "Triangle could not mesh the geometry (it ran out of floating-point "

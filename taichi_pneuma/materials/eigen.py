@@ -13,7 +13,7 @@ run time, so Taichi traces the body once: compiling it costs well under a second
 version (every rotation written out) cost 16 s.
 """
 
-import taichi as ti
+from ..backend import ti
 
 EPSILON = 1e-15
 MAX_SWEEPS = 50

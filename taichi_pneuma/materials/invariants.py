@@ -20,7 +20,7 @@ search keeps det F > 0) but finite differences through J = 0's neighbourhood may
 singular at J = 0 only.
 """
 
-import taichi as ti
+from ..backend import ti
 
 
 @ti.func

@@ -34,8 +34,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import taichi as ti
 
+from ..backend import ti
 from ..errors import require, require_finite
 from .invariants import isochoric_gradients, isochoric_hessians, isochoric_invariants
 from .law import Law, register

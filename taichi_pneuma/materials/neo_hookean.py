@@ -25,8 +25,8 @@ and the 2 x 2 block B has closed-form eigenpairs: four eigenpairs of M, no itera
 """
 
 import numpy as np
-import taichi as ti
 
+from ..backend import ti
 from .invariants import cofactor, determinant_hessian, flat
 from .law import Law, register
 

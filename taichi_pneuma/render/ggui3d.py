@@ -11,9 +11,9 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-import taichi as ti
 
 from .. import runtime
+from ..backend import ti
 from .camera import Camera
 
 

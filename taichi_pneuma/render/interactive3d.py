@@ -13,8 +13,8 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-import taichi as ti
 
+from ..backend import ti
 from ..errors import require, require_finite
 from .camera import Camera
 from .frames3d import BACKGROUND, section_faces, shaded_triangles

@@ -26,9 +26,9 @@ segment (a quadratic in the step fraction), the continuous collision check.
 
 
 import numpy as np
-import taichi as ti
 
 from .. import limits
+from ..backend import ti
 from .base import Indices, Table, Term, Triples, Vec2s, block_pattern, edge, int32s, position, quadratic_roots
 
 

@@ -32,8 +32,8 @@ PSD elastic and clamp Hessians keep projected Newton a descent method).
 """
 
 import numpy as np
-import taichi as ti
 
+from ...backend import ti
 from ..base import Indices, Scalars, Term, Vec2s, int32s, position, vertex_dofs
 
 Pairs = ti.types.ndarray(dtype=ti.types.vector(2, ti.i32), ndim=1)  # (P, 2) int32 index pairs
