@@ -24,7 +24,7 @@ from taichi_pneuma import runtime
 from taichi_pneuma.apps.bench import machine
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.pneunet import PneuNet
-from taichi_pneuma.fem.tetmesh import MeshSizes, estimate_tets, mesh_solid
+from taichi_pneuma.fem.gmsh_mesher import MeshSizes, estimate_tets, mesh_solid
 from taichi_pneuma.render.frames3d import FrameRenderer3D, Track3D
 from taichi_pneuma.render.interactive3d import Slider, explore_3d
 

@@ -9,7 +9,7 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.geometry import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.fem.solids import Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
-from taichi_pneuma.fem.tetmesh import MeshSizes, Solid, cavity_volume, estimate_tets, mesh_solid
+from taichi_pneuma.fem.gmsh_mesher import MeshSizes, Solid, cavity_volume, estimate_tets, mesh_solid
 
 gmsh = pytest.importorskip("gmsh", reason="gmsh is not installed (pip install 'taichi-pneuma[3d]')")
 

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 from ..errors import require, require_finite
 from .solids import Box, RoundedBox
-from .tetmesh import MAX_SHAPES, Solid
+from .gmsh_mesher import MAX_SHAPES, Solid
 
 LAYER = "layer"
 

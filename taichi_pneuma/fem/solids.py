@@ -14,7 +14,7 @@ z the depth (a 2D shape in the x-y plane is extruded along z). Shapes are axis-a
   `points` sampling does not apply: the 3D mesh size does); any other shape from its polygon().
 
 Each shape's build(occ) adds it to the current gmsh model through gmsh.model.occ and returns the new
-volume's tag; gmsh itself is only imported by fem.tetmesh, which calls these.
+volume's tag; gmsh itself is only imported by fem.gmsh_mesher, which calls these.
 """
 
 from __future__ import annotations
