@@ -16,16 +16,18 @@ a quadratic triangle counts as 4 linear ones (it has as many nodes, and a Hessia
 from __future__ import annotations
 
 from .errors import require
-from .fem.geometry import signed_area
 
 MAX_TRIANGLES = 200_000
 MAX_INCREMENTS = 2_000
 MAX_FRAME_PIXELS = 3840 * 2160
 BYTES_PER_TRIANGLE = 4_000
+MAX_RUNS = 100_000  # runs of one design study (apps/sweep.py --max-runs)
 
 
 def check_scene(scene, max_triangles: int = MAX_TRIANGLES, max_increments: int = MAX_INCREMENTS) -> None:
     """Refuse (PneumaInputError) a scene whose estimated mesh or increment count is past the limits."""
+    from .fem.geometry import signed_area  # imported here: this module is read by the apps' --help
+
     geometry = scene.geometry
     loops = [geometry.body.polygon()] + [shape.polygon() for _, shape in geometry.chambers]
     area = abs(signed_area(loops[0])) - sum(abs(signed_area(loop)) for loop in loops[1:])

@@ -1,12 +1,13 @@
-"""The single place where Taichi is initialised (float64, the caller's backend, offline kernel cache)."""
+"""The single place where Taichi is initialised (float64, the caller's backend, offline kernel cache).
+
+Taichi itself is imported by init(), so that importing this module (the apps' --help does) stays cheap.
+"""
 
 from __future__ import annotations
 
-import taichi as ti
-
 from .errors import PneumaInputError
 
-ARCHES = {"cpu": ti.cpu, "cuda": ti.cuda, "vulkan": ti.vulkan, "metal": ti.metal, "opengl": ti.opengl, "gpu": ti.gpu}
+ARCHES = ("cpu", "cuda", "vulkan", "metal", "opengl", "gpu")  # Taichi's backends by their attribute names
 _current: str | None = None
 
 
@@ -20,8 +21,10 @@ def init(arch: str = "cpu", cpu_threads: int | None = None) -> None:
         raise PneumaInputError(f"arch = {arch!r} is not one of {', '.join(ARCHES)}")
     if _current == arch:
         return
+    import taichi as ti
+
     threads = {} if cpu_threads is None else {"cpu_max_num_threads": cpu_threads}
-    ti.init(arch=ARCHES[arch], default_fp=ti.f64, offline_cache=True, log_level=ti.WARN, **threads)
+    ti.init(arch=getattr(ti, arch), default_fp=ti.f64, offline_cache=True, log_level=ti.WARN, **threads)
     _current = arch
 
 

@@ -16,7 +16,7 @@ from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms import contact, elastic
 from taichi_pneuma.terms.chambers import wall
 
-SCENES = Path(__file__).resolve().parents[1] / "assets" / "scenes"
+SCENES = Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes"
 
 
 def compiled_instances() -> dict[str, int]:

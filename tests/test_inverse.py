@@ -16,7 +16,7 @@ from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.solve.schedule import ChamberSchedule
 from taichi_pneuma.solve.simulate import settle, tip_measures
 
-SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
+SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 TIGHT = NewtonOptions(tol=1e-9)
 
 

@@ -1,16 +1,15 @@
-"""What accuracy costs in time: start-up, timing breakdown, solver backends, accuracy-vs-time study (P1 and P2),
-near-incompressible convergence, scaling.
+"""What accuracy costs in time: start-up and rendering, timing breakdown, solver backends, accuracy-vs-time
+study (P1 and P2), near-incompressible convergence, scaling.
 
-    python -m taichi_pneuma.apps.bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling]
-                                       [--out benchmarks/results]
+    pneuma-bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling] [--out out/bench]
+    pneuma-bench --out benchmarks/results       (a clone: rewrite the tracked tables the README quotes)
 
-Every section prints a Markdown table and saves it (bench_<section>.md, .json) under --out, headed
-with the machine and date; the accuracy section also plots error against wall time (log-log, one
-curve per knob) to bench_accuracy.png when matplotlib is installed (`pip install .[bench]`).
-Timings are wall-clock on a possibly shared machine: compare ratios within one run.
+Every section prints a Markdown table and saves it (bench_<section>.md, .json) under --out (default
+out/bench, a scratch directory), headed with the machine and date; the accuracy section also plots
+error against wall time (log-log, one curve per knob) to bench_accuracy.png. Timings are wall-clock
+on a possibly shared machine: compare ratios within one run.
 """
 
-import argparse
 import collections
 import os
 import platform
@@ -28,12 +27,6 @@ import numpy as np
 from .. import runtime
 from ..errors import PneumaInputError, require
 from ..io.output import prepare_directory, save_json, save_text, write_atomic
-from ..io.scenefile import load_scene
-from ..scene import reference_scene
-from ..solve.linsolve import BACKENDS, FixedPattern, make_backend
-from ..solve.newton import NewtonOptions
-from ..solve.schedule import Schedule, area_ramp
-from ..solve.simulate import run_schedule
 
 SECTIONS = ("startup", "breakdown", "backends", "accuracy", "incompressible", "scaling")
 REFERENCE_TUTORIAL_SECONDS = 25.0  # SPEC.md: the NumPy/SciPy tutorial's cy = 0.15 ramp on this kind of machine
@@ -52,12 +45,18 @@ def markdown(header: list[str], rows: list[list]) -> str:
 
 def warm_up(built, options=None) -> None:
     """Compile (or load from the offline cache) this scene's kernels: one tiny increment of 1% area."""
+    from ..solve.schedule import Schedule, area_ramp
+    from ..solve.simulate import run_schedule
+
     run_schedule(built, Schedule(1, (area_ramp(1.01, 2),)), options)
 
 
 def timed_ramp(max_area=0.0012, steps=36, growth=3.5, options=None, cy=0.15, **scene):
     """Build, warm the kernels up on a tiny ramp, then time the ramp; return (built, result, seconds).
-    scene: further reference_scene arguments (order, refinements, poisson_ratio)."""
+    scene: further reference_scene arguments (order, refinements, nu)."""
+    from ..scene import reference_scene
+    from ..solve.simulate import run_schedule
+
     built = reference_scene(cy, growth=growth, steps=steps, max_area=max_area, **scene).build()
     warm_up(built, options)
     start = time.perf_counter()
@@ -67,7 +66,6 @@ def timed_ramp(max_area=0.0012, steps=36, growth=3.5, options=None, cy=0.15, **s
 
 MAIN_COMMAND = ("--cy", "0.15", "--no-video")
 FIRST_INCREMENT = re.compile(r"step\s+1/")
-SCENES_DIR = Path(__file__).resolve().parents[2] / "assets" / "scenes"
 
 
 def main_command_process(cache_dir: str, out: str) -> tuple[float, float]:
@@ -96,6 +94,10 @@ def startup() -> tuple[str, dict]:
     increment, from an empty kernel cache (as on a fresh machine) and then from the cache it left; and,
     in this process, three scenes in turn that differ in mesh size, E, nu, k and number of chambers:
     their build time and their first two increments against two typical ones."""
+    from ..api import load_scene
+    from ..scene import reference_scene
+    from ..solve.simulate import run_schedule
+
     rows, data = [], {"process": {}, "scenes": []}
     with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as out:
         for label in ("empty kernel cache", "warm kernel cache"):
@@ -106,9 +108,8 @@ def startup() -> tuple[str, dict]:
     table = markdown(["whole process", "s", "to first increment (s)", "against SPEC.md's 25 s reference"], rows)
     scenes = [("reference cy=+0.15 (first in process)", lambda: reference_scene(0.15)),
               ("cy=+0.10, max area 0.002, E 2e4, nu 0.4, k 2e5",
-               lambda: reference_scene(0.10, youngs_modulus=2e4, poisson_ratio=0.4, chamber_stiffness=2e5,
-                                       max_area=0.002)),
-              ("bidirectional.toml (2 chambers)", lambda: load_scene(SCENES_DIR / "bidirectional.toml"))]
+               lambda: reference_scene(0.10, E=2e4, nu=0.4, k=2e5, max_area=0.002)),
+              ("bidirectional.toml (2 chambers)", lambda: load_scene("bidirectional"))]
     rows = []
     for label, make in scenes:
         start = time.perf_counter()
@@ -126,6 +127,9 @@ def startup() -> tuple[str, dict]:
 
 def breakdown() -> tuple[str, dict]:
     """Where the time of one reference ramp goes, with the one-off kernel compile/load separately."""
+    from ..scene import reference_scene
+    from ..solve.simulate import run_schedule
+
     start = time.perf_counter()
     built = reference_scene(0.15).build()
     build_seconds = time.perf_counter() - start
@@ -158,6 +162,9 @@ def breakdown() -> tuple[str, dict]:
 
 def backends() -> tuple[str, dict]:
     """Each backend on the same matrices (the final reference state), then each on the whole ramp."""
+    from ..solve.linsolve import BACKENDS, FixedPattern, make_backend
+    from ..solve.newton import NewtonOptions
+
     built, result, _ = timed_ramp()
     model = built.model
     model.set_displacements(result.positions[-1] - built.mesh.vertices)
@@ -195,7 +202,7 @@ def converged_tip(poisson_ratio: float, levels: int = 3) -> dict:
     Returns the tips per level, the observed order p = log2(|f0 - f1| / |f1 - f2|) and the finest tip."""
     tips, nodes = [], []
     for level in range(levels):
-        built, result, _ = timed_ramp(steps=11, order=2, refinements=level, poisson_ratio=poisson_ratio)
+        built, result, _ = timed_ramp(steps=11, order=2, refinements=level, nu=poisson_ratio)
         tips.append(result.tip_deflection)
         nodes.append(built.mesh.n_vertices)
         print(f"  reference nu={poisson_ratio}: level {level}, {nodes[-1]} nodes, tip {tips[-1]:+.6f}",
@@ -210,13 +217,15 @@ def accuracy(out: Path) -> tuple[str, dict]:
     and 0.499, error of the tip deflection against a converged P2 reference (converged_tip) and wall time
     of the 35-increment ramp; then the Newton tolerance and the number of increments on the default P1
     mesh, against the same mesh solved tightly (tol 1e-9, 100 increments). Plots error against time."""
+    from ..solve.newton import NewtonOptions
+
     rows, data = [], {"elements": collections.defaultdict(list), "references": {}}
     for nu in STUDY_NU:
         reference = converged_tip(nu)
         data["references"][nu] = reference
         for order, areas in MESHES.items():
             for max_area in areas:
-                built, result, seconds = timed_ramp(max_area=max_area, order=order, poisson_ratio=nu)
+                built, result, seconds = timed_ramp(max_area=max_area, order=order, nu=nu)
                 error = abs(result.tip_deflection / reference["tip"] - 1)
                 data["elements"][f"P{order}, nu = {nu}"].append(
                     {"value": max_area, "nodes": built.mesh.n_vertices, "seconds": seconds, "tip": error})
@@ -252,7 +261,7 @@ def incompressible() -> tuple[str, dict]:
     rows, data = [], []
     for nu in LOCKING_NU:
         for order, max_area in LOCKING_BASE.items():
-            runs = [timed_ramp(max_area=max_area, steps=11, order=order, refinements=level, poisson_ratio=nu)
+            runs = [timed_ramp(max_area=max_area, steps=11, order=order, refinements=level, nu=nu)
                     for level in range(3)]
             tips = [result.tip_deflection for _, result, _ in runs]
             nodes = [built.mesh.n_vertices for built, _, _ in runs]
@@ -313,9 +322,12 @@ def scaling() -> tuple[str, dict]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.bench", description=__doc__.split("\n")[0])
+    from .cli import app_parser
+
+    parser = app_parser("pneuma-bench", __doc__)
     parser.add_argument("--sections", default=",".join(SECTIONS), help=f"comma-separated, from {', '.join(SECTIONS)}")
-    parser.add_argument("--out", default="benchmarks/results", help="directory for the tables, JSON and plot")
+    parser.add_argument("--out", default="out/bench",
+                        help="directory for the tables, JSON and plot (benchmarks/results: the tracked ones)")
     parser.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
     args = parser.parse_args(argv)
     try:

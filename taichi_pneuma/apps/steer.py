@@ -1,6 +1,6 @@
 """Steering by chamber placement: the same inflation ramp with the chamber high, centred and low.
 
-    python -m taichi_pneuma.apps.steer
+    pneuma-steer                                 (or python -m taichi_pneuma.apps.steer)
 
 Solves the three ramps (cy = +0.15, 0, -0.15), prints their tip deflections, writes each ramp's ParaView
 files (steer_cy+0.15.pvd, ...) and, unless --no-video, plays them side by side in one video (all panels in
@@ -13,11 +13,11 @@ import argparse
 import sys
 
 from .. import runtime
-from ..io.output import prepare_directory, save_json
-from ..io.vtk import VtkSeries
 from .cli import (
     add_ramp_arguments,
     add_video_arguments,
+    app_parser,
+    apply_set,
     build,
     exit_code,
     render_report,
@@ -30,15 +30,20 @@ PLACEMENTS = ((0.15, "chamber high -> curls down"), (0.0, "centred -> no bend"),
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.steer", description=__doc__.split("\n")[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = app_parser("pneuma-steer", __doc__)
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="change a dotted scene-file key or a short name (cx E nu k max_area) of the three scenes "
+                        "(repeatable)")
     add_ramp_arguments(p)
     add_video_arguments(p, "1344x320")
     return p
 
 
 def run(args: argparse.Namespace) -> dict:
-    scenes = [scene_for(args, cy) for cy, _ in PLACEMENTS]
+    from ..io.output import prepare_directory, save_json
+    from ..io.vtk import VtkSeries
+
+    scenes = [apply_set(scene_for(args, cy), args.set) for cy, _ in PLACEMENTS]
     size = rendering_flags(args)
     out = prepare_directory(args.out)
     runtime.init(args.arch)

@@ -36,11 +36,11 @@ import taichi as ti
 import triangle
 
 from .. import runtime
+from . import COLOR_FIELDS, RENDERERS
 from ..errors import PneumaInputError, require
 from ..fem.fields import ElementFields
 from ..fem.geometry import Mesh
 
-BACKENDS = ("auto", "ggui", "gui")
 BACKGROUND = (1.0, 1.0, 1.0)
 FACE = (0.72, 0.89, 0.66)
 EDGE = (0.18, 0.49, 0.20)
@@ -56,8 +56,6 @@ AREA_CURVE = (0.05, 0.2, 0.95)
 PRESSURE_CURVE = (0.85, 0.15, 0.1)
 CURSOR = (0.2, 0.2, 0.2)
 COLORMAP = "viridis"
-# the fields a body can be coloured by: name -> (label, key of fields.ElementFields.at)
-COLOR_FIELDS = {"stretch": ("max stretch", "max_stretch"), "detF": ("det F", "det_F")}
 FONT_PX, LINE_PX, MARGIN_PX = 13, 17, 10
 HEADER_LINES = 3  # title (if any), step and area, pressure and tip: the band above the body, title or not
 COLORBAR_PX = 96  # width of the colour bar strip
@@ -223,7 +221,7 @@ def open_canvas(width: int, height: int, backend: str = "auto", show: bool = Fal
 
     Says through log() which renderer it uses (and why it fell back).
     """
-    require(backend in BACKENDS, f"renderer = {backend!r} is not one of {', '.join(BACKENDS)}")
+    require(backend in RENDERERS, f"renderer = {backend!r} is not one of {', '.join(RENDERERS)}")
     require(width >= 64 and height >= 64, f"frame size {width}x{height} must be at least 64x64")
     runtime.ensure_initialised()
     if backend in ("auto", "ggui"):
