@@ -11,6 +11,7 @@ on a possibly shared machine: compare ratios within one run.
 """
 
 import collections
+import json
 import os
 import platform
 import re
@@ -64,23 +65,26 @@ def timed_ramp(max_area=0.0012, steps=36, growth=3.5, options=None, cy=0.15, **s
     return built, result, time.perf_counter() - start
 
 
-MAIN_COMMAND = ("--cy", "0.15", "--no-video")
+MAIN_COMMAND = ("--cy", "0.15")
 FIRST_INCREMENT = re.compile(r"step\s+1/")
 
 
-def main_command_process(cache_dir: str, out: str) -> tuple[float, float]:
-    """Run the main command (--no-video) in a fresh process with Taichi's offline kernel cache in cache_dir;
-    return (seconds until its first increment's line is printed, seconds until the process exits)."""
+def main_command_process(cache_dir: str, out: str, flags: tuple = ()) -> tuple[float, float, dict | None]:
+    """Run the main command (with flags) in a fresh process with Taichi's offline kernel cache in cache_dir;
+    return (seconds until its first increment's line is printed, seconds until the process exits, its
+    summary JSON), the summary None when it exits with an error (a renderer that is unavailable)."""
     env = {**os.environ, "TI_OFFLINE_CACHE_FILE_PATH": cache_dir, "PYTHONUNBUFFERED": "1"}
-    command = [sys.executable, "-m", "taichi_pneuma.apps.inflate", *MAIN_COMMAND, "--out", out]
+    command = [sys.executable, "-m", "taichi_pneuma.apps.inflate", *MAIN_COMMAND, *flags, "--out", out]
     start = time.perf_counter()
     first = float("nan")
     with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env) as proc:
         for line in proc.stdout:
             if first != first and FIRST_INCREMENT.search(line):
                 first = time.perf_counter() - start
-    require(proc.returncode == 0, f"the main command exited with {proc.returncode}")
-    return first, time.perf_counter() - start
+    whole = time.perf_counter() - start
+    if proc.returncode != 0:
+        return first, whole, None
+    return first, whole, json.loads((Path(out) / "inflate_cy+0.15_summary.json").read_text())
 
 
 def first_versus_typical(result) -> tuple[float, float]:
@@ -89,23 +93,43 @@ def first_versus_typical(result) -> tuple[float, float]:
     return float(seconds[1:3].sum()), 2.0 * float(np.median(seconds[3:]))
 
 
+# the main command's processes: label, flags, kernel cache (the first run fills the empty one)
+PROCESSES = (("`--no-video`, empty kernel cache", ("--no-video",)), ("`--no-video`, warm kernel cache", ("--no-video",)),
+             ("with its video (renderer auto: ti.GUI), warm", ()),
+             ("with its video, `--renderer ggui` (GGUI on Vulkan), warm", ("--renderer", "ggui")))
+
+
 def startup() -> tuple[str, dict]:
-    """Kernel compilation at start-up. The main command's whole process, and its time to the first
-    increment, from an empty kernel cache (as on a fresh machine) and then from the cache it left; and,
-    in this process, three scenes in turn that differ in mesh size, E, nu, k and number of chambers:
-    their build time and their first two increments against two typical ones."""
+    """Kernel compilation at start-up, and rendering. The main command's whole process, and its time to the
+    first increment, from an empty kernel cache (as on a fresh machine) and then from the cache it left,
+    without and with its video (each renderer), against SPEC.md's 25 s for the seed tutorial's ramp; per
+    renderer, rendering per frame against solving per step in the same process; and, in this process,
+    three scenes in turn that differ in mesh size, E, nu, k and number of chambers: their build time and
+    their first two increments against two typical ones."""
     from ..api import load_scene
     from ..scene import reference_scene
     from ..solve.simulate import run_schedule
 
-    rows, data = [], {"process": {}, "scenes": []}
+    rows, render_rows, data = [], [], {"process": {}, "rendering": {}, "scenes": []}
     with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as out:
-        for label in ("empty kernel cache", "warm kernel cache"):
-            first, whole = main_command_process(cache, out)
-            data["process"][label] = {"first_increment_s": first, "whole_s": whole}
-            rows.append([f"main command `{' '.join(MAIN_COMMAND)}`, {label}", f"{whole:.2f}", f"{first:.2f}",
-                         f"{REFERENCE_TUTORIAL_SECONDS / whole:.1f}x faster than the tutorial's ramp alone"])
-    table = markdown(["whole process", "s", "to first increment (s)", "against SPEC.md's 25 s reference"], rows)
+        for label, flags in PROCESSES:
+            first, whole, summary = main_command_process(cache, out, flags)
+            data["process"][label] = {"first_increment_s": first, "whole_s": whole, "ok": summary is not None}
+            if summary is None:
+                rows.append([f"main command {label}", "unavailable", "", ""])
+                continue
+            rows.append([f"main command {label}", f"{whole:.2f}", f"{first:.2f}",
+                         f"{REFERENCE_TUTORIAL_SECONDS / whole:.1f}x faster"])
+            if "renderer" in summary:
+                frame_ms, step_ms = summary["render_ms_per_frame"], 1e3 * summary["solve_seconds_per_step"]
+                data["rendering"][summary["renderer"]] = {"ms_per_frame": frame_ms, "solve_ms_per_step": step_ms,
+                                                          "whole_s": whole}
+                render_rows.append([summary["renderer"], f"{frame_ms:.1f}", f"{step_ms:.1f}",
+                                    f"{frame_ms / step_ms:.2f}", f"{whole:.2f}"])
+    table = markdown(["whole process", "s", "to first increment (s)", "against SPEC.md's 25 s for the seed's ramp"],
+                     rows)
+    table += "\n" + markdown(["renderer (960x384 frames, coloured by stretch)", "render ms / frame",
+                              "solve ms / step (same process)", "frame / step", "whole process (s)"], render_rows)
     scenes = [("reference cy=+0.15 (first in process)", lambda: reference_scene(0.15)),
               ("cy=+0.10, max area 0.002, E 2e4, nu 0.4, k 2e5",
                lambda: reference_scene(0.10, E=2e4, nu=0.4, k=2e5, max_area=0.002)),

@@ -76,9 +76,8 @@ def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
     p.add_argument("--fps", type=float, default=12.0, help="video frames per second (one frame per step)")
     p.add_argument("--size", default=size, help="frame size WIDTHxHEIGHT in pixels")
     p.add_argument("--renderer", default="auto", choices=RENDERERS,
-                   help="ggui: Taichi's GGUI (Vulkan), gui: ti.GUI's software rasteriser; auto: ti.GUI for video "
-                        "frames (the faster on every machine measured, see the README), GGUI for --interactive "
-                        "when Vulkan is available")
+                   help="gui: ti.GUI's software rasteriser; ggui: Taichi's GGUI (needs Vulkan); auto: ti.GUI, "
+                        "the faster of the two wherever measured (README, Performance)")
     p.add_argument("--no-video", action="store_true",
                    help="no pictures: no video, no frame PNG, no plot PNG (and no renderer or matplotlib started); "
                         "the history, states, scene, summary and ParaView files are still written")

@@ -59,6 +59,8 @@ def scene_data(scene) -> dict:
         kind = control.kind
         chamber = {"name": name, **shape_data(shape), "control": kind.name,
                    **{key: getattr(kind, key) for key in kind.parameters()}, "keyframes": control.schedule.keyframes}
+        if control.bounds is not None:
+            chamber["bounds"] = control.bounds
         chambers.append(chamber)
     material = {"E": scene.material.youngs_modulus, "nu": scene.material.poisson_ratio}
     if scene.regions:
@@ -77,6 +79,9 @@ def scene_data(scene) -> dict:
     }
     if scene.effects:
         data["effects"] = {e.name: {f.name: getattr(e, f.name) for f in dataclasses.fields(e)} for e in scene.effects}
+    if scene.targets:
+        data["targets"] = [{"tip": t.tip, **({} if t.angle is None else {"angle": t.angle}), "weights": t.weights}
+                           for t in scene.targets]
     return plain(data)
 
 

@@ -1,6 +1,6 @@
 """render: offscreen frames (frames.py), videos (video.py), the history plot (plots.py), live windows
 (interactive.py). The choices the apps offer are plain data here, so --help reads them without Taichi."""
 
-RENDERERS = ("auto", "ggui", "gui")  # auto: the faster of the two that works (frames.open_canvas)
+RENDERERS = ("auto", "ggui", "gui")  # auto: the faster one measured, ti.GUI (frames.open_canvas)
 # the fields a body can be coloured by: name -> (label, key of fields.ElementFields.at)
 COLOR_FIELDS = {"stretch": ("max stretch", "max_stretch"), "detF": ("det F", "det_F")}
