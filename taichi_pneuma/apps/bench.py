@@ -345,15 +345,19 @@ def scaling() -> tuple[str, dict]:
     return table + f"\nfitted: time per iteration ~ vertices^{exponent:.2f}\n", {"runs": data, "exponent": exponent}
 
 
-def main(argv: list[str] | None = None) -> int:
+def parser():
     from .cli import app_parser
 
-    parser = app_parser("pneuma-bench", __doc__)
-    parser.add_argument("--sections", default=",".join(SECTIONS), help=f"comma-separated, from {', '.join(SECTIONS)}")
-    parser.add_argument("--out", default="out/bench",
-                        help="directory for the tables, JSON and plot (benchmarks/results: the tracked ones)")
-    parser.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
-    args = parser.parse_args(argv)
+    p = app_parser("pneuma-bench", __doc__)
+    p.add_argument("--sections", default=",".join(SECTIONS), help=f"comma-separated, from {', '.join(SECTIONS)}")
+    p.add_argument("--out", default="out/bench",
+                   help="directory for the tables, JSON and plot (benchmarks/results: the tracked ones of a clone)")
+    p.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
     try:
         sections = [s.strip() for s in args.sections.split(",") if s.strip()]
         for s in sections:
