@@ -213,8 +213,12 @@ def _hex(color):
 
 
 def _to_rgb8(buffer: np.ndarray) -> np.ndarray:
-    """(width, height, 4) float buffer, origin bottom-left -> (height, width, 3) uint8, top row first."""
-    rgb = (np.clip(buffer[:, :, :3], 0, 1) * 255 + 0.5).astype(np.uint8)  # converted before the transpose: faster
+    """(width, height, 4) float buffer, origin bottom-left -> (height, width, 3) uint8, top row first.
+
+    The canvases hold colours c = k / 255 (ti.GUI: the 8-bit colours it was given; GGUI: an 8-bit image),
+    so floor(255.99 c) is k again, without a rounding or clipping pass (a value a little past 0 or 1
+    still lands on 0 or 255)."""
+    rgb = (buffer[:, :, :3] * np.float32(255.99)).astype(np.uint8)  # converted before the transpose: faster
     return np.ascontiguousarray(rgb[:, ::-1].transpose(1, 0, 2))
 
 
@@ -314,12 +318,21 @@ def nice_ticks(lo: float, hi: float, integer: bool = False, bins: int = 5) -> np
     return MaxNLocator(nbins=bins, integer=integer, min_n_ticks=min(3, bins + 1)).tick_values(lo, hi)
 
 
-def colormap(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """RGB (k, 3) of values on the colour map, lo..hi mapped to its ends."""
+@lru_cache(maxsize=None)
+def _colormap_table() -> np.ndarray:
+    """The colour map's table of RGB colours (matplotlib's, N entries)."""
     import matplotlib
 
+    cmap = matplotlib.colormaps[COLORMAP]
+    return cmap(np.arange(cmap.N))[:, :3]
+
+
+def colormap(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """RGB (k, 3) of values on the colour map, lo..hi mapped to its ends: the table entry matplotlib's
+    colormap call picks (floor of t N, the top end in the last entry), looked up without the call."""
+    table = _colormap_table()
     t = np.clip((values - lo) / (hi - lo if hi > lo else 1.0), 0.0, 1.0)
-    return matplotlib.colormaps[COLORMAP](t)[:, :3]
+    return table[np.minimum((t * len(table)).astype(int), len(table) - 1)]
 
 
 # --- what is drawn ---

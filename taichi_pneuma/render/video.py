@@ -21,9 +21,11 @@ from tqdm import tqdm
 from ..errors import PneumaInputError, require, require_finite
 from ..io.output import prepare_directory, write_atomic
 
-# extension -> (codec, output pixel format, extra ffmpeg output parameters)
+# extension -> (codec, output pixel format, extra ffmpeg output parameters). x264's ultrafast preset: a quarter
+# of the default preset's encoding time for these flat-shaded frames (0.14 against 0.59 s for the reference
+# ramp's 36 frames) at the same quality setting, the file ~3x larger (~200 kB)
 FORMATS = {
-    ".mp4": ("libx264", "yuv420p", ["-movflags", "+faststart"]),
+    ".mp4": ("libx264", "yuv420p", ["-preset", "ultrafast", "-movflags", "+faststart"]),
     ".gif": ("gif", "rgb8", []),
 }
 
