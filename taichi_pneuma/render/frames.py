@@ -8,10 +8,14 @@ One frame shows, for each ramp (a *track*), a beam panel:
 - the chamber, its deformed wall loop filled translucent blue (alpha-blended onto the background:
   the chamber is a hole in the mesh, so only background lies under it) and outlined in strong blue;
 - the pinned vertices as dark square markers; the ground line, if the scene has one;
-- for inverse control, the target as a red cross and the tip's path so far in orange;
+- for inverse control, the target as a red cross and, in orange, the tip where earlier targets were
+  reached (joined) and the current descent's earlier iterates (dots);
 - a header above the body: the panel's title, step, area ratio, pressure and tip deflection;
-and, optionally, beside them a trace panel with axes: chamber area / rest area (blue, numbered left
-axis) and pressure (red, numbered right axis) against the step, with a cursor at the current step.
+and, optionally, beside them a trace panel with axes: chamber area / rest area (numbered left axis)
+and pressure (numbered right axis) against the step, with a cursor at the current step; one chamber's
+curves blue and red, several chambers' each in its own colour (named in a legend), pressures as dots.
+The trace panel is left out of a frame too small to read it, and its axes carry as many numbers as
+have room.
 
 Every beam panel uses one world-to-pixel map (equal x and y scale) fitted to the bounds of all
 states of all tracks below the header band, so panels share a frame of reference, the beam is
