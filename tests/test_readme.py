@@ -2,12 +2,14 @@
 directory, as a user types them after the set-up (the virtual environment activated).
 
 The rule, also stated in the README's set-up section: lines that set up or install (venv, pip,
-activate, pytest), that need a Ray cluster or a display (ray, --ray, --interactive), and the
-benchmark (pneuma-bench, minutes) are not run (SKIP); every other command is an app of the package,
-run through its console script's entry point (pyproject's [project.scripts]; `python -m
-taichi_pneuma.apps.X` is the same main) with `--quality draft --steps 8` appended (a coarser mesh,
-a looser tolerance and 7 increments for the reference beam; a scene file keeps its mesh and schedule:
-this test checks the commands, the figures are tested elsewhere), and must exit 0.
+activate, pytest), that need a Ray cluster or a display (ray, --ray, --interactive), and the long
+ones (pneuma-bench: minutes; --design: a root-finder over 10-16 ramps, tested in test_reach.py) are
+not run (SKIP); every other command is an app of the package, run through its console script's
+entry point (pyproject's [project.scripts]; `python -m taichi_pneuma.apps.X` is the same main) with
+`--quality draft --steps 8` appended (a coarser mesh, a looser tolerance and 7 increments for the
+reference beam; a scene file keeps its mesh and schedule: this test checks the commands, the
+figures are tested elsewhere), and a sweep with `--workers 1` (one worker process to start, not
+one per core), and must exit 0.
 """
 
 import importlib
@@ -20,8 +22,9 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 SKIP = re.compile(r"^(python3 -m venv|\.venv/bin/|pip |\. \.venv|source |ray |python -m pytest|pneuma-bench)"
-                  r"|--ray|--interactive")
+                  r"|--ray|--interactive|--design")
 FAST = ["--quality", "draft", "--steps", "8"]
+ONE_WORKER = ["--workers", "1"]
 
 
 def readme_commands() -> list[str]:
@@ -46,7 +49,7 @@ def entry_point(argv: list[str]):
 
 def test_the_rule_is_stated_in_the_readme():
     text = (ROOT / "README.md").read_text()
-    assert "tests/test_readme.py" in text and " ".join(FAST) in text
+    assert "tests/test_readme.py" in text and " ".join(FAST) in text and " ".join(ONE_WORKER) in text
 
 
 @pytest.mark.slow
@@ -56,8 +59,9 @@ def test_every_readme_command_runs_as_written(tmp_path, monkeypatch, capsys):
     for line in readme_commands():
         if SKIP.search(line):
             continue
-        main, args = entry_point(shlex.split(line, comments=True))
-        code = main([*args, *FAST])
+        argv = shlex.split(line, comments=True)
+        main, args = entry_point(argv)
+        code = main([*args, *FAST, *(ONE_WORKER if main.__module__.endswith(".sweep") else [])])
         captured = capsys.readouterr()
         assert code == 0, f"{line!r} exited {code}:\n{captured.err[-2000:]}"
         ran.append(line)
