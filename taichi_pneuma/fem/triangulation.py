@@ -13,9 +13,6 @@ from __future__ import annotations
 
 import importlib.util
 import os
-import pickle
-import sys
-import warnings
 
 import numpy as np
 
@@ -61,34 +58,10 @@ def _with_triangle(pslg: dict, flags: str) -> dict:
 
 def _with_meshpy(pslg: dict, flags: str) -> dict:
     """meshpy's Triangle ends the process (C exit) where the `triangle` package raises, when refinement runs
-    out of precision: on Linux a refining call ('q' or 'a') runs in a forked child, whose exit becomes a
-    RuntimeError. (A plain 'p' triangulation adds no points and cannot run out of precision.)"""
-    if sys.platform == "linux" and ("q" in flags or "a" in flags):
-        return _in_child(_meshpy_triangulate, pslg, flags)
+    out of precision (a geometry whose features are ~1e-16 of its size): no error can be caught then. A forked
+    child would catch it, but forking a process whose kernel threads run can deadlock the child, so it is
+    not done; `limits` and the geometry checks refuse such geometries before they reach Triangle."""
     return _meshpy_triangulate(pslg, flags)
-
-
-def _in_child(function, *args):
-    """function(*args), computed in a forked child process and sent back through a pipe; RuntimeError if the
-    child ends without sending it."""
-    read_end, write_end = os.pipe()
-    with warnings.catch_warnings():  # Python >= 3.12 warns on forking a process with threads (the kernels' pool)
-        warnings.simplefilter("ignore", DeprecationWarning)
-        pid = os.fork()
-    if pid == 0:  # the child: send the result, then leave without running the parent's exit handlers
-        os.close(read_end)
-        try:
-            with os.fdopen(write_end, "wb") as pipe:
-                pipe.write(pickle.dumps(function(*args)))
-        finally:
-            os._exit(0)
-    os.close(write_end)
-    with os.fdopen(read_end, "rb") as pipe:
-        sent = pipe.read()
-    _, status = os.waitpid(pid, 0)
-    if status != 0 or not sent:
-        raise RuntimeError(f"Triangle ended its process (exit status {os.waitstatus_to_exitcode(status)})")
-    return pickle.loads(sent)
 
 
 def _meshpy_triangulate(pslg: dict, flags: str) -> dict:
