@@ -41,7 +41,7 @@ def twin_reaches(count: int) -> None:
     print("|---|---|---|---|---|---|---|")
     rng = np.random.default_rng(0)
     for name in ("reference_beam", "bidirectional", "pneunet_finger"):
-        built = load_scene(ROOT / "assets" / "scenes" / f"{name}.toml").build()
+        built = load_scene(ROOT / "taichi_pneuma" / "scenes" / f"{name}.toml").build()
         probe = Reacher(built)
         results = []
         for _ in range(count):

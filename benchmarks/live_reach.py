@@ -22,7 +22,7 @@ from taichi_pneuma.io.scenefile import load_scene
 from taichi_pneuma.render.interactive import fixed_view, follow_mouse
 from taichi_pneuma.solve.newton import NewtonOptions
 
-SCENE = Path(__file__).resolve().parent.parent / "assets" / "scenes" / "bidirectional.toml"
+SCENE = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes" / "bidirectional.toml"
 
 
 def drag_path(scene, frames: int, size, radius: float = 0.3) -> list[tuple[float, float]]:

@@ -3,7 +3,7 @@
     python examples/balloon_curves.py [OUT]      (OUT: a directory, default out; writes balloon_curves.png and
                                                   balloon_curves.csv there, and prints what each drive did)
 
-The shipped scenes assets/scenes/balloon_{volume,syringe,pressure}.toml are one body: a thin V-shaped wall
+The shipped scenes taichi_pneuma/scenes/balloon_{volume,syringe,pressure}.toml are one body: a thin V-shaped wall
 dented into its chamber, which pops out past a pressure peak. Volume control and the syringe follow the
 whole curve through the pressure drop; the pressure regulator stops at the peak (no equilibrium near past
 it); the same syringe through a dead volume of 3e5 mm^3 per mm of depth holds so much air that it is too soft
@@ -20,7 +20,7 @@ import numpy as np
 import taichi_pneuma as tp
 from taichi_pneuma.solve.simulate import RampFailed
 
-SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
+SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 DRIVES = {  # label: (scene, changed keys)
     "volume control": ("balloon_volume.toml", {}),
     "syringe, dead volume 20": ("balloon_syringe.toml", {}),

@@ -1,4 +1,4 @@
-"""A PneuNet-style actuator's bending angle against pressure, in mm and kPa (assets/scenes/pneunet_mm_kpa.toml).
+"""A PneuNet-style actuator's bending angle against pressure, in mm and kPa (taichi_pneuma/scenes/pneunet_mm_kpa.toml).
 
     python examples/pneunet_bending.py [OUT]        (default OUT: out; writes OUT/pneunet_bending.csv and .png)
     python examples/pneunet_bending.py OUT --study  (also the mesh study: P1 and P2 triangles at three sizes)
@@ -20,7 +20,7 @@ import numpy as np  # noqa: E402
 
 import taichi_pneuma as tp  # noqa: E402
 
-SCENE = Path(__file__).resolve().parent.parent / "assets" / "scenes" / "pneunet_mm_kpa.toml"
+SCENE = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes" / "pneunet_mm_kpa.toml"
 STUDY = [(1, 0.8), (1, 0.4), (1, 0.2), (2, 0.8), (2, 0.4)]  # (element order, max triangle area mm^2)
 
 

@@ -1,24 +1,50 @@
-"""taichi-pneuma: soft pneumatic actuators in 2D (neo-Hookean FEM, chambers, projected Newton in Taichi).
+"""taichi-pneuma: soft pneumatic actuators (hyperelastic FEM, chambers, projected Newton in Taichi).
 
     import taichi_pneuma as tp
-    scene = tp.load_scene("assets/scenes/bidirectional.toml")    # or tp.reference_scene(cy=0.15)
-    scene = scene.with_value("material.E", 2e4)                   # any dotted scene-file key, validated
-    result = tp.simulate(scene)
-    print(result.tip_deflection, result.history["tip_dy"])
+    scene = tp.load_scene("bidirectional")           # a shipped scene by name, a .toml path, or tp.reference_scene(E=2e4)
+    scene = scene.with_value("E", 2e4)                # a short name or any dotted scene-file key, validated
+    result = tp.simulate(scene, progress=True)        # a progress bar while it solves
+    print(result.tip_deflection, result.tip_rotation, result.history["tip_dy"])
     result.save("out"); result.video("out/run.mp4"); result.plot()
 
 Taichi is initialised on the CPU by the first simulate() unless tp.init("cuda"), ... chose a backend.
+The names below are imported on first use, so `import taichi_pneuma` (and every app's --help) starts
+without loading Taichi.
 """
 
-from .signals import quiet_while_loading
+from __future__ import annotations
 
-quiet_while_loading()  # a command's Ctrl-C while the modules below load: one line, no traceback
+import importlib
+from typing import TYPE_CHECKING
 
-from .api import Result, simulate
-from .errors import PneumaInputError
-from .io.scenefile import load_scene
-from .runtime import init
-from .scene import Scene, reference_scene
-from .solve.simulate import RampFailed
+__version__ = "0.1.0"  # the one place the version is written: pyproject.toml reads it
 
-__all__ = ["PneumaInputError", "RampFailed", "Result", "Scene", "init", "load_scene", "reference_scene", "simulate"]
+from .signals import quiet_while_loading  # noqa: E402
+
+quiet_while_loading()  # a command's Ctrl-C while its modules load: one line, no traceback
+
+# public name -> the module that defines it
+_EXPORTS = {"PneumaInputError": ".errors", "RampFailed": ".solve.simulate", "RampInterrupted": ".solve.simulate",
+            "Result": ".api", "Scene": ".scene", "init": ".runtime", "load_scene": ".api",
+            "reference_scene": ".scene", "simulate": ".api"}
+__all__ = ["PneumaInputError", "RampFailed", "RampInterrupted", "Result", "Scene", "__version__", "init", "load_scene",
+           "reference_scene", "simulate"]
+
+if TYPE_CHECKING:
+    from .api import Result, load_scene, simulate
+    from .errors import PneumaInputError
+    from .runtime import init
+    from .scene import Scene, reference_scene
+    from .solve.simulate import RampFailed, RampInterrupted
+
+
+def __getattr__(name: str):
+    if name not in _EXPORTS:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(_EXPORTS[name], __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_EXPORTS})

@@ -1,23 +1,34 @@
-"""The public Python API (re-exported by the package): simulate a scene, get a Result to look at.
+"""The public Python API (re-exported by the package): load or make a scene, simulate it, get a Result.
 
     import taichi_pneuma as tp
-    scene = tp.reference_scene(cy=0.15)          # or tp.load_scene("x.toml"), scene.with_value(key, value)
-    result = tp.simulate(scene)
-    result.tip_deflection, result.history["main.pressure"], result.area_ratio
+    scene = tp.reference_scene(cy=0.15, E=2e4)   # or tp.load_scene("pneunet_finger"), scene.with_value("E", 2e4)
+    result = tp.simulate(scene, progress=True)
+    result.tip_deflection, result.tip_rotation, result.history["main.pressure"], result.area_ratio
     result.save("out")                           # CSV, npz, JSON, scene TOML, plot PNG, ParaView PVD/VTU
-    result.video("out/x.mp4")                    # frames rendered by Taichi
+    result.video("out/x.mp4", size="480x192")    # frames rendered by Taichi
     result.plot()                                # matplotlib figure with axes
 """
 
 from __future__ import annotations
 
+import os
+
 from . import runtime
+from .io import scenefile
+from .io.shipped import find
 from .scene import BuiltScene, Scene
 from .solve.newton import NewtonOptions
 from .solve.result import Result
 from .solve.simulate import MAX_CUTS, run_schedule
 
-__all__ = ["Result", "simulate"]
+__all__ = ["Result", "load_scene", "simulate"]
+
+
+def load_scene(path: str | os.PathLike) -> Scene:
+    """Read and validate a scene file: a path, or the name of a scene shipped with the package
+    ("pneunet_finger", "bidirectional", "finger_on_ground", "reference_beam"; io/shipped.py). Errors are
+    one PneumaInputError naming the file and the key."""
+    return scenefile.load_scene(find(path))
 
 
 def simulate(scene: Scene | BuiltScene, *, tol: float = NewtonOptions.tol,
@@ -26,11 +37,17 @@ def simulate(scene: Scene | BuiltScene, *, tol: float = NewtonOptions.tol,
     """Run the scene's schedule (meshing it first unless it is already built) and return its Result.
 
     tol: Newton tolerance on |gradient| / force scale; max_iterations per solve; max_cuts: halvings of an
-    increment that does not converge. progress(step_record, positions, contact_force) is called after
-    every increment; stop() after every increment but the last, ending the run with RampInterrupted when
-    it returns True. Raises RampFailed when an increment finds no equilibrium; both carry .result, the
-    Result of the steps done. Initialises Taichi on the CPU unless runtime.init chose a backend."""
+    increment that does not converge. progress: True shows a progress bar (tqdm) while it solves; a
+    function progress(step_record, positions, contact_force) is called after every increment instead.
+    stop() is asked after every increment but the last, ending the run with tp.RampInterrupted when it
+    returns True. Raises tp.RampFailed when an increment finds no equilibrium; both carry .result, the
+    Result of the steps done. Initialises Taichi on the CPU unless tp.init chose a backend."""
     runtime.ensure_initialised()
     built = scene if isinstance(scene, BuiltScene) else scene.build()
-    return run_schedule(built, options=NewtonOptions(tol=tol, max_iterations=max_iterations), progress=progress,
-                        max_cuts=max_cuts, stop=stop)
+    options = NewtonOptions(tol=tol, max_iterations=max_iterations)
+    if progress is not True:
+        return run_schedule(built, options=options, progress=progress or None, max_cuts=max_cuts, stop=stop)
+    from tqdm import tqdm
+
+    with tqdm(total=built.scene.increments + 1, desc=built.scene.name, unit="step", leave=False) as bar:
+        return run_schedule(built, options=options, progress=lambda *_: bar.update(), max_cuts=max_cuts, stop=stop)

@@ -39,6 +39,7 @@ MAX_INCREMENTS = 2_000
 MAX_FRAME_PIXELS = 3840 * 2160
 BYTES_PER_TRIANGLE = 4_000
 BYTES_PER_PAIR = 2_500
+MAX_RUNS = 100_000  # runs of one design study (apps/sweep.py --max-runs)
 
 _budget: ContextVar[int | None] = ContextVar("triangle budget", default=None)
 
@@ -93,7 +94,7 @@ def wall_pairs(points: list[int]) -> int:
 def check_scene(scene, max_triangles: int = MAX_TRIANGLES, max_increments: int = MAX_INCREMENTS) -> None:
     """Refuse (PneumaInputError) a scene whose estimated mesh (its terms' pairs included) or increment count
     is past the limits."""
-    from .fem.geometry import signed_area
+    from .fem.geometry import signed_area  # imported here: this module is read by the apps' --help
 
     geometry = scene.geometry
     loops = [geometry.body.polygon()] + [shape.polygon() for _, shape in geometry.chambers]

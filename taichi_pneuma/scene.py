@@ -19,6 +19,7 @@ from . import runtime
 from .errors import require, require_finite
 from .fem.geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
 from .io import sceneformat
+from .io.keys import dotted
 from .io.output import check_stem
 from .io.units import UNITLESS, Units
 from .materials import IsochoricMaterial, StableNeoHookean
@@ -125,13 +126,14 @@ class Scene:
         return sceneformat.to_toml(self)
 
     def with_value(self, key: str, value) -> "Scene":
-        """A copy with one dotted scene-file key changed (e.g. "chambers[0].center[1]", 0.1), validated
-        like a scene file; a bad key or value raises PneumaInputError naming the key."""
+        """A copy with one dotted scene-file key changed (e.g. "chambers[0].center[1]", 0.1, or a short name
+        of io/keys.py: "cy", "E", "nu", "k", ...), validated like a scene file; a bad key or value raises
+        PneumaInputError naming the key."""
         return self.with_values({key: value})
 
     def with_values(self, values: dict) -> "Scene":
-        """A copy with several dotted keys changed at once (validated once, after all are set)."""
-        return sceneformat.with_values(self, values)
+        """A copy with several dotted keys (or short names) changed at once (validated once, after all are set)."""
+        return sceneformat.with_values(self, {dotted(key): value for key, value in values.items()})
 
     @property
     def schedule(self) -> Schedule:
@@ -203,14 +205,19 @@ class BuiltScene:
             chamber.set_command(command)
 
 
-def reference_scene(cy: float = 0.15, cx: float = 0.0, growth: float = 3.5, steps: int = 36,
-                    youngs_modulus: float = 1e4, poisson_ratio: float = 0.45, chamber_stiffness: float = 1e5,
-                    max_area: float = 0.0012, chamber_points: int = 128, order: int = 1,
-                    refinements: int = 0) -> Scene:
-    """SPEC.md's scene: the clamped 3.5 x 0.8 beam, one ellipse chamber ramped in area from 1 to growth;
-    order 2 meshes it with quadratic triangles, refinements splits every triangle in four that often."""
+def reference_scene(cy: float = 0.15, cx: float = 0.0, growth: float = 3.5, steps: int = 36, E: float = 1e4,
+                    nu: float = 0.45, k: float = 1e5, max_area: float = 0.0012, chamber_points: int = 128,
+                    order: int = 1, refinements: int = 0, **long_names) -> Scene:
+    """SPEC.md's scene: the clamped 3.5 x 0.8 beam, one ellipse chamber at (cx, cy) ramped in area from 1 to
+    growth over steps commanded areas (rest included); E, nu: Young's modulus and Poisson's ratio; k: the
+    chamber's area penalty stiffness (the names of the command line's flags; youngs_modulus,
+    poisson_ratio, chamber_stiffness are accepted for them too). order 2 meshes it with quadratic
+    triangles, refinements splits every triangle in four that often."""
+    E, nu = long_names.pop("youngs_modulus", E), long_names.pop("poisson_ratio", nu)
+    k = long_names.pop("chamber_stiffness", k)
+    if long_names:
+        raise TypeError(f"reference_scene() got an unexpected keyword argument {next(iter(long_names))!r}")
     beam = BeamGeometry(cx=cx, cy=cy, max_area=max_area, chamber_points=chamber_points, order=order,
                         refinements=refinements)
-    return Scene(beam.general(), (ChamberControl(area_ramp(growth, steps, chamber_stiffness)),), steps - 1,
-                 Material(youngs_modulus, poisson_ratio), name=f"reference_cy{cy:+.2f}")
-
+    return Scene(beam.general(), (ChamberControl(area_ramp(growth, steps, k)),), steps - 1, Material(E, nu),
+                 name=f"reference_cy{cy:+.2f}")

@@ -16,7 +16,7 @@ from taichi_pneuma.io.schema import parse_assignment
 from taichi_pneuma.render.plots import command_axis
 
 ROOT = Path(__file__).resolve().parent.parent
-SCENES = sorted((ROOT / "assets" / "scenes").glob("*.toml"))
+SCENES = sorted((ROOT / "taichi_pneuma" / "scenes").glob("*.toml"))
 
 
 @pytest.fixture(scope="module")
@@ -133,7 +133,7 @@ def test_plot_shows_the_history_on_labelled_axes(small):
 
 @pytest.mark.parametrize("name, label", [("bidirectional", "step"), ("pneunet_finger", "commanded pressure")])
 def test_plots_are_against_the_command_when_all_chambers_share_it(name, label):
-    scene = tp.load_scene(ROOT / "assets" / "scenes" / f"{name}.toml")
+    scene = tp.load_scene(ROOT / "taichi_pneuma" / "scenes" / f"{name}.toml")
     command = np.array([scene.schedule.commands(i) for i in range(scene.increments + 1)])
     x, x_label = command_axis(command, [c.kind.quantity for c in scene.controls])
     assert x_label == label

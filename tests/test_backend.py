@@ -14,14 +14,14 @@ def python(code: str, **env) -> subprocess.CompletedProcess:
 
 def test_a_forced_backend_that_does_not_import_names_its_install_command():
     other = "quadrants" if backend.NAME == "taichi" else "taichi"
-    proc = python(f"import sys; sys.modules[{other!r}] = None; import taichi_pneuma", PNEUMA_BACKEND=other)
+    proc = python(f"import sys; sys.modules[{other!r}] = None; import taichi_pneuma.backend", PNEUMA_BACKEND=other)
     assert proc.returncode != 0
     last = proc.stderr.strip().splitlines()[-1]
     assert f"PNEUMA_BACKEND={other}, but {other} does not import" in last and backend.INSTALL[other] in last
 
 
 def test_an_unknown_backend_is_named():
-    proc = python("import taichi_pneuma", PNEUMA_BACKEND="jax")
+    proc = python("import taichi_pneuma.backend", PNEUMA_BACKEND="jax")
     assert "PNEUMA_BACKEND='jax' is not one of taichi, quadrants" in proc.stderr.strip().splitlines()[-1]
 
 

@@ -1,5 +1,5 @@
 """The balloon scenes: one thin wall dented into its chamber, whose pressure-volume curve has a limit point,
-driven by volume control, a syringe and a pressure regulator (assets/scenes/balloon_*.toml, docs/chambers.md).
+driven by volume control, a syringe and a pressure regulator (taichi_pneuma/scenes/balloon_*.toml, docs/chambers.md).
 
 Volume control finds the peak, the drop and the rise after it; the syringe passes the peak as a sequence of
 stable equilibria (its Hessian positive definite where pressure control's is not) on the same curve; pressure
@@ -18,7 +18,7 @@ from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.solve.linsolve import FixedPattern
 from taichi_pneuma.terms.chambers import AreaControl, PressureControl, Syringe
 
-SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
+SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 
 
 @pytest.fixture(scope="module")

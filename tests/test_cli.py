@@ -76,9 +76,36 @@ def test_quality_presets_set_mesh_and_tolerance_unless_overridden(tmp_path, caps
     for flags, max_area in ((["--quality", "draft"], QUALITY["draft"][0]), (["--quality", "draft", "--max-area", "0.01"], 0.01)):
         out = tmp_path / str(max_area)
         assert main([*flags, "--steps", "3", "--growth", "1.2", "--no-video", "--quiet", "--out", str(out)]) == 0
-        summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
+        summary = json.loads((out / "inflate_cy+0.15_draft_summary.json").read_text())  # named by the preset
         assert summary["vertices"] == BeamGeometry(cy=0.15, max_area=max_area).mesh().n_vertices
         assert summary["max_residual"] <= QUALITY["draft"][2]
+
+
+def test_a_quality_preset_writes_its_own_files_beside_the_default_run(tmp_path, capsys):
+    flags = ["--steps", "2", "--growth", "1.2", "--max-area", "0.02", "--no-video", "--quiet", "--out", str(tmp_path)]
+    assert main(flags) == 0 and main([*flags, "--quality", "high"]) == 0
+    default = json.loads((tmp_path / "inflate_cy+0.15_summary.json").read_text())
+    high = json.loads((tmp_path / "inflate_cy+0.15_high_summary.json").read_text())
+    assert default["element_order"] == 1 and high["element_order"] == 2  # neither run overwrote the other
+
+
+def test_command_line_defaults_are_the_solvers_and_the_reference_scenes():
+    """The flags' defaults are written as plain numbers (so --help needs no solver import): they must be the
+    library's own defaults."""
+    import inspect
+
+    from taichi_pneuma.apps import cli, inflate
+    from taichi_pneuma.fem.geometry import BeamGeometry
+    from taichi_pneuma.scene import reference_scene
+    from taichi_pneuma.solve.newton import NewtonOptions
+    from taichi_pneuma.solve.simulate import MAX_CUTS
+
+    assert cli.QUALITY["default"] == (BeamGeometry.max_area, 1, NewtonOptions.tol)
+    assert (cli.MAX_ITERATIONS, cli.MAX_CUTS) == (NewtonOptions.max_iterations, MAX_CUTS)
+    flags = vars(inflate.parser().parse_args([]))
+    defaults = inspect.signature(reference_scene).parameters
+    for name in ("cy", "cx", "growth", "steps", "E", "nu", "k"):
+        assert flags[name] == defaults[name].default, name
 
 
 def test_set_changes_the_run(tmp_path, capsys):

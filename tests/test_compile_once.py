@@ -19,7 +19,7 @@ from taichi_pneuma.scene import reference_scene
 from taichi_pneuma.solve.newton import NewtonSolver
 from taichi_pneuma.solve.simulate import run_schedule
 
-SCENES = Path(__file__).resolve().parents[1] / "assets" / "scenes"
+SCENES = Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes"
 
 
 def package_kernels() -> dict[str, object]:

@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 
 from taichi_pneuma.apps.inflate import main
 
-SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
+SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 CHEAP = (SCENES / "reference_beam.toml").read_text().replace("max_area = 0.0012", "max_area = 0.02") \
     .replace("[35, 3.5]", "[2, 1.3]").replace("increments = 35", "increments = 2")
 ENV = {**os.environ, "PYTHONUNBUFFERED": "1"}

@@ -29,7 +29,7 @@ from hypothesis import strategies as st
 
 from taichi_pneuma.apps.inflate import main
 
-SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
+SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 INCREMENTS = 3
 FLAGS = ["--no-video", "--quiet", "--max-triangles", "3000", "--max-increments", "20", "--max-iterations", "20",
          "--max-cuts", "2"]

@@ -25,7 +25,7 @@ from taichi_pneuma.fem.geometry import Ellipse, Geometry, Polygon
 from taichi_pneuma.io.scenefile import load_scene
 from taichi_pneuma.io.schema import parse_assignment, parse_key
 
-SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
+SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 CHEAP = (SCENES / "reference_beam.toml").read_text().replace("max_area = 0.0012", "max_area = 0.02") \
     .replace("[35, 3.5]", "[2, 1.3]").replace("increments = 35", "increments = 2")
 QUICK = ["--no-video", "--quiet"]
@@ -392,13 +392,13 @@ def test_sigterm_and_sighup_stop_a_ramp_like_ctrl_c_and_keep_the_steps_done(tmp_
 def test_a_signal_while_results_are_saved_waits_for_them(tmp_path, monkeypatch):
     """Before: a Ctrl-C during Result.save (after a whole ramp) left no history, npz or summary."""
     result = tp.simulate(tp.reference_scene(max_area=0.02, steps=3))
-    real = np.savez_compressed
+    real = np.savez  # output.save_npz writes uncompressed (faster)
 
     def interrupted_savez(*args, **kwargs):
         os.kill(os.getpid(), signal.SIGINT)  # arrives in the middle of the saving
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(np, "savez_compressed", interrupted_savez)
+    monkeypatch.setattr(np, "savez", interrupted_savez)
     with pytest.raises(KeyboardInterrupt):
         result.save(tmp_path, vtk=False, plot=False)
     assert sorted(os.listdir(tmp_path)) == ["reference_cy+0.15_history.csv", "reference_cy+0.15_scene.toml",

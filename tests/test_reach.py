@@ -1,5 +1,6 @@
 """The reach command as a user runs it: a target, a trajectory, an unreachable target, bad input, design."""
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -58,7 +59,8 @@ def test_unreachable_target_exits_1_with_one_line_and_keeps_the_closest_pose(tmp
 def test_trajectory_from_scene_targets_and_csv_with_video(tmp_path, capsys, bidirectional):
     path = [(1.3, 1.0), (1.8, 1.2), (2.2, 1.5)]
     tips = [tuple(map(float, forward(bidirectional, q)[0])) for q in path]
-    text = open(BIDIRECTIONAL).read() + "".join(f"\n[[targets]]\ntip = [{x!r}, {y!r}]\n" for x, y in tips)
+    untargeted = dataclasses.replace(load_scene(BIDIRECTIONAL), targets=())  # the shipped scene's own targets left out
+    text = untargeted.to_toml() + "".join(f"\n[[targets]]\ntip = [{x!r}, {y!r}]\n" for x, y in tips)
     (tmp_path / "traj.toml").write_text(text)
     (tmp_path / "traj.csv").write_text("x,y\n" + "".join(f"{x!r},{y!r}\n" for x, y in tips))
     out = tmp_path / "out"
@@ -118,7 +120,7 @@ increments = 2
     (["--angle", "5"], "--angle needs --tip"),
     (["--tip", "1.8", "0", "--targets", "t.csv"], "give --tip or --targets, not both"),
     (["--targets", "missing.csv"], "'missing.csv' cannot be read"),
-    ([], "no target: give --tip X Y"),
+    (["--scene", str(SCENES / "pneunet_finger.toml")], "no target: give --tip X Y"),  # a scene without [[targets]]
     (["--tip", "1.8", "0", "--tip-tol", "0"], "tol = 0.0 must be > 0"),
     (["--tip-dy", "-0.2"], "--tip-dy needs --design cy"),
 ])

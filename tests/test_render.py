@@ -127,20 +127,25 @@ def test_no_video_initialises_no_renderer_and_draws_no_picture(tmp_path, monkeyp
                                              "_vtk")]
 
 
-def test_inflate_without_vulkan_falls_back_to_software_and_writes_every_frame(tmp_path):
-    """Taichi without Vulkan falls back to ti.GUI; a backend without Taichi's GUIs (Quadrants) to Pillow."""
+def test_inflate_renders_with_ti_gui_by_default_and_refuses_ggui_without_vulkan(tmp_path):
+    """'auto' is ti.GUI (the faster renderer), so no Vulkan is needed (a backend without Taichi's GUIs,
+    Quadrants, falls back to Pillow); asking for GGUI where Vulkan is missing is one error line before any solve."""
     env = dict(os.environ, VK_ICD_FILENAMES=str(tmp_path / "no_vulkan.json"))
-    proc = subprocess.run([sys.executable, "-m", "taichi_pneuma.apps.inflate", *COARSE, "--size", "320x160",
-                           "--out", str(tmp_path)], capture_output=True, text=True, env=env)
+    run = lambda *flags: subprocess.run([sys.executable, "-m", "taichi_pneuma.apps.inflate", *COARSE, "--size", "320x160",
+                                         "--out", str(tmp_path), *flags], capture_output=True, text=True, env=env)
+    proc = run()
     assert proc.returncode == 0, proc.stderr
-    name, why = ("ti.GUI (software)", "GGUI unavailable") if has_gui() else ("Pillow (software)", "has no GUI")
-    assert f"renderer: {name} (" in proc.stdout and why in proc.stdout
+    name = "ti.GUI (software)" if has_gui() else "Pillow (software)"
+    assert f"renderer: {name}" in proc.stdout
     video = tmp_path / "inflate_cy+0.15.mp4"
     assert imageio_ffmpeg.count_frames_and_secs(str(video))[0] == 3
     assert iio.imread(video, index=0).shape == (160, 320, 3)
     summary = json.loads((tmp_path / "inflate_cy+0.15_summary.json").read_text())
     assert summary["renderer"] == name and summary["video_frames"] == 3
     assert iio.imread(tmp_path / "inflate_cy+0.15.png").shape == (160, 320, 3)
+    refused = run("--renderer", "ggui")
+    errors = [line for line in refused.stderr.splitlines() if line.startswith("error:")]
+    assert refused.returncode == 2 and len(errors) == 1 and ("renderer = 'ggui' is unavailable" if has_gui() else "renderer = 'ggui' needs") in errors[0]
 
 
 def test_steer_plays_three_panels_in_one_video(tmp_path, capsys):

@@ -16,7 +16,7 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.render.frames import Track
 from taichi_pneuma.terms.effects import Gravity, Ground, SelfContact
 
-EXTRA = ["target", "target_x", "target_y", "target_angle", "tip_x", "tip_y", "tip_error"]
+EXTRA = ["target", "target_x", "target_y", "target_angle", "tip_x", "tip_y", "tip_error", "descent"]
 
 
 @dataclasses.dataclass(frozen=True)

@@ -18,7 +18,7 @@ from taichi_pneuma.solve.schedule import ChamberSchedule
 from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 from taichi_pneuma.terms.effects import SelfContact
 
-SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
+SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 LENGTH = 3.5
 
 

@@ -20,7 +20,7 @@ from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.solve.sensitivity import command_forces, sensitivity
 from taichi_pneuma.solve.simulate import settle, tip_measures
 
-SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
+SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 TIGHT = NewtonOptions(tol=1e-10)
 STEP = {"area": 1e-3, "pressure": 0.1}
 

@@ -249,7 +249,7 @@ def test_proposed_scene_maps_one_to_one_onto_the_generator():
 
     import tomllib
 
-    scene = tomllib.loads((Path(__file__).parents[1] / "assets/scenes/proposed/pneunet_3d.toml").read_text())
+    scene = tomllib.loads((Path(__file__).parents[1] / "taichi_pneuma/scenes/proposed/pneunet_3d.toml").read_text())
     body = {k: v for k, v in scene["body"].items() if k != "shape"}
     assert scene["body"]["shape"] == "pneunet" and set(body) == {f.name for f in dataclasses.fields(PneuNet)}
     mesh = {k: v for k, v in scene["mesh"].items() if k != "order"}

@@ -16,7 +16,7 @@ from taichi_pneuma.fem.geometry import BeamGeometry, Ellipse, Geometry, Rectangl
 from taichi_pneuma.io.scenefile import load_scene
 
 INSTALLED = triangulation.installed()
-SCENES = Path(__file__).resolve().parents[1] / "assets" / "scenes"
+SCENES = Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes"
 MESHES = {"cy=0": lambda: BeamGeometry(cy=0.0).mesh(), "cy=+0.15": lambda: BeamGeometry(cy=0.15).mesh(),
           "cy=-0.15": lambda: BeamGeometry(cy=-0.15).mesh(),
           "bidirectional": lambda: load_scene(SCENES / "bidirectional.toml").geometry.mesh()}

@@ -20,7 +20,7 @@ from taichi_pneuma.fem.geometry import MAX_WALL_POINTS
 from taichi_pneuma.io.output import check_stem, save_text
 from taichi_pneuma.io.scenefile import MAX_SCENE_BYTES, load_scene
 
-SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
+SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 # the reference scene file made cheap: a coarse mesh, 2 increments
 CHEAP = (SCENES / "reference_beam.toml").read_text().replace("max_area = 0.0012", "max_area = 0.02") \
     .replace("[35, 3.5]", "[2, 1.3]").replace("increments = 35", "increments = 2")

@@ -91,7 +91,7 @@ def test_a_failed_run_leaves_its_finished_steps_readable(tmp_path):
 
 
 def test_contact_scenes_write_the_contact_force(tmp_path):
-    scene = tp.load_scene("assets/scenes/finger_on_ground.toml").with_values(
+    scene = tp.load_scene("finger_on_ground").with_values(
         {"mesh.max_area": 0.02, "schedule.increments": 2, **{f"chambers[{i}].keyframes": [[2, 200.0]] for i in range(5)}})
     result = tp.simulate(scene)
     entries = read_pvd(VtkSeries(tmp_path, "f", result.built).write_all(result))

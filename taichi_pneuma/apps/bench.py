@@ -1,17 +1,18 @@
-"""What accuracy costs in time: start-up, timing breakdown, solver backends, accuracy-vs-time study (P1 and P2),
-near-incompressible convergence, scaling; and Taichi against Quadrants (the kernels' two compilers).
+"""What accuracy costs in time: start-up and rendering, timing breakdown, solver backends, accuracy-vs-time
+study (P1 and P2), near-incompressible convergence, scaling; and Taichi against Quadrants (the kernels' two
+compilers).
 
-    python -m taichi_pneuma.apps.bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling,compilers]
-                                       [--out benchmarks/results]
+    pneuma-bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling,compilers] [--out out/bench]
+    pneuma-bench --out benchmarks/results       (a clone: rewrite the tracked tables the README quotes)
 
-Every section prints a Markdown table and saves it (bench_<section>.md, .json) under --out, headed
-with the machine and date; the accuracy section also plots error against wall time (log-log, one
-curve per knob) to bench_accuracy.png when matplotlib is installed (`pip install .[bench]`).
-Timings are wall-clock on a possibly shared machine: compare ratios within one run.
+Every section prints a Markdown table and saves it (bench_<section>.md, .json) under --out (default
+out/bench, a scratch directory), headed with the machine and date; the accuracy section also plots
+error against wall time (log-log, one curve per knob) to bench_accuracy.png. Timings are wall-clock
+on a possibly shared machine: compare ratios within one run.
 """
 
-import argparse
 import collections
+import argparse
 import importlib.util
 import json
 import os
@@ -27,15 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import backend, runtime, signals
+from .. import runtime, signals
 from ..errors import PneumaInputError, require
 from ..io.output import prepare_directory, save_json, save_text, write_atomic
-from ..io.scenefile import load_scene
-from ..scene import reference_scene
-from ..solve.linsolve import BACKENDS, FixedPattern, make_backend
-from ..solve.newton import NewtonOptions
-from ..solve.schedule import Schedule, area_ramp
-from ..solve.simulate import run_schedule
 
 SECTIONS = ("startup", "breakdown", "backends", "accuracy", "incompressible", "scaling", "compilers")
 REFERENCE_TUTORIAL_SECONDS = 25.0  # SPEC.md: the NumPy/SciPy tutorial's cy = 0.15 ramp on this kind of machine
@@ -54,12 +49,18 @@ def markdown(header: list[str], rows: list[list]) -> str:
 
 def warm_up(built, options=None) -> None:
     """Compile (or load from the offline cache) this scene's kernels: one tiny increment of 1% area."""
+    from ..solve.schedule import Schedule, area_ramp
+    from ..solve.simulate import run_schedule
+
     run_schedule(built, Schedule(1, (area_ramp(1.01, 2),)), options)
 
 
 def timed_ramp(max_area=0.0012, steps=36, growth=3.5, options=None, cy=0.15, **scene):
     """Build, warm the kernels up on a tiny ramp, then time the ramp; return (built, result, seconds).
-    scene: further reference_scene arguments (order, refinements, poisson_ratio)."""
+    scene: further reference_scene arguments (order, refinements, nu)."""
+    from ..scene import reference_scene
+    from ..solve.simulate import run_schedule
+
     built = reference_scene(cy, growth=growth, steps=steps, max_area=max_area, **scene).build()
     warm_up(built, options)
     start = time.perf_counter()
@@ -67,24 +68,28 @@ def timed_ramp(max_area=0.0012, steps=36, growth=3.5, options=None, cy=0.15, **s
     return built, result, time.perf_counter() - start
 
 
-MAIN_COMMAND = ("--cy", "0.15", "--no-video")
+MAIN_COMMAND = ("--cy", "0.15")
 FIRST_INCREMENT = re.compile(r"step\s+1/")
-SCENES_DIR = Path(__file__).resolve().parents[2] / "assets" / "scenes"
 
 
-def main_command_process(cache_dir: str, out: str) -> tuple[float, float]:
-    """Run the main command (--no-video) in a fresh process with Taichi's offline kernel cache in cache_dir;
-    return (seconds until its first increment's line is printed, seconds until the process exits)."""
+def main_command_process(cache_dir: str, out: str, flags: tuple = ()) -> tuple[float, float, dict | None]:
+    """Run the main command (with flags) in a fresh process with Taichi's offline kernel cache in cache_dir;
+    return (seconds until its first increment's line is printed, seconds until the process exits, its
+    summary JSON), the summary None when it exits with an error (a renderer that is unavailable)."""
+    from .. import backend
+
     env = {**os.environ, backend.environment_name("cache"): cache_dir, "PYTHONUNBUFFERED": "1"}
-    command = [sys.executable, "-m", "taichi_pneuma.apps.inflate", *MAIN_COMMAND, "--out", out]
+    command = [sys.executable, "-m", "taichi_pneuma.apps.inflate", *MAIN_COMMAND, *flags, "--out", out]
     start = time.perf_counter()
     first = float("nan")
     with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env) as proc:
         for line in proc.stdout:
             if first != first and FIRST_INCREMENT.search(line):
                 first = time.perf_counter() - start
-    require(proc.returncode == 0, f"the main command exited with {proc.returncode}")
-    return first, time.perf_counter() - start
+    whole = time.perf_counter() - start
+    if proc.returncode != 0:
+        return first, whole, None
+    return first, whole, json.loads((Path(out) / "inflate_cy+0.15_summary.json").read_text())
 
 
 def first_versus_typical(result) -> tuple[float, float]:
@@ -93,24 +98,47 @@ def first_versus_typical(result) -> tuple[float, float]:
     return float(seconds[1:3].sum()), 2.0 * float(np.median(seconds[3:]))
 
 
+# the main command's processes: label, flags, kernel cache (the first run fills the empty one)
+PROCESSES = (("`--no-video`, empty kernel cache", ("--no-video",)), ("`--no-video`, warm kernel cache", ("--no-video",)),
+             ("with its video (renderer auto: ti.GUI), warm", ()),
+             ("with its video, `--renderer ggui` (GGUI on Vulkan), warm", ("--renderer", "ggui")))
+
+
 def startup() -> tuple[str, dict]:
-    """Kernel compilation at start-up. The main command's whole process, and its time to the first
-    increment, from an empty kernel cache (as on a fresh machine) and then from the cache it left; and,
-    in this process, three scenes in turn that differ in mesh size, E, nu, k and number of chambers:
-    their build time and their first two increments against two typical ones."""
-    rows, data = [], {"process": {}, "scenes": []}
+    """Kernel compilation at start-up, and rendering. The main command's whole process, and its time to the
+    first increment, from an empty kernel cache (as on a fresh machine) and then from the cache it left,
+    without and with its video (each renderer), against SPEC.md's 25 s for the seed tutorial's ramp; per
+    renderer, rendering per frame against solving per step in the same process; and, in this process,
+    three scenes in turn that differ in mesh size, E, nu, k and number of chambers: their build time and
+    their first two increments against two typical ones."""
+    from ..api import load_scene
+    from ..scene import reference_scene
+    from ..solve.simulate import run_schedule
+
+    rows, render_rows, data = [], [], {"process": {}, "rendering": {}, "scenes": []}
     with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as out:
-        for label in ("empty kernel cache", "warm kernel cache"):
-            first, whole = main_command_process(cache, out)
-            data["process"][label] = {"first_increment_s": first, "whole_s": whole}
-            rows.append([f"main command `{' '.join(MAIN_COMMAND)}`, {label}", f"{whole:.2f}", f"{first:.2f}",
-                         f"{REFERENCE_TUTORIAL_SECONDS / whole:.1f}x faster than the tutorial's ramp alone"])
-    table = markdown(["whole process", "s", "to first increment (s)", "against SPEC.md's 25 s reference"], rows)
+        for label, flags in PROCESSES:
+            first, whole, summary = main_command_process(cache, out, flags)
+            data["process"][label] = {"first_increment_s": first, "whole_s": whole, "ok": summary is not None}
+            if summary is None:
+                rows.append([f"main command {label}", "unavailable", "", ""])
+                continue
+            rows.append([f"main command {label}", f"{whole:.2f}", f"{first:.2f}",
+                         f"{REFERENCE_TUTORIAL_SECONDS / whole:.1f}x faster"])
+            if "renderer" in summary:
+                frame_ms, step_ms = summary["render_ms_per_frame"], 1e3 * summary["solve_seconds_per_step"]
+                data["rendering"][summary["renderer"]] = {"ms_per_frame": frame_ms, "solve_ms_per_step": step_ms,
+                                                          "whole_s": whole}
+                render_rows.append([summary["renderer"], f"{frame_ms:.1f}", f"{step_ms:.1f}",
+                                    f"{frame_ms / step_ms:.2f}", f"{whole:.2f}"])
+    table = markdown(["whole process", "s", "to first increment (s)", "against SPEC.md's 25 s for the seed's ramp"],
+                     rows)
+    table += "\n" + markdown(["renderer (960x384 frames, coloured by stretch)", "render ms / frame",
+                              "solve ms / step (same process)", "frame / step", "whole process (s)"], render_rows)
     scenes = [("reference cy=+0.15 (first in process)", lambda: reference_scene(0.15)),
               ("cy=+0.10, max area 0.002, E 2e4, nu 0.4, k 2e5",
-               lambda: reference_scene(0.10, youngs_modulus=2e4, poisson_ratio=0.4, chamber_stiffness=2e5,
-                                       max_area=0.002)),
-              ("bidirectional.toml (2 chambers)", lambda: load_scene(SCENES_DIR / "bidirectional.toml"))]
+               lambda: reference_scene(0.10, E=2e4, nu=0.4, k=2e5, max_area=0.002)),
+              ("bidirectional.toml (2 chambers)", lambda: load_scene("bidirectional"))]
     rows = []
     for label, make in scenes:
         start = time.perf_counter()
@@ -128,6 +156,9 @@ def startup() -> tuple[str, dict]:
 
 def breakdown() -> tuple[str, dict]:
     """Where the time of one reference ramp goes, with the one-off kernel compile/load separately."""
+    from ..scene import reference_scene
+    from ..solve.simulate import run_schedule
+
     start = time.perf_counter()
     built = reference_scene(0.15).build()
     build_seconds = time.perf_counter() - start
@@ -160,6 +191,9 @@ def breakdown() -> tuple[str, dict]:
 
 def backends() -> tuple[str, dict]:
     """Each backend on the same matrices (the final reference state), then each on the whole ramp."""
+    from ..solve.linsolve import BACKENDS, FixedPattern, make_backend
+    from ..solve.newton import NewtonOptions
+
     built, result, _ = timed_ramp()
     model = built.model
     model.set_displacements(result.positions[-1] - built.mesh.vertices)
@@ -197,7 +231,7 @@ def converged_tip(poisson_ratio: float, levels: int = 3) -> dict:
     Returns the tips per level, the observed order p = log2(|f0 - f1| / |f1 - f2|) and the finest tip."""
     tips, nodes = [], []
     for level in range(levels):
-        built, result, _ = timed_ramp(steps=11, order=2, refinements=level, poisson_ratio=poisson_ratio)
+        built, result, _ = timed_ramp(steps=11, order=2, refinements=level, nu=poisson_ratio)
         tips.append(result.tip_deflection)
         nodes.append(built.mesh.n_vertices)
         print(f"  reference nu={poisson_ratio}: level {level}, {nodes[-1]} nodes, tip {tips[-1]:+.6f}",
@@ -212,13 +246,15 @@ def accuracy(out: Path) -> tuple[str, dict]:
     and 0.499, error of the tip deflection against a converged P2 reference (converged_tip) and wall time
     of the 35-increment ramp; then the Newton tolerance and the number of increments on the default P1
     mesh, against the same mesh solved tightly (tol 1e-9, 100 increments). Plots error against time."""
+    from ..solve.newton import NewtonOptions
+
     rows, data = [], {"elements": collections.defaultdict(list), "references": {}}
     for nu in STUDY_NU:
         reference = converged_tip(nu)
         data["references"][nu] = reference
         for order, areas in MESHES.items():
             for max_area in areas:
-                built, result, seconds = timed_ramp(max_area=max_area, order=order, poisson_ratio=nu)
+                built, result, seconds = timed_ramp(max_area=max_area, order=order, nu=nu)
                 error = abs(result.tip_deflection / reference["tip"] - 1)
                 data["elements"][f"P{order}, nu = {nu}"].append(
                     {"value": max_area, "nodes": built.mesh.n_vertices, "seconds": seconds, "tip": error})
@@ -254,7 +290,7 @@ def incompressible() -> tuple[str, dict]:
     rows, data = [], []
     for nu in LOCKING_NU:
         for order, max_area in LOCKING_BASE.items():
-            runs = [timed_ramp(max_area=max_area, steps=11, order=order, refinements=level, poisson_ratio=nu)
+            runs = [timed_ramp(max_area=max_area, steps=11, order=order, refinements=level, nu=nu)
                     for level in range(3)]
             tips = [result.tip_deflection for _, result, _ in runs]
             nodes = [built.mesh.n_vertices for built, _, _ in runs]
@@ -318,6 +354,9 @@ def compilers() -> tuple[str, dict]:
     """Taichi against Quadrants in one run: for each one installed, in child processes with PNEUMA_BACKEND set,
     the startup section (the main command from an empty and a warm kernel cache) and the breakdown section twice
     (the second's first solve loads every kernel from the warm cache): the first calls of the kernels and the ramp."""
+    from .. import backend
+
+    empty, warm = (label for label, _ in PROCESSES[:2])  # the main command --no-video, empty and warm cache
     rows, data = [], {}
     for name in backend.INSTALL:
         if importlib.util.find_spec(name) is None:
@@ -334,22 +373,27 @@ def compilers() -> tuple[str, dict]:
         process, ramp = sections["startup"]["data"]["process"], sections["breakdown"]["data"]
         data[name] = {"version": sections["breakdown"]["backend"], "startup": sections["startup"]["data"],
                       "breakdown": ramp}
-        rows.append([data[name]["version"], f"{process['empty kernel cache']['whole_s']:.2f}",
-                     f"{process['warm kernel cache']['whole_s']:.2f}",
-                     f"{process['warm kernel cache']['first_increment_s']:.2f}", f"{1e3 * ramp['first_call_s']:.0f}",
+        rows.append([data[name]["version"], f"{process[empty]['whole_s']:.2f}",
+                     f"{process[warm]['whole_s']:.2f}",
+                     f"{process[warm]['first_increment_s']:.2f}", f"{1e3 * ramp['first_call_s']:.0f}",
                      f"{1e3 * ramp['ramp_s']:.0f}", ramp["iterations"], f"{1e3 * ramp['ramp_s'] / ramp['iterations']:.1f}",
                      f"{ramp['tip_deflection']:.15f}"])
     header = ["compiler", "main command, empty cache (s)", "warm cache (s)", "warm: to first increment (s)",
               "first solve, warm cache (ms)", "reference ramp (ms)", "Newton iterations", "ms/iteration", "tip dy"]
     return markdown(header, rows), data
+def parser():
+    from .cli import app_parser
+
+    p = app_parser("pneuma-bench", __doc__)
+    p.add_argument("--sections", default=",".join(SECTIONS), help=f"comma-separated, from {', '.join(SECTIONS)}")
+    p.add_argument("--out", default="out/bench",
+                   help="directory for the tables, JSON and plot (benchmarks/results: the tracked ones of a clone)")
+    p.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
+    return p
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.bench", description=__doc__.split("\n")[0])
-    parser.add_argument("--sections", default=",".join(SECTIONS), help=f"comma-separated, from {', '.join(SECTIONS)}")
-    parser.add_argument("--out", default="benchmarks/results", help="directory for the tables, JSON and plot")
-    parser.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
-    args = parser.parse_args(argv)
+    args = parser().parse_args(argv)
     try:
         with signals.interrupting():
             return run(args)
@@ -369,6 +413,8 @@ def run(args: argparse.Namespace) -> int:
         require(s in SECTIONS, f"--sections: {s!r} is not one of {', '.join(SECTIONS)}")
     out = prepare_directory(args.out)
     runtime.init(args.arch)
+    from .. import backend
+
     heading = f"Machine: {machine()}, {backend.NAME} {backend.VERSION}, arch {args.arch}\n\n"
     for section in sections:
         print(f"## {section}", flush=True)

@@ -2,33 +2,39 @@
 their checks (before any work), the scene of the flags (--scene, --set), building it with its one-line
 description, a ramp run with a line per step and Ctrl-C handled, the render report line, and the exit
 codes: 0 done, 1 no equilibrium (or a target not reached, a run lost), 2 bad input (one `error:` line),
-128 + signal on Ctrl-C (130), SIGTERM (143) or SIGHUP (129)."""
+128 + signal on Ctrl-C (130), SIGTERM (143) or SIGHUP (129).
+
+The flags are plain data: this module and the apps import the solver, Taichi and the renderers inside
+the functions that run, so `--help` answers at once, without Taichi's start-up.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
 
-import numpy as np
-from tqdm import tqdm
-
 from .. import limits, runtime, signals
-from ..api import Result, simulate
 from ..errors import PneumaInputError, require, require_finite
-from ..fem.geometry import BeamGeometry
-from ..io.scenefile import load_scene
-from ..io.schema import parse_assignment
 from ..io.units import AREA, LENGTH, PRESSURE
-from ..io.vtk import VtkSeries
-from ..render.frames import BACKENDS, COLOR_FIELDS
-from ..scene import Scene, reference_scene
-from ..solve.newton import NewtonOptions
-from ..solve.schedule import area_ramp
-from ..solve.simulate import MAX_CUTS, NoEquilibrium, RampFailed, RampInterrupted
+from ..render import COLOR_FIELDS, RENDERERS
 
-# --quality presets: (max triangle area, element order, Newton tolerance); see the README's accuracy study
-QUALITY = {"draft": (0.005, 1, 1e-4), "default": (BeamGeometry.max_area, 1, NewtonOptions.tol),
-           "high": (0.005, 2, 1e-6), "accurate": (0.0012, 2, 1e-9)}
+# --quality presets: (max triangle area, element order, Newton tolerance); see the README's accuracy study.
+# "default" is SPEC.md's mesh and the solver's default tolerance (tests/test_cli.py checks they agree).
+QUALITY = {"draft": (0.005, 1, 1e-4), "default": (0.0012, 1, 1e-6), "high": (0.005, 2, 1e-6),
+           "accurate": (0.0012, 2, 1e-9)}
+MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_iterations, simulate.MAX_CUTS)
+
+
+def app_parser(prog: str, doc: str) -> argparse.ArgumentParser:
+    """An app's parser: its description is the first paragraph of the app's docstring, defaults shown."""
+    return argparse.ArgumentParser(prog=prog, description=" ".join(doc.split("\n\n")[0].split()),
+                                   formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+
+
+def quality_stem(args: argparse.Namespace) -> str:
+    """The suffix a --quality other than the default adds to the result file names ('' or '_high', ...), so
+    runs of one scene at two qualities do not overwrite each other."""
+    return "" if args.quality == "default" else f"_{args.quality}"
 
 
 def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
@@ -41,13 +47,15 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--k", type=float, default=1e5, help="chamber stiffness (area control penalty)")
     p.add_argument("--quality", default="default", choices=list(QUALITY),
                    help="mesh density, element order and Newton tolerance, read off the accuracy-vs-time study: "
-                        + "; ".join(f"{k}: max area {a:g}, order {o}, tol {t:g}" for k, (a, o, t) in QUALITY.items()))
+                        + "; ".join(f"{k}: max area {a:g}, order {o}, tol {t:g}" for k, (a, o, t) in QUALITY.items())
+                        + "; a quality other than the default adds _QUALITY to the result file names")
     p.add_argument("--max-area", type=float, default=None, help="Triangle's maximum triangle area (overrides --quality)")
     p.add_argument("--order", type=int, default=None, choices=(1, 2),
                    help="1: linear triangles, 2: quadratic triangles (overrides --quality)")
     p.add_argument("--tol", type=float, default=None,
                    help="Newton tolerance on |gradient| / force scale (overrides --quality)")
-    p.add_argument("--max-iterations", type=int, default=40, help="Newton iterations per solve before it counts as failed")
+    p.add_argument("--max-iterations", type=int, default=MAX_ITERATIONS,
+                   help="Newton iterations per solve before it counts as failed")
     p.add_argument("--max-cuts", type=int, default=MAX_CUTS,
                    help="times a non-converging increment may be halved before the run stops")
     p.add_argument("--max-triangles", type=int, default=limits.MAX_TRIANGLES,
@@ -62,12 +70,16 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
 def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
     """The rendering flags shared by the apps."""
     p.add_argument("--video", default=None,
-                   help="video file (.mp4 H.264 or .gif); default <out>/<name>.mp4")
+                   help="video file (.mp4 H.264 or .gif; its directory is created); default <out>/<name>.mp4")
     p.add_argument("--fps", type=float, default=12.0, help="video frames per second (one frame per step)")
     p.add_argument("--size", default=size, help="frame size WIDTHxHEIGHT in pixels")
-    p.add_argument("--renderer", default="auto", choices=BACKENDS,
-                   help="auto: GGUI (Vulkan) if available, else ti.GUI")
-    p.add_argument("--no-video", action="store_true", help="no rendering at all: no video, no frame PNG, no plot PNG")
+    p.add_argument("--renderer", default="auto", choices=RENDERERS,
+                   help="gui: ti.GUI's software rasteriser; ggui: Taichi's GGUI (needs Vulkan); pillow: Pillow, no "
+                        "Taichi GUI; auto: ti.GUI, the faster of the two wherever measured (README, Performance), "
+                        "else Pillow where the backend has no GUI")
+    p.add_argument("--no-video", action="store_true",
+                   help="no pictures: no video, no frame PNG, no plot PNG (and no renderer or matplotlib started); "
+                        "the history, states, scene, summary and ParaView files are still written")
     p.add_argument("--color", default="stretch", choices=["none", *COLOR_FIELDS],
                    help="colour the body by a field: the largest principal stretch, det F, or none (mesh edges)")
     p.add_argument("--max-frame-pixels", type=int, default=limits.MAX_FRAME_PIXELS,
@@ -75,22 +87,25 @@ def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
 
 
 def rendering_flags(args: argparse.Namespace) -> tuple[int, int]:
-    """Check the rendering flags before any work; return --size 'WIDTHxHEIGHT' as (width, height)."""
-    from ..render.video import check_video
+    """Check the rendering flags before any work, and create the directory of --video (so a path in a new
+    directory works, and one that cannot be written fails now, not after the solve); return --size
+    'WIDTHxHEIGHT' as (width, height)."""
+    from pathlib import Path
+
+    from ..io.output import prepare_directory
+    from ..render.video import check_video, frame_size
 
     check_video(args.video or "default.mp4", args.fps)
-    text = args.size
-    try:
-        width, height = (int(v) for v in text.lower().split("x"))
-    except ValueError:
-        raise PneumaInputError(f"--size = {text!r} must look like 960x384") from None
-    require(width >= 64 and height >= 64 and width % 2 == 0 and height % 2 == 0,
-            f"--size = {text!r}: width and height must be even and >= 64")
+    width, height = frame_size(args.size, "--size")
     limits.check_frame(width, height, args.max_frame_pixels)
+    if args.video and not args.no_video:
+        prepare_directory(Path(args.video).parent)
     return width, height
 
 
-def newton_options(args: argparse.Namespace) -> NewtonOptions:
+def newton_options(args: argparse.Namespace):
+    from ..solve.newton import NewtonOptions
+
     return NewtonOptions(tol=args.tol, max_iterations=args.max_iterations)
 
 
@@ -106,11 +121,15 @@ def check_flags(args: argparse.Namespace) -> None:
     require(args.max_cuts >= 0, f"--max-cuts = {args.max_cuts!r} must be >= 0")
     for name in ("max_triangles", "max_increments", "max_frame_pixels"):
         require(getattr(args, name) >= 1, f"--{name.replace('_', '-')} = {getattr(args, name)!r} must be >= 1")
+    from ..solve.schedule import area_ramp
+
     area_ramp(args.growth, args.steps)  # validates growth and steps before any work
 
 
-def scene_for(args: argparse.Namespace, cy: float) -> Scene:
+def scene_for(args: argparse.Namespace, cy: float):
     """The validated reference scene of the flags with its chamber at height cy (PneumaInputError on bad flags)."""
+    from ..scene import reference_scene
+
     check_flags(args)
     scene = reference_scene(require_finite("--cy", cy), args.cx, args.growth, args.steps, args.E, args.nu, args.k,
                             args.max_area, order=args.order)
@@ -118,10 +137,12 @@ def scene_for(args: argparse.Namespace, cy: float) -> Scene:
     return scene
 
 
-def scene_of_flags(args: argparse.Namespace) -> Scene:
+def scene_of_flags(args: argparse.Namespace):
     """The validated scene of the flags: --scene (or the reference beam of the flags, its chamber at --cy)
     with every --set applied, then checked against the resource limits (which --set may have raised)."""
     if args.scene:
+        from ..api import load_scene
+
         check_flags(args)
         scene = apply_set(load_scene(args.scene), args.set)
     else:
@@ -130,7 +151,7 @@ def scene_of_flags(args: argparse.Namespace) -> Scene:
     return scene
 
 
-def build(scene: Scene):
+def build(scene):
     """Mesh the scene, build its terms and print the mesh size, the terms and each chamber's rest area."""
     built = scene.build()
     mesh = built.mesh
@@ -143,7 +164,7 @@ def build(scene: Scene):
     return built
 
 
-def solve(args: argparse.Namespace, built, label: str = "solving", vtk: VtkSeries | None = None) -> Result:
+def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
     """Run the scene's schedule, printing a line per step, with a progress bar on a terminal only (the
     lines go through the bar, tqdm.write; piped or logged output gets the lines alone); write each
     step's VTU as it is solved if vtk is given. Returns an api.Result.
@@ -151,6 +172,11 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk: VtkSerie
     Raises RampFailed when an increment fails after its cuts, RampInterrupted (its .signum the signal)
     after the increment during which Ctrl-C, SIGTERM or SIGHUP came (signals.stopping); both carry the
     steps done (.result)."""
+    from tqdm import tqdm
+
+    from ..api import simulate
+    from ..solve.simulate import RampInterrupted
+
     increments, units = built.scene.increments, built.scene.units
     bar = tqdm(total=increments + 1, desc=label, unit="step", disable=True if args.quiet else None, leave=False)
 
@@ -180,8 +206,10 @@ def render_report(export, seconds_per_step: float) -> str:
             f"ms/frame vs solving {1000 * seconds_per_step:.0f} ms/step")
 
 
-def apply_set(scene: Scene, assignments: list[str]) -> Scene:
+def apply_set(scene, assignments: list[str]):
     """The scene with every --set KEY=VALUE applied (validated once, like a scene file)."""
+    from ..io.schema import parse_assignment
+
     if not assignments:
         return scene
     values = dict(parse_assignment(text) for text in assignments)
@@ -199,6 +227,10 @@ def exit_code(app_run, args: argparse.Namespace) -> int:
 
     NumPy's floating-point warnings (overflow, invalid value) are silenced: a huge input value overflows
     harmlessly in a check that then refuses it, and a solve that produces NaN or inf fails its own checks."""
+    import numpy as np
+
+    from ..solve.simulate import NoEquilibrium, RampFailed, RampInterrupted
+
     try:
         with np.errstate(all="ignore"), signals.interrupting(), limits.budget(args.max_triangles):
             summary = app_run(args)

@@ -1,13 +1,15 @@
-"""Run a scene's schedule (a scene file, or the reference beam by its flags) and show how it bends.
+"""Run a scene's schedule (a scene file, a shipped scene by name, or the reference beam by its flags) and
+show how it bends.
 
-    python -m taichi_pneuma.apps.inflate --cy 0.15
-    python -m taichi_pneuma.apps.inflate --scene assets/scenes/bidirectional.toml
+    pneuma-inflate --cy 0.15                     (or python -m taichi_pneuma.apps.inflate --cy 0.15)
+    pneuma-inflate --scene bidirectional
 
 Prints the mesh size, the terms built, each chamber's rest area, final area ratio and pressure,
 the tip deflection and rotation and the peak chamber pressure; writes the per-step history (CSV),
-the states (npz), a summary (JSON), the scene as run (TOML), a plot of the history (PNG) and the
-ParaView files (a VTU per step as it is solved, indexed by a PVD) under --out, and, unless --no-video,
-a video of the run (body coloured by --color beside its area/pressure trace) and a PNG of its last frame.
+the states (npz), a summary (JSON), the scene as run (TOML) and the ParaView files (a VTU per step as
+it is solved, indexed by a PVD) under --out, and, unless --no-video, a plot of the history (PNG), a
+video of the run (body coloured by --color beside its area/pressure trace) and a PNG of its most
+deformed frame.
 --set KEY=VALUE changes any dotted scene-file key. --interactive instead opens a window with a slider
 for the commanded area.
 
@@ -26,16 +28,15 @@ from .. import runtime
 from ..errors import require
 from ..io.output import lock_stems, prepare_directory, save_json
 from ..io.units import AREA, FORCE, LENGTH, PRESSURE
-from ..io.vtk import VtkSeries
 from ..signals import holding
-from ..solve.simulate import RampInterrupted, RampStopped
-from ..terms.chambers import AreaControl
 from .cli import (
     add_ramp_arguments,
     add_video_arguments,
+    app_parser,
     build,
     exit_code,
     newton_options,
+    quality_stem,
     render_report,
     rendering_flags,
     scene_of_flags,
@@ -44,14 +45,15 @@ from .cli import (
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.inflate", description=__doc__.split("\n")[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--scene", help="a scene file (TOML); the reference-beam flags (--cy --cx --growth --steps --E --nu "
-                                   "--k --max-area --order) are then ignored")
+    p = app_parser("pneuma-inflate", __doc__)
+    p.add_argument("--scene", help="a scene file (TOML) or the name of a shipped scene (bidirectional, "
+                                   "finger_on_ground, pneunet_finger, reference_beam); the reference-beam flags "
+                                   "(--cy --cx --growth --steps --E --nu --k --max-area --order) are then ignored")
     p.add_argument("--cy", type=float, default=0.15, help="chamber centre height (above the neutral axis curls down)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="change a dotted scene-file key, e.g. --set chambers[0].center[1]=0.1 --set material.E=2e4 "
-                        "(repeatable; the reference beam's keys are those of assets/scenes/reference_beam.toml)")
+                   help="change a dotted scene-file key or a short name (cy cx E nu k max_area), e.g. --set "
+                        "chambers[0].center[1]=0.1 --set material.E=2e4 (repeatable; the reference beam's keys are "
+                        "those of the shipped reference_beam.toml)")
     add_ramp_arguments(p)
     add_video_arguments(p, "960x384")
     p.add_argument("--interactive", action="store_true",
@@ -60,9 +62,11 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> dict:
+    from ..terms.chambers import AreaControl
+
     scene = scene_of_flags(args)
     # a scene's name is a plain file name (Scene checks it): every result file lands inside --out
-    stem = scene.name if args.scene else f"inflate_cy{args.cy:+.2f}"
+    stem = (scene.name if args.scene else f"inflate_cy{args.cy:+.2f}") + quality_stem(args)
     size = rendering_flags(args)
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
     if args.interactive:
@@ -79,6 +83,9 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def run_scene(args: argparse.Namespace, scene, stem: str, size: tuple[int, int], out) -> dict:
+    from ..io.vtk import VtkSeries
+    from ..solve.simulate import RampInterrupted, RampStopped
+
     built = build(scene)
     vtk = VtkSeries(out, stem, built)
     try:

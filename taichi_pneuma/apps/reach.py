@@ -1,8 +1,8 @@
 """Inverse control: find the chamber commands that put the tip where you want it.
 
-    python -m taichi_pneuma.apps.reach --scene assets/scenes/bidirectional.toml --tip 1.8 -0.1
-    python -m taichi_pneuma.apps.reach --scene FILE --targets path.csv     (or the scene's [[targets]])
-    python -m taichi_pneuma.apps.reach --design cy --tip-dy -0.2
+    pneuma-reach --scene bidirectional --tip 1.7 -0.3
+    pneuma-reach --scene pneunet_finger --targets pneunet_finger_targets.csv   (or a scene's [[targets]])
+    pneuma-reach --design cy --tip-dy -0.2
 
 X Y is where the tip point (the mean of the tip vertices, as in inflate's tip deflection) should be,
 in scene coordinates; --angle DEG adds the tip rotation. Commands stay inside each chamber's bounds
@@ -22,49 +22,54 @@ import dataclasses
 import os
 import sys
 import time
-
-import numpy as np
-from tqdm import tqdm
+from typing import TYPE_CHECKING
 
 from .. import runtime
-from ..control.design import solve_design
-from ..control.inverse import Reacher, ReachOptions, command_bounds, frames
-from ..control.targets import Target, read_targets_csv
 from ..errors import PneumaInputError, parse_number, require, require_finite
-from ..fem.geometry import BeamGeometry
 from ..io.output import lock_stems, prepare_directory, save_json
-from ..io.scenefile import load_scene
-from ..scene import Scene
 from ..signals import holding
-from ..solve.simulate import run_schedule
+if TYPE_CHECKING:
+    from ..control.targets import Target
+    from ..scene import Scene
+
 from .cli import (
     add_ramp_arguments,
     add_video_arguments,
+    app_parser,
+    apply_set,
     build,
     check_flags,
     exit_code,
     newton_options,
+    quality_stem,
     render_report,
     rendering_flags,
     scene_for,
 )
 
+# ReachOptions' defaults (control/inverse.py; tests/test_reach.py checks they agree)
+TIP_TOL, ANGLE_TOL, RESTARTS = 1e-3, 0.5, 4
+
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.reach", description=__doc__.split("\n")[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
-    p.add_argument("--scene", help="a scene file (TOML); default the reference beam of the flags below")
+    p = app_parser("pneuma-reach", __doc__)
+    p.add_argument("--scene", help="a scene file (TOML) or the name of a shipped scene; default the reference beam "
+                                   "of the flags below")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="change a dotted scene-file key or a short name (cy cx E nu k max_area) of the scene "
+                        "(repeatable)")
     p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
     p.add_argument("--tip", nargs=2, type=float, metavar=("X", "Y"), help="target position of the tip point")
     p.add_argument("--angle", type=float, default=None, help="target tip rotation in degrees (with --tip)")
     p.add_argument("--weights", nargs=3, type=float, default=[1.0, 1.0, 1.0], metavar=("WX", "WY", "WANGLE"),
                    help="weights of the x, y and rotation errors (with --tip)")
-    p.add_argument("--targets", help="CSV of targets followed in order (columns x, y, optional angle, wx, wy, wangle)")
+    p.add_argument("--targets", help="CSV of targets followed in order (columns x, y, optional angle, wx, wy, wangle), "
+                                     "a path or the name of a shipped one (pneunet_finger_targets.csv)")
     p.add_argument("--bounds", nargs=3, action="append", default=[], metavar=("CHAMBER", "MIN", "MAX"),
                    help="command bounds of a chamber (pressure or area ratio); repeatable")
-    p.add_argument("--tip-tol", type=float, default=ReachOptions.tol, help="tip tolerance, a fraction of the body length")
-    p.add_argument("--angle-tol", type=float, default=ReachOptions.angle_tol, help="rotation tolerance, degrees")
-    p.add_argument("--restarts", type=int, default=ReachOptions.restarts,
+    p.add_argument("--tip-tol", type=float, default=TIP_TOL, help="tip tolerance, a fraction of the body length")
+    p.add_argument("--angle-tol", type=float, default=ANGLE_TOL, help="rotation tolerance, degrees")
+    p.add_argument("--restarts", type=int, default=RESTARTS,
                    help="descents from other commands when one stops short of the target")
     p.add_argument("--design", choices=["cy"], help="find the reference chamber height cy for --tip-dy instead")
     p.add_argument("--tip-dy", type=float, help="with --design cy: the tip deflection the ramp should end at")
@@ -75,7 +80,7 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
-def with_bounds(scene: Scene, bounds: list[list[str]]) -> Scene:
+def with_bounds(scene, bounds: list[list[str]]):
     """The scene with each --bounds NAME MIN MAX applied to its chamber (checked as the scene file's are)."""
     names = scene.chamber_names
     controls = list(scene.controls)
@@ -90,25 +95,28 @@ def with_bounds(scene: Scene, bounds: list[list[str]]) -> Scene:
     return dataclasses.replace(scene, controls=tuple(controls))
 
 
-def targets_of(args: argparse.Namespace, scene: Scene, required: bool = True) -> list[Target]:
-    """--tip (with --angle, --weights), else --targets FILE.csv, else the scene file's [[targets]] (if not
-    required, else none)."""
+def targets_of(args: argparse.Namespace, scene, required: bool = True) -> list:
+    """--tip (with --angle, --weights), else --targets FILE.csv (a path or a shipped file's name), else the
+    scene file's [[targets]] (if not required, else none)."""
+    from ..control.targets import Target, read_targets_csv
+    from ..io.shipped import find
+
     require(args.tip is None or args.targets is None, "give --tip or --targets, not both")
     require(args.angle is None or args.tip is not None, "--angle needs --tip")
     if args.tip is not None:
         return [Target(tuple(args.tip), args.angle, tuple(args.weights))]
     if args.targets is not None:
-        return read_targets_csv(args.targets)
+        return read_targets_csv(find(args.targets, ".csv", "targets file"))
     require(bool(scene.targets) or not required,
             "no target: give --tip X Y, --targets FILE.csv, or [[targets]] in the scene file")
     return list(scene.targets)
 
 
-def describe(reacher: Reacher, commands: np.ndarray) -> str:
+def describe(reacher, commands) -> str:
     return ", ".join(f"{name} = {q:.6g} ({unit})" for name, unit, q in zip(reacher.names, reacher.units, commands))
 
 
-def reach_record(reacher: Reacher, result) -> dict:
+def reach_record(reacher, result) -> dict:
     return {"target": {"tip": list(result.target.tip), "angle": result.target.angle,
                        "weights": list(result.target.weights)},
             "tip": result.pose.tip.tolist(), "tip_rotation_deg": result.pose.rotation, "tip_error": result.error,
@@ -120,17 +128,20 @@ def reach_record(reacher: Reacher, result) -> dict:
 
 
 def run(args: argparse.Namespace) -> dict:
+    from ..control.inverse import ReachOptions, command_bounds
+    from ..api import load_scene
+
     if args.design:
         return run_design(args)
     require(args.tip_dy is None, "--tip-dy needs --design cy")
     explicit_tol = args.tol is not None  # live mode keeps interactive.LIVE_TOL unless --tol is given
     check_flags(args)
     if args.scene:
-        scene = load_scene(args.scene)
-        stem = f"reach_{scene.name}"
+        scene = apply_set(load_scene(args.scene), args.set)
+        stem = f"reach_{scene.name}{quality_stem(args)}"
     else:
-        scene = scene_for(args, args.cy)
-        stem = f"reach_cy{args.cy:+.2f}"
+        scene = apply_set(scene_for(args, args.cy), args.set)
+        stem = f"reach_cy{args.cy:+.2f}{quality_stem(args)}"
     scene = with_bounds(scene, args.bounds)
     lo, hi = command_bounds(scene)
     targets = targets_of(args, scene, required=not args.interactive)
@@ -152,13 +163,19 @@ def run(args: argparse.Namespace) -> dict:
 
 def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: list[Target], bounds, options,
                   size: tuple[int, int], out) -> dict:
+    import numpy as np
+    from tqdm import tqdm
+
+    from ..control.inverse import Reacher, frames
+
     (lo, hi), built = bounds, build(scene)
     start = time.perf_counter()
     reacher = Reacher(built, (lo, hi), options, newton_options(args), args.max_cuts)
     print("bounds: " + ", ".join(f"{n} {a:g} .. {b:g}" for n, a, b in zip(reacher.names, lo, hi))
           + f"; start (box centre) solved in {time.perf_counter() - start:.2f} s")
-    bar = tqdm(total=len(targets), desc="reaching", unit="target", disable=args.quiet or len(targets) < 2,
-               leave=False)
+    # a bar on a terminal only (disable=None: off when stderr is not a TTY, so never in a piped log)
+    bar = tqdm(total=len(targets), desc="reaching", unit="target",
+               disable=True if args.quiet or len(targets) < 2 else None, leave=False)
 
     done = 0
 
@@ -192,7 +209,7 @@ def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: li
     written = []
     if not args.no_video:
         done = trajectory.video(args.video or out / f"{stem}.mp4", out / f"{stem}.png", size, args.fps,
-                                args.color, args.renderer, quiet=args.quiet)
+                                args.color, args.renderer, quiet=args.quiet, png_step=-1)  # the pose reached
         summary.update(renderer=done.renderer, video_frames=done.frames, video_size=[done.width, done.height])
         print(render_report(done, float(np.mean([s.seconds for s in trajectory.steps]))))
         written += [done.video, done.png]
@@ -216,11 +233,15 @@ def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: li
 
 def run_design(args: argparse.Namespace) -> dict:
     """--design cy --tip-dy D: the chamber height at which the reference ramp ends at tip deflection D."""
+    from ..control.design import solve_design
+    from ..fem.geometry import BeamGeometry
+    from ..solve.simulate import run_schedule
+
     require(args.tip_dy is not None, "--design cy needs --tip-dy D")
     wanted = require_finite("--tip-dy", args.tip_dy)
     require(not args.scene and args.tip is None and args.targets is None and not args.interactive,
             "--design cy works on the reference beam of the flags (no --scene, --tip, --targets, --interactive)")
-    scene_for(args, 0.0)  # validates the reference-beam flags
+    apply_set(scene_for(args, 0.0), args.set)  # validates the reference-beam flags and --set
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     beam = BeamGeometry()
@@ -229,7 +250,8 @@ def run_design(args: argparse.Namespace) -> dict:
 
     def tip_dy(cy: float) -> float:
         started = time.perf_counter()
-        result = run_schedule(scene_for(args, cy).build(), options=options, max_cuts=args.max_cuts)
+        result = run_schedule(apply_set(scene_for(args, cy), args.set).build(), options=options,
+                              max_cuts=args.max_cuts)
         if not args.quiet:
             print(f"  cy = {cy:+.6f}: tip dy {result.tip_deflection:+.6f} ({time.perf_counter() - started:.2f} s)",
                   flush=True)

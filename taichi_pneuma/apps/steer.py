@@ -1,6 +1,6 @@
 """Steering by chamber placement: the same inflation ramp with the chamber high, centred and low.
 
-    python -m taichi_pneuma.apps.steer
+    pneuma-steer                                 (or python -m taichi_pneuma.apps.steer)
 
 Solves the three ramps (cy = +0.15, 0, -0.15), prints their tip deflections, writes each ramp's ParaView
 files (steer_cy+0.15.pvd, ...) and, unless --no-video, plays them side by side in one video (all panels in
@@ -16,11 +16,11 @@ import sys
 
 from .. import runtime
 from ..io.output import lock_stems, prepare_directory, save_json
-from ..io.vtk import VtkSeries
-from ..solve.simulate import RampInterrupted, RampStopped
 from .cli import (
     add_ramp_arguments,
     add_video_arguments,
+    app_parser,
+    apply_set,
     build,
     exit_code,
     render_report,
@@ -33,15 +33,17 @@ PLACEMENTS = ((0.15, "chamber high -> curls down"), (0.0, "centred -> no bend"),
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.steer", description=__doc__.split("\n")[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = app_parser("pneuma-steer", __doc__)
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="change a dotted scene-file key or a short name (cx E nu k max_area) of the three scenes "
+                        "(repeatable)")
     add_ramp_arguments(p)
     add_video_arguments(p, "1344x320")
     return p
 
 
 def run(args: argparse.Namespace) -> dict:
-    scenes = [scene_for(args, cy) for cy, _ in PLACEMENTS]
+    scenes = [apply_set(scene_for(args, cy), args.set) for cy, _ in PLACEMENTS]
     size = rendering_flags(args)
     out = prepare_directory(args.out)
     runtime.init(args.arch)
@@ -51,6 +53,9 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def run_placements(args: argparse.Namespace, scenes, stems: list[str], size: tuple[int, int], out) -> dict:
+    from ..io.vtk import VtkSeries
+    from ..solve.simulate import RampInterrupted, RampStopped
+
     built = [build(scene) for scene in scenes]
     series = [VtkSeries(out, stem, b) for b, stem in zip(built, stems)]
     solved = []

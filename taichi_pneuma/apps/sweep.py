@@ -1,10 +1,9 @@
 """A design study: run a scene with dotted scene keys varied over a grid (or a Latin hypercube sample),
 on every core of this machine or on a Ray cluster; one CSV row per run, resumable.
 
-    python -m taichi_pneuma.apps.sweep --vary cy=-0.15,0,0.15
-    python -m taichi_pneuma.apps.sweep --scene assets/scenes/bidirectional.toml \\
-        --vary material.E=5e3:2e4:4 --vary chambers[0].center[1]=0.15:0.25:3 --workers 2
-    python -m taichi_pneuma.apps.sweep --vary cy=-0.2:0.2 --vary E=5e3:2e4 --samples 32 --ray 10.0.0.1:6379
+    pneuma-sweep --vary cy=-0.15,0,0.15
+    pneuma-sweep --scene bidirectional --vary material.E=5e3:2e4:4 --vary chambers[0].center[1]=0.15:0.25:3
+    pneuma-sweep --vary cy=-0.17:0.17 --vary E=5e3:2e4 --samples 32 --ray 10.0.0.1:6379
 
 Writes <out>/<name>.csv (a row per run: the varied values, tip dx/dy/rotation, each chamber's final
 area ratio and peak |pressure|, converged, Newton iterations, increments done, vertices, seconds, error),
@@ -25,21 +24,18 @@ from __future__ import annotations
 import argparse
 import sys
 
-from tqdm import tqdm
-
 from .. import limits
-from ..control.study import ALIASES, MAX_RUNS, LocalPool, RayCluster, RunOptions, Sweep, parse_vary
+from ..io.keys import SHORT_KEYS
 from ..io.output import check_stem, lock_stem, prepare_directory
-from .cli import add_ramp_arguments, exit_code, scene_of_flags
+from .cli import add_ramp_arguments, app_parser, exit_code, scene_of_flags
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.sweep", description=__doc__.split("\n")[0],
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = app_parser("pneuma-sweep", __doc__)
     p.add_argument("--vary", action="append", default=[], metavar="KEY=SPEC", required=True,
                    help="a dotted scene key and its values: start:stop:count (evenly spaced, ends included; "
                         "integers if both ends are), start:stop (with --samples) or v1,v2,...; repeatable (a full "
-                        "grid over all). Short keys: " + ", ".join(f"{k} = {v}" for k, v in ALIASES.items()))
+                        "grid over all). Short keys: " + ", ".join(f"{k} = {v}" for k, v in SHORT_KEYS.items()))
     p.add_argument("--samples", type=int, default=None,
                    help="run N points of a Latin hypercube over the ranges (a list is sampled by its items; a "
                         "range's count is ignored) instead of the full grid")
@@ -53,9 +49,9 @@ def parser() -> argparse.ArgumentParser:
                         "ray://HOST:PORT)")
     p.add_argument("--name", default="sweep", help="the result files are <out>/<name>.csv, .json and .png")
     p.add_argument("--retry-failed", action="store_true", help="run again the runs recorded with an error")
-    p.add_argument("--max-runs", type=int, default=MAX_RUNS, help="refuse a study of more runs")
-    p.add_argument("--scene", help="the base scene file (TOML); the reference-beam flags (--cy --cx --growth --steps "
-                                   "--E --nu --k --max-area --order) are then ignored")
+    p.add_argument("--max-runs", type=int, default=limits.MAX_RUNS, help="refuse a study of more runs")
+    p.add_argument("--scene", help="the base scene file (TOML) or the name of a shipped scene; the reference-beam "
+                                   "flags (--cy --cx --growth --steps --E --nu --k --max-area --order) are then ignored")
     p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="change a dotted key of the base scene for every run (repeatable)")
@@ -64,8 +60,8 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
-def row_line(row: dict, keys: list[str]) -> str:
-    values = ", ".join(f"{k} = {row[k]}" for k in keys)
+def row_line(row: dict, keys: list[str], labels: list[str]) -> str:
+    values = ", ".join(f"{label} = {row[k]}" for k, label in zip(keys, labels))
     seconds = "" if row.get("seconds") is None else f" ({row['seconds']:.1f} s)"  # none: the run was lost
     if row.get("error") is not None:
         return f"  {values}: error: {row['error']}{seconds}"
@@ -74,6 +70,8 @@ def row_line(row: dict, keys: list[str]) -> str:
 
 
 def run(args: argparse.Namespace) -> dict:
+    from ..control.study import LocalPool, RayCluster, RunOptions, Sweep, parse_vary
+
     axes = [parse_vary(text) for text in args.vary]
     base = scene_of_flags(args)
     executor = LocalPool(args.workers) if args.ray is None else RayCluster(args.ray or None, args.workers)
@@ -85,18 +83,20 @@ def run(args: argparse.Namespace) -> dict:
         return run_study(args, sweep, executor)
 
 
-def run_study(args: argparse.Namespace, sweep: Sweep, executor) -> dict:
+def run_study(args: argparse.Namespace, sweep, executor) -> dict:
+    from tqdm import tqdm
+
     where = "a local Ray" if args.ray == "" else f"Ray at {args.ray}" if args.ray else \
         f"a process pool of {min(executor.workers, len(sweep.todo))} workers"
     print(f"study {args.name}: {len(sweep.runs)} runs ({'full grid' if args.samples is None else 'Latin hypercube'} "
-          f"over {', '.join(sweep.keys)}); {len(sweep.runs) - len(sweep.todo)} done before, {len(sweep.todo)} to run"
+          f"over {', '.join(a.label for a in sweep.axes)}); {len(sweep.runs) - len(sweep.todo)} done before, {len(sweep.todo)} to run"
           + (f" on {where}" if sweep.todo else ""))
     bar = tqdm(total=len(sweep.todo), desc="runs", unit="run", disable=True if args.quiet else None, leave=False)
 
     def on_row(row):
         bar.update()
         if not args.quiet:
-            tqdm.write(row_line(row, sweep.keys))
+            tqdm.write(row_line(row, sweep.keys, [a.label for a in sweep.axes]))
 
     try:
         with bar:

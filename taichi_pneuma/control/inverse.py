@@ -121,7 +121,8 @@ class Pose:
 
 @dataclass
 class ReachResult:
-    """What one reach did. path: the accepted equilibria, the starting one first."""
+    """What one reach did. path: the accepted equilibria, the starting one first; jumps: the indices in path
+    of the poses not reached by a step from the one before (a restart's start, the best pose re-taken)."""
 
     target: Target
     pose: Pose
@@ -134,6 +135,7 @@ class ReachResult:
     newton_iterations: int
     seconds: float
     path: list[Pose] = field(default_factory=list)
+    jumps: list[int] = field(default_factory=list)
 
     def summary_line(self) -> str:
         """One line: 'reached: ...' or 'unreachable: closest tip error ...; chamber ... at its max ...'."""
@@ -251,7 +253,7 @@ class Reacher:
         start = time.perf_counter()
         solves0, newton0 = self.forward_solves, self.newton_iterations
         goal = Objective(self, target)
-        path, iterations = [self.pose], 0
+        path, iterations, jumps = [self.pose], 0, []
         best = self.pose
         starts = (q for q in self._restart_commands() if np.any(q != self.pose.commands))
         while True:
@@ -267,11 +269,13 @@ class Reacher:
                 break
             try:
                 path.append(self.settle(restart))
+                jumps.append(len(path) - 1)
             except NoEquilibrium:
                 continue
         if best is not self.pose:
             self.pose, self._previous = best, None
             path.append(best)
+            jumps.append(len(path) - 1)
         self.built.set_commands(best.commands)
         self.built.model.set_displacements(best.u)
         error, angle_error = self._errors(target, best)
@@ -280,7 +284,7 @@ class Reacher:
                   for side, bound in (("min", low), ("max", high)) if value == bound]
         return ReachResult(target, best, error, angle_error, reached, active, iterations,
                            self.forward_solves - solves0, self.newton_iterations - newton0,
-                           time.perf_counter() - start, path)
+                           time.perf_counter() - start, path, jumps)
 
     def _restart_commands(self) -> list[np.ndarray]:
         """Commands to restart a descent from: the centre of the box, then scrambled Sobol points."""
@@ -337,19 +341,22 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
     """Every accepted equilibrium of a sequence of reaches, in order, as one run's Result (its history CSV,
     states and video are made as a ramp's are): each step's record carries the extra columns target (the
     index of the target pursued), target_x, target_y, target_angle (nan for a free angle), the tip point
-    tip_x, tip_y and its distance to the target, tip_error."""
+    tip_x, tip_y and its distance to the target, tip_error, and descent: a count that goes up at every
+    pose not reached by a step from the frame before (a restart, the best pose re-taken)."""
     built, mesh = reacher.built, reacher.built.mesh
     rest_tip = mesh.vertices[mesh.tip].mean(axis=0)
-    steps, states = [], []
+    steps, states, descent = [], [], 0
     for k, result in enumerate(results):
         target = result.target
-        for pose in result.path[1 if k else 0:]:
+        for j, pose in enumerate(result.path[1 if k else 0:], start=1 if k else 0):
+            descent += j in result.jumps
             built.set_commands(pose.commands)
             built.model.set_displacements(pose.u)
             dx, dy = pose.tip - rest_tip
             extra = {"target": k, "target_x": target.tip[0], "target_y": target.tip[1],
                      "target_angle": math.nan if target.angle is None else target.angle,
-                     "tip_x": pose.tip[0], "tip_y": pose.tip[1], "tip_error": float(np.hypot(*(pose.tip - target.tip)))}
+                     "tip_x": pose.tip[0], "tip_y": pose.tip[1], "tip_error": float(np.hypot(*(pose.tip - target.tip))),
+                     "descent": descent}
             steps.append(StepRecord(len(steps), chamber_records(built, pose.commands), float(dx), float(dy),
                                     pose.rotation, pose.iterations, pose.residual, True, 0, 1,
                                     built.elastic.min_determinant(), pose.seconds, extra=extra))

@@ -44,6 +44,7 @@ from scipy.stats import qmc
 
 from .. import backend, limits, runtime, signals
 from ..errors import PneumaInputError, require, require_finite
+from ..io.keys import SHORT_KEYS, dotted
 from ..io.output import (
     FORMULA,
     check_stem,
@@ -61,10 +62,8 @@ from ..scene import Scene
 from ..solve.newton import NewtonOptions
 from ..solve.simulate import MAX_CUTS, RampStopped
 
-# Short names for the keys of the reference beam's flags
-ALIASES = {"cy": "chambers[0].center[1]", "cx": "chambers[0].center[0]", "E": "material.E", "nu": "material.nu",
-           "k": "chambers[0].stiffness", "max_area": "mesh.max_area"}
-MAX_RUNS = 100_000
+ALIASES = SHORT_KEYS  # the short key names (io/keys.py), under their former name here
+MAX_RUNS = limits.MAX_RUNS
 MAX_CELL = 10_000  # characters of a varied value in the CSV (csv reads fields of at most 131,072)
 MAX_ERROR = 1_000  # characters of a run's error kept in its row
 MAX_RECORD_BYTES = 256_000_000  # the most of a study's CSV or JSON read back
@@ -84,7 +83,7 @@ def is_number(value) -> bool:
 @dataclass(frozen=True)
 class Axis:
     """One varied key: a range (low, high, count: count evenly spaced values, ends included; integers
-    if both ends are) or a list of values."""
+    if both ends are) or a list of values; name: the short name the user gave it (io/keys.py), if any."""
 
     key: str
     spec: str
@@ -92,6 +91,12 @@ class Axis:
     high: float | None = None
     count: int | None = None
     items: tuple = ()
+    name: str = ""
+
+    @property
+    def label(self) -> str:
+        """The key as the user wrote it: its short name, else the dotted key."""
+        return self.name or self.key
 
     @property
     def is_range(self) -> bool:
@@ -128,9 +133,10 @@ class Axis:
 
 def parse_vary(text: str) -> Axis:
     """'KEY=start:stop:count' (or start:stop with --samples) or 'KEY=v1,v2,...' -> Axis. KEY is a dotted
-    scene key (material.E, chambers[0].center[1]) or one of ALIASES (cy, cx, E, nu, k, max_area)."""
-    key, sep, spec = text.partition("=")
-    key, spec = ALIASES.get(key.strip(), key.strip()), spec.strip()
+    scene key (material.E, chambers[0].center[1]) or a short name of io/keys.py (cy, cx, E, nu, k, max_area)."""
+    typed, sep, spec = text.partition("=")
+    key, spec = dotted(typed.strip()), spec.strip()
+    name = typed.strip() if key != typed.strip() else ""
     require(bool(sep) and key and spec, f"--vary {text[:100]!r} must look like KEY=start:stop:count or KEY=v1,v2,...")
     parse_key(key)  # the dotted-key syntax
     where = f"--vary {key}={spec}"
@@ -146,14 +152,14 @@ def parse_vary(text: str) -> Axis:
             count = parse_value(parts[2], where)
             require(isinstance(count, int) and not isinstance(count, bool) and 1 <= count <= MAX_RUNS,
                     f"{where}: count {parts[2]!r} must be an integer from 1 to {MAX_RUNS}")
-        return Axis(key, spec, ends[0], ends[1], count)
+        return Axis(key, spec, ends[0], ends[1], count, name=name)
     items = [p.strip() for p in spec.split(",")]
     require(all(items), f"{where}: an empty value in the list")
     values = tuple(parse_value(p, where) for p in items)
     require(all(len(cell(v)) <= MAX_CELL for v in values),
             f"--vary {key}: a value of more than {MAX_CELL} characters (as a CSV cell)")
     require(len({cell(v) for v in values}) == len(values), f"{where}: a value is listed twice")
-    return Axis(key, spec, items=values)
+    return Axis(key, spec, items=values, name=name)
 
 
 def plan(axes: list[Axis], samples: int | None = None, seed: int = 0, max_runs: int = MAX_RUNS) -> list[dict]:
@@ -641,7 +647,8 @@ class Sweep:
                 self._write_csv(rows + others)
                 save_json(self.json, self.record(status, described, report))
         if any(row.get("tip_dy") is not None and row.get("error") is None for row in rows):
-            figure = study_figure(rows, self.keys, sampled=self.samples is not None)
+            figure = study_figure(rows, self.keys, sampled=self.samples is not None,
+                                  labels=[a.label for a in self.axes])
             report.files.append(write_atomic(self.png, lambda tmp: figure.savefig(tmp, format="png", dpi=100)))
         return report
 
@@ -666,12 +673,16 @@ def _edges(centres: np.ndarray) -> np.ndarray:
     return np.concatenate([[2 * centres[0] - mid[0]], mid, [2 * centres[-1] - mid[-1]]])
 
 
-def study_figure(rows: list[dict], keys: list[str], sampled: bool = False):
-    """Tip deflection against the varied keys (a matplotlib Figure, no pyplot). One key: curves of tip
-    dy and dx. Two: a heatmap of tip dy over the grid (red up, blue down; a scatter coloured by it for
-    a sampled study). More: tip dy against each key. Failed runs are marked x (left out for 3+ keys)."""
+def study_figure(rows: list[dict], keys: list[str], sampled: bool = False, labels: list[str] | None = None):
+    """Tip deflection against the varied keys (a matplotlib Figure, no pyplot), each axis labelled as the
+    user named its key (labels: short names, default the keys). One key: curves of tip dy and dx. Two: a
+    heatmap of tip dy over the grid (red up, blue down; a scatter coloured by it for a sampled study).
+    More: tip dy against each key. A failed run has no figures: one key marks it by a shaded line at its
+    value (never a point at y = 0, which would read as data); two keys by an x in its cell; more leave
+    it out (the title counts it)."""
     from matplotlib.figure import Figure
 
+    labels = labels or keys
     ok = [r for r in rows if r.get("error") is None and r.get("tip_dy") is not None]
     failed = [r for r in rows if r.get("error") is not None]
     n = len(ok)
@@ -680,12 +691,12 @@ def study_figure(rows: list[dict], keys: list[str], sampled: bool = False):
     if len(keys) > 2:
         figure = Figure(figsize=(4 * len(keys), 3.6), layout="constrained")
         axes = figure.subplots(1, len(keys), sharey=True)
-        for ax, key in zip(axes, keys):
-            x, labels = _positions([r[key] for r in ok])
+        for ax, key, label in zip(axes, keys, labels):
+            x, ticks = _positions([r[key] for r in ok])
             ax.plot(x, tip, "o", ms=4)
-            if labels:
-                ax.set_xticks(range(len(labels)), labels)
-            ax.set(xlabel=key)
+            if ticks:
+                ax.set_xticks(range(len(ticks)), ticks)
+            ax.set(xlabel=label)
         axes[0].set_ylabel("tip dy")
         figure.suptitle(title + (f" ({len(failed)} failed runs not shown)" if failed else ""))
         return figure
@@ -697,8 +708,9 @@ def study_figure(rows: list[dict], keys: list[str], sampled: bool = False):
         order = np.argsort(x[:n], kind="stable")
         ax.plot(x[:n][order], tip[order], "o-", label="tip dy")
         ax.plot(x[:n][order], np.clip([r["tip_dx"] for r in ok], -MAX_DRAWN, MAX_DRAWN)[order], "s--", label="tip dx")
-        y = np.zeros(len(x))
         ax.axhline(0, color="0.7", lw=0.8)
+        for k, value in enumerate(x[n:]):
+            ax.axvline(value, color="tab:red", alpha=0.25, lw=6, label="failed run (no figures)" if k == 0 else None)
         ax.set(ylabel="tip displacement")
     else:
         y, yl = positions[1]
@@ -719,12 +731,12 @@ def study_figure(rows: list[dict], keys: list[str], sampled: bool = False):
         figure.colorbar(image, ax=ax, label="tip dy")
         if yl:
             ax.set_yticks(range(len(yl)), yl)
-        ax.set(ylabel=keys[1])
-    if failed:
-        ax.plot(x[n:], y[n:], "x", color="tab:red" if len(keys) == 1 else "k", ms=9, mew=2, label="failed run")
+        ax.set(ylabel=labels[1])
+        if failed:
+            ax.plot(x[n:], y[n:], "x", color="k", ms=9, mew=2, label="failed run")
     if xl:
         ax.set_xticks(range(len(xl)), xl)
-    ax.set(xlabel=keys[0], title=title)
+    ax.set(xlabel=labels[0], title=title)
     if len(keys) == 1 or failed:
         ax.legend()
     return figure

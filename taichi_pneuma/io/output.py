@@ -169,9 +169,11 @@ def save_json(path: Path, data: dict) -> Path:
 
 
 def save_npz(path: Path, **arrays) -> Path:
+    """The arrays as an .npz file, uncompressed: float states compress by ~10 % at ~20x the time (0.16
+    against 0.007 s for the reference ramp's states)."""
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as f:
-            np.savez_compressed(f, **arrays)
+            np.savez(f, **arrays)
 
     return write_atomic(path, write)
 

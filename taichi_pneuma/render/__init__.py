@@ -1,1 +1,7 @@
-"""render"""
+"""render: offscreen frames (frames.py), videos (video.py), the history plot (plots.py), live windows
+(interactive.py). The choices the apps offer are plain data here, so --help reads them without Taichi."""
+
+# auto: the faster one measured, ti.GUI (else Pillow where the backend has no GUI; frames.open_canvas)
+RENDERERS = ("auto", "ggui", "gui", "pillow")
+# the fields a body can be coloured by: name -> (label, key of fields.ElementFields.at)
+COLOR_FIELDS = {"stretch": ("max stretch", "max_stretch"), "detF": ("det F", "det_F")}

@@ -8,19 +8,23 @@ One frame shows, for each ramp (a *track*), a beam panel:
 - the chamber, its deformed wall loop filled translucent blue (alpha-blended onto the background:
   the chamber is a hole in the mesh, so only background lies under it) and outlined in strong blue;
 - the pinned vertices as dark square markers; the ground line, if the scene has one;
-- for inverse control, the target as a red cross and the tip's path so far in orange;
+- for inverse control, the target as a red cross and, in orange, the tip where earlier targets were
+  reached (joined) and the current descent's earlier iterates (dots);
 - a header above the body: the panel's title, step, area ratio, pressure and tip deflection;
-and, optionally, beside them a trace panel with axes: chamber area / rest area (blue, numbered left
-axis) and pressure (red, numbered right axis) against the step, with a cursor at the current step.
+and, optionally, beside them a trace panel with axes: chamber area / rest area (numbered left axis)
+and pressure (numbered right axis) against the step, with a cursor at the current step; one chamber's
+curves blue and red, several chambers' each in its own colour (named in a legend), pressures as dots.
+The trace panel is left out of a frame too small to read it, and its axes carry as many numbers as
+have room.
 
 Every beam panel uses one world-to-pixel map (equal x and y scale) fitted to the bounds of all
 states of all tracks below the header band, so panels share a frame of reference, the beam is
 never cropped and no text covers it.
 
 Three canvases draw the same primitives (filled triangles, line segments):
-- GGUI offscreen, ti.ui.Window(show_window=False), when Vulkan is available; on CPU-only machines
-  mesa's lavapipe (apt-get install mesa-vulkan-drivers) provides it, and it works with ti.cpu;
-- ti.GUI(show_gui=False), a software rasteriser, otherwise;
+- ti.GUI(show_gui=False), a software rasteriser: the default ('auto'), the faster one measured;
+- GGUI offscreen, ti.ui.Window(show_window=False), on request, when Vulkan is available; on CPU-only
+  machines mesa's lavapipe (apt-get install mesa-vulkan-drivers) provides it, and it works with ti.cpu;
 - Pillow (pillow_canvas.py) where the backend has neither GUI (Quadrants), or when asked for.
 Text is drawn afterwards onto the image read back from the canvas (Pillow, matplotlib's DejaVu Sans),
 the same on every backend.
@@ -36,12 +40,13 @@ import numpy as np
 
 from .. import runtime
 from ..backend import INSTALL, NAME, VERSION, has_ggui, has_gui, ti
+from . import COLOR_FIELDS, RENDERERS
 from ..errors import PneumaInputError, require
 from ..fem.fields import ElementFields
 from ..fem.geometry import Mesh
 from ..fem.triangulation import triangulate
 
-BACKENDS = ("auto", "ggui", "gui", "pillow")
+BACKENDS = RENDERERS  # the --renderer choices (render/__init__.py, plain data for --help)
 BACKGROUND = (1.0, 1.0, 1.0)
 FACE = (0.72, 0.89, 0.66)
 EDGE = (0.18, 0.49, 0.20)
@@ -57,13 +62,17 @@ AREA_CURVE = (0.05, 0.2, 0.95)
 PRESSURE_CURVE = (0.85, 0.15, 0.1)
 CURSOR = (0.2, 0.2, 0.2)
 COLORMAP = "viridis"
-# the fields a body can be coloured by: name -> (label, key of fields.ElementFields.at)
-COLOR_FIELDS = {"stretch": ("max stretch", "max_stretch"), "detF": ("det F", "det_F")}
 FONT_PX, LINE_PX, MARGIN_PX = 13, 17, 10
 HEADER_LINES = 3  # title (if any), step and area, pressure and tip: the band above the body, title or not
 COLORBAR_PX = 96  # width of the colour bar strip
 TARGET = (0.9, 0.1, 0.1)
 TIP_PATH = (0.95, 0.55, 0.0)
+# the trace panel: the plot box's margins (pixels: left, top, right, bottom) and the smallest box worth
+# drawing (a smaller --size leaves the panel out); room per tick label along x and y
+TRACE_MARGINS_PX = (58, MARGIN_PX + 3 * LINE_PX + 8, 58, 2 * LINE_PX + 12)
+TRACE_MIN_BOX_PX = (60, 40)
+TICK_ROOM_PX = (34, 20)
+PIN_HALF_PX = 3.5  # half the side of a clamp marker
 
 
 # --- backends: one canvas of (width, height) pixels, coordinates normalised to [0, 1], origin bottom-left ---
@@ -159,9 +168,7 @@ class GUICanvas:
 
     def triangles(self, corners: np.ndarray, color) -> None:
         """corners (m, 3, 2); color: one RGB, or one RGB per triangle (m, 3)."""
-        color = np.asarray(color, dtype=float)
-        colors = _hex(color) if color.ndim == 1 else np.array([_hex(c) for c in color], dtype=np.uint32)
-        self.gui.triangles(corners[:, 0], corners[:, 1], corners[:, 2], color=colors)
+        self.gui.triangles(corners[:, 0], corners[:, 1], corners[:, 2], color=_hex(color))
 
     def segments(self, ends: np.ndarray, color, width_px: float) -> None:
         self.gui.lines(ends[:, 0], ends[:, 1], radius=width_px / 2, color=_hex(color))
@@ -204,14 +211,24 @@ class GUICanvas:
         self.gui.close()
 
 
-def _hex(color) -> int:
-    r, g, b = (int(round(255 * c)) for c in color)
-    return (r << 16) | (g << 8) | b
+def _hex(color):
+    """RGB in [0, 1] -> 0xRRGGBB: an int for one colour (3,), a uint32 array for one per row (k, 3)."""
+    r, g, b = np.rint(255 * np.asarray(color, dtype=float)).astype(np.uint32).T
+    packed = (r << 16) | (g << 8) | b
+    return int(packed) if packed.ndim == 0 else packed
 
 
 def _to_rgb8(buffer: np.ndarray) -> np.ndarray:
-    """(width, height, 4) float buffer, origin bottom-left -> (height, width, 3) uint8, top row first."""
-    return np.ascontiguousarray((np.clip(np.rot90(buffer[:, :, :3]), 0, 1) * 255 + 0.5).astype(np.uint8))
+    """(width, height, 4) float buffer, origin bottom-left -> (height, width, 3) uint8, top row first.
+
+    The canvases hold colours c = k / 255 (ti.GUI: the 8-bit colours it was given; GGUI: an 8-bit image),
+    so floor(255.99 c) is k again, without a rounding or clipping pass (a value a little past 0 or 1
+    still lands on 0 or 255). The whole RGBA buffer is converted (contiguous: faster than its RGB view)
+    and turned upright by Pillow (2.4 against 4.7-6.6 ms a 960x384 frame with NumPy's transpose)."""
+    from PIL import Image
+
+    rgba = Image.fromarray((buffer * np.float32(255.99)).astype(np.uint8), "RGBA")
+    return np.array(rgba.transpose(Image.Transpose.ROTATE_90).convert("RGB"))
 
 
 def _from_rgb8(image: np.ndarray) -> np.ndarray:
@@ -220,11 +237,11 @@ def _from_rgb8(image: np.ndarray) -> np.ndarray:
 
 
 def open_canvas(width: int, height: int, backend: str = "auto", show: bool = False, log=print):
-    """A canvas on `backend` ('ggui', 'gui', 'pillow', or 'auto': GGUI when Vulkan is available, else ti.GUI,
-    else Pillow where the Taichi backend has no GUI).
-
-    Says through log() which renderer it uses (and why it fell back).
-    """
+    """A canvas on `backend`: 'gui' (ti.GUI's software rasteriser), 'ggui' (GGUI on Vulkan; PneumaInputError
+    when Vulkan is unavailable), 'pillow' (pillow_canvas.py) or 'auto': ti.GUI, the faster of the two Taichi
+    canvases wherever measured (the frame is read back to the CPU for its text and the encoder, and on lavapipe
+    GGUI's read-back alone costs more than ti.GUI's whole frame; see the README's Performance section), else
+    Pillow where the Taichi backend has no GUI. Says through log() which it uses (and why it fell back)."""
     require(backend in BACKENDS, f"renderer = {backend!r} is not one of {', '.join(BACKENDS)}")
     require(width >= 64 and height >= 64, f"frame size {width}x{height} must be at least 64x64")
     runtime.ensure_initialised()
@@ -238,18 +255,15 @@ def open_canvas(width: int, height: int, backend: str = "auto", show: bool = Fal
         canvas = PillowCanvas(width, height, show)
         log(f"renderer: {canvas.name}" + ("" if backend == "pillow" else f" ({NAME} has no GUI)"))
         return canvas
-    if backend in ("auto", "ggui"):
+    if backend == "ggui" or (backend == "auto" and not has_gui()):
         try:
             canvas = GGUICanvas(width, height, show)
         except RuntimeError as exc:
-            if backend == "ggui":
-                raise PneumaInputError(f"renderer = 'ggui' is unavailable: {exc}") from None
-            log(f"renderer: {GUICanvas.name} (GGUI unavailable: {exc})")
-            return GUICanvas(width, height, show)
-        log(f"renderer: {canvas.name}")
-        return canvas
-    log(f"renderer: {GUICanvas.name}")
-    return GUICanvas(width, height, show)
+            raise PneumaInputError(f"renderer = 'ggui' is unavailable: {exc}") from None
+    else:
+        canvas = GUICanvas(width, height, show)
+    log(f"renderer: {canvas.name}")
+    return canvas
 
 
 # --- text, drawn onto the finished image ---
@@ -282,34 +296,63 @@ def label_box(label: Label) -> tuple[float, float, float, float]:
                                                              anchor=label.anchor)
 
 
-def draw_labels(image: np.ndarray, labels: list[Label]) -> np.ndarray:
-    """The image (height, width, 3) uint8 with the labels written on it."""
+@lru_cache(maxsize=4096)
+def _coverage(text: str, anchor: str) -> tuple[np.ndarray, int, int]:
+    """The text's glyph coverage (h, w) in [0, 1], drawn with its anchor at the origin, and the offset of
+    its top-left pixel from the anchor point. Cached: most labels (axis numbers, titles) repeat every frame."""
     from PIL import Image, ImageDraw
 
-    picture = Image.fromarray(image)
-    draw = ImageDraw.Draw(picture)
+    left, top, right, bottom = _font().getbbox(text, anchor=anchor)
+    mask = Image.new("L", (max(right - left, 1), max(bottom - top, 1)))
+    ImageDraw.Draw(mask).text((-left, -top), text, fill=255, font=_font(), anchor=anchor)
+    return np.asarray(mask, dtype=np.float32) / 255, left, top
+
+
+def draw_labels(image: np.ndarray, labels: list[Label]) -> np.ndarray:
+    """The image (height, width, 3) uint8 with the labels written on it (blended in place by glyph coverage,
+    each label at its anchor rounded to a pixel)."""
+    height, width = image.shape[:2]
     for label in labels:
-        draw.text((label.x, label.y), label.text, fill=tuple(int(round(255 * c)) for c in label.color),
-                  font=_font(), anchor=label.anchor)
-    return np.asarray(picture)
+        alpha, left, top = _coverage(label.text, label.anchor)
+        x0, y0 = int(round(label.x)) + left, int(round(label.y)) + top
+        h, w = alpha.shape
+        cx0, cy0, cx1, cy1 = max(x0, 0), max(y0, 0), min(x0 + w, width), min(y0 + h, height)
+        if cx0 >= cx1 or cy0 >= cy1:
+            continue
+        a = alpha[cy0 - y0:cy1 - y0, cx0 - x0:cx1 - x0, None]
+        region = image[cy0:cy1, cx0:cx1].astype(np.float32)
+        color = np.array(label.color, dtype=np.float32) * 255
+        image[cy0:cy1, cx0:cx1] = (region + (color - region) * a + 0.5).astype(np.uint8)
+    return image
 
 
-def nice_ticks(lo: float, hi: float, integer: bool = False) -> np.ndarray:
-    """Round tick values (1-2-5 steps, matplotlib's MaxNLocator) whose first and last enclose [lo, hi]."""
+def nice_ticks(lo: float, hi: float, integer: bool = False, bins: int = 5) -> np.ndarray:
+    """Round tick values (1-2-5 steps, matplotlib's MaxNLocator) whose first and last enclose [lo, hi], at
+    most bins intervals (fewer where a small frame has no room for more labels)."""
     from matplotlib.ticker import MaxNLocator
 
     if hi <= lo:
         pad = 0.1 * abs(lo) if lo != 0 else 1.0
         lo, hi = lo - pad, hi + pad
-    return MaxNLocator(nbins=5, integer=integer, min_n_ticks=3).tick_values(lo, hi)
+    bins = max(int(bins), 1)
+    return MaxNLocator(nbins=bins, integer=integer, min_n_ticks=min(3, bins + 1)).tick_values(lo, hi)
+
+
+@lru_cache(maxsize=None)
+def _colormap_table() -> np.ndarray:
+    """The colour map's table of RGB colours (matplotlib's, N entries)."""
+    import matplotlib
+
+    cmap = matplotlib.colormaps[COLORMAP]
+    return cmap(np.arange(cmap.N))[:, :3]
 
 
 def colormap(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """RGB (k, 3) of values on the colour map, lo..hi mapped to its ends."""
-    import matplotlib
-
+    """RGB (k, 3) of values on the colour map, lo..hi mapped to its ends: the table entry matplotlib's
+    colormap call picks (floor of t N, the top end in the last entry), looked up without the call."""
+    table = _colormap_table()
     t = np.clip((values - lo) / (hi - lo if hi > lo else 1.0), 0.0, 1.0)
-    return matplotlib.colormaps[COLORMAP](t)[:, :3]
+    return table[np.minimum((t * len(table)).astype(int), len(table) - 1)]
 
 
 # --- what is drawn ---
@@ -330,6 +373,9 @@ class Track:
     targets: np.ndarray | None = None  # (steps, 2) inverse control's target point per frame: a cross and the tip's path
     color: np.ndarray | None = None
     color_label: str = ""
+    target_index: np.ndarray | None = None  # (steps,) inverse control: the target a frame pursues
+    descent: np.ndarray | None = None  # (steps,) inverse control: the descent a frame belongs to (restarts)
+    chamber_names: tuple[str, ...] = ()  # for the trace panel's legend (several chambers)
 
     @classmethod
     def from_result(cls, result, title: str = "", color: str = "none") -> "Track":
@@ -345,7 +391,8 @@ class Track:
             values = np.array([fields.at(x)[key] for x in result.positions])
         targets = np.column_stack([history["target_x"], history["target_y"]]) if "target_x" in history else None
         return cls(mesh, result.positions, result.area_ratio, result.pressure, history["tip_dy"], title,
-                   result.ground_height, targets, values, label)
+                   result.ground_height, targets, values, label, history.get("target"), history.get("descent"),
+                   tuple(result.chamber_names))
 
     def header(self, i: int) -> list[str]:
         """The lines above the body at step i."""
@@ -392,7 +439,7 @@ class FrameRenderer:
         require(len(tracks) >= 1, "nothing to render: no tracks")
         lengths = {len(t.states) for t in tracks}
         require(len(lengths) == 1, f"tracks have different step counts {sorted(lengths)}")
-        self.tracks, self.trace = tracks, trace
+        self.tracks = tracks
         self.frames = lengths.pop()
         self.canvas = canvas or open_canvas(width, height, backend, log=log)
         self.width, self.height = self.canvas.width, self.canvas.height
@@ -403,8 +450,12 @@ class FrameRenderer:
             self.color_range = (float(values.min()), float(values.max()))
         self._art = [(mesh_edges(t.mesh, boundary_only=t.color is not None), t.mesh.display_triangles(),
                       chamber_triangles(t.mesh)) for t in tracks]
-        # horizontal layout in normalised units: beam panels | colour bar | trace panel
-        trace_w = 0.38 if trace else 0.0
+        # horizontal layout in normalised units: beam panels | colour bar | trace panel (left out when its
+        # plot box would be too small to read, at a small --size)
+        left, top, right, bottom = TRACE_MARGINS_PX
+        self.trace = trace and (0.38 * self.width - left - right >= TRACE_MIN_BOX_PX[0]
+                                and self.height - top - bottom >= TRACE_MIN_BOX_PX[1])
+        trace_w = 0.38 if self.trace else 0.0
         bar_w = COLORBAR_PX / self.width if colored else 0.0
         beam_w = 1.0 - trace_w - bar_w
         n = len(tracks)
@@ -466,7 +517,7 @@ class FrameRenderer:
             c.triangles(x[chamber], CHAMBER_FILL)
             for loop in track.mesh.chambers:
                 c.segments(np.stack([x[loop], x[np.roll(loop, -1)]], axis=1), CHAMBER_WALL, 2.5)
-            c.triangles(_squares(x[track.mesh.pinned], 3.5 / np.array([self.width, self.height])), PIN)
+            c.triangles(_squares(x[track.mesh.pinned], PIN_HALF_PX / np.array([self.width, self.height])), PIN)
             if track.targets is not None:
                 self._draw_target(p, track, i)
             left = self.panels[p][0] * self.width + MARGIN_PX
@@ -478,11 +529,21 @@ class FrameRenderer:
         return labels
 
     def _draw_target(self, panel: int, track: Track, i: int) -> None:
-        """The tip's path up to frame i (the mean of the tip vertices) and a cross at frame i's target."""
+        """A cross at frame i's target; the tip (the mean of the tip vertices) where each earlier target was
+        reached, joined in order (the trajectory); and as dots, the tip at the earlier equilibria of frame
+        i's descent (Gauss-Newton's iterates: equilibria apart, not a path the tip moved along, so not
+        joined; a restart begins a new descent)."""
         c = self.canvas
-        path = self.to_canvas(panel, track.states[:i + 1, track.mesh.tip].mean(axis=1))
-        if len(path) > 1:
-            c.segments(np.stack([path[:-1], path[1:]], axis=1), TIP_PATH, 2.0)
+        tips = self.to_canvas(panel, track.states[:i + 1, track.mesh.tip].mean(axis=1))
+        if track.target_index is not None:
+            done = np.flatnonzero(np.diff(track.target_index[:i + 1]) != 0)  # the last frame of each earlier target
+            if len(done) > 1:
+                c.segments(np.stack([tips[done[:-1]], tips[done[1:]]], axis=1), TIP_PATH, 2.0)
+            if len(done):
+                c.triangles(_squares(tips[done], 4.0 / np.array([self.width, self.height])), TIP_PATH)
+        same = np.ones(i, bool) if track.descent is None else track.descent[:i] == track.descent[i]
+        if same.any():
+            c.triangles(_squares(tips[:i][same], 2.0 / np.array([self.width, self.height])), TIP_PATH)
         centre = self.to_canvas(panel, track.targets[i])
         arm = 9.0 / np.array([self.width, self.height])
         c.segments(np.array([[centre - arm, centre + arm], [centre + arm * (-1, 1), centre + arm * (1, -1)]]),
@@ -517,19 +578,34 @@ class FrameRenderer:
 
     def trace_axes(self) -> dict:
         """The trace panel's plot box in pixels (left, top, right, bottom) and its three axes as
-        (lo, hi, ticks): 'step' (x), 'area' (left y), 'pressure' (right y)."""
+        (lo, hi, ticks): 'step' (x), 'area' (left y), 'pressure' (right y); as many ticks as have room."""
         x0, x1 = (v * self.width for v in self.trace_panel)
-        box = (x0 + 58, MARGIN_PX + 3 * LINE_PX + 8, x1 - 58, self.height - 2 * LINE_PX - 12)
-        axes = {"step": (0.0, float(self.frames - 1), nice_ticks(0, max(self.frames - 1, 1), integer=True))}
+        left, top, right, bottom = TRACE_MARGINS_PX
+        box = (x0 + left, top, x1 - right, self.height - bottom)
+        bins_x, bins_y = ((box[2] - box[0]) // TICK_ROOM_PX[0], (box[3] - box[1]) // TICK_ROOM_PX[1])
+        axes = {"step": (0.0, float(self.frames - 1),
+                         nice_ticks(0, max(self.frames - 1, 1), integer=True, bins=min(5, bins_x)))}
         for key, attr in (("area", "area_ratio"), ("pressure", "pressure")):
             values = np.concatenate([getattr(t, attr).ravel() for t in self.tracks])
-            ticks = nice_ticks(float(values.min()), float(values.max()))
+            ticks = nice_ticks(float(values.min()), float(values.max()), bins=min(5, bins_y))
             axes[key] = (float(ticks[0]), float(ticks[-1]), ticks)
         return {"box": box, **axes}
 
+    def chamber_colors(self) -> list[tuple] | None:
+        """One colour per chamber when the tracks have several (matplotlib's tab10 cycle), else None: a
+        single chamber's curves are coloured by quantity (area blue, pressure red)."""
+        chambers = max(t.area_ratio.shape[1] for t in self.tracks)
+        if chambers == 1:
+            return None
+        import matplotlib
+
+        cycle = matplotlib.colormaps["tab10"].colors
+        return [tuple(cycle[k % len(cycle)]) for k in range(chambers)]
+
     def _draw_trace(self, i: int) -> list[Label]:
         """Area / rest area (left axis) and pressure (right axis) of every chamber against the step, on
-        numbered axes; cursor at step i."""
+        numbered axes; cursor at step i. One chamber: two lines, area blue and pressure red. Several: each
+        chamber in its own colour (named in a legend), its area ratio as a line, its pressure as dots."""
         c, spec = self.canvas, self.trace_axes()
         left, top, right, bottom = spec["box"]
         corners = np.array([[left, bottom], [right, bottom], [right, top], [left, top]])
@@ -540,6 +616,7 @@ class FrameRenderer:
             lo, hi, _ = spec[axis]
             return bottom + (top - bottom) * (v - lo) / (hi - lo)
 
+        per_chamber = self.chamber_colors()
         labels, ticks = [], []
         for s in spec["step"][2]:
             if 0 <= s <= self.frames - 1:
@@ -550,20 +627,47 @@ class FrameRenderer:
                                              ("pressure", right, 1, "lm", PRESSURE_CURVE)):
             for v in spec[axis][2]:
                 ticks.append([[x, to_y(axis, v)], [x + 5 * sign, to_y(axis, v)]])
-                labels.append(Label(_nice(v), x + 7 * sign, to_y(axis, v), anchor, color))
+                labels.append(Label(_nice(v), x + 7 * sign, to_y(axis, v), anchor, TEXT if per_chamber else color))
         c.segments(self._norm(np.array(ticks)), AXES, 1.0)
         steps = np.arange(self.frames)
+        marker = 4.0 / np.array([self.width, self.height])
         for track in self.tracks:
-            for axis, values, color in (("area", track.area_ratio, AREA_CURVE), ("pressure", track.pressure, PRESSURE_CURVE)):
-                for curve in values.T:  # one curve per chamber, all on the same axis
-                    pts = np.column_stack([to_x(steps), to_y(axis, curve)])
-                    c.segments(self._norm(np.stack([pts[:-1], pts[1:]], axis=1)), color, 2.0)
-                    c.triangles(_squares(self._norm(pts[i:i + 1]), 4.0 / np.array([self.width, self.height])), color)
+            for k in range(track.area_ratio.shape[1]):
+                for axis, values in (("area", track.area_ratio[:, k]), ("pressure", track.pressure[:, k])):
+                    pts = self._norm(np.column_stack([to_x(steps), to_y(axis, values)]))
+                    if per_chamber is None:
+                        color = AREA_CURVE if axis == "area" else PRESSURE_CURVE
+                        c.segments(np.stack([pts[:-1], pts[1:]], axis=1), color, 2.0)
+                    elif axis == "area":
+                        color = per_chamber[k]
+                        c.segments(np.stack([pts[:-1], pts[1:]], axis=1), color, 2.0)
+                    else:
+                        color = per_chamber[k]
+                        c.triangles(_squares(pts, 0.5 * marker), color)
+                    c.triangles(_squares(pts[i:i + 1], marker), color)
         c.segments(self._norm(np.array([[[to_x(i), bottom], [to_x(i), top]]])), CURSOR, 1.0)
         x_text = self.trace_panel[0] * self.width + MARGIN_PX
-        labels += [Label("area / rest area (left axis)", x_text, MARGIN_PX / 2, color=AREA_CURVE),
-                   Label("pressure p (right axis)", x_text, MARGIN_PX / 2 + LINE_PX, color=PRESSURE_CURVE),
-                   Label(f"cursor: step {i}", x_text, MARGIN_PX / 2 + 2 * LINE_PX)]
+        if per_chamber is None:
+            titles = [("area / rest area (left axis)", AREA_CURVE), ("pressure p (right axis)", PRESSURE_CURVE)]
+        else:
+            titles = [("area / rest area: lines, left axis", TEXT), ("pressure p: dots, right axis", TEXT)]
+        labels += [Label(text, x_text, MARGIN_PX / 2 + LINE_PX * k, color=color) for k, (text, color) in enumerate(titles)]
+        cursor = Label(f"cursor: step {i}", x_text, MARGIN_PX / 2 + 2 * LINE_PX)
+        labels.append(cursor)
+        if per_chamber is not None:
+            labels += self._legend(cursor, per_chamber)
+        return labels
+
+    def _legend(self, after: Label, colors: list[tuple]) -> list[Label]:
+        """The chambers' names in their colours, on the line of `after`, as many as fit in the panel."""
+        x, edge = label_box(after)[2] + 12, self.width - MARGIN_PX
+        labels = []
+        for name, color in zip(self.tracks[0].chamber_names or [f"#{k + 1}" for k in range(len(colors))], colors):
+            label = Label(name[:12], x, after.y, color=color)
+            x = label_box(label)[2] + 8
+            if x > edge:
+                break
+            labels.append(label)
         return labels
 
 

@@ -62,7 +62,7 @@ class PillowCanvas:
 
     def image(self) -> np.ndarray:
         """The frame as an (height, width, 3) uint8 image, top row first."""
-        return np.asarray(self._picture.reduce(self.SUPERSAMPLE))
+        return np.array(self._picture.reduce(self.SUPERSAMPLE))  # writable: draw_labels blends in place
 
     def close(self) -> None:
         pass

@@ -37,9 +37,16 @@ class NotebookFigure(Figure):
         return buffer.getvalue()
 
 
+# the four panels' margins and gaps on the 10 x 7 inch figure, fixed: matplotlib's constrained layout
+# would find them itself, at twice the time of the whole plot (0.75 against 1.7 s measured)
+LAYOUT = dict(left=0.07, right=0.98, bottom=0.07, top=0.92, wspace=0.22, hspace=0.32)
+
+
 def history_figure(result, figure=None):
-    """Draw the history of an api.Result on `figure` (a new NotebookFigure by default)."""
-    fig = figure if figure is not None else NotebookFigure(figsize=(10, 7), layout="constrained")
+    """Draw the history of an api.Result on `figure` (a new NotebookFigure, laid out by LAYOUT, by default)."""
+    fig = figure if figure is not None else NotebookFigure(figsize=(10, 7))
+    if figure is None:
+        fig.subplots_adjust(**LAYOUT)
     (pa, tip), (area, pressure) = fig.subplots(2, 2)
     units, kinds = result.scene.units, [c.kind for c in result.scene.controls]
     x, x_label = command_axis(result.command, [kind.quantity for kind in kinds])
@@ -70,10 +77,8 @@ def short(text: str, most: int = 24) -> str:
 
 
 def save_history_png(result, path) -> None:
-    """Write the history figure to path (PNG). Where many chambers' legend leaves the axes no room,
-    matplotlib drops its constrained layout, and a name's character without a glyph in the font is drawn
-    as a box; it says so each time, but the figure is still whole, so neither is passed on as a warning."""
+    """Write the history figure to path (PNG). A name's character without a glyph in the font is drawn as
+    a box; matplotlib says so each time, but the figure is still whole, so it is not passed on as a warning."""
     with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message="constrained_layout not applied")
         warnings.filterwarnings("ignore", message="Glyph .* missing from font")
         history_figure(result).savefig(path, dpi=100, format="png")

@@ -24,11 +24,12 @@ from ..signals import holding
 class Result:
     """A run: the built scene and, per step (rest state first), its simulate.StepRecord and positions.
 
-    positions (steps, n, 2); solves: the last Newton SolveRecord of each step (none for reaches);
-    contact_forces (steps, n, 2): the summed contact force per vertex, when the scene has contact;
-    seconds: wall time of the run. command, area, area_ratio, pressure: (steps, chambers) in the order
-    of chamber_names; history: every column of the history CSV by name ('tip_dy', 'main.pressure',
-    'iterations', and a reach's 'target_x', 'tip_error', ...)."""
+    Its fields: built (the BuiltScene: mesh, energy model, terms); steps (a simulate.StepRecord per step:
+    chamber records, tip measures, Newton figures); positions (steps, n, 2): the vertex positions per
+    step; solves: the last Newton SolveRecord of each step (none for reaches); contact_forces (steps,
+    n, 2): the summed contact force per vertex, when the scene has contact, else None; seconds: wall
+    time of the run. Everything else (figures, per-chamber arrays, history, files, pictures) is
+    derived from these: see each property and method."""
 
     built: BuiltScene
     steps: list
@@ -39,22 +40,30 @@ class Result:
 
     @property
     def scene(self) -> Scene:
+        """The Scene that was run (its geometry, materials, chambers, schedule, effects)."""
         return self.built.scene
 
     @property
     def mesh(self):
+        """The mesh (fem.geometry.Mesh): rest vertices (n, 2), triangles, pinned, tip and boundary vertices,
+        chamber wall loops."""
         return self.built.mesh
 
     @property
     def displacements(self) -> np.ndarray:
+        """(steps, n, 2) vertex displacements from the rest mesh, per step."""
         return self.positions - self.mesh.vertices
 
     @property
     def chamber_names(self) -> list[str]:
+        """The chambers' names, in the scene's order: the column order of command, area, area_ratio, pressure."""
         return self.scene.chamber_names
 
     @cached_property
     def history(self) -> dict[str, np.ndarray]:
+        """Every column of the history CSV by name, one value per step: 'tip_dx', 'tip_dy', 'tip_rotation',
+        '<chamber>.command' / '.area' / '.area_ratio' / '.pressure', 'iterations', 'residual', 'converged',
+        'cuts', 'min_det', 'seconds', and a reach's 'target_x', 'tip_error', ..."""
         rows = [s.row() for s in self.steps]
         return {name: np.array([row[name] for row in rows], dtype=float) for name in (rows[0] if rows else ())}
 
@@ -72,12 +81,26 @@ class Result:
         return self.steps[-1].tip_dy
 
     @property
+    def tip_rotation(self) -> float:
+        """Rotation of the tip vertices at the last step, in degrees (counter-clockwise positive)."""
+        return self.steps[-1].tip_rotation
+
+    @property
     def peak_pressure(self) -> float:
+        """The largest |pressure| of any chamber at any step."""
         return max(abs(c.pressure) for s in self.steps for c in s.chambers.values())
 
     @property
     def converged(self) -> bool:
+        """Whether every step's Newton solve converged."""
         return bool(all(s.converged for s in self.steps))
+
+    def peak_step(self) -> int:
+        """The step of the largest deformation: the last step whose largest vertex displacement is within 1 %
+        of the run's largest (a hold at the peak, or a symmetric return, gives its latest step). A ramp
+        that ends inflated gives its last step; one that inflates and deflates, its bent state."""
+        largest = np.linalg.norm(self.displacements, axis=2).max(axis=1)
+        return int(np.flatnonzero(largest >= 0.99 * largest.max())[-1])
 
     @property
     def ground_height(self) -> float | None:
@@ -165,13 +188,15 @@ class Result:
             written.append(save_json(out / f"{stem}_summary.json", {**self.summary(), **(extra or {})}))
         return written
 
-    def video(self, path, png=None, size: tuple[int, int] = (960, 384), fps: float = 12.0, color: str = "stretch",
-              renderer: str = "auto", trace: bool = True, quiet: bool = True, log=print):
-        """Render one frame per step into path (.mp4 or .gif), and the last frame into png if given;
+    def video(self, path, png=None, size=(960, 384), fps: float = 12.0, color: str = "stretch",
+              renderer: str = "auto", trace: bool = True, quiet: bool = True, log=print, png_step: int | None = None):
+        """Render one frame per step into path (.mp4 or .gif; its directory is created), and frame png_step
+        (default peak_step(), the most deformed) into png if given. size: (width, height) or '960x384';
         color: 'stretch', 'detF' or 'none'; renderer: 'auto', 'ggui' or 'gui'. Returns a video.Export."""
         from ..render.video import render_video
 
-        return render_video([self], path, png, size, fps, color, renderer, trace, quiet=quiet, log=log)
+        return render_video([self], path, png, size, fps, color, renderer, trace, quiet=quiet, log=log,
+                            png_frame=self.peak_step() if png_step is None else png_step)
 
     def plot(self):
         """The history as a matplotlib Figure with axes (plots.py): pressure against area ratio, and tip

@@ -1,0 +1,36 @@
+"""The files shipped inside the package (taichi_pneuma/scenes/: scene files and a targets CSV), found by name.
+
+A path that exists is used as it is (or with the suffix added: `x` for `x.toml`); otherwise a bare name
+(`pneunet_finger` or `pneunet_finger.toml`, no directory part) is looked up among the shipped files, so `tp.load_scene("pneunet_finger")` and
+`--scene pneunet_finger` work from any directory, in a clone or an installed wheel.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from ..errors import PneumaInputError
+
+SHIPPED = Path(__file__).resolve().parent.parent / "scenes"
+
+
+def shipped(suffix: str = ".toml") -> list[str]:
+    """The names of the shipped files with this suffix, without it."""
+    return sorted(p.stem for p in SHIPPED.glob(f"*{suffix}"))
+
+
+def find(name: str | os.PathLike, suffix: str = ".toml", what: str = "scene file") -> Path:
+    """The file `name` names: itself if it exists (or with the suffix added), else the shipped file of that
+    bare name (the suffix optional); PneumaInputError naming it and the shipped names otherwise."""
+    path = Path(name)
+    if path.exists():
+        return path
+    if path.suffix != suffix and path.with_name(f"{path.name}{suffix}").is_file():
+        return path.with_name(f"{path.name}{suffix}")
+    if path.parent == Path("."):
+        for candidate in (SHIPPED / path.name, SHIPPED / f"{path.name}{suffix}"):
+            if candidate.suffix == suffix and candidate.is_file():
+                return candidate
+    raise PneumaInputError(f"{what} {str(name)!r} cannot be read (no such file, and none of that name ships with "
+                           f"the package: {', '.join(shipped(suffix))})")
