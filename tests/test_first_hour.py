@@ -10,13 +10,14 @@ import math
 import re
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import imageio.v3 as iio
 import imageio_ffmpeg
 import numpy as np
 import pytest
+import tomllib
+from renderers import SOFTWARE
 
 import taichi_pneuma as tp
 from taichi_pneuma.apps import bench, inflate, reach, steer, sweep
@@ -110,8 +111,8 @@ def test_the_frame_png_is_the_most_deformed_step(tmp_path):
                                                            "chambers[0].keyframes": [[2, 2.0], [4, 1.0]]})
     result = tp.simulate(scene)
     assert result.peak_step() == 2
-    result.video(tmp_path / "v.mp4", png=tmp_path / "v.png", size=(320, 160), renderer="gui")
-    renderer = FrameRenderer([Track.from_result(result, color="stretch")], 320, 160, backend="gui")
+    result.video(tmp_path / "v.mp4", png=tmp_path / "v.png", size=(320, 160), renderer=SOFTWARE)
+    renderer = FrameRenderer([Track.from_result(result, color="stretch")], 320, 160, backend=SOFTWARE)
     assert np.array_equal(iio.imread(tmp_path / "v.png"), renderer.frame(2))
     assert not np.array_equal(renderer.frame(2), renderer.frame(4))
 
@@ -219,7 +220,7 @@ def boxes_overlap(a, b) -> bool:
 @pytest.mark.parametrize("size", [(960, 384), (480, 192), (320, 128), (256, 96)])
 def test_small_frames_keep_labels_apart_and_markers_inside(small, size):
     track = Track.from_result(small, color="stretch")
-    renderer = FrameRenderer([track], *size, backend="gui")
+    renderer = FrameRenderer([track], *size, backend=SOFTWARE)
     labels = renderer.draw(2)
     steps = [render.label_box(label) for label in labels if label.anchor == "mt" and label.text.isdigit()]
     assert all(not boxes_overlap(a, b) for k, a in enumerate(steps) for b in steps[k + 1:])
@@ -238,7 +239,7 @@ def test_small_frames_keep_labels_apart_and_markers_inside(small, size):
 def test_several_chambers_have_their_own_colours_and_names_in_the_trace():
     scene = tp.load_scene("bidirectional").with_value("mesh.max_area", 0.02)
     result = tp.simulate(scene)
-    renderer = FrameRenderer([Track.from_result(result)], 960, 384, backend="gui")
+    renderer = FrameRenderer([Track.from_result(result)], 960, 384, backend=SOFTWARE)
     colors = renderer.chamber_colors()
     labels = renderer.draw(0)
     image = renderer.frame(0)
@@ -266,7 +267,7 @@ def test_the_tip_path_is_not_joined_across_a_restart():
     track = Track(mesh, states, np.ones((4, 1)), np.zeros((4, 1)), tip[:, 1] - tip[0, 1],
                   targets=np.tile(tip[1] + (0, 0.05), (4, 1)), target_index=np.array([0, 0, 1, 1]),
                   descent=np.array([0, 0, 1, 1]))
-    renderer = FrameRenderer([track], 480, 320, trace=False, backend="gui")
+    renderer = FrameRenderer([track], 480, 320, trace=False, backend=SOFTWARE)
     image = renderer.frame(3)
     px = lambda p: (renderer.to_canvas(0, np.array([p]))[0] * (480, 320)) * (1, -1) + (0, 320)
     orange = np.round(np.array(render.TIP_PATH) * 255)
