@@ -10,6 +10,7 @@ import pytest
 from scipy.spatial import ConvexHull
 from test_render import xvfb_display  # noqa: F401  (the virtual display fixture)
 
+from taichi_pneuma.backend import has_ggui
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.render import interactive3d
 from taichi_pneuma.render.camera import MAX_ELEVATION, Camera
@@ -252,6 +253,7 @@ def test_slider_commands_and_drag_orbit():
         Slider("c1", 1.0, 0.0, 0.5)
 
 
+@pytest.mark.skipif(not has_ggui(), reason="the live 3D window is GGUI's, which this backend lacks")
 def test_interactive_window_resolves_on_slider_moves_and_spins(xvfb_display, finger, monkeypatch):  # noqa: F811
     """Under a virtual display: scripted slider values re-solve only when they change, the camera spins."""
     import taichi as ti

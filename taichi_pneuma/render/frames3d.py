@@ -93,9 +93,12 @@ def open_view(backend: str, width: int, height: int, show: bool = False, log=pri
     if backend == "numpy":
         view = NumpyView(width, height)
     else:
+        from ..backend import has_ggui
         from .ggui3d import GGUIView
 
         try:
+            if not has_ggui():
+                raise RuntimeError("this Taichi backend has no GGUI (ti.ui)")
             view = GGUIView(width, height, show)
         except RuntimeError as exc:
             if backend == "ggui":
