@@ -16,6 +16,7 @@ import pytest
 from taichi_pneuma import limits
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.errors import PneumaInputError
+from taichi_pneuma.fem import triangulation
 from taichi_pneuma.fem.geometry import MAX_WALL_POINTS
 from taichi_pneuma.io.output import check_stem, save_text
 from taichi_pneuma.io.scenefile import MAX_SCENE_BYTES, load_scene
@@ -155,7 +156,10 @@ ELLIPSE = 'shape = "ellipse"\ncenter = [0.0, 0.15]\nsemi_axes = [0.85, 0.22]\npo
     ([("E = 1e4", "E = 1" + "0" * 400)], "material: E = 1" + "0" * 400 + " must be a finite number"),
 ], ids=["coincident points", "out of precision", "ragged list", "numeric string", "huge integer"])
 def test_what_the_fuzzer_found_is_one_error_line(tmp_path, capsys, replacements, words):
-    """Before: a segfault of the whole process, Triangle's RuntimeError, ValueError, TypeError, OverflowError."""
+    """Before: a segfault of the whole process, Triangle's RuntimeError, ValueError, TypeError, OverflowError.
+    meshpy's Triangle ends the process where it runs out of precision (docs/backends.md): that case needs `triangle`."""
+    if "could not mesh" in words and triangulation.default_binding() == "meshpy":
+        pytest.skip("meshpy's Triangle ends the process when it runs out of precision")
     path = reference_with(tmp_path, *replacements)
     assert main(["--scene", str(path), "--out", str(tmp_path / "out"), *QUICK]) == 2
     assert words in error_line(capsys)
