@@ -35,8 +35,6 @@ class Syringe(ClosedGas):
     dead_volume: float = 0.0
     name = "syringe"
     quantity = "displaced volume"
-    rest = 0.0
-    dimension = "area"  # a volume per unit depth in 2D (the unit of the chamber area)
 
     def __post_init__(self):
         super().__post_init__()
