@@ -26,9 +26,11 @@ from ..render.frames import BACKENDS, COLOR_FIELDS
 from ..scene import Scene, reference_scene
 from ..solve.newton import NewtonOptions
 from ..solve.schedule import area_ramp
+from ..solve.result import ELEMENTS
 from ..solve.simulate import MAX_CUTS, NoEquilibrium, RampFailed, RampInterrupted
 
 # --quality presets: (max triangle area, element order, Newton tolerance); see the README's accuracy study
+MEASURE = {2: "area", 3: "volume"}  # what a chamber encloses, by dimension
 QUALITY = {"draft": (0.005, 1, 1e-4), "default": (BeamGeometry.max_area, 1, NewtonOptions.tol),
            "high": (0.005, 2, 1e-6), "accurate": (0.0012, 2, 1e-9)}
 
@@ -136,12 +138,12 @@ def build(scene: Scene):
     """Mesh the scene, build its terms and print the mesh size, the terms and each chamber's rest area."""
     built = scene.build()
     mesh = built.mesh
-    kind = "triangles" if mesh.order == 1 else "quadratic triangles"
+    kind = ("" if mesh.order == 1 else "quadratic ") + ELEMENTS[mesh.dim]
     print(f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
-          f"{mesh.n_triangles} {kind}; clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
+          f"{mesh.n_elements} {kind}; clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
     for chamber in built.chambers:
         print(f"chamber {chamber.chamber_name}: {chamber.kind.name} control, wall {chamber.n_wall} vertices, "
-              f"rest area {chamber.rest_area:.3f}")
+              f"rest {MEASURE[mesh.dim]} {chamber.rest_area:.3f}")
     return built
 
 

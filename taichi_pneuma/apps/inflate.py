@@ -29,6 +29,7 @@ from ..io.vtk import VtkSeries
 from ..solve.simulate import RampInterrupted, RampStopped
 from ..terms.chambers import AreaControl
 from .cli import (
+    MEASURE,
     add_ramp_arguments,
     add_video_arguments,
     build,
@@ -84,9 +85,14 @@ def run(args: argparse.Namespace) -> dict:
         raise
     final, summary = result.steps[-1], result.summary()
     for name, c in final.chambers.items():
-        print(f"{name}: area {c.area / c.area_ratio:.3f} -> {c.area:.3f} (x{c.area_ratio:.2f}), pressure {c.pressure:.1f}")
-    print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}; "
-          f"tip rotation {final.tip_rotation:+.1f} deg")
+        print(f"{name}: {MEASURE[result.mesh.dim]} {c.area / c.area_ratio:.3f} -> {c.area:.3f} (x{c.area_ratio:.2f}), "
+              f"pressure {c.pressure:.1f}")
+    if final.tip_dz is None:
+        print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}; "
+              f"tip rotation {final.tip_rotation:+.1f} deg")
+    else:
+        print(f"tip deflection (mean y displacement of the right face): {result.tip_deflection:+.4f}; "
+              f"tip dz {final.tip_dz:+.4f}; bend angle {final.tip_rotation:+.1f} deg")
     print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}")
     for name, (fx, fy, magnitude) in final.contact.items():
         print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g})")

@@ -2,7 +2,8 @@
 
     name = "bidirectional"
     [body]       shape = "rectangle" (center, size) | "polygon" (points) | "union" (rectangles = [{center, size}, ...])
-    [mesh]       max_area, order = 1 (linear triangles) | 2 (quadratic)
+                 | "mesh" (file: a 3D mesh file with tetrahedra, relative to the scene file)
+    [mesh]       max_area (2D), order = 1 (linear triangles, tetrahedra) | 2 (quadratic)
     [material]   E, nu, regions = [{box = [x0, y0, x1, y1], E, nu}, ...]   (E, nu of a region default to the base)
     [clamp]      side = "left" | "right" | "bottom" | "top"  or  box = [x0, y0, x1, y1];  stiffness (also the rollers')
     [tip]        side = "right" (default) | "left" | "bottom" | "top"  or  box = [x0, y0, x1, y1]: the nodes whose
@@ -11,7 +12,8 @@
                  normal) or box = [x0, y0, x1, y1]; tolerance = 1e-6. A roller line along the body's edge is a
                  symmetry line: a chamber crossing it is cut there, its area closed by the flat cap on the line
     [[chambers]] name, shape = "ellipse" (center, semi_axes, points) | "rounded_rectangle" (center, size,
-                 radius, corner_points) | "polygon" (points); control = a chamber kind's name, "area"
+                 radius, corner_points) | "polygon" (points) | "mesh_surface" (group: the mesh file's triangles
+                 of the chamber's wall, for a mesh body); control = a chamber kind's name, "area"
                  (stiffness) | "pressure" (allow_vacuum) | ..., with that kind's parameters;
                  keyframes = [[step, value], ...]; bounds = [min, max] (inverse control)
     [schedule]   increments
@@ -66,6 +68,9 @@ def load_scene(path: str | os.PathLike) -> Scene:
         raise PneumaInputError(f"{path}: not valid TOML ({exc})") from None
     except RecursionError:
         raise PneumaInputError(f"{path}: not valid TOML (arrays or tables nested too deeply)") from None
+    body = data.get("body")
+    if isinstance(body, dict) and isinstance(body.get("file"), str):  # a mesh file, relative to the scene file
+        body["file"] = os.path.join(os.path.dirname(os.path.abspath(path)), body["file"])
     try:
         return read_scene(data, reduce_to_stem(os.path.splitext(os.path.basename(path))[0]))
     except PneumaInputError as exc:

@@ -26,7 +26,8 @@ import taichi as ti
 
 from ..fem.elements import FAMILIES, family_of
 from ..materials.law import element_parameters, embedded, stress_eigensystem
-from .base import Nodal, Table, Term, block_pattern, int32s, smallest_positive_root
+from ..materials.neo_hookean import cofactor
+from .base import Nodal, Table, Term, block_pattern, int32s, smallest_positive_cubic_root, smallest_positive_root
 
 Nodes = ti.types.ndarray(dtype=ti.i32, ndim=2)  # (m, k): the nodes of each element
 Gradients = ti.types.ndarray(dtype=ti.f64, ndim=4)  # (m, nq, k, d): dN_a/dX at each quadrature point
@@ -108,9 +109,10 @@ def elastic_hessian(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal,
 
 @ti.kernel
 def inversion_step(d: ti.template(), rest: Nodal, u: Nodal, dx: Nodal, nodes: Nodes, grads: Gradients) -> ti.f64:
-    """Smallest alpha > 0 with det(F_q + alpha dF_q) = 0 over all quadrature points (inf if none); for d = 2,
-    det F + alpha cof F : dF + alpha^2 det dF (3D, a cubic, is not written yet)."""
-    ti.static_assert(d == 2, "inversion_step: only d = 2 (det(F + alpha dF) is a quadratic) is written")
+    """Smallest alpha > 0 with det(F_q + alpha dF_q) = 0 over all quadrature points (inf if none):
+
+        d = 2:  det F + alpha cof F : dF + alpha^2 det dF,
+        d = 3:  det F + alpha cof F : dF + alpha^2 F : cof dF + alpha^3 det dF."""
     bound = ti.math.inf
     for e, q in ti.ndrange(nodes.shape[0], grads.shape[1]):
         F = deformation_gradient(rest, u, nodes, grads, e, q, d)
@@ -118,8 +120,12 @@ def inversion_step(d: ti.template(), rest: Nodal, u: Nodal, dx: Nodal, nodes: No
         for a in range(1, nodes.shape[1]):
             for i, j in ti.static(ti.ndrange(d, d)):
                 dF[i, j] += (dx[nodes[e, a], i] - dx[nodes[e, 0], i]) * grads[e, q, a, j]
-        cross = F[0, 0] * dF[1, 1] + F[1, 1] * dF[0, 0] - F[0, 1] * dF[1, 0] - F[1, 0] * dF[0, 1]
-        ti.atomic_min(bound, smallest_positive_root(F.determinant(), cross, dF.determinant()))
+        if ti.static(d == 2):
+            cross = F[0, 0] * dF[1, 1] + F[1, 1] * dF[0, 0] - F[0, 1] * dF[1, 0] - F[1, 0] * dF[0, 1]
+            ti.atomic_min(bound, smallest_positive_root(F.determinant(), cross, dF.determinant()))
+        else:
+            ti.atomic_min(bound, smallest_positive_cubic_root(F.determinant(), (cofactor(F) * dF).sum(),
+                                                              (F * cofactor(dF)).sum(), dF.determinant()))
     return bound
 
 
