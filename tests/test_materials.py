@@ -1,10 +1,12 @@
 """Material laws: each registered law's stress and stress derivative by finite differences, its energy,
-gradient and Hessian through the elastic term on every element family, the plane-strain embedding, and
-the generic (Jacobi) eigensystem against the analytic one."""
+gradient and Hessian through the elastic term on every element family (triangles and tetrahedra, linear
+and quadratic), the plane-strain embedding, and the generic (Jacobi) eigensystem against the analytic one
+(in 2D and 3D)."""
 
 import numpy as np
 import pytest
 import taichi as ti
+from solid_meshes import shell_octant
 from test_terms import dense_hessian, fd_gradient, fd_hessian
 
 from taichi_pneuma.materials import LAWS, Law, StableNeoHookean, lame_parameters, register
@@ -172,25 +174,29 @@ def test_generic_and_analytic_eigensystems_reconstruct_the_stress_derivative(d):
     assert (values < 0).any(axis=1).mean() > 0.3  # the projection has work to do
 
 
-def coarse_body(order):
-    """A coarse beam with its chamber commanded to 1.5x, in a random, partly compressed state."""
-    scene = reference_scene(cy=0.15, chamber_points=16 if order == 2 else 32, max_area=0.05 if order == 2 else 0.02,
-                            order=order)
-    built = scene.build()
-    built.set_commands([1.5])
-    return built.mesh, 0.02 * np.random.default_rng(order).standard_normal(built.mesh.vertices.shape)
+def coarse_body(order, dim=2):
+    """A coarse body in a random, partly compressed state: the beam with its chamber commanded to 1.5x (2D), or
+    an octant of a spherical shell (3D)."""
+    if dim == 3:
+        mesh = shell_octant(2, 1, order)
+    else:
+        scene = reference_scene(cy=0.15, chamber_points=16 if order == 2 else 32,
+                                max_area=0.05 if order == 2 else 0.02, order=order)
+        mesh = scene.build().mesh
+    return mesh, 0.02 * np.random.default_rng(order).standard_normal(mesh.vertices.shape)
 
 
 def elastic_model(mesh, law):
     model = EnergyModel(mesh.vertices, force_floor=1.0, energy_resolution=1e-12)
-    parameters = law.parameters(np.full(mesh.n_triangles, 1e4), np.full(mesh.n_triangles, 0.45))
-    return model, model.add(Elasticity(model.config, mesh.triangles, law, parameters))
+    parameters = law.parameters(np.full(mesh.n_elements, 1e4), np.full(mesh.n_elements, 0.45))
+    return model, model.add(Elasticity(model.config, mesh.elements, law, parameters))
 
 
+@pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("order", [1, 2])
 @pytest.mark.parametrize("law", [*LAWS.values(), JacobiNeoHookean], ids=[*LAWS.keys(), "jacobi_neo_hookean"])
-def test_elastic_term_energy_gradient_and_hessian_match_finite_differences(law, order):
-    mesh, u = coarse_body(order)
+def test_elastic_term_energy_gradient_and_hessian_match_finite_differences(law, order, dim):
+    mesh, u = coarse_body(order, dim)
     model, term = elastic_model(mesh, law)
     model.set_displacements(u)
     g = term.gradient().ravel()
@@ -201,9 +207,10 @@ def test_elastic_term_energy_gradient_and_hessian_match_finite_differences(law, 
     assert np.linalg.eigvalsh(projected).min() > -1e-9 * np.abs(projected).max()
 
 
+@pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("order", [1, 2])
-def test_generic_path_gives_the_analytic_hessian(order):
-    mesh, u = coarse_body(order)
+def test_generic_path_gives_the_analytic_hessian(order, dim):
+    mesh, u = coarse_body(order, dim)
     (model, analytic), (jacobi_model, jacobi) = elastic_model(mesh, StableNeoHookean), elastic_model(mesh, JacobiNeoHookean)
     model.set_displacements(u)
     jacobi_model.set_displacements(u)

@@ -28,6 +28,7 @@ from taichi_pneuma.fem.geometry import (
     Roller,
     RoundedRectangle,
 )
+from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface
 from taichi_pneuma.io.scenefile import key_reference, read_scene
 from taichi_pneuma.io.sceneformat import scene_data
 from taichi_pneuma.scene import ChamberControl, Material, Region, Scene
@@ -222,7 +223,8 @@ def covering_scenes() -> list[Scene]:
                                                           (("c", Ellipse((0.0, 0.0), (0.2, 0.1))),)))
     kinds = [dataclasses.replace(core, increments=4, controls=(ChamberControl(ChamberSchedule(kind(), ((4, 2.0),))),))
              for kind in set(KINDS.values())]  # every registered chamber kind (tests register more), with its defaults
-    return [every, boxed, polygon, *kinds]
+    solid = dataclasses.replace(core, geometry=MeshGeometry(MeshBody("beam_3d.msh"), (("main", MeshSurface("chamber")),)))
+    return [every, boxed, polygon, *kinds, solid]
 
 
 def key_paths(node, path=""):

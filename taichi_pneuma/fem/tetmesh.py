@@ -180,12 +180,13 @@ def closure(name: str, vertices: np.ndarray, wall: np.ndarray, rollers) -> Closu
 
 
 def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndarray], boundary: np.ndarray | None = None,
-             regions: np.ndarray | None = None, order: int = 1, clamp: PointSet = PointSet("left"),
+             regions: np.ndarray | None = None, order: int = 1, clamp: PointSet | None = PointSet("left"),
              tip: PointSet = PointSet("right"), rollers=()) -> TetMesh:
     """The TetMesh of plain arrays (module docstring): vertices (n, 3); tets (m, 4) or (m, 10); chambers: name ->
     its wall's triangles (f, 3) (or (f, 6): the first three columns are used), in the scene's order;
     boundary: the outer boundary's triangles (None: every boundary facet on no chamber wall); regions: (m,)
-    region tags; order 1 or 2; the clamp, the tip and the rollers select their nodes."""
+    region tags; order 1 or 2; the clamp (None: no node clamped, e.g. a body held by rollers alone), the tip and
+    the rollers select their nodes."""
     vertices = np.asarray(vertices, dtype=np.float64)
     tets = np.asarray(tets)
     require(vertices.ndim == 2 and vertices.shape[1] == 3 and len(vertices) >= 4 and np.isfinite(vertices).all(),
@@ -233,6 +234,7 @@ def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndar
         walls.append(wall)
         origins.append(closure(name, vertices, wall, rollers))
     outer = surface[facets_of(given[-1], "boundary")] if boundary is not None else surface[~taken]
-    return TetMesh(vertices, tets, tuple(walls), np.unique(outer), clamp.select(vertices, "clamp"),
+    pinned = np.zeros(0, dtype=np.int64) if clamp is None else clamp.select(vertices, "clamp")
+    return TetMesh(vertices, tets, tuple(walls), np.unique(outer), pinned,
                    tip.select(vertices, "tip"), tuple(origins),
                    tuple((roller.select(vertices), roller.unit_normal) for roller in rollers), surface, regions)

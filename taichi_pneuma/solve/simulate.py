@@ -232,7 +232,7 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
         for name, term in contact_terms:
             f = -term.gradient()
             vertex_forces += f
-            fx, fy = f.sum(axis=0)
+            fx, fy = f.sum(axis=0)[:2]  # (in 3D only the ground reports contact, along y)
             contact[name] = (float(fx), float(fy), float(np.linalg.norm(f, axis=1).sum()))
         step = StepRecord(i, chambers, *tip_measures(mesh, u),
                           sum(r.iterations for r in records), final.residual, final.converged, cuts,
