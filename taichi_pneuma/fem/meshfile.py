@@ -71,22 +71,27 @@ def read_file(path: str, size: int, modified: int) -> meshio.Mesh:
         raise PneumaInputError(f"mesh file {path!r} cannot be read by meshio ({type(exc).__name__}: {exc})") from None
 
 
+def groups(mesh: meshio.Mesh) -> dict[str, list]:
+    """The file's named groups: name -> per cell block the indices of its cells in the group (meshio's cell sets;
+    for a gmsh 2.2 file, which meshio gives no cell sets, its physical names and each cell's physical tag)."""
+    named = {name: [np.asarray([] if ids is None else ids, dtype=np.int64) for ids in sets]
+             for name, sets in mesh.cell_sets.items() if not name.startswith("gmsh:")}
+    tags = mesh.cell_data.get("gmsh:physical")
+    if not named and tags is not None:
+        named = {name: [np.flatnonzero(block_tags == tag) for block_tags in tags]
+                 for name, (tag, _) in mesh.field_data.items()}
+    return named
+
+
 def cells_of(mesh: meshio.Mesh, types: tuple[str, ...], group: str | None, path: str) -> tuple[np.ndarray, list]:
     """The cells of one of `types` (all of them, or those of the named group), and their blocks' indices."""
     if group is not None:
-        require(group in mesh.cell_sets, f"mesh file {path!r} has no group {group!r} (its groups: "
-                                         f"{', '.join(k for k in mesh.cell_sets if not k.startswith('gmsh:')) or 'none'})")
+        named = groups(mesh)
+        require(group in named, f"mesh file {path!r} has no group {group!r} (its groups: {', '.join(named) or 'none'})")
     blocks = [i for i, block in enumerate(mesh.cells) if block.type in types]
     kinds = {mesh.cells[i].type for i in blocks}
     require(len(kinds) <= 1, f"mesh file {path!r} mixes {' and '.join(sorted(kinds))} cells")
-
-    def rows(i):  # the block's cells in the group (a block outside it may have None)
-        if group is None:
-            return slice(None)
-        ids = mesh.cell_sets[group][i]
-        return np.zeros(0, dtype=np.int64) if ids is None else np.asarray(ids, dtype=np.int64)
-
-    parts = [mesh.cells[i].data[rows(i)] for i in blocks]
+    parts = [mesh.cells[i].data if group is None else mesh.cells[i].data[named[group][i]] for i in blocks]
     if not parts:
         return np.zeros((0, 0), dtype=np.int64), blocks
     return np.vstack(parts).astype(np.int64), blocks
