@@ -1,6 +1,7 @@
 """3D bodies from mesh files (meshio formats, groups by name) through scene files, the API and the command line;
 their result files: VTU tetrahedra (4- and 10-node) with the chamber walls, history, npz, summary."""
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -13,7 +14,8 @@ import taichi_pneuma as tp
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.geometry import Ellipse, Geometry, Rectangle, Roller
-from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface
+from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface, write_mesh
+from taichi_pneuma.fem.tetmesh import REVERSED
 from taichi_pneuma.io.vtk import VtkSeries
 
 SCENES = Path(__file__).resolve().parents[1] / "assets" / "scenes"
@@ -28,21 +30,11 @@ point = [0.0, 0.0, 0.8]
 """
 
 
-def write_msh(path, mesh, file_format="gmsh22"):
-    """The mesh's tetrahedra (group "body") and its first chamber's wall ("chamber") written inside out, as gmsh
-    2.2 (physical groups) or Abaqus (element sets)."""
-    tets, walls = ("tetra", "triangle") if mesh.order == 1 else ("tetra10", "triangle6")
-    cells = [(walls, mesh.chambers[0][:, [0, 2, 1, 5, 4, 3][:mesh.chambers[0].shape[1]]]), (tets, mesh.elements)]
-    if file_format == "abaqus":
-        none = np.zeros(0, dtype=int)
-        sets = {"chamber": [np.arange(len(mesh.chambers[0])), none], "body": [none, np.arange(mesh.n_elements)]}
-        meshio.write(path, meshio.Mesh(mesh.vertices, cells, cell_sets=sets), file_format="abaqus")
-        return path
-    tags = [np.full(len(mesh.chambers[0]), 2), np.full(mesh.n_elements, 1)]
-    meshio.write(path, meshio.Mesh(mesh.vertices, cells, cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags},
-                                   field_data={"body": np.array([1, 3]), "chamber": np.array([2, 2])}),
-                 file_format=file_format, binary=False)
-    return path
+def write_msh(path, mesh):
+    """The mesh (tetrahedra: group "body"), its chamber wall turned inside out (group "chamber"), as write_mesh
+    writes it (gmsh 2.2 or Abaqus by the file's suffix)."""
+    return write_mesh(path, dataclasses.replace(mesh, chambers=(mesh.chambers[0][:, REVERSED[mesh.chambers[0].shape[1]]],)),
+                      ("chamber",))
 
 
 def scene_text(mesh_file, order=1, steps=2, more=""):
@@ -70,7 +62,7 @@ def test_a_mesh_file_reads_back_to_the_mesh_it_was_written_from(tmp_path, order,
     VTK's once read) and read as they are, from gmsh 2.2 physical groups or Abaqus element sets (gmsh 4.1: the
     shipped scene); the chamber wall written inside out comes back oriented out of the cavity."""
     mesh, _ = extruded_beam(0.1, order, chamber_points=16)
-    path = write_msh(tmp_path / ("beam.inp" if file_format == "abaqus" else "beam.msh"), mesh, file_format)
+    path = write_msh(tmp_path / ("beam.inp" if file_format == "abaqus" else "beam.msh"), mesh)
     geometry = MeshGeometry(MeshBody(str(path)), (("main", MeshSurface("chamber")),), order, rollers=mesh_rollers())
     read = geometry.mesh()
     assert np.array_equal(read.vertices, mesh.vertices) and np.array_equal(read.elements, mesh.elements)
@@ -225,3 +217,26 @@ def test_the_api_simulates_and_saves_a_3d_scene(tmp_path):
     written = result.save(tmp_path / "out")
     assert {p.name for p in written} >= {"beam3d_history.csv", "beam3d_states.npz", "beam3d_plot.png",
                                          "beam3d_scene.toml", "beam3d_summary.json", "beam3d.pvd"}
+
+
+def test_a_3d_material_region_is_a_box_of_six_numbers(tmp_path):
+    mesh, _ = extruded_beam(0.2, chamber_points=8)
+    write_msh(tmp_path / "beam.msh", mesh)
+    (tmp_path / "s.toml").write_text(scene_text("beam.msh", more="\n[material]\nregions = [{ box = [0, -1, 0, 2, 1, 1], E = 5e4 }]\n"))
+    built = tp.load_scene(tmp_path / "s.toml").build()
+    youngs, _ = built.scene.element_moduli(built.mesh)
+    inside = built.mesh.vertices[built.mesh.elements].mean(axis=1)[:, 0] >= 0
+    assert np.all(youngs[inside] == 5e4) and np.all(youngs[~inside] == 1e4) and inside.any() and not inside.all()
+    with pytest.raises(PneumaInputError, match="must have 6 numbers on this 3D body"):
+        built.scene.with_value("material.regions[0].box", [0, -1, 2, 1]).build()
+
+
+def test_a_mesh_past_the_element_limit_is_refused_before_any_work(tmp_path, capsys):
+    mesh, _ = extruded_beam(0.2, chamber_points=8)
+    write_msh(tmp_path / "beam.msh", mesh)
+    (tmp_path / "s.toml").write_text(scene_text("beam.msh", order=2))
+    out = tmp_path / "out"
+    assert main(["--scene", str(tmp_path / "s.toml"), "--no-video", "--max-triangles", "100", "--out", str(out)]) == 2
+    error = capsys.readouterr().err
+    assert f"the mesh has {mesh.n_elements} quadratic tetrahedra, counted 8 times" in error
+    assert "the limit is 100 elements (--max-triangles raises it)" in error and not (out / "s_history.csv").exists()

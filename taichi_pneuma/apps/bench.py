@@ -1,7 +1,7 @@
 """What accuracy costs in time: start-up, timing breakdown, solver backends, accuracy-vs-time study (P1 and P2),
-near-incompressible convergence, scaling.
+near-incompressible convergence, scaling, 3D (solid).
 
-    python -m taichi_pneuma.apps.bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling]
+    python -m taichi_pneuma.apps.bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling,solid]
                                        [--out benchmarks/results]
 
 Every section prints a Markdown table and saves it (bench_<section>.md, .json) under --out, headed
@@ -20,6 +20,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from datetime import date
 from pathlib import Path
 
@@ -27,15 +28,20 @@ import numpy as np
 
 from .. import runtime
 from ..errors import PneumaInputError, require
+from ..fem.geometry import Roller
+from ..fem.layered import spherical_shell_octant
+from ..fem.tetmesh import tet_mesh
 from ..io.output import prepare_directory, save_json, save_text, write_atomic
 from ..io.scenefile import load_scene
-from ..scene import reference_scene
+from ..materials import StableNeoHookean
+from ..scene import ChamberControl, Material, Scene, reference_scene
 from ..solve.linsolve import BACKENDS, FixedPattern, make_backend
 from ..solve.newton import NewtonOptions
-from ..solve.schedule import Schedule, area_ramp
+from ..solve.schedule import ChamberSchedule, Schedule, area_ramp
 from ..solve.simulate import run_schedule
+from ..terms import Elasticity
 
-SECTIONS = ("startup", "breakdown", "backends", "accuracy", "incompressible", "scaling")
+SECTIONS = ("startup", "breakdown", "backends", "accuracy", "incompressible", "scaling", "solid")
 REFERENCE_TUTORIAL_SECONDS = 25.0  # SPEC.md: the NumPy/SciPy tutorial's cy = 0.15 ramp on this kind of machine
 PHASES = ("gradient", "hessian", "assemble", "factorize", "solve", "line_search")
 
@@ -312,6 +318,82 @@ def scaling() -> tuple[str, dict]:
     return table + f"\nfitted: time per iteration ~ vertices^{exponent:.2f}\n", {"runs": data, "exponent": exponent}
 
 
+@dataclass(frozen=True)
+class Meshed:
+    """A scene geometry already meshed (a TetMesh and its one chamber), for timing 3D solves."""
+
+    ready: object
+    chambers: tuple = (("cavity", None),)
+
+    def mesh(self):
+        return self.ready
+
+
+def octant(divisions: int, layers: int, order: int) -> Scene:
+    """A pressurised octant of the thick spherical shell 1 <= r <= 2 (layered.py), closed by its three symmetry
+    planes; pressure 0 -> 0.05 E in 3 increments."""
+    vertices, tets, wall = spherical_shell_octant(1.0, 2.0, divisions, layers)
+    mesh = tet_mesh(vertices, tets, {"cavity": wall}, order=order, clamp=None,
+                    rollers=tuple(Roller(tuple(n), (0.0, 0.0, 0.0)) for n in np.eye(3)))
+    return Scene(Meshed(mesh), (ChamberControl(ChamberSchedule("pressure", ((3, 500.0),))),), 3, Material(1e4, 0.45))
+
+
+def solid() -> tuple[str, dict]:
+    """3D: time per Newton iteration and its parts (the linear solve's share), linear and quadratic tetrahedra,
+    Taichi's LLT and CHOLMOD; the elastic Hessian with the analytic eigensystem against the Jacobi one."""
+    rows, data = [], []
+    for label, divisions, layers, order in (("P1", 16, 6, 1), ("P1", 24, 12, 1), ("P2", 12, 6, 2)):
+        built = octant(divisions, layers, order).build()
+        mesh = built.mesh
+        for backend in ("taichi", "cholespy"):
+            options = NewtonOptions(linear_solver=backend)
+            run_schedule(built, Schedule(1, (ChamberSchedule("pressure", ((1, 5.0),)),)), options)  # compile, analyse
+            start = time.perf_counter()
+            result = run_schedule(built, options=options)
+            seconds = time.perf_counter() - start
+            phases = collections.Counter()
+            for solve in result.solves:
+                phases.update(solve.phase_seconds)
+            iterations = int(result.history["iterations"].sum())
+            per = {p: 1e3 * phases[p] / iterations for p in PHASES}
+            linear = per["factorize"] + per["solve"]
+            record = {"elements": f"{label} tetrahedra", "tetrahedra": mesh.n_elements, "dofs": 3 * mesh.n_vertices,
+                      "backend": backend, "iterations": iterations, "ms_per_iteration": 1e3 * seconds / iterations,
+                      "phases_ms": per, "linear_solve_share": linear / (1e3 * seconds / iterations)}
+            data.append(record)
+            rows.append([f"{label}, {mesh.n_elements}", 3 * mesh.n_vertices, backend, iterations,
+                         f"{record['ms_per_iteration']:.0f}", *(f"{per[p]:.1f}" for p in PHASES),
+                         f"{100 * record['linear_solve_share']:.0f} %"])
+            print(f"  solid: {record}", file=sys.stderr, flush=True)
+    table = markdown(["tetrahedra", "DOFs", "backend", "iterations", "ms / iteration", *(f"{p} (ms)" for p in PHASES),
+                      "linear solve share"], rows)
+    eigen_rows = []
+    for label, divisions, layers, order in (("P1", 24, 12, 1), ("P2", 12, 6, 2)):
+        built = octant(divisions, layers, order).build()
+        elastic = built.elastic
+        times = {}
+        for name, law in (("analytic", StableNeoHookean), ("Jacobi", JacobiNeoHookean)):
+            term = Elasticity(built.model.config, built.mesh.elements, law, elastic.parameters)
+            term.hessian_values(True)
+            start = time.perf_counter()
+            for _ in range(5):
+                term.hessian_values(True)
+            times[name] = (time.perf_counter() - start) / 5
+        n = built.mesh.n_elements
+        eigen_rows.append([f"{label}, {n}", f"{1e3 * times['analytic']:.1f} ({1e6 * times['analytic'] / n:.1f} us/element)",
+                           f"{1e3 * times['Jacobi']:.1f} ({1e6 * times['Jacobi'] / n:.1f} us/element)",
+                           f"{times['Jacobi'] / times['analytic']:.1f}x"])
+    table += "\nThe projected elastic Hessian, analytic eigensystem against Jacobi on the 9 x 9 d2psi/dF2:\n\n"
+    table += markdown(["tetrahedra", "analytic (ms)", "Jacobi (ms)", "ratio"], eigen_rows)
+    return table, {"runs": data}
+
+
+class JacobiNeoHookean(StableNeoHookean):
+    """Stable neo-Hookean without its analytic eigensystem: the generic Jacobi path (timing only)."""
+
+    analytic_dims = ()
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.bench", description=__doc__.split("\n")[0])
     parser.add_argument("--sections", default=",".join(SECTIONS), help=f"comma-separated, from {', '.join(SECTIONS)}")
@@ -332,7 +414,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"## {section}", flush=True)
         table, data = accuracy(out) if section == "accuracy" else {"startup": startup, "breakdown": breakdown,
                                                                     "backends": backends, "incompressible": incompressible,
-                                                                    "scaling": scaling}[section]()
+                                                                    "scaling": scaling, "solid": solid}[section]()
         print(heading + table, flush=True)
         save_text(out / f"bench_{section}.md", heading + table)
         save_json(out / f"bench_{section}.json", {"machine": machine(), "arch": args.arch, **{"data": data}})

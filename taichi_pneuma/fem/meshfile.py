@@ -9,7 +9,8 @@ the body's cells and each chamber's wall given by named groups (gmsh's physical 
                                region tags are the tetrahedra's gmsh physical tags where the file has them
 
 A file is read whole, so it may be at most MAX_MESH_BYTES; whatever meshio cannot read, and a file
-without tetrahedra or without a named group, is one PneumaInputError naming the file.
+without tetrahedra or without a named group, is one PneumaInputError naming the file. write_mesh() writes a
+TetMesh (made in Python, e.g. by tetmesh.tet_mesh from a mesher's arrays) as such a file.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from __future__ import annotations
 import functools
 import os
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import meshio
 import numpy as np
@@ -149,3 +151,23 @@ class MeshGeometry:
                             tip=self.tip, rollers=self.rollers)
         except PneumaInputError as exc:
             raise PneumaInputError(f"mesh file {path!r}: {exc}") from None
+
+
+def write_mesh(path, mesh: TetMesh, names: tuple[str, ...]) -> Path:
+    """Write the mesh's tetrahedra (group "body") and each chamber's wall (a group named after the chamber, in the
+    order of names) as gmsh 2.2 (.msh, physical groups) or Abaqus (.inp, element sets): a file MeshGeometry reads
+    back to the same mesh."""
+    path = Path(path)
+    require(path.suffix in (".msh", ".inp"), f"{path}: write_mesh writes .msh (gmsh 2.2) or .inp (Abaqus) files")
+    walls = "triangle" if mesh.order == 1 else "triangle6"
+    cells = [(walls, wall) for wall in mesh.chambers] + [("tetra" if mesh.order == 1 else "tetra10", mesh.elements)]
+    if path.suffix == ".inp":
+        sets = {name: [np.arange(len(data)) if i == j else np.zeros(0, dtype=np.int64) for j, (_, data) in
+                       enumerate(cells)] for i, name in enumerate((*names, "body"))}
+        meshio.write(path, meshio.Mesh(mesh.vertices, cells, cell_sets=sets), file_format="abaqus")
+    else:
+        tags = [np.full(len(data), i + 2) for i, (_, data) in enumerate(cells[:-1])] + [np.ones(mesh.n_elements, int)]
+        groups = {name: np.array([i + 2, 2]) for i, name in enumerate(names)} | {"body": np.array([1, 3])}
+        meshio.write(path, meshio.Mesh(mesh.vertices, cells, cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags},
+                                       field_data=groups), file_format="gmsh22", binary=False)
+    return path

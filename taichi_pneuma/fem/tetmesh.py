@@ -201,6 +201,9 @@ def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndar
     names = list(chambers)
     given = [np.asarray(chambers[name], dtype=np.int64).reshape(-1, np.shape(chambers[name])[-1])[:, :3]
              for name in names] + ([] if boundary is None else [np.asarray(boundary, dtype=np.int64)[:, :3]])
+    for name, faces in zip(names + ["boundary"], given):
+        require(faces.size == 0 or (faces.min() >= 0 and faces.max() < len(vertices)),
+                f"{name}: a triangle names a vertex that does not exist")
     vertices, tets, given = used_nodes(vertices, tets.astype(np.int64), given)
     tets = positively_oriented(vertices, tets)
     if tets.shape[1] == 10:
