@@ -32,7 +32,7 @@ def main(path: Path = OUT) -> None:
     gmsh.model.addPhysicalGroup(3, [tag for _, tag in body], name="body")
     gmsh.model.addPhysicalGroup(2, walls, name="chamber")
     gmsh.option.setNumber("Mesh.MeshSizeMax", SIZE)
-    gmsh.option.setNumber("Mesh.Algorithm", 5)  # Delaunay: the default Frontal-Delaunay leaves the elongated cavity unmeshed
+    gmsh.option.setNumber("Mesh.Algorithm", 5)  # Delaunay (Frontal-Delaunay leaves this elongated cavity unmeshed)
     gmsh.option.setNumber("Mesh.Binary", 0)
     gmsh.model.mesh.generate(3)
     gmsh.write(str(path))

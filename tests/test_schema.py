@@ -223,7 +223,8 @@ def covering_scenes() -> list[Scene]:
                                                           (("c", Ellipse((0.0, 0.0), (0.2, 0.1))),)))
     kinds = [dataclasses.replace(core, increments=4, controls=(ChamberControl(ChamberSchedule(kind(), ((4, 2.0),))),))
              for kind in set(KINDS.values())]  # every registered chamber kind (tests register more), with its defaults
-    solid = dataclasses.replace(core, geometry=MeshGeometry(MeshBody("beam_3d.msh"), (("main", MeshSurface("chamber")),)))
+    mesh_body = MeshGeometry(MeshBody("beam_3d.msh"), (("main", MeshSurface("chamber")),))
+    solid = dataclasses.replace(core, geometry=mesh_body)
     return [every, boxed, polygon, *kinds, solid]
 
 

@@ -130,7 +130,8 @@ def test_every_3d_term_matches_finite_differences(body, order):
     chamber = model.add(AreaControl(1e4).term(config, mesh.chambers[0], "c", order, mesh.wall_origins[0]))
     chamber.set_command(1.4)
     pinned = mesh.tip if body == "prism" else mesh.boundary[:5]
-    others = [model.add(Clamp(config, pinned, 1e3)), model.add(NormalClamp(config, mesh.boundary[::3], (1.0, 2.0, 2.0), 1e3))]
+    others = [model.add(Clamp(config, pinned, 1e3)),
+              model.add(NormalClamp(config, mesh.boundary[::3], (1.0, 2.0, 2.0), 1e3))]
     others += Gravity(2.0, 3.0).terms(config, mesh, mesh.nodal_measures())
     lowest = mesh.vertices[mesh.boundary, 1].min()
     others += [model.add(t) for t in Ground(lowest - 0.02, dhat=0.05, stiffness=10.0).terms(config, mesh, None)]

@@ -436,7 +436,8 @@ def vector(name: str, value) -> tuple[float, ...]:
 def require_box(name: str, box) -> None:
     """Refuse, naming it, a box that is not [x0, y0, x1, y1] (2D) or [x0, y0, z0, x1, y1, z1] (3D) of finite
     numbers with each lower bound below its upper one."""
-    require(shape_of(box) in ((4,), (6,)), f"{name} = {box!r} must be [x0, y0, x1, y1] (or [x0, y0, z0, x1, y1, z1] in 3D)")
+    require(shape_of(box) in ((4,), (6,)),
+            f"{name} = {box!r} must be [x0, y0, x1, y1] (or [x0, y0, z0, x1, y1, z1] in 3D)")
     for v in box:
         require_finite(name, v)
     half = len(box) // 2
@@ -550,7 +551,8 @@ class Geometry:
         require(len(self.chambers) <= MAX_SHAPES, f"{len(self.chambers)} chambers: at most {MAX_SHAPES} are allowed")
         require(len(self.rollers) <= MAX_SHAPES, f"{len(self.rollers)} rollers: at most {MAX_SHAPES} are allowed")
         for roller in self.rollers:
-            require(len(roller.normal) == 2, f"roller normal = {list(roller.normal)!r}: a 2D body's rollers have 2 components")
+            require(len(roller.normal) == 2,
+                    f"roller normal = {list(roller.normal)!r}: a 2D body's rollers have 2 components")
         for name, shape in self.chambers:
             require(callable(getattr(shape, "polygon", None)), f"chamber {name!r}: a {type(shape).__name__} wall needs "
                                                                f"a body from a mesh file (body shape = \"mesh\")")

@@ -168,6 +168,7 @@ def write_mesh(path, mesh: TetMesh, names: tuple[str, ...]) -> Path:
     else:
         tags = [np.full(len(data), i + 2) for i, (_, data) in enumerate(cells[:-1])] + [np.ones(mesh.n_elements, int)]
         groups = {name: np.array([i + 2, 2]) for i, name in enumerate(names)} | {"body": np.array([1, 3])}
-        meshio.write(path, meshio.Mesh(mesh.vertices, cells, cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags},
-                                       field_data=groups), file_format="gmsh22", binary=False)
+        data = {"gmsh:physical": tags, "gmsh:geometrical": tags}
+        meshio.write(path, meshio.Mesh(mesh.vertices, cells, cell_data=data, field_data=groups), file_format="gmsh22",
+                     binary=False)
     return path

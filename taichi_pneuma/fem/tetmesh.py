@@ -152,7 +152,8 @@ def closure(name: str, vertices: np.ndarray, wall: np.ndarray, rollers) -> Closu
     if counts.min() == 2:
         return None
     rim = vertices[np.unique(unique[counts == 1])]
-    planes = [(r.unit_normal, np.asarray(r.point, dtype=np.float64), r.tolerance) for r in rollers if r.point is not None]
+    planes = [(r.unit_normal, np.asarray(r.point, dtype=np.float64), r.tolerance)
+              for r in rollers if r.point is not None]
     on = np.array([np.abs((rim - p) @ n) <= tol for n, p, tol in planes]).reshape(len(planes), len(rim))
     off = ~on.any(axis=0)
     require(not off.any(), f"chamber {name!r}: its wall is open, and its rim at {rim[np.argmax(off)].tolist()} lies "
@@ -179,8 +180,9 @@ def closure(name: str, vertices: np.ndarray, wall: np.ndarray, rollers) -> Closu
     return Closure(origin, projector)
 
 
-def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndarray], boundary: np.ndarray | None = None,
-             regions: np.ndarray | None = None, order: int = 1, clamp: PointSet | None = PointSet("left"),
+def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndarray],
+             boundary: np.ndarray | None = None, regions: np.ndarray | None = None, order: int = 1,
+             clamp: PointSet | None = PointSet("left"),
              tip: PointSet = PointSet("right"), rollers=()) -> TetMesh:
     """The TetMesh of plain arrays (module docstring): vertices (n, 3); tets (m, 4) or (m, 10); chambers: name ->
     its wall's triangles (f, 3) (or (f, 6): the first three columns are used), in the scene's order;

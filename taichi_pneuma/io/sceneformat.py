@@ -84,7 +84,8 @@ def scene_table(scene_class) -> Table:
     """The declaration of a scene file of scene_class (scene.Scene)."""
     hints = typing.get_type_hints(scene_class)
     material_class, region_class, control_class = (item_type(hints[k]) for k in ("material", "regions", "controls"))
-    region = Table({"box": Key(tuple, doc=f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D)"), "E": Key(float, None, "none: material.E"),
+    region = Table({"box": Key(tuple, doc=f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D)"),
+                    "E": Key(float, None, "none: material.E"),
                     "nu": Key(float, None, "none: material.nu")},
                    parts=lambda r: {"box": r.box, "E": r.material.youngs_modulus, "nu": r.material.poisson_ratio},
                    doc="a material for the elements whose centroid lies in box; later regions win")

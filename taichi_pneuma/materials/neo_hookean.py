@@ -14,8 +14,9 @@ With g = dJ/dF = cof F and c = mu + lam (1 - J):
 which in the plane is constant: with vec(F) = (F00, F01, F10, F11), H_J has eigenvalue +1 on
 span{(1,0,0,1), (0,1,-1,0)} and -1 on span{(1,0,0,-1), (0,1,1,0)}.
 
-The eigensystem of M is analytic in 2D and 3D (the fast path). In 2D, mu I - c H_J is mu - c on the first plane and mu + c on the second. Split g = a u_+ + b u_-
-into its parts in the two planes (a, b >= 0, u_+- unit) and let w_+- complete each plane. Then
+The eigensystem of M is analytic in 2D and 3D (the fast path). In 2D, mu I - c H_J is mu - c on the first
+plane and mu + c on the second. Split g = a u_+ + b u_- into its parts in the two planes (a, b >= 0, u_+-
+unit) and let w_+- complete each plane. Then
 
     M = (mu - c) w_+ w_+^T + (mu + c) w_- w_-^T + [u_+ u_-] B [u_+ u_-]^T,
     B = [[mu - c + lam a^2, lam a b], [lam a b, mu + c + lam b^2]],

@@ -133,7 +133,8 @@ class Result:
         """
         out, stem = prepare_directory(directory), stem or self.scene.name
         mesh = self.mesh
-        cells = {"triangles": mesh.elements} if mesh.dim == 2 else {"tetrahedra": mesh.elements, "surface": mesh.surface}
+        cells = ({"triangles": mesh.elements} if mesh.dim == 2 else
+                 {"tetrahedra": mesh.elements, "surface": mesh.surface})
         arrays = dict(positions=self.positions, rest=mesh.vertices, **cells, pinned=mesh.pinned,
                       tip=mesh.tip, boundary=mesh.boundary, chamber_names=np.array(self.chamber_names),
                       **{f"chamber_loop_{i}": loop for i, loop in enumerate(mesh.chambers)},

@@ -9,7 +9,7 @@ so every kernel runs over elements and their quadrature points, whatever the ele
 per triangle or tetrahedron, F constant; P2: three or four). The nodal force is W_q P(F_q) G_qa, and the
 Hessian block of nodes (a, b) is
 
-    W_q sum_jl G_qa,j M_(ij)(kl) G_qb,l,   M = sum over the eigenpairs (lambda_s, v_s) of d2psi/dF2 of lambda_s v_s v_s^T;
+    W_q sum_jl G_qa,j M_(ij)(kl) G_qb,l,   M = sum_s lambda_s v_s v_s^T over the eigenpairs of d2psi/dF2;
 
 the projected Hessian clamps the negative lambda_s to zero at each quadrature point, which equals the
 exact one wherever d2psi/dF2 is already PSD. The law supplies psi, P
