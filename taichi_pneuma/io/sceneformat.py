@@ -59,8 +59,9 @@ TARGET = record(Target, "a pose the tip should reach (inverse control)", tip=Key
 
 
 ROLLER = record(Roller, "a roller support: the nodes' displacement along normal held, tangential motion free",
-                normal=Key(tuple, doc="[nx, ny]"),
-                point=Key(tuple, None, "[x, y]: the nodes within tolerance of the line through it, normal to normal"),
+                normal=Key(tuple, doc="[nx, ny] ([nx, ny, nz] in 3D)"),
+                point=Key(tuple, None, "[x, y]: the nodes within tolerance of the line through it, normal to normal "
+                                       "(3D: [x, y, z], a plane)"),
                 box=Key(tuple, None, f"{BOX}: the nodes in it (instead of point)"), tolerance=Key(float, 1e-6))
 
 
