@@ -4,7 +4,8 @@ either run or stop with one `error:` line, within TIME_BOUND, with no traceback 
 --out.
 
 Each example runs in this process (apps.inflate.main), so its cost is capped: every shipped scene is
-first made cheap (max_area 0.02 and its schedule squeezed into INCREMENTS increments), and the run
+first made cheap (max_area 0.02, or for a mesh-file body a small mesh file, and its schedule squeezed
+into INCREMENTS increments), and the run
 flags (FLAGS) set low resource limits and few Newton iterations, so that a mutation which makes a
 scene big or slow is refused by the resource guards, as any such scene would be. A traceback is an
 exception escaping main(), which fails the example; stderr and warnings are captured per example.
@@ -25,8 +26,10 @@ import pytest
 import tomllib
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
+from solid_meshes import box_with_cavity
 
 from taichi_pneuma.apps.inflate import main
+from taichi_pneuma.fem.meshfile import write_mesh
 
 SCENES = Path(__file__).resolve().parent.parent / "assets" / "scenes"
 INCREMENTS = 3
@@ -45,7 +48,10 @@ EXTRA_KEYS = ["extra", "centre", "Name", "max_area", "E", "ε"]
 def cheap(scene: dict) -> dict:
     """The scene with a coarse mesh and its keyframes squeezed into INCREMENTS increments."""
     scene = copy.deepcopy(scene)
-    scene["mesh"] = {"max_area": 0.02}
+    if scene["body"]["shape"] == "mesh":  # a mesh file's body: a small one instead
+        scene["body"]["file"], scene["mesh"] = str(SMALL_MESH), {}
+    else:
+        scene["mesh"] = {"max_area": 0.02}
     n = scene["schedule"]["increments"]
     scene["schedule"]["increments"] = INCREMENTS
     for chamber in scene["chambers"]:
@@ -54,6 +60,8 @@ def cheap(scene: dict) -> dict:
     return scene
 
 
+MESHES = tempfile.TemporaryDirectory()  # removed when the test process ends
+SMALL_MESH = write_mesh(Path(MESHES.name) / "box.msh", box_with_cavity(), ("chamber",))
 BASES = {path.stem: cheap(tomllib.loads(path.read_text())) for path in sorted(SCENES.glob("*.toml"))}
 
 
