@@ -10,6 +10,10 @@
 Taichi is initialised on the CPU by the first simulate() unless tp.init("cuda"), ... chose a backend.
 """
 
+from .signals import quiet_while_loading
+
+quiet_while_loading()  # a command's Ctrl-C while the modules below load: one line, no traceback
+
 from .api import Result, simulate
 from .errors import PneumaInputError
 from .io.scenefile import load_scene

@@ -1,7 +1,8 @@
-"""Resource guards: a run whose size would exhaust memory or time is refused before any work, in one
-line naming the estimate, the limit and the command-line flag that raises it.
+"""Resource guards: a run whose size would exhaust memory or time is refused, in one line naming the
+estimate, the limit and the command-line flag that raises it; before any work where an estimate can
+tell, and by a budget the mesher and the terms keep to where it cannot.
 
-The mesh size is estimated before meshing, from a fit to Triangle's output for 'pq' meshes
+Before meshing, the mesh size is estimated from a fit to Triangle's output for 'pq' meshes
 (48 meshes: the shipped scenes and the reference beam, small and large chambers, 12 to 1800 outline
 points, max_area 1e-4 to 0.1; the estimate lies between 0.95 and 1.54 times the real count):
 
@@ -12,22 +13,88 @@ at 35k-114k triangles, CPU backend), plus the stored states: positions (and, wit
 forces) of every step, 16 bytes per vertex each. Each uniform refinement multiplies the triangles by 4;
 a quadratic triangle counts as 4 linear ones (it has as many nodes, and a Hessian block 4 times larger).
 A 3D geometry (dim = 3) gives its own size_estimate() (tetrahedra, nodes), counted against the same limit.
+Self-contact holds a pair per (wall node, wall edge not incident to it): k (k - 2) for a wall of k nodes,
+quadratic in the wall; a pair costs about BYTES_PER_PAIR (its indices, its 36-entry Hessian block and
+the assembled matrix's share: 2.5-2.7 kB measured at 0.25M-4M pairs), counted as BYTES_PER_PAIR /
+BYTES_PER_TRIANGLE triangles.
+
+The estimate cannot see what quality meshing does to thin features: a strip of width w and length l
+needs about l / w triangles across any max_area (Triangle's minimum angle forces triangles as small as
+the strip is wide). So the mesher runs under a budget (budget(), set by the commands for their run):
+Triangle is given at most element_cap() Steiner points (its S switch) and stops there, and a mesh
+that reached the cap, or has more triangles than the budget, is refused (check_mesh); the terms check
+what they allocate against it too (check_pairs, before self-contact allocates its pairs). A 3D mesher
+meets the same budget through element_cap(weight) and check_mesh. Without a budget (library use that
+sets none) nothing is capped.
 """
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+from contextvars import ContextVar
+
 from .errors import require
-from .fem.geometry import signed_area
 
 MAX_TRIANGLES = 200_000
 MAX_INCREMENTS = 2_000
 MAX_FRAME_PIXELS = 3840 * 2160
 BYTES_PER_TRIANGLE = 4_000
+BYTES_PER_PAIR = 2_500
 BYTES_PER_TETRAHEDRON = 6_000
+
+_budget: ContextVar[int | None] = ContextVar("triangle budget", default=None)
+
+
+@contextmanager
+def budget(max_triangles: int = MAX_TRIANGLES):
+    """Mesh and allocate under a budget of max_triangles linear triangles (their worth of memory) in the block."""
+    token = _budget.set(int(max_triangles))
+    try:
+        yield
+    finally:
+        _budget.reset(token)
+
+
+def element_cap(weight: float = 1.0) -> int | None:
+    """The most elements (or points) a mesher may make in the active budget, each counting `weight` linear
+    triangles (a quadratic triangle 4, each uniform refinement 4 times more); None without a budget."""
+    limit = _budget.get()
+    return None if limit is None else max(1, int(limit // weight))
+
+
+def refusal(what: str, triangles: float, limit: int) -> str:
+    return (f"{what}: about {triangles:.3g} triangles' worth, {BYTES_PER_TRIANGLE * triangles / 1e9:.3g} GB; the "
+            f"limit is {limit} triangles (--max-triangles raises it)")
+
+
+def check_mesh(elements: int, weight: float, how: str, stopped_at: int | None = None) -> None:
+    """Refuse (in the active budget) a mesh whose elements, each worth `weight` triangles, pass the budget,
+    or that its mesher (how: "Triangle") stopped at its cap of stopped_at points before finishing."""
+    limit = _budget.get()
+    if limit is None:
+        return
+    require(stopped_at is None, f"the mesh needs more than {limit} triangles: {how} stopped at its cap of "
+                                f"{stopped_at} added points (thin features or narrow gaps need triangles as small "
+                                f"as they are wide, whatever max_area is); the limit is {limit} triangles "
+                                f"(--max-triangles raises it)")
+    require(elements * weight <= limit, refusal(f"the mesh has {elements} elements", elements * weight, limit))
+
+
+def check_pairs(pairs: int, what: str) -> None:
+    """Refuse (in the active budget) a term about to allocate `pairs` contact pairs past the budget's memory."""
+    limit = _budget.get()
+    worth = pairs * BYTES_PER_PAIR / BYTES_PER_TRIANGLE
+    require(limit is None or worth <= limit, refusal(f"{what} would hold {pairs} point-edge pairs", worth, limit))
+
+
+def wall_pairs(points: list[int]) -> int:
+    """Point-edge pairs of closed walls of these node counts: each node with each edge not incident to it."""
+    return sum(k * (k - 2) for k in points)
 
 
 def check_scene(scene, max_triangles: int = MAX_TRIANGLES, max_increments: int = MAX_INCREMENTS) -> None:
-    """Refuse (PneumaInputError) a scene whose estimated mesh or increment count is past the limits."""
+    """Refuse (PneumaInputError) a scene whose estimated mesh (its terms' pairs included) or increment count
+    is past the limits."""
     geometry = scene.geometry
     if getattr(geometry, "dim", 2) == 3:
         check_solid(scene, max_triangles)
@@ -52,21 +119,28 @@ def check_solid(scene, max_elements: int) -> None:
 
 
 def check_planar(scene, max_triangles: int) -> None:
-    """A 2D scene: the triangles estimated from its outlines (module docstring)."""
+    """A 2D scene: the triangles estimated from its outlines and its terms' pairs (module docstring)."""
+    from .fem.geometry import signed_area
+
     geometry = scene.geometry
     loops = [geometry.body.polygon()] + [shape.polygon() for _, shape in geometry.chambers]
     area = abs(signed_area(loops[0])) - sum(abs(signed_area(loop)) for loop in loops[1:])
     points = sum(len(loop) for loop in loops)
+    nodes_per_point = 2 ** geometry.refinements * geometry.order
+    walls = [len(loop) * nodes_per_point for loop in loops[1:]]
+    pairs = sum(effect.pairs(walls) for effect in scene.effects)
     triangles = (1.6 * area / geometry.max_area + 3 * points) * 4 ** geometry.refinements
     linear = triangles * (4 if geometry.order == 2 else 1)
+    worth = linear + pairs * BYTES_PER_PAIR / BYTES_PER_TRIANGLE
     vertices = linear / 2 + points
     per_step = 2 if any(e.contact for e in scene.effects) else 1
-    memory = BYTES_PER_TRIANGLE * linear + 16 * per_step * vertices * (scene.increments + 1)
+    memory = BYTES_PER_TRIANGLE * worth + 16 * per_step * vertices * (scene.increments + 1)
     quadratic = " quadratic triangles, counted 4 times" if geometry.order == 2 else " triangles"
-    require(linear <= max_triangles,
+    contact = f" and {pairs} self-contact pairs (walls of {max(walls)} nodes)" if pairs else ""
+    require(worth <= max_triangles,
             f"the mesh would have about {triangles:.3g}{quadratic} (meshed area {area:.4g} / max_area "
-            f"{geometry.max_area:.3g}, {points} outline points) and need about {memory / 1e9:.3g} GB; the limit is "
-            f"{max_triangles} triangles (--max-triangles raises it)")
+            f"{geometry.max_area:.3g}, {points} outline points){contact} and need about {memory / 1e9:.3g} GB; "
+            f"the limit is {max_triangles} triangles (--max-triangles raises it)")
 
 
 def check_frame(width: int, height: int, max_pixels: int = MAX_FRAME_PIXELS) -> None:

@@ -19,7 +19,9 @@ from .errors import require, require_finite
 from .fem.geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
 from .io import sceneformat
 from .io.output import check_stem
-from .materials import StableNeoHookean
+from .io.units import UNITLESS, Units
+from .materials import IsochoricMaterial, StableNeoHookean
+from .materials.presets import PresetMaterial
 from .solve.model import EnergyModel
 from .solve.schedule import ChamberSchedule, Schedule, area_ramp
 from .terms import Clamp, Elasticity, NormalClamp
@@ -42,6 +44,15 @@ class Material:
         require(e > 0, f"E = {self.youngs_modulus!r} must be > 0")
         require(-1 < nu < 0.5, f"nu = {self.poisson_ratio!r} must lie in (-1, 0.5)")
 
+    def law_parameters(self, units: Units) -> tuple[type, np.ndarray]:
+        """The law and its parameter vector (E and nu are in the scene's units already)."""
+        return StableNeoHookean, StableNeoHookean.parameters(self.youngs_modulus, self.poisson_ratio)[0]
+
+
+# A body's material: the stable neo-Hookean one of (E, nu), a form of the isochoric law with its coefficients, or
+# a preset; each gives law_parameters(units)
+AnyMaterial = Material | IsochoricMaterial | PresetMaterial
+
 
 @dataclass(frozen=True)
 class Region:
@@ -49,7 +60,7 @@ class Region:
     later regions win."""
 
     box: tuple[float, float, float, float]
-    material: Material
+    material: AnyMaterial
 
     def __post_init__(self):
         require_box("box", self.box)
@@ -84,17 +95,19 @@ class ChamberControl:
 
 @dataclass(frozen=True)
 class Scene:
-    """A whole scene. controls: one ChamberControl per chamber of geometry, in the same order."""
+    """A whole scene. controls: one ChamberControl per chamber of geometry, in the same order; units: the
+    system its numbers are in (io/units.py; unitless by default), into which presets are converted."""
 
     geometry: Geometry
     controls: tuple[ChamberControl, ...]
     increments: int
-    material: Material = field(default_factory=Material)
+    material: AnyMaterial = field(default_factory=Material)
     regions: tuple[Region, ...] = ()
     clamp_stiffness: float = 1e9
     effects: tuple[Effect, ...] = ()
     name: str = "scene"
     targets: tuple = ()  # targets.Target poses for inverse control (apps.reach), in order
+    units: Units = UNITLESS
 
     def __post_init__(self):
         check_stem(self.name)  # the result files are named after the scene
@@ -105,6 +118,7 @@ class Scene:
         kinds = [e.name for e in self.effects]
         require(len(set(kinds)) == len(kinds), f"effects {kinds!r} name one effect twice")
         self.schedule  # validates the increments against the keyframes
+        self.law_parameters()  # resolves the presets, checks that the body has one law
 
     def to_toml(self) -> str:
         """This scene as a scene file (TOML); scenefile.load_scene reads it back to an equal scene."""
@@ -127,19 +141,28 @@ class Scene:
     def chamber_names(self) -> list[str]:
         return [name for name, _ in self.geometry.chambers]
 
-    def element_moduli(self, mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
-        """Young's modulus and Poisson's ratio of every element (base material, then regions in order)."""
-        centroids = mesh.vertices[mesh.elements].mean(axis=1)
-        e = np.full(mesh.n_elements, self.material.youngs_modulus)
-        nu = np.full(mesh.n_elements, self.material.poisson_ratio)
-        for region in self.regions:
-            inside = region.contains(centroids)
-            e[inside], nu[inside] = region.material.youngs_modulus, region.material.poisson_ratio
-        return e, nu
+    def law_parameters(self) -> tuple[type, list[np.ndarray]]:
+        """The body's law and the parameter vector of the material and of each region, in the scene's units
+        (PneumaInputError naming the region whose law differs: a body has one law)."""
+        law, base = self.material.law_parameters(self.units)
+        rows = [base]
+        for i, region in enumerate(self.regions):
+            other, row = region.material.law_parameters(self.units)
+            require(other is law, f"material.regions[{i}]: its law {other.name!r} is not the body's {law.name!r}: a "
+                                  f"body has one law (E and nu: stable_neo_hookean; law = neo_hookean, mooney_rivlin, "
+                                  f"yeoh and presets: isochoric_polynomial)")
+            rows.append(row)
+        return law, rows
 
     def element_material(self, mesh: Mesh) -> tuple[type, np.ndarray]:
-        """The material law of the body and its parameter vector for every element, (m, p)."""
-        return StableNeoHookean, StableNeoHookean.parameters(*self.element_moduli(mesh))
+        """The material law of the body and its parameter vector for every element, (m, p): the base material's,
+        then each region's for the elements whose centroid it contains, in order."""
+        law, (base, *rows) = self.law_parameters()
+        centroids = mesh.vertices[mesh.elements].mean(axis=1)
+        parameters = np.tile(base, (mesh.n_elements, 1))
+        for region, row in zip(self.regions, rows):
+            parameters[region.contains(centroids)] = row
+        return law, parameters
 
     def build(self) -> "BuiltScene":
         """Mesh the geometry and instantiate exactly the terms this scene names."""

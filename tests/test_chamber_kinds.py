@@ -1,6 +1,7 @@
-"""Chamber kinds: each kind's energy, gradient, Hessian and -d(residual)/d(command) against finite
-differences; the closed gas kind of tests/closed_gas.py (registered there, no other module edited) through
-scene files, the ramp, sensitivities, inverse control's units, the plots and the failure message; and
+"""Chamber kinds: every registered kind's energy, gradient, Hessian and -d(residual)/d(command) against finite
+differences; the gas kinds (closed gas, syringe) against their gas laws along ramps, their sensitivities
+against finite differences of re-solves, a syringe twin through inverse control, the gas volume kept
+positive by max_step; through scene files, inverse control's units, the plots and the failure message; and
 every kind's validation naming the value."""
 
 import dataclasses
@@ -8,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from closed_gas import ClosedGas
 from test_terms import dense_hessian, fd_gradient, fd_hessian, random_state
 
-from taichi_pneuma.control.inverse import Reacher, command_bounds
+from taichi_pneuma.control.inverse import Reacher, ReachOptions, body_length, command_bounds
+from taichi_pneuma.control.targets import Target
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.io.scenefile import load_scene
 from taichi_pneuma.render.plots import command_axis
@@ -20,11 +21,27 @@ from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.solve.schedule import ChamberSchedule
 from taichi_pneuma.solve.sensitivity import sensitivity
 from taichi_pneuma.solve.simulate import describe_commands, run_schedule, settle, tip_measures
-from taichi_pneuma.terms.chambers import AreaControl, ChamberKind, PressureControl, register
+from taichi_pneuma.terms.chambers import (
+    KINDS,
+    AreaControl,
+    ChamberKind,
+    ClosedGas,
+    PressureControl,
+    Syringe,
+    register,
+)
 
 ATMOSPHERE = 1e3  # a soft gas for the reference beam (E = 1e4): gauge pressures of a few hundred
-KINDS = {"area": (AreaControl(), 1.5), "pressure": (PressureControl(), 300.0),
-         "closed_gas": (ClosedGas(ATMOSPHERE), 1.5)}  # kind, a command that inflates the chamber
+SYRINGE = Syringe(ATMOSPHERE, syringe_volume=1.0, dead_volume=0.3)
+EXAMPLES = {  # kind, a command that inflates the coarse beam's chamber (rest area 0.57)
+    "area": (AreaControl(), 1.5), "pressure": (PressureControl(), 300.0), "closed_gas": (ClosedGas(ATMOSPHERE), 0.6),
+    "adiabatic_gas": (ClosedGas(ATMOSPHERE, gamma=1.4), 0.6), "syringe": (SYRINGE, 0.6),
+    "adiabatic_syringe": (dataclasses.replace(SYRINGE, gamma=1.4), 0.6)}
+
+
+def test_every_registered_kind_has_an_example():
+    """The checks below run over EXAMPLES: a newly registered kind must be added to it."""
+    assert {kind.name for kind in KINDS.values()} == {kind.name for kind, _ in EXAMPLES.values()}
 
 
 def kind_scene(kind, keyframes, **coarse):
@@ -34,19 +51,19 @@ def kind_scene(kind, keyframes, **coarse):
                                increments=int(keyframes[-1][0]))
 
 
-@pytest.fixture(scope="module", params=list(KINDS))
+@pytest.fixture(scope="module", params=list(EXAMPLES))
 def inflated(request):
     """A coarse beam whose chamber of each kind is commanded to inflate, in a random state."""
-    kind, command = KINDS[request.param]
+    kind, command = EXAMPLES[request.param]
     built = kind_scene(kind, ((1, command),)).build()
     built.set_commands([command])
     u = random_state(built)
     built.model.set_displacements(u)
-    return built, u
+    return built, u, command
 
 
 def test_energy_gradient_and_hessian_match_finite_differences(inflated):
-    built, u = inflated
+    built, u, _ = inflated
     model, chamber = built.model, built.chambers[0]
     g = chamber.gradient().ravel()
     assert np.linalg.norm(g - fd_gradient(model, chamber, u)) < 1e-6 * np.linalg.norm(g)
@@ -61,9 +78,8 @@ def test_energy_gradient_and_hessian_match_finite_differences(inflated):
 
 def test_command_force_is_minus_the_residual_derivative(inflated):
     """-dr/dq at a fixed state against central differences of the gradient in the command."""
-    built, u = inflated
-    chamber = built.chambers[0]
-    command, h = KINDS[chamber.kind.name][1], 1e-4 * KINDS[chamber.kind.name][1]
+    built, u, command = inflated
+    chamber, h = built.chambers[0], 1e-4 * command
     built.model.set_displacements(u)
     residual = []
     for q in (command + h, command - h):
@@ -76,7 +92,7 @@ def test_command_force_is_minus_the_residual_derivative(inflated):
 
 def test_rest_command_loads_nothing():
     """At the rest state the rest command's wall force vanishes (to round-off against an inflating command's)."""
-    for kind, command in KINDS.values():
+    for kind, command in EXAMPLES.values():
         built = kind_scene(kind, ((1, command),)).build()
         chamber = built.chambers[0]
         loads = []
@@ -86,28 +102,66 @@ def test_rest_command_loads_nothing():
         assert loads[0] <= 1e-12 * loads[1]
 
 
-def test_closed_gas_obeys_the_gas_law_and_is_the_pressure_load_of_its_own_pressure():
-    """Along a ramp of gas amount q, (p + p_atm) A = n R T = q p_atm A_rest at every equilibrium; the
-    final one is also the equilibrium of pressure control at the gas's pressure (a gas is a pressure load)."""
-    result = run_schedule(kind_scene(ClosedGas(ATMOSPHERE), ((4, 2.0),)).build())
+def gas_law_constant(chamber_record, kind, rest_area: float, gamma: float) -> tuple[float, float]:
+    """(p_abs G^gamma, p_atm V_atm^gamma) of one equilibrium of a gas kind, from its recorded pressure and area:
+    G and V_atm from the kind's definition (closed gas: G = A, V_atm = A_rest + q; syringe: G = A + V_d + V_s0 - dV,
+    V_atm = A_rest + V_d + V_s0)."""
+    c, p_atm = chamber_record, kind.atmosphere
+    if isinstance(kind, Syringe):
+        barrel = kind.dead_volume + kind.syringe_volume
+        gas, air = c.area + barrel - c.command, rest_area + barrel
+    else:
+        gas, air = c.area, rest_area + c.command
+    return (c.pressure + p_atm) * gas ** gamma, p_atm * air ** gamma
+
+
+@pytest.mark.parametrize("kind", [ClosedGas(ATMOSPHERE), ClosedGas(ATMOSPHERE, gamma=1.4), SYRINGE],
+                         ids=["isothermal", "adiabatic", "syringe"])
+def test_gas_kinds_obey_their_gas_law_along_a_ramp(kind):
+    """At every equilibrium of a ramp p_abs G = n R T (isothermal) or p_abs G^1.4 = its rest value (adiabatic);
+    the chamber inflates and its gauge pressure rises."""
+    result = run_schedule(kind_scene(kind, ((4, 0.8),)).build())
     rest_area = result.steps[0].chambers["main"].area
     for step in result.steps:
-        c = step.chambers["main"]
-        assert (c.pressure + ATMOSPHERE) * c.area == pytest.approx(c.command * ATMOSPHERE * rest_area, rel=1e-12)
-    final = result.steps[-1].chambers["main"]
-    assert 1.3 < final.area_ratio < 2.0 and final.pressure > 100  # inflated, the gas expanded below q = 2
-    built = kind_scene(PressureControl(), ((1, final.pressure),)).build()
-    u = settle(built, NewtonSolver(built.model), np.zeros(1), np.zeros_like(built.mesh.vertices),
-               np.array([final.pressure]))[0]
-    moved = result.positions[-1] - built.mesh.vertices
-    assert np.abs(u - moved).max() < 1e-6 * np.abs(moved).max()
+        reached, law = gas_law_constant(step.chambers["main"], kind, rest_area, kind.gamma)
+        assert reached == pytest.approx(law, rel=1e-12)
+    pressures = [step.chambers["main"].pressure for step in result.steps]
+    assert pressures[0] == 0 and np.all(np.diff(pressures) > 0)
+    assert 1.3 < result.steps[-1].chambers["main"].area_ratio < 2.4  # inflated; the gas kept some of the volume
 
 
-def test_closed_gas_sensitivities_match_finite_differences_of_resolves():
-    built = kind_scene(ClosedGas(ATMOSPHERE), ((1, 1.5),), max_area=0.01, chamber_points=64).build()
+def test_a_gas_is_the_pressure_load_of_its_own_pressure():
+    """The closed gas's equilibrium is that of pressure control at the gas's pressure (and the syringe's too)."""
+    for kind in (ClosedGas(ATMOSPHERE), SYRINGE):
+        result = run_schedule(kind_scene(kind, ((2, 0.8),)).build())
+        final = result.steps[-1].chambers["main"]
+        built = kind_scene(PressureControl(), ((1, final.pressure),)).build()
+        u = settle(built, NewtonSolver(built.model), np.zeros(1), np.zeros_like(built.mesh.vertices),
+                   np.array([final.pressure]))[0]
+        moved = result.positions[-1] - built.mesh.vertices
+        assert np.abs(u - moved).max() < 1e-6 * np.abs(moved).max()
+
+
+def test_the_syringe_compresses_its_air_more_the_more_there_is_of_it():
+    """The same displaced volume inflates the chamber less through a larger dead volume (more air to
+    compress), and with no tube a syringe that empties itself is the closed gas chamber pumped that much."""
+    areas = []
+    for dead in (0.0, 1.0, 4.0):
+        kind = dataclasses.replace(SYRINGE, dead_volume=dead)
+        areas.append(run_schedule(kind_scene(kind, ((1, 0.8),)).build()).steps[-1].chambers["main"].area)
+    assert areas[0] > areas[1] > areas[2]
+    emptied = run_schedule(kind_scene(Syringe(ATMOSPHERE, syringe_volume=0.8), ((1, 0.8),)).build())
+    pumped = run_schedule(kind_scene(ClosedGas(ATMOSPHERE), ((1, 0.8),)).build())
+    assert np.abs(emptied.positions[-1] - pumped.positions[-1]).max() < 1e-9
+
+
+@pytest.mark.parametrize("kind", [ClosedGas(ATMOSPHERE), ClosedGas(ATMOSPHERE, gamma=1.4), SYRINGE],
+                         ids=["closed_gas", "adiabatic", "syringe"])
+def test_gas_sensitivities_match_finite_differences_of_resolves(kind):
+    built = kind_scene(kind, ((1, 0.6),), max_area=0.01, chamber_points=64).build()
     solver = NewtonSolver(built.model, NewtonOptions(tol=1e-10))
-    q, h = np.array([1.5]), 1e-3
-    u = settle(built, solver, np.ones(1), np.zeros_like(built.mesh.vertices), q)[0]
+    q, h = np.array([0.6]), 1e-3
+    u = settle(built, solver, np.zeros(1), np.zeros_like(built.mesh.vertices), q)[0]
     s = sensitivity(built, q, u)
     plus, minus = (settle(built, solver, q, u, q + sign * h)[0] for sign in (1, -1))
     fd_tip = (np.array(tip_measures(built.mesh, plus)) - tip_measures(built.mesh, minus)) / (2 * h)
@@ -117,32 +171,74 @@ def test_closed_gas_sensitivities_match_finite_differences_of_resolves():
     assert np.abs(s.displacements[..., 0] - fd_u).max() <= 1e-5 * np.abs(fd_u).max()
 
 
+@pytest.mark.parametrize("seed", [1, 2])
+def test_syringe_twin_through_inverse_control(seed):
+    """A displaced volume drawn at random, solved forward (not by the code under test), is recovered from the
+    tip it produced."""
+    scene = kind_scene(SYRINGE, ((1, 0.8),), max_area=0.01, chamber_points=64)
+    built = scene.build()
+    displaced = np.random.default_rng(seed).uniform(0.1, 0.7, 1)
+    u = settle(built, NewtonSolver(built.model, NewtonOptions(tol=1e-9)), np.zeros(1),
+               np.zeros_like(built.mesh.vertices), displaced)[0]
+    dx, dy, _ = tip_measures(built.mesh, u)
+    tip = built.mesh.vertices[built.mesh.tip].mean(axis=0) + (dx, dy)
+    result = Reacher(built, options=ReachOptions(tol=1e-7), newton=NewtonOptions(tol=1e-9)).reach(Target(tuple(tip)))
+    assert result.reached and result.error <= 1e-7 * body_length(built)
+    assert result.pose.commands == pytest.approx(displaced, rel=1e-4)
+    assert Reacher(built).units == ["displaced volume"] and command_bounds(scene)[1].tolist() == [0.8]
+
+
+@pytest.mark.parametrize("kind", [ClosedGas(ATMOSPHERE), SYRINGE], ids=["closed_gas", "syringe"])
+def test_max_step_is_where_the_gas_volume_vanishes(kind):
+    """Moving the wall nodes by (x, y) -> (x + t (x - c_x), y - 2 t (y - c_y)) scales the enclosed area to
+    A (1 + t)(1 - 2 t); max_step is the first t > 0 with A (1 + t)(1 - 2 t) + c = 0 (c: the gas outside)."""
+    built = kind_scene(kind, ((1, 0.5),)).build()
+    built.set_commands([0.5])
+    chamber = built.chambers[0]
+    wall = built.mesh.vertices[chamber.loop_vertices]
+    dx = np.zeros_like(built.mesh.vertices)
+    dx[chamber.loop_vertices] = (wall - wall.mean(axis=0)) * (1.0, -2.0)
+    area, outside = chamber.area(), chamber.outside  # the model is at rest
+    roots = np.roots([-2 * area, -area, area + outside])
+    assert chamber.max_step(dx) == pytest.approx(roots[roots > 0].min(), rel=1e-10)
+    assert chamber.max_step(-dx) == np.inf or chamber.max_step(-dx) > 1
+    built.model.set_displacements(1.001 * chamber.max_step(dx) * dx)
+    assert chamber.energy() == np.inf
+
+
 def test_a_registered_kind_is_a_scene_file_control(tmp_path):
-    """The gas kind's name and parameter read and write through scene files; "volume" names area control;
-    a parameter of another kind is an unknown key."""
-    scene = kind_scene(ClosedGas(ATMOSPHERE), ((4, 2.0),))
+    """The gas kinds' names and parameters read and write through scene files; a missing required parameter is
+    named; "volume" names area control; a parameter of another kind is an unknown key."""
+    scene = kind_scene(ClosedGas(ATMOSPHERE, gamma=1.4), ((4, 0.8),))
     text = scene.to_toml()
-    assert 'control = "closed_gas"' in text and "atmosphere = 1000.0" in text
+    assert 'control = "closed_gas"' in text and "atmosphere = 1000.0" in text and "gamma = 1.4" in text
     path = tmp_path / "gas.toml"
     path.write_text(text)
     assert load_scene(path) == scene
     path.write_text(text.replace("atmosphere = 1000.0", "stiffness = 1e5"))
     with pytest.raises(PneumaInputError, match=r"unknown key 'chambers\[0\].stiffness' \(allowed here: atmosphere,"):
         load_scene(path)
-    path.write_text(text.replace('"closed_gas"', '"volume"').replace("atmosphere = 1000.0", "stiffness = 2e5"))
+    path.write_text(text.replace('"closed_gas"', '"volume"').replace("atmosphere = 1000.0", "stiffness = 2e5")
+                    .replace("gamma = 1.4\n", ""))
     assert load_scene(path).controls[0].kind == AreaControl(stiffness=2e5)
+    syringe = kind_scene(SYRINGE, ((4, 0.8),))
+    path.write_text(syringe.to_toml())
+    assert load_scene(path) == syringe
+    path.write_text(syringe.to_toml().replace("syringe_volume = 1.0\n", ""))
+    with pytest.raises(PneumaInputError, match=r"missing key 'chambers\[0\].syringe_volume'"):
+        load_scene(path)
 
 
 def test_the_apps_ask_the_kind():
     """Inverse control's units and default bounds, the plots' label and a failed solve's words come from the kind."""
-    scene = kind_scene(ClosedGas(ATMOSPHERE), ((2, 1.5), (4, 0.8)))
-    assert [b.tolist() for b in command_bounds(scene)] == [[0.8], [1.5]]
-    command = np.array([[1.0], [1.2]])
-    assert command_axis(command, [c.kind.quantity for c in scene.controls])[1] == "commanded gas amount"
+    scene = kind_scene(ClosedGas(ATMOSPHERE), ((2, 0.5), (4, 0.2)))
+    assert [b.tolist() for b in command_bounds(scene)] == [[0.0], [0.5]]
+    command = np.array([[0.0], [0.2]])
+    assert command_axis(command, [c.kind.quantity for c in scene.controls])[1] == "commanded air pumped in"
     built = scene.build()
-    assert Reacher(built, bounds=([1.0], [1.5])).units == ["gas amount"]
-    assert describe_commands(built, np.array([1.5]), np.array([1.25])) == \
-        "gas amount 1.5 (last equilibrium at gas amount 1.25)"
+    assert Reacher(built, bounds=([0.0], [0.5])).units == ["air pumped in"]
+    assert describe_commands(built, np.array([0.5]), np.array([0.25])) == \
+        "air pumped in 0.5 (last equilibrium at air pumped in 0.25)"
     area = kind_scene(AreaControl(), ((1, 2.0),)).build()
     assert describe_commands(area, np.array([2.0]), np.array([1.5])) == \
         f"commanded area {2 * area.chambers[0].rest_area:.6g} (2 x rest)"
@@ -157,9 +253,19 @@ def test_the_apps_ask_the_kind():
      r"bounds = \[0.5, 2000.0\]: area ratio 2000.0 must lie in"),
     (lambda: ChamberControl(ChamberSchedule("pressure", ((1, 2.0),)), (-1.0, 2.0)),
      r"bounds = \[-1.0, 2.0\]: pressure -1.0 is negative"),
-    (lambda: ChamberSchedule(ClosedGas(), ((1, -1.0),)), r"keyframes gas amount -1.0 must be > 0"),
+    (lambda: ChamberSchedule(ClosedGas(), ((1, -1.0),)), r"keyframes air pumped in -1.0 must be >= 0"),
     (lambda: ClosedGas(atmosphere=0.0), r"atmosphere = 0.0 must be > 0"),
-    (lambda: ChamberSchedule("syringe", ((1, 1.0),)), r"control = 'syringe' is not one of area, volume, pressure"),
+    (lambda: ClosedGas(gamma=0.9), r"gamma = 0.9 must lie in \[1, 5/3\]"),
+    (lambda: ClosedGas(gamma=float("nan")), r"gamma = nan must be a finite number"),
+    (lambda: ChamberSchedule("bellows", ((1, 1.0),)),
+     r"control = 'bellows' is not one of area, volume, closed_gas, pressure, syringe"),
+    (lambda: ChamberSchedule("syringe", ((1, 1.0),)), r"control = 'syringe' has no default for syringe_volume"),
+    (lambda: Syringe(syringe_volume=0.0), r"syringe_volume = 0.0 must be > 0"),
+    (lambda: Syringe(syringe_volume=1.0, dead_volume=-0.1), r"dead_volume = -0.1 must be >= 0"),
+    (lambda: ChamberSchedule(SYRINGE, ((1, 0.5), (2, 1.5))),
+     r"keyframes displaced volume 1.5 exceeds syringe_volume = 1.0 \(the plunger stops at the barrel's end\)"),
+    (lambda: ChamberControl(ChamberSchedule(SYRINGE, ((1, 0.5),)), (-0.5, 2.0)),
+     r"bounds = \[-0.5, 2.0\]: displaced volume 2.0 exceeds"),
 ])
 def test_bad_commands_and_parameters_are_refused_naming_the_value(make, message):
     with pytest.raises(PneumaInputError, match=message):
@@ -177,8 +283,9 @@ def test_suction_with_allow_vacuum_and_a_taken_name():
         register(Impostor)
 
 
-def test_the_extending_page_shows_this_example():
-    """docs/extending.md's code of the closed gas kind is the code these tests run."""
-    page = (Path(__file__).resolve().parents[1] / "docs" / "extending.md").read_text()
+def test_the_extending_page_shows_the_shipped_closed_gas_kind():
+    """docs/extending.md's worked example is the code of the shipped closed gas kind, which these tests run."""
+    root = Path(__file__).resolve().parents[1]
+    page = (root / "docs" / "extending.md").read_text()
     block = next(b.split("```")[0] for b in page.split("```python\n")[1:] if "class ClosedGas" in b)
-    assert block in (Path(__file__).resolve().parent / "closed_gas.py").read_text()
+    assert block in (root / "taichi_pneuma" / "terms" / "chambers" / "closed_gas.py").read_text()

@@ -1,7 +1,8 @@
 """Kernels compile once per process: a new scene, mesh, material or number of chambers compiles no kernel.
 
-Taichi keeps each kernel's compiled instances in `kernel._primal.compiled_kernels`; a kernel whose
-compile key depended on a mesh (a field's shape, a @ti.data_oriented instance) would gain one per scene.
+Each kernel keeps its compiled instances in a dict keyed by its compile key, `kernel._primal.compiled_kernels`
+in Taichi and `kernel._primal.materialized_kernels` in Quadrants; a kernel whose compile key depended on a
+mesh (a field's shape, a @ti.data_oriented instance) would gain one per scene.
 The kernels are found, not listed: every object with a `_primal` in every module of the package.
 """
 
@@ -13,6 +14,7 @@ import numpy as np
 from solid_meshes import box_with_cavity, extruded_beam, scene_of, shell_octant
 
 import taichi_pneuma
+from taichi_pneuma import backend
 from taichi_pneuma.fem.meshfile import write_mesh
 from taichi_pneuma.io.scenefile import load_scene
 from taichi_pneuma.scene import Material, reference_scene
@@ -29,13 +31,16 @@ def package_kernels() -> dict[str, object]:
     for info in pkgutil.walk_packages(taichi_pneuma.__path__, "taichi_pneuma."):
         module = importlib.import_module(info.name)
         for name, obj in vars(module).items():
-            if hasattr(obj, "_primal") and obj.__module__ == module.__name__:
+            if getattr(obj, "_primal", None) is not None and obj.__module__ == module.__name__:  # Quadrants' funcs: None
                 kernels[f"{module.__name__}.{name}"] = obj
     return kernels
 
 
+INSTANCES = {"taichi": "compiled_kernels", "quadrants": "materialized_kernels"}  # each backend's private dict
+
+
 def compiled_instances() -> dict[str, int]:
-    return {name: len(kernel._primal.compiled_kernels) for name, kernel in package_kernels().items()}
+    return {name: len(getattr(kernel._primal, INSTANCES[backend.NAME])) for name, kernel in package_kernels().items()}
 
 
 def solve_once(built, commands):

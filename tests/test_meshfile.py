@@ -225,9 +225,12 @@ def test_a_3d_material_region_is_a_box_of_six_numbers(tmp_path):
     region = "\n[material]\nregions = [{ box = [0, -1, 0, 2, 1, 1], E = 5e4 }]\n"
     (tmp_path / "s.toml").write_text(scene_text("beam.msh", more=region))
     built = tp.load_scene(tmp_path / "s.toml").build()
-    youngs, _ = built.scene.element_moduli(built.mesh)
+    _, parameters = built.scene.element_material(built.mesh)
+    _, (base, region) = built.scene.law_parameters()
+    assert not np.allclose(base, region)
     inside = built.mesh.vertices[built.mesh.elements].mean(axis=1)[:, 0] >= 0
-    assert np.all(youngs[inside] == 5e4) and np.all(youngs[~inside] == 1e4) and inside.any() and not inside.all()
+    assert np.all(parameters[inside] == region) and np.all(parameters[~inside] == base)
+    assert inside.any() and not inside.all()
     with pytest.raises(PneumaInputError, match="must have 6 numbers on this 3D body"):
         built.scene.with_value("material.regions[0].box", [0, -1, 2, 1]).build()
 

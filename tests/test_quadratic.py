@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from renderers import SOFTWARE
 from test_terms import (
     assert_gradient_matches_finite_differences,
     assert_max_step_stops_before_inversion,
@@ -164,7 +165,7 @@ def test_quadratic_frame_fills_every_subtriangle_and_draws_curved_walls():
 
     built = reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.02, order=2).build()
     track = Track.from_result(run_schedule(built))
-    renderer = FrameRenderer([track], 480, 192, trace=False, backend="gui")
+    renderer = FrameRenderer([track], 960, 384, trace=False, backend=SOFTWARE)  # subtriangles wider than the outlines
     image = renderer.frame(2)
     x = track.states[2]
     faces = built.mesh.display_triangles()

@@ -8,6 +8,7 @@ import imageio.v3 as iio
 import imageio_ffmpeg
 import numpy as np
 import pytest
+from renderers import SOFTWARE, needs_window
 from test_inverse import SCENES, forward
 from test_render import xvfb_display  # noqa: F401 (a fixture)
 
@@ -61,7 +62,7 @@ def test_trajectory_from_scene_targets_and_csv_with_video(tmp_path, capsys, bidi
     (tmp_path / "traj.toml").write_text(text)
     (tmp_path / "traj.csv").write_text("x,y\n" + "".join(f"{x!r},{y!r}\n" for x, y in tips))
     out = tmp_path / "out"
-    assert main(["--scene", str(tmp_path / "traj.toml"), "--out", str(out), "--renderer", "gui", "--size", "320x128",
+    assert main(["--scene", str(tmp_path / "traj.toml"), "--out", str(out), "--renderer", SOFTWARE, "--size", "320x128",
                  "--quiet"]) == 0
     assert capsys.readouterr().out.splitlines()[-1].startswith("reached: all 3 targets in order")
     history = np.genfromtxt(out / "reach_bidirectional_history.csv", delimiter=",", names=True, deletechars="")
@@ -83,7 +84,7 @@ def test_target_marker_is_drawn_at_the_target():
     states = built.mesh.vertices[None]
     target = np.array([[1.2, 0.6]])  # above the beam, on the background
     track = Track(built.mesh, states, np.ones((1, 1)), np.zeros((1, 1)), np.zeros(1), targets=target)
-    renderer = FrameRenderer([track], 480, 192, trace=False, backend="gui", log=lambda *_: None)
+    renderer = FrameRenderer([track], 480, 192, trace=False, backend=SOFTWARE, log=lambda *_: None)
     image = renderer.frame(0)
     uv = renderer.to_canvas(0, target)[0]
     pixel = image[int((1 - uv[1]) * 192), int(uv[0] * 480)].astype(float)
@@ -161,6 +162,7 @@ def test_design_out_of_range_is_unreachable(tmp_path, capsys):
     assert len(err) == 1 and err[0].startswith("unreachable: tip dy -5 lies outside what cy in [")
 
 
+@needs_window
 def test_live_drag_resolves_on_every_move_and_sliders_command_directly(xvfb_display, monkeypatch, capsys, bidirectional):
     """Under Xvfb, in a real ti.GUI window; the canvas's mouse query is scripted (the button held at two
     target positions, then released) and on the last frame the 'top' slider returns a value the user set."""

@@ -10,8 +10,10 @@ import imageio.v3 as iio
 import imageio_ffmpeg
 import numpy as np
 import pytest
+from renderers import SOFTWARE, needs_window
 
 from taichi_pneuma.apps import inflate, steer
+from taichi_pneuma.backend import has_gui
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.render import frames as render
 from taichi_pneuma.render.frames import BACKGROUND, CHAMBER_FILL, FACE, GROUND, FrameRenderer, Track
@@ -45,7 +47,7 @@ def pixels_at(renderer, image, points):
     return image[rows, cols].astype(float)
 
 
-@pytest.mark.parametrize("backend", ["gui", "ggui"])
+@pytest.mark.parametrize("backend", ["gui", "ggui", "pillow"])
 def test_frame_shows_the_mesh_and_the_filled_chamber(track, backend, capsys):
     try:
         renderer = FrameRenderer([track], 480, 192, trace=True, backend=backend)
@@ -73,19 +75,19 @@ def test_ground_line_is_drawn_where_the_ground_is(track):
     grounded = dataclasses.replace(track, ground=lowest - 0.02)
     points = track.states.reshape(-1, 2)
     bounds = (points.min(axis=0) - 0.05, points.max(axis=0))
-    renderer = FrameRenderer([grounded], 480, 192, trace=False, backend="gui", bounds=bounds)
+    renderer = FrameRenderer([grounded], 480, 192, trace=False, backend=SOFTWARE, bounds=bounds)
     image = renderer.frame(0)
     x_mid = float(track.states[0, :, 0].mean())
     on_line = pixels_at(renderer, image, np.array([[x_mid, lowest - 0.02]]))
     assert np.all(np.abs(on_line - rgb8(GROUND)) <= 3)
-    no_ground = FrameRenderer([track], 480, 192, trace=False, backend="gui", canvas=renderer.canvas,
+    no_ground = FrameRenderer([track], 480, 192, trace=False, backend=SOFTWARE, canvas=renderer.canvas,
                               bounds=bounds)
     assert np.all(np.abs(pixels_at(no_ground, no_ground.frame(0), np.array([[x_mid, lowest - 0.02]]))
                          - rgb8(BACKGROUND)) <= 3)
 
 
 def test_view_frames_every_state(track):
-    renderer = FrameRenderer([track, track], 480, 192, trace=False, backend="gui")
+    renderer = FrameRenderer([track, track], 480, 192, trace=False, backend=SOFTWARE)
     for panel, (x0, x1) in enumerate(renderer.panels):
         uv = renderer.to_canvas(panel, track.states.reshape(-1, 2))
         assert uv[:, 0].min() > x0 and uv[:, 0].max() < x1 and uv[:, 1].min() > 0 and uv[:, 1].max() < 1
@@ -125,23 +127,25 @@ def test_no_video_initialises_no_renderer_and_draws_no_picture(tmp_path, monkeyp
                                              "_vtk")]
 
 
-def test_inflate_without_vulkan_falls_back_to_ti_gui_and_writes_every_frame(tmp_path):
+def test_inflate_without_vulkan_falls_back_to_software_and_writes_every_frame(tmp_path):
+    """Taichi without Vulkan falls back to ti.GUI; a backend without Taichi's GUIs (Quadrants) to Pillow."""
     env = dict(os.environ, VK_ICD_FILENAMES=str(tmp_path / "no_vulkan.json"))
     proc = subprocess.run([sys.executable, "-m", "taichi_pneuma.apps.inflate", *COARSE, "--size", "320x160",
                            "--out", str(tmp_path)], capture_output=True, text=True, env=env)
     assert proc.returncode == 0, proc.stderr
-    assert "renderer: ti.GUI (software) (GGUI unavailable" in proc.stdout
+    name, why = ("ti.GUI (software)", "GGUI unavailable") if has_gui() else ("Pillow (software)", "has no GUI")
+    assert f"renderer: {name} (" in proc.stdout and why in proc.stdout
     video = tmp_path / "inflate_cy+0.15.mp4"
     assert imageio_ffmpeg.count_frames_and_secs(str(video))[0] == 3
     assert iio.imread(video, index=0).shape == (160, 320, 3)
     summary = json.loads((tmp_path / "inflate_cy+0.15_summary.json").read_text())
-    assert summary["renderer"] == "ti.GUI (software)" and summary["video_frames"] == 3
+    assert summary["renderer"] == name and summary["video_frames"] == 3
     assert iio.imread(tmp_path / "inflate_cy+0.15.png").shape == (160, 320, 3)
 
 
 def test_steer_plays_three_panels_in_one_video(tmp_path, capsys):
     flags = ["--max-area", "0.01", "--growth", "1.5", "--steps", "4", "--quiet"]
-    assert steer.main([*flags, "--renderer", "gui", "--size", "384x128", "--out", str(tmp_path)]) == 0
+    assert steer.main([*flags, "--renderer", SOFTWARE, "--size", "384x128", "--out", str(tmp_path)]) == 0
     printed = capsys.readouterr().out
     assert all(f"cy = {cy}" in printed for cy in ("+0.15", "+0.00", "-0.15"))
     summary = json.loads((tmp_path / "steer_summary.json").read_text())
@@ -167,6 +171,32 @@ def test_interactive_without_display_is_one_clear_error(tmp_path, capsys, monkey
     assert "--interactive needs a display" in capsys.readouterr().err
 
 
+def test_without_taichi_gui_a_live_window_or_taichi_renderer_is_one_clear_error(tmp_path, capsys, monkeypatch):
+    """Where the backend has neither ti.GUI nor GGUI (Quadrants; simulated here on Taichi), --interactive
+    and --renderer gui/ggui are refused in one line naming what is missing; 'auto' draws with Pillow."""
+    monkeypatch.setattr(render, "has_gui", lambda: False)
+    monkeypatch.setattr(render, "has_ggui", lambda: False)
+    monkeypatch.setenv("DISPLAY", ":0")
+    assert inflate.main([*COARSE, "--interactive", "--out", str(tmp_path)]) == 2
+    assert "a live window needs Taichi's GUI (ti.GUI or GGUI), which" in capsys.readouterr().err
+    for backend in ("gui", "ggui"):
+        with pytest.raises(PneumaInputError, match=f"renderer = '{backend}' needs Taichi's GUI .* --renderer pillow"):
+            render.open_canvas(64, 64, backend)
+    assert render.open_canvas(64, 64, "auto").name == "Pillow (software)"
+
+
+def test_pillow_draws_the_picture_ggui_draws(track):
+    """The same frame on GGUI (Vulkan) and on Pillow: averaged over 4 x 4 pixel blocks (Pillow's edges are
+    anti-aliased, GGUI's are not) the two pictures agree within 24 of 255 levels at 99% of the blocks."""
+    try:
+        ggui = FrameRenderer([track], 480, 192, trace=True, backend="ggui", log=lambda *_: None).frame(2)
+    except PneumaInputError as exc:
+        pytest.skip(str(exc))
+    pillow = FrameRenderer([track], 480, 192, trace=True, backend="pillow", log=lambda *_: None).frame(2)
+    blocks = lambda image: image.reshape(48, 4, 120, 4, 3).mean(axis=(1, 3))
+    assert np.mean(np.abs(blocks(ggui) - blocks(pillow)).max(axis=2) > 24) < 0.01
+
+
 @pytest.fixture
 def xvfb_display(monkeypatch):
     """A virtual X display on a free display number, ready when yielded (skips when Xvfb is not installed)."""
@@ -185,6 +215,7 @@ def xvfb_display(monkeypatch):
     proc.wait()
 
 
+@needs_window
 def test_interactive_window_resolves_when_the_slider_moves(xvfb_display, monkeypatch, capsys):
     from taichi_pneuma.render.interactive import explore
 
@@ -204,7 +235,7 @@ def test_text_never_covers_the_body(track):
     """Three titled panels (the steering picture's layout): every label's box lies off the body's pixels
     in every frame."""
     titled = [dataclasses.replace(track, title=f"cy = +0.15: chamber high -> curls down {k}") for k in range(3)]
-    renderer = FrameRenderer(titled, 1344, 320, trace=False, backend="gui")
+    renderer = FrameRenderer(titled, 1344, 320, trace=False, backend=SOFTWARE)
     for i in range(renderer.frames):
         boxes = np.array([render.label_box(label) for label in renderer.draw(i)])
         for p, t in enumerate(titled):
@@ -227,7 +258,7 @@ def test_body_colours_follow_det_f_and_the_colour_bar_numbers(ramp):
         return (b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0]
     det = np.array([areas(x) / areas(mesh.vertices) for x in result.positions])  # det F = area ratio
     assert colored.color == pytest.approx(det, rel=1e-10) and colored.color_label == "det F"
-    renderer = FrameRenderer([colored], 480, 192, trace=False, backend="gui")
+    renderer = FrameRenderer([colored], 480, 192, trace=False, backend=SOFTWARE)
     image = renderer.frame(2)
     lo, hi = det.min(), det.max()
     assert renderer.color_range == pytest.approx((lo, hi)) and hi - lo > 0.02
@@ -245,7 +276,7 @@ def test_body_colours_follow_det_f_and_the_colour_bar_numbers(ramp):
 def test_trace_axis_numbers_match_the_drawn_curves(track):
     """The numbers on the trace panel's axes put each curve where its values are: the pixel at (step, value)
     mapped through the tick labels is the curve's colour (where the two curves do not cross)."""
-    renderer = FrameRenderer([track], 960, 384, trace=True, backend="gui")
+    renderer = FrameRenderer([track], 960, 384, trace=True, backend=SOFTWARE)
     labels = renderer.draw(0)
     image = renderer.frame(0)
     step_x = {float(l.text): l.x for l in labels if l.anchor == "mt" and l.text.replace(".", "").isdigit()}
@@ -276,7 +307,7 @@ def test_quadratic_elements_are_coloured_by_their_own_value():
     built = reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.02, order=2).build()
     result = run_schedule(built)
     colored = Track.from_result(result, color="stretch")
-    renderer = FrameRenderer([colored], 480, 192, trace=False, backend="gui")
+    renderer = FrameRenderer([colored], 480, 192, trace=False, backend=SOFTWARE)
     image = renderer.frame(2)
     lo, hi = renderer.color_range
     expected = np.asarray(matplotlib.colormaps["viridis"]((colored.color[2] - lo) / (hi - lo)))[:, :3] * 255

@@ -1,5 +1,6 @@
 """The scene schema: one declaration reads, writes and edits scene files. Generated valid scenes (every body
-and chamber shape, both controls, regions, effects, bounds, targets) read back equal from their TOML text;
+and chamber shape, both controls, units, every kind of material and region, effects, bounds, targets) read
+back equal from their TOML text;
 bounds and targets survive with_value; effect parameters keep their declared types; the key reference
 lists exactly the keys the reader accepts; scene.py imports the schema without an import cycle."""
 
@@ -11,7 +12,7 @@ from pathlib import Path
 
 import pytest
 import tomllib
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import taichi_pneuma as tp
@@ -29,8 +30,12 @@ from taichi_pneuma.fem.geometry import (
     RoundedRectangle,
 )
 from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface
+from taichi_pneuma.io.output import FORMULA
 from taichi_pneuma.io.scenefile import key_reference, read_scene
 from taichi_pneuma.io.sceneformat import scene_data
+from taichi_pneuma.io.units import UNITLESS, UNITS
+from taichi_pneuma.materials import FORMS, IsochoricMaterial
+from taichi_pneuma.materials.presets import PRESETS, PresetMaterial
 from taichi_pneuma.scene import ChamberControl, Material, Region, Scene
 from taichi_pneuma.solve.schedule import ChamberSchedule
 from taichi_pneuma.terms.chambers import KINDS, AreaControl, PressureControl
@@ -97,6 +102,23 @@ def controls(draw):
     return ChamberControl(ChamberSchedule(PressureControl(vacuum), tuple(zip(steps, values))), bounds)
 
 
+@st.composite
+def volumetric(draw):
+    """A bulk modulus, a Poisson's ratio or neither: (K, nu)."""
+    which = draw(st.sampled_from(["K", "nu", None]))
+    return (draw(number(1e-3, 1e9)) if which == "K" else None, draw(number(-0.99, 0.499)) if which == "nu" else None)
+
+
+@st.composite
+def isochoric_materials(draw, presets: bool):
+    """A form of the isochoric law with its coefficients, or (if presets) a preset, with K, nu or neither."""
+    K, nu = draw(volumetric())
+    if presets and draw(st.booleans()):
+        return PresetMaterial(draw(st.sampled_from(sorted(PRESETS))), K, nu)
+    law = draw(st.sampled_from(sorted(FORMS)))
+    return IsochoricMaterial(law, **{c: draw(number(1e-3, 1e6)) for c in FORMS[law]}, bulk_modulus=K, poisson_ratio=nu)
+
+
 def effects_of(cls) -> st.SearchStrategy:
     return st.builds(cls, **{f.name: number(1e-3, 1e6) for f in dataclasses.fields(cls)})
 
@@ -106,8 +128,8 @@ def scenes(draw):
     """Valid scenes: chambers in separate cells of the body's core rectangle, every key of the file drawn."""
     cx, cy, w, h = draw(grid(-2, 2)), draw(grid(-2, 2)), draw(grid(2, 4)), draw(grid(0.5, 1.0))
     body = draw(bodies(cx, cy, w, h))
-    names = draw(st.lists(st.text(st.characters(blacklist_categories=("Cs",)), min_size=1, max_size=6),
-                          min_size=1, max_size=3, unique=True))
+    names = draw(st.lists(st.text(st.characters(blacklist_categories=("Cs",)), min_size=1, max_size=6)
+                          .filter(lambda name: not name.startswith(FORMULA)), min_size=1, max_size=3, unique=True))
     cell = w / len(names)
     shapes = [draw(chamber_shapes(cx - w / 2 + (i + 0.5) * cell, cy, cell / 2 - 0.05, h / 2 - 0.05))
               for i in range(len(names))]
@@ -119,11 +141,18 @@ def scenes(draw):
                            draw(number(1e-9, 1e-2))) if draw(st.booleans()) else
                     Roller((1.0, 0.0), None, (cx - w / 2, cy - h / 2, cx - w / 2 + 0.1, cy + h / 2))
                     for _ in range(draw(st.integers(0, 2))))
-    geometry = Geometry(body, tuple(zip(names, shapes)), draw(number(1e-4, 1.0)), clamp, draw(st.sampled_from([1, 2])),
-                        tip=tip, rollers=rollers)
-    material = Material(draw(number(1e-3, 1e12) | st.integers(1, 10**6)), draw(number(-0.99, 0.499)))
-    regions = tuple(Region((x, y, x + draw(number(0.01, 5.0)), y + draw(number(0.01, 5.0))),
-                           Material(draw(number(1e-3, 1e12)), draw(number(-0.99, 0.499))))
+    try:  # rarely, drawn outlines are too close to mesh (Geometry refuses them): not a scene to round-trip
+        geometry = Geometry(body, tuple(zip(names, shapes)), draw(number(1e-4, 1.0)), clamp,
+                            draw(st.sampled_from([1, 2])), tip=tip, rollers=rollers)
+    except PneumaInputError:
+        assume(False)
+    units = draw(st.sampled_from([UNITLESS, *UNITS.values()]))
+    if draw(st.booleans()):  # the stable neo-Hookean material, or (one law per body) the isochoric law's
+        materials = st.builds(Material, number(1e-3, 1e12) | st.integers(1, 10**6), number(-0.99, 0.499))
+    else:
+        materials = isochoric_materials(presets=units is not UNITLESS)
+    material = draw(materials)
+    regions = tuple(Region((x, y, x + draw(number(0.01, 5.0)), y + draw(number(0.01, 5.0))), draw(materials))
                     for x, y in draw(st.lists(st.tuples(number(-5, 5), number(-5, 5)), max_size=2)))
     effects = tuple(draw(effects_of(EFFECTS[name]))
                     for name in draw(st.lists(st.sampled_from(sorted(EFFECTS)), unique=True, max_size=4)))
@@ -133,7 +162,7 @@ def scenes(draw):
     increments = max(c.schedule.last_step for c in chamber_controls) + draw(st.integers(1, 5))
     name = draw(st.from_regex(r"[A-Za-z][A-Za-z0-9_+.\-]{0,20}", fullmatch=True))
     return Scene(geometry, chamber_controls, increments, material, regions, draw(number(1e-3, 1e15)), effects, name,
-                 targets)
+                 targets, units)
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -205,7 +234,8 @@ BOX = (-1.75, -0.4, -1.7, 0.4)
 
 def covering_scenes() -> list[Scene]:
     """Scenes that between them have every key of the file: each body and chamber shape, both controls,
-    both forms of the clamp, the tip and rollers, a region, every effect, targets with an angle."""
+    both forms of the clamp, the tip and rollers, a region, every effect, targets with an angle, every unit
+    system and every material key (presets, each form of the isochoric law, K and nu)."""
     core = tp.reference_scene()
     chambers = (("e", Ellipse((-1.0, 0.0), (0.3, 0.2), 16)), ("r", RoundedRectangle((0.0, 0.0), (0.5, 0.4), 0.1)),
                 ("p", Polygon(((0.8, -0.2), (1.2, -0.2), (1.0, 0.2)))))
@@ -221,11 +251,21 @@ def covering_scenes() -> list[Scene]:
                                                         clamp=PointSet(None, BOX), tip=PointSet(None, BOX)))
     polygon = dataclasses.replace(core, geometry=Geometry(Polygon(((-1.75, -0.4), (1.75, -0.4), (0.0, 0.9))),
                                                           (("c", Ellipse((0.0, 0.0), (0.2, 0.1))),)))
-    kinds = [dataclasses.replace(core, increments=4, controls=(ChamberControl(ChamberSchedule(kind(), ((4, 2.0),))),))
-             for kind in set(KINDS.values())]  # every registered chamber kind (tests register more), with its defaults
+    kinds = [dataclasses.replace(core, increments=4, controls=(ChamberControl(ChamberSchedule(kind(**{
+        name: 3.0 for name, (_, default) in kind.parameters().items() if default is dataclasses.MISSING}), ((4, 2.0),))),))
+             for kind in set(KINDS.values())]  # every registered kind (tests register more): defaults, 3.0 if required
+    box = (-1.75, -0.4, 1.75, -0.3)
+    silicones = [dataclasses.replace(core, units=units, material=material, regions=tuple(Region(box, m) for m in regions))
+                 for units, material, regions in (
+                     (UNITS["mm-kPa"], PresetMaterial("ecoflex_00_30", poisson_ratio=0.45),
+                      (IsochoricMaterial("yeoh", 10.0, C20=1.0, C30=0.1, bulk_modulus=1e3),)),
+                     (UNITS["m-Pa"], IsochoricMaterial("yeoh", 1e4, C20=1e3, C30=10.0, bulk_modulus=1e6),
+                      (PresetMaterial("paper", bulk_modulus=1e9),)),
+                     (UNITS["mm-MPa"], IsochoricMaterial("mooney_rivlin", 0.1, C01=0.02, poisson_ratio=0.49),
+                      (IsochoricMaterial("mooney_rivlin", 0.2, C01=0.01, poisson_ratio=0.45),)))]
     mesh_body = MeshGeometry(MeshBody("beam_3d.msh"), (("main", MeshSurface("chamber")),))
     solid = dataclasses.replace(core, geometry=mesh_body)
-    return [every, boxed, polygon, *kinds, solid]
+    return [every, boxed, polygon, *kinds, *silicones, solid]
 
 
 def key_paths(node, path=""):
@@ -261,7 +301,8 @@ def test_the_key_reference_lists_exactly_the_keys_the_reader_accepts():
     rows = {(row.key, row.when): row for row in reference}
     assert rows[("chambers[].control", "")].allowed == ", ".join(KINDS)
     assert rows[("chambers[].allow_vacuum", 'chambers[].control = "pressure"')].default == "false"
-    assert rows[("material.regions[].E", "")].doc == "none: material.E"
+    assert rows[("material.regions[].preset", "")].allowed == ", ".join(PRESETS)
+    assert rows[("units", "")].allowed == ", ".join(UNITS)
     assert rows[("effects.ground.dhat", "")].default == "0.01"
 
 

@@ -11,6 +11,7 @@ import pytest
 import tomllib
 
 import taichi_pneuma as tp
+from taichi_pneuma import backend
 from taichi_pneuma.apps.sweep import main
 from taichi_pneuma.control.study import RunOptions, Task, check_axes, parse_vary, plan, run_task, study_figure
 from taichi_pneuma.io.scenefile import read_scene
@@ -137,7 +138,7 @@ def test_cy_sweep_on_the_process_pool_reproduces_the_reference_records_a_failure
     record = json.loads((out / "sweep.json").read_text())
     assert record["status"] == "done" and record["result"]["ran"] == 4 and record["result"]["failed"] == 1
     assert record["executor"] == {"executor": "process pool", "workers": 2}
-    assert {"taichi", "numpy", "scipy", "taichi-pneuma"} <= set(record["versions"])
+    assert {backend.NAME, "numpy", "scipy", "taichi-pneuma"} <= set(record["versions"])
     assert record["grid"]["axes"][0]["values"] == [-0.15, 0.0, 0.15, 0.35]
     assert read_scene(tomllib.loads(record["base_scene"]), "x") == tp.reference_scene(0.15)
     assert (out / "sweep.png").stat().st_size > 10_000

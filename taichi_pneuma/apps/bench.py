@@ -1,7 +1,7 @@
 """What accuracy costs in time: start-up, timing breakdown, solver backends, accuracy-vs-time study (P1 and P2),
-near-incompressible convergence, scaling, 3D (solid).
+near-incompressible convergence, scaling, 3D (solid); and Taichi against Quadrants (the kernels' two compilers).
 
-    python -m taichi_pneuma.apps.bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling,solid]
+    python -m taichi_pneuma.apps.bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling,solid,compilers]
                                        [--out benchmarks/results]
 
 Every section prints a Markdown table and saves it (bench_<section>.md, .json) under --out, headed
@@ -12,6 +12,8 @@ Timings are wall-clock on a possibly shared machine: compare ratios within one r
 
 import argparse
 import collections
+import importlib.util
+import json
 import os
 import platform
 import re
@@ -26,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import runtime
+from .. import backend, runtime, signals
 from ..errors import PneumaInputError, require
 from ..fem.geometry import Roller
 from ..fem.layered import spherical_shell_octant
@@ -41,7 +43,7 @@ from ..solve.schedule import ChamberSchedule, Schedule, area_ramp
 from ..solve.simulate import run_schedule
 from ..terms import Elasticity
 
-SECTIONS = ("startup", "breakdown", "backends", "accuracy", "incompressible", "scaling", "solid")
+SECTIONS = ("startup", "breakdown", "backends", "accuracy", "incompressible", "scaling", "solid", "compilers")
 REFERENCE_TUTORIAL_SECONDS = 25.0  # SPEC.md: the NumPy/SciPy tutorial's cy = 0.15 ramp on this kind of machine
 PHASES = ("gradient", "hessian", "assemble", "factorize", "solve", "line_search")
 
@@ -79,7 +81,7 @@ SCENES_DIR = Path(__file__).resolve().parents[2] / "assets" / "scenes"
 def main_command_process(cache_dir: str, out: str) -> tuple[float, float]:
     """Run the main command (--no-video) in a fresh process with Taichi's offline kernel cache in cache_dir;
     return (seconds until its first increment's line is printed, seconds until the process exits)."""
-    env = {**os.environ, "TI_OFFLINE_CACHE_FILE_PATH": cache_dir, "PYTHONUNBUFFERED": "1"}
+    env = {**os.environ, backend.environment_name("cache"): cache_dir, "PYTHONUNBUFFERED": "1"}
     command = [sys.executable, "-m", "taichi_pneuma.apps.inflate", *MAIN_COMMAND, "--out", out]
     start = time.perf_counter()
     first = float("nan")
@@ -393,6 +395,36 @@ class JacobiNeoHookean(StableNeoHookean):
     analytic_dims = ()
 
 
+def compilers() -> tuple[str, dict]:
+    """Taichi against Quadrants in one run: for each one installed, in child processes with PNEUMA_BACKEND set,
+    the startup section (the main command from an empty and a warm kernel cache) and the breakdown section twice
+    (the second's first solve loads every kernel from the warm cache): the first calls of the kernels and the ramp."""
+    rows, data = [], {}
+    for name in backend.INSTALL:
+        if importlib.util.find_spec(name) is None:
+            rows.append([name, "not installed"] + [""] * 7)
+            continue
+        sections = {}
+        with tempfile.TemporaryDirectory() as out:
+            for section in ("breakdown", "breakdown", "startup"):
+                command = [sys.executable, "-m", "taichi_pneuma.apps.bench", "--sections", section, "--out", out]
+                proc = subprocess.run(command, env={**os.environ, backend.CHOICE_VARIABLE: name}, capture_output=True,
+                                      text=True)
+                require(proc.returncode == 0, f"bench --sections {section} on {name} failed: {proc.stderr[-300:]}")
+                sections[section] = json.loads((Path(out) / f"bench_{section}.json").read_text())
+        process, ramp = sections["startup"]["data"]["process"], sections["breakdown"]["data"]
+        data[name] = {"version": sections["breakdown"]["backend"], "startup": sections["startup"]["data"],
+                      "breakdown": ramp}
+        rows.append([data[name]["version"], f"{process['empty kernel cache']['whole_s']:.2f}",
+                     f"{process['warm kernel cache']['whole_s']:.2f}",
+                     f"{process['warm kernel cache']['first_increment_s']:.2f}", f"{1e3 * ramp['first_call_s']:.0f}",
+                     f"{1e3 * ramp['ramp_s']:.0f}", ramp["iterations"], f"{1e3 * ramp['ramp_s'] / ramp['iterations']:.1f}",
+                     f"{ramp['tip_deflection']:.15f}"])
+    header = ["compiler", "main command, empty cache (s)", "warm cache (s)", "warm: to first increment (s)",
+              "first solve, warm cache (ms)", "reference ramp (ms)", "Newton iterations", "ms/iteration", "tip dy"]
+    return markdown(header, rows), data
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m taichi_pneuma.apps.bench", description=__doc__.split("\n")[0])
     parser.add_argument("--sections", default=",".join(SECTIONS), help=f"comma-separated, from {', '.join(SECTIONS)}")
@@ -400,23 +432,35 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
     args = parser.parse_args(argv)
     try:
-        sections = [s.strip() for s in args.sections.split(",") if s.strip()]
-        for s in sections:
-            require(s in SECTIONS, f"--sections: {s!r} is not one of {', '.join(SECTIONS)}")
-        out = prepare_directory(args.out)
+        with signals.interrupting():
+            return run(args)
     except PneumaInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP: the sections done are written
+        print(f"error: interrupted ({signals.name_of(exc)})", file=sys.stderr)
+        return signals.exit_code_of(exc)
+    finally:
+        signals.finished()
+
+
+def run(args: argparse.Namespace) -> int:
+    sections = [s.strip() for s in args.sections.split(",") if s.strip()]
+    for s in sections:
+        require(s in SECTIONS, f"--sections: {s!r} is not one of {', '.join(SECTIONS)}")
+    out = prepare_directory(args.out)
     runtime.init(args.arch)
-    heading = f"Machine: {machine()}, Taichi arch {args.arch}\n\n"
+    heading = f"Machine: {machine()}, {backend.NAME} {backend.VERSION}, arch {args.arch}\n\n"
     for section in sections:
         print(f"## {section}", flush=True)
         table, data = accuracy(out) if section == "accuracy" else {"startup": startup, "breakdown": breakdown,
                                                                     "backends": backends, "incompressible": incompressible,
-                                                                    "scaling": scaling, "solid": solid}[section]()
+                                                                    "scaling": scaling, "solid": solid,
+                                                                    "compilers": compilers}[section]()
         print(heading + table, flush=True)
         save_text(out / f"bench_{section}.md", heading + table)
-        save_json(out / f"bench_{section}.json", {"machine": machine(), "arch": args.arch, **{"data": data}})
+        save_json(out / f"bench_{section}.json", {"machine": machine(), "backend": f"{backend.NAME} {backend.VERSION}",
+                                                  "arch": args.arch, **{"data": data}})
     return 0
 
 

@@ -2,25 +2,23 @@
 their checks (before any work), the scene of the flags (--scene, --set), building it with its one-line
 description, a ramp run with a line per step and Ctrl-C handled, the render report line, and the exit
 codes: 0 done, 1 no equilibrium (or a target not reached, a run lost), 2 bad input (one `error:` line),
-130 Ctrl-C."""
+128 + signal on Ctrl-C (130), SIGTERM (143) or SIGHUP (129)."""
 
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
-import threading
-from contextlib import contextmanager
 
 import numpy as np
 from tqdm import tqdm
 
-from .. import limits, runtime
+from .. import limits, runtime, signals
 from ..api import Result, simulate
 from ..errors import PneumaInputError, require, require_finite
 from ..fem.geometry import BeamGeometry
 from ..io.scenefile import load_scene
 from ..io.schema import parse_assignment
+from ..io.units import AREA, LENGTH, MEASURES, PRESSURE
 from ..io.vtk import VtkSeries
 from ..render.frames import BACKENDS, COLOR_FIELDS
 from ..scene import Scene, reference_scene
@@ -143,30 +141,8 @@ def build(scene: Scene):
           f"{mesh.n_elements} {kind}; clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
     for chamber in built.chambers:
         print(f"chamber {chamber.chamber_name}: {chamber.kind.name} control, wall {chamber.n_wall} vertices, "
-              f"rest {MEASURE[mesh.dim]} {chamber.rest_area:.3f}")
+              f"rest {MEASURE[mesh.dim]} {chamber.rest_area:.3f}{scene.units.suffix(MEASURES[mesh.dim])}")
     return built
-
-
-@contextmanager
-def stop_on_interrupt():
-    """Yield a threading.Event that the first Ctrl-C (SIGINT) sets instead of raising KeyboardInterrupt;
-    a second Ctrl-C interrupts at once. Outside the main thread (no signal handling) the event never sets."""
-    requested = threading.Event()
-    if threading.current_thread() is not threading.main_thread():
-        yield requested
-        return
-    previous = signal.getsignal(signal.SIGINT)
-
-    def handler(signum, frame):
-        requested.set()
-        signal.signal(signal.SIGINT, previous)
-        print("interrupt: stopping after the current increment (Ctrl-C again to stop at once)", file=sys.stderr)
-
-    signal.signal(signal.SIGINT, handler)
-    try:
-        yield requested
-    finally:
-        signal.signal(signal.SIGINT, previous)
 
 
 def solve(args: argparse.Namespace, built, label: str = "solving", vtk: VtkSeries | None = None) -> Result:
@@ -174,9 +150,10 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk: VtkSerie
     lines go through the bar, tqdm.write; piped or logged output gets the lines alone); write each
     step's VTU as it is solved if vtk is given. Returns an api.Result.
 
-    Raises RampFailed when an increment fails after its cuts, RampInterrupted after the increment
-    during which Ctrl-C was pressed; both carry the steps done (.result)."""
-    increments = built.scene.increments
+    Raises RampFailed when an increment fails after its cuts, RampInterrupted (its .signum the signal)
+    after the increment during which Ctrl-C, SIGTERM or SIGHUP came (signals.stopping); both carry the
+    steps done (.result)."""
+    increments, units = built.scene.increments, built.scene.units
     bar = tqdm(total=increments + 1, desc=label, unit="step", disable=True if args.quiet else None, leave=False)
 
     def progress(step, positions, contact_force):
@@ -184,14 +161,20 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk: VtkSerie
             vtk.write(step, positions, contact_force)
         bar.update()
         if not args.quiet:
-            chambers = "  ".join(f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}" for name, c in step.chambers.items())
-            tqdm.write(f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {step.tip_dy:+.4f} "
+            chambers = "  ".join(f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}{units.suffix(PRESSURE)}"
+                                 for name, c in step.chambers.items())
+            tip = f"{step.tip_dy:+.4f}{units.suffix(LENGTH)}"
+            tqdm.write(f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {tip} "
                        f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  {step.cuts} cuts  "
                        f"residual {step.residual:.1e}")
 
-    with bar, stop_on_interrupt() as interrupted:
-        return simulate(built, tol=args.tol, max_iterations=args.max_iterations, max_cuts=args.max_cuts,
-                        progress=progress, stop=interrupted.is_set)
+    with bar, signals.stopping() as interrupted:
+        try:
+            return simulate(built, tol=args.tol, max_iterations=args.max_iterations, max_cuts=args.max_cuts,
+                            progress=progress, stop=interrupted.is_set)
+        except RampInterrupted as exc:
+            exc.signum = interrupted.signum
+            raise
 
 
 def render_report(export, seconds_per_step: float) -> str:
@@ -212,13 +195,14 @@ def apply_set(scene: Scene, assignments: list[str]) -> Scene:
 
 def exit_code(app_run, args: argparse.Namespace) -> int:
     """Run an app; bad input is one line and exit 2, a ramp (or a reach's start) with no equilibrium one line
-    and exit 1,
-    Ctrl-C one line and exit 130 (128 + SIGINT, as shells report it).
+    and exit 1, Ctrl-C, SIGTERM or SIGHUP one line and exit 128 + the signal (130, 143, 129, as shells
+    report it): all three raise signals.Interrupted during the run, or stop a ramp after its increment.
+    Meshes and terms are made in the budget of --max-triangles (limits.budget).
 
     NumPy's floating-point warnings (overflow, invalid value) are silenced: a huge input value overflows
     harmlessly in a check that then refuses it, and a solve that produces NaN or inf fails its own checks."""
     try:
-        with np.errstate(all="ignore"):
+        with np.errstate(all="ignore"), signals.interrupting(), limits.budget(args.max_triangles):
             summary = app_run(args)
     except PneumaInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -227,9 +211,11 @@ def exit_code(app_run, args: argparse.Namespace) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     except RampInterrupted as exc:
-        print(f"error: {exc} (Ctrl-C)", file=sys.stderr)
-        return 130
-    except KeyboardInterrupt:
-        print("error: interrupted (Ctrl-C)", file=sys.stderr)
-        return 130
+        print(f"error: {exc} ({signals.name_of(exc)})", file=sys.stderr)
+        return signals.exit_code_of(exc)
+    except KeyboardInterrupt as exc:
+        print(f"error: interrupted ({signals.name_of(exc)})", file=sys.stderr)
+        return signals.exit_code_of(exc)
+    finally:
+        signals.finished()
     return 0 if summary["all_converged"] else 1

@@ -24,8 +24,10 @@ import sys
 
 from .. import runtime
 from ..errors import require
-from ..io.output import prepare_directory, save_json
+from ..io.output import lock_stems, prepare_directory, save_json
+from ..io.units import AREA, FORCE, LENGTH, MEASURES, PRESSURE
 from ..io.vtk import VtkSeries
+from ..signals import holding
 from ..solve.simulate import RampInterrupted, RampStopped
 from ..terms.chambers import AreaControl
 from .cli import (
@@ -73,29 +75,38 @@ def run(args: argparse.Namespace) -> dict:
     if args.interactive:
         from ..render.interactive import explore
         return explore(scene, args.growth, size, args.renderer, newton_options(args))
+    with lock_stems(out, stem):  # no other run writes these files meanwhile
+        return run_scene(args, scene, stem, size, out)
+
+
+def run_scene(args: argparse.Namespace, scene, stem: str, size: tuple[int, int], out) -> dict:
     built = build(scene)
     vtk = VtkSeries(out, stem, built)
     try:
         result = solve(args, built, vtk=vtk)
     except RampStopped as stopped:
-        written = stopped.result.save_history(out, stem) + [vtk.pvd]
-        if isinstance(stopped, RampInterrupted):
-            written.append(save_json(out / f"{stem}_summary.json", stopped.result.summary(interrupted=True)))
-        print(f"saved the {len(stopped.result.steps)} steps done in " + ", ".join(str(p) for p in written))
+        if stopped.result.steps:  # none when the rest state itself has no equilibrium
+            with holding():  # a second signal waits for these files
+                written = stopped.result.save_history(out, stem) + [vtk.pvd]
+                if isinstance(stopped, RampInterrupted):
+                    written.append(save_json(out / f"{stem}_summary.json", stopped.result.summary(interrupted=True)))
+            print(f"saved the {len(stopped.result.steps)} steps done in " + ", ".join(str(p) for p in written))
         raise
     final, summary = result.steps[-1], result.summary()
+    area, length, pressure, force = (scene.units.suffix(d) for d in (AREA, LENGTH, PRESSURE, FORCE))
+    measure = scene.units.suffix(MEASURES[result.mesh.dim])
     for name, c in final.chambers.items():
-        print(f"{name}: {MEASURE[result.mesh.dim]} {c.area / c.area_ratio:.3f} -> {c.area:.3f} (x{c.area_ratio:.2f}), "
-              f"pressure {c.pressure:.1f}")
+        print(f"{name}: {MEASURE[result.mesh.dim]} {c.area / c.area_ratio:.3f} -> {c.area:.3f}{measure} "
+              f"(x{c.area_ratio:.2f}), pressure {c.pressure:.1f}{pressure}")
     if final.tip_dz is None:
-        print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}; "
+        print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}{length}; "
               f"tip rotation {final.tip_rotation:+.1f} deg")
     else:
-        print(f"tip deflection (mean y displacement of the right face): {result.tip_deflection:+.4f}; "
-              f"tip dz {final.tip_dz:+.4f}; bend angle {final.tip_rotation:+.1f} deg")
-    print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}")
+        print(f"tip deflection (mean y displacement of the right face): {result.tip_deflection:+.4f}{length}; "
+              f"tip dz {final.tip_dz:+.4f}{length}; bend angle {final.tip_rotation:+.1f} deg")
+    print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}{pressure}")
     for name, (fx, fy, magnitude) in final.contact.items():
-        print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g})")
+        print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g}){force}")
     print(f"Newton: {summary['newton_iterations_total']} iterations over {summary['steps'] - 1} solves "
           f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
           f"all converged: {summary['all_converged']}; run {result.seconds:.2f} s")

@@ -32,9 +32,10 @@ from ..control.inverse import Reacher, ReachOptions, command_bounds, frames
 from ..control.targets import Target, read_targets_csv
 from ..errors import PneumaInputError, parse_number, require, require_finite
 from ..fem.geometry import BeamGeometry
-from ..io.output import prepare_directory, save_json
+from ..io.output import lock_stems, prepare_directory, save_json
 from ..io.scenefile import load_scene
 from ..scene import Scene
+from ..signals import holding
 from ..solve.simulate import run_schedule
 from .cli import (
     add_ramp_arguments,
@@ -145,7 +146,13 @@ def run(args: argparse.Namespace) -> dict:
         from ..render.interactive import follow_mouse
         return follow_mouse(scene, (lo, hi), size, args.renderer, options,
                             newton_options(args) if explicit_tol else None, targets[0] if targets else None)
-    built = build(scene)
+    with lock_stems(out, stem):  # no other run writes these files meanwhile
+        return reach_targets(args, scene, stem, targets, (lo, hi), options, size, out)
+
+
+def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: list[Target], bounds, options,
+                  size: tuple[int, int], out) -> dict:
+    (lo, hi), built = bounds, build(scene)
     start = time.perf_counter()
     reacher = Reacher(built, (lo, hi), options, newton_options(args), args.max_cuts)
     print("bounds: " + ", ".join(f"{n} {a:g} .. {b:g}" for n, a, b in zip(reacher.names, lo, hi))
@@ -189,7 +196,8 @@ def run(args: argparse.Namespace) -> dict:
         summary.update(renderer=done.renderer, video_frames=done.frames, video_size=[done.width, done.height])
         print(render_report(done, float(np.mean([s.seconds for s in trajectory.steps]))))
         written += [done.video, done.png]
-    written += trajectory.save_history(out, stem) + [save_json(out / f"{stem}_summary.json", summary)]
+    with holding():  # a signal meanwhile waits for the files
+        written += trajectory.save_history(out, stem) + [save_json(out / f"{stem}_summary.json", summary)]
     print("wrote " + ", ".join(str(p) for p in written))
     unreached = [(k, r) for k, r in enumerate(results, start=1) if not r.reached]
     if not unreached:

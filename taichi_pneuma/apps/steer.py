@@ -5,6 +5,8 @@
 Solves the three ramps (cy = +0.15, 0, -0.15), prints their tip deflections, writes each ramp's ParaView
 files (steer_cy+0.15.pvd, ...) and, unless --no-video, plays them side by side in one video (all panels in
 one frame of reference, bodies coloured by --color on one scale) with a PNG of the last frame.
+A ramp stopped (Ctrl-C, SIGTERM, SIGHUP, or no equilibrium) still writes steer_summary.json with the
+steps each ramp did (interrupted: true for a signal).
 """
 
 from __future__ import annotations
@@ -13,8 +15,9 @@ import argparse
 import sys
 
 from .. import runtime
-from ..io.output import prepare_directory, save_json
+from ..io.output import lock_stems, prepare_directory, save_json
 from ..io.vtk import VtkSeries
+from ..solve.simulate import RampInterrupted, RampStopped
 from .cli import (
     add_ramp_arguments,
     add_video_arguments,
@@ -42,9 +45,26 @@ def run(args: argparse.Namespace) -> dict:
     size = rendering_flags(args)
     out = prepare_directory(args.out)
     runtime.init(args.arch)
+    stems = [f"steer_cy{cy:+.2f}" for cy, _ in PLACEMENTS]
+    with lock_stems(out, "steer", *stems):  # no other run writes these files meanwhile
+        return run_placements(args, scenes, stems, size, out)
+
+
+def run_placements(args: argparse.Namespace, scenes, stems: list[str], size: tuple[int, int], out) -> dict:
     built = [build(scene) for scene in scenes]
-    series = [VtkSeries(out, f"steer_cy{cy:+.2f}", b) for b, (cy, _) in zip(built, PLACEMENTS)]
-    solved = [solve(args, b, f"cy = {cy:+.2f}", vtk) for b, vtk, (cy, _) in zip(built, series, PLACEMENTS)]
+    series = [VtkSeries(out, stem, b) for b, stem in zip(built, stems)]
+    solved = []
+    for b, vtk, (cy, _) in zip(built, series, PLACEMENTS):
+        try:
+            solved.append(solve(args, b, f"cy = {cy:+.2f}", vtk))
+        except RampStopped as stopped:  # the ramps done, and the steps of this one, are kept
+            done = {f"{c:+.2f}": r for (c, _), r in zip(PLACEMENTS, solved + [stopped.result]) if r.steps}
+            path = save_json(out / "steer_summary.json", {
+                "tip_deflection": {k: r.tip_deflection for k, r in done.items()},
+                "steps": {k: len(r.steps) for k, r in done.items()}, "all_converged": False,
+                "interrupted": isinstance(stopped, RampInterrupted)})
+            print(f"saved the ramps done in {path} and {', '.join(str(v.pvd) for v in series[:len(done)])}")
+            raise
     summary = {"tip_deflection": {}, "all_converged": True}
     for (cy, title), result in zip(PLACEMENTS, solved):
         print(f"cy = {cy:+.2f} ({title}): tip deflection {result.tip_deflection:+.4f}, "

@@ -14,8 +14,10 @@ equilibrium) is a row with its error, never the end of the study. The same comma
 the runs that have no row yet (--retry-failed: also those with an error).
 
 Exit codes: 0 when every run has its row (failed runs included), 1 when runs were lost with a
-crashed worker process (the same command runs them), 2 for bad input (one `error:` line), 130 on
-Ctrl-C (runs in flight finish and are kept; the same command resumes).
+crashed worker process (the same command runs them), 2 for bad input (one `error:` line; also when
+another run is writing the study of the same --name in --out), 130 on Ctrl-C, 143 on SIGTERM, 129 on
+SIGHUP (runs in flight finish and are kept; the same command resumes). The workers ignore Ctrl-C (the
+command decides) and die with the command, even one killed outright.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from tqdm import tqdm
 
 from .. import limits
 from ..control.study import ALIASES, MAX_RUNS, LocalPool, RayCluster, RunOptions, Sweep, parse_vary
+from ..io.output import check_stem, lock_stem, prepare_directory
 from .cli import add_ramp_arguments, exit_code, scene_of_flags
 
 
@@ -63,10 +66,11 @@ def parser() -> argparse.ArgumentParser:
 
 def row_line(row: dict, keys: list[str]) -> str:
     values = ", ".join(f"{k} = {row[k]}" for k in keys)
+    seconds = "" if row.get("seconds") is None else f" ({row['seconds']:.1f} s)"  # none: the run was lost
     if row.get("error") is not None:
-        return f"  {values}: error: {row['error']} ({row['seconds']:.1f} s)"
+        return f"  {values}: error: {row['error']}{seconds}"
     return (f"  {values}: tip dy {row['tip_dy']:+.4f} dx {row['tip_dx']:+.4f} rot {row['tip_rotation']:+.1f} deg, "
-            f"{row['iterations']} Newton it ({row['seconds']:.1f} s)")
+            f"{row['iterations']} Newton it{seconds}")
 
 
 def run(args: argparse.Namespace) -> dict:
@@ -75,7 +79,13 @@ def run(args: argparse.Namespace) -> dict:
     executor = LocalPool(args.workers) if args.ray is None else RayCluster(args.ray or None, args.workers)
     options = RunOptions(args.tol, args.max_iterations, args.max_cuts, args.max_triangles, args.max_increments,
                          args.arch)
-    sweep = Sweep(base, axes, args.out, args.name, args.samples, args.seed, options, args.retry_failed, args.max_runs)
+    out = prepare_directory(args.out)
+    with lock_stem(out, check_stem(args.name)):  # from reading the rows done to writing the last: this run's
+        sweep = Sweep(base, axes, out, args.name, args.samples, args.seed, options, args.retry_failed, args.max_runs)
+        return run_study(args, sweep, executor)
+
+
+def run_study(args: argparse.Namespace, sweep: Sweep, executor) -> dict:
     where = "a local Ray" if args.ray == "" else f"Ray at {args.ray}" if args.ray else \
         f"a process pool of {min(executor.workers, len(sweep.todo))} workers"
     print(f"study {args.name}: {len(sweep.runs)} runs ({'full grid' if args.samples is None else 'Latin hypercube'} "

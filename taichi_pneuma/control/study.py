@@ -16,13 +16,17 @@ versions and the machine; <name>.png plots the tip deflection against the varied
 from __future__ import annotations
 
 import csv
+import ctypes
 import io
 import itertools
 import json
+import math
 import os
 import platform
 import signal
 import socket
+import sys
+import threading
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -38,12 +42,21 @@ import numpy as np
 import tomllib
 from scipy.stats import qmc
 
-from .. import limits, runtime
+from .. import backend, limits, runtime, signals
 from ..errors import PneumaInputError, require, require_finite
-from ..io.output import check_stem, prepare_directory, save_json, write_atomic
+from ..io.output import (
+    FORMULA,
+    check_stem,
+    lock_stem,
+    open_appending,
+    prepare_directory,
+    read_input,
+    save_json,
+    write_atomic,
+)
 from ..io.scenefile import read_scene
 from ..io.sceneformat import scene_data
-from ..io.schema import parse_assignment, parse_key
+from ..io.schema import parse_key, parse_value
 from ..scene import Scene
 from ..solve.newton import NewtonOptions
 from ..solve.simulate import MAX_CUTS, RampStopped
@@ -52,9 +65,14 @@ from ..solve.simulate import MAX_CUTS, RampStopped
 ALIASES = {"cy": "chambers[0].center[1]", "cx": "chambers[0].center[0]", "E": "material.E", "nu": "material.nu",
            "k": "chambers[0].stiffness", "max_area": "mesh.max_area"}
 MAX_RUNS = 100_000
+MAX_CELL = 10_000  # characters of a varied value in the CSV (csv reads fields of at most 131,072)
+MAX_ERROR = 1_000  # characters of a run's error kept in its row
+MAX_RECORD_BYTES = 256_000_000  # the most of a study's CSV or JSON read back
+MAX_DRAWN = 1e100  # numbers the plot draws as such (matplotlib's axis arithmetic overflows near 1e308)
+PR_SET_PDEATHSIG = 1  # prctl's option: the signal a process gets when its parent dies (Linux)
 # Worker processes: one thread each (Taichi's pool is set by runtime.init), no Taichi banner per worker
 WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-              "ENABLE_TAICHI_HEADER_PRINT": "0"}
+              backend.environment_name("banner"): "0"}
 
 
 # --- the varied keys -------------------------------------------------------------------------------
@@ -108,35 +126,32 @@ class Axis:
         return [float(v) for v in self.low + u * (self.high - self.low)]
 
 
-def parse_value(text: str):
-    """A value as TOML reads it (1e4, 3, true, "x"); a bare word is a string."""
-    return parse_assignment(f"v={text}")[1]
-
-
 def parse_vary(text: str) -> Axis:
     """'KEY=start:stop:count' (or start:stop with --samples) or 'KEY=v1,v2,...' -> Axis. KEY is a dotted
     scene key (material.E, chambers[0].center[1]) or one of ALIASES (cy, cx, E, nu, k, max_area)."""
     key, sep, spec = text.partition("=")
     key, spec = ALIASES.get(key.strip(), key.strip()), spec.strip()
-    require(bool(sep) and key and spec, f"--vary {text!r} must look like KEY=start:stop:count or KEY=v1,v2,...")
+    require(bool(sep) and key and spec, f"--vary {text[:100]!r} must look like KEY=start:stop:count or KEY=v1,v2,...")
     parse_key(key)  # the dotted-key syntax
     where = f"--vary {key}={spec}"
     if ":" in spec:
         parts = spec.split(":")
         require(len(parts) in (2, 3), f"{where}: a range is start:stop:count (or start:stop with --samples)")
-        ends = [parse_value(p) for p in parts[:2]]
+        ends = [parse_value(p, where) for p in parts[:2]]
         for end in ends:
             require(is_number(end), f"{where}: {end!r} is not a number")
             require_finite(where, end)
         count = None
         if len(parts) == 3:
-            count = parse_value(parts[2])
+            count = parse_value(parts[2], where)
             require(isinstance(count, int) and not isinstance(count, bool) and 1 <= count <= MAX_RUNS,
                     f"{where}: count {parts[2]!r} must be an integer from 1 to {MAX_RUNS}")
         return Axis(key, spec, ends[0], ends[1], count)
     items = [p.strip() for p in spec.split(",")]
     require(all(items), f"{where}: an empty value in the list")
-    values = tuple(parse_value(p) for p in items)
+    values = tuple(parse_value(p, where) for p in items)
+    require(all(len(cell(v)) <= MAX_CELL for v in values),
+            f"--vary {key}: a value of more than {MAX_CELL} characters (as a CSV cell)")
     require(len({cell(v) for v in values}) == len(values), f"{where}: a value is listed twice")
     return Axis(key, spec, items=values)
 
@@ -146,7 +161,7 @@ def plan(axes: list[Axis], samples: int | None = None, seed: int = 0, max_runs: 
     them (scipy.stats.qmc, seeded: the same command plans the same runs), without repeats."""
     if samples is None:
         values = [axis.grid() for axis in axes]
-        total = int(np.prod([len(v) for v in values]))
+        total = math.prod(len(v) for v in values)  # Python integers: no int64 wrap-around
         require(total <= max_runs, f"the grid has {total} runs; the limit is {max_runs} (--max-runs raises it)")
         runs = [dict(zip([a.key for a in axes], combination)) for combination in itertools.product(*values)]
     else:
@@ -228,14 +243,17 @@ class Task:
 
 
 def one_line(exc: BaseException) -> str:
-    return " ".join(str(exc).split()) or type(exc).__name__
+    """The exception's message on one line, cut to MAX_ERROR characters."""
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if len(text) <= MAX_ERROR else text[:MAX_ERROR - 3] + "..."
 
 
-def measures(result) -> dict:
-    """The row's figures of an api.Result (finished or partial)."""
+def measures(result, names: list[str]) -> dict:
+    """The row's figures of an api.Result (finished or partial); its chambers' columns are named `names`
+    (the base scene's chamber names: a run that varies a chamber's name keeps the study's columns)."""
     final = result.steps[-1]
     row = {"tip_dx": float(final.tip_dx), "tip_dy": float(final.tip_dy), "tip_rotation": float(final.tip_rotation)}
-    for i, name in enumerate(result.chamber_names):
+    for i, name in enumerate(names):
         row[f"{name}.area_ratio"] = float(result.area_ratio[-1, i])
         row[f"{name}.peak_pressure"] = float(np.abs(result.pressure[:, i]).max())
     row.update(converged=result.converged, iterations=int(result.history["iterations"].sum()),
@@ -253,13 +271,18 @@ def run_task(task: Task) -> dict:
     try:
         with redirect_stdout(io.StringIO()):  # ti.init prints its arch, once per worker
             runtime.init(task.options.arch, cpu_threads=1)
-        scene = read_scene(tomllib.loads(task.scene), "scene").with_values(task.values)
+        base = read_scene(tomllib.loads(task.scene), "scene")
+        names = base.chamber_names
+        scene = base.with_values(task.values)
         limits.check_scene(scene, task.options.max_triangles, task.options.max_increments)
         options = task.options
-        row.update(measures(simulate(scene, tol=options.tol, max_iterations=options.max_iterations,
-                                     max_cuts=options.max_cuts)), error=None)
+        with limits.budget(options.max_triangles):
+            row.update(measures(simulate(scene, tol=options.tol, max_iterations=options.max_iterations,
+                                         max_cuts=options.max_cuts), names), error=None)
     except RampStopped as exc:  # no equilibrium: keep the figures of the steps done
-        row.update(measures(exc.result), converged=False, error=one_line(exc))
+        if exc.result.steps:
+            row.update(measures(exc.result, names), converged=False)
+        row["error"] = one_line(exc)
     except PneumaInputError as exc:
         row["error"] = one_line(exc)
     except Exception as exc:  # noqa: BLE001 -- a failing run never stops the study
@@ -270,9 +293,30 @@ def run_task(task: Task) -> dict:
 
 # --- executors -----------------------------------------------------------------------------------
 
-def _worker_start() -> None:
-    """Pool worker initializer: Ctrl-C is the parent's business (it cancels the runs not started)."""
+def _worker_start(parent: int) -> None:
+    """Pool worker initializer: Ctrl-C and SIGHUP are the parent's business (it cancels the runs not started;
+    the workers were started ignoring them, signals.ignored); a worker dies with its parent (parent_watch)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "SIGHUP"):
+        signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    parent_watch(parent)
+
+
+def parent_watch(parent: int) -> None:
+    """End this process when its parent (pid `parent`) ends, killed or not: on Linux the kernel sends it
+    SIGKILL (prctl PR_SET_PDEATHSIG); elsewhere a thread looks every second. A parent already gone (it
+    died while this process started) ends it at once."""
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    else:
+        def watch():
+            while os.getppid() == parent:
+                time.sleep(1.0)
+            os._exit(1)
+
+        threading.Thread(target=watch, daemon=True).start()
+    if os.getppid() != parent:
+        os._exit(1)
 
 
 class LocalPool:
@@ -290,7 +334,8 @@ class LocalPool:
         # workers are spawned as runs are submitted and inherit this environment (read as numpy loads)
         self._saved_env = {k: os.environ.get(k) for k in WORKER_ENV}
         os.environ.update(WORKER_ENV)
-        self._pool = ProcessPoolExecutor(self.workers, mp_context=get_context("spawn"), initializer=_worker_start)
+        self._pool = ProcessPoolExecutor(self.workers, mp_context=get_context("spawn"), initializer=_worker_start,
+                                         initargs=(os.getpid(),))
         return self
 
     def __exit__(self, *exc):
@@ -304,7 +349,9 @@ class LocalPool:
     def run(self, tasks: list[Task]):
         """Yield (index, row) as runs finish; row None for a run lost with a crashed worker process.
         On Ctrl-C: cancel the runs not started, yield those in flight as they finish, re-raise."""
-        futures = {self._pool.submit(run_task, task): i for i, task in enumerate(tasks)}
+        with signals.ignored():  # the first `workers` submissions start the workers: they inherit it
+            futures = {self._pool.submit(run_task, task): i for i, task in enumerate(tasks[:self.workers])}
+        futures.update({self._pool.submit(run_task, task): i for i, task in enumerate(tasks) if i >= self.workers})
         pending = set(futures)
 
         def outcome(future):
@@ -403,18 +450,23 @@ class RayCluster:
 # --- the study -----------------------------------------------------------------------------------
 
 def cell(value) -> str:
-    """CSV text of a value: '' for none, words as they are, numbers and booleans as JSON (exact floats)."""
+    """CSV text of a value: '' for none, words as they are, numbers and booleans as JSON (exact floats); a
+    word a spreadsheet would read as a formula (starting with one of FORMULA), or that reads as JSON, as a
+    JSON string ("=1+1" in quotes): uncell reads every one back."""
     if value is None:
         return ""
-    return value if isinstance(value, str) else json.dumps(value)
+    if not isinstance(value, str):
+        return json.dumps(value)
+    return json.dumps(value, ensure_ascii=False) if value.startswith(FORMULA) or uncell(value) != value else value
 
 
 def uncell(text: str):
+    """The value of a CSV cell (cell's inverse)."""
     if text == "":
         return None
     try:
         return json.loads(text)
-    except ValueError:
+    except (ValueError, RecursionError):
         return text
 
 
@@ -423,7 +475,7 @@ def run_key(values: dict) -> tuple:
 
 
 def versions(ray: bool = False) -> dict:
-    names = ["taichi-pneuma", "taichi", "numpy", "scipy"] + (["ray"] if ray else [])
+    names = ["taichi-pneuma", backend.NAME, "numpy", "scipy"] + (["ray"] if ray else [])
     found = {}
     for name in names:
         try:
@@ -477,34 +529,48 @@ class Sweep:
         figures = ["tip_dx", "tip_dy", "tip_rotation"] + [f"{c}.{f}" for c in base.chamber_names
                                                           for f in ("area_ratio", "peak_pressure")]
         self.columns = self.keys + figures + ["converged", "iterations", "increments", "vertices", "seconds", "error"]
-        check_stem(name)
-        out = prepare_directory(out)
-        self.csv, self.json, self.png = (out / f"{name}{suffix}" for suffix in (".csv", ".json", ".png"))
+        self.name = check_stem(name)
+        self.out = prepare_directory(out)
+        self.csv, self.json, self.png = (self.out / f"{name}{suffix}" for suffix in (".csv", ".json", ".png"))
         self.identity = {"keys": self.keys, "base_scene": self.scene_toml, "options": asdict(options)}
-        self.done = self._read_done(retry_failed)
+        with lock_stem(self.out, name):  # (the sweep app holds it from before this to the end of run())
+            self.done = self._read_done(retry_failed)
         self.todo = [run for run in self.runs if run_key(run) not in self.done]
 
     def _read_done(self, retry_failed: bool) -> dict[tuple, dict]:
-        """Rows of a previous run of this study, by their values (a cut-off last line is dropped)."""
-        if not self.csv.exists():
+        """Rows of a previous run of this study, by their values. The CSV and JSON are read back within
+        MAX_RECORD_BYTES and not through a link; a row that is not one the study writes (a cut-off last
+        line, a tampered one: a figure that is no finite number) is dropped, so that its run runs again."""
+        if not os.path.lexists(self.csv):
             return {}
         try:
-            previous = json.loads(self.json.read_text())
-            same = all(previous.get(k) == v for k, v in self.identity.items())
-            with open(self.csv, newline="") as f:
-                reader = csv.DictReader(f)
-                same = same and reader.fieldnames == self.columns
-                rows = [row for row in reader if None not in row.values() and None not in row]
-        except (OSError, ValueError):
+            previous = json.loads(read_input(self.json, MAX_RECORD_BYTES, "study record", follow_links=False))
+            same = isinstance(previous, dict) and all(previous.get(k) == v for k, v in self.identity.items())
+            text = read_input(self.csv, MAX_RECORD_BYTES, "study table", follow_links=False).decode("utf-8")
+            reader = csv.DictReader(io.StringIO(text, newline=""))
+            same = same and reader.fieldnames == self.columns
+            rows = [row for row in reader if None not in row.values() and None not in row]
+        except (PneumaInputError, ValueError, RecursionError, csv.Error):
             same = False
-        require(same, f"{self.csv} holds another study (other keys, base scene, solver options or its JSON is "
-                      f"missing); give another --name or --out, or delete it")
+        require(same, f"{self.csv} holds another study (other keys, base scene or solver options), or it or its "
+                      f"JSON is missing, damaged or not a plain file; give another --name or --out, or delete it")
         done = {}
         for text in rows:
             row = {k: uncell(v) for k, v in text.items()}
-            if not (retry_failed and row["error"] is not None):
+            if self.well_formed(row) and not (retry_failed and row["error"] is not None):
                 done[tuple(text[k] for k in self.keys)] = row
         return done
+
+    def well_formed(self, row: dict) -> bool:
+        """Whether a row read back is one run_task could have made: its figures finite numbers (or empty, for
+        a run that failed before any step), converged a boolean, the error a string."""
+        figures = self.columns[len(self.keys):-1]
+        numbers = [row[k] for k in figures if k != "converged"]
+        if not all(v is None or (is_number(v) and math.isfinite(v)) for v in numbers):
+            return False
+        if row["error"] is None:
+            return row["converged"] in (True, False) and None not in numbers
+        return row["converged"] in (None, True, False) and isinstance(row["error"], str)
 
     def record(self, status: str, executor: dict | None = None, report: Report | None = None) -> dict:
         grid = {"axes": [{"key": a.key, "spec": a.spec, **({"values": a.grid()} if self.samples is None else {})}
@@ -523,7 +589,7 @@ class Sweep:
         writer_rows = [[cell(row.get(c)) for c in self.columns] for row in rows]
 
         def write(tmp):
-            with open(tmp, "w", newline="") as f:
+            with open(tmp, "w", newline="", encoding="utf-8") as f:
                 csv.writer(f).writerows([self.columns] + writer_rows)
         return write_atomic(self.csv, write)
 
@@ -539,6 +605,10 @@ class Sweep:
         """Run the runs not done before on an entered executor (LocalPool, RayCluster; None when there is
         nothing to run), appending each row to the CSV as it finishes; on_row(row) after each. Writes
         the JSON (status running, then done or interrupted) and the plot. Ctrl-C: the rows done stay."""
+        with lock_stem(self.out, self.name):  # no other run writes this study meanwhile
+            return self._run(executor, on_row)
+
+    def _run(self, executor, on_row) -> Report:
         start = time.perf_counter()
         described = executor.describe() if executor is not None else None
         save_json(self.json, self.record("running", described))
@@ -549,7 +619,7 @@ class Sweep:
         try:
             if self.todo:
                 tasks = [Task(self.scene_toml, run, self.options) for run in self.todo]
-                with open(self.csv, "a", newline="") as f:
+                with open_appending(self.csv) as f:
                     writer = csv.writer(f)
                     for index, row in executor.run(tasks):
                         if row is None:
@@ -567,8 +637,9 @@ class Sweep:
             report = Report(len(self.runs), len(self.runs) - len(self.todo), len(new),
                             sum(row.get("error") is not None for row in rows), lost, time.perf_counter() - start,
                             rows, [self.csv, self.json])
-            self._write_csv(rows + others)
-            save_json(self.json, self.record(status, described, report))
+            with signals.holding():  # a signal meanwhile waits for the files
+                self._write_csv(rows + others)
+                save_json(self.json, self.record(status, described, report))
         if any(row.get("tip_dy") is not None and row.get("error") is None for row in rows):
             figure = study_figure(rows, self.keys, sampled=self.samples is not None)
             report.files.append(write_atomic(self.png, lambda tmp: figure.savefig(tmp, format="png", dpi=100)))
@@ -578,8 +649,9 @@ class Sweep:
 # --- the plot ------------------------------------------------------------------------------------
 
 def _positions(values: list) -> tuple[np.ndarray, list | None]:
-    """Numbers as they are; anything else as category indices (returned with their labels)."""
-    if all(is_number(v) for v in values):
+    """Numbers as they are, if a plot can draw them (MAX_DRAWN); anything else as category indices
+    (returned with their labels)."""
+    if all(is_number(v) and abs(v) <= MAX_DRAWN for v in values):
         return np.array(values, dtype=float), None
     labels = list(dict.fromkeys(cell(v) for v in values))
     return np.array([labels.index(cell(v)) for v in values], dtype=float), labels
@@ -603,7 +675,7 @@ def study_figure(rows: list[dict], keys: list[str], sampled: bool = False):
     ok = [r for r in rows if r.get("error") is None and r.get("tip_dy") is not None]
     failed = [r for r in rows if r.get("error") is not None]
     n = len(ok)
-    tip = np.array([r["tip_dy"] for r in ok], dtype=float)
+    tip = np.clip([r["tip_dy"] for r in ok], -MAX_DRAWN, MAX_DRAWN)  # drawn; the CSV has them exact
     title = "tip deflection at the last step"
     if len(keys) > 2:
         figure = Figure(figsize=(4 * len(keys), 3.6), layout="constrained")
@@ -624,7 +696,7 @@ def study_figure(rows: list[dict], keys: list[str], sampled: bool = False):
     if len(keys) == 1:
         order = np.argsort(x[:n], kind="stable")
         ax.plot(x[:n][order], tip[order], "o-", label="tip dy")
-        ax.plot(x[:n][order], np.array([r["tip_dx"] for r in ok])[order], "s--", label="tip dx")
+        ax.plot(x[:n][order], np.clip([r["tip_dx"] for r in ok], -MAX_DRAWN, MAX_DRAWN)[order], "s--", label="tip dx")
         y = np.zeros(len(x))
         ax.axhline(0, color="0.7", lw=0.8)
         ax.set(ylabel="tip displacement")

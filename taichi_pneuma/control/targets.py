@@ -4,18 +4,24 @@ The tip point is the mean of the tip vertices (as in inflate's tip deflection), 
 coordinates; the rotation is their least-squares rigid rotation, in degrees, counter-clockwise.
 A list of targets comes from a scene file's [[targets]] tables or from a CSV file with a header
 naming the columns x, y and, optionally, angle, wx, wy, wangle (weights; an empty angle cell
-leaves the rotation free).
+leaves the rotation free). A list has at most MAX_TARGETS targets (each is a reach: seconds of solves),
+and a targets file is read only if it is a regular file, and at most MAX_TARGETS_BYTES of it.
 """
 
 from __future__ import annotations
 
 import csv
+import io
+import itertools
 import os
 from dataclasses import dataclass
 
 from ..errors import PneumaInputError, parse_number, require, require_finite
+from ..io.output import read_input
 
 COLUMNS = ("x", "y", "angle", "wx", "wy", "wangle")
+MAX_TARGETS = 1000
+MAX_TARGETS_BYTES = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -42,14 +48,14 @@ class Target:
 def read_targets_csv(path: str | os.PathLike) -> list[Target]:
     """Targets, one per row of a CSV file with a header (x, y required; angle, wx, wy, wangle optional)."""
     try:
-        with open(path, newline="") as f:
-            rows = list(csv.DictReader(f))
-            header = rows[0].keys() if rows else []
-    except OSError as exc:
-        raise PneumaInputError(f"targets file {str(path)!r} cannot be read ({exc.strerror})") from None
+        lines = io.StringIO(read_input(path, MAX_TARGETS_BYTES, "targets file").decode("utf-8"), newline="")
+        rows = list(itertools.islice(csv.DictReader(lines), MAX_TARGETS + 1))
+        header = rows[0].keys() if rows else []
     except (csv.Error, UnicodeDecodeError) as exc:
         raise PneumaInputError(f"{path}: not a CSV file ({exc})") from None
     require(rows, f"{path}: no targets (a header line x,y[,angle,...] and one row per target)")
+    require(len(rows) <= MAX_TARGETS, f"{path}: more than {MAX_TARGETS} targets; at most {MAX_TARGETS} are allowed "
+                                      f"(each is a reach)")
     unknown = sorted(set(header) - set(COLUMNS), key=str)
     require(not unknown and {"x", "y"} <= set(header),
             f"{path}: columns {list(header)!r} must include x and y and be among {', '.join(COLUMNS)}")

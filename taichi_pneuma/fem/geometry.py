@@ -3,7 +3,7 @@ lines), and its named vertex sets: the clamp, the tip, the rollers.
 
 Bodies are rectangles, polygons or unions of axis-aligned rectangles; chambers are ellipses,
 rectangles with rounded corners or polygons. Each shape yields a closed counter-clockwise
-polygon. The body is meshed by Shewchuk's Triangle (``triangle`` package) with the flags
+polygon. The body is meshed by Shewchuk's Triangle (through triangulation.py's binding) with the flags
 ``p q a<max_area>``: a planar straight-line graph (the body loop, then each chamber loop),
 quality (20 degree minimum angle) refinement and a maximum triangle area; one hole point
 strictly inside each chamber removes its inside. Each chamber wall is recovered from the output
@@ -27,7 +27,8 @@ mesh (it runs out of floating-point precision) is a PneumaInputError too.
 
 Checking that takes time and memory quadratic in the outline points, so a geometry has at most
 MAX_SHAPES chambers (a union at most MAX_SHAPES rectangles) and MAX_WALL_POINTS outline points in all
-(2000 points: 0.7 s and 190 MB for the self-crossing test of one polygon).
+(2000 points: 0.7 s and 190 MB for the self-crossing test of one polygon). Chamber names are distinct
+and head CSV columns, so none starts like a spreadsheet formula (output.check_heading).
 """
 
 from __future__ import annotations
@@ -35,10 +36,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import triangle
 from scipy.spatial import cKDTree
 
+from .. import limits
 from ..errors import PneumaInputError, require, require_finite, shape_of
+from ..io.output import check_heading
+from . import triangulation
 
 OUTER_MARKER = 1
 MARGIN = 1e-3
@@ -563,6 +566,8 @@ class Geometry:
                                            f"at most {MAX_WALL_POINTS} are allowed")
         names = [name for name, _ in polygons]
         require(len(set(names)) == len(names), f"chamber names {names!r} must be distinct")
+        for name in names:
+            check_heading("chamber name", name)
         for what, poly in [("the body", body)] + [(f"chamber {name!r}", poly) for name, poly in polygons]:
             require_spaced(what, poly)
         outline, _, walls = self.outline()
@@ -602,7 +607,8 @@ class Geometry:
     def mesh(self) -> Mesh:
         """Mesh the body minus its chambers with Triangle ('pqa<max_area>'), split every triangle in four
         `refinements` times (uniform refinement: the same boundary polygons, h halved each time), add a
-        midside node to every edge for quadratic triangles, and name the node sets."""
+        midside node to every edge for quadratic triangles, and name the node sets. In a limits.budget,
+        Triangle adds at most limits.element_cap points and a mesh past the budget is refused."""
         outline, outline_markers, walls = self.outline()
         closed = [c for c, (_, origin) in enumerate(walls, start=1) if origin is None]
         loops = [outline] + [walls[c - 1][0] for c in closed]
@@ -616,7 +622,11 @@ class Geometry:
         }
         if closed:
             pslg["holes"] = np.array([interior_point(p) for p in loops[1:]])
-        out = triangulate(pslg, f"pqa{self.max_area:.17f}")  # fixed-point: Triangle reads no exponent
+        weight = 4 ** self.refinements * (4 if self.order == 2 else 1)  # linear triangles per Triangle's one
+        cap = limits.element_cap(weight)  # Triangle adds at most this many points (S), then stops
+        out = triangulate(pslg, f"pqa{self.max_area:.17f}" + ("" if cap is None else f"S{cap}"))  # no exponent
+        added = len(out["vertices"]) - len(pslg["vertices"])
+        limits.check_mesh(len(out["triangles"]), weight, "Triangle", cap if cap is not None and added >= cap else None)
         vertices = np.asarray(out["vertices"], dtype=np.float64)
         triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
         segments, markers = np.asarray(out["segments"], dtype=np.int64), out["segment_markers"].ravel()
@@ -723,9 +733,9 @@ class BeamGeometry:
 
 
 def triangulate(pslg: dict, flags: str) -> dict:
-    """triangle.triangulate, with its failure (RuntimeError, or no triangle made) a PneumaInputError."""
+    """triangulation.triangulate, with its failure (RuntimeError, or no triangle made) a PneumaInputError."""
     try:
-        out = triangle.triangulate(pslg, flags)
+        out = triangulation.triangulate(pslg, flags)
     except RuntimeError:
         out = {}
     require(len(out.get("triangles", ())) > 0, "Triangle could not mesh the geometry (it ran out of floating-point "

@@ -1,15 +1,36 @@
-"""Result files written whole or not at all: write to a temporary name beside the target, then rename.
+"""Result files: written whole or not at all, inside the output directory only, by one run per name at a time;
+input files read within a size limit.
+
+- A result file is written into a private folder made for it beside its target (mkdtemp: mode 0700, a
+  random name `.<file>.<pid>.<random>.partial`, made by mkdir, so never a planted link or another's
+  folder), then renamed onto the target: the rename replaces a link found there instead of following it,
+  and a folder there is one error naming the file.
+- A folder a run writes into inside the output directory (<stem>_vtk) is a Subfolder: made, then opened
+  without following a link, and its files renamed into it through that descriptor, so a link planted
+  at its name, or swapped in during the run, is never followed.
+- A run holds a lock per result stem (lock_stems): `.<stem>.lock` in the output directory, flock'ed; a
+  second run of the same stem is one error naming it (another run holds it), never an interleaving.
+- The private folders that runs killed outright (SIGKILL) left behind are removed by the next run that
+  prepares the directory (those of processes no longer alive).
+- read_input reads an input file only if it is a regular file (a FIFO or a device such as /dev/zero is
+  refused without blocking), and at most a given number of bytes.
 
 Result files are named after the scene, so a scene name must be a plain file name (STEM): no
-separator, no leading dot, nothing that could lead outside the output directory.
+separator, no leading dot, nothing that could lead outside the output directory. Chamber names head CSV
+columns, so they must not start like a spreadsheet formula (check_heading).
 """
 
 from __future__ import annotations
 
+import fcntl
 import json
 import os
 import re
+import shutil
+import stat
 import tempfile
+import weakref
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +39,9 @@ from ..errors import PneumaInputError, require
 
 MAX_NAME = 100
 STEM = re.compile(r"[A-Za-z0-9_+-][A-Za-z0-9_.+-]*")
+PARTIAL = re.compile(r"\..+\.(\d{1,9})\.[a-z0-9_]{8}\.partial")  # .<file>.<pid>.<random>.partial
+NOFOLLOW = getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+FORMULA = ("=", "+", "-", "@", "\t", "\r")  # a spreadsheet reads a CSV cell starting so as a formula
 
 
 def check_stem(name) -> str:
@@ -28,13 +52,22 @@ def check_stem(name) -> str:
     return name
 
 
+def check_heading(what: str, name) -> None:
+    """Refuse a name that heads CSV columns (a chamber's: <name>.pressure) if it starts with one of FORMULA,
+    which would make a spreadsheet read the heading as a formula."""
+    require(not (isinstance(name, str) and name.startswith(FORMULA)),
+            f"{what} {name!r} cannot start with = + - @, a tab or a carriage return: it heads CSV columns, which a "
+            f"spreadsheet would read as a formula")
+
+
 def reduce_to_stem(text: str) -> str:
     """text made a valid stem: every other character replaced by '_', leading dots dropped, cut to MAX_NAME."""
     return re.sub(r"[^A-Za-z0-9_.+-]", "_", text).lstrip(".")[:MAX_NAME] or "scene"
 
 
 def prepare_directory(path: str | os.PathLike) -> Path:
-    """Create the output directory if needed and check it is writable; raise naming it otherwise."""
+    """Create the output directory if needed, check it is writable (raise naming it otherwise) and remove
+    the private folders of dead runs from it."""
     directory = Path(path)
     try:
         directory.mkdir(parents=True, exist_ok=True)
@@ -42,27 +75,93 @@ def prepare_directory(path: str | os.PathLike) -> Path:
             pass
     except OSError as exc:
         raise PneumaInputError(f"output directory {str(directory)!r} is not writable ({exc.strerror})") from None
+    remove_stale(directory)
     return directory
 
 
-def write_atomic(path: Path, write) -> Path:
-    """Call write(tmp_path) and rename tmp_path to path only if it returns without error.
-
-    An OSError (disk full, permission) becomes a PneumaInputError naming the file."""
-    tmp = path.with_name(f".{path.name}.partial{path.suffix}")
+def alive(pid: int) -> bool:
     try:
-        write(tmp)
-        os.replace(tmp, path)
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
+
+
+def remove_stale(directory: Path) -> None:
+    """Remove the private folders (PARTIAL) in directory whose process is no longer alive."""
+    for entry in os.scandir(directory):
+        match = PARTIAL.fullmatch(entry.name)
+        if match and entry.is_dir(follow_symlinks=False) and not alive(int(match.group(1))):
+            shutil.rmtree(entry.path, ignore_errors=True)
+
+
+@contextmanager
+def private_folder(directory: Path, name: str):
+    """A new folder in directory only this user can enter (named after the file `name` and this process), removed
+    with its contents afterwards."""
+    folder = Path(tempfile.mkdtemp(prefix=f".{name}.{os.getpid()}.", suffix=".partial", dir=directory))
+    try:
+        yield folder
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+class Subfolder:
+    """A folder `name` inside an output directory, made if missing and opened without following a link (a
+    link or a file at its name is refused, naming it); files are renamed into it through that descriptor."""
+
+    def __init__(self, directory: str | os.PathLike, name: str):
+        self.directory, self.path = Path(directory), Path(directory) / name
+        try:
+            self.path.mkdir(exist_ok=True)
+        except FileExistsError:
+            pass  # a link or a file: refused below
+        except OSError as exc:
+            raise PneumaInputError(f"cannot make the folder {str(self.path)!r} ({exc.strerror})") from None
+        try:
+            self.fd = os.open(self.path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_DIRECTORY", 0) | NOFOLLOW)
+        except OSError:
+            kind = "a link" if self.path.is_symlink() else "a file"
+            raise PneumaInputError(f"{str(self.path)!r} is {kind}, not a folder: the results cannot go in it "
+                                   f"(a link inside the output directory is never followed); remove it") from None
+        weakref.finalize(self, os.close, self.fd)
+
+    def names(self) -> list[str]:
+        return os.listdir(self.fd)
+
+    def remove(self, name: str) -> None:
+        """Remove the file `name` from the folder (a folder of that name is left alone)."""
+        try:
+            os.unlink(name, dir_fd=self.fd)
+        except IsADirectoryError:
+            pass
+
+
+def write_atomic(path: str | os.PathLike, write, folder: Subfolder | None = None) -> Path:
+    """Call write(tmp_path) on a path in a private folder beside path, and rename it to path only if it
+    returns without error. folder: the Subfolder path lies in (its
+    private folder is then made in the output directory, and the rename goes through the folder's
+    descriptor).
+
+    An OSError (disk full, permission, a folder at path) becomes a PneumaInputError naming the file."""
+    path = Path(path)
+    try:
+        with private_folder(path.parent if folder is None else folder.directory, path.name) as scratch:
+            tmp = scratch / path.name
+            write(tmp)
+            if folder is None:
+                os.replace(tmp, path)
+            else:
+                os.replace(tmp, path.name, dst_dir_fd=folder.fd)
     except OSError as exc:
         raise PneumaInputError(f"cannot write {str(path)!r} ({exc.strerror or exc})") from None
-    finally:
-        if tmp.exists():
-            tmp.unlink()
     return path
 
 
 def save_text(path: Path, text: str) -> Path:
-    return write_atomic(path, lambda tmp: tmp.write_text(text))
+    return write_atomic(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
 
 
 def save_json(path: Path, data: dict) -> Path:
@@ -75,3 +174,96 @@ def save_npz(path: Path, **arrays) -> Path:
             np.savez_compressed(f, **arrays)
 
     return write_atomic(path, write)
+
+
+def open_appending(path: Path):
+    """A text file of the output directory opened to append to, not through a link (refused as an error naming it)."""
+    try:
+        return os.fdopen(os.open(path, os.O_WRONLY | os.O_APPEND | NOFOLLOW), "a", newline="", encoding="utf-8")
+    except OSError as exc:
+        raise PneumaInputError(f"cannot append to {str(path)!r} ({exc.strerror})") from None
+
+
+# --- one run per stem ------------------------------------------------------------------------------
+
+_locks: dict[tuple, list] = {}  # (device, inode of the directory, stem) -> [descriptor, depth]: held by this process
+
+
+def same_file(fd: int, path: Path) -> bool:
+    try:
+        a, b = os.fstat(fd), os.stat(path, follow_symlinks=False)
+    except FileNotFoundError:
+        return False
+    return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
+
+
+def acquire(directory: Path, stem: str) -> int:
+    """The descriptor of directory/.<stem>.lock, flock'ed by this process (PneumaInputError if another holds it)."""
+    path = directory / f".{stem}.lock"
+    while True:
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | NOFOLLOW, 0o600)
+        except OSError as exc:
+            raise PneumaInputError(f"cannot lock the results named {stem!r}: {str(path)!r} ({exc.strerror})") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            raise PneumaInputError(f"another run is writing the results named {stem!r} in {str(directory)!r} (it "
+                                   f"holds {path.name}); wait for it to end, or give another --out or name") from None
+        if same_file(fd, path):  # else the last holder removed the file between our open and flock: again
+            return fd
+        os.close(fd)
+
+
+@contextmanager
+def lock_stem(directory: str | os.PathLike, stem: str):
+    """Hold the lock of the result files named `stem` in directory for the block (re-entrant in a process);
+    the lock file is removed afterwards."""
+    directory, stem = Path(directory), check_stem(stem)
+    info = os.stat(directory)
+    key = (info.st_dev, info.st_ino, stem)
+    if key not in _locks:
+        _locks[key] = [acquire(directory, stem), 0]
+    held = _locks[key]
+    held[1] += 1
+    try:
+        yield
+    finally:
+        held[1] -= 1
+        if held[1] == 0:
+            del _locks[key]
+            path = directory / f".{stem}.lock"
+            if same_file(held[0], path):
+                os.unlink(path)
+            os.close(held[0])
+
+
+@contextmanager
+def lock_stems(directory: str | os.PathLike, *stems: str):
+    """lock_stem for each of stems."""
+    with ExitStack() as stack:
+        for stem in stems:
+            stack.enter_context(lock_stem(directory, stem))
+        yield
+
+
+# --- input files -----------------------------------------------------------------------------------
+
+def read_input(path: str | os.PathLike, max_bytes: int, what: str, follow_links: bool = True) -> bytes:
+    """The bytes of the input file at path (`what` names it in errors: "scene file"), refused unless it is a
+    regular file of at most max_bytes bytes: a FIFO, a device or a folder is refused without reading or
+    waiting, and no more than max_bytes + 1 bytes are ever read. follow_links False: a link is refused."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | (getattr(os, "O_CLOEXEC", 0) if follow_links else NOFOLLOW))
+    except OSError as exc:
+        raise PneumaInputError(f"{what} {str(path)!r} cannot be read ({exc.strerror})") from None
+    with open(fd, "rb") as f:
+        require(stat.S_ISREG(os.fstat(fd).st_mode),
+                f"{what} {str(path)!r} is not a regular file (a FIFO, a device or a folder cannot be read as one)")
+        try:
+            data = f.read(max_bytes + 1)
+        except OSError as exc:
+            raise PneumaInputError(f"{what} {str(path)!r} cannot be read ({exc.strerror})") from None
+    require(len(data) <= max_bytes, f"{path}: larger than {max_bytes} bytes, the most a {what} may be")
+    return data

@@ -17,7 +17,8 @@
     [[chambers]] name, shape = "ellipse" (center, semi_axes, points) | "rounded_rectangle" (center, size,
                  radius, corner_points) | "polygon" (points) | "mesh_surface" (group: the mesh file's triangles
                  of the chamber's wall, for a mesh body); control = a chamber kind's name, "area"
-                 (stiffness) | "pressure" (allow_vacuum) | ..., with that kind's parameters;
+                 (stiffness) | "pressure" (allow_vacuum) | "closed_gas" (atmosphere, gamma) | "syringe"
+                 (syringe_volume, dead_volume, atmosphere, gamma) | ..., with that kind's parameters;
                  keyframes = [[step, value], ...]; bounds = [min, max] (inverse control)
     [schedule]   increments
     [effects.gravity] density, g      [effects.ground] height, dhat, stiffness      [effects.self_contact] dhat, stiffness
@@ -26,7 +27,8 @@
 
 Every key is checked: an unknown key, a missing required one, or a value out of range is refused
 with its dotted path (e.g. ``chambers[1].semi_axes``). The format is declared once, in sceneformat.py;
-key_reference() lists every key with its type, default and allowed values. A file over MAX_SCENE_BYTES is refused unread;
+key_reference() lists every key with its type, default and allowed values. A file over MAX_SCENE_BYTES, or one
+that is not a regular file (a FIFO, a device), is refused unread;
 ``name`` must be a plain file name (output.check_stem); without it the file's own name, reduced to one, is used.
 """
 
@@ -34,13 +36,11 @@ from __future__ import annotations
 
 import os
 
-import tomllib
-
-from ..errors import PneumaInputError, require
+from ..errors import PneumaInputError
 from ..scene import Scene
 from . import sceneformat
-from .output import reduce_to_stem
-from .schema import KeyInfo
+from .output import read_input, reduce_to_stem
+from .schema import KeyInfo, parse_toml
 
 MAX_SCENE_BYTES = 1_000_000
 
@@ -56,21 +56,15 @@ def key_reference() -> list[KeyInfo]:
 
 
 def load_scene(path: str | os.PathLike) -> Scene:
-    """Read and validate a scene file; errors are PneumaInputError prefixed with the file name."""
+    """Read and validate a scene file (a regular file of at most MAX_SCENE_BYTES: a FIFO or a device is
+    refused without waiting for it; TOML within schema.parse_toml's limits); errors are PneumaInputError
+    prefixed with the file name."""
+    raw = read_input(path, MAX_SCENE_BYTES, "scene file")
     try:
-        with open(path, "rb") as f:
-            raw = f.read(MAX_SCENE_BYTES + 1)
-    except OSError as exc:
-        raise PneumaInputError(f"scene file {str(path)!r} cannot be read ({exc.strerror})") from None
-    require(len(raw) <= MAX_SCENE_BYTES, f"{path}: larger than {MAX_SCENE_BYTES} bytes, the most a scene file may be")
-    try:
-        data = tomllib.loads(raw.decode("utf-8"))
+        text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise PneumaInputError(f"{path}: not valid TOML (not UTF-8: {exc.reason} at byte {exc.start})") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise PneumaInputError(f"{path}: not valid TOML ({exc})") from None
-    except RecursionError:
-        raise PneumaInputError(f"{path}: not valid TOML (arrays or tables nested too deeply)") from None
+    data = parse_toml(text, str(path))
     body = data.get("body")
     if isinstance(body, dict) and isinstance(body.get("file"), str):  # a mesh file, relative to the scene file
         body["file"] = os.path.join(os.path.dirname(os.path.abspath(path)), body["file"])

@@ -10,7 +10,7 @@ from __future__ import annotations
 import functools
 import typing
 
-from ..control.targets import Target
+from ..control.targets import MAX_TARGETS, Target
 from ..errors import require
 from ..fem.geometry import (
     ORDERS,
@@ -25,11 +25,14 @@ from ..fem.geometry import (
     RoundedRectangle,
 )
 from ..fem.meshfile import MeshBody, MeshGeometry, MeshSurface
+from ..materials import FORMS, IsochoricMaterial
+from ..materials.presets import PRESETS, PresetMaterial
 from ..solve.schedule import ChamberSchedule
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
 from .schema import Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
 from .tomltext import dumps
+from .units import UNITLESS, UNITS
 
 PAIR, BOX = "[x, y]", "[x0, y0, x1, y1]"
 POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3"))
@@ -75,6 +78,51 @@ def make_point_set(v: dict, default_side: str) -> PointSet:
     return PointSet(default_side if v["side"] is None and v["box"] is None else v["side"], v["box"])
 
 
+MATERIAL_KEYS = {
+    "preset": Key(str, None, "a published material (its law and coefficients, converted into the scene's units)",
+                  tuple(PRESETS)),
+    "law": Key(str, None, "a form of the isochoric law (C10, ... and K or nu); none: stable neo-Hookean (E, nu)",
+               tuple(FORMS)),
+    "E": Key(float, None, "Young's modulus of the stable neo-Hookean material, > 0; none: 1e4"),
+    "nu": Key(float, None, "Poisson's ratio, in (-1, 0.5); none: 0.45 (E), 0.49 (law), the preset's own"),
+    "K": Key(float, None, "bulk modulus, instead of nu (law or preset)"),
+    **{c: Key(float, None, f"coefficient of the isochoric law's {c} term (the forms taking it; none: 0, C10 "
+                           f"required)") for c in ("C10", "C01", "C20", "C30")},
+}
+
+
+def material_of(keys: dict, material_class):
+    """The material of a [material] table's (or a region's) keys: a preset, a form of the isochoric law, or
+    (neither) the stable neo-Hookean material_class(E, nu)."""
+    given = sorted(k for k, value in keys.items() if value is not None)
+    coefficients = [c for c in ("C10", "C01", "C20", "C30") if keys[c] is not None]
+    if keys["preset"] is not None:
+        extra = [k for k in given if k not in ("preset", "K", "nu")]
+        require(not extra, f"preset = {keys['preset']!r} gives the law and its coefficients: drop {', '.join(extra)}")
+        return PresetMaterial(keys["preset"], keys["K"], keys["nu"])
+    if keys["law"] is None:
+        extra = [k for k in given if k not in ("E", "nu")]
+        require(not extra, f"{', '.join(extra)} need law = {' or '.join(FORMS)} (E and nu alone: stable neo-Hookean)")
+        return material_class(1e4 if keys["E"] is None else keys["E"], 0.45 if keys["nu"] is None else keys["nu"])
+    require(keys["E"] is None, f"E = {keys['E']!r}: law = {keys['law']!r} takes C10, ... and K or nu, not E")
+    require(keys["C10"] is not None, f"law = {keys['law']!r} needs C10")
+    return IsochoricMaterial(keys["law"], **{c: keys[c] for c in coefficients}, bulk_modulus=keys["K"],
+                             poisson_ratio=keys["nu"])
+
+
+def material_keys(material) -> dict:
+    """The [material] (or region) keys of a material, None where absent: material_of's inverse."""
+    keys = dict.fromkeys(MATERIAL_KEYS)
+    if isinstance(material, PresetMaterial):
+        keys.update(preset=material.preset, K=material.bulk_modulus, nu=material.poisson_ratio)
+    elif isinstance(material, IsochoricMaterial):
+        keys.update(law=material.law, K=material.bulk_modulus, nu=material.poisson_ratio,
+                    **{c: getattr(material, c) for c in FORMS[material.law]})
+    else:
+        keys.update(E=material.youngs_modulus, nu=material.poisson_ratio)
+    return keys
+
+
 def item_type(hint):
     """tuple[X, ...] -> X; X -> X."""
     return typing.get_args(hint)[0] if typing.get_origin(hint) is tuple else hint
@@ -84,26 +132,33 @@ def item_type(hint):
 def scene_table(scene_class) -> Table:
     """The declaration of a scene file of scene_class (scene.Scene)."""
     hints = typing.get_type_hints(scene_class)
-    material_class, region_class, control_class = (item_type(hints[k]) for k in ("material", "regions", "controls"))
-    region = Table({"box": Key(tuple, doc=f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D)"),
-                    "E": Key(float, None, "none: material.E"),
-                    "nu": Key(float, None, "none: material.nu")},
-                   parts=lambda r: {"box": r.box, "E": r.material.youngs_modulus, "nu": r.material.poisson_ratio},
-                   doc="a material for the elements whose centroid lies in box; later regions win")
+    region_class, control_class = (item_type(hints[k]) for k in ("regions", "controls"))
+    material_class = typing.get_args(hints["material"])[0]  # the stable neo-Hookean Material, first of the union
+    def make_material(v):  # the base first, then each region (its omitted keys the base's, unless it names a law)
+        base_keys = {k: v[k] for k in MATERIAL_KEYS}
+        base = material_of(base_keys, material_class)
 
-    def make_material(v):  # the base first, then each region (its E and nu by default the base's)
-        base = material_class(v["E"], v["nu"])
-        return base, tuple(build(f"material.regions[{i}]", lambda: region_class(r["box"], material_class(
-            base.youngs_modulus if r["E"] is None else r["E"], base.poisson_ratio if r["nu"] is None else r["nu"])))
-            for i, r in enumerate(v["regions"]))
+        def region(r):
+            keys = {k: r[k] for k in MATERIAL_KEYS}
+            if keys["preset"] is None and keys["law"] is None:
+                volume = keys["K"] is not None or keys["nu"] is not None  # the region's K or nu replaces both
+                keys = {k: base_keys[k] if keys[k] is None and not (volume and k in ("K", "nu")) else keys[k]
+                        for k in keys}
+            return region_class(r["box"], material_of(keys, material_class))
 
-    material = Table({"E": Key(float, 1e4, "Young's modulus, > 0"),
-                      "nu": Key(float, 0.45, "Poisson's ratio, in (-1, 0.5)"), "regions": Tables(region)},
-                     make=make_material,
-                     parts=lambda s: {"E": s.material.youngs_modulus, "nu": s.material.poisson_ratio,
-                                      "regions": s.regions},
-                     optional=True, doc="the stable neo-Hookean material")
-    chamber = Table({"name": Key(str, doc="distinct among the chambers"), "shape": CHAMBER_SHAPES,
+        return base, tuple(build(f"material.regions[{i}]", lambda: region(r)) for i, r in enumerate(v["regions"]))
+
+    region = Table({"box": Key(tuple, doc=f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D)"), **MATERIAL_KEYS},
+                   parts=lambda r: {"box": r.box, **material_keys(r.material)})
+    regions = Tables(region, "materials for the elements whose centroid lies in box (later regions win); keys as "
+                             "material's, and unless a region names a preset or law, each key it omits is material's")
+    material = Table({**MATERIAL_KEYS, "regions": regions}, make=make_material,
+                     parts=lambda s: {**material_keys(s.material), "regions": s.regions}, optional=True,
+                     doc="the body's material: the stable neo-Hookean one of E and nu (no law or preset), a form of "
+                         "the isochoric law (law = neo_hookean, mooney_rivlin, yeoh: C10, ... and K or nu, in the "
+                         "scene's pressure unit), or a preset (docs/materials.md)")
+    chamber = Table({"name": Key(str, doc="distinct among the chambers, not starting with = + - @ (it heads CSV "
+                                          "columns)"), "shape": CHAMBER_SHAPES,
                      "control": Variant(KINDS, lambda kind: kind.name, "area", "the chamber kind (its keys its parameters)"),
                      "keyframes": Key(tuple, doc="[[step, command], ...], steps whole and increasing"),
                      "bounds": Key(tuple, None, "[min, max] of the command under inverse control")},
@@ -114,6 +169,8 @@ def scene_table(scene_class) -> Table:
 
     def make_scene(v):
         require(v["chambers"], "scene names no chamber: add at least one [[chambers]] table")
+        require(len(v["targets"]) <= MAX_TARGETS, f"{len(v['targets'])} [[targets]]: at most {MAX_TARGETS} are "
+                                                  f"allowed (each is a reach)")
         (material, regions), (clamp, clamp_stiffness) = v["material"], v["clamp"]
         chambers, max_area = tuple((name, shape) for name, shape, _ in v["chambers"]), v["mesh"]["max_area"]
         if isinstance(v["body"], MeshBody):
@@ -123,7 +180,8 @@ def scene_table(scene_class) -> Table:
             geometry = Geometry(v["body"], chambers, *(() if max_area is None else (max_area,)), clamp=clamp,
                                 order=v["mesh"]["order"], tip=v["tip"], rollers=v["rollers"])
         return scene_class(geometry, tuple(control for *_, control in v["chambers"]), v["schedule"]["increments"],
-                           material, regions, clamp_stiffness, v["effects"], v["name"], v["targets"])
+                           material, regions, clamp_stiffness, v["effects"], v["name"], v["targets"],
+                           UNITLESS if v["units"] is None else UNITS[v["units"]])
 
     def mesh_parts(geometry):
         refinements = getattr(geometry, "refinements", 0)
@@ -134,6 +192,8 @@ def scene_table(scene_class) -> Table:
     return Table({
         "name": Key(str, None, "names the result files (a plain file name); none: the scene file's own name"),
         "description": Key(str, "", "free text, not kept"),
+        "units": Key(str, None, "the system of the scene's lengths and pressures (io/units.py; none: unitless)",
+                     tuple(UNITS)),
         "body": Table({"shape": BODY_SHAPES}, make=lambda v: v["shape"], parts=lambda body: {"shape": body}),
         "mesh": Table({"max_area": Key(float, None, "largest triangle area (2D; none: 0.0012)"),
                        "order": Key(int, 1, "1: linear triangles (tetrahedra), 2: quadratic", ORDERS)},
@@ -153,7 +213,8 @@ def scene_table(scene_class) -> Table:
         "effects": Named(EFFECTS, "the effects the scene adds, by name"),
         "targets": Tables(TARGET, "poses for inverse control, in order"),
     }, make=make_scene, parts=lambda s: {
-        "name": s.name, "description": None, "body": s.geometry.body, "mesh": s.geometry, "material": s, "clamp": s,
+        "name": s.name, "description": None, "units": s.units.name, "body": s.geometry.body, "mesh": s.geometry,
+        "material": s, "clamp": s,
         "tip": s.geometry, "rollers": s.geometry.rollers,
         "chambers": [(name, shape, control) for (name, shape), control in zip(s.geometry.chambers, s.controls)],
         "schedule": s, "effects": s.effects, "targets": s.targets})

@@ -15,6 +15,13 @@ its dotted key), writing (objects -> data), editing by dotted keys and the key r
 
 Reading checks every key's type, refuses unknown keys, and prefixes an error a constructor raises with
 the table's dotted path (``chambers[1]: ...``).
+
+Text from outside (a scene file, a --set KEY=VALUE) is read within limits, so that no input makes the
+readers recurse past Python's stack or take time quadratic in its length: a dotted key has at most
+MAX_KEY_PARTS parts (tomllib's cost grows with the square of a key's parts: one key of 16,000 parts takes
+8 s), data nest at most MAX_DEPTH tables and arrays deep, a --set value has at most MAX_VALUE_CHARS
+characters and is valid UTF-8 (a byte the terminal could not decode is refused, not written to a file).
+The scene format's deepest key has 5 parts (chambers[0].keyframes[1][0]) and 5 levels.
 """
 
 from __future__ import annotations
@@ -34,6 +41,13 @@ from .tomltext import dumps
 
 REQUIRED = object()
 KEY_PART = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)")
+MAX_KEY_PARTS = 16
+MAX_DEPTH = 16
+MAX_VALUE_CHARS = 100_000
+# TOML strings and comments (whose dots are no key's), then a run of MAX_KEY_PARTS dots between key
+# parts (bare words or strings): a float or a date has one dot, so such a run is a dotted key
+TOML_STRING_OR_COMMENT = re.compile(r'"""(?:[^\\]|\\.)*?"""|\'\'\'.*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*', re.DOTALL)
+TOML_KEY_RUN = re.compile(rf'(?<![\w"-])(?:(?:[\w-]++|"")[ \t]*+\.[ \t]*+){{{MAX_KEY_PARTS}}}')
 TYPE_NAMES = {float: "number", int: "integer", str: "string", bool: "boolean", tuple: "array", list: "array"}
 
 
@@ -285,7 +299,9 @@ def edited(root: Table, obj, values: dict):
 
 
 def parse_key(key: str) -> list:
-    """'chambers[0].center[1]' -> ['chambers', 0, 'center', 1]."""
+    """'chambers[0].center[1]' -> ['chambers', 0, 'center', 1]; at most MAX_KEY_PARTS parts."""
+    require(key.count(".") + key.count("[") < MAX_KEY_PARTS,
+            f"the key {key[:40]!r}... has more than {MAX_KEY_PARTS} parts: no scene key is that deep")
     parts = []
     for segment in key.split("."):
         match = KEY_PART.fullmatch(segment)
@@ -317,11 +333,59 @@ def set_key(data: dict, key: str, value) -> None:
 
 
 def parse_assignment(text: str) -> tuple[str, object]:
-    """'KEY=VALUE' -> (key, value); VALUE is read as a TOML value (1e4, true, [0, 0.1], "x"), else as a string."""
+    """'KEY=VALUE' -> (key, parse_value(VALUE))."""
     key, sep, raw = text.partition("=")
-    require(bool(sep) and key.strip(), f"--set {text!r} must look like KEY=VALUE (e.g. material.E=2e4)")
+    require(bool(sep) and key.strip(), f"--set {text[:100]!r} must look like KEY=VALUE (e.g. material.E=2e4)")
+    return key.strip(), parse_value(raw, f"--set {key.strip()[:40]}")
+
+
+def parse_value(raw: str, what: str):
+    """A value as TOML reads it (1e4, true, [0, 0.1], "x"), else the text (stripped) as a string; refused
+    (naming `what`) past MAX_VALUE_CHARS characters, past the limits of read_toml, or not valid UTF-8."""
+    require(len(raw) <= MAX_VALUE_CHARS, f"{what}: the value has {len(raw)} characters; at most {MAX_VALUE_CHARS} "
+                                         f"are allowed")
     try:
-        value = tomllib.loads(f"v = {raw.strip()}")["v"]
+        raw.encode("utf-8")
+    except UnicodeEncodeError:
+        raise PneumaInputError(f"{what}: {raw[:60]!r} is not valid UTF-8 (bytes the terminal could not "
+                               f"decode)") from None
+    try:
+        return read_toml(f"v = {raw.strip()}", what)["v"]
     except tomllib.TOMLDecodeError:
-        value = raw.strip()
-    return key.strip(), value
+        return raw.strip()
+
+
+def nested_past(data, depth: int) -> bool:
+    """Whether tables and arrays nest in data deeper than depth (iteratively: no recursion)."""
+    stack = [(data, 0)]
+    while stack:
+        node, level = stack.pop()
+        children = node.values() if isinstance(node, dict) else node if isinstance(node, (list, tuple)) else None
+        if children is not None:
+            if level >= depth:
+                return True
+            stack.extend((child, level + 1) for child in children)
+    return False
+
+
+def read_toml(text: str, what: str) -> dict:
+    """tomllib.loads(text) within the limits of the module docstring (PneumaInputError naming `what` past
+    them); text that is not TOML raises tomllib.TOMLDecodeError."""
+    stripped = TOML_STRING_OR_COMMENT.sub(lambda m: "" if m.group().startswith("#") else '""', text)
+    require(TOML_KEY_RUN.search(stripped) is None,
+            f"{what}: a dotted key of more than {MAX_KEY_PARTS} parts (the scene format has none deeper than 5)")
+    try:
+        data = tomllib.loads(text)
+    except RecursionError:
+        data = None
+    require(data is not None and not nested_past(data, MAX_DEPTH),
+            f"{what}: arrays or tables nested too deeply (at most {MAX_DEPTH} levels)")
+    return data
+
+
+def parse_toml(text: str, what: str) -> dict:
+    """read_toml(text, what), text that is not TOML a PneumaInputError too (naming `what` and tomllib's reason)."""
+    try:
+        return read_toml(text, what)
+    except tomllib.TOMLDecodeError as exc:
+        raise PneumaInputError(f"{what}: not valid TOML ({exc})") from None

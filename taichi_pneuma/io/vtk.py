@@ -4,7 +4,9 @@
     <out>/<stem>_vtk/<stem>_0000.vtu     step 0, 1, ... each written whole (output.write_atomic)
 
 The PVD is rewritten after every step, so a run that stops early leaves its finished steps readable;
-VTU files of the same stem left in the folder by an earlier run are removed when a series starts.
+VTU files of the same stem left in the folder by an earlier run, and the .partial files of one killed
+while writing, are removed when a series starts. The folder is an output.Subfolder: a link or a file at
+its name is refused before any step is solved, and no link in it is followed.
 Each VTU holds the rest mesh (in 2D points padded with z = 0; linear triangles, or quadratic ones as VTK's
 6-node triangle, whose midside-node order 01, 12, 20 the mesh shares; in 3D tetrahedra, 4-node or VTK's
 10-node, whose node order the mesh shares, followed by the chamber walls' triangles, each its chamber's
@@ -17,11 +19,14 @@ index in the cell field chamber, -1 on the tetrahedra, and NaN in the other cell
   out-of-plane stress) and von_mises (of that stress);
 - field data: the step's history row (per chamber <name>.command/.area/.area_ratio/.pressure, tip_dx,
   tip_dy, tip_rotation, solver figures), one value each.
+In a scene with units every array's name carries its unit (io/units.py): "displacement [mm]",
+"stress [kPa]", "main.pressure [kPa]".
 meshio 5.3 reads FieldData but does not write it: write_vtu adds the block (ASCII) to meshio's file.
 """
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -29,7 +34,8 @@ import meshio
 import numpy as np
 
 from ..fem.fields import ElementFields
-from .output import save_text, write_atomic
+from .output import Subfolder, save_text, write_atomic
+from .units import FORCE, LENGTH, PRESSURE, history_dimensions
 
 SYMMETRIC_TENSOR = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))  # ParaView's 6-component order
 
@@ -65,11 +71,14 @@ class VtkSeries:
     def __init__(self, directory: str | Path, stem: str, built):
         mesh = built.mesh
         self.directory, self.stem, self.mesh = Path(directory), stem, mesh
-        self.folder = self.directory / f"{stem}_vtk"
-        self.folder.mkdir(parents=True, exist_ok=True)
-        for stale in self.folder.glob(f"{stem}_[0-9][0-9][0-9][0-9].vtu"):  # from an earlier run of this name
-            stale.unlink()
+        self._folder = Subfolder(self.directory, f"{stem}_vtk")
+        self.folder = self._folder.path
+        stale = re.compile(rf"{re.escape(stem)}_\d{{4,}}\.vtu|\..*\.partial.*")  # an earlier run's steps, a killed write
+        for name in self._folder.names():
+            if stale.fullmatch(name):
+                self._folder.remove(name)
         self.pvd = self.directory / f"{stem}.pvd"
+        self.scene = built.scene
         self.material = built.elastic.law, built.elastic.parameters
         self.fields = ElementFields(mesh.vertices, mesh.elements)
         self.cells = [(CELL_TYPES[mesh.dim, mesh.order], mesh.elements)]
@@ -86,11 +95,12 @@ class VtkSeries:
         mesh = self.mesh
         fields = self.fields.at(positions, *self.material)
         stress = np.column_stack([fields["stress"][:, i, j] for i, j in SYMMETRIC_TENSOR])
-        point_data = {"displacement": pad3(positions - mesh.vertices), "chamber": self.chamber}
+        units = self.scene.units
+        point_data = {units.label("displacement", LENGTH): pad3(positions - mesh.vertices), "chamber": self.chamber}
         if contact_force is not None:
-            point_data["contact_force"] = pad3(contact_force)
-        cell_data = {"det_F": fields["det_F"], "max_stretch": fields["max_stretch"], "stress": stress,
-                     "von_mises": fields["von_mises"]}
+            point_data[units.label("contact_force", FORCE)] = pad3(contact_force)
+        cell_data = {"det_F": fields["det_F"], "max_stretch": fields["max_stretch"],
+                     units.label("stress", PRESSURE): stress, units.label("von_mises", PRESSURE): fields["von_mises"]}
         if self.walls:  # the chamber walls' triangles: their chamber, and no element field
             cell_data = {name: [values, np.full((len(self.wall_chamber), *values.shape[1:]), np.nan)]
                          for name, values in cell_data.items()}
@@ -98,8 +108,10 @@ class VtkSeries:
         else:
             cell_data = {name: [values] for name, values in cell_data.items()}
         grid = meshio.Mesh(pad3(mesh.vertices), self.cells + self.walls, point_data=point_data, cell_data=cell_data)
+        dimensions = history_dimensions(self.scene, step.contact)
+        row = {units.label(name, dimensions.get(name, "")): value for name, value in step.row().items()}
         path = self.folder / f"{self.stem}_{step.step:04d}.vtu"
-        write_atomic(path, lambda tmp: write_vtu(tmp, grid, step.row()))
+        write_atomic(path, lambda tmp: write_vtu(tmp, grid, row), self._folder)
         self.entries.append((float(step.step), f"{self.folder.name}/{path.name}"))
         save_text(self.pvd, pvd_text(self.entries))
         return path

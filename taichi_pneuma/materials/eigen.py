@@ -19,7 +19,7 @@ u_3 = u_1 x u_2, and sigma_i = u_i . F v_i (signed). Unlike Taichi's own ti.svd 
 approximate rotations: |U S V^T - F| up to 4e-10 |F| in float64) it is exact to round-off.
 """
 
-import taichi as ti
+from ..backend import ti
 
 EPSILON = 1e-15
 MAX_SWEEPS = 50

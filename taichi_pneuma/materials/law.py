@@ -21,8 +21,8 @@ plane strain), by the kernel cauchy_stresses.
 """
 
 import numpy as np
-import taichi as ti
 
+from ..backend import ti
 from .eigen import symmetric_eigensystem
 
 

@@ -38,9 +38,10 @@ and three scaling modes U diag(a) V^T for the eigenvectors a of the 3 x 3 Hessia
 """
 
 import numpy as np
-import taichi as ti
 
+from ..backend import ti
 from .eigen import rotation_variant_svd, symmetric_eigensystem
+from .invariants import cofactor, determinant_hessian, flat
 from .law import Law, register
 
 SQRT_HALF = 0.7071067811865476
@@ -50,16 +51,6 @@ def lame_parameters(youngs_modulus, poisson_ratio):
     """(mu, lam) of an isotropic material from Young's modulus and Poisson's ratio (scalars or arrays)."""
     e, nu = youngs_modulus, poisson_ratio
     return e / (2.0 * (1.0 + nu)), e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
-
-
-@ti.func
-def cofactor(F):
-    """cof F = dJ/dF of a 3 x 3 matrix: (cof F)_ij = F_(i+1)(j+1) F_(i+2)(j+2) - F_(i+1)(j+2) F_(i+2)(j+1), mod 3."""
-    C = ti.Matrix.zero(ti.f64, 3, 3)
-    for i, j in ti.static(ti.ndrange(3, 3)):
-        C[i, j] = F[(i + 1) % 3, (j + 1) % 3] * F[(i + 2) % 3, (j + 2) % 3] \
-            - F[(i + 1) % 3, (j + 2) % 3] * F[(i + 2) % 3, (j + 1) % 3]
-    return C
 
 
 @ti.func
@@ -109,14 +100,7 @@ class StableNeoHookean(Law):
         mu, lam = p[0], p[1]
         g = cofactor(F)
         c = mu + lam * (1.0 - F.determinant())
-        M = ti.Matrix.zero(ti.f64, 9, 9)
-        for i, j, k, l in ti.ndrange(3, 3, 3, 3):
-            h = 0.0  # (H_J)_(ij)(kl): nonzero for i != k, j != l, with m, n the third indices
-            if i != k and j != l:
-                sign = (1.0 if (k - i + 3) % 3 == 1 else -1.0) * (1.0 if (l - j + 3) % 3 == 1 else -1.0)
-                h = sign * F[3 - i - k, 3 - j - l]
-            M[3 * i + j, 3 * k + l] = lam * g[i, j] * g[k, l] - c * h + (mu if i == k and j == l else 0.0)
-        return M
+        return mu * ti.Matrix.identity(ti.f64, 9) + lam * flat(g).outer_product(flat(g)) - c * determinant_hessian(F)
 
     @staticmethod
     @ti.func

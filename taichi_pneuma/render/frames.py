@@ -17,12 +17,13 @@ Every beam panel uses one world-to-pixel map (equal x and y scale) fitted to the
 states of all tracks below the header band, so panels share a frame of reference, the beam is
 never cropped and no text covers it.
 
-Two backends draw the same primitives (filled triangles, line segments):
+Three canvases draw the same primitives (filled triangles, line segments):
 - GGUI offscreen, ti.ui.Window(show_window=False), when Vulkan is available; on CPU-only machines
   mesa's lavapipe (apt-get install mesa-vulkan-drivers) provides it, and it works with ti.cpu;
-- ti.GUI(show_gui=False), a software rasteriser, otherwise.
+- ti.GUI(show_gui=False), a software rasteriser, otherwise;
+- Pillow (pillow_canvas.py) where the backend has neither GUI (Quadrants), or when asked for.
 Text is drawn afterwards onto the image read back from the canvas (Pillow, matplotlib's DejaVu Sans),
-the same on both backends.
+the same on every backend.
 """
 
 from __future__ import annotations
@@ -32,15 +33,15 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-import taichi as ti
-import triangle
 
 from .. import runtime
+from ..backend import INSTALL, NAME, VERSION, has_ggui, has_gui, ti
 from ..errors import PneumaInputError, require
 from ..fem.fields import ElementFields
 from ..fem.geometry import Mesh
+from ..fem.triangulation import triangulate
 
-BACKENDS = ("auto", "ggui", "gui")
+BACKENDS = ("auto", "ggui", "gui", "pillow")
 BACKGROUND = (1.0, 1.0, 1.0)
 FACE = (0.72, 0.89, 0.66)
 EDGE = (0.18, 0.49, 0.20)
@@ -219,13 +220,24 @@ def _from_rgb8(image: np.ndarray) -> np.ndarray:
 
 
 def open_canvas(width: int, height: int, backend: str = "auto", show: bool = False, log=print):
-    """A canvas on `backend` ('ggui', 'gui', or 'auto': GGUI when Vulkan is available, else ti.GUI).
+    """A canvas on `backend` ('ggui', 'gui', 'pillow', or 'auto': GGUI when Vulkan is available, else ti.GUI,
+    else Pillow where the Taichi backend has no GUI).
 
     Says through log() which renderer it uses (and why it fell back).
     """
     require(backend in BACKENDS, f"renderer = {backend!r} is not one of {', '.join(BACKENDS)}")
     require(width >= 64 and height >= 64, f"frame size {width}x{height} must be at least 64x64")
     runtime.ensure_initialised()
+    if backend == "pillow" or not (has_ggui() or has_gui()):
+        from .pillow_canvas import PillowCanvas
+
+        missing = f"Taichi's GUI (ti.GUI or GGUI), which {NAME} {VERSION} does not have"
+        require(backend in ("auto", "pillow"), f"renderer = {backend!r} needs {missing}: use --renderer pillow")
+        require(not show or backend == "pillow", f"a live window needs {missing}: install taichi "
+                f"({INSTALL['taichi']}; Python < 3.14, not Linux aarch64) and run with PNEUMA_BACKEND=taichi")
+        canvas = PillowCanvas(width, height, show)
+        log(f"renderer: {canvas.name}" + ("" if backend == "pillow" else f" ({NAME} has no GUI)"))
+        return canvas
     if backend in ("auto", "ggui"):
         try:
             canvas = GGUICanvas(width, height, show)
@@ -349,7 +361,7 @@ def chamber_triangles(mesh: Mesh) -> np.ndarray:
     for loop in mesh.chambers:
         k = len(loop)
         ring = np.column_stack([np.arange(k), (np.arange(k) + 1) % k])
-        out = triangle.triangulate({"vertices": mesh.vertices[loop], "segments": ring}, "p")
+        out = triangulate({"vertices": mesh.vertices[loop], "segments": ring}, "p")
         require(len(out["vertices"]) == k, "chamber wall loop could not be triangulated without extra points")
         parts.append(loop[out["triangles"]])
     return np.concatenate(parts)

@@ -4,7 +4,8 @@
     area ratio against the command     pressure against the command
 
 "The command" is the chambers' commanded value (area ratio or pressure) when every chamber gets the
-same command at every step (one chamber, or chambers driven together); otherwise the step.
+same command at every step (one chamber, or chambers driven together); otherwise the step. In a scene
+with units every axis with a dimension says its unit ("pressure p [kPa]").
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ import warnings
 
 import numpy as np
 from matplotlib.figure import Figure
+
+from ..io.units import LENGTH, PRESSURE
 
 
 def command_axis(command: np.ndarray, quantities: list[str]) -> tuple[np.ndarray, str]:
@@ -38,16 +41,20 @@ def history_figure(result, figure=None):
     """Draw the history of an api.Result on `figure` (a new NotebookFigure by default)."""
     fig = figure if figure is not None else NotebookFigure(figsize=(10, 7), layout="constrained")
     (pa, tip), (area, pressure) = fig.subplots(2, 2)
-    x, x_label = command_axis(result.command, [c.kind.quantity for c in result.scene.controls])
+    units, kinds = result.scene.units, [c.kind for c in result.scene.controls]
+    x, x_label = command_axis(result.command, [kind.quantity for kind in kinds])
+    x_label = x_label if x_label == "step" else units.label(x_label, kinds[0].dimension)
+    pressure_label = units.label("pressure p", PRESSURE)
     for c, name in enumerate(result.chamber_names):
         pa.plot(result.area_ratio[:, c], result.pressure[:, c], ".-", label=short(name))
         area.plot(x, result.area_ratio[:, c], ".-", label=short(name))
         pressure.plot(x, result.pressure[:, c], ".-", label=short(name))
     tip.plot(x, result.history["tip_dy"], ".-", color="k")
-    for ax, xl, yl, title in ((pa, "area ratio A / A_rest", "pressure p", "pressure against area ratio"),
-                              (tip, x_label, "tip deflection dy", "tip deflection (mean y displacement of the tip)"),
+    for ax, xl, yl, title in ((pa, "area ratio A / A_rest", pressure_label, "pressure against area ratio"),
+                              (tip, x_label, units.label("tip deflection dy", LENGTH),
+                               "tip deflection (mean y displacement of the tip)"),
                               (area, x_label, "area ratio A / A_rest", "chamber area"),
-                              (pressure, x_label, "pressure p", "chamber pressure")):
+                              (pressure, x_label, pressure_label, "chamber pressure")):
         ax.set(xlabel=xl, ylabel=yl, title=title)
         ax.grid(True, alpha=0.3)
     if len(result.chamber_names) > 1:

@@ -4,6 +4,7 @@ and the Woodbury identity for the low-rank (chamber) parts kept out of the facto
     (S + U C U^T)^-1 b = y - Z (C^-1 + U^T Z)^-1 U^T y,   y = S^-1 b,  Z = S^-1 U.
 """
 
+import importlib.util
 import os
 import sys
 from contextlib import contextmanager
@@ -11,9 +12,9 @@ from contextlib import contextmanager
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-import taichi as ti
 
 from .. import runtime
+from ..backend import ti
 
 
 class FixedPattern:
@@ -142,9 +143,11 @@ BACKENDS = {"cholespy": CholespyCholesky, "scipy": ScipySuperLU, "taichi": Taich
 
 def make_backend(name: str):
     """A fresh linear-solver backend by name: one of BACKENDS, or "auto": Taichi's LLT when Taichi runs on
-    the CPU, CHOLMOD otherwise (Taichi's sparse solvers are float32-only on CUDA; the solve stays float64)."""
+    the CPU, CHOLMOD otherwise (Taichi's sparse solvers are float32-only on CUDA; the solve stays float64),
+    or SciPy's SuperLU where cholespy is not installed (it has no wheel for Linux aarch64)."""
     if name == "auto":
-        name = "taichi" if runtime.current_arch() in (None, "cpu") else "cholespy"
+        name = "taichi" if runtime.current_arch() in (None, "cpu") else \
+            "cholespy" if importlib.util.find_spec("cholespy") else "scipy"
     return BACKENDS[name]()
 
 

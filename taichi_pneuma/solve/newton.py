@@ -5,11 +5,14 @@ Hessian (fixed pattern, factorised) and the rank-1 parts enter by the Woodbury i
 
 H is the exact Hessian (unprojected elastic blocks, the chamber's pressure load stiffness) on the
 first iteration and after a full step (alpha = 1, the sign that Newton is in its quadratic basin),
-unless its factorisation fails (a Cholesky backend refuses an indefinite matrix) or its direction is
-not a descent direction; otherwise it is the PSD one (each element's d2psi/dF2 eigen-clamped, the
-chamber's Gauss-Newton part only). Projected-only Newton converges linearly on this problem; the
-exact Hessian near equilibrium restores quadratic convergence, while the PSD one keeps far-off
-iterations stable.
+unless it cannot be factorised or its direction is not a descent direction; otherwise it is the PSD
+one (each element's d2psi/dF2 eigen-clamped, the chamber's Gauss-Newton part only). Projected-only
+Newton converges linearly on this problem; the exact Hessian near equilibrium restores quadratic
+convergence, while the PSD one keeps far-off iterations stable. A Cholesky backend refuses an
+indefinite sparse part H; after the first iteration SciPy's LU then factorises it: past a limit point
+under volume or syringe control H alone is indefinite (it is the Hessian under pressure control)
+while H plus the chamber's rank-1 part is positive definite at the stable equilibrium. (At the first
+iteration the commands have just moved, the exact Hessian is a poor model there, and the PSD one is used.)
 
 The step u <- u + alpha d (u: displacements) starts at alpha = min(1, 0.9 max_step), the terms'
 safe bound (no triangle inverts), and halves until the Armijo condition
@@ -100,25 +103,34 @@ class NewtonSolver:
         rows, cols = model.hessian_pattern()
         self.pattern = FixedPattern(rows, cols, model.n_dofs)
         self.backend = make_backend(self.options.linear_solver)
+        self.indefinite_backend = self.backend if self.backend.name == "scipy" else make_backend("scipy")
+        self.factored_by = self.backend
 
     def _energy_at(self, u: np.ndarray) -> float:
         self.model.set_displacements(u)
         return self.model.energy()
 
-    def _direction(self, g: np.ndarray, psd_only: bool, clock: "PhaseClock") -> tuple[np.ndarray, float]:
-        """Newton direction d = -H^-1 g and the slope g.d (nan when the factorisation fails)."""
+    def _direction(self, g: np.ndarray, psd_only: bool, clock: PhaseClock,
+                   indefinite: bool = False) -> tuple[np.ndarray, float]:
+        """Newton direction d = -H^-1 g and the slope g.d (nan when the factorisation fails); indefinite: an
+        exact H the backend refuses goes to SciPy's LU (see the module docstring)."""
         with clock("hessian"):
             values = self.model.hessian_values(psd_only)
             low_rank = self.model.low_rank()
         with clock("assemble"):
             matrix = self.pattern.matrix(values)
-        try:
-            with clock("factorize"):
-                self.backend.factorize(matrix)
-        except FactorizationError:  # singular, or indefinite for a Cholesky backend
+        for backend in (self.backend, self.indefinite_backend) if indefinite and not psd_only else (self.backend,):
+            try:
+                with clock("factorize"):
+                    backend.factorize(matrix)
+                break
+            except FactorizationError:  # singular, or indefinite for a Cholesky backend
+                continue
+        else:
             return g * math.nan, math.nan
+        self.factored_by = backend
         with clock("solve"):
-            d = solve_low_rank_updated(self.backend, -g, low_rank)
+            d = solve_low_rank_updated(backend, -g, low_rank)
         return d, float(g @ d)
 
     def solve(self, u0: np.ndarray) -> tuple[np.ndarray, SolveRecord]:
@@ -146,12 +158,12 @@ class NewtonSolver:
                 record.message = f"no convergence in {opts.max_iterations} iterations"
                 break
             exact = not record.step_sizes or record.step_sizes[-1] == 1.0
-            d, slope = self._direction(g, not exact, clock)
+            d, slope = self._direction(g, not exact, clock, bool(record.step_sizes))
             if exact and not slope < 0:
                 record.psd_fallbacks += 1
                 exact = False
                 d, slope = self._direction(g, True, clock)
-            record.exact_factor = exact
+            record.exact_factor = exact and self.factored_by is self.backend
             if not slope < 0:
                 record.message = f"not a descent direction (g.d = {slope:.3e})"
                 break

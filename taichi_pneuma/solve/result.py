@@ -14,8 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from ..fem.fields import element_fields
-from ..io.output import prepare_directory, save_json, save_npz, save_text, write_atomic
+from ..io.output import lock_stem, prepare_directory, save_json, save_npz, save_text, write_atomic
+from ..io.units import history_dimensions
 from ..scene import BuiltScene, Scene
+from ..signals import holding
 
 
 ELEMENTS = {2: "triangles", 3: "tetrahedra"}  # the summary's element count, by dimension
@@ -111,16 +113,19 @@ class Result:
             "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max(initial=0)),
             "increment_cuts": int(self.history["cuts"].sum()),
             "wall_seconds": self.seconds, "solve_seconds_per_step": float(seconds.mean()) if len(seconds) else 0.0,
-            "steps": len(self.steps), "interrupted": interrupted,
+            "steps": len(self.steps), "interrupted": interrupted, "units": self.scene.units.summary(),
         }
 
     def history_csv(self) -> str:
-        """The history as CSV text: a header, then one row per step (StepRecord.row)."""
+        """The history as CSV text: a header (the columns' names, each with its unit in a scene with units:
+        "main.pressure [kPa]"), then one row per step (StepRecord.row)."""
         buffer = io.StringIO()
         rows = [s.row() for s in self.steps]
-        writer = csv.DictWriter(buffer, fieldnames=list(rows[0]) if rows else ["step"])
-        writer.writeheader()
-        writer.writerows(rows)
+        columns = list(rows[0]) if rows else ["step"]
+        dimensions = history_dimensions(self.scene, self.steps[0].contact if self.steps else ())
+        writer = csv.writer(buffer)
+        writer.writerow([self.scene.units.label(c, dimensions.get(c, "")) for c in columns])
+        writer.writerows([[row[c] for c in columns] for row in rows])
         return buffer.getvalue()
 
     def save_history(self, directory, stem: str | None = None) -> list[Path]:
@@ -143,26 +148,29 @@ class Result:
             arrays["contact_forces"] = self.contact_forces
         if self.ground_height is not None:
             arrays["ground_height"] = np.array(self.ground_height)
-        return [save_text(out / f"{stem}_history.csv", self.history_csv()),
-                save_npz(out / f"{stem}_states.npz", **arrays)]
+        with holding(), lock_stem(out, stem):
+            return [save_text(out / f"{stem}_history.csv", self.history_csv()),
+                    save_npz(out / f"{stem}_states.npz", **arrays)]
 
     def save(self, directory, stem: str | None = None, vtk: bool = True, extra: dict | None = None,
              plot: bool = True) -> list[Path]:
         """Write the result files under directory, named <stem>_* (default: the scene's name): history CSV,
         states npz, the plot PNG (unless plot is False), the scene TOML, the summary JSON (with `extra`
         merged in) and, unless vtk is False, the ParaView files <stem>.pvd + <stem>_vtk/*.vtu. Returns the
-        paths written."""
+        paths written. They are written under the stem's lock (output.lock_stem: another process writing
+        the same stem there is refused), and a signal meanwhile waits for them (signals.holding)."""
         from ..io.vtk import VtkSeries
         from ..render.plots import save_history_png
 
         out, stem = prepare_directory(directory), stem or self.scene.name
-        written = self.save_history(out, stem)
-        if vtk:
-            written.append(VtkSeries(out, stem, self.built).write_all(self))
-        if plot:
-            written.append(write_atomic(out / f"{stem}_plot.png", lambda tmp: save_history_png(self, tmp)))
-        written.append(save_text(out / f"{stem}_scene.toml", self.scene.to_toml()))
-        written.append(save_json(out / f"{stem}_summary.json", {**self.summary(), **(extra or {})}))
+        with holding(), lock_stem(out, stem):  # a signal meanwhile waits for the files; no other run writes them
+            written = self.save_history(out, stem)
+            if vtk:
+                written.append(VtkSeries(out, stem, self.built).write_all(self))
+            if plot:
+                written.append(write_atomic(out / f"{stem}_plot.png", lambda tmp: save_history_png(self, tmp)))
+            written.append(save_text(out / f"{stem}_scene.toml", self.scene.to_toml()))
+            written.append(save_json(out / f"{stem}_summary.json", {**self.summary(), **(extra or {})}))
         return written
 
     def video(self, path, png=None, size: tuple[int, int] = (960, 384), fps: float = 12.0, color: str = "stretch",

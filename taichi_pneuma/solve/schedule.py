@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import require, require_finite, shape_of
-from ..terms.chambers import AreaControl, ChamberKind, chamber_kind
+from ..terms.chambers import AreaControl, ChamberKind, default_kind
 
 
 @dataclass(frozen=True)
@@ -31,7 +31,7 @@ class ChamberSchedule:
 
     def __post_init__(self):
         if not isinstance(self.kind, ChamberKind):
-            object.__setattr__(self, "kind", chamber_kind(self.kind)())
+            object.__setattr__(self, "kind", default_kind(self.kind))
         require(len(self.keyframes) >= 1 and all(shape_of(k) == (2,) for k in self.keyframes),
                 f"keyframes = {self.keyframes!r} must be a non-empty list of [step, value] pairs")
         steps = [require_finite("keyframes step", s) for s, _ in self.keyframes]

@@ -9,7 +9,8 @@ so a kernel is compiled once per process whatever the mesh, material or scene.
 import math
 
 import numpy as np
-import taichi as ti
+
+from ..backend import ti
 
 Nodal = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (n, d) float64: positions, displacements, forces, any d
 Scalars = ti.types.ndarray(dtype=ti.f64, ndim=1)  # (m,) float64

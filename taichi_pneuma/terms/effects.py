@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..errors import require, require_finite
+from ..limits import wall_pairs
 from .contact import GroundContact
 from .contact import SelfContact as SelfContactTerm
 from .gravity import Gravity as GravityTerm
@@ -33,6 +34,10 @@ class Effect:
 
     def terms(self, config, mesh, lumped_area) -> list:
         raise NotImplementedError
+
+    def pairs(self, walls: list[int]) -> int:
+        """The contact pairs its terms hold for chamber walls of these node counts (limits.py counts their memory)."""
+        return 0
 
 
 def _positive(name: str, value: float) -> None:
@@ -100,6 +105,9 @@ class SelfContact(Effect):
         require(all(origin is None for origin in mesh.wall_origins),
                 "self_contact: a chamber cut by a symmetry line is not supported (its wall would meet its mirror image)")
         return [SelfContactTerm(config, list(mesh.chambers), self.dhat, self.stiffness)]
+
+    def pairs(self, walls: list[int]) -> int:
+        return wall_pairs(walls)
 
 
 @dataclass(frozen=True)

@@ -22,8 +22,8 @@ which keeps its compile time short.
 """
 
 import numpy as np
-import taichi as ti
 
+from ..backend import ti
 from ..fem.elements import FAMILIES, family_of
 from ..materials.law import element_parameters, embedded, stress_eigensystem
 from ..materials.neo_hookean import cofactor

@@ -25,7 +25,7 @@ class Inertia(Term):
         self.config = config
         n = config.n_vertices
         masses = np.asarray(masses, dtype=np.float64)
-        self.mass_over_h2 = masses / dt**2
+        self.mass_over_h2 = masses / np.square(np.float64(dt))  # h past 1e154: h^2 = inf, no inertia (quasistatics)
         self.target = np.zeros_like(config.rest)  # uhat, zero at rest (u_0 = 0, v_0 = 0)
         self._previous = np.zeros_like(config.rest)
         self._dofs = vertex_dofs(np.arange(n), config.dim)

@@ -20,8 +20,8 @@ its nodes, which depends on x) follow by the chain rule.
 """
 
 import numpy as np
-import taichi as ti
 
+from ...backend import ti
 from ...fem.elements import TRIANGLE_P1, TRIANGLE_P2
 from ...fem.tetmesh import Closure
 from ..base import Indices, Nodal, Scalars, Table, block_pattern, int32s
@@ -123,9 +123,11 @@ class VolumeForm:
     def _data(self):
         return self.wall, self.faces, self.shapes, self.derivatives, self.weights, self.projector
 
-    def measure_and_gradient(self) -> tuple[float, np.ndarray]:
+    def measure_and_gradient(self, u: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+        """V(x) and dV/dx on the wall nodes, (k, 3), at the model's displacements or at u (n, 3)."""
         gradient = np.empty((len(self.nodes), 3))
-        return wall_volume(self.rest, self.config.u, *self._data(), gradient), gradient
+        u = self.config.u if u is None else np.ascontiguousarray(u, dtype=np.float64)
+        return wall_volume(self.rest, u, *self._data(), gradient), gradient
 
     def hessian(self) -> np.ndarray:
         k = self.faces.shape[1]

@@ -7,6 +7,8 @@ scene schema asks parameters() for them). Its class attributes describe its comm
     name       the scene file's `control = "..."`; aliases: other names it is read by
     quantity   what q is, in words, for labels and messages ("area ratio", "pressure")
     rest       q of the unloaded chamber, where every schedule starts (1.0, 0.0)
+    dimension  q's dimension (io/units.py: "" none, "pressure", "area"), the unit outputs give it in a scene
+               with units
 
 and its methods do the rest: check() refuses values q cannot take, default_bounds() gives the range
 inverse control keeps to when the scene names none, term() builds the chamber's energy term (a
@@ -30,6 +32,7 @@ class ChamberKind:
     aliases: ClassVar[tuple[str, ...]] = ()
     quantity: ClassVar[str]
     rest: ClassVar[float]
+    dimension: ClassVar[str] = ""
 
     @classmethod
     def parameters(cls) -> dict[str, tuple[type, object]]:
@@ -70,3 +73,13 @@ def chamber_kind(name: str) -> type[ChamberKind]:
     """The kind registered under `name` (PneumaInputError naming it and the known ones otherwise)."""
     require(isinstance(name, str) and name in KINDS, f"control = {name!r} is not one of {', '.join(KINDS)}")
     return KINDS[name]
+
+
+def default_kind(name: str) -> ChamberKind:
+    """The kind registered under `name` with its default parameters (PneumaInputError naming the parameters
+    it has no default for: such a kind is given with them, e.g. Syringe(syringe_volume=1.0))."""
+    kind = chamber_kind(name)
+    required = [key for key, (_, default) in kind.parameters().items() if default is dataclasses.MISSING]
+    require(not required, f"control = {name!r} has no default for {', '.join(required)}: "
+                          f"give {kind.__name__}({', '.join(f'{key}=...' for key in required)})")
+    return kind()

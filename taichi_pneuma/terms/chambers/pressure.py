@@ -25,6 +25,7 @@ class PressureControl(ChamberKind):
     name = "pressure"
     quantity = "pressure"
     rest = 0.0
+    dimension = "pressure"
 
     def check(self, what: str, values: list[float]) -> None:
         for value in values:

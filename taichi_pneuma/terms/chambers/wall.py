@@ -35,8 +35,8 @@ PSD elastic and clamp Hessians keep projected Newton a descent method).
 """
 
 import numpy as np
-import taichi as ti
 
+from ...backend import ti
 from ..base import Indices, Scalars, Term, Vec2s, int32s, position, vertex_dofs
 from .cavity import VolumeForm
 
@@ -92,9 +92,11 @@ class AreaForm:
         p, q = rest[pairs[:, 0]], rest[pairs[:, 1]]
         self.rest_measure = float(self.weights @ (p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0]))
 
-    def measure_and_gradient(self) -> tuple[float, np.ndarray]:
+    def measure_and_gradient(self, u: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+        """A(x) and dA/dx on the wall nodes, (k, 2) in loop order, at the model's displacements or at u (n, 2)."""
         gradient = np.empty((len(self.nodes), 2))
-        return wall_area(self.rest, self.config.u, self.loop, self.pairs, self.weights, gradient), gradient
+        u = self.config.u if u is None else np.ascontiguousarray(u, dtype=np.float64)
+        return wall_area(self.rest, u, self.loop, self.pairs, self.weights, gradient), gradient
 
     def hessian(self) -> np.ndarray:
         return self._hessian
@@ -122,9 +124,10 @@ class Chamber(Term):
         self.n_wall = len(self.loop_vertices)
         self.rest_area = self.form.rest_measure
 
-    def area_and_gradient(self) -> tuple[float, np.ndarray]:
-        """A(x) and dA/dx on the wall nodes, (k, d) in the order of loop_vertices."""
-        return self.form.measure_and_gradient()
+    def area_and_gradient(self, u: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+        """A(x) and dA/dx on the wall nodes, (k, d) in the order of loop_vertices, at the model's displacements
+        or at u (n, d)."""
+        return self.form.measure_and_gradient(u)
 
     def area(self) -> float:
         """The signed measure A(x) enclosed by the wall (an area in 2D, a volume in 3D)."""

@@ -1,0 +1,77 @@
+"""The one place the package gets Taichi from: Taichi itself where its wheel installs, else Quadrants.
+
+Quadrants (the Genesis project's fork of Taichi, `pip install quadrants`) keeps every name the kernels
+use (kernel, func, template, types.ndarray, Matrix, linalg.SparseMatrixBuilder / SparseSolver, init's
+options) and has wheels where Taichi has none: Python 3.14, Linux aarch64. Every module imports
+
+    from ..backend import ti
+
+and so runs unchanged on either. The choice: PNEUMA_BACKEND=taichi|quadrants forces one (an error
+naming the install command when it is not installed); without it, Taichi if it imports, else Quadrants.
+
+What differs is named here once: the environment variables each reads (Taichi's TI_*, Quadrants' QD_*),
+and the arches each has (Quadrants dropped OpenGL). Quadrants also dropped Taichi's GUIs (ti.GUI, GGUI);
+render/ asks has_gui() / has_ggui() and falls back to its own Pillow canvas.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+
+CHOICE_VARIABLE = "PNEUMA_BACKEND"
+INSTALL = {"taichi": 'pip install "taichi>=1.7,<1.8"', "quadrants": 'pip install "quadrants>=1.3.3,<1.5"'}
+# the environment variables the package sets, by backend: kernel cache folder, banner printed at import
+ENVIRONMENT = {
+    "taichi": {"cache": "TI_OFFLINE_CACHE_FILE_PATH", "banner": "ENABLE_TAICHI_HEADER_PRINT"},
+    "quadrants": {"cache": "QD_OFFLINE_CACHE_FILE_PATH", "banner": "ENABLE_QUADRANTS_HEADER_PRINT"},
+}
+ARCH_NAMES = ("cpu", "cuda", "vulkan", "metal", "opengl", "gpu")
+
+
+class BackendUnavailable(ImportError):
+    """Neither backend is installed, or PNEUMA_BACKEND names one that is not (or is not a backend)."""
+
+
+def _import(name: str):
+    try:
+        return importlib.import_module(name)
+    except ImportError as exc:
+        raise BackendUnavailable(f"{CHOICE_VARIABLE}={name}, but {name} does not import ({exc}); install it with: "
+                                 f"{INSTALL[name]}") from None
+
+
+def _choose():
+    forced = os.environ.get(CHOICE_VARIABLE, "")
+    if forced:
+        if forced not in INSTALL:
+            raise BackendUnavailable(f"{CHOICE_VARIABLE}={forced!r} is not one of {', '.join(INSTALL)}")
+        return forced, _import(forced)
+    for name in INSTALL:
+        try:
+            return name, importlib.import_module(name)
+        except ImportError:
+            continue
+    raise BackendUnavailable("neither taichi nor quadrants is installed; install one with: "
+                             + " or ".join(INSTALL.values()))
+
+
+NAME, ti = _choose()
+VERSION = ".".join(str(v) for v in ti.__version__)
+ARCHES = {name: getattr(ti, name) for name in ARCH_NAMES if hasattr(ti, name)}
+
+
+def environment_name(what: str) -> str:
+    """The environment variable this backend reads for `what` ('cache': its kernel cache folder,
+    'banner': whether it prints its version line at import)."""
+    return ENVIRONMENT[NAME][what]
+
+
+def has_gui() -> bool:
+    """Whether the backend has Taichi's software GUI (ti.GUI)."""
+    return hasattr(ti, "GUI")
+
+
+def has_ggui() -> bool:
+    """Whether the backend has Taichi's Vulkan GUI (ti.ui, GGUI)."""
+    return hasattr(ti, "ui")

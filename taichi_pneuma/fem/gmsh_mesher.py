@@ -1,0 +1,337 @@
+"""A 3D body with chamber cavities and material regions -> a linear tetrahedral mesh, by gmsh.
+
+The solid is built with OpenCASCADE (fem.solids shapes) and split by one boolean *fragment* of the
+body with every chamber and region shape. The chamber pieces inside the body are the cavities and are
+removed (pieces outside the body are dropped); every other piece inside the body is rubber, tagged with
+the last region whose shape contains it (0: the base material). A chamber wall is the part of the
+cavity's boundary shared with the rubber; where a chamber crosses the body's boundary (a symmetry plane
+of a half model) its wall is open, its rim on that plane, and the flat cap across it is not meshed (no
+rubber there): with an origin o on the plane, V = 1/3 int_wall (x - o) . n dA, as x - o is normal to n on the
+cap. Whether such a plane is a symmetry plane (rollers) is the scene's check. Physical groups name what is read
+back: the volume groups 'body' and each region, a surface group per chamber.
+
+Mesh size: tetrahedra of edge length about `size` in the bulk and `near` (MeshSizes.near_chambers)
+within `near` of the chamber walls, growing linearly to `size` over the grading distance d beyond
+(gmsh Distance and Threshold fields). Before meshing, the tetrahedron count is estimated as the volume
+over the volume of a regular tetrahedron of the local edge length h, h^3 / (6 sqrt 2):
+
+    tets ~ 6 sqrt 2 [ (V - A t) / size^3 + A int_0^t ds / h(s)^3 ],   t = near + d,
+
+with V the rubber's volume and A the chamber walls' area (from OpenCASCADE). gmsh's Delaunay meshes
+have 0.55-0.95 times that many, fewer the finer the mesh (more only where the mesh is much coarser than
+the thinnest wall, where the walls, not the size, set the count: the PneuNet, 0.08 walls, has 2.5 times
+the estimate at size 0.2 and 5 times at 0.3, a few thousand tetrahedra either way): a solid whose
+estimate exceeds max_tets is refused before meshing, and a mesh that still comes out larger is refused
+after.
+
+Returned arrays (SolidMesh): vertices (n, 3); tets (m, 4), each positively oriented,
+det[x1 - x0, x2 - x0, x3 - x0] > 0; per chamber its wall triangles (f, 3) oriented outward from the
+cavity, i.e. (x1 - x0) x (x2 - x0) points from the air into the rubber, so that for a closed wall
+
+    V = 1/3 sum_faces (centroid . n) area = 1/6 sum_faces x0 . (x1 x x2) > 0
+
+is the cavity's volume; boundary (b, 3): the triangles of the body's outer surface (cavity walls
+excluded), oriented outward from the body; regions (m,) the tag of each tetrahedron, k >= 1 the k-th
+entry of Solid.regions (region_names).
+
+gmsh is a GPL-licensed optional dependency (pip install 'taichi-pneuma[3d]'); each call initialises it,
+works silently in a model of its own and finalises it (or, if the caller has gmsh initialised already,
+removes only its own model and restores the options it set).
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import PneumaInputError, require, require_finite
+
+MAX_TETS = 200_000
+MAX_SHAPES = 64
+INSTALL = "pip install 'taichi-pneuma[3d]'"
+REGULAR_TET = 1 / (6 * np.sqrt(2))  # volume of the regular tetrahedron of unit edge
+BODY_GROUP = "body"
+# the global gmsh options meshing sets; a caller's gmsh session gets its values back afterwards
+OPTIONS = ("General.Terminal", "Mesh.MeshSizeMax", "Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature",
+           "Mesh.MeshSizeExtendFromBoundary")
+MAX_SAMPLING = 200  # points per direction on a wall surface for its distance field
+# a tetrahedron's four faces (corners in its local numbering), each oriented outward for a positive tetrahedron
+TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
+
+
+@dataclass(frozen=True)
+class MeshSizes:
+    """Target tetrahedron edge length: `size` in the bulk, `near_chambers` (default size) within that
+    distance of the chamber walls, growing linearly to `size` over `distance` (default 2 size) beyond."""
+
+    size: float
+    near_chambers: float | None = None
+    distance: float | None = None
+
+    def __post_init__(self):
+        require(require_finite("size", self.size) > 0, f"size = {self.size!r} must be > 0")
+        if self.near_chambers is not None:
+            near = require_finite("near_chambers", self.near_chambers)
+            require(0 < near <= self.size, f"near_chambers = {self.near_chambers!r} must lie in (0, size = {self.size:g}]")
+        if self.distance is not None:
+            require(require_finite("distance", self.distance) > 0, f"distance = {self.distance!r} must be > 0")
+
+    @property
+    def near(self) -> float:
+        return self.size if self.near_chambers is None else float(self.near_chambers)
+
+    @property
+    def grading(self) -> float:
+        return 2 * self.size if self.distance is None else float(self.distance)
+
+    @property
+    def shell(self) -> float:
+        """The thickness of the layer over the walls where the size is below `size`."""
+        return self.near + self.grading if self.near < self.size else 0.0
+
+    def shell_density(self) -> float:
+        """int over the shell's thickness of 1 / h(s)^3 ds: h = near up to s = near, then growing linearly
+        to size at s = near + grading."""
+        near, far = self.near, float(self.size)
+        if self.shell == 0.0:
+            return 0.0
+        return 1 / near ** 2 + self.grading / (far - near) * (1 / near ** 2 - 1 / far ** 2) / 2
+
+
+@dataclass(frozen=True)
+class Solid:
+    """A body shape with named chamber shapes (cavities) and named material-region shapes (the part of
+    the body inside a region's shape gets that region's material; later regions win where they overlap)."""
+
+    body: object
+    chambers: tuple[tuple[str, object], ...]
+    regions: tuple[tuple[str, object], ...] = ()
+
+    def __post_init__(self):
+        for what, entries in (("chambers", self.chambers), ("regions", self.regions)):
+            require(len(entries) <= MAX_SHAPES, f"{len(entries)} {what}: at most {MAX_SHAPES} are allowed")
+        names = [name for name, _ in self.chambers + self.regions]
+        require(all(isinstance(n, str) and n and n != BODY_GROUP for n in names),
+                f"chamber and region names {names!r} must be non-empty strings other than {BODY_GROUP!r}")
+        require(len(set(names)) == len(names), f"chamber and region names {names!r} must be distinct")
+        for what, shape in [("body", self.body)] + list(self.chambers + self.regions):
+            require(callable(getattr(shape, "build", None)), f"{what}: {shape!r} is not a 3D shape")
+
+
+@dataclass(frozen=True, eq=False)
+class SolidMesh:
+    """The arrays of a meshed Solid (see the module docstring for their orientation)."""
+
+    vertices: np.ndarray
+    tets: np.ndarray
+    chambers: dict[str, np.ndarray]
+    boundary: np.ndarray
+    regions: np.ndarray
+    region_names: tuple[str, ...] = field(default=())
+
+
+def _gmsh():
+    try:
+        import gmsh
+    except ImportError:
+        raise PneumaInputError(f"3D bodies from shapes are meshed by gmsh, which is not installed: {INSTALL}") from None
+    return gmsh
+
+
+@contextmanager
+def _session(verbose: bool = False):
+    """gmsh with a model of its own, silent unless verbose; initialised and finalised around the block (in a
+    caller's gmsh session: its current model and the options set here are restored instead). A gmsh
+    exception becomes a PneumaInputError quoting gmsh's last error lines."""
+    gmsh = _gmsh()
+    owner = not gmsh.isInitialized()
+    if owner:
+        gmsh.initialize(readConfigFiles=False, interruptible=False)
+    callers = None if owner else (gmsh.model.getCurrent(), {name: gmsh.option.getNumber(name) for name in OPTIONS})
+    gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
+    gmsh.logger.start()
+    gmsh.model.add("taichi_pneuma_solid")
+    try:
+        yield gmsh
+    except Exception as exc:
+        if isinstance(exc, PneumaInputError):
+            raise
+        log = [line for line in gmsh.logger.get() if "Error" in line or "error" in line]
+        raise PneumaInputError(f"gmsh could not mesh the solid: {'; '.join(log[-3:]) or exc}") from None
+    finally:
+        gmsh.logger.stop()
+        if owner:
+            gmsh.finalize()
+        else:
+            gmsh.model.remove()
+            gmsh.model.setCurrent(callers[0])
+            for name, value in callers[1].items():
+                gmsh.option.setNumber(name, value)
+
+
+class _Pieces:
+    """The fragmented solid: the rubber pieces with their region tags, and each chamber's wall surfaces."""
+
+    def __init__(self, gmsh, solid: Solid):
+        occ = gmsh.model.occ
+        body = solid.body.build(occ)
+        tools = [shape.build(occ) for _, shape in solid.chambers + solid.regions]
+        _, pieces = occ.fragment([(3, body)], [(3, t) for t in tools])
+        occ.synchronize()
+        volumes = [{tag for _, tag in p} for p in pieces]
+        inside, chambers, regions = volumes[0], volumes[1:1 + len(solid.chambers)], volumes[1 + len(solid.chambers):]
+        cavities = [c & inside for c in chambers]
+        for (name, _), cavity in zip(solid.chambers, cavities):
+            require(cavity, f"chamber {name!r} lies outside the body")
+        for (name, _), region in zip(solid.regions, regions):
+            require(region & inside, f"region {name!r} lies outside the body")
+        for i, (a, c) in enumerate(zip(solid.chambers, cavities)):
+            for b, d in zip(solid.chambers[i + 1:], cavities[i + 1:]):
+                require(not c & d, f"chambers {a[0]!r} and {b[0]!r} overlap")
+        hollow = set().union(*cavities)
+        self.rubber = {tag: 0 for tag in sorted(inside - hollow)}
+        for k, region in enumerate(regions, start=1):
+            self.rubber.update({tag: k for tag in region if tag in self.rubber})
+        require(self.rubber, "the chambers fill the whole body: no rubber is left")
+        rubber_faces = _faces(gmsh, self.rubber, combined=False)
+        self.walls = {}
+        for (name, _), cavity in zip(solid.chambers, cavities):
+            surface = _faces(gmsh, cavity)
+            others = set().union(*(c for c in cavities if c is not cavity))
+            require(not surface & _faces(gmsh, others, combined=False), f"chamber {name!r} touches another chamber")
+            self.walls[name] = sorted(surface & rubber_faces)
+            require(self.walls[name], f"chamber {name!r} has no wall inside the body")
+        dropped = set().union(*volumes) - set(self.rubber)
+        occ.remove([(3, v) for v in sorted(dropped)], recursive=True)
+        occ.synchronize()
+        self.volume = sum(occ.getMass(3, v) for v in self.rubber)
+        self.wall_area = sum(occ.getMass(2, s) for walls in self.walls.values() for s in walls)
+
+
+def _faces(gmsh, volumes, combined: bool = True) -> set[int]:
+    """The surface tags bounding the volumes: of their union (combined), or of each one."""
+    if not volumes:
+        return set()
+    return {abs(t) for _, t in gmsh.model.getBoundary([(3, v) for v in volumes], combined=combined, oriented=False)}
+
+
+def estimate_tets(solid: Solid, sizes: MeshSizes) -> float:
+    """The estimated tetrahedron count of mesh_solid(solid, sizes) (module docstring), from the solid's
+    geometry alone: gmsh builds it, nothing is meshed."""
+    with _session() as gmsh:
+        return _estimate(_Pieces(gmsh, solid), sizes)
+
+
+def _estimate(pieces: _Pieces, sizes: MeshSizes) -> float:
+    area = min(pieces.wall_area, pieces.volume / sizes.shell) if sizes.shell else 0.0
+    bulk = pieces.volume - area * sizes.shell
+    return (bulk / sizes.size ** 3 + area * sizes.shell_density()) / REGULAR_TET
+
+
+def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose: bool = False) -> SolidMesh:
+    """Mesh the solid with linear tetrahedra (gmsh: OpenCASCADE fragment, Delaunay), or raise one
+    PneumaInputError: bad geometry, an estimate or a mesh over max_tets (--max-tets raises it), or
+    gmsh failing (its error line quoted)."""
+    with _session(verbose) as gmsh:
+        pieces = _Pieces(gmsh, solid)
+        estimate = _estimate(pieces, sizes)
+        require(estimate <= max_tets,
+                f"the mesh would have about {estimate:.3g} tetrahedra (volume {pieces.volume:.4g}, size {sizes.size:g}, "
+                f"near chambers {sizes.near:g}); the limit is {max_tets} tetrahedra (--max-tets raises it)")
+        model = gmsh.model
+        for k, name in enumerate([BODY_GROUP] + [name for name, _ in solid.regions]):
+            tags = [v for v, r in pieces.rubber.items() if r == k]
+            if tags:  # a region wholly overridden by later ones has no group
+                model.addPhysicalGroup(3, tags, name=name)
+        for name, walls in pieces.walls.items():
+            model.addPhysicalGroup(2, walls, name=name)
+        _set_sizes(gmsh, sizes, [s for walls in pieces.walls.values() for s in walls])
+        model.mesh.generate(3)
+        return _read(gmsh, solid, pieces, max_tets)
+
+
+def _set_sizes(gmsh, sizes: MeshSizes, walls: list[int]) -> None:
+    """Edge length `size` everywhere, `near` within `near` of the walls, growing linearly to `size` over the
+    grading distance beyond (gmsh Distance and Threshold fields; the walls sampled at about near / 2)."""
+    option = gmsh.option.setNumber
+    option("Mesh.MeshSizeMax", sizes.size)
+    for name in ("Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature", "Mesh.MeshSizeExtendFromBoundary"):
+        option(name, 0)
+    if sizes.near < sizes.size:
+        field = gmsh.model.mesh.field
+        distance = field.add("Distance")
+        field.setNumbers(distance, "SurfacesList", walls)
+        extent = max(np.ptp(np.reshape(gmsh.model.getBoundingBox(2, s), (2, 3)), axis=0).max() for s in walls)
+        field.setNumber(distance, "Sampling", int(np.clip(2 * extent / sizes.near, 20, MAX_SAMPLING)))
+        threshold = field.add("Threshold")
+        field.setNumber(threshold, "InField", distance)
+        for key, value in (("SizeMin", sizes.near), ("SizeMax", sizes.size), ("DistMin", sizes.near),
+                           ("DistMax", sizes.near + sizes.grading)):
+            field.setNumber(threshold, key, value)
+        field.setAsBackgroundMesh(threshold)
+
+
+def _elements(gmsh, dim: int, entities, kind: int, corners: int) -> np.ndarray:
+    """The node tags (k, corners) of the elements of gmsh type `kind` on the given entities."""
+    blocks = [gmsh.model.mesh.getElementsByType(kind, tag)[1] for tag in entities]
+    return np.concatenate(blocks).astype(np.int64).reshape(-1, corners) if blocks else np.zeros((0, corners), np.int64)
+
+
+def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
+    """The mesh's arrays: nodes renumbered 0..n-1 (those of tetrahedra only), tetrahedra oriented, faces
+    matched to the tetrahedra's boundary faces for their orientation."""
+    mesh = gmsh.model.mesh
+    blocks = {k: _elements(gmsh, 3, [v for v, r in pieces.rubber.items() if r == k], 4, 4)
+              for k in range(len(solid.regions) + 1)}
+    tags = np.concatenate(list(blocks.values()))
+    regions = np.concatenate([np.full(len(b), k) for k, b in blocks.items()])
+    require(len(tags) <= max_tets, f"the mesh has {len(tags)} tetrahedra; the limit is {max_tets} (--max-tets raises it)")
+    node_tags, coords, _ = mesh.getNodes()
+    used, tets = np.unique(tags, return_inverse=True)
+    tets = tets.reshape(-1, 4)
+    position = np.empty(int(node_tags.max()) + 1, dtype=np.int64)
+    position[node_tags.astype(np.int64)] = np.arange(len(node_tags))
+    vertices = coords.reshape(-1, 3)[position[used]]
+    tets = positively_oriented(vertices, tets)
+    faces = tets[:, TET_FACES].reshape(-1, 3)
+    keys = face_keys(faces, len(vertices))
+    unique, first, counts = np.unique(keys, return_index=True, return_counts=True)
+    outer = first[counts == 1]  # faces of one tetrahedron only: the body's surface, walls included
+    index = {int(k): int(i) for k, i in zip(keys[outer], outer)}
+    local = np.full(int(used.max()) + 1, -1, dtype=np.int64)
+    local[used] = np.arange(len(used))
+    chambers, on_wall = {}, set()
+    for name, walls in pieces.walls.items():
+        triangles = local[_elements(gmsh, 2, walls, 2, 3)]
+        wall_keys = face_keys(triangles, len(vertices))
+        rows = [index.get(int(k), -1) for k in wall_keys]
+        require(min(rows, default=-1) >= 0, f"chamber {name!r}: its wall mesh does not match the tetrahedra's faces")
+        chambers[name] = faces[rows][:, ::-1].copy()  # outward from the rubber = into the cavity: reversed
+        on_wall.update(rows)
+    boundary = faces[[i for i in outer if i not in on_wall]]
+    return SolidMesh(vertices, tets, chambers, boundary, regions.astype(np.int64),
+                     tuple(name for name, _ in solid.regions))
+
+
+def positively_oriented(vertices: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """tets with the last two corners swapped where det[x1 - x0, x2 - x0, x3 - x0] < 0."""
+    x = vertices[tets]
+    negative = np.linalg.det(x[:, 1:] - x[:, :1]) < 0
+    tets = tets.copy()
+    tets[negative, 2:] = tets[negative, 3:1:-1]
+    return tets
+
+
+def face_keys(faces: np.ndarray, n: int) -> np.ndarray:
+    """One integer per triangle, the same for any order of its corners: sorted corners in base n."""
+    s = np.sort(faces, axis=1).astype(np.int64)
+    return (s[:, 0] * n + s[:, 1]) * n + s[:, 2]
+
+
+def cavity_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """1/6 sum_faces x0 . (x1 x x2): the volume a closed surface encloses, positive when its faces are
+    oriented outward from the enclosed region."""
+    x = vertices[faces]
+    return float(np.einsum("ij,ij->", x[:, 0], np.cross(x[:, 1], x[:, 2])) / 6)

@@ -1,0 +1,78 @@
+"""A PneuNet bending actuator from a few dimensions: a rubber block with a row of rounded-box chambers
+near its top and a stiffer strain-limiting layer at its bottom.
+
+Inflated, the chambers stretch the soft top while the layer keeps the bottom's length, so the finger
+curls towards the layer (down, -y). Along x, from the left (clamped) end:
+
+    end | chamber | gap | chamber | ... | chamber | end          length = 2 end + n chamber_length + (n - 1) gap
+
+and from the bottom up: layer (region 'layer'), base, chamber_height, wall; across z: wall,
+chamber_width, wall. The block is centred on the origin. The chambers are named c1 .. cn from the left
+and sealed from each other (a real PneuNet joins them by a thin air channel; here they are commanded
+together by giving them the same schedule). The defaults extrude the 2D pneunet_finger scene: a 4 x 0.8
+block, six 0.4 x 0.5 chambers with 0.1 gaps, a 0.15 layer, here 0.76 deep.
+
+The dataclass fields are the keys of the scene file's [body] table with shape = "pneunet".
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..errors import require, require_finite
+from .solids import Box, RoundedBox
+from .gmsh_mesher import MAX_SHAPES, Solid
+
+LAYER = "layer"
+
+
+@dataclass(frozen=True)
+class PneuNet:
+    """The actuator's dimensions (see the module docstring); radius rounds the chambers' edges (0: sharp)."""
+
+    chambers: int = 6
+    chamber_length: float = 0.4
+    chamber_height: float = 0.5
+    chamber_width: float = 0.6
+    radius: float = 0.08
+    gap: float = 0.1
+    wall: float = 0.08
+    end: float = 0.55
+    base: float = 0.07
+    layer: float = 0.15
+
+    def __post_init__(self):
+        require(isinstance(self.chambers, int) and not isinstance(self.chambers, bool)
+                and 1 <= self.chambers <= MAX_SHAPES,
+                f"chambers = {self.chambers!r} must be an integer from 1 to {MAX_SHAPES}")
+        for name in ("chamber_length", "chamber_height", "chamber_width", "gap", "wall", "end", "base"):
+            value = getattr(self, name)
+            require(require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
+        for name in ("radius", "layer"):
+            value = getattr(self, name)
+            require(require_finite(name, value) >= 0, f"{name} = {value!r} must be >= 0")
+        shortest = min(self.chamber_length, self.chamber_height, self.chamber_width)
+        require(self.radius < shortest / 2,
+                f"radius = {self.radius!r} must be < {shortest / 2:g} (half the chamber's shortest side)")
+
+    @property
+    def size(self) -> tuple[float, float, float]:
+        """The block's (length, height, width)."""
+        n = self.chambers
+        return (2 * self.end + n * self.chamber_length + (n - 1) * self.gap,
+                self.layer + self.base + self.chamber_height + self.wall,
+                self.chamber_width + 2 * self.wall)
+
+    def solid(self) -> Solid:
+        """The block, its chambers c1 .. cn and, if layer > 0, the region 'layer' (the bottom slab)."""
+        length, height, width = self.size
+        chamber = (self.chamber_length, self.chamber_height, self.chamber_width)
+        y = -height / 2 + self.layer + self.base + self.chamber_height / 2
+        chambers = []
+        for i in range(self.chambers):
+            x = -length / 2 + self.end + self.chamber_length / 2 + i * (self.chamber_length + self.gap)
+            shape = (RoundedBox((x, y, 0.0), chamber, self.radius) if self.radius > 0
+                     else Box((x, y, 0.0), chamber))
+            chambers.append((f"c{i + 1}", shape))
+        regions = ((LAYER, Box((0.0, (self.layer - height) / 2, 0.0), (length, self.layer, width))),) if self.layer else ()
+        return Solid(Box((0.0, 0.0, 0.0), self.size), tuple(chambers), regions)

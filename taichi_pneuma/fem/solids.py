@@ -1,0 +1,157 @@
+"""3D shapes for bodies, chambers and material regions, each built as an OpenCASCADE solid in gmsh.
+
+Axes: x along the body (the clamp at its left end), y up (the bending direction of a 2D scene),
+z the depth (a 2D shape in the x-y plane is extruded along z). Shapes are axis-aligned:
+
+- Box(center, size): the box center +- size / 2;
+- RoundedBox(center, size, radius): the same box with every edge and corner rounded at `radius`,
+  i.e. the inner box (size - 2 radius) swept by a ball of that radius;
+- Ellipsoid(center, semi_axes): sum ((x_i - c_i) / a_i)^2 <= 1;
+- Cylinder(center, radius, length, axis): a circular cylinder along axis 'x', 'y' or 'z';
+- Extrusion(profile, depth, z): a 2D shape of the scene format (fem.geometry: Rectangle, Ellipse,
+  RoundedRectangle, Polygon, RectangleUnion) swept along z from z - depth / 2 to z + depth / 2.
+  Rectangles, ellipses and rounded rectangles are built from their exact curves (the 2D shape's
+  `points` sampling does not apply: the 3D mesh size does); any other shape from its polygon().
+
+Each shape's build(occ) adds it to the current gmsh model through gmsh.model.occ and returns the new
+volume's tag; gmsh itself is only imported by fem.gmsh_mesher, which calls these.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import require, require_finite, shape_of
+from .geometry import Ellipse, Rectangle, RoundedRectangle
+
+AXES = ("x", "y", "z")
+
+
+def _vector(name: str, value, positive: bool = False) -> tuple[float, float, float]:
+    """value as three finite numbers (all > 0 if positive), or a PneumaInputError naming it."""
+    require(shape_of(value) == (3,), f"{name} = {value!r} must be three numbers [x, y, z]")
+    vector = tuple(require_finite(name, v) for v in value)
+    if positive:
+        require(min(vector) > 0, f"{name} = {list(value)!r} must be > 0 in each of x, y, z")
+    return vector
+
+
+def _positive(name: str, value) -> float:
+    v = require_finite(name, value)
+    require(v > 0, f"{name} = {value!r} must be > 0")
+    return v
+
+
+@dataclass(frozen=True)
+class Box:
+    """The axis-aligned box center +- size / 2."""
+
+    center: tuple[float, float, float]
+    size: tuple[float, float, float]
+
+    def __post_init__(self):
+        _vector("center", self.center)
+        _vector("size", self.size, positive=True)
+
+    def build(self, occ) -> int:
+        corner = np.subtract(self.center, np.divide(self.size, 2))
+        return occ.addBox(*corner, *self.size)
+
+
+@dataclass(frozen=True)
+class RoundedBox:
+    """A box whose 12 edges are quarter cylinders and 8 corners eighth spheres of `radius`
+    (0 < radius < half the shortest side)."""
+
+    center: tuple[float, float, float]
+    size: tuple[float, float, float]
+    radius: float
+
+    def __post_init__(self):
+        _vector("center", self.center)
+        shortest = min(_vector("size", self.size, positive=True))
+        r = require_finite("radius", self.radius)
+        require(0 < r < shortest / 2, f"radius = {self.radius!r} must lie in (0, {shortest / 2:g}) (half the shortest side)")
+
+    def build(self, occ) -> int:
+        before = set(occ.getEntities(1))
+        box = Box(self.center, self.size).build(occ)
+        edges = sorted(tag for _, tag in set(occ.getEntities(1)) - before)
+        (_, volume), = occ.fillet([box], edges, [self.radius])
+        return volume
+
+
+@dataclass(frozen=True)
+class Ellipsoid:
+    """The ellipsoid of semi-axes (a, b, c) along x, y, z about center."""
+
+    center: tuple[float, float, float]
+    semi_axes: tuple[float, float, float]
+
+    def __post_init__(self):
+        _vector("center", self.center)
+        _vector("semi_axes", self.semi_axes, positive=True)
+
+    def build(self, occ) -> int:
+        ball = occ.addSphere(*self.center, 1.0)
+        occ.dilate([(3, ball)], *self.center, *self.semi_axes)
+        return ball
+
+
+@dataclass(frozen=True)
+class Cylinder:
+    """A circular cylinder of `radius` and `length` along `axis` ('x', 'y' or 'z'), centred on center."""
+
+    center: tuple[float, float, float]
+    radius: float
+    length: float
+    axis: str = "z"
+
+    def __post_init__(self):
+        _vector("center", self.center)
+        _positive("radius", self.radius)
+        _positive("length", self.length)
+        require(self.axis in AXES, f"axis = {self.axis!r} is not one of {', '.join(AXES)}")
+
+    def build(self, occ) -> int:
+        direction = np.eye(3)[AXES.index(self.axis)] * self.length
+        return occ.addCylinder(*(np.asarray(self.center) - direction / 2), *direction, self.radius)
+
+
+@dataclass(frozen=True)
+class Extrusion:
+    """A 2D profile shape (in the x-y plane, with a polygon() method) swept along z over depth, centred on z."""
+
+    profile: object
+    depth: float
+    z: float = 0.0
+
+    def __post_init__(self):
+        require(callable(getattr(self.profile, "polygon", None)),
+                f"profile = {self.profile!r} is not a 2D shape (rectangle, ellipse, rounded_rectangle, polygon or union)")
+        _positive("depth", self.depth)
+        require_finite("z", self.z)
+
+    def build(self, occ) -> int:
+        z0 = self.z - self.depth / 2
+        surface = _section(occ, self.profile, z0)
+        extruded = occ.extrude([(2, surface)], 0.0, 0.0, self.depth)
+        return next(tag for dim, tag in extruded if dim == 3)
+
+
+def _section(occ, shape, z: float) -> int:
+    """The plane surface of a 2D shape at height z: exact curves for rectangles, ellipses and rounded
+    rectangles, the polygon() outline for any other shape."""
+    if isinstance(shape, (Rectangle, RoundedRectangle)):
+        (cx, cy), (w, h) = shape.center, shape.size
+        radius = shape.radius if isinstance(shape, RoundedRectangle) else 0.0
+        return occ.addRectangle(cx - w / 2, cy - h / 2, z, w, h, roundedRadius=radius)
+    if isinstance(shape, Ellipse):
+        (cx, cy), (a, b) = shape.center, shape.semi_axes
+        # OpenCASCADE wants the major radius first: for b > a the ellipse's first axis is y
+        return occ.addDisk(cx, cy, z, a, b) if a >= b else occ.addDisk(cx, cy, z, b, a, xAxis=[0, 1, 0])
+    points = [occ.addPoint(x, y, z) for x, y in shape.polygon()]
+    lines = [occ.addLine(p, q) for p, q in zip(points, points[1:] + points[:1])]
+    return occ.addPlaneSurface([occ.addCurveLoop(lines)])

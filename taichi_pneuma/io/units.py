@@ -1,0 +1,82 @@
+"""A scene's units: a consistent system of a length unit and a pressure (stress) unit, and the labels its outputs
+carry.
+
+    units = "mm-kPa"    lengths in millimetres, pressures and moduli in kilopascals
+    units = "mm-MPa"    millimetres and megapascals (N and mm: Abaqus' usual system)
+    units = "m-Pa"      SI
+    (no units key)      unitless, as the reference scene: numbers are what the scene says they are
+
+Every other quantity follows from these two: an area is length^2, a force per unit depth (the 2D contact
+force) pressure x length, an energy per unit depth pressure x length^2. Material presets are stored in SI and
+converted into a scene's units (a modulus in Pa divided by the pressure unit in Pa). Angles are in degrees and
+times in seconds whatever the system.
+
+Outputs of a scene with units say their unit: a column or array named `x` is written `x [unit]` (history CSV
+headers, VTU arrays and field data), printed values carry the unit, plots label their axes with it and the
+summary JSON has a "units" entry. A unitless scene's outputs are named as they always were.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+LENGTH, AREA, PRESSURE, FORCE, ANGLE, TIME = "length", "area", "pressure", "force", "angle", "time"
+VOLUME = "volume"  # a 3D chamber's measure
+MEASURES = {2: AREA, 3: VOLUME}  # what a chamber encloses, by dimension
+
+
+@dataclass(frozen=True)
+class Units:
+    """A system of units: its name (None: unitless), the length and pressure units' symbols and sizes in SI."""
+
+    name: str | None = None
+    length: str = ""
+    pressure: str = ""
+    metre: float = 1.0  # the length unit, in m
+    pascal: float = 1.0  # the pressure unit, in Pa
+
+    def symbol(self, dimension: str) -> str:
+        """The unit of a dimension (LENGTH, AREA, PRESSURE, FORCE per unit depth, ANGLE, TIME) in this system;
+        "" when unitless or dimensionless ("")."""
+        if self.name is None or not dimension:
+            return ""
+        return {LENGTH: self.length, AREA: f"{self.length}^2", PRESSURE: self.pressure,
+                FORCE: f"{self.pressure} {self.length}", ANGLE: "deg", TIME: "s",
+                VOLUME: f"{self.length}^3"}[dimension]
+
+    def label(self, name: str, dimension: str) -> str:
+        """name with its unit in brackets ("main.pressure [kPa]"); name itself when there is none."""
+        unit = self.symbol(dimension)
+        return f"{name} [{unit}]" if unit else name
+
+    def suffix(self, dimension: str) -> str:
+        """" kPa" after a printed value; "" when there is no unit."""
+        unit = self.symbol(dimension)
+        return f" {unit}" if unit else ""
+
+    def summary(self) -> dict | None:
+        """The summary JSON's "units" entry: the system and each dimension's unit (None when unitless)."""
+        if self.name is None:
+            return None
+        return {"system": self.name, **{d: self.symbol(d) for d in (LENGTH, AREA, PRESSURE, FORCE, ANGLE, TIME)}}
+
+
+UNITLESS = Units()
+UNITS = {u.name: u for u in (Units("mm-kPa", "mm", "kPa", 1e-3, 1e3), Units("mm-MPa", "mm", "MPa", 1e-3, 1e6),
+                             Units("m-Pa", "m", "Pa", 1.0, 1.0))}
+
+# Dimensions of the history columns that are not per chamber or per contact (those are set by history_dimensions)
+FIXED_COLUMNS = {"tip_dx": LENGTH, "tip_dy": LENGTH, "tip_rotation": ANGLE, "seconds": TIME, "target_x": LENGTH,
+                 "target_y": LENGTH, "target_angle": ANGLE, "tip_x": LENGTH, "tip_y": LENGTH, "tip_error": LENGTH}
+
+
+def history_dimensions(scene, contacts=()) -> dict[str, str]:
+    """The dimension of every history column (simulate.StepRecord.row) with one, for a scene (its chambers'
+    commands have their kinds' dimensions) and the names of its contact terms."""
+    dimensions = dict(FIXED_COLUMNS)
+    for name, control in zip(scene.chamber_names, scene.controls):
+        dimensions.update({f"{name}.command": control.kind.dimension, f"{name}.area": AREA,
+                           f"{name}.pressure": PRESSURE})
+    for name in contacts:
+        dimensions.update({f"{name}.{part}": FORCE for part in ("fx", "fy", "magnitude")})
+    return dimensions

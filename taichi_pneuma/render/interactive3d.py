@@ -1,0 +1,104 @@
+"""Interactive 3D: a GGUI window with a slider per chamber and a camera orbiting the body.
+
+Moving a slider re-solves the equilibrium at the new commands (the caller's solve function, warm-started
+by the caller) and redraws the body; dragging with the left mouse button outside the slider panel turns
+the camera about the body (a drag across the whole window width: DRAG_DEGREES of azimuth; up and down:
+elevation, held short of the poles), and `spin` turns it by that many degrees every frame.
+The window knows nothing of the solver: solve(commands) -> (positions (n, 3), caption lines).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..backend import ti
+from ..errors import require, require_finite
+from .camera import Camera
+from .frames3d import BACKGROUND, section_faces, shaded_triangles
+from .ggui3d import GGUIView
+
+DRAG_DEGREES = (360.0, 180.0)  # (azimuth, elevation) turned by a drag across the whole window
+PANEL_WIDTH = 0.34  # the slider panel's width, as a share of the window's
+ROW_HEIGHT_PX = 30
+
+
+@dataclass(frozen=True)
+class Slider:
+    """A chamber's command slider: its name, range and starting value."""
+
+    name: str
+    low: float
+    high: float
+    value: float
+
+    def __post_init__(self):
+        low, high, value = (require_finite(f"slider {self.name!r}", v) for v in (self.low, self.high, self.value))
+        require(low < high and low <= value <= high,
+                f"slider {self.name!r}: need low < high and the value within, got {low:g}, {high:g}, {value:g}")
+
+
+def commands_from(sliders: list[Slider], shown: np.ndarray, values: list[float]) -> np.ndarray | None:
+    """The new commands if the user moved a slider, else None: `values` as GGUI returns them (float32,
+    clamped to each range here) compared with the commands on screen, to 1e-6 of each range."""
+    low, high = np.array([s.low for s in sliders]), np.array([s.high for s in sliders])
+    values = np.clip(np.asarray(values, dtype=float), low, high)
+    return values if np.any(np.abs(values - shown) > 1e-6 * (high - low)) else None
+
+
+def dragged(camera: Camera, start: tuple[float, float], end: tuple[float, float]) -> Camera:
+    """The camera turned by a mouse drag from start to end (normalised window coordinates, origin bottom-left):
+    rightwards turns the eye to the left round the body (the body seems to turn right), upwards lowers it."""
+    dx, dy = end[0] - start[0], end[1] - start[1]
+    return camera.orbit(-DRAG_DEGREES[0] * dx, -DRAG_DEGREES[1] * dy)
+
+
+def in_panel(cursor: tuple[float, float], rows: int, height: int) -> bool:
+    """Whether a cursor position (normalised, origin bottom-left) lies on the slider panel (top left)."""
+    return cursor[0] <= PANEL_WIDTH and cursor[1] >= 1 - (rows + 1) * ROW_HEIGHT_PX / height
+
+
+def explore_3d(solve, sliders: list[Slider], rest: np.ndarray, boundary: np.ndarray, chambers: tuple,
+               size: tuple[int, int] = (960, 640), camera: Camera | None = None, spin: float = 0.0,
+               section: bool = True, max_frames: int | None = None) -> dict:
+    """Run the window until it is closed (or for max_frames frames). Returns {'solves', 'frames', 'fps'
+    (frames per second over the frames after the first), 'commands', 'azimuth', 'elevation'}."""
+    width, height = size
+    view = GGUIView(width, height, show=True)
+    window, gui = view.window, view.window.get_gui()
+    camera = (camera or Camera()).fitted(rest, width, height, margin=0.2)
+    walls = np.concatenate(chambers) if len(chambers) else np.zeros((0, 3), np.int64)
+    faces = boundary[section_faces(rest, boundary, camera)] if section and len(chambers) else boundary
+    shown = np.array([s.value for s in sliders], dtype=float)
+    x, caption = solve(shown)
+    solves, frames, seconds, last = 1, 0, 0.0, None
+    print(f"interactive: {len(sliders)} sliders (top left); drag to turn the view; close the window to quit")
+    try:
+        while window.running and (max_frames is None or frames < max_frames):
+            start = time.perf_counter()
+            with gui.sub_window("chambers", 0.0, 0.0, PANEL_WIDTH, (len(sliders) + 1) * ROW_HEIGHT_PX / height):
+                values = [gui.slider_float(s.name, float(v), s.low, s.high) for s, v in zip(sliders, shown)]
+                for line in caption:
+                    gui.text(line)
+            moved = commands_from(sliders, shown, values)
+            if moved is not None:
+                shown = moved
+                x, caption = solve(shown)
+                solves += 1
+            cursor = tuple(float(c) for c in window.get_cursor_pos())
+            pressed = window.is_pressed(ti.ui.LMB)
+            if pressed and last is not None:
+                camera = dragged(camera, last, cursor)
+            last = cursor if pressed and not in_panel(cursor, len(sliders), height) else None
+            camera = camera.orbit(spin, 0.0)
+            view.draw(*shaded_triangles(x, faces, walls, camera), camera, BACKGROUND)
+            window.show()
+            if frames:
+                seconds += time.perf_counter() - start
+            frames += 1
+    finally:
+        view.close()
+    return {"solves": solves, "frames": frames, "fps": (frames - 1) / seconds if seconds else None,
+            "commands": shown.tolist(), "azimuth": camera.azimuth, "elevation": camera.elevation}
