@@ -12,6 +12,7 @@ and the memory from the measured peak of a solve, about BYTES_PER_TRIANGLE per t
 at 35k-114k triangles, CPU backend), plus the stored states: positions (and, with contact, contact
 forces) of every step, 16 bytes per vertex each. Each uniform refinement multiplies the triangles by 4;
 a quadratic triangle counts as 4 linear ones (it has as many nodes, and a Hessian block 4 times larger).
+A 3D geometry (dim = 3) gives its own size_estimate() (tetrahedra, nodes), counted against the same limit.
 Self-contact holds a pair per (wall node, wall edge not incident to it): k (k - 2) for a wall of k nodes,
 quadratic in the wall; a pair costs about BYTES_PER_PAIR (its indices, its 36-entry Hessian block and
 the assembled matrix's share: 2.5-2.7 kB measured at 0.25M-4M pairs), counted as BYTES_PER_PAIR /
@@ -40,6 +41,7 @@ MAX_FRAME_PIXELS = 3840 * 2160
 BYTES_PER_TRIANGLE = 4_000
 BYTES_PER_PAIR = 2_500
 MAX_RUNS = 100_000  # runs of one design study (apps/sweep.py --max-runs)
+BYTES_PER_TETRAHEDRON = 6_000
 
 _budget: ContextVar[int | None] = ContextVar("triangle budget", default=None)
 
@@ -94,7 +96,32 @@ def wall_pairs(points: list[int]) -> int:
 def check_scene(scene, max_triangles: int = MAX_TRIANGLES, max_increments: int = MAX_INCREMENTS) -> None:
     """Refuse (PneumaInputError) a scene whose estimated mesh (its terms' pairs included) or increment count
     is past the limits."""
-    from .fem.geometry import signed_area  # imported here: this module is read by the apps' --help
+    geometry = scene.geometry
+    if getattr(geometry, "dim", 2) == 3:
+        check_solid(scene, max_triangles)
+    else:
+        check_planar(scene, max_triangles)
+    require(scene.increments <= max_increments,
+            f"the schedule has {scene.increments} increments; the limit is {max_increments} "
+            f"(--max-increments raises it)")
+
+
+def check_solid(scene, max_elements: int) -> None:
+    """A 3D scene: its geometry's (tetrahedra, nodes) estimate, a quadratic tetrahedron counted 8 times (8 times
+    a linear one's Hessian block, 9 times its nodes)."""
+    geometry = scene.geometry
+    tetrahedra, nodes = geometry.size_estimate()
+    linear = tetrahedra * (8 if geometry.order == 2 else 1)
+    per_step = 2 if any(e.contact for e in scene.effects) else 1
+    memory = BYTES_PER_TETRAHEDRON * linear + 24 * per_step * nodes * (scene.increments + 1)
+    quadratic = " quadratic tetrahedra, counted 8 times" if geometry.order == 2 else " tetrahedra"
+    require(linear <= max_elements, f"the mesh has {tetrahedra}{quadratic} and needs about {memory / 1e9:.3g} GB; "
+                                    f"the limit is {max_elements} elements (--max-triangles raises it)")
+
+
+def check_planar(scene, max_triangles: int) -> None:
+    """A 2D scene: the triangles estimated from its outlines and its terms' pairs (module docstring)."""
+    from .fem.geometry import signed_area
 
     geometry = scene.geometry
     loops = [geometry.body.polygon()] + [shape.polygon() for _, shape in geometry.chambers]
@@ -115,9 +142,6 @@ def check_scene(scene, max_triangles: int = MAX_TRIANGLES, max_increments: int =
             f"the mesh would have about {triangles:.3g}{quadratic} (meshed area {area:.4g} / max_area "
             f"{geometry.max_area:.3g}, {points} outline points){contact} and need about {memory / 1e9:.3g} GB; "
             f"the limit is {max_triangles} triangles (--max-triangles raises it)")
-    require(scene.increments <= max_increments,
-            f"the schedule has {scene.increments} increments; the limit is {max_increments} "
-            f"(--max-increments raises it)")
 
 
 def check_frame(width: int, height: int, max_pixels: int = MAX_FRAME_PIXELS) -> None:

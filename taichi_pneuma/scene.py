@@ -10,7 +10,6 @@ allocated and no kernel compiled or launched for it.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -58,7 +57,8 @@ AnyMaterial = Material | IsochoricMaterial | PresetMaterial
 
 @dataclass(frozen=True)
 class Region:
-    """A material for the triangles whose centroid lies in box [x0, y0, x1, y1]; later regions win."""
+    """A material for the elements whose centroid lies in box [x0, y0, x1, y1] ([x0, y0, z0, x1, y1, z1] in 3D);
+    later regions win."""
 
     box: tuple[float, float, float, float]
     material: AnyMaterial
@@ -67,7 +67,7 @@ class Region:
         require_box("box", self.box)
 
     def contains(self, points: np.ndarray) -> np.ndarray:
-        return in_box(points, self.box)
+        return in_box(points, self.box, "material region")
 
 
 @dataclass(frozen=True)
@@ -160,8 +160,8 @@ class Scene:
         """The material law of the body and its parameter vector for every element, (m, p): the base material's,
         then each region's for the elements whose centroid it contains, in order."""
         law, (base, *rows) = self.law_parameters()
-        centroids = mesh.vertices[mesh.triangles].mean(axis=1)
-        parameters = np.tile(base, (mesh.n_triangles, 1))
+        centroids = mesh.vertices[mesh.elements].mean(axis=1)
+        parameters = np.tile(base, (mesh.n_elements, 1))
         for region, row in zip(self.regions, rows):
             parameters[region.contains(centroids)] = row
         return law, parameters
@@ -172,18 +172,19 @@ class Scene:
         mesh = self.geometry.mesh()
         law, parameters = self.element_material(mesh)
         # Round-off scales, from the stiffest modulus (neo-Hookean: mu + lam, which grows without bound as
-        # nu -> 1/2): forces below 1e-6 modulus sqrt(body area), energies below 1e-12 modulus (body area).
+        # nu -> 1/2): forces below 1e-6 modulus (body measure)^((d - 1) / d) (a stress times the measure of a
+        # cross-section: sqrt(area) in 2D, volume^(2/3) in 3D), energies below 1e-12 modulus (body measure).
         modulus = float(np.max(law.modulus(parameters)))
-        model = EnergyModel(mesh.vertices, force_floor=1e-6 * modulus * math.sqrt(mesh.area),
-                            energy_resolution=1e-12 * modulus * mesh.area)
+        model = EnergyModel(mesh.vertices, force_floor=1e-6 * modulus * mesh.measure ** ((mesh.dim - 1) / mesh.dim),
+                            energy_resolution=1e-12 * modulus * mesh.measure)
         config = model.config
-        elastic = model.add(Elasticity(config, mesh.triangles, law, parameters))
+        elastic = model.add(Elasticity(config, mesh.elements, law, parameters))
         chambers = [model.add(control.term(config, loop, name, mesh.order, origin)) for control, loop, origin, name
                     in zip(self.controls, mesh.chambers, mesh.wall_origins, self.chamber_names)]
         model.add(Clamp(config, mesh.pinned, self.clamp_stiffness))
         for nodes, normal in mesh.rollers:
             model.add(NormalClamp(config, nodes, normal, self.clamp_stiffness))
-        lumped_area = mesh.nodal_areas()
+        lumped_area = mesh.nodal_measures()
         effects = {effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area)]
                    for effect in self.effects}
         return BuiltScene(self, mesh, model, elastic, chambers, effects)

@@ -11,12 +11,15 @@ import pkgutil
 from pathlib import Path
 
 import numpy as np
+from solid_meshes import box_with_cavity, extruded_beam, scene_of, shell_octant
 
 import taichi_pneuma
 from taichi_pneuma import backend
+from taichi_pneuma.fem.meshfile import write_mesh
 from taichi_pneuma.io.scenefile import load_scene
-from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.scene import Material, reference_scene
 from taichi_pneuma.solve.newton import NewtonSolver
+from taichi_pneuma.solve.schedule import ChamberSchedule, area_ramp
 from taichi_pneuma.solve.simulate import run_schedule
 
 SCENES = Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes"
@@ -59,4 +62,18 @@ def test_new_scenes_compile_no_kernel():
     solve_once(load_scene(SCENES / "bidirectional.toml").build(), [1.2, 1.1])
     solve_once(load_scene(SCENES / "pneunet_finger.toml").build(), [50.0] * 6)
     run_schedule(reference_scene(0.15, growth=1.2, steps=3, max_area=0.05, chamber_points=32, order=2).build())
+    assert compiled_instances() == before
+
+
+def test_new_3d_scenes_compile_no_kernel(tmp_path):
+    """3D kernels compile once per process too (per law and dimension): after one 3D scene, another mesh (a
+    mesh file's, with quadratic tetrahedra), material, chamber closure and pressure control compile nothing."""
+    beam, _ = extruded_beam(0.1, chamber_points=16)
+    run_schedule(scene_of(beam, [area_ramp(1.2, 3, 1e5)], 2).build())
+    before = compiled_instances()
+    shell = shell_octant(3, 2, order=2)
+    solve_once(scene_of(shell, [ChamberSchedule("pressure", ((1, 1.0),))], 1, Material(3e4, 0.3)).build(), [100.0])
+    write_mesh(tmp_path / "beam_3d.msh", box_with_cavity(), ("chamber",))
+    (tmp_path / "beam_3d.toml").write_text((SCENES / "beam_3d.toml").read_text())
+    solve_once(load_scene(tmp_path / "beam_3d.toml").with_value("mesh.order", 2).build(), [1.05])
     assert compiled_instances() == before

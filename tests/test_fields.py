@@ -4,7 +4,7 @@ hand formulas and against the elastic term's own gradient."""
 import numpy as np
 import pytest
 
-from taichi_pneuma.fem.fields import cauchy_stress, max_stretch, triangle_fields, von_mises
+from taichi_pneuma.fem.fields import cauchy_stress, element_fields, max_stretch, von_mises
 from taichi_pneuma.materials import StableNeoHookean, lame_parameters
 from taichi_pneuma.scene import reference_scene
 
@@ -71,7 +71,7 @@ def test_stress_matches_the_elastic_terms_gradient_under_a_homogeneous_deformati
     g = built.elastic.gradient()
     measured = np.array([[np.sum(g * (X @ np.outer(np.eye(2)[a], np.eye(2)[b]).T)) for b in range(2)]
                          for a in range(2)]) / built.mesh.area
-    fields = triangle_fields(X, positions, built.mesh.triangles, *built.scene.element_material(built.mesh))
+    fields = element_fields(X, positions, built.mesh.triangles, *built.scene.element_material(built.mesh))
     sigma = fields["stress"][0, :2, :2]
     J = np.linalg.det(F)
     assert fields["det_F"] == pytest.approx(J, rel=1e-12) and len(fields["det_F"]) == built.mesh.n_triangles

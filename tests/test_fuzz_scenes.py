@@ -4,7 +4,8 @@ body, deep keys and nesting, cut-off files), either run or stop with one `error:
 TIME_BOUND, with no traceback and no file outside --out.
 
 Each example runs in this process (apps.inflate.main), so its cost is capped: every shipped scene is
-first made cheap (max_area 0.02 and its schedule squeezed into INCREMENTS increments), and the run
+first made cheap (max_area 0.02, or for a mesh-file body a small mesh file, and its schedule squeezed
+into INCREMENTS increments), and the run
 flags (FLAGS) set low resource limits and few Newton iterations, so that a mutation which makes a
 scene big or slow is refused by the resource guards, as any such scene would be. A traceback is an
 exception escaping main(), which fails the example; stderr and warnings are captured per example.
@@ -26,8 +27,10 @@ import pytest
 import tomllib
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
+from solid_meshes import box_with_cavity
 
 from taichi_pneuma.apps.inflate import main
+from taichi_pneuma.fem.meshfile import write_mesh
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 INCREMENTS = 3
@@ -51,8 +54,11 @@ def cheap(scene: dict) -> dict:
     millimetres is 10 times larger) and its keyframes squeezed into INCREMENTS increments."""
     scene = copy.deepcopy(scene)
     body = scene["body"]
-    length = max(body["size"]) if "size" in body else float(np.ptp(np.array(body["points"]), axis=0).max())
-    scene["mesh"] = {"max_area": 0.02 * (length / 4.0) ** 2}
+    if body["shape"] == "mesh":  # a mesh file's body: a small one instead
+        body["file"], scene["mesh"] = str(SMALL_MESH), {}
+    else:
+        length = max(body["size"]) if "size" in body else float(np.ptp(np.array(body["points"]), axis=0).max())
+        scene["mesh"] = {"max_area": 0.02 * (length / 4.0) ** 2}
     n = scene["schedule"]["increments"]
     scene["schedule"]["increments"] = INCREMENTS
     for chamber in scene["chambers"]:
@@ -61,6 +67,8 @@ def cheap(scene: dict) -> dict:
     return scene
 
 
+MESHES = tempfile.TemporaryDirectory()  # removed when the test process ends
+SMALL_MESH = write_mesh(Path(MESHES.name) / "box.msh", box_with_cavity(), ("chamber",))
 SAME_BODY = {"balloon_volume", "balloon_pressure"}  # balloon_syringe driven otherwise: one of the three is enough
 BASES = {path.stem: cheap(tomllib.loads(path.read_text())) for path in sorted(SCENES.glob("*.toml"))
          if path.stem not in SAME_BODY}

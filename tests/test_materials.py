@@ -1,9 +1,11 @@
 """Material laws: each registered law's stress and stress derivative by finite differences, its energy,
-gradient and Hessian through the elastic term on every element family, the plane-strain embedding, and
-the generic (Jacobi) eigensystem against the analytic one."""
+gradient and Hessian through the elastic term on every element family (triangles and tetrahedra, linear
+and quadratic), the plane-strain embedding, and the generic (Jacobi) eigensystem against the analytic one
+(in 2D and 3D)."""
 
 import numpy as np
 import pytest
+from solid_meshes import shell_octant
 from test_terms import dense_hessian, fd_gradient, fd_hessian
 
 from taichi_pneuma.backend import ti
@@ -165,45 +167,48 @@ def test_plane_strain_energy_is_the_3d_law_at_unit_thickness_stretch():
 
 
 @pytest.mark.parametrize("d", [2, 3])
-def test_generic_eigensystem_reconstructs_the_stress_derivative(d):
-    """Jacobi's eigenpairs: orthonormal, V^T diag(lambda) V = d2psi/dF2 (its d x d block), eigenvalues those of
-    NumPy's eigh; in 2D equal to the analytic ones."""
+def test_generic_and_analytic_eigensystems_reconstruct_the_stress_derivative(d):
+    """Jacobi's eigenpairs and the analytic ones: orthonormal, V^T diag(lambda) V = d2psi/dF2 (its d x d block),
+    eigenvalues those of NumPy's eigh, also at repeated singular values (F = I, a uniaxial stretch) and at
+    inverted F."""
     F = random_F(40, dim=d, seed=d)
+    F[:3, :d, :d] = [np.eye(d), np.diag([1.3] + [0.9] * (d - 1)), -np.eye(d)[::-1]]
     n, k = len(F), d * d
     parameters = StableNeoHookean.parameters(np.full(n, 1e4), np.full(n, 0.45))
     block = np.ix_(*[[3 * i + j for i in range(d) for j in range(d)]] * 2)
     M = at(StableNeoHookean, F)[2][:, block[0], block[1]]
-    values, vectors = np.empty((n, k)), np.empty((n, k, k))
-    eigensystems(JacobiNeoHookean, d, F, parameters, values, vectors)
     scale = np.abs(M).max()
-    assert np.allclose(vectors @ vectors.transpose(0, 2, 1), np.eye(k), atol=1e-12)
-    assert np.abs(np.einsum("nki,nk,nkj->nij", vectors, values, vectors) - M).max() < 1e-10 * scale
-    assert np.abs(np.sort(values, axis=1) - np.linalg.eigvalsh(M)).max() < 1e-10 * scale
-    if d == 2:
-        analytic_values, analytic_vectors = np.empty((n, k)), np.empty((n, k, k))
-        eigensystems(StableNeoHookean, d, F, parameters, analytic_values, analytic_vectors)
-        assert np.abs(np.sort(values, axis=1) - np.sort(analytic_values, axis=1)).max() < 1e-10 * scale
-        assert (values < 0).any(axis=1).mean() > 0.3  # the projection has work to do
+    for law in (JacobiNeoHookean, StableNeoHookean):
+        values, vectors = np.empty((n, k)), np.empty((n, k, k))
+        eigensystems(law, d, F, parameters, values, vectors)
+        assert np.allclose(vectors @ vectors.transpose(0, 2, 1), np.eye(k), atol=1e-12)
+        assert np.abs(np.einsum("nki,nk,nkj->nij", vectors, values, vectors) - M).max() < 1e-10 * scale
+        assert np.abs(np.sort(values, axis=1) - np.linalg.eigvalsh(M)).max() < 1e-10 * scale
+    assert (values < 0).any(axis=1).mean() > 0.3  # the projection has work to do
 
 
-def coarse_body(order):
-    """A coarse beam with its chamber commanded to 1.5x, in a random, partly compressed state."""
-    scene = reference_scene(cy=0.15, chamber_points=16 if order == 2 else 32, max_area=0.05 if order == 2 else 0.02,
-                            order=order)
-    built = scene.build()
-    built.set_commands([1.5])
-    return built.mesh, 0.02 * np.random.default_rng(order).standard_normal(built.mesh.vertices.shape)
+def coarse_body(order, dim=2):
+    """A coarse body in a random, partly compressed state: the beam with its chamber commanded to 1.5x (2D), or
+    an octant of a spherical shell (3D)."""
+    if dim == 3:
+        mesh = shell_octant(2, 1, order)
+    else:
+        scene = reference_scene(cy=0.15, chamber_points=16 if order == 2 else 32,
+                                max_area=0.05 if order == 2 else 0.02, order=order)
+        mesh = scene.build().mesh
+    return mesh, 0.02 * np.random.default_rng(order).standard_normal(mesh.vertices.shape)
 
 
 def elastic_model(mesh, law):
     model = EnergyModel(mesh.vertices, force_floor=1.0, energy_resolution=1e-12)
-    return model, model.add(Elasticity(model.config, mesh.triangles, law, law_parameters(law, mesh.n_triangles)))
+    return model, model.add(Elasticity(model.config, mesh.elements, law, law_parameters(law, mesh.n_elements)))
 
 
+@pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("order", [1, 2])
 @pytest.mark.parametrize("law", [*LAWS.values(), JacobiNeoHookean], ids=[*LAWS.keys(), "jacobi_neo_hookean"])
-def test_elastic_term_energy_gradient_and_hessian_match_finite_differences(law, order):
-    mesh, u = coarse_body(order)
+def test_elastic_term_energy_gradient_and_hessian_match_finite_differences(law, order, dim):
+    mesh, u = coarse_body(order, dim)
     model, term = elastic_model(mesh, law)
     model.set_displacements(u)
     while law.name in BARRIER_LAWS and term.min_determinant() < 0.2:
@@ -217,9 +222,10 @@ def test_elastic_term_energy_gradient_and_hessian_match_finite_differences(law, 
     assert np.linalg.eigvalsh(projected).min() > -1e-9 * np.abs(projected).max()
 
 
+@pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("order", [1, 2])
-def test_generic_path_gives_the_analytic_hessian(order):
-    mesh, u = coarse_body(order)
+def test_generic_path_gives_the_analytic_hessian(order, dim):
+    mesh, u = coarse_body(order, dim)
     (model, analytic), (jacobi_model, jacobi) = elastic_model(mesh, StableNeoHookean), elastic_model(mesh, JacobiNeoHookean)
     model.set_displacements(u)
     jacobi_model.set_displacements(u)

@@ -29,6 +29,7 @@ from taichi_pneuma.fem.geometry import (
     Roller,
     RoundedRectangle,
 )
+from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface
 from taichi_pneuma.io.output import FORMULA
 from taichi_pneuma.io.scenefile import key_reference, read_scene
 from taichi_pneuma.io.sceneformat import scene_data
@@ -262,7 +263,9 @@ def covering_scenes() -> list[Scene]:
                       (PresetMaterial("paper", bulk_modulus=1e9),)),
                      (UNITS["mm-MPa"], IsochoricMaterial("mooney_rivlin", 0.1, C01=0.02, poisson_ratio=0.49),
                       (IsochoricMaterial("mooney_rivlin", 0.2, C01=0.01, poisson_ratio=0.45),)))]
-    return [every, boxed, polygon, *kinds, *silicones]
+    mesh_body = MeshGeometry(MeshBody("beam_3d.msh"), (("main", MeshSurface("chamber")),))
+    solid = dataclasses.replace(core, geometry=mesh_body)
+    return [every, boxed, polygon, *kinds, *silicones, solid]
 
 
 def key_paths(node, path=""):

@@ -12,11 +12,13 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from solid_meshes import extruded_beam, scene_of
 
 from taichi_pneuma.io.scenefile import load_scene
 from taichi_pneuma.scene import reference_scene
 from taichi_pneuma.solve.linsolve import FixedPattern
 from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
+from taichi_pneuma.solve.schedule import area_ramp
 from taichi_pneuma.solve.sensitivity import command_forces, sensitivity
 from taichi_pneuma.solve.simulate import settle, tip_measures
 
@@ -30,6 +32,8 @@ CASES = {
     "pneunet_finger": (lambda: load_scene(SCENES / "pneunet_finger.toml"), [300.0, 500.0, 400.0, 600.0, 200.0, 450.0]),
     # gravity, with 15 vertices inside the ground barrier's activation distance at these pressures
     "finger_on_ground": (lambda: load_scene(SCENES / "finger_on_ground.toml"), [100.0, 150.0, 120.0, 80.0, 60.0]),
+    # 3D: the extruded beam (tetrahedra, its prism chamber closed by the two z planes)
+    "solid": (lambda: scene_of(extruded_beam(0.05, chamber_points=32)[0], [area_ramp(2.0, 2, 1e5)], 1), [1.6]),
 }
 
 
@@ -77,7 +81,7 @@ def errors_against_finite_differences(case):
 def test_sensitivities_match_finite_differences_of_resolves(case):
     tip_errors, du_error, built, s, fd_tip = errors_against_finite_differences(case)
     chambers = len(CASES[case][1])
-    assert s.tip.shape == (3, chambers) and s.displacements.shape == (built.mesh.n_vertices, 2, chambers)
+    assert s.tip.shape == (3, chambers) and s.displacements.shape == (built.mesh.n_vertices, built.mesh.dim, chambers)
     assert np.all(np.abs(fd_tip).max(axis=1) > 0)  # every tip output moves
     assert tip_errors.max() <= 1e-5  # tip dx, dy and rotation
     assert du_error <= 1e-5

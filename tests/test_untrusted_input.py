@@ -119,7 +119,8 @@ def test_max_triangles_flag_moves_the_limit(tmp_path, capsys):
 def test_the_triangle_estimate_is_close_to_the_mesh_triangle_makes(scene):
     loaded = load_scene(scene)
     mesh = loaded.geometry.mesh()
-    made = mesh.n_triangles * (4 if mesh.order == 2 else 1)  # the limit counts a quadratic triangle as 4 linear ones
+    # the limit counts a quadratic triangle as 4 linear ones, a quadratic tetrahedron as 8 linear ones
+    made = mesh.n_elements * ({2: 4, 3: 8}[mesh.dim] if mesh.order == 2 else 1)
     for limit, refused in ((int(0.9 * made), True), (int(1.6 * made), False)):
         try:
             limits.check_scene(loaded, max_triangles=limit)

@@ -1,8 +1,8 @@
 """What accuracy costs in time: start-up and rendering, timing breakdown, solver backends, accuracy-vs-time
-study (P1 and P2), near-incompressible convergence, scaling; and Taichi against Quadrants (the kernels' two
+study (P1 and P2), near-incompressible convergence, scaling, 3D (solid); and Taichi against Quadrants (the kernels' two
 compilers).
 
-    pneuma-bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling,compilers] [--out out/bench]
+    pneuma-bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling,solid,compilers] [--out out/bench]
     pneuma-bench --out benchmarks/results       (a clone: rewrite the tracked tables the README quotes)
 
 Every section prints a Markdown table and saves it (bench_<section>.md, .json) under --out (default
@@ -11,8 +11,8 @@ error against wall time (log-log, one curve per knob) to bench_accuracy.png. Tim
 on a possibly shared machine: compare ratios within one run.
 """
 
-import collections
 import argparse
+import collections
 import importlib.util
 import json
 import os
@@ -23,6 +23,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from datetime import date
 from pathlib import Path
 
@@ -32,7 +33,7 @@ from .. import runtime, signals
 from ..errors import PneumaInputError, require
 from ..io.output import prepare_directory, save_json, save_text, write_atomic
 
-SECTIONS = ("startup", "breakdown", "backends", "accuracy", "incompressible", "scaling", "compilers")
+SECTIONS = ("startup", "breakdown", "backends", "accuracy", "incompressible", "scaling", "solid", "compilers")
 REFERENCE_TUTORIAL_SECONDS = 25.0  # SPEC.md: the NumPy/SciPy tutorial's cy = 0.15 ramp on this kind of machine
 PHASES = ("gradient", "hessian", "assemble", "factorize", "solve", "line_search")
 
@@ -350,6 +351,92 @@ def scaling() -> tuple[str, dict]:
     return table + f"\nfitted: time per iteration ~ vertices^{exponent:.2f}\n", {"runs": data, "exponent": exponent}
 
 
+@dataclass(frozen=True)
+class Meshed:
+    """A scene geometry already meshed (a TetMesh and its one chamber), for timing 3D solves."""
+
+    ready: object
+    chambers: tuple = (("cavity", None),)
+
+    def mesh(self):
+        return self.ready
+
+
+def octant(divisions: int, layers: int, order: int) -> "Scene":
+    """A pressurised octant of the thick spherical shell 1 <= r <= 2 (layered.py), closed by its three symmetry
+    planes; pressure 0 -> 0.05 E in 3 increments."""
+    from ..fem.geometry import Roller
+    from ..fem.layered import spherical_shell_octant
+    from ..fem.tetmesh import tet_mesh
+    from ..scene import ChamberControl, Material, Scene
+    from ..solve.schedule import ChamberSchedule
+
+    vertices, tets, wall = spherical_shell_octant(1.0, 2.0, divisions, layers)
+    mesh = tet_mesh(vertices, tets, {"cavity": wall}, order=order, clamp=None,
+                    rollers=tuple(Roller(tuple(n), (0.0, 0.0, 0.0)) for n in np.eye(3)))
+    return Scene(Meshed(mesh), (ChamberControl(ChamberSchedule("pressure", ((3, 500.0),))),), 3, Material(1e4, 0.45))
+
+
+def solid() -> tuple[str, dict]:
+    """3D: time per Newton iteration and its parts (the linear solve's share), linear and quadratic tetrahedra,
+    Taichi's LLT and CHOLMOD; the elastic Hessian with the analytic eigensystem against the Jacobi one."""
+    from ..materials import StableNeoHookean
+    from ..solve.newton import NewtonOptions
+    from ..solve.schedule import ChamberSchedule, Schedule
+    from ..solve.simulate import run_schedule
+    from ..terms import Elasticity
+
+    class JacobiNeoHookean(StableNeoHookean):
+        """Stable neo-Hookean without its analytic eigensystem: the generic Jacobi path (timing only)."""
+
+        analytic_dims = ()
+
+    rows, data = [], []
+    for label, divisions, layers, order in (("P1", 16, 6, 1), ("P1", 24, 12, 1), ("P2", 12, 6, 2)):
+        built = octant(divisions, layers, order).build()
+        mesh = built.mesh
+        for backend in ("taichi", "cholespy"):
+            options = NewtonOptions(linear_solver=backend)
+            run_schedule(built, Schedule(1, (ChamberSchedule("pressure", ((1, 5.0),)),)), options)  # compile, analyse
+            start = time.perf_counter()
+            result = run_schedule(built, options=options)
+            seconds = time.perf_counter() - start
+            phases = collections.Counter()
+            for solve in result.solves:
+                phases.update(solve.phase_seconds)
+            iterations = int(result.history["iterations"].sum())
+            per = {p: 1e3 * phases[p] / iterations for p in PHASES}
+            linear = per["factorize"] + per["solve"]
+            record = {"elements": f"{label} tetrahedra", "tetrahedra": mesh.n_elements, "dofs": 3 * mesh.n_vertices,
+                      "backend": backend, "iterations": iterations, "ms_per_iteration": 1e3 * seconds / iterations,
+                      "phases_ms": per, "linear_solve_share": linear / (1e3 * seconds / iterations)}
+            data.append(record)
+            rows.append([f"{label}, {mesh.n_elements}", 3 * mesh.n_vertices, backend, iterations,
+                         f"{record['ms_per_iteration']:.0f}", *(f"{per[p]:.1f}" for p in PHASES),
+                         f"{100 * record['linear_solve_share']:.0f} %"])
+            print(f"  solid: {record}", file=sys.stderr, flush=True)
+    table = markdown(["tetrahedra", "DOFs", "backend", "iterations", "ms / iteration", *(f"{p} (ms)" for p in PHASES),
+                      "linear solve share"], rows)
+    eigen_rows = []
+    for label, divisions, layers, order in (("P1", 24, 12, 1), ("P2", 12, 6, 2)):
+        built = octant(divisions, layers, order).build()
+        elastic = built.elastic
+        times = {}
+        for name, law in (("analytic", StableNeoHookean), ("Jacobi", JacobiNeoHookean)):
+            term = Elasticity(built.model.config, built.mesh.elements, law, elastic.parameters)
+            term.hessian_values(True)
+            start = time.perf_counter()
+            for _ in range(5):
+                term.hessian_values(True)
+            times[name] = (time.perf_counter() - start) / 5
+        n = built.mesh.n_elements
+        eigen_rows.append([f"{label}, {n}", *(f"{1e3 * t:.1f} ({1e6 * t / n:.1f} us/element)" for t in times.values()),
+                           f"{times['Jacobi'] / times['analytic']:.1f}x"])
+    table += "\nThe projected elastic Hessian, analytic eigensystem against Jacobi on the 9 x 9 d2psi/dF2:\n\n"
+    table += markdown(["tetrahedra", "analytic (ms)", "Jacobi (ms)", "ratio"], eigen_rows)
+    return table, {"runs": data}
+
+
 def compilers() -> tuple[str, dict]:
     """Taichi against Quadrants in one run: for each one installed, in child processes with PNEUMA_BACKEND set,
     the startup section (the main command from an empty and a warm kernel cache) and the breakdown section twice
@@ -420,7 +507,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"## {section}", flush=True)
         table, data = accuracy(out) if section == "accuracy" else {"startup": startup, "breakdown": breakdown,
                                                                     "backends": backends, "incompressible": incompressible,
-                                                                    "scaling": scaling, "compilers": compilers}[section]()
+                                                                    "scaling": scaling, "solid": solid,
+                                                                    "compilers": compilers}[section]()
         print(heading + table, flush=True)
         save_text(out / f"bench_{section}.md", heading + table)
         save_json(out / f"bench_{section}.json", {"machine": machine(), "backend": f"{backend.NAME} {backend.VERSION}",

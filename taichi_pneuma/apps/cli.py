@@ -15,13 +15,14 @@ import sys
 
 from .. import limits, runtime, signals
 from ..errors import PneumaInputError, require, require_finite
-from ..io.units import AREA, LENGTH, PRESSURE
+from ..io.units import AREA, LENGTH, MEASURES, PRESSURE
 from ..render import COLOR_FIELDS, RENDERERS
 
 # --quality presets: (max triangle area, element order, Newton tolerance); see the README's accuracy study.
 # "default" is SPEC.md's mesh and the solver's default tolerance (tests/test_cli.py checks they agree).
 QUALITY = {"draft": (0.005, 1, 1e-4), "default": (0.0012, 1, 1e-6), "high": (0.005, 2, 1e-6),
            "accurate": (0.0012, 2, 1e-9)}
+MEASURE = {2: "area", 3: "volume"}  # what a chamber encloses, by dimension
 MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_iterations, simulate.MAX_CUTS)
 
 
@@ -153,14 +154,16 @@ def scene_of_flags(args: argparse.Namespace):
 
 def build(scene):
     """Mesh the scene, build its terms and print the mesh size, the terms and each chamber's rest area."""
+    from ..solve.result import ELEMENTS
+
     built = scene.build()
     mesh = built.mesh
-    kind = "triangles" if mesh.order == 1 else "quadratic triangles"
+    kind = ("" if mesh.order == 1 else "quadratic ") + ELEMENTS[mesh.dim]
     print(f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
-          f"{mesh.n_triangles} {kind}; clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
+          f"{mesh.n_elements} {kind}; clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
     for chamber in built.chambers:
         print(f"chamber {chamber.chamber_name}: {chamber.kind.name} control, wall {chamber.n_wall} vertices, "
-              f"rest area {chamber.rest_area:.3f}{scene.units.suffix(AREA)}")
+              f"rest {MEASURE[mesh.dim]} {chamber.rest_area:.3f}{scene.units.suffix(MEASURES[mesh.dim])}")
     return built
 
 

@@ -27,9 +27,10 @@ import sys
 from .. import runtime
 from ..errors import require
 from ..io.output import lock_stems, prepare_directory, save_json
-from ..io.units import AREA, FORCE, LENGTH, PRESSURE
+from ..io.units import AREA, FORCE, LENGTH, MEASURES, PRESSURE
 from ..signals import holding
 from .cli import (
+    MEASURE,
     add_ramp_arguments,
     add_video_arguments,
     app_parser,
@@ -100,11 +101,16 @@ def run_scene(args: argparse.Namespace, scene, stem: str, size: tuple[int, int],
         raise
     final, summary = result.steps[-1], result.summary()
     area, length, pressure, force = (scene.units.suffix(d) for d in (AREA, LENGTH, PRESSURE, FORCE))
+    measure = scene.units.suffix(MEASURES[result.mesh.dim])
     for name, c in final.chambers.items():
-        print(f"{name}: area {c.area / c.area_ratio:.3f} -> {c.area:.3f}{area} (x{c.area_ratio:.2f}), "
-              f"pressure {c.pressure:.1f}{pressure}")
-    print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}{length}; "
-          f"tip rotation {final.tip_rotation:+.1f} deg")
+        print(f"{name}: {MEASURE[result.mesh.dim]} {c.area / c.area_ratio:.3f} -> {c.area:.3f}{measure} "
+              f"(x{c.area_ratio:.2f}), pressure {c.pressure:.1f}{pressure}")
+    if final.tip_dz is None:
+        print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}{length}; "
+              f"tip rotation {final.tip_rotation:+.1f} deg")
+    else:
+        print(f"tip deflection (mean y displacement of the right face): {result.tip_deflection:+.4f}{length}; "
+              f"tip dz {final.tip_dz:+.4f}{length}; bend angle {final.tip_rotation:+.1f} deg")
     print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}{pressure}")
     for name, (fx, fy, magnitude) in final.contact.items():
         print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g}){force}")

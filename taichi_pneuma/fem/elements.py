@@ -8,23 +8,29 @@ In barycentric coordinates L_0 = 1 - sum_i xi_i, L_i = xi_i (i = 1..d) its shape
     order 2:  N_i = L_i (2 L_i - 1) at corner i,   N_ij = 4 L_i L_j at the middle of edge ij,
 
 and every quantity a solver needs follows from that: the reference nodes, the shape functions and
-their gradients dN/dxi, and, on a mesh of straight-sided elements with corner positions X_0..X_d,
+their gradients dN/dxi, and, on a mesh with node positions X_a (isoparametric),
 
-    dX/dxi = [X_1 - X_0, ..., X_d - X_0],   G_qa = dN_a/dX = (dN_a/dxi)(xi_q) (dX/dxi)^-1,
-    W_q = w_q |det dX/dxi| / d!   (rule weights w_q sum to 1, the reference simplex has volume 1/d!).
+    dX/dxi = sum_a X_a (dN_a/dxi)(xi_q)   (= [X_1 - X_0, ..., X_d - X_0] on straight-sided elements),
+    G_qa = dN_a/dX = (dN_a/dxi)(xi_q) (dX/dxi)^-1,
+    W_q = w_q det dX/dxi / d!   (rule weights w_q sum to 1, the reference simplex has volume 1/d!).
 
 Rules are keyed by their degree (exact for every polynomial of that degree); a family integrates its
 energy with the rule of its quadrature_degree: 1 point for linear elements (F is constant), degree 2
-for quadratic ones (exact for their small-strain stiffness). facets: each boundary facet's nodes, the
-facet's corners first (for a counter-clockwise triangle in its sense of traversal, so the outward
-normal lies to the right), then its midside node.
+for quadratic ones (exact for their small-strain stiffness, whose integrand dN_a/dX . dN_b/dX is of
+degree 2). facets: each boundary facet's nodes, the facet's corners first, then its midside nodes,
+oriented so the outward normal follows: for a triangle (segment facets, element counter-clockwise) the
+outward normal lies to the right of the facet's direction; for a tetrahedron (triangle facets, element
+of positive volume det[X_1 - X_0, X_2 - X_0, X_3 - X_0] > 0) the facet's corners c_0, c_1, c_2 turn
+counter-clockwise seen from outside, (c_1 - c_0) x (c_2 - c_0) pointing out, and a quadratic facet is a
+6-node triangle in the triangle's own numbering (corners, then the middles of edges 01, 12, 20).
 
-A new family is one more entry: tetrahedra add a Simplex(3) with its rules and the edge list
-(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3) of the mesh's convention.
+The families: triangles and tetrahedra, linear and quadratic. The tetrahedron's edges are numbered
+(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3), which is VTK's (and meshio's) 10-node tetrahedron.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -46,8 +52,21 @@ class Simplex:
         return np.vstack([np.zeros(self.dim), np.eye(self.dim)])
 
 
+def symmetric_points(*orbits: tuple[float, ...]) -> np.ndarray:
+    """The distinct permutations of each barycentric tuple (the points of a fully symmetric rule), as
+    reference coordinates: the barycentric weights of corners 1..d."""
+    points = [p for orbit in orbits for p in sorted(set(itertools.permutations(orbit)))]
+    return np.array(points)[:, 1:]
+
+
+DUNAVANT_A = (0.44594849091596488632, 0.091576213509770743460)  # the degree-4 rule's two orbits (a, a, 1 - 2a)
+DUNAVANT_W = (0.22338158967801146570, 0.10995174365532186764)  # and their weights (Dunavant 1985)
 TRIANGLE = Simplex(2, {1: (np.array([[1 / 3, 1 / 3]]), np.array([1.0])),
-                       2: (np.array([[1 / 6, 1 / 6], [2 / 3, 1 / 6], [1 / 6, 2 / 3]]), np.full(3, 1 / 3))})
+                       2: (np.array([[1 / 6, 1 / 6], [2 / 3, 1 / 6], [1 / 6, 2 / 3]]), np.full(3, 1 / 3)),
+                       4: (symmetric_points(*((a, a, 1 - 2 * a) for a in DUNAVANT_A)), np.repeat(DUNAVANT_W, 3))})
+TET_A, TET_B = (5 + 3 * math.sqrt(5)) / 20, (5 - math.sqrt(5)) / 20  # the degree-2 rule's barycentric weights
+TETRAHEDRON = Simplex(3, {1: (np.array([[0.25, 0.25, 0.25]]), np.array([1.0])),
+                          2: (symmetric_points((TET_A, TET_B, TET_B, TET_B)), np.full(4, 0.25))})
 
 
 @dataclass(frozen=True)
@@ -101,22 +120,31 @@ class ElementFamily:
         return np.concatenate([corners, np.stack(mids, axis=1)], axis=1)
 
     def quadrature(self, vertices: np.ndarray, elements: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The rest gradients G (m, nq, k, d) and weights W (m, nq) at the rule's points of straight-sided
-        elements (m, k) with node positions vertices (n, d)."""
+        """The rest gradients G (m, nq, k, d) and weights W (m, nq) at the rule's points of elements (m, k) with
+        node positions vertices (n, d), from the Jacobian at each point (isoparametric: a quadratic element
+        whose midside nodes are off its edges' middles is curved; on a straight-sided one this is the
+        corners' [X_1 - X_0, ..., X_d - X_0])."""
         points, weights = self.rule
         d = self.dim
-        corners = vertices[elements[:, :d + 1]]
-        jacobian = np.stack([corners[:, i] - corners[:, 0] for i in range(1, d + 1)], axis=2)  # dX/dxi
+        dn = self.shape_gradients(points)  # (nq, k, d)
+        nodes = vertices[elements]
+        edges = nodes[:, 1:] - nodes[:, :1]
+        jacobian = np.einsum("mai,qaj->mqij", edges, dn[:, 1:])  # dX/dxi = sum_a (X_a - X_0) dN_a/dxi
         inverse, volume = np.linalg.inv(jacobian), np.linalg.det(jacobian) / math.factorial(d)
-        gradients = np.stack([dn @ inverse for dn in self.shape_gradients(points)], axis=1)
-        return gradients, volume[:, None] * weights[None, :]
+        gradients = np.einsum("qaj,mqji->mqai", dn, inverse)
+        return gradients, volume * weights[None, :]
 
 
 TRIANGLE_P1 = ElementFamily("P1 triangle", TRIANGLE, order=1, quadrature_degree=1,
                             facets=((0, 1), (1, 2), (2, 0)))
 TRIANGLE_P2 = ElementFamily("P2 triangle", TRIANGLE, order=2, quadrature_degree=2,
                             edges=((0, 1), (1, 2), (2, 0)), facets=((0, 1, 3), (1, 2, 4), (2, 0, 5)))
-FAMILIES = (TRIANGLE_P1, TRIANGLE_P2)
+TET_EDGES = ((0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3))
+TET_P1 = ElementFamily("P1 tetrahedron", TETRAHEDRON, order=1, quadrature_degree=1,
+                       facets=((1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1)))
+TET_P2 = ElementFamily("P2 tetrahedron", TETRAHEDRON, order=2, quadrature_degree=2, edges=TET_EDGES,
+                       facets=((1, 2, 3, 5, 9, 8), (0, 3, 2, 7, 9, 6), (0, 1, 3, 4, 8, 7), (0, 2, 1, 6, 5, 4)))
+FAMILIES = (TRIANGLE_P1, TRIANGLE_P2, TET_P1, TET_P2)
 
 
 def family_of(elements: np.ndarray, dim: int) -> ElementFamily:
@@ -131,7 +159,8 @@ def family_of(elements: np.ndarray, dim: int) -> ElementFamily:
 
 def boundary_facets(family: ElementFamily, elements: np.ndarray) -> np.ndarray:
     """The facets (f, nodes per facet) of the elements' table that belong to one element only: the mesh's
-    boundary, each facet in its element's node order (outward normal to the right in 2D)."""
+    boundary, each facet in its element's node order (outward normal to the right in 2D, corners
+    counter-clockwise seen from outside in 3D)."""
     facets = elements[:, np.array(family.facets)].reshape(-1, len(family.facets[0]))
     corners = np.sort(facets[:, :family.dim], axis=1)
     _, index, counts = np.unique(corners, axis=0, return_index=True, return_counts=True)

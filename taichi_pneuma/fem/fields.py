@@ -81,7 +81,7 @@ def von_mises(sigma: np.ndarray) -> np.ndarray:
     return np.sqrt(0.5 * normal + 3.0 * shear)
 
 
-def triangle_fields(rest: np.ndarray, positions: np.ndarray, elements: np.ndarray, law=None, parameters=None
+def element_fields(rest: np.ndarray, positions: np.ndarray, elements: np.ndarray, law=None, parameters=None
                     ) -> dict[str, np.ndarray]:
     """ElementFields(rest, elements).at(positions, law, parameters), for one state."""
     return ElementFields(rest, elements).at(positions, law, parameters)

@@ -49,7 +49,7 @@ MAX_WALL_POINTS = 2000
 MAX_SHAPES = 64
 MIN_SPACING = 1e-9
 CUT_TOLERANCE = 1e-9  # points this close to a symmetry line, relative to the body's size, lie on it
-SIDES = ("left", "right", "bottom", "top")
+SIDES = ("left", "right", "bottom", "top", "back", "front")  # pairs along x, y, z
 ORDERS = (1, 2)
 MAX_REFINEMENTS = 4
 
@@ -357,8 +357,8 @@ def notch(outline: np.ndarray, markers: np.ndarray, wall: np.ndarray, origin: np
 
 @dataclass(frozen=True)
 class PointSet:
-    """Named mesh nodes (the clamp, the tip): a side of the body's bounding box (within 1e-6) or those in a
-    closed box [x0, y0, x1, y1]."""
+    """Named mesh nodes (the clamp, the tip): a side of the body's bounding box (within 1e-6; back and front
+    are the sides normal to z, in 3D) or those in a closed box [x0, y0, x1, y1] ([x0, y0, z0, x1, y1, z1] in 3D)."""
 
     side: str | None = None
     box: tuple | None = None
@@ -372,12 +372,13 @@ class PointSet:
 
     def select(self, vertices: np.ndarray, what: str) -> np.ndarray:
         """The indices of the chosen vertices; choosing none is a PneumaInputError naming `what` (e.g. 'tip')."""
-        x, y = vertices[:, 0], vertices[:, 1]
         if self.side is not None:
-            chosen = {"left": x <= x.min() + 1e-6, "right": x >= x.max() - 1e-6,
-                      "bottom": y <= y.min() + 1e-6, "top": y >= y.max() - 1e-6}[self.side]
+            axis = SIDES.index(self.side) // 2
+            require(axis < vertices.shape[1], f"{what}.side = {self.side!r} needs a 3D body")
+            x = vertices[:, axis]
+            chosen = x <= x.min() + 1e-6 if SIDES.index(self.side) % 2 == 0 else x >= x.max() - 1e-6
         else:
-            chosen = in_box(vertices, self.box)
+            chosen = in_box(vertices, self.box, what)
         nodes = np.flatnonzero(chosen)
         require(len(nodes) > 0, f"{what}.box = {self.box!r} selects no mesh vertex")
         return nodes
@@ -387,21 +388,24 @@ class PointSet:
 class Roller:
     """A roller support: nodes whose displacement along `normal` is held, their tangential motion free.
 
-    The nodes are those within `tolerance` of the line n . (X - point) = 0, or those in the closed box
-    [x0, y0, x1, y1]. A roller line along an edge of the body is a symmetry line: a chamber may be cut by it
-    (see Geometry), which is how half and quarter models of symmetric actuators are built."""
+    The nodes are those within `tolerance` of the line (the plane, in 3D) n . (X - point) = 0, or those in
+    the closed box [x0, y0, x1, y1] ([x0, y0, z0, x1, y1, z1]). A roller line along an edge of the body is a
+    symmetry line: a chamber may be cut by it (see Geometry), which is how half and quarter models of symmetric
+    actuators are built; in 3D a roller plane holding a chamber's open rim closes that chamber (tetmesh.py)."""
 
-    normal: tuple[float, float]
-    point: tuple[float, float] | None = None
+    normal: tuple
+    point: tuple | None = None
     box: tuple | None = None
     tolerance: float = 1e-6
 
     def __post_init__(self):
-        require(_pair("normal", self.normal) != (0.0, 0.0), f"normal = {list(self.normal)!r} must not be zero")
+        normal = vector("normal", self.normal)
+        require(any(normal), f"normal = {list(self.normal)!r} must not be zero")
         require((self.point is None) != (self.box is None),
                 "give exactly one of 'point' (the roller line through it) and 'box'")
         if self.point is not None:
-            _pair("point", self.point)
+            require(len(vector("point", self.point)) == len(normal),
+                    f"point = {list(self.point)!r} must have as many components as normal = {list(self.normal)!r}")
         else:
             require_box("box", self.box)
         require(require_finite("tolerance", self.tolerance) > 0, f"tolerance = {self.tolerance!r} must be > 0")
@@ -413,28 +417,43 @@ class Roller:
 
     def select(self, vertices: np.ndarray) -> np.ndarray:
         """The indices of the held vertices; holding none is a PneumaInputError."""
+        where = f"point = {list(self.point)!r}" if self.point is not None else f"box = {list(self.box)!r}"
+        what = f"roller (normal = {list(self.normal)!r}, {where})"
+        require(len(self.normal) == vertices.shape[1], f"{what}: its normal must have {vertices.shape[1]} components "
+                                                       f"on this {vertices.shape[1]}D body")
         if self.point is not None:
             chosen = np.abs((vertices - np.asarray(self.point, dtype=np.float64)) @ self.unit_normal) <= self.tolerance
         else:
-            chosen = in_box(vertices, self.box)
+            chosen = in_box(vertices, self.box, what)
         nodes = np.flatnonzero(chosen)
-        where = f"point = {list(self.point)!r}" if self.point is not None else f"box = {list(self.box)!r}"
-        require(len(nodes) > 0, f"roller (normal = {list(self.normal)!r}, {where}) holds no mesh vertex")
+        require(len(nodes) > 0, f"{what} holds no mesh vertex")
         return nodes
 
 
+def vector(name: str, value) -> tuple[float, ...]:
+    """A point or direction of 2 or 3 finite numbers (PneumaInputError naming it otherwise)."""
+    require(shape_of(value) in ((2,), (3,)), f"{name} = {value!r} must be a list of 2 (2D) or 3 (3D) numbers")
+    return tuple(require_finite(name, v) for v in value)
+
+
 def require_box(name: str, box) -> None:
-    """Refuse, naming it, a box that is not four finite numbers [x0, y0, x1, y1] with x0 < x1, y0 < y1."""
-    require(shape_of(box) == (4,), f"{name} = {box!r} must be [x0, y0, x1, y1]")
+    """Refuse, naming it, a box that is not [x0, y0, x1, y1] (2D) or [x0, y0, z0, x1, y1, z1] (3D) of finite
+    numbers with each lower bound below its upper one."""
+    require(shape_of(box) in ((4,), (6,)),
+            f"{name} = {box!r} must be [x0, y0, x1, y1] (or [x0, y0, z0, x1, y1, z1] in 3D)")
     for v in box:
         require_finite(name, v)
-    require(box[0] < box[2] and box[1] < box[3], f"{name} = {list(box)!r} must have x0 < x1 and y0 < y1")
+    half = len(box) // 2
+    require(all(box[i] < box[half + i] for i in range(half)),
+            f"{name} = {list(box)!r} must have x0 < x1 and y0 < y1" + (" and z0 < z1" if half == 3 else ""))
 
 
-def in_box(points: np.ndarray, box) -> np.ndarray:
-    """Which points (k, 2) lie in the closed box [x0, y0, x1, y1]."""
-    x0, y0, x1, y1 = box
-    return (points[:, 0] >= x0) & (points[:, 0] <= x1) & (points[:, 1] >= y0) & (points[:, 1] <= y1)
+def in_box(points: np.ndarray, box, what: str = "box") -> np.ndarray:
+    """Which points (k, d) lie in the closed box [x0, y0, (z0,) x1, y1, (z1)] of 2 d numbers."""
+    d = points.shape[1]
+    require(len(box) == 2 * d, f"{what}: box = {list(box)!r} must have {2 * d} numbers on this {d}D body")
+    lower, upper = np.asarray(box[:d], dtype=np.float64), np.asarray(box[d:], dtype=np.float64)
+    return np.all((points >= lower) & (points <= upper), axis=1)
 
 
 @dataclass(frozen=True)
@@ -468,6 +487,11 @@ class Mesh:
     def n_triangles(self) -> int:
         return len(self.triangles)
 
+    dim = 2
+    elements = property(lambda self: self.triangles, doc="the elements (the dimension-neutral name of triangles)")
+    n_elements = n_triangles
+    measure = property(lambda self: self.area, doc="the body's rest measure: its area in 2D, its volume in 3D")
+
     @property
     def order(self) -> int:
         """1 for linear triangles, 2 for quadratic ones."""
@@ -482,6 +506,10 @@ class Mesh:
         """Linear triangles to draw: the triangles themselves, or each quadratic one split in four at its
         midside nodes (corner triangles, then the middle one)."""
         return self.triangles if self.order == 1 else split_in_four(self.triangles)
+
+    def nodal_measures(self) -> np.ndarray:
+        """The integral of each node's shape function over the body: nodal_areas() in 2D."""
+        return self.nodal_areas()
 
     def nodal_areas(self) -> np.ndarray:
         """The integral of each node's shape function over the body, sum_t int_t N_a dA: a third of the
@@ -525,6 +553,12 @@ class Geometry:
                 f"refinements = {self.refinements!r} must be an integer from 0 to {MAX_REFINEMENTS}")
         require(len(self.chambers) <= MAX_SHAPES, f"{len(self.chambers)} chambers: at most {MAX_SHAPES} are allowed")
         require(len(self.rollers) <= MAX_SHAPES, f"{len(self.rollers)} rollers: at most {MAX_SHAPES} are allowed")
+        for roller in self.rollers:
+            require(len(roller.normal) == 2,
+                    f"roller normal = {list(roller.normal)!r}: a 2D body's rollers have 2 components")
+        for name, shape in self.chambers:
+            require(callable(getattr(shape, "polygon", None)), f"chamber {name!r}: a {type(shape).__name__} wall needs "
+                                                               f"a body from a mesh file (body shape = \"mesh\")")
         body = self.body.polygon()
         polygons = [(name, shape.polygon()) for name, shape in self.chambers]
         points = len(body) + sum(len(p) for _, p in polygons)
@@ -631,11 +665,11 @@ def require_spaced(what: str, polygon: np.ndarray) -> None:
             f"a radius, size or point spacing too small, or coordinates too large, to mesh")
 
 
-def with_edge_midpoints(vertices: np.ndarray, triangles: np.ndarray):
-    """The vertices with the midpoint of every edge of the (corner) triangles appended, and mid(a, b): the
-    index of the midpoint of edge (a, b), elementwise over index arrays."""
-    edges = np.sort(np.vstack([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1)
-    unique = np.unique(edges, axis=0)
+def with_edge_midpoints(vertices: np.ndarray, elements: np.ndarray, edges=((0, 1), (1, 2), (2, 0))):
+    """The vertices with the midpoint of every edge of the (corner) elements appended, and mid(a, b): the
+    index of the midpoint of edge (a, b), elementwise over index arrays. edges: the corner pairs of an
+    element that are its edges (a triangle's by default)."""
+    unique = np.unique(np.sort(np.vstack([elements[:, list(e)] for e in edges]), axis=1), axis=0)
     n = len(vertices)
     keys = unique[:, 0] * n + unique[:, 1]
 

@@ -2,16 +2,21 @@
 
     name = "bidirectional"
     [body]       shape = "rectangle" (center, size) | "polygon" (points) | "union" (rectangles = [{center, size}, ...])
-    [mesh]       max_area, order = 1 (linear triangles) | 2 (quadratic)
+                 | "mesh" (file: a 3D mesh file with tetrahedra, relative to the scene file)
+    [mesh]       max_area (2D), order = 1 (linear triangles, tetrahedra) | 2 (quadratic)
     [material]   E, nu, regions = [{box = [x0, y0, x1, y1], E, nu}, ...]   (E, nu of a region default to the base)
-    [clamp]      side = "left" | "right" | "bottom" | "top"  or  box = [x0, y0, x1, y1];  stiffness (also the rollers')
+    [clamp]      side = "left" | "right" | "bottom" | "top" ("back" | "front": z, in 3D)  or  box = [x0, y0, x1, y1]
+                 ([x0, y0, z0, x1, y1, z1] in 3D);  stiffness (also the rollers')
     [tip]        side = "right" (default) | "left" | "bottom" | "top"  or  box = [x0, y0, x1, y1]: the nodes whose
                  mean displacement and rotation the history (tip_dx, tip_dy, tip_rotation), sensitivities and reach use
     [[rollers]]  normal = [nx, ny]; point = [x, y] (the nodes within tolerance of the line through it, normal to
                  normal) or box = [x0, y0, x1, y1]; tolerance = 1e-6. A roller line along the body's edge is a
-                 symmetry line: a chamber crossing it is cut there, its area closed by the flat cap on the line
+                 symmetry line: a chamber crossing it is cut there, its area closed by the flat cap on the line.
+                 In 3D: normal = [nx, ny, nz], point = [x, y, z] (a plane); a plane holding an open chamber
+                 wall's rim closes that chamber
     [[chambers]] name, shape = "ellipse" (center, semi_axes, points) | "rounded_rectangle" (center, size,
-                 radius, corner_points) | "polygon" (points); control = a chamber kind's name, "area"
+                 radius, corner_points) | "polygon" (points) | "mesh_surface" (group: the mesh file's triangles
+                 of the chamber's wall, for a mesh body); control = a chamber kind's name, "area"
                  (stiffness) | "pressure" (allow_vacuum) | "closed_gas" (atmosphere, gamma) | "syringe"
                  (syringe_volume, dead_volume, atmosphere, gamma) | ..., with that kind's parameters;
                  keyframes = [[step, value], ...]; bounds = [min, max] (inverse control)
@@ -60,6 +65,9 @@ def load_scene(path: str | os.PathLike) -> Scene:
     except UnicodeDecodeError as exc:
         raise PneumaInputError(f"{path}: not valid TOML (not UTF-8: {exc.reason} at byte {exc.start})") from None
     data = parse_toml(text, str(path))
+    body = data.get("body")
+    if isinstance(body, dict) and isinstance(body.get("file"), str):  # a mesh file, relative to the scene file
+        body["file"] = os.path.join(os.path.dirname(os.path.abspath(path)), body["file"])
     try:
         return read_scene(data, reduce_to_stem(os.path.splitext(os.path.basename(path))[0]))
     except PneumaInputError as exc:

@@ -24,6 +24,7 @@ from ..fem.geometry import (
     Roller,
     RoundedRectangle,
 )
+from ..fem.meshfile import MeshBody, MeshGeometry, MeshSurface
 from ..materials import FORMS, IsochoricMaterial
 from ..materials.presets import PRESETS, PresetMaterial
 from ..solve.schedule import ChamberSchedule
@@ -41,7 +42,9 @@ BODY_SHAPES = Variant({
     "polygon": POLYGON,
     "union": record(RectangleUnion, "a union of axis-aligned rectangles (one region, no holes)",
                     rectangles=Tables(record(Rectangle, center=Key(tuple, doc=PAIR), size=Key(tuple, doc="[w, h]")))),
-}, doc="the body's outline")
+    "mesh": record(MeshBody, "a 3D body read from a mesh file (any meshio format with tetrahedra)",
+                   file=Key(str, doc="the mesh file, relative to the scene file")),
+}, doc="the body's outline (2D), or a 3D body")
 CHAMBER_SHAPES = Variant({
     "ellipse": record(Ellipse, "an ellipse", center=Key(tuple, doc=PAIR), semi_axes=Key(tuple, doc="[a, b]"),
                       points=Key(int, 64, "wall points, 8 or more")),
@@ -50,6 +53,8 @@ CHAMBER_SHAPES = Variant({
                                 radius=Key(float, doc="corner radius, below half the shorter side"),
                                 corner_points=Key(int, 6, "points per corner")),
     "polygon": POLYGON,
+    "mesh_surface": record(MeshSurface, "the wall of a mesh body's chamber: a group of the mesh file's triangles",
+                           group=Key(str, doc="the group (gmsh physical group) of the wall's triangles")),
 }, doc="the chamber's wall")
 TARGET = record(Target, "a pose the tip should reach (inverse control)", tip=Key(tuple, doc=PAIR),
                 angle=Key(float, None, "tip rotation in degrees (none: free)"),
@@ -57,8 +62,9 @@ TARGET = record(Target, "a pose the tip should reach (inverse control)", tip=Key
 
 
 ROLLER = record(Roller, "a roller support: the nodes' displacement along normal held, tangential motion free",
-                normal=Key(tuple, doc="[nx, ny]"),
-                point=Key(tuple, None, "[x, y]: the nodes within tolerance of the line through it, normal to normal"),
+                normal=Key(tuple, doc="[nx, ny] ([nx, ny, nz] in 3D)"),
+                point=Key(tuple, None, "[x, y]: the nodes within tolerance of the line through it, normal to normal "
+                                       "(3D: [x, y, z], a plane)"),
                 box=Key(tuple, None, f"{BOX}: the nodes in it (instead of point)"), tolerance=Key(float, 1e-6))
 
 
@@ -142,9 +148,9 @@ def scene_table(scene_class) -> Table:
 
         return base, tuple(build(f"material.regions[{i}]", lambda: region(r)) for i, r in enumerate(v["regions"]))
 
-    region = Table({"box": Key(tuple, doc=BOX), **MATERIAL_KEYS},
+    region = Table({"box": Key(tuple, doc=f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D)"), **MATERIAL_KEYS},
                    parts=lambda r: {"box": r.box, **material_keys(r.material)})
-    regions = Tables(region, "materials for the triangles whose centroid lies in box (later regions win); keys as "
+    regions = Tables(region, "materials for the elements whose centroid lies in box (later regions win); keys as "
                              "material's, and unless a region names a preset or law, each key it omits is material's")
     material = Table({**MATERIAL_KEYS, "regions": regions}, make=make_material,
                      parts=lambda s: {**material_keys(s.material), "regions": s.regions}, optional=True,
@@ -166,16 +172,22 @@ def scene_table(scene_class) -> Table:
         require(len(v["targets"]) <= MAX_TARGETS, f"{len(v['targets'])} [[targets]]: at most {MAX_TARGETS} are "
                                                   f"allowed (each is a reach)")
         (material, regions), (clamp, clamp_stiffness) = v["material"], v["clamp"]
-        geometry = Geometry(v["body"], tuple((name, shape) for name, shape, _ in v["chambers"]),
-                            v["mesh"]["max_area"], clamp, v["mesh"]["order"], tip=v["tip"], rollers=v["rollers"])
+        chambers, max_area = tuple((name, shape) for name, shape, _ in v["chambers"]), v["mesh"]["max_area"]
+        if isinstance(v["body"], MeshBody):
+            require(max_area is None, "mesh.max_area: a mesh file's body keeps the file's elements (no max_area)")
+            geometry = MeshGeometry(v["body"], chambers, v["mesh"]["order"], clamp, v["tip"], v["rollers"])
+        else:
+            geometry = Geometry(v["body"], chambers, *(() if max_area is None else (max_area,)), clamp=clamp,
+                                order=v["mesh"]["order"], tip=v["tip"], rollers=v["rollers"])
         return scene_class(geometry, tuple(control for *_, control in v["chambers"]), v["schedule"]["increments"],
                            material, regions, clamp_stiffness, v["effects"], v["name"], v["targets"],
                            UNITLESS if v["units"] is None else UNITS[v["units"]])
 
     def mesh_parts(geometry):
-        require(geometry.refinements == 0, f"a geometry refined {geometry.refinements} times has no scene-file form "
-                                           f"(scene files have no refinements key)")
-        return {"max_area": geometry.max_area, "order": geometry.order}
+        refinements = getattr(geometry, "refinements", 0)
+        require(refinements == 0, f"a geometry refined {refinements} times has no scene-file form "
+                                  f"(scene files have no refinements key)")
+        return {"max_area": getattr(geometry, "max_area", None), "order": geometry.order}
 
     return Table({
         "name": Key(str, None, "names the result files (a plain file name); none: the scene file's own name"),
@@ -183,8 +195,8 @@ def scene_table(scene_class) -> Table:
         "units": Key(str, None, "the system of the scene's lengths and pressures (io/units.py; none: unitless)",
                      tuple(UNITS)),
         "body": Table({"shape": BODY_SHAPES}, make=lambda v: v["shape"], parts=lambda body: {"shape": body}),
-        "mesh": Table({"max_area": Key(float, 0.0012, "largest triangle area"),
-                       "order": Key(int, 1, "1: linear triangles, 2: quadratic", ORDERS)},
+        "mesh": Table({"max_area": Key(float, None, "largest triangle area (2D; none: 0.0012)"),
+                       "order": Key(int, 1, "1: linear triangles (tetrahedra), 2: quadratic", ORDERS)},
                       parts=mesh_parts, optional=True),
         "material": material,
         "clamp": Table(point_set("left", stiffness=Key(float, 1e9, "penalty stiffness of the clamp and the rollers")),

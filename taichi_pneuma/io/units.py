@@ -21,6 +21,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 LENGTH, AREA, PRESSURE, FORCE, ANGLE, TIME = "length", "area", "pressure", "force", "angle", "time"
+VOLUME = "volume"  # a 3D chamber's measure
+MEASURES = {2: AREA, 3: VOLUME}  # what a chamber encloses, by dimension
 
 
 @dataclass(frozen=True)
@@ -39,7 +41,8 @@ class Units:
         if self.name is None or not dimension:
             return ""
         return {LENGTH: self.length, AREA: f"{self.length}^2", PRESSURE: self.pressure,
-                FORCE: f"{self.pressure} {self.length}", ANGLE: "deg", TIME: "s"}[dimension]
+                FORCE: f"{self.pressure} {self.length}", ANGLE: "deg", TIME: "s",
+                VOLUME: f"{self.length}^3"}[dimension]
 
     def label(self, name: str, dimension: str) -> str:
         """name with its unit in brackets ("main.pressure [kPa]"); name itself when there is none."""

@@ -7,9 +7,11 @@ The PVD is rewritten after every step, so a run that stops early leaves its fini
 VTU files of the same stem left in the folder by an earlier run, and the .partial files of one killed
 while writing, are removed when a series starts. The folder is an output.Subfolder: a link or a file at
 its name is refused before any step is solved, and no link in it is followed.
-Each VTU holds the rest mesh (points padded with z = 0; linear triangles, or quadratic ones as VTK's
-6-node triangle, whose midside-node order 01, 12, 20 the mesh shares) and
-- point data: displacement (x, y, 0): ParaView's Warp By Vector with it shows the deformed body;
+Each VTU holds the rest mesh (in 2D points padded with z = 0; linear triangles, or quadratic ones as VTK's
+6-node triangle, whose midside-node order 01, 12, 20 the mesh shares; in 3D tetrahedra, 4-node or VTK's
+10-node, whose node order the mesh shares, followed by the chamber walls' triangles, each its chamber's
+index in the cell field chamber, -1 on the tetrahedra, and NaN in the other cell fields) and
+- point data: displacement (x, y, 0; x, y, z in 3D): ParaView's Warp By Vector with it shows the deformed body;
   chamber: the index (scene order) of the chamber whose wall the vertex is on, -1 elsewhere;
   contact_force (x, y, 0), summed over the contact terms, when the scene has contact;
 - cell data (fields.py: element means over the quadrature points): det_F, max_stretch, stress (Cauchy,
@@ -39,8 +41,11 @@ SYMMETRIC_TENSOR = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))  # ParaView'
 
 
 def pad3(vectors: np.ndarray) -> np.ndarray:
-    """(n, 2) -> (n, 3) with z = 0."""
-    return np.column_stack([vectors, np.zeros(len(vectors))])
+    """(n, 2) -> (n, 3) with z = 0; (n, 3) as is."""
+    return vectors if vectors.shape[1] == 3 else np.column_stack([vectors, np.zeros(len(vectors))])
+
+
+CELL_TYPES = {(2, 1): "triangle", (2, 2): "triangle6", (3, 1): "tetra", (3, 2): "tetra10"}  # (d, order) -> VTK
 
 
 def write_vtu(path: Path, mesh: meshio.Mesh, field_data: dict[str, float]) -> None:
@@ -75,14 +80,18 @@ class VtkSeries:
         self.pvd = self.directory / f"{stem}.pvd"
         self.scene = built.scene
         self.material = built.elastic.law, built.elastic.parameters
-        self.fields = ElementFields(mesh.vertices, mesh.triangles)
+        self.fields = ElementFields(mesh.vertices, mesh.elements)
+        self.cells = [(CELL_TYPES[mesh.dim, mesh.order], mesh.elements)]
+        self.walls = [] if mesh.dim == 2 else [(CELL_TYPES[2, mesh.order], np.vstack(mesh.chambers))]
+        if self.walls:
+            self.wall_chamber = np.concatenate([np.full(len(w), i) for i, w in enumerate(mesh.chambers)])
         self.chamber = np.full(mesh.n_vertices, -1, dtype=np.int32)
         for index, loop in enumerate(mesh.chambers):
             self.chamber[loop] = index
         self.entries: list[tuple[float, str]] = []
 
     def write(self, step, positions: np.ndarray, contact_force: np.ndarray | None = None) -> Path:
-        """Write step (a simulate.StepRecord) at positions (n, 2); return the VTU's path."""
+        """Write step (a simulate.StepRecord) at positions (n, d); return the VTU's path."""
         mesh = self.mesh
         fields = self.fields.at(positions, *self.material)
         stress = np.column_stack([fields["stress"][:, i, j] for i, j in SYMMETRIC_TENSOR])
@@ -90,11 +99,15 @@ class VtkSeries:
         point_data = {units.label("displacement", LENGTH): pad3(positions - mesh.vertices), "chamber": self.chamber}
         if contact_force is not None:
             point_data[units.label("contact_force", FORCE)] = pad3(contact_force)
-        cell_type = "triangle" if mesh.order == 1 else "triangle6"
-        grid = meshio.Mesh(pad3(mesh.vertices), [(cell_type, mesh.triangles)], point_data=point_data,
-                           cell_data={"det_F": [fields["det_F"]], "max_stretch": [fields["max_stretch"]],
-                                      units.label("stress", PRESSURE): [stress],
-                                      units.label("von_mises", PRESSURE): [fields["von_mises"]]})
+        cell_data = {"det_F": fields["det_F"], "max_stretch": fields["max_stretch"],
+                     units.label("stress", PRESSURE): stress, units.label("von_mises", PRESSURE): fields["von_mises"]}
+        if self.walls:  # the chamber walls' triangles: their chamber, and no element field
+            cell_data = {name: [values, np.full((len(self.wall_chamber), *values.shape[1:]), np.nan)]
+                         for name, values in cell_data.items()}
+            cell_data["chamber"] = [np.full(mesh.n_elements, -1), self.wall_chamber]
+        else:
+            cell_data = {name: [values] for name, values in cell_data.items()}
+        grid = meshio.Mesh(pad3(mesh.vertices), self.cells + self.walls, point_data=point_data, cell_data=cell_data)
         dimensions = history_dimensions(self.scene, step.contact)
         row = {units.label(name, dimensions.get(name, "")): value for name, value in step.row().items()}
         path = self.folder / f"{self.stem}_{step.step:04d}.vtu"

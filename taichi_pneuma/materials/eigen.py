@@ -11,6 +11,12 @@ accumulating V <- V J; sweeps repeat until the off-diagonal part is below EPSILO
 converges quadratically: 5-8 sweeps for 9 x 9). The loops are runtime loops over a matrix indexed at
 run time, so Taichi traces the body once: compiling it costs well under a second, where the unrolled
 version (every rotation written out) cost 16 s.
+
+The rotation-variant SVD of a 3 x 3 F (F = U diag(sigma) V^T with U, V rotations, sigma_3 negative when
+det F < 0) comes from the same iteration on C = F^T F = V diag(sigma^2) V^T (eigenvalues sorted down,
+v_3 flipped to make det V = 1): u_1 = F v_1 / |F v_1|, u_2 the unit part of F v_2 normal to u_1,
+u_3 = u_1 x u_2, and sigma_i = u_i . F v_i (signed). Unlike Taichi's own ti.svd (a fixed number of
+approximate rotations: |U S V^T - F| up to 4e-10 |F| in float64) it is exact to round-off.
 """
 
 from ..backend import ti
@@ -61,3 +67,41 @@ def symmetric_eigensystem(M):
     for i in range(n):
         values[i] = A[i, i]
     return values, V.transpose()
+
+
+@ti.func
+def unit_or(v, fallback):
+    """v / |v|, or fallback (a unit vector) where v vanishes."""
+    out = fallback
+    length = v.norm()
+    if length > 1e-150:
+        out = v / length
+    return out
+
+
+@ti.func
+def rotation_variant_svd(F):
+    """(U, sigma, V) of a 3 x 3 F: F = U diag(sigma) V^T, U and V rotations, sigma_1 >= sigma_2 >= |sigma_3|
+    (module docstring)."""
+    values, rows = symmetric_eigensystem(F.transpose() @ F)
+    order = ti.Vector([0, 1, 2])
+    for i in ti.static(range(2)):  # sort the three eigenvalues down
+        for j in ti.static(range(2 - i)):
+            if values[order[j]] < values[order[j + 1]]:
+                order[j], order[j + 1] = order[j + 1], order[j]
+    V = ti.Matrix.zero(ti.f64, 3, 3)
+    for i, k in ti.ndrange(3, 3):
+        V[k, i] = rows[order[i], k]
+    if V.determinant() < 0:
+        for k in ti.static(range(3)):
+            V[k, 2] = -V[k, 2]
+    v1 = ti.Vector([V[0, 0], V[1, 0], V[2, 0]])
+    v2 = ti.Vector([V[0, 1], V[1, 1], V[2, 1]])
+    v3 = ti.Vector([V[0, 2], V[1, 2], V[2, 2]])
+    u1 = unit_or(F @ v1, ti.Vector([1.0, 0.0, 0.0]))
+    w = F @ v2
+    across = ti.Vector([1.0, 0.0, 0.0]) if ti.abs(u1[0]) < 0.9 else ti.Vector([0.0, 1.0, 0.0])
+    u2 = unit_or(w - u1.dot(w) * u1, u1.cross(across).normalized())
+    u3 = u1.cross(u2)
+    U = ti.Matrix.cols([u1, u2, u3])
+    return U, ti.Vector([u1.dot(F @ v1), u2.dot(w), u3.dot(F @ v3)]), V

@@ -14,19 +14,33 @@ With g = dJ/dF = cof F and c = mu + lam (1 - J):
 which in the plane is constant: with vec(F) = (F00, F01, F10, F11), H_J has eigenvalue +1 on
 span{(1,0,0,1), (0,1,-1,0)} and -1 on span{(1,0,0,-1), (0,1,1,0)}.
 
-The 2D eigensystem of M is analytic (the fast path; 3D uses the Jacobi iteration until its closed form
-is added). mu I - c H_J is mu - c on the first plane and mu + c on the second. Split g = a u_+ + b u_-
-into its parts in the two planes (a, b >= 0, u_+- unit) and let w_+- complete each plane. Then
+The eigensystem of M is analytic in 2D and 3D (the fast path). In 2D, mu I - c H_J is mu - c on the first
+plane and mu + c on the second. Split g = a u_+ + b u_- into its parts in the two planes (a, b >= 0, u_+-
+unit) and let w_+- complete each plane. Then
 
     M = (mu - c) w_+ w_+^T + (mu + c) w_- w_-^T + [u_+ u_-] B [u_+ u_-]^T,
     B = [[mu - c + lam a^2, lam a b], [lam a b, mu + c + lam b^2]],
 
 and the 2 x 2 block B has closed-form eigenpairs: four eigenpairs of M, no iteration.
+
+In 3D the eigensystem is that of Smith, de Goes and Kim (2019, "Analytic eigensystems for isotropic
+distortion energies"), on the rotation-variant SVD F = U diag(s) V^T (eigen.rotation_variant_svd): for
+each axis k, with (i, j) the other two,
+
+    twist  U (e_i e_j^T - e_j e_i^T) V^T / sqrt 2,   eigenvalue mu - c s_k,
+    flip   U (e_i e_j^T + e_j e_i^T) V^T / sqrt 2,   eigenvalue mu + c s_k,
+
+and three scaling modes U diag(a) V^T for the eigenvectors a of the 3 x 3 Hessian of psi in s,
+
+    A_ii = mu + lam (s_j s_k)^2,   A_ij = lam s_i s_j s_k^2 - c s_k,
+
+(at s = (s1, s2, 1) the twist and flip of axis z are the in-plane modes of the 2D system above).
 """
 
 import numpy as np
 
 from ..backend import ti
+from .eigen import rotation_variant_svd, symmetric_eigensystem
 from .invariants import cofactor, determinant_hessian, flat
 from .law import Law, register
 
@@ -56,7 +70,7 @@ def plane_split(g, p, q):
 class StableNeoHookean(Law):
     name = "stable_neo_hookean"
     parameter_names = ("mu", "lam")
-    analytic_dims = (2,)
+    analytic_dims = (2, 3)
 
     @staticmethod
     def parameters(youngs_modulus, poisson_ratio) -> np.ndarray:
@@ -91,17 +105,54 @@ class StableNeoHookean(Law):
     @staticmethod
     @ti.func
     def eigensystem(F, p, d: ti.template()):
-        """The four eigenvalues and unit eigenvectors (rows of a 4 x 4 matrix) of the in-plane M (module docstring)."""
-        ti.static_assert(d == 2)
-        mu, lam = p[0], p[1]
-        g = ti.Vector([F[1, 1], -F[1, 0], -F[0, 1], F[0, 0]])  # cof of the in-plane block, = that of F
-        c = mu + lam * (1.0 - F.determinant())
-        r = SQRT_HALF
-        a, u_p, w_p = plane_split(g, ti.Vector([r, 0.0, 0.0, r]), ti.Vector([0.0, r, -r, 0.0]))
-        b, u_m, w_m = plane_split(g, ti.Vector([r, 0.0, 0.0, -r]), ti.Vector([0.0, r, r, 0.0]))
-        pp, q, s = mu - c + lam * a * a, lam * a * b, mu + c + lam * b * b  # B = [[pp, q], [q, s]]
-        mean, half = 0.5 * (pp + s), ti.sqrt(0.25 * (pp - s) ** 2 + q * q)
-        theta = 0.5 * ti.atan2(2.0 * q, pp - s)  # (cos, sin) theta: the eigenvector of mean + half
-        v1 = ti.cos(theta) * u_p + ti.sin(theta) * u_m
-        v2 = -ti.sin(theta) * u_p + ti.cos(theta) * u_m
-        return ti.Vector([mu - c, mu + c, mean + half, mean - half]), ti.Matrix.rows([w_p, w_m, v1, v2])
+        """The d^2 eigenvalues and unit eigenvectors (rows of a d^2 x d^2 matrix) of M on the d x d block (module
+        docstring)."""
+        if ti.static(d == 2):
+            return plane_eigensystem(F, p)
+        else:
+            return solid_eigensystem(F, p)
+
+
+@ti.func
+def plane_eigensystem(F, p):
+    """The four eigenvalues and unit eigenvectors (rows of a 4 x 4 matrix) of the in-plane M."""
+    mu, lam = p[0], p[1]
+    g = ti.Vector([F[1, 1], -F[1, 0], -F[0, 1], F[0, 0]])  # cof of the in-plane block, = that of F
+    c = mu + lam * (1.0 - F.determinant())
+    r = SQRT_HALF
+    a, u_p, w_p = plane_split(g, ti.Vector([r, 0.0, 0.0, r]), ti.Vector([0.0, r, -r, 0.0]))
+    b, u_m, w_m = plane_split(g, ti.Vector([r, 0.0, 0.0, -r]), ti.Vector([0.0, r, r, 0.0]))
+    pp, q, s = mu - c + lam * a * a, lam * a * b, mu + c + lam * b * b  # B = [[pp, q], [q, s]]
+    mean, half = 0.5 * (pp + s), ti.sqrt(0.25 * (pp - s) ** 2 + q * q)
+    theta = 0.5 * ti.atan2(2.0 * q, pp - s)  # (cos, sin) theta: the eigenvector of mean + half
+    v1 = ti.cos(theta) * u_p + ti.sin(theta) * u_m
+    v2 = -ti.sin(theta) * u_p + ti.cos(theta) * u_m
+    return ti.Vector([mu - c, mu + c, mean + half, mean - half]), ti.Matrix.rows([w_p, w_m, v1, v2])
+
+
+@ti.func
+def solid_eigensystem(F, p):
+    """The nine eigenvalues and unit eigenvectors (rows of a 9 x 9 matrix, over vec(F) row by row) of the 3D M:
+    twists, flips, then scalings (module docstring)."""
+    mu, lam = p[0], p[1]
+    U, s, V = rotation_variant_svd(F)
+    c = mu + lam * (1.0 - s[0] * s[1] * s[2])
+    values = ti.Vector.zero(ti.f64, 9)
+    vectors = ti.Matrix.zero(ti.f64, 9, 9)
+    A = ti.Matrix.zero(ti.f64, 3, 3)
+    for k in ti.static(range(3)):
+        i, j = (k + 1) % 3, (k + 2) % 3
+        values[k], values[3 + k] = mu - c * s[k], mu + c * s[k]
+        for a, b in ti.static(ti.ndrange(3, 3)):
+            vectors[k, 3 * a + b] = SQRT_HALF * (U[a, i] * V[b, j] - U[a, j] * V[b, i])
+            vectors[3 + k, 3 * a + b] = SQRT_HALF * (U[a, i] * V[b, j] + U[a, j] * V[b, i])
+        A[k, k] = mu + lam * (s[i] * s[j]) ** 2
+        A[i, j] = lam * s[i] * s[j] * s[k] ** 2 - c * s[k]
+        A[j, i] = A[i, j]
+    scalings, rows = symmetric_eigensystem(A)
+    for m in ti.static(range(3)):
+        values[6 + m] = scalings[m]
+        for a, b in ti.static(ti.ndrange(3, 3)):
+            vectors[6 + m, 3 * a + b] = U[a, 0] * rows[m, 0] * V[b, 0] + U[a, 1] * rows[m, 1] * V[b, 1] \
+                + U[a, 2] * rows[m, 2] * V[b, 2]
+    return values, vectors

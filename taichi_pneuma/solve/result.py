@@ -13,11 +13,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fem.fields import triangle_fields
+from ..fem.fields import element_fields
 from ..io.output import lock_stem, prepare_directory, save_json, save_npz, save_text, write_atomic
 from ..io.units import history_dimensions
 from ..scene import BuiltScene, Scene
 from ..signals import holding
+
+
+ELEMENTS = {2: "triangles", 3: "tetrahedra"}  # the summary's element count, by dimension
 
 
 @dataclass
@@ -108,9 +111,9 @@ class Result:
         return next((e.ground_height for e in self.scene.effects if e.ground_height is not None), None)
 
     def fields(self, step: int = -1) -> dict[str, np.ndarray]:
-        """Per triangle at a step: det_F, max_stretch, stress (Cauchy, (m, 3, 3)), von_mises (fields.py)."""
-        return triangle_fields(self.mesh.vertices, self.positions[step], self.mesh.triangles,
-                               *self.scene.element_material(self.mesh))
+        """Per element at a step: det_F, max_stretch, stress (Cauchy, (m, 3, 3)), von_mises (fields.py)."""
+        return element_fields(self.mesh.vertices, self.positions[step], self.mesh.elements,
+                              *self.scene.element_material(self.mesh))
 
     def summary(self, interrupted: bool = False) -> dict:
         """The figures of the run (the summary JSON); interrupted: the run was stopped after these steps."""
@@ -118,12 +121,14 @@ class Result:
         iterations, seconds = self.history["iterations"][1:], self.history["seconds"][1:]
         return {
             "scene": self.scene.name, "terms": self.built.model.term_names(),
-            "vertices": self.mesh.n_vertices, "triangles": self.mesh.n_triangles, "element_order": self.mesh.order,
+            "vertices": self.mesh.n_vertices, ELEMENTS[self.mesh.dim]: self.mesh.n_elements,
+            "element_order": self.mesh.order,
             "chambers": {name: {"control": c.control, "rest_area": c.area / c.area_ratio, "final_area": c.area,
                                 "area_ratio": c.area_ratio, "final_pressure": c.pressure,
                                 "peak_pressure": float(np.abs(self.history[f"{name}.pressure"]).max())}
                          for name, c in final.chambers.items()},
-            "tip_deflection": self.tip_deflection, "tip_rotation_deg": final.tip_rotation,
+            "tip_deflection": self.tip_deflection, **({} if final.tip_dz is None else {"tip_dz": final.tip_dz}),
+            "tip_rotation_deg": final.tip_rotation,
             "peak_pressure": self.peak_pressure, "contact": final.contact,
             "all_converged": self.converged,
             "max_residual": float(self.history["residual"].max()),
@@ -149,13 +154,16 @@ class Result:
     def save_history(self, directory, stem: str | None = None) -> list[Path]:
         """Write <stem>_history.csv and <stem>_states.npz (also for a partial run); return their paths.
 
-        The npz holds positions (steps, n, 2), rest, triangles, pinned, tip, boundary, chamber_names and
-        one chamber_loop_<i> per chamber, command / area / pressure as (steps, chambers), and, where
-        the scene has them, contact_forces (steps, n, 2) and ground_height.
+        The npz holds positions (steps, n, d), rest, triangles (in 3D: tetrahedra and surface, the body's
+        boundary triangles), pinned, tip, boundary, chamber_names and one chamber_loop_<i> per chamber
+        (in 3D its wall's triangles), command / area / pressure as (steps, chambers), and, where the
+        scene has them, contact_forces (steps, n, d) and ground_height.
         """
         out, stem = prepare_directory(directory), stem or self.scene.name
         mesh = self.mesh
-        arrays = dict(positions=self.positions, rest=mesh.vertices, triangles=mesh.triangles, pinned=mesh.pinned,
+        cells = ({"triangles": mesh.elements} if mesh.dim == 2 else
+                 {"tetrahedra": mesh.elements, "surface": mesh.surface})
+        arrays = dict(positions=self.positions, rest=mesh.vertices, **cells, pinned=mesh.pinned,
                       tip=mesh.tip, boundary=mesh.boundary, chamber_names=np.array(self.chamber_names),
                       **{f"chamber_loop_{i}": loop for i, loop in enumerate(mesh.chambers)},
                       command=self.command, area=self.area, pressure=self.pressure)

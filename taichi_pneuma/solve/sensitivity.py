@@ -45,7 +45,7 @@ from .linsolve import FactorizationError, FixedPattern, make_backend, solve_low_
 class Sensitivity:
     """d(state)/d(commands) at one equilibrium; m = number of chambers, in the scene's order.
 
-    displacements: (n, 2, m) du/dq of every vertex; tip: (3, m) d(tip dx, tip dy, tip rotation in
+    displacements: (n, d, m) du/dq of every vertex; tip: (3, m) d(tip dx, tip dy, tip rotation in
     degrees)/dq; backend: the linear solver that factorised the exact Hessian."""
 
     displacements: np.ndarray
@@ -95,15 +95,16 @@ def solve_exact(built: BuiltScene, rhs: np.ndarray, pattern: FixedPattern | None
 
 def sensitivity(built: BuiltScene, commands: np.ndarray, u: np.ndarray, pattern: FixedPattern | None = None,
                 backend=None, factorised: bool = False) -> Sensitivity:
-    """du/dq and the tip Jacobian at the equilibrium u (n, 2) of `commands`; leaves them set on `built`.
-    pattern, backend, factorised: see solve_exact."""
+    """du/dq and the tip Jacobian at the equilibrium u (n, d) of `commands`; leaves them set on `built`.
+    pattern, backend, factorised: see solve_exact. The tip outputs are those of simulate.tip_measures: in the
+    x-y plane (in 3D the bend angle about z)."""
     built.set_commands(commands)
     built.model.set_displacements(u)
     du, name = solve_exact(built, command_forces(built), pattern, backend, factorised)
-    du = du.reshape(-1, 2, len(built.chambers))
     mesh = built.mesh
-    tip_du = du[mesh.tip]  # (k, 2, m)
-    rest_tip = mesh.vertices[mesh.tip]
-    rotation = tip_rotation_gradient(rest_tip, rest_tip + np.reshape(u, (-1, 2))[mesh.tip])
+    du = du.reshape(-1, mesh.dim, len(built.chambers))
+    tip_du = du[mesh.tip, :2]  # (k, 2, m)
+    rest_tip = mesh.vertices[mesh.tip, :2]
+    rotation = tip_rotation_gradient(rest_tip, rest_tip + np.reshape(u, (-1, mesh.dim))[mesh.tip, :2])
     d_theta = np.einsum("kd,kdm->m", rotation, tip_du)
     return Sensitivity(du, np.vstack([tip_du.mean(axis=0), math.degrees(1.0) * d_theta]), name)

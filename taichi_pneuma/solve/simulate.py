@@ -33,9 +33,10 @@ class StepRecord:
     """One increment of the schedule, as measured after its solve.
 
     tip_dx, tip_dy: mean displacement of the tip vertices (mesh.tip); tip_rotation: their rigid
-    rotation in degrees (counter-clockwise positive, least squares); contact: per contact term the
-    total force it exerts on the body (fx, fy) and the sum of its per-vertex force magnitudes; extra:
-    further columns by name, last in the row (a reach's target and tip error, inverse.frames).
+    rotation in degrees (counter-clockwise positive, least squares; in 3D the bend angle, about z);
+    contact: per contact term the total force it exerts on the body (fx, fy) and the sum of its
+    per-vertex force magnitudes; extra: further columns by name, last in the row (a reach's target and
+    tip error, inverse.frames); tip_dz: in 3D the tip's mean z displacement (None in 2D).
     """
 
     step: int
@@ -52,6 +53,7 @@ class StepRecord:
     seconds: float
     contact: dict[str, tuple[float, float, float]] = field(default_factory=dict)
     extra: dict[str, float] = field(default_factory=dict)
+    tip_dz: float | None = None
 
     def row(self) -> dict[str, float]:
         """Flat columns: step, <chamber>.<field> for each chamber, <contact>.fx/.fy/.magnitude, solver figures,
@@ -60,7 +62,10 @@ class StepRecord:
         for name, c in self.chambers.items():
             row.update({f"{name}.command": c.command, f"{name}.area": c.area, f"{name}.area_ratio": c.area_ratio,
                         f"{name}.pressure": c.pressure})
-        row.update({"tip_dx": self.tip_dx, "tip_dy": self.tip_dy, "tip_rotation": self.tip_rotation})
+        row.update({"tip_dx": self.tip_dx, "tip_dy": self.tip_dy})
+        if self.tip_dz is not None:
+            row["tip_dz"] = self.tip_dz
+        row["tip_rotation"] = self.tip_rotation
         for name, (fx, fy, magnitude) in self.contact.items():
             row.update({f"{name}.fx": fx, f"{name}.fy": fy, f"{name}.magnitude": magnitude})
         row.update({"iterations": self.iterations, "residual": self.residual, "converged": self.converged,
@@ -123,9 +128,16 @@ def tip_rotation(rest: np.ndarray, current: np.ndarray) -> float:
 
 def tip_measures(mesh, u: np.ndarray) -> tuple[float, float, float]:
     """(dx, dy, rotation in degrees) of the tip: the mean displacement of the mesh's tip nodes (the geometry's
-    named tip, the right edge by default) and their rigid rotation."""
-    dx, dy = u[mesh.tip].mean(axis=0)
-    return float(dx), float(dy), tip_rotation(mesh.vertices[mesh.tip], mesh.vertices[mesh.tip] + u[mesh.tip])
+    named tip, the right edge (face, in 3D) by default) and their rigid rotation in the x-y plane (in 3D the
+    bend angle: the rotation about z of the tip nodes' x-y positions)."""
+    rest, moved = mesh.vertices[mesh.tip, :2], u[mesh.tip, :2]
+    dx, dy = moved.mean(axis=0)
+    return float(dx), float(dy), tip_rotation(rest, rest + moved)
+
+
+def tip_dz(mesh, u: np.ndarray) -> float | None:
+    """The tip nodes' mean z displacement in 3D (None in 2D)."""
+    return float(u[mesh.tip, 2].mean()) if mesh.dim == 3 else None
 
 
 def describe_commands(built: BuiltScene, commands: np.ndarray, reached: np.ndarray) -> str:
@@ -220,11 +232,12 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
         for name, term in contact_terms:
             f = -term.gradient()
             vertex_forces += f
-            fx, fy = f.sum(axis=0)
+            fx, fy = f.sum(axis=0)[:2]  # (in 3D only the ground reports contact, along y)
             contact[name] = (float(fx), float(fy), float(np.linalg.norm(f, axis=1).sum()))
         step = StepRecord(i, chambers, *tip_measures(mesh, u),
                           sum(r.iterations for r in records), final.residual, final.converged, cuts,
-                          len(records) - cuts, built.elastic.min_determinant(), time.perf_counter() - start, contact)
+                          len(records) - cuts, built.elastic.min_determinant(), time.perf_counter() - start, contact,
+                          tip_dz=tip_dz(mesh, u))
         steps.append(step)
         states.append(mesh.vertices + u)
         forces.append(vertex_forces)

@@ -17,6 +17,7 @@ Scalars = ti.types.ndarray(dtype=ti.f64, ndim=1)  # (m,) float64
 Table = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (m, k) float64: per-element Hessian blocks
 Indices = ti.types.ndarray(dtype=ti.i32, ndim=1)  # (m,) int32 vertex indices
 Triples = ti.types.ndarray(dtype=ti.types.vector(3, ti.i32), ndim=1)  # (m, 3) int32 vertex triples
+HUGE = 1e300  # a finite stand-in for infinity in comparisons (smallest_positive_cubic_root)
 
 
 def vectors(d: int):
@@ -87,6 +88,55 @@ def smallest_positive_root(c0, c1, c2):
     for r in ti.static(range(2)):
         if roots[r] > 0:
             root = ti.min(root, roots[r])
+    return root
+
+
+@ti.func
+def sign_of(x):
+    return ti.select(x > 0, 1, ti.select(x < 0, -1, 0))
+
+
+@ti.func
+def cubic(c0, c1, c2, c3, t):
+    return c0 + t * (c1 + t * (c2 + t * c3))
+
+
+@ti.func
+def smallest_positive_cubic_root(c0, c1, c2, c3):
+    """The smallest root t > 0 of p(t) = c0 + c1 t + c2 t^2 + c3 t^3 (inf if none), by bisection on the
+    pieces where p is monotone: from 0 to the positive roots of p' (quadratic_roots) and, past the last one,
+    to a bracket found by doubling (up to HUGE). Any degree (c3, or more, may vanish). The result is the
+    left end of the last bracket, within 1e-15 of the root relative to it and never past it.
+
+    Taichi compiles with fast math, which may assume no value is infinite: a comparison with an infinite
+    constant can be folded away, so the pieces' ends are compared with the finite HUGE instead."""
+    critical = quadratic_roots(c1, 2.0 * c2, 3.0 * c3)
+    ends = ti.Vector([ti.min(critical[0], critical[1]), ti.max(critical[0], critical[1]), HUGE])
+    root = ti.math.inf
+    found = False
+    a = 0.0
+    for i in ti.static(range(3)):
+        b = ends[i]
+        if not found and a < b and b <= HUGE:
+            start = sign_of(cubic(c0, c1, c2, c3, a))
+            if ti.static(i == 2):  # the last piece, unbounded: double until p changes sign
+                b = ti.max(2.0 * a, 1.0)
+                while sign_of(cubic(c0, c1, c2, c3, b)) == start and b < HUGE:
+                    b *= 2.0
+            if start == 0 and a > 0:
+                root, found = a, True
+            elif start != 0 and sign_of(cubic(c0, c1, c2, c3, b)) != start:
+                lo, hi = a, b
+                while hi - lo > 1e-15 * hi:
+                    middle = 0.5 * (lo + hi)
+                    if middle <= lo or middle >= hi:
+                        break
+                    if sign_of(cubic(c0, c1, c2, c3, middle)) == start:
+                        lo = middle
+                    else:
+                        hi = middle
+                root, found = lo, True
+            a = b
     return root
 
 

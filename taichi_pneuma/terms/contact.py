@@ -9,8 +9,9 @@ The barrier on a distance d with activation threshold d_hat and stiffness kappa 
 C2 at d_hat, infinite as d -> 0, so the energy forbids touching; max_step keeps every distance
 positive along a Newton step (the solver steps at most 0.9 of it), so no step jumps through.
 
-Ground: d_i = y_i - h for each vertex on the body's outer boundary (the line y = h). The
-Hessian b''(d) e_y e_y^T is PSD and exact. Step bound: d_i / (-dy_i) where dy_i < 0.
+Ground: d_i = y_i - h for each vertex on the body's outer boundary (the line, or in 3D the plane, y = h).
+The Hessian b''(d) e_y e_y^T is PSD and exact. Step bound: d_i / (-dy_i) where dy_i < 0. (Self-contact
+is 2D only.)
 
 Self-contact of a chamber wall: for each wall vertex p and each wall edge (a, b) not incident to
 it (and not within 2 d_hat of it at rest: neighbours along a smooth wall), d is the point-segment
@@ -29,7 +30,7 @@ import numpy as np
 
 from .. import limits
 from ..backend import ti
-from .base import Indices, Table, Term, Triples, Vec2s, block_pattern, edge, int32s, position, quadratic_roots
+from .base import Indices, Nodal, Table, Term, Triples, Vec2s, block_pattern, edge, int32s, position, quadratic_roots
 
 
 @ti.func
@@ -46,13 +47,13 @@ def barrier(d, dhat, kappa):
 
 
 @ti.kernel
-def ground_energy(rest: Vec2s, u: Vec2s, verts: Indices, height: ti.f64, dhat: ti.f64,
+def ground_energy(rest: Nodal, u: Nodal, verts: Indices, height: ti.f64, dhat: ti.f64,
                   kappa: ti.f64) -> tuple[ti.f64, ti.f64]:
     """(sum of the barriers over the vertices above the ground, smallest distance to it)."""
     total = 0.0
     nearest = ti.math.inf
     for k in range(verts.shape[0]):
-        d = position(rest, u, verts[k])[1] - height
+        d = rest[verts[k], 1] + u[verts[k], 1] - height
         ti.atomic_min(nearest, d)
         if d > 0:
             total += barrier(d, dhat, kappa)[0]
@@ -60,31 +61,31 @@ def ground_energy(rest: Vec2s, u: Vec2s, verts: Indices, height: ti.f64, dhat: t
 
 
 @ti.kernel
-def ground_derivatives(rest: Vec2s, u: Vec2s, verts: Indices, height: ti.f64, dhat: ti.f64, kappa: ti.f64,
-                       gradient: Vec2s, hessian: ti.types.ndarray(dtype=ti.f64, ndim=1)):
+def ground_derivatives(rest: Nodal, u: Nodal, verts: Indices, height: ti.f64, dhat: ti.f64, kappa: ti.f64,
+                       gradient: Nodal, hessian: ti.types.ndarray(dtype=ti.f64, ndim=1)):
     """gradient = dE/dx (zero off the listed vertices); hessian[k] = b''(d_k), the y-y entry of vertex k."""
-    for v in range(gradient.shape[0]):
-        gradient[v] = ti.Vector([0.0, 0.0])
+    for v, i in ti.ndrange(gradient.shape[0], gradient.shape[1]):
+        gradient[v, i] = 0.0
     for k in range(verts.shape[0]):
-        d = position(rest, u, verts[k])[1] - height
+        d = rest[verts[k], 1] + u[verts[k], 1] - height
         _, db, ddb = barrier(d, dhat, kappa)
-        gradient[verts[k]] = ti.Vector([0.0, db])
+        gradient[verts[k], 1] = db
         hessian[k] = ddb
 
 
 @ti.kernel
-def ground_step(rest: Vec2s, u: Vec2s, dx: Vec2s, verts: Indices, height: ti.f64) -> ti.f64:
+def ground_step(rest: Nodal, u: Nodal, dx: Nodal, verts: Indices, height: ti.f64) -> ti.f64:
     """Smallest alpha > 0 at which a listed vertex moving along dx reaches the ground (inf if none)."""
     bound = ti.math.inf
     for k in range(verts.shape[0]):
-        dy = dx[verts[k]][1]
+        dy = dx[verts[k], 1]
         if dy < 0:
-            ti.atomic_min(bound, (position(rest, u, verts[k])[1] - height) / -dy)
+            ti.atomic_min(bound, (rest[verts[k], 1] + u[verts[k], 1] - height) / -dy)
     return bound
 
 
 class GroundContact(Term):
-    """Barrier keeping the given vertices above the line y = height."""
+    """Barrier keeping the given vertices above the line (plane) y = height."""
 
     name = "ground"
     reports_contact = True
@@ -93,7 +94,7 @@ class GroundContact(Term):
         self.config = config
         self.height, self.dhat, self.kappa = float(height), float(dhat), float(stiffness)
         self.verts = int32s(vertices)
-        self._dofs = 2 * np.asarray(vertices, dtype=np.int64) + 1
+        self._dofs = config.dim * np.asarray(vertices, dtype=np.int64) + 1
 
     def energy(self) -> float:
         total, nearest = ground_energy(self.config.rest, self.config.u, self.verts, self.height, self.dhat, self.kappa)

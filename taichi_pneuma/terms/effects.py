@@ -4,8 +4,9 @@ An effect is a frozen dataclass registered in EFFECTS under its name: its fields
 [effects.<name>] table in a scene file, read and written with the types their annotations declare
 (float: any number; int, str, bool; tuple or list: an array), a field's default being the key's.
 Its terms(config, mesh, lumped_area) returns the terms it adds to the energy model;
-lumped_area[i] is the integral of node i's shape function over the body (mesh.nodal_areas(): a third of
-the rest area of the triangles at a linear-element vertex; mass = density x it).
+lumped_area[i] is the integral of node i's shape function over the body (mesh.nodal_measures(): a third of
+the rest area of the triangles at a linear-element vertex, a quarter of the tetrahedra's volume in 3D; mass =
+density x it).
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ def _positive(name: str, value: float) -> None:
 
 @dataclass(frozen=True)
 class Gravity(Effect):
-    """Body weight: density rho (mass per unit area) under acceleration g along -y."""
+    """Body weight: density rho (mass per unit area in 2D, per unit volume in 3D) under acceleration g along -y."""
 
     density: float
     g: float = 9.81
@@ -61,7 +62,8 @@ class Gravity(Effect):
 
 @dataclass(frozen=True)
 class Ground(Effect):
-    """Ground contact: a log barrier (threshold dhat, stiffness kappa) keeps the body's outer boundary above y = height."""
+    """Ground contact: a log barrier (threshold dhat, stiffness kappa) keeps the body's outer boundary above the line
+    (in 3D the plane) y = height."""
 
     height: float
     dhat: float = 0.01
@@ -98,6 +100,8 @@ class SelfContact(Effect):
         _positive("stiffness", self.stiffness)
 
     def terms(self, config, mesh, lumped_area) -> list:
+        require(mesh.dim == 2, "self_contact is 2D only: a 3D scene cannot have [effects.self_contact] (the contact of "
+                               "a collapsing 3D chamber's walls is not modelled)")
         require(all(origin is None for origin in mesh.wall_origins),
                 "self_contact: a chamber cut by a symmetry line is not supported (its wall would meet its mirror image)")
         return [SelfContactTerm(config, list(mesh.chambers), self.dhat, self.stiffness)]

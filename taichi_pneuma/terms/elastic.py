@@ -6,13 +6,13 @@ with nodes a = 0..k-1 and rest shape-function gradients G_qa = dN_a/dX,
     F_q = sum_a x_a G_qa^T = sum_{a >= 1} (x_a - x_0) G_qa^T      (sum_a G_qa = 0),
 
 so every kernel runs over elements and their quadrature points, whatever the element (P1: one point
-per triangle, F constant; P2: three). The nodal force is W_q P(F_q) G_qa, and the Hessian block of
-nodes (a, b) is
+per triangle or tetrahedron, F constant; P2: three or four). The nodal force is W_q P(F_q) G_qa, and the
+Hessian block of nodes (a, b) is
 
-    W_q sum over the eigenpairs (lambda_k, v_k) of M = d2psi/dF2 of  lambda_k (D^T v_k)_a (D^T v_k)_b^T,
+    W_q sum_jl G_qa,j M_(ij)(kl) G_qb,l,   M = sum_s lambda_s v_s v_s^T over the eigenpairs of d2psi/dF2;
 
-with (D^T v)_a = V G_qa for v = vec(V); the projected Hessian clamps the negative lambda_k to zero at
-each quadrature point, which equals the exact one wherever M is already PSD. The law supplies psi, P
+the projected Hessian clamps the negative lambda_s to zero at each quadrature point, which equals the
+exact one wherever d2psi/dF2 is already PSD. The law supplies psi, P
 and the eigenpairs (materials/law.py), on F embedded in 3 x 3 (plane strain: F_33 = 1).
 
 The kernels take the law and the dimension d as template arguments and the element's node and point
@@ -26,7 +26,8 @@ import numpy as np
 from ..backend import ti
 from ..fem.elements import FAMILIES, family_of
 from ..materials.law import element_parameters, embedded, stress_eigensystem
-from .base import Nodal, Table, Term, block_pattern, int32s, smallest_positive_root
+from ..materials.neo_hookean import cofactor
+from .base import Nodal, Table, Term, block_pattern, int32s, smallest_positive_cubic_root, smallest_positive_root
 
 Nodes = ti.types.ndarray(dtype=ti.i32, ndim=2)  # (m, k): the nodes of each element
 Gradients = ti.types.ndarray(dtype=ti.f64, ndim=4)  # (m, nq, k, d): dN_a/dX at each quadrature point
@@ -82,10 +83,13 @@ def elastic_gradient(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal
 @ti.kernel
 def elastic_hessian(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal, nodes: Nodes, grads: Gradients,
                     weights: Weights, parameters: Parameters, project: ti.i32, out: Table):
-    """out[e] = the dk x dk block sum_q W_q sum_k lambda_qk Q_qk Q_qk^T of element e, row-major, with
-    Q_qk[d a + i] = (V_qk G_qa)_i (M's eigenvalues clamped to >= 0 if project)."""
+    """out[e] = the dk x dk block of element e, row-major: for nodes a <= b the d x d block (and its transpose at
+    b, a) sum_q (D_qa^T M_q D_qb), (D_qa^T M D_qb)_ik = sum_jl G_qa,j M_(ij)(kl) G_qb,l, with M_q = W_q sum_s
+    lambda_qs v_qs v_qs^T (eigenvalues clamped to >= 0 if project): M once per point, then T_b = M D_qb per
+    node, then one d x d product per node pair."""
     for e in range(nodes.shape[0]):
-        n = d * nodes.shape[1]
+        k = nodes.shape[1]
+        n = d * k
         for i in range(n * n):
             out[e, i] = 0.0
         for q in range(weights.shape[1]):
@@ -93,24 +97,35 @@ def elastic_hessian(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal,
             lambdas, vectors = stress_eigensystem(law, F, element_parameters(law, parameters, e), d)
             if project:
                 lambdas = ti.max(lambdas, 0.0)
-            Q = ti.Matrix.zero(ti.f64, d * d, d * ti.static(MAX_NODES[d]))
-            for k, a, i in ti.ndrange(d * d, nodes.shape[1], d):
+            M = ti.Matrix.zero(ti.f64, d * d, d * d)
+            for r, c in ti.ndrange(d * d, d * d):
                 entry = 0.0
-                for j in ti.static(range(d)):
-                    entry += vectors[k, d * i + j] * grads[e, q, a, j]
-                Q[k, d * a + i] = entry
-            for i, j in ti.ndrange(n, n):
-                h = 0.0
-                for k in range(d * d):
-                    h += lambdas[k] * Q[k, i] * Q[k, j]
-                out[e, n * i + j] += weights[e, q] * h
+                for s in range(d * d):
+                    entry += lambdas[s] * vectors[s, r] * vectors[s, c]
+                M[r, c] = weights[e, q] * entry
+            T = ti.Matrix.zero(ti.f64, d * d, d * ti.static(MAX_NODES[d]))  # T[(i, j), (b, kk)] = (M D_qb)
+            for r, b, kk in ti.ndrange(d * d, k, d):
+                entry = 0.0
+                for l in ti.static(range(d)):
+                    entry += M[r, d * kk + l] * grads[e, q, b, l]
+                T[r, d * b + kk] = entry
+            for a in range(k):
+                for b in range(a, k):
+                    for i, kk in ti.static(ti.ndrange(d, d)):
+                        h = 0.0
+                        for j in ti.static(range(d)):
+                            h += grads[e, q, a, j] * T[d * i + j, d * b + kk]
+                        out[e, n * (d * a + i) + d * b + kk] += h
+                        if b != a:
+                            out[e, n * (d * b + kk) + d * a + i] += h
 
 
 @ti.kernel
 def inversion_step(d: ti.template(), rest: Nodal, u: Nodal, dx: Nodal, nodes: Nodes, grads: Gradients) -> ti.f64:
-    """Smallest alpha > 0 with det(F_q + alpha dF_q) = 0 over all quadrature points (inf if none); for d = 2,
-    det F + alpha cof F : dF + alpha^2 det dF (3D, a cubic, is not written yet)."""
-    ti.static_assert(d == 2, "inversion_step: only d = 2 (det(F + alpha dF) is a quadratic) is written")
+    """Smallest alpha > 0 with det(F_q + alpha dF_q) = 0 over all quadrature points (inf if none):
+
+        d = 2:  det F + alpha cof F : dF + alpha^2 det dF,
+        d = 3:  det F + alpha cof F : dF + alpha^2 F : cof dF + alpha^3 det dF."""
     bound = ti.math.inf
     for e, q in ti.ndrange(nodes.shape[0], grads.shape[1]):
         F = deformation_gradient(rest, u, nodes, grads, e, q, d)
@@ -118,8 +133,12 @@ def inversion_step(d: ti.template(), rest: Nodal, u: Nodal, dx: Nodal, nodes: No
         for a in range(1, nodes.shape[1]):
             for i, j in ti.static(ti.ndrange(d, d)):
                 dF[i, j] += (dx[nodes[e, a], i] - dx[nodes[e, 0], i]) * grads[e, q, a, j]
-        cross = F[0, 0] * dF[1, 1] + F[1, 1] * dF[0, 0] - F[0, 1] * dF[1, 0] - F[1, 0] * dF[0, 1]
-        ti.atomic_min(bound, smallest_positive_root(F.determinant(), cross, dF.determinant()))
+        if ti.static(d == 2):
+            cross = F[0, 0] * dF[1, 1] + F[1, 1] * dF[0, 0] - F[0, 1] * dF[1, 0] - F[1, 0] * dF[0, 1]
+            ti.atomic_min(bound, smallest_positive_root(F.determinant(), cross, dF.determinant()))
+        else:
+            ti.atomic_min(bound, smallest_positive_cubic_root(F.determinant(), (cofactor(F) * dF).sum(),
+                                                              (F * cofactor(dF)).sum(), dF.determinant()))
     return bound
 
 

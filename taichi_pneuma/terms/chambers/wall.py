@@ -1,6 +1,7 @@
-"""The wall of a sealed chamber: its enclosed area, the area's gradient and the load stiffness, as a Taichi kernel.
+"""The wall of a sealed chamber: its enclosed measure (area in 2D, volume in 3D), the measure's gradient and the
+load stiffness, as Taichi kernels.
 
-The chamber wall is a closed counter-clockwise loop of straight edges (linear elements: nodes
+In 2D (AreaForm) the chamber wall is a closed counter-clockwise loop of straight edges (linear elements: nodes
 x_0 .. x_{k-1}) or of quadratic edges (quadratic elements: corner a, midside m, corner b, ...). Its
 signed area, 1/2 the closed integral of x cross dx, is exact for either: per edge
 
@@ -21,6 +22,8 @@ nothing and the enclosed area is the same form without the closing edge, on posi
 
 computed by the same kernel on rest positions shifted by -o; d2A is unchanged (o is fixed).
 
+In 3D the wall is a surface of triangles and its measure the volume it encloses (cavity.py).
+
 Every chamber kind (kind.py) loads its wall with a uniform pressure p(A) that the kind defines:
 
     dE/dx = -p dA/dx,   Hessian  -p'(A) dA dA^T - p d2A.
@@ -35,6 +38,7 @@ import numpy as np
 
 from ...backend import ti
 from ..base import Indices, Scalars, Term, Vec2s, int32s, position, vertex_dofs
+from .cavity import VolumeForm
 
 Pairs = ti.types.ndarray(dtype=ti.types.vector(2, ti.i32), ndim=1)  # (P, 2) int32 index pairs
 
@@ -67,46 +71,66 @@ def area_form(k: int, order: int, closed: bool = True) -> tuple[np.ndarray, np.n
     pairs = np.vstack([np.column_stack(p) for p in ((a, m), (m, b), (a, b))])
     return pairs, np.repeat([2 / 3, 2 / 3, -1 / 6], len(a))
 
+class AreaForm:
+    """The enclosed area of a 2D wall loop (module docstring): a quadratic form with a constant Hessian.
 
-class Chamber(Term):
-    """The wall loop of one named chamber: its area, area gradient and the -p d2A load stiffness.
+    nodes: the wall's nodes in loop order; rest_measure: the area at rest."""
 
-    A kind's term subclasses it with set_command(q), pressure_at(A), energy(), command_force() and,
-    where p depends on A, low_rank(). kind: the ChamberKind (with its parameters) that made it;
-    order: 1 for a loop of straight edges, 2 for one of quadratic edges (corner, midside, corner, ...);
-    origin: None for a closed loop, else the wall is open, closed by the cap along the symmetry lines through
-    the origin o."""
-
-    def __init__(self, kind, config, loop: np.ndarray, name: str = "main", order: int = 1,
-                 origin: np.ndarray | None = None):
-        self.kind = kind
+    def __init__(self, config, loop: np.ndarray, order: int, origin: np.ndarray | None):
         self.config = config
         self.rest = config.rest if origin is None else config.rest - np.asarray(origin, dtype=np.float64)
-        self.chamber_name = name
-        self.name = f"chamber:{name}"
-        self.loop_vertices = np.asarray(loop, dtype=np.int64)
+        self.nodes = np.asarray(loop, dtype=np.int64)
         self.loop = int32s(loop)
-        self.dofs = vertex_dofs(self.loop_vertices, config.dim)
-        self.n_wall = len(loop)
-        pairs, self.weights = area_form(self.n_wall, order, closed=origin is None)
+        pairs, self.weights = area_form(len(loop), order, closed=origin is None)
         self.pairs = int32s(pairs)
-        xi, yi = 2 * self.loop_vertices[pairs[:, 0]], 2 * self.loop_vertices[pairs[:, 0]] + 1
-        xj, yj = 2 * self.loop_vertices[pairs[:, 1]], 2 * self.loop_vertices[pairs[:, 1]] + 1
-        self._rows = np.concatenate([xi, yj, yi, xj])
-        self._cols = np.concatenate([yj, xi, xj, yi])
-        self._area_hessian = np.concatenate([self.weights, self.weights, -self.weights, -self.weights])
-        rest = self.rest[self.loop_vertices]
+        xi, yi = 2 * self.nodes[pairs[:, 0]], 2 * self.nodes[pairs[:, 0]] + 1
+        xj, yj = 2 * self.nodes[pairs[:, 1]], 2 * self.nodes[pairs[:, 1]] + 1
+        self.rows = np.concatenate([xi, yj, yi, xj])
+        self.cols = np.concatenate([yj, xi, xj, yi])
+        self._hessian = np.concatenate([self.weights, self.weights, -self.weights, -self.weights])
+        rest = self.rest[self.nodes]
         p, q = rest[pairs[:, 0]], rest[pairs[:, 1]]
-        self.rest_area = float(self.weights @ (p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0]))
+        self.rest_measure = float(self.weights @ (p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0]))
 
-    def area_and_gradient(self, u: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+    def measure_and_gradient(self, u: np.ndarray | None = None) -> tuple[float, np.ndarray]:
         """A(x) and dA/dx on the wall nodes, (k, 2) in loop order, at the model's displacements or at u (n, 2)."""
-        gradient = np.empty((self.n_wall, 2))
+        gradient = np.empty((len(self.nodes), 2))
         u = self.config.u if u is None else np.ascontiguousarray(u, dtype=np.float64)
         return wall_area(self.rest, u, self.loop, self.pairs, self.weights, gradient), gradient
 
+    def hessian(self) -> np.ndarray:
+        return self._hessian
+
+
+class Chamber(Term):
+    """The wall of one named chamber: its enclosed measure (area() and area_and_gradient(): the area in 2D, the
+    volume in 3D), and the -p d2A load stiffness.
+
+    A kind's term subclasses it with set_command(q), pressure_at(A), energy(), command_force() and,
+    where p depends on A, low_rank(). kind: the ChamberKind (with its parameters) that made it; loop: in 2D
+    the wall loop's nodes, in 3D the wall's triangles (f, 3 or 6); order: in 2D 1 for a loop of straight
+    edges, 2 for one of quadratic edges (corner, midside, corner, ...); origin: None for a closed wall, else
+    the wall is open, closed by caps along the symmetry lines (planes) through the origin o (in 3D a
+    fem.tetmesh.Closure). loop_vertices: the wall's nodes, the rows of area_and_gradient()'s gradient."""
+
+    def __init__(self, kind, config, loop: np.ndarray, name: str = "main", order: int = 1, origin=None):
+        self.kind = kind
+        self.config = config
+        self.chamber_name = name
+        self.name = f"chamber:{name}"
+        self.form = AreaForm(config, loop, order, origin) if config.dim == 2 else VolumeForm(config, loop, origin)
+        self.loop_vertices = self.form.nodes
+        self.dofs = vertex_dofs(self.loop_vertices, config.dim)
+        self.n_wall = len(self.loop_vertices)
+        self.rest_area = self.form.rest_measure
+
+    def area_and_gradient(self, u: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+        """A(x) and dA/dx on the wall nodes, (k, d) in the order of loop_vertices, at the model's displacements
+        or at u (n, d)."""
+        return self.form.measure_and_gradient(u)
+
     def area(self) -> float:
-        """The signed area A(x) enclosed by the wall."""
+        """The signed measure A(x) enclosed by the wall (an area in 2D, a volume in 3D)."""
         return self.area_and_gradient()[0]
 
     def gradient(self) -> np.ndarray:
@@ -121,11 +145,11 @@ class Chamber(Term):
         return self.pressure_at(self.area())
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        return self._rows, self._cols
+        return self.form.rows, self.form.cols
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
         """The load stiffness -p d2A (nothing with psd_only)."""
-        return np.zeros(len(self._rows)) if psd_only else -self.pressure() * self._area_hessian
+        return np.zeros(len(self.form.rows)) if psd_only else -self.pressure() * self.form.hessian()
 
     def describe(self, command: float, reached: float) -> str:
         """A command of a failed solve in words, with the last command that reached an equilibrium."""

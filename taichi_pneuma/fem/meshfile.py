@@ -1,0 +1,174 @@
+"""Bodies from mesh files: any format meshio reads that has tetrahedra (gmsh .msh, VTK, Abaqus .inp, MED, ...),
+the body's cells and each chamber's wall given by named groups (gmsh's physical groups, meshio's cell sets).
+
+    MeshBody(file)             the body: every tetrahedron of the file (4- or 10-node, VTK's node order,
+                               which meshio gives whatever the format's own)
+    MeshSurface(group)         a chamber's wall: the triangles (3- or 6-node) of the named group
+    MeshGeometry(body, ...)    the scene's geometry: body, named chamber walls, element order, clamp, tip and
+                               rollers; mesh() reads the file and builds the TetMesh (tetmesh.tet_mesh), whose
+                               region tags are the tetrahedra's gmsh physical tags where the file has them
+
+A file is read whole, so it may be at most MAX_MESH_BYTES; whatever meshio cannot read, and a file
+without tetrahedra or without a named group, is one PneumaInputError naming the file. write_mesh() writes a
+TetMesh (made in Python, e.g. by tetmesh.tet_mesh from a mesher's arrays) as such a file.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import meshio
+import numpy as np
+
+from ..errors import PneumaInputError, require
+from .geometry import PointSet
+from .tetmesh import TetMesh, tet_mesh
+
+MAX_MESH_BYTES = 500_000_000
+TETRAHEDRA = ("tetra", "tetra10")
+TRIANGLES = ("triangle", "triangle6")
+
+
+@dataclass(frozen=True)
+class MeshBody:
+    """A body read from the mesh file `file` (kept as an absolute path: a relative one is taken from the
+    current directory, a scene file's from the scene file's folder)."""
+
+    file: str
+
+    def __post_init__(self):
+        require(isinstance(self.file, str) and self.file.strip() != "", f"file = {self.file!r} must name a mesh file")
+        object.__setattr__(self, "file", os.path.abspath(self.file))
+
+
+@dataclass(frozen=True)
+class MeshSurface:
+    """A chamber wall: the triangles of the mesh file's group `group` (a closed cavity surface, or one left
+    open on symmetry planes that roller planes hold)."""
+
+    group: str
+
+    def __post_init__(self):
+        require(isinstance(self.group, str) and self.group != "", f"group = {self.group!r} must name a group")
+
+
+def read_mesh(path: str) -> meshio.Mesh:
+    """meshio's reading of the file, every failure one PneumaInputError naming it (the last file read is kept:
+    the resource check and the build read it once)."""
+    require(os.path.isfile(path), f"mesh file {path!r} does not exist")
+    stat = os.stat(path)
+    return read_file(path, stat.st_size, stat.st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=1)
+def read_file(path: str, size: int, modified: int) -> meshio.Mesh:
+    """meshio.read of a file of that size and modification time."""
+    require(size <= MAX_MESH_BYTES, f"mesh file {path!r} has {size} bytes; at most {MAX_MESH_BYTES} are read")
+    try:
+        return meshio.read(path)
+    except Exception as exc:  # meshio raises many kinds (ReadError, KeyError, ValueError, ...) on a bad file
+        raise PneumaInputError(f"mesh file {path!r} cannot be read by meshio ({type(exc).__name__}: {exc})") from None
+
+
+def groups(mesh: meshio.Mesh) -> dict[str, list]:
+    """The file's named groups: name -> per cell block the indices of its cells in the group (meshio's cell sets;
+    for a gmsh 2.2 file, which meshio gives no cell sets, its physical names and each cell's physical tag)."""
+    named = {name: [np.asarray([] if ids is None else ids, dtype=np.int64) for ids in sets]
+             for name, sets in mesh.cell_sets.items() if not name.startswith("gmsh:")}
+    tags = mesh.cell_data.get("gmsh:physical")
+    if not named and tags is not None:
+        named = {name: [np.flatnonzero(block_tags == tag) for block_tags in tags]
+                 for name, (tag, _) in mesh.field_data.items()}
+    return named
+
+
+def cells_of(mesh: meshio.Mesh, types: tuple[str, ...], group: str | None, path: str) -> tuple[np.ndarray, list]:
+    """The cells of one of `types` (all of them, or those of the named group), and their blocks' indices."""
+    if group is not None:
+        named = groups(mesh)
+        require(group in named, f"mesh file {path!r} has no group {group!r} (its groups: {', '.join(named) or 'none'})")
+    blocks = [i for i, block in enumerate(mesh.cells) if block.type in types]
+    kinds = {mesh.cells[i].type for i in blocks}
+    require(len(kinds) <= 1, f"mesh file {path!r} mixes {' and '.join(sorted(kinds))} cells")
+    parts = [mesh.cells[i].data if group is None else mesh.cells[i].data[named[group][i]] for i in blocks]
+    if not parts:
+        return np.zeros((0, 0), dtype=np.int64), blocks
+    return np.vstack(parts).astype(np.int64), blocks
+
+
+@dataclass(frozen=True)
+class MeshGeometry:
+    """A 3D scene's geometry read from a mesh file: the body, its chambers (name, MeshSurface) in order, the
+    element order (1: linear tetrahedra; 2: quadratic, a 4-node mesh given straight midside nodes), and the
+    clamp, tip and rollers (as geometry.Geometry's)."""
+
+    body: MeshBody
+    chambers: tuple
+    order: int = 1
+    clamp: PointSet = field(default_factory=lambda: PointSet("left"))
+    tip: PointSet = field(default_factory=lambda: PointSet("right"))
+    rollers: tuple = ()
+
+    dim = 3
+
+    def __post_init__(self):
+        require(self.order in (1, 2), f"order = {self.order!r} must be 1 (linear tetrahedra) or 2 (quadratic)")
+        names = [name for name, _ in self.chambers]
+        require(len(set(names)) == len(names), f"chamber names {names!r} must be distinct")
+        for name, shape in self.chambers:
+            require(isinstance(shape, MeshSurface), f"chamber {name!r}: a mesh body's chambers are the mesh file's "
+                                                    f"groups (shape = \"mesh_surface\")")
+
+    def tetrahedra(self) -> tuple[meshio.Mesh, np.ndarray, list]:
+        """The file's meshio mesh, its tetrahedra (m, 4 or 10) and their cell blocks."""
+        path = self.body.file
+        source = read_mesh(path)
+        tets, blocks = cells_of(source, TETRAHEDRA, None, path)
+        require(len(tets) > 0, f"mesh file {path!r} has no tetrahedra (4- or 10-node)")
+        return source, tets, blocks
+
+    def size_estimate(self) -> tuple[int, int]:
+        """(tetrahedra, nodes) of the mesh mesh() builds (nodes: at most, before unused ones are dropped; a 4-node
+        mesh made quadratic gains a node per edge, about 7 per tetrahedron)."""
+        source, tets, _ = self.tetrahedra()
+        nodes = len(np.unique(tets))
+        return len(tets), nodes + (7 * len(tets) if self.order == 2 and tets.shape[1] == 4 else 0)
+
+    def mesh(self) -> TetMesh:
+        path = self.body.file
+        source, tets, blocks = self.tetrahedra()
+        physical = source.cell_data.get("gmsh:physical")
+        regions = None if physical is None else np.concatenate([physical[i] for i in blocks])
+        walls = {}
+        for name, shape in self.chambers:
+            walls[name], _ = cells_of(source, TRIANGLES, shape.group, path)
+            require(len(walls[name]) > 0, f"chamber {name!r}: group {shape.group!r} of {path!r} has no triangles")
+        try:
+            return tet_mesh(source.points, tets, walls, regions=regions, order=self.order, clamp=self.clamp,
+                            tip=self.tip, rollers=self.rollers)
+        except PneumaInputError as exc:
+            raise PneumaInputError(f"mesh file {path!r}: {exc}") from None
+
+
+def write_mesh(path, mesh: TetMesh, names: tuple[str, ...]) -> Path:
+    """Write the mesh's tetrahedra (group "body") and each chamber's wall (a group named after the chamber, in the
+    order of names) as gmsh 2.2 (.msh, physical groups) or Abaqus (.inp, element sets): a file MeshGeometry reads
+    back to the same mesh."""
+    path = Path(path)
+    require(path.suffix in (".msh", ".inp"), f"{path}: write_mesh writes .msh (gmsh 2.2) or .inp (Abaqus) files")
+    walls = "triangle" if mesh.order == 1 else "triangle6"
+    cells = [(walls, wall) for wall in mesh.chambers] + [("tetra" if mesh.order == 1 else "tetra10", mesh.elements)]
+    if path.suffix == ".inp":
+        sets = {name: [np.arange(len(data)) if i == j else np.zeros(0, dtype=np.int64) for j, (_, data) in
+                       enumerate(cells)] for i, name in enumerate((*names, "body"))}
+        meshio.write(path, meshio.Mesh(mesh.vertices, cells, cell_sets=sets), file_format="abaqus")
+    else:
+        tags = [np.full(len(data), i + 2) for i, (_, data) in enumerate(cells[:-1])] + [np.ones(mesh.n_elements, int)]
+        groups = {name: np.array([i + 2, 2]) for i, name in enumerate(names)} | {"body": np.array([1, 3])}
+        data = {"gmsh:physical": tags, "gmsh:geometrical": tags}
+        meshio.write(path, meshio.Mesh(mesh.vertices, cells, cell_data=data, field_data=groups), file_format="gmsh22",
+                     binary=False)
+    return path

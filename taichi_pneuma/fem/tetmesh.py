@@ -1,0 +1,245 @@
+"""Tetrahedral meshes of 3D bodies with cavity chambers: TetMesh, the 3D counterpart of geometry.Mesh (the
+same field names where they mean the same thing), and tet_mesh(), its constructor from plain arrays.
+
+A mesh generator or a mesh file hands over vertices (n, 3), tetrahedra (m, 4) or (m, 10) (VTK's node
+order: corners, then the middles of edges 01, 12, 20, 03, 13, 23), each chamber's wall as triangles
+(f, 3) by their corners and, optionally, the outer boundary's triangles and a region tag per
+tetrahedron. tet_mesh() drops the nodes no tetrahedron uses, turns every tetrahedron to positive volume,
+adds straight midside nodes to a 4-node mesh for quadratic elements (order 2; a 10-node mesh is read as
+is and may be curved), finds the body's boundary facets (elements.boundary_facets) and takes each chamber
+wall as the facets with those corners, oriented outward from the cavity (into the rubber: the reverse of
+the body's outward facet), so that its enclosed volume
+
+    V = 1/3 integral of (x - o) . n dA over the wall
+
+is positive at rest. A wall that is open (a chamber cut by symmetry planes, as in a half or quarter
+model) is closed by flat caps in the roller planes that hold its rim (Closure): with the origin o on
+every cap plane the caps add nothing, (x - o) . n = 0 on them. Two parallel cap planes (a chamber
+through the whole depth between two rollers) cannot both hold o; their direction e is projected out
+instead, V = 1/r integral of (x - o) . P n dA with P = I - e e^T and r = 3 - (directions projected
+out), whose integrand also vanishes on those caps, and whose divergence theorem still gives the
+volume (div P (x - o) / r = 1).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import require
+from .elements import TET_EDGES, TET_P1, TET_P2, boundary_facets
+from .geometry import PointSet, split_in_four, with_edge_midpoints
+
+REVERSED = {3: [0, 2, 1], 6: [0, 2, 1, 5, 4, 3]}  # a facet's nodes with its orientation flipped
+MIRRORED = {4: [0, 2, 1, 3], 10: [0, 2, 1, 3, 6, 5, 4, 7, 9, 8]}  # a tetrahedron's with corners 1, 2 swapped
+PARALLEL = 1 - 1e-9  # |n1 . n2| above it: parallel planes
+
+
+@dataclass(frozen=True)
+class Closure:
+    """How an open chamber wall is closed by flat caps in symmetry planes: its volume is 1/r times the
+    integral of (x - origin) . projector n over the wall, r = the projector's rank (module docstring)."""
+
+    origin: np.ndarray
+    projector: np.ndarray
+
+
+@dataclass(frozen=True)
+class TetMesh:
+    """A tetrahedral mesh with the node sets a pneumatic scene needs (geometry.Mesh's fields, in 3D).
+
+    vertices (n, 3); elements (m, 4) or (m, 10) of positive volume; chambers: per chamber its wall, (f, 3)
+    or (f, 6) triangles oriented outward from the cavity; wall_origins: per chamber None (a closed wall) or
+    the Closure of an open one; surface: every boundary facet of the body (outer boundary and chamber
+    walls) oriented outward from the body; boundary: the nodes on the outer boundary (not on a chamber
+    wall alone); pinned, tip: the clamped and the tip nodes; rollers: per roller (held nodes, unit normal);
+    regions: a region tag per element (0 when the source has none)."""
+
+    vertices: np.ndarray
+    elements: np.ndarray
+    chambers: tuple[np.ndarray, ...]
+    boundary: np.ndarray
+    pinned: np.ndarray
+    tip: np.ndarray
+    wall_origins: tuple[Closure | None, ...]
+    rollers: tuple[tuple[np.ndarray, np.ndarray], ...]
+    surface: np.ndarray
+    regions: np.ndarray
+
+    dim = 3
+
+    @property
+    def family(self):
+        return TET_P1 if self.elements.shape[1] == 4 else TET_P2
+
+    @property
+    def order(self) -> int:
+        return self.family.order
+
+    @property
+    def n_vertices(self) -> int:
+        return len(self.vertices)
+
+    @property
+    def n_elements(self) -> int:
+        return len(self.elements)
+
+    @property
+    def volume(self) -> float:
+        """The body's rest volume."""
+        return float(self.family.quadrature(self.vertices, self.elements)[1].sum())
+
+    measure = volume
+
+    def nodal_measures(self) -> np.ndarray:
+        """The integral of each node's shape function over the body, sum_e int_e N_a dV (exact: a quarter
+        of the adjacent volumes at a linear element's corners; -1/20 at a quadratic one's corners, 1/5 at its
+        midside nodes): the consistent nodal weights of a uniform load."""
+        points, _ = self.family.rule
+        _, weights = self.family.quadrature(self.vertices, self.elements)
+        out = np.zeros(self.n_vertices)
+        np.add.at(out, self.elements, weights @ self.family.shape_functions(points))
+        return out
+
+    def display_triangles(self) -> np.ndarray:
+        """Linear triangles to draw: the body's surface facets (each quadratic one split in four)."""
+        return self.surface if self.order == 1 else split_in_four(self.surface)
+
+
+def facet_keys(facets: np.ndarray, n: int) -> np.ndarray:
+    """One integer per facet, the same for any order of its three corners."""
+    corners = np.sort(facets[:, :3], axis=1).astype(np.int64)
+    return (corners[:, 0] * n + corners[:, 1]) * n + corners[:, 2]
+
+
+def used_nodes(vertices: np.ndarray, tets: np.ndarray, faces: list[np.ndarray]):
+    """The vertices the tetrahedra use, and the tetrahedra and faces renumbered to them."""
+    used = np.unique(tets)
+    number = np.full(len(vertices), -1, dtype=np.int64)
+    number[used] = np.arange(len(used))
+    return vertices[used], number[tets], [number[f] for f in faces]
+
+
+def positively_oriented(vertices: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """The tetrahedra with corners 1 and 2 swapped where det[X1 - X0, X2 - X0, X3 - X0] < 0; a flat one
+    (volume below 1e-12 of the bounding box's) is refused."""
+    x = vertices[tets[:, :4]]
+    det = np.linalg.det(np.stack([x[:, 1] - x[:, 0], x[:, 2] - x[:, 0], x[:, 3] - x[:, 0]], axis=2))
+    scale = float(np.ptp(vertices, axis=0).prod())
+    flat = np.abs(det) <= 1e-12 * scale
+    require(not flat.any(), f"tetrahedron {int(np.argmax(flat))} (nodes {tets[np.argmax(flat)].tolist()}) is flat")
+    return np.where((det < 0)[:, None], tets[:, MIRRORED[tets.shape[1]]], tets)
+
+
+def check_midside_nodes(vertices: np.ndarray, tets: np.ndarray) -> None:
+    """Refuse 10-node tetrahedra whose midside nodes are not near the middles of edges 01, 12, 20, 03, 13, 23
+    (within a quarter of the edge: another node order, such as gmsh's own, lands half an edge away)."""
+    for k, (i, j) in enumerate(TET_EDGES):
+        a, b, m = vertices[tets[:, i]], vertices[tets[:, j]], vertices[tets[:, 4 + k]]
+        off = np.linalg.norm(m - 0.5 * (a + b), axis=1) > 0.25 * np.linalg.norm(b - a, axis=1)
+        require(not off.any(), f"10-node tetrahedron {int(np.argmax(off))}: node {4 + k} is not near the middle of "
+                               f"edge {i}{j} (the node order must be VTK's: edges 01, 12, 20, 03, 13, 23)")
+
+
+def closure(name: str, vertices: np.ndarray, wall: np.ndarray, rollers) -> Closure | None:
+    """None for a closed wall (every edge in two of its triangles); for an open one the Closure of the roller
+    planes that hold its rim (module docstring), or a PneumaInputError naming the chamber."""
+    corners = wall[:, :3]
+    edges = np.sort(np.vstack([corners[:, [0, 1]], corners[:, [1, 2]], corners[:, [2, 0]]]), axis=1)
+    unique, counts = np.unique(edges, axis=0, return_counts=True)
+    require(counts.max() <= 2, f"chamber {name!r}: an edge of its wall belongs to more than two of its triangles")
+    if counts.min() == 2:
+        return None
+    rim = vertices[np.unique(unique[counts == 1])]
+    planes = [(r.unit_normal, np.asarray(r.point, dtype=np.float64), r.tolerance)
+              for r in rollers if r.point is not None]
+    on = np.array([np.abs((rim - p) @ n) <= tol for n, p, tol in planes]).reshape(len(planes), len(rim))
+    off = ~on.any(axis=0)
+    require(not off.any(), f"chamber {name!r}: its wall is open, and its rim at {rim[np.argmax(off)].tolist()} lies "
+                           f"on no roller plane (a symmetry plane closing it: [[rollers]] with a point)")
+    groups: list[list] = []  # the planes holding the rim, parallel ones together (each plane once)
+    for n, p, tol in (planes[i] for i in np.flatnonzero(on.any(axis=1))):
+        group = next((g for g in groups if abs(n @ g[0][0]) > PARALLEL), None)
+        if group is None:
+            groups.append([(n, p)])
+        elif all(abs(group[0][0] @ (p - q)) > tol for _, q in group):
+            group.append((n, p))
+    require(all(len(g) <= 2 for g in groups), f"chamber {name!r}: its rim lies on three parallel roller planes")
+    single = [g[0] for g in groups if len(g) == 1]
+    normals, projector = [g[0][0] for g in groups], np.eye(3)
+    for n in (g[0][0] for g in groups if len(g) == 2):
+        require(all(abs(n @ m) < 1e-9 for m in normals if m is not n),
+                f"chamber {name!r}: a pair of parallel roller planes closing it is not perpendicular to the others")
+        projector -= np.outer(n, n)
+    require(np.trace(projector) > 0.5, f"chamber {name!r}: closed by parallel roller planes in every direction")
+    origin = rim.mean(axis=0)
+    if single:  # the point nearest the rim's centre on every single plane
+        normals, offsets = np.array([n for n, _ in single]), np.array([n @ p for n, p in single])
+        origin = origin + np.linalg.lstsq(normals, offsets - normals @ origin, rcond=None)[0]
+    return Closure(origin, projector)
+
+
+def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndarray],
+             boundary: np.ndarray | None = None, regions: np.ndarray | None = None, order: int = 1,
+             clamp: PointSet | None = PointSet("left"),
+             tip: PointSet = PointSet("right"), rollers=()) -> TetMesh:
+    """The TetMesh of plain arrays (module docstring): vertices (n, 3); tets (m, 4) or (m, 10); chambers: name ->
+    its wall's triangles (f, 3) (or (f, 6): the first three columns are used), in the scene's order;
+    boundary: the outer boundary's triangles (None: every boundary facet on no chamber wall); regions: (m,)
+    region tags; order 1 or 2; the clamp (None: no node clamped, e.g. a body held by rollers alone), the tip and
+    the rollers select their nodes."""
+    vertices = np.asarray(vertices, dtype=np.float64)
+    tets = np.asarray(tets)
+    require(vertices.ndim == 2 and vertices.shape[1] == 3 and len(vertices) >= 4 and np.isfinite(vertices).all(),
+            f"vertices must be finite (n, 3) coordinates, not an array of shape {vertices.shape}")
+    require(tets.ndim == 2 and tets.shape[1] in (4, 10) and len(tets) > 0 and np.issubdtype(tets.dtype, np.integer),
+            f"tetrahedra must be an (m, 4) or (m, 10) integer array, not {tets.dtype} of shape {tets.shape}")
+    require(tets.min() >= 0 and tets.max() < len(vertices), "a tetrahedron names a vertex that does not exist")
+    require(order in (1, 2), f"order = {order!r} must be 1 (linear tetrahedra) or 2 (quadratic)")
+    require(order == 2 or tets.shape[1] == 4, "the mesh has 10-node (quadratic) tetrahedra: set order = 2")
+    regions = np.zeros(len(tets), dtype=np.int64) if regions is None else np.asarray(regions, dtype=np.int64)
+    require(regions.shape == (len(tets),), f"regions: {regions.shape} tags for {len(tets)} tetrahedra")
+    names = list(chambers)
+    given = [np.asarray(chambers[name], dtype=np.int64).reshape(-1, np.shape(chambers[name])[-1])[:, :3]
+             for name in names] + ([] if boundary is None else [np.asarray(boundary, dtype=np.int64)[:, :3]])
+    for name, faces in zip(names + ["boundary"], given):
+        require(faces.size == 0 or (faces.min() >= 0 and faces.max() < len(vertices)),
+                f"{name}: a triangle names a vertex that does not exist")
+    vertices, tets, given = used_nodes(vertices, tets.astype(np.int64), given)
+    tets = positively_oriented(vertices, tets)
+    if tets.shape[1] == 10:
+        check_midside_nodes(vertices, tets)
+    elif order == 2:
+        vertices, mid = with_edge_midpoints(vertices, tets, TET_EDGES)
+        tets = np.column_stack([tets] + [mid(tets[:, i], tets[:, j]) for i, j in TET_EDGES])
+    family = TET_P2 if order == 2 else TET_P1
+    surface = boundary_facets(family, tets)
+    n = len(vertices)
+    keys = facet_keys(surface, n)
+    order_of_keys = np.argsort(keys)
+
+    def facets_of(faces: np.ndarray, what: str) -> np.ndarray:
+        """The rows of `surface` with the corners of faces (f, 3); a face not on the boundary is refused."""
+        require(len(faces) > 0 and faces.min() >= 0, f"{what} has no triangle on the mesh")
+        wanted = facet_keys(faces, n)
+        at = np.minimum(np.searchsorted(keys, wanted, sorter=order_of_keys), len(keys) - 1)
+        rows = order_of_keys[at]
+        missing = keys[rows] != wanted
+        require(not missing.any(), f"{what}: triangle {faces[np.argmax(missing)].tolist()} is not a face on the "
+                                   f"mesh's boundary")
+        return rows
+
+    walls, origins, taken = [], [], np.zeros(len(surface), dtype=bool)
+    for name, faces in zip(names, given):
+        rows = facets_of(faces, f"chamber {name!r}")
+        require(not taken[rows].any(), f"chamber {name!r} shares wall triangles with another chamber")
+        taken[rows] = True
+        wall = surface[rows][:, REVERSED[surface.shape[1]]]
+        walls.append(wall)
+        origins.append(closure(name, vertices, wall, rollers))
+    outer = surface[facets_of(given[-1], "boundary")] if boundary is not None else surface[~taken]
+    pinned = np.zeros(0, dtype=np.int64) if clamp is None else clamp.select(vertices, "clamp")
+    return TetMesh(vertices, tets, tuple(walls), np.unique(outer), pinned,
+                   tip.select(vertices, "tip"), tuple(origins),
+                   tuple((roller.select(vertices), roller.unit_normal) for roller in rollers), surface, regions)

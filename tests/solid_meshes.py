@@ -1,0 +1,90 @@
+"""Small 3D bodies for the tests, made without a mesh generator (fem/layered.py), and a scene geometry that
+hands over a ready mesh.
+
+    extruded_beam   the reference beam's triangles extruded through DEPTH along z, its chamber a prism through
+                    the depth, rollers on both faces normal to z: the plane-strain body in 3D
+    shell_octant    an octant of the thick spherical shell inner <= r <= outer, its cavity closed by the three
+                    coordinate planes (rollers), nothing clamped
+    box_with_cavity the 3.5 x 0.8 x 0.8 box of a structured grid with a box-shaped closed cavity (its grid cells
+                    left out), clamped at its left face
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from taichi_pneuma.fem.elements import TET_EDGES
+from taichi_pneuma.fem.geometry import BeamGeometry, Roller
+from taichi_pneuma.fem.layered import extrude, layered_tets, spherical_shell_octant
+from taichi_pneuma.fem.tetmesh import TetMesh, tet_mesh
+from taichi_pneuma.scene import ChamberControl, Material, Scene
+
+DEPTH = 0.8
+Z_ROLLERS = (Roller((0.0, 0.0, 1.0), (0.0, 0.0, 0.0)), Roller((0.0, 0.0, 1.0), (0.0, 0.0, DEPTH)))
+PLANES = tuple(Roller(tuple(n), (0.0, 0.0, 0.0)) for n in np.eye(3))
+
+
+@dataclass(frozen=True)
+class MeshOf:
+    """A scene geometry whose mesh is ready: its chambers are the mesh's, named in order."""
+
+    ready: TetMesh
+    names: tuple = ("main",)
+
+    @property
+    def chambers(self):
+        return tuple((name, None) for name in self.names)
+
+    def mesh(self) -> TetMesh:
+        return self.ready
+
+
+def extruded_beam(max_area: float, order: int = 1, layers: int = 1, chamber_points: int = 32, cy: float = 0.15):
+    """(the 3D mesh, the 2D linear mesh it extrudes)."""
+    planar = BeamGeometry(cy=cy, max_area=max_area, chamber_points=chamber_points).mesh()
+    vertices, tets, walls = extrude(planar, DEPTH, layers)
+    return tet_mesh(vertices, tets, {"main": walls[0]}, order=order, rollers=Z_ROLLERS), planar
+
+
+def shell_octant(divisions: int, layers: int, order: int = 1, inner: float = 1.0, outer: float = 2.0,
+                 curved: bool = False) -> TetMesh:
+    """The octant mesh; curved (order 2): every midside node moved radially to the mean radius of its edge's ends,
+    so that the quadratic (isoparametric) tetrahedra fit the spheres."""
+    vertices, tets, wall = spherical_shell_octant(inner, outer, divisions, layers)
+    mesh = tet_mesh(vertices, tets, {"cavity": wall}, order=order, clamp=None, rollers=PLANES)
+    if not curved:
+        return mesh
+    x = mesh.vertices.copy()
+    radius = np.linalg.norm(x, axis=1)
+    for k, (i, j) in enumerate(TET_EDGES):
+        middle = mesh.elements[:, 4 + k]
+        target = 0.5 * (radius[mesh.elements[:, i]] + radius[mesh.elements[:, j]])
+        x[middle] = mesh.vertices[middle] * (target / radius[middle])[:, None]
+    return tet_mesh(x, mesh.elements, {"cavity": mesh.chambers[0]}, order=2, clamp=None, rollers=PLANES)
+
+
+def scene_of(mesh: TetMesh, schedules, increments: int, material: Material = Material(), **more) -> Scene:
+    """A scene of the mesh's chambers (named as the schedules' order) driven by the schedules."""
+    names = tuple(f"c{i}" for i in range(len(schedules))) if len(schedules) > 1 else ("main",)
+    return Scene(MeshOf(mesh, names), tuple(ChamberControl(s) for s in schedules), increments, material, **more)
+
+
+def box_with_cavity(order: int = 1) -> TetMesh:
+    """A 7 x 4 x 4 grid of 0.5 x 0.2 x 0.2 cells over [-1.75, 1.75] x [-0.4, 0.4] x [-0.4, 0.4], each cell six
+    tetrahedra, without the cells of the cavity [-0.75, 0.75] x [0, 0.2] x [-0.2, 0.2]: its wall is every
+    boundary facet off the box's faces."""
+    x, y = np.meshgrid(np.linspace(-1.75, 1.75, 8), np.linspace(-0.4, 0.4, 5), indexing="ij")
+    corner = np.arange(40).reshape(8, 5)[:-1, :-1].ravel()
+    triangles = np.vstack([np.column_stack([corner, corner + 5, corner + 6]),
+                           np.column_stack([corner, corner + 6, corner + 1])])
+    vertices = np.vstack([np.column_stack([x.ravel(), y.ravel(), np.full(40, z)]) for z in np.linspace(-0.4, 0.4, 5)])
+    tets = layered_tets(40, triangles, 4)
+    centre = vertices[tets].mean(axis=1)
+    inside = np.all((centre > (-0.75, 0.0, -0.2)) & (centre < (0.75, 0.2, 0.2)), axis=1)
+    tets = tets[~inside]
+    faces = np.vstack([tets[:, list(f)] for f in ((1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1))])
+    keys, counts = np.unique(np.sort(faces, axis=1), axis=0, return_counts=True)
+    boundary = keys[counts == 1]
+    middle = vertices[boundary].mean(axis=1)
+    wall = boundary[np.all(np.abs(middle) < (1.75 - 1e-9, 0.4 - 1e-9, 0.4 - 1e-9), axis=1)]
+    return tet_mesh(vertices, tets, {"chamber": wall}, order=order)
