@@ -61,7 +61,7 @@ def parser() -> argparse.ArgumentParser:
                    help="change a dotted scene-file key or a short name (cy cx E nu k max_area) of the scene "
                         "(repeatable)")
     p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
-    p.add_argument("--tip", nargs="+", type=float, metavar="X Y [Z]",
+    p.add_argument("--tip", nargs="+", type=float, metavar="COORD",
                    help="target position of the tip point: X Y, or X Y Z on a 3D body")
     p.add_argument("--angle", type=float, default=None, help="target tip rotation in degrees (with --tip)")
     p.add_argument("--weights", nargs=3, type=float, default=[1.0, 1.0, 1.0], metavar=("WX", "WY", "WANGLE"),
