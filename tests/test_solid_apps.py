@@ -16,7 +16,7 @@ import taichi_pneuma as tp
 from taichi_pneuma.apps.reach import main as reach_main
 from taichi_pneuma.control.inverse import Reacher, ReachOptions
 from taichi_pneuma.control.study import RunOptions, Sweep, check_axes, parse_vary, run_task
-from taichi_pneuma.control.targets import Target
+from taichi_pneuma.control.targets import Target, read_targets_csv
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.meshfile import write_mesh
 from taichi_pneuma.scene import Material
@@ -114,6 +114,22 @@ def test_reach_app_takes_tip_x_y_z_on_a_3d_scene(tmp_path, twin, capsys):
                                                       abs=1e-12)
     assert reach_main(["--scene", scene, "--tip", "1", "2", "3", "4", "--no-video", "--out", str(tmp_path)]) == 2
     assert "--tip takes X Y or X Y Z, not 4 numbers" in capsys.readouterr().err
+    assert reach_main(["--scene", scene, "--tip", "1", "2", "3", "--interactive", "--out", str(tmp_path)]) == 2
+    assert "--interactive reach works on 2D scenes" in capsys.readouterr().err
+
+
+def test_targets_with_z_from_a_csv_file_and_a_scene_file(tmp_path):
+    path = tmp_path / "targets.csv"
+    path.write_text("x,y,z,wz\n1.7,-0.1,0.05,2\n1.7,-0.2,,\n")
+    assert read_targets_csv(path) == [Target((1.7, -0.1, 0.05), weight_z=2.0), Target((1.7, -0.2))]
+    scene = tp.reference_scene().with_value("targets", [{"tip": [1.7, -0.1, 0.05], "weight_z": 0.5}])
+    assert scene.targets == (Target((1.7, -0.1, 0.05), weight_z=0.5),)
+    (tmp_path / "s.toml").write_text(scene.to_toml())
+    assert tp.load_scene(tmp_path / "s.toml").targets == scene.targets
+    with pytest.raises(PneumaInputError, match=r"target tip = \[1.0, 2.0, 3.0, 4.0\] must be \[x, y\] or \[x, y, z\]"):
+        Target((1.0, 2.0, 3.0, 4.0))
+    with pytest.raises(PneumaInputError, match="target weight_z = -1.0 must be >= 0"):
+        Target((1.0, 2.0, 3.0), weight_z=-1.0)
 
 
 class InProcess:
