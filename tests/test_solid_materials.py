@@ -19,6 +19,7 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import brentq
 from solid_meshes import box_with_cavities, scene_of, shell_octant
+from test_solid import HeldAt
 
 import taichi_pneuma as tp
 from taichi_pneuma.io.units import UNITS
@@ -28,7 +29,6 @@ from taichi_pneuma.solve.model import EnergyModel
 from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.solve.schedule import ChamberSchedule
 from taichi_pneuma.terms import Elasticity, NormalClamp
-from taichi_pneuma.terms.base import Term
 
 # Yeoh and Mooney-Rivlin in units of C10; the preset in kPa (its Yeoh fit, converted from Pa)
 MATERIALS = {
@@ -68,30 +68,6 @@ def incompressible_uniaxial_stress(material, stretch):
     return 2 * (stretch - stretch ** -2) * (W1 + W2 / stretch)
 
 
-class FaceAt(Term):
-    """1/2 K sum_i (u_i . n - a)^2 over the given nodes: their normal displacement held at a."""
-
-    name = "face"
-
-    def __init__(self, config, nodes, normal, offset, stiffness):
-        self.config, self.nodes, self.n, self.a, self.k = config, nodes, np.asarray(normal, float), offset, stiffness
-        self._dofs = config.dim * nodes + int(np.argmax(self.n))
-
-    def energy(self):
-        return 0.5 * self.k * float(np.sum((self.config.u[self.nodes] @ self.n - self.a) ** 2))
-
-    def gradient(self):
-        g = np.zeros_like(self.config.u)
-        g[self.nodes] = self.k * np.outer(self.config.u[self.nodes] @ self.n - self.a, self.n)
-        return g
-
-    def hessian_pattern(self):
-        return self._dofs, self._dofs
-
-    def hessian_values(self, psd_only=False):
-        return np.full(len(self._dofs), self.k)
-
-
 @pytest.mark.parametrize("order", [1, 2])
 @pytest.mark.parametrize("name", MATERIALS)
 def test_uniaxial_tension_of_a_block_gives_the_nominal_stress_of_the_law(name, order):
@@ -111,7 +87,7 @@ def test_uniaxial_tension_of_a_block_gives_the_nominal_stress_of_the_law(name, o
         model.add(NormalClamp(config, np.flatnonzero(x[:, axis] == low[axis]), np.eye(3)[axis], 1e9 * scale))
     pulled = np.flatnonzero(x[:, 0] == high[0])
     length = high[0] - low[0]
-    model.add(FaceAt(config, pulled, (1.0, 0.0, 0.0), (stretch - 1) * length, 1e9 * scale))
+    model.add(HeldAt(config, pulled, ((stretch - 1) * length, 0.0, 0.0), 1e9 * scale, axes=[0]))
     guess = (x - low) * (np.array([stretch, stretch ** -0.5, stretch ** -0.5]) - 1)  # incompressible, exact in x
     u, record = NewtonSolver(model, NewtonOptions(tol=1e-6)).solve(guess)
     assert record.converged
