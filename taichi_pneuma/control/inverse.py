@@ -23,8 +23,8 @@ first guess u + du/dq dq on the tangent). A step that does not decrease Phi by a
 its predicted decrease is halved and solved again from the last accepted equilibrium. Every
 iterate lies inside the bounds.
 
-A descent stops *reached* when |tip - t| <= tol L (over the coordinates t gives) (and |theta - theta_t| <= angle_tol when the
-rotation is targeted); short of it when a step no longer moves the scaled commands by step_tol,
+A descent stops *reached* when |tip - t| <= tol L, over the coordinates t gives (and
+|theta - theta_t| <= angle_tol when the rotation is targeted); short of it when a step no longer moves the scaled commands by step_tol,
 decreases Phi by less than a fraction `stall` of it, or the halvings or max_iterations run out.
 Then the descent starts again from the centre of the command box and from quasi-random commands
 (`restarts` in all: Phi need not be convex, e.g. the reference tip first lifts, then curls down as
@@ -175,7 +175,7 @@ class Objective:
         self.scale = np.array([w_x / length, w_y / length, w_angle * math.pi / 180.0,
                                target.weight_z / length])[self.rows]
         x, y, *z = target.tip
-        self.wanted = np.array([x, y, target.angle or 0.0, *z, *[0.0] * (1 - len(z))])[self.rows]
+        self.wanted = np.array([x, y, target.angle or 0.0, *(z or [0.0])])[self.rows]
 
     def value(self, pose: Pose) -> tuple[np.ndarray, np.ndarray, float]:
         """(f, s, Phi) at a pose."""
@@ -359,8 +359,8 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
     states and video are made as a ramp's are): each step's record carries the extra columns target (the
     index of the target pursued), target_x, target_y, target_angle (nan for a free angle), the tip point
     tip_x, tip_y and its distance to the target, tip_error (in 3D also target_z, nan where z is free, and
-    tip_z), and descent: a count that goes up at every
-    pose not reached by a step from the frame before (a restart, the best pose re-taken)."""
+    tip_z), and descent: a count that goes up at every pose not reached by a step from the frame before (a
+    restart, the best pose re-taken)."""
     built, mesh = reacher.built, reacher.built.mesh
     rest_tip = mesh.vertices[mesh.tip].mean(axis=0)
     steps, states, descent = [], [], 0

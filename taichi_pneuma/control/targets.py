@@ -5,8 +5,9 @@ coordinates: (x, y), or (x, y, z) on a 3D body (an (x, y) target there leaves z 
 is their least-squares rigid rotation in the x-y plane (in 3D about the bending axis z), in degrees,
 counter-clockwise. A list of targets comes from a scene file's [[targets]] tables or from a CSV file
 with a header naming the columns x, y and, optionally, z, angle, wx, wy, wz, wangle (weights; an
-empty z or angle cell leaves that free). A list has at most MAX_TARGETS targets (each is a reach: seconds of solves),
-and a targets file is read only if it is a regular file, and at most MAX_TARGETS_BYTES of it.
+empty z or angle cell leaves that free). A list has at most MAX_TARGETS targets (each is a reach:
+seconds of solves), and a targets file is read only if it is a regular file, and at most
+MAX_TARGETS_BYTES of it.
 """
 
 from __future__ import annotations

@@ -23,9 +23,10 @@ per output instead of one per command. With at most a handful of chambers the di
 the same and also gives every vertex's du/dq, so that is what is computed.
 
 Tip outputs (simulate.tip_measures, tip_dz): the tip point is the mean of the tip vertices, so its
-Jacobian is the mean of their rows of du/dq (x, y and, in 3D, z). The tip rotation (in 3D about z) is the least-squares rigid
-rotation theta = atan2(S, C), S = sum_i r_i x c_i, C = sum_i r_i . c_i, with r_i the centred
-rest and c_i the centred current tip positions; since sum_i r_i = 0 the centring of du drops out:
+Jacobian is the mean of their rows of du/dq (x, y and, in 3D, z). The tip rotation (in 3D about z,
+from the x-y positions) is the least-squares rigid rotation theta = atan2(S, C), S = sum_i r_i x c_i,
+C = sum_i r_i . c_i, with r_i the centred rest and c_i the centred current tip positions; since
+sum_i r_i = 0 the centring of du drops out:
 
     d theta = (C dS - S dC) / (S^2 + C^2),   dS = sum_i r_i x du_i,   dC = sum_i r_i . du_i.
 """
