@@ -31,6 +31,8 @@ class MeshOf:
     ready: TetMesh
     names: tuple = ("main",)
 
+    dim = 3
+
     @property
     def chambers(self):
         return tuple((name, None) for name in self.names)
