@@ -1,7 +1,7 @@
 """Inverse control: find the chamber commands that put the tip where you want it.
 
     pneuma-reach --scene bidirectional --tip 1.7 -0.3
-    pneuma-reach --scene beam_3d --tip 3.4 -0.2 0.4 --no-video        (a 3D body: X Y Z)
+    pneuma-reach --scene beam_3d --tip 1.769 -0.179 0.006 --no-video    (a 3D body: X Y Z)
     pneuma-reach --scene pneunet_finger --targets pneunet_finger_targets.csv   (or a scene's [[targets]])
     pneuma-reach --design cy --tip-dy -0.2
 
