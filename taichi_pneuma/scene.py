@@ -140,6 +140,11 @@ class Scene:
         return Schedule(self.increments, tuple(c.schedule for c in self.controls))
 
     @property
+    def dim(self) -> int:
+        """The body's dimension: 3 for a geometry of tetrahedra (one that says dim = 3), else 2."""
+        return getattr(self.geometry, "dim", 2)
+
+    @property
     def chamber_names(self) -> list[str]:
         return [name for name, _ in self.geometry.chambers]
 

@@ -6,7 +6,7 @@ hands over a ready mesh.
     shell_octant    an octant of the thick spherical shell inner <= r <= outer, its cavity closed by the three
                     coordinate planes (rollers), nothing clamped
     box_with_cavity the 3.5 x 0.8 x 0.8 box of a structured grid with a box-shaped closed cavity (its grid cells
-                    left out), clamped at its left face
+                    left out), clamped at its left face; box_with_cavities: several named cavities
 """
 
 from dataclasses import dataclass
@@ -30,6 +30,8 @@ class MeshOf:
 
     ready: TetMesh
     names: tuple = ("main",)
+
+    dim = 3
 
     @property
     def chambers(self):
@@ -73,18 +75,28 @@ def box_with_cavity(order: int = 1) -> TetMesh:
     """A 7 x 4 x 4 grid of 0.5 x 0.2 x 0.2 cells over [-1.75, 1.75] x [-0.4, 0.4] x [-0.4, 0.4], each cell six
     tetrahedra, without the cells of the cavity [-0.75, 0.75] x [0, 0.2] x [-0.2, 0.2]: its wall is every
     boundary facet off the box's faces."""
+    return box_with_cavities({"chamber": ((-0.75, 0.0, -0.2), (0.75, 0.2, 0.2))}, 4, order)
+
+
+def box_with_cavities(cavities: dict, layers: int, order: int = 1) -> TetMesh:
+    """The box [-1.75, 1.75] x [-0.4, 0.4] x [-0.4, 0.4] of a 7 x 4 x `layers` grid of cells, each six
+    tetrahedra, clamped at its left face, without the cells inside each cavity box (name: (low corner, high
+    corner), on grid lines, apart from each other and from the box's faces); a cavity's wall is the boundary
+    facets on its box."""
     x, y = np.meshgrid(np.linspace(-1.75, 1.75, 8), np.linspace(-0.4, 0.4, 5), indexing="ij")
     corner = np.arange(40).reshape(8, 5)[:-1, :-1].ravel()
     triangles = np.vstack([np.column_stack([corner, corner + 5, corner + 6]),
                            np.column_stack([corner, corner + 6, corner + 1])])
-    vertices = np.vstack([np.column_stack([x.ravel(), y.ravel(), np.full(40, z)]) for z in np.linspace(-0.4, 0.4, 5)])
-    tets = layered_tets(40, triangles, 4)
-    centre = vertices[tets].mean(axis=1)
-    inside = np.all((centre > (-0.75, 0.0, -0.2)) & (centre < (0.75, 0.2, 0.2)), axis=1)
-    tets = tets[~inside]
+    vertices = np.vstack([np.column_stack([x.ravel(), y.ravel(), np.full(40, z)])
+                          for z in np.linspace(-0.4, 0.4, layers + 1)])
+    tets = layered_tets(40, triangles, layers)
+    inside = lambda points, box, slack: np.all((points > np.subtract(box[0], slack))
+                                               & (points < np.add(box[1], slack)), axis=1)
+    for box in cavities.values():
+        tets = tets[~inside(vertices[tets].mean(axis=1), box, 0.0)]
     faces = np.vstack([tets[:, list(f)] for f in ((1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1))])
     keys, counts = np.unique(np.sort(faces, axis=1), axis=0, return_counts=True)
     boundary = keys[counts == 1]
     middle = vertices[boundary].mean(axis=1)
-    wall = boundary[np.all(np.abs(middle) < (1.75 - 1e-9, 0.4 - 1e-9, 0.4 - 1e-9), axis=1)]
-    return tet_mesh(vertices, tets, {"chamber": wall}, order=order)
+    walls = {name: boundary[inside(middle, box, 1e-9)] for name, box in cavities.items()}
+    return tet_mesh(vertices, tets, walls, order=order)

@@ -225,21 +225,27 @@ def test_symmetry_closures_give_the_volume_of_the_closed_cavity():
 
 
 class HeldAt(Term):
-    """1/2 K |u_i - target_i|^2 on the given nodes: displacements prescribed by a stiff penalty."""
+    """1/2 K |u_i - target_i|^2 on the given nodes (over the given axes only, if any): displacements prescribed by
+    a stiff penalty."""
 
     name = "held"
 
-    def __init__(self, config, nodes, target, stiffness):
-        self.config, self.nodes, self.target, self.k = config, nodes, target, stiffness
+    def __init__(self, config, nodes, target, stiffness, axes=None):
+        self.config, self.nodes, self.k = config, nodes, stiffness
         d = config.dim
-        self._dofs = (d * nodes[:, None] + np.arange(d)).ravel()
+        self.axes = np.arange(d) if axes is None else np.asarray(axes)
+        self.target = np.broadcast_to(target, (len(nodes), d))[:, self.axes]
+        self._dofs = (d * nodes[:, None] + self.axes).ravel()
+
+    def _offsets(self):
+        return self.config.u[np.ix_(self.nodes, self.axes)] - self.target
 
     def energy(self):
-        return 0.5 * self.k * float(np.sum((self.config.u[self.nodes] - self.target) ** 2))
+        return 0.5 * self.k * float(np.sum(self._offsets() ** 2))
 
     def gradient(self):
         g = np.zeros_like(self.config.u)
-        g[self.nodes] = self.k * (self.config.u[self.nodes] - self.target)
+        g[np.ix_(self.nodes, self.axes)] = self.k * self._offsets()
         return g
 
     def hessian_pattern(self):

@@ -1,11 +1,13 @@
 """Inverse control: find the chamber commands that put the tip where you want it.
 
     pneuma-reach --scene bidirectional --tip 1.7 -0.3
+    pneuma-reach --scene beam_3d --tip 1.769 -0.179 0.006 --no-video    (a 3D body: X Y Z)
     pneuma-reach --scene pneunet_finger --targets pneunet_finger_targets.csv   (or a scene's [[targets]])
     pneuma-reach --design cy --tip-dy -0.2
 
 X Y is where the tip point (the mean of the tip vertices, as in inflate's tip deflection) should be,
-in scene coordinates; --angle DEG adds the tip rotation. Commands stay inside each chamber's bounds
+in scene coordinates (X Y Z on a 3D body; X Y alone leaves z free); --angle DEG adds the tip rotation
+(in 3D about the bending axis z). Commands stay inside each chamber's bounds
 (--bounds NAME MIN MAX, the scene file's `bounds`, or the range its keyframes drive). Prints the
 commands found and a summary line starting with `reached:`; an unreachable target prints
 `unreachable: ...` (the closest pose, the chambers at a bound) and exits with 1, its files still
@@ -59,7 +61,8 @@ def parser() -> argparse.ArgumentParser:
                    help="change a dotted scene-file key or a short name (cy cx E nu k max_area) of the scene "
                         "(repeatable)")
     p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
-    p.add_argument("--tip", nargs=2, type=float, metavar=("X", "Y"), help="target position of the tip point")
+    p.add_argument("--tip", nargs="+", type=float, metavar="COORD",
+                   help="target position of the tip point: X Y, or X Y Z on a 3D body")
     p.add_argument("--angle", type=float, default=None, help="target tip rotation in degrees (with --tip)")
     p.add_argument("--weights", nargs=3, type=float, default=[1.0, 1.0, 1.0], metavar=("WX", "WY", "WANGLE"),
                    help="weights of the x, y and rotation errors (with --tip)")
@@ -104,6 +107,7 @@ def targets_of(args: argparse.Namespace, scene, required: bool = True) -> list:
     require(args.tip is None or args.targets is None, "give --tip or --targets, not both")
     require(args.angle is None or args.tip is not None, "--angle needs --tip")
     if args.tip is not None:
+        require(len(args.tip) in (2, 3), f"--tip takes X Y or X Y Z, not {len(args.tip)} numbers")
         return [Target(tuple(args.tip), args.angle, tuple(args.weights))]
     if args.targets is not None:
         return read_targets_csv(find(args.targets, ".csv", "targets file"))
@@ -149,6 +153,7 @@ def run(args: argparse.Namespace) -> dict:
     size = rendering_flags(args)
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
     if args.interactive:
+        require(scene.dim == 2, "--interactive reach works on 2D scenes (drag a target in the plane)")
         require(bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")),
                 "--interactive needs a display (DISPLAY is not set)")
     out = prepare_directory(args.out)
@@ -167,6 +172,7 @@ def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: li
     from tqdm import tqdm
 
     from ..control.inverse import Reacher, frames
+    from ..solve.result import ELEMENTS
 
     (lo, hi), built = bounds, build(scene)
     start = time.perf_counter()
@@ -194,7 +200,7 @@ def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: li
     solves = [r.forward_solves for r in results]
     seconds = [r.seconds for r in results]
     summary = {
-        "scene": scene.name, "vertices": built.mesh.n_vertices, "triangles": built.mesh.n_triangles,
+        "scene": scene.name, "vertices": built.mesh.n_vertices, ELEMENTS[built.mesh.dim]: built.mesh.n_elements,
         "body_length": reacher.length, "bounds": {n: [a, b] for n, a, b in zip(reacher.names, lo, hi)},
         **reach_record(reacher, last),
         "targets_reached": sum(r.reached for r in results), "targets": len(results),
@@ -221,8 +227,8 @@ def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: li
         if len(results) == 1:
             print(last.summary_line())
         else:
-            x, y = last.pose.tip
-            print(f"reached: all {len(results)} targets in order; last tip ({x:.6g}, {y:.6g}); "
+            tip = ", ".join(f"{v:.6g}" for v in last.pose.tip)
+            print(f"reached: all {len(results)} targets in order; last tip ({tip}); "
                   f"worst tip error {summary['worst_tip_error']:.3g}")
     else:
         k, first = unreached[0]

@@ -4,9 +4,11 @@ For a target tip point t (optionally a tip rotation theta_t), weights w and boun
 the chamber commands q (area ratios or pressures), minimise over q
 
     Phi(q) = |f(q)|^2 + rho^2 |s - s_ref|^2,    s = (q - lo) / (hi - lo)   (commands scaled to [0, 1]),
-    f(q)   = (w_x (x(q) - t_x) / L,  w_y (y(q) - t_y) / L,  w_theta (theta(q) - theta_t) [radians]),
+    f(q)   = (w_x (x(q) - t_x) / L,  w_y (y(q) - t_y) / L,  w_theta (theta(q) - theta_t) [radians],
+              w_z (z(q) - t_z) / L),
 
-with (x, y, theta) the tip point and rotation at the equilibrium of q and L the body length. The
+with (x, y, z) the tip point and theta its rotation (about z) at the equilibrium of q and L the body
+length; the z row only for an (x, y, z) target on a 3D body, the theta row only when it is targeted. The
 regulariser (rho, default 1e-4, towards the rest commands s_ref) acts only when the chambers
 outnumber the targeted quantities: redundant chambers then take the least actuation that reaches
 the target; with no redundancy it is off, so a reachable target is met exactly.
@@ -21,8 +23,8 @@ first guess u + du/dq dq on the tangent). A step that does not decrease Phi by a
 its predicted decrease is halved and solved again from the last accepted equilibrium. Every
 iterate lies inside the bounds.
 
-A descent stops *reached* when |(x, y) - t| <= tol L (and |theta - theta_t| <= angle_tol when the
-rotation is targeted); short of it when a step no longer moves the scaled commands by step_tol,
+A descent stops *reached* when |tip - t| <= tol L, over the coordinates t gives (and
+|theta - theta_t| <= angle_tol when the rotation is targeted); short of it when a step no longer moves the scaled commands by step_tol,
 decreases Phi by less than a fraction `stall` of it, or the halvings or max_iterations run out.
 Then the descent starts again from the centre of the command box and from quasi-random commands
 (`restarts` in all: Phi need not be convex, e.g. the reference tip first lifts, then curls down as
@@ -47,7 +49,7 @@ from ..scene import BuiltScene, Scene
 from ..solve.newton import NewtonOptions, NewtonSolver
 from ..solve.result import Result
 from ..solve.sensitivity import sensitivity
-from ..solve.simulate import MAX_CUTS, NoEquilibrium, StepRecord, chamber_records, settle, tip_measures
+from ..solve.simulate import MAX_CUTS, NoEquilibrium, StepRecord, chamber_records, settle, tip_dz, tip_measures
 from .targets import Target
 
 ARMIJO = 1e-4
@@ -107,8 +109,8 @@ class ReachOptions:
 
 @dataclass
 class Pose:
-    """An equilibrium: the commands, the displacements (n, 2), the tip point (scene coordinates) and
-    rotation (degrees), and the forward solve that found it (Newton iterations, residual, seconds)."""
+    """An equilibrium: the commands, the displacements (n, d), the tip point (d,) (scene coordinates) and
+    rotation (degrees, about z in 3D), and the forward solve that found it (Newton iterations, residual, seconds)."""
 
     commands: np.ndarray
     u: np.ndarray
@@ -139,40 +141,45 @@ class ReachResult:
 
     def summary_line(self) -> str:
         """One line: 'reached: ...' or 'unreachable: closest tip error ...; chamber ... at its max ...'."""
-        x, y = self.pose.tip
+        tip = ", ".join(f"{v:.6g}" for v in self.pose.tip)
         rotation = f", rotation {self.pose.rotation:+.2f} deg" + (
             f" (error {self.angle_error:.3g} deg)" if self.angle_error is not None else "")
         if self.reached:
-            return f"reached: tip ({x:.6g}, {y:.6g}){rotation}; tip error {self.error:.3g}"
+            return f"reached: tip ({tip}){rotation}; tip error {self.error:.3g}"
         bounds = "; ".join(f"chamber {name!r} at its {side} {unit} {value:g}" for name, side, unit, value in self.active)
         angle = f", rotation error {self.angle_error:.3g} deg" if self.angle_error is not None else ""
-        return (f"unreachable: closest tip error {self.error:.3g}{angle} at tip ({x:.6g}, {y:.6g}); "
+        return (f"unreachable: closest tip error {self.error:.3g}{angle} at tip ({tip}); "
                 + (bounds or "no bound active (a local minimum of the tip error)"))
 
 
 class Objective:
     """Phi of the module docstring for one target and one Reacher's bounds.
 
-    f = scale * ((tip x, tip y, rotation in degrees) - target)[rows]: lengths over L, the rotation
-    in radians; rows: x and y, and the rotation when targeted. rho is 0 unless chambers are redundant."""
+    f = scale * (measured(pose) - target)[rows]: lengths over L, the rotation in radians; rows: x and y,
+    z for an (x, y, z) target, and the rotation when targeted. rho is 0 unless chambers are redundant."""
 
     def __init__(self, reacher: "Reacher", target: Target):
         self.target, self.reacher = target, reacher
-        require(target.angle is None or len(reacher.built.mesh.tip) >= 2,
+        mesh = reacher.built.mesh
+        require(len(target.tip) <= mesh.dim, f"target tip = {list(target.tip)!r}: a 2D scene's tip is [x, y]")
+        require(target.angle is None or len(mesh.tip) >= 2,
                 f"target angle {target.angle!r}: the tip rotation needs at least 2 tip vertices "
-                f"(this mesh has {len(reacher.built.mesh.tip)})")
-        self.rows = [0, 1] + ([2] if target.angle is not None else [])
+                f"(this mesh has {len(mesh.tip)})")
+        self.rows = [0, 1] + ([3] if len(target.tip) == 3 else []) + ([2] if target.angle is not None else [])
         self.rho = reacher.options.regularization if len(reacher.names) > len(self.rows) else 0.0
         self.span = reacher.hi - reacher.lo
         rest = reacher.built.scene.schedule.rest_commands
         self.s_ref = np.clip((rest - reacher.lo) / self.span, 0.0, 1.0)
         w_x, w_y, w_angle = target.weights
-        self.scale = np.array([w_x / reacher.length, w_y / reacher.length, w_angle * math.pi / 180.0])[self.rows]
-        self.wanted = np.array([*target.tip, target.angle or 0.0])[self.rows]
+        length = reacher.length
+        self.scale = np.array([w_x / length, w_y / length, w_angle * math.pi / 180.0,
+                               target.weight_z / length])[self.rows]
+        x, y, *z = target.tip
+        self.wanted = np.array([x, y, target.angle or 0.0, *(z or [0.0])])[self.rows]
 
     def value(self, pose: Pose) -> tuple[np.ndarray, np.ndarray, float]:
         """(f, s, Phi) at a pose."""
-        f = self.scale * (np.array([*pose.tip, pose.rotation])[self.rows] - self.wanted)
+        f = self.scale * (measured(pose)[self.rows] - self.wanted)
         s = (pose.commands - self.reacher.lo) / self.span
         return f, s, float(f @ f + self.rho ** 2 * np.sum((s - self.s_ref) ** 2))
 
@@ -181,6 +188,11 @@ class Objective:
         error, angle_error = self.reacher._errors(self.target, pose)
         opts = self.reacher.options
         return error <= opts.tol * self.reacher.length and (angle_error is None or angle_error <= opts.angle_tol)
+
+
+def measured(pose: Pose) -> np.ndarray:
+    """(tip x, tip y, rotation in degrees) and in 3D tip z: the rows of the tip Jacobian (sensitivity.py)."""
+    return np.array([pose.tip[0], pose.tip[1], pose.rotation, *pose.tip[2:]])
 
 
 class Reacher:
@@ -208,15 +220,15 @@ class Reacher:
         self.settle((self.lo + self.hi) / 2 if start is None else start)
 
     def _pose(self, commands: np.ndarray, u: np.ndarray) -> Pose:
-        dx, dy, rotation = tip_measures(self.built.mesh, u)
-        rest_tip = self.built.mesh.vertices[self.built.mesh.tip].mean(axis=0)
-        return Pose(np.array(commands, float), u, rest_tip + (dx, dy), rotation)
+        mesh = self.built.mesh
+        rotation = tip_measures(mesh, u)[2]
+        return Pose(np.array(commands, float), u, (mesh.vertices[mesh.tip] + u[mesh.tip]).mean(axis=0), rotation)
 
     def settle(self, commands: np.ndarray, tangent: np.ndarray | None = None) -> Pose:
         """The equilibrium at `commands` (clipped to the bounds), from the current one; it becomes current.
         Raises simulate.NoEquilibrium (the current pose unchanged) when there is none.
 
-        tangent: du/dq (n, 2, m) at the current pose, for the first guess u + du/dq dq (Newton then often
+        tangent: du/dq (n, d, m) at the current pose, for the first guess u + du/dq dq (Newton then often
         needs one iteration): handed to simulate.predict as a previous equilibrium on the tangent line."""
         commands = np.clip(np.asarray(commands, float), self.lo, self.hi)
         previous = self._previous
@@ -239,7 +251,7 @@ class Reacher:
         return self.pose
 
     def _errors(self, target: Target, pose: Pose) -> tuple[float, float | None]:
-        error = float(np.hypot(*(pose.tip - target.tip)))
+        error = tip_error(target, pose)
         if target.angle is None:
             return error, None
         return error, abs((pose.rotation - target.angle + 180.0) % 360.0 - 180.0)
@@ -337,12 +349,18 @@ class Reacher:
         return results
 
 
+def tip_error(target: Target, pose: Pose) -> float:
+    """The distance from the tip point to the target's, over the coordinates the target gives (x, y[, z])."""
+    return float(np.linalg.norm(pose.tip[:len(target.tip)] - target.tip))
+
+
 def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
     """Every accepted equilibrium of a sequence of reaches, in order, as one run's Result (its history CSV,
     states and video are made as a ramp's are): each step's record carries the extra columns target (the
     index of the target pursued), target_x, target_y, target_angle (nan for a free angle), the tip point
-    tip_x, tip_y and its distance to the target, tip_error, and descent: a count that goes up at every
-    pose not reached by a step from the frame before (a restart, the best pose re-taken)."""
+    tip_x, tip_y and its distance to the target, tip_error (in 3D also target_z, nan where z is free, and
+    tip_z), and descent: a count that goes up at every pose not reached by a step from the frame before (a
+    restart, the best pose re-taken)."""
     built, mesh = reacher.built, reacher.built.mesh
     rest_tip = mesh.vertices[mesh.tip].mean(axis=0)
     steps, states, descent = [], [], 0
@@ -352,14 +370,17 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
             descent += j in result.jumps
             built.set_commands(pose.commands)
             built.model.set_displacements(pose.u)
-            dx, dy = pose.tip - rest_tip
+            dx, dy = (pose.tip - rest_tip)[:2]
             extra = {"target": k, "target_x": target.tip[0], "target_y": target.tip[1],
                      "target_angle": math.nan if target.angle is None else target.angle,
-                     "tip_x": pose.tip[0], "tip_y": pose.tip[1], "tip_error": float(np.hypot(*(pose.tip - target.tip))),
+                     "tip_x": pose.tip[0], "tip_y": pose.tip[1], "tip_error": tip_error(target, pose),
                      "descent": descent}
+            if mesh.dim == 3:
+                extra.update(target_z=target.tip[2] if len(target.tip) == 3 else math.nan, tip_z=pose.tip[2])
             steps.append(StepRecord(len(steps), chamber_records(built, pose.commands), float(dx), float(dy),
                                     pose.rotation, pose.iterations, pose.residual, True, 0, 1,
-                                    built.elastic.min_determinant(), pose.seconds, extra=extra))
+                                    built.elastic.min_determinant(), pose.seconds, extra=extra,
+                                    tip_dz=tip_dz(mesh, pose.u)))
             states.append(mesh.vertices + pose.u)
     built.set_commands(reacher.pose.commands)
     built.model.set_displacements(reacher.pose.u)

@@ -259,6 +259,8 @@ def measures(result, names: list[str]) -> dict:
     (the base scene's chamber names: a run that varies a chamber's name keeps the study's columns)."""
     final = result.steps[-1]
     row = {"tip_dx": float(final.tip_dx), "tip_dy": float(final.tip_dy), "tip_rotation": float(final.tip_rotation)}
+    if final.tip_dz is not None:  # a 3D body
+        row["tip_dz"] = float(final.tip_dz)
     for i, name in enumerate(names):
         row[f"{name}.area_ratio"] = float(result.area_ratio[-1, i])
         row[f"{name}.peak_pressure"] = float(np.abs(result.pressure[:, i]).max())
@@ -532,8 +534,8 @@ class Sweep:
         self.keys = [a.key for a in axes]
         self.runs = plan(axes, samples, seed, max_runs)
         self.scene_toml = base.to_toml()
-        figures = ["tip_dx", "tip_dy", "tip_rotation"] + [f"{c}.{f}" for c in base.chamber_names
-                                                          for f in ("area_ratio", "peak_pressure")]
+        tip = ["tip_dx", "tip_dy", "tip_rotation"] + (["tip_dz"] if base.dim == 3 else [])
+        figures = tip + [f"{c}.{f}" for c in base.chamber_names for f in ("area_ratio", "peak_pressure")]
         self.columns = self.keys + figures + ["converged", "iterations", "increments", "vertices", "seconds", "error"]
         self.name = check_stem(name)
         self.out = prepare_directory(out)

@@ -56,9 +56,11 @@ CHAMBER_SHAPES = Variant({
     "mesh_surface": record(MeshSurface, "the wall of a mesh body's chamber: a group of the mesh file's triangles",
                            group=Key(str, doc="the group (gmsh physical group) of the wall's triangles")),
 }, doc="the chamber's wall")
-TARGET = record(Target, "a pose the tip should reach (inverse control)", tip=Key(tuple, doc=PAIR),
+TARGET = record(Target, "a pose the tip should reach (inverse control)",
+                tip=Key(tuple, doc="[x, y], or [x, y, z] on a 3D body (z free when not given)"),
                 angle=Key(float, None, "tip rotation in degrees (none: free)"),
-                weights=Key(tuple, (1.0, 1.0, 1.0), "[w_x, w_y, w_angle]"))
+                weights=Key(tuple, (1.0, 1.0, 1.0), "[w_x, w_y, w_angle]"),
+                weight_z=Key(float, 1.0, "w_z, the weight of a 3D tip's z error"))
 
 
 ROLLER = record(Roller, "a roller support: the nodes' displacement along normal held, tangential motion free",

@@ -66,17 +66,25 @@ UNITS = {u.name: u for u in (Units("mm-kPa", "mm", "kPa", 1e-3, 1e3), Units("mm-
                              Units("m-Pa", "m", "Pa", 1.0, 1.0))}
 
 # Dimensions of the history columns that are not per chamber or per contact (those are set by history_dimensions)
-FIXED_COLUMNS = {"tip_dx": LENGTH, "tip_dy": LENGTH, "tip_rotation": ANGLE, "seconds": TIME, "target_x": LENGTH,
-                 "target_y": LENGTH, "target_angle": ANGLE, "tip_x": LENGTH, "tip_y": LENGTH, "tip_error": LENGTH}
+FIXED_COLUMNS = {"tip_dx": LENGTH, "tip_dy": LENGTH, "tip_dz": LENGTH, "tip_rotation": ANGLE, "seconds": TIME,
+                 "target_x": LENGTH, "target_y": LENGTH, "target_z": LENGTH, "target_angle": ANGLE, "tip_x": LENGTH,
+                 "tip_y": LENGTH, "tip_z": LENGTH, "tip_error": LENGTH}
 
 
-def history_dimensions(scene, contacts=()) -> dict[str, str]:
+def in_dimension(dimension: str, dim: int) -> str:
+    """A chamber quantity's dimension in a body of dimension dim: AREA (a chamber's measure, or a volume of air
+    per unit depth) is VOLUME in 3D; others are themselves."""
+    return MEASURES[dim] if dimension == AREA else dimension
+
+
+def history_dimensions(scene, contacts=(), dim: int = 2) -> dict[str, str]:
     """The dimension of every history column (simulate.StepRecord.row) with one, for a scene (its chambers'
-    commands have their kinds' dimensions) and the names of its contact terms."""
+    commands have their kinds' dimensions; a chamber's measure is a volume in 3D), the names of its contact
+    terms and the body's dimension dim."""
     dimensions = dict(FIXED_COLUMNS)
     for name, control in zip(scene.chamber_names, scene.controls):
-        dimensions.update({f"{name}.command": control.kind.dimension, f"{name}.area": AREA,
-                           f"{name}.pressure": PRESSURE})
+        dimensions.update({f"{name}.command": in_dimension(control.kind.dimension, dim),
+                           f"{name}.area": MEASURES[dim], f"{name}.pressure": PRESSURE})
     for name in contacts:
         dimensions.update({f"{name}.{part}": FORCE for part in ("fx", "fy", "magnitude")})
     return dimensions

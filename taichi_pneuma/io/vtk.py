@@ -108,7 +108,7 @@ class VtkSeries:
         else:
             cell_data = {name: [values] for name, values in cell_data.items()}
         grid = meshio.Mesh(pad3(mesh.vertices), self.cells + self.walls, point_data=point_data, cell_data=cell_data)
-        dimensions = history_dimensions(self.scene, step.contact)
+        dimensions = history_dimensions(self.scene, step.contact, mesh.dim)
         row = {units.label(name, dimensions.get(name, "")): value for name, value in step.row().items()}
         path = self.folder / f"{self.stem}_{step.step:04d}.vtu"
         write_atomic(path, lambda tmp: write_vtu(tmp, grid, row), self._folder)

@@ -16,7 +16,7 @@ import warnings
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..io.units import LENGTH, PRESSURE
+from ..io.units import LENGTH, PRESSURE, in_dimension
 
 
 def command_axis(command: np.ndarray, quantities: list[str]) -> tuple[np.ndarray, str]:
@@ -50,7 +50,7 @@ def history_figure(result, figure=None):
     (pa, tip), (area, pressure) = fig.subplots(2, 2)
     units, kinds = result.scene.units, [c.kind for c in result.scene.controls]
     x, x_label = command_axis(result.command, [kind.quantity for kind in kinds])
-    x_label = x_label if x_label == "step" else units.label(x_label, kinds[0].dimension)
+    x_label = x_label if x_label == "step" else units.label(x_label, in_dimension(kinds[0].dimension, result.mesh.dim))
     pressure_label = units.label("pressure p", PRESSURE)
     for c, name in enumerate(result.chamber_names):
         pa.plot(result.area_ratio[:, c], result.pressure[:, c], ".-", label=short(name))

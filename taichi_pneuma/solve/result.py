@@ -145,7 +145,7 @@ class Result:
         buffer = io.StringIO()
         rows = [s.row() for s in self.steps]
         columns = list(rows[0]) if rows else ["step"]
-        dimensions = history_dimensions(self.scene, self.steps[0].contact if self.steps else ())
+        dimensions = history_dimensions(self.scene, self.steps[0].contact if self.steps else (), self.mesh.dim)
         writer = csv.writer(buffer)
         writer.writerow([self.scene.units.label(c, dimensions.get(c, "")) for c in columns])
         writer.writerows([[row[c] for c in columns] for row in rows])

@@ -22,10 +22,11 @@ The adjoint form of one output o(u) is do/dq = -lambda^T dr/dq with H lambda = d
 per output instead of one per command. With at most a handful of chambers the direct form costs
 the same and also gives every vertex's du/dq, so that is what is computed.
 
-Tip outputs (simulate.tip_measures): the tip point is the mean of the tip vertices, so its
-Jacobian is the mean of their rows of du/dq. The tip rotation is the least-squares rigid
-rotation theta = atan2(S, C), S = sum_i r_i x c_i, C = sum_i r_i . c_i, with r_i the centred
-rest and c_i the centred current tip positions; since sum_i r_i = 0 the centring of du drops out:
+Tip outputs (simulate.tip_measures, tip_dz): the tip point is the mean of the tip vertices, so its
+Jacobian is the mean of their rows of du/dq (x, y and, in 3D, z). The tip rotation (in 3D about z,
+from the x-y positions) is the least-squares rigid rotation theta = atan2(S, C), S = sum_i r_i x c_i,
+C = sum_i r_i . c_i, with r_i the centred rest and c_i the centred current tip positions; since
+sum_i r_i = 0 the centring of du drops out:
 
     d theta = (C dS - S dC) / (S^2 + C^2),   dS = sum_i r_i x du_i,   dC = sum_i r_i . du_i.
 """
@@ -46,7 +47,8 @@ class Sensitivity:
     """d(state)/d(commands) at one equilibrium; m = number of chambers, in the scene's order.
 
     displacements: (n, d, m) du/dq of every vertex; tip: (3, m) d(tip dx, tip dy, tip rotation in
-    degrees)/dq; backend: the linear solver that factorised the exact Hessian."""
+    degrees)/dq, in 3D (4, m) with d(tip dz)/dq as its last row; backend: the linear solver that factorised
+    the exact Hessian."""
 
     displacements: np.ndarray
     tip: np.ndarray
@@ -96,15 +98,16 @@ def solve_exact(built: BuiltScene, rhs: np.ndarray, pattern: FixedPattern | None
 def sensitivity(built: BuiltScene, commands: np.ndarray, u: np.ndarray, pattern: FixedPattern | None = None,
                 backend=None, factorised: bool = False) -> Sensitivity:
     """du/dq and the tip Jacobian at the equilibrium u (n, d) of `commands`; leaves them set on `built`.
-    pattern, backend, factorised: see solve_exact. The tip outputs are those of simulate.tip_measures: in the
-    x-y plane (in 3D the bend angle about z)."""
+    pattern, backend, factorised: see solve_exact. The tip outputs are those of simulate.tip_measures (in the
+    x-y plane; in 3D the bend angle about z), then in 3D simulate.tip_dz."""
     built.set_commands(commands)
     built.model.set_displacements(u)
     du, name = solve_exact(built, command_forces(built), pattern, backend, factorised)
     mesh = built.mesh
     du = du.reshape(-1, mesh.dim, len(built.chambers))
-    tip_du = du[mesh.tip, :2]  # (k, 2, m)
+    tip_du = du[mesh.tip]  # (k, d, m)
     rest_tip = mesh.vertices[mesh.tip, :2]
     rotation = tip_rotation_gradient(rest_tip, rest_tip + np.reshape(u, (-1, mesh.dim))[mesh.tip, :2])
-    d_theta = np.einsum("kd,kdm->m", rotation, tip_du)
-    return Sensitivity(du, np.vstack([tip_du.mean(axis=0), math.degrees(1.0) * d_theta]), name)
+    d_theta = np.einsum("kd,kdm->m", rotation, tip_du[:, :2])
+    mean = tip_du.mean(axis=0)
+    return Sensitivity(du, np.vstack([mean[:2], math.degrees(1.0) * d_theta, mean[2:]]), name)

@@ -37,7 +37,7 @@ class ClosedGas(ChamberKind):
     name = "closed_gas"
     quantity = "air pumped in"
     rest = 0.0
-    dimension = "area"  # a volume per unit depth in 2D (the unit of the chamber area)
+    dimension = "area"  # the chamber measure's unit: a volume per unit depth in 2D, a volume in 3D (units.in_dimension)
 
     def __post_init__(self):
         require(require_finite("atmosphere", self.atmosphere) > 0, f"atmosphere = {self.atmosphere!r} must be > 0")
