@@ -4,7 +4,7 @@ they cannot drift from what they describe:
 - _generated/app_<name>.md: each app's usage and flags, read off its argparse parser (what --help prints);
 - _generated/scene_keys.md: every key of the scene file, from io/scenefile.key_reference() (the format's one
   declaration, io/sceneformat.py);
-- _generated/results_<page>.md: the tables under benchmarks/results/, each with the docstring of the code that
+- _generated/results_<page>.md: the tables under benchmarks/results/ (machine and date included), each with the docstring of the code that
   wrote it and the command that writes it again; a table no page claims lands on the performance page;
 - api/<package>.md and api/index.md: an automodule directive per module of each subpackage (pkgutil's walk),
   so that a new module is in the reference without an edit here.
@@ -136,11 +136,11 @@ def results_pages() -> dict[str, str]:
         about = docstring_of(source, function) if source else ""
         first = " ".join(about.split("\n\n")[0].split())
         lines = [f"## {title}", "", first, "",
-                 f"Written by `{command}` to `benchmarks/results/{path.name}` (with `.json`).", "",
-                 f"```{{include}} ../../benchmarks/results/{path.name}\n```", ""]
+                 f"Written by `{command}` to `benchmarks/results/{path.name}` (with `.json`):", "",
+                 path.read_text().strip(), ""]
         picture = path.with_suffix(".png")
-        if picture.exists():
-            lines += [f"![{title}](../../benchmarks/results/{picture.name})", ""]
+        if picture.exists():  # (the path as seen from the pages that include this one, in docs/)
+            lines += [f"![{title}](../benchmarks/results/{picture.name})", ""]
         pages[page].append("\n".join(lines))
     return {page: "\n".join(sections) for page, sections in pages.items()}
 
@@ -198,8 +198,8 @@ def plain_docstring(app, what, name, obj, options, lines: list[str]) -> None:
     text (other than a list item's continuation) starts a literal block (an example, an equation laid out in
     columns) that ends where the indentation does; a list ('- ' items) gets the blank lines around it that
     reST wants."""
-    out: list[str] = [""] if what in ("attribute", "property", "data") else []  # napoleon would read "x: y"
-    literal, in_list = None, False                                             # on the first line as a type
+    out: list[str] = []
+    literal, in_list = None, False
     for line in lines:
         depth = len(line) - len(line.lstrip())
         if literal is not None and (not line.strip() or depth >= literal):

@@ -61,4 +61,14 @@ sphinx_gallery_conf = {
 
 
 def setup(app):
-    app.connect("autodoc-process-docstring", _generate.plain_docstring, priority=400)  # before napoleon
+    """Docstrings are read as plain text first (_generate.plain_docstring), then by napoleon for their Args:
+    and Returns: sections, except those of attributes and properties, whose first line napoleon would read
+    as "type: description" (these state what the value is, not its type)."""
+    from sphinx.ext import napoleon
+
+    for listener in list(app.events.listeners["autodoc-process-docstring"]):
+        if listener.handler is napoleon._process_docstring:
+            app.disconnect(listener.id)
+    app.connect("autodoc-process-docstring", _generate.plain_docstring, priority=400)
+    app.connect("autodoc-process-docstring", lambda app, what, *rest: None if what in ("attribute", "property", "data")
+                else napoleon._process_docstring(app, what, *rest))
