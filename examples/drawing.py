@@ -40,3 +40,4 @@ def draw_surface(ax, positions, faces, color=(0.55, 0.7, 0.9)):
     lo, hi = positions.min(axis=0), positions.max(axis=0)
     ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]), xlabel="x", ylabel="z", zlabel="y")
     ax.set_box_aspect(hi - lo)
+    ax.set_axis_off()

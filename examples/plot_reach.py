@@ -22,13 +22,13 @@ built = scene.build()
 reacher = Reacher(built)  # each chamber's commands bounded by its [[chambers]] bounds
 reached = reacher.follow(list(scene.targets))
 
-fig, ax = plt.subplots(figsize=(8, 4), layout="constrained")
-for result in reached:
+fig, axes = plt.subplots(3, 1, figsize=(7, 7.5), layout="constrained")
+for ax, result in zip(axes, reached):
     draw_body(ax, built.mesh.vertices + result.pose.u, built.mesh)
     commands = ", ".join(f"{name} {value:.3f}" for name, value in zip(reacher.names, result.pose.commands))
     print(f"target {result.target.tip}: {commands}; {result.summary_line()}")
-ax.plot(*zip(*(r.target.tip for r in reached)), "r+", ms=14, mew=2, label="targets")
-ax.plot(*zip(*(r.pose.tip for r in reached)), "o", mfc="none", color="tab:orange", label="tip reached")
-ax.legend(loc="upper left")
-ax.set_title("three targets, two chambers")
+    ax.plot(*result.target.tip, "r+", ms=16, mew=2, label="target")
+    ax.plot(*result.pose.tip, "o", ms=9, mfc="none", color="tab:orange", label="tip reached")
+    ax.set_title(f"area ratios: {commands}; tip error {result.error:.1e}")
+axes[0].legend(loc="upper left")
 plt.show()

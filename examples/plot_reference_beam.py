@@ -8,6 +8,8 @@ down. ``pneuma-inflate --cy 0.15`` runs the same scene on the reference mesh (ti
 mesh and 8 increments keep the example short.
 """
 
+import tempfile
+
 import matplotlib.pyplot as plt
 from drawing import draw_result
 
@@ -23,6 +25,11 @@ draw_result(ax, result)
 ax.set_title(f"area x{result.area_ratio[-1, 0]:.2f}: tip {result.tip_deflection:+.3f}")
 
 # %%
-# The history: pressure against area ratio, and the tip against the command.
-result.plot()
+# ``result.save`` writes the history (CSV), states (npz), summary, scene file, ParaView files and the plot of
+# the history: pressure against area ratio, and the tip, area and pressure against the command.
+written = result.save(tempfile.mkdtemp())
+plot = next(path for path in written if path.name.endswith("_plot.png"))
+fig, ax = plt.subplots(figsize=(10, 7), layout="constrained")
+ax.imshow(plt.imread(plot))
+ax.set_axis_off()
 plt.show()

@@ -11,7 +11,7 @@ from drawing import draw_result
 
 import taichi_pneuma as tp
 
-fig, axes = plt.subplots(3, 1, figsize=(7, 7), layout="constrained")
+fig, axes = plt.subplots(3, 1, figsize=(6, 8), layout="constrained")
 for ax, cy in zip(axes, (0.15, 0.0, -0.15)):
     result = tp.simulate(tp.reference_scene(cy=cy, steps=8, max_area=0.005))
     draw_result(ax, result, vmin=1.0, vmax=1.8)

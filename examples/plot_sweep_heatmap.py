@@ -15,7 +15,7 @@ import tempfile
 import matplotlib.pyplot as plt
 
 import taichi_pneuma as tp
-from taichi_pneuma.control.study import LocalPool, Sweep, parse_vary, study_figure
+from taichi_pneuma.control.study import LocalPool, Sweep, parse_vary
 
 if __name__ == "__main__":  # the workers are spawned processes, which import this file without running it
     base = tp.reference_scene(steps=5, max_area=0.01)
@@ -24,5 +24,7 @@ if __name__ == "__main__":  # the workers are spawned processes, which import th
     with LocalPool(workers=2) as pool:
         report = sweep.run(pool)
     print(f"{report.ran} runs in {report.seconds:.1f} s, {report.failed} failed")
-    fig = study_figure(report.rows, sweep.keys, labels=["cy", "E"])
+    fig, ax = plt.subplots(figsize=(6, 4.5), layout="constrained")
+    ax.imshow(plt.imread(sweep.png))  # the study's plot, written beside its CSV and JSON
+    ax.set_axis_off()
     plt.show()
