@@ -6,8 +6,9 @@ few lines keep each gallery script to its subject.
 
 import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.colors import LightSource
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+LIGHT = np.array([-0.4, -0.6, 0.7]) / np.linalg.norm([-0.4, -0.6, 0.7])  # towards the light: above, in front
 
 
 def draw_body(ax, positions, mesh, values=None, label="largest principal stretch", **style):
@@ -34,8 +35,9 @@ def draw_surface(ax, positions, faces, color=(0.55, 0.7, 0.9)):
     drawn upwards."""
     positions = positions[:, [0, 2, 1]]  # matplotlib's z is up
     triangles = positions[faces[:, :3]]
-    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
-    shade = LightSource(azdeg=225, altdeg=45).shade_normals(normals, fraction=1.0)
+    normals = -np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])  # (y, z swapped)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    shade = 0.35 + 0.65 * np.clip(normals @ LIGHT, 0.0, 1.0)  # ambient plus Lambert
     ax.add_collection3d(Poly3DCollection(triangles, facecolors=np.outer(shade, color).clip(0, 1), linewidths=0))
     lo, hi = positions.min(axis=0), positions.max(axis=0)
     ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]), xlabel="x", ylabel="z", zlabel="y")

@@ -21,7 +21,7 @@ mesh = result.mesh
 outer = mesh.surface[np.isin(mesh.surface[:, :3], mesh.boundary).all(axis=1)]  # the cavity's wall left out
 print(f"{len(mesh.vertices)} nodes, {len(mesh.elements)} tetrahedra; tip deflection {result.tip_deflection:+.4f}")
 
-fig = plt.figure(figsize=(9, 3.5), layout="constrained")
+fig = plt.figure(figsize=(9, 2.8), layout="constrained")
 for i, step in enumerate((0, -1)):
     ax = fig.add_subplot(1, 2, i + 1, projection="3d")
     draw_surface(ax, result.positions[step], outer)

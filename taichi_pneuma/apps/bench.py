@@ -3,7 +3,7 @@ study (P1 and P2), near-incompressible convergence, scaling, 3D (solid); and Tai
 compilers).
 
     pneuma-bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling,solid,compilers] [--out out/bench]
-    pneuma-bench --out benchmarks/results       (a clone: rewrite the tracked tables the README quotes)
+    pneuma-bench --out benchmarks/results       (a clone: rewrite the tracked tables the site shows)
 
 Every section prints a Markdown table and saves it (bench_<section>.md, .json) under --out (default
 out/bench, a scratch directory), headed with the machine and date; the accuracy section also plots

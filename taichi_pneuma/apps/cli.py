@@ -79,7 +79,7 @@ def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
     p.add_argument("--size", default=size, help="frame size WIDTHxHEIGHT in pixels")
     p.add_argument("--renderer", default="auto", choices=RENDERERS,
                    help="gui: ti.GUI's software rasteriser; ggui: Taichi's GGUI (needs Vulkan); pillow: Pillow, no "
-                        "Taichi GUI; auto: ti.GUI, the faster of the two wherever measured (README, Performance), "
+                        "Taichi GUI; auto: ti.GUI, the faster of the two wherever measured (docs/performance.md), "
                         "else Pillow where the backend has no GUI")
     p.add_argument("--no-video", action="store_true",
                    help="no pictures: no video, no frame PNG, no plot PNG (and no renderer or matplotlib started); "
