@@ -26,8 +26,8 @@ from taichi_pneuma.scene import ChamberControl, Material, Scene, reference_scene
 from taichi_pneuma.solve.schedule import area_ramp
 
 DEPTH = 0.8
-CONVERGED = -0.25826  # P2, the reference mesh refined twice (README, "Accuracy")
-STEPS = 11  # the area-controlled equilibrium does not depend on the path (README)
+CONVERGED = -0.25826  # P2, the reference mesh refined twice (docs/accuracy.md)
+STEPS = 11  # the area-controlled equilibrium does not depend on the path (docs/accuracy.md)
 ROLLERS = (Roller((0.0, 0.0, 1.0), (0.0, 0.0, 0.0)), Roller((0.0, 0.0, 1.0), (0.0, 0.0, DEPTH)))
 
 

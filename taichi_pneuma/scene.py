@@ -214,7 +214,7 @@ class BuiltScene:
 def reference_scene(cy: float = 0.15, cx: float = 0.0, growth: float = 3.5, steps: int = 36, E: float = 1e4,
                     nu: float = 0.45, k: float = 1e5, max_area: float = 0.0012, chamber_points: int = 128,
                     order: int = 1, refinements: int = 0, **long_names) -> Scene:
-    """SPEC.md's scene: the clamped 3.5 x 0.8 beam, one ellipse chamber at (cx, cy) ramped in area from 1 to
+    """The reference scene: the clamped 3.5 x 0.8 beam, one ellipse chamber at (cx, cy) ramped in area from 1 to
     growth over steps commanded areas (rest included); E, nu: Young's modulus and Poisson's ratio; k: the
     chamber's area penalty stiffness (the names of the command line's flags; youngs_modulus,
     poisson_ratio, chamber_stiffness are accepted for them too). order 2 meshes it with quadratic

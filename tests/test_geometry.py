@@ -7,7 +7,7 @@ from taichi_pneuma.fem.geometry import BeamGeometry, signed_area
 
 @pytest.mark.parametrize("cy, vertices, triangles", [(0.0, 1601, 2916), (0.15, 1632, 2976), (-0.15, 1633, 2980)])
 def test_reference_mesh_sizes(cy, vertices, triangles):
-    """Triangle with 'pqa0.0012' gives the reference implementation's meshes (SPEC.md)."""
+    """Triangle with 'pqa0.0012' gives the reference implementation's meshes."""
     mesh = BeamGeometry(cy=cy).mesh()
     assert (mesh.n_vertices, mesh.n_triangles) == (vertices, triangles)
 

@@ -147,7 +147,7 @@ def test_order_flag_quality_preset_and_scene_key(tmp_path, capsys):
         summary = json.loads((out / f"{stem}_summary.json").read_text())
         assert summary["element_order"] == 2 and summary["all_converged"]
         assert summary["vertices"] == BeamGeometry(cy=0.15, max_area=0.02, order=2).mesh().n_vertices
-    assert QUALITY["default"][:2] == (0.0012, 1)  # the main command keeps SPEC.md's linear mesh
+    assert QUALITY["default"][:2] == (0.0012, 1)  # the main command keeps the reference's linear mesh
     reference = (Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes" / "reference_beam.toml").read_text()
     for order in (2, 3):
         path = tmp_path / f"order{order}.toml"

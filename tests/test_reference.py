@@ -1,4 +1,4 @@
-"""The reference ramp (SPEC.md) for the three chamber placements, against the reference figures."""
+"""The reference ramp for the three chamber placements, against the reference figures."""
 
 import numpy as np
 import pytest

@@ -13,7 +13,7 @@ from taichi_pneuma.solve.schedule import ChamberSchedule, area_ramp
 from taichi_pneuma.terms import Elasticity
 from taichi_pneuma.terms.chambers import AreaControl
 
-CONVERGED_2D_TIP = -0.25826  # the 2D reference ramp's converged tip deflection (P2, uniform refinement; README)
+CONVERGED_2D_TIP = -0.25826  # the 2D reference ramp's converged tip deflection (P2, uniform refinement; docs/accuracy.md)
 
 
 def test_extruded_p1_body_has_exactly_depth_times_the_plane_strain_energy_forces_and_area():

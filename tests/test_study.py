@@ -17,7 +17,7 @@ from taichi_pneuma.control.study import RunOptions, Task, check_axes, parse_vary
 from taichi_pneuma.io.scenefile import read_scene
 
 CY = "chambers[0].center[1]"
-REFERENCE_TIP = {-0.15: 0.2790, 0.0: -0.0011, 0.15: -0.2790}  # SPEC.md, solved to a small gradient
+REFERENCE_TIP = {-0.15: 0.2790, 0.0: -0.0011, 0.15: -0.2790}  # the reference figures, solved to a small gradient
 COARSE = ["--steps", "11", "--max-area", "0.01"]  # 380 vertices, 10 increments: ~0.1 s a ramp
 
 

@@ -3,7 +3,7 @@ study (P1 and P2), near-incompressible convergence, scaling, 3D (solid); and Tai
 compilers).
 
     pneuma-bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling,solid,compilers] [--out out/bench]
-    pneuma-bench --out benchmarks/results       (a clone: rewrite the tracked tables the README quotes)
+    pneuma-bench --out benchmarks/results       (a clone: rewrite the tracked tables the site shows)
 
 Every section prints a Markdown table and saves it (bench_<section>.md, .json) under --out (default
 out/bench, a scratch directory), headed with the machine and date; the accuracy section also plots
@@ -34,7 +34,7 @@ from ..errors import PneumaInputError, require
 from ..io.output import prepare_directory, save_json, save_text, write_atomic
 
 SECTIONS = ("startup", "breakdown", "backends", "accuracy", "incompressible", "scaling", "solid", "compilers")
-REFERENCE_TUTORIAL_SECONDS = 25.0  # SPEC.md: the NumPy/SciPy tutorial's cy = 0.15 ramp on this kind of machine
+REFERENCE_TUTORIAL_SECONDS = 25.0  # the seed pipeline (a NumPy/SciPy tutorial) on the cy = 0.15 ramp, this kind of machine
 PHASES = ("gradient", "hessian", "assemble", "factorize", "solve", "line_search")
 
 
@@ -108,7 +108,7 @@ PROCESSES = (("`--no-video`, empty kernel cache", ("--no-video",)), ("`--no-vide
 def startup() -> tuple[str, dict]:
     """Kernel compilation at start-up, and rendering. The main command's whole process, and its time to the
     first increment, from an empty kernel cache (as on a fresh machine) and then from the cache it left,
-    without and with its video (each renderer), against SPEC.md's 25 s for the seed tutorial's ramp; per
+    without and with its video (each renderer), against the seed pipeline's 25 s for the same ramp (a NumPy/SciPy tutorial); per
     renderer, rendering per frame against solving per step in the same process; and, in this process,
     three scenes in turn that differ in mesh size, E, nu, k and number of chambers: their build time and
     their first two increments against two typical ones."""
@@ -132,7 +132,7 @@ def startup() -> tuple[str, dict]:
                                                           "whole_s": whole}
                 render_rows.append([summary["renderer"], f"{frame_ms:.1f}", f"{step_ms:.1f}",
                                     f"{frame_ms / step_ms:.2f}", f"{whole:.2f}"])
-    table = markdown(["whole process", "s", "to first increment (s)", "against SPEC.md's 25 s for the seed's ramp"],
+    table = markdown(["whole process", "s", "to first increment (s)", "against the seed pipeline's 25 s for this ramp"],
                      rows)
     table += "\n" + markdown(["renderer (960x384 frames, coloured by stretch)", "render ms / frame",
                               "solve ms / step (same process)", "frame / step", "whole process (s)"], render_rows)
@@ -182,7 +182,7 @@ def breakdown() -> tuple[str, dict]:
              ["**ramp total (35 increments)**", f"**{1e3 * ramp_seconds:.0f}**",
               f"{increments / ramp_seconds:.0f} increments/s, {iterations} Newton iterations "
               f"({iterations / increments:.1f} per increment), {1e3 * ramp_seconds / iterations:.1f} ms/iteration"],
-             ["reference tutorial (SPEC.md figure, not measured here)", f"{1e3 * REFERENCE_TUTORIAL_SECONDS:.0f}",
+             ["seed pipeline, a NumPy/SciPy tutorial (its stated figure, not measured here)", f"{1e3 * REFERENCE_TUTORIAL_SECONDS:.0f}",
               f"{REFERENCE_TUTORIAL_SECONDS / ramp_seconds:.0f}x slower than this ramp"]]
     data = {"build_s": build_seconds, "first_call_s": first_call, "ramp_s": ramp_seconds, "phases_s": dict(phases),
             "iterations": iterations, "increments_per_s": increments / ramp_seconds,

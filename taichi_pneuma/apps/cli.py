@@ -13,13 +13,13 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .. import limits, runtime, signals
+from .. import __version__, limits, runtime, signals
 from ..errors import PneumaInputError, require, require_finite
 from ..io.units import AREA, LENGTH, MEASURES, PRESSURE
 from ..render import COLOR_FIELDS, RENDERERS
 
-# --quality presets: (max triangle area, element order, Newton tolerance); see the README's accuracy study.
-# "default" is SPEC.md's mesh and the solver's default tolerance (tests/test_cli.py checks they agree).
+# --quality presets: (max triangle area, element order, Newton tolerance); see the accuracy study (docs).
+# "default" is the reference beam's mesh and the solver's default tolerance (tests/test_cli.py checks they agree).
 QUALITY = {"draft": (0.005, 1, 1e-4), "default": (0.0012, 1, 1e-6), "high": (0.005, 2, 1e-6),
            "accurate": (0.0012, 2, 1e-9)}
 MEASURE = {2: "area", 3: "volume"}  # what a chamber encloses, by dimension
@@ -27,9 +27,12 @@ MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_ite
 
 
 def app_parser(prog: str, doc: str) -> argparse.ArgumentParser:
-    """An app's parser: its description is the first paragraph of the app's docstring, defaults shown."""
-    return argparse.ArgumentParser(prog=prog, description=" ".join(doc.split("\n\n")[0].split()),
-                                   formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    """An app's parser: its description is the first paragraph of the app's docstring, defaults shown;
+    --version prints the package's version."""
+    p = argparse.ArgumentParser(prog=prog, description=" ".join(doc.split("\n\n")[0].split()),
+                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    return p
 
 
 def quality_stem(args: argparse.Namespace) -> str:
@@ -76,7 +79,7 @@ def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
     p.add_argument("--size", default=size, help="frame size WIDTHxHEIGHT in pixels")
     p.add_argument("--renderer", default="auto", choices=RENDERERS,
                    help="gui: ti.GUI's software rasteriser; ggui: Taichi's GGUI (needs Vulkan); pillow: Pillow, no "
-                        "Taichi GUI; auto: ti.GUI, the faster of the two wherever measured (README, Performance), "
+                        "Taichi GUI; auto: ti.GUI, the faster of the two wherever measured (docs/performance.md), "
                         "else Pillow where the backend has no GUI")
     p.add_argument("--no-video", action="store_true",
                    help="no pictures: no video, no frame PNG, no plot PNG (and no renderer or matplotlib started); "

@@ -689,7 +689,7 @@ def split_in_four(triangles: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class BeamGeometry:
-    """SPEC.md's beam: a rectangle L x H centred at the origin with an elliptical chamber (a, b) at (cx, cy)."""
+    """The reference beam: a rectangle L x H centred at the origin with an elliptical chamber (a, b) at (cx, cy)."""
 
     length: float = 3.5
     height: float = 0.8

@@ -240,7 +240,7 @@ def open_canvas(width: int, height: int, backend: str = "auto", show: bool = Fal
     """A canvas on `backend`: 'gui' (ti.GUI's software rasteriser), 'ggui' (GGUI on Vulkan; PneumaInputError
     when Vulkan is unavailable), 'pillow' (pillow_canvas.py) or 'auto': ti.GUI, the faster of the two Taichi
     canvases wherever measured (the frame is read back to the CPU for its text and the encoder, and on lavapipe
-    GGUI's read-back alone costs more than ti.GUI's whole frame; see the README's Performance section), else
+    GGUI's read-back alone costs more than ti.GUI's whole frame; see docs/performance.md), else
     Pillow where the Taichi backend has no GUI. Says through log() which it uses (and why it fell back)."""
     require(backend in BACKENDS, f"renderer = {backend!r} is not one of {', '.join(BACKENDS)}")
     require(width >= 64 and height >= 64, f"frame size {width}x{height} must be at least 64x64")

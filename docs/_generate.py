@@ -1,0 +1,225 @@
+"""The site's pages that are generated at build time, from the code and the tracked benchmark results, so that
+they cannot drift from what they describe:
+
+- _generated/app_<name>.md: each app's usage and flags, read off its argparse parser (what --help prints);
+- _generated/scene_keys.md: every key of the scene file, from io/scenefile.key_reference() (the format's one
+  declaration, io/sceneformat.py);
+- _generated/results_<page>.md: the tables under benchmarks/results/ (machine and date included), each with the docstring of the code that
+  wrote it and the command that writes it again; a table no page claims lands on the performance page;
+- api/<package>.md and api/index.md: an automodule directive per module of each subpackage (pkgutil's walk),
+  so that a new module is in the reference without an edit here.
+
+plain_docstring() reads the docstrings, written as plain text for help() and a terminal, as reStructuredText
+(the characters reST would take as markup escaped, indented blocks made literal) for autodoc.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import pkgutil
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+RESULTS = ROOT / "benchmarks" / "results"
+APPS = ("inflate", "steer", "reach", "sweep", "bench")
+
+# results table stem -> (page, title, (module file, function or None: the docstring that says what it measures),
+#                         the command that writes it again)
+RESULTS_PAGES = {
+    "bench_startup": ("performance", "Start-up: kernels compile once; rendering against solving",
+                      ("taichi_pneuma/apps/bench.py", "startup"), "pneuma-bench --sections startup"),
+    "bench_breakdown": ("performance", "Where the time of the reference ramp goes",
+                        ("taichi_pneuma/apps/bench.py", "breakdown"), "pneuma-bench --sections breakdown"),
+    "bench_backends": ("performance", "Linear-solver backends", ("taichi_pneuma/apps/bench.py", "backends"),
+                       "pneuma-bench --sections backends"),
+    "bench_scaling": ("performance", "Scaling with the mesh size", ("taichi_pneuma/apps/bench.py", "scaling"),
+                      "pneuma-bench --sections scaling"),
+    "bench_solid": ("performance", "3D: the cost of a Newton iteration on tetrahedra",
+                    ("taichi_pneuma/apps/bench.py", "solid"), "pneuma-bench --sections solid"),
+    "bench_sweep": ("performance", "Design studies: throughput on a process pool and on Ray",
+                    ("benchmarks/sweep.py", None), "python benchmarks/sweep.py --out benchmarks/results"),
+    "render3d": ("performance", "3D meshing and rendering", ("benchmarks/render3d.py", None),
+                 "python -m benchmarks.render3d --out benchmarks/results"),
+    "bench_accuracy": ("accuracy", "Accuracy against time: linear or quadratic triangles",
+                       ("taichi_pneuma/apps/bench.py", "accuracy"), "pneuma-bench --sections accuracy"),
+    "bench_incompressible": ("accuracy", "Near-incompressible rubber",
+                             ("taichi_pneuma/apps/bench.py", "incompressible"),
+                             "pneuma-bench --sections incompressible"),
+    "plane_strain_3d": ("accuracy", "Plane strain in 3D: tetrahedra against triangles",
+                        ("benchmarks/plane_strain_3d.py", None),
+                        "python benchmarks/plane_strain_3d.py --out benchmarks/results"),
+    "stability": ("stability", "The hard cases", ("benchmarks/stability.py", None),
+                  "python benchmarks/stability.py --out benchmarks/results"),
+}
+
+
+def write_all(out: Path) -> None:
+    """Write every generated page: out/ holds the pieces other pages include, out/../api the API reference."""
+    out.mkdir(exist_ok=True)
+    for name in APPS:
+        write_if_changed(out / f"app_{name}.md", app_page(name))
+    write_if_changed(out / "scene_keys.md", scene_keys_page())
+    for page, text in results_pages().items():
+        write_if_changed(out / f"results_{page}.md", text)
+    api = out.parent / "api"
+    api.mkdir(exist_ok=True)
+    packages = api_packages()
+    for package in packages:
+        write_if_changed(api / f"{package}.md", f"# {package}\n\n" + api_page(package))
+    write_if_changed(api / "index.md", API_INDEX + "\n".join(packages) + "\n```\n")
+
+
+def write_if_changed(path: Path, text: str) -> None:
+    """Rewrite a page only when it changed, so that Sphinx rebuilds only what changed."""
+    if not path.exists() or path.read_text() != text:
+        path.write_text(text)
+
+
+def cell(text) -> str:
+    """A Markdown table cell: pipes escaped, on one line."""
+    return " ".join(str(text).split()).replace("|", "\\|") or " "
+
+
+def table(header: list[str], rows: list[list]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return "\n".join(lines + ["| " + " | ".join(cell(c) for c in row) + " |" for row in rows]) + "\n"
+
+
+def app_page(name: str) -> str:
+    """Usage and a table of every flag of pneuma-<name>, from its parser."""
+    import argparse
+
+    parser = importlib.import_module(f"taichi_pneuma.apps.{name}").parser()
+    formatter = parser._get_formatter()
+    rows = []
+    for action in parser._actions:
+        if isinstance(action, argparse._HelpAction) or not action.option_strings:
+            continue
+        flag = ", ".join(action.option_strings)
+        if action.choices:
+            flag += " {" + ",".join(map(str, action.choices)) + "}"
+        elif action.nargs != 0:
+            flag += " " + formatter._format_args(action, action.metavar or action.dest.upper())
+        default = "" if action.default in (None, argparse.SUPPRESS, [], False) else f"`{action.default}`"
+        help_text = formatter._expand_help(action) if action.help else ""
+        help_text = re.sub(r"\s*\(default: .*\)$", "", help_text)
+        rows.append([f"`{flag}`", default, help_text])
+    usage = parser.format_usage().strip()
+    return (f"```text\n{usage}\n```\n\n{parser.description}\n\n"
+            + table(["flag", "default", "what it does"], rows))
+
+
+def scene_keys_page() -> str:
+    from taichi_pneuma.io.scenefile import key_reference
+
+    rows = [[f"`{k.key}`", k.type, f"`{k.default}`" if k.default else "", k.allowed,
+             f"`{k.when}`" if k.when else "", k.doc] for k in key_reference()]
+    return f"{len(rows)} keys.\n\n" + table(["key", "type", "default", "allowed", "applies when", "meaning"], rows)
+
+
+def docstring_of(path: str, function: str | None) -> str:
+    """The docstring of a module (function None) or of one of its functions, read without importing it."""
+    module = ast.parse((ROOT / path).read_text())
+    if function is None:
+        return ast.get_docstring(module) or ""
+    found = [n for n in module.body if isinstance(n, ast.FunctionDef) and n.name == function]
+    return ast.get_docstring(found[0]) if found else ""
+
+
+def results_pages() -> dict[str, str]:
+    pages = {"performance": [], "accuracy": [], "stability": []}
+    for path in sorted(RESULTS.glob("*.md")):
+        page, title, (source, function), command = RESULTS_PAGES.get(
+            path.stem, ("performance", path.stem, (None, None), "the script named in its JSON"))
+        about = docstring_of(source, function) if source else ""
+        first = " ".join(about.split("\n\n")[0].split())
+        lines = [f"## {title}", "", first, "",
+                 f"Written by `{command}` to `benchmarks/results/{path.name}` (with `.json`):", "",
+                 path.read_text().strip(), ""]
+        picture = path.with_suffix(".png")
+        if picture.exists():  # (the path as seen from the pages that include this one, in docs/)
+            lines += [f"![{title}](../benchmarks/results/{picture.name})", ""]
+        pages[page].append("\n".join(lines))
+    return {page: "\n".join(sections) for page, sections in pages.items()}
+
+
+API_INDEX = """# API reference
+
+From the docstrings, module by module. The public names are those of `taichi_pneuma` (`tp.simulate`,
+`tp.load_scene`, `tp.reference_scene`, `tp.Result`, `tp.Scene`, ...): {doc}`../guide/python_api` shows
+them at work. The subpackages hold the parts a new term, law, chamber kind or element plugs into
+({doc}`../extending`).
+
+```{toctree}
+:maxdepth: 1
+
+"""
+
+
+def api_packages() -> list[str]:
+    import taichi_pneuma
+
+    return ["taichi_pneuma"] + sorted(f"taichi_pneuma.{m.name}" for m in pkgutil.iter_modules(taichi_pneuma.__path__)
+                                      if m.ispkg and m.name != "scenes")
+
+
+def api_page(package: str) -> str:
+    """An automodule directive for the package (the top level: its own modules) or each module inside it."""
+    module = importlib.import_module(package)
+    if package == "taichi_pneuma":
+        names = ["taichi_pneuma"] + sorted(f"taichi_pneuma.{m.name}" for m in pkgutil.iter_modules(module.__path__)
+                                           if not m.ispkg and not m.name.startswith("_"))
+    else:
+        names = sorted(m.name for m in pkgutil.walk_packages(module.__path__, package + ".")
+                       if not m.name.rsplit(".", 1)[1].startswith("_"))
+    # the top level re-exports names documented in their own modules: described here, indexed there
+    return "\n".join(f"## {name}\n\n```{{eval-rst}}\n.. automodule:: {name}\n"
+                     + ("   :no-members:\n" if name == "taichi_pneuma" else "") + "```\n" for name in names)
+
+
+INLINE = [(re.compile(r"\\"), r"\\\\"), (re.compile(r"\|"), r"\\|"), (re.compile(r"\*"), r"\\*"),
+          (re.compile(r"(?<=\w)_(?=\W|$)"), r"\\_"), (re.compile(r"`"), r"\\`")]
+
+
+def escape(line: str) -> str:
+    for pattern, replacement in INLINE:
+        line = pattern.sub(replacement, line)
+    return line
+
+
+def indent_of(line: str) -> int:
+    return len(line) - len(line.lstrip())
+
+
+def plain_docstring(app, what, name, obj, options, lines: list[str]) -> None:
+    """Read a plain-text docstring as reST: inline markup characters escaped; a line indented deeper than the
+    text (other than a list item's continuation) starts a literal block (an example, an equation laid out in
+    columns) that ends where the indentation does; a list ('- ' items) gets the blank lines around it that
+    reST wants."""
+    out: list[str] = []
+    literal, in_list = None, False
+    for line in lines:
+        depth = len(line) - len(line.lstrip())
+        if literal is not None and (not line.strip() or depth >= literal):
+            out.append(line)
+            continue
+        if literal is not None:
+            literal = None
+            out.append("")
+        if not line.strip():
+            in_list = False
+            out.append(line)
+            continue
+        item = depth == 0 and line.startswith("- ")
+        if depth > 0 and not (in_list and depth == 2):
+            out += ([""] if out and out[-1].strip() else []) + ["::", ""]
+            literal, in_list = depth, False
+            out.append(line)
+            continue
+        if item != in_list and depth == 0 and out and out[-1].strip():
+            out.append("")  # a list starts or ends
+        in_list = item or (in_list and depth == 2)
+        out.append(escape(line))
+    lines[:] = out
