@@ -426,6 +426,14 @@ def test_a_terminal_ctrl_c_early_in_a_sweep_ends_it_without_a_hang(tmp_path):
     assert errors == (["error: interrupted (Ctrl-C)"] if done.returncode else [])
 
 
+def running(pid: int) -> bool:
+    """Whether the process runs (exists and is not a zombie)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().split()[2] != "Z"
+    except FileNotFoundError:
+        return False
+
+
 def children(pid: int) -> list[int]:
     found = []
     for entry in os.listdir("/proc"):
@@ -448,24 +456,19 @@ def test_sweep_workers_die_with_their_parent_killed_outright(tmp_path):
     for line in proc.stdout:
         if line.startswith("study sweep:"):
             break
-    workers = []
-    for _ in range(100):
+    workers, deadline = [], time.monotonic() + 60  # generous: a loaded machine starts the workers slowly
+    while len(workers) < 2 and time.monotonic() < deadline:
         workers = [pid for pid in children(proc.pid) if "spawn_main" in Path(f"/proc/{pid}/cmdline").read_text()]
-        if len(workers) == 2:
-            break
         time.sleep(0.1)
     assert len(workers) == 2
     time.sleep(1.0)  # into their runs
     proc.kill()
     proc.wait()
     try:
-        for _ in range(100):
-            if not any(Path(f"/proc/{pid}").exists() and "Z" not in Path(f"/proc/{pid}/stat").read_text().split()[2]
-                       for pid in workers):
-                break
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and any(map(running, workers)):
             time.sleep(0.1)
-        alive = [pid for pid in workers if Path(f"/proc/{pid}").exists()]
-        assert not [pid for pid in alive if "Z" not in Path(f"/proc/{pid}/stat").read_text().split()[2]]
+        assert not [pid for pid in workers if running(pid)]
     finally:
         for pid in workers:
             try:
