@@ -18,6 +18,7 @@ shared machine: compare ratios within one run.
 
 import argparse
 import collections
+import itertools
 import json
 import os
 import tempfile
@@ -55,12 +56,15 @@ def outer_faces(mesh) -> np.ndarray:
     return np.array([face for face in mesh.surface[:, :3].tolist() if tuple(sorted(face)) not in walls])
 
 
-def live(frames: int, size: float = 0.3, peak: float = 900.0, options=None) -> list[dict]:
-    """The interactive loop's work per frame, headless (module docstring); a record per 3D view."""
+def live(frames: int, size: float = 0.3, peak: float = 900.0) -> list[dict]:
+    """The interactive loop's work per frame, headless (module docstring): a record per 3D view and Newton
+    tolerance (the default, and the 2D live views' LIVE_TOL), wall and CPU time (the steadier on a shared
+    machine)."""
     from taichi_pneuma.apps.bench import Meshed
     from taichi_pneuma.fem.tetmesh import tet_mesh
     from taichi_pneuma.scene import ChamberControl, Material, Scene
-    from taichi_pneuma.solve.newton import NewtonSolver
+    from taichi_pneuma.render.interactive import LIVE_TOL
+    from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
     from taichi_pneuma.solve.schedule import ChamberSchedule
 
     meshed = mesh_solid(PneuNet().solid(), MeshSizes(size))
@@ -74,18 +78,18 @@ def live(frames: int, size: float = 0.3, peak: float = 900.0, options=None) -> l
     boundary = outer_faces(mesh)
     faces, walls = boundary[section_faces(mesh.vertices, boundary, camera)], np.concatenate(mesh.chambers)[:, :3]
     records = []
-    for backend in ("numpy", "ggui"):
+    for backend, tol in itertools.product(("numpy", "ggui"), (NewtonOptions.tol, LIVE_TOL)):
         try:
             view = open_view(backend, 960, 640, log=lambda _: None)
         except PneumaInputError as exc:
             print(f"{backend}: {exc}")
             continue
-        solver = NewtonSolver(built.model, options)
+        solver = NewtonSolver(built.model, NewtonOptions(tol=tol))
         u = np.zeros_like(mesh.vertices)
-        solve_s, draw_s, iterations, phases = [], [], [], collections.Counter()
+        solve_s, draw_s, cpu_s, iterations, phases = [], [], [], [], collections.Counter()
         try:
             for k in range(-1, frames + 1):  # frame -1 (a tiny pressure: the kernels' first calls) is the warm-up
-                start = time.perf_counter()
+                start, cpu = time.perf_counter(), time.process_time()
                 built.set_commands(np.full(len(built.chambers), peak * max(k, 0.01) / frames))
                 u, record = solver.solve(u)
                 middle = time.perf_counter()
@@ -93,6 +97,7 @@ def live(frames: int, size: float = 0.3, peak: float = 900.0, options=None) -> l
                 if k >= 1:
                     solve_s.append(middle - start)
                     draw_s.append(time.perf_counter() - middle)
+                    cpu_s.append(time.process_time() - cpu)
                     iterations.append(record.iterations)
                     phases.update(record.phase_seconds)
         finally:
@@ -101,6 +106,7 @@ def live(frames: int, size: float = 0.3, peak: float = 900.0, options=None) -> l
         records.append({"tets": len(mesh.elements), "nodes": len(mesh.vertices), "view": view.name,
                         "solve_ms": solve_ms, "draw_ms": draw_ms, "newton_iterations": float(np.mean(iterations)),
                         "frames_per_second": 1e3 / (solve_ms + draw_ms), "linear_solver": solver.backend.name,
+                        "cpu_ms": 1e3 * np.mean(cpu_s), "frames_per_cpu_second": 1 / np.mean(cpu_s),
                         "tol": solver.options.tol, "phases_ms_per_frame": {p: 1e3 * t / frames for p, t in phases.items()}})
         print(records[-1], flush=True)
     return records
@@ -170,10 +176,12 @@ def main() -> None:
     lines += [f"| {r['mesh']} | {r['surface_triangles']} ({r['drawn_triangles']}) | {r['view']} | "
               f"{r['ms_per_frame']:.0f} | {r['cpu_ms_per_frame']:.0f} |" for r in data["rendering"]]
     lines += ["", f"Live loop without a window (coarse PneuNet, {args.live_frames} frames of a pressure slider 0 -> 900 Pa, "
-                  "960 x 640):", "", "| tetrahedra | nodes | view | linear solver | Newton iterations / frame | "
-                  "solve ms / frame | draw ms / frame | frames/s |", "|---|---|---|---|---|---|---|---|"]
-    lines += [f"| {r['tets']} | {r['nodes']} | {r['view']} | {r['linear_solver']} | {r['newton_iterations']:.1f} | "
-              f"{r['solve_ms']:.0f} | {r['draw_ms']:.0f} | {r['frames_per_second']:.1f} |" for r in data["live"]]
+                  "960 x 640):", "", "| tetrahedra | nodes | view | linear solver | Newton tol | Newton iterations / frame | "
+                  "solve ms / frame | draw ms / frame | frames/s | CPU ms / frame | frames / CPU s |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {r['tets']} | {r['nodes']} | {r['view']} | {r['linear_solver']} | {r['tol']:g} | "
+              f"{r['newton_iterations']:.1f} | {r['solve_ms']:.0f} | {r['draw_ms']:.0f} | {r['frames_per_second']:.1f} | "
+              f"{r['cpu_ms']:.0f} | {r['frames_per_cpu_second']:.1f} |" for r in data["live"]]
     if "interactive" in data:
         lines += ["", f"Interactive window (960 x 640, coarse PneuNet of {data['interactive']['tets']} tetrahedra, "
                       f"no solve): {data['interactive']['frames_per_second']:.0f} frames/s"]

@@ -13,7 +13,6 @@ scale_3d.md and .json with the machine and date; wall times on a shared machine:
 """
 
 import argparse
-import collections
 import json
 import resource
 import subprocess
@@ -23,7 +22,6 @@ from pathlib import Path
 
 CASES = {"P1": (57, 20, 1), "P2": (29, 20, 2)}  # (divisions, layers, order): 194,940 and 50,460 tetrahedra
 INCREMENTS = 2
-PHASES = ("gradient", "hessian", "assemble", "factorize", "solve", "line_search")
 
 
 def peak_rss_mb() -> float:
@@ -33,7 +31,7 @@ def peak_rss_mb() -> float:
 def child(case: str, backend: str) -> dict:
     """One run in this process (module docstring); returns its record."""
     from taichi_pneuma import runtime
-    from taichi_pneuma.apps.bench import octant
+    from taichi_pneuma.apps.bench import octant, phase_ms
     from taichi_pneuma.solve.newton import NewtonOptions
     from taichi_pneuma.solve.simulate import run_schedule
 
@@ -48,16 +46,13 @@ def child(case: str, backend: str) -> dict:
     start = time.perf_counter()
     result = run_schedule(built, options=options)
     seconds = time.perf_counter() - start
-    phases = collections.Counter()
-    for solve in result.solves:
-        phases.update(solve.phase_seconds)
-    iterations = int(result.history["iterations"].sum())
+    iterations, phases = phase_ms(result)
     peak = peak_rss_mb()
     tetrahedra = built.mesh.n_elements
     return {"case": case, "backend": backend, "tetrahedra": tetrahedra, "nodes": built.mesh.n_vertices,
             "dofs": built.model.n_dofs, "build_s": build, "ramp_s": seconds, "iterations": iterations,
             "converged": bool(all(s.converged for s in result.steps)), "ms_per_iteration": 1e3 * seconds / iterations,
-            "phases_ms": {p: 1e3 * phases[p] / iterations for p in PHASES}, "rss_before_mb": before,
+            "phases_ms": phases, "rss_before_mb": before,
             "peak_rss_mb": peak, "bytes_per_tetrahedron": 1e6 * (peak - before) / tetrahedra,
             "tip": float(result.positions[-1][:, 0].max())}
 
@@ -73,7 +68,7 @@ def main() -> None:
     if args.child:
         print(json.dumps(child(*args.child)))
         return
-    from taichi_pneuma.apps.bench import machine, markdown
+    from taichi_pneuma.apps.bench import PHASES, machine, markdown
     from taichi_pneuma.io.output import prepare_directory, save_json, save_text
 
     rows, records = [], []

@@ -7,7 +7,7 @@ from solid_meshes import box_with_cavity, scene_of
 
 from taichi_pneuma.solve.linsolve import (AMG_MIN_DOFS, AmgConjugateGradient, FixedPattern, NotConverged,
                                           make_backend, rigid_body_modes, solve_low_rank_updated)
-from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver, forcing_term
+from taichi_pneuma.solve.newton import FORCING_MAX, NewtonOptions, NewtonSolver, forcing_term
 from taichi_pneuma.solve.schedule import area_ramp
 from taichi_pneuma.solve.simulate import run_schedule
 
@@ -100,7 +100,7 @@ def test_newton_falls_back_to_the_direct_backend_when_cg_does_not_converge():
 
 
 def test_forcing_term_tightens_with_the_residual_down_to_what_the_tolerance_needs():
-    assert forcing_term(1.0, 1e-6) == 0.1
+    assert forcing_term(1.0, 1e-6) == FORCING_MAX
     assert forcing_term(1e-3, 1e-6) == 1e-3  # eta = r: quadratic convergence
     assert forcing_term(1e-6 * 1.5, 1e-6) == pytest.approx(0.1 / 1.5)  # near tol: only what lands below it
     for r in np.logspace(-6, 0, 13):
