@@ -198,7 +198,6 @@ class AmgConjugateGradient:
         self._block = 1 if rest is None else np.shape(rest)[1]
         self.rtol = 1e-10
         self.iterations = 0  # CG iterations of the last solve
-        self.setups = 0  # hierarchies built so far
         self._hierarchy = None
         self._indptr = None
 
@@ -217,7 +216,6 @@ class AmgConjugateGradient:
         self._indptr = matrix.indptr
         self._fresh_rate = None  # iterations per decade of residual on this hierarchy's first solve
         self._stale = False
-        self.setups += 1
 
     def solve(self, rhs: np.ndarray, low_rank: list[tuple[np.ndarray, np.ndarray, float]] = (),
               rtol: float | None = None) -> np.ndarray:

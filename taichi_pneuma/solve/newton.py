@@ -48,9 +48,7 @@ from .model import EnergyModel
 ARMIJO_C1 = 1e-4
 MAX_HALVINGS = 40
 STEP_SAFETY = 0.9
-
-
-FORCING_MAX = 0.01
+FORCING_MAX = 0.01  # forcing_term's largest eta
 
 
 def forcing_term(residual: float, tol: float) -> float:
