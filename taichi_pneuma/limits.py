@@ -12,7 +12,14 @@ and the memory from the measured peak of a solve, about BYTES_PER_TRIANGLE per t
 at 35k-114k triangles, CPU backend), plus the stored states: positions (and, with contact, contact
 forces) of every step, 16 bytes per vertex each. Each uniform refinement multiplies the triangles by 4;
 a quadratic triangle counts as 4 linear ones (it has as many nodes, and a Hessian block 4 times larger).
-A 3D geometry (dim = 3) gives its own size_estimate() (tetrahedra, nodes), counted against the same limit.
+A 3D geometry (dim = 3) gives its own size_estimate() (tetrahedra, nodes), counted against the same limit as
+elements: a linear tetrahedron one, a quadratic one 8 (its Hessian block is 6.25 times a linear one's, and its
+measured memory 6.2 times). The memory estimate is BYTES_PER_TETRAHEDRON per linear tetrahedron: the peak RSS
+of a Newton ramp above the process's before the mesh, 11.9 kB per tetrahedron for 195k linear tetrahedra
+(2.5 GB) and 74 kB per quadratic one for 50k (3.9 GB), CG with multigrid, whose memory grows linearly (the
+peak is the Hessian pattern's construction, 144 (row, column) pairs per linear tetrahedron, 900 per quadratic
+one; benchmarks/scale_3d.py). So 200k linear tetrahedra pass the default limit, and 50k quadratic ones need
+--max-triangles 410000 (a sparse Cholesky factor instead grows as n^(4/3): the direct backends need more).
 Self-contact holds a pair per (wall node, wall edge not incident to it): k (k - 2) for a wall of k nodes,
 quadratic in the wall; a pair costs about BYTES_PER_PAIR (its indices, its 36-entry Hessian block and
 the assembled matrix's share: 2.5-2.7 kB measured at 0.25M-4M pairs), counted as BYTES_PER_PAIR /
@@ -41,7 +48,7 @@ MAX_FRAME_PIXELS = 3840 * 2160
 BYTES_PER_TRIANGLE = 4_000
 BYTES_PER_PAIR = 2_500
 MAX_RUNS = 100_000  # runs of one design study (apps/sweep.py --max-runs)
-BYTES_PER_TETRAHEDRON = 6_000
+BYTES_PER_TETRAHEDRON = 12_000  # measured, see the module docstring
 
 _budget: ContextVar[int | None] = ContextVar("triangle budget", default=None)
 
@@ -107,8 +114,8 @@ def check_scene(scene, max_triangles: int = MAX_TRIANGLES, max_increments: int =
 
 
 def check_solid(scene, max_elements: int) -> None:
-    """A 3D scene: its geometry's (tetrahedra, nodes) estimate, a quadratic tetrahedron counted 8 times (8 times
-    a linear one's Hessian block, 9 times its nodes)."""
+    """A 3D scene: its geometry's (tetrahedra, nodes) estimate, a quadratic tetrahedron counted 8 times (module
+    docstring)."""
     geometry = scene.geometry
     tetrahedra, nodes = geometry.size_estimate()
     linear = tetrahedra * (8 if geometry.order == 2 else 1)

@@ -351,6 +351,15 @@ def scaling() -> tuple[str, dict]:
     return table + f"\nfitted: time per iteration ~ vertices^{exponent:.2f}\n", {"runs": data, "exponent": exponent}
 
 
+def phase_ms(result) -> tuple[int, dict[str, float]]:
+    """(the Newton iterations of a run, each phase's ms per iteration)."""
+    phases = collections.Counter()
+    for solve in result.solves:
+        phases.update(solve.phase_seconds)
+    iterations = int(result.history["iterations"].sum())
+    return iterations, {p: 1e3 * phases[p] / iterations for p in PHASES}
+
+
 @dataclass(frozen=True)
 class Meshed:
     """A scene geometry already meshed (a TetMesh and its one chamber), for timing 3D solves."""
@@ -362,9 +371,9 @@ class Meshed:
         return self.ready
 
 
-def octant(divisions: int, layers: int, order: int) -> "Scene":
-    """A pressurised octant of the thick spherical shell 1 <= r <= 2 (layered.py), closed by its three symmetry
-    planes; pressure 0 -> 0.05 E in 3 increments."""
+def octant(divisions: int, layers: int, order: int, increments: int = 3) -> "Scene":
+    """A pressurised octant of the thick spherical shell 1 <= r <= 2 (layered.py: 3 divisions^2 layers
+    tetrahedra), closed by its three symmetry planes; pressure 0 -> 0.05 E in `increments` increments."""
     from ..fem.geometry import Roller
     from ..fem.layered import spherical_shell_octant
     from ..fem.tetmesh import tet_mesh
@@ -374,12 +383,18 @@ def octant(divisions: int, layers: int, order: int) -> "Scene":
     vertices, tets, wall = spherical_shell_octant(1.0, 2.0, divisions, layers)
     mesh = tet_mesh(vertices, tets, {"cavity": wall}, order=order, clamp=None,
                     rollers=tuple(Roller(tuple(n), (0.0, 0.0, 0.0)) for n in np.eye(3)))
-    return Scene(Meshed(mesh), (ChamberControl(ChamberSchedule("pressure", ((3, 500.0),))),), 3, Material(1e4, 0.45))
+    return Scene(Meshed(mesh), (ChamberControl(ChamberSchedule("pressure", ((increments, 500.0),))),), increments,
+                 Material(1e4, 0.45))
+
+
+SOLID_MESHES = (("P1", 8, 4, 1), ("P1", 16, 6, 1), ("P1", 24, 12, 1), ("P2", 12, 6, 2))
+SOLID_BACKENDS = ("taichi", "cholespy", "amg")
 
 
 def solid() -> tuple[str, dict]:
-    """3D: time per Newton iteration and its parts (the linear solve's share), linear and quadratic tetrahedra,
-    Taichi's LLT and CHOLMOD; the elastic Hessian with the analytic eigensystem against the Jacobi one."""
+    """3D: time per Newton iteration and its parts (the linear solve's share) on octants of growing size, linear
+    and quadratic tetrahedra, Taichi's LLT, CHOLMOD and CG with multigrid (where auto's switch to it comes from);
+    the elastic Hessian with the analytic eigensystem against the Jacobi one."""
     from ..materials import StableNeoHookean
     from ..solve.newton import NewtonOptions
     from ..solve.schedule import ChamberSchedule, Schedule
@@ -392,31 +407,28 @@ def solid() -> tuple[str, dict]:
         analytic_dims = ()
 
     rows, data = [], []
-    for label, divisions, layers, order in (("P1", 16, 6, 1), ("P1", 24, 12, 1), ("P2", 12, 6, 2)):
+    for label, divisions, layers, order in SOLID_MESHES:
         built = octant(divisions, layers, order).build()
         mesh = built.mesh
-        for backend in ("taichi", "cholespy"):
+        for backend in SOLID_BACKENDS:
             options = NewtonOptions(linear_solver=backend)
             run_schedule(built, Schedule(1, (ChamberSchedule("pressure", ((1, 5.0),)),)), options)  # compile, analyse
             start = time.perf_counter()
             result = run_schedule(built, options=options)
             seconds = time.perf_counter() - start
-            phases = collections.Counter()
-            for solve in result.solves:
-                phases.update(solve.phase_seconds)
-            iterations = int(result.history["iterations"].sum())
-            per = {p: 1e3 * phases[p] / iterations for p in PHASES}
+            iterations, per = phase_ms(result)
             linear = per["factorize"] + per["solve"]
             record = {"elements": f"{label} tetrahedra", "tetrahedra": mesh.n_elements, "dofs": 3 * mesh.n_vertices,
                       "backend": backend, "iterations": iterations, "ms_per_iteration": 1e3 * seconds / iterations,
-                      "phases_ms": per, "linear_solve_share": linear / (1e3 * seconds / iterations)}
+                      "phases_ms": per, "linear_solve_share": linear / (1e3 * seconds / iterations),
+                      "tip": float(result.positions[-1][:, 0].max())}
             data.append(record)
             rows.append([f"{label}, {mesh.n_elements}", 3 * mesh.n_vertices, backend, iterations,
                          f"{record['ms_per_iteration']:.0f}", *(f"{per[p]:.1f}" for p in PHASES),
-                         f"{100 * record['linear_solve_share']:.0f} %"])
+                         f"{100 * record['linear_solve_share']:.0f} %", f"{record['tip']:.6f}"])
             print(f"  solid: {record}", file=sys.stderr, flush=True)
     table = markdown(["tetrahedra", "DOFs", "backend", "iterations", "ms / iteration", *(f"{p} (ms)" for p in PHASES),
-                      "linear solve share"], rows)
+                      "linear solve share", "max x (pole)"], rows)
     eigen_rows = []
     for label, divisions, layers, order in (("P1", 24, 12, 1), ("P2", 12, 6, 2)):
         built = octant(divisions, layers, order).build()

@@ -76,8 +76,12 @@ class EnergyModel:
         patterns = [t.hessian_pattern() for t in self.terms]
         return np.concatenate([p[0] for p in patterns]), np.concatenate([p[1] for p in patterns])
 
+    def hessian_parts(self, psd_only: bool = False) -> list[np.ndarray]:
+        """The terms' Hessian values, in the pattern's order (FixedPattern.matrix sums them without concatenating)."""
+        return [t.hessian_values(psd_only) for t in self.terms]
+
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
-        return np.concatenate([t.hessian_values(psd_only) for t in self.terms])
+        return np.concatenate(self.hessian_parts(psd_only))
 
     def low_rank(self) -> list[tuple[np.ndarray, np.ndarray, float]]:
         return [part for t in self.terms for part in t.low_rank()]

@@ -14,6 +14,11 @@ under volume or syringe control H alone is indefinite (it is the Hessian under p
 while H plus the chamber's rank-1 part is positive definite at the stable equilibrium. (At the first
 iteration the commands have just moved, the exact Hessian is a poor model there, and the PSD one is used.)
 
+With the iterative backend (CG with multigrid, linsolve.py) d solves H d = -g only to the relative residual
+eta = forcing_term(r, tol) at the Newton residual r: an inexact Newton method, as quadratically convergent
+as the exact one while eta <= r. Where CG does not reach eta, an exact H is given up for the PSD one (an LU
+of a large 3D Hessian is what the iterative backend avoids), and a PSD H goes to the direct backend.
+
 The step u <- u + alpha d (u: displacements) starts at alpha = min(1, 0.9 max_step), the terms'
 safe bound (no triangle inverts), and halves until the Armijo condition
 
@@ -36,12 +41,23 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import require, require_finite
-from .linsolve import BACKENDS, FactorizationError, FixedPattern, make_backend, solve_low_rank_updated
+from .linsolve import (BACKENDS, FactorizationError, FixedPattern, direct_backend, make_backend,
+                       solve_low_rank_updated)
 from .model import EnergyModel
 
 ARMIJO_C1 = 1e-4
 MAX_HALVINGS = 40
 STEP_SAFETY = 0.9
+FORCING_MAX = 0.01  # forcing_term's largest eta
+
+
+def forcing_term(residual: float, tol: float) -> float:
+    """The relative residual eta to which an iterative backend solves H d = -g at the Newton residual
+    r = |g| / force scale: the next residual is about eta r + O(r^2), so eta = min(FORCING_MAX, r) keeps
+    Newton's quadratic convergence (an inexact Newton method's forcing term; a looser FORCING_MAX, 0.1, cost
+    Newton iterations on the nearly incompressible octant, more than the CG iterations it saved), and
+    eta >= 0.1 tol / r stops solving more exactly than needed to land below tol (0.1 tol away from it)."""
+    return max(min(FORCING_MAX, residual), 0.1 * tol / residual)
 
 
 class PhaseClock:
@@ -102,35 +118,44 @@ class NewtonSolver:
         self.options = options or NewtonOptions()
         rows, cols = model.hessian_pattern()
         self.pattern = FixedPattern(rows, cols, model.n_dofs)
-        self.backend = make_backend(self.options.linear_solver)
+        self.backend = make_backend(self.options.linear_solver, model.config.rest)
         self.indefinite_backend = self.backend if self.backend.name == "scipy" else make_backend("scipy")
+        self.direct_backend = make_backend(direct_backend()) if self.backend.name == "amg" else self.backend
         self.factored_by = self.backend
 
     def _energy_at(self, u: np.ndarray) -> float:
         self.model.set_displacements(u)
         return self.model.energy()
 
-    def _direction(self, g: np.ndarray, psd_only: bool, clock: PhaseClock,
-                   indefinite: bool = False) -> tuple[np.ndarray, float]:
-        """Newton direction d = -H^-1 g and the slope g.d (nan when the factorisation fails); indefinite: an
-        exact H the backend refuses goes to SciPy's LU (see the module docstring)."""
+    def _backends(self, psd_only: bool, indefinite: bool) -> tuple:
+        """The backends to try in turn: an exact H that a Cholesky backend refuses goes to SciPy's LU if indefinite
+        (see the module docstring); the iterative backend's PSD H, where CG fails, to the direct backend (its
+        exact H to the PSD one instead: an LU of a large 3D Hessian is what the iterative backend avoids)."""
+        if self.backend.name == "amg":
+            return (self.backend, self.direct_backend) if psd_only else (self.backend,)
+        return (self.backend, self.indefinite_backend) if indefinite and not psd_only else (self.backend,)
+
+    def _direction(self, g: np.ndarray, psd_only: bool, clock: PhaseClock, indefinite: bool = False,
+                   rtol: float | None = None) -> tuple[np.ndarray, float]:
+        """Newton direction d = -H^-1 g (to the relative residual rtol where the backend is iterative) and the
+        slope g.d (nan when every backend fails); indefinite: see _backends."""
         with clock("hessian"):
-            values = self.model.hessian_values(psd_only)
+            values = self.model.hessian_parts(psd_only)
             low_rank = self.model.low_rank()
         with clock("assemble"):
             matrix = self.pattern.matrix(values)
-        for backend in (self.backend, self.indefinite_backend) if indefinite and not psd_only else (self.backend,):
+        for backend in self._backends(psd_only, indefinite):
             try:
                 with clock("factorize"):
                     backend.factorize(matrix)
+                with clock("solve"):
+                    d = solve_low_rank_updated(backend, -g, low_rank, rtol)
                 break
-            except FactorizationError:  # singular, or indefinite for a Cholesky backend
+            except FactorizationError:  # singular, indefinite for a Cholesky backend, CG not converged
                 continue
         else:
             return g * math.nan, math.nan
         self.factored_by = backend
-        with clock("solve"):
-            d = solve_low_rank_updated(backend, -g, low_rank)
         return d, float(g @ d)
 
     def solve(self, u0: np.ndarray) -> tuple[np.ndarray, SolveRecord]:
@@ -158,11 +183,12 @@ class NewtonSolver:
                 record.message = f"no convergence in {opts.max_iterations} iterations"
                 break
             exact = not record.step_sizes or record.step_sizes[-1] == 1.0
-            d, slope = self._direction(g, not exact, clock, bool(record.step_sizes))
+            rtol = forcing_term(record.residual, opts.tol)
+            d, slope = self._direction(g, not exact, clock, bool(record.step_sizes), rtol)
             if exact and not slope < 0:
                 record.psd_fallbacks += 1
                 exact = False
-                d, slope = self._direction(g, True, clock)
+                d, slope = self._direction(g, True, clock, rtol=rtol)
             record.exact_factor = exact and self.factored_by is self.backend
             if not slope < 0:
                 record.message = f"not a descent direction (g.d = {slope:.3e})"
