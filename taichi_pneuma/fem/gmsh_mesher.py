@@ -54,8 +54,11 @@ INSTALL = "pip install 'taichi-pneuma[3d]'"
 REGULAR_TET = 1 / (6 * np.sqrt(2))  # volume of the regular tetrahedron of unit edge
 BODY_GROUP = "body"
 # the global gmsh options meshing sets; a caller's gmsh session gets its values back afterwards
-OPTIONS = ("General.Terminal", "Mesh.MeshSizeMax", "Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature",
+OPTIONS = ("General.Terminal", "Mesh.Algorithm", "Mesh.MeshSizeMax", "Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature",
            "Mesh.MeshSizeExtendFromBoundary")
+# gmsh's 2D algorithm for the surfaces: MeshAdapt (1). The default Frontal-Delaunay (6) and Delaunay (5) leave a
+# dilated sphere (an ellipsoidal chamber such as the 3D reference beam's) without triangles at some sizes
+SURFACE_ALGORITHM = 1
 MAX_SAMPLING = 200  # points per direction on a wall surface for its distance field
 # a tetrahedron's four faces (corners in its local numbering), each oriented outward for a positive tetrahedron
 TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
@@ -232,14 +235,14 @@ def _estimate(pieces: _Pieces, sizes: MeshSizes) -> float:
 
 def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose: bool = False) -> SolidMesh:
     """Mesh the solid with linear tetrahedra (gmsh: OpenCASCADE fragment, Delaunay), or raise one
-    PneumaInputError: bad geometry, an estimate or a mesh over max_tets (--max-tets raises it), or
+    PneumaInputError: bad geometry, an estimate or a mesh over max_tets (--max-triangles raises it), or
     gmsh failing (its error line quoted)."""
     with _session(verbose) as gmsh:
         pieces = _Pieces(gmsh, solid)
         estimate = _estimate(pieces, sizes)
         require(estimate <= max_tets,
                 f"the mesh would have about {estimate:.3g} tetrahedra (volume {pieces.volume:.4g}, size {sizes.size:g}, "
-                f"near chambers {sizes.near:g}); the limit is {max_tets} tetrahedra (--max-tets raises it)")
+                f"near chambers {sizes.near:g}); the limit is {max_tets} tetrahedra (--max-triangles raises it)")
         model = gmsh.model
         for k, name in enumerate([BODY_GROUP] + [name for name, _ in solid.regions]):
             tags = [v for v, r in pieces.rubber.items() if r == k]
@@ -253,9 +256,10 @@ def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose
 
 
 def _set_sizes(gmsh, sizes: MeshSizes, walls: list[int]) -> None:
-    """Edge length `size` everywhere, `near` within `near` of the walls, growing linearly to `size` over the
+    """MeshAdapt on the surfaces (SURFACE_ALGORITHM); edge length `size` everywhere, `near` within `near` of the walls, growing linearly to `size` over the
     grading distance beyond (gmsh Distance and Threshold fields; the walls sampled at about near / 2)."""
     option = gmsh.option.setNumber
+    option("Mesh.Algorithm", SURFACE_ALGORITHM)
     option("Mesh.MeshSizeMax", sizes.size)
     for name in ("Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature", "Mesh.MeshSizeExtendFromBoundary"):
         option(name, 0)
@@ -287,7 +291,9 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
               for k in range(len(solid.regions) + 1)}
     tags = np.concatenate(list(blocks.values()))
     regions = np.concatenate([np.full(len(b), k) for k, b in blocks.items()])
-    require(len(tags) <= max_tets, f"the mesh has {len(tags)} tetrahedra; the limit is {max_tets} (--max-tets raises it)")
+    require(all(len(b) for k, b in blocks.items() if any(r == k for r in pieces.rubber.values())),
+            "gmsh left a part of the body without tetrahedra")
+    require(len(tags) <= max_tets, f"the mesh has {len(tags)} tetrahedra; the limit is {max_tets} (--max-triangles raises it)")
     node_tags, coords, _ = mesh.getNodes()
     used, tets = np.unique(tags, return_inverse=True)
     tets = tets.reshape(-1, 4)
@@ -305,6 +311,7 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
     chambers, on_wall = {}, set()
     for name, walls in pieces.walls.items():
         triangles = local[_elements(gmsh, 2, walls, 2, 3)]
+        require(len(triangles) > 0, f"gmsh left the wall of chamber {name!r} without triangles")
         wall_keys = face_keys(triangles, len(vertices))
         rows = [index.get(int(k), -1) for k in wall_keys]
         require(min(rows, default=-1) >= 0, f"chamber {name!r}: its wall mesh does not match the tetrahedra's faces")
