@@ -56,9 +56,12 @@ BODY_GROUP = "body"
 # the global gmsh options meshing sets; a caller's gmsh session gets its values back afterwards
 OPTIONS = ("General.Terminal", "Mesh.Algorithm", "Mesh.MeshSizeMax", "Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature",
            "Mesh.MeshSizeExtendFromBoundary")
-# gmsh's 2D algorithm for the surfaces: MeshAdapt (1). The default Frontal-Delaunay (6) and Delaunay (5) leave a
-# dilated sphere (an ellipsoidal chamber such as the 3D reference beam's) without triangles at some sizes
-SURFACE_ALGORITHM = 1
+# gmsh's surface meshers, (Mesh.Algorithm, Mesh.MeshSizeFromCurvature), tried in turn until every surface and
+# volume is meshed: Frontal-Delaunay with the sizes alone; then Delaunay with edges also shortened to 2 pi R / 12 on
+# surfaces of curvature radius R. Frontal-Delaunay leaves a coarsely meshed B-spline surface (an ellipsoid:
+# OpenCASCADE makes the dilated sphere one) without triangles: the 3D reference beam's chamber at sizes 0.13-0.5.
+# (MeshAdapt loops on a small ellipsoid in a coarse mesh until gmsh crashes.)
+SURFACE_MESHERS = ((6, 0), (5, 12))
 MAX_SAMPLING = 200  # points per direction on a wall surface for its distance field
 # a tetrahedron's four faces (corners in its local numbering), each oriented outward for a positive tetrahedron
 TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
@@ -251,15 +254,31 @@ def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose
         for name, walls in pieces.walls.items():
             model.addPhysicalGroup(2, walls, name=name)
         _set_sizes(gmsh, sizes, [s for walls in pieces.walls.values() for s in walls])
-        model.mesh.generate(3)
+        for attempt, (algorithm, curvature) in enumerate(SURFACE_MESHERS, start=1):
+            gmsh.option.setNumber("Mesh.Algorithm", algorithm)
+            gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", curvature)
+            model.mesh.clear()
+            try:
+                model.mesh.generate(3)
+            except Exception:
+                if attempt == len(SURFACE_MESHERS):
+                    raise
+                continue
+            if _complete(gmsh, pieces):
+                break
         return _read(gmsh, solid, pieces, max_tets)
 
 
+def _complete(gmsh, pieces: _Pieces) -> bool:
+    """Whether every rubber volume has tetrahedra and every chamber wall triangles."""
+    return (all(len(_elements(gmsh, 3, [v], 4, 4)) for v in pieces.rubber)
+            and all(len(_elements(gmsh, 2, [s], 2, 3)) for walls in pieces.walls.values() for s in walls))
+
+
 def _set_sizes(gmsh, sizes: MeshSizes, walls: list[int]) -> None:
-    """MeshAdapt on the surfaces (SURFACE_ALGORITHM); edge length `size` everywhere, `near` within `near` of the walls, growing linearly to `size` over the
+    """Edge length `size` everywhere, `near` within `near` of the walls, growing linearly to `size` over the
     grading distance beyond (gmsh Distance and Threshold fields; the walls sampled at about near / 2)."""
     option = gmsh.option.setNumber
-    option("Mesh.Algorithm", SURFACE_ALGORITHM)
     option("Mesh.MeshSizeMax", sizes.size)
     for name in ("Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature", "Mesh.MeshSizeExtendFromBoundary"):
         option(name, 0)

@@ -66,7 +66,7 @@ def extrusion(profiles: dict, what: str) -> Table:
                   depth=Key(float, doc="its extent along z"), z=Key(float, 0.0, "the z of its middle"))
 
 
-SOLIDS = {  # the 3D shapes bodies and chambers share (fem/solids.py)
+SOLIDS = {  # the 3D shapes bodies and chambers share (fem/solids.py); with extrusion and pneunet, the 3D bodies
     "box": record(Box, "an axis-aligned box (3D)", center=Key(tuple, doc=TRIPLE), size=Key(tuple, doc=TRIPLE)),
     "rounded_box": record(RoundedBox, "a box with every edge and corner rounded (3D)", center=Key(tuple, doc=TRIPLE),
                           size=Key(tuple, doc=TRIPLE), radius=Key(float, doc="below half the shortest side")),
