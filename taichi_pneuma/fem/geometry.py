@@ -560,7 +560,7 @@ class Geometry:
                     f"roller normal = {list(roller.normal)!r}: a 2D body's rollers have 2 components")
         for name, shape in self.chambers:
             require(callable(getattr(shape, "polygon", None)), f"chamber {name!r}: a {type(shape).__name__} wall needs "
-                                                               f"a 3D body (a body from a mesh file or a 3D shape)")
+                                                               f"a body from a mesh file or 3D shapes (a 3D body)")
         body = self.body.polygon()
         polygons = [(name, shape.polygon()) for name, shape in self.chambers]
         points = len(body) + sum(len(p) for _, p in polygons)
