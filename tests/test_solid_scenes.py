@@ -156,6 +156,8 @@ def test_pneunet_chambers_are_its_groups():
     scene = tp.load_scene("pneunet_3d")
     with pytest.raises(PneumaInputError, match=r"chambers\[0\].*group = 'c9' is none of the pneunet's chambers c1, c2"):
         scene.with_value("chambers[0].group", "c9")
+    with pytest.raises(PneumaInputError, match="chamber name '=c1' cannot start with ="):
+        scene.with_value("chambers[0].name", "=c1")
     data = scene_data(scene)
     data["chambers"][0] = {**data["chambers"][0], "shape": "box", "center": [0, 0, 0], "size": [0.1] * 3}
     del data["chambers"][0]["group"]

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 from .. import limits
 from ..errors import require
+from ..io.output import check_heading
 from .geometry import PointSet
 from .gmsh_mesher import MAX_TETS, MeshSizes, Solid, estimate_tets, mesh_solid
 from .meshfile import MeshSurface
@@ -62,14 +63,15 @@ class SolidGeometry:
         require(self.order in (1, 2), f"order = {self.order!r} must be 1 (linear tetrahedra) or 2 (quadratic)")
         require(is_solid_shape(self.body), f"body: {self.body!r} is not a 3D shape")
         generated = isinstance(self.body, PneuNet)
+        groups = self.groups()
         for name, shape in self.chambers:
+            check_heading("chamber name", name)
             if generated:
                 require(isinstance(shape, MeshSurface),
                         f"chamber {name!r}: a pneunet body makes its own chambers c1 .. c{self.body.chambers}; name "
                         f"one by shape = \"mesh_surface\" and group = \"c1\" ...")
-                require(shape.group in self.groups(),
-                        f"chamber {name!r}: group = {shape.group!r} is none of the pneunet's chambers "
-                        f"{', '.join(self.groups())}")
+                require(shape.group in groups,
+                        f"chamber {name!r}: group = {shape.group!r} is none of the pneunet's chambers {', '.join(groups)}")
             else:
                 require(is_solid_shape(shape) and not isinstance(shape, PneuNet),
                         f"chamber {name!r}: a 3D body's chambers are 3D shapes (ellipsoid, box, rounded_box, "
