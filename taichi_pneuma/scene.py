@@ -57,17 +57,29 @@ AnyMaterial = Material | IsochoricMaterial | PresetMaterial
 
 @dataclass(frozen=True)
 class Region:
-    """A material for the elements whose centroid lies in box [x0, y0, x1, y1] ([x0, y0, z0, x1, y1, z1] in 3D);
-    later regions win."""
+    """A material for the elements whose centroid lies in box [x0, y0, x1, y1] ([x0, y0, z0, x1, y1, z1] in 3D),
+    or (3D) for the tetrahedra of a named volume group of the mesh (a mesh file's physical group, a PneuNet's
+    "layer"); later regions win."""
 
-    box: tuple[float, float, float, float]
+    box: tuple[float, float, float, float] | None
     material: AnyMaterial
+    group: str | None = None
 
     def __post_init__(self):
-        require_box("box", self.box)
+        require((self.box is None) != (self.group is None), "give exactly one of 'box' and 'group'")
+        if self.box is not None:
+            require_box("box", self.box)
+        else:
+            require(isinstance(self.group, str) and self.group != "", f"group = {self.group!r} must name a group")
 
-    def contains(self, points: np.ndarray) -> np.ndarray:
-        return in_box(points, self.box, "material region")
+    def contains(self, mesh: Mesh) -> np.ndarray:
+        """Which of the mesh's elements the region takes (a group the mesh lacks is refused, naming its groups)."""
+        if self.box is not None:
+            return in_box(mesh.vertices[mesh.elements].mean(axis=1), self.box, "material region")
+        groups = getattr(mesh, "region_groups", {})
+        require(self.group in groups, f"material region group = {self.group!r}: the mesh has no such volume group "
+                                      f"(its groups: {', '.join(groups) or 'none'})")
+        return mesh.regions == groups[self.group]
 
 
 @dataclass(frozen=True)
@@ -163,12 +175,11 @@ class Scene:
 
     def element_material(self, mesh: Mesh) -> tuple[type, np.ndarray]:
         """The material law of the body and its parameter vector for every element, (m, p): the base material's,
-        then each region's for the elements whose centroid it contains, in order."""
+        then each region's for the elements it contains (Region.contains), in order."""
         law, (base, *rows) = self.law_parameters()
-        centroids = mesh.vertices[mesh.elements].mean(axis=1)
         parameters = np.tile(base, (mesh.n_elements, 1))
         for region, row in zip(self.regions, rows):
-            parameters[region.contains(centroids)] = row
+            parameters[region.contains(mesh)] = row
         return law, parameters
 
     def build(self) -> "BuiltScene":

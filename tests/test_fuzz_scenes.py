@@ -4,7 +4,8 @@ body, deep keys and nesting, cut-off files), either run or stop with one `error:
 TIME_BOUND, with no traceback and no file outside --out.
 
 Each example runs in this process (apps.inflate.main), so its cost is capped: every shipped scene is
-first made cheap (max_area 0.02, or for a mesh-file body a small mesh file, and its schedule squeezed
+first made cheap (max_area 0.02, for a mesh-file body a small mesh file, for a 3D body from shapes tetrahedra
+of edge 0.5, and its schedule squeezed
 into INCREMENTS increments), and the run
 flags (FLAGS) set low resource limits and few Newton iterations, so that a mutation which makes a
 scene big or slow is refused by the resource guards, as any such scene would be. A traceback is an
@@ -31,6 +32,7 @@ from solid_meshes import box_with_cavity
 
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.fem.meshfile import write_mesh
+from taichi_pneuma.io.sceneformat import SOLIDS
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 INCREMENTS = 3
@@ -56,6 +58,8 @@ def cheap(scene: dict) -> dict:
     body = scene["body"]
     if body["shape"] == "mesh":  # a mesh file's body: a small one instead
         body["file"], scene["mesh"] = str(SMALL_MESH), {}
+    elif body["shape"] in (*SOLIDS, "extrusion", "pneunet"):  # a 3D body from shapes: coarse tetrahedra
+        scene["mesh"] = {"size": 0.5}
     else:
         length = max(body["size"]) if "size" in body else float(np.ptp(np.array(body["points"]), axis=0).max())
         scene["mesh"] = {"max_area": 0.02 * (length / 4.0) ** 2}
@@ -69,7 +73,9 @@ def cheap(scene: dict) -> dict:
 
 MESHES = tempfile.TemporaryDirectory()  # removed when the test process ends
 SMALL_MESH = write_mesh(Path(MESHES.name) / "box.msh", box_with_cavity(), ("chamber",))
-SAME_BODY = {"balloon_volume", "balloon_pressure"}  # balloon_syringe driven otherwise: one of the three is enough
+# balloon_syringe driven otherwise: one of the three is enough; beam_3d_ellipsoid is beam_3d's body from shapes
+# (pneunet_3d fuzzes the 3D shapes and gmsh)
+SAME_BODY = {"balloon_volume", "balloon_pressure", "beam_3d_ellipsoid"}
 BASES = {path.stem: cheap(tomllib.loads(path.read_text())) for path in sorted(SCENES.glob("*.toml"))
          if path.stem not in SAME_BODY}
 

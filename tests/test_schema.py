@@ -265,7 +265,33 @@ def covering_scenes() -> list[Scene]:
                       (IsochoricMaterial("mooney_rivlin", 0.2, C01=0.01, poisson_ratio=0.45),)))]
     mesh_body = MeshGeometry(MeshBody("beam_3d.msh"), (("main", MeshSurface("chamber")),))
     solid = dataclasses.replace(core, geometry=mesh_body)
-    return [every, boxed, polygon, *kinds, *silicones, solid]
+    return [every, boxed, polygon, *kinds, *silicones, solid, *shaped_scenes(core)]
+
+
+def shaped_scenes(core: Scene) -> list[Scene]:
+    """3D scenes from shapes between them having every 3D body and chamber shape (each 2D profile extruded),
+    every mesh size key and a region by volume group."""
+    from taichi_pneuma.fem.gmsh_mesher import MeshSizes
+    from taichi_pneuma.fem.pneunet import PneuNet
+    from taichi_pneuma.fem.solid_geometry import SolidGeometry
+    from taichi_pneuma.fem.solids import Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
+
+    chambers = (("a", Ellipsoid((-1.2, 0.0, 0.0), (0.2, 0.1, 0.1))), ("b", Box((-0.8, 0.0, 0.0), (0.2, 0.2, 0.2))),
+                ("c", RoundedBox((-0.4, 0.0, 0.0), (0.2, 0.2, 0.2), 0.05)), ("d", Cylinder((0.0, 0.0, 0.0), 0.1, 0.2, "x")),
+                ("e", Extrusion(Ellipse((0.4, 0.0), (0.1, 0.1)), 0.2)),
+                ("f", Extrusion(RoundedRectangle((0.8, 0.0), (0.2, 0.2), 0.05), 0.2, 0.05)),
+                ("g", Extrusion(Polygon(((1.1, -0.1), (1.3, -0.1), (1.2, 0.1))), 0.2)))
+    bodies = [Box((0.0, 0.0, 0.0), (3.5, 0.8, 0.8)), RoundedBox((0.0, 0.0, 0.0), (3.5, 0.8, 0.8), 0.1),
+              Cylinder((0.0, 0.0, 0.0), 0.4, 3.5, "x"), Ellipsoid((0.0, 0.0, 0.0), (1.75, 0.4, 0.4)),
+              Extrusion(Rectangle((0.0, 0.0), (3.5, 0.8)), 0.8), Extrusion(Polygon(((-1.75, -0.4), (1.75, -0.4), (0.0, 0.9))), 0.8),
+              Extrusion(RectangleUnion((Rectangle((0.0, 0.0), (3.5, 0.8)), Rectangle((1.5, 0.5), (0.3, 0.4)))), 0.8)]
+    area = ChamberControl(ChamberSchedule("area", ((4, 2.0),)))
+    every = dataclasses.replace(core, increments=4, controls=(area,) * len(chambers),
+                                geometry=SolidGeometry(bodies[0], chambers, MeshSizes(0.2, 0.1, 0.3), order=2))
+    one = [dataclasses.replace(core, geometry=SolidGeometry(body, chambers[:1], MeshSizes(0.2))) for body in bodies[1:]]
+    pneunet = dataclasses.replace(core, geometry=SolidGeometry(PneuNet(), (("c1", MeshSurface("c1")),), MeshSizes(0.2)),
+                                  regions=(Region(None, Material(5e4, 0.45), "layer"),))
+    return [every, *one, pneunet]
 
 
 def key_paths(node, path=""):

@@ -147,7 +147,7 @@ def test_estimate_bounds_the_count_before_meshing():
     for sizes in (MeshSizes(0.1), MeshSizes(0.25, near_chambers=0.06)):
         count = len(mesh_solid(solid, sizes).tets)
         assert 0.5 < count / estimate_tets(solid, sizes) < 1.0
-    with pytest.raises(PneumaInputError, match=r"about [\d.]+e\+08 tetrahedra .* limit is 200000 .*--max-tets"):
+    with pytest.raises(PneumaInputError, match=r"about [\d.]+e\+08 tetrahedra .* limit is 200000 .*--max-triangles"):
         mesh_solid(solid, MeshSizes(0.002))
 
 
@@ -241,15 +241,15 @@ def test_pneunet_without_layer_or_rounding():
         assert cavity_volume(mesh.vertices, wall) == pytest.approx(0.4 * 0.5 * 0.6, rel=1e-12)
 
 
-def test_proposed_scene_maps_one_to_one_onto_the_generator():
-    """The proposed pneunet_3d.toml: its [body] keys are PneuNet's fields, its [mesh] keys MeshSizes' (and the
+def test_shipped_scene_maps_one_to_one_onto_the_generator():
+    """The shipped pneunet_3d.toml: its [body] keys are PneuNet's fields, its [mesh] keys MeshSizes' (and the
     order), its chambers and its region name the generated solid's surface and volume groups."""
     import dataclasses
     from pathlib import Path
 
     import tomllib
 
-    scene = tomllib.loads((Path(__file__).parents[1] / "taichi_pneuma/scenes/proposed/pneunet_3d.toml").read_text())
+    scene = tomllib.loads((Path(__file__).parents[1] / "taichi_pneuma/scenes/pneunet_3d.toml").read_text())
     body = {k: v for k, v in scene["body"].items() if k != "shape"}
     assert scene["body"]["shape"] == "pneunet" and set(body) == {f.name for f in dataclasses.fields(PneuNet)}
     mesh = {k: v for k, v in scene["mesh"].items() if k != "order"}

@@ -11,7 +11,8 @@ it is solved, indexed by a PVD) under --out, and, unless --no-video, a plot of t
 video of the run (body coloured by --color beside its area/pressure trace) and a PNG of its most
 deformed frame.
 --set KEY=VALUE changes any dotted scene-file key. --interactive instead opens a window with a slider
-for the commanded area.
+for the commanded area (a 3D scene: a slider per chamber, and the camera turned by dragging the mouse).
+A 3D scene's video shows the body in 3D, opened by a section to show its chambers (docs/3d.md).
 
 Before any work, a run past the resource limits (estimated triangles, increments, frame pixels; see
 limits.py) is refused in one line naming the flag that raises the limit. Ctrl-C during the ramp
@@ -48,7 +49,8 @@ from .cli import (
 def parser() -> argparse.ArgumentParser:
     p = app_parser("pneuma-inflate", __doc__)
     p.add_argument("--scene", help="a scene file (TOML) or the name of a shipped scene (bidirectional, "
-                                   "finger_on_ground, pneunet_finger, reference_beam); the reference-beam flags "
+                                   "finger_on_ground, pneunet_finger, reference_beam; 3D: beam_3d, beam_3d_ellipsoid, "
+                                   "pneunet_3d); the reference-beam flags "
                                    "(--cy --cx --growth --steps --E --nu --k --max-area --order) are then ignored")
     p.add_argument("--cy", type=float, default=0.15, help="chamber centre height (above the neutral axis curls down)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -58,7 +60,8 @@ def parser() -> argparse.ArgumentParser:
     add_ramp_arguments(p)
     add_video_arguments(p, "960x384")
     p.add_argument("--interactive", action="store_true",
-                   help="open a window (needs a display) with a slider for the commanded area; re-solves live")
+                   help="open a window (needs a display) with a slider for the commanded area (3D: one per chamber, "
+                        "the view turned by dragging); re-solves live")
     return p
 
 
@@ -73,9 +76,13 @@ def run(args: argparse.Namespace) -> dict:
     if args.interactive:
         require(bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")),
                 "--interactive needs a display (DISPLAY is not set); run without it for headless video output")
-        require(isinstance(scene.controls[0].kind, AreaControl), "--interactive needs an area-controlled first chamber")
+        require(scene.geometry.dim == 3 or isinstance(scene.controls[0].kind, AreaControl),
+                "--interactive needs an area-controlled first chamber (a 2D scene)")
     out = prepare_directory(args.out)
     runtime.init(args.arch)
+    if args.interactive and scene.geometry.dim == 3:
+        from ..render.interactive import explore_solid
+        return explore_solid(scene, size, newton_options(args))
     if args.interactive:
         from ..render.interactive import explore
         return explore(scene, args.growth, size, args.renderer, newton_options(args))

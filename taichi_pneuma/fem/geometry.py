@@ -546,6 +546,8 @@ class Geometry:
     tip: PointSet = field(default_factory=lambda: PointSet("right"))
     rollers: tuple[Roller, ...] = ()
 
+    dim = 2
+
     def __post_init__(self):
         require(require_finite("max_area", self.max_area) > 0, f"max_area = {self.max_area!r} must be > 0")
         require(self.order in ORDERS, f"order = {self.order!r} must be 1 (linear triangles) or 2 (quadratic)")
@@ -558,7 +560,7 @@ class Geometry:
                     f"roller normal = {list(roller.normal)!r}: a 2D body's rollers have 2 components")
         for name, shape in self.chambers:
             require(callable(getattr(shape, "polygon", None)), f"chamber {name!r}: a {type(shape).__name__} wall needs "
-                                                               f"a body from a mesh file (body shape = \"mesh\")")
+                                                               f"a body from a mesh file or 3D shapes (a 3D body)")
         body = self.body.polygon()
         polygons = [(name, shape.polygon()) for name, shape in self.chambers]
         points = len(body) + sum(len(p) for _, p in polygons)

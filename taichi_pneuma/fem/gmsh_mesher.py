@@ -54,8 +54,14 @@ INSTALL = "pip install 'taichi-pneuma[3d]'"
 REGULAR_TET = 1 / (6 * np.sqrt(2))  # volume of the regular tetrahedron of unit edge
 BODY_GROUP = "body"
 # the global gmsh options meshing sets; a caller's gmsh session gets its values back afterwards
-OPTIONS = ("General.Terminal", "Mesh.MeshSizeMax", "Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature",
+OPTIONS = ("General.Terminal", "Mesh.Algorithm", "Mesh.MeshSizeMax", "Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature",
            "Mesh.MeshSizeExtendFromBoundary")
+# gmsh's surface meshers, (Mesh.Algorithm, Mesh.MeshSizeFromCurvature), tried in turn until every surface and
+# volume is meshed: Frontal-Delaunay with the sizes alone; then Delaunay with edges also shortened to 2 pi R / 12 on
+# surfaces of curvature radius R. Frontal-Delaunay leaves a coarsely meshed B-spline surface (an ellipsoid:
+# OpenCASCADE makes the dilated sphere one) without triangles: the 3D reference beam's chamber at sizes 0.13-0.5.
+# (MeshAdapt loops on a small ellipsoid in a coarse mesh until gmsh crashes.)
+SURFACE_MESHERS = ((6, 0), (5, 12))
 MAX_SAMPLING = 200  # points per direction on a wall surface for its distance field
 # a tetrahedron's four faces (corners in its local numbering), each oriented outward for a positive tetrahedron
 TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
@@ -232,14 +238,14 @@ def _estimate(pieces: _Pieces, sizes: MeshSizes) -> float:
 
 def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose: bool = False) -> SolidMesh:
     """Mesh the solid with linear tetrahedra (gmsh: OpenCASCADE fragment, Delaunay), or raise one
-    PneumaInputError: bad geometry, an estimate or a mesh over max_tets (--max-tets raises it), or
+    PneumaInputError: bad geometry, an estimate or a mesh over max_tets (--max-triangles raises it), or
     gmsh failing (its error line quoted)."""
     with _session(verbose) as gmsh:
         pieces = _Pieces(gmsh, solid)
         estimate = _estimate(pieces, sizes)
         require(estimate <= max_tets,
                 f"the mesh would have about {estimate:.3g} tetrahedra (volume {pieces.volume:.4g}, size {sizes.size:g}, "
-                f"near chambers {sizes.near:g}); the limit is {max_tets} tetrahedra (--max-tets raises it)")
+                f"near chambers {sizes.near:g}); the limit is {max_tets} tetrahedra (--max-triangles raises it)")
         model = gmsh.model
         for k, name in enumerate([BODY_GROUP] + [name for name, _ in solid.regions]):
             tags = [v for v, r in pieces.rubber.items() if r == k]
@@ -248,8 +254,25 @@ def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose
         for name, walls in pieces.walls.items():
             model.addPhysicalGroup(2, walls, name=name)
         _set_sizes(gmsh, sizes, [s for walls in pieces.walls.values() for s in walls])
-        model.mesh.generate(3)
+        for attempt, (algorithm, curvature) in enumerate(SURFACE_MESHERS, start=1):
+            gmsh.option.setNumber("Mesh.Algorithm", algorithm)
+            gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", curvature)
+            model.mesh.clear()
+            try:
+                model.mesh.generate(3)
+            except Exception:
+                if attempt == len(SURFACE_MESHERS):
+                    raise
+                continue
+            if _complete(gmsh, pieces):
+                break
         return _read(gmsh, solid, pieces, max_tets)
+
+
+def _complete(gmsh, pieces: _Pieces) -> bool:
+    """Whether every rubber volume has tetrahedra and every chamber wall triangles."""
+    return (all(len(_elements(gmsh, 3, [v], 4, 4)) for v in pieces.rubber)
+            and all(len(_elements(gmsh, 2, [s], 2, 3)) for walls in pieces.walls.values() for s in walls))
 
 
 def _set_sizes(gmsh, sizes: MeshSizes, walls: list[int]) -> None:
@@ -287,7 +310,9 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
               for k in range(len(solid.regions) + 1)}
     tags = np.concatenate(list(blocks.values()))
     regions = np.concatenate([np.full(len(b), k) for k, b in blocks.items()])
-    require(len(tags) <= max_tets, f"the mesh has {len(tags)} tetrahedra; the limit is {max_tets} (--max-tets raises it)")
+    require(all(len(b) for k, b in blocks.items() if any(r == k for r in pieces.rubber.values())),
+            "gmsh left a part of the body without tetrahedra")
+    require(len(tags) <= max_tets, f"the mesh has {len(tags)} tetrahedra; the limit is {max_tets} (--max-triangles raises it)")
     node_tags, coords, _ = mesh.getNodes()
     used, tets = np.unique(tags, return_inverse=True)
     tets = tets.reshape(-1, 4)
@@ -305,6 +330,7 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
     chambers, on_wall = {}, set()
     for name, walls in pieces.walls.items():
         triangles = local[_elements(gmsh, 2, walls, 2, 3)]
+        require(len(triangles) > 0, f"gmsh left the wall of chamber {name!r} without triangles")
         wall_keys = face_keys(triangles, len(vertices))
         rows = [index.get(int(k), -1) for k in wall_keys]
         require(min(rows, default=-1) >= 0, f"chamber {name!r}: its wall mesh does not match the tetrahedra's faces")

@@ -99,6 +99,11 @@ def cells_of(mesh: meshio.Mesh, types: tuple[str, ...], group: str | None, path:
     return np.vstack(parts).astype(np.int64), blocks
 
 
+def volume_groups(mesh: meshio.Mesh) -> dict[str, int]:
+    """The file's named gmsh physical groups of volumes: name -> the physical tag its tetrahedra carry."""
+    return {name: int(tag) for name, (tag, dim) in mesh.field_data.items() if int(dim) == 3}
+
+
 @dataclass(frozen=True)
 class MeshGeometry:
     """A 3D scene's geometry read from a mesh file: the body, its chambers (name, MeshSurface) in order, the
@@ -148,7 +153,7 @@ class MeshGeometry:
             require(len(walls[name]) > 0, f"chamber {name!r}: group {shape.group!r} of {path!r} has no triangles")
         try:
             return tet_mesh(source.points, tets, walls, regions=regions, order=self.order, clamp=self.clamp,
-                            tip=self.tip, rollers=self.rollers)
+                            tip=self.tip, rollers=self.rollers, region_groups=volume_groups(source))
         except PneumaInputError as exc:
             raise PneumaInputError(f"mesh file {path!r}: {exc}") from None
 

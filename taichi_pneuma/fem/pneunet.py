@@ -63,6 +63,11 @@ class PneuNet:
                 self.layer + self.base + self.chamber_height + self.wall,
                 self.chamber_width + 2 * self.wall)
 
+    @property
+    def thinnest(self) -> float:
+        """The thinnest rubber: the wall above and beside the chambers, or the gap between them."""
+        return min(self.wall, self.gap)
+
     def solid(self) -> Solid:
         """The block, its chambers c1 .. cn and, if layer > 0, the region 'layer' (the bottom slab)."""
         length, height, width = self.size

@@ -23,7 +23,7 @@ volume (div P (x - o) / r = 1).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -54,7 +54,8 @@ class TetMesh:
     the Closure of an open one; surface: every boundary facet of the body (outer boundary and chamber
     walls) oriented outward from the body; boundary: the nodes on the outer boundary (not on a chamber
     wall alone); pinned, tip: the clamped and the tip nodes; rollers: per roller (held nodes, unit normal);
-    regions: a region tag per element (0 when the source has none)."""
+    regions: a region tag per element (0 when the source has none); region_groups: the named volume groups'
+    tags (name -> tag, e.g. a mesh file's physical groups of tetrahedra, a PneuNet's "layer")."""
 
     vertices: np.ndarray
     elements: np.ndarray
@@ -66,6 +67,7 @@ class TetMesh:
     rollers: tuple[tuple[np.ndarray, np.ndarray], ...]
     surface: np.ndarray
     regions: np.ndarray
+    region_groups: dict = field(default_factory=dict)
 
     dim = 3
 
@@ -183,11 +185,11 @@ def closure(name: str, vertices: np.ndarray, wall: np.ndarray, rollers) -> Closu
 def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndarray],
              boundary: np.ndarray | None = None, regions: np.ndarray | None = None, order: int = 1,
              clamp: PointSet | None = PointSet("left"),
-             tip: PointSet = PointSet("right"), rollers=()) -> TetMesh:
+             tip: PointSet = PointSet("right"), rollers=(), region_groups: dict | None = None) -> TetMesh:
     """The TetMesh of plain arrays (module docstring): vertices (n, 3); tets (m, 4) or (m, 10); chambers: name ->
     its wall's triangles (f, 3) (or (f, 6): the first three columns are used), in the scene's order;
     boundary: the outer boundary's triangles (None: every boundary facet on no chamber wall); regions: (m,)
-    region tags; order 1 or 2; the clamp (None: no node clamped, e.g. a body held by rollers alone), the tip and
+    region tags (region_groups: the names of some, name -> tag); order 1 or 2; the clamp (None: no node clamped, e.g. a body held by rollers alone), the tip and
     the rollers select their nodes."""
     vertices = np.asarray(vertices, dtype=np.float64)
     tets = np.asarray(tets)
@@ -242,4 +244,5 @@ def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndar
     pinned = np.zeros(0, dtype=np.int64) if clamp is None else clamp.select(vertices, "clamp")
     return TetMesh(vertices, tets, tuple(walls), np.unique(outer), pinned,
                    tip.select(vertices, "tip"), tuple(origins),
-                   tuple((roller.select(vertices), roller.unit_normal) for roller in rollers), surface, regions)
+                   tuple((roller.select(vertices), roller.unit_normal) for roller in rollers), surface, regions,
+                   dict(region_groups or {}))

@@ -24,7 +24,11 @@ from ..fem.geometry import (
     Roller,
     RoundedRectangle,
 )
+from ..fem.gmsh_mesher import MeshSizes
 from ..fem.meshfile import MeshBody, MeshGeometry, MeshSurface
+from ..fem.pneunet import PneuNet
+from ..fem.solid_geometry import SolidGeometry, is_solid_shape
+from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
 from ..materials import FORMS, IsochoricMaterial
 from ..materials.presets import PRESETS, PresetMaterial
 from ..solve.schedule import ChamberSchedule
@@ -34,27 +38,58 @@ from .schema import Key, KeyInfo, Named, Table, Tables, Variant, build, edited, 
 from .tomltext import dumps
 from .units import UNITLESS, UNITS
 
-PAIR, BOX = "[x, y]", "[x0, y0, x1, y1]"
+PAIR, BOX, TRIPLE = "[x, y]", "[x0, y0, x1, y1]", "[x, y, z]"
 POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3"))
-BODY_SHAPES = Variant({
+PLANAR_BODIES = {
     "rectangle": record(Rectangle, "an axis-aligned rectangle", center=Key(tuple, (0.0, 0.0), PAIR),
                         size=Key(tuple, doc="[width, height]")),
     "polygon": POLYGON,
     "union": record(RectangleUnion, "a union of axis-aligned rectangles (one region, no holes)",
                     rectangles=Tables(record(Rectangle, center=Key(tuple, doc=PAIR), size=Key(tuple, doc="[w, h]")))),
-    "mesh": record(MeshBody, "a 3D body read from a mesh file (any meshio format with tetrahedra)",
-                   file=Key(str, doc="the mesh file, relative to the scene file")),
-}, doc="the body's outline (2D), or a 3D body")
-CHAMBER_SHAPES = Variant({
+}
+PLANAR_CHAMBERS = {
     "ellipse": record(Ellipse, "an ellipse", center=Key(tuple, doc=PAIR), semi_axes=Key(tuple, doc="[a, b]"),
-                      points=Key(int, 64, "wall points, 8 or more")),
+                      points=Key(int, 64, "wall points, 8 or more (2D)")),
     "rounded_rectangle": record(RoundedRectangle, "a rectangle with quarter-circle corners",
                                 center=Key(tuple, doc=PAIR), size=Key(tuple, doc="[w, h]"),
                                 radius=Key(float, doc="corner radius, below half the shorter side"),
-                                corner_points=Key(int, 6, "points per corner")),
+                                corner_points=Key(int, 6, "points per corner (2D)")),
     "polygon": POLYGON,
-    "mesh_surface": record(MeshSurface, "the wall of a mesh body's chamber: a group of the mesh file's triangles",
+}
+
+
+def extrusion(profiles: dict, what: str) -> Table:
+    """The 3D shape of a 2D shape (one of profiles, in the table `profile`) swept along z over depth."""
+    profile = Table({"shape": Variant(profiles, doc=f"the 2D {what} shape swept")}, make=lambda v: v["shape"],
+                    parts=lambda shape: {"shape": shape}, doc="the 2D shape (in the x-y plane), its keys as in 2D")
+    return record(Extrusion, f"a 2D {what} shape swept along z (3D)", profile=profile,
+                  depth=Key(float, doc="its extent along z"), z=Key(float, 0.0, "the z of its middle"))
+
+
+SOLIDS = {  # the 3D shapes bodies and chambers share (fem/solids.py); with extrusion and pneunet, the 3D bodies
+    "box": record(Box, "an axis-aligned box (3D)", center=Key(tuple, doc=TRIPLE), size=Key(tuple, doc=TRIPLE)),
+    "rounded_box": record(RoundedBox, "a box with every edge and corner rounded (3D)", center=Key(tuple, doc=TRIPLE),
+                          size=Key(tuple, doc=TRIPLE), radius=Key(float, doc="below half the shortest side")),
+    "cylinder": record(Cylinder, "a circular cylinder (3D)", center=Key(tuple, doc=TRIPLE), radius=Key(float),
+                       length=Key(float), axis=Key(str, "z", "its axis", AXES)),
+    "ellipsoid": record(Ellipsoid, "an axis-aligned ellipsoid (3D)", center=Key(tuple, doc=TRIPLE),
+                        semi_axes=Key(tuple, doc="[a, b, c]")),
+}
+BODY_SHAPES = Variant({
+    **PLANAR_BODIES,
+    "mesh": record(MeshBody, "a 3D body read from a mesh file (any meshio format with tetrahedra)",
+                   file=Key(str, doc="the mesh file, relative to the scene file")),
+    **SOLIDS,
+    "extrusion": extrusion(PLANAR_BODIES, "body"),
+    "pneunet": PneuNet,
+}, doc="the body's outline (2D), or a 3D body (a mesh file, a 3D shape meshed by gmsh, or the PneuNet generator)")
+CHAMBER_SHAPES = Variant({
+    **PLANAR_CHAMBERS,
+    "mesh_surface": record(MeshSurface, "the wall of a mesh body's chamber: a group of the mesh file's triangles "
+                                        "(of a pneunet body: its chambers c1 .. cn)",
                            group=Key(str, doc="the group (gmsh physical group) of the wall's triangles")),
+    **SOLIDS,
+    "extrusion": extrusion(PLANAR_CHAMBERS, "chamber"),
 }, doc="the chamber's wall")
 TARGET = record(Target, "a pose the tip should reach (inverse control)",
                 tip=Key(tuple, doc="[x, y], or [x, y, z] on a 3D body (z free when not given)"),
@@ -146,13 +181,16 @@ def scene_table(scene_class) -> Table:
                 volume = keys["K"] is not None or keys["nu"] is not None  # the region's K or nu replaces both
                 keys = {k: base_keys[k] if keys[k] is None and not (volume and k in ("K", "nu")) else keys[k]
                         for k in keys}
-            return region_class(r["box"], material_of(keys, material_class))
+            return region_class(r["box"], material_of(keys, material_class), r["group"])
 
         return base, tuple(build(f"material.regions[{i}]", lambda: region(r)) for i, r in enumerate(v["regions"]))
 
-    region = Table({"box": Key(tuple, doc=f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D)"), **MATERIAL_KEYS},
-                   parts=lambda r: {"box": r.box, **material_keys(r.material)})
-    regions = Tables(region, "materials for the elements whose centroid lies in box (later regions win); keys as "
+    region = Table({"box": Key(tuple, None, f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D): the elements whose centroid "
+                                            f"lies in it"),
+                    "group": Key(str, None, "instead of box (3D): the tetrahedra of the mesh's named volume group "
+                                            "(a mesh file's physical group, a pneunet's \"layer\")"), **MATERIAL_KEYS},
+                   parts=lambda r: {"box": r.box, "group": r.group, **material_keys(r.material)})
+    regions = Tables(region, "materials for the elements of a box or a volume group (later regions win); keys as "
                              "material's, and unless a region names a preset or law, each key it omits is material's")
     material = Table({**MATERIAL_KEYS, "regions": regions}, make=make_material,
                      parts=lambda s: {**material_keys(s.material), "regions": s.regions}, optional=True,
@@ -174,13 +212,24 @@ def scene_table(scene_class) -> Table:
         require(len(v["targets"]) <= MAX_TARGETS, f"{len(v['targets'])} [[targets]]: at most {MAX_TARGETS} are "
                                                   f"allowed (each is a reach)")
         (material, regions), (clamp, clamp_stiffness) = v["material"], v["clamp"]
-        chambers, max_area = tuple((name, shape) for name, shape, _ in v["chambers"]), v["mesh"]["max_area"]
-        if isinstance(v["body"], MeshBody):
-            require(max_area is None, "mesh.max_area: a mesh file's body keeps the file's elements (no max_area)")
-            geometry = MeshGeometry(v["body"], chambers, v["mesh"]["order"], clamp, v["tip"], v["rollers"])
+        chambers, mesh = tuple((name, shape) for name, shape, _ in v["chambers"]), v["mesh"]
+        sized = [k for k in ("size", "near_chambers", "distance") if mesh[k] is not None]
+        planar = ["max_area"] if mesh["max_area"] is not None else []
+        if is_solid_shape(v["body"]):
+            require(mesh["max_area"] is None, "mesh.max_area: a 3D body from shapes takes mesh.size (the tetrahedra's "
+                                              "edge length), not max_area")
+            require(mesh["size"] is not None, "missing key 'mesh.size': a 3D body from shapes needs the tetrahedra's "
+                                              "edge length")
+            sizes = build("mesh", lambda: MeshSizes(mesh["size"], mesh["near_chambers"], mesh["distance"]))
+            geometry = SolidGeometry(v["body"], chambers, sizes, mesh["order"], clamp, v["tip"], v["rollers"])
+        elif isinstance(v["body"], MeshBody):
+            require(not planar + sized, f"mesh.{(planar + sized + [''])[0]}: a mesh file's body keeps the file's "
+                                        f"elements (mesh.order only)")
+            geometry = MeshGeometry(v["body"], chambers, mesh["order"], clamp, v["tip"], v["rollers"])
         else:
-            geometry = Geometry(v["body"], chambers, *(() if max_area is None else (max_area,)), clamp=clamp,
-                                order=v["mesh"]["order"], tip=v["tip"], rollers=v["rollers"])
+            require(not sized, f"mesh.{sized[0] if sized else ''}: a 2D body takes mesh.max_area")
+            geometry = Geometry(v["body"], chambers, *(() if mesh["max_area"] is None else (mesh["max_area"],)),
+                                clamp=clamp, order=mesh["order"], tip=v["tip"], rollers=v["rollers"])
         return scene_class(geometry, tuple(control for *_, control in v["chambers"]), v["schedule"]["increments"],
                            material, regions, clamp_stiffness, v["effects"], v["name"], v["targets"],
                            UNITLESS if v["units"] is None else UNITS[v["units"]])
@@ -189,7 +238,9 @@ def scene_table(scene_class) -> Table:
         refinements = getattr(geometry, "refinements", 0)
         require(refinements == 0, f"a geometry refined {refinements} times has no scene-file form "
                                   f"(scene files have no refinements key)")
-        return {"max_area": getattr(geometry, "max_area", None), "order": geometry.order}
+        sizes = getattr(geometry, "sizes", None)
+        return {"max_area": getattr(geometry, "max_area", None), "order": geometry.order,
+                **{k: getattr(sizes, k, None) for k in ("size", "near_chambers", "distance")}}
 
     return Table({
         "name": Key(str, None, "names the result files (a plain file name); none: the scene file's own name"),
@@ -198,7 +249,14 @@ def scene_table(scene_class) -> Table:
                      tuple(UNITS)),
         "body": Table({"shape": BODY_SHAPES}, make=lambda v: v["shape"], parts=lambda body: {"shape": body}),
         "mesh": Table({"max_area": Key(float, None, "largest triangle area (2D; none: 0.0012)"),
-                       "order": Key(int, 1, "1: linear triangles (tetrahedra), 2: quadratic", ORDERS)},
+                       "size": Key(float, None, "tetrahedron edge length in the bulk (3D body from shapes; required "
+                                                "there)"),
+                       "near_chambers": Key(float, None, "edge length within that distance of the chamber walls (3D "
+                                                         "shapes; none: size)"),
+                       "distance": Key(float, None, "over which the edge length grows from near_chambers back to size "
+                                                    "(3D shapes; none: 2 size)"),
+                       "order": Key(int, 1, "1: linear triangles (tetrahedra), 2: quadratic (3D: straight midside "
+                                            "nodes added)", ORDERS)},
                       parts=mesh_parts, optional=True),
         "material": material,
         "clamp": Table(point_set("left", stiffness=Key(float, 1e9, "penalty stiffness of the clamp and the rollers")),

@@ -30,11 +30,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import PneumaInputError, require, shape_of
+from ..fem.fields import ElementFields
+from ..fem.geometry import split_in_four
+from ..io.units import LENGTH, PRESSURE
 from .camera import Camera
 from .frames import Label, colormap, draw_labels, nice_ticks
 from .surface import NumpyView, shade_faces
 
 VIEWS = ("auto", "numpy", "ggui")
+# the apps' --renderer (render.RENDERERS) -> the 3D view: the software renderers' counterpart is the NumPy rasteriser
+VIEW_OF_RENDERER = {"auto": "auto", "ggui": "ggui", "gui": "numpy", "pillow": "numpy"}
 BACKGROUND = (1.0, 1.0, 1.0)
 BODY = (0.72, 0.89, 0.66)
 CHAMBER = (0.3, 0.5, 0.95)
@@ -80,9 +85,53 @@ class Track3D:
         for label, values in self.trace:
             require(len(values) == steps, f"trace {label!r} must give {steps} steps")
 
+    @classmethod
+    def from_result(cls, result, color: str = "none") -> "Track3D":
+        """The track of a 3D run (a solve.result.Result): its outer surface and chamber walls (a quadratic
+        facet drawn as its four linear triangles), coloured per face by a COLOR_FIELDS field of the tetrahedron
+        under it ('none': plain), captions of the chambers' volume ratios and pressures and the tip, the
+        volume ratio and pressure traced, and the scene's ground."""
+        from . import COLOR_FIELDS
+
+        require(color == "none" or color in COLOR_FIELDS,
+                f"color = {color!r} is not one of none, {', '.join(COLOR_FIELDS)}")
+        mesh, history, units = result.mesh, result.history, result.scene.units
+        outer, walls, under = surface_triangles(mesh)
+        values, label = None, ""
+        if color != "none":
+            label, key = COLOR_FIELDS[color]
+            fields = ElementFields(mesh.vertices, mesh.elements)
+            values = np.array([fields.at(x)[key][under] for x in result.positions])
+        steps = len(result.positions)
+        names = result.chamber_names
+        captions = tuple((f"step {i}/{steps - 1}   volume " + ", ".join(f"x{r:.2f}" for r in result.area_ratio[i])
+                          + "   p = " + ", ".join(f"{p:.4g}" for p in result.pressure[i]) + units.suffix(PRESSURE),
+                          f"tip dy = {history['tip_dy'][i]:+.4f}   dz = {history['tip_dz'][i]:+.4f}{units.suffix(LENGTH)}"
+                          f"   bend {history['tip_rotation'][i]:+.1f} deg") for i in range(steps))
+        trace = (("volume / rest volume", result.area_ratio), (f"pressure{units.suffix(PRESSURE)}", result.pressure))
+        return cls(result.positions, outer, walls, values, label, f"{result.scene.name}: " + ", ".join(names),
+                   captions, trace, result.ground_height)
+
     @property
     def per_node(self) -> bool:
         return self.color is not None and np.shape(self.color)[1] == len(self.positions[0]) != len(self.boundary)
+
+
+def surface_triangles(mesh) -> tuple[np.ndarray, tuple[np.ndarray, ...], np.ndarray]:
+    """A TetMesh's linear triangles to draw: the outer surface (b, 3), each chamber's wall, and for each outer
+    triangle the tetrahedron under it (b,). A quadratic facet is split in four (geometry.split_in_four)."""
+    from ..fem.tetmesh import facet_keys
+
+    n, family = mesh.n_vertices, mesh.family
+    on_walls = np.concatenate([facet_keys(wall, n) for wall in mesh.chambers]) if mesh.chambers else np.zeros(0)
+    outer = mesh.surface[~np.isin(facet_keys(mesh.surface, n), on_walls)]
+    faces = mesh.elements[:, np.array(family.facets)]  # (m, 4, nodes per facet)
+    keys = facet_keys(faces.reshape(-1, faces.shape[2]), n)
+    order = np.argsort(keys)
+    under = order[np.searchsorted(keys, facet_keys(outer, n), sorter=order)] // faces.shape[1]
+    if mesh.order == 1:
+        return outer, tuple(mesh.chambers), under
+    return split_in_four(outer), tuple(split_in_four(wall) for wall in mesh.chambers), np.repeat(under, 4)
 
 
 def open_view(backend: str, width: int, height: int, show: bool = False, log=print):
@@ -250,19 +299,27 @@ class TracePanel:
         return image
 
 
-def render_video_3d(track: Track3D, video, png=None, size: tuple[int, int] = (960, 540), fps: float = 12.0,
+def render_video_3d(track: Track3D, video, png=None, size=(960, 540), fps: float = 12.0,
                     backend: str = "auto", camera: Camera | None = None, section: bool = True, trace: bool = True,
-                    quiet: bool = True, log=print):
-    """Render every step of track into video (.mp4 or .gif) and the last frame into png if given; the view is
-    opened for it and closed after (also when the export fails). Returns video.Export (with ms per frame)."""
+                    quiet: bool = True, log=print, png_frame: int = -1):
+    """Render every step of track into video (.mp4 or .gif) and frame png_frame (default the last) into png if
+    given (their directories are created); size: (width, height) or 'WIDTHxHEIGHT'; backend: a view (VIEWS)
+    or an app's --renderer (VIEW_OF_RENDERER). The view is opened for it and closed after (also when the
+    export fails). Returns video.Export (with ms per frame)."""
     from pathlib import Path
 
-    from .video import check_video, export
+    from ..io.output import prepare_directory
+    from .video import check_video, export, frame_size
 
     check_video(video, fps)
+    size = frame_size(size)
+    for path in (video, png):
+        if path is not None:
+            prepare_directory(Path(path).parent)
+    backend = VIEW_OF_RENDERER.get(backend, backend)
     renderer = FrameRenderer3D(track, *size, backend=backend, camera=camera, section=section, trace=trace, log=log)
     try:
-        return export(renderer, Path(video), None if png is None else Path(png), fps, quiet)
+        return export(renderer, Path(video), None if png is None else Path(png), fps, quiet, png_frame)
     finally:
         renderer.canvas.close()
 

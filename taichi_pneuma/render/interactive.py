@@ -130,3 +130,48 @@ def follow_mouse(scene: Scene, bounds, size: tuple[int, int], backend: str = "au
           + (f"while dragging {summary['drag_fps']:.1f} frames/s, {summary['ms_per_reach']:.1f} ms and "
              f"{summary['forward_solves_per_reach']:.2f} forward solves per reach" if drag_seconds else "no drag"))
     return summary
+
+
+def chamber_sliders(scene: Scene) -> list:
+    """A slider per chamber over the commands its schedule drives (ChamberControl.bounds when given, else the
+    kind's default_bounds: the rest command and every keyframe value), starting at the rest command."""
+    from .interactive3d import Slider
+
+    sliders = []
+    for name, control in zip(scene.chamber_names, scene.controls):
+        kind = control.kind
+        low, high = control.bounds or kind.default_bounds([v for _, v in control.schedule.keyframes])
+        if high <= low:  # a chamber held at one command: a slider from there to twice as far from zero
+            high = low + max(abs(low), 1.0)
+        sliders.append(Slider(name, low, high, min(max(kind.rest, low), high)))
+    return sliders
+
+
+def explore_solid(scene: Scene, size: tuple[int, int], options: NewtonOptions | None = None, spin: float = 0.0,
+                  max_frames: int | None = None) -> dict:
+    """The live window of a 3D scene (interactive3d.explore_3d): a slider per chamber (chamber_sliders); each
+    move re-solves the equilibrium, warm-started from the one on screen; the camera orbits by mouse drag (and
+    `spin` degrees per frame). Returns explore_3d's summary with 'all_converged'."""
+    from .frames3d import surface_triangles
+    from .interactive3d import explore_3d
+
+    built = scene.build()
+    mesh, solver = built.mesh, NewtonSolver(built.model, options or NewtonOptions(tol=LIVE_TOL))
+    outer, walls, _ = surface_triangles(mesh)
+    state = {"u": np.zeros_like(mesh.vertices), "converged": True}
+
+    def solve(commands):
+        built.set_commands(commands)
+        u, record = solver.solve(state["u"])
+        state["converged"] &= record.converged
+        if record.converged:  # else the last equilibrium stays on screen
+            state["u"] = u
+        volumes = ", ".join(f"x{c.area() / c.rest_area:.2f}" for c in built.chambers)
+        tip = state["u"][mesh.tip].mean(axis=0)
+        return mesh.vertices + state["u"], [f"volume {volumes}", f"tip dy {tip[1]:+.4f} dz {tip[2]:+.4f}",
+                                            f"{record.iterations} Newton it" + ("" if record.converged else
+                                                                                 ", not converged")]
+
+    summary = explore_3d(solve, chamber_sliders(scene), mesh.vertices, outer, walls, size, spin=spin,
+                         max_frames=max_frames)
+    return {**summary, "all_converged": bool(state["converged"])}

@@ -200,11 +200,20 @@ class Result:
               renderer: str = "auto", trace: bool = True, quiet: bool = True, log=print, png_step: int | None = None):
         """Render one frame per step into path (.mp4 or .gif; its directory is created), and frame png_step
         (default peak_step(), the most deformed) into png if given. size: (width, height) or '960x384';
-        color: 'stretch', 'detF' or 'none'; renderer: 'auto', 'ggui' or 'gui'. Returns a video.Export."""
+        color: 'stretch', 'detF' or 'none'; renderer: 'auto', 'ggui', 'gui' or 'pillow'. A 3D run is drawn in
+        3D (render.frames3d: the body opened by a section to show its chambers; 'auto' and 'ggui' GGUI's 3D
+        scene, falling back to the NumPy rasteriser for 'auto', which 'gui' and 'pillow' take). Returns a
+        video.Export."""
+        png_frame = self.peak_step() if png_step is None else png_step
+        if self.mesh.dim == 3:
+            from ..render.frames3d import Track3D, render_video_3d
+
+            return render_video_3d(Track3D.from_result(self, color), path, png, size, fps, renderer, trace=trace,
+                                   quiet=quiet, log=log, png_frame=png_frame)
         from ..render.video import render_video
 
         return render_video([self], path, png, size, fps, color, renderer, trace, quiet=quiet, log=log,
-                            png_frame=self.peak_step() if png_step is None else png_step)
+                            png_frame=png_frame)
 
     def plot(self):
         """The history as a matplotlib Figure with axes (plots.py): pressure against area ratio, and tip

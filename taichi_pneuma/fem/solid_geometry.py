@@ -1,0 +1,127 @@
+"""A 3D scene's geometry from parametric shapes: the body (a fem.solids shape or a fem.pneunet.PneuNet), its
+chambers, the mesh sizes, the element order and the node sets, meshed by gmsh into a TetMesh.
+
+    SolidGeometry(body, chambers, sizes, order, clamp, tip, rollers)
+
+A body shape's chambers are fem.solids shapes (ellipsoid, box, rounded box, cylinder, an extruded 2D
+chamber shape), cut out of it. A PneuNet makes its own chambers c1 .. cn and its volume group "layer";
+a scene names the chambers it drives by those groups (fem.meshfile.MeshSurface, as for a mesh file's
+groups), and a generated chamber it does not name stays an empty, unloaded cavity.
+
+mesh() runs gmsh_mesher.mesh_solid (linear tetrahedra) and hands its arrays to tetmesh.tet_mesh, which
+orients each chamber wall out of the cavity and, for order 2, adds a straight midside node to every edge
+(the chamber walls stay the flat triangles gmsh made: a quadratic element gains accuracy in the body,
+not in the walls' shape). The tetrahedra's region tags are the volume groups' (region_groups: name -> tag).
+
+size_estimate() is the resource guard's count, before meshing: the tetrahedra estimated from the rubber's
+volume over the volume of a regular tetrahedron of the local edge length (gmsh_mesher.estimate_tets; gmsh
+builds the solid, nothing is meshed), and about one node per TETS_PER_NODE tetrahedra (a Delaunay mesh
+has 5 to 6), plus one per edge (about 1.2 per tetrahedron) for quadratic elements. A PneuNet's walls (0.08
+by default) are thinner than its usual edge lengths, and gmsh meshes them with edges about their thickness,
+2.5 to 13 times the count of the size alone; counting the rubber within `size` of the chambers at edges of
+THIN_WALL times the thinnest wall brings the estimate to 0.97-1.71 times gmsh's count at sizes 0.1-0.5 (the
+shipped pneunet_3d at 0.2: 1.24), erring towards refusing. Meshing then runs
+under limits.element_cap, gmsh's output is checked against it (a quadratic tetrahedron counted 8
+times, as limits.check_solid counts it), and limits.check_mesh refuses a mesh past the budget.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .. import limits
+from ..errors import require
+from ..io.output import check_heading
+from .geometry import PointSet
+from .gmsh_mesher import MAX_TETS, MeshSizes, Solid, estimate_tets, mesh_solid
+from .meshfile import MeshSurface
+from .pneunet import PneuNet
+from .tetmesh import TetMesh, tet_mesh
+
+TETS_PER_NODE = 5
+EDGES_PER_TET = 1.2  # a tetrahedral mesh has about 1.2 edges per tetrahedron (Euler: E ~ V + T)
+QUADRATIC_WEIGHT = 8  # limits.check_solid's count of a quadratic tetrahedron
+THIN_WALL = 1.5  # a PneuNet's walls counted at edges of THIN_WALL times their thickness (estimate_sizes)
+
+
+def is_solid_shape(shape) -> bool:
+    """Whether shape is a 3D body or chamber shape (fem.solids) or a generated body (PneuNet)."""
+    return isinstance(shape, PneuNet) or callable(getattr(shape, "build", None))
+
+
+@dataclass(frozen=True)
+class SolidGeometry:
+    """A 3D body from shapes (module docstring): body, chambers (name, shape) in order, mesh sizes, element
+    order (1: linear tetrahedra, 2: quadratic), clamp, tip and rollers (as geometry.Geometry's)."""
+
+    body: object
+    chambers: tuple
+    sizes: MeshSizes
+    order: int = 1
+    clamp: PointSet = field(default_factory=lambda: PointSet("left"))
+    tip: PointSet = field(default_factory=lambda: PointSet("right"))
+    rollers: tuple = ()
+
+    dim = 3
+
+    def __post_init__(self):
+        require(self.order in (1, 2), f"order = {self.order!r} must be 1 (linear tetrahedra) or 2 (quadratic)")
+        require(is_solid_shape(self.body), f"body: {self.body!r} is not a 3D shape")
+        generated = isinstance(self.body, PneuNet)
+        groups = self.groups()
+        for name, shape in self.chambers:
+            check_heading("chamber name", name)
+            if generated:
+                require(isinstance(shape, MeshSurface),
+                        f"chamber {name!r}: a pneunet body makes its own chambers c1 .. c{self.body.chambers}; name "
+                        f"one by shape = \"mesh_surface\" and group = \"c1\" ...")
+                require(shape.group in groups,
+                        f"chamber {name!r}: group = {shape.group!r} is none of the pneunet's chambers {', '.join(groups)}")
+            else:
+                require(is_solid_shape(shape) and not isinstance(shape, PneuNet),
+                        f"chamber {name!r}: a 3D body's chambers are 3D shapes (ellipsoid, box, rounded_box, "
+                        f"cylinder, extrusion of a 2D chamber shape), not {type(shape).__name__}")
+        names = [name for name, _ in self.chambers]
+        require(len(set(names)) == len(names), f"chamber names {names!r} must be distinct")
+        if generated:
+            groups = [shape.group for _, shape in self.chambers]
+            require(len(set(groups)) == len(groups), f"chamber groups {groups!r} must be distinct")
+        self.solid()  # validates the shapes together (names, counts)
+
+    def groups(self) -> list[str]:
+        """The generated chambers' names (a PneuNet's c1 .. cn)."""
+        return [name for name, _ in self.body.solid().chambers] if isinstance(self.body, PneuNet) else []
+
+    def solid(self) -> Solid:
+        """The gmsh_mesher.Solid: a PneuNet's own, or the body with the scene's chambers."""
+        if isinstance(self.body, PneuNet):
+            return self.body.solid()
+        return Solid(self.body, tuple(self.chambers))
+
+    def estimate_sizes(self) -> MeshSizes:
+        """The sizes the count is estimated at: the scene's, but for a PneuNet whose walls (its thinnest rubber, t)
+        are thinner than its edge length, edges of THIN_WALL t counted within `size` of the chambers: gmsh
+        meshes a thin wall with edges about its thickness (module docstring)."""
+        near = THIN_WALL * self.body.thinnest if isinstance(self.body, PneuNet) else self.sizes.near
+        if near >= self.sizes.near:
+            return self.sizes
+        return MeshSizes(self.sizes.size, near, self.sizes.size)
+
+    def size_estimate(self) -> tuple[int, int]:
+        """(tetrahedra, nodes) estimated before meshing (module docstring)."""
+        tets = int(round(estimate_tets(self.solid(), self.estimate_sizes())))
+        nodes = tets / TETS_PER_NODE + (EDGES_PER_TET * tets if self.order == 2 else 0)
+        return tets, int(round(nodes))
+
+    def mesh(self) -> TetMesh:
+        """Mesh with gmsh (in the active limits.budget) and build the TetMesh (module docstring)."""
+        weight = QUADRATIC_WEIGHT if self.order == 2 else 1
+        cap = limits.element_cap(weight)
+        solid = self.solid()
+        meshed = mesh_solid(solid, self.sizes, MAX_TETS if cap is None else cap)
+        limits.check_mesh(len(meshed.tets), weight, "gmsh")
+        walls = {name: meshed.chambers[shape.group if isinstance(shape, MeshSurface) else name]
+                 for name, shape in self.chambers}
+        groups = {name: k for k, name in enumerate(meshed.region_names, start=1)}
+        return tet_mesh(meshed.vertices, meshed.tets, walls, regions=meshed.regions, order=self.order,
+                        clamp=self.clamp, tip=self.tip, rollers=self.rollers, region_groups=groups)
