@@ -10,7 +10,8 @@ Level 0 is gmsh's mesh of the solid (fem/gmsh_mesher.py) at size SIZE; level l +
 level l in eight at its edge midpoints (and every wall triangle in four; a curved chamber wall keeps level 0's
 facets: the study measures the elements' error on one geometry, the mesh's own), so the quadratic tetrahedra of level l have exactly the nodes of the linear ones
 of level l + 1. Per run: tip deflection (mean y displacement of the right face), chamber pressure at the final
-volume, wall time and Newton iterations; per element order the observed order of convergence of the tip from
+volume, wall and CPU time (the process's, all threads: the steadier figure on a shared machine) and
+Newton iterations; per element order the observed order of convergence of the tip from
 three nested levels, p = log2((t0 - t1) / (t1 - t2)), and every run's error against the reference (the
 finest quadratic run, listed with its own estimated error |t_fine - t_coarse| / (2^2 - 1)).
 
@@ -121,14 +122,14 @@ def scene_of(case: Case, level, order: int, nu: float) -> Scene:
 
 
 def run(case: Case, level, order: int, nu: float) -> dict:
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     result = api.simulate(scene_of(case, level, order, nu))
-    seconds = time.perf_counter() - start
+    seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
     mesh = result.mesh
     pressures = [result.history[f"{name}.pressure"][-1] for name in result.chamber_names]
     return {"tetrahedra": int(mesh.n_elements), "nodes": int(mesh.n_vertices), "dofs": 3 * int(mesh.n_vertices),
             "tip": float(result.tip_deflection), "pressure": float(np.mean(pressures)), "seconds": seconds,
-            "iterations": int(sum(s.iterations for s in result.solves)), "converged": bool(result.converged)}
+            "cpu_seconds": cpu, "iterations": int(sum(s.iterations for s in result.solves)), "converged": bool(result.converged)}
 
 
 def observed_order(tips: list[float]) -> float:
@@ -187,7 +188,8 @@ def main() -> None:
                 records.append(record)
                 print(f"{name} nu={nu} P{order} level {level}: {record['tetrahedra']} tetrahedra, {record['dofs']} "
                       f"DOFs, tip {record['tip']:+.5f}, pressure {record['pressure']:.1f}, "
-                      f"{record['seconds']:.1f} s, {record['iterations']} Newton iterations", flush=True)
+                      f"{record['seconds']:.1f} s ({record['cpu_seconds']:.1f} s CPU), {record['iterations']} Newton iterations",
+                      flush=True)
                 save_json(out / "accuracy_3d.json", {"machine": machine, "date": str(date.today()),
                                                      "increments": INCREMENTS, "runs": records})
     text = f"Machine: {machine}; {date.today()}; {INCREMENTS} increments per ramp.\n\n" + report(records)

@@ -154,11 +154,13 @@ class SkfemBody:
             self.seconds["solve"] += time.perf_counter() - start
         raise RuntimeError(f"scikit-fem Newton: no equilibrium at volume ratio {ratio} in {max_iterations} iterations")
 
-    def ramp(self, ratios, tol: float = 1e-6) -> tuple[np.ndarray, int]:
+    def ramp(self, ratios, tol: float = 1e-6, progress=None) -> tuple[np.ndarray, int]:
         """Equilibria at each volume ratio in turn from rest: the nodal displacements (n, 3) of the last, and
-        the Newton iterations in all."""
+        the Newton iterations in all; progress(ratio, iterations) after each."""
         u, total = np.zeros(self.basis.N), 0
         for ratio in ratios:
             u, iterations = self.solve(u, ratio, tol)
             total += iterations
+            if progress is not None:
+                progress(ratio, iterations)
         return u[self.basis.nodal_dofs].T, total

@@ -22,6 +22,11 @@ from ..render import COLOR_FIELDS, RENDERERS
 # "default" is SPEC.md's mesh and the solver's default tolerance (tests/test_cli.py checks they agree).
 QUALITY = {"draft": (0.005, 1, 1e-4), "default": (0.0012, 1, 1e-6), "high": (0.005, 2, 1e-6),
            "accurate": (0.0012, 2, 1e-9)}
+# The 3D presets: (tetrahedron edge length of a body meshed from shapes, element order, Newton tolerance), read
+# off the 3D accuracy study (docs/solid.md, benchmarks/accuracy_3d.py); QUALITIES gives a scene's by dimension.
+QUALITY_3D = {"draft": (0.3, 1, 1e-4), "default": (0.15, 1, 1e-6), "high": (0.3, 2, 1e-6),
+              "accurate": (0.15, 2, 1e-9)}
+QUALITIES = {2: QUALITY, 3: QUALITY_3D}
 MEASURE = {2: "area", 3: "volume"}  # what a chamber encloses, by dimension
 MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_iterations, simulate.MAX_CUTS)
 
@@ -49,6 +54,8 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quality", default="default", choices=list(QUALITY),
                    help="mesh density, element order and Newton tolerance, read off the accuracy-vs-time study: "
                         + "; ".join(f"{k}: max area {a:g}, order {o}, tol {t:g}" for k, (a, o, t) in QUALITY.items())
+                        + "; in 3D " + "; ".join(f"{k}: tetrahedron size {h:g}, order {o}, tol {t:g}"
+                                                 for k, (h, o, t) in QUALITY_3D.items())
                         + "; a quality other than the default adds _QUALITY to the result file names")
     p.add_argument("--max-area", type=float, default=None, help="Triangle's maximum triangle area (overrides --quality)")
     p.add_argument("--order", type=int, default=None, choices=(1, 2),
