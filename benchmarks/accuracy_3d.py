@@ -1,5 +1,5 @@
-"""What accuracy costs in 3D: linear against quadratic tetrahedra on nested refinements of a gmsh mesh, against
-the finest run as the reference, at nu = 0.45 and 0.499, for two bodies:
+"""What accuracy costs in 3D: linear against quadratic tetrahedra on nested refinements of a gmsh mesh, against a
+converged reference, at nu = 0.45 and 0.499, for two bodies:
 
     beam     the reference beam in 3D: the clamped 3.5 x 0.8 x 0.8 box with the ellipsoidal chamber of semi-axes
              (0.85, 0.22, 0.25) at (0, 0.15, 0), volume 1 -> 2x
@@ -8,14 +8,17 @@ the finest run as the reference, at nu = 0.45 and 0.499, for two bodies:
 
 Level 0 is gmsh's mesh of the solid (fem/gmsh_mesher.py) at size SIZE; level l + 1 splits every tetrahedron of
 level l in eight at its edge midpoints (and every wall triangle in four; a curved chamber wall keeps level 0's
-facets: the study measures the elements' error on one geometry, the mesh's own), so the quadratic tetrahedra of level l have exactly the nodes of the linear ones
-of level l + 1. Per run: tip deflection (mean y displacement of the right face), chamber pressure at the final
+facets: the study measures the elements' error on one geometry, the mesh's own; moving the new wall nodes onto
+the ellipsoid turns tetrahedra inside out at this size), so the quadratic tetrahedra of level l have exactly the
+nodes of the linear ones of level l + 1. Every ramp has INCREMENTS increments (the volume-controlled equilibrium
+does not depend on the path). Per run: tip deflection (mean y displacement of the right face), chamber pressure at the final
 volume, wall and CPU time (the process's, all threads: the steadier figure on a shared machine) and
-Newton iterations; per element order the observed order of convergence of the tip from
-three nested levels, p = log2((t0 - t1) / (t1 - t2)), and every run's error against the reference (the
-finest quadratic run, listed with its own estimated error |t_fine - t_coarse| / (2^2 - 1)).
+Newton iterations; every run's error against the reference: the Richardson extrapolation
+of the linear runs on three nested levels (with their observed order), or where there are not three, or they do
+not converge monotonically, the finest quadratic run.
 
-    python benchmarks/accuracy_3d.py [--cases beam pneunet] [--nu 0.45 0.499] [--out benchmarks/results]
+    python benchmarks/accuracy_3d.py [--cases beam pneunet] [--nu 0.45 0.499] [--runs 1:0 2:0 ...] [--out DIR]
+    python benchmarks/accuracy_3d.py --report a.json b.json ...    (one report of runs made apart)
 
 Progress lines as it goes; accuracy_3d.json is rewritten after every run (machine, date); accuracy_3d.md at the end.
 """
@@ -23,6 +26,7 @@ Progress lines as it goes; accuracy_3d.json is rewritten after every run (machin
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import sys
@@ -46,6 +50,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from solid_meshes import MeshOf  # noqa: E402
 
 E, STIFFNESS, INCREMENTS = 1e4, 1e6, 5
+# (order, level) per case: linear tetrahedra on three levels where affordable, quadratic ones on the first
+PLANS = {"beam": [(1, 0), (1, 1), (1, 2), (2, 0)], "pneunet": [(1, 0), (1, 1), (2, 0)]}
 # tetrahedron corners of the eight children of a split tetrahedron: corners 0-3, edge midpoints 4-9 in the order
 # (01, 02, 03, 12, 13, 23); four corner tetrahedra, the inner octahedron cut along its 02-13 diagonal
 EDGES = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
@@ -132,36 +138,47 @@ def run(case: Case, level, order: int, nu: float) -> dict:
             "cpu_seconds": cpu, "iterations": int(sum(s.iterations for s in result.solves)), "converged": bool(result.converged)}
 
 
-def observed_order(tips: list[float]) -> float:
-    """log2 of the ratio of successive differences over three nested levels (NaN if they do not shrink)."""
-    a, b = tips[-3] - tips[-2], tips[-2] - tips[-1]
-    return float(np.log2(a / b)) if a * b > 0 else float("nan")
+def richardson(values: list[float]) -> tuple[float, float]:
+    """(extrapolated value, observed order) from the last three of a nested sequence (h halved each time):
+    p = log2((v0 - v1) / (v1 - v2)), v = v2 + (v2 - v1) / (2^p - 1); (NaN, NaN) unless the differences shrink
+    monotonically."""
+    v0, v1, v2 = values[-3:]
+    if not 0 < (v1 - v2) / (v0 - v1) < 1:
+        return float("nan"), float("nan")
+    order = float(np.log2((v0 - v1) / (v1 - v2)))
+    return v2 + (v2 - v1) / (2 ** order - 1), order
+
+
+def reference(rows: list[dict], key: str) -> tuple[float, str]:
+    """The reference value of a quantity: the Richardson extrapolation of the linear runs on three levels where
+    they converge monotonically, else the quadratic run with the most DOFs (else the finest run)."""
+    linear = [r[key] for r in rows if r["order"] == 1]
+    if len(linear) >= 3:
+        value, order = richardson(linear)
+        if np.isfinite(value):
+            return value, f"Richardson of P1 levels {len(linear) - 3}-{len(linear) - 1}, observed order {order:.2f}"
+    finest = max(rows, key=lambda r: (r["order"], r["dofs"]))
+    return finest[key], f"P{finest['order']} level {finest['level']}"
+
+
+def heading(machine: str, day: str) -> str:
+    return f"Machine: {machine}; {day}; {INCREMENTS} increments per ramp.\n\n"
 
 
 def report(records: list[dict]) -> str:
     lines = []
     for (case, nu) in dict.fromkeys((r["case"], r["nu"]) for r in records):
-        rows = [r for r in records if r["case"] == case and r["nu"] == nu]
-        quadratic = [r for r in rows if r["order"] == 2]
-        reference = max(quadratic or rows, key=lambda r: r["nodes"])
-        same = [r for r in quadratic if r is not reference]
-        estimate = abs(reference["tip"] - same[-1]["tip"]) / 3 if same else float("nan")
-        lines += [f"### {case}, nu = {nu}", "",
-                  f"Reference: P{reference['order']} level {reference['level']}, tip {reference['tip']:+.5f} "
-                  f"(estimated error {estimate:.1e}), pressure {reference['pressure']:.1f}.", "",
-                  "| elements | level | tetrahedra | DOFs | tip | tip error | pressure | pressure error | s | "
-                  "Newton it |", "|---|---|---|---|---|---|---|---|---|---|"]
+        rows = sorted((r for r in records if r["case"] == case and r["nu"] == nu), key=lambda r: (r["order"], r["level"]))
+        tip, tip_from = reference(rows, "tip")
+        pressure, pressure_from = reference(rows, "pressure")
+        lines += [f"### {case}, nu = {nu}", "", f"Reference tip {tip:+.5f} ({tip_from}); pressure {pressure:.1f} "
+                  f"({pressure_from}).", "",
+                  "| elements | level | tetrahedra | DOFs | tip | tip error | pressure | pressure error | s | CPU s | "
+                  "Newton it |", "|---|---|---|---|---|---|---|---|---|---|---|"]
         for r in rows:
-            tip_error = abs(r["tip"] / reference["tip"] - 1)
-            pressure_error = abs(r["pressure"] / reference["pressure"] - 1)
             lines.append(f"| P{r['order']} | {r['level']} | {r['tetrahedra']} | {r['dofs']} | {r['tip']:+.5f} | "
-                         f"{tip_error:.2%} | {r['pressure']:.1f} | {pressure_error:.2%} | {r['seconds']:.1f} | "
-                         f"{r['iterations']} |")
-        for order in (1, 2):
-            tips = [r["tip"] for r in rows if r["order"] == order]
-            if len(tips) >= 3:
-                lines.append(f"\nObserved order of the P{order} tip over its last three levels: "
-                             f"{observed_order(tips):.2f}")
+                         f"{abs(r['tip'] / tip - 1):.2%} | {r['pressure']:.1f} | {abs(r['pressure'] / pressure - 1):.2%} | "
+                         f"{r['seconds']:.1f} | {r['cpu_seconds']:.1f} | {r['iterations']} |")
         lines.append("")
     return "\n".join(lines)
 
@@ -170,19 +187,28 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--cases", nargs="+", default=["beam", "pneunet"], choices=["beam", "pneunet"])
     parser.add_argument("--nu", nargs="+", type=float, default=[0.45, 0.499])
+    parser.add_argument("--runs", nargs="+", default=None, metavar="ORDER:LEVEL",
+                        help="the runs to make (default: each case's plan, PLANS)")
+    parser.add_argument("--report", nargs="+", default=None, metavar="JSON",
+                        help="make no runs: write accuracy_3d.md of the runs in these accuracy_3d.json files")
     parser.add_argument("--out", default="benchmarks/results")
     args = parser.parse_args()
     out = prepare_directory(args.out)
+    if args.report:
+        loaded = [json.loads(Path(path).read_text()) for path in args.report]
+        records = [r for data in loaded for r in data["runs"]]
+        save_text(out / "accuracy_3d.md", heading(loaded[0]["machine"], loaded[0]["date"]) + report(records))
+        save_json(out / "accuracy_3d.json", {**loaded[0], "runs": records})
+        return
     runtime.init("cpu")
     machine = f"{platform.node()}, {platform.machine()}, {os.cpu_count()} CPUs"
-    # (order, level) per case: the linear tetrahedra on three levels where affordable, the quadratic on two
-    plans = {"beam": [(1, 0), (1, 1), (1, 2), (2, 0), (2, 1)], "pneunet": [(1, 0), (1, 1), (2, 0)]}
     records = []
     for name in args.cases:
         case = case_of(name)
-        levels = meshes(case, 1 + max(level + order - 1 for order, level in plans[name]))
+        plan = PLANS[name] if args.runs is None else [tuple(int(k) for k in run.split(":")) for run in args.runs]
+        levels = meshes(case, 1 + max(level + order - 1 for order, level in plan))
         for nu in args.nu:
-            for order, level in plans[name]:
+            for order, level in plan:
                 record = {"case": name, "nu": nu, "order": order, "level": level,
                           **run(case, levels[level], order, nu)}
                 records.append(record)
@@ -192,7 +218,7 @@ def main() -> None:
                       flush=True)
                 save_json(out / "accuracy_3d.json", {"machine": machine, "date": str(date.today()),
                                                      "increments": INCREMENTS, "runs": records})
-    text = f"Machine: {machine}; {date.today()}; {INCREMENTS} increments per ramp.\n\n" + report(records)
+    text = heading(machine, str(date.today())) + report(records)
     print(text)
     save_text(out / "accuracy_3d.md", text)
 
