@@ -5,7 +5,8 @@ on both faces normal to z), linear and quadratic, on the reference mesh refined 
     python benchmarks/plane_strain_3d.py [--levels 3] [--quadratic-levels 1] [--out benchmarks/results]
 
 Prints a Markdown table (elements, 2D and 3D tip deflections, their gap, each one's error against the converged
-2D tip -0.25826, wall times) and writes it with the machine and date to plane_strain_3d.md and .json. The 3D
+2D tip -0.25826, wall times) and writes it with the machine and date to plane_strain_3d.md and .json
+(plane_strain_3d_a<max area>.md where level 0 is not the reference mesh). The 3D
 scene is a mesh-file scene (fem/meshfile.write_mesh, then MeshGeometry), as a user would write it.
 
 The converged 3D value: Richardson extrapolation of the tips t0, t1, t2 on three nested levels (h halved each
@@ -110,8 +111,9 @@ def main() -> None:
                           f"{value:+.5f} (observed order {observed:.2f}), {abs(value / CONVERGED - 1):.2%} from the "
                           f"converged 2D {CONVERGED}")
     print(heading + table + notes)
-    save_text(out / "plane_strain_3d.md", heading + table + notes + "\n")
-    save_json(out / "plane_strain_3d.json", {"machine": platform.node(), "date": str(date.today()), "max_area": args.max_area,
+    stem = "plane_strain_3d" + ("" if args.max_area == BeamGeometry.max_area else f"_a{args.max_area:g}")
+    save_text(out / f"{stem}.md", heading + table + notes + "\n")
+    save_json(out / f"{stem}.json", {"machine": platform.node(), "date": str(date.today()), "max_area": args.max_area,
                                              "runs": data, "extrapolated": extrapolated})
 
 
