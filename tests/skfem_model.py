@@ -14,8 +14,8 @@ cavity, hence the minus sign):
     V = -1/3 int x . cof F N dA,   dV[v] = -int v . cof F N dA,   d2V[v, w] = -int v . dcof[grad w] N dA,
 
 and the clamp as springs 1/2 K |u|^2 on the clamped nodes. Newton: the full (unprojected) Hessian,
-k dV dV^T + k (V - V*) d2V for the cavity, solved by scipy.sparse.linalg.spsolve, no line search; converged
-when |gradient| <= tol x the sum of the three forces' norms.
+k dV dV^T + k (V - V*) d2V for the cavity, solved by scipy.sparse.linalg.spsolve, the step halved until the
+gradient's norm decreases; converged when |gradient| <= tol x the sum of the three forces' norms.
 """
 
 from __future__ import annotations
@@ -120,38 +120,54 @@ class SkfemBody:
     def volume(self, u: np.ndarray) -> float:
         return float(asm(cavity_volume, self.wall_basis, u=self.wall_basis.interpolate(u)))
 
-    def residual_and_tangent(self, u: np.ndarray, target: float):
-        """The energy's gradient and Hessian at displacements u with the cavity's volume target V*, and the sum
-        of the elastic, cavity and clamp forces' norms (the scale convergence is measured against)."""
+    def forces(self, u: np.ndarray, target: float) -> tuple[np.ndarray, float, float]:
+        """The energy's gradient at displacements u with the cavity's volume target V*, the sum of the elastic,
+        cavity and clamp forces' norms (the scale convergence is measured against), and V - V*."""
         start = time.perf_counter()
-        w = self.fields(u)
-        on_wall = self.wall_basis.interpolate(u)
-        elastic = asm(internal_force, self.basis, **w)
-        hessian = asm(tangent, self.basis, **w)
+        elastic = asm(internal_force, self.basis, **self.fields(u))
         excess = self.volume(u) - target
+        dV = asm(cavity_gradient, self.wall_basis, u=self.wall_basis.interpolate(u))
+        clamp = np.zeros(self.basis.N)
+        clamp[self.clamp_dofs] = self.clamp_stiffness * u[self.clamp_dofs]
+        forces = (elastic, self.stiffness * excess * dV, clamp)
+        self.seconds["assembly"] += time.perf_counter() - start
+        return sum(forces), sum(np.linalg.norm(f) for f in forces), excess
+
+    def hessian(self, u: np.ndarray, excess: float) -> sp.csr_matrix:
+        """The energy's Hessian at u, where the cavity's volume exceeds its target by `excess`."""
+        start = time.perf_counter()
+        on_wall = self.wall_basis.interpolate(u)
         dV = asm(cavity_gradient, self.wall_basis, u=on_wall)
-        d2V = asm(cavity_hessian, self.wall_basis, u=on_wall)
         wall = np.flatnonzero(dV)
         rank_one = sp.coo_matrix((self.stiffness * np.outer(dV[wall], dV[wall]).ravel(),
-                                  (np.repeat(wall, len(wall)), np.tile(wall, len(wall)))), shape=hessian.shape)
-        hessian = hessian + self.stiffness * excess * d2V + rank_one
+                                  (np.repeat(wall, len(wall)), np.tile(wall, len(wall)))), shape=(len(u), len(u)))
         clamp = np.zeros(self.basis.N)
         clamp[self.clamp_dofs] = self.clamp_stiffness
-        forces = (elastic, self.stiffness * excess * dV, clamp * u)
-        hessian = (hessian + sp.diags(clamp)).tocsr()
+        hessian = (asm(tangent, self.basis, **self.fields(u))
+                   + self.stiffness * excess * asm(cavity_hessian, self.wall_basis, u=on_wall)
+                   + rank_one + sp.diags(clamp)).tocsr()
         self.seconds["assembly"] += time.perf_counter() - start
-        return sum(forces), hessian, sum(np.linalg.norm(f) for f in forces)
+        return hessian
 
-    def solve(self, u: np.ndarray, ratio: float, tol: float = 1e-6, max_iterations: int = 30) -> tuple[np.ndarray, int]:
+    def solve(self, u: np.ndarray, ratio: float, tol: float = 1e-6, max_iterations: int = 40) -> tuple[np.ndarray, int]:
         """Newton from u to the equilibrium at the volume ratio V* / V_rest, until |gradient| <= tol x the sum of
-        the forces' norms (taichi-pneuma's criterion); (displacements, iterations)."""
+        the forces' norms (taichi-pneuma's criterion), each step halved until |gradient| decreases (at most
+        ten times); (displacements, iterations)."""
+        target = ratio * self.rest_volume
+        gradient, scale, excess = self.forces(u, target)
         for iteration in range(max_iterations):
-            gradient, hessian, scale = self.residual_and_tangent(u, ratio * self.rest_volume)
             if np.linalg.norm(gradient) <= tol * scale:
                 return u, iteration
+            hessian = self.hessian(u, excess)
             start = time.perf_counter()
-            u = u - spsolve(hessian, gradient)
+            step = spsolve(hessian, gradient)
             self.seconds["solve"] += time.perf_counter() - start
+            for halving in range(11):
+                trial = u - step / 2 ** halving
+                trial_gradient, trial_scale, trial_excess = self.forces(trial, target)
+                if np.linalg.norm(trial_gradient) < np.linalg.norm(gradient):
+                    break
+            u, gradient, scale, excess = trial, trial_gradient, trial_scale, trial_excess
         raise RuntimeError(f"scikit-fem Newton: no equilibrium at volume ratio {ratio} in {max_iterations} iterations")
 
     def ramp(self, ratios, tol: float = 1e-6, progress=None) -> tuple[np.ndarray, int]:
