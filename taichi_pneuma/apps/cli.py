@@ -24,8 +24,8 @@ QUALITY = {"draft": (0.005, 1, 1e-4), "default": (0.0012, 1, 1e-6), "high": (0.0
            "accurate": (0.0012, 2, 1e-9)}
 # The 3D presets: (tetrahedron edge length of a body meshed from shapes, element order, Newton tolerance), read
 # off the 3D accuracy study (docs/solid.md, benchmarks/accuracy_3d.py); QUALITIES gives a scene's by dimension.
-QUALITY_3D = {"draft": (0.3, 1, 1e-4), "default": (0.15, 1, 1e-6), "high": (0.3, 2, 1e-6),
-              "accurate": (0.15, 2, 1e-9)}
+QUALITY_3D = {"draft": (0.3, 1, 1e-4), "default": (0.3, 2, 1e-6), "high": (0.15, 2, 1e-6),
+              "accurate": (0.1, 2, 1e-9)}
 QUALITIES = {2: QUALITY, 3: QUALITY_3D}
 MEASURE = {2: "area", 3: "volume"}  # what a chamber encloses, by dimension
 MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_iterations, simulate.MAX_CUTS)
