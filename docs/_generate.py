@@ -54,6 +54,13 @@ RESULTS_PAGES = {
     "plane_strain_3d": ("accuracy", "Plane strain in 3D: tetrahedra against triangles",
                         ("benchmarks/plane_strain_3d.py", None),
                         "python benchmarks/plane_strain_3d.py --out benchmarks/results"),
+    "plane_strain_3d_a0.005": ("accuracy", "Plane strain in 3D: the converged values, by extrapolation",
+                               ("benchmarks/plane_strain_3d.py", None),
+                               "python benchmarks/plane_strain_3d.py --max-area 0.005 --out benchmarks/results"),
+    "accuracy_3d": ("accuracy", "What accuracy costs in 3D: linear or quadratic tetrahedra",
+                    ("benchmarks/accuracy_3d.py", None), "python benchmarks/accuracy_3d.py --report"),
+    "skfem_3d_coarse": ("performance", "3D against scikit-fem + SciPy: the same model, mesh and ramp",
+                        ("benchmarks/skfem_3d.py", None), "python benchmarks/skfem_3d.py --coarse"),
     "stability": ("stability", "The hard cases", ("benchmarks/stability.py", None),
                   "python benchmarks/stability.py --out benchmarks/results"),
 }

@@ -22,6 +22,10 @@ from ..render import COLOR_FIELDS, RENDERERS
 # "default" is the reference beam's mesh and the solver's default tolerance (tests/test_cli.py checks they agree).
 QUALITY = {"draft": (0.005, 1, 1e-4), "default": (0.0012, 1, 1e-6), "high": (0.005, 2, 1e-6),
            "accurate": (0.0012, 2, 1e-9)}
+# The 3D presets: (tetrahedron edge length of a body meshed from shapes, element order, Newton tolerance), read
+# off the 3D accuracy study (docs/solid.md, benchmarks/accuracy_3d.py).
+QUALITY_3D = {"draft": (0.3, 1, 1e-4), "default": (0.3, 2, 1e-6), "high": (0.15, 2, 1e-6),
+              "accurate": (0.1, 2, 1e-9)}
 MEASURE = {2: "area", 3: "volume"}  # what a chamber encloses, by dimension
 MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_iterations, simulate.MAX_CUTS)
 
@@ -33,6 +37,13 @@ def app_parser(prog: str, doc: str) -> argparse.ArgumentParser:
                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     return p
+
+
+class GivenQuality(argparse.Action):
+    """--quality, remembering that it was given (args.quality_given): only then does it remesh a 3D scene file."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        namespace.quality, namespace.quality_given = values, True
 
 
 def quality_stem(args: argparse.Namespace) -> str:
@@ -49,10 +60,13 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--E", type=float, default=1e4, help="Young's modulus")
     p.add_argument("--nu", type=float, default=0.45, help="Poisson's ratio, in (-1, 0.5)")
     p.add_argument("--k", type=float, default=1e5, help="chamber stiffness (area control penalty)")
-    p.add_argument("--quality", default="default", choices=list(QUALITY),
+    p.add_argument("--quality", default="default", choices=list(QUALITY), action=GivenQuality,
                    help="mesh density, element order and Newton tolerance, read off the accuracy-vs-time study: "
                         + "; ".join(f"{k}: max area {a:g}, order {o}, tol {t:g}" for k, (a, o, t) in QUALITY.items())
-                        + "; a quality other than the default adds _QUALITY to the result file names")
+                        + "; in 3D " + "; ".join(f"{k}: tetrahedron size {h:g}, order {o}, tol {t:g}"
+                                                 for k, (h, o, t) in QUALITY_3D.items())
+                        + " (given, it remeshes a 3D scene file's body from shapes; without it the scene keeps "
+                          "its [mesh]); a quality other than the default adds _QUALITY to the result file names")
     p.add_argument("--max-area", type=float, default=None, help="Triangle's maximum triangle area (overrides --quality)")
     p.add_argument("--order", type=int, default=None, choices=(1, 2),
                    help="1: linear triangles, 2: quadratic triangles (overrides --quality)")
@@ -141,6 +155,15 @@ def scene_for(args: argparse.Namespace, cy: float):
     return scene
 
 
+def with_quality_3d(scene, args: argparse.Namespace):
+    """The scene with the tetrahedron size and element order of the 3D --quality preset, where --quality was given
+    and the body is meshed from shapes (a mesh file's tetrahedra are its own); else the scene as it is."""
+    if not getattr(args, "quality_given", False) or scene.dim != 3 or not hasattr(scene.geometry, "sizes"):
+        return scene
+    size, order, _ = QUALITY_3D[args.quality]
+    return scene.with_values({"mesh.size": size, "mesh.order": order})
+
+
 def scene_of_flags(args: argparse.Namespace):
     """The validated scene of the flags: --scene (or the reference beam of the flags, its chamber at --cy)
     with every --set applied, then checked against the resource limits (which --set may have raised)."""
@@ -148,7 +171,7 @@ def scene_of_flags(args: argparse.Namespace):
         from ..api import load_scene
 
         check_flags(args)
-        scene = apply_set(load_scene(args.scene), args.set)
+        scene = apply_set(with_quality_3d(load_scene(args.scene), args), args.set)
     else:
         scene = apply_set(scene_for(args, args.cy), args.set)
     limits.check_scene(scene, args.max_triangles, args.max_increments)

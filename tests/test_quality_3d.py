@@ -1,0 +1,28 @@
+"""--quality on 3D scene files: given, it remeshes a body from shapes at the 3D preset's size and order; not given,
+the scene keeps its own [mesh]; a mesh file's tetrahedra are never remeshed."""
+
+import pytest
+
+from taichi_pneuma.apps.cli import QUALITY_3D, scene_of_flags
+from taichi_pneuma.apps.inflate import parser
+
+
+def scene(*flags):
+    return scene_of_flags(parser().parse_args(list(flags)))
+
+
+@pytest.mark.parametrize("quality", list(QUALITY_3D))
+def test_a_given_quality_remeshes_a_body_from_shapes(quality):
+    size, order, _ = QUALITY_3D[quality]
+    geometry = scene("--scene", "pneunet_3d", "--quality", quality).geometry
+    assert (geometry.sizes.size, geometry.order) == (size, order)
+
+
+def test_without_quality_the_scene_keeps_its_mesh_and_set_overrides_the_preset():
+    own = scene("--scene", "pneunet_3d").geometry
+    assert (own.sizes.size, own.order) == (0.2, 1)  # pneunet_3d.toml's [mesh]
+    assert scene("--scene", "pneunet_3d", "--quality", "draft", "--set", "mesh.size=0.25").geometry.sizes.size == 0.25
+
+
+def test_a_mesh_file_keeps_its_tetrahedra():
+    assert scene("--scene", "beam_3d", "--quality", "accurate").geometry.order == 1
