@@ -58,7 +58,7 @@ RESULTS_PAGES = {
                                ("benchmarks/plane_strain_3d.py", None),
                                "python benchmarks/plane_strain_3d.py --max-area 0.005 --out benchmarks/results"),
     "accuracy_3d": ("accuracy", "What accuracy costs in 3D: linear or quadratic tetrahedra",
-                    ("benchmarks/accuracy_3d.py", None), "python benchmarks/accuracy_3d.py --report"),
+                    ("benchmarks/accuracy_3d.py", None), "python benchmarks/accuracy_3d.py"),
     "skfem_3d_coarse": ("performance", "3D against scikit-fem + SciPy: the same model, mesh and ramp",
                         ("benchmarks/skfem_3d.py", None), "python benchmarks/skfem_3d.py --coarse"),
     "stability": ("stability", "The hard cases", ("benchmarks/stability.py", None),
