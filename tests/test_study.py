@@ -18,6 +18,9 @@ from taichi_pneuma.io.scenefile import read_scene
 
 CY = "chambers[0].center[1]"
 COARSE = ["--steps", "11", "--max-area", "0.01"]  # 380 vertices, 10 increments: ~0.1 s a ramp
+# a worker's run and the same run here agree to round-off (parallel sums in a thread-dependent order), and at worst
+# to the Newton tolerance (1e-6) should they stop after different iteration counts
+SAME = 1e-6
 
 
 def read_rows(path):
@@ -141,7 +144,7 @@ def test_cy_sweep_on_the_process_pool_gives_the_rows_of_single_runs_records_a_fa
         assert alone["error"] is None and alone["increments"] == 10
         assert rows[cy]["converged"] == "true" and rows[cy]["error"] == "" and rows[cy]["increments"] == "10"
         for column in ("tip_dy", "tip_dx", "main.area_ratio", "main.peak_pressure"):
-            assert float(rows[cy][column]) == pytest.approx(alone[column], rel=1e-9, abs=1e-12), (cy, column)
+            assert float(rows[cy][column]) == pytest.approx(alone[column], rel=SAME, abs=SAME), (cy, column)
     assert float(rows[0.15]["tip_dy"]) < -0.1 < 0.1 < float(rows[-0.15]["tip_dy"])  # curls away from the chamber
     assert float(rows[0.15]["main.area_ratio"]) == pytest.approx(3.5, abs=0.02)
     assert "not inside the body" in rows[0.35]["error"] and rows[0.35]["tip_dy"] == ""  # recorded, not fatal
@@ -170,7 +173,7 @@ def test_cy_sweep_on_the_process_pool_gives_the_rows_of_single_runs_records_a_fa
     assert json.loads((out / "sweep.json").read_text())["result"]["ran"] == 1
     again = read_rows(out / "sweep.csv")
     assert [r[CY] for r in again] == ["-0.15", "0.0", "0.15", "0.35"]
-    assert float(by_height(again)[0.15]["tip_dy"]) == pytest.approx(single[0.15]["tip_dy"], rel=1e-9)
+    assert float(by_height(again)[0.15]["tip_dy"]) == pytest.approx(single[0.15]["tip_dy"], rel=SAME)
     assert [r["seconds"] for r in again if r[CY] != "0.15"] == [r["seconds"] for r in read_rows_text(kept)]
 
     # another base scene under the same name is refused, the rows kept
@@ -213,7 +216,7 @@ def test_cy_sweep_on_a_local_ray_gives_the_rows_of_single_runs(tmp_path):
     single = coarse_rows((-0.15, 0.0, 0.15))
     assert sorted(rows) == sorted(single)
     for cy, alone in single.items():
-        assert float(rows[cy]["tip_dy"]) == pytest.approx(alone["tip_dy"], rel=1e-9, abs=1e-12) and rows[cy]["error"] == ""
+        assert float(rows[cy]["tip_dy"]) == pytest.approx(alone["tip_dy"], rel=SAME, abs=SAME) and rows[cy]["error"] == ""
     record = json.loads((out / "sweep.json").read_text())
     assert record["executor"]["executor"] == "ray" and record["executor"]["ray_cpus"] == 2
     assert record["versions"]["ray"] and record["result"]["ran"] == 3
