@@ -1,4 +1,5 @@
-"""Tests run on Taichi's CPU backend (float64)."""
+"""Tests run on Taichi's CPU backend (float64). The reference scene's full ramps are solved once per session
+and shared (reference_ramp)."""
 
 import pytest
 
@@ -8,3 +9,22 @@ from taichi_pneuma import runtime
 @pytest.fixture(scope="session", autouse=True)
 def taichi_cpu():
     runtime.init("cpu")
+
+
+@pytest.fixture(scope="session")
+def reference_ramp(taichi_cpu):
+    """reference_ramp(cy): (built scene, Result) of the reference scene's full ramp (35 increments to 3.5x on
+    its 1632-vertex mesh) with the chamber at height cy, solved the first time it is asked for. Callers read
+    it and leave it as it is."""
+    from taichi_pneuma.scene import reference_scene
+    from taichi_pneuma.solve.simulate import run_schedule
+
+    ramps = {}
+
+    def ramp(cy: float):
+        if cy not in ramps:
+            built = reference_scene(cy=cy).build()
+            ramps[cy] = built, run_schedule(built)
+        return ramps[cy]
+
+    return ramp

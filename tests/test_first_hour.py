@@ -191,9 +191,9 @@ def test_no_video_writes_no_picture_and_everything_else(tmp_path):
             "inflate_cy+0.15_scene.toml", "inflate_cy+0.15.pvd"} <= set(written)
 
 
-def test_reach_has_no_bar_in_a_piped_log_and_follows_color(tmp_path):
-    """Two targets (the bar's case), output piped: no bar text, no carriage returns. --color changes the
-    picture."""
+def test_reach_has_no_bar_in_a_piped_log_and_follows_color(tmp_path, capsys):
+    """Two targets (the bar's case), output to a stream that is not a terminal (as a pipe or a log file):
+    no bar text, no carriage returns. --color changes the picture."""
     built = tp.reference_scene(max_area=0.01).build()
     tips = [tp.simulate(tp.reference_scene(max_area=0.01, growth=g, steps=2)).positions[-1][built.mesh.tip].mean(axis=0)
             for g in (2.0, 3.0)]
@@ -202,11 +202,11 @@ def test_reach_has_no_bar_in_a_piped_log_and_follows_color(tmp_path):
     pngs = []
     for color in ("stretch", "detF"):
         out = tmp_path / color
-        proc = subprocess.run([sys.executable, "-m", "taichi_pneuma.apps.reach", "--max-area", "0.01", "--targets",
-                               str(csv), "--color", color, "--size", "320x160", "--out", str(out)],
-                              capture_output=True, text=True)
-        assert proc.returncode == 0, proc.stderr
-        assert "\r" not in proc.stdout + proc.stderr and "reaching" not in proc.stdout + proc.stderr
+        code = reach.main(["--max-area", "0.01", "--targets", str(csv), "--color", color, "--size", "320x160",
+                           "--out", str(out)])
+        printed = capsys.readouterr()
+        assert code == 0, printed.err
+        assert "\r" not in printed.out + printed.err and "reaching" not in printed.out + printed.err
         pngs.append(iio.imread(out / "reach_cy+0.15.png"))
     assert not np.array_equal(*pngs)
 

@@ -233,7 +233,7 @@ def test_cheap_bases_run(bases_outcomes):
     assert bases_outcomes == {name: (0, [], []) for name in BASES}
 
 
-@settings(max_examples=300, deadline=timedelta(seconds=TIME_BOUND), derandomize=True, database=None,
+@settings(max_examples=100, deadline=timedelta(seconds=TIME_BOUND), derandomize=True, database=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(st.data())
 def test_mutated_scene_files_run_or_stop_with_one_error_line(bases_outcomes, data):

@@ -1,23 +1,18 @@
-"""The reference ramp for the three chamber placements, against the reference figures."""
+"""The reference ramp for the three chamber placements, against the reference figures (the ramps are
+conftest's reference_ramp, shared with the other tests that need them)."""
 
 import numpy as np
 import pytest
 
-from taichi_pneuma.scene import reference_scene
 from taichi_pneuma.solve.newton import NewtonOptions
-from taichi_pneuma.solve.simulate import run_schedule
 
 pytestmark = pytest.mark.slow
 TOL = NewtonOptions().tol
 
 
 @pytest.fixture(scope="module")
-def ramps():
-    results = {}
-    for cy in (0.15, 0.0, -0.15):
-        built = reference_scene(cy=cy).build()
-        results[cy] = (built, run_schedule(built))
-    return results
+def ramps(reference_ramp):
+    return {cy: reference_ramp(cy) for cy in (0.15, 0.0, -0.15)}
 
 
 @pytest.mark.parametrize("cy, tip", [(0.15, -0.278), (0.0, -0.001), (-0.15, 0.278)])
@@ -34,6 +29,15 @@ def test_area_after_ramp_and_peak_pressure(ramps):
     built, result = ramps[0.15]
     assert result.steps[-1].chambers["main"].area == pytest.approx(2.052, abs=0.005)
     assert result.peak_pressure == pytest.approx(294.8, rel=0.01)
+
+
+def test_the_summary_gives_the_mesh_terms_and_chamber_areas(ramps):
+    """The figures the reference file's run reports (reference_beam.toml is this scene: test_scenes.py)."""
+    summary = ramps[0.15][1].summary()
+    assert summary["vertices"] == 1632 and summary["triangles"] == 2976
+    assert summary["terms"] == ["elastic", "chamber:main", "clamp"]
+    assert summary["chambers"]["main"]["rest_area"] == pytest.approx(0.587, abs=5e-4)
+    assert summary["chambers"]["main"]["final_area"] == pytest.approx(2.052, abs=0.005)
 
 
 def test_up_and_down_chambers_are_mirror_images(ramps):

@@ -32,20 +32,9 @@ def run_scene_cli(name, tmp_path):
 
 
 def test_reference_file_is_the_spec_scene():
+    """So its run is the reference ramp, whose figures test_reference.py checks."""
     assert dataclasses.replace(load_scene(SCENES / "reference_beam.toml"), name="x") == \
         dataclasses.replace(reference_scene(cy=0.15), name="x")
-
-
-@pytest.mark.slow
-def test_reference_file_reproduces_the_core_figures(tmp_path):
-    summary, history, _ = run_scene_cli("reference_beam", tmp_path)
-    assert summary["vertices"] == 1632 and summary["triangles"] == 2976
-    assert summary["terms"] == ["elastic", "chamber:main", "clamp"]
-    main_chamber = summary["chambers"]["main"]
-    assert main_chamber["rest_area"] == pytest.approx(0.587, abs=5e-4)
-    assert main_chamber["final_area"] == pytest.approx(2.052, abs=0.005)
-    assert summary["tip_deflection"] == pytest.approx(-0.278, abs=0.003)
-    assert summary["peak_pressure"] == pytest.approx(294.8, rel=0.01)
 
 
 def test_bidirectional_tip_goes_down_back_then_up(tmp_path):
