@@ -9,11 +9,12 @@ Rendering: the PneuNet's surface (outer faces and chamber walls) bent by an anal
 GGUI's scene (lavapipe on a CPU-only machine); ms per frame after one warm-up frame, wall-clock and
 CPU time of the process (all its threads: lavapipe's included), the latter steadier on a shared machine. With a display
 (DISPLAY set; e.g. Xvfb), the interactive window's redraw rate on the coarse PneuNet (six sliders, the
-camera spinning, no solve). The live loop without a window (the interactive window's work per frame: a
-warm-started Newton solve at the moved slider, then the shaded triangles drawn offscreen): the coarse PneuNet
-scene, its six chambers' pressure slider dragged from 0 to 900 Pa in --live-frames frames, ms per frame of
-the solve and of the drawing, each 3D view, and the frames per second of both together. Wall times on a
-shared machine: compare ratios within one run.
+camera spinning, no solve), and with the live solve. The live loop without a window (the interactive window's
+work per frame: the solve at the moved slider, then the shaded triangles drawn offscreen and read back): the
+coarse PneuNet scene, its six chambers' pressure slider dragged from 0 to 900 Pa in --live-frames frames, ms
+per frame of the solve and of the drawing, each 3D view, for a full Newton solve per move and for the
+window's one Newton step per frame (render.interactive.LiveEquilibrium, then held until it converges), and
+the frames per second of solve and drawing together. Wall times on a shared machine: compare ratios within one run.
 """
 
 import argparse
@@ -56,15 +57,12 @@ def outer_faces(mesh) -> np.ndarray:
     return np.array([face for face in mesh.surface[:, :3].tolist() if tuple(sorted(face)) not in walls])
 
 
-def live(frames: int, size: float = 0.3, peak: float = 900.0) -> list[dict]:
-    """The interactive loop's work per frame, headless (module docstring): a record per 3D view and Newton
-    tolerance (the default, and the 2D live views' LIVE_TOL), wall and CPU time (the steadier on a shared
-    machine)."""
+def live_scene(size: float = 0.3, peak: float = 900.0):
+    """The coarse PneuNet (gmsh at edge `size`), its six chambers under pressure control (to `peak` Pa), one
+    material (the scene's stiffer layer aside): (built scene, outer faces, chamber walls)."""
     from taichi_pneuma.apps.bench import Meshed
     from taichi_pneuma.fem.tetmesh import tet_mesh
     from taichi_pneuma.scene import ChamberControl, Material, Scene
-    from taichi_pneuma.render.interactive import LIVE_TOL
-    from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
     from taichi_pneuma.solve.schedule import ChamberSchedule
 
     meshed = mesh_solid(PneuNet().solid(), MeshSizes(size))
@@ -72,44 +70,90 @@ def live(frames: int, size: float = 0.3, peak: float = 900.0) -> list[dict]:
     geometry = Meshed(tet_mesh(meshed.vertices, meshed.tets, meshed.chambers, meshed.boundary),
                       tuple((name, None) for name in names))
     controls = tuple(ChamberControl(ChamberSchedule("pressure", ((1, peak),))) for _ in names)
-    built = Scene(geometry, controls, 1, Material(1e4, 0.45)).build()  # one material (the scene's stiffer layer aside)
+    built = Scene(geometry, controls, 1, Material(1e4, 0.45)).build()
+    return built, outer_faces(built.mesh), np.concatenate(built.mesh.chambers)[:, :3]
+
+
+def live(frames: int, peak: float = 900.0, idle: int = 30) -> list[dict]:
+    """The interactive loop's work per frame, headless (module docstring): a record per 3D view and solve mode,
+    wall and CPU time (the steadier on a shared machine). Modes: "full Newton" solves to the live tolerance at
+    every slider move (warm-started); "one step" is the window's LiveEquilibrium (one Newton step per frame, the
+    previous factorisation reused while the slider moves), followed by idle frames (at most `idle`) until it
+    converges at the last command; its distance from the full solve there is recorded."""
+    from taichi_pneuma.render.interactive import LIVE_TOL, LiveEquilibrium
+    from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
+
+    built, boundary, walls = live_scene(peak=peak)
     mesh = built.mesh
     camera = Camera().fitted(mesh.vertices, 960, 640, margin=0.2)
-    boundary = outer_faces(mesh)
-    faces, walls = boundary[section_faces(mesh.vertices, boundary, camera)], np.concatenate(mesh.chambers)[:, :3]
+    faces = boundary[section_faces(mesh.vertices, boundary, camera)]
+    command = np.full(len(built.chambers), peak)
+    built.set_commands(command)
+    reference, _ = NewtonSolver(built.model, NewtonOptions()).solve(np.zeros_like(mesh.vertices))
     records = []
-    for backend, tol in itertools.product(("numpy", "ggui"), (NewtonOptions.tol, LIVE_TOL)):
+    for backend, mode in itertools.product(("numpy", "ggui"), ("full Newton", "one step")):
         try:
             view = open_view(backend, 960, 640, log=lambda _: None)
         except PneumaInputError as exc:
             print(f"{backend}: {exc}")
             continue
-        solver = NewtonSolver(built.model, NewtonOptions(tol=tol))
-        u = np.zeros_like(mesh.vertices)
-        solve_s, draw_s, cpu_s, iterations, phases = [], [], [], [], collections.Counter()
+        state = LiveEquilibrium(built, NewtonOptions(tol=LIVE_TOL))
+        solver = state.solver
+
+        def step(commands):
+            if mode == "one step":
+                state.frame(commands)
+                return state.iterations
+            built.set_commands(commands)
+            state.u, record = solver.solve(state.u)
+            return record.iterations
+
+        solve_s, draw_s, cpu_s, iterations = [], [], [], []
         try:
-            for k in range(-1, frames + 1):  # frame -1 (a tiny pressure: the kernels' first calls) is the warm-up
+            for k in range(-1, frames + 1 + idle):  # frame -1 (a tiny pressure: the kernels' first calls) is the warm-up
+                if k > frames and (mode == "full Newton" or state.converged):
+                    break
                 start, cpu = time.perf_counter(), time.process_time()
-                built.set_commands(np.full(len(built.chambers), peak * max(k, 0.01) / frames))
-                u, record = solver.solve(u)
+                taken = step(np.full(len(built.chambers), peak * min(max(k, 0.01), frames) / frames))
                 middle = time.perf_counter()
-                view.render(*shaded_triangles(mesh.vertices + u, faces, walls, camera), camera, BACKGROUND)
-                if k >= 1:
+                view.render(*shaded_triangles(mesh.vertices + state.u, faces, walls, camera), camera, BACKGROUND)
+                if 1 <= k <= frames:
                     solve_s.append(middle - start)
                     draw_s.append(time.perf_counter() - middle)
                     cpu_s.append(time.process_time() - cpu)
-                    iterations.append(record.iterations)
-                    phases.update(record.phase_seconds)
+                    iterations.append(taken if mode == "full Newton" else 1)
         finally:
             view.close()
         solve_ms, draw_ms = 1e3 * np.mean(solve_s), 1e3 * np.mean(draw_s)
-        records.append({"tets": len(mesh.elements), "nodes": len(mesh.vertices), "view": view.name,
+        records.append({"tets": len(mesh.elements), "nodes": len(mesh.vertices), "view": view.name, "mode": mode,
                         "solve_ms": solve_ms, "draw_ms": draw_ms, "newton_iterations": float(np.mean(iterations)),
                         "frames_per_second": 1e3 / (solve_ms + draw_ms), "linear_solver": solver.backend.name,
                         "cpu_ms": 1e3 * np.mean(cpu_s), "frames_per_cpu_second": 1 / np.mean(cpu_s),
-                        "tol": solver.options.tol, "phases_ms_per_frame": {p: 1e3 * t / frames for p, t in phases.items()}})
+                        "solve_frames_per_second": 1e3 / solve_ms, "tol": solver.options.tol,
+                        "idle_frames": k - frames if mode == "one step" else 0,
+                        "converged": bool(state.converged) if mode == "one step" else True,
+                        "distance_from_equilibrium": float(np.abs(state.u - reference).max() / np.abs(reference).max())})
         print(records[-1], flush=True)
     return records
+
+
+def live_window(frames: int, peak: float = 900.0) -> dict:
+    """The interactive window (explore_3d, needs a display) on the coarse PneuNet with the live solve
+    (LiveEquilibrium): the six chambers' pressure moved 0 -> peak over `frames` frames (scripted, not the
+    slider), then held for as many frames; its frames per second."""
+    from taichi_pneuma.render.interactive import LiveEquilibrium
+
+    built, boundary, walls = live_scene(peak=peak)
+    state, ramp = LiveEquilibrium(built), iter(np.linspace(0.0, peak, frames + 1))
+
+    def solve(_):
+        state.frame(np.full(len(built.chambers), next(ramp, peak)))
+        return built.mesh.vertices + state.u, [f"residual {state.residual:.1e}"]
+
+    summary = explore_3d(solve, [Slider("pressure", 0.0, peak, 0.0)], built.mesh.vertices, boundary,
+                         tuple(c[:, :3] for c in built.mesh.chambers), size=(960, 640), max_frames=2 * frames)
+    return {"tets": len(built.mesh.elements), "frames": summary["frames"], "frames_per_second": summary["fps"],
+            "residual": state.residual, "converged": state.converged}
 
 
 def main() -> None:
@@ -120,6 +164,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results"))
     args = parser.parse_args()
     runtime.init("cpu")
+    load = os.getloadavg()[0]
     solid, data = PneuNet().solid(), {"meshing": [], "rendering": [], "live": live(args.live_frames)}
     for label, sizes in {} if args.only_live else MESH_SIZES.items():
         start = time.perf_counter()
@@ -165,27 +210,41 @@ def main() -> None:
                              tuple(mesh.chambers.values()), size=(960, 640), spin=2.0, max_frames=60)
         data["interactive"] = {"tets": len(mesh.tets), "frames_per_second": summary["fps"]}
         print(data["interactive"], flush=True)
+    if os.environ.get("DISPLAY"):
+        data["interactive_live"] = live_window(args.live_frames)
+        print(data["interactive_live"], flush=True)
     args.out.mkdir(parents=True, exist_ok=True)
     stem = "render3d_live" if args.only_live else "render3d"  # the live loop alone leaves the full tables as they are
-    (args.out / f"{stem}.json").write_text(json.dumps({"machine": machine(), "data": data}, indent=2))
-    lines = [f"Machine: {machine()}", "", "| PneuNet mesh | size | tetrahedra | nodes | surface triangles | "
-             "estimate | meshing (s) |", "|---|---|---|---|---|---|---|"]
-    lines += [f"| {r['mesh']} | {r['size']:g} | {r['tets']} | {r['nodes']} | {r['surface_triangles']} | "
-              f"{r['estimate']:.0f} | {r['seconds']:.2f} |" for r in data["meshing"]]
-    lines += ["", "| surface | triangles (drawn after the section) | view | ms / frame (960 x 540) | CPU ms / frame |",
-              "|---|---|---|---|---|"]
-    lines += [f"| {r['mesh']} | {r['surface_triangles']} ({r['drawn_triangles']}) | {r['view']} | "
-              f"{r['ms_per_frame']:.0f} | {r['cpu_ms_per_frame']:.0f} |" for r in data["rendering"]]
-    lines += ["", f"Live loop without a window (coarse PneuNet, {args.live_frames} frames of a pressure slider 0 -> 900 Pa, "
-                  "960 x 640):", "", "| tetrahedra | nodes | view | linear solver | Newton tol | Newton iterations / frame | "
-                  "solve ms / frame | draw ms / frame | frames/s | CPU ms / frame | frames / CPU s |",
-              "|---|---|---|---|---|---|---|---|---|---|---|"]
-    lines += [f"| {r['tets']} | {r['nodes']} | {r['view']} | {r['linear_solver']} | {r['tol']:g} | "
+    (args.out / f"{stem}.json").write_text(json.dumps({"machine": machine(), "load_average": load, "data": data}, indent=2))
+    lines = [f"Machine: {machine()}; load average (1 min) at the start: {load:.1f}"]
+    if data["meshing"]:
+        lines += ["", "| PneuNet mesh | size | tetrahedra | nodes | surface triangles | estimate | meshing (s) |",
+                  "|---|---|---|---|---|---|---|"]
+        lines += [f"| {r['mesh']} | {r['size']:g} | {r['tets']} | {r['nodes']} | {r['surface_triangles']} | "
+                  f"{r['estimate']:.0f} | {r['seconds']:.2f} |" for r in data["meshing"]]
+    if data["rendering"]:
+        lines += ["", "| surface | triangles (drawn after the section) | view | ms / frame (960 x 540) | CPU ms / frame |",
+                  "|---|---|---|---|---|"]
+        lines += [f"| {r['mesh']} | {r['surface_triangles']} ({r['drawn_triangles']}) | {r['view']} | "
+                  f"{r['ms_per_frame']:.0f} | {r['cpu_ms_per_frame']:.0f} |" for r in data["rendering"]]
+    lines += ["", f"Live loop without a window (coarse PneuNet, its six chambers' pressure slider moved 0 -> 900 Pa in "
+                  f"{args.live_frames} frames, then held; 960 x 640; drawing includes the image's read-back):", "",
+              "| tetrahedra | nodes | view | solve per frame | linear solver | Newton it / moving frame | solve ms | "
+              "draw ms | frames/s | solve-only frames/s | CPU ms / frame | frames / CPU s | idle frames to converge | "
+              "max abs(u - u*) / max abs(u*) |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {r['tets']} | {r['nodes']} | {r['view']} | {r['mode']} | {r['linear_solver']} | "
               f"{r['newton_iterations']:.1f} | {r['solve_ms']:.0f} | {r['draw_ms']:.0f} | {r['frames_per_second']:.1f} | "
-              f"{r['cpu_ms']:.0f} | {r['frames_per_cpu_second']:.1f} |" for r in data["live"]]
+              f"{r['solve_frames_per_second']:.0f} | {r['cpu_ms']:.0f} | {r['frames_per_cpu_second']:.1f} | "
+              f"{r['idle_frames']} | {r['distance_from_equilibrium']:.1e} |" for r in data["live"]]
     if "interactive" in data:
         lines += ["", f"Interactive window (960 x 640, coarse PneuNet of {data['interactive']['tets']} tetrahedra, "
                       f"no solve): {data['interactive']['frames_per_second']:.0f} frames/s"]
+    if "interactive_live" in data:
+        r = data["interactive_live"]
+        lines += ["", f"Interactive window with the live solve (960 x 640, coarse PneuNet of {r['tets']} tetrahedra, one "
+                      f"Newton step per frame, the slider moved over {args.live_frames} frames then held, "
+                      f"{r['frames']} frames): {r['frames_per_second']:.1f} frames/s; final residual "
+                      f"{r['residual']:.1e} (converged: {r['converged']})"]
     (args.out / f"{stem}.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 

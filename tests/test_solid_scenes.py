@@ -285,8 +285,8 @@ def test_api_video_and_plot_of_a_3d_run(tiny_run, tmp_path):
 
 @pytest.mark.skipif(not has_ggui(), reason="the live 3D window is GGUI's, which this backend lacks")
 def test_interactive_3d_scene_resolves_per_chamber_slider(xvfb_display, monkeypatch):  # noqa: F811
-    """--interactive's 3D window: a slider per chamber over its schedule's commands; a moved slider re-solves
-    (the body inflates), an unmoved one does not."""
+    """--interactive's 3D window: a slider per chamber over its schedule's commands; each frame a Newton step
+    toward the equilibrium at the slider's command, which a held slider reaches (all_converged)."""
     import taichi as ti
 
     from taichi_pneuma.render import interactive3d
@@ -299,9 +299,9 @@ def test_interactive_3d_scene_resolves_per_chamber_slider(xvfb_display, monkeypa
     scene = beam()
     (slider,) = chamber_sliders(scene)
     assert (slider.name, slider.low, slider.high, slider.value) == ("main", 1.0, 1.5, 1.0)
-    script = iter([[1.0], [1.2], [1.2], [1.4]])
+    script = iter([[1.0], [1.2], [1.2]] + [[1.4]] * 9)  # the last command held: the live loop converges
     real = interactive3d.commands_from
     monkeypatch.setattr(interactive3d, "commands_from", lambda sliders, shown, values: real(sliders, shown, next(script)))
-    summary = explore_solid(scene, (320, 240), spin=10.0, max_frames=4)
-    assert summary["solves"] == 3 and summary["frames"] == 4 and summary["all_converged"]
+    summary = explore_solid(scene, (320, 240), spin=10.0, max_frames=12)
+    assert summary["solves"] == 3 and summary["frames"] == 12 and summary["all_converged"]
     assert summary["commands"] == pytest.approx([1.4], abs=1e-6)

@@ -8,6 +8,7 @@ follow_mouse is inverse control live: drag the target, the chambers follow.
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 
 import numpy as np
@@ -147,31 +148,68 @@ def chamber_sliders(scene: Scene) -> list:
     return sliders
 
 
+class LiveEquilibrium:
+    """The 3D live window's solve: one Newton step per frame, so a moving slider never waits for convergence.
+
+    frame(commands) takes, from the state on screen, one Newton step at the commands: while they move, a
+    modified Newton step (the previous frame's factorisation reused, no Hessian assembled: solve's
+    reuse_factor), while they rest a full one per frame until the residual |g| / force scale is within the
+    Newton tolerance, so the state a resting slider settles to is the equilibrium a full Newton solve finds
+    at those commands. The line search never lets a tetrahedron invert (terms' max_step). A step the line
+    search refuses leaves the state as it was and the next frame takes a fresh Hessian; where even that
+    fails, the loop waits for the commands to move."""
+
+    def __init__(self, built, options: NewtonOptions | None = None):
+        self.built, self.solver = built, NewtonSolver(built.model, options or NewtonOptions(tol=LIVE_TOL))
+        self.u = np.zeros_like(built.mesh.vertices)
+        self.commands, self.residual, self.stuck, self.reuse = None, math.inf, False, False
+        self.iterations = 0  # Newton steps taken since the commands last moved
+
+    @property
+    def converged(self) -> bool:
+        return self.residual <= self.solver.options.tol
+
+    def frame(self, commands: np.ndarray) -> bool:
+        """One frame's step at the commands; whether the state changed."""
+        moved = self.commands is None or not np.array_equal(commands, self.commands)
+        if moved:
+            self.commands = np.array(commands, dtype=float)
+            self.built.set_commands(self.commands)
+            self.stuck, self.iterations = False, 0
+        elif self.converged or self.stuck:
+            return False
+        reuse = moved and self.reuse
+        u, record = self.solver.solve(self.u, max_iterations=1, reuse_factor=reuse)
+        self.residual = record.residual
+        if record.iterations:
+            self.u, self.iterations = u, self.iterations + 1
+        elif not record.converged:  # the line search refused the step
+            self.stuck = not reuse
+        self.reuse = bool(record.iterations)
+        return bool(record.iterations)
+
+
 def explore_solid(scene: Scene, size: tuple[int, int], options: NewtonOptions | None = None, spin: float = 0.0,
                   max_frames: int | None = None) -> dict:
     """The live window of a 3D scene (interactive3d.explore_3d): a slider per chamber (chamber_sliders); each
-    move re-solves the equilibrium, warm-started from the one on screen; the camera orbits by mouse drag (and
-    `spin` degrees per frame). Returns explore_3d's summary with 'all_converged'."""
+    frame takes a Newton step toward the equilibrium at the commands on screen (LiveEquilibrium; the panel
+    shows the residual); the camera orbits by mouse drag (and `spin` degrees per frame). Returns explore_3d's
+    summary with 'all_converged' (the state shown last is the equilibrium at the last commands) and 'residual'."""
     from .frames3d import surface_triangles
     from .interactive3d import explore_3d
 
     built = scene.build()
-    mesh, solver = built.mesh, NewtonSolver(built.model, options or NewtonOptions(tol=LIVE_TOL))
+    mesh, live = built.mesh, LiveEquilibrium(built, options)
     outer, walls, _ = surface_triangles(mesh)
-    state = {"u": np.zeros_like(mesh.vertices), "converged": True}
 
     def solve(commands):
-        built.set_commands(commands)
-        u, record = solver.solve(state["u"])
-        state["converged"] &= record.converged
-        if record.converged:  # else the last equilibrium stays on screen
-            state["u"] = u
+        live.frame(commands)
         volumes = ", ".join(f"x{c.area() / c.rest_area:.2f}" for c in built.chambers)
-        tip = state["u"][mesh.tip].mean(axis=0)
-        return mesh.vertices + state["u"], [f"volume {volumes}", f"tip dy {tip[1]:+.4f} dz {tip[2]:+.4f}",
-                                            f"{record.iterations} Newton it" + ("" if record.converged else
-                                                                                 ", not converged")]
+        tip = live.u[mesh.tip].mean(axis=0)
+        state = "equilibrium" if live.converged else "stuck" if live.stuck else "converging"
+        return mesh.vertices + live.u, [f"volume {volumes}", f"tip dy {tip[1]:+.4f} dz {tip[2]:+.4f}",
+                                        f"residual {live.residual:.1e} ({state}, {live.iterations} Newton it)"]
 
     summary = explore_3d(solve, chamber_sliders(scene), mesh.vertices, outer, walls, size, spin=spin,
                          max_frames=max_frames)
-    return {**summary, "all_converged": bool(state["converged"])}
+    return {**summary, "all_converged": live.converged, "residual": live.residual}

@@ -1,10 +1,11 @@
 """Interactive 3D: a GGUI window with a slider per chamber and a camera orbiting the body.
 
-Moving a slider re-solves the equilibrium at the new commands (the caller's solve function, warm-started
-by the caller) and redraws the body; dragging with the left mouse button outside the slider panel turns
-the camera about the body (a drag across the whole window width: DRAG_DEGREES of azimuth; up and down:
-elevation, held short of the poles), and `spin` turns it by that many degrees every frame.
-The window knows nothing of the solver: solve(commands) -> (positions (n, 3), caption lines).
+Every frame calls the caller's solve function at the commands on screen (moved or not: a live solve takes a
+step toward the equilibrium per frame and keeps converging while the sliders rest) and redraws the body;
+dragging with the left mouse button outside the slider panel turns the camera about the body (a drag across
+the whole window width: DRAG_DEGREES of azimuth; up and down: elevation, held short of the poles), and `spin`
+turns it by that many degrees every frame. The window knows nothing of the solver: solve(commands) ->
+(positions (n, 3), caption lines).
 """
 
 from __future__ import annotations
@@ -63,8 +64,9 @@ def in_panel(cursor: tuple[float, float], rows: int, height: int) -> bool:
 def explore_3d(solve, sliders: list[Slider], rest: np.ndarray, boundary: np.ndarray, chambers: tuple,
                size: tuple[int, int] = (960, 640), camera: Camera | None = None, spin: float = 0.0,
                section: bool = True, max_frames: int | None = None) -> dict:
-    """Run the window until it is closed (or for max_frames frames). Returns {'solves', 'frames', 'fps'
-    (frames per second over the frames after the first), 'commands', 'azimuth', 'elevation'}."""
+    """Run the window until it is closed (or for max_frames frames). Returns {'solves' (slider moves, and the
+    first solve), 'frames', 'fps' (frames per second over the frames after the first), 'commands', 'azimuth',
+    'elevation'}."""
     width, height = size
     view = GGUIView(width, height, show=True)
     window, gui = view.window, view.window.get_gui()
@@ -85,8 +87,8 @@ def explore_3d(solve, sliders: list[Slider], rest: np.ndarray, boundary: np.ndar
             moved = commands_from(sliders, shown, values)
             if moved is not None:
                 shown = moved
-                x, caption = solve(shown)
                 solves += 1
+            x, caption = solve(shown)
             cursor = tuple(float(c) for c in window.get_cursor_pos())
             pressed = window.is_pressed(ti.ui.LMB)
             if pressed and last is not None:

@@ -121,7 +121,7 @@ class NewtonSolver:
         self.backend = make_backend(self.options.linear_solver, model.config.rest)
         self.indefinite_backend = self.backend if self.backend.name == "scipy" else make_backend("scipy")
         self.direct_backend = make_backend(direct_backend()) if self.backend.name == "amg" else self.backend
-        self.factored_by = self.backend
+        self.factored_by, self.factored = self.backend, False  # the backend holding the last factorisation
 
     def _energy_at(self, u: np.ndarray) -> float:
         self.model.set_displacements(u)
@@ -155,11 +155,27 @@ class NewtonSolver:
                 continue
         else:
             return g * math.nan, math.nan
-        self.factored_by = backend
+        self.factored_by, self.factored = backend, True
         return d, float(g @ d)
 
-    def solve(self, u0: np.ndarray) -> tuple[np.ndarray, SolveRecord]:
-        """Minimise the model's energy over displacements from u0 (n, d); returns the final u (n, d) and the record."""
+    def _reused_direction(self, g: np.ndarray, clock: PhaseClock, rtol: float) -> tuple[np.ndarray, float]:
+        """d = -H_old^-1 g with the factorisation the backend holds (solve's reuse_factor) and the slope g.d;
+        nan where none is held."""
+        if not self.factored:
+            return g * math.nan, math.nan
+        with clock("solve"):
+            d = solve_low_rank_updated(self.factored_by, -g, self.model.low_rank(), rtol)
+        return d, float(g @ d)
+
+    def solve(self, u0: np.ndarray, max_iterations: int | None = None,
+              reuse_factor: bool = False) -> tuple[np.ndarray, SolveRecord]:
+        """Minimise the model's energy over displacements from u0 (n, d); returns the final u (n, d) and the record.
+
+        max_iterations: this call's cap (default the options'; a live loop takes one step per frame).
+        reuse_factor: the first direction solves with the factorisation the backend already holds (that of
+        the last direction of the previous call, at other commands or displacements: a modified Newton step,
+        d = -H_old^-1 g, a descent direction while H_old is positive definite) instead of assembling and
+        factorising a new Hessian; where it is not a descent direction, a fresh Hessian is taken."""
         start = time.perf_counter()
         model, opts = self.model, self.options
         u = np.array(u0, dtype=np.float64).ravel()
@@ -179,12 +195,18 @@ class NewtonSolver:
                 record.converged = True
                 record.message = "converged"
                 break
-            if record.iterations >= opts.max_iterations:
-                record.message = f"no convergence in {opts.max_iterations} iterations"
+            cap = opts.max_iterations if max_iterations is None else max_iterations
+            if record.iterations >= cap:
+                record.message = f"no convergence in {cap} iterations"
                 break
             exact = not record.step_sizes or record.step_sizes[-1] == 1.0
             rtol = forcing_term(record.residual, opts.tol)
-            d, slope = self._direction(g, not exact, clock, bool(record.step_sizes), rtol)
+            d, slope = self._reused_direction(g, clock, rtol) if reuse_factor and not record.step_sizes \
+                else (None, math.nan)
+            if not slope < 0:
+                d, slope = self._direction(g, not exact, clock, bool(record.step_sizes), rtol)
+            else:
+                exact = False
             if exact and not slope < 0:
                 record.psd_fallbacks += 1
                 exact = False

@@ -117,6 +117,7 @@ class VolumeForm:
         self.weights = weights / (2.0 * np.trace(closure.projector))  # the reference triangle's area 1/2, 1/r
         self.projector = np.ascontiguousarray(closure.projector, dtype=np.float64)
         self.rows, self.cols = block_pattern(faces, 3)
+        self._last = None  # (the wall nodes' displacements, V, dV/dx) of the last measure_and_gradient
         self.rest_measure = wall_volume(self.rest, np.zeros_like(self.rest), *self._data(),
                                         np.empty((len(self.nodes), 3)))
 
@@ -124,10 +125,19 @@ class VolumeForm:
         return self.wall, self.faces, self.shapes, self.derivatives, self.weights, self.projector
 
     def measure_and_gradient(self, u: np.ndarray | None = None) -> tuple[float, np.ndarray]:
-        """V(x) and dV/dx on the wall nodes, (k, 3), at the model's displacements or at u (n, 3)."""
-        gradient = np.empty((len(self.nodes), 3))
+        """V(x) and dV/dx on the wall nodes, (k, 3, read-only), at the model's displacements or at u (n, 3).
+
+        The last answer is given again while the wall nodes' displacements are the same (a Newton iteration
+        asks for the energy and the gradient at one state: one kernel launch instead of two)."""
         u = self.config.u if u is None else np.ascontiguousarray(u, dtype=np.float64)
-        return wall_volume(self.rest, u, *self._data(), gradient), gradient
+        wall_u = u[self.nodes]
+        if self._last is not None and np.array_equal(wall_u, self._last[0]):
+            return self._last[1], self._last[2]
+        gradient = np.empty((len(self.nodes), 3))
+        volume = wall_volume(self.rest, u, *self._data(), gradient)
+        gradient.flags.writeable = False
+        self._last = (wall_u, volume, gradient)
+        return volume, gradient
 
     def hessian(self) -> np.ndarray:
         k = self.faces.shape[1]
