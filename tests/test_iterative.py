@@ -81,7 +81,8 @@ def test_a_3d_ramp_with_cg_ends_at_the_direct_solvers_tip():
 
 def test_newton_falls_back_to_the_direct_backend_when_cg_does_not_converge():
     """CG allowed one iteration cannot reach the forcing term: NotConverged, and Newton's direction comes from the
-    PSD Hessian factorised by the direct backend; the equilibrium is the direct solver's."""
+    PSD Hessian factorised by the direct backend, which takes every later Hessian of the solver (CG is not tried
+    again); the equilibrium is the direct solver's."""
     built = beam(1)
     matrix, low_rank, g = hessian_at(built, 0.02)
     backend = AmgConjugateGradient(built.model.config.rest)
@@ -92,9 +93,13 @@ def test_newton_falls_back_to_the_direct_backend_when_cg_does_not_converge():
     built = beam(1)
     solver = NewtonSolver(built.model, NewtonOptions(linear_solver="amg", tol=1e-9))
     solver.backend.MAX_ITERATIONS = 1
+    cg_calls = []
+    factorize = solver.backend.factorize
+    solver.backend.factorize = lambda matrix: cg_calls.append(1) or factorize(matrix)
     built.set_commands(np.array([1.3]))
     u, record = solver.solve(built.model.config.u)
     assert record.converged and record.psd_fallbacks >= 1 and solver.factored_by is solver.direct_backend
+    assert solver.cg_failed and record.iterations > 2 and len(cg_calls) <= 2  # an exact H, then the PSD one: no more
     reference = run_schedule(beam(1), options=NewtonOptions(linear_solver="scipy", tol=1e-9)).positions[-1]
     assert np.abs(built.mesh.vertices + u - reference).max() < 1e-7
 

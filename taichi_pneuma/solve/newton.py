@@ -122,6 +122,7 @@ class NewtonSolver:
         self.indefinite_backend = self.backend if self.backend.name == "scipy" else make_backend("scipy")
         self.direct_backend = make_backend(direct_backend()) if self.backend.name == "amg" else self.backend
         self.factored_by, self.factored = self.backend, False  # the backend holding the last factorisation
+        self.cg_failed = False  # CG failed on a PSD Hessian of this model: the direct backend serves from then on
 
     def _energy_at(self, u: np.ndarray) -> float:
         self.model.set_displacements(u)
@@ -130,8 +131,12 @@ class NewtonSolver:
     def _backends(self, psd_only: bool, indefinite: bool) -> tuple:
         """The backends to try in turn: an exact H that a Cholesky backend refuses goes to SciPy's LU if indefinite
         (see the module docstring); the iterative backend's PSD H, where CG fails, to the direct backend (its
-        exact H to the PSD one instead: an LU of a large 3D Hessian is what the iterative backend avoids)."""
+        exact H to the PSD one instead: an LU of a large 3D Hessian is what the iterative backend avoids). Once CG
+        has failed on a PSD H, the direct backend takes every later H of this solver (CG's failed iterations would
+        otherwise come before every direct factorisation of the run)."""
         if self.backend.name == "amg":
+            if self.cg_failed:
+                return (self.direct_backend,)
             return (self.backend, self.direct_backend) if psd_only else (self.backend,)
         return (self.backend, self.indefinite_backend) if indefinite and not psd_only else (self.backend,)
 
@@ -152,6 +157,7 @@ class NewtonSolver:
                     d = solve_low_rank_updated(backend, -g, low_rank, rtol)
                 break
             except FactorizationError:  # singular, indefinite for a Cholesky backend, CG not converged
+                self.cg_failed |= psd_only and backend.name == "amg"
                 continue
         else:
             return g * math.nan, math.nan
