@@ -13,6 +13,11 @@ def require(condition: bool, message: str) -> None:
         raise PneumaInputError(message)
 
 
+def require_distinct(label: str, values: list) -> None:
+    """Raise naming the values (label: what they are, e.g. 'chamber names') unless no two are equal."""
+    require(len(set(values)) == len(values), f"{label} {values!r} must be distinct")
+
+
 def require_finite(name: str, value: float) -> float:
     """Return value as float if it is a finite number, else raise naming it."""
     try:

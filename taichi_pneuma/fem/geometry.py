@@ -39,7 +39,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .. import limits
-from ..errors import PneumaInputError, require, require_finite, shape_of
+from ..errors import PneumaInputError, require, require_distinct, require_finite, shape_of
 from ..io.output import check_heading
 from . import triangulation
 
@@ -567,7 +567,7 @@ class Geometry:
         require(points <= MAX_WALL_POINTS, f"the body and chamber outlines have {points} points in all; "
                                            f"at most {MAX_WALL_POINTS} are allowed")
         names = [name for name, _ in polygons]
-        require(len(set(names)) == len(names), f"chamber names {names!r} must be distinct")
+        require_distinct("chamber names", names)
         for name in names:
             check_heading("chamber name", name)
         for what, poly in [("the body", body)] + [(f"chamber {name!r}", poly) for name, poly in polygons]:

@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import PneumaInputError, require, require_finite
+from ..errors import PneumaInputError, require, require_distinct, require_finite
 
 MAX_TETS = 200_000
 MAX_SHAPES = 64
@@ -121,7 +121,7 @@ class Solid:
         names = [name for name, _ in self.chambers + self.regions]
         require(all(isinstance(n, str) and n and n != BODY_GROUP for n in names),
                 f"chamber and region names {names!r} must be non-empty strings other than {BODY_GROUP!r}")
-        require(len(set(names)) == len(names), f"chamber and region names {names!r} must be distinct")
+        require_distinct("chamber and region names", names)
         for what, shape in [("body", self.body)] + list(self.chambers + self.regions):
             require(callable(getattr(shape, "build", None)), f"{what}: {shape!r} is not a 3D shape")
 

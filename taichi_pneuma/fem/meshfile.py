@@ -23,9 +23,9 @@ from pathlib import Path
 import meshio
 import numpy as np
 
-from ..errors import PneumaInputError, require
+from ..errors import PneumaInputError, require, require_distinct
 from .geometry import PointSet
-from .tetmesh import TetMesh, tet_mesh
+from .tetmesh import TetMesh, check_order, tet_mesh
 
 MAX_MESH_BYTES = 500_000_000
 TETRAHEDRA = ("tetra", "tetra10")
@@ -120,9 +120,8 @@ class MeshGeometry:
     dim = 3
 
     def __post_init__(self):
-        require(self.order in (1, 2), f"order = {self.order!r} must be 1 (linear tetrahedra) or 2 (quadratic)")
-        names = [name for name, _ in self.chambers]
-        require(len(set(names)) == len(names), f"chamber names {names!r} must be distinct")
+        check_order(self.order)
+        require_distinct("chamber names", [name for name, _ in self.chambers])
         for name, shape in self.chambers:
             require(isinstance(shape, MeshSurface), f"chamber {name!r}: a mesh body's chambers are the mesh file's "
                                                     f"groups (shape = \"mesh_surface\")")

@@ -30,13 +30,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from .. import limits
-from ..errors import require
+from ..errors import require, require_distinct
 from ..io.output import check_heading
 from .geometry import PointSet
 from .gmsh_mesher import MAX_TETS, MeshSizes, Solid, estimate_tets, mesh_solid
 from .meshfile import MeshSurface
 from .pneunet import PneuNet
-from .tetmesh import TetMesh, tet_mesh
+from .tetmesh import TetMesh, check_order, tet_mesh
 
 TETS_PER_NODE = 5
 EDGES_PER_TET = 1.2  # a tetrahedral mesh has about 1.2 edges per tetrahedron (Euler: E ~ V + T)
@@ -65,7 +65,7 @@ class SolidGeometry:
     dim = 3
 
     def __post_init__(self):
-        require(self.order in (1, 2), f"order = {self.order!r} must be 1 (linear tetrahedra) or 2 (quadratic)")
+        check_order(self.order)
         require(is_solid_shape(self.body), f"body: {self.body!r} is not a 3D shape")
         generated = isinstance(self.body, PneuNet)
         groups = self.groups()
@@ -81,11 +81,9 @@ class SolidGeometry:
                 require(is_solid_shape(shape) and not isinstance(shape, PneuNet),
                         f"chamber {name!r}: a 3D body's chambers are 3D shapes (ellipsoid, box, rounded_box, "
                         f"cylinder, extrusion of a 2D chamber shape), not {type(shape).__name__}")
-        names = [name for name, _ in self.chambers]
-        require(len(set(names)) == len(names), f"chamber names {names!r} must be distinct")
+        require_distinct("chamber names", [name for name, _ in self.chambers])
         if generated:
-            groups = [shape.group for _, shape in self.chambers]
-            require(len(set(groups)) == len(groups), f"chamber groups {groups!r} must be distinct")
+            require_distinct("chamber groups", [shape.group for _, shape in self.chambers])
         self.solid()  # validates the shapes together (names, counts)
 
     def groups(self) -> list[str]:

@@ -182,6 +182,11 @@ def closure(name: str, vertices: np.ndarray, wall: np.ndarray, rollers) -> Closu
     return Closure(origin, projector)
 
 
+def check_order(order) -> None:
+    """Refuse an element order other than 1 (linear tetrahedra) or 2 (quadratic)."""
+    require(order in (1, 2), f"order = {order!r} must be 1 (linear tetrahedra) or 2 (quadratic)")
+
+
 def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndarray],
              boundary: np.ndarray | None = None, regions: np.ndarray | None = None, order: int = 1,
              clamp: PointSet | None = PointSet("left"),
@@ -198,7 +203,7 @@ def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndar
     require(tets.ndim == 2 and tets.shape[1] in (4, 10) and len(tets) > 0 and np.issubdtype(tets.dtype, np.integer),
             f"tetrahedra must be an (m, 4) or (m, 10) integer array, not {tets.dtype} of shape {tets.shape}")
     require(tets.min() >= 0 and tets.max() < len(vertices), "a tetrahedron names a vertex that does not exist")
-    require(order in (1, 2), f"order = {order!r} must be 1 (linear tetrahedra) or 2 (quadratic)")
+    check_order(order)
     require(order == 2 or tets.shape[1] == 4, "the mesh has 10-node (quadratic) tetrahedra: set order = 2")
     regions = np.zeros(len(tets), dtype=np.int64) if regions is None else np.asarray(regions, dtype=np.int64)
     require(regions.shape == (len(tets),), f"regions: {regions.shape} tags for {len(tets)} tetrahedra")
