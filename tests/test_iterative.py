@@ -3,10 +3,12 @@ residual, its Newton runs against a direct solver's, and its fall-back when CG d
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 from solid_meshes import box_with_cavity, scene_of
 
 from taichi_pneuma.solve.linsolve import (AMG_MIN_DOFS, AmgConjugateGradient, FixedPattern, NotConverged,
                                           make_backend, rigid_body_modes, solve_low_rank_updated)
+from taichi_pneuma.solve import newton
 from taichi_pneuma.solve.newton import FORCING_MAX, NewtonOptions, NewtonSolver, forcing_term
 from taichi_pneuma.solve.schedule import area_ramp
 from taichi_pneuma.solve.simulate import run_schedule
@@ -79,7 +81,7 @@ def test_a_3d_ramp_with_cg_ends_at_the_direct_solvers_tip():
     assert iterations["amg"] <= iterations["scipy"] + 1
 
 
-def test_newton_falls_back_to_the_direct_backend_when_cg_does_not_converge():
+def test_newton_falls_back_to_the_direct_backend_when_cg_does_not_converge(monkeypatch):
     """CG allowed one iteration cannot reach the forcing term: NotConverged, and Newton's direction comes from the
     PSD Hessian factorised by the direct backend, which takes every later Hessian of the solver (CG is not tried
     again); the equilibrium is the direct solver's."""
@@ -93,6 +95,7 @@ def test_newton_falls_back_to_the_direct_backend_when_cg_does_not_converge():
     built = beam(1)
     solver = NewtonSolver(built.model, NewtonOptions(linear_solver="amg", tol=1e-9))
     solver.backend.MAX_ITERATIONS = 1
+    monkeypatch.setattr(newton, "EXACT_CG_ITERATIONS", 1)
     cg_calls = []
     factorize = solver.backend.factorize
     solver.backend.factorize = lambda matrix: cg_calls.append(1) or factorize(matrix)
@@ -102,6 +105,29 @@ def test_newton_falls_back_to_the_direct_backend_when_cg_does_not_converge():
     assert solver.cg_failed and record.iterations > 2 and len(cg_calls) <= 2  # an exact H, then the PSD one: no more
     reference = run_schedule(beam(1), options=NewtonOptions(linear_solver="scipy", tol=1e-9)).positions[-1]
     assert np.abs(built.mesh.vertices + u - reference).max() < 1e-7
+
+
+def test_a_hierarchy_built_on_an_indefinite_matrix_does_not_precondition_the_next_one():
+    """An exact Hessian may be indefinite (a chamber's load stiffness at the jumped pressure of an increment's
+    start): CG fails on it, and the projected Hessian that Newton takes next (the same sparsity pattern) gets a
+    hierarchy of its own, not the indefinite one's, and converges (on the stale hierarchy CG ended 300
+    iterations at a relative residual of 0.8)."""
+    built = beam(1)
+    matrix, low_rank, g = hessian_at(built, 0.02)
+    shifted = matrix.copy()
+    shifted.setdiag(matrix.diagonal() - 0.1 * np.median(matrix.diagonal()))
+    indefinite = sp.csr_matrix((shifted.data, matrix.indices, matrix.indptr), shape=matrix.shape)
+    backend = AmgConjugateGradient(built.model.config.rest)
+    backend.factorize(indefinite)
+    with pytest.raises(NotConverged):
+        solve_low_rank_updated(backend, -g, low_rank, 1e-6)
+    backend.factorize(matrix)  # the same pattern (indptr): reuse would be the default
+    x = solve_low_rank_updated(backend, -g, low_rank, 1e-6)
+    assert backend.iterations < 60
+    direct = make_backend("scipy")
+    direct.factorize(matrix)
+    exact = solve_low_rank_updated(direct, -g, low_rank)
+    assert np.linalg.norm(x - exact) < 1e-4 * np.linalg.norm(exact)
 
 
 def test_forcing_term_tightens_with_the_residual_down_to_what_the_tolerance_needs():

@@ -236,10 +236,12 @@ def _estimate(pieces: _Pieces, sizes: MeshSizes) -> float:
     return (bulk / sizes.size ** 3 + area * sizes.shell_density()) / REGULAR_TET
 
 
-def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose: bool = False) -> SolidMesh:
+def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose: bool = False,
+               surface_meshers: tuple = SURFACE_MESHERS) -> SolidMesh:
     """Mesh the solid with linear tetrahedra (gmsh: OpenCASCADE fragment, Delaunay), or raise one
     PneumaInputError: bad geometry, an estimate or a mesh over max_tets (--max-triangles raises it), or
-    gmsh failing (its error line quoted)."""
+    gmsh failing (its error line quoted). surface_meshers: the (Mesh.Algorithm, Mesh.MeshSizeFromCurvature)
+    pairs tried in turn (a study that must keep one mesh pins one)."""
     with _session(verbose) as gmsh:
         pieces = _Pieces(gmsh, solid)
         estimate = _estimate(pieces, sizes)
@@ -254,14 +256,14 @@ def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose
         for name, walls in pieces.walls.items():
             model.addPhysicalGroup(2, walls, name=name)
         _set_sizes(gmsh, sizes, [s for walls in pieces.walls.values() for s in walls])
-        for attempt, (algorithm, curvature) in enumerate(SURFACE_MESHERS, start=1):
+        for attempt, (algorithm, curvature) in enumerate(surface_meshers, start=1):
             gmsh.option.setNumber("Mesh.Algorithm", algorithm)
             gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", curvature)
             model.mesh.clear()
             try:
                 model.mesh.generate(3)
             except Exception:
-                if attempt == len(SURFACE_MESHERS):
+                if attempt == len(surface_meshers):
                     raise
                 continue
             if _complete(gmsh, pieces):
