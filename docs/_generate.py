@@ -59,8 +59,12 @@ RESULTS_PAGES = {
                                "python benchmarks/plane_strain_3d.py --max-area 0.005 --out benchmarks/results"),
     "accuracy_3d": ("accuracy", "What accuracy costs in 3D: linear or quadratic tetrahedra",
                     ("benchmarks/accuracy_3d.py", None), "python benchmarks/accuracy_3d.py"),
+    "skfem_3d": ("performance", "3D against scikit-fem + SciPy: the beam_3d scene's mesh and ramp",
+                 ("benchmarks/skfem_3d.py", None), "python benchmarks/skfem_3d.py"),
     "skfem_3d_coarse": ("performance", "3D against scikit-fem + SciPy: the same model, mesh and ramp",
                         ("benchmarks/skfem_3d.py", None), "python benchmarks/skfem_3d.py --coarse"),
+    "amg_options": ("performance", "3D: multigrid options for quadratic tetrahedra",
+                    ("benchmarks/amg_options.py", None), "python benchmarks/amg_options.py"),
     "stability": ("stability", "The hard cases", ("benchmarks/stability.py", None),
                   "python benchmarks/stability.py --out benchmarks/results"),
 }

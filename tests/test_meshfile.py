@@ -157,7 +157,7 @@ def test_inflate_runs_a_mesh_file_scene_and_writes_3d_results(tmp_path, capsys):
     assert main(["--scene", str(tmp_path / "beam3d.toml"), "--no-video", "--quiet", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert f"mesh {mesh.n_vertices} vertices, {mesh.n_elements} tetrahedra" in printed
-    assert "rest volume" in printed and "main: volume" in printed
+    assert "main: volume control, wall" in printed and "rest volume" in printed and "main: volume" in printed
     line = next(x for x in printed.splitlines() if x.startswith("tip deflection (mean y displacement of the right"))
     assert line.startswith("tip deflection (mean y displacement of the right face)")
     summary = json.loads((out / "beam3d_summary.json").read_text())
