@@ -47,10 +47,10 @@ def recorded_systems(level: int, count: int) -> tuple[list[dict], np.ndarray, in
     systems = []
     solve = linsolve.AmgConjugateGradient.solve
 
-    def recording(backend, rhs, low_rank=(), rtol=None, max_iterations=None):
+    def recording(backend, rhs, low_rank=(), rtol=None):
         if len(systems) < count:
             systems.append({"matrix": backend._matrix, "rhs": rhs.copy(), "low_rank": low_rank})
-        return solve(backend, rhs, low_rank, rtol, max_iterations)
+        return solve(backend, rhs, low_rank, rtol)
 
     case = case_of("beam")
     built = scene_of(case, meshes(case, level + 1)[level], 2, 0.45).build()

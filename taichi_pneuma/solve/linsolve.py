@@ -223,21 +223,20 @@ class AmgConjugateGradient:
         self._stale = False
 
     def solve(self, rhs: np.ndarray, low_rank: list[tuple[np.ndarray, np.ndarray, float]] = (),
-              rtol: float | None = None, max_iterations: int | None = None) -> np.ndarray:
+              rtol: float | None = None) -> np.ndarray:
         if rhs.ndim == 2:
-            return np.column_stack([self.solve(column, low_rank, rtol, max_iterations) for column in rhs.T])
+            return np.column_stack([self.solve(column, low_rank, rtol) for column in rhs.T])
         rtol = self.rtol if rtol is None else rtol
-        budget = self.MAX_ITERATIONS if max_iterations is None else max_iterations
         try:
-            return self._cg(rhs, low_rank, rtol, budget)
+            return self._cg(rhs, low_rank, rtol)
         except NotConverged:
             if self._fresh_rate is None:  # a fresh hierarchy: the matrix is at fault (indefinite), and so is its
                 self._stale = True        # hierarchy, which must not precondition the next matrix of this pattern
                 raise
             self._setup()
-            return self._cg(rhs, low_rank, rtol, budget)
+            return self._cg(rhs, low_rank, rtol)
 
-    def _cg(self, rhs: np.ndarray, low_rank, rtol: float, budget: int) -> np.ndarray:
+    def _cg(self, rhs: np.ndarray, low_rank, rtol: float) -> np.ndarray:
         matrix = self._matrix
 
         def apply(x):
@@ -248,7 +247,7 @@ class AmgConjugateGradient:
 
         operator = spla.LinearOperator(matrix.shape, matvec=apply, dtype=np.float64)
         count = itertools.count()
-        x, info = spla.cg(operator, rhs, rtol=rtol, maxiter=budget, M=self._preconditioner,
+        x, info = spla.cg(operator, rhs, rtol=rtol, maxiter=self.MAX_ITERATIONS, M=self._preconditioner,
                           callback=lambda _: next(count))
         self.iterations = next(count)
         residual = np.linalg.norm(apply(x) - rhs) / max(np.linalg.norm(rhs), np.finfo(float).tiny)
@@ -294,12 +293,11 @@ def direct_backend() -> str:
 
 
 def solve_low_rank_updated(backend, rhs: np.ndarray, low_rank: list[tuple[np.ndarray, np.ndarray, float]],
-                           rtol: float | None = None, max_iterations: int | None = None):
+                           rtol: float | None = None):
     """Solve (S + sum_j c_j u_j u_j^T) d = rhs with S factorised in `backend` (the iterative one: set up), to the
-    relative residual rtol where the backend is iterative (a direct one solves exactly; max_iterations: the
-    iterative one's budget, default its MAX_ITERATIONS)."""
+    relative residual rtol where the backend is iterative (a direct one solves exactly)."""
     if isinstance(backend, AmgConjugateGradient):
-        return backend.solve(rhs, low_rank, rtol, max_iterations)
+        return backend.solve(rhs, low_rank, rtol)
     y = backend.solve(rhs)
     if not low_rank:
         return y

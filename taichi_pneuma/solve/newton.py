@@ -49,11 +49,6 @@ ARMIJO_C1 = 1e-4
 MAX_HALVINGS = 40
 STEP_SAFETY = 0.9
 FORCING_MAX = 0.01  # forcing_term's largest eta
-# CG iterations an exact Hessian gets before the projected one is taken instead (the projected ones get the
-# backend's 300). An exact Hessian where CG needs more is nearly indefinite: at the start of a volume
-# increment, the chamber's load stiffness at the jumped pressure. On the quadratic 3D beam (32k DOFs) such
-# solves took 150-300 iterations, where a projected one took 10-60 (docs/solid.md)
-EXACT_CG_ITERATIONS = 100
 
 
 def forcing_term(residual: float, tol: float) -> float:
@@ -159,7 +154,7 @@ class NewtonSolver:
                 with clock("factorize"):
                     backend.factorize(matrix)
                 with clock("solve"):
-                    d = solve_low_rank_updated(backend, -g, low_rank, rtol, None if psd_only else EXACT_CG_ITERATIONS)
+                    d = solve_low_rank_updated(backend, -g, low_rank, rtol)
                 break
             except FactorizationError:  # singular, indefinite for a Cholesky backend, CG not converged
                 self.cg_failed |= psd_only and backend.name == "amg"
