@@ -194,7 +194,7 @@ class AmgConjugateGradient:
     # strength of connection |a_ij| >= 0.08 sqrt(|a_ii a_jj|) (of the node blocks' norms), not pyamg's 0: the dense
     # node graph of quadratic tetrahedra otherwise makes aggregates of ~30 nodes and a weak coarse level;
     # energy-minimising prolongation smoothing, not one Jacobi step. Measured on the quadratic 3D beam's
-    # Hessians (32k DOFs): CG iterations to 1e-2 of 135 -> 39 and 38 -> 13 (docs/solid.md)
+    # Hessians (32k DOFs): 3-10 CG iterations to 1e-2 where pyamg's defaults took 8-29 (docs/solid.md)
     OPTIONS = {"strength": ("symmetric", {"theta": 0.08}), "smooth": "energy"}
     STALE_FACTOR = 2.0
 
