@@ -177,8 +177,8 @@ def report(records: list[dict]) -> str:
         rows = sorted((r for r in records if r["case"] == case and r["nu"] == nu), key=lambda r: (r["order"], r["level"]))
         tip, tip_from = reference(rows, "tip")
         pressure, pressure_from = reference(rows, "pressure")
-        others = [f"{key} {value:.5g} ({how})" for key in ("tip", "pressure")
-                  for value, how in extrapolations(rows, key) if how not in (tip_from, pressure_from)]
+        others = [f"{key} {value:.5g} ({how})" for key in ("tip", "pressure")  # reference() takes the first
+                  for value, how in extrapolations(rows, key)[1:]]
         lines += [f"### {case}, nu = {nu}", "", f"Reference tip {tip:+.5f} ({tip_from}); pressure {pressure:.1f} "
                   f"({pressure_from}).", *([f"Not taken: {'; '.join(others)}."] if others else []), "",
                   "| elements | level | tetrahedra | DOFs | tip | tip error | pressure | pressure error | s | CPU s | "
