@@ -149,6 +149,20 @@ def describe_commands(built: BuiltScene, commands: np.ndarray, reached: np.ndarr
     return "; ".join(parts)
 
 
+def state_fault(built: BuiltScene, commands: np.ndarray) -> str | None:
+    """What makes the model's current equilibrium (at `commands`) no physical state, in words, or None: a chamber
+    wall that crosses or folds through itself or turns inside out (Chamber.fault), or an element whose det F is
+    not positive. Such a state can be an exact equilibrium of the discrete energy (the area penalty does not
+    care how the wall encloses its area), so only this check tells it apart."""
+    for chamber, command in zip(built.chambers, commands):
+        fault = chamber.fault()
+        if fault is not None:
+            return (f"chamber {chamber.chamber_name!r} {fault} at {chamber.kind.quantity} {command:.4g}: the body "
+                    f"cannot take its chamber that far (a wall through itself is not physical)")
+    min_det = built.elastic.min_determinant()
+    return None if min_det > 0 else f"an element turned inside out (min det F = {min_det:.3g})"
+
+
 class NoEquilibrium(RuntimeError):
     """settle() found no equilibrium even after cutting back; the model holds the last equilibrium's u."""
 
@@ -194,7 +208,8 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     chamber commands is halved and the smaller sub-increment solved from the last equilibrium, as
     often as max_cuts times per increment; every cut is counted in the history. If it still fails,
     RampFailed names the step, the commands (for pressure control, the last pressure reached) and
-    the residual, and carries the steps done. progress, if given, is called after every increment as
+    the residual, and carries the steps done; so does an equilibrium that is no physical state (state_fault:
+    a chamber wall through itself, an inverted element), which is not kept. progress, if given, is called after every increment as
     progress(step_record, positions, contact_force): the positions (n, 2) and, if the scene has contact,
     the summed contact force per vertex (n, 2), else None; stop, if given, is asked stop() after every
     increment but the last, and when it returns True the ramp ends there with RampInterrupted carrying
@@ -224,6 +239,9 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
             raise RampFailed(f"step {i}: {failure}", partial()) from None
         built.set_commands(target)
         built.model.set_displacements(u)
+        fault = state_fault(built, target)
+        if fault is not None:
+            raise RampFailed(f"step {i}: {fault}", partial())
         for term in built.model.terms:
             term.advance(u)
         final = records[-1]
