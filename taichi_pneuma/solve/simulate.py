@@ -151,11 +151,11 @@ def describe_commands(built: BuiltScene, commands: np.ndarray, reached: np.ndarr
 
 def state_fault(built: BuiltScene, commands: np.ndarray) -> str | None:
     """What makes the model's current equilibrium (at `commands`) no physical state, in words, or None: a chamber
-    wall that crosses or folds through itself or turns inside out (Chamber.fault), or an element whose det F is
+    wall that crosses or folds through itself or turns inside out (Chamber.wall_fault), or an element whose det F is
     not positive. Such a state can be an exact equilibrium of the discrete energy (the area penalty does not
     care how the wall encloses its area), so only this check tells it apart."""
     for chamber, command in zip(built.chambers, commands):
-        fault = chamber.fault()
+        fault = chamber.wall_fault()
         if fault is not None:
             return (f"chamber {chamber.chamber_name!r} {fault} at {chamber.kind.quantity} {command:.4g}: the body "
                     f"cannot take its chamber that far (a wall through itself is not physical)")

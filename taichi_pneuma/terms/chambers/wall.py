@@ -184,7 +184,7 @@ class Chamber(Term):
         force[self.loop_vertices] = -self.pressure_at(area) * area_gradient
         return force
 
-    def fault(self) -> str | None:
+    def wall_fault(self) -> str | None:
         """What makes the wall in the model's current state no chamber wall any more, in words (form.fault:
         crossing itself or turned inside out in 2D, triangles flipped in 3D), or None."""
         return self.form.fault(self.config.u)
