@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..fem.fields import ElementFields
 from ..scene import BuiltScene
 from .newton import NewtonOptions, NewtonSolver, SolveRecord
 from .result import Result
@@ -36,7 +37,8 @@ class StepRecord:
     rotation in degrees (counter-clockwise positive, least squares; in 3D the bend angle, about z);
     contact: per contact term the total force it exerts on the body (fx, fy) and the sum of its
     per-vertex force magnitudes; extra: further columns by name, last in the row (a reach's target and
-    tip error, inverse.frames); tip_dz: in 3D the tip's mean z displacement (None in 2D).
+    tip error, inverse.frames); tip_dz: in 3D the tip's mean z displacement (None in 2D); max_stretch: the
+    largest principal stretch at any quadrature point (ElementFields.largest_stretch).
     """
 
     step: int
@@ -54,6 +56,7 @@ class StepRecord:
     contact: dict[str, tuple[float, float, float]] = field(default_factory=dict)
     extra: dict[str, float] = field(default_factory=dict)
     tip_dz: float | None = None
+    max_stretch: float = math.nan
 
     def row(self) -> dict[str, float]:
         """Flat columns: step, <chamber>.<field> for each chamber, <contact>.fx/.fy/.magnitude, solver figures,
@@ -69,7 +72,8 @@ class StepRecord:
         for name, (fx, fy, magnitude) in self.contact.items():
             row.update({f"{name}.fx": fx, f"{name}.fy": fy, f"{name}.magnitude": magnitude})
         row.update({"iterations": self.iterations, "residual": self.residual, "converged": self.converged,
-                    "cuts": self.cuts, "substeps": self.substeps, "min_det": self.min_det, "seconds": self.seconds})
+                    "cuts": self.cuts, "substeps": self.substeps, "min_det": self.min_det, "max_stretch": self.max_stretch,
+                    "seconds": self.seconds})
         row.update(self.extra)
         return row
 
@@ -221,6 +225,7 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     mesh = built.mesh
     contact_terms = [(name, t) for name, terms in built.effects.items() for t in terms if t.reports_contact]
     u = np.zeros_like(mesh.vertices)
+    stretches = ElementFields(mesh.vertices, mesh.elements)
     steps, states, solves, forces = [], [], [], []
     reached = schedule.rest_commands
     previous = None  # (commands, u) of the equilibrium before the last one, for the predictor
@@ -255,7 +260,7 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
         step = StepRecord(i, chambers, *tip_measures(mesh, u),
                           sum(r.iterations for r in records), final.residual, final.converged, cuts,
                           len(records) - cuts, built.elastic.min_determinant(), time.perf_counter() - start, contact,
-                          tip_dz=tip_dz(mesh, u))
+                          tip_dz=tip_dz(mesh, u), max_stretch=stretches.largest_stretch(mesh.vertices + u))
         steps.append(step)
         states.append(mesh.vertices + u)
         forces.append(vertex_forces)
