@@ -76,7 +76,8 @@ def test_a_chamber_closed_past_what_the_body_allows_stops_where_its_wall_crosses
                          capture_output=True, text=True)
     assert run.returncode == 1
     errors = [line for line in run.stderr.splitlines() if line.strip() and not line.startswith("[Taichi]")]
-    assert len(errors) == 1 and errors[0].startswith("error: step ") and "chamber 'main' wall crosses itself" in errors[0]
+    assert len(errors) == 1 and errors[0].startswith("error: step ")
+    assert "chamber 'main' wall crosses itself" in errors[0]
     failed = int(errors[0].split()[2].rstrip(":"))
     states = np.load(out / "inflate_cy+0.15_states.npz")
     assert 2 <= failed <= 5 and states["positions"].shape[0] == failed  # steps 0 .. failed - 1

@@ -126,7 +126,8 @@ def run_scene(args: argparse.Namespace, scene, stem: str, size: tuple[int, int],
     else:
         print(f"tip deflection (mean y displacement of the right face): {result.tip_deflection:+.4f}{length}; "
               f"tip dz {final.tip_dz:+.4f}{length}; bend angle {final.tip_rotation:+.1f} deg")
-    tip = [f"d{axis} {span(f'tip_d{axis}', '{:+.4f}' + length)}" for axis in ("x", "y", "z") if f"tip_d{axis}" in extremes]
+    tip = [f"d{axis} {span(f'tip_d{axis}', '{:+.4f}' + length)}" for axis in ("x", "y", "z")
+           if f"tip_d{axis}" in extremes]
     print(f"tip over the run: {', '.join(tip)}; {'rotation' if final.tip_dz is None else 'bend angle'} "
           f"{span('tip_rotation', '{:+.1f}')} deg")
     print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}{pressure}")

@@ -72,8 +72,8 @@ class StepRecord:
         for name, (fx, fy, magnitude) in self.contact.items():
             row.update({f"{name}.fx": fx, f"{name}.fy": fy, f"{name}.magnitude": magnitude})
         row.update({"iterations": self.iterations, "residual": self.residual, "converged": self.converged,
-                    "cuts": self.cuts, "substeps": self.substeps, "min_det": self.min_det, "max_stretch": self.max_stretch,
-                    "seconds": self.seconds})
+                    "cuts": self.cuts, "substeps": self.substeps, "min_det": self.min_det,
+                    "max_stretch": self.max_stretch, "seconds": self.seconds})
         row.update(self.extra)
         return row
 
@@ -213,9 +213,9 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     often as max_cuts times per increment; every cut is counted in the history. If it still fails,
     RampFailed names the step, the commands (for pressure control, the last pressure reached) and
     the residual, and carries the steps done; so does an equilibrium that is no physical state (state_fault:
-    a chamber wall through itself, an inverted element), which is not kept. progress, if given, is called after every increment as
-    progress(step_record, positions, contact_force): the positions (n, 2) and, if the scene has contact,
-    the summed contact force per vertex (n, 2), else None; stop, if given, is asked stop() after every
+    a chamber wall through itself, an inverted element), which is not kept. progress, if given, is called
+    after every increment as progress(step_record, positions, contact_force): the positions (n, 2) and, if
+    the scene has contact, the summed contact force per vertex (n, 2), else None; stop, if given, is asked stop() after every
     increment but the last, and when it returns True the ramp ends there with RampInterrupted carrying
     the steps done. Returns the run's Result (its seconds: the wall time of this call).
     """

@@ -93,8 +93,8 @@ def crossing_segments(points: np.ndarray, closed: bool) -> tuple[int, int] | Non
     def side(p, q, r):
         return (q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0])
 
-    cross = (side(a[i], b[i], a[j]) * side(a[i], b[i], b[j]) < 0) & (side(a[j], b[j], a[i]) * side(a[j], b[j], b[i]) < 0)
-    hits = np.flatnonzero(cross)
+    hits = np.flatnonzero((side(a[i], b[i], a[j]) * side(a[i], b[i], b[j]) < 0)
+                          & (side(a[j], b[j], a[i]) * side(a[j], b[j], b[i]) < 0))
     return (int(i[hits[0]]), int(j[hits[0]])) if len(hits) else None
 
 
@@ -163,10 +163,10 @@ class Chamber(Term):
         self.n_wall = len(self.loop_vertices)
         self.rest_area = self.form.rest_measure
         measure = "area" if config.dim == 2 else "volume"
-        require(self.rest_area > 0, f"chamber {name!r}: rest {measure} {self.rest_area:.4g} is not positive: a chamber's "
-                                    f"wall must enclose a cavity with the rubber outside it (its wall oriented out of "
-                                    f"the cavity, into the rubber); the body's outer surface given as a chamber "
-                                    f"encloses a negative {measure}")
+        require(self.rest_area > 0, f"chamber {name!r}: rest {measure} {self.rest_area:.4g} is not positive: a "
+                                    f"chamber's wall must enclose a cavity with the rubber outside it (its wall "
+                                    f"oriented out of the cavity, into the rubber); the body's outer surface given as "
+                                    f"a chamber encloses a negative {measure}")
 
     def area_and_gradient(self, u: np.ndarray | None = None) -> tuple[float, np.ndarray]:
         """A(x) and dA/dx on the wall nodes, (k, d) in the order of loop_vertices, at the model's displacements
