@@ -215,9 +215,9 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     the residual, and carries the steps done; so does an equilibrium that is no physical state (state_fault:
     a chamber wall through itself, an inverted element), which is not kept. progress, if given, is called
     after every increment as progress(step_record, positions, contact_force): the positions (n, 2) and, if
-    the scene has contact, the summed contact force per vertex (n, 2), else None; stop, if given, is asked stop() after every
-    increment but the last, and when it returns True the ramp ends there with RampInterrupted carrying
-    the steps done. Returns the run's Result (its seconds: the wall time of this call).
+    the scene has contact, the summed contact force per vertex (n, 2), else None; stop, if given, is asked
+    stop() after every increment but the last, and when it returns True the ramp ends there with
+    RampInterrupted carrying the steps done. Returns the run's Result (its seconds: the wall time of this call).
     """
     started = time.perf_counter()
     schedule = schedule or built.scene.schedule
