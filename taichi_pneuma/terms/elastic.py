@@ -212,11 +212,11 @@ class Elasticity(Term):
             return None
         F = ElementFields(self.config.rest, self.nodes).deformation_gradients(self.config.rest + self.config.u)[e, q]
         stretches = ", ".join(f"{s:.3g}" for s in np.linalg.svd(F, compute_uv=False))
-        what = (f"its energy density there, {density[e, q]:.4g}, lies below the rest state's {rest[e, q]:.4g}"
-                if np.isfinite(density[e, q]) else "its energy density there is not finite")
-        return (f"the material law {self.law.name!r} is unstable at element {e} (principal stretches {stretches}): "
-                f"{what}, so it gives energy by deforming further and no equilibrium exists; check its "
-                f"coefficients over the stretches reached")
+        why = (f"its energy density there, {density[e, q]:.4g}, lies below the rest state's {rest[e, q]:.4g}, so it "
+               f"gives energy by deforming further and no equilibrium exists; check its coefficients over the "
+               f"stretches reached" if np.isfinite(density[e, q]) else
+               "its energy density there is not finite: these stretches are outside the law's range")
+        return f"the material law {self.law.name!r} is unstable at element {e} (principal stretches {stretches}): {why}"
 
     def min_determinant(self) -> float:
         """Smallest det F over the quadrature points (negative where an element is inverted)."""
