@@ -24,7 +24,7 @@ from .io.units import UNITLESS, Units
 from .materials import IsochoricMaterial, StableNeoHookean
 from .materials.presets import PresetMaterial
 from .solve.model import EnergyModel
-from .solve.schedule import ChamberSchedule, Schedule, area_ramp
+from .solve.schedule import MAX_STRETCH, ChamberSchedule, Schedule, area_ramp
 from .terms import Clamp, Elasticity, NormalClamp
 from .terms.base import Term
 from .terms.chambers import Chamber, ChamberKind
@@ -109,7 +109,9 @@ class ChamberControl:
 @dataclass(frozen=True)
 class Scene:
     """A whole scene. controls: one ChamberControl per chamber of geometry, in the same order; units: the
-    system its numbers are in (io/units.py; unitless by default), into which presets are converted."""
+    system its numbers are in (io/units.py; unitless by default), into which presets are converted; max_stretch: the
+    largest principal stretch a run may reach before it warns that it has left the material model's range
+    (MAX_STRETCH by default)."""
 
     geometry: Geometry
     controls: tuple[ChamberControl, ...]
@@ -121,9 +123,12 @@ class Scene:
     name: str = "scene"
     targets: tuple = ()  # targets.Target poses for inverse control (apps.reach), in order
     units: Units = UNITLESS
+    max_stretch: float = MAX_STRETCH
 
     def __post_init__(self):
         check_stem(self.name)  # the result files are named after the scene
+        require(require_finite("max_stretch", self.max_stretch) > 1,
+                f"max_stretch = {self.max_stretch!r} must be > 1 (a principal stretch; 1 is the rest state)")
         require_finite("clamp stiffness", self.clamp_stiffness)
         require(self.clamp_stiffness > 0, f"clamp stiffness = {self.clamp_stiffness!r} must be > 0")
         require(len(self.controls) == len(self.geometry.chambers),

@@ -196,8 +196,9 @@ def build(scene):
 
 def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
     """Run the scene's schedule, printing a line per step, with a progress bar on a terminal only (the
-    lines go through the bar, tqdm.write; piped or logged output gets the lines alone); write each
-    step's VTU as it is solved if vtk is given. Returns an api.Result.
+    lines go through the bar, tqdm.write; piped or logged output gets the lines alone), and one `warning:`
+    line (also with --quiet) at the first step whose largest principal stretch passes the scene's max_stretch;
+    write each step's VTU as it is solved if vtk is given. Returns an api.Result.
 
     Raises RampFailed when an increment fails after its cuts, RampInterrupted (its .signum the signal)
     after the increment during which Ctrl-C, SIGTERM or SIGHUP came (signals.stopping); both carry the
@@ -207,13 +208,19 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
     from ..api import simulate
     from ..solve.simulate import RampInterrupted
 
-    increments, units = built.scene.increments, built.scene.units
+    increments, units, limit = built.scene.increments, built.scene.units, built.scene.max_stretch
     bar = tqdm(total=increments + 1, desc=label, unit="step", disable=True if args.quiet else None, leave=False)
+    past = []  # the step that first passed the scene's max_stretch
 
     def progress(step, positions, contact_force):
         if vtk is not None:
             vtk.write(step, positions, contact_force)
         bar.update()
+        if step.max_stretch > limit and not past:
+            past.append(step.step)
+            tqdm.write(f"warning: step {step.step}: the largest principal stretch {step.max_stretch:.2f} is past "
+                       f"max_stretch = {limit:g} (schedule.max_stretch): the material model is not meant for it, its "
+                       f"results from here on are extrapolated", file=sys.stderr)
         if not args.quiet:
             chambers = "  ".join(f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}{units.suffix(PRESSURE)}"
                                  for name, c in step.chambers.items())

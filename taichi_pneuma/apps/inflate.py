@@ -109,16 +109,30 @@ def run_scene(args: argparse.Namespace, scene, stem: str, size: tuple[int, int],
     final, summary = result.steps[-1], result.summary()
     area, length, pressure, force = (scene.units.suffix(d) for d in (AREA, LENGTH, PRESSURE, FORCE))
     measure = scene.units.suffix(MEASURES[result.mesh.dim])
+    extremes = summary["extremes"]
+
+    def span(column: str, text: str) -> str:
+        """A column's range over the run: 'min (step i) to max (step j)', each value formatted by text."""
+        e = extremes[column]
+        return f"{text.format(e['min'])} (step {e['min_step']}) to {text.format(e['max'])} (step {e['max_step']})"
+
     for name, c in final.chambers.items():
         print(f"{name}: {MEASURE[result.mesh.dim]} {c.area / c.area_ratio:.3f} -> {c.area:.3f}{measure} "
-              f"(x{c.area_ratio:.2f}), pressure {c.pressure:.1f}{pressure}")
+              f"(x{c.area_ratio:.2f}), pressure {c.pressure:.1f}{pressure}; over the run "
+              f"{span(f'{name}.area_ratio', 'x{:.2f}')}, pressure {span(f'{name}.pressure', '{:.1f}' + pressure)}")
     if final.tip_dz is None:
         print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}{length}; "
               f"tip rotation {final.tip_rotation:+.1f} deg")
     else:
         print(f"tip deflection (mean y displacement of the right face): {result.tip_deflection:+.4f}{length}; "
               f"tip dz {final.tip_dz:+.4f}{length}; bend angle {final.tip_rotation:+.1f} deg")
+    tip = [f"d{axis} {span(f'tip_d{axis}', '{:+.4f}' + length)}" for axis in ("x", "y", "z")
+           if f"tip_d{axis}" in extremes]
+    print(f"tip over the run: {', '.join(tip)}; {'rotation' if final.tip_dz is None else 'bend angle'} "
+          f"{span('tip_rotation', '{:+.1f}')} deg")
     print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}{pressure}")
+    print(f"largest principal stretch: {summary['max_stretch']:.2f} (step {summary['max_stretch_step']}; a run past "
+          f"max_stretch = {summary['max_stretch_limit']:g} warns)")
     for name, (fx, fy, magnitude) in final.contact.items():
         print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g}){force}")
     print(f"Newton: {summary['newton_iterations_total']} iterations over {summary['steps'] - 1} solves "

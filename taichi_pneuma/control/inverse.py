@@ -45,6 +45,7 @@ from scipy.optimize import lsq_linear
 from scipy.stats import qmc
 
 from ..errors import require, require_finite
+from ..fem.fields import ElementFields
 from ..scene import BuiltScene, Scene
 from ..solve.newton import NewtonOptions, NewtonSolver
 from ..solve.result import Result
@@ -364,6 +365,7 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
     built, mesh = reacher.built, reacher.built.mesh
     rest_tip = mesh.vertices[mesh.tip].mean(axis=0)
     steps, states, descent = [], [], 0
+    stretches = ElementFields(mesh.vertices, mesh.elements)
     for k, result in enumerate(results):
         target = result.target
         for j, pose in enumerate(result.path[1 if k else 0:], start=1 if k else 0):
@@ -380,7 +382,8 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
             steps.append(StepRecord(len(steps), chamber_records(built, pose.commands), float(dx), float(dy),
                                     pose.rotation, pose.iterations, pose.residual, True, 0, 1,
                                     built.elastic.min_determinant(), pose.seconds, extra=extra,
-                                    tip_dz=tip_dz(mesh, pose.u)))
+                                    tip_dz=tip_dz(mesh, pose.u),
+                                    max_stretch=stretches.largest_stretch(mesh.vertices + pose.u)))
             states.append(mesh.vertices + pose.u)
     built.set_commands(reacher.pose.commands)
     built.model.set_displacements(reacher.pose.u)

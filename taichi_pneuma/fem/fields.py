@@ -39,6 +39,11 @@ class ElementFields:
         """F (m, nq, d, d) at the quadrature points, from the current node positions (n, d)."""
         return np.einsum("mai,mqaj->mqij", positions[self.elements], self.gradients)
 
+    def largest_stretch(self, positions: np.ndarray) -> float:
+        """The largest principal stretch at any quadrature point (of any element) at the node positions (n, d)."""
+        F = self.deformation_gradients(positions)
+        return float(max_stretch(F.reshape(-1, *F.shape[2:])).max())
+
     def at(self, positions: np.ndarray, law=None, parameters=None) -> dict[str, np.ndarray]:
         """Per element (quadrature-weighted means): det_F and max_stretch, and, given a material law and its
         parameter vectors (one per element, (m, p)), stress (the mean Cauchy stress, (m, 3, 3)) and von_mises (of it)."""

@@ -31,7 +31,7 @@ from ..fem.solid_geometry import SolidGeometry, is_solid_shape
 from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
 from ..materials import FORMS, IsochoricMaterial
 from ..materials.presets import PRESETS, PresetMaterial
-from ..solve.schedule import ChamberSchedule
+from ..solve.schedule import MAX_STRETCH, ChamberSchedule
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
 from .schema import Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
@@ -232,7 +232,7 @@ def scene_table(scene_class) -> Table:
                                 clamp=clamp, order=mesh["order"], tip=v["tip"], rollers=v["rollers"])
         return scene_class(geometry, tuple(control for *_, control in v["chambers"]), v["schedule"]["increments"],
                            material, regions, clamp_stiffness, v["effects"], v["name"], v["targets"],
-                           UNITLESS if v["units"] is None else UNITS[v["units"]])
+                           UNITLESS if v["units"] is None else UNITS[v["units"]], v["schedule"]["max_stretch"])
 
     def mesh_parts(geometry):
         refinements = getattr(geometry, "refinements", 0)
@@ -268,8 +268,10 @@ def scene_table(scene_class) -> Table:
                      doc="the nodes whose mean displacement and rotation the history, sensitivities and reach use"),
         "rollers": Tables(ROLLER, "roller supports; one along a body edge is a symmetry line that may cut chambers"),
         "chambers": Tables(chamber, "the chambers, at least one"),
-        "schedule": Table({"increments": Key(int, doc="solves after the rest state")},
-                          parts=lambda s: {"increments": s.increments}),
+        "schedule": Table({"increments": Key(int, doc="solves after the rest state"),
+                           "max_stretch": Key(float, MAX_STRETCH, "a run whose largest principal stretch passes it "
+                                                                  "warns (once, at the first step past it)")},
+                          parts=lambda s: {"increments": s.increments, "max_stretch": s.max_stretch}),
         "effects": Named(EFFECTS, "the effects the scene adds, by name"),
         "targets": Tables(TARGET, "poses for inverse control, in order"),
     }, make=make_scene, parts=lambda s: {

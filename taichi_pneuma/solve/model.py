@@ -72,6 +72,10 @@ class EnergyModel:
         scale = max(sum(float(np.linalg.norm(p)) for p in parts), self.force_floor)
         return np.sum(parts, axis=0), scale
 
+    def fault(self) -> str | None:
+        """The first term's account of why no equilibrium can be found from the current state (Term.fault), or None."""
+        return next((fault for fault in (t.fault() for t in self.terms) if fault is not None), None)
+
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         patterns = [t.hessian_pattern() for t in self.terms]
         return np.concatenate([p[0] for p in patterns]), np.concatenate([p[1] for p in patterns])

@@ -28,7 +28,9 @@ holds (a NaN energy never does), or, once the predicted decrease -alpha g.d is b
 energy resolution (a sum over thousands of elements cannot resolve smaller changes in float64),
 until the gradient norm decreases instead. Converged when |g| / force_scale <= tol (force_scale:
 the sum of the terms' force norms, see EnergyModel.gradient). Nothing fails silently: the
-record says whether it converged and why it stopped.
+record says whether it converged and why it stopped; where it breaks down (a non-finite gradient, no
+descent direction, no decrease) and a term names itself the cause (EnergyModel.fault: a material law
+unstable at the state reached), the record gives that cause instead of the symptom.
 """
 
 from __future__ import annotations
@@ -195,7 +197,7 @@ class NewtonSolver:
             record.residuals.append(float(np.linalg.norm(g)) / scale)
             record.energies.append(energy)
             if not np.isfinite(record.residual):
-                record.message = "non-finite gradient"
+                record.message = model.fault() or "non-finite gradient"
                 break
             if record.residual <= opts.tol:
                 record.converged = True
@@ -219,13 +221,13 @@ class NewtonSolver:
                 d, slope = self._direction(g, True, clock, rtol=rtol)
             record.exact_factor = exact and self.factored_by is self.backend
             if not slope < 0:
-                record.message = f"not a descent direction (g.d = {slope:.3e})"
+                record.message = model.fault() or f"not a descent direction (g.d = {slope:.3e})"
                 break
             with clock("line_search"):
                 alpha, trial = self._line_search(u, d, g, energy, slope, record)
             if alpha == 0.0:
                 self.model.set_displacements(u)
-                record.message = "line search found no decrease (energy at round-off)"
+                record.message = model.fault() or "line search found no decrease (energy at round-off)"
                 break
             u = u + alpha * d
             energy = trial

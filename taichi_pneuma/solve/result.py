@@ -115,9 +115,28 @@ class Result:
         return element_fields(self.mesh.vertices, self.positions[step], self.mesh.elements,
                               *self.scene.element_material(self.mesh))
 
+    def extremes(self) -> dict[str, dict]:
+        """The range over the run of the tip's measures (tip_dx, tip_dy, in 3D tip_dz, tip_rotation) and of each
+        chamber's (<chamber>.area, .area_ratio, .pressure), by history column: {"min": value, "min_step": the
+        first step at it, "max": ..., "max_step": ...}. A schedule that goes out and back ends near rest; its
+        extremes keep what it reached."""
+        history = self.history
+        columns = ["tip_dx", "tip_dy", *(["tip_dz"] if "tip_dz" in history else []), "tip_rotation",
+                   *(f"{name}.{key}" for name in self.chamber_names for key in ("area", "area_ratio", "pressure"))]
+        extremes = {}
+        for column in columns:
+            values = history[column]
+            low, high = int(np.argmin(values)), int(np.argmax(values))
+            extremes[column] = {"min": float(values[low]), "min_step": int(history["step"][low]),
+                                "max": float(values[high]), "max_step": int(history["step"][high])}
+        return extremes
+
     def summary(self, interrupted: bool = False) -> dict:
-        """The figures of the run (the summary JSON); interrupted: the run was stopped after these steps."""
+        """The figures of the run (the summary JSON); interrupted: the run was stopped after these steps. Besides
+        the last step's values: extremes() (each with its step), the largest principal stretch over the run, its
+        step and the scene's max_stretch (past which a run warns)."""
         final = self.steps[-1]
+        stretch = self.history["max_stretch"]
         iterations, seconds = self.history["iterations"][1:], self.history["seconds"][1:]
         return {
             "scene": self.scene.name, "terms": self.built.model.term_names(),
@@ -129,7 +148,9 @@ class Result:
                          for name, c in final.chambers.items()},
             "tip_deflection": self.tip_deflection, **({} if final.tip_dz is None else {"tip_dz": final.tip_dz}),
             "tip_rotation_deg": final.tip_rotation,
-            "peak_pressure": self.peak_pressure, "contact": final.contact,
+            "peak_pressure": self.peak_pressure, "contact": final.contact, "extremes": self.extremes(),
+            "max_stretch": float(stretch.max()), "max_stretch_step": int(self.history["step"][np.argmax(stretch)]),
+            "max_stretch_limit": self.scene.max_stretch,
             "all_converged": self.converged,
             "max_residual": float(self.history["residual"].max()),
             "min_det_F": float(self.history["min_det"].min()),

@@ -18,6 +18,11 @@ import numpy as np
 from ..errors import require, require_finite, shape_of
 from ..terms.chambers import AreaControl, ChamberKind, default_kind
 
+# A run past this largest principal stretch warns (a scene's schedule.max_stretch replaces it). The presets are
+# fitted to uniaxial data up to 200 % strain (a stretch of 3; docs/materials.md): past that their stresses are
+# extrapolated, and at 5 (400 % strain) a silicone is past Dragon Skin 30's elongation at break (364 %) and half
+# way to the others' (700-1000 %); the stable neo-Hookean law has no such data at all.
+MAX_STRETCH = 5.0
 
 @dataclass(frozen=True)
 class ChamberSchedule:

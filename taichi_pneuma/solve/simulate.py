@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..fem.fields import ElementFields
 from ..scene import BuiltScene
 from .newton import NewtonOptions, NewtonSolver, SolveRecord
 from .result import Result
@@ -36,7 +37,8 @@ class StepRecord:
     rotation in degrees (counter-clockwise positive, least squares; in 3D the bend angle, about z);
     contact: per contact term the total force it exerts on the body (fx, fy) and the sum of its
     per-vertex force magnitudes; extra: further columns by name, last in the row (a reach's target and
-    tip error, inverse.frames); tip_dz: in 3D the tip's mean z displacement (None in 2D).
+    tip error, inverse.frames); tip_dz: in 3D the tip's mean z displacement (None in 2D); max_stretch: the
+    largest principal stretch at any quadrature point (ElementFields.largest_stretch).
     """
 
     step: int
@@ -54,6 +56,7 @@ class StepRecord:
     contact: dict[str, tuple[float, float, float]] = field(default_factory=dict)
     extra: dict[str, float] = field(default_factory=dict)
     tip_dz: float | None = None
+    max_stretch: float = math.nan
 
     def row(self) -> dict[str, float]:
         """Flat columns: step, <chamber>.<field> for each chamber, <contact>.fx/.fy/.magnitude, solver figures,
@@ -69,7 +72,8 @@ class StepRecord:
         for name, (fx, fy, magnitude) in self.contact.items():
             row.update({f"{name}.fx": fx, f"{name}.fy": fy, f"{name}.magnitude": magnitude})
         row.update({"iterations": self.iterations, "residual": self.residual, "converged": self.converged,
-                    "cuts": self.cuts, "substeps": self.substeps, "min_det": self.min_det, "seconds": self.seconds})
+                    "cuts": self.cuts, "substeps": self.substeps, "min_det": self.min_det,
+                    "max_stretch": self.max_stretch, "seconds": self.seconds})
         row.update(self.extra)
         return row
 
@@ -149,6 +153,20 @@ def describe_commands(built: BuiltScene, commands: np.ndarray, reached: np.ndarr
     return "; ".join(parts)
 
 
+def state_fault(built: BuiltScene, commands: np.ndarray) -> str | None:
+    """What makes the model's current equilibrium (at `commands`) no physical state, in words, or None: a chamber
+    wall that crosses or folds through itself or turns inside out (Chamber.wall_fault), or an element whose det F is
+    not positive. Such a state can be an exact equilibrium of the discrete energy (the area penalty does not
+    care how the wall encloses its area), so only this check tells it apart."""
+    for chamber, command in zip(built.chambers, commands):
+        fault = chamber.wall_fault()
+        if fault is not None:
+            return (f"chamber {chamber.chamber_name!r} {fault} at {chamber.kind.quantity} {command:.4g}: the body "
+                    f"cannot take its chamber that far (a wall through itself is not physical)")
+    min_det = built.elastic.min_determinant()
+    return None if min_det > 0 else f"an element turned inside out (min det F = {min_det:.3g})"
+
+
 class NoEquilibrium(RuntimeError):
     """settle() found no equilibrium even after cutting back; the model holds the last equilibrium's u."""
 
@@ -194,11 +212,12 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     chamber commands is halved and the smaller sub-increment solved from the last equilibrium, as
     often as max_cuts times per increment; every cut is counted in the history. If it still fails,
     RampFailed names the step, the commands (for pressure control, the last pressure reached) and
-    the residual, and carries the steps done. progress, if given, is called after every increment as
-    progress(step_record, positions, contact_force): the positions (n, 2) and, if the scene has contact,
-    the summed contact force per vertex (n, 2), else None; stop, if given, is asked stop() after every
-    increment but the last, and when it returns True the ramp ends there with RampInterrupted carrying
-    the steps done. Returns the run's Result (its seconds: the wall time of this call).
+    the residual, and carries the steps done; so does an equilibrium that is no physical state (state_fault:
+    a chamber wall through itself, an inverted element), which is not kept. progress, if given, is called
+    after every increment as progress(step_record, positions, contact_force): the positions (n, 2) and, if
+    the scene has contact, the summed contact force per vertex (n, 2), else None; stop, if given, is asked
+    stop() after every increment but the last, and when it returns True the ramp ends there with
+    RampInterrupted carrying the steps done. Returns the run's Result (its seconds: the wall time of this call).
     """
     started = time.perf_counter()
     schedule = schedule or built.scene.schedule
@@ -206,6 +225,7 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     mesh = built.mesh
     contact_terms = [(name, t) for name, terms in built.effects.items() for t in terms if t.reports_contact]
     u = np.zeros_like(mesh.vertices)
+    stretches = ElementFields(mesh.vertices, mesh.elements)
     steps, states, solves, forces = [], [], [], []
     reached = schedule.rest_commands
     previous = None  # (commands, u) of the equilibrium before the last one, for the predictor
@@ -224,6 +244,9 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
             raise RampFailed(f"step {i}: {failure}", partial()) from None
         built.set_commands(target)
         built.model.set_displacements(u)
+        fault = state_fault(built, target)
+        if fault is not None:
+            raise RampFailed(f"step {i}: {fault}", partial())
         for term in built.model.terms:
             term.advance(u)
         final = records[-1]
@@ -237,7 +260,7 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
         step = StepRecord(i, chambers, *tip_measures(mesh, u),
                           sum(r.iterations for r in records), final.residual, final.converged, cuts,
                           len(records) - cuts, built.elastic.min_determinant(), time.perf_counter() - start, contact,
-                          tip_dz=tip_dz(mesh, u))
+                          tip_dz=tip_dz(mesh, u), max_stretch=stretches.largest_stretch(mesh.vertices + u))
         steps.append(step)
         states.append(mesh.vertices + u)
         forces.append(vertex_forces)

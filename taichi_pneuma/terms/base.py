@@ -164,5 +164,10 @@ class Term:
     def max_step(self, dx: np.ndarray) -> float:
         return math.inf
 
+    def fault(self) -> str | None:
+        """Why no equilibrium can be found from the current state, in words, when this term is the cause (e.g. a
+        material law that is unstable there), else None; asked when a Newton solve breaks down."""
+        return None
+
     def advance(self, u: np.ndarray) -> None:
         """Called with the displacements that end each increment; time-dependent terms update their state."""

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..backend import ti
 from ..fem.elements import FAMILIES, family_of
+from ..fem.fields import ElementFields
 from ..materials.law import element_parameters, embedded, stress_eigensystem
 from ..materials.neo_hookean import cofactor
 from .base import Nodal, Table, Term, block_pattern, int32s, smallest_positive_cubic_root, smallest_positive_root
@@ -61,6 +62,15 @@ def elastic_energy(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal, 
         total += weights[e, q] * law.energy(F, element_parameters(law, parameters, e))
         ti.atomic_min(smallest, F.determinant())
     return total, smallest
+
+
+@ti.kernel
+def energy_densities(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal, nodes: Nodes, grads: Gradients,
+                     weights: Weights, parameters: Parameters, out: Weights):
+    """out[e, q] = psi(F_q) of element e."""
+    for e, q in ti.ndrange(nodes.shape[0], weights.shape[1]):
+        F = embedded(deformation_gradient(rest, u, nodes, grads, e, q, d), d)
+        out[e, q] = law.energy(F, element_parameters(law, parameters, e))
 
 
 @ti.kernel
@@ -185,6 +195,28 @@ class Elasticity(Term):
         """Largest step fraction along dx that keeps det F positive at every quadrature point."""
         return inversion_step(self.dim, self.config.rest, self.config.u, np.ascontiguousarray(dx, dtype=np.float64),
                               self.nodes, self.grads)
+
+    def fault(self) -> str | None:
+        """The material law as the cause of a breakdown, in words, or None: at some quadrature point its energy
+        density is not finite, or lies below the rest state's, psi(F) < psi(I) (by more than 1e-9 of the law's
+        modulus): a stable law's stress-free rest state is its energy minimum, so a law below it there gives
+        energy by deforming further (a Yeoh C20 < 0 at large stretch, say) and no equilibrium exists. Names the
+        element of the lowest point and its principal stretches (the singular values of F)."""
+        density, rest = np.empty_like(self.weights), np.empty_like(self.weights)
+        energy_densities(*self._arguments(), density)
+        energy_densities(*self._arguments()[:3], np.zeros_like(self.config.u), *self._arguments()[4:], rest)
+        drop = np.where(np.isfinite(density), density - rest, -np.inf)
+        drop[drop >= -1e-9 * self.law.modulus(self.parameters)[:, None]] = 0.0
+        e, q = np.unravel_index(np.argmin(drop), drop.shape)
+        if drop[e, q] == 0.0:
+            return None
+        F = ElementFields(self.config.rest, self.nodes).deformation_gradients(self.config.rest + self.config.u)[e, q]
+        stretches = ", ".join(f"{s:.3g}" for s in np.linalg.svd(F, compute_uv=False))
+        why = (f"its energy density there, {density[e, q]:.4g}, lies below the rest state's {rest[e, q]:.4g}, so it "
+               f"gives energy by deforming further and no equilibrium exists; check its coefficients over the "
+               f"stretches reached" if np.isfinite(density[e, q]) else
+               "its energy density there is not finite: these stretches are outside the law's range")
+        return f"the material law {self.law.name!r} is unstable at element {e} (principal stretches {stretches}): {why}"
 
     def min_determinant(self) -> float:
         """Smallest det F over the quadrature points (negative where an element is inverted)."""

@@ -139,6 +139,22 @@ class VolumeForm:
         self._last = (wall_u, volume, gradient)
         return volume, gradient
 
+    def fault(self, u: np.ndarray) -> str | None:
+        """What is wrong with the wall at displacements u (n, 3), in words, or None: a triangle flipped (the normal
+        (x1 - x0) x (x2 - x0) of its corners turned against its rest normal, n . n_rest <= 0: the wall folded
+        through itself there), or the enclosed volume not positive (turned inside out). Surfaces that pass
+        through each other without a flip are not looked for."""
+        def normals(x):
+            corners = x[self.nodes][self.faces[:, :3]]
+            return np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+
+        flipped = np.flatnonzero(np.einsum("fi,fi->f", normals(self.rest), normals(self.rest + u)) <= 0)
+        if len(flipped):
+            return f"wall folded through itself ({len(flipped)} of its {len(self.faces)} triangles flipped, " \
+                   f"the first triangle {flipped[0]})"
+        volume = self.measure_and_gradient(u)[0]
+        return None if volume > 0 else f"wall turned inside out (enclosed volume {volume:.4g})"
+
     def hessian(self) -> np.ndarray:
         k = self.faces.shape[1]
         out = np.empty((len(self.faces), 9 * k * k))

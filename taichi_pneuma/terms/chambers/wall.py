@@ -37,6 +37,7 @@ PSD elastic and clamp Hessians keep projected Newton a descent method).
 import numpy as np
 
 from ...backend import ti
+from ...errors import require
 from ..base import Indices, Scalars, Term, Vec2s, int32s, position, vertex_dofs
 from .cavity import VolumeForm
 
@@ -71,6 +72,32 @@ def area_form(k: int, order: int, closed: bool = True) -> tuple[np.ndarray, np.n
     pairs = np.vstack([np.column_stack(p) for p in ((a, m), (m, b), (a, b))])
     return pairs, np.repeat([2 / 3, 2 / 3, -1 / 6], len(a))
 
+
+def crossing_segments(points: np.ndarray, closed: bool) -> tuple[int, int] | None:
+    """The first pair (i, j), i < j, of non-adjacent segments of the polygon through points (k, 2) that cross,
+    or None where it is simple. Segment i runs from point i to point i + 1 (a closed polygon's last one back to
+    point 0, an open chain's k - 1 segments have none). Segments ab and cd cross where c and d lie strictly on
+    opposite sides of line ab and a and b strictly on opposite sides of line cd:
+
+        side(p, q, r) = (q - p) x (r - p),   side(a, b, c) side(a, b, d) < 0  and  side(c, d, a) side(c, d, b) < 0,
+
+    over all O(k^2) pairs at once (k ~ 100 wall nodes)."""
+    a = points if closed else points[:-1]
+    b = np.roll(points, -1, axis=0)[:len(a)]
+    n = len(a)
+    i, j = np.triu_indices(n, 2)
+    if closed:  # the last segment touches the first
+        keep = ~((i == 0) & (j == n - 1))
+        i, j = i[keep], j[keep]
+
+    def side(p, q, r):
+        return (q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0])
+
+    hits = np.flatnonzero((side(a[i], b[i], a[j]) * side(a[i], b[i], b[j]) < 0)
+                          & (side(a[j], b[j], a[i]) * side(a[j], b[j], b[i]) < 0))
+    return (int(i[hits[0]]), int(j[hits[0]])) if len(hits) else None
+
+
 class AreaForm:
     """The enclosed area of a 2D wall loop (module docstring): a quadratic form with a constant Hessian.
 
@@ -81,7 +108,8 @@ class AreaForm:
         self.rest = config.rest if origin is None else config.rest - np.asarray(origin, dtype=np.float64)
         self.nodes = np.asarray(loop, dtype=np.int64)
         self.loop = int32s(loop)
-        pairs, self.weights = area_form(len(loop), order, closed=origin is None)
+        self.closed = origin is None
+        pairs, self.weights = area_form(len(loop), order, closed=self.closed)
         self.pairs = int32s(pairs)
         xi, yi = 2 * self.nodes[pairs[:, 0]], 2 * self.nodes[pairs[:, 0]] + 1
         xj, yj = 2 * self.nodes[pairs[:, 1]], 2 * self.nodes[pairs[:, 1]] + 1
@@ -100,6 +128,17 @@ class AreaForm:
 
     def hessian(self) -> np.ndarray:
         return self._hessian
+
+    def fault(self, u: np.ndarray) -> str | None:
+        """What is wrong with the wall at displacements u (n, 2), in words, or None: the polygon through its
+        nodes (corners and midside nodes) crosses itself (crossing_segments), or the enclosed area is not
+        positive (the wall turned inside out: its orientation lost)."""
+        points = self.rest[self.nodes] + u[self.nodes]
+        crossing = crossing_segments(points, self.closed)
+        if crossing is not None:
+            return f"wall crosses itself (segments {crossing[0]} and {crossing[1]} of its {len(self.nodes)} nodes)"
+        area = self.measure_and_gradient(u)[0]
+        return None if area > 0 else f"wall turned inside out (enclosed area {area:.4g})"
 
 
 class Chamber(Term):
@@ -123,6 +162,11 @@ class Chamber(Term):
         self.dofs = vertex_dofs(self.loop_vertices, config.dim)
         self.n_wall = len(self.loop_vertices)
         self.rest_area = self.form.rest_measure
+        measure = "area" if config.dim == 2 else "volume"
+        require(self.rest_area > 0, f"chamber {name!r}: rest {measure} {self.rest_area:.4g} is not positive: a "
+                                    f"chamber's wall must enclose a cavity with the rubber outside it (its wall "
+                                    f"oriented out of the cavity, into the rubber); the body's outer surface given as "
+                                    f"a chamber encloses a negative {measure}")
 
     def area_and_gradient(self, u: np.ndarray | None = None) -> tuple[float, np.ndarray]:
         """A(x) and dA/dx on the wall nodes, (k, d) in the order of loop_vertices, at the model's displacements
@@ -139,6 +183,11 @@ class Chamber(Term):
         force = np.zeros_like(self.config.u)
         force[self.loop_vertices] = -self.pressure_at(area) * area_gradient
         return force
+
+    def wall_fault(self) -> str | None:
+        """What makes the wall in the model's current state no chamber wall any more, in words (form.fault:
+        crossing itself or turned inside out in 2D, triangles flipped in 3D), or None."""
+        return self.form.fault(self.config.u)
 
     def pressure(self) -> float:
         """The chamber's (gauge) pressure p in the current state: positive when it pushes its walls outward."""
