@@ -39,6 +39,7 @@ from .tomltext import dumps
 from .units import UNITLESS, UNITS
 
 PAIR, BOX, TRIPLE = "[x, y]", "[x0, y0, x1, y1]", "[x, y, z]"
+CLAMP_STIFFNESS = 1e9  # the [clamp] stiffness key's default
 POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3"))
 PLANAR_BODIES = {
     "rectangle": record(Rectangle, "an axis-aligned rectangle", center=Key(tuple, (0.0, 0.0), PAIR),
@@ -105,14 +106,17 @@ ROLLER = record(Roller, "a roller support: the nodes' displacement along normal 
                 box=Key(tuple, None, f"{BOX}: the nodes in it (instead of point)"), tolerance=Key(float, 1e-6))
 
 
-def point_set(default_side: str, **more) -> dict:
-    """The keys of a [clamp] or [tip] node set: side, or box (then no side)."""
-    return {"side": Key(str, None, f"a side of the body's bounding box (without box: {default_side})", SIDES),
+def point_set(neither: str, **more) -> dict:
+    """The keys of a [clamp] or [tip] node set: side, or box (then no side); neither: what neither means."""
+    return {"side": Key(str, None, f"a side of the body's bounding box (neither side nor box: {neither})", SIDES),
             "box": Key(tuple, None, f"{BOX}: the nodes in it"), **more}
 
 
-def make_point_set(v: dict, default_side: str) -> PointSet:
-    return PointSet(default_side if v["side"] is None and v["box"] is None else v["side"], v["box"])
+def make_point_set(v: dict, default_side: str | None) -> PointSet | None:
+    """The node set of the keys side and box; neither: the default side's, or None without one."""
+    if v["side"] is None and v["box"] is None:
+        return None if default_side is None else PointSet(default_side)
+    return PointSet(v["side"], v["box"])
 
 
 MATERIAL_KEYS = {
@@ -234,6 +238,12 @@ def scene_table(scene_class) -> Table:
                            material, regions, clamp_stiffness, v["effects"], v["name"], v["targets"],
                            UNITLESS if v["units"] is None else UNITS[v["units"]])
 
+    def clamp_parts(scene):
+        """The [clamp] keys; without a clamp, its stiffness only if not the default (so no [clamp] is written)."""
+        clamp, stiffness = scene.geometry.clamp, scene.clamp_stiffness
+        return {"side": getattr(clamp, "side", None), "box": getattr(clamp, "box", None),
+                "stiffness": None if clamp is None and stiffness == CLAMP_STIFFNESS else stiffness}
+
     def mesh_parts(geometry):
         refinements = getattr(geometry, "refinements", 0)
         require(refinements == 0, f"a geometry refined {refinements} times has no scene-file form "
@@ -259,10 +269,11 @@ def scene_table(scene_class) -> Table:
                                             "nodes added)", ORDERS)},
                       parts=mesh_parts, optional=True),
         "material": material,
-        "clamp": Table(point_set("left", stiffness=Key(float, 1e9, "penalty stiffness of the clamp and the rollers")),
-                       make=lambda v: (make_point_set(v, "left"), v["stiffness"]),
-                       parts=lambda s: {"side": s.geometry.clamp.side, "box": s.geometry.clamp.box,
-                                        "stiffness": s.clamp_stiffness}, optional=True, doc="the clamped nodes"),
+        "clamp": Table(point_set("no clamp", stiffness=Key(float, CLAMP_STIFFNESS, "penalty stiffness of the clamp "
+                                                                                   "and the rollers")),
+                       make=lambda v: (make_point_set(v, None), v["stiffness"]), parts=clamp_parts, optional=True,
+                       doc="the clamped nodes; no [clamp] table (or one without side and box): no clamp, the body held "
+                           "by its rollers"),
         "tip": Table(point_set("right"), make=lambda v: make_point_set(v, "right"),
                      parts=lambda g: {"side": g.tip.side, "box": g.tip.box}, optional=True,
                      doc="the nodes whose mean displacement and rotation the history, sensitivities and reach use"),

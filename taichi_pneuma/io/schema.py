@@ -100,7 +100,7 @@ class Table:
     keys: dict
     make: Callable = dict
     parts: Callable = dict
-    optional: bool = False  # absent: read as an empty table (every key at its default)
+    optional: bool = False  # absent: read as an empty table (every key at its default); empty: not written
     cls: type | None = None  # the class make() builds, by which a Variant knows an object's option
     doc: str = ""
 
@@ -118,7 +118,9 @@ class Table:
         return build(path, lambda: self.make(values))
 
     def write(self, value, name: str, data: dict) -> None:
-        data[name] = self.write_table(value)
+        table = self.write_table(value)
+        if table or not self.optional:  # an optional table with no key is not written: absent reads the same
+            data[name] = table
 
     def write_table(self, obj) -> dict:
         data = {}
