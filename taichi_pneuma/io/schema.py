@@ -287,8 +287,12 @@ def default_text(default) -> str:
 
 def edited(root: Table, obj, values: dict):
     """A copy of obj with the dotted keys of `values` set in its data, read back (validated) through root;
-    a bad key or value raises one PneumaInputError naming the key."""
+    a bad key or value raises one PneumaInputError naming the key. A value that switches a Variant's tag
+    (chambers[0].control = "pressure") first drops the old option's keys (switched), then every value is set:
+    a key of the old option set in the same edit is kept, and refused if the new option lacks it."""
     data = root.write_table(obj)
+    for key, value in values.items():
+        switched(root.keys, data, parse_key(key), plain(value))
     for key, value in values.items():
         set_key(data, key, plain(value))
     try:
@@ -298,6 +302,39 @@ def edited(root: Table, obj, values: dict):
         if not any(key in message for key in values):
             message = f"{', '.join(f'{k} = {v!r}' for k, v in values.items())}: {message}"
         raise PneumaInputError(message) from None
+
+
+def switched(keys: dict, node, parts: list, value) -> None:
+    """If parts (a parsed dotted key) names, through tables and arrays of tables, the tag of a Variant in the
+    table node (of the entries keys) and value is another of its options: drop from that table the keys of the
+    old option that the new one lacks or that hold the old option's default (keys the user did not choose for
+    the new option, written out only because every key is)."""
+    if not isinstance(node, dict) or not parts or not isinstance(parts[0], str):
+        return
+    name, rest = parts[0], parts[1:]
+    entry = table_entries(keys, node).get(name)
+    if isinstance(entry, Variant) and not rest:
+        old = node.get(name, entry.default)
+        if old != value and old in entry.options and isinstance(value, str) and value in entry.options:
+            new = table_entries(entry.table(value).keys, {})
+            for key, part in table_entries(entry.table(old).keys, node).items():
+                default = isinstance(part, Key) and part.default is not REQUIRED and node.get(key) == plain(part.default)
+                if key not in new or default:
+                    node.pop(key, None)
+    elif isinstance(entry, Table):
+        switched(entry.keys, node.get(name), rest, value)
+    elif isinstance(entry, Tables) and rest and isinstance(rest[0], int) and rest[0] < len(node.get(name) or ()):
+        switched(entry.table.keys, node[name][rest[0]], rest[1:], value)
+
+
+def table_entries(keys: dict, data: dict) -> dict:
+    """The entries of a table's data: keys, and the keys of the option each Variant among them chooses there."""
+    entries = dict(keys)
+    for name, entry in keys.items():
+        option = data.get(name, entry.default) if isinstance(entry, Variant) else None
+        if isinstance(option, str) and option in entry.options:
+            entries.update(table_entries(entry.table(option).keys, data))
+    return entries
 
 
 def parse_key(key: str) -> list:
