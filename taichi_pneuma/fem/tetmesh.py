@@ -194,8 +194,8 @@ def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndar
     """The TetMesh of plain arrays (module docstring): vertices (n, 3); tets (m, 4) or (m, 10); chambers: name ->
     its wall's triangles (f, 3) (or (f, 6): the first three columns are used), in the scene's order;
     boundary: the outer boundary's triangles (None: every boundary facet on no chamber wall); regions: (m,)
-    region tags (region_groups: the names of some, name -> tag); order 1 or 2; the clamp (None, the default: no node clamped), the tip and
-    the rollers select their nodes."""
+    region tags (region_groups: the names of some, name -> tag); order 1 or 2; the clamp (None, the default:
+    no node clamped), the tip and the rollers select their nodes."""
     vertices = np.asarray(vertices, dtype=np.float64)
     tets = np.asarray(tets)
     require(vertices.ndim == 2 and vertices.shape[1] == 3 and len(vertices) >= 4 and np.isfinite(vertices).all(),

@@ -34,7 +34,7 @@ from ..materials.presets import PRESETS, PresetMaterial
 from ..solve.schedule import ChamberSchedule
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
-from .schema import Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
+from .schema import REQUIRED, Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
 from .tomltext import dumps
 from .units import UNITLESS, UNITS
 
@@ -132,6 +132,20 @@ MATERIAL_KEYS = {
 }
 
 
+STABLE_DEFAULTS = {"E": 1e4, "nu": 0.45}  # the stable neo-Hookean material's E and nu where not given
+MATERIAL_TAGS = ("preset", "law")  # the keys choosing a material's form (material_kind)
+
+
+def material_kind(keys: dict) -> dict:
+    """The keys of the material form that a [material] table's (or a region's) keys choose, each with the
+    default material_of gives it (REQUIRED: none): a preset's, a law's, or the stable neo-Hookean E and nu."""
+    if keys.get("preset") is not None:
+        return dict.fromkeys(("preset", "K", "nu"), REQUIRED)
+    if keys.get("law") is not None:
+        return dict.fromkeys(("law", *FORMS.get(keys["law"], ()), "K", "nu"), REQUIRED)
+    return dict(STABLE_DEFAULTS)
+
+
 def material_of(keys: dict, material_class):
     """The material of a [material] table's (or a region's) keys: a preset, a form of the isochoric law, or
     (neither) the stable neo-Hookean material_class(E, nu)."""
@@ -144,7 +158,7 @@ def material_of(keys: dict, material_class):
     if keys["law"] is None:
         extra = [k for k in given if k not in ("E", "nu")]
         require(not extra, f"{', '.join(extra)} need law = {' or '.join(FORMS)} (E and nu alone: stable neo-Hookean)")
-        return material_class(1e4 if keys["E"] is None else keys["E"], 0.45 if keys["nu"] is None else keys["nu"])
+        return material_class(*(STABLE_DEFAULTS[k] if keys[k] is None else keys[k] for k in ("E", "nu")))
     require(keys["E"] is None, f"E = {keys['E']!r}: law = {keys['law']!r} takes C10, ... and K or nu, not E")
     require(keys["C10"] is not None, f"law = {keys['law']!r} needs C10")
     return IsochoricMaterial(keys["law"], **{c: keys[c] for c in coefficients}, bulk_modulus=keys["K"],
@@ -193,11 +207,13 @@ def scene_table(scene_class) -> Table:
                                             f"lies in it"),
                     "group": Key(str, None, "instead of box (3D): the tetrahedra of the mesh's named volume group "
                                             "(a mesh file's physical group, a pneunet's \"layer\")"), **MATERIAL_KEYS},
-                   parts=lambda r: {"box": r.box, "group": r.group, **material_keys(r.material)})
+                   parts=lambda r: {"box": r.box, "group": r.group, **material_keys(r.material)}, kind=material_kind,
+                   tags=MATERIAL_TAGS)
     regions = Tables(region, "materials for the elements of a box or a volume group (later regions win); keys as "
                              "material's, and unless a region names a preset or law, each key it omits is material's")
     material = Table({**MATERIAL_KEYS, "regions": regions}, make=make_material,
                      parts=lambda s: {**material_keys(s.material), "regions": s.regions}, optional=True,
+                     kind=material_kind, tags=MATERIAL_TAGS,
                      doc="the body's material: the stable neo-Hookean one of E and nu (no law or preset), a form of "
                          "the isochoric law (law = neo_hookean, mooney_rivlin, yeoh: C10, ... and K or nu, in the "
                          "scene's pressure unit), or a preset (docs/materials.md)")
