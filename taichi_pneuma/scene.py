@@ -222,7 +222,8 @@ def describe_supports(mesh: Mesh, effects) -> str:
     """The supports in words: 'clamp 17 vertices' (or 'no clamp'), each roller by its normal with its count,
     the support effects by name (ground)."""
     clamp = f"clamp {len(mesh.pinned)} vertices" if len(mesh.pinned) else "no clamp"
-    rollers = [f"roller [{', '.join(f'{c:.3g}' for c in n + 0.0)}] {len(nodes)} vertices" for nodes, n in mesh.rollers]
+    rollers = [f"roller [{', '.join(f'{c:.3g}' for c in n + 0.0)}] {len(nodes)} vertices"  # + 0.0: no -0
+               for nodes, n in mesh.rollers]
     return ", ".join([clamp] + rollers + [effect.name for effect in effects if effect.support])
 
 

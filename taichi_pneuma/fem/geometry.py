@@ -472,8 +472,8 @@ class Mesh:
     corner, ...), a closed loop, or for a chamber cut by symmetry lines an open chain from line to line,
     oriented so its enclosed area (enclosed_area with wall_origins) is positive; wall_origins: per chamber
     None (a closed loop) or the origin o of an open wall's area, on the lines; boundary: the nodes on the
-    body's outer boundary; pinned: the clamped nodes (none without a clamp); tip: the tip's nodes (the right edge by default);
-    rollers: per roller, (its held nodes, its unit normal).
+    body's outer boundary; pinned: the clamped nodes (none without a clamp); tip: the tip's nodes (the right
+    edge by default); rollers: per roller, (its held nodes, its unit normal).
     """
 
     vertices: np.ndarray

@@ -80,6 +80,7 @@ class Ground(Effect):
     stiffness: float = 1e3
     name = "ground"
     contact = True
+    support = True
 
     @property
     def ground_height(self) -> float:
@@ -89,8 +90,6 @@ class Ground(Effect):
         require_finite("height", self.height)
         _positive("dhat", self.dhat)
         _positive("stiffness", self.stiffness)
-
-    support = True
 
     def holds(self, mesh, effects) -> list:
         """A one-sided contact holds a body only where a load presses it on: with gravity, the normal (y)
