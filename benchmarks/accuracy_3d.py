@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from taichi_pneuma import api, runtime
+from taichi_pneuma.fem.geometry import PointSet
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes, Solid, mesh_solid
 from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.fem.solids import Box, Ellipsoid
@@ -114,7 +115,7 @@ def meshes(case: Case, levels: int):
 
 def scene_of(case: Case, level, order: int, nu: float) -> Scene:
     vertices, tets, walls = level
-    mesh = tet_mesh(vertices, tets, walls, order=order)
+    mesh = tet_mesh(vertices, tets, walls, order=order, clamp=PointSet("left"))
     names = tuple(walls)
     controls = tuple(ChamberControl(area_ramp(case.growth, INCREMENTS + 1, STIFFNESS)) for _ in names)
     regions = () if case.layer is None else (Region(case.layer[0], Material(case.layer[1], nu)),)

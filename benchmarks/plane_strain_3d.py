@@ -23,7 +23,7 @@ from datetime import date
 from pathlib import Path
 
 from taichi_pneuma import api, runtime
-from taichi_pneuma.fem.geometry import BeamGeometry, Roller
+from taichi_pneuma.fem.geometry import BeamGeometry, PointSet, Roller
 from taichi_pneuma.fem.layered import extrude
 from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface, write_mesh
 from taichi_pneuma.fem.tetmesh import tet_mesh
@@ -45,7 +45,8 @@ def extruded_scene(level: int, order: int, folder: Path, max_area: float) -> Sce
     vertices, tets, walls = extrude(planar, DEPTH)
     mesh = tet_mesh(vertices, tets, {"main": walls[0]}, rollers=ROLLERS)
     path = write_mesh(folder / f"beam_{level}.msh", mesh, ("main",))
-    geometry = MeshGeometry(MeshBody(str(path)), (("main", MeshSurface("main")),), order, rollers=ROLLERS)
+    geometry = MeshGeometry(MeshBody(str(path)), (("main", MeshSurface("main")),), order, PointSet("left"),
+                            rollers=ROLLERS)
     return Scene(geometry, (ChamberControl(area_ramp(3.5, STEPS, 1e5 / DEPTH)),), STEPS - 1, Material(1e4, 0.45),
                  name=f"extruded_{level}_p{order}")
 

@@ -61,13 +61,14 @@ def live_scene(size: float = 0.3, peak: float = 900.0):
     """The coarse PneuNet (gmsh at edge `size`), its six chambers under pressure control (to `peak` Pa), one
     material (the scene's stiffer layer aside): (built scene, outer faces, chamber walls)."""
     from taichi_pneuma.apps.bench import Meshed
+    from taichi_pneuma.fem.geometry import PointSet
     from taichi_pneuma.fem.tetmesh import tet_mesh
     from taichi_pneuma.scene import ChamberControl, Material, Scene
     from taichi_pneuma.solve.schedule import ChamberSchedule
 
     meshed = mesh_solid(PneuNet().solid(), MeshSizes(size))
     names = tuple(meshed.chambers)
-    geometry = Meshed(tet_mesh(meshed.vertices, meshed.tets, meshed.chambers, meshed.boundary),
+    geometry = Meshed(tet_mesh(meshed.vertices, meshed.tets, meshed.chambers, meshed.boundary, clamp=PointSet("left")),
                       tuple((name, None) for name in names))
     controls = tuple(ChamberControl(ChamberSchedule("pressure", ((1, peak),))) for _ in names)
     built = Scene(geometry, controls, 1, Material(1e4, 0.45)).build()

@@ -2,8 +2,9 @@
 
 A scene is a body with chambers (geometry.Geometry: also the clamped nodes, the rollers and the tip),
 a material (optionally one per region), a schedule of chamber commands, and a tuple of effects. The
-builder always adds elasticity, one chamber term per chamber (of the chamber's kind), the clamp,
-and a roller term per roller of the geometry (both of stiffness clamp_stiffness); each effect
+builder refuses supports that leave a rigid-body motion free (fem/supports.py), then adds elasticity, one
+chamber term per chamber (of the chamber's kind), the clamp (when there is one: no [clamp], no clamp), and a
+roller term per roller of the geometry (both of stiffness clamp_stiffness); each effect
 the scene names adds its own term(s), and an effect it does not name adds nothing: no field is
 allocated and no kernel compiled or launched for it.
 """
@@ -17,6 +18,7 @@ import numpy as np
 from . import runtime
 from .errors import require, require_finite
 from .fem.geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
+from .fem.supports import require_held
 from .io import sceneformat
 from .io.keys import dotted
 from .io.output import check_stem
@@ -191,6 +193,7 @@ class Scene:
         """Mesh the geometry and instantiate exactly the terms this scene names."""
         runtime.ensure_initialised()
         mesh = self.geometry.mesh()
+        require_held(mesh.vertices, support_rows(mesh, self.effects), describe_supports(mesh, self.effects))
         law, parameters = self.element_material(mesh)
         # Round-off scales, from the stiffest modulus (neo-Hookean: mu + lam, which grows without bound as
         # nu -> 1/2): forces below 1e-6 modulus (body measure)^((d - 1) / d) (a stress times the measure of a
@@ -202,13 +205,31 @@ class Scene:
         elastic = model.add(Elasticity(config, mesh.elements, law, parameters))
         chambers = [model.add(control.term(config, loop, name, mesh.order, origin)) for control, loop, origin, name
                     in zip(self.controls, mesh.chambers, mesh.wall_origins, self.chamber_names)]
-        model.add(Clamp(config, mesh.pinned, self.clamp_stiffness))
+        if len(mesh.pinned):
+            model.add(Clamp(config, mesh.pinned, self.clamp_stiffness))
         for nodes, normal in mesh.rollers:
             model.add(NormalClamp(config, nodes, normal, self.clamp_stiffness))
         lumped_area = mesh.nodal_measures()
         effects = {effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area)]
                    for effect in self.effects}
         return BuiltScene(self, mesh, model, elastic, chambers, effects)
+
+
+def support_rows(mesh: Mesh, effects) -> list:
+    """What holds the body, as support rows (nodes, d x d projector) (fem/supports.py): the clamp (every
+    component), each roller (its normal component), and the effects that hold motions (Effect.holds: the
+    ground under gravity, inertia)."""
+    return ([(mesh.pinned, np.eye(mesh.dim))] + [(nodes, np.outer(n, n)) for nodes, n in mesh.rollers]
+            + [row for effect in effects for row in effect.holds(mesh, effects)])
+
+
+def describe_supports(mesh: Mesh, effects) -> str:
+    """The supports in words: 'clamp 17 vertices' (or 'no clamp'), each roller by its normal with its count,
+    the support effects by name (ground)."""
+    clamp = f"clamp {len(mesh.pinned)} vertices" if len(mesh.pinned) else "no clamp"
+    rollers = [f"roller [{', '.join(f'{c:.3g}' for c in n + 0.0)}] {len(nodes)} vertices"  # + 0.0: no -0
+               for nodes, n in mesh.rollers]
+    return ", ".join([clamp] + rollers + [effect.name for effect in effects if effect.support])
 
 
 @dataclass

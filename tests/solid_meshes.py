@@ -2,7 +2,8 @@
 hands over a ready mesh.
 
     extruded_beam   the reference beam's triangles extruded through DEPTH along z, its chamber a prism through
-                    the depth, rollers on both faces normal to z: the plane-strain body in 3D
+                    the depth, rollers on both faces normal to z, clamped at its left face: the plane-strain
+                    body in 3D
     shell_octant    an octant of the thick spherical shell inner <= r <= outer, its cavity closed by the three
                     coordinate planes (rollers), nothing clamped
     box_with_cavity the 3.5 x 0.8 x 0.8 box of a structured grid with a box-shaped closed cavity (its grid cells
@@ -14,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from taichi_pneuma.fem.elements import TET_EDGES
-from taichi_pneuma.fem.geometry import BeamGeometry, Roller
+from taichi_pneuma.fem.geometry import BeamGeometry, PointSet, Roller
 from taichi_pneuma.fem.layered import extrude, layered_tets, spherical_shell_octant
 from taichi_pneuma.fem.tetmesh import TetMesh, tet_mesh
 from taichi_pneuma.scene import ChamberControl, Material, Scene
@@ -45,7 +46,7 @@ def extruded_beam(max_area: float, order: int = 1, layers: int = 1, chamber_poin
     """(the 3D mesh, the 2D linear mesh it extrudes)."""
     planar = BeamGeometry(cy=cy, max_area=max_area, chamber_points=chamber_points).mesh()
     vertices, tets, walls = extrude(planar, DEPTH, layers)
-    return tet_mesh(vertices, tets, {"main": walls[0]}, order=order, rollers=Z_ROLLERS), planar
+    return tet_mesh(vertices, tets, {"main": walls[0]}, order=order, clamp=PointSet("left"), rollers=Z_ROLLERS), planar
 
 
 def shell_octant(divisions: int, layers: int, order: int = 1, inner: float = 1.0, outer: float = 2.0,
@@ -99,4 +100,4 @@ def box_with_cavities(cavities: dict, layers: int, order: int = 1) -> TetMesh:
     boundary = keys[counts == 1]
     middle = vertices[boundary].mean(axis=1)
     walls = {name: boundary[inside(middle, box, 1e-9)] for name, box in cavities.items()}
-    return tet_mesh(vertices, tets, walls, order=order)
+    return tet_mesh(vertices, tets, walls, order=order, clamp=PointSet("left"))

@@ -97,7 +97,7 @@ def test_roller_wall_at_the_right_end_holds_it_horizontally():
     and rotation held, to the penalty's reaction / K) while it slides along it (tip dy free, if smaller than a
     free end's)."""
     geometry = Geometry(Rectangle((0.0, 0.0), (3.5, 0.8)), (("main", Ellipse((0.0, 0.15), (0.85, 0.22), 32)),), 0.02,
-                        rollers=(Roller(normal=(1.0, 0.0), point=(1.75, 0.0)),))
+                        PointSet("left"), rollers=(Roller(normal=(1.0, 0.0), point=(1.75, 0.0)),))
     free = reference_scene(max_area=0.02, chamber_points=32, steps=4)
     held = Scene(geometry, free.controls, free.increments)
     tips = [run_schedule(scene.build()).steps[-1] for scene in (free, held)]

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from test_terms import assert_gradient_matches_finite_differences, dense_hessian, fd_hessian
 
-from taichi_pneuma.fem.geometry import Ellipse, Geometry, Rectangle
+from taichi_pneuma.fem.geometry import Ellipse, Geometry, PointSet, Rectangle
 from taichi_pneuma.scene import ChamberControl, Scene, reference_scene
 from taichi_pneuma.solve.schedule import ChamberSchedule
 from taichi_pneuma.terms.effects import Gravity, Ground, SelfContact
@@ -13,7 +13,8 @@ from taichi_pneuma.terms.effects import Gravity, Ground, SelfContact
 
 def thin_chamber_scene(*effects, control="pressure"):
     """A small plate with a flat elliptical chamber (gap 0.02 at its middle), coarse."""
-    geometry = Geometry(Rectangle((0.0, 0.0), (1.0, 0.3)), (("slit", Ellipse((0.0, 0.0), (0.3, 0.01), 24)),), 0.01)
+    geometry = Geometry(Rectangle((0.0, 0.0), (1.0, 0.3)), (("slit", Ellipse((0.0, 0.0), (0.3, 0.01), 24)),), 0.01,
+                        PointSet("left"))
     keyframes = ((0, 1.0), (1, 0.2)) if control == "area" else ((0, 0.0), (1, 10.0))
     return Scene(geometry, (ChamberControl(ChamberSchedule(control, keyframes)),), 1, effects=effects)
 

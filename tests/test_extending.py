@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from taichi_pneuma.fem.geometry import Geometry, Rectangle
+from taichi_pneuma.fem.geometry import Geometry, PointSet, Rectangle
 from taichi_pneuma.scene import Material, Scene
 from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms.base import Term
@@ -62,7 +62,7 @@ def test_tip_load_bends_a_cantilever_as_timoshenko_predicts(tip_force_registered
     to 1 % (the clamp holds the whole wall, which beam theory does not)."""
     E, nu, L, H, F = 1e4, 0.3, 3.5, 0.8, -1.0
     body = Rectangle((0.0, 0.0), (L, H))
-    scene = Scene(Geometry(body, (), 0.01, order=2), (), 1, Material(E, nu), effects=(TipForce(fy=F),))
+    scene = Scene(Geometry(body, (), 0.01, PointSet("left"), order=2), (), 1, Material(E, nu), effects=(TipForce(fy=F),))
     deflection = run_schedule(scene.build()).steps[-1].tip_dy
     mu, lam = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
     lame = lam - mu

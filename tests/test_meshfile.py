@@ -14,7 +14,7 @@ import taichi_pneuma as tp
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.elements import TET_P2
-from taichi_pneuma.fem.geometry import Ellipse, Geometry, Rectangle, Roller
+from taichi_pneuma.fem.geometry import Ellipse, Geometry, PointSet, Rectangle, Roller
 from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface, write_mesh
 from taichi_pneuma.fem.tetmesh import REVERSED
 from taichi_pneuma.io.vtk import VtkSeries
@@ -56,6 +56,8 @@ stiffness = {1e5 / DEPTH}
 keyframes = [[0, 1.0], [{steps}, 1.5]]
 [schedule]
 increments = {steps}
+[clamp]
+side = "left"
 {ROLLERS}{more}"""
 
 
@@ -271,7 +273,7 @@ def test_a_curved_quadratic_gmsh_mesh_is_read_as_is(tmp_path):
     errors = []
     for name in ("linear", "curved"):
         geometry = MeshGeometry(MeshBody(str(tmp_path / f"{name}.msh")), (("c", MeshSurface("chamber")),),
-                                order=1 if name == "linear" else 2)
+                                order=1 if name == "linear" else 2, clamp=PointSet("left"))
         built = Scene(geometry, (ChamberControl(area_ramp(1.1, 2)),), 1).build()
         assert built.mesh.elements.shape[1] == (4 if name == "linear" else 10)
         errors.append(abs(built.chambers[0].rest_area / sphere - 1))

@@ -74,6 +74,7 @@ max_area = 6.0
 preset = "dragon_skin_10"
 regions = [{ box = [-20.0, -4.0, 20.0, -3.0], preset = "paper" }]
 [clamp]
+side = "left"
 stiffness = 1e7
 [[chambers]]
 name = "main"

@@ -100,6 +100,8 @@ shape = "polygon"
 points = [[-1.5, -0.3], [1.2, -0.3], [1.5, 0.0], [1.2, 0.3], [-1.5, 0.3]]
 [mesh]
 max_area = 0.01
+[clamp]
+side = "left"
 [[chambers]]
 name = "main"
 shape = "ellipse"

@@ -90,7 +90,7 @@ keyframes = [[0, 0.0], [2, {PRESSURE}]]
 ''' for name in CAVITIES)
     path = tmp_path / "twin.toml"
     path.write_text(f'name = "twin"\n[body]\nshape = "mesh"\nfile = "twin.msh"\n[material]\nE = 1e4\nnu = 0.45\n'
-                    f'[schedule]\nincrements = 2\n{chambers}')
+                    f'[clamp]\nside = "left"\n[schedule]\nincrements = 2\n{chambers}')
     return str(path)
 
 

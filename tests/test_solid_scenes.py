@@ -33,6 +33,8 @@ rectangles = [{ center = [-1.0, 0.0], size = [1.5, 0.8] }, { center = [0.75, 0.0
 [mesh]
 size = 0.3
 near_chambers = 0.1
+[clamp]
+side = "left"
 [[chambers]]
 name = "ellipsoid"
 shape = "ellipsoid"

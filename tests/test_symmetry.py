@@ -44,7 +44,8 @@ ELLIPSE = Ellipse((0.0, 0.0), (0.85, 0.22), POINTS)
 
 
 def half_geometry(**kwargs) -> Geometry:
-    return Geometry(Rectangle((0.0, 0.2), (3.5, 0.4)), (("main", ELLIPSE),), MAX_AREA, rollers=(MIRROR,), **kwargs)
+    return Geometry(Rectangle((0.0, 0.2), (3.5, 0.4)), (("main", ELLIPSE),), MAX_AREA, PointSet("left"),
+                    rollers=(MIRROR,), **kwargs)
 
 
 @dataclass(frozen=True, eq=False)

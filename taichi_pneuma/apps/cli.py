@@ -179,14 +179,17 @@ def scene_of_flags(args: argparse.Namespace):
 
 
 def build(scene):
-    """Mesh the scene, build its terms and print the mesh size, the terms and each chamber's rest area."""
+    """Mesh the scene, build its terms and print the mesh size, the supports, the terms and each chamber's rest
+    area."""
+    from ..scene import describe_supports
     from ..solve.result import ELEMENTS
 
     built = scene.build()
     mesh = built.mesh
     kind = ("" if mesh.order == 1 else "quadratic ") + ELEMENTS[mesh.dim]
     print(f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
-          f"{mesh.n_elements} {kind}; clamp {len(mesh.pinned)} vertices; terms: {', '.join(built.model.term_names())}")
+          f"{mesh.n_elements} {kind}; {describe_supports(mesh, scene.effects)}; "
+          f"terms: {', '.join(built.model.term_names())}")
     for chamber in built.chambers:
         control = MEASURE[mesh.dim] if chamber.kind.name == "area" else chamber.kind.name  # "volume" in 3D
         print(f"chamber {chamber.chamber_name}: {control} control, wall {chamber.n_wall} vertices, "

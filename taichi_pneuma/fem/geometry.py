@@ -384,6 +384,12 @@ class PointSet:
         return nodes
 
 
+def clamped(clamp: PointSet | None, vertices: np.ndarray) -> np.ndarray:
+    """The clamped vertices: those clamp selects, none when there is no clamp (None: a body held otherwise,
+    e.g. by rollers on its symmetry planes)."""
+    return np.zeros(0, dtype=np.int64) if clamp is None else clamp.select(vertices, "clamp")
+
+
 @dataclass(frozen=True)
 class Roller:
     """A roller support: nodes whose displacement along `normal` is held, their tangential motion free.
@@ -466,8 +472,8 @@ class Mesh:
     corner, ...), a closed loop, or for a chamber cut by symmetry lines an open chain from line to line,
     oriented so its enclosed area (enclosed_area with wall_origins) is positive; wall_origins: per chamber
     None (a closed loop) or the origin o of an open wall's area, on the lines; boundary: the nodes on the
-    body's outer boundary; pinned: the clamped nodes; tip: the tip's nodes (the right edge by default);
-    rollers: per roller, (its held nodes, its unit normal).
+    body's outer boundary; pinned: the clamped nodes (none without a clamp); tip: the tip's nodes (the right
+    edge by default); rollers: per roller, (its held nodes, its unit normal).
     """
 
     vertices: np.ndarray
@@ -530,8 +536,8 @@ def triangle_areas(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Geometry:
-    """A body shape with named chamber shapes, a mesh density and the named node sets: the clamp, the tip
-    (the right edge by default) and the rollers.
+    """A body shape with named chamber shapes, a mesh density and the named node sets: the clamp (None, the
+    default: none), the tip (the right edge by default) and the rollers.
 
     A chamber lies inside the body, or is cut by symmetry lines: roller lines along an edge of the body. A
     chamber crossing such lines keeps its part on the body's side (cut_by_lines), a notch in the body's
@@ -540,7 +546,7 @@ class Geometry:
     body: object
     chambers: tuple[tuple[str, object], ...]
     max_area: float = 0.0012
-    clamp: PointSet = field(default_factory=lambda: PointSet("left"))
+    clamp: PointSet | None = None
     order: int = 1
     refinements: int = 0
     tip: PointSet = field(default_factory=lambda: PointSet("right"))
@@ -653,7 +659,7 @@ class Geometry:
             chambers.append(nodes)
         outer = segments[markers == OUTER_MARKER]
         boundary = np.unique(outer if mid is None else np.column_stack([outer, mid(outer[:, 0], outer[:, 1])]))
-        return Mesh(vertices, triangles, tuple(chambers), boundary, self.clamp.select(vertices, "clamp"),
+        return Mesh(vertices, triangles, tuple(chambers), boundary, clamped(self.clamp, vertices),
                     self.tip.select(vertices, "tip"), tuple(origin for _, origin in walls),
                     tuple((roller.select(vertices), roller.unit_normal) for roller in self.rollers))
 
@@ -728,7 +734,7 @@ class BeamGeometry:
         """The same beam as a general Geometry (body rectangle, one ellipse chamber named 'main', left clamp)."""
         return Geometry(Rectangle((0.0, 0.0), (self.length, self.height)),
                         (("main", Ellipse((self.cx, self.cy), (self.a, self.b), self.chamber_points)),),
-                        self.max_area, order=self.order, refinements=self.refinements)
+                        self.max_area, PointSet("left"), order=self.order, refinements=self.refinements)
 
     def mesh(self) -> Mesh:
         return self.general().mesh()

@@ -113,7 +113,7 @@ class MeshGeometry:
     body: MeshBody
     chambers: tuple
     order: int = 1
-    clamp: PointSet = field(default_factory=lambda: PointSet("left"))
+    clamp: PointSet | None = None
     tip: PointSet = field(default_factory=lambda: PointSet("right"))
     rollers: tuple = ()
 

@@ -58,7 +58,7 @@ class SolidGeometry:
     chambers: tuple
     sizes: MeshSizes
     order: int = 1
-    clamp: PointSet = field(default_factory=lambda: PointSet("left"))
+    clamp: PointSet | None = None
     tip: PointSet = field(default_factory=lambda: PointSet("right"))
     rollers: tuple = ()
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import require
 from .elements import TET_EDGES, TET_P1, TET_P2, boundary_facets
-from .geometry import PointSet, split_in_four, with_edge_midpoints
+from .geometry import PointSet, clamped, split_in_four, with_edge_midpoints
 
 REVERSED = {3: [0, 2, 1], 6: [0, 2, 1, 5, 4, 3]}  # a facet's nodes with its orientation flipped
 MIRRORED = {4: [0, 2, 1, 3], 10: [0, 2, 1, 3, 6, 5, 4, 7, 9, 8]}  # a tetrahedron's with corners 1, 2 swapped
@@ -189,13 +189,13 @@ def check_order(order) -> None:
 
 def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndarray],
              boundary: np.ndarray | None = None, regions: np.ndarray | None = None, order: int = 1,
-             clamp: PointSet | None = PointSet("left"),
+             clamp: PointSet | None = None,
              tip: PointSet = PointSet("right"), rollers=(), region_groups: dict | None = None) -> TetMesh:
     """The TetMesh of plain arrays (module docstring): vertices (n, 3); tets (m, 4) or (m, 10); chambers: name ->
     its wall's triangles (f, 3) (or (f, 6): the first three columns are used), in the scene's order;
     boundary: the outer boundary's triangles (None: every boundary facet on no chamber wall); regions: (m,)
-    region tags (region_groups: the names of some, name -> tag); order 1 or 2; the clamp (None: no node clamped, e.g. a body held by rollers alone), the tip and
-    the rollers select their nodes."""
+    region tags (region_groups: the names of some, name -> tag); order 1 or 2; the clamp (None, the default:
+    no node clamped), the tip and the rollers select their nodes."""
     vertices = np.asarray(vertices, dtype=np.float64)
     tets = np.asarray(tets)
     require(vertices.ndim == 2 and vertices.shape[1] == 3 and len(vertices) >= 4 and np.isfinite(vertices).all(),
@@ -246,8 +246,7 @@ def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndar
         walls.append(wall)
         origins.append(closure(name, vertices, wall, rollers))
     outer = surface[facets_of(given[-1], "boundary")] if boundary is not None else surface[~taken]
-    pinned = np.zeros(0, dtype=np.int64) if clamp is None else clamp.select(vertices, "clamp")
-    return TetMesh(vertices, tets, tuple(walls), np.unique(outer), pinned,
+    return TetMesh(vertices, tets, tuple(walls), np.unique(outer), clamped(clamp, vertices),
                    tip.select(vertices, "tip"), tuple(origins),
                    tuple((roller.select(vertices), roller.unit_normal) for roller in rollers), surface, regions,
                    dict(region_groups or {}))

@@ -34,11 +34,12 @@ from ..materials.presets import PRESETS, PresetMaterial
 from ..solve.schedule import MAX_STRETCH, ChamberSchedule
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
-from .schema import Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
+from .schema import REQUIRED, Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
 from .tomltext import dumps
 from .units import UNITLESS, UNITS
 
 PAIR, BOX, TRIPLE = "[x, y]", "[x0, y0, x1, y1]", "[x, y, z]"
+CLAMP_STIFFNESS = 1e9  # the [clamp] stiffness key's default
 POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3"))
 PLANAR_BODIES = {
     "rectangle": record(Rectangle, "an axis-aligned rectangle", center=Key(tuple, (0.0, 0.0), PAIR),
@@ -105,14 +106,17 @@ ROLLER = record(Roller, "a roller support: the nodes' displacement along normal 
                 box=Key(tuple, None, f"{BOX}: the nodes in it (instead of point)"), tolerance=Key(float, 1e-6))
 
 
-def point_set(default_side: str, **more) -> dict:
-    """The keys of a [clamp] or [tip] node set: side, or box (then no side)."""
-    return {"side": Key(str, None, f"a side of the body's bounding box (without box: {default_side})", SIDES),
+def point_set(neither: str, **more) -> dict:
+    """The keys of a [clamp] or [tip] node set: side, or box (then no side); neither: what neither means."""
+    return {"side": Key(str, None, f"a side of the body's bounding box (neither side nor box: {neither})", SIDES),
             "box": Key(tuple, None, f"{BOX}: the nodes in it"), **more}
 
 
-def make_point_set(v: dict, default_side: str) -> PointSet:
-    return PointSet(default_side if v["side"] is None and v["box"] is None else v["side"], v["box"])
+def make_point_set(v: dict, default_side: str | None) -> PointSet | None:
+    """The node set of the keys side and box; neither: the default side's, or None without one."""
+    if v["side"] is None and v["box"] is None:
+        return None if default_side is None else PointSet(default_side)
+    return PointSet(v["side"], v["box"])
 
 
 MATERIAL_KEYS = {
@@ -128,6 +132,20 @@ MATERIAL_KEYS = {
 }
 
 
+STABLE_DEFAULTS = {"E": 1e4, "nu": 0.45}  # the stable neo-Hookean material's E and nu where not given
+MATERIAL_TAGS = ("preset", "law")  # the keys choosing a material's form (material_kind)
+
+
+def material_kind(keys: dict) -> dict:
+    """The keys of the material form that a [material] table's (or a region's) keys choose, each with the
+    default material_of gives it (REQUIRED: none): a preset's, a law's, or the stable neo-Hookean E and nu."""
+    if keys.get("preset") is not None:
+        return dict.fromkeys(("preset", "K", "nu"), REQUIRED)
+    if keys.get("law") is not None:
+        return dict.fromkeys(("law", *FORMS.get(keys["law"], ()), "K", "nu"), REQUIRED)
+    return dict(STABLE_DEFAULTS)
+
+
 def material_of(keys: dict, material_class):
     """The material of a [material] table's (or a region's) keys: a preset, a form of the isochoric law, or
     (neither) the stable neo-Hookean material_class(E, nu)."""
@@ -140,7 +158,7 @@ def material_of(keys: dict, material_class):
     if keys["law"] is None:
         extra = [k for k in given if k not in ("E", "nu")]
         require(not extra, f"{', '.join(extra)} need law = {' or '.join(FORMS)} (E and nu alone: stable neo-Hookean)")
-        return material_class(1e4 if keys["E"] is None else keys["E"], 0.45 if keys["nu"] is None else keys["nu"])
+        return material_class(*(STABLE_DEFAULTS[k] if keys[k] is None else keys[k] for k in ("E", "nu")))
     require(keys["E"] is None, f"E = {keys['E']!r}: law = {keys['law']!r} takes C10, ... and K or nu, not E")
     require(keys["C10"] is not None, f"law = {keys['law']!r} needs C10")
     return IsochoricMaterial(keys["law"], **{c: keys[c] for c in coefficients}, bulk_modulus=keys["K"],
@@ -189,11 +207,13 @@ def scene_table(scene_class) -> Table:
                                             f"lies in it"),
                     "group": Key(str, None, "instead of box (3D): the tetrahedra of the mesh's named volume group "
                                             "(a mesh file's physical group, a pneunet's \"layer\")"), **MATERIAL_KEYS},
-                   parts=lambda r: {"box": r.box, "group": r.group, **material_keys(r.material)})
+                   parts=lambda r: {"box": r.box, "group": r.group, **material_keys(r.material)}, kind=material_kind,
+                   tags=MATERIAL_TAGS)
     regions = Tables(region, "materials for the elements of a box or a volume group (later regions win); keys as "
                              "material's, and unless a region names a preset or law, each key it omits is material's")
     material = Table({**MATERIAL_KEYS, "regions": regions}, make=make_material,
                      parts=lambda s: {**material_keys(s.material), "regions": s.regions}, optional=True,
+                     kind=material_kind, tags=MATERIAL_TAGS,
                      doc="the body's material: the stable neo-Hookean one of E and nu (no law or preset), a form of "
                          "the isochoric law (law = neo_hookean, mooney_rivlin, yeoh: C10, ... and K or nu, in the "
                          "scene's pressure unit), or a preset (docs/materials.md)")
@@ -234,6 +254,12 @@ def scene_table(scene_class) -> Table:
                            material, regions, clamp_stiffness, v["effects"], v["name"], v["targets"],
                            UNITLESS if v["units"] is None else UNITS[v["units"]], v["schedule"]["max_stretch"])
 
+    def clamp_parts(scene):
+        """The [clamp] keys; without a clamp, its stiffness only if not the default (so no [clamp] is written)."""
+        clamp, stiffness = scene.geometry.clamp, scene.clamp_stiffness
+        return {"side": getattr(clamp, "side", None), "box": getattr(clamp, "box", None),
+                "stiffness": None if clamp is None and stiffness == CLAMP_STIFFNESS else stiffness}
+
     def mesh_parts(geometry):
         refinements = getattr(geometry, "refinements", 0)
         require(refinements == 0, f"a geometry refined {refinements} times has no scene-file form "
@@ -259,10 +285,11 @@ def scene_table(scene_class) -> Table:
                                             "nodes added)", ORDERS)},
                       parts=mesh_parts, optional=True),
         "material": material,
-        "clamp": Table(point_set("left", stiffness=Key(float, 1e9, "penalty stiffness of the clamp and the rollers")),
-                       make=lambda v: (make_point_set(v, "left"), v["stiffness"]),
-                       parts=lambda s: {"side": s.geometry.clamp.side, "box": s.geometry.clamp.box,
-                                        "stiffness": s.clamp_stiffness}, optional=True, doc="the clamped nodes"),
+        "clamp": Table(point_set("no clamp", stiffness=Key(float, CLAMP_STIFFNESS, "penalty stiffness of the clamp "
+                                                                                   "and the rollers")),
+                       make=lambda v: (make_point_set(v, None), v["stiffness"]), parts=clamp_parts, optional=True,
+                       doc="the clamped nodes; no [clamp] table (or one without side and box): no clamp, the body held "
+                           "by its rollers"),
         "tip": Table(point_set("right"), make=lambda v: make_point_set(v, "right"),
                      parts=lambda g: {"side": g.tip.side, "box": g.tip.box}, optional=True,
                      doc="the nodes whose mean displacement and rotation the history, sensitivities and reach use"),

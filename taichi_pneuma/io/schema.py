@@ -100,9 +100,14 @@ class Table:
     keys: dict
     make: Callable = dict
     parts: Callable = dict
-    optional: bool = False  # absent: read as an empty table (every key at its default)
+    optional: bool = False  # absent: read as an empty table (every key at its default); empty: not written
     cls: type | None = None  # the class make() builds, by which a Variant knows an object's option
     doc: str = ""
+    # A table of kinds that are not a Variant's (the [material]: a preset, a law, or E and nu): kind(data), the
+    # keys of the kind its data choose, name -> default (REQUIRED: none); tags, the keys that choose it (one
+    # at a time). Editing a tag to another kind drops the old kind's keys (switched).
+    kind: Callable | None = None
+    tags: tuple = ()
 
     def read(self, data: dict, name: str, path: str, known: set):
         return self.read_table(data.get(name, {} if self.optional else None), join(path, name))
@@ -118,7 +123,9 @@ class Table:
         return build(path, lambda: self.make(values))
 
     def write(self, value, name: str, data: dict) -> None:
-        data[name] = self.write_table(value)
+        table = self.write_table(value)
+        if table or not self.optional:  # an optional table with no key is not written: absent reads the same
+            data[name] = table
 
     def write_table(self, obj) -> dict:
         data = {}
@@ -285,8 +292,13 @@ def default_text(default) -> str:
 
 def edited(root: Table, obj, values: dict):
     """A copy of obj with the dotted keys of `values` set in its data, read back (validated) through root;
-    a bad key or value raises one PneumaInputError naming the key."""
+    a bad key or value raises one PneumaInputError naming the key. A value that switches a Variant's tag
+    (chambers[0].control = "pressure"), or one of a table's tags (material.law, material.preset), first drops the
+    old kind's keys (switched), then every value is set: a key of the old kind set in the same edit is kept,
+    and refused if the new kind lacks it."""
     data = root.write_table(obj)
+    for key, value in values.items():
+        switched(root, data, parse_key(key), plain(value))
     for key, value in values.items():
         set_key(data, key, plain(value))
     try:
@@ -296,6 +308,50 @@ def edited(root: Table, obj, values: dict):
         if not any(key in message for key in values):
             message = f"{', '.join(f'{k} = {v!r}' for k, v in values.items())}: {message}"
         raise PneumaInputError(message) from None
+
+
+def switched(table: "Table", node, parts: list, value) -> None:
+    """If parts (a parsed dotted key) names, through tables and arrays of tables, a key that switches the kind
+    of its table node to another (a Variant's tag, or one of its table's tags, the others then unset): drop
+    from node the keys of the old kind that the new one lacks or that hold the old kind's default (keys the
+    user did not choose for the new kind, written out only because every key is)."""
+    if not isinstance(node, dict) or not parts or not isinstance(parts[0], str):
+        return
+    name, rest = parts[0], parts[1:]
+    entry = table_entries(table.keys, node).get(name)
+    if isinstance(entry, Variant) and not rest:
+        old = node.get(name, entry.default)
+        if old != value and old in entry.options and isinstance(value, str) and value in entry.options:
+            keys = table_entries(entry.table(old).keys, node)
+            drop_kind(node, {k: e.default if isinstance(e, Key) else REQUIRED for k, e in keys.items()},
+                      table_entries(entry.table(value).keys, {}))
+    elif name in table.tags and not rest:
+        old = table.kind(node)
+        new = table.kind({**{k: v for k, v in node.items() if k not in table.tags}, name: value})
+        if set(old) != set(new):
+            drop_kind(node, old, new)
+    elif isinstance(entry, Table):
+        switched(entry, node.get(name), rest, value)
+    elif isinstance(entry, Tables) and rest and isinstance(rest[0], int) and rest[0] < len(node.get(name) or ()):
+        switched(entry.table, node[name][rest[0]], rest[1:], value)
+
+
+def drop_kind(node: dict, old: dict, new) -> None:
+    """Drop from node each key of the old kind (name -> its default, REQUIRED: none) that the new kind (its key
+    names) lacks or that holds its old default."""
+    for key, default in old.items():
+        if key not in new or (default is not REQUIRED and key in node and node[key] == plain(default)):
+            node.pop(key, None)
+
+
+def table_entries(keys: dict, data: dict) -> dict:
+    """The entries of a table's data: keys, and the keys of the option each Variant among them chooses there."""
+    entries = dict(keys)
+    for name, entry in keys.items():
+        option = data.get(name, entry.default) if isinstance(entry, Variant) else None
+        if isinstance(option, str) and option in entry.options:
+            entries.update(table_entries(entry.table(option).keys, data))
+    return entries
 
 
 def parse_key(key: str) -> list:

@@ -13,7 +13,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..errors import require, require_finite
+from ..fem.geometry import PointSet
 from ..limits import wall_pairs
 from .contact import GroundContact
 from .contact import SelfContact as SelfContactTerm
@@ -26,14 +29,21 @@ class Effect:
 
     What the rest of the program asks of an effect without knowing it: contact, whether its terms report
     contact forces (stored per vertex and step, and counted by limits.py); ground_height, the height y of
-    a ground line the output draws (npz ground_height, the video), or None."""
+    a ground line the output draws (npz ground_height, the video), or None; support, whether the run's
+    first line lists it among the supports; holds(), the rigid motions its terms hold."""
 
     name = "effect"
     contact = False
     ground_height = None
+    support = False
 
     def terms(self, config, mesh, lumped_area) -> list:
         raise NotImplementedError
+
+    def holds(self, mesh, effects) -> list:
+        """The rigid-body motions its terms hold in a scene of these effects, as support rows (nodes, d x d
+        projector) (fem/supports.py): none by default."""
+        return []
 
     def pairs(self, walls: list[int]) -> int:
         """The contact pairs its terms hold for chamber walls of these node counts (limits.py counts their memory)."""
@@ -70,6 +80,7 @@ class Ground(Effect):
     stiffness: float = 1e3
     name = "ground"
     contact = True
+    support = True
 
     @property
     def ground_height(self) -> float:
@@ -79,6 +90,15 @@ class Ground(Effect):
         require_finite("height", self.height)
         _positive("dhat", self.dhat)
         _positive("stiffness", self.stiffness)
+
+    def holds(self, mesh, effects) -> list:
+        """A one-sided contact holds a body only where a load presses it on: with gravity, the normal (y)
+        displacement of the nodes of the body's bottom (where it comes to rest on a level ground; so the
+        vertical translation and the tilts, not whether the body would topple); without gravity, nothing. The
+        barrier has no friction: it never holds a motion along the ground."""
+        if not any(effect.name == Gravity.name for effect in effects):
+            return []
+        return [(PointSet("bottom").select(mesh.vertices, "ground"), np.diag(np.eye(mesh.dim)[1]))]
 
     def terms(self, config, mesh, lumped_area) -> list:
         lowest = float(mesh.vertices[mesh.boundary, 1].min())
@@ -122,6 +142,11 @@ class Dynamics(Effect):
     def __post_init__(self):
         _positive("density", self.density)
         _positive("dt", self.dt)
+
+    def holds(self, mesh, effects) -> list:
+        """Inertia holds every motion (its Hessian, the lumped masses / dt^2, is positive definite): a free body
+        moves."""
+        return [(np.arange(mesh.n_vertices), np.eye(mesh.dim))]
 
     def terms(self, config, mesh, lumped_area) -> list:
         require(mesh.order == 1, "dynamics needs linear triangles (order = 1): the quadratic triangle's "
