@@ -1,11 +1,16 @@
 """A file format declared once: from one tree of entries come reading (data -> objects, every error naming
 its dotted key), writing (objects -> data), editing by dotted keys and the key reference.
 
-    Key(type, default, doc, allowed)  a value: float (any number), int, str, bool; tuple (an array, read as
-                                      nested tuples) or list (an array, read as is). default: REQUIRED, a
-                                      value, or None (optional: absent reads as None, None is not written)
+    Key(type, default, doc, allowed,  a value: float (any number), int, str, bool; tuple (an array, read as
+        unit, scaled)                 nested tuples) or list (an array, read as is). default: REQUIRED, a
+                                      value, or None (optional: absent reads as None, None is not written).
+                                      unit: its dimension (io/units.py), its default in SI, converted into
+                                      the scene's units when read (scaled=False: a scene with units must
+                                      give the key)
     Table(keys, make, parts)          a table: make(values by key) builds its object, parts(object) gives the
-                                      values back; read(write(x)) == x is the contract (a property test checks it)
+                                      values back; read(write(x)) == x is the contract (a property test checks it).
+                                      system(data): the units and dimension the defaults are converted into
+                                      while the table is read (the root's: the scene's)
     Tables(table)                     an array of tables ([[chambers]], regions = [{...}, ...]), read as a tuple
     Variant(options, choose)          a tag key (shape = "ellipse") choosing the Table (or the registered
                                       dataclass) of further keys its table has; choose(object) names the
@@ -26,6 +31,7 @@ The scene format's deepest key has 5 parts (chambers[0].keyframes[1][0]) and 5 l
 
 from __future__ import annotations
 
+import contextvars
 import dataclasses
 import functools
 import re
@@ -38,6 +44,7 @@ import tomllib
 
 from ..errors import PneumaInputError, require
 from .tomltext import dumps
+from .units import UNITLESS, Units, si_text
 
 REQUIRED = object()
 KEY_PART = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)")
@@ -49,6 +56,7 @@ MAX_VALUE_CHARS = 100_000
 TOML_STRING_OR_COMMENT = re.compile(r'"""(?:[^\\]|\\.)*?"""|\'\'\'.*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*', re.DOTALL)
 TOML_KEY_RUN = re.compile(rf'(?<![\w"-])(?:(?:[\w-]++|"")[ \t]*+\.[ \t]*+){{{MAX_KEY_PARTS}}}')
 TYPE_NAMES = {float: "number", int: "integer", str: "string", bool: "boolean", tuple: "array", list: "array"}
+SYSTEM = contextvars.ContextVar("SYSTEM", default=(UNITLESS, 2))  # (units, dim) the defaults read are in
 
 
 @dataclass(frozen=True)
@@ -61,6 +69,8 @@ class KeyInfo:
     allowed: str = ""
     when: str = ""  # the tag choosing the key, e.g. chambers[].shape = "ellipse"
     doc: str = ""
+    unit: str = ""  # its dimension (io/units.py), "" none; the default is in SI
+    scaled: bool = True  # False: a numerical default, which a scene with units must give
 
 
 @dataclass(frozen=True)
@@ -69,12 +79,14 @@ class Key:
     default: object = REQUIRED
     doc: str = ""
     allowed: tuple = ()
+    unit: str = ""
+    scaled: bool = True
 
     def read(self, data: dict, name: str, path: str, known: set):
         full = join(path, name)
         if name not in data:
             require(self.default is not REQUIRED, f"missing key '{full}'")
-            return self.default
+            return self.converted(full)
         value = data[name]
         if self.type is float:
             require(isinstance(value, (int, float)) and not isinstance(value, bool), f"{full} = {value!r} must be a number")
@@ -86,13 +98,24 @@ class Key:
                 f"{full} = {value!r} is not one of {', '.join(map(str, self.allowed))}")
         return freeze(value) if self.type is tuple else value
 
+    def converted(self, full: str):
+        """The default in the units of the table being read (SYSTEM): SI / units.factor(unit, dim), a number or
+        an array of numbers; a numerical default (scaled=False) refused in a scene with units."""
+        units, dim = SYSTEM.get()
+        if not self.unit or self.default is None or units.name is None:
+            return self.default
+        require(self.scaled, f"missing key '{full}': a scene with units gives it (in {units.name}); its default "
+                             f"{default_text(self.default)} is a numerical parameter for unitless scenes")
+        factor = units.factor(self.unit, dim)
+        return tuple(v / factor for v in self.default) if isinstance(self.default, tuple) else self.default / factor
+
     def write(self, value, name: str, data: dict) -> None:
         if value is not None:
             data[name] = plain(value)
 
     def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
         return [KeyInfo(join(path, name), TYPE_NAMES[self.type], default_text(self.default),
-                        ", ".join(map(str, self.allowed)), when, self.doc)]
+                        ", ".join(map(str, self.allowed)), when, self.doc, self.unit, self.scaled)]
 
 
 @dataclass(frozen=True)
@@ -103,6 +126,7 @@ class Table:
     optional: bool = False  # absent: read as an empty table (every key at its default)
     cls: type | None = None  # the class make() builds, by which a Variant knows an object's option
     doc: str = ""
+    system: Callable[[dict], tuple[Units, int]] | None = None
 
     def read(self, data: dict, name: str, path: str, known: set):
         return self.read_table(data.get(name, {} if self.optional else None), join(path, name))
@@ -110,6 +134,15 @@ class Table:
     def read_table(self, data, path: str):
         require(data is not None, f"missing key '{path}'")
         require(isinstance(data, dict), f"{path or 'scene'} must be a table, not {data!r}")
+        if self.system is None:
+            return self.read_values(data, path)
+        token = SYSTEM.set(self.system(data))
+        try:
+            return self.read_values(data, path)
+        finally:
+            SYSTEM.reset(token)
+
+    def read_values(self, data: dict, path: str):
         known = set()
         values = read_keys(self.keys, data, path, known)
         unknown = sorted(set(data) - known)
@@ -223,7 +256,7 @@ def dataclass_table(cls) -> Table:
             raise TypeError(f"{cls.__name__}.{f.name}: {hints[f.name]} has no scene-file form")
         default = (f.default if f.default is not dataclasses.MISSING else
                    f.default_factory() if f.default_factory is not dataclasses.MISSING else REQUIRED)
-        keys[f.name] = Key(kind, default)
+        keys[f.name] = Key(kind, default, unit=f.metadata.get("unit", ""), scaled=f.metadata.get("scaled", True))
     return record(cls, " ".join((cls.__doc__ or "").split("\n\n")[0].split()), **keys)
 
 

@@ -7,9 +7,18 @@ carry.
     (no units key)      unitless, as the reference scene: numbers are what the scene says they are
 
 Every other quantity follows from these two: an area is length^2, a force per unit depth (the 2D contact
-force) pressure x length, an energy per unit depth pressure x length^2. Material presets are stored in SI and
-converted into a scene's units (a modulus in Pa divided by the pressure unit in Pa). Angles are in degrees and
-times in seconds whatever the system.
+force) pressure x length, an energy per unit depth pressure x length^2, a mass pressure x length x s^2 (so
+that force = mass x acceleration: kg in mm-kPa, tonnes in mm-MPa). Angles are in degrees and times in seconds
+whatever the system.
+
+Defaults are stored in SI and converted into a scene's units: a key declares its dimension (io/schema.Key's
+unit; a chamber kind's or an effect's field through unit()), and a default of dimension L^a P^b in 2D (or
+3D) is divided by factor() = metre^a pascal^b when read (material presets likewise: a modulus in Pa divided
+by the pressure unit in Pa). A unitless scene takes every number as it is, as SI. Some defaults are numerical
+parameters calibrated for the unitless scenes (bodies of size about 1, moduli about 1e4): a penalty stiffness
+or a barrier's distance, whose SI value would be far off at a real actuator's scale (an area penalty of 1e5
+Pa/m^2 holds nothing on a chamber of a few mm^2); unit(dimension, scaled=False) declares one, and a scene
+with units must give it.
 
 Outputs of a scene with units say their unit: a column or array named `x` is written `x [unit]` (history CSV
 headers, VTU arrays and field data), printed values carry the unit, plots label their axes with it and the
@@ -23,6 +32,33 @@ from dataclasses import dataclass
 LENGTH, AREA, PRESSURE, FORCE, ANGLE, TIME = "length", "area", "pressure", "force", "angle", "time"
 VOLUME = "volume"  # a 3D chamber's measure
 MEASURES = {2: AREA, 3: VOLUME}  # what a chamber encloses, by dimension
+ACCELERATION, DENSITY = "acceleration", "density"
+NODAL_STIFFNESS = "nodal penalty stiffness"  # energy per length^2 at a node: K of E = 1/2 K |u|^2 (per depth in 2D)
+MEASURE_STIFFNESS = "measure penalty stiffness"  # pressure per chamber measure: k of E = 1/2 k (A - A*)^2
+# (length, pressure, time) exponents of each dimension in 2D and in 3D (a chamber's measure is an area, a volume
+# per unit depth, in 2D; an energy is per unit depth in 2D); times are in seconds in every system
+EXPONENTS = {LENGTH: ((1, 0, 0),) * 2, AREA: ((2, 0, 0), (3, 0, 0)), VOLUME: ((3, 0, 0),) * 2,
+             PRESSURE: ((0, 1, 0),) * 2, ANGLE: ((0, 0, 0),) * 2, TIME: ((0, 0, 1),) * 2,
+             ACCELERATION: ((1, 0, -2),) * 2, DENSITY: ((-2, 1, 2),) * 2,
+             NODAL_STIFFNESS: ((0, 1, 0), (1, 1, 0)), MEASURE_STIFFNESS: ((-2, 1, 0), (-3, 1, 0))}
+
+
+def unit(dimension: str, scaled: bool = True) -> dict:
+    """A dataclass field's metadata declaring its dimension (field(default=..., metadata=unit(PRESSURE))): its
+    default is in SI and converted (scaled=False: a numerical default a scene with units must give)."""
+    return {"unit": dimension, "scaled": scaled}
+
+
+def si_text(dimension: str) -> str:
+    """The SI unit of a dimension ("Pa", "m^2 (2D), m^3 (3D)", "deg" for angles): the key reference's unit."""
+    if dimension == ANGLE:
+        return "deg"
+
+    def text(exponents) -> str:
+        parts = [f"{symbol}^{e}" if e != 1 else symbol for symbol, e in zip(("m", "Pa", "s"), exponents) if e]
+        return " ".join(parts) or "1"
+    plane, solid = (text(e) for e in EXPONENTS[dimension])
+    return plane if plane == solid else f"{plane} (2D), {solid} (3D)"
 
 
 @dataclass(frozen=True)
@@ -53,6 +89,12 @@ class Units:
         """" kPa" after a printed value; "" when there is no unit."""
         unit = self.symbol(dimension)
         return f" {unit}" if unit else ""
+
+    def factor(self, dimension: str, dim: int) -> float:
+        """The size in SI of this system's unit of `dimension` in a body of dimension dim (a value in SI divided
+        by it is the value in this system): metre^a pascal^b for L^a P^b."""
+        length, pressure, _ = EXPONENTS[dimension][dim - 2]
+        return self.metre ** length * self.pascal ** pressure
 
     def summary(self) -> dict | None:
         """The summary JSON's "units" entry: the system and each dimension's unit (None when unitless)."""

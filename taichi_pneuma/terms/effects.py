@@ -11,9 +11,10 @@ density x it).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from ..errors import require, require_finite
+from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, TIME, unit
 from ..limits import wall_pairs
 from .contact import GroundContact
 from .contact import SelfContact as SelfContactTerm
@@ -48,8 +49,8 @@ def _positive(name: str, value: float) -> None:
 class Gravity(Effect):
     """Body weight: density rho (mass per unit area in 2D, per unit volume in 3D) under acceleration g along -y."""
 
-    density: float
-    g: float = 9.81
+    density: float = field(metadata=unit(DENSITY))
+    g: float = field(default=9.81, metadata=unit(ACCELERATION))
     name = "gravity"
 
     def __post_init__(self):
@@ -65,9 +66,9 @@ class Ground(Effect):
     """Ground contact: a log barrier (threshold dhat, stiffness kappa) keeps the body's outer boundary above the line
     (in 3D the plane) y = height."""
 
-    height: float
-    dhat: float = 0.01
-    stiffness: float = 1e3
+    height: float = field(metadata=unit(LENGTH))
+    dhat: float = field(default=0.01, metadata=unit(LENGTH, scaled=False))
+    stiffness: float = field(default=1e3, metadata=unit(NODAL_STIFFNESS, scaled=False))
     name = "ground"
     contact = True
 
@@ -90,8 +91,8 @@ class Ground(Effect):
 class SelfContact(Effect):
     """Self-contact of chamber walls: point-edge log barriers (threshold dhat, stiffness kappa) on every wall."""
 
-    dhat: float = 0.005
-    stiffness: float = 1e4
+    dhat: float = field(default=0.005, metadata=unit(LENGTH, scaled=False))
+    stiffness: float = field(default=1e4, metadata=unit(NODAL_STIFFNESS, scaled=False))
     name = "self_contact"
     contact = True
 
@@ -115,8 +116,8 @@ class Dynamics(Effect):
     """Motion instead of quasistatics: inertia of the lumped masses (density rho), backward Euler with
     time step dt, one time step per schedule increment."""
 
-    density: float
-    dt: float
+    density: float = field(metadata=unit(DENSITY))
+    dt: float = field(metadata=unit(TIME))
     name = "dynamics"
 
     def __post_init__(self):

@@ -11,11 +11,12 @@ control still has an equilibrium nearby (pressure control has not).
 Sensitivity: dr/dr_cmd = d(-p dA/dx)/dr = -k A_rest dA/dx.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ...errors import require, require_finite
+from ...io.units import MEASURE_STIFFNESS, unit
 from .kind import ChamberKind, register
 from .wall import Chamber
 
@@ -27,7 +28,7 @@ MAX_AREA_RATIO = 1e3  # far past any rubber (the hard cases reach 8); keeps (A -
 class AreaControl(ChamberKind):
     """Area control with penalty stiffness k > 0; commands are area ratios A* / A_rest in (0, MAX_AREA_RATIO]."""
 
-    stiffness: float = 1e5
+    stiffness: float = field(default=1e5, metadata=unit(MEASURE_STIFFNESS, scaled=False))  # calibrated for unitless scenes
     name = "area"
     aliases = ("volume",)
     quantity = "area ratio"

@@ -17,11 +17,12 @@ modulus) and is left out: the wall carries the gauge pressure.
 """
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ...errors import require, require_finite
+from ...io.units import PRESSURE, unit
 from .kind import ChamberKind, register
 from .wall import Chamber
 
@@ -29,10 +30,11 @@ from .wall import Chamber
 @register
 @dataclass(frozen=True)
 class ClosedGas(ChamberKind):
-    """A sealed chamber of air at ambient pressure `atmosphere` (in the scene's pressure unit: 101325 in Pa,
-    101.325 in kPa), compressed with polytropic exponent gamma: 1 isothermal, 1.4 adiabatic air."""
+    """A sealed chamber of air at ambient pressure `atmosphere` (in the scene's pressure unit; its default, 101325
+    Pa, is converted into it: 101.325 in kPa), compressed with polytropic exponent gamma: 1 isothermal, 1.4
+    adiabatic air."""
 
-    atmosphere: float = 101325.0
+    atmosphere: float = field(default=101325.0, metadata=unit(PRESSURE))
     gamma: float = 1.0
     name = "closed_gas"
     quantity = "air pumped in"
