@@ -175,11 +175,17 @@ class Scene:
 
     def element_material(self, mesh: Mesh) -> tuple[type, np.ndarray]:
         """The material law of the body and its parameter vector for every element, (m, p): the base material's,
-        then each region's for the elements it contains (Region.contains), in order."""
+        then each region's for the elements it contains (Region.contains), in order; a region that contains no
+        element is refused, naming it."""
         law, (base, *rows) = self.law_parameters()
         parameters = np.tile(base, (mesh.n_elements, 1))
-        for region, row in zip(self.regions, rows):
-            parameters[region.contains(mesh)] = row
+        for i, (region, row) in enumerate(zip(self.regions, rows)):
+            taken = region.contains(mesh)
+            require(taken.any(), f"material.regions[{i}]: " + (
+                f"box = {list(region.box)} holds no element's centroid (the body's bounding box is "
+                f"{[round(float(v), 6) for v in (*mesh.vertices.min(axis=0), *mesh.vertices.max(axis=0))]})"
+                if region.box is not None else f"group = {region.group!r} has no elements"))
+            parameters[taken] = row
         return law, parameters
 
     def build(self) -> "BuiltScene":
