@@ -36,7 +36,7 @@ from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
 from .schema import Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
 from .tomltext import dumps
-from .units import AREA, LENGTH, NODAL_STIFFNESS, PRESSURE, UNITLESS, UNITS
+from .units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, PRESSURE, UNITLESS, UNITS
 
 PAIR, BOX, TRIPLE = "[x, y]", "[x0, y0, x1, y1]", "[x, y, z]"
 POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3", unit=LENGTH))
@@ -262,7 +262,7 @@ def scene_table(scene_class) -> Table:
                      tuple(UNITS)),
         "body": Table({"shape": BODY_SHAPES}, make=lambda v: v["shape"], parts=lambda body: {"shape": body}),
         "mesh": Table({"max_area": Key(float, None, "largest triangle area (2D; none: 0.0012 in a unitless scene, "
-                                                    "required in a scene with units)", unit=AREA, scaled=False),
+                                                    "required in a scene with units)", unit=PLANE_AREA, scaled=False),
                        "size": Key(float, None, "tetrahedron edge length in the bulk (3D body from shapes; required "
                                                 "there)", unit=LENGTH),
                        "near_chambers": Key(float, None, "edge length within that distance of the chamber walls (3D "

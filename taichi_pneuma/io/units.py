@@ -33,11 +33,13 @@ LENGTH, AREA, PRESSURE, FORCE, ANGLE, TIME = "length", "area", "pressure", "forc
 VOLUME = "volume"  # a 3D chamber's measure
 MEASURES = {2: AREA, 3: VOLUME}  # what a chamber encloses, by dimension
 ACCELERATION, DENSITY = "acceleration", "density"
+PLANE_AREA = "plane area"  # an area in 2D and 3D alike (a triangle's), where AREA is a chamber's measure
 NODAL_STIFFNESS = "nodal penalty stiffness"  # energy per length^2 at a node: K of E = 1/2 K |u|^2 (per depth in 2D)
 MEASURE_STIFFNESS = "measure penalty stiffness"  # pressure per chamber measure: k of E = 1/2 k (A - A*)^2
 # (length, pressure, time) exponents of each dimension in 2D and in 3D (a chamber's measure is an area, a volume
 # per unit depth, in 2D; an energy is per unit depth in 2D); times are in seconds in every system
 EXPONENTS = {LENGTH: ((1, 0, 0),) * 2, AREA: ((2, 0, 0), (3, 0, 0)), VOLUME: ((3, 0, 0),) * 2,
+             PLANE_AREA: ((2, 0, 0),) * 2,
              PRESSURE: ((0, 1, 0),) * 2, ANGLE: ((0, 0, 0),) * 2, TIME: ((0, 0, 1),) * 2,
              ACCELERATION: ((1, 0, -2),) * 2, DENSITY: ((-2, 1, 2),) * 2,
              NODAL_STIFFNESS: ((0, 1, 0), (1, 1, 0)), MEASURE_STIFFNESS: ((-2, 1, 0), (-3, 1, 0))}
@@ -55,7 +57,9 @@ def si_text(dimension: str) -> str:
         return "deg"
 
     def text(exponents) -> str:
-        parts = [f"{symbol}^{e}" if e != 1 else symbol for symbol, e in zip(("m", "Pa", "s"), exponents) if e]
+        length, pressure, time = exponents
+        parts = [f"{symbol}^{e}" if e != 1 else symbol for symbol, e in (("Pa", pressure), ("m", length), ("s", time))
+                 if e]
         return " ".join(parts) or "1"
     plane, solid = (text(e) for e in EXPONENTS[dimension])
     return plane if plane == solid else f"{plane} (2D), {solid} (3D)"
