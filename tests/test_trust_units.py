@@ -141,15 +141,14 @@ BASES = [(tomllib.loads(text), dim) for text, dim in (
 
 # The size of each system's unit of each dimension in SI, by hand: (2D, 3D). A mass is pressure x length x s^2
 # (kg in mm-kPa, t in mm-MPa); a 2D energy is per unit depth; a chamber's measure an area (2D) or a volume (3D)
+DIMENSIONS = ("length", "area", "plane area", "pressure", "acceleration", "density", "time",
+              "nodal penalty stiffness", "measure penalty stiffness")
 BY_HAND = {
-    "mm-kPa": {"length": (1e-3, 1e-3), "area": (1e-6, 1e-9), "plane area": (1e-6, 1e-6), "pressure": (1e3, 1e3), "acceleration": (1e-3, 1e-3),
-               "density": (1e9, 1e9), "time": (1.0, 1.0), "nodal penalty stiffness": (1e3, 1.0),
-               "measure penalty stiffness": (1e9, 1e12)},
-    "mm-MPa": {"length": (1e-3, 1e-3), "area": (1e-6, 1e-9), "plane area": (1e-6, 1e-6), "pressure": (1e6, 1e6), "acceleration": (1e-3, 1e-3),
-               "density": (1e12, 1e12), "time": (1.0, 1.0), "nodal penalty stiffness": (1e6, 1e3),
-               "measure penalty stiffness": (1e12, 1e15)},
-    "m-Pa": {dimension: (1.0, 1.0) for dimension in ("length", "area", "plane area", "pressure", "acceleration", "density", "time",
-                                                      "nodal penalty stiffness", "measure penalty stiffness")},
+    "mm-kPa": dict(zip(DIMENSIONS, ((1e-3, 1e-3), (1e-6, 1e-9), (1e-6, 1e-6), (1e3, 1e3), (1e-3, 1e-3), (1e9, 1e9),
+                                    (1.0, 1.0), (1e3, 1.0), (1e9, 1e12)))),
+    "mm-MPa": dict(zip(DIMENSIONS, ((1e-3, 1e-3), (1e-6, 1e-9), (1e-6, 1e-6), (1e6, 1e6), (1e-3, 1e-3), (1e12, 1e12),
+                                    (1.0, 1.0), (1e6, 1e3), (1e12, 1e15)))),
+    "m-Pa": dict.fromkeys(DIMENSIONS, (1.0, 1.0)),
 }
 
 

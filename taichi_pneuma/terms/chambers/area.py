@@ -28,7 +28,7 @@ MAX_AREA_RATIO = 1e3  # far past any rubber (the hard cases reach 8); keeps (A -
 class AreaControl(ChamberKind):
     """Area control with penalty stiffness k > 0; commands are area ratios A* / A_rest in (0, MAX_AREA_RATIO]."""
 
-    stiffness: float = field(default=1e5, metadata=unit(MEASURE_STIFFNESS, scaled=False))  # calibrated for unitless scenes
+    stiffness: float = field(default=1e5, metadata=unit(MEASURE_STIFFNESS, scaled=False))  # for unitless scenes
     name = "area"
     aliases = ("volume",)
     quantity = "area ratio"
