@@ -44,7 +44,7 @@ import tomllib
 
 from ..errors import PneumaInputError, require
 from .tomltext import dumps
-from .units import UNITLESS, Units, si_text
+from .units import UNITLESS, Units
 
 REQUIRED = object()
 KEY_PART = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)")
