@@ -7,6 +7,7 @@ from the annotations of the Scene class passed in, so that scene.py imports this
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import typing
 
@@ -127,14 +128,12 @@ MATERIAL_KEYS = {
                   tuple(PRESETS)),
     "law": Key(str, None, "a form of the isochoric law (C10, ... and K or nu); none: stable neo-Hookean (E, nu)",
                tuple(FORMS)),
-    "E": Key(float, None, "Young's modulus of the stable neo-Hookean material, > 0; none: 1e4 Pa (converted into "
-                          "the scene's units)", unit=PRESSURE),
+    "E": Key(float, None, "Young's modulus of the stable neo-Hookean material, > 0", unit=PRESSURE, si=1e4),
     "nu": Key(float, None, "Poisson's ratio, in (-1, 0.5); none: 0.45 (E), 0.49 (law), the preset's own"),
     "K": Key(float, None, "bulk modulus, instead of nu (law or preset)", unit=PRESSURE),
     **{c: Key(float, None, f"coefficient of the isochoric law's {c} term (the forms taking it; none: 0, C10 "
                            f"required)", unit=PRESSURE) for c in ("C10", "C01", "C20", "C30")},
 }
-DEFAULT_E = Key(float, 1e4, unit=PRESSURE)  # E of a [material] (or region) that names neither law nor preset nor E
 
 
 def material_of(keys: dict, material_class):
@@ -149,8 +148,7 @@ def material_of(keys: dict, material_class):
     if keys["law"] is None:
         extra = [k for k in given if k not in ("E", "nu")]
         require(not extra, f"{', '.join(extra)} need law = {' or '.join(FORMS)} (E and nu alone: stable neo-Hookean)")
-        return material_class(DEFAULT_E.converted("material.E") if keys["E"] is None else keys["E"],
-                              0.45 if keys["nu"] is None else keys["nu"])
+        return material_class(keys["E"], 0.45 if keys["nu"] is None else keys["nu"])
     require(keys["E"] is None, f"E = {keys['E']!r}: law = {keys['law']!r} takes C10, ... and K or nu, not E")
     require(keys["C10"] is not None, f"law = {keys['law']!r} needs C10")
     return IsochoricMaterial(keys["law"], **{c: keys[c] for c in coefficients}, bulk_modulus=keys["K"],
@@ -198,7 +196,8 @@ def scene_table(scene_class) -> Table:
     region = Table({"box": Key(tuple, None, f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D): the elements whose centroid "
                                             f"lies in it", unit=LENGTH),
                     "group": Key(str, None, "instead of box (3D): the tetrahedra of the mesh's named volume group "
-                                            "(a mesh file's physical group, a pneunet's \"layer\")"), **MATERIAL_KEYS},
+                                            "(a mesh file's physical group, a pneunet's \"layer\")"), **MATERIAL_KEYS,
+                    "E": dataclasses.replace(MATERIAL_KEYS["E"], si=None)},  # none: the base's (make_material)
                    parts=lambda r: {"box": r.box, "group": r.group, **material_keys(r.material)})
     regions = Tables(region, "materials for the elements of a box or a volume group (later regions win); keys as "
                              "material's, and unless a region names a preset or law, each key it omits is material's")
@@ -273,8 +272,9 @@ def scene_table(scene_class) -> Table:
                                             "nodes added)", ORDERS)},
                       parts=mesh_parts, optional=True),
         "material": material,
-        "clamp": Table(point_set("left", stiffness=Key(float, 1e9, "penalty stiffness of the clamp and the rollers "
-                                                                   "(E = 1/2 K |u|^2 per node)", unit=NODAL_STIFFNESS)),
+        "clamp": Table(point_set("left", stiffness=Key(float, None, "penalty stiffness of the clamp and the rollers "
+                                                                    "(E = 1/2 K |u|^2 per node)", unit=NODAL_STIFFNESS,
+                                                       si=1e9)),
                        make=lambda v: (make_point_set(v, "left"), v["stiffness"]),
                        parts=lambda s: {"side": s.geometry.clamp.side, "box": s.geometry.clamp.box,
                                         "stiffness": s.clamp_stiffness}, optional=True, doc="the clamped nodes"),

@@ -2,11 +2,13 @@
 its dotted key), writing (objects -> data), editing by dotted keys and the key reference.
 
     Key(type, default, doc, allowed,  a value: float (any number), int, str, bool; tuple (an array, read as
-        unit, scaled)                 nested tuples) or list (an array, read as is). default: REQUIRED, a
+        unit, scaled, si)             nested tuples) or list (an array, read as is). default: REQUIRED, a
                                       value, or None (optional: absent reads as None, None is not written).
-                                      unit: its dimension (io/units.py), its default in SI, converted into
-                                      the scene's units when read (scaled=False: a scene with units must
-                                      give the key)
+                                      unit: its dimension (io/units.py); si: the SI default that a default
+                                      None stands for, which the Scene converts into its units (a key of
+                                      the geometry has its SI default as default, converted when read);
+                                      both through units.default_in (scaled=False: a scene with units
+                                      must give the key)
     Table(keys, make, parts)          a table: make(values by key) builds its object, parts(object) gives the
                                       values back; read(write(x)) == x is the contract (a property test checks it).
                                       system(data): the units and dimension the defaults are converted into
@@ -35,6 +37,7 @@ import contextvars
 import dataclasses
 import functools
 import re
+import types
 import typing
 from dataclasses import dataclass
 from typing import Callable
@@ -44,7 +47,7 @@ import tomllib
 
 from ..errors import PneumaInputError, require
 from .tomltext import dumps
-from .units import UNITLESS, Units
+from .units import UNITLESS, Units, default_in
 
 REQUIRED = object()
 KEY_PART = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)")
@@ -81,6 +84,7 @@ class Key:
     allowed: tuple = ()
     unit: str = ""
     scaled: bool = True
+    si: object = None  # the SI default that a default None stands for (units.si_default: the Scene converts it)
 
     def read(self, data: dict, name: str, path: str, known: set):
         full = join(path, name)
@@ -99,22 +103,19 @@ class Key:
         return freeze(value) if self.type is tuple else value
 
     def converted(self, full: str):
-        """The default in the units of the table being read (SYSTEM): SI / units.factor(unit, dim), a number or
-        an array of numbers; a numerical default (scaled=False) refused in a scene with units."""
-        units, dim = SYSTEM.get()
-        if not self.unit or self.default is None or units.name is None:
+        """The default in the units of the table being read (SYSTEM; units.default_in), for a key of the geometry
+        (which the Scene does not resolve)."""
+        if not self.unit or self.default is None:
             return self.default
-        require(self.scaled, f"missing key '{full}': a scene with units gives it (in {units.name}); its default "
-                             f"{default_text(self.default)} is a numerical parameter for unitless scenes")
-        factor = units.factor(self.unit, dim)
-        return tuple(v / factor for v in self.default) if isinstance(self.default, tuple) else self.default / factor
+        return default_in(self.default, self.unit, self.scaled, *SYSTEM.get(), full)
 
     def write(self, value, name: str, data: dict) -> None:
         if value is not None:
             data[name] = plain(value)
 
     def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
-        return [KeyInfo(join(path, name), TYPE_NAMES[self.type], default_text(self.default),
+        shown = self.default if self.si is None else self.si
+        return [KeyInfo(join(path, name), TYPE_NAMES[self.type], default_text(shown),
                         ", ".join(map(str, self.allowed)), when, self.doc, self.unit, self.scaled)]
 
 
@@ -247,16 +248,21 @@ def record(cls, doc: str = "", **keys) -> Table:
 
 @functools.cache
 def dataclass_table(cls) -> Table:
-    """A table of every field of the dataclass cls, typed by its annotation (float, int, str, bool, tuple, list)."""
+    """A table of every field of the dataclass cls, typed by its annotation (float, int, str, bool, tuple, list;
+    X | None, a units.si_default field's, as X)."""
     hints = typing.get_type_hints(cls)
     keys = {}
     for f in dataclasses.fields(cls):
-        kind = typing.get_origin(hints[f.name]) or hints[f.name]
+        hint = hints[f.name]
+        if isinstance(hint, types.UnionType):
+            hint, = (arg for arg in typing.get_args(hint) if arg is not type(None))
+        kind = typing.get_origin(hint) or hint
         if kind not in TYPE_NAMES:
             raise TypeError(f"{cls.__name__}.{f.name}: {hints[f.name]} has no scene-file form")
         default = (f.default if f.default is not dataclasses.MISSING else
                    f.default_factory() if f.default_factory is not dataclasses.MISSING else REQUIRED)
-        keys[f.name] = Key(kind, default, unit=f.metadata.get("unit", ""), scaled=f.metadata.get("scaled", True))
+        keys[f.name] = Key(kind, default, unit=f.metadata.get("unit", ""), scaled=f.metadata.get("scaled", True),
+                           si=f.metadata.get("si"))
     return record(cls, " ".join((cls.__doc__ or "").split("\n\n")[0].split()), **keys)
 
 

@@ -27,7 +27,10 @@ summary JSON has a "units" entry. A unitless scene's outputs are named as they a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
+from dataclasses import dataclass, field
+
+from ..errors import require
 
 LENGTH, AREA, PRESSURE, FORCE, ANGLE, TIME = "length", "area", "pressure", "force", "angle", "time"
 VOLUME = "volume"  # a 3D chamber's measure
@@ -46,9 +49,44 @@ EXPONENTS = {LENGTH: ((1, 0, 0),) * 2, AREA: ((2, 0, 0), (3, 0, 0)), VOLUME: ((3
 
 
 def unit(dimension: str, scaled: bool = True) -> dict:
-    """A dataclass field's metadata declaring its dimension (field(default=..., metadata=unit(PRESSURE))): its
-    default is in SI and converted (scaled=False: a numerical default a scene with units must give)."""
+    """A dataclass field's metadata declaring its dimension (field(metadata=unit(DENSITY))): a value in the
+    scene's units (scaled=False: see si_default)."""
     return {"unit": dimension, "scaled": scaled}
+
+
+def si_default(si, dimension: str, scaled: bool = True):
+    """A dataclass field of dimension `dimension` whose default, None, stands for `si` (in SI) converted into the
+    scene's units (default_in) when the Scene resolves it (resolved); scaled=False: a numerical default for
+    unitless scenes, which a scene with units must give."""
+    return field(default=None, metadata={**unit(dimension, scaled), "si": si})
+
+
+def default_in(si, dimension: str, scaled: bool, units: "Units", dim: int, key: str):
+    """The default `si` (a number or an array of numbers, in SI) of key `key` in `units` in a body of dimension
+    dim: si / units.factor(dimension, dim); a numerical default (scaled=False) is taken as it is in a unitless
+    scene and refused, naming the key, in a scene with units. Scene files and the Python API both come here."""
+    if units.name is None:
+        return si
+    require(scaled, f"missing key '{key}': a scene with units gives it (in {units.name}); its default {si!r} is a "
+                    f"numerical parameter for unitless scenes")
+    factor = units.factor(dimension, dim)
+    return tuple(v / factor for v in si) if isinstance(si, tuple) else si / factor
+
+
+def defaults(obj, units: "Units", dim: int, path: str) -> dict:
+    """The value in `units` (default_in) of every si_default field of obj (a dataclass) left None, by name; path:
+    the scene-file table of obj, naming a key a scene with units must give."""
+    if not dataclasses.is_dataclass(obj):
+        return {}
+    return {f.name: default_in(f.metadata["si"], f.metadata["unit"], f.metadata["scaled"], units, dim,
+                               f"{path}.{f.name}") for f in dataclasses.fields(obj)
+            if "si" in f.metadata and getattr(obj, f.name) is None}
+
+
+def resolved(obj, units: "Units", dim: int, path: str):
+    """obj with its defaults (defaults()) set; obj itself when it has none left None."""
+    given = defaults(obj, units, dim, path)
+    return dataclasses.replace(obj, **given) if given else obj
 
 
 def si_text(dimension: str) -> str:

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..errors import require, require_finite
-from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, TIME, unit
+from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, TIME, si_default, unit
 from ..limits import wall_pairs
 from .contact import GroundContact
 from .contact import SelfContact as SelfContactTerm
@@ -41,8 +41,9 @@ class Effect:
         return 0
 
 
-def _positive(name: str, value: float) -> None:
-    require(require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
+def _positive(name: str, value: float | None) -> None:
+    """Refuse a value that is not > 0 (None: a default the Scene resolves, units.si_default)."""
+    require(value is None or require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
 
 
 @dataclass(frozen=True)
@@ -50,7 +51,7 @@ class Gravity(Effect):
     """Body weight: density rho (mass per unit area in 2D, per unit volume in 3D) under acceleration g along -y."""
 
     density: float = field(metadata=unit(DENSITY))
-    g: float = field(default=9.81, metadata=unit(ACCELERATION))
+    g: float | None = si_default(9.81, ACCELERATION)
     name = "gravity"
 
     def __post_init__(self):
@@ -67,8 +68,8 @@ class Ground(Effect):
     (in 3D the plane) y = height."""
 
     height: float = field(metadata=unit(LENGTH))
-    dhat: float = field(default=0.01, metadata=unit(LENGTH, scaled=False))
-    stiffness: float = field(default=1e3, metadata=unit(NODAL_STIFFNESS, scaled=False))
+    dhat: float | None = si_default(0.01, LENGTH, scaled=False)
+    stiffness: float | None = si_default(1e3, NODAL_STIFFNESS, scaled=False)
     name = "ground"
     contact = True
 
@@ -91,8 +92,8 @@ class Ground(Effect):
 class SelfContact(Effect):
     """Self-contact of chamber walls: point-edge log barriers (threshold dhat, stiffness kappa) on every wall."""
 
-    dhat: float = field(default=0.005, metadata=unit(LENGTH, scaled=False))
-    stiffness: float = field(default=1e4, metadata=unit(NODAL_STIFFNESS, scaled=False))
+    dhat: float | None = si_default(0.005, LENGTH, scaled=False)
+    stiffness: float | None = si_default(1e4, NODAL_STIFFNESS, scaled=False)
     name = "self_contact"
     contact = True
 
