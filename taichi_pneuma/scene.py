@@ -115,7 +115,8 @@ class Scene:
     A parameter with a unit left None in it or in its parts (units.si_default: a chamber kind's atmosphere, the
     material's E, gravity's g, the clamp stiffness, ...) is set on construction to its SI default converted into
     the scene's units (resolve_defaults); a numerical default for unitless scenes (an area penalty's stiffness,
-    a contact's dhat) left None in a scene with units is refused, naming its scene-file key."""
+    a contact's dhat, a 2D geometry's max_area) left None in a scene with units is refused, naming its
+    scene-file key."""
 
     geometry: Geometry
     controls: tuple[ChamberControl, ...]
@@ -141,15 +142,16 @@ class Scene:
         self.law_parameters()  # resolves the presets, checks that the body has one law
 
     def resolve_defaults(self) -> None:
-        """Set every default left None (units.si_default) of the scene, its material and regions, its chamber
-        kinds and its effects to its value in the scene's units (units.defaults: the one place defaults with a
-        unit are converted, for scene files and the Python API alike)."""
+        """Set every default left None (units.si_default) of the scene, its geometry, its material and regions,
+        its chamber kinds and its effects to its value in the scene's units (units.defaults, the conversion that
+        scene files and the Python API share)."""
         def put(name, value):
             object.__setattr__(self, name, value)
 
         units, dim = self.units, self.dim
         for name, value in defaults(self, units, dim, "clamp").items():
             put(name, value)
+        put("geometry", resolved(self.geometry, units, dim, "mesh"))  # a 2D Geometry's max_area
         put("material", resolved(self.material, units, dim, "material"))
         put("regions", tuple(dataclasses.replace(r, material=resolved(r.material, units, dim, f"material.regions[{i}]"))
                              for i, r in enumerate(self.regions)))

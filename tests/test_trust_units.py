@@ -17,11 +17,15 @@ from taichi_pneuma.apps import inflate
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.io.sceneformat import scene_data
 from taichi_pneuma.io.scenefile import key_reference, read_scene
-from taichi_pneuma.io.units import UNITS
+from taichi_pneuma.fem.geometry import Geometry, PointSet, Polygon
+from taichi_pneuma.io.units import UNITLESS, UNITS
 from taichi_pneuma.materials import IsochoricMaterial
 from taichi_pneuma.materials.isochoric import unstable_stretch
 from taichi_pneuma.materials.presets import PRESETS
-from taichi_pneuma.scene import Region
+from taichi_pneuma.scene import ChamberControl, Material, Region, Scene
+from taichi_pneuma.solve.schedule import ChamberSchedule
+from taichi_pneuma.terms.chambers import KINDS as CHAMBER_KINDS, AreaControl, ClosedGas
+from taichi_pneuma.terms.effects import EFFECTS, Gravity, Ground, SelfContact
 
 # A dented wall (balloon_syringe.toml, coarser and stiffer, so that the air's compression matters) in mm and kPa
 SYRINGE = '''units = "mm-kPa"
@@ -231,7 +235,7 @@ def test_the_default_modulus_is_1e4_pa_and_max_area_must_be_given_with_units():
     assert read(data, "mm-MPa").material.youngs_modulus == pytest.approx(0.01)
     assert read(data, None).material.youngs_modulus == 1e4
     del data["mesh"]["max_area"]
-    with pytest.raises(PneumaInputError, match="missing key 'mesh.max_area': a 2D scene with units gives it"):
+    with pytest.raises(PneumaInputError, match="missing key 'mesh.max_area': a scene with units gives it"):
         read(data, "mm-kPa")
     assert read(data, None).geometry.max_area == 0.0012
 
@@ -306,3 +310,76 @@ def test_a_negative_coefficient_that_keeps_the_law_stable_is_accepted(law, coeff
 def test_every_preset_is_a_stable_law(name):
     material = PRESETS[name].material
     assert unstable_stretch(material.C10, material.C01, material.C20, material.C30) is None
+
+
+# --- API defaults: the Python API converts the same SI defaults as a scene file (units.si_default) ---
+
+MM_KPA = UNITS["mm-kPa"]
+WALL = Polygon(((-15.0, -5.0), (15.0, -5.0), (15.0, 5.0), (8.0, 5.0), (0.0, 1.5), (-8.0, 5.0), (-15.0, 5.0)))
+DENT = Polygon(((-8.0, -2.0), (8.0, -2.0), (8.0, 4.6), (0.0, 1.1), (-8.0, 4.6)))
+
+
+def wall_scene(kind, material=None, max_area: float | None = 2.0, effects=(), units=MM_KPA) -> Scene:
+    """SYRINGE's dented wall built in Python: 30 x 10 mm, E = 2000 kPa, the air pumped in 40 mm^2 over 4 steps."""
+    geometry = Geometry(WALL, (("main", DENT),), max_area, PointSet("bottom"), tip=PointSet(box=(-0.5, 0.5, 0.5, 2.0)))
+    return Scene(geometry, (ChamberControl(ChamberSchedule(kind, ((4, 40.0),))),), 4,
+                 Material(2000.0, 0.45) if material is None else material, effects=effects, units=units)
+
+
+def test_an_api_built_mm_kpa_closed_gas_chamber_takes_101_325_kpa_as_its_default_atmosphere():
+    """Before: ClosedGas()'s (and ChamberSchedule("closed_gas", ...)'s) atmosphere stayed 101325, read as kPa, a
+    nearly incompressible gas. Now None, set by the Scene to 101325 Pa / 1000 = 101.325 kPa: the same run as
+    atmosphere = 101.325 written out. The wall (E = 100 MPa) is stiff enough for the air's compression to matter:
+    the peak is 39.9 kPa at 101.325 kPa and 68.1 kPa with a nearly incompressible gas (101325 kPa)."""
+    assert wall_scene(ClosedGas()).controls[0].kind.atmosphere == pytest.approx(101.325, rel=1e-12)
+    stiff = Material(1e5, 0.45)
+    peaks = [max(step.chambers["main"].pressure for step in tp.simulate(wall_scene(kind, stiff)).steps)
+             for kind in ("closed_gas", ClosedGas(atmosphere=101.325), ClosedGas(atmosphere=101325.0))]
+    assert peaks[0] == pytest.approx(peaks[1], rel=1e-9)
+    assert peaks[2] > 1.5 * peaks[1]
+
+
+def test_api_defaults_with_a_unit_are_si_converted_by_the_scene():
+    """By hand, in mm-kPa: E 1e4 Pa = 10 kPa; g 9.81 m/s^2 = 9810 mm/s^2; the clamp's 1e9 Pa (2D: energy per
+    depth per length^2, a pressure) = 1e6 kPa. mm-MPa: E = 0.01 MPa. A unitless scene keeps the SI numbers."""
+    units = {"mm-kPa": (10.0, 9810.0, 1e6), "mm-MPa": (0.01, 9810.0, 1e3), None: (1e4, 9.81, 1e9)}
+    for name, (E, g, clamp) in units.items():
+        scene = wall_scene("pressure", Material(), effects=(Gravity(density=1.0),),
+                           units=UNITLESS if name is None else UNITS[name])
+        assert scene.material.youngs_modulus == pytest.approx(E, rel=1e-12)
+        assert scene.effects[0].g == pytest.approx(g, rel=1e-12)
+        assert scene.clamp_stiffness == pytest.approx(clamp, rel=1e-12)
+        assert read_scene(tomllib.loads(scene.to_toml()), "scene") == scene
+
+
+@pytest.mark.parametrize("change, key", [
+    (dict(kind="area"), "chambers[0].stiffness"), (dict(kind=AreaControl()), "chambers[0].stiffness"),
+    (dict(effects=(Ground(height=-10.0),)), "effects.ground.dhat"),
+    (dict(effects=(SelfContact(),)), "effects.self_contact.dhat"), (dict(max_area=None), "mesh.max_area")])
+def test_api_numerical_defaults_are_refused_in_a_scene_with_units_naming_the_key(change, key):
+    """As in a scene file: a default calibrated for unitless scenes (area penalty 1e5, contact dhat, max_area
+    0.0012) left None in a scene with units is one PneumaInputError naming the key; unitless, it is taken."""
+    arguments = {"kind": "pressure", **change}
+    with pytest.raises(PneumaInputError, match=rf"missing key '{re.escape(key)}': a scene with units gives it"):
+        wall_scene(**arguments)
+    unitless = wall_scene(**arguments, units=UNITLESS)
+    assert unitless.geometry.max_area in (2.0, 0.0012)
+
+
+def test_every_api_default_with_a_unit_is_the_scene_files_default():
+    """Each si_default field of the chamber kinds, effects, Material, Scene and Geometry is the key of the key
+    reference with the same SI default, unit and scaling: one declaration serves both."""
+    rows = {row.key: row for row in key_reference()}
+    owners = [(cls, f"chambers[].{{}}") for cls in CHAMBER_KINDS.values()] + [
+        (cls, f"effects.{cls.name}.{{}}") for cls in EFFECTS.values()] + [
+        (Material, "material.{}"), (Scene, "clamp.{}"), (Geometry, "mesh.{}")]
+    names = {"youngs_modulus": "E", "clamp_stiffness": "stiffness"}
+    found = 0
+    for cls, key in owners:
+        for f in dataclasses.fields(cls):
+            if "si" in f.metadata:
+                row = rows[key.format(names.get(f.name, f.name))]
+                assert (tomllib.loads(f"v = {row.default}")["v"], row.unit, row.scaled) == (
+                    f.metadata["si"], f.metadata["unit"], f.metadata["scaled"]), row.key
+                found += 1
+    assert found >= 10

@@ -237,11 +237,8 @@ def scene_table(scene_class) -> Table:
             geometry = MeshGeometry(v["body"], chambers, mesh["order"], clamp, v["tip"], v["rollers"])
         else:
             require(not sized, f"mesh.{sized[0] if sized else ''}: a 2D body takes mesh.max_area")
-            require(mesh["max_area"] is not None or v["units"] is None,
-                    f"missing key 'mesh.max_area': a 2D scene with units gives it (in {v['units']}); its default "
-                    f"0.0012 is a numerical parameter for unitless scenes")
-            geometry = Geometry(v["body"], chambers, *(() if mesh["max_area"] is None else (mesh["max_area"],)),
-                                clamp=clamp, order=mesh["order"], tip=v["tip"], rollers=v["rollers"])
+            geometry = Geometry(v["body"], chambers, mesh["max_area"], clamp=clamp, order=mesh["order"], tip=v["tip"],
+                                rollers=v["rollers"])
         return scene_class(geometry, tuple(control for *_, control in v["chambers"]), v["schedule"]["increments"],
                            material, regions, clamp_stiffness, v["effects"], v["name"], v["targets"],
                            UNITLESS if v["units"] is None else UNITS[v["units"]])
@@ -260,8 +257,8 @@ def scene_table(scene_class) -> Table:
         "units": Key(str, None, "the system of the scene's lengths and pressures (io/units.py; none: unitless)",
                      tuple(UNITS)),
         "body": Table({"shape": BODY_SHAPES}, make=lambda v: v["shape"], parts=lambda body: {"shape": body}),
-        "mesh": Table({"max_area": Key(float, None, "largest triangle area (2D; none: 0.0012 in a unitless scene, "
-                                                    "required in a scene with units)", unit=PLANE_AREA, scaled=False),
+        "mesh": Table({"max_area": Key(float, None, "largest triangle area (2D)", unit=PLANE_AREA, scaled=False,
+                                       si=0.0012),
                        "size": Key(float, None, "tetrahedron edge length in the bulk (3D body from shapes; required "
                                                 "there)", unit=LENGTH),
                        "near_chambers": Key(float, None, "edge length within that distance of the chamber walls (3D "
