@@ -129,9 +129,22 @@ def app_page(name: str) -> str:
 def scene_keys_page() -> str:
     from taichi_pneuma.io.scenefile import key_reference
 
-    rows = [[f"`{k.key}`", k.type, f"`{k.default}`" if k.default else "", k.allowed,
+    from taichi_pneuma.io.units import si_text
+
+    def default(k) -> str:
+        if not k.default:
+            return ""
+        if not k.unit or k.default in ("required", "none"):
+            return f"`{k.default}`"
+        return f"`{k.default}` ({'SI, converted' if k.scaled else 'unitless scenes only'})"
+
+    rows = [[f"`{k.key}`", k.type, default(k), si_text(k.unit) if k.unit else "", k.allowed,
              f"`{k.when}`" if k.when else "", k.doc] for k in key_reference()]
-    return f"{len(rows)} keys.\n\n" + table(["key", "type", "default", "allowed", "applies when", "meaning"], rows)
+    return (f"{len(rows)} keys. A key with a unit takes the scene's units (`units = ...`; the unit column gives the "
+            f"SI one). Its default is in SI, converted into the scene's units; a numerical default (a penalty "
+            f"stiffness, a barrier distance, a mesh size: 'unitless scenes only') is for unitless scenes, and a "
+            f"scene with units gives the key.\n\n"
+            + table(["key", "type", "default", "unit", "allowed", "applies when", "meaning"], rows))
 
 
 def docstring_of(path: str, function: str | None) -> str:

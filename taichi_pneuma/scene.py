@@ -11,6 +11,7 @@ allocated and no kernel compiled or launched for it.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -22,7 +23,7 @@ from .fem.supports import require_held
 from .io import sceneformat
 from .io.keys import dotted
 from .io.output import check_stem
-from .io.units import UNITLESS, Units
+from .io.units import NODAL_STIFFNESS, PRESSURE, UNITLESS, Units, defaults, resolved, si_default
 from .materials import IsochoricMaterial, StableNeoHookean
 from .materials.presets import PresetMaterial
 from .solve.model import EnergyModel
@@ -35,16 +36,16 @@ from .terms.effects import Effect
 
 @dataclass(frozen=True)
 class Material:
-    """Isotropic material of the stable neo-Hookean law (materials/neo_hookean.py): Young's modulus E > 0,
-    Poisson's ratio -1 < nu < 0.5."""
+    """Isotropic material of the stable neo-Hookean law (materials/neo_hookean.py): Young's modulus E > 0
+    (None: 1e4 Pa in the scene's units, set by the Scene), Poisson's ratio -1 < nu < 0.5."""
 
-    youngs_modulus: float = 1e4
+    youngs_modulus: float | None = si_default(1e4, PRESSURE)
     poisson_ratio: float = 0.45
 
     def __post_init__(self):
-        e = require_finite("E", self.youngs_modulus)
+        require(self.youngs_modulus is None or require_finite("E", self.youngs_modulus) > 0,
+                f"E = {self.youngs_modulus!r} must be > 0")
         nu = require_finite("nu", self.poisson_ratio)
-        require(e > 0, f"E = {self.youngs_modulus!r} must be > 0")
         require(-1 < nu < 0.5, f"nu = {self.poisson_ratio!r} must lie in (-1, 0.5)")
 
     def law_parameters(self, units: Units) -> tuple[type, np.ndarray]:
@@ -113,14 +114,20 @@ class Scene:
     """A whole scene. controls: one ChamberControl per chamber of geometry, in the same order; units: the
     system its numbers are in (io/units.py; unitless by default), into which presets are converted; max_stretch: the
     largest principal stretch a run may reach before it warns that it has left the material model's range
-    (MAX_STRETCH by default)."""
+    (MAX_STRETCH by default).
+
+    A parameter with a unit left None in it or in its parts (units.si_default: a chamber kind's atmosphere, the
+    material's E, gravity's g, the clamp stiffness, ...) is set on construction to its SI default converted into
+    the scene's units (resolve_defaults); a numerical default for unitless scenes (an area penalty's stiffness,
+    a contact's dhat, a 2D geometry's max_area) left None in a scene with units is refused, naming its
+    scene-file key."""
 
     geometry: Geometry
     controls: tuple[ChamberControl, ...]
     increments: int
     material: AnyMaterial = field(default_factory=Material)
     regions: tuple[Region, ...] = ()
-    clamp_stiffness: float = 1e9
+    clamp_stiffness: float | None = si_default(sceneformat.CLAMP_STIFFNESS, NODAL_STIFFNESS)  # 1/2 K |u|^2 per node
     effects: tuple[Effect, ...] = ()
     name: str = "scene"
     targets: tuple = ()  # targets.Target poses for inverse control (apps.reach), in order
@@ -128,6 +135,7 @@ class Scene:
     max_stretch: float = MAX_STRETCH
 
     def __post_init__(self):
+        self.resolve_defaults()
         check_stem(self.name)  # the result files are named after the scene
         require(require_finite("max_stretch", self.max_stretch) > 1,
                 f"max_stretch = {self.max_stretch!r} must be > 1 (a principal stretch; 1 is the rest state)")
@@ -139,6 +147,24 @@ class Scene:
         require(len(set(kinds)) == len(kinds), f"effects {kinds!r} name one effect twice")
         self.schedule  # validates the increments against the keyframes
         self.law_parameters()  # resolves the presets, checks that the body has one law
+
+    def resolve_defaults(self) -> None:
+        """Set every default left None (units.si_default) of the scene, its geometry, its material and regions,
+        its chamber kinds and its effects to its value in the scene's units (units.defaults, the conversion that
+        scene files and the Python API share)."""
+        def put(name, value):
+            object.__setattr__(self, name, value)
+
+        units, dim = self.units, self.dim
+        for name, value in defaults(self, units, dim, "clamp").items():
+            put(name, value)
+        put("geometry", resolved(self.geometry, units, dim, "mesh"))  # a 2D Geometry's max_area
+        put("material", resolved(self.material, units, dim, "material"))
+        put("regions", tuple(dataclasses.replace(r, material=resolved(r.material, units, dim, f"material.regions[{i}]"))
+                             for i, r in enumerate(self.regions)))
+        put("controls", tuple(dataclasses.replace(c, schedule=dataclasses.replace(
+            c.schedule, kind=resolved(c.kind, units, dim, f"chambers[{i}]"))) for i, c in enumerate(self.controls)))
+        put("effects", tuple(resolved(e, units, dim, f"effects.{e.name}") for e in self.effects))
 
     def to_toml(self) -> str:
         """This scene as a scene file (TOML); scenefile.load_scene reads it back to an equal scene."""
@@ -182,11 +208,17 @@ class Scene:
 
     def element_material(self, mesh: Mesh) -> tuple[type, np.ndarray]:
         """The material law of the body and its parameter vector for every element, (m, p): the base material's,
-        then each region's for the elements it contains (Region.contains), in order."""
+        then each region's for the elements it contains (Region.contains), in order; a region that contains no
+        element is refused, naming it."""
         law, (base, *rows) = self.law_parameters()
         parameters = np.tile(base, (mesh.n_elements, 1))
-        for region, row in zip(self.regions, rows):
-            parameters[region.contains(mesh)] = row
+        for i, (region, row) in enumerate(zip(self.regions, rows)):
+            taken = region.contains(mesh)
+            require(taken.any(), f"material.regions[{i}]: " + (
+                f"box = {list(region.box)} holds no element's centroid (the body's bounding box is "
+                f"{[round(float(v), 6) for v in (*mesh.vertices.min(axis=0), *mesh.vertices.max(axis=0))]})"
+                if region.box is not None else f"group = {region.group!r} has no elements"))
+            parameters[taken] = row
         return law, parameters
 
     def build(self) -> "BuiltScene":

@@ -41,6 +41,7 @@ from scipy.spatial import cKDTree
 from .. import limits
 from ..errors import PneumaInputError, require, require_distinct, require_finite, shape_of
 from ..io.output import check_heading
+from ..io.units import PLANE_AREA, si_default
 from . import triangulation
 
 OUTER_MARKER = 1
@@ -545,7 +546,7 @@ class Geometry:
 
     body: object
     chambers: tuple[tuple[str, object], ...]
-    max_area: float = 0.0012
+    max_area: float | None = si_default(0.0012, PLANE_AREA, scaled=False)  # None: 0.0012, unitless scenes only
     clamp: PointSet | None = None
     order: int = 1
     refinements: int = 0
@@ -555,7 +556,8 @@ class Geometry:
     dim = 2
 
     def __post_init__(self):
-        require(require_finite("max_area", self.max_area) > 0, f"max_area = {self.max_area!r} must be > 0")
+        require(self.max_area is None or require_finite("max_area", self.max_area) > 0,
+                f"max_area = {self.max_area!r} must be > 0")
         require(self.order in ORDERS, f"order = {self.order!r} must be 1 (linear triangles) or 2 (quadratic)")
         require(self.refinements in range(MAX_REFINEMENTS + 1),
                 f"refinements = {self.refinements!r} must be an integer from 0 to {MAX_REFINEMENTS}")
@@ -617,6 +619,8 @@ class Geometry:
         `refinements` times (uniform refinement: the same boundary polygons, h halved each time), add a
         midside node to every edge for quadratic triangles, and name the node sets. In a limits.budget,
         Triangle adds at most limits.element_cap points and a mesh past the budget is refused."""
+        require(self.max_area is not None, "max_area = None: the Scene sets the default (0.0012 in a unitless scene); "
+                                           "give max_area to mesh a Geometry on its own")
         outline, outline_markers, walls = self.outline()
         closed = [c for c, (_, origin) in enumerate(walls, start=1) if origin is None]
         loops = [outline] + [walls[c - 1][0] for c in closed]

@@ -17,13 +17,16 @@ The dataclass fields are the keys of the scene file's [body] table with shape = 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from ..errors import require, require_finite
+from ..io.units import LENGTH, unit
 from .solids import Box, RoundedBox
 from .gmsh_mesher import MAX_SHAPES, Solid
 
 LAYER = "layer"
+# the defaults are the unitless pneunet_3d finger (4 long): a scene with units gives every length it uses
+LENGTH_DEFAULT = unit(LENGTH, scaled=False)
 
 
 @dataclass(frozen=True)
@@ -31,15 +34,15 @@ class PneuNet:
     """The actuator's dimensions (see the module docstring); radius rounds the chambers' edges (0: sharp)."""
 
     chambers: int = 6
-    chamber_length: float = 0.4
-    chamber_height: float = 0.5
-    chamber_width: float = 0.6
-    radius: float = 0.08
-    gap: float = 0.1
-    wall: float = 0.08
-    end: float = 0.55
-    base: float = 0.07
-    layer: float = 0.15
+    chamber_length: float = field(default=0.4, metadata=LENGTH_DEFAULT)
+    chamber_height: float = field(default=0.5, metadata=LENGTH_DEFAULT)
+    chamber_width: float = field(default=0.6, metadata=LENGTH_DEFAULT)
+    radius: float = field(default=0.08, metadata=LENGTH_DEFAULT)
+    gap: float = field(default=0.1, metadata=LENGTH_DEFAULT)
+    wall: float = field(default=0.08, metadata=LENGTH_DEFAULT)
+    end: float = field(default=0.55, metadata=LENGTH_DEFAULT)
+    base: float = field(default=0.07, metadata=LENGTH_DEFAULT)
+    layer: float = field(default=0.15, metadata=LENGTH_DEFAULT)
 
     def __post_init__(self):
         require(isinstance(self.chambers, int) and not isinstance(self.chambers, bool)

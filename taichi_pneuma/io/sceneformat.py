@@ -7,6 +7,7 @@ from the annotations of the Scene class passed in, so that scene.py imports this
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import typing
 
@@ -36,24 +37,26 @@ from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
 from .schema import REQUIRED, Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
 from .tomltext import dumps
-from .units import UNITLESS, UNITS
+from .units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, PRESSURE, UNITLESS, UNITS, default_in
 
 PAIR, BOX, TRIPLE = "[x, y]", "[x0, y0, x1, y1]", "[x, y, z]"
-CLAMP_STIFFNESS = 1e9  # the [clamp] stiffness key's default
-POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3"))
+CLAMP_STIFFNESS = 1e9  # the [clamp] stiffness key's default, in SI (Pa, 2D; Pa m, 3D)
+POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3", unit=LENGTH))
 PLANAR_BODIES = {
-    "rectangle": record(Rectangle, "an axis-aligned rectangle", center=Key(tuple, (0.0, 0.0), PAIR),
-                        size=Key(tuple, doc="[width, height]")),
+    "rectangle": record(Rectangle, "an axis-aligned rectangle", center=Key(tuple, (0.0, 0.0), PAIR, unit=LENGTH),
+                        size=Key(tuple, doc="[width, height]", unit=LENGTH)),
     "polygon": POLYGON,
     "union": record(RectangleUnion, "a union of axis-aligned rectangles (one region, no holes)",
-                    rectangles=Tables(record(Rectangle, center=Key(tuple, doc=PAIR), size=Key(tuple, doc="[w, h]")))),
+                    rectangles=Tables(record(Rectangle, center=Key(tuple, doc=PAIR, unit=LENGTH),
+                                             size=Key(tuple, doc="[w, h]", unit=LENGTH)))),
 }
 PLANAR_CHAMBERS = {
-    "ellipse": record(Ellipse, "an ellipse", center=Key(tuple, doc=PAIR), semi_axes=Key(tuple, doc="[a, b]"),
+    "ellipse": record(Ellipse, "an ellipse", center=Key(tuple, doc=PAIR, unit=LENGTH),
+                      semi_axes=Key(tuple, doc="[a, b]", unit=LENGTH),
                       points=Key(int, 64, "wall points, 8 or more (2D)")),
     "rounded_rectangle": record(RoundedRectangle, "a rectangle with quarter-circle corners",
-                                center=Key(tuple, doc=PAIR), size=Key(tuple, doc="[w, h]"),
-                                radius=Key(float, doc="corner radius, below half the shorter side"),
+                                center=Key(tuple, doc=PAIR, unit=LENGTH), size=Key(tuple, doc="[w, h]", unit=LENGTH),
+                                radius=Key(float, doc="corner radius, below half the shorter side", unit=LENGTH),
                                 corner_points=Key(int, 6, "points per corner (2D)")),
     "polygon": POLYGON,
 }
@@ -64,17 +67,21 @@ def extrusion(profiles: dict, what: str) -> Table:
     profile = Table({"shape": Variant(profiles, doc=f"the 2D {what} shape swept")}, make=lambda v: v["shape"],
                     parts=lambda shape: {"shape": shape}, doc="the 2D shape (in the x-y plane), its keys as in 2D")
     return record(Extrusion, f"a 2D {what} shape swept along z (3D)", profile=profile,
-                  depth=Key(float, doc="its extent along z"), z=Key(float, 0.0, "the z of its middle"))
+                  depth=Key(float, doc="its extent along z", unit=LENGTH),
+                  z=Key(float, 0.0, "the z of its middle", unit=LENGTH))
 
 
 SOLIDS = {  # the 3D shapes bodies and chambers share (fem/solids.py); with extrusion and pneunet, the 3D bodies
-    "box": record(Box, "an axis-aligned box (3D)", center=Key(tuple, doc=TRIPLE), size=Key(tuple, doc=TRIPLE)),
-    "rounded_box": record(RoundedBox, "a box with every edge and corner rounded (3D)", center=Key(tuple, doc=TRIPLE),
-                          size=Key(tuple, doc=TRIPLE), radius=Key(float, doc="below half the shortest side")),
-    "cylinder": record(Cylinder, "a circular cylinder (3D)", center=Key(tuple, doc=TRIPLE), radius=Key(float),
-                       length=Key(float), axis=Key(str, "z", "its axis", AXES)),
-    "ellipsoid": record(Ellipsoid, "an axis-aligned ellipsoid (3D)", center=Key(tuple, doc=TRIPLE),
-                        semi_axes=Key(tuple, doc="[a, b, c]")),
+    "box": record(Box, "an axis-aligned box (3D)", center=Key(tuple, doc=TRIPLE, unit=LENGTH),
+                  size=Key(tuple, doc=TRIPLE, unit=LENGTH)),
+    "rounded_box": record(RoundedBox, "a box with every edge and corner rounded (3D)",
+                          center=Key(tuple, doc=TRIPLE, unit=LENGTH), size=Key(tuple, doc=TRIPLE, unit=LENGTH),
+                          radius=Key(float, doc="below half the shortest side", unit=LENGTH)),
+    "cylinder": record(Cylinder, "a circular cylinder (3D)", center=Key(tuple, doc=TRIPLE, unit=LENGTH),
+                       radius=Key(float, unit=LENGTH), length=Key(float, unit=LENGTH),
+                       axis=Key(str, "z", "its axis", AXES)),
+    "ellipsoid": record(Ellipsoid, "an axis-aligned ellipsoid (3D)", center=Key(tuple, doc=TRIPLE, unit=LENGTH),
+                        semi_axes=Key(tuple, doc="[a, b, c]", unit=LENGTH)),
 }
 BODY_SHAPES = Variant({
     **PLANAR_BODIES,
@@ -93,7 +100,7 @@ CHAMBER_SHAPES = Variant({
     "extrusion": extrusion(PLANAR_CHAMBERS, "chamber"),
 }, doc="the chamber's wall")
 TARGET = record(Target, "a pose the tip should reach (inverse control)",
-                tip=Key(tuple, doc="[x, y], or [x, y, z] on a 3D body (z free when not given)"),
+                tip=Key(tuple, doc="[x, y], or [x, y, z] on a 3D body (z free when not given)", unit=LENGTH),
                 angle=Key(float, None, "tip rotation in degrees (none: free)"),
                 weights=Key(tuple, (1.0, 1.0, 1.0), "[w_x, w_y, w_angle]"),
                 weight_z=Key(float, 1.0, "w_z, the weight of a 3D tip's z error"))
@@ -102,14 +109,15 @@ TARGET = record(Target, "a pose the tip should reach (inverse control)",
 ROLLER = record(Roller, "a roller support: the nodes' displacement along normal held, tangential motion free",
                 normal=Key(tuple, doc="[nx, ny] ([nx, ny, nz] in 3D)"),
                 point=Key(tuple, None, "[x, y]: the nodes within tolerance of the line through it, normal to normal "
-                                       "(3D: [x, y, z], a plane)"),
-                box=Key(tuple, None, f"{BOX}: the nodes in it (instead of point)"), tolerance=Key(float, 1e-6))
+                                       "(3D: [x, y, z], a plane)", unit=LENGTH),
+                box=Key(tuple, None, f"{BOX}: the nodes in it (instead of point)", unit=LENGTH),
+                tolerance=Key(float, 1e-6, unit=LENGTH))
 
 
 def point_set(neither: str, **more) -> dict:
     """The keys of a [clamp] or [tip] node set: side, or box (then no side); neither: what neither means."""
     return {"side": Key(str, None, f"a side of the body's bounding box (neither side nor box: {neither})", SIDES),
-            "box": Key(tuple, None, f"{BOX}: the nodes in it"), **more}
+            "box": Key(tuple, None, f"{BOX}: the nodes in it", unit=LENGTH), **more}
 
 
 def make_point_set(v: dict, default_side: str | None) -> PointSet | None:
@@ -124,11 +132,11 @@ MATERIAL_KEYS = {
                   tuple(PRESETS)),
     "law": Key(str, None, "a form of the isochoric law (C10, ... and K or nu); none: stable neo-Hookean (E, nu)",
                tuple(FORMS)),
-    "E": Key(float, None, "Young's modulus of the stable neo-Hookean material, > 0; none: 1e4"),
+    "E": Key(float, None, "Young's modulus of the stable neo-Hookean material, > 0", unit=PRESSURE, si=1e4),
     "nu": Key(float, None, "Poisson's ratio, in (-1, 0.5); none: 0.45 (E), 0.49 (law), the preset's own"),
-    "K": Key(float, None, "bulk modulus, instead of nu (law or preset)"),
+    "K": Key(float, None, "bulk modulus, instead of nu (law or preset)", unit=PRESSURE),
     **{c: Key(float, None, f"coefficient of the isochoric law's {c} term (the forms taking it; none: 0, C10 "
-                           f"required)") for c in ("C10", "C01", "C20", "C30")},
+                           f"required)", unit=PRESSURE) for c in ("C10", "C01", "C20", "C30")},
 }
 
 
@@ -158,7 +166,8 @@ def material_of(keys: dict, material_class):
     if keys["law"] is None:
         extra = [k for k in given if k not in ("E", "nu")]
         require(not extra, f"{', '.join(extra)} need law = {' or '.join(FORMS)} (E and nu alone: stable neo-Hookean)")
-        return material_class(*(STABLE_DEFAULTS[k] if keys[k] is None else keys[k] for k in ("E", "nu")))
+        # E left None: its SI default converted into the scene's units, set by the Scene (units.si_default)
+        return material_class(keys["E"], STABLE_DEFAULTS["nu"] if keys["nu"] is None else keys["nu"])
     require(keys["E"] is None, f"E = {keys['E']!r}: law = {keys['law']!r} takes C10, ... and K or nu, not E")
     require(keys["C10"] is not None, f"law = {keys['law']!r} needs C10")
     return IsochoricMaterial(keys["law"], **{c: keys[c] for c in coefficients}, bulk_modulus=keys["K"],
@@ -204,9 +213,10 @@ def scene_table(scene_class) -> Table:
         return base, tuple(build(f"material.regions[{i}]", lambda: region(r)) for i, r in enumerate(v["regions"]))
 
     region = Table({"box": Key(tuple, None, f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D): the elements whose centroid "
-                                            f"lies in it"),
+                                            f"lies in it", unit=LENGTH),
                     "group": Key(str, None, "instead of box (3D): the tetrahedra of the mesh's named volume group "
-                                            "(a mesh file's physical group, a pneunet's \"layer\")"), **MATERIAL_KEYS},
+                                            "(a mesh file's physical group, a pneunet's \"layer\")"), **MATERIAL_KEYS,
+                    "E": dataclasses.replace(MATERIAL_KEYS["E"], si=None)},  # none: the base's (make_material)
                    parts=lambda r: {"box": r.box, "group": r.group, **material_keys(r.material)}, kind=material_kind,
                    tags=MATERIAL_TAGS)
     regions = Tables(region, "materials for the elements of a box or a volume group (later regions win); keys as "
@@ -248,8 +258,8 @@ def scene_table(scene_class) -> Table:
             geometry = MeshGeometry(v["body"], chambers, mesh["order"], clamp, v["tip"], v["rollers"])
         else:
             require(not sized, f"mesh.{sized[0] if sized else ''}: a 2D body takes mesh.max_area")
-            geometry = Geometry(v["body"], chambers, *(() if mesh["max_area"] is None else (mesh["max_area"],)),
-                                clamp=clamp, order=mesh["order"], tip=v["tip"], rollers=v["rollers"])
+            geometry = Geometry(v["body"], chambers, mesh["max_area"], clamp=clamp, order=mesh["order"], tip=v["tip"],
+                                rollers=v["rollers"])
         return scene_class(geometry, tuple(control for *_, control in v["chambers"]), v["schedule"]["increments"],
                            material, regions, clamp_stiffness, v["effects"], v["name"], v["targets"],
                            UNITLESS if v["units"] is None else UNITS[v["units"]], v["schedule"]["max_stretch"])
@@ -257,8 +267,9 @@ def scene_table(scene_class) -> Table:
     def clamp_parts(scene):
         """The [clamp] keys; without a clamp, its stiffness only if not the default (so no [clamp] is written)."""
         clamp, stiffness = scene.geometry.clamp, scene.clamp_stiffness
+        default = default_in(CLAMP_STIFFNESS, NODAL_STIFFNESS, True, scene.units, scene.dim, "clamp.stiffness")
         return {"side": getattr(clamp, "side", None), "box": getattr(clamp, "box", None),
-                "stiffness": None if clamp is None and stiffness == CLAMP_STIFFNESS else stiffness}
+                "stiffness": None if clamp is None and stiffness == default else stiffness}
 
     def mesh_parts(geometry):
         refinements = getattr(geometry, "refinements", 0)
@@ -268,25 +279,27 @@ def scene_table(scene_class) -> Table:
         return {"max_area": getattr(geometry, "max_area", None), "order": geometry.order,
                 **{k: getattr(sizes, k, None) for k in ("size", "near_chambers", "distance")}}
 
-    return Table({
+    return Table(system=scene_system, keys={
         "name": Key(str, None, "names the result files (a plain file name); none: the scene file's own name"),
         "description": Key(str, "", "free text, not kept"),
         "units": Key(str, None, "the system of the scene's lengths and pressures (io/units.py; none: unitless)",
                      tuple(UNITS)),
         "body": Table({"shape": BODY_SHAPES}, make=lambda v: v["shape"], parts=lambda body: {"shape": body}),
-        "mesh": Table({"max_area": Key(float, None, "largest triangle area (2D; none: 0.0012)"),
+        "mesh": Table({"max_area": Key(float, None, "largest triangle area (2D)", unit=PLANE_AREA, scaled=False,
+                                       si=0.0012),
                        "size": Key(float, None, "tetrahedron edge length in the bulk (3D body from shapes; required "
-                                                "there)"),
+                                                "there)", unit=LENGTH),
                        "near_chambers": Key(float, None, "edge length within that distance of the chamber walls (3D "
-                                                         "shapes; none: size)"),
+                                                         "shapes; none: size)", unit=LENGTH),
                        "distance": Key(float, None, "over which the edge length grows from near_chambers back to size "
-                                                    "(3D shapes; none: 2 size)"),
+                                                    "(3D shapes; none: 2 size)", unit=LENGTH),
                        "order": Key(int, 1, "1: linear triangles (tetrahedra), 2: quadratic (3D: straight midside "
                                             "nodes added)", ORDERS)},
                       parts=mesh_parts, optional=True),
         "material": material,
-        "clamp": Table(point_set("no clamp", stiffness=Key(float, CLAMP_STIFFNESS, "penalty stiffness of the clamp "
-                                                                                   "and the rollers")),
+        "clamp": Table(point_set("no clamp", stiffness=Key(float, None, "penalty stiffness of the clamp and the "
+                                                                        "rollers (E = 1/2 K |u|^2 per node)",
+                                                           unit=NODAL_STIFFNESS, si=CLAMP_STIFFNESS)),
                        make=lambda v: (make_point_set(v, None), v["stiffness"]), parts=clamp_parts, optional=True,
                        doc="the clamped nodes; no [clamp] table (or one without side and box): no clamp, the body held "
                            "by its rollers"),
@@ -307,6 +320,16 @@ def scene_table(scene_class) -> Table:
         "tip": s.geometry, "rollers": s.geometry.rollers,
         "chambers": [(name, shape, control) for (name, shape), control in zip(s.geometry.chambers, s.controls)],
         "schedule": s, "effects": s.effects, "targets": s.targets})
+
+
+def scene_system(data: dict) -> tuple:
+    """The units and the dimension of the scene of the data of a scene file: its units key (unitless when it has
+    none) and 3 for a 3D body shape, 2 otherwise (a bad value of either is refused when it is read)."""
+    body = data.get("body")
+    shape = body.get("shape") if isinstance(body, dict) else None
+    units = data.get("units")
+    return (UNITS[units] if isinstance(units, str) and units in UNITS else UNITLESS,
+            3 if isinstance(shape, str) and shape in BODY_SHAPES.options and shape not in PLANAR_BODIES else 2)
 
 
 def read_scene(data: dict, name: str, scene_class):

@@ -1,11 +1,18 @@
 """A file format declared once: from one tree of entries come reading (data -> objects, every error naming
 its dotted key), writing (objects -> data), editing by dotted keys and the key reference.
 
-    Key(type, default, doc, allowed)  a value: float (any number), int, str, bool; tuple (an array, read as
-                                      nested tuples) or list (an array, read as is). default: REQUIRED, a
-                                      value, or None (optional: absent reads as None, None is not written)
+    Key(type, default, doc, allowed,  a value: float (any number), int, str, bool; tuple (an array, read as
+        unit, scaled, si)             nested tuples) or list (an array, read as is). default: REQUIRED, a
+                                      value, or None (optional: absent reads as None, None is not written).
+                                      unit: its dimension (io/units.py); si: the SI default that a default
+                                      None stands for, which the Scene converts into its units (a key of
+                                      the geometry has its SI default as default, converted when read);
+                                      both through units.default_in (scaled=False: a scene with units
+                                      must give the key)
     Table(keys, make, parts)          a table: make(values by key) builds its object, parts(object) gives the
-                                      values back; read(write(x)) == x is the contract (a property test checks it)
+                                      values back; read(write(x)) == x is the contract (a property test checks it).
+                                      system(data): the units and dimension the defaults are converted into
+                                      while the table is read (the root's: the scene's)
     Tables(table)                     an array of tables ([[chambers]], regions = [{...}, ...]), read as a tuple
     Variant(options, choose)          a tag key (shape = "ellipse") choosing the Table (or the registered
                                       dataclass) of further keys its table has; choose(object) names the
@@ -26,9 +33,11 @@ The scene format's deepest key has 5 parts (chambers[0].keyframes[1][0]) and 5 l
 
 from __future__ import annotations
 
+import contextvars
 import dataclasses
 import functools
 import re
+import types
 import typing
 from dataclasses import dataclass
 from typing import Callable
@@ -38,6 +47,7 @@ import tomllib
 
 from ..errors import PneumaInputError, require
 from .tomltext import dumps
+from .units import UNITLESS, Units, default_in
 
 REQUIRED = object()
 KEY_PART = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)")
@@ -49,6 +59,7 @@ MAX_VALUE_CHARS = 100_000
 TOML_STRING_OR_COMMENT = re.compile(r'"""(?:[^\\]|\\.)*?"""|\'\'\'.*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*', re.DOTALL)
 TOML_KEY_RUN = re.compile(rf'(?<![\w"-])(?:(?:[\w-]++|"")[ \t]*+\.[ \t]*+){{{MAX_KEY_PARTS}}}')
 TYPE_NAMES = {float: "number", int: "integer", str: "string", bool: "boolean", tuple: "array", list: "array"}
+SYSTEM = contextvars.ContextVar("SYSTEM", default=(UNITLESS, 2))  # (units, dim) the defaults read are in
 
 
 @dataclass(frozen=True)
@@ -61,6 +72,8 @@ class KeyInfo:
     allowed: str = ""
     when: str = ""  # the tag choosing the key, e.g. chambers[].shape = "ellipse"
     doc: str = ""
+    unit: str = ""  # its dimension (io/units.py), "" none; the default is in SI
+    scaled: bool = True  # False: a numerical default, which a scene with units must give
 
 
 @dataclass(frozen=True)
@@ -69,12 +82,15 @@ class Key:
     default: object = REQUIRED
     doc: str = ""
     allowed: tuple = ()
+    unit: str = ""
+    scaled: bool = True
+    si: object = None  # the SI default that a default None stands for (units.si_default: the Scene converts it)
 
     def read(self, data: dict, name: str, path: str, known: set):
         full = join(path, name)
         if name not in data:
             require(self.default is not REQUIRED, f"missing key '{full}'")
-            return self.default
+            return self.converted(full)
         value = data[name]
         if self.type is float:
             require(isinstance(value, (int, float)) and not isinstance(value, bool), f"{full} = {value!r} must be a number")
@@ -86,13 +102,21 @@ class Key:
                 f"{full} = {value!r} is not one of {', '.join(map(str, self.allowed))}")
         return freeze(value) if self.type is tuple else value
 
+    def converted(self, full: str):
+        """The default in the units of the table being read (SYSTEM; units.default_in), for a key of the geometry
+        (which the Scene does not resolve)."""
+        if not self.unit or self.default is None:
+            return self.default
+        return default_in(self.default, self.unit, self.scaled, *SYSTEM.get(), full)
+
     def write(self, value, name: str, data: dict) -> None:
         if value is not None:
             data[name] = plain(value)
 
     def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
-        return [KeyInfo(join(path, name), TYPE_NAMES[self.type], default_text(self.default),
-                        ", ".join(map(str, self.allowed)), when, self.doc)]
+        shown = self.default if self.si is None else self.si
+        return [KeyInfo(join(path, name), TYPE_NAMES[self.type], default_text(shown),
+                        ", ".join(map(str, self.allowed)), when, self.doc, self.unit, self.scaled)]
 
 
 @dataclass(frozen=True)
@@ -108,6 +132,7 @@ class Table:
     # at a time). Editing a tag to another kind drops the old kind's keys (switched).
     kind: Callable | None = None
     tags: tuple = ()
+    system: Callable[[dict], tuple[Units, int]] | None = None
 
     def read(self, data: dict, name: str, path: str, known: set):
         return self.read_table(data.get(name, {} if self.optional else None), join(path, name))
@@ -115,6 +140,15 @@ class Table:
     def read_table(self, data, path: str):
         require(data is not None, f"missing key '{path}'")
         require(isinstance(data, dict), f"{path or 'scene'} must be a table, not {data!r}")
+        if self.system is None:
+            return self.read_values(data, path)
+        token = SYSTEM.set(self.system(data))
+        try:
+            return self.read_values(data, path)
+        finally:
+            SYSTEM.reset(token)
+
+    def read_values(self, data: dict, path: str):
         known = set()
         values = read_keys(self.keys, data, path, known)
         unknown = sorted(set(data) - known)
@@ -221,16 +255,21 @@ def record(cls, doc: str = "", **keys) -> Table:
 
 @functools.cache
 def dataclass_table(cls) -> Table:
-    """A table of every field of the dataclass cls, typed by its annotation (float, int, str, bool, tuple, list)."""
+    """A table of every field of the dataclass cls, typed by its annotation (float, int, str, bool, tuple, list;
+    X | None, a units.si_default field's, as X)."""
     hints = typing.get_type_hints(cls)
     keys = {}
     for f in dataclasses.fields(cls):
-        kind = typing.get_origin(hints[f.name]) or hints[f.name]
+        hint = hints[f.name]
+        if isinstance(hint, types.UnionType):
+            hint, = (arg for arg in typing.get_args(hint) if arg is not type(None))
+        kind = typing.get_origin(hint) or hint
         if kind not in TYPE_NAMES:
             raise TypeError(f"{cls.__name__}.{f.name}: {hints[f.name]} has no scene-file form")
         default = (f.default if f.default is not dataclasses.MISSING else
                    f.default_factory() if f.default_factory is not dataclasses.MISSING else REQUIRED)
-        keys[f.name] = Key(kind, default)
+        keys[f.name] = Key(kind, default, unit=f.metadata.get("unit", ""), scaled=f.metadata.get("scaled", True),
+                           si=f.metadata.get("si"))
     return record(cls, " ".join((cls.__doc__ or "").split("\n\n")[0].split()), **keys)
 
 

@@ -7,9 +7,18 @@ carry.
     (no units key)      unitless, as the reference scene: numbers are what the scene says they are
 
 Every other quantity follows from these two: an area is length^2, a force per unit depth (the 2D contact
-force) pressure x length, an energy per unit depth pressure x length^2. Material presets are stored in SI and
-converted into a scene's units (a modulus in Pa divided by the pressure unit in Pa). Angles are in degrees and
-times in seconds whatever the system.
+force) pressure x length, an energy per unit depth pressure x length^2, a mass pressure x length x s^2 (so
+that force = mass x acceleration: kg in mm-kPa, tonnes in mm-MPa). Angles are in degrees and times in seconds
+whatever the system.
+
+Defaults are stored in SI and converted into a scene's units: a key declares its dimension (io/schema.Key's
+unit; a chamber kind's or an effect's field through unit()), and a default of dimension L^a P^b in 2D (or
+3D) is divided by factor() = metre^a pascal^b when read (material presets likewise: a modulus in Pa divided
+by the pressure unit in Pa). A unitless scene takes every number as it is, as SI. Some defaults are numerical
+parameters calibrated for the unitless scenes (bodies of size about 1, moduli about 1e4): a penalty stiffness
+or a barrier's distance, whose SI value would be far off at a real actuator's scale (an area penalty of 1e5
+Pa/m^2 holds nothing on a chamber of a few mm^2); unit(dimension, scaled=False) declares one, and a scene
+with units must give it.
 
 Outputs of a scene with units say their unit: a column or array named `x` is written `x [unit]` (history CSV
 headers, VTU arrays and field data), printed values carry the unit, plots label their axes with it and the
@@ -18,11 +27,80 @@ summary JSON has a "units" entry. A unitless scene's outputs are named as they a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
+from dataclasses import dataclass, field
+
+from ..errors import require
 
 LENGTH, AREA, PRESSURE, FORCE, ANGLE, TIME = "length", "area", "pressure", "force", "angle", "time"
 VOLUME = "volume"  # a 3D chamber's measure
 MEASURES = {2: AREA, 3: VOLUME}  # what a chamber encloses, by dimension
+ACCELERATION, DENSITY = "acceleration", "density"
+PLANE_AREA = "plane area"  # an area in 2D and 3D alike (a triangle's), where AREA is a chamber's measure
+NODAL_STIFFNESS = "nodal penalty stiffness"  # energy per length^2 at a node: K of E = 1/2 K |u|^2 (per depth in 2D)
+MEASURE_STIFFNESS = "measure penalty stiffness"  # pressure per chamber measure: k of E = 1/2 k (A - A*)^2
+# (length, pressure, time) exponents of each dimension in 2D and in 3D (a chamber's measure is an area, a volume
+# per unit depth, in 2D; an energy is per unit depth in 2D); times are in seconds in every system
+EXPONENTS = {LENGTH: ((1, 0, 0),) * 2, AREA: ((2, 0, 0), (3, 0, 0)), VOLUME: ((3, 0, 0),) * 2,
+             PLANE_AREA: ((2, 0, 0),) * 2,
+             PRESSURE: ((0, 1, 0),) * 2, ANGLE: ((0, 0, 0),) * 2, TIME: ((0, 0, 1),) * 2,
+             ACCELERATION: ((1, 0, -2),) * 2, DENSITY: ((-2, 1, 2),) * 2,
+             NODAL_STIFFNESS: ((0, 1, 0), (1, 1, 0)), MEASURE_STIFFNESS: ((-2, 1, 0), (-3, 1, 0))}
+
+
+def unit(dimension: str, scaled: bool = True) -> dict:
+    """A dataclass field's metadata declaring its dimension (field(metadata=unit(DENSITY))): a value in the
+    scene's units (scaled=False: see si_default)."""
+    return {"unit": dimension, "scaled": scaled}
+
+
+def si_default(si, dimension: str, scaled: bool = True):
+    """A dataclass field of dimension `dimension` whose default, None, stands for `si` (in SI) converted into the
+    scene's units (default_in) when the Scene resolves it (resolved); scaled=False: a numerical default for
+    unitless scenes, which a scene with units must give."""
+    return field(default=None, metadata={**unit(dimension, scaled), "si": si})
+
+
+def default_in(si, dimension: str, scaled: bool, units: "Units", dim: int, key: str):
+    """The default `si` (a number or an array of numbers, in SI) of key `key` in `units` in a body of dimension
+    dim: si / units.factor(dimension, dim); a numerical default (scaled=False) is taken as it is in a unitless
+    scene and refused, naming the key, in a scene with units. Scene files and the Python API both come here."""
+    if units.name is None:
+        return si
+    require(scaled, f"missing key '{key}': a scene with units gives it (in {units.name}); its default {si!r} is a "
+                    f"numerical parameter for unitless scenes")
+    factor = units.factor(dimension, dim)
+    return tuple(v / factor for v in si) if isinstance(si, tuple) else si / factor
+
+
+def defaults(obj, units: "Units", dim: int, path: str) -> dict:
+    """The value in `units` (default_in) of every si_default field of obj (a dataclass) left None, by name; path:
+    the scene-file table of obj, naming a key a scene with units must give."""
+    if not dataclasses.is_dataclass(obj):
+        return {}
+    return {f.name: default_in(f.metadata["si"], f.metadata["unit"], f.metadata["scaled"], units, dim,
+                               f"{path}.{f.name}") for f in dataclasses.fields(obj)
+            if "si" in f.metadata and getattr(obj, f.name) is None}
+
+
+def resolved(obj, units: "Units", dim: int, path: str):
+    """obj with its defaults (defaults()) set; obj itself when it has none left None."""
+    given = defaults(obj, units, dim, path)
+    return dataclasses.replace(obj, **given) if given else obj
+
+
+def si_text(dimension: str) -> str:
+    """The SI unit of a dimension ("Pa", "m^2 (2D), m^3 (3D)", "deg" for angles): the key reference's unit."""
+    if dimension == ANGLE:
+        return "deg"
+
+    def text(exponents) -> str:
+        length, pressure, time = exponents
+        parts = [f"{symbol}^{e}" if e != 1 else symbol for symbol, e in (("Pa", pressure), ("m", length), ("s", time))
+                 if e]
+        return " ".join(parts) or "1"
+    plane, solid = (text(e) for e in EXPONENTS[dimension])
+    return plane if plane == solid else f"{plane} (2D), {solid} (3D)"
 
 
 @dataclass(frozen=True)
@@ -53,6 +131,12 @@ class Units:
         """" kPa" after a printed value; "" when there is no unit."""
         unit = self.symbol(dimension)
         return f" {unit}" if unit else ""
+
+    def factor(self, dimension: str, dim: int) -> float:
+        """The size in SI of this system's unit of `dimension` in a body of dimension dim (a value in SI divided
+        by it is the value in this system): metre^a pascal^b for L^a P^b."""
+        length, pressure, _ = EXPONENTS[dimension][dim - 2]
+        return self.metre ** length * self.pascal ** pressure
 
     def summary(self) -> dict | None:
         """The summary JSON's "units" entry: the system and each dimension's unit (None when unitless)."""

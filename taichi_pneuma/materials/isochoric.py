@@ -27,6 +27,21 @@ as nu -> 1/2 (K/mu0 -> inf) it tends to the incompressible material of the same 
 
 A single law (one compiled kernel set) holds all three forms, so a body whose regions are of different
 silicones is one elastic term.
+
+Stability (Drucker's condition, the check Abaqus makes of a hyperelastic fit): along uniaxial, equibiaxial and
+pure shear deformation of the incompressible material the nominal stress must grow with the stretch. Along
+such a path of stretch lam, with w(lam) = W(I1(lam), I2(lam)), the nominal stress is dw/dlam (uniaxial, pure
+shear; 2 x it equibiaxially), so the condition is
+
+    d2w/dlam2 = W1 I1'' + W11 I1'^2 + C01 I2'' > 0,
+    uniaxial     (lam, lam^-1/2, lam^-1/2):  I1 = lam^2 + 2/lam,       I2 = 2 lam + lam^-2,
+    equibiaxial  (lam, lam, lam^-2):         I1 = 2 lam^2 + lam^-4,    I2 = lam^4 + 2 lam^-2,
+    pure shear   (lam, 1, 1/lam):            I1 = I2 = lam^2 + 1 + lam^-2,
+
+checked at load for every principal stretch in [1/3, 3] (STRETCHES): the presets are fitted to uniaxial tension
+up to 200 % engineering strain (lam = 3, presets.py), and 1/3 is its reciprocal in compression. With every
+coefficient >= 0 (and C10 + C01 > 0) the law is stable at every stretch (I1'', I2'' > 0); a negative C01, C20
+or C30 may make it unstable, and such a law is refused naming the coefficient, the path and the stretch.
 """
 
 from __future__ import annotations
@@ -43,6 +58,31 @@ from .law import Law, register
 FORMS = {"neo_hookean": ("C10",), "mooney_rivlin": ("C10", "C01"), "yeoh": ("C10", "C20", "C30")}
 COEFFICIENTS = ("C10", "C01", "C20", "C30")
 DEFAULT_POISSON_RATIO = 0.49  # when a material gives neither K nor nu: nearly incompressible, as silicones are
+STRETCHES = (1 / 3, 3.0)  # the principal stretches a law must be stable for (module docstring)
+
+
+def path_invariants(lam: np.ndarray) -> dict:
+    """(I1 - 3, I1', I1'', I2'') along each stability path, at stretches lam of that path keeping every principal
+    stretch within STRETCHES (equibiaxially lam in [3^-1/2, 3^1/2]: its third stretch is lam^-2)."""
+    return {"uniaxial": (lam ** 2 + 2 / lam - 3, 2 * lam - 2 / lam ** 2, 2 + 4 / lam ** 3, 6 / lam ** 4),
+            "equibiaxial": (2 * lam ** 2 + lam ** -4 - 3, 4 * lam - 4 * lam ** -5, 4 + 20 * lam ** -6,
+                            12 * lam ** 2 + 12 * lam ** -4),
+            "pure shear": (lam ** 2 + lam ** -2 - 2, 2 * lam - 2 * lam ** -3, 2 + 6 * lam ** -4, 2 + 6 * lam ** -4)}
+
+
+def unstable_stretch(C10: float, C01: float, C20: float, C30: float) -> tuple[str, float] | None:
+    """The (path, stretch) nearest to the rest state (lam = 1) at which d2w/dlam2 <= 0 (module docstring), on the
+    first path that has one; None when the law is stable over STRETCHES."""
+    low, high = np.log(STRETCHES)
+    lam = np.exp(np.linspace(low, high, 4001))
+    bounds = {"equibiaxial": np.sqrt(STRETCHES)}
+    for path, (a, da, dda, ddb) in path_invariants(lam).items():
+        W1, W11 = C10 + 2 * C20 * a + 3 * C30 * a ** 2, 2 * C20 + 6 * C30 * a
+        inside = (lam >= bounds.get(path, STRETCHES)[0]) & (lam <= bounds.get(path, STRETCHES)[1])
+        falling = inside & (W1 * dda + W11 * da ** 2 + C01 * ddb <= 0)
+        if falling.any():
+            return path, float(lam[falling][np.argmin(np.abs(np.log(lam[falling])))])
+    return None
 
 
 def bulk_modulus(shear_modulus, poisson_ratio):
@@ -121,6 +161,7 @@ class IsochoricMaterial:
                     f"{name} = {value!r}: law {self.law!r} takes only {', '.join(FORMS[self.law])}")
         require(self.shear_modulus > 0, f"C10 = {self.C10!r}, C01 = {self.C01!r}: the initial shear modulus "
                                         f"2 (C10 + C01) = {self.shear_modulus:g} must be > 0")
+        self.require_stable()
         require(self.bulk_modulus is None or self.poisson_ratio is None,
                 f"K = {self.bulk_modulus!r} and nu = {self.poisson_ratio!r}: give one of them, not both")
         if self.bulk_modulus is not None:
@@ -128,6 +169,21 @@ class IsochoricMaterial:
         if self.poisson_ratio is not None:
             nu = require_finite("nu", self.poisson_ratio)
             require(-1 < nu < 0.5, f"nu = {self.poisson_ratio!r} must lie in (-1, 0.5)")
+
+    def require_stable(self) -> None:
+        """Refuse a law that is not stable over STRETCHES (module docstring), naming its negative coefficients,
+        the path and the stretch at which its nominal stress stops growing."""
+        found = unstable_stretch(self.C10, self.C01, self.C20, self.C30)
+        if found is None:
+            return
+        path, lam = found
+        given = ", ".join(f"{c} = {getattr(self, c)!r}" for c in FORMS[self.law])
+        negative = [c for c in COEFFICIENTS if getattr(self, c) < 0]
+        mode = path if path == "pure shear" else f"{path} {'tension' if lam > 1 else 'compression'}"
+        require(False, f"law = {self.law!r} with {given} is not stable (Drucker): in {mode} at stretch {lam:.3g} "
+                       f"its nominal stress stops growing with the stretch, because of "
+                       f"{' and '.join(f'{c} = {getattr(self, c)!r}' for c in negative)} < 0; a law must be stable "
+                       f"for principal stretches 1/{1 / STRETCHES[0]:g} to {STRETCHES[1]:g} (the presets' fitted range)")
 
     @property
     def shear_modulus(self) -> float:

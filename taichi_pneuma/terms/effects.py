@@ -11,12 +11,13 @@ density x it).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import require, require_finite
 from ..fem.geometry import PointSet
+from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, TIME, si_default, unit
 from ..limits import wall_pairs
 from .contact import GroundContact
 from .contact import SelfContact as SelfContactTerm
@@ -50,16 +51,17 @@ class Effect:
         return 0
 
 
-def _positive(name: str, value: float) -> None:
-    require(require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
+def _positive(name: str, value: float | None) -> None:
+    """Refuse a value that is not > 0 (None: a default the Scene resolves, units.si_default)."""
+    require(value is None or require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
 
 
 @dataclass(frozen=True)
 class Gravity(Effect):
     """Body weight: density rho (mass per unit area in 2D, per unit volume in 3D) under acceleration g along -y."""
 
-    density: float
-    g: float = 9.81
+    density: float = field(metadata=unit(DENSITY))
+    g: float | None = si_default(9.81, ACCELERATION)
     name = "gravity"
 
     def __post_init__(self):
@@ -75,9 +77,9 @@ class Ground(Effect):
     """Ground contact: a log barrier (threshold dhat, stiffness kappa) keeps the body's outer boundary above the line
     (in 3D the plane) y = height."""
 
-    height: float
-    dhat: float = 0.01
-    stiffness: float = 1e3
+    height: float = field(metadata=unit(LENGTH))
+    dhat: float | None = si_default(0.01, LENGTH, scaled=False)
+    stiffness: float | None = si_default(1e3, NODAL_STIFFNESS, scaled=False)
     name = "ground"
     contact = True
     support = True
@@ -110,8 +112,8 @@ class Ground(Effect):
 class SelfContact(Effect):
     """Self-contact of chamber walls: point-edge log barriers (threshold dhat, stiffness kappa) on every wall."""
 
-    dhat: float = 0.005
-    stiffness: float = 1e4
+    dhat: float | None = si_default(0.005, LENGTH, scaled=False)
+    stiffness: float | None = si_default(1e4, NODAL_STIFFNESS, scaled=False)
     name = "self_contact"
     contact = True
 
@@ -135,8 +137,8 @@ class Dynamics(Effect):
     """Motion instead of quasistatics: inertia of the lumped masses (density rho), backward Euler with
     time step dt, one time step per schedule increment."""
 
-    density: float
-    dt: float
+    density: float = field(metadata=unit(DENSITY))
+    dt: float = field(metadata=unit(TIME))
     name = "dynamics"
 
     def __post_init__(self):

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import require, require_finite
+from ...io.units import MEASURE_STIFFNESS, si_default
 from .kind import ChamberKind, register
 from .wall import Chamber
 
@@ -27,15 +28,15 @@ MAX_AREA_RATIO = 1e3  # far past any rubber (the hard cases reach 8); keeps (A -
 class AreaControl(ChamberKind):
     """Area control with penalty stiffness k > 0; commands are area ratios A* / A_rest in (0, MAX_AREA_RATIO]."""
 
-    stiffness: float = 1e5
+    stiffness: float | None = si_default(1e5, MEASURE_STIFFNESS, scaled=False)  # None: 1e5 in unitless scenes
     name = "area"
     aliases = ("volume",)
     quantity = "area ratio"
     rest = 1.0
 
     def __post_init__(self):
-        require_finite("stiffness", self.stiffness)
-        require(self.stiffness > 0, f"chamber stiffness k = {self.stiffness!r} must be > 0")
+        require(self.stiffness is None or require_finite("stiffness", self.stiffness) > 0,
+                f"chamber stiffness k = {self.stiffness!r} must be > 0")
 
     def check(self, what: str, values: list[float]) -> None:
         for value in values:

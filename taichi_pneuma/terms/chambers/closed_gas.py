@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import require, require_finite
+from ...io.units import PRESSURE, si_default
 from .kind import ChamberKind, register
 from .wall import Chamber
 
@@ -29,10 +30,11 @@ from .wall import Chamber
 @register
 @dataclass(frozen=True)
 class ClosedGas(ChamberKind):
-    """A sealed chamber of air at ambient pressure `atmosphere` (in the scene's pressure unit: 101325 in Pa,
-    101.325 in kPa), compressed with polytropic exponent gamma: 1 isothermal, 1.4 adiabatic air."""
+    """A sealed chamber of air at ambient pressure `atmosphere` (in the scene's pressure unit; its default None
+    is 101325 Pa, which the Scene converts into it: 101.325 in kPa), compressed with polytropic exponent gamma:
+    1 isothermal, 1.4 adiabatic air."""
 
-    atmosphere: float = 101325.0
+    atmosphere: float | None = si_default(101325.0, PRESSURE)
     gamma: float = 1.0
     name = "closed_gas"
     quantity = "air pumped in"
@@ -40,7 +42,8 @@ class ClosedGas(ChamberKind):
     dimension = "area"  # the chamber measure's unit: a volume per unit depth in 2D, a volume in 3D (units.in_dimension)
 
     def __post_init__(self):
-        require(require_finite("atmosphere", self.atmosphere) > 0, f"atmosphere = {self.atmosphere!r} must be > 0")
+        require(self.atmosphere is None or require_finite("atmosphere", self.atmosphere) > 0,
+                f"atmosphere = {self.atmosphere!r} must be > 0")
         require(1 <= require_finite("gamma", self.gamma) <= 5 / 3,
                 f"gamma = {self.gamma!r} must lie in [1, 5/3] (1: isothermal, 1.4: adiabatic air)")
 

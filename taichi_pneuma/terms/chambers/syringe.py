@@ -18,9 +18,10 @@ past the peak the equilibrium is stable while it exceeds the structure's falling
 small dead volume passes the peak like volume control and a large one snaps like pressure control.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from ...errors import require, require_finite
+from ...io.units import AREA, unit
 from .closed_gas import ClosedGas, ClosedGasChamber
 from .kind import register
 
@@ -31,8 +32,8 @@ class Syringe(ClosedGas):
     """A syringe of initial air volume syringe_volume (> 0) pushing through a tube of dead_volume (>= 0) into
     the chamber; atmosphere and gamma as for closed_gas. Volumes in the scene's units (areas in 2D)."""
 
-    syringe_volume: float
-    dead_volume: float = 0.0
+    syringe_volume: float = field(metadata=unit(AREA))
+    dead_volume: float = field(default=0.0, metadata=unit(AREA))
     name = "syringe"
     quantity = "displaced volume"
 
