@@ -39,8 +39,8 @@ def simulate(scene: Scene | BuiltScene, *, tol: float = NewtonOptions.tol,
     tol: Newton tolerance on |gradient| / force scale; max_iterations per solve; max_cuts: halvings of an
     increment that does not converge. progress: True shows a progress bar (tqdm) while it solves; a
     function progress(step_record, positions, contact_force) is called after every increment instead.
-    stop() is asked after every increment but the last, ending the run with tp.RampInterrupted when it
-    returns True. Raises tp.RampFailed when an increment finds no equilibrium; both carry .result, the
+    stop() is asked after every increment but the last and before every Newton iteration, ending the run
+    with tp.RampInterrupted (the increments done) when it returns True. Raises tp.RampFailed when an increment finds no equilibrium; both carry .result, the
     Result of the steps done. Initialises Taichi on the CPU unless tp.init chose a backend."""
     runtime.ensure_initialised()
     built = scene if isinstance(scene, BuiltScene) else scene.build()
