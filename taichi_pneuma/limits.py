@@ -37,6 +37,8 @@ sets none) nothing is capped.
 
 from __future__ import annotations
 
+import os
+import resource
 from contextlib import contextmanager
 from contextvars import ContextVar
 
@@ -47,6 +49,8 @@ MAX_INCREMENTS = 2_000
 MAX_FRAME_PIXELS = 3840 * 2160
 BYTES_PER_TRIANGLE = 4_000
 BYTES_PER_PAIR = 2_500
+READ_BYTES = 256_000_000  # memory a mesh file's reader may take, beyond READ_BYTES_PER_FILE_BYTE per byte of the file
+READ_BYTES_PER_FILE_BYTE = 8
 MAX_RUNS = 100_000  # runs of one design study (apps/sweep.py --max-runs)
 BYTES_PER_TETRAHEDRON = 12_000  # measured, see the module docstring
 
@@ -156,3 +160,41 @@ def check_frame(width: int, height: int, max_pixels: int = MAX_FRAME_PIXELS) -> 
     require(width * height <= max_pixels,
             f"--size {width}x{height} is {width * height} pixels per frame; the limit is {max_pixels} "
             f"(--max-frame-pixels raises it)")
+
+
+def address_space() -> int | None:
+    """This process's virtual memory size in bytes (Linux: /proc/self/statm), None where it cannot be read."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+@contextmanager
+def memory_bound(extra: int):
+    """Allocations of more than `extra` bytes beyond the process's current virtual size fail (MemoryError) in the
+    block: the address-space limit (RLIMIT_AS) is lowered to that for the block, then restored. Where the size
+    cannot be read (not Linux) nothing is bounded. Only for code that runs alone (a file reader before the solve):
+    every thread of the process is bounded meanwhile."""
+    size = address_space()
+    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    if size is None:
+        yield
+        return
+    bound = size + extra
+    for limit in (soft, hard):
+        if limit != resource.RLIM_INFINITY:
+            bound = min(bound, limit)
+    resource.setrlimit(resource.RLIMIT_AS, (bound, hard))
+    try:
+        yield
+    finally:
+        resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
+
+
+def read_allowance(file_bytes: int) -> int:
+    """The memory a reader of a file of file_bytes bytes may take: READ_BYTES + READ_BYTES_PER_FILE_BYTE per byte
+    (meshio holds the text, its parsed numbers and the arrays at once; a compressed array or a sparse
+    numbering can claim far more: a 234 KB VTU 2.4 GB, a gmsh file with one node numbered 400000000 1.6 GB)."""
+    return READ_BYTES + READ_BYTES_PER_FILE_BYTE * file_bytes

@@ -8,8 +8,10 @@ the body's cells and each chamber's wall given by named groups (gmsh's physical 
                                rollers; mesh() reads the file and builds the TetMesh (tetmesh.tet_mesh), whose
                                region tags are the tetrahedra's gmsh physical tags where the file has them
 
-A file is read whole, so it may be at most MAX_MESH_BYTES; whatever meshio cannot read, and a file
-without tetrahedra or without a named group, is one PneumaInputError naming the file. write_mesh() writes a
+A file is read whole, so it may be at most MAX_MESH_BYTES, and under a memory bound (limits.read_allowance: a
+small file whose arrays are compressed, or whose nodes are numbered sparsely, could claim gigabytes); whatever
+meshio cannot read, a file that needs more memory, and a file without tetrahedra or without a named group, is
+one PneumaInputError naming the file. write_mesh() writes a
 TetMesh (made in Python, e.g. by tetmesh.tet_mesh from a mesher's arrays) as such a file.
 """
 
@@ -23,6 +25,7 @@ from pathlib import Path
 import meshio
 import numpy as np
 
+from .. import limits
 from ..errors import PneumaInputError, require, require_distinct
 from .geometry import PointSet
 from .tetmesh import TetMesh, check_order, tet_mesh
@@ -65,10 +68,17 @@ def read_mesh(path: str) -> meshio.Mesh:
 
 @functools.lru_cache(maxsize=1)
 def read_file(path: str, size: int, modified: int) -> meshio.Mesh:
-    """meshio.read of a file of that size and modification time."""
+    """meshio.read of a file of that size and modification time, bounded to limits.read_allowance(size) bytes of
+    memory."""
     require(size <= MAX_MESH_BYTES, f"mesh file {path!r} has {size} bytes; at most {MAX_MESH_BYTES} are read")
+    allowance = limits.read_allowance(size)
     try:
-        return meshio.read(path)
+        with limits.memory_bound(allowance):
+            return meshio.read(path)
+    except MemoryError:
+        raise PneumaInputError(f"mesh file {path!r} ({size} bytes) needs more than {allowance} bytes of memory to "
+                               f"read, the most a file of its size may take (compressed arrays that expand, or "
+                               f"node numbers far larger than the node count)") from None
     except Exception as exc:  # meshio raises many kinds (ReadError, KeyError, ValueError, ...) on a bad file
         raise PneumaInputError(f"mesh file {path!r} cannot be read by meshio ({type(exc).__name__}: {exc})") from None
 
