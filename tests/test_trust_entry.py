@@ -85,3 +85,59 @@ def test_a_signal_while_an_increment_cuts_back_ends_the_run_within_a_second(tmp_
     assert errors == ["error: interrupted during step 1 of 3 (SIGTERM)"]
     summary = json.loads((out / f"{STEM}_summary.json").read_text())
     assert summary["interrupted"] is True and summary["steps"] == 1
+
+
+# --- 2. memory from small files ---------------------------------------------------------------------------
+
+def lzma_vtu(path: Path, blocks: int = 40, block: int = 64 * 2**20) -> Path:
+    """A VTU of one tetrahedron whose points array is LZMA-compressed: blocks of `block` zero bytes each, one
+    compressed block repeated (about 0.5 MB of file for 2.7 GB of points)."""
+    import base64
+    import lzma
+    import struct
+
+    one = lzma.compress(bytes(block), preset=0)
+    header = struct.pack(f"<{3 + blocks}I", blocks, block, block, *([len(one)] * blocks))
+    points = base64.b64encode(header).decode() + base64.b64encode(one * blocks).decode()
+    path.write_text(f"""<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian" header_type="UInt32"
+ compressor="vtkLZMADataCompressor"><UnstructuredGrid><Piece NumberOfPoints="4" NumberOfCells="1">
+<Points><DataArray type="Float64" NumberOfComponents="3" format="binary">{points}</DataArray></Points>
+<Cells><DataArray type="Int64" Name="connectivity" format="ascii">0 1 2 3</DataArray>
+<DataArray type="Int64" Name="offsets" format="ascii">4</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">10</DataArray></Cells>
+</Piece></UnstructuredGrid></VTKFile>
+""")
+    return path
+
+
+def sparse_gmsh(path: Path, tag: int) -> Path:
+    """A gmsh 2.2 file of one tetrahedron whose fourth node is numbered `tag`."""
+    path.write_text(f"""$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n2 2 "chamber"\n3 1 "body"
+$EndPhysicalNames\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n{tag} 0 0 1\n$EndNodes\n$Elements\n2\n1 2 2 2 2 1 2 3
+2 4 2 1 1 1 2 3 {tag}\n$EndElements\n""")
+    return path
+
+
+def scene_of_mesh(directory: Path, mesh: Path) -> Path:
+    scene = directory / "scene.toml"
+    scene.write_text(f'name = "small_file"\n[body]\nshape = "mesh"\nfile = "{mesh.name}"\n[clamp]\nside = "left"\n'
+                     '[[chambers]]\nname = "main"\nshape = "mesh_surface"\ngroup = "chamber"\ncontrol = "volume"\n'
+                     'keyframes = [[0, 1.0], [2, 1.5]]\n[schedule]\nincrements = 2\n')
+    return scene
+
+
+@pytest.mark.parametrize("make", [lzma_vtu, lambda p: sparse_gmsh(p, 400_000_000)], ids=["lzma-vtu", "node-4e8"])
+def test_a_small_mesh_file_that_claims_gigabytes_is_refused_at_low_memory(tmp_path, make):
+    """Before: 5.3 GB resident for the VTU (meshio decompressed every block, then failed), 1.65 GB for the gmsh
+    file (meshio's node-number map is sized by the largest number)."""
+    mesh = make(tmp_path / "mesh.vtu") if make is lzma_vtu else make(tmp_path / "mesh.msh")
+    assert mesh.stat().st_size < 600_000
+    proc = subprocess.Popen([sys.executable, "-m", "taichi_pneuma.apps.inflate", "--scene",
+                             str(scene_of_mesh(tmp_path, mesh)), "--no-video", "--out", str(tmp_path / "out")],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=ENV)
+    stderr = proc.stderr.read()
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    one_error_line(subprocess.CompletedProcess([], proc.returncode, "", stderr), str(mesh), "bytes of memory")
+    assert usage.ru_maxrss * 1024 < 800e6  # the reader's bound is 256 MB above the process's size
