@@ -112,9 +112,13 @@ def check_scene(scene, max_triangles: int = MAX_TRIANGLES, max_increments: int =
         check_solid(scene, max_triangles)
     else:
         check_planar(scene, max_triangles)
-    require(scene.increments <= max_increments,
-            f"the schedule has {scene.increments} increments; the limit is {max_increments} "
-            f"(--max-increments raises it)")
+    check_increments(scene.increments, max_increments)
+
+
+def check_increments(increments: int, limit: int = MAX_INCREMENTS, raised_by: str = "--max-increments") -> None:
+    """Refuse a schedule of more than `limit` increments (raised_by: what raises the limit, named in the message)."""
+    require(increments <= limit, f"the schedule has {increments} increments; the limit is {limit} ({raised_by} "
+                                 f"raises it)")
 
 
 def check_solid(scene, max_elements: int) -> None:
@@ -155,11 +159,13 @@ def check_planar(scene, max_triangles: int) -> None:
             f"the limit is {max_triangles} triangles (--max-triangles raises it)")
 
 
-def check_frame(width: int, height: int, max_pixels: int = MAX_FRAME_PIXELS) -> None:
-    """Refuse a video frame size of more than max_pixels pixels."""
+def check_frame(width: int, height: int, max_pixels: int = MAX_FRAME_PIXELS, what: str = "--size",
+                raised_by: str = "--max-frame-pixels") -> None:
+    """Refuse a video frame size of more than max_pixels pixels (what: the size's name in the message; raised_by:
+    what raises the limit)."""
     require(width * height <= max_pixels,
-            f"--size {width}x{height} is {width * height} pixels per frame; the limit is {max_pixels} "
-            f"(--max-frame-pixels raises it)")
+            f"{what} {width}x{height} is {width * height} pixels per frame; the limit is {max_pixels} "
+            f"({raised_by} raises it)")
 
 
 def address_space() -> int | None:
