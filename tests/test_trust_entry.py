@@ -111,14 +111,6 @@ def lzma_vtu(path: Path, blocks: int = 40, block: int = 64 * 2**20) -> Path:
     return path
 
 
-def sparse_gmsh(path: Path, tag: int) -> Path:
-    """A gmsh 2.2 file of one tetrahedron whose fourth node is numbered `tag`."""
-    path.write_text(f"""$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n2 2 "chamber"\n3 1 "body"
-$EndPhysicalNames\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n{tag} 0 0 1\n$EndNodes\n$Elements\n2\n1 2 2 2 2 1 2 3
-2 4 2 1 1 1 2 3 {tag}\n$EndElements\n""")
-    return path
-
-
 def scene_of_mesh(directory: Path, mesh: Path) -> Path:
     scene = directory / "scene.toml"
     scene.write_text(f'name = "small_file"\n[body]\nshape = "mesh"\nfile = "{mesh.name}"\n[clamp]\nside = "left"\n'
@@ -127,11 +119,9 @@ def scene_of_mesh(directory: Path, mesh: Path) -> Path:
     return scene
 
 
-@pytest.mark.parametrize("make", [lzma_vtu, lambda p: sparse_gmsh(p, 400_000_000)], ids=["lzma-vtu", "node-4e8"])
-def test_a_small_mesh_file_that_claims_gigabytes_is_refused_at_low_memory(tmp_path, make):
-    """Before: 5.3 GB resident for the VTU (meshio decompressed every block, then failed), 1.65 GB for the gmsh
-    file (meshio's node-number map is sized by the largest number)."""
-    mesh = make(tmp_path / "mesh.vtu") if make is lzma_vtu else make(tmp_path / "mesh.msh")
+def test_a_small_mesh_file_that_claims_gigabytes_is_refused_at_low_memory(tmp_path):
+    """Before: 5.3 GB resident (meshio decompressed every block, then failed on the array's size)."""
+    mesh = lzma_vtu(tmp_path / "mesh.vtu")
     assert mesh.stat().st_size < 600_000
     proc = subprocess.Popen([sys.executable, "-m", "taichi_pneuma.apps.inflate", "--scene",
                              str(scene_of_mesh(tmp_path, mesh)), "--no-video", "--out", str(tmp_path / "out")],
@@ -141,3 +131,98 @@ def test_a_small_mesh_file_that_claims_gigabytes_is_refused_at_low_memory(tmp_pa
     proc.returncode = os.waitstatus_to_exitcode(status)
     one_error_line(subprocess.CompletedProcess([], proc.returncode, "", stderr), str(mesh), "bytes of memory")
     assert usage.ru_maxrss * 1024 < 800e6  # the reader's bound is 256 MB above the process's size
+
+
+# --- 3. one line for every bad input, at every entry point ----------------------------------------------
+
+@pytest.mark.parametrize("command, needles", [
+    (["inflate", "--scene", "{tmp}"], ["is not a regular file"]),
+    (["inflate", "--scene", "x" * 5000], ["(5000 characters) cannot be read (File name too long)"]),
+    (["reach", "--targets", "{tmp}"], ["targets file", "is not a regular file"]),
+], ids=["scene-folder", "scene-5000-characters", "targets-folder"])
+def test_a_path_that_is_a_folder_or_too_long_is_one_error_line(tmp_path, command, needles):
+    """Before: IsADirectoryError and OSError (File name too long) tracebacks, exit 1."""
+    done = app(*[part.replace("{tmp}", str(tmp_path)) for part in command], "--out", str(tmp_path / "out"))
+    line = one_error_line(done, *needles)
+    assert len(line) < 400
+
+
+@pytest.mark.parametrize("variable", ["PNEUMA_BACKEND", "PNEUMA_TRIANGLE"])
+@pytest.mark.parametrize("name, args", [
+    ("inflate", CHEAP + ["--no-video"]), ("steer", CHEAP + ["--no-video"]), ("reach", ["--tip", "3", "0"]),
+    ("sweep", ["--vary", "cy=0,0.1", "--workers", "1", *CHEAP]), ("bench", ["--sections", "startup"]),
+])
+def test_an_environment_variable_naming_no_backend_is_one_error_line_at_every_command(tmp_path, variable, name, args):
+    """Before: an ImportError traceback (exit 1), and the sweep recorded the error in every row and exited 0."""
+    done = app(name, *args, "--out", str(tmp_path / "out"), env={**ENV, variable: "garbage"})
+    one_error_line(done, f"{variable}='garbage' is not one of")
+    assert not (tmp_path / "out").exists() or not list((tmp_path / "out").glob("*.csv"))
+
+
+def test_an_arch_whose_driver_crashes_the_process_is_one_error_line(tmp_path):
+    """--arch opengl here has no driver: Taichi segfaults while starting it (before: exit -11, no line). Where
+    a driver exists it starts, and the arch is refused for its 32-bit floats, or (CUDA) runs."""
+    done = app("inflate", "--arch", "opengl", *CHEAP, "--no-video", "--out", str(tmp_path / "out"))
+    if done.returncode == 0:
+        pytest.skip("this machine runs --arch opengl")
+    one_error_line(done, "arch = 'opengl'", "use cpu, or cuda")
+
+
+# --- 4. the Python API ------------------------------------------------------------------------------------
+
+def test_the_api_refuses_what_the_commands_refuse(tmp_path):
+    """Before: 10**400 increments ran without end, a 100000x100000 video tried to allocate 149 GiB, and
+    load_scene(a folder) raised IsADirectoryError."""
+    import taichi_pneuma as tp
+
+    scene = tp.reference_scene(max_area=0.05, steps=3)
+    with pytest.raises(tp.PneumaInputError, match="increments; the limit is 2000 .simulate's max_increments"):
+        tp.simulate(scene.with_value("schedule.increments", 10**400))
+    with pytest.raises(tp.PneumaInputError, match=r"size 100000x100000 is 10000000000 pixels per frame"):
+        tp.simulate(scene).video(tmp_path / "big.mp4", size="100000x100000")
+    assert not list(tmp_path.iterdir())
+    with pytest.raises(tp.PneumaInputError, match="is not a regular file"):
+        tp.load_scene(tmp_path)
+
+
+SPARSE_READ = """
+import resource, sys
+import numpy as np
+from taichi_pneuma.fem.meshfile import read_mesh
+dense, sparse = read_mesh(sys.argv[1]), read_mesh(sys.argv[2])
+assert np.array_equal(sparse.points, dense.points)
+assert all(np.array_equal(a.data, b.data) and a.type == b.type for a, b in zip(sparse.cells, dense.cells))
+assert sparse.field_data.keys() == dense.field_data.keys()
+print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
+"""
+
+
+def moved_up(text: str, by: int) -> str:
+    """A gmsh 2.2 ASCII file's text with every node number (in $Nodes and in the elements) increased by `by`."""
+    head, rest = text.split("$Nodes\n", 1)
+    nodes, rest = rest.split("\n$EndNodes\n", 1)
+    between, rest = rest.split("$Elements\n", 1)
+    elements, tail = rest.split("\n$EndElements", 1)
+    count, *lines = nodes.split("\n")
+    lines = [f"{int(number) + by} {xyz}" for number, xyz in (line.split(None, 1) for line in lines)]
+    cells, *rows = elements.split("\n")
+    rows = [" ".join(f[:3 + int(f[2])] + [str(int(n) + by) for n in f[3 + int(f[2]):]]) for f in map(str.split, rows)]
+    return "\n".join([head + "$Nodes", count, *lines, "$EndNodes", between + "$Elements", cells, *rows]) \
+        + "\n$EndElements" + tail
+
+
+def test_a_gmsh_file_numbering_its_nodes_from_4e9_reads_as_the_dense_one_at_low_memory(tmp_path):
+    """Every node number of a gmsh 2.2 file (the reference beam in 3D, written by write_mesh) moved up by 4e9.
+    Before: meshio maps node numbers through an array as long as the largest (one node numbered 4e8 took
+    1.66 GB; past 2**31 it overflows)."""
+    from solid_meshes import extruded_beam
+
+    from taichi_pneuma.fem.meshfile import write_mesh
+
+    dense = write_mesh(tmp_path / "dense.msh", extruded_beam(0.05)[0], ("main",))
+    sparse = tmp_path / "sparse.msh"
+    sparse.write_text(moved_up(dense.read_text(), 4_000_000_000))
+    done = subprocess.run([sys.executable, "-c", SPARSE_READ, str(dense), str(sparse)], capture_output=True,
+                          text=True, env=ENV, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    assert int(done.stdout.split()[-1]) < 600e6
