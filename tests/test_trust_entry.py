@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from solid_meshes import extruded_beam, lzma_vtu, moved_up
 
 ENV = {**os.environ, "PYTHONUNBUFFERED": "1"}
 STEM = "inflate_cy+0.15"
@@ -88,28 +89,6 @@ def test_a_signal_while_an_increment_cuts_back_ends_the_run_within_a_second(tmp_
 
 
 # --- 2. memory from small files ---------------------------------------------------------------------------
-
-def lzma_vtu(path: Path, blocks: int = 40, block: int = 64 * 2**20) -> Path:
-    """A VTU of one tetrahedron whose points array is LZMA-compressed: blocks of `block` zero bytes each, one
-    compressed block repeated (about 0.5 MB of file for 2.7 GB of points)."""
-    import base64
-    import lzma
-    import struct
-
-    one = lzma.compress(bytes(block), preset=0)
-    header = struct.pack(f"<{3 + blocks}I", blocks, block, block, *([len(one)] * blocks))
-    points = base64.b64encode(header).decode() + base64.b64encode(one * blocks).decode()
-    path.write_text(f"""<?xml version="1.0"?>
-<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian" header_type="UInt32"
- compressor="vtkLZMADataCompressor"><UnstructuredGrid><Piece NumberOfPoints="4" NumberOfCells="1">
-<Points><DataArray type="Float64" NumberOfComponents="3" format="binary">{points}</DataArray></Points>
-<Cells><DataArray type="Int64" Name="connectivity" format="ascii">0 1 2 3</DataArray>
-<DataArray type="Int64" Name="offsets" format="ascii">4</DataArray>
-<DataArray type="UInt8" Name="types" format="ascii">10</DataArray></Cells>
-</Piece></UnstructuredGrid></VTKFile>
-""")
-    return path
-
 
 def scene_of_mesh(directory: Path, mesh: Path) -> Path:
     scene = directory / "scene.toml"
@@ -197,26 +176,10 @@ print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024)
 """
 
 
-def moved_up(text: str, by: int) -> str:
-    """A gmsh 2.2 ASCII file's text with every node number (in $Nodes and in the elements) increased by `by`."""
-    head, rest = text.split("$Nodes\n", 1)
-    nodes, rest = rest.split("\n$EndNodes\n", 1)
-    between, rest = rest.split("$Elements\n", 1)
-    elements, tail = rest.split("\n$EndElements", 1)
-    count, *lines = nodes.split("\n")
-    lines = [f"{int(number) + by} {xyz}" for number, xyz in (line.split(None, 1) for line in lines)]
-    cells, *rows = elements.split("\n")
-    rows = [" ".join(f[:3 + int(f[2])] + [str(int(n) + by) for n in f[3 + int(f[2]):]]) for f in map(str.split, rows)]
-    return "\n".join([head + "$Nodes", count, *lines, "$EndNodes", between + "$Elements", cells, *rows]) \
-        + "\n$EndElements" + tail
-
-
 def test_a_gmsh_file_numbering_its_nodes_from_4e9_reads_as_the_dense_one_at_low_memory(tmp_path):
     """Every node number of a gmsh 2.2 file (the reference beam in 3D, written by write_mesh) moved up by 4e9.
     Before: meshio maps node numbers through an array as long as the largest (one node numbered 4e8 took
     1.66 GB; past 2**31 it overflows)."""
-    from solid_meshes import extruded_beam
-
     from taichi_pneuma.fem.meshfile import write_mesh
 
     dense = write_mesh(tmp_path / "dense.msh", extruded_beam(0.05)[0], ("main",))
