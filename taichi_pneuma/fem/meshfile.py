@@ -27,7 +27,7 @@ import meshio
 import numpy as np
 
 from .. import limits
-from ..errors import PneumaInputError, require, require_distinct
+from ..errors import PneumaInputError, quoted, require, require_distinct
 from .geometry import PointSet
 from .tetmesh import TetMesh, check_order, tet_mesh
 
@@ -63,7 +63,9 @@ class MeshSurface:
 def read_mesh(path: str) -> meshio.Mesh:
     """meshio's reading of the file, every failure one PneumaInputError naming it (the last file read is kept:
     the resource check and the build read it once)."""
-    require(os.path.isfile(path), f"mesh file {path!r} does not exist")
+    require(os.path.isfile(path), f"mesh file {quoted(path)} " +
+            ("is not a regular file (a folder, a FIFO or a device cannot be read as one)" if os.path.exists(path)
+             else "does not exist"))
     stat = os.stat(path)
     return read_file(path, stat.st_size, stat.st_mtime_ns)
 
