@@ -33,6 +33,10 @@ that reached the cap, or has more triangles than the budget, is refused (check_m
 what they allocate against it too (check_pairs, before self-contact allocates its pairs). A 3D mesher
 meets the same budget through element_cap(weight) and check_mesh. Without a budget (library use that
 sets none) nothing is capped.
+
+A mesh file is read under a memory bound (memory_bound, read_allowance: READ_BYTES plus
+READ_BYTES_PER_FILE_BYTE per byte of the file; on Linux, by the address-space limit): a small file whose arrays
+are compressed, or whose node numbers are sparse, cannot claim gigabytes before any check sees it.
 """
 
 from __future__ import annotations
