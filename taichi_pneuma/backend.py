@@ -19,8 +19,10 @@ from __future__ import annotations
 import importlib
 import os
 
+from .runtime import BACKENDS
+
 CHOICE_VARIABLE = "PNEUMA_BACKEND"
-INSTALL = {"taichi": 'pip install "taichi>=1.7,<1.8"', "quadrants": 'pip install "quadrants>=1.3.3,<1.5"'}
+INSTALL = dict(zip(BACKENDS, ('pip install "taichi>=1.7,<1.8"', 'pip install "quadrants>=1.3.3,<1.5"')))
 # the environment variables the package sets, by backend: kernel cache folder, banner printed at import
 ENVIRONMENT = {
     "taichi": {"cache": "TI_OFFLINE_CACHE_FILE_PATH", "banner": "ENABLE_TAICHI_HEADER_PRINT"},

@@ -7,6 +7,17 @@ class PneumaInputError(ValueError):
     """A user-supplied value is not allowed; the message names the value and what is allowed."""
 
 
+MAX_QUOTED = 200  # characters of a user's value quoted in a message
+
+
+def quoted(value) -> str:
+    """repr(str(value)) for a message, a value of more than MAX_QUOTED characters cut to its first ones and its length."""
+    text = str(value)
+    if len(text) <= MAX_QUOTED:
+        return repr(text)
+    return f"{text[:MAX_QUOTED]!r}... ({len(text)} characters)"
+
+
 def require(condition: bool, message: str) -> None:
     """Raise PneumaInputError(message) unless condition holds."""
     if not condition:

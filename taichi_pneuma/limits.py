@@ -33,10 +33,16 @@ that reached the cap, or has more triangles than the budget, is refused (check_m
 what they allocate against it too (check_pairs, before self-contact allocates its pairs). A 3D mesher
 meets the same budget through element_cap(weight) and check_mesh. Without a budget (library use that
 sets none) nothing is capped.
+
+A mesh file is read under a memory bound (memory_bound, read_allowance: READ_BYTES plus
+READ_BYTES_PER_FILE_BYTE per byte of the file; on Linux, by the address-space limit): a small file whose arrays
+are compressed, or whose node numbers are sparse, cannot claim gigabytes before any check sees it.
 """
 
 from __future__ import annotations
 
+import os
+import resource
 from contextlib import contextmanager
 from contextvars import ContextVar
 
@@ -47,6 +53,8 @@ MAX_INCREMENTS = 2_000
 MAX_FRAME_PIXELS = 3840 * 2160
 BYTES_PER_TRIANGLE = 4_000
 BYTES_PER_PAIR = 2_500
+READ_BYTES = 256_000_000  # memory a mesh file's reader may take, beyond READ_BYTES_PER_FILE_BYTE per byte of the file
+READ_BYTES_PER_FILE_BYTE = 16  # meshio's gmsh 2.2 reader peaks at 7.2 bytes per file byte (a 10.9 MB file: 78 MB)
 MAX_RUNS = 100_000  # runs of one design study (apps/sweep.py --max-runs)
 BYTES_PER_TETRAHEDRON = 12_000  # measured, see the module docstring
 
@@ -108,9 +116,13 @@ def check_scene(scene, max_triangles: int = MAX_TRIANGLES, max_increments: int =
         check_solid(scene, max_triangles)
     else:
         check_planar(scene, max_triangles)
-    require(scene.increments <= max_increments,
-            f"the schedule has {scene.increments} increments; the limit is {max_increments} "
-            f"(--max-increments raises it)")
+    check_increments(scene.increments, max_increments)
+
+
+def check_increments(increments: int, limit: int = MAX_INCREMENTS, raised_by: str = "--max-increments") -> None:
+    """Refuse a schedule of more than `limit` increments (raised_by: what raises the limit, named in the message)."""
+    require(increments <= limit, f"the schedule has {increments} increments; the limit is {limit} ({raised_by} "
+                                 f"raises it)")
 
 
 def check_solid(scene, max_elements: int) -> None:
@@ -151,8 +163,48 @@ def check_planar(scene, max_triangles: int) -> None:
             f"the limit is {max_triangles} triangles (--max-triangles raises it)")
 
 
-def check_frame(width: int, height: int, max_pixels: int = MAX_FRAME_PIXELS) -> None:
-    """Refuse a video frame size of more than max_pixels pixels."""
+def check_frame(width: int, height: int, max_pixels: int = MAX_FRAME_PIXELS, what: str = "--size",
+                raised_by: str = "--max-frame-pixels") -> None:
+    """Refuse a video frame size of more than max_pixels pixels (what: the size's name in the message; raised_by:
+    what raises the limit)."""
     require(width * height <= max_pixels,
-            f"--size {width}x{height} is {width * height} pixels per frame; the limit is {max_pixels} "
-            f"(--max-frame-pixels raises it)")
+            f"{what} {width}x{height} is {width * height} pixels per frame; the limit is {max_pixels} "
+            f"({raised_by} raises it)")
+
+
+def address_space() -> int | None:
+    """This process's virtual memory size in bytes (Linux: /proc/self/statm), None where it cannot be read."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+@contextmanager
+def memory_bound(extra: int):
+    """Allocations of more than `extra` bytes beyond the process's current virtual size fail (MemoryError) in the
+    block: the address-space limit (RLIMIT_AS) is lowered to that for the block, then restored. Where the size
+    cannot be read (not Linux) nothing is bounded. Only for code that runs alone (a file reader before the solve):
+    every thread of the process is bounded meanwhile."""
+    size = address_space()
+    soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    if size is None:
+        yield
+        return
+    bound = size + extra
+    for limit in (soft, hard):
+        if limit != resource.RLIM_INFINITY:
+            bound = min(bound, limit)
+    resource.setrlimit(resource.RLIMIT_AS, (bound, hard))
+    try:
+        yield
+    finally:
+        resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
+
+
+def read_allowance(file_bytes: int) -> int:
+    """The memory a reader of a file of file_bytes bytes may take: READ_BYTES + READ_BYTES_PER_FILE_BYTE per byte
+    (meshio holds the text, its parsed numbers and the arrays at once; a compressed array or a sparse
+    numbering can claim far more: a 234 KB VTU 2.4 GB, a gmsh file with one node numbered 400000000 1.6 GB)."""
+    return READ_BYTES + READ_BYTES_PER_FILE_BYTE * file_bytes

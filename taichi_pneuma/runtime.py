@@ -2,14 +2,72 @@
 offline kernel cache.
 
 The backend is imported by init(), so that importing this module (the apps' --help does) stays cheap.
+An arch other than the CPU is started first in a child process (probe): a driver that crashes the process
+that starts it (Taichi's Vulkan or OpenGL backend without a driver segfaults) ends the child, and the
+command says so in one line. check_environment() refuses the package's environment variables set to a
+name they cannot take.
 """
 
 from __future__ import annotations
 
-from .errors import PneumaInputError
+import importlib.util
+import os
+import signal
+import subprocess
+import sys
+
+from .errors import PneumaInputError, quoted, require
 
 ARCHES = ("cpu", "cuda", "vulkan", "metal", "opengl", "gpu")  # arch names; backend.ARCHES: those the backend has
+BACKENDS = ("taichi", "quadrants")  # what PNEUMA_BACKEND may name (backend.py)
+TRIANGLE_BINDINGS = ("triangle", "meshpy")  # what PNEUMA_TRIANGLE may name (fem/triangulation.py)
+CHOICES = {"PNEUMA_BACKEND": BACKENDS, "PNEUMA_TRIANGLE": TRIANGLE_BINDINGS}
+PROBE_SECONDS = 300
 _current: str | None = None
+
+
+def check_environment() -> None:
+    """Refuse (PneumaInputError) a variable of CHOICES set to a name not among its choices, or to a module not
+    installed here; the commands ask this first, before any run or worker starts."""
+    for variable, names in CHOICES.items():
+        value = os.environ.get(variable, "")
+        if value:
+            require(value in names, f"environment variable {variable}={quoted(value)} is not one of "
+                                    f"{', '.join(names)} (or unset)")
+            require(importlib.util.find_spec(value) is not None,
+                    f"environment variable {variable}={value}, but {value} is not installed here")
+
+
+def probe(arch: str) -> None:
+    """Start Taichi on `arch` in a child process (start()): PneumaInputError with the child's error line, or
+    naming the signal that ended it (a driver that crashed), unless it started."""
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [package, os.environ.get("PYTHONPATH")]))}
+    code = f"import sys; from taichi_pneuma import runtime; sys.exit(runtime.start_alone({arch!r}))"
+    try:
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                              timeout=PROBE_SECONDS, check=False)
+    except subprocess.TimeoutExpired:
+        raise PneumaInputError(f"arch = {arch!r}: Taichi did not start it within {PROBE_SECONDS} s here") from None
+    if done.returncode == 0:
+        return
+    errors = [line for line in done.stderr.splitlines() if line.startswith("error: ")]
+    if errors:
+        raise PneumaInputError(errors[-1].removeprefix("error: "))
+    how = (f"signal {signal.Signals(-done.returncode).name}" if done.returncode < 0 and
+           -done.returncode in signal.valid_signals() else f"exit code {done.returncode}")
+    raise PneumaInputError(f"arch = {arch!r}: starting it here crashed a test process ({how}; no working driver for "
+                           f"it?); use cpu, or cuda (an NVIDIA GPU)")
+
+
+def start_alone(arch: str) -> int:
+    """The probe's child: start(arch); 0, or its error line and 2."""
+    try:
+        start(arch)
+    except PneumaInputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    return 0
 
 
 def init(arch: str = "cpu", cpu_threads: int | None = None) -> None:
@@ -19,11 +77,18 @@ def init(arch: str = "cpu", cpu_threads: int | None = None) -> None:
     processes use 1 each, so that N workers keep N cores busy. An arch the backend lacks or cannot start,
     or one whose kernels have no 64-bit floats (what "gpu" gives without CUDA: Vulkan, Metal, OpenGL), is a
     PneumaInputError."""
-    global _current
     if arch not in ARCHES:
         raise PneumaInputError(f"arch = {arch!r} is not one of {', '.join(ARCHES)}")
     if _current == arch:
         return
+    if arch != "cpu":
+        probe(arch)
+    start(arch, cpu_threads)
+
+
+def start(arch: str, cpu_threads: int | None = None) -> None:
+    """ti.init on `arch` (init's checks after its probe)."""
+    global _current
     from .backend import ARCHES as AVAILABLE
     from .backend import ti
 

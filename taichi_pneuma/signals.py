@@ -3,9 +3,12 @@
     interrupting()   for a command's whole run: each raises Interrupted (a KeyboardInterrupt naming the
                      signal), which the command turns into one `error: interrupted (<signal>)` line and the
                      exit code 128 + signal number (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP)
-    stopping()       during a ramp: the first asks it to stop after the current increment (an Event is set,
-                     its .signum the signal); a second interrupts at once
-    holding()        while a batch of result files is written: they wait for it, then take their course
+    stopping()       during a ramp: the first asks it to stop (an Event is set, its .signum the signal; the ramp
+                     asks it between Newton iterations and ends after the increments done); a second
+                     interrupts at once. One that came too late for the ramp to see it (its last increment
+                     was solved) is raised again as the block ends, to the handlers in place before it
+    holding()        from the last solve to the last result file written: they wait for it (the handlers
+                     only record them), then take their course
     ignored()        while a pool starts its workers: SIGINT and SIGHUP ignored, which the workers inherit
     quiet_while_loading()  called first by the package: when the program is one of its commands, a signal
                      before the command has set its own handlers (while the modules load) ends it with one
@@ -65,6 +68,9 @@ def handling(handler):
             signal.signal(s, signal.SIG_DFL if h is None else h)
 
 
+_held: list[int] | None = None  # the signals holding() holds, while it is active
+
+
 def interrupt(signum: int) -> None:
     raise Interrupted(signum)
 
@@ -77,20 +83,29 @@ def interrupting():
 @contextmanager
 def stopping():
     """Yield a threading.Event that the first signal of NAMES sets (recording it as .signum) instead of
-    raising; a second one raises Interrupted at once. Outside the main thread the event never sets."""
+    raising; a second one raises Interrupted at once. A signal the block's caller did not act on (the event
+    set when the block ends without an exception: it came after the ramp's last check) is raised again after
+    the block, to the handlers in place before it (holding()'s, where the files are being written). Outside
+    the main thread the event never sets. A signal an enclosing holding() holds from before the block sets
+    the event at once (a run of several ramps held for its files stops at the next ramp's start)."""
     requested = threading.Event()
     requested.signum = None
+    if _held:  # held by an enclosing holding() before this ramp began (between two ramps): it stops at once
+        requested.signum = _held.pop(0)
+        requested.set()
 
     def first(signum: int) -> None:
         if requested.is_set():
             raise Interrupted(signum)
         requested.signum = signum
         requested.set()
-        print(f"interrupt ({NAMES[signum]}): stopping after the current increment (again to stop at once)",
+        print(f"interrupt ({NAMES[signum]}): stopping, keeping the increments done (again to stop at once)",
               file=sys.stderr)
 
     with handling(first):
         yield requested
+    if requested.is_set():
+        signal.raise_signal(requested.signum)
 
 
 @contextmanager
@@ -110,14 +125,12 @@ def ignored():
             signal.signal(s, signal.SIG_DFL if h is None else h)
 
 
-_held: list[int] | None = None
-
-
 @contextmanager
 def holding():
-    """Signals of NAMES that arrive during the block (a batch of result files being written) wait for its
-    end; then each is raised again, to the handlers in place before the block. Nested blocks hold until
-    the outermost ends."""
+    """Signals of NAMES that arrive during the block (a finished run whose result files are being written) wait
+    for its end; then each is raised again, to the handlers in place before the block. The handler only
+    records the signal: nothing is raised inside the block, wherever (Python, Taichi or other native code) the
+    signal finds the program. Nested blocks hold until the outermost ends."""
     global _held
     if _held is not None or not in_main_thread():
         yield

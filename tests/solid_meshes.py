@@ -8,9 +8,15 @@ hands over a ready mesh.
                     coordinate planes (rollers), nothing clamped
     box_with_cavity the 3.5 x 0.8 x 0.8 box of a structured grid with a box-shaped closed cavity (its grid cells
                     left out), clamped at its left face; box_with_cavities: several named cavities
+    lzma_vtu        a small VTU whose compressed points array expands to gigabytes
+    moved_up        a gmsh 2.2 file's text with its node numbers moved up (numbered sparsely, from a large one)
 """
 
+import base64
+import lzma
+import struct
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -101,3 +107,37 @@ def box_with_cavities(cavities: dict, layers: int, order: int = 1) -> TetMesh:
     middle = vertices[boundary].mean(axis=1)
     walls = {name: boundary[inside(middle, box, 1e-9)] for name, box in cavities.items()}
     return tet_mesh(vertices, tets, walls, order=order, clamp=PointSet("left"))
+
+
+# hostile mesh files (issue 28): small files that would claim gigabytes
+
+def lzma_vtu(path: Path, blocks: int = 40, block: int = 64 * 2**20) -> Path:
+    """A VTU of one tetrahedron whose points array is LZMA-compressed: blocks of `block` zero bytes each, one
+    compressed block repeated (about 0.5 MB of file for 2.7 GB of points)."""
+    one = lzma.compress(bytes(block), preset=0)
+    header = struct.pack(f"<{3 + blocks}I", blocks, block, block, *([len(one)] * blocks))
+    points = base64.b64encode(header).decode() + base64.b64encode(one * blocks).decode()
+    path.write_text(f"""<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="0.1" byte_order="LittleEndian" header_type="UInt32"
+ compressor="vtkLZMADataCompressor"><UnstructuredGrid><Piece NumberOfPoints="4" NumberOfCells="1">
+<Points><DataArray type="Float64" NumberOfComponents="3" format="binary">{points}</DataArray></Points>
+<Cells><DataArray type="Int64" Name="connectivity" format="ascii">0 1 2 3</DataArray>
+<DataArray type="Int64" Name="offsets" format="ascii">4</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">10</DataArray></Cells>
+</Piece></UnstructuredGrid></VTKFile>
+""")
+    return path
+
+
+def moved_up(text: str, by: int) -> str:
+    """A gmsh 2.2 ASCII file's text with every node number (in $Nodes and in the elements) increased by `by`."""
+    head, rest = text.split("$Nodes\n", 1)
+    nodes, rest = rest.split("\n$EndNodes\n", 1)
+    between, rest = rest.split("$Elements\n", 1)
+    elements, tail = rest.split("\n$EndElements", 1)
+    count, *lines = nodes.split("\n")
+    lines = [f"{int(number) + by} {xyz}" for number, xyz in (line.split(None, 1) for line in lines)]
+    cells, *rows = elements.split("\n")
+    rows = [" ".join(f[:3 + int(f[2])] + [str(int(n) + by) for n in f[3 + int(f[2]):]]) for f in map(str.split, rows)]
+    return "\n".join([head + "$Nodes", count, *lines, "$EndNodes", between + "$Elements", cells, *rows]) \
+        + "\n$EndElements" + tail

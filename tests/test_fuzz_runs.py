@@ -1,9 +1,10 @@
 """Fuzzing what surrounds a run (issue 21): the state the output directory is in (Hypothesis: each result
 name absent, a file, a folder, a link to a file or folder outside, a dangling link or a FIFO), signals
-at random times, and runs of the same scene at once. Whatever the state, a run ends with its files
+at random times, runs of the same scene at once, and any value of the package's environment variables. Whatever the state, a run ends with its files
 whole or one `error:` line, never follows a link out of --out, never blocks and never prints a
 traceback; a signal ends it with 128 + signal and the steps done kept consistently."""
 
+import importlib.util
 import json
 import os
 import random
@@ -24,6 +25,7 @@ from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 
 from taichi_pneuma.apps.inflate import main
+from taichi_pneuma.runtime import CHOICES
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 CHEAP = (SCENES / "reference_beam.toml").read_text().replace("max_area = 0.0012", "max_area = 0.02") \
@@ -91,6 +93,35 @@ def test_any_state_of_the_output_directory_gives_whole_files_or_one_error_line(p
             assert len(listed) == summary["steps"] and all((out / f).is_file() for f in listed)
         else:
             assert code == 2 and len(lines) == 1 and lines[0].startswith("error: "), lines
+
+
+@settings(max_examples=30, deadline=timedelta(seconds=60), derandomize=True, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(sorted(CHOICES)), st.one_of(
+    st.sampled_from(["", "taichi", "quadrants", "triangle", "meshpy", "TAICHI", " taichi", "x" * 5000, "../taichi"]),
+    st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="\x00"), max_size=30)))
+def test_any_value_of_the_environment_variables_runs_or_is_one_error_line(variable, value):
+    """PNEUMA_BACKEND and PNEUMA_TRIANGLE set to anything: a run (the name allowed and installed) or one error line
+    naming the variable, before any work (issue 28: the sweep recorded the error per row and exited 0)."""
+    note(f"{variable}={value!r}")
+    previous = os.environ.get(variable)
+    os.environ[variable] = value
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            scene = Path(tmp) / "scene.toml"
+            scene.write_text(CHEAP)
+            err = StringIO()
+            with redirect_stderr(err), redirect_stdout(StringIO()):
+                code = main(["--scene", str(scene), "--out", str(Path(tmp) / "out"), "--no-video", "--quiet"])
+    finally:
+        os.environ.pop(variable) if previous is None else os.environ.__setitem__(variable, previous)
+    lines = [line for line in err.getvalue().splitlines() if line.strip()]
+    usable = value == "" or (value in CHOICES[variable] and importlib.util.find_spec(value) is not None)
+    if usable:
+        assert code == 0 and lines == [], lines
+    else:
+        assert code == 2 and len(lines) == 1 and lines[0].startswith(f"error: environment variable {variable}="), lines
+        assert len(lines[0]) < 400
 
 
 def run_and_signal(out: Path, signum: int, delay: float) -> tuple[int, str]:

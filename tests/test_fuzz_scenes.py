@@ -1,6 +1,6 @@
 """Fuzzing the scene files (Hypothesis): the shipped scenes, mutated (wrong types, missing and extra
 keys, NaN and inf, huge, zero and negative numbers, overlapping chambers, odd names, thin arms on the
-body, deep keys and nesting, cut-off files), either run or stop with one `error:` line, within
+body, deep keys and nesting, cut-off files, hostile mesh files), either run or stop with one `error:` line, within
 TIME_BOUND, with no traceback and no file outside --out.
 
 Each example runs in this process (apps.inflate.main), so its cost is capped: every shipped scene is
@@ -28,7 +28,7 @@ import pytest
 import tomllib
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
-from solid_meshes import box_with_cavity
+from solid_meshes import box_with_cavity, lzma_vtu, moved_up
 
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.fem.meshfile import write_mesh
@@ -73,6 +73,10 @@ def cheap(scene: dict) -> dict:
 
 MESHES = tempfile.TemporaryDirectory()  # removed when the test process ends
 SMALL_MESH = write_mesh(Path(MESHES.name) / "box.msh", box_with_cavity(), ("chamber",))
+SPARSE_MESH = Path(MESHES.name) / "sparse.msh"  # the same box, its nodes numbered from 4e9
+SPARSE_MESH.write_text(moved_up(SMALL_MESH.read_text(), 4_000_000_000))
+# a mesh body's file: a folder, a name too long, sparse node numbers, a 0.1 MB file claiming 0.5 GB (issue 28)
+MESH_FILES = [MESHES.name, "x" * 5000, str(SPARSE_MESH), str(lzma_vtu(Path(MESHES.name) / "bomb.vtu", blocks=8))]
 # balloon_syringe driven otherwise: one of the three is enough; beam_3d_ellipsoid is beam_3d's body from shapes
 # (pneunet_3d fuzzes the 3D shapes and gmsh)
 SAME_BODY = {"balloon_volume", "balloon_pressure", "beam_3d_ellipsoid"}
@@ -107,8 +111,14 @@ def paths(node, prefix=()):
 
 def mutate(scene: dict, draw) -> str:
     """Apply one mutation to scene (in place), choosing with draw(strategy); return what it did."""
-    kind = draw(st.sampled_from(["value", "value", "scale", "delete", "extra", "name", "overlap", "length", "thin"]))
+    kind = draw(st.sampled_from(["value", "value", "scale", "delete", "extra", "name", "overlap", "length", "thin",
+                                 "mesh file"]))
     chambers = scene.get("chambers")
+    if kind == "mesh file":
+        if not isinstance(scene.get("body"), dict) or scene["body"].get("shape") != "mesh":
+            return "mesh file (no mesh body)"
+        scene["body"]["file"] = draw(st.sampled_from(MESH_FILES))
+        return f"mesh file {scene['body']['file'][:100]!r}"
     if kind == "thin":
         return thin_arm(scene, draw(st.sampled_from(ARM_WIDTHS)), draw(st.sampled_from(ARM_LENGTHS)))
     if kind == "name":

@@ -495,6 +495,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
     try:
         with signals.interrupting():
+            runtime.check_environment()
             return run(args)
     except PneumaInputError as exc:
         print(f"error: {exc}", file=sys.stderr)

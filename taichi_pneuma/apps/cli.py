@@ -260,7 +260,7 @@ def apply_set(scene, assignments: list[str]):
 
 
 def exit_code(app_run, args: argparse.Namespace) -> int:
-    """Run an app; bad input is one line and exit 2, a ramp (or a reach's start) with no equilibrium one line
+    """Run an app; bad input (the environment's PNEUMA_* variables checked first) is one line and exit 2, a ramp (or a reach's start) with no equilibrium one line
     and exit 1, Ctrl-C, SIGTERM or SIGHUP one line and exit 128 + the signal (130, 143, 129, as shells
     report it): all three raise signals.Interrupted during the run, or stop a ramp after its increment.
     Meshes and terms are made in the budget of --max-triangles (limits.budget).
@@ -269,6 +269,11 @@ def exit_code(app_run, args: argparse.Namespace) -> int:
     harmlessly in a check that then refuses it, and a solve that produces NaN or inf fails its own checks."""
     import numpy as np
 
+    try:
+        runtime.check_environment()  # first: the modules imported next load the backend PNEUMA_BACKEND names
+    except PneumaInputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     from ..solve.simulate import NoEquilibrium, RampFailed, RampInterrupted
 
     try:

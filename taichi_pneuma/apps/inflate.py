@@ -15,8 +15,9 @@ for the commanded area (a 3D scene: a slider per chamber, and the camera turned 
 A 3D scene's video shows the body in 3D, opened by a section to show its chambers (docs/3d.md).
 
 Before any work, a run past the resource limits (estimated triangles, increments, frame pixels; see
-limits.py) is refused in one line naming the flag that raises the limit. Ctrl-C during the ramp
-stops it after the current increment, saves the steps done (summary marked interrupted) and exits 130.
+limits.py) is refused in one line naming the flag that raises the limit. Ctrl-C (or SIGTERM, SIGHUP) during
+the ramp stops it within a Newton iteration, saves the increments done (summary marked interrupted) and exits
+130 (143, 129); one after the last increment is solved waits until every result file is written, then exits so.
 """
 
 from __future__ import annotations
@@ -92,18 +93,24 @@ def run(args: argparse.Namespace) -> dict:
 
 def run_scene(args: argparse.Namespace, scene, stem: str, size: tuple[int, int], out) -> dict:
     from ..io.vtk import VtkSeries
-    from ..solve.simulate import RampInterrupted, RampStopped
 
     built = build(scene)
     vtk = VtkSeries(out, stem, built)
+    with holding():  # from the last solve to the last file, a signal waits for the files (the ramp's own: stopping)
+        return solve_and_save(args, built, stem, size, out, vtk)
+
+
+def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, int], out, vtk) -> dict:
+    from ..solve.simulate import RampInterrupted, RampStopped
+
+    scene = built.scene
     try:
         result = solve(args, built, vtk=vtk)
     except RampStopped as stopped:
         if stopped.result.steps:  # none when the rest state itself has no equilibrium
-            with holding():  # a second signal waits for these files
-                written = stopped.result.save_history(out, stem) + [vtk.pvd]
-                if isinstance(stopped, RampInterrupted):
-                    written.append(save_json(out / f"{stem}_summary.json", stopped.result.summary(interrupted=True)))
+            written = stopped.result.save_history(out, stem) + [vtk.pvd]
+            if isinstance(stopped, RampInterrupted):
+                written.append(save_json(out / f"{stem}_summary.json", stopped.result.summary(interrupted=True)))
             print(f"saved the {len(stopped.result.steps)} steps done in " + ", ".join(str(p) for p in written))
         raise
     final, summary = result.steps[-1], result.summary()

@@ -168,11 +168,9 @@ def run(args: argparse.Namespace) -> dict:
 
 def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: list[Target], bounds, options,
                   size: tuple[int, int], out) -> dict:
-    import numpy as np
     from tqdm import tqdm
 
-    from ..control.inverse import Reacher, frames
-    from ..solve.result import ELEMENTS
+    from ..control.inverse import Reacher
 
     (lo, hi), built = bounds, build(scene)
     start = time.perf_counter()
@@ -195,12 +193,23 @@ def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: li
 
     with bar:
         results = reacher.follow(targets, progress)
+    with holding():  # from the last reach to the last file, a signal waits for the files
+        return save_reaches(args, reacher, results, stem, size, out)
+
+
+def save_reaches(args: argparse.Namespace, reacher, results: list, stem: str, size: tuple[int, int], out) -> dict:
+    import numpy as np
+
+    from ..control.inverse import frames
+    from ..solve.result import ELEMENTS
+
+    built, (lo, hi) = reacher.built, (reacher.lo, reacher.hi)
     last = results[-1]
     trajectory = frames(reacher, results)  # every accepted equilibrium, as one run
     solves = [r.forward_solves for r in results]
     seconds = [r.seconds for r in results]
     summary = {
-        "scene": scene.name, "vertices": built.mesh.n_vertices, ELEMENTS[built.mesh.dim]: built.mesh.n_elements,
+        "scene": built.scene.name, "vertices": built.mesh.n_vertices, ELEMENTS[built.mesh.dim]: built.mesh.n_elements,
         "body_length": reacher.length, "bounds": {n: [a, b] for n, a, b in zip(reacher.names, lo, hi)},
         **reach_record(reacher, last),
         "targets_reached": sum(r.reached for r in results), "targets": len(results),
@@ -219,8 +228,7 @@ def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: li
         summary.update(renderer=done.renderer, video_frames=done.frames, video_size=[done.width, done.height])
         print(render_report(done, float(np.mean([s.seconds for s in trajectory.steps]))))
         written += [done.video, done.png]
-    with holding():  # a signal meanwhile waits for the files
-        written += trajectory.save_history(out, stem) + [save_json(out / f"{stem}_summary.json", summary)]
+    written += trajectory.save_history(out, stem) + [save_json(out / f"{stem}_summary.json", summary)]
     print("wrote " + ", ".join(str(p) for p in written))
     unreached = [(k, r) for k, r in enumerate(results, start=1) if not r.reached]
     if not unreached:

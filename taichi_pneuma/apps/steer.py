@@ -16,6 +16,7 @@ import sys
 
 from .. import runtime
 from ..io.output import lock_stems, prepare_directory, save_json
+from ..signals import holding
 from .cli import (
     add_ramp_arguments,
     add_video_arguments,
@@ -48,7 +49,9 @@ def run(args: argparse.Namespace) -> dict:
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     stems = [f"steer_cy{cy:+.2f}" for cy, _ in PLACEMENTS]
-    with lock_stems(out, "steer", *stems):  # no other run writes these files meanwhile
+    # no other run writes these files meanwhile; a signal between two ramps stops the next at its start, one after
+    # the last increment waits for the files (signals.holding, signals.stopping)
+    with lock_stems(out, "steer", *stems), holding():
         return run_placements(args, scenes, stems, size, out)
 
 

@@ -8,8 +8,10 @@ the body's cells and each chamber's wall given by named groups (gmsh's physical 
                                rollers; mesh() reads the file and builds the TetMesh (tetmesh.tet_mesh), whose
                                region tags are the tetrahedra's gmsh physical tags where the file has them
 
-A file is read whole, so it may be at most MAX_MESH_BYTES; whatever meshio cannot read, and a file
-without tetrahedra or without a named group, is one PneumaInputError naming the file. write_mesh() writes a
+A file is read whole, so it may be at most MAX_MESH_BYTES, and under a memory bound (limits.read_allowance: a
+small file whose arrays are compressed, or whose nodes are numbered sparsely, could claim gigabytes); whatever
+meshio cannot read, a file that needs more memory, and a file without tetrahedra or without a named group, is
+one PneumaInputError naming the file. write_mesh() writes a
 TetMesh (made in Python, e.g. by tetmesh.tet_mesh from a mesher's arrays) as such a file.
 """
 
@@ -17,17 +19,20 @@ from __future__ import annotations
 
 import functools
 import os
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import meshio
 import numpy as np
 
-from ..errors import PneumaInputError, require, require_distinct
+from .. import limits
+from ..errors import PneumaInputError, quoted, require, require_distinct
 from .geometry import PointSet
 from .tetmesh import TetMesh, check_order, tet_mesh
 
 MAX_MESH_BYTES = 500_000_000
+SPARSE_NODES = 4  # a gmsh 2.2 file whose largest node number passes this many times its node count is renumbered
 TETRAHEDRA = ("tetra", "tetra10")
 TRIANGLES = ("triangle", "triangle6")
 
@@ -58,19 +63,74 @@ class MeshSurface:
 def read_mesh(path: str) -> meshio.Mesh:
     """meshio's reading of the file, every failure one PneumaInputError naming it (the last file read is kept:
     the resource check and the build read it once)."""
-    require(os.path.isfile(path), f"mesh file {path!r} does not exist")
+    require(os.path.isfile(path), f"mesh file {quoted(path)} " +
+            ("is not a regular file (a folder, a FIFO or a device cannot be read as one)" if os.path.exists(path)
+             else "does not exist"))
     stat = os.stat(path)
     return read_file(path, stat.st_size, stat.st_mtime_ns)
 
 
 @functools.lru_cache(maxsize=1)
 def read_file(path: str, size: int, modified: int) -> meshio.Mesh:
-    """meshio.read of a file of that size and modification time."""
+    """meshio.read of a file of that size and modification time, bounded to limits.read_allowance(size) bytes of
+    memory."""
     require(size <= MAX_MESH_BYTES, f"mesh file {path!r} has {size} bytes; at most {MAX_MESH_BYTES} are read")
+    allowance = limits.read_allowance(size)
     try:
-        return meshio.read(path)
+        with limits.memory_bound(allowance):
+            dense = dense_gmsh22(path)
+            if dense is None:
+                return meshio.read(path)
+            with tempfile.NamedTemporaryFile(suffix=".msh") as copy:  # meshio's gmsh reader needs a file
+                copy.write(dense)
+                copy.flush()
+                return meshio.read(copy.name)
+    except PneumaInputError:
+        raise
+    except MemoryError:
+        raise PneumaInputError(f"mesh file {path!r} ({size} bytes) needs more than {allowance} bytes of memory to "
+                               f"read, the most a file of its size may take (compressed arrays that expand, or "
+                               f"node numbers far larger than the node count)") from None
     except Exception as exc:  # meshio raises many kinds (ReadError, KeyError, ValueError, ...) on a bad file
         raise PneumaInputError(f"mesh file {path!r} cannot be read by meshio ({type(exc).__name__}: {exc})") from None
+
+
+def dense_gmsh22(path: str) -> bytes | None:
+    """The text of a gmsh 2.2 ASCII file whose largest node number passes SPARSE_NODES times its node count, its
+    nodes numbered 1..n in their order (the elements' node numbers mapped by a binary search of the sorted
+    numbers, no array sized by the largest); None for every other file. meshio's reader maps node numbers
+    through an array as long as the largest (one node numbered 4e8 took 1.6 GB)."""
+    with open(path, "rb") as f:
+        lines = f.read(64).split(b"\n")
+        if len(lines) < 2 or lines[0].strip() != b"$MeshFormat" or not lines[1].strip().startswith(b"2.2 0"):
+            return None
+        data = f.seek(0) or f.read()
+    start, end = data.find(b"$Nodes\n"), data.find(b"\n$EndNodes")
+    head, _, body = data[start + 7:end].partition(b"\n")
+    nodes = body.split(b"\n")
+    if start < 0 or end < start or not head.strip().isdigit() or len(nodes) != int(head):
+        return None  # meshio's reader says what is wrong
+    numbers = np.array([int(line.split(None, 1)[0]) for line in nodes])
+    if numbers.max(initial=0) <= SPARSE_NODES * len(numbers):
+        return None
+    order = np.argsort(numbers)
+    new = {}  # a cell's node number -> its new number
+
+    def renumber(number: bytes) -> bytes:
+        k = np.searchsorted(numbers[order], int(number))
+        require(k < len(order) and numbers[order[k]] == int(number), f"mesh file {path!r}: an element names node "
+                                                                     f"{int(number)}, which $Nodes does not list")
+        return b"%d" % (order[k] + 1)
+    renumbered = [b"%d %s" % (i + 1, line.split(None, 1)[1]) for i, line in enumerate(nodes)]
+    first, last = data.find(b"$Elements\n", end), data.find(b"\n$EndElements", end)
+    count, _, elements = data[first + 10:last].partition(b"\n")
+    cells = []
+    for line in elements.split(b"\n"):
+        fields = line.split()
+        tagged = 3 + int(fields[2])
+        cells.append(b" ".join(fields[:tagged] + [new.setdefault(n, renumber(n)) for n in fields[tagged:]]))
+    return b"\n".join([data[:start + 7] + head, *renumbered, data[end + 1:first + 10] + count, *cells,
+                       data[last + 1:]])
 
 
 def groups(mesh: meshio.Mesh) -> dict[str, list]:

@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import PneumaInputError, require
+from ..errors import PneumaInputError, quoted, require
 
 MAX_NAME = 100
 STEM = re.compile(r"[A-Za-z0-9_+-][A-Za-z0-9_.+-]*")
@@ -259,10 +259,12 @@ def read_input(path: str | os.PathLike, max_bytes: int, what: str, follow_links:
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | (getattr(os, "O_CLOEXEC", 0) if follow_links else NOFOLLOW))
     except OSError as exc:
-        raise PneumaInputError(f"{what} {str(path)!r} cannot be read ({exc.strerror})") from None
+        raise PneumaInputError(f"{what} {quoted(path)} cannot be read ({exc.strerror})") from None
+    if not stat.S_ISREG(os.fstat(fd).st_mode):  # checked before open(fd), which refuses a folder with its own error
+        os.close(fd)
+        raise PneumaInputError(f"{what} {quoted(path)} is not a regular file (a FIFO, a device or a folder cannot "
+                               f"be read as one)")
     with open(fd, "rb") as f:
-        require(stat.S_ISREG(os.fstat(fd).st_mode),
-                f"{what} {str(path)!r} is not a regular file (a FIFO, a device or a folder cannot be read as one)")
         try:
             data = f.read(max_bytes + 1)
         except OSError as exc:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ..errors import PneumaInputError
+from ..errors import PneumaInputError, quoted
 
 SHIPPED = Path(__file__).resolve().parent.parent / "scenes"
 
@@ -24,13 +24,16 @@ def find(name: str | os.PathLike, suffix: str = ".toml", what: str = "scene file
     """The file `name` names: itself if it exists (or with the suffix added), else the shipped file of that
     bare name (the suffix optional); PneumaInputError naming it and the shipped names otherwise."""
     path = Path(name)
-    if path.exists():
-        return path
-    if path.suffix != suffix and path.with_name(f"{path.name}{suffix}").is_file():
-        return path.with_name(f"{path.name}{suffix}")
+    try:
+        if path.exists():
+            return path
+        if path.suffix != suffix and path.with_name(f"{path.name}{suffix}").is_file():
+            return path.with_name(f"{path.name}{suffix}")
+    except OSError as exc:  # a name too long for the file system, ...
+        raise PneumaInputError(f"{what} {quoted(name)} cannot be read ({exc.strerror})") from None
     if path.parent == Path("."):
         for candidate in (SHIPPED / path.name, SHIPPED / f"{path.name}{suffix}"):
             if candidate.suffix == suffix and candidate.is_file():
                 return candidate
-    raise PneumaInputError(f"{what} {str(name)!r} cannot be read (no such file, and none of that name ships with "
+    raise PneumaInputError(f"{what} {quoted(name)} cannot be read (no such file, and none of that name ships with "
                            f"the package: {', '.join(shipped(suffix))})")

@@ -89,6 +89,7 @@ class SolveRecord:
     line_search_trials: int = 0
     psd_fallbacks: int = 0
     exact_factor: bool = False  # the backend holds the exact Hessian of the last iteration's start point
+    stopped: bool = False  # the caller's stop() ended the solve
     phase_seconds: dict[str, float] = field(default_factory=dict)
     seconds: float = 0.0
     message: str = ""
@@ -176,14 +177,15 @@ class NewtonSolver:
         return d, float(g @ d)
 
     def solve(self, u0: np.ndarray, max_iterations: int | None = None,
-              reuse_factor: bool = False) -> tuple[np.ndarray, SolveRecord]:
+              reuse_factor: bool = False, stop=None) -> tuple[np.ndarray, SolveRecord]:
         """Minimise the model's energy over displacements from u0 (n, d); returns the final u (n, d) and the record.
 
         max_iterations: this call's cap (default the options'; a live loop takes one step per frame).
         reuse_factor: the first direction solves with the factorisation the backend already holds (that of
         the last direction of the previous call, at other commands or displacements: a modified Newton step,
         d = -H_old^-1 g, a descent direction while H_old is positive definite) instead of assembling and
-        factorising a new Hessian; where it is not a descent direction, a fresh Hessian is taken."""
+        factorising a new Hessian; where it is not a descent direction, a fresh Hessian is taken.
+        stop: asked before every iteration; when it returns True the solve ends unconverged, record.stopped set."""
         start = time.perf_counter()
         model, opts = self.model, self.options
         u = np.array(u0, dtype=np.float64).ravel()
@@ -206,6 +208,9 @@ class NewtonSolver:
             cap = opts.max_iterations if max_iterations is None else max_iterations
             if record.iterations >= cap:
                 record.message = f"no convergence in {cap} iterations"
+                break
+            if stop is not None and stop():
+                record.stopped, record.message = True, "stopped"
                 break
             exact = not record.step_sizes or record.step_sizes[-1] == 1.0
             rtol = forcing_term(record.residual, opts.tol)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import limits
 from ..fem.fields import element_fields
 from ..io.output import lock_stem, prepare_directory, save_json, save_npz, save_text, write_atomic
 from ..io.units import history_dimensions
@@ -218,13 +219,18 @@ class Result:
         return written
 
     def video(self, path, png=None, size=(960, 384), fps: float = 12.0, color: str = "stretch",
-              renderer: str = "auto", trace: bool = True, quiet: bool = True, log=print, png_step: int | None = None):
+              renderer: str = "auto", trace: bool = True, quiet: bool = True, log=print, png_step: int | None = None,
+              max_frame_pixels: int = limits.MAX_FRAME_PIXELS):
         """Render one frame per step into path (.mp4 or .gif; its directory is created), and frame png_step
         (default peak_step(), the most deformed) into png if given. size: (width, height) or '960x384';
         color: 'stretch', 'detF' or 'none'; renderer: 'auto', 'ggui', 'gui' or 'pillow'. A 3D run is drawn in
         3D (render.frames3d: the body opened by a section to show its chambers; 'auto' and 'ggui' GGUI's 3D
         scene, falling back to the NumPy rasteriser for 'auto', which 'gui' and 'pillow' take). Returns a
-        video.Export."""
+        video.Export. A size of more than max_frame_pixels pixels is refused (PneumaInputError), as the commands'
+        --max-frame-pixels does."""
+        from ..render.video import frame_size
+
+        limits.check_frame(*frame_size(size), max_frame_pixels, "size", "video's max_frame_pixels")
         png_frame = self.peak_step() if png_step is None else png_step
         if self.mesh.dim == 3:
             from ..render.frames3d import Track3D, render_video_3d

@@ -171,15 +171,21 @@ class NoEquilibrium(RuntimeError):
     """settle() found no equilibrium even after cutting back; the model holds the last equilibrium's u."""
 
 
+class Stopped(Exception):
+    """settle() was asked to stop (its stop() returned True) before it reached its target; the model holds the
+    last equilibrium's u."""
+
+
 def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.ndarray, target: np.ndarray,
-           previous=None, max_cuts: int = MAX_CUTS):
+           previous=None, max_cuts: int = MAX_CUTS, stop=None):
     """Solve the equilibrium at commands `target`, starting from the equilibrium u at commands `reached`.
 
     A Newton solve that does not converge is cut back: the remaining change of all chamber commands is
     halved and the smaller sub-increment solved from the last equilibrium, at most max_cuts times.
     previous: the equilibrium (commands, u) before (reached, u), for the predictor, or None.
     Returns (u, commands reached, previous, the SolveRecords, cuts); raises NoEquilibrium naming the
-    commands and the residual when the cuts run out.
+    commands and the residual when the cuts run out, Stopped when stop() (asked before every Newton
+    iteration, so between cuts too) returns True.
     """
     records: list[SolveRecord] = []
     origin = reached
@@ -188,8 +194,11 @@ def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.n
         trial = min(1.0, done + fraction)
         commands = origin + trial * (target - origin)
         built.set_commands(commands)
-        u_trial, record = solver.solve(predict(built, previous, (reached, u), commands))
+        u_trial, record = solver.solve(predict(built, previous, (reached, u), commands), stop=stop)
         records.append(record)
+        if record.stopped:
+            built.model.set_displacements(u)
+            raise Stopped
         if record.converged:
             previous = (reached, u)
             u, done, reached = u_trial, trial, commands
@@ -216,8 +225,9 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     a chamber wall through itself, an inverted element), which is not kept. progress, if given, is called
     after every increment as progress(step_record, positions, contact_force): the positions (n, 2) and, if
     the scene has contact, the summed contact force per vertex (n, 2), else None; stop, if given, is asked
-    stop() after every increment but the last, and when it returns True the ramp ends there with
-    RampInterrupted carrying the steps done. Returns the run's Result (its seconds: the wall time of this call).
+    stop() after every increment but the last and before every Newton iteration (so a run cutting back asks
+    it too), and when it returns True the ramp ends there with RampInterrupted carrying the steps done (not
+    the increment it was solving). Returns the run's Result (its seconds: the wall time of this call).
     """
     started = time.perf_counter()
     schedule = schedule or built.scene.schedule
@@ -239,9 +249,11 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
         start = time.perf_counter()
         target = schedule.commands(i)
         try:
-            u, reached, previous, records, cuts = settle(built, solver, reached, u, target, previous, max_cuts)
+            u, reached, previous, records, cuts = settle(built, solver, reached, u, target, previous, max_cuts, stop)
         except NoEquilibrium as failure:
             raise RampFailed(f"step {i}: {failure}", partial()) from None
+        except Stopped:
+            raise RampInterrupted(f"interrupted during step {i} of {schedule.increments}", partial()) from None
         built.set_commands(target)
         built.model.set_displacements(u)
         fault = state_fault(built, target)
