@@ -19,6 +19,7 @@ from __future__ import annotations
 import importlib
 import os
 
+from .errors import PneumaInputError
 from .runtime import BACKENDS
 
 CHOICE_VARIABLE = "PNEUMA_BACKEND"
@@ -31,8 +32,9 @@ ENVIRONMENT = {
 ARCH_NAMES = ("cpu", "cuda", "vulkan", "metal", "opengl", "gpu")
 
 
-class BackendUnavailable(ImportError):
-    """Neither backend is installed, or PNEUMA_BACKEND names one that is not (or is not a backend)."""
+class BackendUnavailable(PneumaInputError, ImportError):
+    """Neither backend is installed, or PNEUMA_BACKEND names one that is not (or is not a backend): a user's
+    mistake (PneumaInputError, as the commands' check_environment says it) and an ImportError."""
 
 
 def _import(name: str):

@@ -139,6 +139,22 @@ def test_an_environment_variable_naming_no_backend_is_one_error_line_at_every_co
     assert not (tmp_path / "out").exists() or not list((tmp_path / "out").glob("*.csv"))
 
 
+API_BACKEND = """
+import taichi_pneuma as tp
+try:
+    tp.simulate(tp.reference_scene(max_area=0.05, steps=2))
+except tp.PneumaInputError as exc:
+    print("refused:", exc)
+"""
+
+
+def test_the_api_under_an_environment_variable_naming_no_backend_raises_the_input_error():
+    """Before: an ImportError that is no PneumaInputError, unlike every other bad input through the API."""
+    done = subprocess.run([sys.executable, "-c", API_BACKEND], capture_output=True, text=True, timeout=120,
+                          env={**ENV, "PNEUMA_BACKEND": "garbage"}, check=False)
+    assert done.returncode == 0 and "refused: PNEUMA_BACKEND='garbage' is not one of" in done.stdout, done.stderr
+
+
 def test_an_arch_whose_driver_crashes_the_process_is_one_error_line(tmp_path):
     """--arch opengl here has no driver: Taichi segfaults while starting it (before: exit -11, no line). Where
     a driver exists it starts, and the arch is refused for its 32-bit floats, or (CUDA) runs."""
