@@ -101,6 +101,10 @@ def start(arch: str, cpu_threads: int | None = None) -> None:
     except RuntimeError as exc:
         raise PneumaInputError(f"arch = {arch!r}: Taichi cannot start it here ({exc})") from None
     chosen = ti.lang.impl.current_cfg().arch  # ti.gpu is whichever GPU backend is found, the CPU if none
+    if arch != "cpu" and chosen in (ti.x64, ti.arm64):  # Taichi falls back to the CPU with a warning only
+        ti.reset()
+        raise PneumaInputError(f"arch = {arch!r} is not available here (Taichi would run on the CPU instead); use "
+                               f"cpu")
     if chosen not in (ti.x64, ti.arm64, ti.cuda):  # the backends whose kernels have 64-bit floats
         ti.reset()
         raise PneumaInputError(f"arch = {arch!r} gives Taichi's {chosen.name} backend here, which cannot run this "

@@ -164,6 +164,14 @@ def test_an_arch_whose_driver_crashes_the_process_is_one_error_line(tmp_path):
     one_error_line(done, "arch = 'opengl'", "use cpu, or cuda")
 
 
+def test_an_arch_taichi_would_quietly_run_on_the_cpu_is_one_error_line(tmp_path):
+    """Before: --arch cuda on a machine without CUDA ran on the CPU, with only Taichi's warning."""
+    done = app("inflate", "--arch", "cuda", *CHEAP, "--no-video", "--out", str(tmp_path / "out"))
+    if "Starting on arch=cuda" in done.stdout + done.stderr:
+        pytest.skip("this machine runs --arch cuda")
+    one_error_line(done, "arch = 'cuda' is not available here", "use cpu")
+
+
 # --- 4. the Python API ------------------------------------------------------------------------------------
 
 def test_the_api_refuses_what_the_commands_refuse(tmp_path):
