@@ -20,7 +20,7 @@ import importlib
 import os
 
 from .errors import PneumaInputError
-from .runtime import BACKENDS
+from .environment import BACKENDS
 
 CHOICE_VARIABLE = "PNEUMA_BACKEND"
 INSTALL = dict(zip(BACKENDS, ('pip install "taichi>=1.7,<1.8"', 'pip install "quadrants>=1.3.3,<1.5"')))

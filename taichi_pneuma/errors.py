@@ -11,7 +11,8 @@ MAX_QUOTED = 200  # characters of a user's value quoted in a message
 
 
 def quoted(value) -> str:
-    """repr(str(value)) for a message, a value of more than MAX_QUOTED characters cut to its first ones and its length."""
+    """repr(str(value)) for a message; a value of more than MAX_QUOTED characters is cut to its first ones and its
+    length."""
     text = str(value)
     if len(text) <= MAX_QUOTED:
         return repr(text)

@@ -121,8 +121,8 @@ def check_scene(scene, max_triangles: int = MAX_TRIANGLES, max_increments: int =
 
 def check_increments(increments: int, limit: int = MAX_INCREMENTS, raised_by: str = "--max-increments") -> None:
     """Refuse a schedule of more than `limit` increments (raised_by: what raises the limit, named in the message)."""
-    require(increments <= limit, f"the schedule has {increments if increments < 10**12 else f'about 10^{len(str(increments)) - 1}'} "
-                                 f"increments; the limit is {limit} ({raised_by} raises it)")
+    count = increments if increments < 10**12 else f"about 10^{len(str(increments)) - 1}"  # not 401 digits
+    require(increments <= limit, f"the schedule has {count} increments; the limit is {limit} ({raised_by} raises it)")
 
 
 def check_solid(scene, max_elements: int) -> None:

@@ -4,38 +4,21 @@ offline kernel cache.
 The backend is imported by init(), so that importing this module (the apps' --help does) stays cheap.
 An arch other than the CPU is started first in a child process (probe): a driver that crashes the process
 that starts it (Taichi's Vulkan or OpenGL backend without a driver segfaults) ends the child, and the
-command says so in one line. check_environment() refuses the package's environment variables set to a
-name they cannot take.
+command says so in one line.
 """
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import signal
 import subprocess
 import sys
 
-from .errors import PneumaInputError, quoted, require
+from .errors import PneumaInputError
 
 ARCHES = ("cpu", "cuda", "vulkan", "metal", "opengl", "gpu")  # arch names; backend.ARCHES: those the backend has
-BACKENDS = ("taichi", "quadrants")  # what PNEUMA_BACKEND may name (backend.py)
-TRIANGLE_BINDINGS = ("triangle", "meshpy")  # what PNEUMA_TRIANGLE may name (fem/triangulation.py)
-CHOICES = {"PNEUMA_BACKEND": BACKENDS, "PNEUMA_TRIANGLE": TRIANGLE_BINDINGS}
 PROBE_SECONDS = 300
 _current: str | None = None
-
-
-def check_environment() -> None:
-    """Refuse (PneumaInputError) a variable of CHOICES set to a name not among its choices, or to a module not
-    installed here; the commands ask this first, before any run or worker starts."""
-    for variable, names in CHOICES.items():
-        value = os.environ.get(variable, "")
-        if value:
-            require(value in names, f"environment variable {variable}={quoted(value)} is not one of "
-                                    f"{', '.join(names)} (or unset)")
-            require(importlib.util.find_spec(value) is not None,
-                    f"environment variable {variable}={value}, but {value} is not installed here")
 
 
 def probe(arch: str) -> None:

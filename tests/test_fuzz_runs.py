@@ -25,7 +25,7 @@ from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 
 from taichi_pneuma.apps.inflate import main
-from taichi_pneuma.runtime import CHOICES
+from taichi_pneuma.environment import CHOICES
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 CHEAP = (SCENES / "reference_beam.toml").read_text().replace("max_area = 0.0012", "max_area = 0.02") \

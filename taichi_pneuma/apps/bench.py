@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import runtime, signals
+from .. import environment, runtime, signals
 from ..errors import PneumaInputError, require
 from ..io.output import prepare_directory, save_json, save_text, write_atomic
 
@@ -495,7 +495,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
     try:
         with signals.interrupting():
-            runtime.check_environment()
+            environment.check_environment()
             return run(args)
     except PneumaInputError as exc:
         print(f"error: {exc}", file=sys.stderr)

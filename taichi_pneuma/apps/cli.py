@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .. import __version__, limits, runtime, signals
+from .. import __version__, environment, limits, runtime, signals
 from ..errors import PneumaInputError, require, require_finite
 from ..io.units import AREA, LENGTH, MEASURES, PRESSURE
 from ..render import COLOR_FIELDS, RENDERERS
@@ -260,9 +260,10 @@ def apply_set(scene, assignments: list[str]):
 
 
 def exit_code(app_run, args: argparse.Namespace) -> int:
-    """Run an app; bad input (the environment's PNEUMA_* variables checked first) is one line and exit 2, a ramp (or a reach's start) with no equilibrium one line
-    and exit 1, Ctrl-C, SIGTERM or SIGHUP one line and exit 128 + the signal (130, 143, 129, as shells
-    report it): all three raise signals.Interrupted during the run, or stop a ramp after its increment.
+    """Run an app; bad input (the environment's PNEUMA_* variables checked first) is one line and exit 2, a
+    ramp (or a reach's start) with no equilibrium one line and exit 1, Ctrl-C, SIGTERM or SIGHUP one line and
+    exit 128 + the signal (130, 143, 129, as shells report it): all three raise signals.Interrupted during the
+    run, or stop a ramp within a Newton iteration (a signal after the last solve waits for the files).
     Meshes and terms are made in the budget of --max-triangles (limits.budget).
 
     NumPy's floating-point warnings (overflow, invalid value) are silenced: a huge input value overflows
@@ -270,7 +271,7 @@ def exit_code(app_run, args: argparse.Namespace) -> int:
     import numpy as np
 
     try:
-        runtime.check_environment()  # first: the modules imported next load the backend PNEUMA_BACKEND names
+        environment.check_environment()  # first: the modules imported next load the backend PNEUMA_BACKEND names
     except PneumaInputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

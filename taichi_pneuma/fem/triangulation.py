@@ -16,7 +16,7 @@ import os
 
 import numpy as np
 
-from ..runtime import TRIANGLE_BINDINGS as BINDINGS
+from ..environment import TRIANGLE_BINDINGS as BINDINGS
 CHOICE_VARIABLE = "PNEUMA_TRIANGLE"
 
 

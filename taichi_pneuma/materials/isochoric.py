@@ -183,7 +183,8 @@ class IsochoricMaterial:
         require(False, f"law = {self.law!r} with {given} is not stable (Drucker): in {mode} at stretch {lam:.3g} "
                        f"its nominal stress stops growing with the stretch, because of "
                        f"{' and '.join(f'{c} = {getattr(self, c)!r}' for c in negative)} < 0; a law must be stable "
-                       f"for principal stretches 1/{1 / STRETCHES[0]:g} to {STRETCHES[1]:g} (the presets' fitted range)")
+                       f"for principal stretches 1/{1 / STRETCHES[0]:g} to {STRETCHES[1]:g} (the presets' fitted "
+                       f"range)")
 
     @property
     def shear_modulus(self) -> float:
