@@ -86,8 +86,9 @@ def start(arch: str, cpu_threads: int | None = None) -> None:
     chosen = ti.lang.impl.current_cfg().arch  # ti.gpu is whichever GPU backend is found, the CPU if none
     if arch != "cpu" and chosen in (ti.x64, ti.arm64):  # Taichi falls back to the CPU with a warning only
         ti.reset()
+        other = "" if arch == "cuda" else ", or cuda (an NVIDIA GPU)"
         raise PneumaInputError(f"arch = {arch!r} is not available here (Taichi would run on the CPU instead); use "
-                               f"cpu")
+                               f"cpu{other}")
     if chosen not in (ti.x64, ti.arm64, ti.cuda):  # the backends whose kernels have 64-bit floats
         ti.reset()
         raise PneumaInputError(f"arch = {arch!r} gives Taichi's {chosen.name} backend here, which cannot run this "
