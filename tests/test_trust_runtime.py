@@ -16,7 +16,8 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.materials import IsochoricMaterial
 from taichi_pneuma.scene import reference_scene
 from taichi_pneuma.solve.schedule import ChamberSchedule
-from taichi_pneuma.solve.simulate import RampFailed, run_schedule
+from taichi_pneuma.control.inverse import Reacher
+from taichi_pneuma.solve.simulate import NoEquilibrium, RampFailed, run_schedule
 from taichi_pneuma.terms.chambers import AreaControl
 
 from solid_meshes import box_with_cavity, scene_of
@@ -83,6 +84,20 @@ def test_a_chamber_closed_past_what_the_body_allows_stops_where_its_wall_crosses
     assert 2 <= failed <= 5 and states["positions"].shape[0] == failed  # steps 0 .. failed - 1
     loop = states["chamber_loop_0"]
     assert not any(crosses(positions[loop]) for positions in states["positions"])
+
+
+def test_inverse_control_refuses_a_pose_whose_wall_crosses_itself_and_keeps_the_last_one(taichi_cpu):
+    """Reach settles each trial pose with simulate.settle, which checks the state as the ramp does: a chamber
+    closed to 0.05 of its area is no equilibrium, and the pose (and the model) stay at the last good one."""
+    built = reference_scene(steps=2, max_area=0.005).build()
+    rest = built.scene.schedule.rest_commands  # the chamber's rest area
+    reacher = Reacher(built, bounds=(0.01 * rest, 4.0 * rest), start=rest)
+    before = reacher.pose
+    with pytest.raises(NoEquilibrium, match="chamber 'main' wall crosses itself"):
+        reacher.settle(0.05 * rest)
+    assert reacher.pose is before and np.array_equal(built.model.config.u, before.u)
+    loop = built.chambers[0].loop_vertices
+    assert not crosses(built.mesh.vertices[loop] + before.u[loop])
 
 
 def test_a_chamber_wall_mirrored_through_its_centre_is_inside_out(taichi_cpu):

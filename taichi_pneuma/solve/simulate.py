@@ -184,7 +184,8 @@ def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.n
     halved and the smaller sub-increment solved from the last equilibrium, at most max_cuts times.
     previous: the equilibrium (commands, u) before (reached, u), for the predictor, or None.
     Returns (u, commands reached, previous, the SolveRecords, cuts); raises NoEquilibrium naming the
-    commands and the residual when the cuts run out, Stopped when stop() (asked before every Newton
+    commands and the residual when the cuts run out, or naming the fault when a converged state is no physical
+    one (state_fault: the ramp and reach refuse it), Stopped when stop() (asked before every Newton
     iteration, so between cuts too) returns True.
     """
     records: list[SolveRecord] = []
@@ -200,6 +201,12 @@ def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.n
             built.model.set_displacements(u)
             raise Stopped
         if record.converged:
+            built.model.set_displacements(u_trial)
+            fault = state_fault(built, commands)
+            if fault is not None:  # an equilibrium of the discrete energy, but no physical state: no cut helps
+                built.set_commands(reached)
+                built.model.set_displacements(u)
+                raise NoEquilibrium(fault)
             previous = (reached, u)
             u, done, reached = u_trial, trial, commands
             if trial == 1.0:
@@ -221,8 +228,8 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     chamber commands is halved and the smaller sub-increment solved from the last equilibrium, as
     often as max_cuts times per increment; every cut is counted in the history. If it still fails,
     RampFailed names the step, the commands (for pressure control, the last pressure reached) and
-    the residual, and carries the steps done; so does an equilibrium that is no physical state (state_fault:
-    a chamber wall through itself, an inverted element), which is not kept. progress, if given, is called
+    the residual, and carries the steps done; so does an equilibrium that is no physical state (settle's
+    state_fault: a chamber wall through itself, an inverted element), which is not kept. progress, if given, is called
     after every increment as progress(step_record, positions, contact_force): the positions (n, 2) and, if
     the scene has contact, the summed contact force per vertex (n, 2), else None; stop, if given, is asked
     stop() after every increment but the last and before every Newton iteration (so a run cutting back asks
@@ -256,9 +263,6 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
             raise RampInterrupted(f"interrupted during step {i} of {schedule.increments}", partial()) from None
         built.set_commands(target)
         built.model.set_displacements(u)
-        fault = state_fault(built, target)
-        if fault is not None:
-            raise RampFailed(f"step {i}: {fault}", partial())
         for term in built.model.terms:
             term.advance(u)
         final = records[-1]
