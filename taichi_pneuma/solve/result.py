@@ -205,7 +205,6 @@ class Result:
         paths written. They are written under the stem's lock (output.lock_stem: another process writing
         the same stem there is refused), and a signal meanwhile waits for them (signals.holding)."""
         from ..io.vtk import VtkSeries
-        from ..render.plots import save_history_png
 
         out, stem = prepare_directory(directory), stem or self.scene.name
         with holding(), lock_stem(out, stem):  # a signal meanwhile waits for the files; no other run writes them
@@ -213,6 +212,8 @@ class Result:
             if vtk:
                 written.append(VtkSeries(out, stem, self.built).write_all(self))
             if plot:
+                from ..render.plots import save_history_png  # matplotlib: 0.6 s of imports a run without a plot skips
+
                 written.append(write_atomic(out / f"{stem}_plot.png", lambda tmp: save_history_png(self, tmp)))
             written.append(save_text(out / f"{stem}_scene.toml", self.scene.to_toml()))
             written.append(save_json(out / f"{stem}_summary.json", {**self.summary(), **(extra or {})}))
