@@ -1,8 +1,10 @@
 """What accuracy costs in time: start-up and rendering, timing breakdown, solver backends, accuracy-vs-time
-study (P1 and P2), near-incompressible convergence, scaling, 3D (solid); and Taichi against Quadrants (the kernels' two
+study (P1 and P2), near-incompressible convergence, scaling, 3D (solid: the linear solvers; presets_3d: the 3D
+presets on the shipped 3D scenes, time and error); and Taichi against Quadrants (the kernels' two
 compilers).
 
-    pneuma-bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling,solid,compilers] [--out out/bench]
+    pneuma-bench [--sections startup,breakdown,backends,accuracy,incompressible,scaling,solid,presets_3d,compilers]
+                 [--out out/bench]
     pneuma-bench --out benchmarks/results       (a clone: rewrite the tracked tables the site shows)
 
 Every section prints a Markdown table and saves it (bench_<section>.md, .json) under --out (default
@@ -33,7 +35,8 @@ from .. import environment, runtime, signals
 from ..errors import PneumaInputError, require
 from ..io.output import prepare_directory, save_json, save_text, write_atomic
 
-SECTIONS = ("startup", "breakdown", "backends", "accuracy", "incompressible", "scaling", "solid", "compilers")
+SECTIONS = ("startup", "breakdown", "backends", "accuracy", "incompressible", "scaling", "solid", "presets_3d",
+            "compilers")
 REFERENCE_TUTORIAL_SECONDS = 25.0  # the seed pipeline (a NumPy/SciPy tutorial) on the cy = 0.15 ramp, this kind of machine
 PHASES = ("gradient", "hessian", "assemble", "factorize", "solve", "line_search")
 
@@ -388,7 +391,7 @@ def octant(divisions: int, layers: int, order: int, increments: int = 3) -> "Sce
 
 
 SOLID_MESHES = (("P1", 8, 4, 1), ("P1", 16, 6, 1), ("P1", 24, 12, 1), ("P2", 12, 6, 2))
-SOLID_BACKENDS = ("taichi", "cholespy", "amg")
+SOLID_BACKENDS = ("taichi", "cholespy", "cholmod", "amg")
 
 
 def solid() -> tuple[str, dict]:
@@ -447,6 +450,52 @@ def solid() -> tuple[str, dict]:
     table += "\nThe projected elastic Hessian, analytic eigensystem against Jacobi on the 9 x 9 d2psi/dF2:\n\n"
     table += markdown(["tetrahedra", "analytic (ms)", "Jacobi (ms)", "ratio"], eigen_rows)
     return table, {"runs": data}
+
+
+PRESET_SCENES_3D = ("beam_3d_ellipsoid", "pneunet_3d")
+# the converged peak tip deflection of each (the largest |mean y displacement| of the tip face over the run), for
+# the presets' errors: see docs/solid.md, "3D presets", for how each was obtained
+CONVERGED_TIP_3D = {"beam_3d_ellipsoid": None, "pneunet_3d": None}
+
+
+def presets_3d() -> tuple[str, dict]:
+    """The 3D presets on the shipped 3D scenes: for each scene and --quality, the main command's whole process
+    (pneuma-inflate --scene S --quality Q --no-video, a warm kernel cache) timed, with its DOFs, Newton iterations
+    (and chord steps: no new Hessian), the linear solver auto chose, the seconds per phase, and the peak tip
+    deflection's error against the converged one (CONVERGED_TIP_3D)."""
+    from .cli import QUALITY_3D
+
+    rows, data = [], []
+    phases = ("hessian", "assemble", "factorize", "solve", "gradient", "line_search")
+    for name in PRESET_SCENES_3D:
+        for quality in QUALITY_3D:
+            with tempfile.TemporaryDirectory() as out:
+                command = [sys.executable, "-m", "taichi_pneuma.apps.inflate", "--scene", name, "--quality", quality,
+                           "--no-video", "--quiet", "--out", out]
+                start = time.perf_counter()
+                proc = subprocess.run(command, capture_output=True, text=True)
+                whole = time.perf_counter() - start
+                require(proc.returncode == 0, f"{' '.join(command[1:])} failed: {proc.stderr[-300:]}")
+                summary = json.loads(next(Path(out).glob("*_summary.json")).read_text())
+            tip = summary["extremes"]["tip_dy"]
+            peak = tip["min"] if abs(tip["min"]) >= abs(tip["max"]) else tip["max"]
+            converged = CONVERGED_TIP_3D[name]
+            error = None if converged is None else abs(peak / converged - 1)
+            newton = summary["newton"]
+            record = {"scene": name, "quality": quality, "dofs": 3 * summary["vertices"],
+                      "order": summary["element_order"], "iterations": summary["newton_iterations_total"],
+                      "chord_steps": newton["chord_steps"], "linear_solver": newton["linear_solver"],
+                      "phase_seconds": newton["phase_seconds"], "ramp_s": summary["wall_seconds"], "whole_s": whole,
+                      "peak_tip": peak, "error": error}
+            data.append(record)
+            print(f"  presets_3d: {record}", file=sys.stderr, flush=True)
+            rows.append([name, quality, f"{record['dofs']:,}", record["order"],
+                         f"{record['iterations']} ({record['chord_steps']})", record["linear_solver"],
+                         *(f"{newton['phase_seconds'].get(p, 0.0):.1f}" for p in phases), f"{record['ramp_s']:.1f}",
+                         f"{whole:.1f}", f"{peak:.5f}", "" if error is None else f"{100 * error:.2f} %"])
+    header = ["scene", "quality", "DOFs", "order", "Newton iterations (chord)", "solver",
+              *(f"{p} (s)" for p in phases), "ramp (s)", "whole process (s)", "peak tip dy", "error"]
+    return markdown(header, rows), {"runs": data, "converged_tip": CONVERGED_TIP_3D}
 
 
 def compilers() -> tuple[str, dict]:
@@ -521,6 +570,7 @@ def run(args: argparse.Namespace) -> int:
         table, data = accuracy(out) if section == "accuracy" else {"startup": startup, "breakdown": breakdown,
                                                                     "backends": backends, "incompressible": incompressible,
                                                                     "scaling": scaling, "solid": solid,
+                                                                    "presets_3d": presets_3d,
                                                                     "compilers": compilers}[section]()
         print(heading + table, flush=True)
         save_text(out / f"bench_{section}.md", heading + table)

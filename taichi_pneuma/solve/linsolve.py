@@ -24,6 +24,10 @@ from ..errors import require
 from ..backend import ti
 
 
+def installed(module: str) -> bool:
+    return importlib.util.find_spec(module) is not None
+
+
 class FixedPattern:
     """The CSR structure of a sum of triplets whose (row, col) never change.
 
@@ -109,6 +113,70 @@ class CholespyCholesky:
         x = np.zeros_like(rhs)
         self._factor.solve(rhs, x)
         return x
+
+
+def nested_dissection(matrix: sp.csr_matrix, block: int) -> np.ndarray | None:
+    """A fill-reducing ordering of the DOFs of a matrix of block x block node blocks: METIS's nested dissection
+    (pymetis) of the node graph, each node's DOFs kept together; None where pymetis is not installed. On the
+    quadratic 3D beam's Hessians it leaves a Cholesky factor 7-33 % smaller, and 1.2-3x faster to compute,
+    than CHOLMOD's own choice (AMD in CVXOPT's build): nested dissection suits 3D meshes, minimum degree 2D ones."""
+    if not installed("pymetis"):
+        return None
+    import pymetis
+
+    n = matrix.shape[0] // block
+    nodes = sp.csr_matrix((np.ones(matrix.nnz), matrix.indices // block, matrix.indptr), shape=(matrix.shape[0], n))
+    graph = (sp.csr_matrix((np.ones(matrix.shape[0]), np.arange(matrix.shape[0]) // block,
+                            np.arange(matrix.shape[0] + 1)), shape=(matrix.shape[0], n)).T @ nodes).tocsr()
+    graph.setdiag(0)
+    graph.eliminate_zeros()
+    order, _ = pymetis.nested_dissection(pymetis.CSRAdjacency(graph.indptr, graph.indices))
+    return (block * np.asarray(order, dtype=np.int64)[:, None] + np.arange(block)).ravel()
+
+
+class CholmodCholesky:
+    """Supernodal sparse Cholesky (CHOLMOD, through CVXOPT's binding): the symbolic analysis (fill-reducing
+    ordering, supernodes) is done once per pattern and kept, so each Newton iteration pays only the numerical
+    factorisation (0.07 s for the quadratic 3D beam's 12k DOFs, where CHOLMOD's simplicial one in cholespy takes
+    0.6 s, and 1.1 s at 59k DOFs). The ordering: nested_dissection of the nodes (block: DOFs per node) where
+    pymetis is installed. Refuses indefinite matrices (FactorizationError). CVXOPT is GPL-licensed: it comes with
+    the [3d] extra, beside gmsh.
+
+    The pattern's CSR arrays are read as the CSC arrays of the transpose: the matrix is symmetric, so its values
+    in CSR order are those of the same matrix in CHOLMOD's column order, and only the lower triangle is read."""
+
+    name = "cholmod"
+
+    def __init__(self, block: int = 1):
+        self._block = block
+        self._indptr = None
+
+    def factorize(self, matrix: sp.csr_matrix) -> None:
+        import cvxopt
+        from cvxopt import cholmod
+
+        if matrix.indptr is not self._indptr:
+            n = matrix.shape[0]
+            rows = np.repeat(np.arange(n, dtype=np.int64), np.diff(matrix.indptr))
+            self._matrix = cvxopt.spmatrix(cvxopt.matrix(matrix.data), cvxopt.matrix(matrix.indices.astype(np.int64)),
+                                           cvxopt.matrix(rows), (n, n))
+            order = nested_dissection(matrix, self._block)
+            self._symbolic = cholmod.symbolic(self._matrix, uplo="L") if order is None else \
+                cholmod.symbolic(self._matrix, p=cvxopt.matrix(order.tolist(), tc="i"), uplo="L")
+            self._indptr = matrix.indptr
+        self._matrix.V = cvxopt.matrix(matrix.data)
+        try:
+            cholmod.numeric(self._matrix, self._symbolic)
+        except ArithmeticError as exc:
+            raise FactorizationError(f"CHOLMOD: the matrix is not positive definite (column {exc})") from None
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        import cvxopt
+        from cvxopt import cholmod
+
+        x = cvxopt.matrix(np.asarray(rhs, dtype=np.float64))
+        cholmod.solve(self._symbolic, x)
+        return np.array(x).reshape(rhs.shape)
 
 
 @ti.kernel
@@ -261,35 +329,50 @@ class AmgConjugateGradient:
         return x
 
 
-BACKENDS = {"amg": AmgConjugateGradient, "cholespy": CholespyCholesky, "scipy": ScipySuperLU, "taichi": TaichiLLT}
-# auto: CG with multigrid from this many DOFs on in 3D. bench.py's solid section: on the octant (nu = 0.45) it
-# overtakes Taichi's LLT between 675 and 3,213 DOFs and is 3x faster at 12,675; at nu = 0.499 multigrid is
-# weaker (its near-null space misses the nearly incompressible modes) and only even with LLT at 3,213
+BACKENDS = {"amg": AmgConjugateGradient, "cholespy": CholespyCholesky, "cholmod": CholmodCholesky,
+            "scipy": ScipySuperLU, "taichi": TaichiLLT}
+# auto in 3D: CHOLMOD up to this many DOFs, CG with multigrid above (a factor's memory grows as n^(4/3) and its
+# time as n^2, multigrid's about as n). On the quadratic beam (bench.py's solid_3d section, 2 cores) CHOLMOD
+# refactorises 59k DOFs in 1.1 s and 119k in 3.9 s, where multigrid's set-up and one solve to 1e-2 take 3.0 s and
+# 15 s, and each later solve 0.6 s and 5.4 s
+DIRECT_MAX_DOFS_3D = 250_000
+# auto without CHOLMOD: CG with multigrid from this many DOFs on in 3D. bench.py's solid section: on the octant
+# (nu = 0.45) it overtakes Taichi's LLT between 675 and 3,213 DOFs and is 3x faster at 12,675; at nu = 0.499
+# multigrid is weaker (its near-null space misses the nearly incompressible modes) and only even with LLT at 3,213
 AMG_MIN_DOFS = 10_000
 
 
+def auto_backend(rest: np.ndarray | None) -> str:
+    """The backend "auto" takes for the nodes at rest (n, d) (None: a matrix of unknown origin): in 3D, CHOLMOD
+    (CVXOPT installed: the [3d] extra) up to DIRECT_MAX_DOFS_3D DOFs, CG with multigrid above them or, without
+    CHOLMOD, from AMG_MIN_DOFS on; otherwise direct_backend()."""
+    dofs = 0 if rest is None or rest.shape[1] != 3 else rest.size
+    cholmod = installed("cvxopt")
+    if installed("pyamg") and (dofs > DIRECT_MAX_DOFS_3D or (dofs >= AMG_MIN_DOFS and not cholmod)):
+        return "amg"
+    return "cholmod" if dofs and cholmod else direct_backend()
+
+
 def make_backend(name: str, rest: np.ndarray | None = None):
-    """A fresh linear-solver backend by name: one of BACKENDS, or "auto": for the nodes at rest (n, d) of a 3D
-    model of AMG_MIN_DOFS DOFs or more, CG with multigrid (a Cholesky factor's fill grows as n^(4/3) there);
-    otherwise Taichi's LLT when Taichi runs on the CPU, CHOLMOD on the GPU arches (Taichi's sparse solvers
-    are float32-only on CUDA; the solve stays float64), or SciPy's SuperLU where cholespy is not installed
-    (it has no wheel for Linux aarch64; nor has pyamg, and auto stays direct there). rest: the nodes' positions,
-    the multigrid's near-null space."""
-    multigrid = importlib.util.find_spec("pyamg") is not None
-    if name == "auto":
-        large = rest is not None and rest.shape[1] == 3 and rest.size >= AMG_MIN_DOFS
-        name = "amg" if large and multigrid else direct_backend()
-    if name != "amg":
-        return BACKENDS[name]()
-    require(multigrid, "linear solver 'amg' needs pyamg, which is not installed (pip install pyamg; it has no wheel "
-                       "for Linux aarch64): choose auto, taichi, cholespy or scipy")
-    return AmgConjugateGradient(rest)
+    """A fresh linear-solver backend by name: one of BACKENDS, or "auto" (auto_backend). rest: the nodes'
+    positions (n, d): the multigrid's near-null space, CHOLMOD's node blocks."""
+    name = auto_backend(rest) if name == "auto" else name
+    if name == "amg":
+        require(installed("pyamg"), "linear solver 'amg' needs pyamg, which is not installed (pip install pyamg; it "
+                                    "has no wheel for Linux aarch64): choose auto, cholmod, taichi, cholespy or scipy")
+        return AmgConjugateGradient(rest)
+    if name == "cholmod":
+        require(installed("cvxopt"), "linear solver 'cholmod' needs CVXOPT, which is not installed (pip install "
+                                     "'taichi-pneuma[3d]'): choose auto, amg, taichi, cholespy or scipy")
+        return CholmodCholesky(1 if rest is None else rest.shape[1])
+    return BACKENDS[name]()
 
 
 def direct_backend() -> str:
-    """The direct backend "auto" takes (make_backend)."""
-    return "taichi" if runtime.current_arch() in (None, "cpu") else \
-        "cholespy" if importlib.util.find_spec("cholespy") else "scipy"
+    """The direct backend of a 2D model, or where CHOLMOD is not installed: Taichi's LLT when Taichi runs on the
+    CPU, cholespy on the GPU arches (Taichi's sparse solvers are float32-only on CUDA; the solve stays float64),
+    or SciPy's SuperLU where cholespy is not installed (no wheel for Linux aarch64)."""
+    return "taichi" if runtime.current_arch() in (None, "cpu") else "cholespy" if installed("cholespy") else "scipy"
 
 
 def solve_low_rank_updated(backend, rhs: np.ndarray, low_rank: list[tuple[np.ndarray, np.ndarray, float]],
@@ -298,12 +381,12 @@ def solve_low_rank_updated(backend, rhs: np.ndarray, low_rank: list[tuple[np.nda
     relative residual rtol where the backend is iterative (a direct one solves exactly)."""
     if isinstance(backend, AmgConjugateGradient):
         return backend.solve(rhs, low_rank, rtol)
-    y = backend.solve(rhs)
     if not low_rank:
-        return y
+        return backend.solve(rhs)
     U = np.zeros((len(rhs), len(low_rank)))
     for j, (dofs, u, _) in enumerate(low_rank):
         U[dofs, j] = u
-    Z = backend.solve(U)
+    solved = backend.solve(np.column_stack([rhs, U]))  # one pass over the factor for all right-hand sides
+    y, Z = solved[:, 0], solved[:, 1:]
     capacitance = np.diag([1.0 / c for _, _, c in low_rank]) + U.T @ Z
     return y - Z @ np.linalg.solve(capacitance, U.T @ y)

@@ -13,11 +13,22 @@ indefinite sparse part H; after the first iteration SciPy's LU then factorises i
 under volume or syringe control H alone is indefinite (it is the Hessian under pressure control)
 while H plus the chamber's rank-1 part is positive definite at the stable equilibrium. (At the first
 iteration the commands have just moved, the exact Hessian is a poor model there, and the PSD one is used.)
+CHOLMOD's refusal (3D) goes to the PSD Hessian instead: an LU of a 3D system costs 15x its Cholesky
+factorisation.
 
 With the iterative backend (CG with multigrid, linsolve.py) d solves H d = -g only to the relative residual
 eta = forcing_term(r, tol) at the Newton residual r: an inexact Newton method, as quadratically convergent
 as the exact one while eta <= r. Where CG does not reach eta, an exact H is given up for the PSD one (an LU
 of a large 3D Hessian is what the iterative backend avoids), and a PSD H goes to the direct backend.
+
+In 3D a factorisation costs 3-10 times the rest of an iteration (more the larger the system), so a direction
+may instead solve with the factorisation the backend holds, d = -H_old^-1 g (a chord step of modified Newton: a
+descent direction while H_old is positive definite; the chamber's rank-1 parts are always the current ones).
+Newton takes one after a full step (alpha = 1), and more while each contracts the residual by
+rho = r_k / r_k-1 <= CHORD_MAX_CONTRACTION and at most CHORD_MAX_NEEDED more, log(tol / r) / log(rho), would
+reach the tolerance; otherwise a fresh Hessian. A solve may also start with one (reuse_factor: the ramp's next
+increment, the live window's next frame). The rule counts steps, not seconds, so a run's iterates do not depend
+on the machine's load. (In 2D a factorisation costs about what the rest of an iteration does: no chord steps.)
 
 The step u <- u + alpha d (u: displacements) starts at alpha = min(1, 0.9 max_step), the terms'
 safe bound (no triangle inverts), and halves until the Armijo condition
@@ -43,7 +54,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import require, require_finite
-from .linsolve import (BACKENDS, FactorizationError, FixedPattern, direct_backend, make_backend,
+from .linsolve import (BACKENDS, FactorizationError, FixedPattern, direct_backend, installed, make_backend,
                        solve_low_rank_updated)
 from .model import EnergyModel
 
@@ -51,6 +62,8 @@ ARMIJO_C1 = 1e-4
 MAX_HALVINGS = 40
 STEP_SAFETY = 0.9
 FORCING_MAX = 0.01  # forcing_term's largest eta
+CHORD_MAX_CONTRACTION = 0.5  # a chord step contracting the residual less than this is followed by a fresh Hessian
+CHORD_MAX_NEEDED = 3  # ... and so is one after which more than this many would be needed to reach tol
 
 
 def forcing_term(residual: float, tol: float) -> float:
@@ -88,7 +101,8 @@ class SolveRecord:
     step_sizes: list[float] = field(default_factory=list)
     line_search_trials: int = 0
     psd_fallbacks: int = 0
-    exact_factor: bool = False  # the backend holds the exact Hessian of the last iteration's start point
+    exact_factor: bool = False  # the backend holds the exact Hessian of an iterate of this solve
+    chord_steps: int = 0  # iterations that solved with a factorisation already held (no new Hessian)
     stopped: bool = False  # the caller's stop() ended the solve
     phase_seconds: dict[str, float] = field(default_factory=dict)
     seconds: float = 0.0
@@ -104,6 +118,7 @@ class NewtonOptions:
     tol: float = 1e-6
     max_iterations: int = 40
     linear_solver: str = "auto"
+    chord_steps: bool | None = None  # reuse a held factorisation (the module docstring); None: in 3D only
 
     def __post_init__(self):
         require(require_finite("tol", self.tol) > 0, f"tol = {self.tol!r} must be > 0")
@@ -122,9 +137,15 @@ class NewtonSolver:
         rows, cols = model.hessian_pattern()
         self.pattern = FixedPattern(rows, cols, model.n_dofs)
         self.backend = make_backend(self.options.linear_solver, model.config.rest)
-        self.indefinite_backend = self.backend if self.backend.name == "scipy" else make_backend("scipy")
-        self.direct_backend = make_backend(direct_backend()) if self.backend.name == "amg" else self.backend
+        # an exact H that CHOLMOD refuses is not handed to an LU: in 3D an LU costs 15x the Cholesky factorisation
+        # (1.15 s against 0.07 s at 12k DOFs) and fills far more; the PSD H serves instead
+        self.indefinite_backend = None if self.backend.name == "cholmod" else \
+            self.backend if self.backend.name == "scipy" else make_backend("scipy")
+        self.direct_backend = self.backend if self.backend.name != "amg" else \
+            make_backend("cholmod" if installed("cvxopt") else direct_backend(), model.config.rest)
         self.factored_by, self.factored = self.backend, False  # the backend holding the last factorisation
+        self.factored_exact = False  # ... and whether it is of an exact Hessian
+        self.chord = model.config.dim == 3 if self.options.chord_steps is None else self.options.chord_steps
         self.cg_failed = False  # CG failed on a PSD Hessian of this model: the direct backend serves from then on
 
     def _energy_at(self, u: np.ndarray) -> float:
@@ -141,7 +162,9 @@ class NewtonSolver:
             if self.cg_failed:
                 return (self.direct_backend,)
             return (self.backend, self.direct_backend) if psd_only else (self.backend,)
-        return (self.backend, self.indefinite_backend) if indefinite and not psd_only else (self.backend,)
+        if indefinite and not psd_only and self.indefinite_backend is not None:
+            return self.backend, self.indefinite_backend
+        return (self.backend,)
 
     def _direction(self, g: np.ndarray, psd_only: bool, clock: PhaseClock, indefinite: bool = False,
                    rtol: float | None = None) -> tuple[np.ndarray, float]:
@@ -164,27 +187,37 @@ class NewtonSolver:
                 continue
         else:
             return g * math.nan, math.nan
-        self.factored_by, self.factored = backend, True
+        self.factored_by, self.factored, self.factored_exact = backend, True, not psd_only
         return d, float(g @ d)
 
     def _reused_direction(self, g: np.ndarray, clock: PhaseClock, rtol: float) -> tuple[np.ndarray, float]:
-        """d = -H_old^-1 g with the factorisation the backend holds (solve's reuse_factor) and the slope g.d;
-        nan where none is held."""
+        """d = -H_old^-1 g with the factorisation the backend holds (a chord step) and the slope g.d; nan where
+        none is held."""
         if not self.factored:
             return g * math.nan, math.nan
         with clock("solve"):
             d = solve_low_rank_updated(self.factored_by, -g, self.model.low_rank(), rtol)
         return d, float(g @ d)
 
+    def _chord_pays(self, record: SolveRecord, chord_last: bool) -> bool:
+        """Whether the next direction is a chord step, with the held factorisation (see the module docstring).
+        chord_last: the last step was a chord step."""
+        if not (self.chord and self.factored and record.step_sizes and record.step_sizes[-1] == 1.0):
+            return False
+        if not chord_last:
+            return True
+        rho = record.residuals[-1] / record.residuals[-2]
+        return rho <= CHORD_MAX_CONTRACTION and math.log(self.options.tol / record.residual) >= \
+            CHORD_MAX_NEEDED * math.log(rho)
+
     def solve(self, u0: np.ndarray, max_iterations: int | None = None,
               reuse_factor: bool = False, stop=None) -> tuple[np.ndarray, SolveRecord]:
         """Minimise the model's energy over displacements from u0 (n, d); returns the final u (n, d) and the record.
 
         max_iterations: this call's cap (default the options'; a live loop takes one step per frame).
-        reuse_factor: the first direction solves with the factorisation the backend already holds (that of
-        the last direction of the previous call, at other commands or displacements: a modified Newton step,
-        d = -H_old^-1 g, a descent direction while H_old is positive definite) instead of assembling and
-        factorising a new Hessian; where it is not a descent direction, a fresh Hessian is taken.
+        reuse_factor: the first direction is a chord step, with the factorisation the backend already holds (that
+        of a direction of the previous call, at other commands or displacements) instead of a new Hessian;
+        where it is not a descent direction, a fresh Hessian is taken.
         stop: asked before every iteration; when it returns True the solve ends unconverged, record.stopped set."""
         start = time.perf_counter()
         model, opts = self.model, self.options
@@ -193,6 +226,7 @@ class NewtonSolver:
         clock = PhaseClock(record.phase_seconds)
         with clock("line_search"):
             energy = self._energy_at(u)
+        chord = False  # the last step was a chord step
         while True:
             with clock("gradient"):
                 g, scale = model.gradient()
@@ -214,9 +248,10 @@ class NewtonSolver:
                 break
             exact = not record.step_sizes or record.step_sizes[-1] == 1.0
             rtol = forcing_term(record.residual, opts.tol)
-            d, slope = self._reused_direction(g, clock, rtol) if reuse_factor and not record.step_sizes \
-                else (None, math.nan)
+            chord = (reuse_factor and not record.step_sizes) or self._chord_pays(record, chord)
+            d, slope = self._reused_direction(g, clock, rtol) if chord else (None, math.nan)
             if not slope < 0:
+                chord = False
                 d, slope = self._direction(g, not exact, clock, bool(record.step_sizes), rtol)
             else:
                 exact = False
@@ -224,7 +259,7 @@ class NewtonSolver:
                 record.psd_fallbacks += 1
                 exact = False
                 d, slope = self._direction(g, True, clock, rtol=rtol)
-            record.exact_factor = exact and self.factored_by is self.backend
+            record.exact_factor = self.factored_exact and self.factored_by is self.backend
             if not slope < 0:
                 record.message = model.fault() or f"not a descent direction (g.d = {slope:.3e})"
                 break
@@ -237,6 +272,7 @@ class NewtonSolver:
             u = u + alpha * d
             energy = trial
             record.iterations += 1
+            record.chord_steps += chord
             record.step_sizes.append(alpha)
         record.seconds = time.perf_counter() - start
         return u.reshape(model.config.u.shape), record

@@ -32,7 +32,8 @@ class Result:
     chamber records, tip measures, Newton figures); positions (steps, n, 2): the vertex positions per
     step; solves: the last Newton SolveRecord of each step (none for reaches); contact_forces (steps,
     n, 2): the summed contact force per vertex, when the scene has contact, else None; seconds: wall
-    time of the run. Everything else (figures, per-chamber arrays, history, files, pictures) is
+    time of the run; newton: the linear solver that served the run's Newton solves, their chord steps
+    (iterations without a new Hessian) and the seconds per phase of an iteration, summed over the run. Everything else (figures, per-chamber arrays, history, files, pictures) is
     derived from these: see each property and method."""
 
     built: BuiltScene
@@ -41,6 +42,7 @@ class Result:
     solves: list = field(default_factory=list)
     contact_forces: np.ndarray | None = None
     seconds: float = math.nan
+    newton: dict = field(default_factory=dict)
 
     @property
     def scene(self) -> Scene:
@@ -156,6 +158,9 @@ class Result:
             "max_residual": float(self.history["residual"].max()),
             "min_det_F": float(self.history["min_det"].min()),
             "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max(initial=0)),
+            **({} if not self.newton else {"newton": {"linear_solver": self.newton["linear_solver"],
+                                                      "chord_steps": self.newton["chord_steps"],
+                                                      "phase_seconds": dict(self.newton["phase_seconds"])}}),
             "increment_cuts": int(self.history["cuts"].sum()),
             "wall_seconds": self.seconds, "solve_seconds_per_step": float(seconds.mean()) if len(seconds) else 0.0,
             "steps": len(self.steps), "interrupted": interrupted, "units": self.scene.units.summary(),

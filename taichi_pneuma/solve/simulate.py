@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import collections
 import math
 import time
 from dataclasses import dataclass, field
@@ -195,7 +196,8 @@ def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.n
         trial = min(1.0, done + fraction)
         commands = origin + trial * (target - origin)
         built.set_commands(commands)
-        u_trial, record = solver.solve(predict(built, previous, (reached, u), commands), stop=stop)
+        u_trial, record = solver.solve(predict(built, previous, (reached, u), commands), 
+                                       reuse_factor=solver.chord, stop=stop)
         records.append(record)
         if record.stopped:
             built.model.set_displacements(u)
@@ -246,11 +248,12 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     steps, states, solves, forces = [], [], [], []
     reached = schedule.rest_commands
     previous = None  # (commands, u) of the equilibrium before the last one, for the predictor
+    newton = {"linear_solver": solver.backend.name, "chord_steps": 0, "phase_seconds": collections.Counter()}
 
     def partial():
         return Result(built, steps, np.array(states).reshape(-1, *mesh.vertices.shape), solves,
                       np.array(forces).reshape(-1, *mesh.vertices.shape) if contact_terms else None,
-                      time.perf_counter() - started)
+                      time.perf_counter() - started, newton)
 
     for i in range(schedule.increments + 1):
         start = time.perf_counter()
@@ -265,6 +268,9 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
         built.model.set_displacements(u)
         for term in built.model.terms:
             term.advance(u)
+        for record in records:
+            newton["chord_steps"] += record.chord_steps
+            newton["phase_seconds"].update(record.phase_seconds)
         final = records[-1]
         chambers = chamber_records(built, target)
         contact, vertex_forces = {}, np.zeros_like(u)
