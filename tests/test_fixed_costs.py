@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from taichi_pneuma import backend
+from taichi_pneuma.backend import ti
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem import gmsh_mesher
 from taichi_pneuma.fem.geometry import has_close_pair
@@ -146,3 +148,32 @@ def test_keys_tell_apart_inputs_that_differ_in_the_last_bit():
     assert cache.key(np.array([0.1234567891])) != cache.key(np.array([0.1234567892]))  # past NumPy's repr digits
     assert cache.key(1) != cache.key(1.0) and cache.key(True) != cache.key(1)
     assert cache.key(object()) is None  # no exact text: not cached
+
+
+@pytest.mark.skipif(backend.NAME != "taichi", reason="Taichi 1.7's AST transformer (Quadrants memoises it itself)")
+def test_memoised_source_positions_are_the_texts_taichi_makes(monkeypatch):
+    """A new kernel inlining a package ti.func twice compiles with every node's memoised position text equal to the
+    text Taichi's own get_pos_info makes, some of them served by the memo, and computes det(A B) = det A det B."""
+    from taichi.lang.ast.ast_transformer_utils import ASTTransformerContext
+
+    from taichi_pneuma.materials.law import embedded
+
+    memoised, texts = ASTTransformerContext.get_pos_info, []
+
+    def checked(self, node):
+        text = memoised(self, node)
+        assert text == memoised.original(self, node)
+        texts.append(text)
+        return text
+
+    monkeypatch.setattr(ASTTransformerContext, "get_pos_info", checked)
+
+    @ti.kernel
+    def det_of_product(F: ti.types.ndarray(dtype=ti.f64, ndim=2)) -> ti.f64:
+        A = embedded(ti.Matrix([[F[0, 0], F[0, 1]], [F[1, 0], F[1, 1]]], dt=ti.f64), 2)
+        B = embedded(ti.Matrix([[F[1, 1], F[0, 1]], [F[1, 0], F[0, 0]]], dt=ti.f64), 2)
+        return (A @ B).determinant()
+
+    F = np.array([[1.5, 2.0], [3.0, 5.0]])
+    assert det_of_product(F) == pytest.approx((1.5 * 5.0 - 2.0 * 3.0) ** 2, rel=1e-14)
+    assert len(texts) > len(set(texts))  # the two call sites of embedded repeat its nodes' texts
