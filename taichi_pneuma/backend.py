@@ -66,6 +66,14 @@ def _choose():
                              + " or ".join(INSTALL.values()))
 
 
+def kernel(function):
+    """ti.kernel; under Quadrants with its fastcache (fastcache=True: in a later process the compiled kernel is found
+    from a hash of its source, its callees' and its arguments' types, without the AST work). For kernels whose
+    arguments are arrays and numbers only: Quadrants 1.3's fastcache cannot hash a class passed as a template (a
+    material law), and would warn at every such call."""
+    return ti.kernel(fastcache=True)(function) if NAME == "quadrants" else ti.kernel(function)
+
+
 def memoize_source_positions(context) -> None:
     """Replace Taichi 1.7's ASTTransformerContext.get_pos_info(node) by a memo of it (module docstring), keyed by
     what the text is made of: the function's file, name, first line and source lines, and the node's kind, span
