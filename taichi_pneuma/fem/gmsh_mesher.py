@@ -335,7 +335,8 @@ def _mesher_version() -> str | None:
 
 
 def _cache_key(kind: str, *parts) -> str | None:
-    version = _mesher_version()
+    """The cache entry of the parts (None when the cache is off, without gmsh, or for a part with no exact text)."""
+    version = None if cache.directory() is None else _mesher_version()
     return None if version is None else cache.key(kind, version, *parts)
 
 
