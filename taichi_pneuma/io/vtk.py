@@ -36,7 +36,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from ..fem.fields import ElementFields
-from .output import Subfolder, save_text, write_atomic
+from .output import Subfolder, held_private_folder, save_text, write_atomic
 from .units import FORCE, LENGTH, PRESSURE, history_dimensions
 
 SYMMETRIC_TENSOR = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))  # ParaView's 6-component order
@@ -103,6 +103,7 @@ class VtkSeries:
             if stale.fullmatch(name):
                 self._folder.remove(name)
         self.pvd = self.directory / f"{stem}.pvd"
+        self._scratch = held_private_folder(self, self.directory, f"{stem}_vtk")  # every step's VTU and PVD
         self.scene = built.scene
         self.material = built.elastic.law, built.elastic.parameters
         self.fields = ElementFields(mesh.vertices, mesh.elements)
@@ -137,9 +138,9 @@ class VtkSeries:
         row = {units.label(name, dimensions.get(name, "")): value for name, value in step.row().items()}
         text = vtu_text(self.points, self.cells + self.walls, point_data, cell_data, row)
         path = self.folder / f"{self.stem}_{step.step:04d}.vtu"
-        write_atomic(path, lambda tmp: tmp.write_text(text, encoding="utf-8"), self._folder)
+        write_atomic(path, lambda tmp: tmp.write_text(text, encoding="utf-8"), self._folder, self._scratch)
         self.entries.append((float(step.step), f"{self.folder.name}/{path.name}"))
-        save_text(self.pvd, pvd_text(self.entries))
+        save_text(self.pvd, pvd_text(self.entries), self._scratch)
         return path
 
     def write_all(self, result) -> Path:
