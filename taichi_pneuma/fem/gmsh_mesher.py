@@ -50,7 +50,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import importlib.metadata
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -323,6 +322,8 @@ def _mesh(solid: Solid, sizes: MeshSizes, max_tets: int, verbose: bool, surface_
 @functools.cache
 def _mesher_version() -> str | None:
     """gmsh's version and a hash of this mesher's source files (MESHER_SOURCES); None without gmsh."""
+    import importlib.metadata  # here: a 2D run does not need it
+
     try:
         version = importlib.metadata.version("gmsh")
     except importlib.metadata.PackageNotFoundError:
