@@ -12,6 +12,12 @@ naming the install command when it is not installed); without it, Taichi if it i
 What differs is named here once: the environment variables each reads (Taichi's TI_*, Quadrants' QD_*),
 and the arches each has (Quadrants dropped OpenGL). Quadrants also dropped Taichi's GUIs (ti.GUI, GGUI);
 render/ asks has_gui() / has_ggui() and falls back to its own Pillow canvas.
+
+Taichi 1.7 turns every kernel's Python source into its IR at the first call in a process, even when the compiled
+kernel then comes from the offline cache, and for each syntax node it formats the node's source position (the
+text of its error messages) with textwrap, again at every call site of an inlined ti.func: half the time of
+loading the reference run's kernels. memoize_source_positions() gives the same text from a memo keyed by all it
+is made of, as Quadrants does itself (its ASTTransformerContext.memoized_get_pos_info).
 """
 
 from __future__ import annotations
@@ -60,8 +66,40 @@ def _choose():
                              + " or ".join(INSTALL.values()))
 
 
+def kernel(function):
+    """ti.kernel; under Quadrants with its fastcache (fastcache=True: in a later process the compiled kernel is found
+    from a hash of its source, its callees' and its arguments' types, without the AST work). For kernels whose
+    arguments are arrays and numbers only: Quadrants 1.3's fastcache cannot hash a class passed as a template (a
+    material law), and would warn at every such call."""
+    return ti.kernel(fastcache=True)(function) if NAME == "quadrants" else ti.kernel(function)
+
+
+def memoize_source_positions(context) -> None:
+    """Replace Taichi 1.7's ASTTransformerContext.get_pos_info(node) by a memo of it (module docstring), keyed by
+    what the text is made of: the function's file, name, first line and source lines, and the node's kind, span
+    and, for a block statement, the line of its body."""
+    original = context.get_pos_info
+    memo = {}
+
+    def get_pos_info(self, node):
+        body = getattr(node, "body", None)
+        key = (self.file, self.func.func.__name__, self.lineno_offset, tuple(self.src), type(node), node.lineno,
+               node.end_lineno, node.col_offset, node.end_col_offset, body[0].lineno if isinstance(body, list) else None)
+        text = memo.get(key)
+        if text is None:
+            text = memo[key] = original(self, node)
+        return text
+
+    get_pos_info.original = original
+    context.get_pos_info = get_pos_info
+
+
 NAME, ti = _choose()
 VERSION = ".".join(str(v) for v in ti.__version__)
+if NAME == "taichi" and ti.__version__[:2] == (1, 7):
+    from taichi.lang.ast.ast_transformer_utils import ASTTransformerContext
+
+    memoize_source_positions(ASTTransformerContext)
 ARCHES = {name: getattr(ti, name) for name in ARCH_NAMES if hasattr(ti, name)}
 
 

@@ -1,9 +1,18 @@
 """Tests run on Taichi's CPU backend (float64). The reference scene's full ramps are solved once per session
-and shared (reference_ramp)."""
+and shared (reference_ramp). The on-disk mesh cache (io/cache.py) is off: every test meshes afresh and none
+reads or writes the user's cache folder (tests/test_fixed_costs.py turns it on in a folder of its own)."""
 
 import pytest
 
 from taichi_pneuma import runtime
+from taichi_pneuma.io import cache
+
+
+@pytest.fixture(scope="session", autouse=True)
+def no_mesh_cache():
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv(cache.VARIABLE, "off")
+        yield
 
 
 @pytest.fixture(scope="session", autouse=True)

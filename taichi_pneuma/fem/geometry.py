@@ -36,7 +36,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from .. import limits
 from ..errors import PneumaInputError, require, require_distinct, require_finite, shape_of
@@ -672,9 +671,20 @@ def require_spaced(what: str, polygon: np.ndarray) -> None:
     """Refuse an outline with two points closer than MIN_SPACING of its size (Triangle crashes on them)."""
     size = float(np.ptp(polygon, axis=0).max())
     require(np.isfinite(size), f"{what}: its outline points overflow to infinity")
-    require(not cKDTree((polygon - polygon.min(axis=0)) / size).query_pairs(MIN_SPACING),
+    require(not has_close_pair((polygon - polygon.min(axis=0)) / size, MIN_SPACING),
             f"{what}: two of its outline points coincide (closer than {MIN_SPACING:g} of its size {size:.3g}): "
             f"a radius, size or point spacing too small, or coordinates too large, to mesh")
+
+
+def has_close_pair(points: np.ndarray, r: float) -> bool:
+    """Whether two of the points (n, 2) lie within distance r (<=) of each other. Sorted by x, point i can only
+    be that close to the points after it whose x is at most x_i + r: those candidate pairs (all pairs at worst,
+    when the points share one x) are compared at once."""
+    p = points[np.argsort(points[:, 0], kind="stable")]
+    counts = np.searchsorted(p[:, 0], p[:, 0] + r, side="right") - np.arange(1, len(p) + 1)
+    first = np.repeat(np.arange(len(p)), counts)
+    second = first + 1 + np.arange(len(first)) - np.repeat(np.cumsum(counts) - counts, counts)
+    return bool(np.any(np.sum((p[second] - p[first]) ** 2, axis=1) <= r * r))
 
 
 def with_edge_midpoints(vertices: np.ndarray, elements: np.ndarray, edges=((0, 1), (1, 2), (2, 0))):

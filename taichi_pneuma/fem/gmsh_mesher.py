@@ -37,16 +37,27 @@ entry of Solid.regions (region_names).
 gmsh is a GPL-licensed optional dependency (pip install 'taichi-pneuma[3d]'); each call initialises it,
 works silently in a model of its own and finalises it (or, if the caller has gmsh initialised already,
 removes only its own model and restores the options it set).
+
+Meshes are cached on disk (io/cache.py: the user's cache folder, PNEUMA_CACHE_DIR moves it or turns it off):
+the arrays of mesh_solid, and the rubber's volume and the walls' area that estimate_tets needs, each keyed by
+everything that decides them: the solid's shapes and their parameters, the sizes, the surface meshers, gmsh's
+version and this mesher's source (the files of MESHER_SOURCES). A hit runs no gmsh at all and returns the very
+arrays gmsh made; the limits are checked on it as on a fresh mesh. A cached file is checked before use (shapes,
+dtypes, indices in range, positive tetrahedra) and a bad one is meshed afresh and replaced.
 """
 
 from __future__ import annotations
 
+import functools
+import hashlib
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from ..errors import PneumaInputError, require, require_distinct, require_finite
+from ..io import cache
 
 MAX_TETS = 200_000
 MAX_SHAPES = 64
@@ -65,6 +76,8 @@ SURFACE_MESHERS = ((6, 0), (5, 12))
 MAX_SAMPLING = 200  # points per direction on a wall surface for its distance field
 # a tetrahedron's four faces (corners in its local numbering), each oriented outward for a positive tetrahedron
 TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
+MESHER_SOURCES = ("gmsh_mesher.py", "solids.py", "pneunet.py", "geometry.py")  # the code a cached mesh depends on
+CACHE_BYTES_PER_TET = 256  # a cached mesh's arrays take about 50 bytes per tetrahedron: a larger file is not read
 
 
 @dataclass(frozen=True)
@@ -225,15 +238,32 @@ def _faces(gmsh, volumes, combined: bool = True) -> set[int]:
 
 def estimate_tets(solid: Solid, sizes: MeshSizes) -> float:
     """The estimated tetrahedron count of mesh_solid(solid, sizes) (module docstring), from the solid's
-    geometry alone: gmsh builds it, nothing is meshed."""
+    geometry alone: gmsh builds it (or the cache has its measures), nothing is meshed."""
+    entry = _cache_key("measures", solid)
+    cached = cache.load("gmsh-measures", entry, _valid_measures, 4096)
+    if cached is not None:
+        return _estimate(*map(float, cached["measures"]), sizes)
     with _session() as gmsh:
-        return _estimate(_Pieces(gmsh, solid), sizes)
+        pieces = _Pieces(gmsh, solid)
+    cache.store("gmsh-measures", entry, {"measures": np.array([pieces.volume, pieces.wall_area])})
+    return _estimate(pieces.volume, pieces.wall_area, sizes)
 
 
-def _estimate(pieces: _Pieces, sizes: MeshSizes) -> float:
-    area = min(pieces.wall_area, pieces.volume / sizes.shell) if sizes.shell else 0.0
-    bulk = pieces.volume - area * sizes.shell
+def _estimate(volume: float, wall_area: float, sizes: MeshSizes) -> float:
+    area = min(wall_area, volume / sizes.shell) if sizes.shell else 0.0
+    bulk = volume - area * sizes.shell
     return (bulk / sizes.size ** 3 + area * sizes.shell_density()) / REGULAR_TET
+
+
+def _check_estimate(volume: float, wall_area: float, sizes: MeshSizes, max_tets: int) -> None:
+    estimate = _estimate(volume, wall_area, sizes)
+    require(estimate <= max_tets,
+            f"the mesh would have about {estimate:.3g} tetrahedra (volume {volume:.4g}, size {sizes.size:g}, "
+            f"near chambers {sizes.near:g}); the limit is {max_tets} tetrahedra (--max-triangles raises it)")
+
+
+def _check_count(tets: int, max_tets: int) -> None:
+    require(tets <= max_tets, f"the mesh has {tets} tetrahedra; the limit is {max_tets} (--max-triangles raises it)")
 
 
 def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose: bool = False,
@@ -241,13 +271,31 @@ def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose
     """Mesh the solid with linear tetrahedra (gmsh: OpenCASCADE fragment, Delaunay), or raise one
     PneumaInputError: bad geometry, an estimate or a mesh over max_tets (--max-triangles raises it), or
     gmsh failing (its error line quoted). surface_meshers: the (Mesh.Algorithm, Mesh.MeshSizeFromCurvature)
-    pairs tried in turn (a study that must keep one mesh pins one)."""
+    pairs tried in turn (a study that must keep one mesh pins one). A mesh in the cache (module docstring) is
+    returned without running gmsh."""
+    entry = _cache_key("mesh", solid, sizes, tuple(tuple(pair) for pair in surface_meshers))
+    cached = cache.load("gmsh-mesh", entry, lambda arrays: _valid_mesh(arrays, solid),
+                        CACHE_BYTES_PER_TET * max(max_tets, 1) + 2 ** 20)
+    if cached is not None:
+        _check_estimate(*map(float, cached["measures"]), sizes, max_tets)
+        _check_count(len(cached["tets"]), max_tets)
+        return SolidMesh(cached["vertices"], cached["tets"],
+                         {name: cached[f"chamber{i}"] for i, (name, _) in enumerate(solid.chambers)},
+                         cached["boundary"], cached["regions"], tuple(name for name, _ in solid.regions))
+    meshed, measures = _mesh(solid, sizes, max_tets, verbose, surface_meshers)
+    cache.store("gmsh-mesh", entry, {"vertices": meshed.vertices, "tets": meshed.tets, "boundary": meshed.boundary,
+                                     "regions": meshed.regions, "measures": measures,
+                                     **{f"chamber{i}": meshed.chambers[name]
+                                        for i, (name, _) in enumerate(solid.chambers)}})
+    return meshed
+
+
+def _mesh(solid: Solid, sizes: MeshSizes, max_tets: int, verbose: bool, surface_meshers: tuple
+          ) -> tuple[SolidMesh, np.ndarray]:
+    """gmsh's mesh of the solid, and the rubber's volume and the walls' area."""
     with _session(verbose) as gmsh:
         pieces = _Pieces(gmsh, solid)
-        estimate = _estimate(pieces, sizes)
-        require(estimate <= max_tets,
-                f"the mesh would have about {estimate:.3g} tetrahedra (volume {pieces.volume:.4g}, size {sizes.size:g}, "
-                f"near chambers {sizes.near:g}); the limit is {max_tets} tetrahedra (--max-triangles raises it)")
+        _check_estimate(pieces.volume, pieces.wall_area, sizes, max_tets)
         model = gmsh.model
         for k, name in enumerate([BODY_GROUP] + [name for name, _ in solid.regions]):
             tags = [v for v, r in pieces.rubber.items() if r == k]
@@ -268,7 +316,59 @@ def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose
                 continue
             if _complete(gmsh, pieces):
                 break
-        return _read(gmsh, solid, pieces, max_tets)
+        return _read(gmsh, solid, pieces, max_tets), np.array([pieces.volume, pieces.wall_area])
+
+
+@functools.cache
+def _mesher_version() -> str | None:
+    """gmsh's version and a hash of this mesher's source files (MESHER_SOURCES); None without gmsh."""
+    import importlib.metadata  # here: a 2D run does not need it
+
+    try:
+        version = importlib.metadata.version("gmsh")
+    except importlib.metadata.PackageNotFoundError:
+        try:
+            version = _gmsh().__version__
+        except PneumaInputError:
+            return None
+    sources = hashlib.sha256(b"".join(Path(__file__).with_name(name).read_bytes() for name in MESHER_SOURCES))
+    return f"gmsh {version}, mesher {sources.hexdigest()}"
+
+
+def _cache_key(kind: str, *parts) -> str | None:
+    """The cache entry of the parts (None when the cache is off, without gmsh, or for a part with no exact text)."""
+    version = None if cache.directory() is None else _mesher_version()
+    return None if version is None else cache.key(kind, version, *parts)
+
+
+def _valid_measures(arrays: dict) -> bool:
+    """A cached (volume, wall area): two finite positive doubles."""
+    measures = arrays["measures"]
+    return measures.dtype == np.float64 and measures.shape == (2,) and bool(np.all(np.isfinite(measures) & (measures > 0)))
+
+
+def _valid_mesh(arrays: dict, solid: Solid) -> bool:
+    """Whether cached arrays are a SolidMesh of this solid: the arrays named and no other, each of its dtype and
+    shape, finite vertices, node indices in range, tetrahedra positively oriented, region tags those of the
+    solid's regions."""
+    walls = [f"chamber{i}" for i in range(len(solid.chambers))]
+    if set(arrays) != {"vertices", "tets", "boundary", "regions", "measures", *walls} or not _valid_measures(arrays):
+        return False
+    vertices, tets, regions = arrays["vertices"], arrays["tets"], arrays["regions"]
+    faces = [arrays[name] for name in ["boundary", *walls]]
+    if not (vertices.dtype == np.float64 and vertices.ndim == 2 and vertices.shape[1] == 3 and len(vertices) >= 4
+            and np.isfinite(vertices).all()):
+        return False
+    shaped = [(tets, 4), *((f, 3) for f in faces)]
+    if not all(a.dtype == np.int64 and a.ndim == 2 and a.shape[1] == k and len(a) > 0 for a, k in shaped):
+        return False
+    if not all(a.min() >= 0 and a.max() < len(vertices) for a, _ in shaped):
+        return False
+    if not (regions.dtype == np.int64 and regions.shape == (len(tets),) and regions.min() >= 0
+            and regions.max() <= len(solid.regions)):
+        return False
+    x = vertices[tets]
+    return bool(np.all(np.linalg.det(x[:, 1:] - x[:, :1]) > 0))
 
 
 def _complete(gmsh, pieces: _Pieces) -> bool:
@@ -314,7 +414,7 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
     regions = np.concatenate([np.full(len(b), k) for k, b in blocks.items()])
     require(all(len(b) for k, b in blocks.items() if any(r == k for r in pieces.rubber.values())),
             "gmsh left a part of the body without tetrahedra")
-    require(len(tags) <= max_tets, f"the mesh has {len(tags)} tetrahedra; the limit is {max_tets} (--max-triangles raises it)")
+    _check_count(len(tags), max_tets)
     node_tags, coords, _ = mesh.getNodes()
     used, tets = np.unique(tags, return_inverse=True)
     tets = tets.reshape(-1, 4)

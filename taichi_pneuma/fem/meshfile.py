@@ -23,7 +23,6 @@ import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import meshio
 import numpy as np
 
 from .. import limits
@@ -74,6 +73,8 @@ def read_mesh(path: str) -> meshio.Mesh:
 def read_file(path: str, size: int, modified: int) -> meshio.Mesh:
     """meshio.read of a file of that size and modification time, bounded to limits.read_allowance(size) bytes of
     memory."""
+    import meshio  # here and in write_mesh, not at the top: a scene without a mesh file does not load it
+
     require(size <= MAX_MESH_BYTES, f"mesh file {path!r} has {size} bytes; at most {MAX_MESH_BYTES} are read")
     allowance = limits.read_allowance(size)
     try:
@@ -221,6 +222,8 @@ def write_mesh(path, mesh: TetMesh, names: tuple[str, ...]) -> Path:
     """Write the mesh's tetrahedra (group "body") and each chamber's wall (a group named after the chamber, in the
     order of names) as gmsh 2.2 (.msh, physical groups) or Abaqus (.inp, element sets): a file MeshGeometry reads
     back to the same mesh."""
+    import meshio
+
     path = Path(path)
     require(path.suffix in (".msh", ".inp"), f"{path}: write_mesh writes .msh (gmsh 2.2) or .inp (Abaqus) files")
     walls = "triangle" if mesh.order == 1 else "triangle6"

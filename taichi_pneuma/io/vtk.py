@@ -1,4 +1,4 @@
-"""ParaView output: one VTU file per step (meshio) and a PVD collection indexing them by step.
+"""ParaView output: one VTU file per step and a PVD collection indexing them by step.
 
     <out>/<stem>.pvd                     the collection: open this in ParaView (timestep = step)
     <out>/<stem>_vtk/<stem>_0000.vtu     step 0, 1, ... each written whole (output.write_atomic)
@@ -21,20 +21,22 @@ index in the cell field chamber, -1 on the tetrahedra, and NaN in the other cell
   tip_dy, tip_rotation, solver figures), one value each.
 In a scene with units every array's name carries its unit (io/units.py): "displacement [mm]",
 "stress [kPa]", "main.pressure [kPa]".
-meshio 5.3 reads FieldData but does not write it: write_vtu adds the block (ASCII) to meshio's file.
+The VTU is written here (vtu_text), as meshio writes it uncompressed: each array inline, base64 of a UInt32
+byte count followed by the values in the machine's byte order; the field data as ASCII values.
 """
 
 from __future__ import annotations
 
+import base64
 import re
+import sys
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
-import meshio
 import numpy as np
 
 from ..fem.fields import ElementFields
-from .output import Subfolder, save_text, write_atomic
+from .output import Subfolder, held_private_folder, save_text, write_atomic
 from .units import FORCE, LENGTH, PRESSURE, history_dimensions
 
 SYMMETRIC_TENSOR = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))  # ParaView's 6-component order
@@ -46,16 +48,39 @@ def pad3(vectors: np.ndarray) -> np.ndarray:
 
 
 CELL_TYPES = {(2, 1): "triangle", (2, 2): "triangle6", (3, 1): "tetra", (3, 2): "tetra10"}  # (d, order) -> VTK
+VTK_CELLS = {"triangle": 5, "triangle6": 22, "tetra": 10, "tetra10": 24}  # VTK's cell type numbers
+XML_TYPES = {np.dtype(t): name for t, name in ((np.float64, "Float64"), (np.int32, "Int32"), (np.int64, "Int64"))}
 
 
-def write_vtu(path: Path, mesh: meshio.Mesh, field_data: dict[str, float]) -> None:
-    """meshio's VTU file (raw binary: zlib would take 5x longer than the write itself, for files half the
-    size) plus a FieldData block of one Float64 value per name."""
-    meshio.write(path, mesh, file_format="vtu", compression=None)
-    arrays = "".join(f'<DataArray type="Float64" Name={quoteattr(name)} NumberOfTuples="1" format="ascii">'
+def data_array(name: str, values: np.ndarray) -> str:
+    """A binary DataArray (uncompressed: zlib would take 5x longer than the write itself, for files half the size):
+    base64 of the UInt32 byte count and the values; a column count for an (n, k) array."""
+    values = np.ascontiguousarray(values, dtype=values.dtype.newbyteorder("="))
+    raw = values.tobytes()
+    components = f' NumberOfComponents="{values.shape[1]}"' if values.ndim == 2 else ""
+    return (f'<DataArray type="{XML_TYPES[values.dtype]}" Name={quoteattr(name)}{components} format="binary">\n'
+            f"{base64.b64encode(np.uint32(len(raw)).tobytes() + raw).decode()}\n</DataArray>\n")
+
+
+def vtu_text(points: np.ndarray, cells: list[tuple[str, np.ndarray]], point_data: dict[str, np.ndarray],
+             cell_data: dict[str, list[np.ndarray]], field_data: dict[str, float]) -> str:
+    """A VTU file: points (n, 3), cell blocks (type, (m, k) nodes), point arrays, cell arrays (one per block) and
+    one Float64 value per field-data name."""
+    fields = "".join(f'<DataArray type="Float64" Name={quoteattr(name)} NumberOfTuples="1" format="ascii">'
                      f"{float(value)!r}</DataArray>" for name, value in field_data.items())
-    text = Path(path).read_text()
-    Path(path).write_text(text.replace("<UnstructuredGrid>", f"<UnstructuredGrid><FieldData>{arrays}</FieldData>", 1))
+    connectivity = np.concatenate([nodes.ravel() for _, nodes in cells]).astype(np.int64)
+    offsets = np.cumsum(np.concatenate([np.full(len(nodes), nodes.shape[1]) for _, nodes in cells])).astype(np.int64)
+    types = np.concatenate([np.full(len(nodes), VTK_CELLS[kind]) for kind, nodes in cells]).astype(np.int64)
+    order = "LittleEndian" if sys.byteorder == "little" else "BigEndian"
+    return "".join([
+        f'<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="0.1" byte_order="{order}">\n',
+        f"<UnstructuredGrid><FieldData>{fields}</FieldData>\n",
+        f'<Piece NumberOfPoints="{len(points)}" NumberOfCells="{len(types)}">\n<Points>\n',
+        data_array("Points", points), "</Points>\n<Cells>\n", data_array("connectivity", connectivity),
+        data_array("offsets", offsets), data_array("types", types), "</Cells>\n<PointData>\n",
+        *(data_array(name, values) for name, values in point_data.items()), "</PointData>\n<CellData>\n",
+        *(data_array(name, np.concatenate(blocks)) for name, blocks in cell_data.items()),
+        "</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n"])
 
 
 def pvd_text(entries: list[tuple[float, str]]) -> str:
@@ -78,9 +103,11 @@ class VtkSeries:
             if stale.fullmatch(name):
                 self._folder.remove(name)
         self.pvd = self.directory / f"{stem}.pvd"
+        self._scratch = held_private_folder(self, self.directory, f"{stem}_vtk")  # every step's VTU and PVD
         self.scene = built.scene
         self.material = built.elastic.law, built.elastic.parameters
         self.fields = ElementFields(mesh.vertices, mesh.elements)
+        self.points = pad3(mesh.vertices)
         self.cells = [(CELL_TYPES[mesh.dim, mesh.order], mesh.elements)]
         self.walls = [] if mesh.dim == 2 else [(CELL_TYPES[2, mesh.order], np.vstack(mesh.chambers))]
         if self.walls:
@@ -107,13 +134,13 @@ class VtkSeries:
             cell_data["chamber"] = [np.full(mesh.n_elements, -1), self.wall_chamber]
         else:
             cell_data = {name: [values] for name, values in cell_data.items()}
-        grid = meshio.Mesh(pad3(mesh.vertices), self.cells + self.walls, point_data=point_data, cell_data=cell_data)
         dimensions = history_dimensions(self.scene, step.contact, mesh.dim)
         row = {units.label(name, dimensions.get(name, "")): value for name, value in step.row().items()}
+        text = vtu_text(self.points, self.cells + self.walls, point_data, cell_data, row)
         path = self.folder / f"{self.stem}_{step.step:04d}.vtu"
-        write_atomic(path, lambda tmp: write_vtu(tmp, grid, row), self._folder)
+        write_atomic(path, lambda tmp: tmp.write_text(text, encoding="utf-8"), self._folder, self._scratch)
         self.entries.append((float(step.step), f"{self.folder.name}/{path.name}"))
-        save_text(self.pvd, pvd_text(self.entries))
+        save_text(self.pvd, pvd_text(self.entries), self._scratch)
         return path
 
     def write_all(self, result) -> Path:

@@ -13,10 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable
 
-import imageio.v3 as iio
-import imageio_ffmpeg
 import numpy as np
-from tqdm import tqdm
 
 from ..errors import PneumaInputError, require, require_finite
 from ..io.output import prepare_directory, write_atomic
@@ -57,6 +54,8 @@ def frame_size(size, what: str = "size") -> tuple[int, int]:
 
 def write_video(path: Path, frames: Iterable[np.ndarray], fps: float = 12.0) -> int:
     """Encode frames ((height, width, 3) uint8, all one size) into path; return how many were written."""
+    import imageio_ffmpeg  # here, not at the top: a run without a video does not load it
+
     path = Path(path)
     codec, pix_fmt, params = check_video(path, fps)
     count = 0
@@ -107,6 +106,9 @@ def export(renderer, video: Path, png: Path | None, fps: float = 12.0, quiet: bo
     """Stream every frame of renderer (a render.FrameRenderer) into video, then save frame png_frame
     (default the last) as png if given. The progress bar shows on a terminal only (never in a log:
     tqdm's disable=None)."""
+    import imageio.v3 as iio
+    from tqdm import tqdm
+
     render_seconds, kept = 0.0, None
     png_frame = png_frame % renderer.frames
 

@@ -29,7 +29,7 @@ segment (a quadratic in the step fraction), the continuous collision check.
 import numpy as np
 
 from .. import limits
-from ..backend import ti
+from ..backend import kernel, ti
 from .base import Indices, Nodal, Table, Term, Triples, Vec2s, block_pattern, edge, int32s, position, quadratic_roots
 
 
@@ -46,7 +46,7 @@ def barrier(d, dhat, kappa):
     return b, db, ddb
 
 
-@ti.kernel
+@kernel
 def ground_energy(rest: Nodal, u: Nodal, verts: Indices, height: ti.f64, dhat: ti.f64,
                   kappa: ti.f64) -> tuple[ti.f64, ti.f64]:
     """(sum of the barriers over the vertices above the ground, smallest distance to it)."""
@@ -60,7 +60,7 @@ def ground_energy(rest: Nodal, u: Nodal, verts: Indices, height: ti.f64, dhat: t
     return total, nearest
 
 
-@ti.kernel
+@kernel
 def ground_derivatives(rest: Nodal, u: Nodal, verts: Indices, height: ti.f64, dhat: ti.f64, kappa: ti.f64,
                        gradient: Nodal, hessian: ti.types.ndarray(dtype=ti.f64, ndim=1)):
     """gradient = dE/dx (zero off the listed vertices); hessian[k] = b''(d_k), the y-y entry of vertex k."""
@@ -73,7 +73,7 @@ def ground_derivatives(rest: Nodal, u: Nodal, verts: Indices, height: ti.f64, dh
         hessian[k] = ddb
 
 
-@ti.kernel
+@kernel
 def ground_step(rest: Nodal, u: Nodal, dx: Nodal, verts: Indices, height: ti.f64) -> ti.f64:
     """Smallest alpha > 0 at which a listed vertex moving along dx reaches the ground (inf if none)."""
     bound = ti.math.inf
@@ -184,7 +184,7 @@ def squared_distance(rest: ti.template(), u: ti.template(), pairs: ti.template()
     return s, g, H
 
 
-@ti.kernel
+@kernel
 def self_contact_energy(rest: Vec2s, u: Vec2s, pairs: Triples, dhat: ti.f64,
                         kappa: ti.f64) -> tuple[ti.f64, ti.f64]:
     """(sum of the barriers over the pairs at positive distance, smallest squared distance)."""
@@ -198,7 +198,7 @@ def self_contact_energy(rest: Vec2s, u: Vec2s, pairs: Triples, dhat: ti.f64,
     return total, nearest
 
 
-@ti.kernel
+@kernel
 def self_contact_derivatives(rest: Vec2s, u: Vec2s, pairs: Triples, dhat: ti.f64, kappa: ti.f64, exact: ti.i32,
                              gradient: Vec2s, hessian: Table):
     """gradient = dE/dx; hessian[q] = the 6 x 6 block of pair q, row-major (Gauss-Newton part unless exact)."""
@@ -223,7 +223,7 @@ def self_contact_derivatives(rest: Vec2s, u: Vec2s, pairs: Triples, dhat: ti.f64
                 hessian[q, 6 * r + c] = K[r, c]
 
 
-@ti.kernel
+@kernel
 def self_contact_step(rest: Vec2s, u: Vec2s, dx: Vec2s, pairs: Triples) -> ti.f64:
     """Smallest alpha > 0 at which a point becomes collinear with a non-incident wall edge, on the edge."""
     bound = ti.math.inf

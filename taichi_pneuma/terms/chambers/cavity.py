@@ -21,7 +21,7 @@ its nodes, which depends on x) follow by the chain rule.
 
 import numpy as np
 
-from ...backend import ti
+from ...backend import kernel, ti
 from ...fem.elements import TRIANGLE_P1, TRIANGLE_P2
 from ...fem.tetmesh import Closure
 from ..base import Indices, Nodal, Scalars, Table, block_pattern, int32s
@@ -50,7 +50,7 @@ def cross_matrix(v):
     return ti.Matrix([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
-@ti.kernel
+@kernel
 def wall_volume(rest: Nodal, u: Nodal, wall: Indices, faces: Faces, shapes: Table, derivatives: Derivatives,
                 weights: Scalars, projector: Table, gradient: Nodal) -> ti.f64:
     """V(x) = sum_f sum_q w_q (P y) . (y_xi x y_eta) (the weights carry 1/r and the reference area); gradient[i] =
@@ -71,7 +71,7 @@ def wall_volume(rest: Nodal, u: Nodal, wall: Indices, faces: Faces, shapes: Tabl
     return total
 
 
-@ti.kernel
+@kernel
 def wall_volume_hessian(rest: Nodal, u: Nodal, wall: Indices, faces: Faces, shapes: Table, derivatives: Derivatives,
                         weights: Scalars, projector: Table, out: Table):
     """out[f] = d2V/dx2 on the nodes of wall triangle f, a dense 3k x 3k block, row-major."""

@@ -36,7 +36,7 @@ PSD elastic and clamp Hessians keep projected Newton a descent method).
 
 import numpy as np
 
-from ...backend import ti
+from ...backend import kernel, ti
 from ...errors import require
 from ..base import Indices, Scalars, Term, Vec2s, int32s, position, vertex_dofs
 from .cavity import VolumeForm
@@ -44,7 +44,7 @@ from .cavity import VolumeForm
 Pairs = ti.types.ndarray(dtype=ti.types.vector(2, ti.i32), ndim=1)  # (P, 2) int32 index pairs
 
 
-@ti.kernel
+@kernel
 def wall_area(rest: Vec2s, u: Vec2s, loop: Indices, pairs: Pairs, weights: Scalars, gradient: Vec2s) -> ti.f64:
     """A(x) = sum_t weights[t] x_i x x_j over the pairs (i, j) of loop positions; gradient[i] = dA/dx of
     loop node i."""
