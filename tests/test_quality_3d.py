@@ -13,9 +13,9 @@ def scene(*flags):
 
 @pytest.mark.parametrize("quality", list(QUALITY_3D))
 def test_a_given_quality_remeshes_a_body_from_shapes(quality):
-    size, order, _ = QUALITY_3D[quality]
+    size, near, order, _ = QUALITY_3D[quality]
     geometry = scene("--scene", "pneunet_3d", "--quality", quality).geometry
-    assert (geometry.sizes.size, geometry.order) == (size, order)
+    assert (geometry.sizes.size, geometry.sizes.near, geometry.order) == (size, near or size, order)
 
 
 def test_without_quality_the_scene_keeps_its_mesh_and_set_overrides_the_preset():
@@ -26,3 +26,18 @@ def test_without_quality_the_scene_keeps_its_mesh_and_set_overrides_the_preset()
 
 def test_a_mesh_file_keeps_its_tetrahedra():
     assert scene("--scene", "beam_3d", "--quality", "accurate").geometry.order == 1
+
+
+def test_the_first_line_names_the_preset_and_its_measured_error_where_a_preset_made_the_mesh():
+    from taichi_pneuma.apps.cli import QUALITY_ERROR, preset_note
+
+    def note(*flags):
+        args = parser().parse_args(list(flags))
+        return preset_note(scene_of_flags(args), args)
+
+    assert note("--cy", "0.15") == f"; --quality default: tip within {QUALITY_ERROR[2]['default']:g} % of converged " \
+                                   "on the reference beam"
+    assert "--quality high: tip within" in note("--scene", "pneunet_3d", "--quality", "high")
+    assert note("--scene", "pneunet_3d") == ""  # the scene's own [mesh]
+    assert note("--scene", "beam_3d", "--quality", "high") == ""  # a mesh file's tetrahedra
+    assert note("--scene", "pneunet_finger") == ""

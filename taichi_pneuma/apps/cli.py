@@ -22,10 +22,15 @@ from ..render import COLOR_FIELDS, RENDERERS
 # "default" is the reference beam's mesh and the solver's default tolerance (tests/test_cli.py checks they agree).
 QUALITY = {"draft": (0.005, 1, 1e-4), "default": (0.0012, 1, 1e-6), "high": (0.005, 2, 1e-6),
            "accurate": (0.0012, 2, 1e-9)}
-# The 3D presets: (tetrahedron edge length of a body meshed from shapes, element order, Newton tolerance), read
-# off the 3D accuracy study (docs/solid.md, benchmarks/accuracy_3d.py).
-QUALITY_3D = {"draft": (0.3, 1, 1e-4), "default": (0.3, 2, 1e-6), "high": (0.15, 2, 1e-6),
-              "accurate": (0.1, 2, 1e-9)}
+# The 3D presets: (tetrahedron edge length of a body meshed from shapes, the edge length near its chambers (None:
+# the same) growing back over that edge length, element order, Newton tolerance), read off beam_3d_ellipsoid's
+# tip against mesh size and grading (docs/solid.md, "3D presets"): the error is near the chambers' thin walls.
+QUALITY_3D = {"draft": (0.3, None, 1, 1e-4), "default": (0.3, 0.15, 2, 1e-6), "high": (0.3, 0.1, 2, 1e-6),
+              "accurate": (0.2, 0.08, 2, 1e-9)}
+# each preset's measured tip error against the converged tip, on the reference beam (2D, nu = 0.45: docs/accuracy.md)
+# and on beam_3d_ellipsoid (3D: docs/solid.md; pneuma-bench --sections presets_3d measures it): the run's first line
+QUALITY_ERROR = {2: {"draft": 28.4, "default": 8.0, "high": 0.64, "accurate": 0.07},
+                 3: {"draft": 26, "default": 1.8, "high": 0.7, "accurate": 0.2}}
 MEASURE = {2: "area", 3: "volume"}  # what a chamber encloses, by dimension
 MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_iterations, simulate.MAX_CUTS)
 
@@ -63,8 +68,9 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quality", default="default", choices=list(QUALITY), action=GivenQuality,
                    help="mesh density, element order and Newton tolerance, read off the accuracy-vs-time study: "
                         + "; ".join(f"{k}: max area {a:g}, order {o}, tol {t:g}" for k, (a, o, t) in QUALITY.items())
-                        + "; in 3D " + "; ".join(f"{k}: tetrahedron size {h:g}, order {o}, tol {t:g}"
-                                                 for k, (h, o, t) in QUALITY_3D.items())
+                        + "; in 3D " + "; ".join(f"{k}: tetrahedron size {h:g}"
+                                                 + ("" if near is None else f" ({near:g} near the chambers)")
+                                                 + f", order {o}, tol {t:g}" for k, (h, near, o, t) in QUALITY_3D.items())
                         + " (given, it remeshes a 3D scene file's body from shapes; without it the scene keeps "
                           "its [mesh]); a quality other than the default adds _QUALITY to the result file names")
     p.add_argument("--max-area", type=float, default=None, help="Triangle's maximum triangle area (overrides --quality)")
@@ -160,8 +166,22 @@ def with_quality_3d(scene, args: argparse.Namespace):
     and the body is meshed from shapes (a mesh file's tetrahedra are its own); else the scene as it is."""
     if not getattr(args, "quality_given", False) or scene.dim != 3 or not hasattr(scene.geometry, "sizes"):
         return scene
-    size, order, _ = QUALITY_3D[args.quality]
-    return scene.with_values({"mesh.size": size, "mesh.order": order})
+    size, near, order, _ = QUALITY_3D[args.quality]
+    graded = near is not None or scene.geometry.sizes.near_chambers is not None  # (a uniform preset: near = size)
+    return scene.with_values({"mesh.size": size, "mesh.order": order,
+                              **({"mesh.near_chambers": near or size, "mesh.distance": size} if graded else {})})
+
+
+def preset_note(scene, args: argparse.Namespace | None) -> str:
+    """What the run's --quality preset is measured to cost in accuracy ('' where no preset decides its mesh: a
+    scene file's own [mesh], a mesh file): the reference beam's flags, or a 3D body from shapes with --quality."""
+    if args is None or not hasattr(args, "quality"):
+        return ""
+    from_shapes = getattr(args, "quality_given", False) and scene.dim == 3 and hasattr(scene.geometry, "sizes")
+    if getattr(args, "scene", None) and not from_shapes:
+        return ""
+    on = "the reference beam" if scene.dim == 2 else "beam_3d_ellipsoid"
+    return f"; --quality {args.quality}: tip within {QUALITY_ERROR[scene.dim][args.quality]:g} % of converged on {on}"
 
 
 def scene_of_flags(args: argparse.Namespace):
@@ -178,9 +198,9 @@ def scene_of_flags(args: argparse.Namespace):
     return scene
 
 
-def build(scene):
-    """Mesh the scene, build its terms and print the mesh size, the supports, the terms and each chamber's rest
-    area."""
+def build(scene, args: argparse.Namespace | None = None):
+    """Mesh the scene, build its terms and print the mesh size, the supports, the terms (and, where a --quality
+    preset of args made the mesh, its measured error: preset_note) and each chamber's rest area."""
     from ..scene import describe_supports
     from ..solve.result import ELEMENTS
 
@@ -189,7 +209,7 @@ def build(scene):
     kind = ("" if mesh.order == 1 else "quadratic ") + ELEMENTS[mesh.dim]
     print(f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
           f"{mesh.n_elements} {kind}; {describe_supports(mesh, scene.effects)}; "
-          f"terms: {', '.join(built.model.term_names())}")
+          f"terms: {', '.join(built.model.term_names())}{preset_note(scene, args)}")
     for chamber in built.chambers:
         control = MEASURE[mesh.dim] if chamber.kind.name == "area" else chamber.kind.name  # "volume" in 3D
         print(f"chamber {chamber.chamber_name}: {control} control, wall {chamber.n_wall} vertices, "

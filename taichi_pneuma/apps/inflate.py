@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> dict:
 def run_scene(args: argparse.Namespace, scene, stem: str, size: tuple[int, int], out) -> dict:
     from ..io.vtk import VtkSeries
 
-    built = build(scene)
+    built = build(scene, args)
     vtk = VtkSeries(out, stem, built)
     with holding():  # from the last solve to the last file, a signal waits for the files (the ramp's own: stopping)
         return solve_and_save(args, built, stem, size, out, vtk)

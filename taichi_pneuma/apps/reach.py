@@ -172,7 +172,7 @@ def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: li
 
     from ..control.inverse import Reacher
 
-    (lo, hi), built = bounds, build(scene)
+    (lo, hi), built = bounds, build(scene, args)
     start = time.perf_counter()
     reacher = Reacher(built, (lo, hi), options, newton_options(args), args.max_cuts)
     print("bounds: " + ", ".join(f"{n} {a:g} .. {b:g}" for n, a, b in zip(reacher.names, lo, hi))

@@ -59,7 +59,7 @@ def run_placements(args: argparse.Namespace, scenes, stems: list[str], size: tup
     from ..io.vtk import VtkSeries
     from ..solve.simulate import RampInterrupted, RampStopped
 
-    built = [build(scene) for scene in scenes]
+    built = [build(scene, args) for scene in scenes]
     series = [VtkSeries(out, stem, b) for b, stem in zip(built, stems)]
     solved = []
     for b, vtk, (cy, _) in zip(built, series, PLACEMENTS):

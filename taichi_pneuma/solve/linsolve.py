@@ -17,7 +17,6 @@ from contextlib import contextmanager
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .. import runtime
 from ..errors import require
@@ -67,8 +66,10 @@ class ScipySuperLU:
     name = "scipy"
 
     def factorize(self, matrix: sp.csr_matrix) -> None:
+        from scipy.sparse.linalg import splu  # (imported where used, as in _cg)
+
         try:
-            self._lu = spla.splu(matrix.tocsc(), permc_spec="MMD_AT_PLUS_A")
+            self._lu = splu(matrix.tocsc(), permc_spec="MMD_AT_PLUS_A")
         except RuntimeError as exc:
             raise FactorizationError(str(exc)) from None
 
@@ -313,6 +314,8 @@ class AmgConjugateGradient:
                 y[dofs] += c * float(u @ x[dofs]) * u
             return y
 
+        import scipy.sparse.linalg as spla  # (imported where used: 0.1 s of every run's start otherwise)
+
         operator = spla.LinearOperator(matrix.shape, matvec=apply, dtype=np.float64)
         count = itertools.count()
         x, info = spla.cg(operator, rhs, rtol=rtol, maxiter=self.MAX_ITERATIONS, M=self._preconditioner,
@@ -387,6 +390,6 @@ def solve_low_rank_updated(backend, rhs: np.ndarray, low_rank: list[tuple[np.nda
     for j, (dofs, u, _) in enumerate(low_rank):
         U[dofs, j] = u
     solved = backend.solve(np.column_stack([rhs, U]))  # one pass over the factor for all right-hand sides
-    y, Z = solved[:, 0], solved[:, 1:]
+    y, Z = solved[:, :-len(low_rank)].reshape(rhs.shape), solved[:, -len(low_rank):]
     capacitance = np.diag([1.0 / c for _, _, c in low_rank]) + U.T @ Z
     return y - Z @ np.linalg.solve(capacitance, U.T @ y)
