@@ -20,7 +20,7 @@ def test_a_given_quality_remeshes_a_body_from_shapes(quality):
 
 def test_without_quality_the_scene_keeps_its_mesh_and_set_overrides_the_preset():
     own = scene("--scene", "pneunet_3d").geometry
-    assert (own.sizes.size, own.order) == (0.2, 1)  # pneunet_3d.toml's [mesh]
+    assert (own.sizes.size, own.sizes.near, own.order) == (0.3, 0.15, 2)  # pneunet_3d.toml's [mesh]
     assert scene("--scene", "pneunet_3d", "--quality", "draft", "--set", "mesh.size=0.25").geometry.sizes.size == 0.25
 
 

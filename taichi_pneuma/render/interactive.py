@@ -14,7 +14,7 @@ import time
 import numpy as np
 
 from ..scene import Scene
-from ..solve.newton import NewtonOptions, NewtonSolver
+from ..solve.newton import CHORD_MAX_CONTRACTION, NewtonOptions, NewtonSolver
 from .frames import FrameRenderer, Track, open_canvas
 
 # Newton tolerance of live forward solves: with the tangent predictor one Newton iteration reaches it
@@ -152,10 +152,10 @@ class LiveEquilibrium:
     """The 3D live window's solve: one Newton step per frame, so a moving slider never waits for convergence.
 
     frame(commands) takes, from the state on screen, one Newton step at the commands: while they move, a
-    modified Newton step (the previous frame's factorisation reused, no Hessian assembled: solve's
-    reuse_factor), while they rest a full one per frame until the residual |g| / force scale is within the
-    Newton tolerance, so the state a resting slider settles to is the equilibrium a full Newton solve finds
-    at those commands. The line search never lets a tetrahedron invert (terms' max_step). A step the line
+    chord step (the previous frame's factorisation reused, no Hessian assembled: solve's reuse_factor); while
+    they rest, chord steps as long as each contracts the residual by CHORD_MAX_CONTRACTION or better, else a
+    full Newton step, one per frame until the residual |g| / force scale is within the Newton tolerance, so the
+    state a resting slider settles to is the equilibrium a full Newton solve finds at those commands. The line search never lets a tetrahedron invert (terms' max_step). A step the line
     search refuses leaves the state as it was and the next frame takes a fresh Hessian; where even that
     fails, the loop waits for the commands to move."""
 
@@ -163,6 +163,7 @@ class LiveEquilibrium:
         self.built, self.solver = built, NewtonSolver(built.model, options or NewtonOptions(tol=LIVE_TOL))
         self.u = np.zeros_like(built.mesh.vertices)
         self.commands, self.residual, self.stuck, self.reuse = None, math.inf, False, False
+        self.contraction = math.inf  # the last step's residual over its start's
         self.iterations = 0  # Newton steps taken since the commands last moved
 
     @property
@@ -178,8 +179,9 @@ class LiveEquilibrium:
             self.stuck, self.iterations = False, 0
         elif self.converged or self.stuck:
             return False
-        reuse = moved and self.reuse
+        reuse = self.reuse and (moved or self.contraction <= CHORD_MAX_CONTRACTION)
         u, record = self.solver.solve(self.u, max_iterations=1, reuse_factor=reuse)
+        self.contraction = record.residuals[-1] / record.residuals[0] if record.iterations else math.inf
         self.residual = record.residual
         if record.iterations:
             self.u, self.iterations = u, self.iterations + 1
