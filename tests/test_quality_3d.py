@@ -14,13 +14,13 @@ def scene(*flags):
 @pytest.mark.parametrize("quality", list(QUALITY_3D))
 def test_a_given_quality_remeshes_a_body_from_shapes(quality):
     size, near, order, _ = QUALITY_3D[quality]
-    geometry = scene("--scene", "pneunet_3d", "--quality", quality).geometry
+    geometry = scene("--scene", "beam_3d_ellipsoid", "--quality", quality).geometry
     assert (geometry.sizes.size, geometry.sizes.near, geometry.order) == (size, near or size, order)
 
 
 def test_without_quality_the_scene_keeps_its_mesh_and_set_overrides_the_preset():
     own = scene("--scene", "pneunet_3d").geometry
-    assert (own.sizes.size, own.sizes.near, own.order) == (0.3, 0.15, 2)  # pneunet_3d.toml's [mesh]
+    assert (own.sizes.size, own.sizes.near, own.order) == (0.3, 0.12, 2)  # pneunet_3d.toml's [mesh]
     assert scene("--scene", "pneunet_3d", "--quality", "draft", "--set", "mesh.size=0.25").geometry.sizes.size == 0.25
 
 

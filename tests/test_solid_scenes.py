@@ -83,7 +83,8 @@ def scene_of(text: str, name: str = "s"):
 def beam(size: float = 0.5, increments: int = 2, order: int = 1):
     """The shipped 3D reference beam from shapes on a coarse mesh, a short ramp."""
     return tp.load_scene("beam_3d_ellipsoid").with_values({
-        "mesh.size": size, "mesh.order": order, "schedule.increments": increments,
+        "mesh.size": size, "mesh.near_chambers": size, "mesh.distance": size, "mesh.order": order,
+        "schedule.increments": increments,
         "chambers[0].keyframes": [[0, 1.0], [increments, 1.5]]})
 
 
@@ -123,7 +124,7 @@ def test_quadratic_order_adds_straight_midside_nodes():
 def test_pneunet_layer_is_its_volume_group_and_stiffer():
     """pneunet_3d's region { group = "layer" } gives E = 5e4 to exactly the tetrahedra of the bottom slab (their
     centroids within `layer` of the bottom), E = 1e4 to the rest."""
-    scene = tp.load_scene("pneunet_3d").with_value("mesh.size", 0.5)
+    scene = tp.load_scene("pneunet_3d").with_values({"mesh.size": 0.5, "mesh.near_chambers": 0.5, "mesh.order": 1})
     mesh = scene.build().mesh
     _, parameters = scene.element_material(mesh)
     stiff = parameters[:, 0] > parameters[:, 0].min()
@@ -138,7 +139,7 @@ def test_pneunet_layer_is_its_volume_group_and_stiffer():
     ({"mesh.max_area": 0.01}, "mesh.max_area: a 3D body from shapes takes mesh.size"),
     ({"mesh.size": DELETE}, "missing key 'mesh.size'"),
     ({"mesh.size": -0.1}, "size = -0.1 must be > 0"),
-    ({"mesh.near_chambers": 0.6}, r"near_chambers = 0.6 must lie in \(0, size = 0.5\]"),
+    ({"mesh.near_chambers": 0.0}, r"near_chambers = 0.0 must be > 0"),
     ({"chambers[0].shape": "ellipse", "chambers[0].center": [0, 0.15], "chambers[0].semi_axes": [0.8, 0.2]},
      "chamber 'main': a 3D body's chambers are 3D shapes"),
     ({"chambers[0].semi_axes": [0.85, 0.22]}, r"semi_axes = \(0.85, 0.22\) must be three numbers"),
@@ -200,7 +201,8 @@ def test_pneunet_from_the_command_line_curls_towards_its_layer(tmp_path):
     """The shipped PneuNet on a coarse mesh: inflated, the finger curls down (towards the stiff layer), and
     deflated it returns to rest."""
     ramps = [arg for i in range(6) for arg in ("--set", f"chambers[{i}].keyframes=[[0, 0.0], [3, 900.0], [6, 0.0]]")]
-    code = inflate(["--scene", "pneunet_3d", "--set", "mesh.size=0.5", "--set", "schedule.increments=6", *ramps,
+    code = inflate(["--scene", "pneunet_3d", "--set", "mesh.size=0.5", "--set", "mesh.near_chambers=0.5",
+                    "--set", "mesh.order=1", "--set", "schedule.increments=6", *ramps,
                     "--no-video", "--quiet", "--out", str(tmp_path)])
     assert code == 0
     states = np.load(tmp_path / "pneunet_3d_states.npz")
@@ -265,7 +267,8 @@ def test_3d_frame_colours_are_the_tetrahedra_under_the_faces(tiny_run):
 def test_3d_video_from_the_command_line(tmp_path):
     """inflate on a 3D scene writes an mp4 of one 3D frame per step and the most deformed frame's PNG, with the
     chamber visible."""
-    code = inflate(["--scene", "beam_3d_ellipsoid", "--set", "mesh.size=0.5", "--set", "schedule.increments=2",
+    code = inflate(["--scene", "beam_3d_ellipsoid", "--set", "mesh.size=0.5", "--set", "mesh.near_chambers=0.5",
+                    "--set", "mesh.order=1", "--set", "schedule.increments=2",
                     "--set", "chambers[0].keyframes=[[0, 1.0], [2, 1.5]]", "--renderer", "pillow", "--size", "480x240",
                     "--quiet", "--out", str(tmp_path)])
     assert code == 0

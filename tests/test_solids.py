@@ -174,7 +174,7 @@ def test_bad_solids_are_one_clear_error_and_leave_gmsh_finalised(solid, message)
     (lambda: Solid(BODY, (("body", Box((0, 0, 0), (0.2, 0.2, 0.2))),)), "names .* other than 'body'"),
     (lambda: Solid(BODY, (("a", Box((0, 0, 0), (0.2, 0.2, 0.2))),), (("a", Box((0, 0, 0), (1, 1, 1))),)), "distinct"),
     (lambda: Solid((1, 2), ()), "body: .* is not a 3D shape"),
-    (lambda: MeshSizes(0.1, near_chambers=0.2), r"near_chambers = 0.2 must lie in \(0, size = 0.1\]"),
+    (lambda: MeshSizes(0.1, near_chambers=-0.2), r"near_chambers = -0.2 must be > 0"),
     (lambda: MeshSizes(float("nan")), "size = nan must be a finite number"),
     (lambda: Box((0, 0, 0), (1, -1, 1)), "size = .* must be > 0"),
     (lambda: Box((0, 0), (1, 1, 1)), r"center = \(0, 0\) must be three numbers"),

@@ -167,9 +167,8 @@ def with_quality_3d(scene, args: argparse.Namespace):
     if not getattr(args, "quality_given", False) or scene.dim != 3 or not hasattr(scene.geometry, "sizes"):
         return scene
     size, near, order, _ = QUALITY_3D[args.quality]
-    graded = near is not None or scene.geometry.sizes.near_chambers is not None  # (a uniform preset: near = size)
-    return scene.with_values({"mesh.size": size, "mesh.order": order,
-                              **({"mesh.near_chambers": near or size, "mesh.distance": size} if graded else {})})
+    return scene.with_values({"mesh.size": size, "mesh.near_chambers": near or size, "mesh.distance": size,
+                              "mesh.order": order})
 
 
 def preset_note(scene, args: argparse.Namespace | None) -> str:

@@ -82,8 +82,8 @@ CACHE_BYTES_PER_TET = 256  # a cached mesh's arrays take about 50 bytes per tetr
 
 @dataclass(frozen=True)
 class MeshSizes:
-    """Target tetrahedron edge length: `size` in the bulk, `near_chambers` (default size) within that
-    distance of the chamber walls, growing linearly to `size` over `distance` (default 2 size) beyond."""
+    """Target tetrahedron edge length: `size` in the bulk, `near_chambers` (default size; at most size) within
+    that distance of the chamber walls, growing linearly to `size` over `distance` (default 2 size) beyond."""
 
     size: float
     near_chambers: float | None = None
@@ -92,14 +92,16 @@ class MeshSizes:
     def __post_init__(self):
         require(require_finite("size", self.size) > 0, f"size = {self.size!r} must be > 0")
         if self.near_chambers is not None:
-            near = require_finite("near_chambers", self.near_chambers)
-            require(0 < near <= self.size, f"near_chambers = {self.near_chambers!r} must lie in (0, size = {self.size:g}]")
+            require(require_finite("near_chambers", self.near_chambers) > 0,
+                    f"near_chambers = {self.near_chambers!r} must be > 0")
         if self.distance is not None:
             require(require_finite("distance", self.distance) > 0, f"distance = {self.distance!r} must be > 0")
 
     @property
     def near(self) -> float:
-        return self.size if self.near_chambers is None else float(self.near_chambers)
+        """The edge length near the chambers: near_chambers, never above size (a size set below a scene's
+        near_chambers makes the mesh uniform at that size)."""
+        return self.size if self.near_chambers is None else min(float(self.near_chambers), float(self.size))
 
     @property
     def grading(self) -> float:

@@ -290,7 +290,7 @@ def scene_table(scene_class) -> Table:
                        "size": Key(float, None, "tetrahedron edge length in the bulk (3D body from shapes; required "
                                                 "there)", unit=LENGTH),
                        "near_chambers": Key(float, None, "edge length within that distance of the chamber walls (3D "
-                                                         "shapes; none: size)", unit=LENGTH),
+                                                         "shapes; none: size; at most size)", unit=LENGTH),
                        "distance": Key(float, None, "over which the edge length grows from near_chambers back to size "
                                                     "(3D shapes; none: 2 size)", unit=LENGTH),
                        "order": Key(int, 1, "1: linear triangles (tetrahedra), 2: quadratic (3D: straight midside "
