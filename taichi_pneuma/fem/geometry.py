@@ -33,7 +33,7 @@ and head CSV columns, so none starts like a spreadsheet formula (output.check_he
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -43,6 +43,7 @@ from ..errors import PneumaInputError, require, require_distinct, require_finite
 from ..io.output import check_heading
 from ..io.units import PLANE_AREA, si_default
 from . import triangulation
+from .elements import TRIANGLE_P2
 
 OUTER_MARKER = 1
 MARGIN = 1e-3
@@ -99,6 +100,13 @@ class Ellipse:
         (cx, cy), (a, b) = self.center, self.semi_axes
         return np.column_stack([cx + a * np.cos(t), cy + b * np.sin(t)])
 
+    def project(self, points: np.ndarray) -> np.ndarray:
+        """Points (k, 2) near the ellipse moved onto it at their parameter angle t = atan2((y - cy) / b,
+        (x - cx) / a): (cx + a cos t, cy + b sin t), radially on a circle; the polygon's vertices stay."""
+        (cx, cy), (a, b) = self.center, self.semi_axes
+        t = np.arctan2((points[:, 1] - cy) / b, (points[:, 0] - cx) / a)
+        return np.column_stack([cx + a * np.cos(t), cy + b * np.sin(t)])
+
 
 @dataclass(frozen=True)
 class RoundedRectangle:
@@ -126,6 +134,16 @@ class RoundedRectangle:
             t = np.linspace(-np.pi / 2 + k * np.pi / 2, k * np.pi / 2, self.corner_points)
             points.append(np.column_stack([ox + r * np.cos(t), oy + r * np.sin(t)]))
         return np.vstack(points)
+
+    def project(self, points: np.ndarray) -> np.ndarray:
+        """Points (k, 2) near the outline moved to its nearest point. The shape is the box of the corner circles'
+        centres grown by radius, so that is o + r (p - o) / |p - o| with o the box's point nearest p: onto its
+        corner circle in a corner, unmoved on a straight side."""
+        (cx, cy), (w, h), r = self.center, self.size, self.radius
+        half = np.array([w / 2 - r, h / 2 - r])
+        o = np.clip(points - (cx, cy), -half, half) + (cx, cy)
+        d = points - o
+        return o + r * d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
 @dataclass(frozen=True)
@@ -506,7 +524,9 @@ class Mesh:
 
     @property
     def area(self) -> float:
-        """Total rest area of the triangles."""
+        """Total rest area of the triangles (curved ones' included: see nodal_areas)."""
+        if self.order == 2:
+            return float(np.sum(self.nodal_areas()))
         return float(np.sum(triangle_areas(self.vertices, self.triangles)))
 
     def display_triangles(self) -> np.ndarray:
@@ -520,12 +540,17 @@ class Mesh:
 
     def nodal_areas(self) -> np.ndarray:
         """The integral of each node's shape function over the body, sum_t int_t N_a dA: a third of the
-        area of the triangles at a node for linear elements; for quadratic ones 0 at corners and a third
-        of each adjacent triangle's area at midside nodes (exact weights of a load linear in x)."""
-        areas = triangle_areas(self.vertices, self.triangles)
-        nodes = self.triangles[:, :3] if self.order == 1 else self.triangles[:, 3:]
+        area of the triangles at a node for linear elements. For quadratic ones int N_a det(dX/dxi) dxi
+        by the degree-4 rule, exact (N_a and det dX/dxi are quadratic): 0 at corners and a third of the
+        triangle's area at midside nodes on a straight-sided triangle, and the exact measure of a triangle
+        with a curved (parabolic) side. Either way the exact weights of a load linear in x."""
         out = np.zeros(self.n_vertices)
-        np.add.at(out, nodes.ravel(), np.repeat(areas / 3, 3))
+        if self.order == 1:
+            np.add.at(out, self.triangles.ravel(), np.repeat(triangle_areas(self.vertices, self.triangles) / 3, 3))
+            return out
+        family = replace(TRIANGLE_P2, quadrature_degree=4)
+        weights = family.quadrature(self.vertices, self.triangles)[1] @ family.shape_functions(family.rule[0])
+        np.add.at(out, self.triangles.ravel(), weights.ravel())
         return out
 
 
@@ -642,16 +667,20 @@ class Geometry:
         vertices = np.asarray(out["vertices"], dtype=np.float64)
         triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
         segments, markers = np.asarray(out["segments"], dtype=np.int64), out["segment_markers"].ravel()
+        shapes = [self.body] + [shape for _, shape in self.chambers]  # the shape of marker OUTER_MARKER + c
+        curves = {OUTER_MARKER + c: shape.project for c, shape in enumerate(shapes) if hasattr(shape, "project")}
+        if self.order == 2 or self.refinements:
+            vertices = onto_curves(vertices, segments, markers, curves)
         for _ in range(self.refinements):
             vertices, mid = with_edge_midpoints(vertices, triangles)
             triangles = split_in_four(np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])]))
-            halves = mid(segments[:, 0], segments[:, 1])
-            segments = np.vstack([np.column_stack([segments[:, 0], halves]), np.column_stack([halves, segments[:, 1]])])
-            markers = np.concatenate([markers, markers])
+            segments, markers = halved(segments, markers, mid)
+            vertices = onto_curves(vertices, segments, markers, curves)
         mid = None
         if self.order == 2:
             vertices, mid = with_edge_midpoints(vertices, triangles)
             triangles = np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])])
+            vertices = onto_curves(vertices, *halved(segments, markers, mid), curves, triangles)
         chambers = []
         for c, (_, origin) in enumerate(walls, start=1):
             nodes = chain(segments[markers == OUTER_MARKER + c], closed=origin is None)
@@ -690,6 +719,42 @@ def with_edge_midpoints(vertices: np.ndarray, elements: np.ndarray, edges=((0, 1
         return n + np.searchsorted(keys, lo * n + hi)
 
     return np.vstack([vertices, 0.5 * (vertices[unique[:, 0]] + vertices[unique[:, 1]])]), mid
+
+
+def halved(segments: np.ndarray, markers: np.ndarray, mid) -> tuple[np.ndarray, np.ndarray]:
+    """Boundary segments (s, 2) and their markers split at their midpoint nodes mid(a, b): (2 s, 2), (2 s,)."""
+    halves = mid(segments[:, 0], segments[:, 1])
+    return (np.vstack([np.column_stack([segments[:, 0], halves]), np.column_stack([halves, segments[:, 1]])]),
+            np.concatenate([markers, markers]))
+
+
+def onto_curves(vertices: np.ndarray, segments: np.ndarray, markers: np.ndarray, curves: dict,
+                triangles: np.ndarray | None = None) -> np.ndarray:
+    """The vertices with every node of the boundary segments of marker m moved onto the exact curve of the
+    shape they came from, curves[m] (its project: an ellipse, a rounded corner; a marker without a curve, a
+    straight polygon, leaves its nodes). A node on segments of two markers stays: the end of a chamber wall
+    cut by a symmetry line, on the line. Quadratic triangles (m, 6) given: a midside node whose move would
+    fold its triangle (det dX/dxi <= 0 at one of its nodes, where the mesh is too coarse for the curve)
+    stays at its edge's middle."""
+    count = len(vertices)
+    lowest, highest = np.full(count, np.iinfo(np.int64).max), np.full(count, -1)
+    np.minimum.at(lowest, segments.ravel(), np.repeat(markers, 2))
+    np.maximum.at(highest, segments.ravel(), np.repeat(markers, 2))
+    moved = vertices.copy()
+    for marker, project in curves.items():
+        nodes = np.flatnonzero((lowest == marker) & (highest == marker))
+        moved[nodes] = project(vertices[nodes])
+    if triangles is not None:
+        folded = triangles[np.min(node_jacobians(moved, triangles), axis=1) <= 0, 3:].ravel()
+        moved[folded] = vertices[folded]
+    return moved
+
+
+def node_jacobians(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """det dX/dxi (m, 6) of quadratic triangles (m, 6) at their six nodes (isoparametric: twice the area
+    of a straight-sided triangle, the same at every node)."""
+    dn = TRIANGLE_P2.shape_gradients(TRIANGLE_P2.reference_nodes)  # (6 points, 6 nodes, 2)
+    return np.linalg.det(np.einsum("mai,paj->mpij", vertices[triangles], dn))
 
 
 def split_in_four(triangles: np.ndarray) -> np.ndarray:
