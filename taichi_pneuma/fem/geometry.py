@@ -14,6 +14,16 @@ segments as a closed vertex loop oriented counter-clockwise, so its signed shoel
 is positive at rest. Chambers must lie inside the body and apart from each other by at least
 MARGIN; otherwise a PneumaInputError names the chamber.
 
+Curved boundaries: an ellipse and a rounded rectangle's corners are curves, which their polygon samples. For
+quadratic triangles, and for meshes refined uniformly, every node on a boundary segment of such a shape (the
+points Triangle adds on its chords, the refinements' new nodes, the midside nodes) is moved onto the exact
+curve (the shape's project), so the isoparametric elements have curved sides and converge at their full order
+(P2: about h^3 in displacement, h^4 in a chamber's area) where straight-sided ones stay at h^2, limited by the
+polygon. Interior midside nodes stay at their edges' middles, straight sides (rectangles, polygons, a rounded
+rectangle's sides, the symmetry lines) stay straight, and a midside node whose move would fold its triangle
+(a mesh too coarse for the curve) stays at its edge's middle. Linear triangles unrefined are Triangle's mesh of
+the polygons as they are (the reference scene's).
+
 Half and quarter models: a roller line along an edge of the body is a symmetry line, and a chamber may
 cross it. Such a chamber is clipped to the body's side of its lines and notched into the body's outline
 (no hole point); its wall is recovered as an open chain from line to line, and its area is closed by
@@ -641,8 +651,9 @@ class Geometry:
 
     def mesh(self) -> Mesh:
         """Mesh the body minus its chambers with Triangle ('pqa<max_area>'), split every triangle in four
-        `refinements` times (uniform refinement: the same boundary polygons, h halved each time), add a
-        midside node to every edge for quadratic triangles, and name the node sets. In a limits.budget,
+        `refinements` times (uniform refinement: h halved each time), add a midside node to every edge for
+        quadratic triangles, and name the node sets. A refined or quadratic mesh has its boundary nodes on the
+        exact curves of ellipses and rounded corners (onto_curves; module docstring). In a limits.budget,
         Triangle adds at most limits.element_cap points and a mesh past the budget is refused."""
         require(self.max_area is not None, "max_area = None: the Scene sets the default (0.0012 in a unitless scene); "
                                            "give max_area to mesh a Geometry on its own")
