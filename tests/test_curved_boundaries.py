@@ -163,3 +163,15 @@ def test_a_midside_node_that_would_fold_its_triangle_stays_at_the_middle():
         moved = onto_curves(vertices, np.array([[1, 3], [3, 0]]), np.array([2, 2]), {2: hole.project}, triangles)
         assert np.allclose(moved[3], [np.sqrt(0.5)] * 2 if curved else [0.5, 0.5], atol=1e-15)
         assert np.allclose(moved[[0, 1, 2, 4, 5]], vertices[[0, 1, 2, 4, 5]], atol=1e-15)
+
+
+def test_a_corner_on_a_chord_that_would_fold_its_linear_triangles_stays():
+    """A node Triangle put on a chord of a unit-circle hole, (0.5, 0.5), with a vertex at (c, c) beyond it: moved
+    to the arc (0.707, 0.707) it passes that vertex for c = 0.6 (both triangles turn clockwise), so it stays;
+    for c = 2 it moves."""
+    hole = Ellipse((0.0, 0.0), (1.0, 1.0), 8)
+    for corner, curved in ((0.6, False), (2.0, True)):
+        vertices = np.array([[1.0, 0.0], [0.0, 1.0], [0.5, 0.5], [corner, corner]])
+        triangles = np.array([[0, 3, 2], [2, 3, 1]])
+        moved = onto_curves(vertices, np.array([[0, 2], [2, 1]]), np.array([2, 2]), {2: hole.project}, triangles)
+        assert np.allclose(moved[2], [np.sqrt(0.5)] * 2 if curved else [0.5, 0.5], atol=1e-15)

@@ -681,12 +681,12 @@ class Geometry:
         shapes = [self.body] + [shape for _, shape in self.chambers]  # the shape of marker OUTER_MARKER + c
         curves = {OUTER_MARKER + c: shape.project for c, shape in enumerate(shapes) if hasattr(shape, "project")}
         if self.order == 2 or self.refinements:
-            vertices = onto_curves(vertices, segments, markers, curves)
+            vertices = onto_curves(vertices, segments, markers, curves, triangles)
         for _ in range(self.refinements):
             vertices, mid = with_edge_midpoints(vertices, triangles)
             triangles = split_in_four(np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])]))
             segments, markers = halved(segments, markers, mid)
-            vertices = onto_curves(vertices, segments, markers, curves)
+            vertices = onto_curves(vertices, segments, markers, curves, triangles)
         mid = None
         if self.order == 2:
             vertices, mid = with_edge_midpoints(vertices, triangles)
@@ -740,13 +740,13 @@ def halved(segments: np.ndarray, markers: np.ndarray, mid) -> tuple[np.ndarray, 
 
 
 def onto_curves(vertices: np.ndarray, segments: np.ndarray, markers: np.ndarray, curves: dict,
-                triangles: np.ndarray | None = None) -> np.ndarray:
+                triangles: np.ndarray) -> np.ndarray:
     """The vertices with every node of the boundary segments of marker m moved onto the exact curve of the
     shape they came from, curves[m] (its project: an ellipse, a rounded corner; a marker without a curve, a
     straight polygon, leaves its nodes). A node on segments of two markers stays: the end of a chamber wall
-    cut by a symmetry line, on the line. Quadratic triangles (m, 6) given: a midside node whose move would
-    fold its triangle (det dX/dxi <= 0 at one of its nodes, where the mesh is too coarse for the curve)
-    stays at its edge's middle."""
+    cut by a symmetry line, on the line. A triangle (linear (m, 3) or quadratic (m, 6)) the moves would fold
+    (det dX/dxi <= 0 at one of its nodes, where the mesh is too coarse for the curve) keeps its nodes where
+    they were: a quadratic one's midside nodes at its edges' middles."""
     count = len(vertices)
     lowest, highest = np.full(count, np.iinfo(np.int64).max), np.full(count, -1)
     np.minimum.at(lowest, segments.ravel(), np.repeat(markers, 2))
@@ -755,9 +755,10 @@ def onto_curves(vertices: np.ndarray, segments: np.ndarray, markers: np.ndarray,
     for marker, project in curves.items():
         nodes = np.flatnonzero((lowest == marker) & (highest == marker))
         moved[nodes] = project(vertices[nodes])
-    if triangles is not None:
-        folded = triangles[np.min(node_jacobians(moved, triangles), axis=1) <= 0, 3:].ravel()
-        moved[folded] = vertices[folded]
+    linear = triangles.shape[1] == 3
+    jacobians = triangle_areas(moved, triangles)[:, None] if linear else node_jacobians(moved, triangles)
+    folded = triangles[np.min(jacobians, axis=1) <= 0].ravel()
+    moved[folded] = vertices[folded]
     return moved
 
 
