@@ -43,7 +43,7 @@ and head CSV columns, so none starts like a spreadsheet formula (output.check_he
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -558,9 +558,9 @@ class Mesh:
         if self.order == 1:
             np.add.at(out, self.triangles.ravel(), np.repeat(triangle_areas(self.vertices, self.triangles) / 3, 3))
             return out
-        family = replace(TRIANGLE_P2, quadrature_degree=4)
-        weights = family.quadrature(self.vertices, self.triangles)[1] @ family.shape_functions(family.rule[0])
-        np.add.at(out, self.triangles.ravel(), weights.ravel())
+        points, weights = TRIANGLE_P2.cell.rules[4]
+        measures = 0.5 * jacobians(self.vertices, self.triangles, points) * weights  # (m, 6 points)
+        np.add.at(out, self.triangles.ravel(), (measures @ TRIANGLE_P2.shape_functions(points)).ravel())
         return out
 
 
@@ -756,17 +756,18 @@ def onto_curves(vertices: np.ndarray, segments: np.ndarray, markers: np.ndarray,
         nodes = np.flatnonzero((lowest == marker) & (highest == marker))
         moved[nodes] = project(vertices[nodes])
     linear = triangles.shape[1] == 3
-    jacobians = triangle_areas(moved, triangles)[:, None] if linear else node_jacobians(moved, triangles)
-    folded = triangles[np.min(jacobians, axis=1) <= 0].ravel()
+    at_nodes = triangle_areas(moved, triangles)[:, None] if linear else jacobians(moved, triangles,
+                                                                                    TRIANGLE_P2.reference_nodes)
+    folded = triangles[np.min(at_nodes, axis=1) <= 0].ravel()
     moved[folded] = vertices[folded]
     return moved
 
 
-def node_jacobians(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """det dX/dxi (m, 6) of quadratic triangles (m, 6) at their six nodes (isoparametric: twice the area
-    of a straight-sided triangle, the same at every node)."""
-    dn = TRIANGLE_P2.shape_gradients(TRIANGLE_P2.reference_nodes)  # (6 points, 6 nodes, 2)
-    return np.linalg.det(np.einsum("mai,paj->mpij", vertices[triangles], dn))
+def jacobians(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """det dX/dxi (m, p) of quadratic triangles (m, 6) at reference points (p, 2), dX/dxi = sum_a X_a dN_a/dxi
+    (isoparametric: twice the area of a straight-sided triangle, the same at every point)."""
+    j = np.swapaxes(vertices[triangles], 1, 2)[:, None] @ TRIANGLE_P2.shape_gradients(points)[None]  # (m, p, 2, 2)
+    return j[..., 0, 0] * j[..., 1, 1] - j[..., 0, 1] * j[..., 1, 0]
 
 
 def split_in_four(triangles: np.ndarray) -> np.ndarray:
