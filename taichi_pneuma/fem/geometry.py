@@ -21,7 +21,9 @@ curve (the shape's project), so the isoparametric elements have curved sides and
 (P2: about h^3 in displacement, h^4 in a chamber's area) where straight-sided ones stay at h^2, limited by the
 polygon. Interior midside nodes stay at their edges' middles, straight sides (rectangles, polygons, a rounded
 rectangle's sides, the symmetry lines) stay straight, and a midside node whose move would fold its triangle
-(a mesh too coarse for the curve) stays at its edge's middle. Linear triangles unrefined are Triangle's mesh of
+(a mesh too coarse for the curve) stays at its edge's middle. The ends of a wall cut by a symmetry line stay
+where the polygon crosses the line: on the curve when a polygon vertex lies on it (an ellipse centred on a
+line along an axis, its points a multiple of 4), else on the chord, off by the chord's sag. Linear triangles unrefined are Triangle's mesh of
 the polygons as they are (the reference scene's).
 
 Half and quarter models: a roller line along an edge of the body is a symmetry line, and a chamber may
