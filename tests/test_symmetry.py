@@ -107,7 +107,10 @@ def test_quadratic_half_mesh_wall_is_corner_midside_corner():
     mesh = half_geometry(order=2).mesh()
     wall = mesh.vertices[mesh.chambers[0]]
     assert len(wall) % 2 == 1
-    assert np.allclose(wall[1::2], 0.5 * (wall[0:-1:2] + wall[2::2]), atol=1e-15)
+    assert np.allclose(np.hypot(wall[:, 0] / 0.85, wall[:, 1] / 0.22), 1.0, atol=1e-14)  # on the ellipse
+    assert wall[0, 1] == wall[-1, 1] == 0.0  # the ends on the line
+    chord, along = wall[2::2] - wall[0:-1:2], wall[1::2] - wall[0:-1:2]  # each midside node between its corners
+    assert np.all(np.abs(np.sum(along * chord, axis=1) / np.sum(chord * chord, axis=1) - 0.5) < 0.1)
     assert enclosed_area(wall[0::2], mesh.wall_origins[0]) == pytest.approx(signed_area(ELLIPSE.polygon()) / 2,
                                                                            rel=1e-12)
 

@@ -14,6 +14,18 @@ segments as a closed vertex loop oriented counter-clockwise, so its signed shoel
 is positive at rest. Chambers must lie inside the body and apart from each other by at least
 MARGIN; otherwise a PneumaInputError names the chamber.
 
+Curved boundaries: an ellipse and a rounded rectangle's corners are curves, which their polygon samples. For
+quadratic triangles, and for meshes refined uniformly, every node on a boundary segment of such a shape (the
+points Triangle adds on its chords, the refinements' new nodes, the midside nodes) is moved onto the exact
+curve (the shape's project), so the isoparametric elements have curved sides and converge at their full order
+(P2: about h^3 in displacement, h^4 in a chamber's area) where straight-sided ones stay at h^2, limited by the
+polygon. Interior midside nodes stay at their edges' middles, straight sides (rectangles, polygons, a rounded
+rectangle's sides, the symmetry lines) stay straight, and a midside node whose move would fold its triangle
+(a mesh too coarse for the curve) stays at its edge's middle. The ends of a wall cut by a symmetry line stay
+where the polygon crosses the line: on the curve when a polygon vertex lies on it (an ellipse centred on a
+line along an axis, its points a multiple of 4), else on the chord, off by the chord's sag. Linear triangles unrefined are Triangle's mesh of
+the polygons as they are (the reference scene's).
+
 Half and quarter models: a roller line along an edge of the body is a symmetry line, and a chamber may
 cross it. Such a chamber is clipped to the body's side of its lines and notched into the body's outline
 (no hole point); its wall is recovered as an open chain from line to line, and its area is closed by
@@ -42,6 +54,7 @@ from ..errors import PneumaInputError, require, require_distinct, require_finite
 from ..io.output import check_heading
 from ..io.units import PLANE_AREA, si_default
 from . import triangulation
+from .elements import TRIANGLE_P2
 
 OUTER_MARKER = 1
 MARGIN = 1e-3
@@ -98,6 +111,13 @@ class Ellipse:
         (cx, cy), (a, b) = self.center, self.semi_axes
         return np.column_stack([cx + a * np.cos(t), cy + b * np.sin(t)])
 
+    def project(self, points: np.ndarray) -> np.ndarray:
+        """Points (k, 2) near the ellipse moved onto it at their parameter angle t = atan2((y - cy) / b,
+        (x - cx) / a): (cx + a cos t, cy + b sin t), radially on a circle; the polygon's vertices stay."""
+        (cx, cy), (a, b) = self.center, self.semi_axes
+        t = np.arctan2((points[:, 1] - cy) / b, (points[:, 0] - cx) / a)
+        return np.column_stack([cx + a * np.cos(t), cy + b * np.sin(t)])
+
 
 @dataclass(frozen=True)
 class RoundedRectangle:
@@ -125,6 +145,16 @@ class RoundedRectangle:
             t = np.linspace(-np.pi / 2 + k * np.pi / 2, k * np.pi / 2, self.corner_points)
             points.append(np.column_stack([ox + r * np.cos(t), oy + r * np.sin(t)]))
         return np.vstack(points)
+
+    def project(self, points: np.ndarray) -> np.ndarray:
+        """Points (k, 2) near the outline moved to its nearest point. The shape is the box of the corner circles'
+        centres grown by radius, so that is o + r (p - o) / |p - o| with o the box's point nearest p: onto its
+        corner circle in a corner, unmoved on a straight side."""
+        (cx, cy), (w, h), r = self.center, self.size, self.radius
+        half = np.array([w / 2 - r, h / 2 - r])
+        o = np.clip(points - (cx, cy), -half, half) + (cx, cy)
+        d = points - o
+        return o + r * d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
 @dataclass(frozen=True)
@@ -505,7 +535,9 @@ class Mesh:
 
     @property
     def area(self) -> float:
-        """Total rest area of the triangles."""
+        """Total rest area of the triangles (curved ones' included: see nodal_areas)."""
+        if self.order == 2:
+            return float(np.sum(self.nodal_areas()))
         return float(np.sum(triangle_areas(self.vertices, self.triangles)))
 
     def display_triangles(self) -> np.ndarray:
@@ -519,12 +551,17 @@ class Mesh:
 
     def nodal_areas(self) -> np.ndarray:
         """The integral of each node's shape function over the body, sum_t int_t N_a dA: a third of the
-        area of the triangles at a node for linear elements; for quadratic ones 0 at corners and a third
-        of each adjacent triangle's area at midside nodes (exact weights of a load linear in x)."""
-        areas = triangle_areas(self.vertices, self.triangles)
-        nodes = self.triangles[:, :3] if self.order == 1 else self.triangles[:, 3:]
+        area of the triangles at a node for linear elements. For quadratic ones int N_a det(dX/dxi) dxi
+        by the degree-4 rule, exact (N_a and det dX/dxi are quadratic): 0 at corners and a third of the
+        triangle's area at midside nodes on a straight-sided triangle, and the exact measure of a triangle
+        with a curved (parabolic) side. Either way the exact weights of a load linear in x."""
         out = np.zeros(self.n_vertices)
-        np.add.at(out, nodes.ravel(), np.repeat(areas / 3, 3))
+        if self.order == 1:
+            np.add.at(out, self.triangles.ravel(), np.repeat(triangle_areas(self.vertices, self.triangles) / 3, 3))
+            return out
+        points, weights = TRIANGLE_P2.cell.rules[4]
+        measures = 0.5 * jacobians(self.vertices, self.triangles, points) * weights  # (m, 6 points)
+        np.add.at(out, self.triangles.ravel(), (measures @ TRIANGLE_P2.shape_functions(points)).ravel())
         return out
 
 
@@ -615,8 +652,9 @@ class Geometry:
 
     def mesh(self) -> Mesh:
         """Mesh the body minus its chambers with Triangle ('pqa<max_area>'), split every triangle in four
-        `refinements` times (uniform refinement: the same boundary polygons, h halved each time), add a
-        midside node to every edge for quadratic triangles, and name the node sets. In a limits.budget,
+        `refinements` times (uniform refinement: h halved each time), add a midside node to every edge for
+        quadratic triangles, and name the node sets. A refined or quadratic mesh has its boundary nodes on the
+        exact curves of ellipses and rounded corners (onto_curves; module docstring). In a limits.budget,
         Triangle adds at most limits.element_cap points and a mesh past the budget is refused."""
         require(self.max_area is not None, "max_area = None: the Scene sets the default (0.0012 in a unitless scene); "
                                            "give max_area to mesh a Geometry on its own")
@@ -641,16 +679,20 @@ class Geometry:
         vertices = np.asarray(out["vertices"], dtype=np.float64)
         triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
         segments, markers = np.asarray(out["segments"], dtype=np.int64), out["segment_markers"].ravel()
+        shapes = [self.body] + [shape for _, shape in self.chambers]  # the shape of marker OUTER_MARKER + c
+        curves = {OUTER_MARKER + c: shape.project for c, shape in enumerate(shapes) if hasattr(shape, "project")}
+        if self.order == 2 or self.refinements:
+            vertices = onto_curves(vertices, segments, markers, curves, triangles)
         for _ in range(self.refinements):
             vertices, mid = with_edge_midpoints(vertices, triangles)
             triangles = split_in_four(np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])]))
-            halves = mid(segments[:, 0], segments[:, 1])
-            segments = np.vstack([np.column_stack([segments[:, 0], halves]), np.column_stack([halves, segments[:, 1]])])
-            markers = np.concatenate([markers, markers])
+            segments, markers = halved(segments, markers, mid)
+            vertices = onto_curves(vertices, segments, markers, curves, triangles)
         mid = None
         if self.order == 2:
             vertices, mid = with_edge_midpoints(vertices, triangles)
             triangles = np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])])
+            vertices = onto_curves(vertices, *halved(segments, markers, mid), curves, triangles)
         chambers = []
         for c, (_, origin) in enumerate(walls, start=1):
             nodes = chain(segments[markers == OUTER_MARKER + c], closed=origin is None)
@@ -700,6 +742,44 @@ def with_edge_midpoints(vertices: np.ndarray, elements: np.ndarray, edges=((0, 1
         return n + np.searchsorted(keys, lo * n + hi)
 
     return np.vstack([vertices, 0.5 * (vertices[unique[:, 0]] + vertices[unique[:, 1]])]), mid
+
+
+def halved(segments: np.ndarray, markers: np.ndarray, mid) -> tuple[np.ndarray, np.ndarray]:
+    """Boundary segments (s, 2) and their markers split at their midpoint nodes mid(a, b): (2 s, 2), (2 s,)."""
+    halves = mid(segments[:, 0], segments[:, 1])
+    return (np.vstack([np.column_stack([segments[:, 0], halves]), np.column_stack([halves, segments[:, 1]])]),
+            np.concatenate([markers, markers]))
+
+
+def onto_curves(vertices: np.ndarray, segments: np.ndarray, markers: np.ndarray, curves: dict,
+                triangles: np.ndarray) -> np.ndarray:
+    """The vertices with every node of the boundary segments of marker m moved onto the exact curve of the
+    shape they came from, curves[m] (its project: an ellipse, a rounded corner; a marker without a curve, a
+    straight polygon, leaves its nodes). A node on segments of two markers stays: the end of a chamber wall
+    cut by a symmetry line, on the line. A triangle (linear (m, 3) or quadratic (m, 6)) the moves would fold
+    (det dX/dxi <= 0 at one of its nodes, where the mesh is too coarse for the curve) keeps its nodes where
+    they were: a quadratic one's midside nodes at its edges' middles."""
+    count = len(vertices)
+    lowest, highest = np.full(count, np.iinfo(np.int64).max), np.full(count, -1)
+    np.minimum.at(lowest, segments.ravel(), np.repeat(markers, 2))
+    np.maximum.at(highest, segments.ravel(), np.repeat(markers, 2))
+    moved = vertices.copy()
+    for marker, project in curves.items():
+        nodes = np.flatnonzero((lowest == marker) & (highest == marker))
+        moved[nodes] = project(vertices[nodes])
+    linear = triangles.shape[1] == 3
+    at_nodes = triangle_areas(moved, triangles)[:, None] if linear else jacobians(moved, triangles,
+                                                                                    TRIANGLE_P2.reference_nodes)
+    folded = triangles[np.min(at_nodes, axis=1) <= 0].ravel()
+    moved[folded] = vertices[folded]
+    return moved
+
+
+def jacobians(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """det dX/dxi (m, p) of quadratic triangles (m, 6) at reference points (p, 2), dX/dxi = sum_a X_a dN_a/dxi
+    (isoparametric: twice the area of a straight-sided triangle, the same at every point)."""
+    j = np.swapaxes(vertices[triangles], 1, 2)[:, None] @ TRIANGLE_P2.shape_gradients(points)[None]  # (m, p, 2, 2)
+    return j[..., 0, 0] * j[..., 1, 1] - j[..., 0, 1] * j[..., 1, 0]
 
 
 def split_in_four(triangles: np.ndarray) -> np.ndarray:

@@ -293,8 +293,9 @@ def scene_table(scene_class) -> Table:
                                                          "shapes; none: size; at most size)", unit=LENGTH),
                        "distance": Key(float, None, "over which the edge length grows from near_chambers back to size "
                                                     "(3D shapes; none: 2 size)", unit=LENGTH),
-                       "order": Key(int, 1, "1: linear triangles (tetrahedra), 2: quadratic (3D: straight midside "
-                                            "nodes added)", ORDERS)},
+                       "order": Key(int, 1, "1: linear triangles (tetrahedra), 2: quadratic (2D: boundary nodes on "
+                                            "the exact ellipses and rounded corners; 3D: straight midside nodes "
+                                            "added)", ORDERS)},
                       parts=mesh_parts, optional=True),
         "material": material,
         "clamp": Table(point_set("no clamp", stiffness=Key(float, None, "penalty stiffness of the clamp and the "
