@@ -32,6 +32,7 @@ from .terms import VOLUMETRIC, Clamp, Elasticity, NormalClamp
 from .terms.base import Term
 from .terms.chambers import Chamber, ChamberKind
 from .terms.effects import Effect
+from .terms.nodal_volume import require_nodal
 
 
 @dataclass(frozen=True)
@@ -144,9 +145,6 @@ class Scene:
                 f"max_stretch = {self.max_stretch!r} must be > 1 (a principal stretch; 1 is the rest state)")
         require(self.volumetric in VOLUMETRIC, f"volumetric = {self.volumetric!r} is not one of "
                                                f"{', '.join(map(repr, VOLUMETRIC))}")
-        require(self.volumetric == "element" or getattr(self.geometry, "order", 1) == 1,
-                f"volumetric = {self.volumetric!r} takes linear elements (order = 1), not order "
-                f"{getattr(self.geometry, 'order', 1)}")
         require_finite("clamp stiffness", self.clamp_stiffness)
         require(self.clamp_stiffness > 0, f"clamp stiffness = {self.clamp_stiffness!r} must be > 0")
         require(len(self.controls) == len(self.geometry.chambers),
@@ -154,7 +152,9 @@ class Scene:
         kinds = [e.name for e in self.effects]
         require(len(set(kinds)) == len(kinds), f"effects {kinds!r} name one effect twice")
         self.schedule  # validates the increments against the keyframes
-        self.law_parameters()  # resolves the presets, checks that the body has one law
+        law, _ = self.law_parameters()  # resolves the presets, checks that the body has one law
+        if self.volumetric == "nodal":
+            require_nodal(law, getattr(self.geometry, "order", 1))
 
     def resolve_defaults(self) -> None:
         """Set every default left None (units.si_default) of the scene, its geometry, its material and regions,

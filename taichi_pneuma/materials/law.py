@@ -6,8 +6,9 @@ of a 3 x 3 deformation gradient F and a small per-element parameter vector p:
     energy(F, p) = psi,   stress(F, p) = P = dpsi/dF (3 x 3),
     stress_derivative(F, p) = d2psi/dF2 (9 x 9 over vec(F) = (F00, F01, F02, F10, ..., F22)),
     volumetric(J, p) = (U, U', U'') of the law's volumetric part U(J), the one whose modulus grows without
-                       bound as nu -> 1/2 (psi - U(J) stays bounded): averaged over nodes by linear elements
-                       that do not lock (volumetric_split, terms/nodal_volume.py).
+                       bound as nu -> 1/2, where psi - U(J) is isochoric and grows without bound as J -> 0 (a
+                       barrier against inverted elements): optional, for linear elements that do not lock
+                       (volumetric_split, terms/nodal_volume.py).
 
 Plane strain (d = 2) is the 3D law at F = [[F2, 0], [0, 1]]: the energy and the in-plane block of P are
 those of the 2D body, and its d2psi/dF2 is the in-plane 4 x 4 block of the 3D one; the out-of-plane

@@ -90,12 +90,6 @@ class StableNeoHookean(Law):
 
     @staticmethod
     @ti.func
-    def volumetric(J, p):
-        """(U, U', U'') of the part that stiffens without bound as nu -> 1/2, U(J) = lam/2 (J - 1)^2."""
-        return ti.Vector([0.5 * p[1] * (J - 1.0) ** 2, p[1] * (J - 1.0), p[1]], dt=ti.f64)
-
-    @staticmethod
-    @ti.func
     def stress(F, p):
         mu, lam = p[0], p[1]
         return mu * F - (mu + lam * (1.0 - F.determinant())) * cofactor(F)

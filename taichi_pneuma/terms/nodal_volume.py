@@ -2,7 +2,8 @@
 nodal pressure element of Bonet and Burton 1998, also called nodally averaged F-bar).
 
 A nearly incompressible law psi(F) = psi_s(F) + U(J) (materials/law.py: volumetric, U's modulus growing without
-bound as nu -> 1/2) on linear simplices locks: one J per element cannot stay near 1 under a bending field.
+bound as nu -> 1/2, psi_s isochoric) on linear simplices locks: one J per element cannot stay near 1 under a
+bending field.
 Here U takes the ratio of current to rest volume of each node's patch of elements instead,
 
     E = sum_e V_e psi_s(F_e) + sum_e sum_(a in e) s_e U_e(J_a),   s_e = V_e / (d + 1),
@@ -25,7 +26,10 @@ with the triplets (a, ab, ac) that add C_a / V_a^2 g_ab g_ac^T into them.
 
 A homogeneous deformation has J_a = det F at every node, so the element reproduces it exactly (the patch test);
 at nu -> 1/2 the constraint is one per node instead of one per element, which linear simplices can satisfy
-without locking.
+without locking. An element's own volume is then held by psi_s alone: the isochoric laws' psi_s grows without
+bound as J -> 0 (Ibar1 = J^(-2/3) I1), a barrier Newton's steps never cross. The stable neo-Hookean law has no
+such part (its psi - lam/2 (J - 1)^2 is finite through J = 0), and on the beam of benchmarks/accuracy_3d.py its
+elements turned inside out at nu = 0.45 and 0.499: it names no volumetric part, and nodal volumes refuse it.
 """
 
 import numpy as np
@@ -96,6 +100,15 @@ def star_structure(nodes: np.ndarray, n: int):
     return pair_of.reshape(nodes.shape[0], -1), triplets, np.column_stack([blocks // n, blocks % n])
 
 
+def require_nodal(law, order: int) -> None:
+    """Refuse (PneumaInputError) nodal volumes on elements of order 2 or under a law without a volumetric part."""
+    require(order == 1, f"volumetric = 'nodal' takes linear elements (order = 1), not order {order}")
+    require(hasattr(law, "volumetric"),
+            f"volumetric = 'nodal' takes a law split into an isochoric part and a volumetric one (law = neo_hookean, "
+            f"mooney_rivlin, yeoh or a preset), not {law.name!r} (E and nu): its elements, left with no volume "
+            f"stiffness of their own, turn inside out")
+
+
 class NodalVolumeElasticity(Elasticity):
     """The elastic energy of a mesh of linear triangles or tetrahedra with the law's volumetric part on nodal volume
     ratios (module docstring); otherwise as Elasticity (its max_step, fault and min_determinant are the
@@ -103,9 +116,7 @@ class NodalVolumeElasticity(Elasticity):
 
     def __init__(self, config, elements: np.ndarray, law, parameters: np.ndarray):
         super().__init__(config, elements, law, parameters)
-        require(self.family.order == 1, f"volumetric averaging over nodes takes linear elements: these are "
-                                        f"{self.family.name}s (mesh.order = 1)")
-        require(hasattr(law, "volumetric"), f"the law {law.name!r} names no volumetric part to average over nodes")
+        require_nodal(law, self.family.order)
         self.split = volumetric_split(law)
         n, k = len(config.rest), self.nodes.shape[1]
         self.share = self.weights[:, 0] / k
