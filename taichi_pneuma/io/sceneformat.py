@@ -281,7 +281,7 @@ def scene_table(scene_class) -> Table:
         sizes = getattr(geometry, "sizes", None)
         return {"max_area": getattr(geometry, "max_area", None), "order": geometry.order,
                 **{k: getattr(sizes, k, None) for k in ("size", "near_chambers", "distance")},
-                "volumetric": scene.volumetric}
+                "volumetric": None if scene.volumetric == "element" else scene.volumetric}  # default: not written
 
     return Table(system=scene_system, keys={
         "name": Key(str, None, "names the result files (a plain file name); none: the scene file's own name"),
