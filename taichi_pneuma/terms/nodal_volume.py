@@ -3,8 +3,7 @@ nodal pressure element of Bonet and Burton 1998, also called nodally averaged F-
 
 A nearly incompressible law psi(F) = psi_s(F) + U(J) (materials/law.py: volumetric, U's modulus growing without
 bound as nu -> 1/2, psi_s isochoric) on linear simplices locks: one J per element cannot stay near 1 under a
-bending field.
-Here U takes the ratio of current to rest volume of each node's patch of elements instead,
+bending field. Here U takes the ratio of current to rest volume of each node's patch of elements instead,
 
     E = sum_e V_e psi_s(F_e) + sum_e sum_(a in e) s_e U_e(J_a),   s_e = V_e / (d + 1),
     J_a = v_a / V_a,   v_a = sum_(e at a) v_e / (d + 1),   V_a = sum_(e at a) s_e,   v_e = V_e det F_e,
@@ -37,17 +36,17 @@ import numpy as np
 from ..backend import ti
 from ..errors import require
 from ..materials.law import element_parameters, embedded, volumetric_split
-from ..materials.neo_hookean import cofactor
+from ..materials.invariants import cofactor
 from .base import Nodal, Scalars, Table, block_pattern, vertex_dofs
 from .elastic import (Elasticity, Gradients, Nodes, Parameters, Weights, deformation_gradient, elastic_energy,
                       elastic_gradient, elastic_hessian)
 
-Triples = ti.types.ndarray(dtype=ti.f64, ndim=3)  # (m, k, j) float64 per element node
+PerNode = ti.types.ndarray(dtype=ti.f64, ndim=3)  # (m, k, j) float64: j values per node of each element
 
 
 @ti.kernel
 def volume_gradients(d: ti.template(), rest: Nodal, u: Nodal, nodes: Nodes, grads: Gradients, weights: Weights,
-                     volumes: Scalars, out: Triples):
+                     volumes: Scalars, out: PerNode):
     """volumes[e] = v_e = V_e det F_e and out[e, b] = dv_e/dx_b = V_e cof F_e G_eb of each linear element."""
     for e in range(nodes.shape[0]):
         F = embedded(deformation_gradient(rest, u, nodes, grads, e, 0, d), d)
@@ -63,7 +62,7 @@ def volume_gradients(d: ti.template(), rest: Nodal, u: Nodal, nodes: Nodes, grad
 
 @ti.kernel
 def nodal_volumetric(law: ti.template(), nodes: Nodes, weights: Weights, parameters: Parameters, ratios: Scalars,
-                     out: Triples):
+                     out: PerNode):
     """out[e, a] = s_e (U_e, U_e', U_e'') at J_a = ratios[node a], s_e = V_e / (number of nodes)."""
     for e, a in ti.ndrange(nodes.shape[0], nodes.shape[1]):
         U = law.volumetric(ratios[nodes[e, a]], element_parameters(law, parameters, e))
@@ -97,7 +96,7 @@ def star_structure(nodes: np.ndarray, n: int):
     ab, ac = start[a] + local // size[a], start[a] + local % size[a]
     blocks, block = np.unique(second[ab] * n + second[ac], return_inverse=True)
     triplets = np.ascontiguousarray(np.column_stack([a, ab, ac, block]), dtype=np.int32)
-    return pair_of.reshape(nodes.shape[0], -1), triplets, np.column_stack([blocks // n, blocks % n])
+    return pair_of.reshape(*nodes.shape, -1), triplets, np.column_stack([blocks // n, blocks % n])
 
 
 def require_nodal(law, order: int) -> None:
