@@ -116,8 +116,8 @@ class Scene:
     system its numbers are in (io/units.py; unitless by default), into which presets are converted; max_stretch: the
     largest principal stretch a run may reach before it warns that it has left the material model's range
     (MAX_STRETCH by default); volumetric: where the law's volumetric part U(J) is evaluated, "element" (at each
-    quadrature point) or "nodal" (on the nodes' patch volume ratios, linear elements only: they then do not lock
-    as nu -> 1/2; terms/nodal_volume.py).
+    quadrature point) or "nodal" (on the nodes' patch volume ratios, for linear elements and the isochoric laws:
+    they then do not lock as nu -> 1/2; terms/nodal_volume.py).
 
     A parameter with a unit left None in it or in its parts (units.si_default: a chamber kind's atmosphere, the
     material's E, gravity's g, the clamp stiffness, ...) is set on construction to its SI default converted into

@@ -301,8 +301,9 @@ def scene_table(scene_class) -> Table:
                                             "nodes added)", ORDERS),
                        "volumetric": Key(str, "element", "where the law's volumetric part U(J) is evaluated: element "
                                                          "(each quadrature point), nodal (on each node's patch volume "
-                                                         "ratio; order 1 only: linear elements that do not lock as nu "
-                                                         "-> 1/2)", tuple(VOLUMETRIC))},
+                                                         "ratio; order 1 and law = neo_hookean, mooney_rivlin, yeoh or "
+                                                         "a preset: linear elements that do not lock as nu -> 1/2)",
+                                         tuple(VOLUMETRIC))},
                       parts=mesh_parts, optional=True),
         "material": material,
         "clamp": Table(point_set("no clamp", stiffness=Key(float, None, "penalty stiffness of the clamp and the "
