@@ -28,10 +28,11 @@ from .materials import IsochoricMaterial, StableNeoHookean
 from .materials.presets import PresetMaterial
 from .solve.model import EnergyModel
 from .solve.schedule import MAX_STRETCH, ChamberSchedule, Schedule, area_ramp
-from .terms import Clamp, Elasticity, NormalClamp
+from .terms import VOLUMETRIC, Clamp, Elasticity, NormalClamp
 from .terms.base import Term
 from .terms.chambers import Chamber, ChamberKind
 from .terms.effects import Effect
+from .terms.nodal_volume import require_nodal
 
 
 @dataclass(frozen=True)
@@ -114,7 +115,9 @@ class Scene:
     """A whole scene. controls: one ChamberControl per chamber of geometry, in the same order; units: the
     system its numbers are in (io/units.py; unitless by default), into which presets are converted; max_stretch: the
     largest principal stretch a run may reach before it warns that it has left the material model's range
-    (MAX_STRETCH by default).
+    (MAX_STRETCH by default); volumetric: where the law's volumetric part U(J) is evaluated, "element" (at each
+    quadrature point) or "nodal" (on the nodes' patch volume ratios, for linear elements and the isochoric laws:
+    they then do not lock as nu -> 1/2; terms/nodal_volume.py).
 
     A parameter with a unit left None in it or in its parts (units.si_default: a chamber kind's atmosphere, the
     material's E, gravity's g, the clamp stiffness, ...) is set on construction to its SI default converted into
@@ -133,12 +136,15 @@ class Scene:
     targets: tuple = ()  # targets.Target poses for inverse control (apps.reach), in order
     units: Units = UNITLESS
     max_stretch: float = MAX_STRETCH
+    volumetric: str = "element"
 
     def __post_init__(self):
         self.resolve_defaults()
         check_stem(self.name)  # the result files are named after the scene
         require(require_finite("max_stretch", self.max_stretch) > 1,
                 f"max_stretch = {self.max_stretch!r} must be > 1 (a principal stretch; 1 is the rest state)")
+        require(self.volumetric in VOLUMETRIC, f"volumetric = {self.volumetric!r} is not one of "
+                                               f"{', '.join(map(repr, VOLUMETRIC))}")
         require_finite("clamp stiffness", self.clamp_stiffness)
         require(self.clamp_stiffness > 0, f"clamp stiffness = {self.clamp_stiffness!r} must be > 0")
         require(len(self.controls) == len(self.geometry.chambers),
@@ -146,7 +152,9 @@ class Scene:
         kinds = [e.name for e in self.effects]
         require(len(set(kinds)) == len(kinds), f"effects {kinds!r} name one effect twice")
         self.schedule  # validates the increments against the keyframes
-        self.law_parameters()  # resolves the presets, checks that the body has one law
+        law, _ = self.law_parameters()  # resolves the presets, checks that the body has one law
+        if self.volumetric == "nodal":
+            require_nodal(law, getattr(self.geometry, "order", 1))
 
     def resolve_defaults(self) -> None:
         """Set every default left None (units.si_default) of the scene, its geometry, its material and regions,
@@ -234,7 +242,7 @@ class Scene:
         model = EnergyModel(mesh.vertices, force_floor=1e-6 * modulus * mesh.measure ** ((mesh.dim - 1) / mesh.dim),
                             energy_resolution=1e-12 * modulus * mesh.measure)
         config = model.config
-        elastic = model.add(Elasticity(config, mesh.elements, law, parameters))
+        elastic = model.add(VOLUMETRIC[self.volumetric](config, mesh.elements, law, parameters))
         chambers = [model.add(control.term(config, loop, name, mesh.order, origin)) for control, loop, origin, name
                     in zip(self.controls, mesh.chambers, mesh.wall_origins, self.chamber_names)]
         if len(mesh.pinned):

@@ -33,6 +33,7 @@ from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
 from ..materials import FORMS, IsochoricMaterial
 from ..materials.presets import PRESETS, PresetMaterial
 from ..solve.schedule import MAX_STRETCH, ChamberSchedule
+from ..terms import VOLUMETRIC
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
 from .schema import REQUIRED, Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
@@ -262,7 +263,8 @@ def scene_table(scene_class) -> Table:
                                 rollers=v["rollers"])
         return scene_class(geometry, tuple(control for *_, control in v["chambers"]), v["schedule"]["increments"],
                            material, regions, clamp_stiffness, v["effects"], v["name"], v["targets"],
-                           UNITLESS if v["units"] is None else UNITS[v["units"]], v["schedule"]["max_stretch"])
+                           UNITLESS if v["units"] is None else UNITS[v["units"]], v["schedule"]["max_stretch"],
+                           mesh["volumetric"])
 
     def clamp_parts(scene):
         """The [clamp] keys; without a clamp, its stiffness only if not the default (so no [clamp] is written)."""
@@ -271,13 +273,15 @@ def scene_table(scene_class) -> Table:
         return {"side": getattr(clamp, "side", None), "box": getattr(clamp, "box", None),
                 "stiffness": None if clamp is None and stiffness == default else stiffness}
 
-    def mesh_parts(geometry):
+    def mesh_parts(scene):
+        geometry = scene.geometry
         refinements = getattr(geometry, "refinements", 0)
         require(refinements == 0, f"a geometry refined {refinements} times has no scene-file form "
                                   f"(scene files have no refinements key)")
         sizes = getattr(geometry, "sizes", None)
         return {"max_area": getattr(geometry, "max_area", None), "order": geometry.order,
-                **{k: getattr(sizes, k, None) for k in ("size", "near_chambers", "distance")}}
+                **{k: getattr(sizes, k, None) for k in ("size", "near_chambers", "distance")},
+                "volumetric": None if scene.volumetric == "element" else scene.volumetric}  # default: not written
 
     return Table(system=scene_system, keys={
         "name": Key(str, None, "names the result files (a plain file name); none: the scene file's own name"),
@@ -295,7 +299,12 @@ def scene_table(scene_class) -> Table:
                                                     "(3D shapes; none: 2 size)", unit=LENGTH),
                        "order": Key(int, 1, "1: linear triangles (tetrahedra), 2: quadratic (2D: boundary nodes on "
                                             "the exact ellipses and rounded corners; 3D: straight midside nodes "
-                                            "added)", ORDERS)},
+                                            "added)", ORDERS),
+                       "volumetric": Key(str, "element", "where the law's volumetric part U(J) is evaluated: element "
+                                                         "(each quadrature point), nodal (on each node's patch volume "
+                                                         "ratio; order 1 and law = neo_hookean, mooney_rivlin, yeoh or "
+                                                         "a preset: linear elements that do not lock as nu -> 1/2)",
+                                         tuple(VOLUMETRIC))},
                       parts=mesh_parts, optional=True),
         "material": material,
         "clamp": Table(point_set("no clamp", stiffness=Key(float, None, "penalty stiffness of the clamp and the "
@@ -316,7 +325,7 @@ def scene_table(scene_class) -> Table:
         "effects": Named(EFFECTS, "the effects the scene adds, by name"),
         "targets": Tables(TARGET, "poses for inverse control, in order"),
     }, make=make_scene, parts=lambda s: {
-        "name": s.name, "description": None, "units": s.units.name, "body": s.geometry.body, "mesh": s.geometry,
+        "name": s.name, "description": None, "units": s.units.name, "body": s.geometry.body, "mesh": s,
         "material": s, "clamp": s,
         "tip": s.geometry, "rollers": s.geometry.rollers,
         "chambers": [(name, shape, control) for (name, shape), control in zip(s.geometry.chambers, s.controls)],

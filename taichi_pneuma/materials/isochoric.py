@@ -116,6 +116,12 @@ class IsochoricPolynomial(Law):
 
     @staticmethod
     @ti.func
+    def volumetric(J, p):
+        """(U, U', U'') of U(J) = K/2 (J - 1)^2."""
+        return ti.Vector([0.5 * p[4] * (J - 1.0) ** 2, p[4] * (J - 1.0), p[4]], dt=ti.f64)
+
+    @staticmethod
+    @ti.func
     def stress(F, p):
         W1, _, J = slopes(F, p)
         dI1, dI2, dJ = isochoric_gradients(F)

@@ -4,7 +4,11 @@ A law is a hyperelastic energy density psi(F) per unit rest volume, written once
 of a 3 x 3 deformation gradient F and a small per-element parameter vector p:
 
     energy(F, p) = psi,   stress(F, p) = P = dpsi/dF (3 x 3),
-    stress_derivative(F, p) = d2psi/dF2 (9 x 9 over vec(F) = (F00, F01, F02, F10, ..., F22)).
+    stress_derivative(F, p) = d2psi/dF2 (9 x 9 over vec(F) = (F00, F01, F02, F10, ..., F22)),
+    volumetric(J, p) = (U, U', U'') of the law's volumetric part U(J), the one whose modulus grows without
+                       bound as nu -> 1/2, where psi - U(J) is isochoric and grows without bound as J -> 0 (a
+                       barrier against inverted elements): optional, for linear elements that do not lock
+                       (volumetric_split, terms/nodal_volume.py).
 
 Plane strain (d = 2) is the 3D law at F = [[F2, 0], [0, 1]]: the energy and the in-plane block of P are
 those of the 2D body, and its d2psi/dF2 is the in-plane 4 x 4 block of the 3D one; the out-of-plane
@@ -20,10 +24,13 @@ The output fields use the same stress: the Cauchy stress sigma = P F^T / J (3 x 
 plane strain), by the kernel cauchy_stresses.
 """
 
+import functools
+
 import numpy as np
 
 from ..backend import ti
 from .eigen import symmetric_eigensystem
+from .invariants import cofactor, determinant_hessian, flat
 
 
 class Law:
@@ -56,6 +63,47 @@ def register(law: type[Law]) -> type[Law]:
     """Class decorator: add a law to LAWS under its name."""
     LAWS[law.name] = law
     return law
+
+
+@functools.cache
+def volumetric_split(law: type[Law]) -> type[Law]:
+    """The law without its volumetric part, plus a given pressure's work: one more parameter pbar (the last),
+
+        psi_s(F) = psi(F) - U(J) + pbar J,   P_s = P - (U'(J) - pbar) cof F,
+        d2psi_s/dF2 = d2psi/dF2 - U''(J) cof F cof F^T - (U'(J) - pbar) d2J/dF2,
+
+    the element part of the nodally averaged volumetric energy (terms/nodal_volume.py): at pbar = 0 the energy
+    psi - U(J), at the averaged pressure its forces and Hessian. One class per law (so its kernels compile once);
+    its eigenpairs come from the Jacobi iteration."""
+    n = len(law.parameter_names)
+
+    @ti.func
+    def own(p):
+        return ti.Vector([p[i] for i in ti.static(range(n))], dt=ti.f64)
+
+    class Split(Law):
+        name = f"{law.name} without U(J)"
+        parameter_names = (*law.parameter_names, "pbar")
+
+        @staticmethod
+        @ti.func
+        def energy(F, p):
+            J = F.determinant()
+            return law.energy(F, own(p)) - law.volumetric(J, own(p))[0] + p[n] * J
+
+        @staticmethod
+        @ti.func
+        def stress(F, p):
+            return law.stress(F, own(p)) - (law.volumetric(F.determinant(), own(p))[1] - p[n]) * cofactor(F)
+
+        @staticmethod
+        @ti.func
+        def stress_derivative(F, p):
+            U = law.volumetric(F.determinant(), own(p))
+            g = flat(cofactor(F))
+            return law.stress_derivative(F, own(p)) - U[2] * g.outer_product(g) - (U[1] - p[n]) * determinant_hessian(F)
+
+    return Split
 
 
 @ti.func

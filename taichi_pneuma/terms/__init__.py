@@ -18,5 +18,10 @@ from .base import Term, vertex_dofs
 from .chambers import AreaChamber, PressureChamber
 from .constraints import Clamp, NormalClamp
 from .elastic import Elasticity
+from .nodal_volume import NodalVolumeElasticity
 
-__all__ = ["AreaChamber", "Clamp", "Elasticity", "NormalClamp", "PressureChamber", "Term", "vertex_dofs"]
+# where the elastic term evaluates the law's volumetric part (Scene.volumetric, the scene file's mesh.volumetric)
+VOLUMETRIC = {"element": Elasticity, "nodal": NodalVolumeElasticity}
+
+__all__ = ["VOLUMETRIC", "AreaChamber", "Clamp", "Elasticity", "NodalVolumeElasticity", "NormalClamp",
+           "PressureChamber", "Term", "vertex_dofs"]
