@@ -28,7 +28,8 @@ QUALITY = {"draft": (0.005, 1, 1e-4), "default": (0.0012, 1, 1e-6), "high": (0.0
 QUALITY_3D = {"draft": (0.3, None, 1, 1e-4), "default": (0.3, 0.15, 2, 1e-6), "high": (0.3, 0.1, 2, 1e-6),
               "accurate": (0.2, 0.08, 2, 1e-9)}
 # each preset's measured tip error against the converged tip, on the reference beam (2D, nu = 0.45: docs/accuracy.md)
-# and on beam_3d_ellipsoid (3D: docs/solid.md; pneuma-bench --sections presets_3d measures it): the run's first line
+# and on beam_3d_ellipsoid (3D: docs/solid.md; pneunet_3d's peak tip: 5.1 % and 2.2 % at default and high, docs/3d.md;
+# pneuma-bench --sections presets_3d measures both): the run's first line
 QUALITY_ERROR = {2: {"draft": 28.4, "default": 8.0, "high": 0.64, "accurate": 0.07},
                  3: {"draft": 26, "default": 1.8, "high": 0.7, "accurate": 0.2}}
 MEASURE = {2: "area", 3: "volume"}  # what a chamber encloses, by dimension
