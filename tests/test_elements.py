@@ -115,8 +115,14 @@ def test_boundary_facets_are_the_mesh_boundary_traversed_with_the_body_on_the_le
     chamber_nodes = np.concatenate(mesh.chambers)
     assert set(np.unique(facets)) == set(mesh.boundary) | set(chamber_nodes)
     # each facet's corners run counter-clockwise around the body and clockwise around a hole (the outward
-    # normal lies to the right): the shoelace sum over the facets is the body's area
+    # normal lies to the right): the shoelace sum over the facets is the body's area, over the parabolas through
+    # corner, midside node and corner for quadratic ones (their boundary nodes lie on the exact curves):
+    # 1/2 a x b per straight facet, 1/6 (4 a x m + 4 m x b - a x b) per parabolic one
     a, b = mesh.vertices[facets[:, 0]], mesh.vertices[facets[:, 1]]
-    assert 0.5 * np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) == pytest.approx(mesh.area, rel=1e-12)
-    if order == 2:  # the third node is the facet's midpoint
-        assert np.allclose(mesh.vertices[facets[:, 2]], 0.5 * (a + b), atol=1e-14)
+    cross = lambda p, q: p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0]
+    if order == 1:
+        assert 0.5 * np.sum(cross(a, b)) == pytest.approx(mesh.area, rel=1e-12)
+    else:
+        m = mesh.vertices[facets[:, 2]]  # the facet's midside node: near the middle of its chord
+        assert np.all(np.linalg.norm(m - 0.5 * (a + b), axis=1) < 0.25 * np.linalg.norm(b - a, axis=1))
+        assert np.sum(4 * cross(a, m) + 4 * cross(m, b) - cross(a, b)) / 6 == pytest.approx(mesh.area, rel=1e-12)

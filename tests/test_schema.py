@@ -266,7 +266,8 @@ def covering_scenes() -> list[Scene]:
                       (IsochoricMaterial("mooney_rivlin", 0.2, C01=0.01, poisson_ratio=0.45),)))]
     mesh_body = MeshGeometry(MeshBody("beam_3d.msh"), (("main", MeshSurface("chamber")),))
     solid = dataclasses.replace(core, geometry=mesh_body)
-    return [every, boxed, polygon, *kinds, *silicones, solid, *shaped_scenes(core)]
+    nodal = dataclasses.replace(silicones[0], volumetric="nodal")  # linear elements with nodal volumes
+    return [every, boxed, polygon, *kinds, *silicones, nodal, solid, *shaped_scenes(core)]
 
 
 def shaped_scenes(core: Scene) -> list[Scene]:

@@ -90,11 +90,5 @@ class EnergyModel:
     def low_rank(self) -> list[tuple[np.ndarray, np.ndarray, float]]:
         return [part for t in self.terms for part in t.low_rank()]
 
-    def admits(self) -> bool | None:
-        """Whether every term admits the state of the last energy() (Term.admits): False where one does not,
-        None where one can only tell along a step's path (max_step)."""
-        verdicts = [t.admits() for t in self.terms]
-        return False if False in verdicts else None if None in verdicts else True
-
     def max_step(self, dx: np.ndarray) -> float:
         return min((t.max_step(dx.reshape(self.config.u.shape)) for t in self.terms), default=math.inf)

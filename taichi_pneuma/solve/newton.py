@@ -30,12 +30,8 @@ reach the tolerance; otherwise a fresh Hessian. A solve may also start with one 
 increment, the live window's next frame). The rule counts steps, not seconds, so a run's iterates do not depend
 on the machine's load. (In 2D a factorisation costs about what the rest of an iteration does: no chord steps.)
 
-The step u <- u + alpha d (u: displacements) is the full step alpha = 1 where it is accepted and every
-term admits its end state judged alone (no inverted element: the elastic energy's kernel returns the
-smallest det F with the energy, so this costs one energy evaluation; EnergyModel.admits). Otherwise,
-and from the start where a term can only judge a step along its path (contact barriers, a gas
-volume), it starts at alpha = min(1, 0.9 max_step), the terms' safe bound (no triangle inverts),
-and halves until the Armijo condition
+The step u <- u + alpha d (u: displacements) starts at alpha = min(1, 0.9 max_step), the terms'
+safe bound (no triangle inverts), and halves until the Armijo condition
 
     E(u + alpha d) <= E(u) + c1 alpha g.d
 
@@ -282,27 +278,15 @@ class NewtonSolver:
         return u.reshape(model.config.u.shape), record
 
     def _line_search(self, u, d, g, energy, slope, record) -> tuple[float, float]:
-        """The full step first where every term judges a state alone (EnergyModel.admits: no max_step to compute
-        when it is taken), else, or where it is refused, backtrack from min(1, 0.9 max_step); return (alpha,
-        energy there), or (0, nan) if nothing is accepted."""
+        """Backtrack from min(1, 0.9 max_step); return (alpha, energy there), or (0, nan) if nothing is accepted."""
         model = self.model
-
-        def accepted(alpha: float, trial: float) -> bool:
-            record.line_search_trials += 1
-            if trial <= energy + ARMIJO_C1 * alpha * slope:
-                return True
-            return -alpha * slope < model.energy_resolution and np.linalg.norm(model.gradient()[0]) < np.linalg.norm(g)
-
-        tried = None
-        if model.admits() is not None:  # every term judges a state alone: try the full step as it is
-            trial, tried = self._energy_at(u + d), 1.0
-            if model.admits() and accepted(1.0, trial):
-                return 1.0, trial
         alpha = min(1.0, STEP_SAFETY * model.max_step(d))
         for _ in range(MAX_HALVINGS):
-            if alpha != tried:
-                trial = self._energy_at(u + alpha * d)
-                if accepted(alpha, trial):
-                    return alpha, trial
+            record.line_search_trials += 1
+            trial = self._energy_at(u + alpha * d)
+            if trial <= energy + ARMIJO_C1 * alpha * slope:
+                return alpha, trial
+            if -alpha * slope < model.energy_resolution and np.linalg.norm(model.gradient()[0]) < np.linalg.norm(g):
+                return alpha, trial
             alpha *= 0.5
         return 0.0, math.nan

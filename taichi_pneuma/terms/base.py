@@ -164,13 +164,6 @@ class Term:
     def max_step(self, dx: np.ndarray) -> float:
         return math.inf
 
-    def admits(self) -> bool | None:
-        """Whether the state of the last energy() is one this term admits, judged from that state alone (the line
-        search then takes a full step without max_step where every term admits its end); None where only max_step,
-        along the step's path, can tell (a barrier that a step could jump). A term without a step bound admits
-        every state."""
-        return True if type(self).max_step is Term.max_step else None
-
     def fault(self) -> str | None:
         """Why no equilibrium can be found from the current state, in words, when this term is the cause (e.g. a
         material law that is unstable there), else None; asked when a Newton solve breaks down."""
