@@ -38,6 +38,8 @@ RESULTS_PAGES = {
                       "pneuma-bench --sections scaling"),
     "bench_solid": ("performance", "3D: the cost of a Newton iteration on tetrahedra",
                     ("taichi_pneuma/apps/bench.py", "solid"), "pneuma-bench --sections solid"),
+    "bench_presets_3d": ("performance", "3D presets on the shipped 3D scenes: time and error",
+                         ("taichi_pneuma/apps/bench.py", "presets_3d"), "pneuma-bench --sections presets_3d"),
     "bench_sweep": ("performance", "Design studies: throughput on a process pool and on Ray",
                     ("benchmarks/sweep.py", None), "python benchmarks/sweep.py --out benchmarks/results"),
     "render3d": ("performance", "3D meshing and rendering", ("benchmarks/render3d.py", None),
