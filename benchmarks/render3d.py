@@ -57,9 +57,10 @@ def outer_faces(mesh) -> np.ndarray:
     return np.array([face for face in mesh.surface[:, :3].tolist() if tuple(sorted(face)) not in walls])
 
 
-def live_scene(size: float = 0.3, peak: float = 900.0):
-    """The coarse PneuNet (gmsh at edge `size`), its six chambers under pressure control (to `peak` Pa), one
-    material (the scene's stiffer layer aside): (built scene, outer faces, chamber walls)."""
+def live_scene(size: float = 0.3, peak: float = 900.0, order: int = 1):
+    """The coarse PneuNet (gmsh at edge `size`; order 2: quadratic tetrahedra), its six chambers under pressure
+    control (to `peak` Pa), one material (the scene's stiffer layer aside): (built scene, outer faces, chamber
+    walls)."""
     from taichi_pneuma.apps.bench import Meshed
     from taichi_pneuma.fem.geometry import PointSet
     from taichi_pneuma.fem.tetmesh import tet_mesh
@@ -68,14 +69,15 @@ def live_scene(size: float = 0.3, peak: float = 900.0):
 
     meshed = mesh_solid(PneuNet().solid(), MeshSizes(size))
     names = tuple(meshed.chambers)
-    geometry = Meshed(tet_mesh(meshed.vertices, meshed.tets, meshed.chambers, meshed.boundary, clamp=PointSet("left")),
+    geometry = Meshed(tet_mesh(meshed.vertices, meshed.tets, meshed.chambers, meshed.boundary, order=order,
+                               clamp=PointSet("left")),
                       tuple((name, None) for name in names))
     controls = tuple(ChamberControl(ChamberSchedule("pressure", ((1, peak),))) for _ in names)
     built = Scene(geometry, controls, 1, Material(1e4, 0.45)).build()
     return built, outer_faces(built.mesh), np.concatenate(built.mesh.chambers)[:, :3]
 
 
-def live(frames: int, peak: float = 900.0, idle: int = 30) -> list[dict]:
+def live(frames: int, peak: float = 900.0, idle: int = 30, order: int = 1) -> list[dict]:
     """The interactive loop's work per frame, headless (module docstring): a record per 3D view and solve mode,
     wall and CPU time (the steadier on a shared machine). Modes: "full Newton" solves to the live tolerance at
     every slider move (warm-started); "one step" is the window's LiveEquilibrium (one Newton step per frame, the
@@ -84,7 +86,7 @@ def live(frames: int, peak: float = 900.0, idle: int = 30) -> list[dict]:
     from taichi_pneuma.render.interactive import LIVE_TOL, LiveEquilibrium
     from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 
-    built, boundary, walls = live_scene(peak=peak)
+    built, boundary, walls = live_scene(peak=peak, order=order)
     mesh = built.mesh
     camera = Camera().fitted(mesh.vertices, 960, 640, margin=0.2)
     faces = boundary[section_faces(mesh.vertices, boundary, camera)]
@@ -162,11 +164,13 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=8)
     parser.add_argument("--live-frames", type=int, default=30)
     parser.add_argument("--only-live", action="store_true", help="the live loop alone (to render3d_live.md, .json)")
+    parser.add_argument("--order", type=int, choices=(1, 2), default=1,
+                        help="the live loop's element order (2: quadratic tetrahedra; its tables get the suffix _p2)")
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results"))
     args = parser.parse_args()
     runtime.init("cpu")
     load = os.getloadavg()[0]
-    solid, data = PneuNet().solid(), {"meshing": [], "rendering": [], "live": live(args.live_frames)}
+    solid, data = PneuNet().solid(), {"meshing": [], "rendering": [], "live": live(args.live_frames, order=args.order)}
     for label, sizes in {} if args.only_live else MESH_SIZES.items():
         start = time.perf_counter()
         mesh = mesh_solid(solid, sizes)
@@ -215,7 +219,8 @@ def main() -> None:
         data["interactive_live"] = live_window(args.live_frames)
         print(data["interactive_live"], flush=True)
     args.out.mkdir(parents=True, exist_ok=True)
-    stem = "render3d_live" if args.only_live else "render3d"  # the live loop alone leaves the full tables as they are
+    stem = ("render3d_live" if args.only_live else "render3d") + ("_p2" if args.order == 2 else "")  # the live loop
+    # alone (or quadratic) leaves the full tables as they are
     (args.out / f"{stem}.json").write_text(json.dumps({"machine": machine(), "load_average": load, "data": data}, indent=2))
     lines = [f"Machine: {machine()}; load average (1 min) at the start: {load:.1f}"]
     if data["meshing"]:
