@@ -126,9 +126,8 @@ def nested_dissection(matrix: sp.csr_matrix, block: int) -> np.ndarray | None:
     import pymetis
 
     n = matrix.shape[0] // block
-    nodes = sp.csr_matrix((np.ones(matrix.nnz), matrix.indices // block, matrix.indptr), shape=(matrix.shape[0], n))
-    graph = (sp.csr_matrix((np.ones(matrix.shape[0]), np.arange(matrix.shape[0]) // block,
-                            np.arange(matrix.shape[0] + 1)), shape=(matrix.shape[0], n)).T @ nodes).tocsr()
+    rows = np.repeat(np.arange(matrix.shape[0]), np.diff(matrix.indptr))
+    graph = sp.csr_matrix((np.ones(matrix.nnz), (rows // block, matrix.indices // block)), shape=(n, n))
     graph.setdiag(0)
     graph.eliminate_zeros()
     order, _ = pymetis.nested_dissection(pymetis.CSRAdjacency(graph.indptr, graph.indices))
@@ -335,9 +334,10 @@ class AmgConjugateGradient:
 BACKENDS = {"amg": AmgConjugateGradient, "cholespy": CholespyCholesky, "cholmod": CholmodCholesky,
             "scipy": ScipySuperLU, "taichi": TaichiLLT}
 # auto in 3D: CHOLMOD up to this many DOFs, CG with multigrid above (a factor's memory grows as n^(4/3) and its
-# time as n^2, multigrid's about as n). On the quadratic beam (bench.py's solid_3d section, 2 cores) CHOLMOD
-# refactorises 59k DOFs in 1.1 s and 119k in 3.9 s, where multigrid's set-up and one solve to 1e-2 take 3.0 s and
-# 15 s, and each later solve 0.6 s and 5.4 s
+# time as n^2, multigrid's about as n). On the quadratic beam's Hessians (2 cores; docs/solid.md, "Linear solvers
+# in 3D") CHOLMOD refactorises 59k DOFs in 1.1 s and 119k in 3.9 s, where multigrid's set-up and one solve to 1e-2
+# take 3.0 s and 15 s, and each later solve 0.6 s and 5.4 s; the 250k bound itself is extrapolated (n^2), not
+# measured
 DIRECT_MAX_DOFS_3D = 250_000
 # auto without CHOLMOD: CG with multigrid from this many DOFs on in 3D. bench.py's solid section: on the octant
 # (nu = 0.45) it overtakes Taichi's LLT between 675 and 3,213 DOFs and is 3x faster at 12,675; at nu = 0.499
