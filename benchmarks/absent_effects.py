@@ -11,7 +11,7 @@ import argparse
 import time
 
 from taichi_pneuma import runtime
-from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.solve.simulate import run_schedule
 
 

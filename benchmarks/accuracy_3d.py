@@ -44,8 +44,8 @@ from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.fem.solids import Box, Ellipsoid
 from taichi_pneuma.fem.tetmesh import tet_mesh
 from taichi_pneuma.io.output import prepare_directory, save_json, save_text
-from taichi_pneuma.scene import ChamberControl, Material, Region, Scene
-from taichi_pneuma.solve.schedule import area_ramp
+from taichi_pneuma.scene.build import ChamberControl, Material, Region, Scene
+from taichi_pneuma.scene.schedule import area_ramp
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from solid_meshes import MeshOf  # noqa: E402

@@ -15,7 +15,7 @@ import time
 from taichi_pneuma import backend, runtime
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.render.frames import FrameRenderer, Track
-from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.solve.simulate import run_schedule
 
 CANVASES = ("ggui", "gui", "pillow")

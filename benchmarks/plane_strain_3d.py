@@ -28,8 +28,8 @@ from taichi_pneuma.fem.layered import extrude
 from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface, write_mesh
 from taichi_pneuma.fem.tetmesh import tet_mesh
 from taichi_pneuma.io.output import prepare_directory, save_json, save_text
-from taichi_pneuma.scene import ChamberControl, Material, Scene, reference_scene
-from taichi_pneuma.solve.schedule import area_ramp
+from taichi_pneuma.scene.build import ChamberControl, Material, Scene, reference_scene
+from taichi_pneuma.scene.schedule import area_ramp
 
 DEPTH = 0.8
 CONVERGED = -0.25826  # P2, the reference mesh refined twice (docs/accuracy.md)

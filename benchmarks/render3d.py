@@ -35,7 +35,7 @@ from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes, estimate_tets, mesh_solid
 from taichi_pneuma.render.camera import Camera
 from taichi_pneuma.render.frames3d import BACKGROUND, FrameRenderer3D, Track3D, open_view, section_faces, shaded_triangles
-from taichi_pneuma.render.interactive3d import Slider, explore_3d
+from taichi_pneuma.live.interactive3d import Slider, explore_3d
 
 MESH_SIZES = {"coarse (interactive)": MeshSizes(0.3), "scene default": MeshSizes(0.1),
               "fine": MeshSizes(0.05)}
@@ -64,8 +64,8 @@ def live_scene(size: float = 0.3, peak: float = 900.0, order: int = 1):
     from taichi_pneuma.apps.bench import Meshed
     from taichi_pneuma.fem.geometry import PointSet
     from taichi_pneuma.fem.tetmesh import tet_mesh
-    from taichi_pneuma.scene import ChamberControl, Material, Scene
-    from taichi_pneuma.solve.schedule import ChamberSchedule
+    from taichi_pneuma.scene.build import ChamberControl, Material, Scene
+    from taichi_pneuma.scene.schedule import ChamberSchedule
 
     meshed = mesh_solid(PneuNet().solid(), MeshSizes(size))
     names = tuple(meshed.chambers)
@@ -83,7 +83,7 @@ def live(frames: int, peak: float = 900.0, idle: int = 30, order: int = 1) -> li
     every slider move (warm-started); "one step" is the window's LiveEquilibrium (one Newton step per frame, the
     previous factorisation reused while the slider moves), followed by idle frames (at most `idle`) until it
     converges at the last command; its distance from the full solve there is recorded."""
-    from taichi_pneuma.render.interactive import LIVE_TOL, LiveEquilibrium
+    from taichi_pneuma.live.interactive import LIVE_TOL, LiveEquilibrium
     from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 
     built, boundary, walls = live_scene(peak=peak, order=order)
@@ -144,7 +144,7 @@ def live_window(frames: int, peak: float = 900.0) -> dict:
     """The interactive window (explore_3d, needs a display) on the coarse PneuNet with the live solve
     (LiveEquilibrium): the six chambers' pressure moved 0 -> peak over `frames` frames (scripted, not the
     slider), then held for as many frames; its frames per second."""
-    from taichi_pneuma.render.interactive import LiveEquilibrium
+    from taichi_pneuma.live.interactive import LiveEquilibrium
 
     built, boundary, walls = live_scene(peak=peak)
     state, ramp = LiveEquilibrium(built), iter(np.linspace(0.0, peak, frames + 1))

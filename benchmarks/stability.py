@@ -14,7 +14,7 @@ from pathlib import Path
 
 from taichi_pneuma import runtime
 from taichi_pneuma.io.output import prepare_directory, save_json, save_text
-from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 
 CASES = [

@@ -132,7 +132,7 @@ def app_page(name: str) -> str:
 
 
 def scene_keys_page() -> str:
-    from taichi_pneuma.io.scenefile import key_reference
+    from taichi_pneuma.scene.scenefile import key_reference
 
     from taichi_pneuma.io.units import si_text
 

@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     from .api import Result, load_scene, simulate
     from .errors import PneumaInputError
     from .runtime import init
-    from .scene import Scene, reference_scene
+    from .scene.build import Scene, reference_scene
     from .solve.simulate import RampFailed, RampInterrupted
 
 

@@ -14,11 +14,11 @@ from __future__ import annotations
 import os
 
 from . import limits, runtime
-from .io import scenefile
-from .io.shipped import find
-from .scene import BuiltScene, Scene
+from .scene import scenefile
+from .scene.shipped import find
+from .scene.build import BuiltScene, Scene
 from .solve.newton import NewtonOptions
-from .solve.result import Result
+from .result import Result
 from .solve.simulate import MAX_CUTS, run_schedule
 
 __all__ = ["Result", "load_scene", "simulate"]

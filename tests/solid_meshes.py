@@ -24,7 +24,7 @@ from taichi_pneuma.fem.elements import TET_EDGES
 from taichi_pneuma.fem.geometry import BeamGeometry, PointSet, Roller
 from taichi_pneuma.fem.layered import extrude, layered_tets, spherical_shell_octant
 from taichi_pneuma.fem.tetmesh import TetMesh, tet_mesh
-from taichi_pneuma.scene import ChamberControl, Material, Scene
+from taichi_pneuma.scene.build import ChamberControl, Material, Scene
 
 DEPTH = 0.8
 Z_ROLLERS = (Roller((0.0, 0.0, 1.0), (0.0, 0.0, 0.0)), Roller((0.0, 0.0, 1.0), (0.0, 0.0, DEPTH)))

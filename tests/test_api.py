@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import taichi_pneuma as tp
-from taichi_pneuma.io.sceneformat import scene_data
-from taichi_pneuma.io.schema import parse_assignment
+from taichi_pneuma.scene.sceneformat import scene_data
+from taichi_pneuma.scene.schema import parse_assignment
 from taichi_pneuma.render.plots import command_axis
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -88,7 +88,7 @@ def test_command_line_defaults_are_the_solvers_and_the_reference_scenes():
 
     from taichi_pneuma.apps import cli, inflate
     from taichi_pneuma.fem.geometry import BeamGeometry
-    from taichi_pneuma.scene import reference_scene
+    from taichi_pneuma.scene.build import reference_scene
     from taichi_pneuma.solve.newton import NewtonOptions
     from taichi_pneuma.solve.simulate import MAX_CUTS
 
@@ -111,7 +111,7 @@ def test_set_changes_the_run(tmp_path, capsys):
         summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
         tips[name], ratio = summary["tip_deflection"], summary["chambers"]["main"]["area_ratio"]
     assert tips["default"] < -0.1 and tips["set"] > 0.1 and ratio == pytest.approx(3.0, abs=0.01)
-    from taichi_pneuma.io.scenefile import load_scene
+    from taichi_pneuma.scene.scenefile import load_scene
     scene = load_scene(tmp_path / "set" / "inflate_cy+0.15_scene.toml")
     assert scene.geometry.chambers[0][1].center == (0.0, -0.15) and scene.controls[0].schedule.keyframes == ((3, 3.0),)
 

@@ -5,10 +5,10 @@ import pytest
 
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.geometry import Ellipse, Geometry, PointSet, Rectangle, Roller
-from taichi_pneuma.io.scenefile import read_scene
-from taichi_pneuma.io.sceneformat import scene_data
-from taichi_pneuma.scene import Scene, reference_scene
-from taichi_pneuma.solve.model import Configuration
+from taichi_pneuma.scene.scenefile import read_scene
+from taichi_pneuma.scene.sceneformat import scene_data
+from taichi_pneuma.scene.build import Scene, reference_scene
+from taichi_pneuma.terms.model import Configuration
 from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms.constraints import Clamp, NormalClamp
 

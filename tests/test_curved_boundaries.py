@@ -18,9 +18,9 @@ from taichi_pneuma.fem.geometry import (
 )
 from taichi_pneuma.materials import lame_parameters
 from taichi_pneuma.fem.elements import TRIANGLE_P2
-from taichi_pneuma.scene import ChamberControl, Material, Scene
-from taichi_pneuma.solve.model import Configuration
-from taichi_pneuma.solve.schedule import ChamberSchedule
+from taichi_pneuma.scene.build import ChamberControl, Material, Scene
+from taichi_pneuma.terms.model import Configuration
+from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms.chambers import PressureControl
 
 INNER, OUTER, NU, LOAD = 1.0, 2.0, 0.3, 1e-6

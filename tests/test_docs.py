@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from taichi_pneuma.io.scenefile import key_reference
+from taichi_pneuma.scene.scenefile import key_reference
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "docs"))

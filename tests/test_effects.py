@@ -6,8 +6,8 @@ import pytest
 from test_terms import assert_gradient_matches_finite_differences, dense_hessian, fd_hessian
 
 from taichi_pneuma.fem.geometry import Ellipse, Geometry, PointSet, Rectangle
-from taichi_pneuma.scene import ChamberControl, Scene, reference_scene
-from taichi_pneuma.solve.schedule import ChamberSchedule
+from taichi_pneuma.scene.build import ChamberControl, Scene, reference_scene
+from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms.effects import Gravity, Ground, SelfContact
 
 
@@ -84,8 +84,8 @@ def test_dynamics_step_response_overshoots_then_decays_to_the_static_shape():
     (backward Euler dissipates); the first peak comes about half a bending period in (~1 s here)."""
     import dataclasses
 
-    from taichi_pneuma.scene import ChamberControl, reference_scene
-    from taichi_pneuma.solve.schedule import ChamberSchedule
+    from taichi_pneuma.scene.build import ChamberControl, reference_scene
+    from taichi_pneuma.scene.schedule import ChamberSchedule
     from taichi_pneuma.solve.simulate import run_schedule
     from taichi_pneuma.terms.effects import Dynamics
 

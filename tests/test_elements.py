@@ -18,7 +18,7 @@ from taichi_pneuma.fem.elements import (
     boundary_facets,
     family_of,
 )
-from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.scene.build import reference_scene
 
 RNG = np.random.default_rng(7)
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from taichi_pneuma.fem.geometry import Geometry, PointSet, Rectangle
-from taichi_pneuma.scene import Material, Scene
+from taichi_pneuma.scene.build import Material, Scene
 from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms.base import Term
 from taichi_pneuma.terms.effects import EFFECTS, Effect

@@ -6,7 +6,7 @@ import pytest
 
 from taichi_pneuma.fem.fields import cauchy_stress, element_fields, max_stretch, von_mises
 from taichi_pneuma.materials import StableNeoHookean, lame_parameters
-from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.scene.build import reference_scene
 
 MU, LAM = lame_parameters(1e4, 0.45)
 

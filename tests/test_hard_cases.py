@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from taichi_pneuma.fem.geometry import polygon_self_intersects
-from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 

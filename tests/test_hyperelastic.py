@@ -11,7 +11,7 @@ from test_materials import evaluate
 from taichi_pneuma import runtime
 from taichi_pneuma.fem.geometry import Geometry, PointSet, Rectangle
 from taichi_pneuma.materials import IsochoricMaterial, IsochoricPolynomial
-from taichi_pneuma.solve.model import EnergyModel
+from taichi_pneuma.terms.model import EnergyModel
 from taichi_pneuma.terms import Elasticity
 
 # One material of each form (kPa, of Ecoflex-like magnitude)

@@ -10,7 +10,7 @@ from taichi_pneuma.solve import linsolve
 from taichi_pneuma.solve.linsolve import (AMG_MIN_DOFS, AmgConjugateGradient, FixedPattern, NotConverged,
                                           make_backend, rigid_body_modes, solve_low_rank_updated)
 from taichi_pneuma.solve.newton import FORCING_MAX, NewtonOptions, NewtonSolver, forcing_term
-from taichi_pneuma.solve.schedule import area_ramp
+from taichi_pneuma.scene.schedule import area_ramp
 from taichi_pneuma.solve.simulate import run_schedule
 
 pytest.importorskip("pyamg")  # the multigrid library, not installed where it has no wheel (Linux aarch64)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.solve.linsolve import BACKENDS, FactorizationError, FixedPattern, make_backend
 from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.solve.simulate import run_schedule

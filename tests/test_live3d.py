@@ -5,9 +5,9 @@ full Newton solve finds at its final commands, and no frame on the way inverts a
 import numpy as np
 import pytest
 
-from taichi_pneuma.render.interactive import LiveEquilibrium
+from taichi_pneuma.live.interactive import LiveEquilibrium
 from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
-from taichi_pneuma.solve.schedule import ChamberSchedule
+from taichi_pneuma.scene.schedule import ChamberSchedule
 from tests.solid_meshes import box_with_cavity, scene_of
 
 TOL = 1e-6
@@ -16,7 +16,7 @@ TOL = 1e-6
 @pytest.fixture(scope="module")
 def built():
     """The box with a cavity under a pressure command (a softer body: the slider's top bends it visibly)."""
-    from taichi_pneuma.scene import Material
+    from taichi_pneuma.scene.build import Material
 
     return scene_of(box_with_cavity(), [ChamberSchedule("pressure", ((1, 1.0),))], 1, Material(1e4, 0.45)).build()
 

@@ -11,8 +11,8 @@ from test_terms import dense_hessian, fd_gradient, fd_hessian
 from taichi_pneuma.backend import ti
 from taichi_pneuma.materials import LAWS, Law, StableNeoHookean, lame_parameters, register
 from taichi_pneuma.materials.law import element_parameters, stress_eigensystem
-from taichi_pneuma.scene import reference_scene
-from taichi_pneuma.solve.model import EnergyModel
+from taichi_pneuma.scene.build import reference_scene
+from taichi_pneuma.terms.model import EnergyModel
 from taichi_pneuma.solve.newton import NewtonSolver
 from taichi_pneuma.terms import Clamp, Elasticity
 from taichi_pneuma.terms.chambers import AreaControl

@@ -18,8 +18,8 @@ from taichi_pneuma.fem.geometry import Ellipse, Geometry, PointSet, Rectangle, R
 from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface, write_mesh
 from taichi_pneuma.fem.tetmesh import REVERSED
 from taichi_pneuma.io.vtk import VtkSeries
-from taichi_pneuma.scene import ChamberControl, Scene
-from taichi_pneuma.solve.schedule import ChamberSchedule, area_ramp
+from taichi_pneuma.scene.build import ChamberControl, Scene
+from taichi_pneuma.scene.schedule import ChamberSchedule, area_ramp
 
 SCENES = Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes"
 ROLLERS = """

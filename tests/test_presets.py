@@ -12,7 +12,7 @@ import tomllib
 
 import taichi_pneuma as tp
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.io.scenefile import read_scene
+from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.io.units import UNITS
 from taichi_pneuma.materials import IsochoricMaterial
 from taichi_pneuma.materials.presets import PRESETS, PresetMaterial

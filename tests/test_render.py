@@ -18,7 +18,7 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.render import frames as render
 from taichi_pneuma.render.frames import BACKGROUND, CHAMBER_FILL, FACE, GROUND, FrameRenderer, Track
 from taichi_pneuma.render.video import write_video
-from taichi_pneuma.scene import reference_scene
+from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.solve.simulate import run_schedule
 
 COARSE = ["--max-area", "0.01", "--growth", "2", "--steps", "3", "--quiet"]
@@ -222,7 +222,7 @@ def xvfb_display(monkeypatch):
 
 @needs_window
 def test_interactive_window_resolves_when_the_slider_moves(xvfb_display, monkeypatch, capsys):
-    from taichi_pneuma.render.interactive import explore
+    from taichi_pneuma.live.interactive import explore
 
     moves = iter([1.0, 1.0, 1.3, 1.3, 1.6])  # the slider's values on successive frames
     monkeypatch.setattr(render.GUICanvas, "slider", lambda self, label, value, low, high: next(moves))

@@ -11,7 +11,7 @@ import pytest
 import taichi_pneuma as tp
 from taichi_pneuma import limits
 from taichi_pneuma.control.inverse import Reacher, frames
-from taichi_pneuma.control.targets import Target
+from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.render.frames import Track
 from taichi_pneuma.terms.effects import Gravity, Ground, SelfContact

@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import taichi_pneuma as tp
-from taichi_pneuma.control.targets import Target
+from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.geometry import (
     SIDES,
@@ -31,13 +31,13 @@ from taichi_pneuma.fem.geometry import (
 )
 from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface
 from taichi_pneuma.io.output import FORMULA
-from taichi_pneuma.io.scenefile import key_reference, read_scene
-from taichi_pneuma.io.sceneformat import scene_data
+from taichi_pneuma.scene.scenefile import key_reference, read_scene
+from taichi_pneuma.scene.sceneformat import scene_data
 from taichi_pneuma.io.units import UNITLESS, UNITS
 from taichi_pneuma.materials import FORMS, IsochoricMaterial
 from taichi_pneuma.materials.presets import PRESETS, PresetMaterial
-from taichi_pneuma.scene import ChamberControl, Material, Region, Scene
-from taichi_pneuma.solve.schedule import ChamberSchedule
+from taichi_pneuma.scene.build import ChamberControl, Material, Region, Scene
+from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms.chambers import KINDS, AreaControl, PressureControl
 from taichi_pneuma.terms.effects import EFFECTS, Dynamics, Effect, Gravity, Ground, SelfContact
 
@@ -385,10 +385,10 @@ def test_scene_reaches_no_module_that_imports_it_back():
     modules = {".".join(p.relative_to(PACKAGE.parent).with_suffix("").parts).removesuffix(".__init__"): p
                for p in PACKAGE.rglob("*.py")}
     graph = {name: imports_of(path) & set(modules) for name, path in modules.items()}
-    reached, todo = set(), ["taichi_pneuma.scene"]
+    reached, todo = set(), ["taichi_pneuma.scene.build"]
     while todo:
         for module in graph[todo.pop()] - {"taichi_pneuma"}:  # the package itself is imported before any module
             if module not in reached:
                 reached.add(module)
                 todo.append(module)
-    assert "taichi_pneuma.io.sceneformat" in reached and "taichi_pneuma.scene" not in reached
+    assert "taichi_pneuma.scene.sceneformat" in reached and "taichi_pneuma.scene.build" not in reached

@@ -13,10 +13,10 @@ from taichi_pneuma.fem.geometry import PointSet, Roller
 from taichi_pneuma.fem.layered import spherical_shell_octant
 from taichi_pneuma.fem.tetmesh import tet_mesh
 from taichi_pneuma.materials import StableNeoHookean
-from taichi_pneuma.scene import Material
-from taichi_pneuma.solve.model import EnergyModel
+from taichi_pneuma.scene.build import Material
+from taichi_pneuma.terms.model import EnergyModel
 from taichi_pneuma.solve.newton import NewtonSolver
-from taichi_pneuma.solve.schedule import ChamberSchedule
+from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms import Clamp, Elasticity, NormalClamp
 from taichi_pneuma.terms.base import Term
 from taichi_pneuma.terms.chambers import AreaControl, PressureControl

@@ -15,9 +15,9 @@ from taichi_pneuma import limits
 from taichi_pneuma.apps.inflate import main as inflate
 from taichi_pneuma.backend import has_ggui
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.io.scenefile import read_scene
-from taichi_pneuma.io.sceneformat import scene_data
-from taichi_pneuma.io.schema import parse_toml, set_key
+from taichi_pneuma.scene.scenefile import read_scene
+from taichi_pneuma.scene.sceneformat import scene_data
+from taichi_pneuma.scene.schema import parse_toml, set_key
 from taichi_pneuma.render.frames3d import CHAMBER, FrameRenderer3D, Track3D
 
 pytest.importorskip("gmsh", reason="gmsh is not installed (pip install 'taichi-pneuma[3d]')")
@@ -294,8 +294,8 @@ def test_interactive_3d_scene_resolves_per_chamber_slider(xvfb_display, monkeypa
     toward the equilibrium at the slider's command, which a held slider reaches (all_converged)."""
     import taichi as ti
 
-    from taichi_pneuma.render import interactive3d
-    from taichi_pneuma.render.interactive import chamber_sliders, explore_solid
+    from taichi_pneuma.live import interactive3d
+    from taichi_pneuma.live.interactive import chamber_sliders, explore_solid
 
     try:
         ti.ui.check_ggui_availability()

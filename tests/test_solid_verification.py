@@ -10,9 +10,9 @@ from solid_meshes import DEPTH, extruded_beam, scene_of, shell_octant
 import taichi_pneuma as tp
 from taichi_pneuma.fem.geometry import Polygon
 from taichi_pneuma.materials import StableNeoHookean, lame_parameters
-from taichi_pneuma.scene import Material, reference_scene
-from taichi_pneuma.solve.model import EnergyModel
-from taichi_pneuma.solve.schedule import ChamberSchedule, area_ramp
+from taichi_pneuma.scene.build import Material, reference_scene
+from taichi_pneuma.terms.model import EnergyModel
+from taichi_pneuma.scene.schedule import ChamberSchedule, area_ramp
 from taichi_pneuma.terms import Elasticity
 from taichi_pneuma.terms.chambers import AreaControl
 

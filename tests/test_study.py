@@ -14,7 +14,7 @@ import taichi_pneuma as tp
 from taichi_pneuma import backend
 from taichi_pneuma.apps.sweep import main
 from taichi_pneuma.control.study import RunOptions, Task, check_axes, parse_vary, plan, run_task, study_figure
-from taichi_pneuma.io.scenefile import read_scene
+from taichi_pneuma.scene.scenefile import read_scene
 
 CY = "chambers[0].center[1]"
 COARSE = ["--steps", "11", "--max-area", "0.01"]  # 380 vertices, 10 increments: ~0.1 s a ramp

@@ -13,7 +13,7 @@ import pytest
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem import triangulation
 from taichi_pneuma.fem.geometry import BeamGeometry, Ellipse, Geometry, Rectangle
-from taichi_pneuma.io.scenefile import load_scene
+from taichi_pneuma.scene.scenefile import load_scene
 
 INSTALLED = triangulation.installed()
 SCENES = Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes"

@@ -14,8 +14,8 @@ import pytest
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.materials import IsochoricMaterial
-from taichi_pneuma.scene import reference_scene
-from taichi_pneuma.solve.schedule import ChamberSchedule
+from taichi_pneuma.scene.build import reference_scene
+from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.control.inverse import Reacher
 from taichi_pneuma.solve.simulate import NoEquilibrium, RampFailed, run_schedule
 from taichi_pneuma.terms.chambers import AreaControl

@@ -28,8 +28,8 @@ from taichi_pneuma.apps import inflate
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.geometry import BeamGeometry, Ellipse, Geometry, PointSet, Rectangle
 from taichi_pneuma.fem.meshfile import write_mesh
-from taichi_pneuma.scene import ChamberControl, Scene
-from taichi_pneuma.solve.schedule import area_ramp
+from taichi_pneuma.scene.build import ChamberControl, Scene
+from taichi_pneuma.scene.schedule import area_ramp
 from taichi_pneuma.terms.effects import Gravity, Ground
 
 MU, PRESSURE, INNER, OUTER = 1.0, 0.4429, 1.0, 2.0

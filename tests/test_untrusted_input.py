@@ -20,7 +20,7 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem import triangulation
 from taichi_pneuma.fem.geometry import MAX_WALL_POINTS
 from taichi_pneuma.io.output import check_stem, save_text
-from taichi_pneuma.io.scenefile import MAX_SCENE_BYTES, load_scene
+from taichi_pneuma.scene.scenefile import MAX_SCENE_BYTES, load_scene
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 # the reference scene file made cheap: a coarse mesh, 2 increments

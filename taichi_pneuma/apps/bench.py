@@ -53,7 +53,7 @@ def markdown(header: list[str], rows: list[list]) -> str:
 
 def warm_up(built, options=None) -> None:
     """Compile (or load from the offline cache) this scene's kernels: one tiny increment of 1% area."""
-    from ..solve.schedule import Schedule, area_ramp
+    from ..scene.schedule import Schedule, area_ramp
     from ..solve.simulate import run_schedule
 
     run_schedule(built, Schedule(1, (area_ramp(1.01, 2),)), options)
@@ -62,7 +62,7 @@ def warm_up(built, options=None) -> None:
 def timed_ramp(max_area=0.0012, steps=36, growth=3.5, options=None, cy=0.15, **scene):
     """Build, warm the kernels up on a tiny ramp, then time the ramp; return (built, result, seconds).
     scene: further reference_scene arguments (order, refinements, nu)."""
-    from ..scene import reference_scene
+    from ..scene.build import reference_scene
     from ..solve.simulate import run_schedule
 
     built = reference_scene(cy, growth=growth, steps=steps, max_area=max_area, **scene).build()
@@ -116,7 +116,7 @@ def startup() -> tuple[str, dict]:
     three scenes in turn that differ in mesh size, E, nu, k and number of chambers: their build time and
     their first two increments against two typical ones."""
     from ..api import load_scene
-    from ..scene import reference_scene
+    from ..scene.build import reference_scene
     from ..solve.simulate import run_schedule
 
     rows, render_rows, data = [], [], {"process": {}, "rendering": {}, "scenes": []}
@@ -160,7 +160,7 @@ def startup() -> tuple[str, dict]:
 
 def breakdown() -> tuple[str, dict]:
     """Where the time of one reference ramp goes, with the one-off kernel compile/load separately."""
-    from ..scene import reference_scene
+    from ..scene.build import reference_scene
     from ..solve.simulate import run_schedule
 
     start = time.perf_counter()
@@ -380,8 +380,8 @@ def octant(divisions: int, layers: int, order: int, increments: int = 3) -> "Sce
     from ..fem.geometry import Roller
     from ..fem.layered import spherical_shell_octant
     from ..fem.tetmesh import tet_mesh
-    from ..scene import ChamberControl, Material, Scene
-    from ..solve.schedule import ChamberSchedule
+    from ..scene.build import ChamberControl, Material, Scene
+    from ..scene.schedule import ChamberSchedule
 
     vertices, tets, wall = spherical_shell_octant(1.0, 2.0, divisions, layers)
     mesh = tet_mesh(vertices, tets, {"cavity": wall}, order=order, clamp=None,
@@ -400,7 +400,7 @@ def solid() -> tuple[str, dict]:
     the elastic Hessian with the analytic eigensystem against the Jacobi one."""
     from ..materials import StableNeoHookean
     from ..solve.newton import NewtonOptions
-    from ..solve.schedule import ChamberSchedule, Schedule
+    from ..scene.schedule import ChamberSchedule, Schedule
     from ..solve.simulate import run_schedule
     from ..terms import Elasticity
 

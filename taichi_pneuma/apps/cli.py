@@ -146,14 +146,14 @@ def check_flags(args: argparse.Namespace) -> None:
     require(args.max_cuts >= 0, f"--max-cuts = {args.max_cuts!r} must be >= 0")
     for name in ("max_triangles", "max_increments", "max_frame_pixels"):
         require(getattr(args, name) >= 1, f"--{name.replace('_', '-')} = {getattr(args, name)!r} must be >= 1")
-    from ..solve.schedule import area_ramp
+    from ..scene.schedule import area_ramp
 
     area_ramp(args.growth, args.steps)  # validates growth and steps before any work
 
 
 def scene_for(args: argparse.Namespace, cy: float):
     """The validated reference scene of the flags with its chamber at height cy (PneumaInputError on bad flags)."""
-    from ..scene import reference_scene
+    from ..scene.build import reference_scene
 
     check_flags(args)
     scene = reference_scene(require_finite("--cy", cy), args.cx, args.growth, args.steps, args.E, args.nu, args.k,
@@ -201,8 +201,8 @@ def scene_of_flags(args: argparse.Namespace):
 def build(scene, args: argparse.Namespace | None = None):
     """Mesh the scene, build its terms and print the mesh size, the supports, the terms (and, where a --quality
     preset of args made the mesh, its measured error: preset_note) and each chamber's rest area."""
-    from ..scene import describe_supports
-    from ..solve.result import ELEMENTS
+    from ..scene.build import describe_supports
+    from ..result import ELEMENTS
 
     built = scene.build()
     mesh = built.mesh
@@ -268,7 +268,7 @@ def render_report(export, seconds_per_step: float) -> str:
 
 def apply_set(scene, assignments: list[str]):
     """The scene with every --set KEY=VALUE applied (validated once, like a scene file)."""
-    from ..io.schema import parse_assignment
+    from ..scene.schema import parse_assignment
 
     if not assignments:
         return scene

@@ -82,10 +82,10 @@ def run(args: argparse.Namespace) -> dict:
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     if args.interactive and scene.geometry.dim == 3:
-        from ..render.interactive import explore_solid
+        from ..live.interactive import explore_solid
         return explore_solid(scene, size, newton_options(args))
     if args.interactive:
-        from ..render.interactive import explore
+        from ..live.interactive import explore
         return explore(scene, args.growth, size, args.renderer, newton_options(args))
     with lock_stems(out, stem):  # no other run writes these files meanwhile
         return run_scene(args, scene, stem, size, out)

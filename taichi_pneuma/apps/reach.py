@@ -31,8 +31,8 @@ from ..errors import PneumaInputError, parse_number, require, require_finite
 from ..io.output import lock_stems, prepare_directory, save_json
 from ..signals import holding
 if TYPE_CHECKING:
-    from ..control.targets import Target
-    from ..scene import Scene
+    from ..scene.targets import Target
+    from ..scene.build import Scene
 
 from .cli import (
     add_ramp_arguments,
@@ -101,8 +101,8 @@ def with_bounds(scene, bounds: list[list[str]]):
 def targets_of(args: argparse.Namespace, scene, required: bool = True) -> list:
     """--tip (with --angle, --weights), else --targets FILE.csv (a path or a shipped file's name), else the
     scene file's [[targets]] (if not required, else none)."""
-    from ..control.targets import Target, read_targets_csv
-    from ..io.shipped import find
+    from ..scene.targets import Target, read_targets_csv
+    from ..scene.shipped import find
 
     require(args.tip is None or args.targets is None, "give --tip or --targets, not both")
     require(args.angle is None or args.tip is not None, "--angle needs --tip")
@@ -159,7 +159,7 @@ def run(args: argparse.Namespace) -> dict:
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     if args.interactive:
-        from ..render.interactive import follow_mouse
+        from ..live.interactive import follow_mouse
         return follow_mouse(scene, (lo, hi), size, args.renderer, options,
                             newton_options(args) if explicit_tol else None, targets[0] if targets else None)
     with lock_stems(out, stem):  # no other run writes these files meanwhile
@@ -201,7 +201,7 @@ def save_reaches(args: argparse.Namespace, reacher, results: list, stem: str, si
     import numpy as np
 
     from ..control.inverse import frames
-    from ..solve.result import ELEMENTS
+    from ..result import ELEMENTS
 
     built, (lo, hi) = reacher.built, (reacher.lo, reacher.hi)
     last = results[-1]

@@ -46,12 +46,12 @@ from scipy.stats import qmc
 
 from ..errors import require, require_finite
 from ..fem.fields import ElementFields
-from ..scene import BuiltScene, Scene
+from ..scene.build import BuiltScene, Scene
 from ..solve.newton import NewtonOptions, NewtonSolver
-from ..solve.result import Result
+from ..result import Result
 from ..solve.sensitivity import sensitivity
 from ..solve.simulate import MAX_CUTS, NoEquilibrium, StepRecord, chamber_records, settle, tip_dz, tip_measures
-from .targets import Target
+from ..scene.targets import Target
 
 ARMIJO = 1e-4
 

@@ -55,10 +55,10 @@ from ..io.output import (
     save_json,
     write_atomic,
 )
-from ..io.scenefile import read_scene
-from ..io.sceneformat import scene_data
-from ..io.schema import parse_key, parse_value
-from ..scene import Scene
+from ..scene.scenefile import read_scene
+from ..scene.sceneformat import scene_data
+from ..scene.schema import parse_key, parse_value
+from ..scene.build import Scene
 from ..solve.newton import NewtonOptions
 from ..solve.simulate import MAX_CUTS, RampStopped
 

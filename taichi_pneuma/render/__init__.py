@@ -1,5 +1,5 @@
-"""render: offscreen frames (frames.py), videos (video.py), the history plot (plots.py), live windows
-(interactive.py). The choices the apps offer are plain data here, so --help reads them without Taichi."""
+"""render: offscreen frames (frames.py), videos (video.py), the history plot (plots.py).
+The choices the apps offer are plain data here, so --help reads them without Taichi."""
 
 # auto: the faster one measured, ti.GUI (else Pillow where the backend has no GUI; frames.open_canvas)
 RENDERERS = ("auto", "ggui", "gui", "pillow")

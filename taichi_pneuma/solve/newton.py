@@ -56,7 +56,7 @@ import numpy as np
 from ..errors import require, require_finite
 from .linsolve import (BACKENDS, FactorizationError, FixedPattern, direct_backend, installed, make_backend,
                        solve_low_rank_updated)
-from .model import EnergyModel
+from ..terms.model import EnergyModel
 
 ARMIJO_C1 = 1e-4
 MAX_HALVINGS = 40

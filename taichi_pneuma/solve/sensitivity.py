@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene import BuiltScene
+from ..scene.build import BuiltScene
 from .linsolve import FactorizationError, FixedPattern, make_backend, solve_low_rank_updated
 
 

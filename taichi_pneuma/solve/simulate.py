@@ -10,10 +10,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..fem.fields import ElementFields
-from ..scene import BuiltScene
+from ..scene.build import BuiltScene
 from .newton import NewtonOptions, NewtonSolver, SolveRecord
-from .result import Result
-from .schedule import Schedule
+from ..result import Result
+from ..scene.schedule import Schedule
 
 MAX_CUTS = 8
 

@@ -16,23 +16,23 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import runtime
-from .errors import require, require_finite
-from .fem.geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
-from .fem.supports import require_held
-from .io import sceneformat
-from .io.keys import dotted
-from .io.output import check_stem
-from .io.units import NODAL_STIFFNESS, PRESSURE, UNITLESS, Units, defaults, resolved, si_default
-from .materials import IsochoricMaterial, StableNeoHookean
-from .materials.presets import PresetMaterial
-from .solve.model import EnergyModel
-from .solve.schedule import MAX_STRETCH, ChamberSchedule, Schedule, area_ramp
-from .terms import VOLUMETRIC, Clamp, Elasticity, NormalClamp
-from .terms.base import Term
-from .terms.chambers import Chamber, ChamberKind
-from .terms.effects import Effect
-from .terms.nodal_volume import require_nodal
+from .. import runtime
+from ..errors import require, require_finite
+from ..fem.geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
+from ..fem.supports import require_held
+from . import sceneformat
+from ..io.keys import dotted
+from ..io.output import check_stem
+from ..io.units import NODAL_STIFFNESS, PRESSURE, UNITLESS, Units, defaults, resolved, si_default
+from ..materials import IsochoricMaterial, StableNeoHookean
+from ..materials.presets import PresetMaterial
+from ..terms.model import EnergyModel
+from .schedule import MAX_STRETCH, ChamberSchedule, Schedule, area_ramp
+from ..terms import VOLUMETRIC, Clamp, Elasticity, NormalClamp
+from ..terms.base import Term
+from ..terms.chambers import Chamber, ChamberKind
+from ..terms.effects import Effect
+from ..terms.nodal_volume import require_nodal
 
 
 @dataclass(frozen=True)

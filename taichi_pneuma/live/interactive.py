@@ -13,9 +13,9 @@ import time
 
 import numpy as np
 
-from ..scene import Scene
+from ..scene.build import Scene
 from ..solve.newton import CHORD_MAX_CONTRACTION, NewtonOptions, NewtonSolver
-from .frames import FrameRenderer, Track, open_canvas
+from ..render.frames import FrameRenderer, Track, open_canvas
 
 # Newton tolerance of live forward solves: with the tangent predictor one Newton iteration reaches it
 # (the default 1e-6 often takes two); it moves the tip by ~1e-6 of the body length, far below the 1e-3 target tolerance.
@@ -74,7 +74,7 @@ def follow_mouse(scene: Scene, bounds, size: tuple[int, int], backend: str = "au
     'drag_fps': frames per second over the frames that re-solved a moved target, after the first
     (warm-up), 'ms_per_reach', 'forward_solves_per_reach'}."""
     from ..control.inverse import Reacher, ReachOptions
-    from ..control.targets import Target
+    from ..scene.targets import Target
 
     built = scene.build()
     # a drag follows the closest pose nearby; one factorisation per frame
@@ -197,7 +197,7 @@ def explore_solid(scene: Scene, size: tuple[int, int], options: NewtonOptions | 
     frame takes a Newton step toward the equilibrium at the commands on screen (LiveEquilibrium; the panel
     shows the residual); the camera orbits by mouse drag (and `spin` degrees per frame). Returns explore_3d's
     summary with 'all_converged' (the state shown last is the equilibrium at the last commands) and 'residual'."""
-    from .frames3d import surface_triangles
+    from ..render.frames3d import surface_triangles
     from .interactive3d import explore_3d
 
     built = scene.build()

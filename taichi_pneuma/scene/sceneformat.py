@@ -11,7 +11,7 @@ import dataclasses
 import functools
 import typing
 
-from ..control.targets import MAX_TARGETS, Target
+from .targets import MAX_TARGETS, Target
 from ..errors import require
 from ..fem.geometry import (
     ORDERS,
@@ -32,13 +32,13 @@ from ..fem.solid_geometry import SolidGeometry, is_solid_shape
 from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
 from ..materials import FORMS, IsochoricMaterial
 from ..materials.presets import PRESETS, PresetMaterial
-from ..solve.schedule import MAX_STRETCH, ChamberSchedule
+from .schedule import MAX_STRETCH, ChamberSchedule
 from ..terms import VOLUMETRIC
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
 from .schema import REQUIRED, Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
-from .tomltext import dumps
-from .units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, PRESSURE, UNITLESS, UNITS, default_in
+from ..io.tomltext import dumps
+from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, PRESSURE, UNITLESS, UNITS, default_in
 
 PAIR, BOX, TRIPLE = "[x, y]", "[x0, y0, x1, y1]", "[x, y, z]"
 CLAMP_STIFFNESS = 1e9  # the [clamp] stiffness key's default, in SI (Pa, 2D; Pa m, 3D)

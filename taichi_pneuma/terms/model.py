@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from ..terms import Term
+from . import Term
 
 
 class Configuration:

@@ -13,12 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import limits
-from ..fem.fields import element_fields
-from ..io.output import lock_stem, prepare_directory, save_json, save_npz, save_text, write_atomic
-from ..io.units import history_dimensions
-from ..scene import BuiltScene, Scene
-from ..signals import holding
+from . import limits
+from .fem.fields import element_fields
+from .io.output import lock_stem, prepare_directory, save_json, save_npz, save_text, write_atomic
+from .io.units import history_dimensions
+from .scene.build import BuiltScene, Scene
+from .signals import holding
 
 
 ELEMENTS = {2: "triangles", 3: "tetrahedra"}  # the summary's element count, by dimension
@@ -209,7 +209,7 @@ class Result:
         merged in) and, unless vtk is False, the ParaView files <stem>.pvd + <stem>_vtk/*.vtu. Returns the
         paths written. They are written under the stem's lock (output.lock_stem: another process writing
         the same stem there is refused), and a signal meanwhile waits for them (signals.holding)."""
-        from ..io.vtk import VtkSeries
+        from .io.vtk import VtkSeries
 
         out, stem = prepare_directory(directory), stem or self.scene.name
         with holding(), lock_stem(out, stem):  # a signal meanwhile waits for the files; no other run writes them
@@ -217,7 +217,7 @@ class Result:
             if vtk:
                 written.append(VtkSeries(out, stem, self.built).write_all(self))
             if plot:
-                from ..render.plots import save_history_png  # matplotlib: 0.6 s of imports a run without a plot skips
+                from .render.plots import save_history_png  # matplotlib: 0.6 s of imports a run without a plot skips
 
                 written.append(write_atomic(out / f"{stem}_plot.png", lambda tmp: save_history_png(self, tmp)))
             written.append(save_text(out / f"{stem}_scene.toml", self.scene.to_toml()))
@@ -234,16 +234,16 @@ class Result:
         scene, falling back to the NumPy rasteriser for 'auto', which 'gui' and 'pillow' take). Returns a
         video.Export. A size of more than max_frame_pixels pixels is refused (PneumaInputError), as the commands'
         --max-frame-pixels does."""
-        from ..render.video import frame_size
+        from .render.video import frame_size
 
         limits.check_frame(*frame_size(size), max_frame_pixels, "size", "video's max_frame_pixels")
         png_frame = self.peak_step() if png_step is None else png_step
         if self.mesh.dim == 3:
-            from ..render.frames3d import Track3D, render_video_3d
+            from .render.frames3d import Track3D, render_video_3d
 
             return render_video_3d(Track3D.from_result(self, color), path, png, size, fps, renderer, trace=trace,
                                    quiet=quiet, log=log, png_frame=png_frame)
-        from ..render.video import render_video
+        from .render.video import render_video
 
         return render_video([self], path, png, size, fps, color, renderer, trace, quiet=quiet, log=log,
                             png_frame=png_frame)
@@ -252,6 +252,6 @@ class Result:
         """The history as a matplotlib Figure with axes (plots.py): pressure against area ratio, and tip
         deflection, area ratio and pressure against the command. A notebook shows it as a PNG; in a
         script, fig.savefig("x.png")."""
-        from ..render.plots import history_figure
+        from .render.plots import history_figure
 
         return history_figure(self)

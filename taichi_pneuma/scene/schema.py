@@ -46,8 +46,8 @@ import numpy as np
 import tomllib
 
 from ..errors import PneumaInputError, require
-from .tomltext import dumps
-from .units import UNITLESS, Units, default_in
+from ..io.tomltext import dumps
+from ..io.units import UNITLESS, Units, default_in
 
 REQUIRED = object()
 KEY_PART = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)")

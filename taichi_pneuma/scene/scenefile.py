@@ -37,9 +37,9 @@ from __future__ import annotations
 import os
 
 from ..errors import PneumaInputError
-from ..scene import Scene
+from .build import Scene
 from . import sceneformat
-from .output import read_input, reduce_to_stem
+from ..io.output import read_input, reduce_to_stem
 from .schema import KeyInfo, parse_toml
 
 MAX_SCENE_BYTES = 1_000_000

@@ -17,9 +17,9 @@ import numpy as np
 
 from ..backend import ti
 from ..errors import require, require_finite
-from .camera import Camera
-from .frames3d import BACKGROUND, section_faces, shaded_triangles
-from .ggui3d import GGUIView
+from ..render.camera import Camera
+from ..render.frames3d import BACKGROUND, section_faces, shaded_triangles
+from ..render.ggui3d import GGUIView
 
 DRAG_DEGREES = (360.0, 180.0)  # (azimuth, elevation) turned by a drag across the whole window
 PANEL_WIDTH = 0.34  # the slider panel's width, as a share of the window's
