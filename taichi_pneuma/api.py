@@ -19,14 +19,14 @@ from .scene.shipped import find
 from .scene.build import BuiltScene, Scene
 from .solve.newton import NewtonOptions
 from .result import Result
-from .solve.simulate import MAX_CUTS, run_schedule
+from .solve.simulate import MAX_CUTS, RampStopped, run_schedule
 
 __all__ = ["Result", "load_scene", "simulate"]
 
 
 def load_scene(path: str | os.PathLike) -> Scene:
     """Read and validate a scene file: a path, or the name of a scene shipped with the package
-    ("pneunet_finger", "bidirectional", "finger_on_ground", "reference_beam"; io/shipped.py). Errors are
+    ("pneunet_finger", "bidirectional", "finger_on_ground", "reference_beam"; scene/shipped.py). Errors are
     one PneumaInputError naming the file and the key."""
     return scenefile.load_scene(find(path))
 
@@ -42,15 +42,22 @@ def simulate(scene: Scene | BuiltScene, *, tol: float = NewtonOptions.tol,
     function progress(step_record, positions, contact_force) is called after every increment instead.
     stop() is asked after every increment but the last and before every Newton iteration, ending the run
     with tp.RampInterrupted (the increments done) when it returns True. Raises tp.RampFailed when an increment
-    finds no equilibrium; both carry .result, the Result of the steps done. Initialises Taichi on the CPU unless tp.init chose a backend."""
+    finds no equilibrium; both carry .result, the Result of the steps done. Initialises Taichi on the CPU unless
+    tp.init chose a backend."""
     limits.check_increments(scene.scene.increments if isinstance(scene, BuiltScene) else scene.increments,
                             max_increments, "simulate's max_increments")
     runtime.ensure_initialised()
     built = scene if isinstance(scene, BuiltScene) else scene.build()
     options = NewtonOptions(tol=tol, max_iterations=max_iterations)
-    if progress is not True:
-        return run_schedule(built, options=options, progress=progress or None, max_cuts=max_cuts, stop=stop)
-    from tqdm import tqdm
+    try:
+        if progress is not True:
+            return Result.of(run_schedule(built, options=options, progress=progress or None, max_cuts=max_cuts,
+                                          stop=stop))
+        from tqdm import tqdm
 
-    with tqdm(total=built.scene.increments + 1, desc=built.scene.name, unit="step", leave=False) as bar:
-        return run_schedule(built, options=options, progress=lambda *_: bar.update(), max_cuts=max_cuts, stop=stop)
+        with tqdm(total=built.scene.increments + 1, desc=built.scene.name, unit="step", leave=False) as bar:
+            return Result.of(run_schedule(built, options=options, progress=lambda *_: bar.update(),
+                                          max_cuts=max_cuts, stop=stop))
+    except RampStopped as stopped:
+        stopped.result = Result.of(stopped.result)
+        raise

@@ -1,138 +1,36 @@
-"""The result of a run, one type for all: a ramp (simulate.run_schedule, tp.simulate), the steps a stopped
-ramp did (RampStopped.result), the frames of a sequence of reaches (inverse.frames). What to look at
-(history, per-chamber arrays, fields), and the files and pictures made from it (save, video, plot)."""
+"""The result of a run: its records (solve/records.py) and what is made from them, the summary, the files
+(history CSV, states npz, scene TOML, ParaView) and the pictures (video, plot)."""
 
 from __future__ import annotations
 
 import csv
 import io
-import math
-from dataclasses import dataclass, field
-from functools import cached_property
+from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
 
 from . import limits
-from .fem.fields import element_fields
+from .fem.tip import COLUMNS as TIP_COLUMNS
 from .io.output import lock_stem, prepare_directory, save_json, save_npz, save_text, write_atomic
 from .io.units import history_dimensions
-from .scene.build import BuiltScene, Scene
 from .signals import holding
+from .solve.records import Run
 
 
 ELEMENTS = {2: "triangles", 3: "tetrahedra"}  # the summary's element count, by dimension
 
 
-@dataclass
-class Result:
-    """A run: the built scene and, per step (rest state first), its simulate.StepRecord and positions.
+class Result(Run):
+    """A run (solve.records.Run: the built scene, its steps and positions, the figures read off them) with what
+    is made from it: the summary, the history CSV and states npz, ParaView files, a video, a plot. One type for
+    all runs: a ramp (tp.simulate), the steps a stopped ramp did (tp.RampFailed.result), the frames of a
+    sequence of reaches (inverse.frames)."""
 
-    Its fields: built (the BuiltScene: mesh, energy model, terms); steps (a simulate.StepRecord per step:
-    chamber records, tip measures, Newton figures); positions (steps, n, 2): the vertex positions per
-    step; solves: the last Newton SolveRecord of each step (none for reaches); contact_forces (steps,
-    n, 2): the summed contact force per vertex, when the scene has contact, else None; seconds: wall
-    time of the run; newton: the linear solver that served the run's Newton solves, their chord steps
-    (iterations without a new Hessian) and the seconds per phase of an iteration, summed over the run. Everything else (figures, per-chamber arrays, history, files, pictures) is
-    derived from these: see each property and method."""
-
-    built: BuiltScene
-    steps: list
-    positions: np.ndarray
-    solves: list = field(default_factory=list)
-    contact_forces: np.ndarray | None = None
-    seconds: float = math.nan
-    newton: dict = field(default_factory=dict)
-
-    @property
-    def scene(self) -> Scene:
-        """The Scene that was run (its geometry, materials, chambers, schedule, effects)."""
-        return self.built.scene
-
-    @property
-    def mesh(self):
-        """The mesh (fem.geometry.Mesh): rest vertices (n, 2), triangles, pinned, tip and boundary vertices,
-        chamber wall loops."""
-        return self.built.mesh
-
-    @property
-    def displacements(self) -> np.ndarray:
-        """(steps, n, 2) vertex displacements from the rest mesh, per step."""
-        return self.positions - self.mesh.vertices
-
-    @property
-    def chamber_names(self) -> list[str]:
-        """The chambers' names, in the scene's order: the column order of command, area, area_ratio, pressure."""
-        return self.scene.chamber_names
-
-    @cached_property
-    def history(self) -> dict[str, np.ndarray]:
-        """Every column of the history CSV by name, one value per step: 'tip_dx', 'tip_dy', 'tip_rotation',
-        '<chamber>.command' / '.area' / '.area_ratio' / '.pressure', 'iterations', 'residual', 'converged',
-        'cuts', 'min_det', 'seconds', and a reach's 'target_x', 'tip_error', ..."""
-        rows = [s.row() for s in self.steps]
-        return {name: np.array([row[name] for row in rows], dtype=float) for name in (rows[0] if rows else ())}
-
-    def _chambers(self, key: str) -> np.ndarray:
-        return np.column_stack([self.history[f"{name}.{key}"] for name in self.chamber_names])
-
-    command = property(lambda self: self._chambers("command"), doc="(steps, chambers) commanded area ratio or pressure")
-    area = property(lambda self: self._chambers("area"), doc="(steps, chambers) chamber areas")
-    area_ratio = property(lambda self: self._chambers("area_ratio"), doc="(steps, chambers) area / rest area")
-    pressure = property(lambda self: self._chambers("pressure"), doc="(steps, chambers) chamber pressures")
-
-    @property
-    def tip_deflection(self) -> float:
-        """Mean y displacement of the tip vertices at the last step."""
-        return self.steps[-1].tip_dy
-
-    @property
-    def tip_rotation(self) -> float:
-        """Rotation of the tip vertices at the last step, in degrees (counter-clockwise positive)."""
-        return self.steps[-1].tip_rotation
-
-    @property
-    def peak_pressure(self) -> float:
-        """The largest |pressure| of any chamber at any step."""
-        return max(abs(c.pressure) for s in self.steps for c in s.chambers.values())
-
-    @property
-    def converged(self) -> bool:
-        """Whether every step's Newton solve converged."""
-        return bool(all(s.converged for s in self.steps))
-
-    def peak_step(self) -> int:
-        """The step of the largest deformation: the last step whose largest vertex displacement is within 1 %
-        of the run's largest (a hold at the peak, or a symmetric return, gives its latest step). A ramp
-        that ends inflated gives its last step; one that inflates and deflates, its bent state."""
-        largest = np.linalg.norm(self.displacements, axis=2).max(axis=1)
-        return int(np.flatnonzero(largest >= 0.99 * largest.max())[-1])
-
-    @property
-    def ground_height(self) -> float | None:
-        """The height of the scene's ground line (the effect that has one), or None."""
-        return next((e.ground_height for e in self.scene.effects if e.ground_height is not None), None)
-
-    def fields(self, step: int = -1) -> dict[str, np.ndarray]:
-        """Per element at a step: det_F, max_stretch, stress (Cauchy, (m, 3, 3)), von_mises (fields.py)."""
-        return element_fields(self.mesh.vertices, self.positions[step], self.mesh.elements,
-                              *self.scene.element_material(self.mesh))
-
-    def extremes(self) -> dict[str, dict]:
-        """The range over the run of the tip's measures (tip_dx, tip_dy, in 3D tip_dz, tip_rotation) and of each
-        chamber's (<chamber>.area, .area_ratio, .pressure), by history column: {"min": value, "min_step": the
-        first step at it, "max": ..., "max_step": ...}. A schedule that goes out and back ends near rest; its
-        extremes keep what it reached."""
-        history = self.history
-        columns = ["tip_dx", "tip_dy", *(["tip_dz"] if "tip_dz" in history else []), "tip_rotation",
-                   *(f"{name}.{key}" for name in self.chamber_names for key in ("area", "area_ratio", "pressure"))]
-        extremes = {}
-        for column in columns:
-            values = history[column]
-            low, high = int(np.argmin(values)), int(np.argmax(values))
-            extremes[column] = {"min": float(values[low]), "min_step": int(history["step"][low]),
-                                "max": float(values[high]), "max_step": int(history["step"][high])}
-        return extremes
+    @classmethod
+    def of(cls, run: Run) -> Result:
+        """The Result of a run's records (the same objects, not copies)."""
+        return run if isinstance(run, Result) else cls(**{f.name: getattr(run, f.name) for f in fields(run)})
 
     def summary(self, interrupted: bool = False) -> dict:
         """The figures of the run (the summary JSON); interrupted: the run was stopped after these steps. Besides
@@ -149,7 +47,7 @@ class Result:
                                 "area_ratio": c.area_ratio, "final_pressure": c.pressure,
                                 "peak_pressure": float(np.abs(self.history[f"{name}.pressure"]).max())}
                          for name, c in final.chambers.items()},
-            "tip_deflection": self.tip_deflection, **({} if final.tip_dz is None else {"tip_dz": final.tip_dz}),
+            "tip_deflection": self.tip_deflection, **{c: float(v) for c, v in zip(TIP_COLUMNS[2:], final.tip[2:])},
             "tip_rotation_deg": final.tip_rotation,
             "peak_pressure": self.peak_pressure, "contact": final.contact, "extremes": self.extremes(),
             "max_stretch": float(stretch.max()), "max_stretch_step": int(self.history["step"][np.argmax(stretch)]),

@@ -26,6 +26,7 @@ def reference_ramp(taichi_cpu):
     its 1632-vertex mesh) with the chamber at height cy, solved the first time it is asked for. Callers read
     it and leave it as it is."""
     from taichi_pneuma.scene.build import reference_scene
+    from taichi_pneuma.result import Result
     from taichi_pneuma.solve.simulate import run_schedule
 
     ramps = {}
@@ -33,7 +34,7 @@ def reference_ramp(taichi_cpu):
     def ramp(cy: float):
         if cy not in ramps:
             built = reference_scene(cy=cy).build()
-            ramps[cy] = built, run_schedule(built)
+            ramps[cy] = built, Result.of(run_schedule(built))
         return ramps[cy]
 
     return ramp

@@ -14,7 +14,8 @@ from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.scene.build import ChamberControl, reference_scene
 from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.scene.schedule import ChamberSchedule
-from taichi_pneuma.solve.simulate import settle, tip_measures
+from taichi_pneuma.fem.tip import tip_measures
+from taichi_pneuma.solve.simulate import settle
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 TIGHT = NewtonOptions(tol=1e-9)
@@ -46,7 +47,7 @@ def forward(built, commands):
     solver = NewtonSolver(built.model, TIGHT)
     rest = built.scene.schedule.rest_commands
     u, *_ = settle(built, solver, rest, np.zeros_like(built.mesh.vertices), np.asarray(commands, float))
-    dx, dy, rotation = tip_measures(built.mesh, u)
+    (dx, dy), rotation = tip_measures(built.mesh, u)
     return built.mesh.vertices[built.mesh.tip].mean(axis=0) + (dx, dy), rotation
 
 

@@ -28,6 +28,7 @@ import sys
 
 from .. import runtime
 from ..errors import require
+from ..fem.tip import COLUMNS as TIP_COLUMNS
 from ..io.output import lock_stems, prepare_directory, save_json
 from ..io.units import AREA, FORCE, LENGTH, MEASURES, PRESSURE
 from ..signals import holding
@@ -45,6 +46,9 @@ from .cli import (
     scene_of_flags,
     solve,
 )
+
+# by dimension: the tip the deflection is measured at, its rotation in the last step's line and over the run
+TIP_WORDS = {2: ("right edge", "tip rotation", "rotation"), 3: ("right face", "bend angle", "bend angle")}
 
 
 def parser() -> argparse.ArgumentParser:
@@ -127,16 +131,12 @@ def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, 
         print(f"{name}: {MEASURE[result.mesh.dim]} {c.area / c.area_ratio:.3f} -> {c.area:.3f}{measure} "
               f"(x{c.area_ratio:.2f}), pressure {c.pressure:.1f}{pressure}; over the run "
               f"{span(f'{name}.area_ratio', 'x{:.2f}')}, pressure {span(f'{name}.pressure', '{:.1f}' + pressure)}")
-    if final.tip_dz is None:
-        print(f"tip deflection (mean y displacement of the right edge): {result.tip_deflection:+.4f}{length}; "
-              f"tip rotation {final.tip_rotation:+.1f} deg")
-    else:
-        print(f"tip deflection (mean y displacement of the right face): {result.tip_deflection:+.4f}{length}; "
-              f"tip dz {final.tip_dz:+.4f}{length}; bend angle {final.tip_rotation:+.1f} deg")
-    tip = [f"d{axis} {span(f'tip_d{axis}', '{:+.4f}' + length)}" for axis in ("x", "y", "z")
-           if f"tip_d{axis}" in extremes]
-    print(f"tip over the run: {', '.join(tip)}; {'rotation' if final.tip_dz is None else 'bend angle'} "
-          f"{span('tip_rotation', '{:+.1f}')} deg")
+    side, turn, turn_over_run = TIP_WORDS[result.mesh.dim]
+    beyond_y = "".join(f"tip dz {dz:+.4f}{length}; " for dz in final.tip[2:])
+    print(f"tip deflection (mean y displacement of the {side}): {result.tip_deflection:+.4f}{length}; "
+          f"{beyond_y}{turn} {final.tip_rotation:+.1f} deg")
+    tip = [f"{column[4:]} {span(column, '{:+.4f}' + length)}" for column in TIP_COLUMNS[:result.mesh.dim]]
+    print(f"tip over the run: {', '.join(tip)}; {turn_over_run} {span('tip_rotation', '{:+.1f}')} deg")
     print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}{pressure}")
     print(f"largest principal stretch: {summary['max_stretch']:.2f} (step {summary['max_stretch_step']}; a run past "
           f"max_stretch = {summary['max_stretch_limit']:g} warns)")

@@ -50,7 +50,9 @@ from ..scene.build import BuiltScene, Scene
 from ..solve.newton import NewtonOptions, NewtonSolver
 from ..result import Result
 from ..solve.sensitivity import sensitivity
-from ..solve.simulate import MAX_CUTS, NoEquilibrium, StepRecord, chamber_records, settle, tip_dz, tip_measures
+from ..fem.tip import tip_measures
+from ..solve.records import StepRecord
+from ..solve.simulate import MAX_CUTS, NoEquilibrium, chamber_records, settle
 from ..scene.targets import Target
 
 ARMIJO = 1e-4
@@ -222,7 +224,7 @@ class Reacher:
 
     def _pose(self, commands: np.ndarray, u: np.ndarray) -> Pose:
         mesh = self.built.mesh
-        rotation = tip_measures(mesh, u)[2]
+        rotation = tip_measures(mesh, u)[1]
         return Pose(np.array(commands, float), u, (mesh.vertices[mesh.tip] + u[mesh.tip]).mean(axis=0), rotation)
 
     def settle(self, commands: np.ndarray, tangent: np.ndarray | None = None) -> Pose:
@@ -372,17 +374,15 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
             descent += j in result.jumps
             built.set_commands(pose.commands)
             built.model.set_displacements(pose.u)
-            dx, dy = (pose.tip - rest_tip)[:2]
             extra = {"target": k, "target_x": target.tip[0], "target_y": target.tip[1],
                      "target_angle": math.nan if target.angle is None else target.angle,
                      "tip_x": pose.tip[0], "tip_y": pose.tip[1], "tip_error": tip_error(target, pose),
                      "descent": descent}
             if mesh.dim == 3:
                 extra.update(target_z=target.tip[2] if len(target.tip) == 3 else math.nan, tip_z=pose.tip[2])
-            steps.append(StepRecord(len(steps), chamber_records(built, pose.commands), float(dx), float(dy),
+            steps.append(StepRecord(len(steps), chamber_records(built, pose.commands), pose.tip - rest_tip,
                                     pose.rotation, pose.iterations, pose.residual, True, 0, 1,
                                     built.elastic.min_determinant(), pose.seconds, extra=extra,
-                                    tip_dz=tip_dz(mesh, pose.u),
                                     max_stretch=stretches.largest_stretch(mesh.vertices + pose.u)))
             states.append(mesh.vertices + pose.u)
     built.set_commands(reacher.pose.commands)

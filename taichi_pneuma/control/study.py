@@ -44,6 +44,7 @@ from scipy.stats import qmc
 
 from .. import backend, limits, runtime, signals
 from ..errors import PneumaInputError, require, require_finite
+from ..fem.tip import COLUMNS as TIP_COLUMNS
 from ..io.keys import SHORT_KEYS, dotted
 from ..io.output import (
     FORMULA,
@@ -259,8 +260,7 @@ def measures(result, names: list[str]) -> dict:
     (the base scene's chamber names: a run that varies a chamber's name keeps the study's columns)."""
     final = result.steps[-1]
     row = {"tip_dx": float(final.tip_dx), "tip_dy": float(final.tip_dy), "tip_rotation": float(final.tip_rotation)}
-    if final.tip_dz is not None:  # a 3D body
-        row["tip_dz"] = float(final.tip_dz)
+    row.update({column: float(value) for column, value in zip(TIP_COLUMNS[2:], final.tip[2:])})  # 3D: tip_dz
     for i, name in enumerate(names):
         row[f"{name}.area_ratio"] = float(result.area_ratio[-1, i])
         row[f"{name}.peak_pressure"] = float(np.abs(result.pressure[:, i]).max())

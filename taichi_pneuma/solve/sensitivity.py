@@ -22,7 +22,7 @@ The adjoint form of one output o(u) is do/dq = -lambda^T dr/dq with H lambda = d
 per output instead of one per command. With at most a handful of chambers the direct form costs
 the same and also gives every vertex's du/dq, so that is what is computed.
 
-Tip outputs (simulate.tip_measures, tip_dz): the tip point is the mean of the tip vertices, so its
+Tip outputs (fem/tip.py tip_outputs: dx, dy, rotation, in 3D dz): the tip point is the mean of the tip vertices, so its
 Jacobian is the mean of their rows of du/dq (x, y and, in 3D, z). The tip rotation (in 3D about z,
 from the x-y positions) is the least-squares rigid rotation theta = atan2(S, C), S = sum_i r_i x c_i,
 C = sum_i r_i . c_i, with r_i the centred rest and c_i the centred current tip positions; since
@@ -98,8 +98,8 @@ def solve_exact(built: BuiltScene, rhs: np.ndarray, pattern: FixedPattern | None
 def sensitivity(built: BuiltScene, commands: np.ndarray, u: np.ndarray, pattern: FixedPattern | None = None,
                 backend=None, factorised: bool = False) -> Sensitivity:
     """du/dq and the tip Jacobian at the equilibrium u (n, d) of `commands`; leaves them set on `built`.
-    pattern, backend, factorised: see solve_exact. The tip outputs are those of simulate.tip_measures (in the
-    x-y plane; in 3D the bend angle about z), then in 3D simulate.tip_dz."""
+    pattern, backend, factorised: see solve_exact. The tip outputs are fem.tip.tip_outputs (dx, dy, the rotation in the
+    x-y plane (in 3D the bend angle about z), then in 3D dz)."""
     built.set_commands(commands)
     built.model.set_displacements(u)
     du, name = solve_exact(built, command_forces(built), pattern, backend, factorised)

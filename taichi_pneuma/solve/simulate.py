@@ -3,80 +3,18 @@
 from __future__ import annotations
 
 import collections
-import math
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..fem.fields import ElementFields
+from ..fem.tip import tip_measures
 from ..scene.build import BuiltScene
-from .newton import NewtonOptions, NewtonSolver, SolveRecord
-from ..result import Result
 from ..scene.schedule import Schedule
+from .newton import NewtonOptions, NewtonSolver, SolveRecord
+from .records import ChamberRecord, Run, StepRecord
 
 MAX_CUTS = 8
-
-
-@dataclass
-class ChamberRecord:
-    """One chamber after a solve: its kind's name, its command (area ratio, pressure, ...), area, area ratio
-    and pressure."""
-
-    control: str
-    command: float
-    area: float
-    area_ratio: float
-    pressure: float
-
-
-@dataclass
-class StepRecord:
-    """One increment of the schedule, as measured after its solve.
-
-    tip_dx, tip_dy: mean displacement of the tip vertices (mesh.tip); tip_rotation: their rigid
-    rotation in degrees (counter-clockwise positive, least squares; in 3D the bend angle, about z);
-    contact: per contact term the total force it exerts on the body (fx, fy) and the sum of its
-    per-vertex force magnitudes; extra: further columns by name, last in the row (a reach's target and
-    tip error, inverse.frames); tip_dz: in 3D the tip's mean z displacement (None in 2D); max_stretch: the
-    largest principal stretch at any quadrature point (ElementFields.largest_stretch).
-    """
-
-    step: int
-    chambers: dict[str, ChamberRecord]
-    tip_dx: float
-    tip_dy: float
-    tip_rotation: float
-    iterations: int
-    residual: float
-    converged: bool
-    cuts: int
-    substeps: int
-    min_det: float
-    seconds: float
-    contact: dict[str, tuple[float, float, float]] = field(default_factory=dict)
-    extra: dict[str, float] = field(default_factory=dict)
-    tip_dz: float | None = None
-    max_stretch: float = math.nan
-
-    def row(self) -> dict[str, float]:
-        """Flat columns: step, <chamber>.<field> for each chamber, <contact>.fx/.fy/.magnitude, solver figures,
-        the extra columns."""
-        row = {"step": self.step}
-        for name, c in self.chambers.items():
-            row.update({f"{name}.command": c.command, f"{name}.area": c.area, f"{name}.area_ratio": c.area_ratio,
-                        f"{name}.pressure": c.pressure})
-        row.update({"tip_dx": self.tip_dx, "tip_dy": self.tip_dy})
-        if self.tip_dz is not None:
-            row["tip_dz"] = self.tip_dz
-        row["tip_rotation"] = self.tip_rotation
-        for name, (fx, fy, magnitude) in self.contact.items():
-            row.update({f"{name}.fx": fx, f"{name}.fy": fy, f"{name}.magnitude": magnitude})
-        row.update({"iterations": self.iterations, "residual": self.residual, "converged": self.converged,
-                    "cuts": self.cuts, "substeps": self.substeps, "min_det": self.min_det,
-                    "max_stretch": self.max_stretch, "seconds": self.seconds})
-        row.update(self.extra)
-        return row
 
 
 def predict(built: BuiltScene, previous, current, commands: np.ndarray) -> np.ndarray:
@@ -110,9 +48,9 @@ def chamber_records(built: BuiltScene, commands: np.ndarray) -> dict[str, Chambe
 
 
 class RampStopped(RuntimeError):
-    """The ramp ended before its last increment; `result` holds the steps done."""
+    """The ramp ended before its last increment; `result` holds the steps done (a Run; tp.simulate's: a Result)."""
 
-    def __init__(self, message: str, result: Result):
+    def __init__(self, message: str, result: Run):
         super().__init__(message)
         self.result = result
 
@@ -123,26 +61,6 @@ class RampFailed(RampStopped):
 
 class RampInterrupted(RampStopped):
     """The caller's stop() asked the ramp to end after an increment (e.g. on Ctrl-C)."""
-
-
-def tip_rotation(rest: np.ndarray, current: np.ndarray) -> float:
-    """Least-squares rigid rotation (degrees) taking the centred rest points to the centred current ones."""
-    r, c = rest - rest.mean(axis=0), current - current.mean(axis=0)
-    return math.degrees(math.atan2(float(np.sum(r[:, 0] * c[:, 1] - r[:, 1] * c[:, 0])), float(np.sum(r * c))))
-
-
-def tip_measures(mesh, u: np.ndarray) -> tuple[float, float, float]:
-    """(dx, dy, rotation in degrees) of the tip: the mean displacement of the mesh's tip nodes (the geometry's
-    named tip, the right edge (face, in 3D) by default) and their rigid rotation in the x-y plane (in 3D the
-    bend angle: the rotation about z of the tip nodes' x-y positions)."""
-    rest, moved = mesh.vertices[mesh.tip, :2], u[mesh.tip, :2]
-    dx, dy = moved.mean(axis=0)
-    return float(dx), float(dy), tip_rotation(rest, rest + moved)
-
-
-def tip_dz(mesh, u: np.ndarray) -> float | None:
-    """The tip nodes' mean z displacement in 3D (None in 2D)."""
-    return float(u[mesh.tip, 2].mean()) if mesh.dim == 3 else None
 
 
 def describe_commands(built: BuiltScene, commands: np.ndarray, reached: np.ndarray) -> str:
@@ -223,7 +141,7 @@ def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.n
 
 
 def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: NewtonOptions | None = None,
-                 progress=None, max_cuts: int = MAX_CUTS, stop=None) -> Result:
+                 progress=None, max_cuts: int = MAX_CUTS, stop=None) -> Run:
     """Solve for equilibrium at each step of the schedule (the scene's own by default), each from the last.
 
     An increment whose Newton solve does not converge is cut back: the remaining change of all
@@ -236,7 +154,7 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     the scene has contact, the summed contact force per vertex (n, 2), else None; stop, if given, is asked
     stop() after every increment but the last and before every Newton iteration (so a run cutting back asks
     it too), and when it returns True the ramp ends there with RampInterrupted carrying the steps done (not
-    the increment it was solving). Returns the run's Result (its seconds: the wall time of this call).
+    the increment it was solving). Returns the run's records, a Run (its seconds: the wall time of this call).
     """
     started = time.perf_counter()
     schedule = schedule or built.scene.schedule
@@ -251,7 +169,7 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     newton = {"linear_solver": solver.backend.name, "chord_steps": 0, "phase_seconds": collections.Counter()}
 
     def partial():
-        return Result(built, steps, np.array(states).reshape(-1, *mesh.vertices.shape), solves,
+        return Run(built, steps, np.array(states).reshape(-1, *mesh.vertices.shape), solves,
                       np.array(forces).reshape(-1, *mesh.vertices.shape) if contact_terms else None,
                       time.perf_counter() - started, newton)
 
@@ -282,7 +200,7 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
         step = StepRecord(i, chambers, *tip_measures(mesh, u),
                           sum(r.iterations for r in records), final.residual, final.converged, cuts,
                           len(records) - cuts, built.elastic.min_determinant(), time.perf_counter() - start, contact,
-                          tip_dz=tip_dz(mesh, u), max_stretch=stretches.largest_stretch(mesh.vertices + u))
+                          max_stretch=stretches.largest_stretch(mesh.vertices + u))
         steps.append(step)
         states.append(mesh.vertices + u)
         forces.append(vertex_forces)

@@ -1,0 +1,190 @@
+"""A run as plain records: per chamber (ChamberRecord) and per step (StepRecord) what was measured after each
+solve, and the whole run (Run: the built scene, its steps and positions) with the figures read off them.
+Files and pictures made from a run are result.Result's."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from ..fem.fields import element_fields
+from ..fem.tip import COLUMNS as TIP_COLUMNS
+from ..scene.build import BuiltScene, Scene
+
+
+@dataclass
+class ChamberRecord:
+    """One chamber after a solve: its kind's name, its command (area ratio, pressure, ...), area, area ratio
+    and pressure."""
+
+    control: str
+    command: float
+    area: float
+    area_ratio: float
+    pressure: float
+
+
+@dataclass
+class StepRecord:
+    """One increment of the schedule, as measured after its solve.
+
+    tip: the mean displacement of the tip nodes (d,) (fem/tip.py); tip_rotation: their rigid rotation in
+    degrees (counter-clockwise positive, least squares; in 3D the bend angle, about z); contact: per contact
+    term the total force it exerts on the body (fx, fy) and the sum of its per-node force magnitudes; extra:
+    further columns by name, last in the row (a reach's target and tip error, inverse.frames); max_stretch: the
+    largest principal stretch at any quadrature point (ElementFields.largest_stretch).
+    """
+
+    step: int
+    chambers: dict[str, ChamberRecord]
+    tip: np.ndarray
+    tip_rotation: float
+    iterations: int
+    residual: float
+    converged: bool
+    cuts: int
+    substeps: int
+    min_det: float
+    seconds: float
+    contact: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    extra: dict[str, float] = field(default_factory=dict)
+    max_stretch: float = math.nan
+
+    @property
+    def tip_dx(self) -> float:
+        """The tip's mean x displacement."""
+        return float(self.tip[0])
+
+    @property
+    def tip_dy(self) -> float:
+        """The tip's mean y displacement (the deflection of a beam along x)."""
+        return float(self.tip[1])
+
+    def row(self) -> dict[str, float]:
+        """Flat columns: step, <chamber>.<field> for each chamber, tip_dx, tip_dy (and tip_dz in 3D),
+        tip_rotation, <contact>.fx/.fy/.magnitude, solver figures, the extra columns."""
+        row = {"step": self.step}
+        for name, c in self.chambers.items():
+            row.update({f"{name}.command": c.command, f"{name}.area": c.area, f"{name}.area_ratio": c.area_ratio,
+                        f"{name}.pressure": c.pressure})
+        row.update({column: float(value) for column, value in zip(TIP_COLUMNS, self.tip)})
+        row["tip_rotation"] = self.tip_rotation
+        for name, (fx, fy, magnitude) in self.contact.items():
+            row.update({f"{name}.fx": fx, f"{name}.fy": fy, f"{name}.magnitude": magnitude})
+        row.update({"iterations": self.iterations, "residual": self.residual, "converged": self.converged,
+                    "cuts": self.cuts, "substeps": self.substeps, "min_det": self.min_det,
+                    "max_stretch": self.max_stretch, "seconds": self.seconds})
+        row.update(self.extra)
+        return row
+
+
+@dataclass
+class Run:
+    """A run: the built scene and, per step (rest state first), its StepRecord and positions.
+
+    Its fields: built (the BuiltScene: mesh, energy model, terms); steps (a StepRecord per step: chamber
+    records, tip measures, Newton figures); positions (steps, n, d): the node positions per step; solves: the
+    last Newton SolveRecord of each step (none for reaches); contact_forces (steps, n, d): the summed contact
+    force per node, when the scene has contact, else None; seconds: wall time of the run; newton: the linear
+    solver that served the run's Newton solves, their chord steps (iterations without a new Hessian) and the
+    seconds per phase of an iteration, summed over the run. The properties below are figures read off these."""
+
+    built: BuiltScene
+    steps: list
+    positions: np.ndarray
+    solves: list = field(default_factory=list)
+    contact_forces: np.ndarray | None = None
+    seconds: float = math.nan
+    newton: dict = field(default_factory=dict)
+
+    @property
+    def scene(self) -> Scene:
+        """The Scene that was run (its geometry, materials, chambers, schedule, effects)."""
+        return self.built.scene
+
+    @property
+    def mesh(self):
+        """The mesh: rest nodes (n, d), elements, pinned, tip and boundary nodes, chamber walls."""
+        return self.built.mesh
+
+    @property
+    def displacements(self) -> np.ndarray:
+        """(steps, n, d) node displacements from the rest mesh, per step."""
+        return self.positions - self.mesh.vertices
+
+    @property
+    def chamber_names(self) -> list[str]:
+        """The chambers' names, in the scene's order: the column order of command, area, area_ratio, pressure."""
+        return self.scene.chamber_names
+
+    @cached_property
+    def history(self) -> dict[str, np.ndarray]:
+        """Every column of the history CSV by name, one value per step: 'tip_dx', 'tip_dy', 'tip_rotation',
+        '<chamber>.command' / '.area' / '.area_ratio' / '.pressure', 'iterations', 'residual', 'converged',
+        'cuts', 'min_det', 'seconds', and a reach's 'target_x', 'tip_error', ..."""
+        rows = [s.row() for s in self.steps]
+        return {name: np.array([row[name] for row in rows], dtype=float) for name in (rows[0] if rows else ())}
+
+    def _chambers(self, key: str) -> np.ndarray:
+        return np.column_stack([self.history[f"{name}.{key}"] for name in self.chamber_names])
+
+    command = property(lambda self: self._chambers("command"), doc="(steps, chambers) commanded area ratio or pressure")
+    area = property(lambda self: self._chambers("area"), doc="(steps, chambers) chamber areas")
+    area_ratio = property(lambda self: self._chambers("area_ratio"), doc="(steps, chambers) area / rest area")
+    pressure = property(lambda self: self._chambers("pressure"), doc="(steps, chambers) chamber pressures")
+
+    @property
+    def tip_deflection(self) -> float:
+        """Mean y displacement of the tip vertices at the last step."""
+        return self.steps[-1].tip_dy
+
+    @property
+    def tip_rotation(self) -> float:
+        """Rotation of the tip vertices at the last step, in degrees (counter-clockwise positive)."""
+        return self.steps[-1].tip_rotation
+
+    @property
+    def peak_pressure(self) -> float:
+        """The largest |pressure| of any chamber at any step."""
+        return max(abs(c.pressure) for s in self.steps for c in s.chambers.values())
+
+    @property
+    def converged(self) -> bool:
+        """Whether every step's Newton solve converged."""
+        return bool(all(s.converged for s in self.steps))
+
+    def peak_step(self) -> int:
+        """The step of the largest deformation: the last step whose largest vertex displacement is within 1 %
+        of the run's largest (a hold at the peak, or a symmetric return, gives its latest step). A ramp
+        that ends inflated gives its last step; one that inflates and deflates, its bent state."""
+        largest = np.linalg.norm(self.displacements, axis=2).max(axis=1)
+        return int(np.flatnonzero(largest >= 0.99 * largest.max())[-1])
+
+    @property
+    def ground_height(self) -> float | None:
+        """The height of the scene's ground line (the effect that has one), or None."""
+        return next((e.ground_height for e in self.scene.effects if e.ground_height is not None), None)
+
+    def fields(self, step: int = -1) -> dict[str, np.ndarray]:
+        """Per element at a step: det_F, max_stretch, stress (Cauchy, (m, 3, 3)), von_mises (fields.py)."""
+        return element_fields(self.mesh.vertices, self.positions[step], self.mesh.elements,
+                              *self.scene.element_material(self.mesh))
+
+    def extremes(self) -> dict[str, dict]:
+        """The range over the run of the tip's measures (tip_dx, tip_dy, in 3D tip_dz, tip_rotation) and of each
+        chamber's (<chamber>.area, .area_ratio, .pressure), by history column: {"min": value, "min_step": the
+        first step at it, "max": ..., "max_step": ...}. A schedule that goes out and back ends near rest; its
+        extremes keep what it reached."""
+        history = self.history
+        columns = [*TIP_COLUMNS[:self.mesh.dim], "tip_rotation",
+                   *(f"{name}.{key}" for name in self.chamber_names for key in ("area", "area_ratio", "pressure"))]
+        extremes = {}
+        for column in columns:
+            values = history[column]
+            low, high = int(np.argmin(values)), int(np.argmax(values))
+            extremes[column] = {"min": float(values[low]), "min_step": int(history["step"][low]),
+                                "max": float(values[high]), "max_step": int(history["step"][high])}
+        return extremes
