@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from taichi_pneuma import runtime
-from taichi_pneuma.render import frames as render
+from taichi_pneuma.render.canvases import GGUICanvas, GUICanvas
+from taichi_pneuma.render.frames import FrameRenderer, Track
 from taichi_pneuma.control.inverse import Reacher, command_bounds
 from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.live.interactive import fixed_view, follow_mouse
@@ -33,8 +34,8 @@ def drag_path(scene, frames: int, size, radius: float = 0.3) -> list[tuple[float
     span = reacher.hi - reacher.lo
     angles = np.linspace(0, 2 * np.pi, frames)
     tips = [reacher.settle(reacher.lo + span * (0.5 + radius * np.array([np.cos(a), np.sin(a)]))).tip for a in angles]
-    track = render.Track(built.mesh, built.mesh.vertices[None], np.ones((1, 2)), np.zeros((1, 2)), np.zeros(1))
-    view = render.FrameRenderer([track], *size, trace=False, backend="gui", bounds=fixed_view(built.mesh),
+    track = Track(built.mesh, built.mesh.vertices[None], np.ones((1, 2)), np.zeros((1, 2)), np.zeros(1))
+    view = FrameRenderer([track], *size, trace=False, backend="gui", bounds=fixed_view(built.mesh),
                                 log=lambda *_: None)
     return [tuple(view.to_canvas(0, tip)) for tip in tips]
 
@@ -52,7 +53,7 @@ def main() -> None:
     scene = load_scene(SCENE)
     scene = dataclasses.replace(scene, geometry=dataclasses.replace(scene.geometry, max_area=args.max_area))
     path = iter(drag_path(scene, args.frames, size))
-    canvas = render.GGUICanvas if args.renderer == "ggui" else render.GUICanvas
+    canvas = GGUICanvas if args.renderer == "ggui" else GUICanvas
     canvas.mouse = lambda self: (*next(path, (0.5, 0.5)), True)
     print(f"mesh: {scene.build().mesh.n_vertices} vertices")
     print(follow_mouse(scene, command_bounds(scene), size, args.renderer, newton=NewtonOptions(tol=args.tol),

@@ -18,11 +18,9 @@ the frames per second of solve and drawing together. Wall times on a shared mach
 """
 
 import argparse
-import collections
 import itertools
 import json
 import os
-import tempfile
 import time
 from pathlib import Path
 
@@ -34,7 +32,8 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes, estimate_tets, mesh_solid
 from taichi_pneuma.render.camera import Camera
-from taichi_pneuma.render.frames3d import BACKGROUND, FrameRenderer3D, Track3D, open_view, section_faces, shaded_triangles
+from taichi_pneuma.render.colours import BACKGROUND
+from taichi_pneuma.render.frames3d import FrameRenderer3D, Track3D, open_view, section_faces, shaded_triangles
 from taichi_pneuma.live.interactive3d import Slider, explore_3d
 
 MESH_SIZES = {"coarse (interactive)": MeshSizes(0.3), "scene default": MeshSizes(0.1),

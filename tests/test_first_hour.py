@@ -23,8 +23,9 @@ import taichi_pneuma as tp
 from taichi_pneuma.apps import bench, inflate, reach, steer, sweep
 from taichi_pneuma.control.study import parse_vary, study_figure
 from taichi_pneuma.scene.shipped import SHIPPED
-from taichi_pneuma.render import frames as render
-from taichi_pneuma.render.frames import FrameRenderer, Track
+from taichi_pneuma.render.colours import TIP_PATH
+from taichi_pneuma.render.frames import PIN_HALF_PX, FrameRenderer, Track
+from taichi_pneuma.render.text import label_box
 
 ROOT = Path(__file__).resolve().parent.parent
 COARSE = ["--max-area", "0.01", "--growth", "2", "--steps", "3", "--quiet"]
@@ -222,15 +223,15 @@ def test_small_frames_keep_labels_apart_and_markers_inside(small, size):
     track = Track.from_result(small, color="stretch")
     renderer = FrameRenderer([track], *size, backend=SOFTWARE)
     labels = renderer.draw(2)
-    steps = [render.label_box(label) for label in labels if label.anchor == "mt" and label.text.isdigit()]
+    steps = [label_box(label) for label in labels if label.anchor == "mt" and label.text.isdigit()]
     assert all(not boxes_overlap(a, b) for k, a in enumerate(steps) for b in steps[k + 1:])
     if renderer.trace:  # the left axis' numbers too
-        left = [render.label_box(label) for label in labels if label.anchor == "rm"]
+        left = [label_box(label) for label in labels if label.anchor == "rm"]
         assert len(left) >= 2 and all(not boxes_overlap(a, b) for k, a in enumerate(left) for b in left[k + 1:])
     else:
         assert size[0] * size[1] <= 320 * 128  # left out only where its plot would be too small
     pins = renderer.to_canvas(0, track.states[2][track.mesh.pinned]) * size
-    half = render.PIN_HALF_PX
+    half = PIN_HALF_PX
     x0, x1 = (v * size[0] for v in renderer.panels[0])
     assert pins[:, 0].min() - half >= x0 and pins[:, 0].max() + half <= x1
     assert pins[:, 1].min() - half >= 0 and pins[:, 1].max() + half <= size[1]
@@ -270,7 +271,7 @@ def test_the_tip_path_is_not_joined_across_a_restart():
     renderer = FrameRenderer([track], 480, 320, trace=False, backend=SOFTWARE)
     image = renderer.frame(3)
     px = lambda p: (renderer.to_canvas(0, np.array([p]))[0] * (480, 320)) * (1, -1) + (0, 320)
-    orange = np.round(np.array(render.TIP_PATH) * 255)
+    orange = np.round(np.array(TIP_PATH) * 255)
     near = lambda p: np.min(np.abs(image[int(px(p)[1]) - 2:int(px(p)[1]) + 3,
                                          int(px(p)[0]) - 2:int(px(p)[0]) + 3].reshape(-1, 3) - orange).max(axis=1))
     assert near(tip[1]) < 30  # where target 0 was reached

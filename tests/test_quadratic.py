@@ -176,7 +176,8 @@ def test_order_flag_quality_preset_and_scene_key(tmp_path, capsys):
 def test_quadratic_frame_fills_every_subtriangle_and_draws_curved_walls():
     from test_render import pixels_at, rgb8
 
-    from taichi_pneuma.render.frames import CHAMBER_FILL, CHAMBER_WALL, FACE, FrameRenderer, Track
+    from taichi_pneuma.render.colours import CHAMBER_FILL, CHAMBER_WALL, FACE
+    from taichi_pneuma.render.frames import FrameRenderer, Track
 
     built = reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.02, order=2).build()
     track = Track.from_result(run_schedule(built))

@@ -15,7 +15,8 @@ from test_render import xvfb_display  # noqa: F401 (a fixture)
 
 from taichi_pneuma.apps.reach import main
 from taichi_pneuma.scene.scenefile import load_scene
-from taichi_pneuma.render.frames import TARGET, FrameRenderer, Track
+from taichi_pneuma.render.colours import TARGET
+from taichi_pneuma.render.frames import FrameRenderer, Track
 from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.solve.simulate import run_schedule
 
@@ -170,7 +171,7 @@ def test_design_out_of_range_is_unreachable(tmp_path, capsys):
 def test_live_drag_resolves_on_every_move_and_sliders_command_directly(xvfb_display, monkeypatch, capsys, bidirectional):
     """Under Xvfb, in a real ti.GUI window; the canvas's mouse query is scripted (the button held at two
     target positions, then released) and on the last frame the 'top' slider returns a value the user set."""
-    from taichi_pneuma.render import frames as render
+    from taichi_pneuma.render.canvases import GUICanvas
     from taichi_pneuma.live.interactive import fixed_view, follow_mouse
 
     size = (480, 192)
@@ -189,8 +190,8 @@ def test_live_drag_resolves_on_every_move_and_sliders_command_directly(xvfb_disp
                 return 2.0
         return value
 
-    monkeypatch.setattr(render.GUICanvas, "mouse", lambda self: next(script))
-    monkeypatch.setattr(render.GUICanvas, "slider", slider)
+    monkeypatch.setattr(GUICanvas, "mouse", lambda self: next(script))
+    monkeypatch.setattr(GUICanvas, "slider", slider)
     result = follow_mouse(load_scene(BIDIRECTIONAL), ([1.0, 1.0], [2.5, 2.5]), size, "gui", max_frames=5)
     assert result["reaches"] == 2 and result["all_converged"]  # a reach per move, each within 1e-3 L
     assert result["target"] == pytest.approx(list(tips[1]), abs=1e-9)

@@ -15,8 +15,11 @@ from renderers import SOFTWARE, needs_window
 from taichi_pneuma.apps import inflate, steer
 from taichi_pneuma.backend import has_gui
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.render import frames as render
-from taichi_pneuma.render.frames import BACKGROUND, CHAMBER_FILL, FACE, GROUND, FrameRenderer, Track
+from taichi_pneuma.render import canvases
+from taichi_pneuma.render import frames as render_frames
+from taichi_pneuma.render.colours import AREA_CURVE, BACKGROUND, CHAMBER_FILL, FACE, GROUND, PRESSURE_CURVE
+from taichi_pneuma.render.frames import FrameRenderer, Track
+from taichi_pneuma.render.text import label_box
 from taichi_pneuma.render.video import write_video
 from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.solve.simulate import run_schedule
@@ -120,7 +123,7 @@ def test_no_video_initialises_no_renderer_and_draws_no_picture(tmp_path, monkeyp
     def refuse(*args, **kwargs):
         raise AssertionError("a renderer was initialised")
 
-    monkeypatch.setattr(render, "open_canvas", refuse)
+    monkeypatch.setattr(render_frames, "open_canvas", refuse)
     assert inflate.main([*COARSE, "--no-video", "--out", str(tmp_path)]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         f"inflate_cy+0.15{end}" for end in (".pvd", "_history.csv", "_scene.toml", "_states.npz", "_summary.json",
@@ -179,15 +182,15 @@ def test_interactive_without_display_is_one_clear_error(tmp_path, capsys, monkey
 def test_without_taichi_gui_a_live_window_or_taichi_renderer_is_one_clear_error(tmp_path, capsys, monkeypatch):
     """Where the backend has neither ti.GUI nor GGUI (Quadrants; simulated here on Taichi), --interactive
     and --renderer gui/ggui are refused in one line naming what is missing; 'auto' draws with Pillow."""
-    monkeypatch.setattr(render, "has_gui", lambda: False)
-    monkeypatch.setattr(render, "has_ggui", lambda: False)
+    monkeypatch.setattr(canvases, "has_gui", lambda: False)
+    monkeypatch.setattr(canvases, "has_ggui", lambda: False)
     monkeypatch.setenv("DISPLAY", ":0")
     assert inflate.main([*COARSE, "--interactive", "--out", str(tmp_path)]) == 2
     assert "a live window needs Taichi's GUI (ti.GUI or GGUI), which" in capsys.readouterr().err
     for backend in ("gui", "ggui"):
         with pytest.raises(PneumaInputError, match=f"renderer = '{backend}' needs Taichi's GUI .* --renderer pillow"):
-            render.open_canvas(64, 64, backend)
-    assert render.open_canvas(64, 64, "auto").name == "Pillow (software)"
+            canvases.open_canvas(64, 64, backend)
+    assert canvases.open_canvas(64, 64, "auto").name == "Pillow (software)"
 
 
 def test_pillow_draws_the_picture_ggui_draws(track):
@@ -225,7 +228,7 @@ def test_interactive_window_resolves_when_the_slider_moves(xvfb_display, monkeyp
     from taichi_pneuma.live.interactive import explore
 
     moves = iter([1.0, 1.0, 1.3, 1.3, 1.6])  # the slider's values on successive frames
-    monkeypatch.setattr(render.GUICanvas, "slider", lambda self, label, value, low, high: next(moves))
+    monkeypatch.setattr(canvases.GUICanvas, "slider", lambda self, label, value, low, high: next(moves))
     scene = reference_scene(cy=0.15, max_area=0.01)
     assert explore(scene, 2.0, (320, 160), "gui", max_frames=5) == {"all_converged": True, "solves": 3}
     printed = capsys.readouterr().out
@@ -242,7 +245,7 @@ def test_text_never_covers_the_body(track):
     titled = [dataclasses.replace(track, title=f"cy = +0.15: chamber high -> curls down {k}") for k in range(3)]
     renderer = FrameRenderer(titled, 1344, 320, trace=False, backend=SOFTWARE)
     for i in range(renderer.frames):
-        boxes = np.array([render.label_box(label) for label in renderer.draw(i)])
+        boxes = np.array([label_box(label) for label in renderer.draw(i)])
         for p, t in enumerate(titled):
             uv = renderer.to_canvas(p, t.states[i])
             px = np.column_stack([uv[:, 0] * renderer.width, (1 - uv[:, 1]) * renderer.height])
@@ -287,14 +290,14 @@ def test_trace_axis_numbers_match_the_drawn_curves(track):
     step_x = {float(l.text): l.x for l in labels if l.anchor == "mt" and l.text.replace(".", "").isdigit()}
     assert set(step_x) >= {0.0, 1.0, 2.0}
     y_of = {}
-    for anchor, color, values in (("rm", render.AREA_CURVE, track.area_ratio[:, 0]),
-                                  ("lm", render.PRESSURE_CURVE, track.pressure[:, 0])):
+    for anchor, color, values in (("rm", AREA_CURVE, track.area_ratio[:, 0]),
+                                  ("lm", PRESSURE_CURVE, track.pressure[:, 0])):
         ticks = [(float(l.text), l.y) for l in labels if l.anchor == anchor and l.color == color]
         assert len(ticks) >= 3
         (v0, y0), (v1, y1) = ticks[0], ticks[-1]
         y_of[color] = y0 + (values - v0) * (y1 - y0) / (v1 - v0)
     checked = 0
-    for color, other in ((render.AREA_CURVE, render.PRESSURE_CURVE), (render.PRESSURE_CURVE, render.AREA_CURVE)):
+    for color, other in ((AREA_CURVE, PRESSURE_CURVE), (PRESSURE_CURVE, AREA_CURVE)):
         for step in (0, 1, 2):
             y, x = y_of[color][step], step_x[float(step)]
             if abs(y - y_of[other][step]) < 8:

@@ -188,7 +188,7 @@ def test_frames_show_the_chambers_through_the_section_and_never_crop_the_body(fi
 def test_colour_field_and_colour_bar(finger):
     """Coloured per node on one scale for all steps: the rest state is all the colour map's low end (|u| = 0);
     a bent state shows high values; the colour bar spans the map."""
-    from taichi_pneuma.render.frames import colormap
+    from taichi_pneuma.render.colours import colormap
 
     renderer = FrameRenderer3D(finger, 640, 360, backend="numpy", trace=False)
     lo, hi = renderer.range

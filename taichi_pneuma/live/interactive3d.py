@@ -18,7 +18,8 @@ import numpy as np
 from ..backend import ti
 from ..errors import require, require_finite
 from ..render.camera import Camera
-from ..render.frames3d import BACKGROUND, section_faces, shaded_triangles
+from ..render.colours import BACKGROUND
+from ..render.frames3d import section_faces, shaded_triangles
 from ..render.ggui3d import GGUIView
 
 DRAG_DEGREES = (360.0, 180.0)  # (azimuth, elevation) turned by a drag across the whole window

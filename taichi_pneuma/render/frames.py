@@ -1,72 +1,26 @@
-"""Offscreen frames of inflation ramps, drawn by Taichi's own renderers, labelled with numbers.
-
-One frame shows, for each ramp (a *track*), a beam panel:
-- the body mesh: faces filled light green with darker green edges, or, with a colour field
-  (Track.color: the largest principal stretch or det F per triangle), each triangle in the colour
-  of its value on one scale for all tracks and steps (viridis) and only the outline drawn, with a
-  colour bar (numbered) beside the panels;
-- the chamber, its deformed wall loop filled translucent blue (alpha-blended onto the background:
-  the chamber is a hole in the mesh, so only background lies under it) and outlined in strong blue;
-- the pinned vertices as dark square markers; the ground line, if the scene has one;
-- for inverse control, the target as a red cross and, in orange, the tip where earlier targets were
-  reached (joined) and the current descent's earlier iterates (dots);
-- a header above the body: the panel's title, step, area ratio, pressure and tip deflection;
-and, optionally, beside them a trace panel with axes: chamber area / rest area (numbered left axis)
-and pressure (numbered right axis) against the step, with a cursor at the current step; one chamber's
-curves blue and red, several chambers' each in its own colour (named in a legend), pressures as dots.
-The trace panel is left out of a frame too small to read it, and its axes carry as many numbers as
-have room.
-
-Every beam panel uses one world-to-pixel map (equal x and y scale) fitted to the bounds of all
-states of all tracks below the header band, so panels share a frame of reference, the beam is
-never cropped and no text covers it.
-
-Three canvases draw the same primitives (filled triangles, line segments):
-- ti.GUI(show_gui=False), a software rasteriser: the default ('auto'), the faster one measured;
-- GGUI offscreen, ti.ui.Window(show_window=False), on request, when Vulkan is available; on CPU-only
-  machines mesa's lavapipe (apt-get install mesa-vulkan-drivers) provides it, and it works with ti.cpu;
-- Pillow (pillow_canvas.py) where the backend has neither GUI (Quadrants), or when asked for.
-Text is drawn afterwards onto the image read back from the canvas (Pillow, matplotlib's DejaVu Sans),
-the same on every backend.
-"""
+"""Offscreen frames of 2D runs: FrameRenderer draws one or more tracks (a run's states and figures) side by
+side on a canvas (canvases.py), each frame a beam panel per track, a colour bar when the body is coloured by a
+field, and a trace panel of the chambers' area and pressure against the step (what a frame shows:
+docs/guide/output.md). Every beam panel shares one world-to-pixel map fitted to all states of all tracks."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
-from .. import runtime
-from ..backend import INSTALL, NAME, VERSION, has_ggui, has_gui, ti
-from . import COLOR_FIELDS, RENDERERS
-from ..errors import PneumaInputError, require
+from ..errors import require
 from ..fem.fields import ElementFields
 from ..fem.geometry import Mesh
 from ..fem.triangulation import triangulate
+from . import COLOR_FIELDS
+from .canvases import open_canvas
+from .colours import (AREA_CURVE, AXES, CHAMBER_FILL, CHAMBER_WALL, COLORBAR_PX, CURSOR, EDGE, FACE, GROUND,
+                      OUTLINE, PIN, PRESSURE_CURVE, TARGET, TEXT, TIP_PATH, colormap)
+from .text import LINE_PX, MARGIN_PX, Label, draw_labels, label_box
+from .ticks import colorbar_ticks, nice_ticks, tick_label
 
-BACKENDS = RENDERERS  # the --renderer choices (render/__init__.py, plain data for --help)
-BACKGROUND = (1.0, 1.0, 1.0)
-FACE = (0.72, 0.89, 0.66)
-EDGE = (0.18, 0.49, 0.20)
-OUTLINE = (0.2, 0.2, 0.2)
-CHAMBER_ALPHA = 0.35
-CHAMBER_FILL = tuple(CHAMBER_ALPHA * c + (1 - CHAMBER_ALPHA) * b for c, b in zip((0.1, 0.3, 1.0), BACKGROUND))
-CHAMBER_WALL = (0.05, 0.2, 0.95)
-PIN = (0.15, 0.15, 0.15)
-GROUND = (0.45, 0.3, 0.15)
-AXES = (0.35, 0.35, 0.35)
-TEXT = (0.1, 0.1, 0.1)
-AREA_CURVE = (0.05, 0.2, 0.95)
-PRESSURE_CURVE = (0.85, 0.15, 0.1)
-CURSOR = (0.2, 0.2, 0.2)
-COLORMAP = "viridis"
-FONT_PX, LINE_PX, MARGIN_PX = 13, 17, 10
 HEADER_LINES = 3  # title (if any), step and area, pressure and tip: the band above the body, title or not
-COLORBAR_PX = 96  # width of the colour bar strip
-TARGET = (0.9, 0.1, 0.1)
-TIP_PATH = (0.95, 0.55, 0.0)
 # the trace panel: the plot box's margins (pixels: left, top, right, bottom) and the smallest box worth
 # drawing (a smaller --size leaves the panel out); room per tick label along x and y
 TRACE_MARGINS_PX = (58, MARGIN_PX + 3 * LINE_PX + 8, 58, 2 * LINE_PX + 12)
@@ -74,288 +28,6 @@ TRACE_MIN_BOX_PX = (60, 40)
 TICK_ROOM_PX = (34, 20)
 PIN_HALF_PX = 3.5  # half the side of a clamp marker
 
-
-# --- backends: one canvas of (width, height) pixels, coordinates normalised to [0, 1], origin bottom-left ---
-
-class GGUICanvas:
-    """Taichi GGUI (Vulkan) window; offscreen unless show=True."""
-
-    name = "GGUI (Vulkan)"
-    slider_row_px = 45  # each slider takes a row this high at the bottom of the window
-
-    def __init__(self, width: int, height: int, show: bool = False, title: str = "taichi-pneuma"):
-        self.width, self.height = width, height
-        self.window = ti.ui.Window(title, (width, height), show_window=show, vsync=False)
-        self.canvas = self.window.get_canvas()
-        self._fields: dict[tuple[int, int, int], ti.Field] = {}
-        self._calls = 0
-
-    def begin(self) -> None:
-        # GGUI's own staging kernels warn "f32 <- f64" when compiled under default_fp=f64; they are harmless.
-        ti.set_logging_level(ti.ERROR)
-        self.canvas.set_background_color(BACKGROUND)
-        self._calls = 0
-
-    def _field(self, values: np.ndarray):
-        """A float32 vector field holding values (k, 2 or 3); one per draw call, reused frame to frame."""
-        key = (self._calls, len(values), values.shape[1])
-        self._calls += 1
-        if key not in self._fields:
-            self._fields[key] = ti.Vector.field(values.shape[1], ti.f32, len(values))
-        field = self._fields[key]
-        field.from_numpy(values.astype(np.float32))
-        return field
-
-    def triangles(self, corners: np.ndarray, color) -> None:
-        """corners (m, 3, 2); color: one RGB, or one RGB per triangle (m, 3)."""
-        color = np.asarray(color, dtype=float)
-        points = self._field(corners.reshape(-1, 2))
-        if color.ndim == 1:
-            self.canvas.triangles(points, color=tuple(color))
-        else:
-            self.canvas.triangles(points, per_vertex_color=self._field(np.repeat(color, 3, axis=0)))
-
-    def segments(self, ends: np.ndarray, color, width_px: float) -> None:
-        self.canvas.lines(self._field(ends.reshape(-1, 2)), width_px / self.height, color=tuple(color))
-
-    def image(self) -> np.ndarray:
-        image = _to_rgb8(self.window.get_image_buffer_as_numpy())
-        ti.set_logging_level(ti.WARN)
-        return image
-
-    def show_image(self, image: np.ndarray) -> None:
-        """Put an (height, width, 3) uint8 image on the canvas (for a shown window)."""
-        self.canvas.set_image(_from_rgb8(image))
-
-    def slider(self, label: str, value: float, low: float, high: float, row: int = 0) -> float:
-        """An imgui slider showing value, in row `row` (slider_row_px high) counted up from the bottom
-        of the window; returns its value (the user's, if they moved it)."""
-        gui = self.window.get_gui()
-        height = self.slider_row_px / self.height
-        with gui.sub_window(f"##slider{row}", 0.0, 1 - (row + 1) * height, 1.0, height):
-            return gui.slider_float(label, value, low, high)
-
-    def mouse(self) -> tuple[float, float, bool]:
-        """The cursor (normalised, origin bottom-left) and whether the left button is down."""
-        x, y = self.window.get_cursor_pos()
-        return float(x), float(y), bool(self.window.is_pressed(ti.ui.LMB))
-
-    @property
-    def running(self) -> bool:
-        return self.window.running
-
-    def show(self) -> None:
-        ti.set_logging_level(ti.WARN)
-        self.window.show()
-
-    def close(self) -> None:
-        """Destroy the window now (GGUI allows one live window per process; garbage collection may come late)."""
-        self.window.destroy()
-
-
-class GUICanvas:
-    """Taichi's ti.GUI software rasteriser; offscreen unless show=True."""
-
-    name = "ti.GUI (software)"
-    slider_row_px = 0  # ti.GUI draws its sliders over the top of the window, taking no row
-
-    def __init__(self, width: int, height: int, show: bool = False, title: str = "taichi-pneuma"):
-        self.width, self.height = width, height
-        self.gui = ti.GUI(title, res=(width, height), show_gui=show, background_color=_hex(BACKGROUND))
-
-    def begin(self) -> None:
-        self.gui.clear(_hex(BACKGROUND))
-
-    def triangles(self, corners: np.ndarray, color) -> None:
-        """corners (m, 3, 2); color: one RGB, or one RGB per triangle (m, 3)."""
-        self.gui.triangles(corners[:, 0], corners[:, 1], corners[:, 2], color=_hex(color))
-
-    def segments(self, ends: np.ndarray, color, width_px: float) -> None:
-        self.gui.lines(ends[:, 0], ends[:, 1], radius=width_px / 2, color=_hex(color))
-
-    def image(self) -> np.ndarray:
-        return _to_rgb8(self.gui.get_image())
-
-    def show_image(self, image: np.ndarray) -> None:
-        """Put an (height, width, 3) uint8 image on the canvas (for a shown window)."""
-        self.gui.set_image(_from_rgb8(image))
-
-    def slider(self, label: str, value: float, low: float, high: float, row: int = 0) -> float:
-        """ti.GUI's slider named label (created on first call): shows value unless the user moved it
-        since the last call; returns its value (the user's, if they moved it). row: unused (ti.GUI
-        stacks its sliders itself)."""
-        sliders = self.__dict__.setdefault("_sliders", {})
-        if label not in sliders:
-            sliders[label] = [self.gui.slider(label, low, high, step=(high - low) / 200), value]
-            sliders[label][0].value = value
-        widget, shown = sliders[label]
-        if widget.value == shown:  # not moved by the user: show the caller's value
-            widget.value = value
-        sliders[label][1] = float(widget.value)
-        return sliders[label][1]
-
-    def mouse(self) -> tuple[float, float, bool]:
-        """The cursor (normalised, origin bottom-left) and whether the left button is down."""
-        list(self.gui.get_events())  # consuming the events updates the pressed keys
-        x, y = self.gui.get_cursor_pos()
-        return float(x), float(y), bool(self.gui.is_pressed(ti.GUI.LMB))
-
-    @property
-    def running(self) -> bool:
-        return self.gui.running
-
-    def show(self) -> None:
-        self.gui.show()
-
-    def close(self) -> None:
-        self.gui.close()
-
-
-def _hex(color):
-    """RGB in [0, 1] -> 0xRRGGBB: an int for one colour (3,), a uint32 array for one per row (k, 3)."""
-    r, g, b = np.rint(255 * np.asarray(color, dtype=float)).astype(np.uint32).T
-    packed = (r << 16) | (g << 8) | b
-    return int(packed) if packed.ndim == 0 else packed
-
-
-def _to_rgb8(buffer: np.ndarray) -> np.ndarray:
-    """(width, height, 4) float buffer, origin bottom-left -> (height, width, 3) uint8, top row first.
-
-    The canvases hold colours c = k / 255 (ti.GUI: the 8-bit colours it was given; GGUI: an 8-bit image),
-    so floor(255.99 c) is k again, without a rounding or clipping pass (a value a little past 0 or 1
-    still lands on 0 or 255). The whole RGBA buffer is converted (contiguous: faster than its RGB view)
-    and turned upright by Pillow (2.4 against 4.7-6.6 ms a 960x384 frame with NumPy's transpose)."""
-    from PIL import Image
-
-    rgba = Image.fromarray((buffer * np.float32(255.99)).astype(np.uint8), "RGBA")
-    return np.array(rgba.transpose(Image.Transpose.ROTATE_90).convert("RGB"))
-
-
-def _from_rgb8(image: np.ndarray) -> np.ndarray:
-    """The inverse of _to_rgb8: (height, width, 3), top row first -> (width, height, 3), origin bottom-left."""
-    return np.ascontiguousarray(np.rot90(image, -1))
-
-
-def open_canvas(width: int, height: int, backend: str = "auto", show: bool = False, log=print):
-    """A canvas on `backend`: 'gui' (ti.GUI's software rasteriser), 'ggui' (GGUI on Vulkan; PneumaInputError
-    when Vulkan is unavailable), 'pillow' (pillow_canvas.py) or 'auto': ti.GUI, the faster of the two Taichi
-    canvases wherever measured (the frame is read back to the CPU for its text and the encoder, and on lavapipe
-    GGUI's read-back alone costs more than ti.GUI's whole frame; see docs/performance.md), else
-    Pillow where the Taichi backend has no GUI. Says through log() which it uses (and why it fell back)."""
-    require(backend in BACKENDS, f"renderer = {backend!r} is not one of {', '.join(BACKENDS)}")
-    require(width >= 64 and height >= 64, f"frame size {width}x{height} must be at least 64x64")
-    runtime.ensure_initialised()
-    if backend == "pillow" or not (has_ggui() or has_gui()):
-        from .pillow_canvas import PillowCanvas
-
-        missing = f"Taichi's GUI (ti.GUI or GGUI), which {NAME} {VERSION} does not have"
-        require(backend in ("auto", "pillow"), f"renderer = {backend!r} needs {missing}: use --renderer pillow")
-        require(not show or backend == "pillow", f"a live window needs {missing}: install taichi "
-                f"({INSTALL['taichi']}; Python < 3.14, not Linux aarch64) and run with PNEUMA_BACKEND=taichi")
-        canvas = PillowCanvas(width, height, show)
-        log(f"renderer: {canvas.name}" + ("" if backend == "pillow" else f" ({NAME} has no GUI)"))
-        return canvas
-    if backend == "ggui" or (backend == "auto" and not has_gui()):
-        try:
-            canvas = GGUICanvas(width, height, show)
-        except RuntimeError as exc:
-            raise PneumaInputError(f"renderer = 'ggui' is unavailable: {exc}") from None
-    else:
-        canvas = GUICanvas(width, height, show)
-    log(f"renderer: {canvas.name}")
-    return canvas
-
-
-# --- text, drawn onto the finished image ---
-
-@dataclass(frozen=True)
-class Label:
-    """A line of text at pixel (x, y) (origin top-left); anchor as Pillow's: 'la' left-ascender, 'rm'
-    right-middle, 'mt' middle-top, ..."""
-
-    text: str
-    x: float
-    y: float
-    anchor: str = "la"
-    color: tuple = TEXT
-
-
-@lru_cache(maxsize=None)
-def _font():
-    import matplotlib
-    from PIL import ImageFont
-
-    return ImageFont.truetype(str(Path(matplotlib.get_data_path()) / "fonts" / "ttf" / "DejaVuSans.ttf"), FONT_PX)
-
-
-def label_box(label: Label) -> tuple[float, float, float, float]:
-    """The pixel box (left, top, right, bottom) the label's text covers."""
-    from PIL import Image, ImageDraw
-
-    return ImageDraw.Draw(Image.new("RGB", (1, 1))).textbbox((label.x, label.y), label.text, font=_font(),
-                                                             anchor=label.anchor)
-
-
-@lru_cache(maxsize=4096)
-def _coverage(text: str, anchor: str) -> tuple[np.ndarray, int, int]:
-    """The text's glyph coverage (h, w) in [0, 1], drawn with its anchor at the origin, and the offset of
-    its top-left pixel from the anchor point. Cached: most labels (axis numbers, titles) repeat every frame."""
-    from PIL import Image, ImageDraw
-
-    left, top, right, bottom = _font().getbbox(text, anchor=anchor)
-    mask = Image.new("L", (max(right - left, 1), max(bottom - top, 1)))
-    ImageDraw.Draw(mask).text((-left, -top), text, fill=255, font=_font(), anchor=anchor)
-    return np.asarray(mask, dtype=np.float32) / 255, left, top
-
-
-def draw_labels(image: np.ndarray, labels: list[Label]) -> np.ndarray:
-    """The image (height, width, 3) uint8 with the labels written on it (blended in place by glyph coverage,
-    each label at its anchor rounded to a pixel)."""
-    height, width = image.shape[:2]
-    for label in labels:
-        alpha, left, top = _coverage(label.text, label.anchor)
-        x0, y0 = int(round(label.x)) + left, int(round(label.y)) + top
-        h, w = alpha.shape
-        cx0, cy0, cx1, cy1 = max(x0, 0), max(y0, 0), min(x0 + w, width), min(y0 + h, height)
-        if cx0 >= cx1 or cy0 >= cy1:
-            continue
-        a = alpha[cy0 - y0:cy1 - y0, cx0 - x0:cx1 - x0, None]
-        region = image[cy0:cy1, cx0:cx1].astype(np.float32)
-        color = np.array(label.color, dtype=np.float32) * 255
-        image[cy0:cy1, cx0:cx1] = (region + (color - region) * a + 0.5).astype(np.uint8)
-    return image
-
-
-def nice_ticks(lo: float, hi: float, integer: bool = False, bins: int = 5) -> np.ndarray:
-    """Round tick values (1-2-5 steps, matplotlib's MaxNLocator) whose first and last enclose [lo, hi], at
-    most bins intervals (fewer where a small frame has no room for more labels)."""
-    from matplotlib.ticker import MaxNLocator
-
-    if hi <= lo:
-        pad = 0.1 * abs(lo) if lo != 0 else 1.0
-        lo, hi = lo - pad, hi + pad
-    bins = max(int(bins), 1)
-    return MaxNLocator(nbins=bins, integer=integer, min_n_ticks=min(3, bins + 1)).tick_values(lo, hi)
-
-
-@lru_cache(maxsize=None)
-def _colormap_table() -> np.ndarray:
-    """The colour map's table of RGB colours (matplotlib's, N entries)."""
-    import matplotlib
-
-    cmap = matplotlib.colormaps[COLORMAP]
-    return cmap(np.arange(cmap.N))[:, :3]
-
-
-def colormap(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """RGB (k, 3) of values on the colour map, lo..hi mapped to its ends: the table entry matplotlib's
-    colormap call picks (floor of t N, the top end in the last entry), looked up without the call."""
-    table = _colormap_table()
-    t = np.clip((values - lo) / (hi - lo if hi > lo else 1.0), 0.0, 1.0)
-    return table[np.minimum((t * len(table)).astype(int), len(table) - 1)]
-
-
-# --- what is drawn ---
 
 @dataclass(frozen=True)
 class Track:
@@ -552,8 +224,6 @@ class FrameRenderer:
     def _draw_colorbar(self) -> list[Label]:
         """A vertical colour bar with numbered ticks over the colour range."""
         c, (lo, hi) = self.canvas, self.color_range
-        ticks = nice_ticks(lo, hi)
-        ticks = ticks[(ticks >= lo - 1e-12) & (ticks <= hi + 1e-12)]
         x0 = self.colorbar_panel[0] * self.width + 8
         top, bottom = self.header_px + LINE_PX + 4, self.height - MARGIN_PX - 8
         k = 64
@@ -565,11 +235,9 @@ class FrameRenderer:
         labels = [Label(self.tracks[0].color_label if all(t.color_label == self.tracks[0].color_label
                                                           for t in self.tracks) else "colour", x0 - 4,
                         self.header_px)]
-        span = hi - lo if hi > lo else 1.0
-        for t in ticks:
-            y = bottom + (top - bottom) * (t - lo) / span
+        for y, figure in colorbar_ticks(lo, hi, top, bottom):
             c.segments(self._norm(np.array([[[x0 + 14, y], [x0 + 19, y]]])), AXES, 1.0)
-            labels.append(Label(_nice(t), x0 + 22, y, "lm"))
+            labels.append(Label(figure, x0 + 22, y, "lm"))
         return labels
 
     def _norm(self, px: np.ndarray) -> np.ndarray:
@@ -627,7 +295,7 @@ class FrameRenderer:
                                              ("pressure", right, 1, "lm", PRESSURE_CURVE)):
             for v in spec[axis][2]:
                 ticks.append([[x, to_y(axis, v)], [x + 5 * sign, to_y(axis, v)]])
-                labels.append(Label(_nice(v), x + 7 * sign, to_y(axis, v), anchor, TEXT if per_chamber else color))
+                labels.append(Label(tick_label(v), x + 7 * sign, to_y(axis, v), anchor, TEXT if per_chamber else color))
         c.segments(self._norm(np.array(ticks)), AXES, 1.0)
         steps = np.arange(self.frames)
         marker = 4.0 / np.array([self.width, self.height])
@@ -669,11 +337,6 @@ class FrameRenderer:
                 break
             labels.append(label)
         return labels
-
-
-def _nice(value: float) -> str:
-    """A tick figure: 4 significant digits, round-off below 1e-9 shown as 0."""
-    return f"{value if abs(value) > 1e-9 else 0.0:.4g}"
 
 
 def _squares(centres: np.ndarray, half: np.ndarray) -> np.ndarray:

@@ -34,18 +34,17 @@ from ..fem.fields import ElementFields
 from ..fem.geometry import split_in_four
 from ..io.units import LENGTH, PRESSURE
 from .camera import Camera
-from .frames import Label, colormap, draw_labels, nice_ticks
+from .colours import BACKGROUND, COLORBAR_PX, colormap
 from .surface import NumpyView, shade_faces
+from .text import LINE_PX, MARGIN_PX, Label, draw_labels
+from .ticks import colorbar_ticks
 
 VIEWS = ("auto", "numpy", "ggui")
 # the apps' --renderer (render.RENDERERS) -> the 3D view: the software renderers' counterpart is the NumPy rasteriser
 VIEW_OF_RENDERER = {"auto": "auto", "ggui": "ggui", "gui": "numpy", "pillow": "numpy"}
-BACKGROUND = (1.0, 1.0, 1.0)
 BODY = (0.72, 0.89, 0.66)
 CHAMBER = (0.3, 0.5, 0.95)
 GROUND = (0.78, 0.76, 0.72)
-FONT_LINE_PX, MARGIN_PX = 17, 10
-COLORBAR_PX = 96
 TRACE_SHARE = 0.36  # of the frame's width
 TRACE_COLORS = ("#1f3fe0", "#d62718")
 
@@ -191,7 +190,7 @@ class FrameRenderer3D:
                  camera: Camera | None = None, section: bool = True, trace: bool = True, log=print, view=None):
         self.track, self.frames = track, len(track.positions)
         self.width, self.height = width, height
-        self.header_px = MARGIN_PX + FONT_LINE_PX * (1 + max((len(c) for c in track.captions or [()]), default=0))
+        self.header_px = MARGIN_PX + LINE_PX * (1 + max((len(c) for c in track.captions or [()]), default=0))
         self.trace_px = int(TRACE_SHARE * width) if trace and track.trace else 0
         self.bar_px = COLORBAR_PX if track.color is not None else 0
         view_size = (width - self.trace_px - self.bar_px, height - self.header_px)
@@ -237,7 +236,7 @@ class FrameRenderer3D:
         image = np.full((self.height, self.width, 3), _rgb8(BACKGROUND), dtype=np.uint8)
         view_w = self.width - self.trace_px - self.bar_px
         image[self.header_px:, :view_w] = _rgb8(self.canvas.render(*self.triangles(i), self.camera, BACKGROUND))
-        labels = [Label(line, MARGIN_PX, MARGIN_PX / 2 + FONT_LINE_PX * k) for k, line in
+        labels = [Label(line, MARGIN_PX, MARGIN_PX / 2 + LINE_PX * k) for k, line in
                   enumerate(([self.track.title] if self.track.title else []) + list(
                       self.track.captions[i] if self.track.captions else ()))]
         if self.range is not None:
@@ -249,17 +248,15 @@ class FrameRenderer3D:
     def _colorbar(self, image: np.ndarray, x0: int) -> list[Label]:
         """A vertical colour strip (14 px) with numbered ticks over the colour range, drawn into image."""
         lo, hi = self.range
-        top, bottom = self.header_px + FONT_LINE_PX, self.height - MARGIN_PX - 8
+        top, bottom = self.header_px + LINE_PX, self.height - MARGIN_PX - 8
         left = x0 + 8
         t = (bottom - np.arange(top, bottom)) / (bottom - top)
         image[top:bottom, left:left + 14] = _rgb8(colormap(lo + (hi - lo) * t, lo, hi))[:, None]
         labels = [Label(self.track.color_label or "colour", left - 4, self.header_px)]
-        span = hi - lo if hi > lo else 1.0
-        for tick in nice_ticks(lo, hi):
-            if lo - 1e-12 <= tick <= hi + 1e-12:
-                y = int(round(bottom - (bottom - top) * (tick - lo) / span))
-                image[max(y - 1, 0):y + 1, left + 14:left + 19] = 90
-                labels.append(Label(f"{tick if abs(tick) > 1e-9 else 0.0:.4g}", left + 22, y, "lm"))
+        for row, figure in colorbar_ticks(lo, hi, top, bottom):
+            y = int(round(row))
+            image[max(y - 1, 0):y + 1, left + 14:left + 19] = 90
+            labels.append(Label(figure, left + 22, y, "lm"))
         return labels
 
 

@@ -1,10 +1,7 @@
 """A canvas that needs no Taichi GUI: Pillow draws the frame's triangles and segments into an RGB image.
 
-It has the primitives of the GGUI and ti.GUI canvases in frames.py (normalised coordinates, origin
-bottom-left; filled triangles, one colour or one per triangle; segments of a width in pixels), so
-FrameRenderer draws the same picture on it; it is the renderer where neither GUI exists (Quadrants
-has neither). It is offscreen only: it opens no window, so a live window refuses it. (frames.py imports
-it when it opens one.)
+It has the primitives of the canvases in canvases.py, so FrameRenderer draws the same picture on it; it is
+the renderer where neither Taichi GUI exists (Quadrants has neither). Offscreen only: a live window refuses it.
 """
 
 from __future__ import annotations
@@ -13,7 +10,7 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from ..errors import PneumaInputError
-from .frames import BACKGROUND
+from .colours import BACKGROUND
 
 
 class PillowCanvas:
