@@ -27,7 +27,7 @@ from ..errors import require
 from ..io.output import check_stem, lock_stem, open_appending, prepare_directory, save_json, write_atomic
 from ..scene.build import Scene
 from .figure import study_figure
-from .table import cell, columns, read_done, run_key, write_table
+from .table import cell, read_done, run_key, table_columns, write_table
 from .task import RunOptions, Task
 from .vary import MAX_RUNS, Axis, check_axes, plan
 
@@ -84,7 +84,7 @@ class Sweep:
         self.keys = [a.key for a in axes]
         self.runs = plan(axes, samples, seed, max_runs)
         self.scene_toml = base.to_toml()
-        self.columns = columns(self.keys, base)
+        self.columns = table_columns(self.keys, base)
         self.name = check_stem(name)
         self.out = prepare_directory(out)
         self.csv, self.json, self.png = (self.out / f"{name}{suffix}" for suffix in (".csv", ".json", ".png"))

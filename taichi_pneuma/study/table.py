@@ -48,7 +48,7 @@ def run_key(values: dict) -> tuple:
     return tuple(cell(v) for v in values.values())
 
 
-def columns(keys: list[str], base) -> list[str]:
+def table_columns(keys: list[str], base) -> list[str]:
     """The CSV's columns for a study of the Scene `base` varying `keys`: the keys, the tip's figures (tip_dz for a
     3D body), each chamber's area ratio and peak pressure (named after the base scene's chambers), then
     converged, iterations, increments, vertices, seconds and error."""
