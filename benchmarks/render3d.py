@@ -21,6 +21,11 @@ import argparse
 import itertools
 import json
 import os
+<<<<<<< HEAD
+=======
+import sys
+import tempfile
+>>>>>>> wt-study
 import time
 from pathlib import Path
 
@@ -35,6 +40,8 @@ from taichi_pneuma.render.camera import Camera
 from taichi_pneuma.render.colours import BACKGROUND
 from taichi_pneuma.render.frames3d import FrameRenderer3D, Track3D, open_view, section_faces, shaded_triangles
 from taichi_pneuma.live.interactive3d import Slider, explore_3d
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the sibling scripts (solid.py's Meshed)
 
 MESH_SIZES = {"coarse (interactive)": MeshSizes(0.3), "scene default": MeshSizes(0.1),
               "fine": MeshSizes(0.05)}
@@ -60,7 +67,7 @@ def live_scene(size: float = 0.3, peak: float = 900.0, order: int = 1):
     """The coarse PneuNet (gmsh at edge `size`; order 2: quadratic tetrahedra), its six chambers under pressure
     control (to `peak` Pa), one material (the scene's stiffer layer aside): (built scene, outer faces, chamber
     walls)."""
-    from taichi_pneuma.apps.bench import Meshed
+    from solid import Meshed
     from taichi_pneuma.fem.geometry import PointSet
     from taichi_pneuma.fem.tetmesh import tet_mesh
     from taichi_pneuma.scene.build import ChamberControl, Material, Scene

@@ -3,7 +3,7 @@ its own (its peak resident set size, getrusage's ru_maxrss, is that run's alone)
 
     python -m benchmarks.scale_3d [--cases P1,P2] [--backends amg] [--out benchmarks/results]   (repository root)
 
-The body is the pressurised octant of the thick spherical shell 1 <= r <= 2 (apps/bench.py's octant: layered
+The body is the pressurised octant of the thick spherical shell 1 <= r <= 2 (benchmarks/solid.py's octant: layered
 tetrahedra from arrays, no mesher; closed by its three symmetry planes, pressure 0 -> 0.05 E in 2 increments):
 about 200k linear tetrahedra (P1) and 50k quadratic ones (P2). A child compiles the kernels on a tiny octant
 first, then builds the mesh and its terms and runs the ramp; it reports the build time, ms per Newton iteration
@@ -20,6 +20,8 @@ import sys
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the sibling scripts (solid.py's octant)
+
 CASES = {"P1": (57, 20, 1), "P2": (29, 20, 2)}  # (divisions, layers, order): 194,940 and 50,460 tetrahedra
 INCREMENTS = 2
 
@@ -31,7 +33,7 @@ def peak_rss_mb() -> float:
 def child(case: str, backend: str) -> dict:
     """One run in this process (module docstring); returns its record."""
     from taichi_pneuma import runtime
-    from taichi_pneuma.apps.bench import octant, phase_ms
+    from solid import octant, phase_ms
     from taichi_pneuma.solve.newton import NewtonOptions
     from taichi_pneuma.solve.simulate import run_schedule
 

@@ -24,7 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from taichi_pneuma.apps.bench import markdown
-from taichi_pneuma.control.study import LocalPool, RayCluster, Sweep, Task, machine, parse_vary, versions
+from taichi_pneuma.study import LocalPool, RayCluster, Sweep, Task, parse_vary
+from taichi_pneuma.study.sweep import machine, versions
 from taichi_pneuma.io.output import prepare_directory, save_json, save_text
 from taichi_pneuma.scene.build import reference_scene
 

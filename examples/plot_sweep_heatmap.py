@@ -2,7 +2,7 @@
 A design study: tip deflection over chamber height and stiffness
 ================================================================
 
-A :class:`~taichi_pneuma.control.study.Sweep` runs a scene once per point of a grid over any of its
+A :class:`~taichi_pneuma.study.Sweep` runs a scene once per point of a grid over any of its
 keys (here the chamber height ``cy`` and Young's modulus ``E``) on a pool of worker processes, appends a
 row per run to a CSV as it finishes (a study run again resumes), and plots the result: for two keys a
 heatmap of the tip deflection. ``pneuma-sweep --vary cy=-0.15:0.15:4 --vary E=5e3:2e4:3`` is the same
@@ -15,7 +15,7 @@ import tempfile
 import matplotlib.pyplot as plt
 
 import taichi_pneuma as tp
-from taichi_pneuma.control.study import LocalPool, Sweep, parse_vary
+from taichi_pneuma.study import LocalPool, Sweep, parse_vary
 
 if __name__ == "__main__":  # the workers are spawned processes, which import this file without running it
     base = tp.reference_scene(steps=5, max_area=0.01)

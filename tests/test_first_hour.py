@@ -21,7 +21,7 @@ from renderers import SOFTWARE
 
 import taichi_pneuma as tp
 from taichi_pneuma.apps import bench, inflate, reach, steer, sweep
-from taichi_pneuma.control.study import parse_vary, study_figure
+from taichi_pneuma.study import parse_vary, study_figure
 from taichi_pneuma.scene.shipped import SHIPPED
 from taichi_pneuma.render.colours import TIP_PATH
 from taichi_pneuma.render.frames import PIN_HALF_PX, FrameRenderer, Track

@@ -18,7 +18,7 @@ import pytest
 import taichi_pneuma as tp
 from taichi_pneuma import limits
 from taichi_pneuma.apps import inflate, sweep
-from taichi_pneuma.control.study import Sweep, parse_vary, plan, run_task, study_figure
+from taichi_pneuma.study import Sweep, parse_vary, plan, run_task, study_figure
 from taichi_pneuma.scene.targets import read_targets_csv
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.geometry import Ellipse, Geometry, Polygon

@@ -15,7 +15,7 @@ from test_sensitivity import TIGHT, relative_error
 import taichi_pneuma as tp
 from taichi_pneuma.apps.reach import main as reach_main
 from taichi_pneuma.control.inverse import Reacher, ReachOptions
-from taichi_pneuma.control.study import RunOptions, Sweep, check_axes, parse_vary, run_task
+from taichi_pneuma.study import RunOptions, Sweep, check_axes, parse_vary, run_task
 from taichi_pneuma.scene.targets import Target, read_targets_csv
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.meshfile import write_mesh

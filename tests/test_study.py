@@ -13,7 +13,7 @@ import tomllib
 import taichi_pneuma as tp
 from taichi_pneuma import backend
 from taichi_pneuma.apps.sweep import main
-from taichi_pneuma.control.study import RunOptions, Task, check_axes, parse_vary, plan, run_task, study_figure
+from taichi_pneuma.study import RunOptions, Task, check_axes, parse_vary, plan, run_task, study_figure
 from taichi_pneuma.scene.scenefile import read_scene
 
 CY = "chambers[0].center[1]"

@@ -70,7 +70,7 @@ def row_line(row: dict, keys: list[str], labels: list[str]) -> str:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from ..control.study import LocalPool, RayCluster, RunOptions, Sweep, parse_vary
+    from ..study import LocalPool, RayCluster, RunOptions, Sweep, parse_vary
 
     axes = [parse_vary(text) for text in args.vary]
     base = scene_of_flags(args)
