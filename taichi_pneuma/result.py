@@ -107,7 +107,7 @@ class Result(Run):
         merged in) and, unless vtk is False, the ParaView files <stem>.pvd + <stem>_vtk/*.vtu. Returns the
         paths written. They are written under the stem's lock (output.lock_stem: another process writing
         the same stem there is refused), and a signal meanwhile waits for them (signals.holding)."""
-        from .io.vtk import VtkSeries
+        from .render.paraview import VtkSeries
 
         out, stem = prepare_directory(directory), stem or self.scene.name
         with holding(), lock_stem(out, stem):  # a signal meanwhile waits for the files; no other run writes them

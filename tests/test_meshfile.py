@@ -17,7 +17,7 @@ from taichi_pneuma.fem.elements import TET_P2
 from taichi_pneuma.fem.geometry import Ellipse, Geometry, PointSet, Rectangle, Roller
 from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface, write_mesh
 from taichi_pneuma.fem.tetmesh import REVERSED
-from taichi_pneuma.io.vtk import VtkSeries
+from taichi_pneuma.render.paraview import VtkSeries
 from taichi_pneuma.scene.build import ChamberControl, Scene
 from taichi_pneuma.scene.schedule import ChamberSchedule, area_ramp
 

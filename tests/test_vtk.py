@@ -8,7 +8,7 @@ import pytest
 
 import taichi_pneuma as tp
 from taichi_pneuma.apps.inflate import main
-from taichi_pneuma.io.vtk import VtkSeries
+from taichi_pneuma.render.paraview import VtkSeries
 from taichi_pneuma.materials import lame_parameters
 
 

@@ -96,7 +96,7 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def run_scene(args: argparse.Namespace, scene, stem: str, size: tuple[int, int], out) -> dict:
-    from ..io.vtk import VtkSeries
+    from ..render.paraview import VtkSeries
 
     built = build(scene, args)
     vtk = VtkSeries(out, stem, built)

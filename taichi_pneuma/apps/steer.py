@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> dict:
 
 
 def run_placements(args: argparse.Namespace, scenes, stems: list[str], size: tuple[int, int], out) -> dict:
-    from ..io.vtk import VtkSeries
+    from ..render.paraview import VtkSeries
     from ..solve.simulate import RampInterrupted, RampStopped
 
     built = [build(scene, args) for scene in scenes]
