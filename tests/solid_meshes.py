@@ -21,7 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from taichi_pneuma.fem.elements import TET_EDGES
-from taichi_pneuma.fem.geometry import BeamGeometry, PointSet, Roller
+from taichi_pneuma.fem.planar import BeamGeometry
+from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.fem.layered import extrude, layered_tets, spherical_shell_octant
 from taichi_pneuma.fem.tetmesh import TetMesh, tet_mesh
 from taichi_pneuma.scene.build import ChamberControl, Material, Scene

@@ -14,7 +14,9 @@ import taichi_pneuma as tp
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.elements import TET_P2
-from taichi_pneuma.fem.geometry import Ellipse, Geometry, PointSet, Rectangle, Roller
+from taichi_pneuma.fem.planar import Geometry
+from taichi_pneuma.fem.shapes import Ellipse, Rectangle
+from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface, write_mesh
 from taichi_pneuma.fem.tetmesh import REVERSED
 from taichi_pneuma.io.vtk import VtkSeries

@@ -377,7 +377,7 @@ class Meshed:
 def octant(divisions: int, layers: int, order: int, increments: int = 3) -> "Scene":
     """A pressurised octant of the thick spherical shell 1 <= r <= 2 (layered.py: 3 divisions^2 layers
     tetrahedra), closed by its three symmetry planes; pressure 0 -> 0.05 E in `increments` increments."""
-    from ..fem.geometry import Roller
+    from ..fem.supports import Roller
     from ..fem.layered import spherical_shell_octant
     from ..fem.tetmesh import tet_mesh
     from ..scene.build import ChamberControl, Material, Scene

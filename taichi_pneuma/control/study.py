@@ -43,6 +43,7 @@ import tomllib
 from scipy.stats import qmc
 
 from .. import backend, limits, runtime, signals
+from ..fem import sizing
 from ..errors import PneumaInputError, require, require_finite
 from ..io.keys import SHORT_KEYS, dotted
 from ..io.output import (
@@ -282,7 +283,7 @@ def run_task(task: Task) -> dict:
         base = read_scene(tomllib.loads(task.scene), "scene")
         names = base.chamber_names
         scene = base.with_values(task.values)
-        limits.check_scene(scene, task.options.max_triangles, task.options.max_increments)
+        sizing.check_scene(scene, task.options.max_triangles, task.options.max_increments)
         options = task.options
         with limits.budget(options.max_triangles):
             row.update(measures(simulate(scene, tol=options.tol, max_iterations=options.max_iterations,

@@ -27,7 +27,7 @@ import numpy as np
 
 from .. import limits
 from ..errors import PneumaInputError, quoted, require, require_distinct
-from .geometry import PointSet
+from .supports import PointSet
 from .tetmesh import TetMesh, check_order, tet_mesh
 
 MAX_MESH_BYTES = 500_000_000
@@ -169,7 +169,7 @@ def volume_groups(mesh: meshio.Mesh) -> dict[str, int]:
 class MeshGeometry:
     """A 3D scene's geometry read from a mesh file: the body, its chambers (name, MeshSurface) in order, the
     element order (1: linear tetrahedra; 2: quadratic, a 4-node mesh given straight midside nodes), and the
-    clamp, tip and rollers (as geometry.Geometry's)."""
+    clamp, tip and rollers (as planar.Geometry's)."""
 
     body: MeshBody
     chambers: tuple

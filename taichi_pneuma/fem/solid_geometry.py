@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from .. import limits
 from ..errors import require, require_distinct
 from ..io.output import check_heading
-from .geometry import PointSet
+from .supports import PointSet
 from .gmsh_mesher import MAX_TETS, MeshSizes, Solid, estimate_tets, mesh_solid
 from .meshfile import MeshSurface
 from .pneunet import PneuNet
@@ -56,7 +56,7 @@ def is_solid_shape(shape) -> bool:
 @dataclass(frozen=True)
 class SolidGeometry:
     """A 3D body from shapes (module docstring): body, chambers (name, shape) in order, mesh sizes, element
-    order (1: linear tetrahedra, 2: quadratic), clamp, tip and rollers (as geometry.Geometry's)."""
+    order (1: linear tetrahedra, 2: quadratic), clamp, tip and rollers (as planar.Geometry's)."""
 
     body: object
     chambers: tuple

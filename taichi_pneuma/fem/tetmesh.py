@@ -29,7 +29,8 @@ import numpy as np
 
 from ..errors import require
 from .elements import TET_EDGES, TET_P1, TET_P2, boundary_facets
-from .geometry import PointSet, clamped, split_in_four, with_edge_midpoints
+from .refine import split_in_four, with_edge_midpoints
+from .supports import clamped, PointSet
 
 REVERSED = {3: [0, 2, 1], 6: [0, 2, 1, 5, 4, 3]}  # a facet's nodes with its orientation flipped
 MIRRORED = {4: [0, 2, 1, 3], 10: [0, 2, 1, 3, 6, 5, 4, 7, 9, 8]}  # a tetrahedron's with corners 1, 2 swapped
