@@ -365,7 +365,7 @@ def phase_ms(result) -> tuple[int, dict[str, float]]:
 
 @dataclass(frozen=True)
 class Meshed:
-    """A scene geometry already meshed (a TetMesh and its one chamber), for timing 3D solves."""
+    """A scene geometry already meshed (a tetrahedral Mesh and its one chamber), for timing 3D solves."""
 
     ready: object
     chambers: tuple = (("cavity", None),)

@@ -36,8 +36,8 @@ from .. import limits
 from ..errors import PneumaInputError, require, require_distinct, require_finite
 from ..io.output import check_heading
 from ..io.units import PLANE_AREA, si_default
-from .elements import TRIANGLE_P2
-from .mesh import Mesh, jacobians, triangle_areas
+from .elements import ORDERS, TRIANGLE_P1, TRIANGLE_P2, ElementFamily, family_for
+from .mesh import Mesh, triangle_areas
 from .polygons import (distance_to_polygon, enclosed_area, interior_point, points_in_polygon, polygon_self_intersects,
                        require_spaced, segments_cross)
 from .refine import halved, split_in_four, with_edge_midpoints
@@ -47,7 +47,6 @@ from .symmetry import CUT_TOLERANCE, OUTER_MARKER, cut_by_lines, notch, symmetry
 from .triangulation import triangulate_or_refuse
 
 MARGIN = 1e-3
-ORDERS = (1, 2)
 MAX_REFINEMENTS = 4
 
 
@@ -70,6 +69,11 @@ class Geometry:
     rollers: tuple[Roller, ...] = ()
 
     dim = 2
+
+    @property
+    def family(self) -> ElementFamily:
+        """The triangles' element family: P1 (order 1) or P2 (order 2)."""
+        return family_for(self.dim, self.order)
 
     def __post_init__(self):
         require(self.max_area is None or require_finite("max_area", self.max_area) > 0,
@@ -151,7 +155,7 @@ class Geometry:
         }
         if closed:
             pslg["holes"] = np.array([interior_point(p) for p in loops[1:]])
-        weight = 4 ** self.refinements * (4 if self.order == 2 else 1)  # linear triangles per Triangle's one
+        weight = 4 ** self.refinements * self.family.weight  # linear triangles per Triangle's one
         cap = limits.element_cap(weight)  # Triangle adds at most this many points (S), then stops
         out = triangulate_or_refuse(pslg, f"pqa{self.max_area:.17f}" + ("" if cap is None else f"S{cap}"))  # no exponent
         added = len(out["vertices"]) - len(pslg["vertices"])
@@ -161,7 +165,7 @@ class Geometry:
         segments, markers = np.asarray(out["segments"], dtype=np.int64), out["segment_markers"].ravel()
         shapes = [self.body] + [shape for _, shape in self.chambers]  # the shape of marker OUTER_MARKER + c
         curves = {OUTER_MARKER + c: shape.project for c, shape in enumerate(shapes) if hasattr(shape, "project")}
-        if self.order == 2 or self.refinements:
+        if self.family.edges or self.refinements:
             vertices = onto_curves(vertices, segments, markers, curves, triangles)
         for _ in range(self.refinements):
             vertices, mid = with_edge_midpoints(vertices, triangles)
@@ -169,9 +173,9 @@ class Geometry:
             segments, markers = halved(segments, markers, mid)
             vertices = onto_curves(vertices, segments, markers, curves, triangles)
         mid = None
-        if self.order == 2:
-            vertices, mid = with_edge_midpoints(vertices, triangles)
-            triangles = np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])])
+        if self.family.edges:  # quadratic: a midside node on every edge
+            vertices, mid = with_edge_midpoints(vertices, triangles, self.family.edges)
+            triangles = np.column_stack([triangles] + [mid(triangles[:, i], triangles[:, j]) for i, j in self.family.edges])
             vertices = onto_curves(vertices, *halved(segments, markers, mid), curves, triangles)
         chambers = []
         for c, (_, origin) in enumerate(walls, start=1):
@@ -186,8 +190,15 @@ class Geometry:
         boundary = np.unique(outer if mid is None else np.column_stack([outer, mid(outer[:, 0], outer[:, 1])]))
         return Mesh(vertices, triangles, tuple(chambers), boundary, clamped(self.clamp, vertices),
                     self.tip.select(vertices, "tip"), tuple(origin for _, origin in walls),
-                    tuple((roller.select(vertices), roller.unit_normal) for roller in self.rollers))
+                    tuple((roller.select(vertices), roller.unit_normal) for roller in self.rollers), self.family)
 
+
+
+def jacobians(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """det dX/dxi (m, p) of quadratic triangles (m, 6) at reference points (p, 2), dX/dxi = sum_a X_a dN_a/dxi
+    (isoparametric: twice the area of a straight-sided triangle, the same at every point)."""
+    j = np.swapaxes(vertices[triangles], 1, 2)[:, None] @ TRIANGLE_P2.shape_gradients(points)[None]  # (m, p, 2, 2)
+    return j[..., 0, 0] * j[..., 1, 1] - j[..., 0, 1] * j[..., 1, 0]
 
 
 def onto_curves(vertices: np.ndarray, segments: np.ndarray, markers: np.ndarray, curves: dict,
@@ -264,9 +275,7 @@ class BeamGeometry:
 def orient_counter_clockwise(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Return triangles with every vertex triple ordered counter-clockwise."""
     clockwise = triangle_areas(vertices, triangles) < 0
-    fixed = triangles.copy()
-    fixed[clockwise] = fixed[clockwise][:, [0, 2, 1]]
-    return fixed
+    return TRIANGLE_P1.mirrored(triangles, clockwise)
 
 
 def chain(edges: np.ndarray, closed: bool = True) -> np.ndarray:

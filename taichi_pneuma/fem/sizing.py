@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from .. import limits
 from ..errors import require
+from .elements import family_for
 from .polygons import signed_area
 
 
@@ -37,10 +38,11 @@ def check_solid(scene, max_elements: int) -> None:
     docstring)."""
     geometry = scene.geometry
     tetrahedra, nodes = geometry.size_estimate()
-    linear = tetrahedra * (8 if geometry.order == 2 else 1)
+    family = family_for(3, geometry.order)
+    linear = tetrahedra * family.weight
     per_step = 2 if any(e.contact for e in scene.effects) else 1
     memory = limits.BYTES_PER_TETRAHEDRON * linear + 24 * per_step * nodes * (scene.increments + 1)
-    quadratic = " quadratic tetrahedra, counted 8 times" if geometry.order == 2 else " tetrahedra"
+    quadratic = f" quadratic tetrahedra, counted {family.weight} times" if family.order == 2 else " tetrahedra"
     require(linear <= max_elements, f"the mesh has {tetrahedra}{quadratic} and needs about {memory / 1e9:.3g} GB; "
                                     f"the limit is {max_elements} elements (--max-triangles raises it)")
 
@@ -55,12 +57,13 @@ def check_planar(scene, max_triangles: int) -> None:
     walls = [len(loop) * nodes_per_point for loop in loops[1:]]
     pairs = sum(effect.pairs(walls) for effect in scene.effects)
     triangles = (1.6 * area / geometry.max_area + 3 * points) * 4 ** geometry.refinements
-    linear = triangles * (4 if geometry.order == 2 else 1)
+    family = family_for(2, geometry.order)
+    linear = triangles * family.weight
     worth = linear + pairs * limits.BYTES_PER_PAIR / limits.BYTES_PER_TRIANGLE
     vertices = linear / 2 + points
     per_step = 2 if any(e.contact for e in scene.effects) else 1
     memory = limits.BYTES_PER_TRIANGLE * worth + 16 * per_step * vertices * (scene.increments + 1)
-    quadratic = " quadratic triangles, counted 4 times" if geometry.order == 2 else " triangles"
+    quadratic = f" quadratic triangles, counted {family.weight} times" if family.order == 2 else " triangles"
     contact = f" and {pairs} self-contact pairs (walls of {max(walls)} nodes)" if pairs else ""
     require(worth <= max_triangles,
             f"the mesh would have about {triangles:.3g}{quadratic} (meshed area {area:.4g} / max_area "

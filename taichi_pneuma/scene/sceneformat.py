@@ -13,7 +13,8 @@ import typing
 
 from .targets import MAX_TARGETS, Target
 from ..errors import require
-from ..fem.planar import ORDERS, Geometry
+from ..fem.elements import ORDERS
+from ..fem.planar import Geometry
 from ..fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 from ..fem.supports import SIDES, PointSet, Roller
 from ..fem.gmsh_mesher import MeshSizes
