@@ -28,6 +28,7 @@ import numpy as np
 from .. import limits
 from ..errors import PneumaInputError, quoted, require, require_distinct
 from .supports import PointSet
+from .body import Body
 from .elements import FAMILIES
 from .mesh import Mesh
 from .tetmesh import check_order, tet_mesh
@@ -168,7 +169,7 @@ def volume_groups(mesh: meshio.Mesh) -> dict[str, int]:
 
 
 @dataclass(frozen=True)
-class MeshGeometry:
+class MeshGeometry(Body):
     """A 3D scene's geometry read from a mesh file: the body, its chambers (name, MeshSurface) in order, the
     element order (1: linear tetrahedra; 2: quadratic, a 4-node mesh given straight midside nodes), and the
     clamp, tip and rollers (as planar.Geometry's)."""
@@ -184,6 +185,7 @@ class MeshGeometry:
 
     def __post_init__(self):
         check_order(self.order)
+        self.check_supports()
         require_distinct("chamber names", [name for name, _ in self.chambers])
         for name, shape in self.chambers:
             require(isinstance(shape, MeshSurface), f"chamber {name!r}: a mesh body's chambers are the mesh file's "

@@ -36,13 +36,14 @@ from .. import limits
 from ..errors import PneumaInputError, require, require_distinct, require_finite
 from ..io.output import check_heading
 from ..io.units import PLANE_AREA, si_default
-from .elements import ORDERS, TRIANGLE_P1, TRIANGLE_P2, ElementFamily, family_for
+from .body import Body
+from .elements import ORDERS, TRIANGLE_P1, TRIANGLE_P2
 from .mesh import Mesh, triangle_areas
 from .polygons import (distance_to_polygon, enclosed_area, interior_point, points_in_polygon, polygon_self_intersects,
                        require_spaced, segments_cross)
 from .refine import halved, split_in_four, with_edge_midpoints
 from .shapes import MAX_SHAPES, MAX_WALL_POINTS, Ellipse, Rectangle
-from .supports import PointSet, Roller, clamped
+from .supports import PointSet, Roller
 from .symmetry import CUT_TOLERANCE, OUTER_MARKER, cut_by_lines, notch, symmetry_lines
 from .triangulation import triangulate_or_refuse
 
@@ -51,7 +52,7 @@ MAX_REFINEMENTS = 4
 
 
 @dataclass(frozen=True)
-class Geometry:
+class Geometry(Body):
     """A body shape with named chamber shapes, a mesh density and the named node sets: the clamp (None, the
     default: none), the tip (the right edge by default) and the rollers.
 
@@ -70,11 +71,6 @@ class Geometry:
 
     dim = 2
 
-    @property
-    def family(self) -> ElementFamily:
-        """The triangles' element family: P1 (order 1) or P2 (order 2)."""
-        return family_for(self.dim, self.order)
-
     def __post_init__(self):
         require(self.max_area is None or require_finite("max_area", self.max_area) > 0,
                 f"max_area = {self.max_area!r} must be > 0")
@@ -82,10 +78,7 @@ class Geometry:
         require(self.refinements in range(MAX_REFINEMENTS + 1),
                 f"refinements = {self.refinements!r} must be an integer from 0 to {MAX_REFINEMENTS}")
         require(len(self.chambers) <= MAX_SHAPES, f"{len(self.chambers)} chambers: at most {MAX_SHAPES} are allowed")
-        require(len(self.rollers) <= MAX_SHAPES, f"{len(self.rollers)} rollers: at most {MAX_SHAPES} are allowed")
-        for roller in self.rollers:
-            require(len(roller.normal) == 2,
-                    f"roller normal = {list(roller.normal)!r}: a 2D body's rollers have 2 components")
+        self.check_supports()
         for name, shape in self.chambers:
             require(callable(getattr(shape, "polygon", None)), f"chamber {name!r}: a {type(shape).__name__} wall needs "
                                                                f"a body from a mesh file or 3D shapes (a 3D body)")
@@ -188,9 +181,9 @@ class Geometry:
             chambers.append(nodes)
         outer = segments[markers == OUTER_MARKER]
         boundary = np.unique(outer if mid is None else np.column_stack([outer, mid(outer[:, 0], outer[:, 1])]))
-        return Mesh(vertices, triangles, tuple(chambers), boundary, clamped(self.clamp, vertices),
-                    self.tip.select(vertices, "tip"), tuple(origin for _, origin in walls),
-                    tuple((roller.select(vertices), roller.unit_normal) for roller in self.rollers), self.family)
+        pinned, tip, rollers = self.node_sets(vertices)
+        return Mesh(vertices, triangles, tuple(chambers), boundary, pinned, tip, tuple(origin for _, origin in walls),
+                    rollers, self.family)
 
 
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 from .. import limits
 from ..errors import require
-from .elements import family_for
 from .polygons import signed_area
 
 
@@ -26,7 +25,7 @@ def check_scene(scene, max_triangles: int = limits.MAX_TRIANGLES,
     """Refuse (PneumaInputError) a scene whose estimated mesh (its terms' pairs included) or increment count
     is past the limits."""
     geometry = scene.geometry
-    if getattr(geometry, "dim", 2) == 3:
+    if geometry.dim == 3:
         check_solid(scene, max_triangles)
     else:
         check_planar(scene, max_triangles)
@@ -38,7 +37,7 @@ def check_solid(scene, max_elements: int) -> None:
     docstring)."""
     geometry = scene.geometry
     tetrahedra, nodes = geometry.size_estimate()
-    family = family_for(3, geometry.order)
+    family = geometry.family
     linear = tetrahedra * family.weight
     per_step = 2 if any(e.contact for e in scene.effects) else 1
     memory = limits.BYTES_PER_TETRAHEDRON * linear + 24 * per_step * nodes * (scene.increments + 1)
@@ -57,7 +56,7 @@ def check_planar(scene, max_triangles: int) -> None:
     walls = [len(loop) * nodes_per_point for loop in loops[1:]]
     pairs = sum(effect.pairs(walls) for effect in scene.effects)
     triangles = (1.6 * area / geometry.max_area + 3 * points) * 4 ** geometry.refinements
-    family = family_for(2, geometry.order)
+    family = geometry.family
     linear = triangles * family.weight
     worth = linear + pairs * limits.BYTES_PER_PAIR / limits.BYTES_PER_TRIANGLE
     vertices = linear / 2 + points

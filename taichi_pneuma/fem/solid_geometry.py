@@ -34,7 +34,7 @@ from .. import limits
 from ..errors import require, require_distinct
 from ..io.output import check_heading
 from .supports import PointSet
-from .elements import family_for
+from .body import Body
 from .gmsh_mesher import MAX_TETS, MeshSizes, Solid, estimate_tets, mesh_solid
 from .meshfile import MeshSurface
 from .pneunet import PneuNet
@@ -55,7 +55,7 @@ def is_solid_shape(shape) -> bool:
 
 
 @dataclass(frozen=True)
-class SolidGeometry:
+class SolidGeometry(Body):
     """A 3D body from shapes (module docstring): body, chambers (name, shape) in order, mesh sizes, element
     order (1: linear tetrahedra, 2: quadratic), clamp, tip and rollers (as planar.Geometry's)."""
 
@@ -71,6 +71,7 @@ class SolidGeometry:
 
     def __post_init__(self):
         check_order(self.order)
+        self.check_supports()
         require(is_solid_shape(self.body), f"body: {self.body!r} is not a 3D shape")
         generated = isinstance(self.body, PneuNet)
         groups = self.groups()
@@ -114,12 +115,12 @@ class SolidGeometry:
         """(tetrahedra, nodes) estimated before meshing (module docstring)."""
         graded = isinstance(self.body, PneuNet) and self.sizes.near < self.sizes.size
         tets = int(round(estimate_tets(self.solid(), self.estimate_sizes()) * (GRADED_THIN_WALL if graded else 1)))
-        nodes = tets / TETS_PER_NODE + (EDGES_PER_TET * tets if self.order == 2 else 0)
+        nodes = tets / TETS_PER_NODE + (EDGES_PER_TET * tets if self.family.edges else 0)
         return tets, int(round(nodes))
 
     def mesh(self) -> Mesh:
         """Mesh with gmsh (in the active limits.budget) and build the Mesh (module docstring)."""
-        weight = family_for(self.dim, self.order).weight
+        weight = self.family.weight
         cap = limits.element_cap(weight)
         solid = self.solid()
         meshed = mesh_solid(solid, self.sizes, MAX_TETS if cap is None else cap)

@@ -116,6 +116,13 @@ def clamped(clamp: PointSet | None, vertices: np.ndarray) -> np.ndarray:
     return np.zeros(0, dtype=np.int64) if clamp is None else clamp.select(vertices, "clamp")
 
 
+def node_sets(clamp: PointSet | None, tip: PointSet, rollers, vertices: np.ndarray) -> tuple:
+    """(pinned, tip, rollers) on a mesh of these vertices: the clamped nodes, the tip's nodes and per roller (its
+    held nodes, its unit normal); a set that selects no vertex is a PneumaInputError naming it."""
+    return (clamped(clamp, vertices), tip.select(vertices, "tip"),
+            tuple((roller.select(vertices), roller.unit_normal) for roller in rollers))
+
+
 @dataclass(frozen=True)
 class Roller:
     """A roller support: nodes whose displacement along `normal` is held, their tangential motion free.

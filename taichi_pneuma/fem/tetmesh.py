@@ -31,7 +31,7 @@ from ..errors import require
 from .elements import ElementFamily, boundary_facets, family_for, family_of
 from .mesh import Mesh
 from .refine import with_edge_midpoints
-from .supports import clamped, PointSet
+from .supports import PointSet, node_sets
 
 PARALLEL = 1 - 1e-9  # |n1 . n2| above it: parallel planes
 
@@ -182,6 +182,6 @@ def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndar
         walls.append(wall)
         origins.append(closure(name, vertices, wall, rollers))
     outer = surface[facets_of(given[-1], "boundary")] if boundary is not None else surface[~taken]
-    return Mesh(vertices, tets, tuple(walls), np.unique(outer), clamped(clamp, vertices), tip.select(vertices, "tip"),
-                tuple(origins), tuple((roller.select(vertices), roller.unit_normal) for roller in rollers), family,
-                surface, regions, dict(region_groups or {}))
+    pinned, tip_nodes, held = node_sets(clamp, tip, rollers, vertices)
+    return Mesh(vertices, tets, tuple(walls), np.unique(outer), pinned, tip_nodes, tuple(origins), held, family, surface,
+                regions, dict(region_groups or {}))
