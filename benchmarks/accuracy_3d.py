@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from taichi_pneuma import api, runtime
-from taichi_pneuma.fem.geometry import PointSet
+from taichi_pneuma.fem.supports import PointSet
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes, Solid, mesh_solid
 from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.fem.solids import Box, Ellipsoid

@@ -21,11 +21,7 @@ import argparse
 import itertools
 import json
 import os
-<<<<<<< HEAD
-=======
 import sys
-import tempfile
->>>>>>> wt-study
 import time
 from pathlib import Path
 
@@ -68,7 +64,7 @@ def live_scene(size: float = 0.3, peak: float = 900.0, order: int = 1):
     control (to `peak` Pa), one material (the scene's stiffer layer aside): (built scene, outer faces, chamber
     walls)."""
     from solid import Meshed
-    from taichi_pneuma.fem.geometry import PointSet
+    from taichi_pneuma.fem.supports import PointSet
     from taichi_pneuma.fem.tetmesh import tet_mesh
     from taichi_pneuma.scene.build import ChamberControl, Material, Scene
     from taichi_pneuma.scene.schedule import ChamberSchedule

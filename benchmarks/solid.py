@@ -31,7 +31,7 @@ def phase_ms(result) -> tuple[int, dict[str, float]]:
 
 @dataclass(frozen=True)
 class Meshed:
-    """A scene geometry already meshed (a TetMesh and its one chamber), for timing 3D solves."""
+    """A scene geometry already meshed (a tetrahedral Mesh and its one chamber), for timing 3D solves."""
 
     ready: object
     chambers: tuple = (("cavity", None),)
@@ -43,7 +43,7 @@ class Meshed:
 def octant(divisions: int, layers: int, order: int, increments: int = 3) -> "Scene":
     """A pressurised octant of the thick spherical shell 1 <= r <= 2 (layered.py: 3 divisions^2 layers
     tetrahedra), closed by its three symmetry planes; pressure 0 -> 0.05 E in `increments` increments."""
-    from taichi_pneuma.fem.geometry import Roller
+    from taichi_pneuma.fem.supports import Roller
     from taichi_pneuma.fem.layered import spherical_shell_octant
     from taichi_pneuma.fem.tetmesh import tet_mesh
     from taichi_pneuma.scene.build import ChamberControl, Material, Scene

@@ -1,42 +1,12 @@
 """Resource guards: a run whose size would exhaust memory or time is refused, in one line naming the
-estimate, the limit and the command-line flag that raises it; before any work where an estimate can
-tell, and by a budget the mesher and the terms keep to where it cannot.
+estimate, the limit and the command-line flag that raises it; before any work where an estimate can tell
+(fem/sizing.py estimates a scene's mesh), and by a budget the mesher and the terms keep to where it cannot.
 
-Before meshing, the mesh size is estimated from a fit to Triangle's output for 'pq' meshes
-(48 meshes: the shipped scenes and the reference beam, small and large chambers, 12 to 1800 outline
-points, max_area 1e-4 to 0.1; the estimate lies between 0.95 and 1.54 times the real count):
-
-    triangles ~ 1.6 (body area - chamber areas) / max_area + 3 (outline points),   vertices ~ triangles / 2 + points
-
-and the memory from the measured peak of a solve, about BYTES_PER_TRIANGLE per triangle (3.9-4.1 kB
-at 35k-114k triangles, CPU backend), plus the stored states: positions (and, with contact, contact
-forces) of every step, 16 bytes per vertex each. Each uniform refinement multiplies the triangles by 4;
-a quadratic triangle counts as 4 linear ones (it has as many nodes, and a Hessian block 4 times larger).
-A 3D geometry (dim = 3) gives its own size_estimate() (tetrahedra, nodes), counted against the same limit as
-elements: a linear tetrahedron one, a quadratic one 8 (its Hessian block is 6.25 times a linear one's, and its
-measured memory 6.2 times). The memory estimate is BYTES_PER_TETRAHEDRON per linear tetrahedron: the peak RSS
-of a Newton ramp above the process's before the mesh, 11.9 kB per tetrahedron for 195k linear tetrahedra
-(2.5 GB) and 74 kB per quadratic one for 50k (3.9 GB), CG with multigrid, whose memory grows linearly (the
-peak is the Hessian pattern's construction, 144 (row, column) pairs per linear tetrahedron, 900 per quadratic
-one; benchmarks/scale_3d.py). So 200k linear tetrahedra pass the default limit, and 50k quadratic ones need
---max-triangles 410000 (a sparse Cholesky factor instead grows as n^(4/3): the direct backends need more).
-Self-contact holds a pair per (wall node, wall edge not incident to it): k (k - 2) for a wall of k nodes,
-quadratic in the wall; a pair costs about BYTES_PER_PAIR (its indices, its 36-entry Hessian block and
-the assembled matrix's share: 2.5-2.7 kB measured at 0.25M-4M pairs), counted as BYTES_PER_PAIR /
-BYTES_PER_TRIANGLE triangles.
-
-The estimate cannot see what quality meshing does to thin features: a strip of width w and length l
-needs about l / w triangles across any max_area (Triangle's minimum angle forces triangles as small as
-the strip is wide). So the mesher runs under a budget (budget(), set by the commands for their run):
-Triangle is given at most element_cap() Steiner points (its S switch) and stops there, and a mesh
-that reached the cap, or has more triangles than the budget, is refused (check_mesh); the terms check
-what they allocate against it too (check_pairs, before self-contact allocates its pairs). A 3D mesher
-meets the same budget through element_cap(weight) and check_mesh. Without a budget (library use that
-sets none) nothing is capped.
-
-A mesh file is read under a memory bound (memory_bound, read_allowance: READ_BYTES plus
-READ_BYTES_PER_FILE_BYTE per byte of the file; on Linux, by the address-space limit): a small file whose arrays
-are compressed, or whose node numbers are sparse, cannot claim gigabytes before any check sees it.
+This module holds the limits, the measured costs they are counted in (BYTES_PER_TRIANGLE, BYTES_PER_TETRAHEDRON,
+BYTES_PER_PAIR, READ_BYTES...: where each figure comes from is on the performance page, docs/performance.md,
+"The resource limits"), the budget (budget(): element_cap() for a mesher, check_mesh() and check_pairs() for what
+was made) and the plain checks of counts (increments, frame pixels) and of a file reader's memory (memory_bound,
+read_allowance). Without a budget (library use that sets none) nothing is capped.
 """
 
 from __future__ import annotations
@@ -108,59 +78,10 @@ def wall_pairs(points: list[int]) -> int:
     return sum(k * (k - 2) for k in points)
 
 
-def check_scene(scene, max_triangles: int = MAX_TRIANGLES, max_increments: int = MAX_INCREMENTS) -> None:
-    """Refuse (PneumaInputError) a scene whose estimated mesh (its terms' pairs included) or increment count
-    is past the limits."""
-    geometry = scene.geometry
-    if getattr(geometry, "dim", 2) == 3:
-        check_solid(scene, max_triangles)
-    else:
-        check_planar(scene, max_triangles)
-    check_increments(scene.increments, max_increments)
-
-
 def check_increments(increments: int, limit: int = MAX_INCREMENTS, raised_by: str = "--max-increments") -> None:
     """Refuse a schedule of more than `limit` increments (raised_by: what raises the limit, named in the message)."""
     count = increments if increments < 10**12 else f"about 10^{len(str(increments)) - 1}"  # not 401 digits
     require(increments <= limit, f"the schedule has {count} increments; the limit is {limit} ({raised_by} raises it)")
-
-
-def check_solid(scene, max_elements: int) -> None:
-    """A 3D scene: its geometry's (tetrahedra, nodes) estimate, a quadratic tetrahedron counted 8 times (module
-    docstring)."""
-    geometry = scene.geometry
-    tetrahedra, nodes = geometry.size_estimate()
-    linear = tetrahedra * (8 if geometry.order == 2 else 1)
-    per_step = 2 if any(e.contact for e in scene.effects) else 1
-    memory = BYTES_PER_TETRAHEDRON * linear + 24 * per_step * nodes * (scene.increments + 1)
-    quadratic = " quadratic tetrahedra, counted 8 times" if geometry.order == 2 else " tetrahedra"
-    require(linear <= max_elements, f"the mesh has {tetrahedra}{quadratic} and needs about {memory / 1e9:.3g} GB; "
-                                    f"the limit is {max_elements} elements (--max-triangles raises it)")
-
-
-def check_planar(scene, max_triangles: int) -> None:
-    """A 2D scene: the triangles estimated from its outlines and its terms' pairs (module docstring)."""
-    from .fem.geometry import signed_area
-
-    geometry = scene.geometry
-    loops = [geometry.body.polygon()] + [shape.polygon() for _, shape in geometry.chambers]
-    area = abs(signed_area(loops[0])) - sum(abs(signed_area(loop)) for loop in loops[1:])
-    points = sum(len(loop) for loop in loops)
-    nodes_per_point = 2 ** geometry.refinements * geometry.order
-    walls = [len(loop) * nodes_per_point for loop in loops[1:]]
-    pairs = sum(effect.pairs(walls) for effect in scene.effects)
-    triangles = (1.6 * area / geometry.max_area + 3 * points) * 4 ** geometry.refinements
-    linear = triangles * (4 if geometry.order == 2 else 1)
-    worth = linear + pairs * BYTES_PER_PAIR / BYTES_PER_TRIANGLE
-    vertices = linear / 2 + points
-    per_step = 2 if any(e.contact for e in scene.effects) else 1
-    memory = BYTES_PER_TRIANGLE * worth + 16 * per_step * vertices * (scene.increments + 1)
-    quadratic = " quadratic triangles, counted 4 times" if geometry.order == 2 else " triangles"
-    contact = f" and {pairs} self-contact pairs (walls of {max(walls)} nodes)" if pairs else ""
-    require(worth <= max_triangles,
-            f"the mesh would have about {triangles:.3g}{quadratic} (meshed area {area:.4g} / max_area "
-            f"{geometry.max_area:.3g}, {points} outline points){contact} and need about {memory / 1e9:.3g} GB; "
-            f"the limit is {max_triangles} triangles (--max-triangles raises it)")
 
 
 def check_frame(width: int, height: int, max_pixels: int = MAX_FRAME_PIXELS, what: str = "--size",

@@ -21,9 +21,11 @@ from pathlib import Path
 import numpy as np
 
 from taichi_pneuma.fem.elements import TET_EDGES
-from taichi_pneuma.fem.geometry import BeamGeometry, PointSet, Roller
+from taichi_pneuma.fem.planar import BeamGeometry
+from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.fem.layered import extrude, layered_tets, spherical_shell_octant
-from taichi_pneuma.fem.tetmesh import TetMesh, tet_mesh
+from taichi_pneuma.fem.mesh import Mesh
+from taichi_pneuma.fem.tetmesh import tet_mesh
 from taichi_pneuma.scene.build import ChamberControl, Material, Scene
 
 DEPTH = 0.8
@@ -35,7 +37,7 @@ PLANES = tuple(Roller(tuple(n), (0.0, 0.0, 0.0)) for n in np.eye(3))
 class MeshOf:
     """A scene geometry whose mesh is ready: its chambers are the mesh's, named in order."""
 
-    ready: TetMesh
+    ready: Mesh
     names: tuple = ("main",)
 
     dim = 3
@@ -44,7 +46,7 @@ class MeshOf:
     def chambers(self):
         return tuple((name, None) for name in self.names)
 
-    def mesh(self) -> TetMesh:
+    def mesh(self) -> Mesh:
         return self.ready
 
 
@@ -56,7 +58,7 @@ def extruded_beam(max_area: float, order: int = 1, layers: int = 1, chamber_poin
 
 
 def shell_octant(divisions: int, layers: int, order: int = 1, inner: float = 1.0, outer: float = 2.0,
-                 curved: bool = False) -> TetMesh:
+                 curved: bool = False) -> Mesh:
     """The octant mesh; curved (order 2): every midside node moved radially to the mean radius of its edge's ends,
     so that the quadratic (isoparametric) tetrahedra fit the spheres."""
     vertices, tets, wall = spherical_shell_octant(inner, outer, divisions, layers)
@@ -72,20 +74,20 @@ def shell_octant(divisions: int, layers: int, order: int = 1, inner: float = 1.0
     return tet_mesh(x, mesh.elements, {"cavity": mesh.chambers[0]}, order=2, clamp=None, rollers=PLANES)
 
 
-def scene_of(mesh: TetMesh, schedules, increments: int, material: Material = Material(), **more) -> Scene:
+def scene_of(mesh: Mesh, schedules, increments: int, material: Material = Material(), **more) -> Scene:
     """A scene of the mesh's chambers (named as the schedules' order) driven by the schedules."""
     names = tuple(f"c{i}" for i in range(len(schedules))) if len(schedules) > 1 else ("main",)
     return Scene(MeshOf(mesh, names), tuple(ChamberControl(s) for s in schedules), increments, material, **more)
 
 
-def box_with_cavity(order: int = 1) -> TetMesh:
+def box_with_cavity(order: int = 1) -> Mesh:
     """A 7 x 4 x 4 grid of 0.5 x 0.2 x 0.2 cells over [-1.75, 1.75] x [-0.4, 0.4] x [-0.4, 0.4], each cell six
     tetrahedra, without the cells of the cavity [-0.75, 0.75] x [0, 0.2] x [-0.2, 0.2]: its wall is every
     boundary facet off the box's faces."""
     return box_with_cavities({"chamber": ((-0.75, 0.0, -0.2), (0.75, 0.2, 0.2))}, 4, order)
 
 
-def box_with_cavities(cavities: dict, layers: int, order: int = 1) -> TetMesh:
+def box_with_cavities(cavities: dict, layers: int, order: int = 1) -> Mesh:
     """The box [-1.75, 1.75] x [-0.4, 0.4] x [-0.4, 0.4] of a 7 x 4 x `layers` grid of cells, each six
     tetrahedra, clamped at its left face, without the cells inside each cavity box (name: (low corner, high
     corner), on grid lines, apart from each other and from the box's faces); a cavity's wall is the boundary

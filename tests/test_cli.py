@@ -63,7 +63,7 @@ def test_unconverged_ramp_stops_with_one_line_and_keeps_the_steps_done(tmp_path,
 
 def test_quality_presets_set_mesh_and_tolerance_unless_overridden(tmp_path, capsys):
     from taichi_pneuma.apps.cli import QUALITY
-    from taichi_pneuma.fem.geometry import BeamGeometry
+    from taichi_pneuma.fem.planar import BeamGeometry
 
     for flags, max_area in ((["--quality", "draft"], QUALITY["draft"][0]), (["--quality", "draft", "--max-area", "0.01"], 0.01)):
         out = tmp_path / str(max_area)
@@ -87,7 +87,7 @@ def test_command_line_defaults_are_the_solvers_and_the_reference_scenes():
     import inspect
 
     from taichi_pneuma.apps import cli, inflate
-    from taichi_pneuma.fem.geometry import BeamGeometry
+    from taichi_pneuma.fem.planar import BeamGeometry
     from taichi_pneuma.scene.build import reference_scene
     from taichi_pneuma.solve.newton import NewtonOptions
     from taichi_pneuma.solve.simulate import MAX_CUTS

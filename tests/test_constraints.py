@@ -4,7 +4,9 @@ import numpy as np
 import pytest
 
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.geometry import Ellipse, Geometry, PointSet, Rectangle, Roller
+from taichi_pneuma.fem.planar import Geometry
+from taichi_pneuma.fem.shapes import Ellipse, Rectangle
+from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.scene.sceneformat import scene_data
 from taichi_pneuma.scene.build import Scene, reference_scene

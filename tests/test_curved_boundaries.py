@@ -6,16 +6,9 @@ import numpy as np
 import pytest
 
 import taichi_pneuma as tp
-from taichi_pneuma.fem.geometry import (
-    Ellipse,
-    Geometry,
-    PointSet,
-    Polygon,
-    Rectangle,
-    Roller,
-    RoundedRectangle,
-    onto_curves,
-)
+from taichi_pneuma.fem.planar import Geometry, onto_curves
+from taichi_pneuma.fem.shapes import Ellipse, Polygon, Rectangle, RoundedRectangle
+from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.materials import lame_parameters
 from taichi_pneuma.fem.elements import TRIANGLE_P2
 from taichi_pneuma.scene.build import ChamberControl, Material, Scene

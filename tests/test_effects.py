@@ -5,7 +5,9 @@ import numpy as np
 import pytest
 from test_terms import assert_gradient_matches_finite_differences, dense_hessian, fd_hessian
 
-from taichi_pneuma.fem.geometry import Ellipse, Geometry, PointSet, Rectangle
+from taichi_pneuma.fem.planar import Geometry
+from taichi_pneuma.fem.shapes import Ellipse, Rectangle
+from taichi_pneuma.fem.supports import PointSet
 from taichi_pneuma.scene.build import ChamberControl, Scene, reference_scene
 from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms.effects import Gravity, Ground, SelfContact

@@ -8,7 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from taichi_pneuma.fem.geometry import Geometry, PointSet, Rectangle
+from taichi_pneuma.fem.planar import Geometry
+from taichi_pneuma.fem.shapes import Rectangle
+from taichi_pneuma.fem.supports import PointSet
 from taichi_pneuma.scene.build import Material, Scene
 from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms.base import Term

@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.geometry import BeamGeometry, signed_area
+from taichi_pneuma.fem.planar import BeamGeometry
+from taichi_pneuma.fem.polygons import signed_area
 
 
 @pytest.mark.parametrize("cy, vertices, triangles", [(0.0, 1601, 2916), (0.15, 1632, 2976), (-0.15, 1633, 2980)])

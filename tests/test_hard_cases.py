@@ -4,7 +4,7 @@ no triangle inverts, nothing is NaN, the energy never rises within a Newton solv
 import numpy as np
 import pytest
 
-from taichi_pneuma.fem.geometry import polygon_self_intersects
+from taichi_pneuma.fem.polygons import polygon_self_intersects
 from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.solve.simulate import RampFailed, run_schedule

@@ -9,7 +9,9 @@ from scipy.optimize import brentq
 from test_materials import evaluate
 
 from taichi_pneuma import runtime
-from taichi_pneuma.fem.geometry import Geometry, PointSet, Rectangle
+from taichi_pneuma.fem.planar import Geometry
+from taichi_pneuma.fem.shapes import Rectangle
+from taichi_pneuma.fem.supports import PointSet
 from taichi_pneuma.materials import IsochoricMaterial, IsochoricPolynomial
 from taichi_pneuma.terms.model import EnergyModel
 from taichi_pneuma.terms import Elasticity

@@ -3,7 +3,7 @@
 import pytest
 
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.geometry import BeamGeometry
+from taichi_pneuma.fem.planar import BeamGeometry
 from taichi_pneuma.io.output import prepare_directory
 from taichi_pneuma.scene.build import Material, reference_scene
 from taichi_pneuma.solve.newton import NewtonOptions

@@ -23,7 +23,7 @@ from test_trust_supports import PRESSURE, exact_inner_stretch
 
 import taichi_pneuma as tp
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.geometry import BeamGeometry
+from taichi_pneuma.fem.planar import BeamGeometry
 from taichi_pneuma.materials import IsochoricMaterial, IsochoricPolynomial
 from taichi_pneuma.terms.model import EnergyModel
 from taichi_pneuma.scene.schedule import ChamberSchedule

@@ -14,9 +14,10 @@ import taichi_pneuma as tp
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.elements import TET_P2
-from taichi_pneuma.fem.geometry import Ellipse, Geometry, PointSet, Rectangle, Roller
+from taichi_pneuma.fem.planar import Geometry
+from taichi_pneuma.fem.shapes import Ellipse, Rectangle
+from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface, write_mesh
-from taichi_pneuma.fem.tetmesh import REVERSED
 from taichi_pneuma.render.paraview import VtkSeries
 from taichi_pneuma.scene.build import ChamberControl, Scene
 from taichi_pneuma.scene.schedule import ChamberSchedule, area_ramp
@@ -37,7 +38,8 @@ def write_msh(path, mesh):
     """The mesh (tetrahedra: group "body"), its chamber wall turned inside out (group "chamber"), as write_mesh
     writes it (gmsh 2.2 or Abaqus by the file's suffix)."""
     wall = mesh.chambers[0]
-    return write_mesh(path, dataclasses.replace(mesh, chambers=(wall[:, REVERSED[wall.shape[1]]],)), ("chamber",))
+    return write_mesh(path, dataclasses.replace(mesh, chambers=(wall[:, list(mesh.family.facet_family.mirror)],)),
+                      ("chamber",))
 
 
 def scene_text(mesh_file, order=1, steps=2, more=""):

@@ -15,7 +15,8 @@ from test_terms import (
     random_state,
 )
 
-from taichi_pneuma.fem.geometry import Ellipse, Geometry, Rectangle
+from taichi_pneuma.fem.planar import Geometry
+from taichi_pneuma.fem.shapes import Ellipse, Rectangle
 from taichi_pneuma.scene.build import Scene, reference_scene
 from taichi_pneuma.terms.model import Configuration
 from taichi_pneuma.solve.simulate import run_schedule
@@ -151,7 +152,7 @@ def test_order_flag_quality_preset_and_scene_key(tmp_path, capsys):
     from taichi_pneuma.apps.cli import QUALITY
     from taichi_pneuma.apps.inflate import main
     from taichi_pneuma.errors import PneumaInputError
-    from taichi_pneuma.fem.geometry import BeamGeometry
+    from taichi_pneuma.fem.planar import BeamGeometry
     from taichi_pneuma.scene.scenefile import load_scene
 
     for flags in (["--order", "2", "--max-area", "0.02"], ["--quality", "high", "--max-area", "0.02"]):

@@ -10,6 +10,7 @@ import pytest
 
 import taichi_pneuma as tp
 from taichi_pneuma import limits
+from taichi_pneuma.fem import sizing
 from taichi_pneuma.control.inverse import Reacher, frames
 from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.errors import PneumaInputError
@@ -61,9 +62,9 @@ def test_the_ground_line_is_asked_of_the_effect(tmp_path):
 
 
 def memory_estimate(scene) -> float:
-    """limits.check_scene's estimate of the memory a run needs, in GB (read off its refusal)."""
+    """sizing.check_scene's estimate of the memory a run needs, in GB (read off its refusal)."""
     with pytest.raises(PneumaInputError) as refused:
-        limits.check_scene(scene, max_triangles=1)
+        sizing.check_scene(scene, max_triangles=1)
     return float(re.search(r"need about ([0-9.e+-]+) GB", str(refused.value)).group(1))
 
 

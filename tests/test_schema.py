@@ -18,17 +18,9 @@ from hypothesis import strategies as st
 import taichi_pneuma as tp
 from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.geometry import (
-    SIDES,
-    Ellipse,
-    Geometry,
-    PointSet,
-    Polygon,
-    Rectangle,
-    RectangleUnion,
-    Roller,
-    RoundedRectangle,
-)
+from taichi_pneuma.fem.planar import Geometry
+from taichi_pneuma.fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
+from taichi_pneuma.fem.supports import SIDES, PointSet, Roller
 from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface
 from taichi_pneuma.io.output import FORMULA
 from taichi_pneuma.scene.scenefile import key_reference, read_scene

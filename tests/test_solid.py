@@ -9,7 +9,7 @@ from test_terms import dense_hessian, fd_gradient, fd_hessian
 import taichi_pneuma as tp
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.elements import TET_EDGES, TRIANGLE_P2, boundary_facets
-from taichi_pneuma.fem.geometry import PointSet, Roller
+from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.fem.layered import spherical_shell_octant
 from taichi_pneuma.fem.tetmesh import tet_mesh
 from taichi_pneuma.materials import StableNeoHookean

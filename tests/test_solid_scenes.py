@@ -12,6 +12,7 @@ from test_render import xvfb_display  # noqa: F401  (the virtual display fixture
 
 import taichi_pneuma as tp
 from taichi_pneuma import limits
+from taichi_pneuma.fem import sizing
 from taichi_pneuma.apps.inflate import main as inflate
 from taichi_pneuma.backend import has_ggui
 from taichi_pneuma.errors import PneumaInputError
@@ -174,7 +175,7 @@ def test_without_gmsh_one_error_names_the_install_command(monkeypatch):
     scene = beam()  # reading the scene needs no gmsh
     monkeypatch.setitem(sys.modules, "gmsh", None)
     with pytest.raises(PneumaInputError, match=r"gmsh, which is not installed: pip install 'taichi-pneuma\[3d\]'"):
-        limits.check_scene(scene)
+        sizing.check_scene(scene)
     with pytest.raises(PneumaInputError, match=r"pip install 'taichi-pneuma\[3d\]'"):
         scene.build()
 
@@ -186,7 +187,7 @@ def test_resource_guard_estimates_before_meshing_and_caps_gmsh():
     fine = beam(size=0.01)
     with pytest.raises(PneumaInputError, match=r"the mesh has \d+ tetrahedra and needs about .* GB; the limit is "
                                                r"200000 elements \(--max-triangles raises it\)"):
-        limits.check_scene(fine)
+        sizing.check_scene(fine)
     tets, nodes = beam(size=0.3).geometry.size_estimate()
     assert 500 < tets < 3000 and 0 < nodes < tets
     coarse = beam(size=0.5)  # its ellipsoid meshed by the curvature fallback: ~10 times the estimate

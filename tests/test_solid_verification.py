@@ -8,7 +8,7 @@ import pytest
 from solid_meshes import DEPTH, extruded_beam, scene_of, shell_octant
 
 import taichi_pneuma as tp
-from taichi_pneuma.fem.geometry import Polygon
+from taichi_pneuma.fem.shapes import Polygon
 from taichi_pneuma.materials import StableNeoHookean, lame_parameters
 from taichi_pneuma.scene.build import Material, reference_scene
 from taichi_pneuma.terms.model import EnergyModel

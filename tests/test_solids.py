@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.geometry import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
+from taichi_pneuma.fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.fem.solids import Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes, Solid, cavity_volume, estimate_tets, mesh_solid

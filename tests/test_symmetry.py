@@ -21,17 +21,11 @@ import numpy as np
 import pytest
 
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.geometry import (
-    BeamGeometry,
-    Ellipse,
-    Geometry,
-    Mesh,
-    PointSet,
-    Rectangle,
-    Roller,
-    enclosed_area,
-    signed_area,
-)
+from taichi_pneuma.fem.mesh import Mesh
+from taichi_pneuma.fem.planar import BeamGeometry, Geometry
+from taichi_pneuma.fem.polygons import enclosed_area, signed_area
+from taichi_pneuma.fem.shapes import Ellipse, Rectangle
+from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.scene.build import ChamberControl, Scene
 from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.scene.schedule import area_ramp

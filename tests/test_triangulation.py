@@ -12,7 +12,8 @@ import pytest
 
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem import triangulation
-from taichi_pneuma.fem.geometry import BeamGeometry, Ellipse, Geometry, Rectangle
+from taichi_pneuma.fem.planar import BeamGeometry, Geometry
+from taichi_pneuma.fem.shapes import Ellipse, Rectangle
 from taichi_pneuma.scene.scenefile import load_scene
 
 INSTALLED = triangulation.installed()

@@ -26,7 +26,9 @@ from solid_meshes import shell_octant
 import taichi_pneuma as tp
 from taichi_pneuma.apps import inflate
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.geometry import BeamGeometry, Ellipse, Geometry, PointSet, Rectangle
+from taichi_pneuma.fem.planar import BeamGeometry, Geometry
+from taichi_pneuma.fem.shapes import Ellipse, Rectangle
+from taichi_pneuma.fem.supports import PointSet
 from taichi_pneuma.fem.meshfile import write_mesh
 from taichi_pneuma.scene.build import ChamberControl, Scene
 from taichi_pneuma.scene.schedule import area_ramp

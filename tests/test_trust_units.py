@@ -17,7 +17,9 @@ from taichi_pneuma.apps import inflate
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.scene.sceneformat import scene_data
 from taichi_pneuma.scene.scenefile import key_reference, read_scene
-from taichi_pneuma.fem.geometry import Geometry, PointSet, Polygon
+from taichi_pneuma.fem.planar import Geometry
+from taichi_pneuma.fem.shapes import Polygon
+from taichi_pneuma.fem.supports import PointSet
 from taichi_pneuma.io.units import UNITLESS, UNITS
 from taichi_pneuma.materials import IsochoricMaterial
 from taichi_pneuma.materials.isochoric import unstable_stretch

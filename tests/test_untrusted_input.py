@@ -15,10 +15,11 @@ import numpy as np
 import pytest
 
 from taichi_pneuma import limits
+from taichi_pneuma.fem import sizing
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem import triangulation
-from taichi_pneuma.fem.geometry import MAX_WALL_POINTS
+from taichi_pneuma.fem.shapes import MAX_WALL_POINTS
 from taichi_pneuma.io.output import check_stem, save_text
 from taichi_pneuma.scene.scenefile import MAX_SCENE_BYTES, load_scene
 
@@ -124,7 +125,7 @@ def test_the_triangle_estimate_is_close_to_the_mesh_triangle_makes(scene):
     made = mesh.n_elements * ({2: 4, 3: 8}[mesh.dim] if mesh.order == 2 else 1)
     for limit, refused in ((int(0.9 * made), True), (int(1.6 * made), False)):
         try:
-            limits.check_scene(loaded, max_triangles=limit)
+            sizing.check_scene(loaded, max_triangles=limit)
             assert not refused
         except PneumaInputError as exc:
             assert refused and "--max-triangles" in str(exc)

@@ -14,6 +14,7 @@ import argparse
 import sys
 
 from .. import __version__, environment, limits, runtime, signals
+from ..fem import sizing
 from ..errors import PneumaInputError, require, require_finite
 from ..io.units import AREA, LENGTH, MEASURES, PRESSURE
 from ..render import COLOR_FIELDS, RENDERERS
@@ -158,7 +159,7 @@ def scene_for(args: argparse.Namespace, cy: float):
     check_flags(args)
     scene = reference_scene(require_finite("--cy", cy), args.cx, args.growth, args.steps, args.E, args.nu, args.k,
                             args.max_area, order=args.order)
-    limits.check_scene(scene, args.max_triangles, args.max_increments)
+    sizing.check_scene(scene, args.max_triangles, args.max_increments)
     return scene
 
 
@@ -194,7 +195,7 @@ def scene_of_flags(args: argparse.Namespace):
         scene = apply_set(with_quality_3d(load_scene(args.scene), args), args.set)
     else:
         scene = apply_set(scene_for(args, args.cy), args.set)
-    limits.check_scene(scene, args.max_triangles, args.max_increments)
+    sizing.check_scene(scene, args.max_triangles, args.max_increments)
     return scene
 
 

@@ -248,7 +248,7 @@ def save_reaches(args: argparse.Namespace, reacher, results: list, stem: str, si
 def run_design(args: argparse.Namespace) -> dict:
     """--design cy --tip-dy D: the chamber height at which the reference ramp ends at tip deflection D."""
     from ..control.design import solve_design
-    from ..fem.geometry import BeamGeometry
+    from ..fem.planar import BeamGeometry
     from ..solve.simulate import run_schedule
 
     require(args.tip_dy is not None, "--design cy needs --tip-dy D")

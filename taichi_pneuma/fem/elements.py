@@ -26,6 +26,15 @@ counter-clockwise seen from outside, (c_1 - c_0) x (c_2 - c_0) pointing out, and
 
 The families: triangles and tetrahedra, linear and quadratic. The tetrahedron's edges are numbered
 (0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3), which is VTK's (and meshio's) 10-node tetrahedron.
+
+A family also answers what the code around the solver asks of an element, so that a new family is added here (and
+in the mesher that makes it): its cell names in files (meshio_cell, vtk_cell), the family of its boundary facets
+(facet_family: a tetrahedron's are triangles; a triangle's edges have none), the node permutation that reverses
+its orientation (mirror), the linear triangles it is drawn with (split, for a triangle family; a 3D body is drawn
+by its facets), the degree of the rule that integrates N_a det dX/dxi exactly (measure_degree: nodal measures, a
+wall's volume), and its cost (weight: linear elements' worth of memory and time, for the resource limits: a
+quadratic triangle 4, it has as many nodes as four linear ones and a Hessian block 4 times larger; a quadratic
+tetrahedron 8, its Hessian block 6.25 times a linear one's, its measured memory 6.2 times).
 """
 
 from __future__ import annotations
@@ -79,6 +88,13 @@ class ElementFamily:
     quadrature_degree: int
     edges: tuple = ()
     facets: tuple = ()
+    meshio_cell: str = ""
+    vtk_cell: int = 0
+    facet_family: ElementFamily | None = None
+    mirror: tuple = ()
+    split: tuple = ()
+    measure_degree: int = 1
+    weight: int = 1
 
     @property
     def dim(self) -> int:
@@ -119,12 +135,12 @@ class ElementFamily:
         mids = [4 * (L[:, i, None] * dL[j] + L[:, j, None] * dL[i]) for i, j in self.edges]
         return np.concatenate([corners, np.stack(mids, axis=1)], axis=1)
 
-    def quadrature(self, vertices: np.ndarray, elements: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The rest gradients G (m, nq, k, d) and weights W (m, nq) at the rule's points of elements (m, k) with
-        node positions vertices (n, d), from the Jacobian at each point (isoparametric: a quadratic element
-        whose midside nodes are off its edges' middles is curved; on a straight-sided one this is the
-        corners' [X_1 - X_0, ..., X_d - X_0])."""
-        points, weights = self.rule
+    def quadrature(self, vertices: np.ndarray, elements: np.ndarray, rule=None) -> tuple[np.ndarray, np.ndarray]:
+        """The rest gradients G (m, nq, k, d) and weights W (m, nq) at the points of `rule` (default: the family's
+        own) of elements (m, k) with node positions vertices (n, d), from the Jacobian at each point
+        (isoparametric: a quadratic element whose midside nodes are off its edges' middles is curved; on a
+        straight-sided one this is the corners' [X_1 - X_0, ..., X_d - X_0])."""
+        points, weights = self.rule if rule is None else rule
         d = self.dim
         dn = self.shape_gradients(points)  # (nq, k, d)
         nodes = vertices[elements]
@@ -134,17 +150,44 @@ class ElementFamily:
         gradients = np.einsum("qaj,mqji->mqai", dn, inverse)
         return gradients, volume * weights[None, :]
 
+    def split_cells(self, cells: np.ndarray) -> np.ndarray:
+        """The linear triangles (split x m, 3) that draw cells (m, k) of this triangle family: each cell's first
+        piece, then each one's second, ... (a quadratic triangle: its three corner triangles, then the middle one)."""
+        return np.vstack([cells[:, list(piece)] for piece in self.split])
+
+    def mirrored(self, cells: np.ndarray, flip: np.ndarray) -> np.ndarray:
+        """The cells (m, k) with those where flip (m,) is true in the opposite orientation (mirror's order)."""
+        return np.where(flip[:, None], cells[:, list(self.mirror)], cells)
+
 
 TRIANGLE_P1 = ElementFamily("P1 triangle", TRIANGLE, order=1, quadrature_degree=1,
-                            facets=((0, 1), (1, 2), (2, 0)))
+                            facets=((0, 1), (1, 2), (2, 0)), meshio_cell="triangle", vtk_cell=5, mirror=(0, 2, 1),
+                            split=((0, 1, 2),))
 TRIANGLE_P2 = ElementFamily("P2 triangle", TRIANGLE, order=2, quadrature_degree=2,
-                            edges=((0, 1), (1, 2), (2, 0)), facets=((0, 1, 3), (1, 2, 4), (2, 0, 5)))
+                            edges=((0, 1), (1, 2), (2, 0)), facets=((0, 1, 3), (1, 2, 4), (2, 0, 5)),
+                            meshio_cell="triangle6", vtk_cell=22, mirror=(0, 2, 1, 5, 4, 3),
+                            split=((0, 3, 5), (3, 1, 4), (5, 4, 2), (3, 4, 5)), measure_degree=4, weight=4)
 TET_EDGES = ((0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3))
 TET_P1 = ElementFamily("P1 tetrahedron", TETRAHEDRON, order=1, quadrature_degree=1,
-                       facets=((1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1)))
+                       facets=((1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1)), meshio_cell="tetra", vtk_cell=10,
+                       facet_family=TRIANGLE_P1, mirror=(0, 2, 1, 3))
 TET_P2 = ElementFamily("P2 tetrahedron", TETRAHEDRON, order=2, quadrature_degree=2, edges=TET_EDGES,
-                       facets=((1, 2, 3, 5, 9, 8), (0, 3, 2, 7, 9, 6), (0, 1, 3, 4, 8, 7), (0, 2, 1, 6, 5, 4)))
+                       facets=((1, 2, 3, 5, 9, 8), (0, 3, 2, 7, 9, 6), (0, 1, 3, 4, 8, 7), (0, 2, 1, 6, 5, 4)),
+                       meshio_cell="tetra10", vtk_cell=24, facet_family=TRIANGLE_P2,
+                       mirror=(0, 2, 1, 3, 6, 5, 4, 7, 9, 8), measure_degree=2, weight=8)
 FAMILIES = (TRIANGLE_P1, TRIANGLE_P2, TET_P1, TET_P2)
+
+
+ORDERS = tuple(sorted({f.order for f in FAMILIES}))
+
+
+def family_for(dim: int, order: int) -> ElementFamily:
+    """The family of order `order` on the simplex of dimension dim; another order is a PneumaInputError."""
+    for f in FAMILIES:
+        if (f.dim, f.order) == (dim, order):
+            return f
+    kinds = ", ".join(f"{f.order} ({f.name})" for f in FAMILIES if f.dim == dim)
+    raise PneumaInputError(f"order = {order!r} must be one of {kinds}")
 
 
 def family_of(elements: np.ndarray, dim: int) -> ElementFamily:

@@ -76,7 +76,7 @@ SURFACE_MESHERS = ((6, 0), (5, 12))
 MAX_SAMPLING = 200  # points per direction on a wall surface for its distance field
 # a tetrahedron's four faces (corners in its local numbering), each oriented outward for a positive tetrahedron
 TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
-MESHER_SOURCES = ("gmsh_mesher.py", "solids.py", "pneunet.py", "geometry.py")  # the code a cached mesh depends on
+MESHER_SOURCES = ("gmsh_mesher.py", "solids.py", "pneunet.py", "shapes.py", "polygons.py")  # the code a cached mesh depends on
 CACHE_BYTES_PER_TET = 256  # a cached mesh's arrays take about 50 bytes per tetrahedron: a larger file is not read
 
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .geometry import Mesh
+from .mesh import Mesh
 
 
 def layered_tets(n: int, triangles: np.ndarray, layers: int) -> np.ndarray:

@@ -5,14 +5,14 @@ the body's cells and each chamber's wall given by named groups (gmsh's physical 
                                which meshio gives whatever the format's own)
     MeshSurface(group)         a chamber's wall: the triangles (3- or 6-node) of the named group
     MeshGeometry(body, ...)    the scene's geometry: body, named chamber walls, element order, clamp, tip and
-                               rollers; mesh() reads the file and builds the TetMesh (tetmesh.tet_mesh), whose
+                               rollers; mesh() reads the file and builds the Mesh (tetmesh.tet_mesh), whose
                                region tags are the tetrahedra's gmsh physical tags where the file has them
 
 A file is read whole, so it may be at most MAX_MESH_BYTES, and under a memory bound (limits.read_allowance: a
 small file whose arrays are compressed, or whose nodes are numbered sparsely, could claim gigabytes); whatever
 meshio cannot read, a file that needs more memory, and a file without tetrahedra or without a named group, is
 one PneumaInputError naming the file. write_mesh() writes a
-TetMesh (made in Python, e.g. by tetmesh.tet_mesh from a mesher's arrays) as such a file.
+tetrahedral Mesh (made in Python, e.g. by tetmesh.tet_mesh from a mesher's arrays) as such a file.
 """
 
 from __future__ import annotations
@@ -27,13 +27,16 @@ import numpy as np
 
 from .. import limits
 from ..errors import PneumaInputError, quoted, require, require_distinct
-from .geometry import PointSet
-from .tetmesh import TetMesh, check_order, tet_mesh
+from .supports import PointSet
+from .body import Body
+from .elements import FAMILIES
+from .mesh import Mesh
+from .tetmesh import check_order, tet_mesh
 
 MAX_MESH_BYTES = 500_000_000
 SPARSE_NODES = 4  # a gmsh 2.2 file whose largest node number passes this many times its node count is renumbered
-TETRAHEDRA = ("tetra", "tetra10")
-TRIANGLES = ("triangle", "triangle6")
+TETRAHEDRA = tuple(f.meshio_cell for f in FAMILIES if f.dim == 3)  # meshio's names of the cells read
+TRIANGLES = tuple(f.meshio_cell for f in FAMILIES if f.dim == 2)
 
 
 @dataclass(frozen=True)
@@ -166,10 +169,10 @@ def volume_groups(mesh: meshio.Mesh) -> dict[str, int]:
 
 
 @dataclass(frozen=True)
-class MeshGeometry:
+class MeshGeometry(Body):
     """A 3D scene's geometry read from a mesh file: the body, its chambers (name, MeshSurface) in order, the
     element order (1: linear tetrahedra; 2: quadratic, a 4-node mesh given straight midside nodes), and the
-    clamp, tip and rollers (as geometry.Geometry's)."""
+    clamp, tip and rollers (as planar.Geometry's)."""
 
     body: MeshBody
     chambers: tuple
@@ -182,6 +185,7 @@ class MeshGeometry:
 
     def __post_init__(self):
         check_order(self.order)
+        self.check_supports()
         require_distinct("chamber names", [name for name, _ in self.chambers])
         for name, shape in self.chambers:
             require(isinstance(shape, MeshSurface), f"chamber {name!r}: a mesh body's chambers are the mesh file's "
@@ -202,7 +206,7 @@ class MeshGeometry:
         nodes = len(np.unique(tets))
         return len(tets), nodes + (7 * len(tets) if self.order == 2 and tets.shape[1] == 4 else 0)
 
-    def mesh(self) -> TetMesh:
+    def mesh(self) -> Mesh:
         path = self.body.file
         source, tets, blocks = self.tetrahedra()
         physical = source.cell_data.get("gmsh:physical")
@@ -218,7 +222,7 @@ class MeshGeometry:
             raise PneumaInputError(f"mesh file {path!r}: {exc}") from None
 
 
-def write_mesh(path, mesh: TetMesh, names: tuple[str, ...]) -> Path:
+def write_mesh(path, mesh: Mesh, names: tuple[str, ...]) -> Path:
     """Write the mesh's tetrahedra (group "body") and each chamber's wall (a group named after the chamber, in the
     order of names) as gmsh 2.2 (.msh, physical groups) or Abaqus (.inp, element sets): a file MeshGeometry reads
     back to the same mesh."""
@@ -226,8 +230,8 @@ def write_mesh(path, mesh: TetMesh, names: tuple[str, ...]) -> Path:
 
     path = Path(path)
     require(path.suffix in (".msh", ".inp"), f"{path}: write_mesh writes .msh (gmsh 2.2) or .inp (Abaqus) files")
-    walls = "triangle" if mesh.order == 1 else "triangle6"
-    cells = [(walls, wall) for wall in mesh.chambers] + [("tetra" if mesh.order == 1 else "tetra10", mesh.elements)]
+    walls = mesh.family.facet_family.meshio_cell
+    cells = [(walls, wall) for wall in mesh.chambers] + [(mesh.family.meshio_cell, mesh.elements)]
     if path.suffix == ".inp":
         sets = {name: [np.arange(len(data)) if i == j else np.zeros(0, dtype=np.int64) for j, (_, data) in
                        enumerate(cells)] for i, name in enumerate((*names, "body"))}

@@ -1,5 +1,5 @@
 """A 3D scene's geometry from parametric shapes: the body (a fem.solids shape or a fem.pneunet.PneuNet), its
-chambers, the mesh sizes, the element order and the node sets, meshed by gmsh into a TetMesh.
+chambers, the mesh sizes, the element order and the node sets, meshed by gmsh into a tetrahedral Mesh.
 
     SolidGeometry(body, chambers, sizes, order, clamp, tip, rollers)
 
@@ -23,7 +23,7 @@ THIN_WALL times the thinnest wall brings the estimate to 0.97-1.71 times gmsh's 
 old shipped pneunet_3d, linear at 0.2: 1.24), erring towards refusing; graded finer near the chambers, GRADED_THIN_WALL
 times that (the shipped pneunet_3d, 0.12 near its chambers: 1.0). Meshing then runs
 under limits.element_cap, gmsh's output is checked against it (a quadratic tetrahedron counted 8
-times, as limits.check_solid counts it), and limits.check_mesh refuses a mesh past the budget.
+times, its family's weight, as sizing.check_solid counts it), and limits.check_mesh refuses a mesh past the budget.
 """
 
 from __future__ import annotations
@@ -33,15 +33,16 @@ from dataclasses import dataclass, field
 from .. import limits
 from ..errors import require, require_distinct
 from ..io.output import check_heading
-from .geometry import PointSet
+from .supports import PointSet
+from .body import Body
 from .gmsh_mesher import MAX_TETS, MeshSizes, Solid, estimate_tets, mesh_solid
 from .meshfile import MeshSurface
 from .pneunet import PneuNet
-from .tetmesh import TetMesh, check_order, tet_mesh
+from .mesh import Mesh
+from .tetmesh import check_order, tet_mesh
 
 TETS_PER_NODE = 5
 EDGES_PER_TET = 1.2  # a tetrahedral mesh has about 1.2 edges per tetrahedron (Euler: E ~ V + T)
-QUADRATIC_WEIGHT = 8  # limits.check_solid's count of a quadratic tetrahedron
 THIN_WALL = 1.5  # a PneuNet's walls counted at edges of THIN_WALL times their thickness (estimate_sizes)
 # ... and a PneuNet meshed finer near its chambers (near_chambers < size) counted GRADED_THIN_WALL times: gmsh grades
 # its 0.08 walls denser than the size field asks, 1.2-1.8 times the estimate at sizes 0.2-0.3, near 0.08-0.12
@@ -54,9 +55,9 @@ def is_solid_shape(shape) -> bool:
 
 
 @dataclass(frozen=True)
-class SolidGeometry:
+class SolidGeometry(Body):
     """A 3D body from shapes (module docstring): body, chambers (name, shape) in order, mesh sizes, element
-    order (1: linear tetrahedra, 2: quadratic), clamp, tip and rollers (as geometry.Geometry's)."""
+    order (1: linear tetrahedra, 2: quadratic), clamp, tip and rollers (as planar.Geometry's)."""
 
     body: object
     chambers: tuple
@@ -70,6 +71,7 @@ class SolidGeometry:
 
     def __post_init__(self):
         check_order(self.order)
+        self.check_supports()
         require(is_solid_shape(self.body), f"body: {self.body!r} is not a 3D shape")
         generated = isinstance(self.body, PneuNet)
         groups = self.groups()
@@ -113,12 +115,12 @@ class SolidGeometry:
         """(tetrahedra, nodes) estimated before meshing (module docstring)."""
         graded = isinstance(self.body, PneuNet) and self.sizes.near < self.sizes.size
         tets = int(round(estimate_tets(self.solid(), self.estimate_sizes()) * (GRADED_THIN_WALL if graded else 1)))
-        nodes = tets / TETS_PER_NODE + (EDGES_PER_TET * tets if self.order == 2 else 0)
+        nodes = tets / TETS_PER_NODE + (EDGES_PER_TET * tets if self.family.edges else 0)
         return tets, int(round(nodes))
 
-    def mesh(self) -> TetMesh:
-        """Mesh with gmsh (in the active limits.budget) and build the TetMesh (module docstring)."""
-        weight = QUADRATIC_WEIGHT if self.order == 2 else 1
+    def mesh(self) -> Mesh:
+        """Mesh with gmsh (in the active limits.budget) and build the Mesh (module docstring)."""
+        weight = self.family.weight
         cap = limits.element_cap(weight)
         solid = self.solid()
         meshed = mesh_solid(solid, self.sizes, MAX_TETS if cap is None else cap)

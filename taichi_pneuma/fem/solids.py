@@ -8,7 +8,7 @@ z the depth (a 2D shape in the x-y plane is extruded along z). Shapes are axis-a
   i.e. the inner box (size - 2 radius) swept by a ball of that radius;
 - Ellipsoid(center, semi_axes): sum ((x_i - c_i) / a_i)^2 <= 1;
 - Cylinder(center, radius, length, axis): a circular cylinder along axis 'x', 'y' or 'z';
-- Extrusion(profile, depth, z): a 2D shape of the scene format (fem.geometry: Rectangle, Ellipse,
+- Extrusion(profile, depth, z): a 2D shape of the scene format (fem.shapes: Rectangle, Ellipse,
   RoundedRectangle, Polygon, RectangleUnion) swept along z from z - depth / 2 to z + depth / 2.
   Rectangles, ellipses and rounded rectangles are built from their exact curves (the 2D shape's
   `points` sampling does not apply: the 3D mesh size does); any other shape from its polygon().
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import require, require_finite, shape_of
-from .geometry import Ellipse, Rectangle, RoundedRectangle
+from .shapes import Ellipse, Rectangle, RoundedRectangle
 
 AXES = ("x", "y", "z")
 

@@ -1,5 +1,5 @@
-"""Tetrahedral meshes of 3D bodies with cavity chambers: TetMesh, the 3D counterpart of geometry.Mesh (the
-same field names where they mean the same thing), and tet_mesh(), its constructor from plain arrays.
+"""Tetrahedral meshes of 3D bodies with cavity chambers: tet_mesh(), the mesh.Mesh of plain arrays, and Closure,
+how an open chamber wall is closed.
 
 A mesh generator or a mesh file hands over vertices (n, 3), tetrahedra (m, 4) or (m, 10) (VTK's node
 order: corners, then the middles of edges 01, 12, 20, 03, 13, 23), each chamber's wall as triangles
@@ -23,16 +23,16 @@ volume (div P (x - o) / r = 1).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import require
-from .elements import TET_EDGES, TET_P1, TET_P2, boundary_facets
-from .geometry import PointSet, clamped, split_in_four, with_edge_midpoints
+from .elements import ElementFamily, boundary_facets, family_for, family_of
+from .mesh import Mesh
+from .refine import with_edge_midpoints
+from .supports import PointSet, node_sets
 
-REVERSED = {3: [0, 2, 1], 6: [0, 2, 1, 5, 4, 3]}  # a facet's nodes with its orientation flipped
-MIRRORED = {4: [0, 2, 1, 3], 10: [0, 2, 1, 3, 6, 5, 4, 7, 9, 8]}  # a tetrahedron's with corners 1, 2 swapped
 PARALLEL = 1 - 1e-9  # |n1 . n2| above it: parallel planes
 
 
@@ -43,70 +43,6 @@ class Closure:
 
     origin: np.ndarray
     projector: np.ndarray
-
-
-@dataclass(frozen=True)
-class TetMesh:
-    """A tetrahedral mesh with the node sets a pneumatic scene needs (geometry.Mesh's fields, in 3D).
-
-    vertices (n, 3); elements (m, 4) or (m, 10) of positive volume; chambers: per chamber its wall, (f, 3)
-    or (f, 6) triangles oriented outward from the cavity; wall_origins: per chamber None (a closed wall) or
-    the Closure of an open one; surface: every boundary facet of the body (outer boundary and chamber
-    walls) oriented outward from the body; boundary: the nodes on the outer boundary (not on a chamber
-    wall alone); pinned, tip: the clamped and the tip nodes; rollers: per roller (held nodes, unit normal);
-    regions: a region tag per element (0 when the source has none); region_groups: the named volume groups'
-    tags (name -> tag, e.g. a mesh file's physical groups of tetrahedra, a PneuNet's "layer")."""
-
-    vertices: np.ndarray
-    elements: np.ndarray
-    chambers: tuple[np.ndarray, ...]
-    boundary: np.ndarray
-    pinned: np.ndarray
-    tip: np.ndarray
-    wall_origins: tuple[Closure | None, ...]
-    rollers: tuple[tuple[np.ndarray, np.ndarray], ...]
-    surface: np.ndarray
-    regions: np.ndarray
-    region_groups: dict = field(default_factory=dict)
-
-    dim = 3
-
-    @property
-    def family(self):
-        return TET_P1 if self.elements.shape[1] == 4 else TET_P2
-
-    @property
-    def order(self) -> int:
-        return self.family.order
-
-    @property
-    def n_vertices(self) -> int:
-        return len(self.vertices)
-
-    @property
-    def n_elements(self) -> int:
-        return len(self.elements)
-
-    @property
-    def volume(self) -> float:
-        """The body's rest volume."""
-        return float(self.family.quadrature(self.vertices, self.elements)[1].sum())
-
-    measure = volume
-
-    def nodal_measures(self) -> np.ndarray:
-        """The integral of each node's shape function over the body, sum_e int_e N_a dV (exact: a quarter
-        of the adjacent volumes at a linear element's corners; -1/20 at a quadratic one's corners, 1/5 at its
-        midside nodes): the consistent nodal weights of a uniform load."""
-        points, _ = self.family.rule
-        _, weights = self.family.quadrature(self.vertices, self.elements)
-        out = np.zeros(self.n_vertices)
-        np.add.at(out, self.elements, weights @ self.family.shape_functions(points))
-        return out
-
-    def display_triangles(self) -> np.ndarray:
-        """Linear triangles to draw: the body's surface facets (each quadratic one split in four)."""
-        return self.surface if self.order == 1 else split_in_four(self.surface)
 
 
 def facet_keys(facets: np.ndarray, n: int) -> np.ndarray:
@@ -123,21 +59,21 @@ def used_nodes(vertices: np.ndarray, tets: np.ndarray, faces: list[np.ndarray]):
     return vertices[used], number[tets], [number[f] for f in faces]
 
 
-def positively_oriented(vertices: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """The tetrahedra with corners 1 and 2 swapped where det[X1 - X0, X2 - X0, X3 - X0] < 0; a flat one
-    (volume below 1e-12 of the bounding box's) is refused."""
+def positively_oriented(vertices: np.ndarray, tets: np.ndarray, family: ElementFamily) -> np.ndarray:
+    """The tetrahedra (of `family`) mirrored (corners 1 and 2 swapped) where det[X1 - X0, X2 - X0, X3 - X0] < 0; a
+    flat one (volume below 1e-12 of the bounding box's) is refused."""
     x = vertices[tets[:, :4]]
     det = np.linalg.det(np.stack([x[:, 1] - x[:, 0], x[:, 2] - x[:, 0], x[:, 3] - x[:, 0]], axis=2))
     scale = float(np.ptp(vertices, axis=0).prod())
     flat = np.abs(det) <= 1e-12 * scale
     require(not flat.any(), f"tetrahedron {int(np.argmax(flat))} (nodes {tets[np.argmax(flat)].tolist()}) is flat")
-    return np.where((det < 0)[:, None], tets[:, MIRRORED[tets.shape[1]]], tets)
+    return family.mirrored(tets, det < 0)
 
 
-def check_midside_nodes(vertices: np.ndarray, tets: np.ndarray) -> None:
-    """Refuse 10-node tetrahedra whose midside nodes are not near the middles of edges 01, 12, 20, 03, 13, 23
-    (within a quarter of the edge: another node order, such as gmsh's own, lands half an edge away)."""
-    for k, (i, j) in enumerate(TET_EDGES):
+def check_midside_nodes(vertices: np.ndarray, tets: np.ndarray, family: ElementFamily) -> None:
+    """Refuse quadratic tetrahedra whose midside nodes are not near the middles of the family's edges 01, 12, 20,
+    03, 13, 23 (within a quarter of the edge: another node order, such as gmsh's own, lands half an edge away)."""
+    for k, (i, j) in enumerate(family.edges):
         a, b, m = vertices[tets[:, i]], vertices[tets[:, j]], vertices[tets[:, 4 + k]]
         off = np.linalg.norm(m - 0.5 * (a + b), axis=1) > 0.25 * np.linalg.norm(b - a, axis=1)
         require(not off.any(), f"10-node tetrahedron {int(np.argmax(off))}: node {4 + k} is not near the middle of "
@@ -190,8 +126,8 @@ def check_order(order) -> None:
 def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndarray],
              boundary: np.ndarray | None = None, regions: np.ndarray | None = None, order: int = 1,
              clamp: PointSet | None = None,
-             tip: PointSet = PointSet("right"), rollers=(), region_groups: dict | None = None) -> TetMesh:
-    """The TetMesh of plain arrays (module docstring): vertices (n, 3); tets (m, 4) or (m, 10); chambers: name ->
+             tip: PointSet = PointSet("right"), rollers=(), region_groups: dict | None = None) -> Mesh:
+    """The Mesh of plain arrays (module docstring): vertices (n, 3); tets (m, 4) or (m, 10); chambers: name ->
     its wall's triangles (f, 3) (or (f, 6): the first three columns are used), in the scene's order;
     boundary: the outer boundary's triangles (None: every boundary facet on no chamber wall); regions: (m,)
     region tags (region_groups: the names of some, name -> tag); order 1 or 2; the clamp (None, the default:
@@ -214,13 +150,13 @@ def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndar
         require(faces.size == 0 or (faces.min() >= 0 and faces.max() < len(vertices)),
                 f"{name}: a triangle names a vertex that does not exist")
     vertices, tets, given = used_nodes(vertices, tets.astype(np.int64), given)
-    tets = positively_oriented(vertices, tets)
-    if tets.shape[1] == 10:
-        check_midside_nodes(vertices, tets)
-    elif order == 2:
-        vertices, mid = with_edge_midpoints(vertices, tets, TET_EDGES)
-        tets = np.column_stack([tets] + [mid(tets[:, i], tets[:, j]) for i, j in TET_EDGES])
-    family = TET_P2 if order == 2 else TET_P1
+    family, given_family = family_for(3, order), family_of(tets, 3)
+    tets = positively_oriented(vertices, tets, given_family)
+    if given_family is family and family.edges:
+        check_midside_nodes(vertices, tets, family)
+    elif given_family is not family:  # corners only: a straight midside node on every edge
+        vertices, mid = with_edge_midpoints(vertices, tets, family.edges)
+        tets = np.column_stack([tets] + [mid(tets[:, i], tets[:, j]) for i, j in family.edges])
     surface = boundary_facets(family, tets)
     n = len(vertices)
     keys = facet_keys(surface, n)
@@ -242,11 +178,10 @@ def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndar
         rows = facets_of(faces, f"chamber {name!r}")
         require(not taken[rows].any(), f"chamber {name!r} shares wall triangles with another chamber")
         taken[rows] = True
-        wall = surface[rows][:, REVERSED[surface.shape[1]]]
+        wall = surface[rows][:, list(family.facet_family.mirror)]
         walls.append(wall)
         origins.append(closure(name, vertices, wall, rollers))
     outer = surface[facets_of(given[-1], "boundary")] if boundary is not None else surface[~taken]
-    return TetMesh(vertices, tets, tuple(walls), np.unique(outer), clamped(clamp, vertices),
-                   tip.select(vertices, "tip"), tuple(origins),
-                   tuple((roller.select(vertices), roller.unit_normal) for roller in rollers), surface, regions,
-                   dict(region_groups or {}))
+    pinned, tip_nodes, held = node_sets(clamp, tip, rollers, vertices)
+    return Mesh(vertices, tets, tuple(walls), np.unique(outer), pinned, tip_nodes, tuple(origins), held, family, surface,
+                regions, dict(region_groups or {}))

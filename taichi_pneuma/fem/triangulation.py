@@ -17,6 +17,8 @@ import os
 import numpy as np
 
 from ..environment import TRIANGLE_BINDINGS as BINDINGS
+from ..errors import require
+
 CHOICE_VARIABLE = "PNEUMA_TRIANGLE"
 
 
@@ -46,6 +48,18 @@ def triangulate(pslg: dict, flags: str, binding: str | None = None) -> dict:
     unless the pslg has them) as int64. Triangle's failure (it runs out of precision) is a RuntimeError on
     either binding, as in the `triangle` package."""
     return (_with_triangle if (binding or default_binding()) == "triangle" else _with_meshpy)(pslg, flags)
+
+
+def triangulate_or_refuse(pslg: dict, flags: str) -> dict:
+    """triangulate, with its failure (RuntimeError, or no triangle made) a PneumaInputError."""
+    try:
+        out = triangulate(pslg, flags)
+    except RuntimeError:
+        out = {}
+    require(len(out.get("triangles", ())) > 0, "Triangle could not mesh the geometry (it ran out of floating-point "
+                                               "precision: features too small for the body's size?)")
+    return out
+
 
 
 def _with_triangle(pslg: dict, flags: str) -> dict:

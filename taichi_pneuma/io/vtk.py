@@ -18,8 +18,6 @@ def pad3(vectors: np.ndarray) -> np.ndarray:
     return vectors if vectors.shape[1] == 3 else np.column_stack([vectors, np.zeros(len(vectors))])
 
 
-CELL_TYPES = {(2, 1): "triangle", (2, 2): "triangle6", (3, 1): "tetra", (3, 2): "tetra10"}  # (d, order) -> VTK
-VTK_CELLS = {"triangle": 5, "triangle6": 22, "tetra": 10, "tetra10": 24}  # VTK's cell type numbers
 XML_TYPES = {np.dtype(t): name for t, name in ((np.float64, "Float64"), (np.int32, "Int32"), (np.int64, "Int64"))}
 
 
@@ -33,15 +31,15 @@ def data_array(name: str, values: np.ndarray) -> str:
             f"{base64.b64encode(np.uint32(len(raw)).tobytes() + raw).decode()}\n</DataArray>\n")
 
 
-def vtu_text(points: np.ndarray, cells: list[tuple[str, np.ndarray]], point_data: dict[str, np.ndarray],
+def vtu_text(points: np.ndarray, cells: list[tuple[object, np.ndarray]], point_data: dict[str, np.ndarray],
              cell_data: dict[str, list[np.ndarray]], field_data: dict[str, float]) -> str:
-    """A VTU file: points (n, 3), cell blocks (type, (m, k) nodes), point arrays, cell arrays (one per block) and
-    one Float64 value per field-data name."""
+    """A VTU file: points (n, 3), cell blocks (element family: its vtk_cell, (m, k) nodes), point arrays, cell arrays
+    (one per block) and one Float64 value per field-data name."""
     fields = "".join(f'<DataArray type="Float64" Name={quoteattr(name)} NumberOfTuples="1" format="ascii">'
                      f"{float(value)!r}</DataArray>" for name, value in field_data.items())
     connectivity = np.concatenate([nodes.ravel() for _, nodes in cells]).astype(np.int64)
     offsets = np.cumsum(np.concatenate([np.full(len(nodes), nodes.shape[1]) for _, nodes in cells])).astype(np.int64)
-    types = np.concatenate([np.full(len(nodes), VTK_CELLS[kind]) for kind, nodes in cells]).astype(np.int64)
+    types = np.concatenate([np.full(len(nodes), family.vtk_cell) for family, nodes in cells]).astype(np.int64)
     order = "LittleEndian" if sys.byteorder == "little" else "BigEndian"
     return "".join([
         f'<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="0.1" byte_order="{order}">\n',

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import require
 from ..fem.fields import ElementFields
-from ..fem.geometry import Mesh
+from ..fem.mesh import Mesh
 from ..fem.triangulation import triangulate
 from . import COLOR_FIELDS
 from .canvases import open_canvas

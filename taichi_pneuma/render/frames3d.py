@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import PneumaInputError, require, shape_of
 from ..fem.fields import ElementFields
-from ..fem.geometry import split_in_four
+from ..fem.refine import split_in_four
 from ..io.units import LENGTH, PRESSURE
 from .camera import Camera
 from .colours import BACKGROUND, COLORBAR_PX, colormap

@@ -34,7 +34,7 @@ import numpy as np
 from ..fem.fields import ElementFields
 from ..io.output import Subfolder, held_private_folder, save_text, write_atomic
 from ..io.units import FORCE, LENGTH, PRESSURE, history_dimensions
-from ..io.vtk import CELL_TYPES, pad3, pvd_text, vtu_text
+from ..io.vtk import pad3, pvd_text, vtu_text
 
 SYMMETRIC_TENSOR = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))  # ParaView's 6-component order
 
@@ -57,8 +57,9 @@ class VtkSeries:
         self.material = built.elastic.law, built.elastic.parameters
         self.fields = ElementFields(mesh.vertices, mesh.elements)
         self.points = pad3(mesh.vertices)
-        self.cells = [(CELL_TYPES[mesh.dim, mesh.order], mesh.elements)]
-        self.walls = [] if mesh.dim == 2 else [(CELL_TYPES[2, mesh.order], np.vstack(mesh.chambers))]
+        self.cells = [(mesh.family, mesh.elements)]
+        walls = mesh.family.facet_family  # a 3D mesh's chamber walls are facets; a 2D one's are node loops
+        self.walls = [] if walls is None else [(walls, np.vstack(mesh.chambers))]
         if self.walls:
             self.wall_chamber = np.concatenate([np.full(len(w), i) for i, w in enumerate(mesh.chambers)])
         self.chamber = np.full(mesh.n_vertices, -1, dtype=np.int32)

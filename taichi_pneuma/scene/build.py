@@ -1,6 +1,6 @@
 """A scene as data, validated, and its builder: a scene -> an EnergyModel of exactly the terms it names.
 
-A scene is a body with chambers (geometry.Geometry: also the clamped nodes, the rollers and the tip),
+A scene is a body with chambers (fem.planar.Geometry: also the clamped nodes, the rollers and the tip),
 a material (optionally one per region), a schedule of chamber commands, and a tuple of effects. The
 builder refuses supports that leave a rigid-body motion free (fem/supports.py), then adds elasticity, one
 chamber term per chamber (of the chamber's kind), the clamp (when there is one: no [clamp], no clamp), and a
@@ -18,7 +18,9 @@ import numpy as np
 
 from .. import runtime
 from ..errors import require, require_finite
-from ..fem.geometry import BeamGeometry, Geometry, Mesh, in_box, require_box
+from ..fem.mesh import Mesh
+from ..fem.planar import BeamGeometry, Geometry
+from ..fem.supports import in_box, require_box
 from ..fem.supports import require_held
 from . import sceneformat
 from ..io.keys import dotted

@@ -13,18 +13,10 @@ import typing
 
 from .targets import MAX_TARGETS, Target
 from ..errors import require
-from ..fem.geometry import (
-    ORDERS,
-    SIDES,
-    Ellipse,
-    Geometry,
-    PointSet,
-    Polygon,
-    Rectangle,
-    RectangleUnion,
-    Roller,
-    RoundedRectangle,
-)
+from ..fem.elements import ORDERS
+from ..fem.planar import Geometry
+from ..fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
+from ..fem.supports import SIDES, PointSet, Roller
 from ..fem.gmsh_mesher import MeshSizes
 from ..fem.meshfile import MeshBody, MeshGeometry, MeshSurface
 from ..fem.pneunet import PneuNet

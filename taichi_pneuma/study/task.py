@@ -15,6 +15,7 @@ import tomllib
 
 from .. import limits, runtime
 from ..errors import PneumaInputError
+from ..fem import sizing
 from ..fem.tip import COLUMNS as TIP_COLUMNS
 from ..scene.scenefile import read_scene
 from ..solve.newton import NewtonOptions
@@ -75,7 +76,7 @@ def run_task(task: Task) -> dict:
         base = read_scene(tomllib.loads(task.scene), "scene")
         names = base.chamber_names
         scene = base.with_values(task.values)
-        limits.check_scene(scene, task.options.max_triangles, task.options.max_increments)
+        sizing.check_scene(scene, task.options.max_triangles, task.options.max_increments)
         options = task.options
         with limits.budget(options.max_triangles):
             row.update(measures(simulate(scene, tol=options.tol, max_iterations=options.max_iterations,

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import require, require_finite
-from ..fem.geometry import PointSet
+from ..fem.supports import PointSet
 from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, TIME, si_default, unit
 from ..limits import wall_pairs
 from .contact import GroundContact

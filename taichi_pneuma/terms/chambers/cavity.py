@@ -22,7 +22,7 @@ its nodes, which depends on x) follow by the chain rule.
 import numpy as np
 
 from ...backend import kernel, ti
-from ...fem.elements import TRIANGLE_P1, TRIANGLE_P2
+from ...fem.elements import family_of
 from ...fem.tetmesh import Closure
 from ..base import Indices, Nodal, Scalars, Table, block_pattern, int32s
 
@@ -110,8 +110,8 @@ class VolumeForm:
         self.rest = config.rest - closure.origin
         self.wall = int32s(self.nodes)
         self.faces = int32s(np.searchsorted(self.nodes, faces))
-        family = TRIANGLE_P1 if faces.shape[1] == 3 else TRIANGLE_P2
-        points, weights = family.cell.rules[3 * family.order - 2]  # degree 1, or 4 for quadratic triangles
+        family = family_of(faces, 2)  # the wall's facets: linear or quadratic triangles
+        points, weights = family.cell.rules[family.measure_degree]  # exact for N_a det dX/dxi
         self.shapes = np.ascontiguousarray(family.shape_functions(points))
         self.derivatives = np.ascontiguousarray(family.shape_gradients(points))
         self.weights = weights / (2.0 * np.trace(closure.projector))  # the reference triangle's area 1/2, 1/r
