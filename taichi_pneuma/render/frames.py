@@ -90,8 +90,7 @@ def mesh_edges(mesh: Mesh, boundary_only: bool = False) -> np.ndarray:
     """Unique undirected edges (e, 2) of the element outlines: a quadratic triangle's sides are drawn as
     two segments each, through their midside nodes; boundary_only: the edges of one element only (the
     body's outline and the chamber walls)."""
-    ring = [0, 1, 2] if mesh.order == 1 else [0, 3, 1, 4, 2, 5]
-    t = mesh.triangles[:, ring]
+    t = mesh.triangles[:, list(mesh.family.outline)]
     edges = np.sort(np.stack([t, np.roll(t, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
     unique, counts = np.unique(edges, axis=0, return_counts=True)
     return unique[counts == 1] if boundary_only else unique

@@ -31,7 +31,6 @@ import numpy as np
 
 from ..errors import PneumaInputError, require, shape_of
 from ..fem.fields import ElementFields
-from ..fem.refine import split_in_four
 from ..io.units import LENGTH, PRESSURE
 from .camera import Camera
 from .colours import BACKGROUND, COLORBAR_PX, colormap
@@ -117,8 +116,8 @@ class Track3D:
 
 
 def surface_triangles(mesh) -> tuple[np.ndarray, tuple[np.ndarray, ...], np.ndarray]:
-    """A TetMesh's linear triangles to draw: the outer surface (b, 3), each chamber's wall, and for each outer
-    triangle the tetrahedron under it (b,). A quadratic facet is split in four (geometry.split_in_four)."""
+    """A 3D Mesh's linear triangles to draw: the outer surface, each chamber's wall, and for each outer triangle
+    the tetrahedron under it. A quadratic facet is split in four (its facet family's split_cells)."""
     from ..fem.tetmesh import facet_keys
 
     n, family = mesh.n_vertices, mesh.family
@@ -128,9 +127,9 @@ def surface_triangles(mesh) -> tuple[np.ndarray, tuple[np.ndarray, ...], np.ndar
     keys = facet_keys(faces.reshape(-1, faces.shape[2]), n)
     order = np.argsort(keys)
     under = order[np.searchsorted(keys, facet_keys(outer, n), sorter=order)] // faces.shape[1]
-    if mesh.order == 1:
-        return outer, tuple(mesh.chambers), under
-    return split_in_four(outer), tuple(split_in_four(wall) for wall in mesh.chambers), np.repeat(under, 4)
+    drawn = family.facet_family  # each piece of a facet lies on the facet's tetrahedron (split_cells' order)
+    return (drawn.split_cells(outer), tuple(drawn.split_cells(wall) for wall in mesh.chambers),
+            np.tile(under, len(drawn.split)))
 
 
 def open_view(backend: str, width: int, height: int, show: bool = False, log=print):
