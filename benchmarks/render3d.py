@@ -1,6 +1,7 @@
 """3D meshing and rendering costs: the PneuNet meshed by gmsh, and ms per frame of both 3D views.
 
-    python -m benchmarks.render3d [--frames 8] [--live-frames 30] [--only-live] [--out benchmarks/results]  (repository root)
+    python -m benchmarks.render3d [--frames 8] [--live-frames 30] [--only-live] [--out benchmarks/results]
+    (from the repository root)
 
 Meshing: PneuNet() at the sizes below, wall time of mesh_solid (OpenCASCADE geometry, fragment, gmsh's
 Delaunay, reading the arrays back), tetrahedra, surface triangles, and the estimate mesh_solid checks.
@@ -18,11 +19,9 @@ the frames per second of solve and drawing together. Wall times on a shared mach
 """
 
 import argparse
-import collections
 import itertools
 import json
 import os
-import tempfile
 import time
 from pathlib import Path
 
@@ -103,7 +102,7 @@ def live(frames: int, peak: float = 900.0, idle: int = 30, order: int = 1) -> li
         state = LiveEquilibrium(built, NewtonOptions(tol=LIVE_TOL))
         solver = state.solver
 
-        def step(commands):
+        def step(commands, mode=mode, state=state, solver=solver):  # bound to this iteration's
             if mode == "one step":
                 state.frame(commands)
                 return state.iterations

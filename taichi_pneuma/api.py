@@ -42,7 +42,8 @@ def simulate(scene: Scene | BuiltScene, *, tol: float = NewtonOptions.tol,
     function progress(step_record, positions, contact_force) is called after every increment instead.
     stop() is asked after every increment but the last and before every Newton iteration, ending the run
     with tp.RampInterrupted (the increments done) when it returns True. Raises tp.RampFailed when an increment
-    finds no equilibrium; both carry .result, the Result of the steps done. Initialises Taichi on the CPU unless tp.init chose a backend."""
+    finds no equilibrium; both carry .result, the Result of the steps done. Initialises Taichi on the CPU unless
+    tp.init chose a backend."""
     limits.check_increments(scene.scene.increments if isinstance(scene, BuiltScene) else scene.increments,
                             max_increments, "simulate's max_increments")
     runtime.ensure_initialised()

@@ -33,8 +33,9 @@ class Result:
     step; solves: the last Newton SolveRecord of each step (none for reaches); contact_forces (steps,
     n, 2): the summed contact force per vertex, when the scene has contact, else None; seconds: wall
     time of the run; newton: the linear solver that served the run's Newton solves, their chord steps
-    (iterations without a new Hessian) and the seconds per phase of an iteration, summed over the run. Everything else (figures, per-chamber arrays, history, files, pictures) is
-    derived from these: see each property and method."""
+    (iterations without a new Hessian) and the seconds per phase of an iteration, summed over the run. Everything
+    else (figures, per-chamber arrays, history, files, pictures) is derived from these: see each property and
+    method."""
 
     built: BuiltScene
     steps: list

@@ -158,7 +158,8 @@ def test_stable_neo_hookean_linearises_to_lame_constants_mu_and_lam_minus_mu():
 
 
 def test_plane_strain_energy_is_the_3d_law_at_unit_thickness_stretch():
-    """psi(F) of the stable neo-Hookean 2D law, mu (1 - J) + lam/2 (1 - J)^2 + mu/2 (|F|^2 - 2), at F = [[F2, 0], [0, 1]]."""
+    """psi(F) of the stable neo-Hookean 2D law, mu (1 - J) + lam/2 (1 - J)^2 + mu/2 (|F|^2 - 2), at
+    F = [[F2, 0], [0, 1]]."""
     F = random_F(20, dim=2)
     F2 = F[:, :2, :2]
     J = np.linalg.det(F2)

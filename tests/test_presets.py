@@ -186,8 +186,8 @@ def test_a_unitless_scenes_outputs_are_named_as_before():
 
 @pytest.mark.slow
 def test_the_pneunet_scene_curls_towards_its_paper_layer_which_does_not_stretch():
-    """taichi_pneuma/scenes/pneunet_mm_kpa.toml: the tip turns clockwise (towards the paper), more with every 10 kPa; the
-    bottom edge (the paper) keeps its length within 0.05 % while the top edge stretches by more than 10 %."""
+    """taichi_pneuma/scenes/pneunet_mm_kpa.toml: the tip turns clockwise (towards the paper), more with every 10
+    kPa; the bottom edge (the paper) keeps its length within 0.05 % while the top edge stretches by more than 10 %."""
     result = tp.simulate(tp.load_scene(Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes" /
                                        "pneunet_mm_kpa.toml"))
     assert result.converged and result.scene.units is UNITS["mm-kPa"]

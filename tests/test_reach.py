@@ -167,7 +167,8 @@ def test_design_out_of_range_is_unreachable(tmp_path, capsys):
 
 
 @needs_window
-def test_live_drag_resolves_on_every_move_and_sliders_command_directly(xvfb_display, monkeypatch, capsys, bidirectional):
+@pytest.mark.usefixtures("xvfb_display")
+def test_live_drag_resolves_on_every_move_and_sliders_command_directly(monkeypatch, capsys, bidirectional):
     """Under Xvfb, in a real ti.GUI window; the canvas's mouse query is scripted (the button held at two
     target positions, then released) and on the last frame the 'top' slider returns a value the user set."""
     from taichi_pneuma.render import frames as render

@@ -31,7 +31,7 @@ def tet_volumes(points, tets):
     return np.linalg.det(np.stack([x[:, 1] - x[:, 0], x[:, 2] - x[:, 0], x[:, 3] - x[:, 0]], axis=2)) / 6
 
 
-def cone_volume(points, triangles, origin=np.zeros(3)):
+def cone_volume(points, triangles, origin=(0.0, 0.0, 0.0)):
     """1/6 sum (x0 - o) . ((x1 - o) x (x2 - o)) over flat triangles: the volume a closed surface encloses."""
     x0, x1, x2 = (points[triangles[:, i]] - origin for i in range(3))
     return float(np.einsum("ij,ij->i", x0, np.cross(x1, x2)).sum() / 6)

@@ -171,8 +171,8 @@ def test_the_first_line_lists_the_supports_and_a_refused_scene_exits_2(tmp_path,
     loose = scene_file(tmp_path, block_text(""), "loose")
     assert inflate.main(["--scene", str(loose), "--out", str(tmp_path / "out2"), "--no-video"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"error: the supports (no clamp) leave free: translation along x, translation along y, rotation "
-                   f"about z; a static body needs a [clamp] (side or box) or [[rollers]] that hold every rigid motion"]
+    assert err == ["error: the supports (no clamp) leave free: translation along x, translation along y, rotation "
+                   "about z; a static body needs a [clamp] (side or box) or [[rollers]] that hold every rigid motion"]
 
 
 def test_no_clamp_survives_the_scene_file_round_trip(tmp_path):

@@ -370,7 +370,7 @@ def test_every_api_default_with_a_unit_is_the_scene_files_default():
     """Each si_default field of the chamber kinds, effects, Material, Scene and Geometry is the key of the key
     reference with the same SI default, unit and scaling: one declaration serves both."""
     rows = {row.key: row for row in key_reference()}
-    owners = [(cls, f"chambers[].{{}}") for cls in CHAMBER_KINDS.values()] + [
+    owners = [(cls, "chambers[].{}") for cls in CHAMBER_KINDS.values()] + [
         (cls, f"effects.{cls.name}.{{}}") for cls in EFFECTS.values()] + [
         (Material, "material.{}"), (Scene, "clamp.{}"), (Geometry, "mesh.{}")]
     names = {"youngs_modulus": "E", "clamp_stiffness": "stiffness"}

@@ -15,7 +15,7 @@ import sys
 
 from .. import __version__, environment, limits, runtime, signals
 from ..errors import PneumaInputError, require, require_finite
-from ..io.units import AREA, LENGTH, MEASURES, PRESSURE
+from ..io.units import LENGTH, MEASURES, PRESSURE
 from ..render import COLOR_FIELDS, RENDERERS
 
 # --quality presets: (max triangle area, element order, Newton tolerance); see the accuracy study (docs).

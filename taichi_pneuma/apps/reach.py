@@ -188,8 +188,9 @@ def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: li
         done += 1
         bar.update()
         if not args.quiet:
-            bar.write(f"  target {done}/{len(targets)} {tuple(result.target.tip)}: {describe(reacher, result.pose.commands)}; "
-                      f"tip error {result.error:.3g}; {result.forward_solves} forward solves, {result.seconds:.2f} s")
+            bar.write(f"  target {done}/{len(targets)} {tuple(result.target.tip)}: "
+                      f"{describe(reacher, result.pose.commands)}; tip error {result.error:.3g}; "
+                      f"{result.forward_solves} forward solves, {result.seconds:.2f} s")
 
     with bar:
         results = reacher.follow(targets, progress)

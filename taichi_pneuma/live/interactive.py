@@ -155,9 +155,9 @@ class LiveEquilibrium:
     chord step (the previous frame's factorisation reused, no Hessian assembled: solve's reuse_factor); while
     they rest, chord steps as long as each contracts the residual by CHORD_MAX_CONTRACTION or better, else a
     full Newton step, one per frame until the residual |g| / force scale is within the Newton tolerance, so the
-    state a resting slider settles to is the equilibrium a full Newton solve finds at those commands. The line search never lets a tetrahedron invert (terms' max_step). A step the line
-    search refuses leaves the state as it was and the next frame takes a fresh Hessian; where even that
-    fails, the loop waits for the commands to move."""
+    state a resting slider settles to is the equilibrium a full Newton solve finds at those commands. The line
+    search never lets a tetrahedron invert (terms' max_step). A step the line search refuses leaves the state as it
+    was and the next frame takes a fresh Hessian; where even that fails, the loop waits for the commands to move."""
 
     def __init__(self, built, options: NewtonOptions | None = None):
         self.built, self.solver = built, NewtonSolver(built.model, options or NewtonOptions(tol=LIVE_TOL))

@@ -82,7 +82,8 @@ class Schedule:
 
 
 def area_ramp(growth: float, steps: int, stiffness: float = 1e5) -> ChamberSchedule:
-    """The reference ramp for one area-controlled chamber (stiffness k): area ratio 1 -> growth over steps - 1 increments."""
+    """The reference ramp for one area-controlled chamber (stiffness k): area ratio 1 -> growth over steps - 1
+    increments."""
     require(require_finite("growth", growth) > 0, f"growth = {growth!r} must be > 0")
     require(isinstance(steps, (int, np.integer)) and steps >= 2,
             f"steps = {steps!r} must be an integer >= 2 (the rest state and at least one increment)")

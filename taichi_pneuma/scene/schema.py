@@ -40,7 +40,7 @@ import re
 import types
 import typing
 from dataclasses import dataclass
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 import tomllib
@@ -349,7 +349,7 @@ def edited(root: Table, obj, values: dict):
         raise PneumaInputError(message) from None
 
 
-def switched(table: "Table", node, parts: list, value) -> None:
+def switched(table: Table, node, parts: list, value) -> None:
     """If parts (a parsed dotted key) names, through tables and arrays of tables, a key that switches the kind
     of its table node to another (a Variant's tag, or one of its table's tags, the others then unset): drop
     from node the keys of the old kind that the new one lacks or that hold the old kind's default (keys the

@@ -196,7 +196,7 @@ def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.n
         trial = min(1.0, done + fraction)
         commands = origin + trial * (target - origin)
         built.set_commands(commands)
-        u_trial, record = solver.solve(predict(built, previous, (reached, u), commands), 
+        u_trial, record = solver.solve(predict(built, previous, (reached, u), commands),
                                        reuse_factor=solver.chord, stop=stop)
         records.append(record)
         if record.stopped:
