@@ -16,10 +16,10 @@ from pathlib import Path
 import numpy as np
 
 from taichi_pneuma import runtime
-from taichi_pneuma.render import frames as render
 from taichi_pneuma.control.inverse import Reacher, command_bounds
-from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.live.interactive import fixed_view, follow_mouse
+from taichi_pneuma.render import frames as render
+from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.solve.newton import NewtonOptions
 
 SCENE = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes" / "bidirectional.toml"

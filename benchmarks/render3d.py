@@ -30,11 +30,18 @@ import numpy as np
 from taichi_pneuma import runtime
 from taichi_pneuma.apps.bench import machine
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes, estimate_tets, mesh_solid
-from taichi_pneuma.render.camera import Camera
-from taichi_pneuma.render.frames3d import BACKGROUND, FrameRenderer3D, Track3D, open_view, section_faces, shaded_triangles
+from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.live.interactive3d import Slider, explore_3d
+from taichi_pneuma.render.camera import Camera
+from taichi_pneuma.render.frames3d import (
+    BACKGROUND,
+    FrameRenderer3D,
+    Track3D,
+    open_view,
+    section_faces,
+    shaded_triangles,
+)
 
 MESH_SIZES = {"coarse (interactive)": MeshSizes(0.3), "scene default": MeshSizes(0.1),
               "fine": MeshSizes(0.05)}

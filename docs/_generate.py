@@ -133,9 +133,8 @@ def app_page(name: str) -> str:
 
 
 def scene_keys_page() -> str:
-    from taichi_pneuma.scene.scenefile import key_reference
-
     from taichi_pneuma.io.units import si_text
+    from taichi_pneuma.scene.scenefile import key_reference
 
     def default(k) -> str:
         if not k.default:

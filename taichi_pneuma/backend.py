@@ -25,8 +25,8 @@ from __future__ import annotations
 import importlib
 import os
 
-from .errors import PneumaInputError
 from .environment import BACKENDS
+from .errors import PneumaInputError
 
 CHOICE_VARIABLE = "PNEUMA_BACKEND"
 INSTALL = dict(zip(BACKENDS, ('pip install "taichi>=1.7,<1.8"', 'pip install "quadrants>=1.3.3,<1.5"')))

@@ -20,7 +20,6 @@ from .io.units import history_dimensions
 from .scene.build import BuiltScene, Scene
 from .signals import holding
 
-
 ELEMENTS = {2: "triangles", 3: "tetrahedra"}  # the summary's element count, by dimension
 
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import taichi_pneuma as tp
+from taichi_pneuma.fem.elements import TRIANGLE_P2
 from taichi_pneuma.fem.geometry import (
     Ellipse,
     Geometry,
@@ -17,11 +18,10 @@ from taichi_pneuma.fem.geometry import (
     onto_curves,
 )
 from taichi_pneuma.materials import lame_parameters
-from taichi_pneuma.fem.elements import TRIANGLE_P2
 from taichi_pneuma.scene.build import ChamberControl, Material, Scene
-from taichi_pneuma.terms.model import Configuration
 from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms.chambers import PressureControl
+from taichi_pneuma.terms.model import Configuration
 
 INNER, OUTER, NU, LOAD = 1.0, 2.0, 0.3, 1e-6
 

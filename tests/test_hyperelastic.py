@@ -11,8 +11,8 @@ from test_materials import evaluate
 from taichi_pneuma import runtime
 from taichi_pneuma.fem.geometry import Geometry, PointSet, Rectangle
 from taichi_pneuma.materials import IsochoricMaterial, IsochoricPolynomial
-from taichi_pneuma.terms.model import EnergyModel
 from taichi_pneuma.terms import Elasticity
+from taichi_pneuma.terms.model import EnergyModel
 
 # One material of each form (kPa, of Ecoflex-like magnitude)
 FORMS = {"neo_hookean": IsochoricMaterial("neo_hookean", 12.0, poisson_ratio=0.49999),

@@ -12,10 +12,10 @@ from taichi_pneuma.backend import ti
 from taichi_pneuma.materials import LAWS, Law, StableNeoHookean, lame_parameters, register
 from taichi_pneuma.materials.law import element_parameters, stress_eigensystem
 from taichi_pneuma.scene.build import reference_scene
-from taichi_pneuma.terms.model import EnergyModel
 from taichi_pneuma.solve.newton import NewtonSolver
 from taichi_pneuma.terms import Clamp, Elasticity
 from taichi_pneuma.terms.chambers import AreaControl
+from taichi_pneuma.terms.model import EnergyModel
 
 Arrays1, Arrays2, Arrays3 = (ti.types.ndarray(dtype=ti.f64, ndim=n) for n in (1, 2, 3))
 MU, LAM = lame_parameters(1e4, 0.45)

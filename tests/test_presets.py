@@ -4,19 +4,19 @@ errors, and every output of a scene with units saying its unit (a unitless scene
 
 import csv
 import io
+import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
-import tomllib
 
 import taichi_pneuma as tp
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.io.units import UNITS
 from taichi_pneuma.materials import IsochoricMaterial
 from taichi_pneuma.materials.presets import PRESETS, PresetMaterial
 from taichi_pneuma.render.plots import history_figure
+from taichi_pneuma.scene.scenefile import read_scene
 
 PSI = 6894.757  # Pa
 # Engineering stress (kPa) at engineering strains 50, 100 and 200 % in the uniaxial tests of Marechal et al. 2021

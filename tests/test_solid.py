@@ -14,13 +14,13 @@ from taichi_pneuma.fem.layered import spherical_shell_octant
 from taichi_pneuma.fem.tetmesh import tet_mesh
 from taichi_pneuma.materials import StableNeoHookean
 from taichi_pneuma.scene.build import Material
-from taichi_pneuma.terms.model import EnergyModel
-from taichi_pneuma.solve.newton import NewtonSolver
 from taichi_pneuma.scene.schedule import ChamberSchedule
+from taichi_pneuma.solve.newton import NewtonSolver
 from taichi_pneuma.terms import Clamp, Elasticity, NormalClamp
 from taichi_pneuma.terms.base import Term
 from taichi_pneuma.terms.chambers import AreaControl, PressureControl
 from taichi_pneuma.terms.effects import Gravity, Ground, SelfContact
+from taichi_pneuma.terms.model import EnergyModel
 
 RNG = np.random.default_rng(3)
 

@@ -16,12 +16,12 @@ import taichi_pneuma as tp
 from taichi_pneuma.apps.reach import main as reach_main
 from taichi_pneuma.control.inverse import Reacher, ReachOptions
 from taichi_pneuma.control.study import RunOptions, Sweep, check_axes, parse_vary, run_task
-from taichi_pneuma.scene.targets import Target, read_targets_csv
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.meshfile import write_mesh
 from taichi_pneuma.scene.build import Material
-from taichi_pneuma.solve.newton import NewtonSolver
 from taichi_pneuma.scene.schedule import ChamberSchedule
+from taichi_pneuma.scene.targets import Target, read_targets_csv
+from taichi_pneuma.solve.newton import NewtonSolver
 from taichi_pneuma.solve.sensitivity import sensitivity
 from taichi_pneuma.solve.simulate import settle, tip_dz, tip_measures
 

@@ -5,10 +5,10 @@ import csv
 import json
 import subprocess
 import sys
+import tomllib
 
 import numpy as np
 import pytest
-import tomllib
 
 import taichi_pneuma as tp
 from taichi_pneuma import backend

@@ -33,8 +33,8 @@ from taichi_pneuma.fem.geometry import (
     signed_area,
 )
 from taichi_pneuma.scene.build import ChamberControl, Scene
-from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.scene.schedule import area_ramp
+from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.solve.sensitivity import sensitivity
 from taichi_pneuma.solve.simulate import run_schedule
 

@@ -15,16 +15,17 @@ import pytest
 import taichi_pneuma as tp
 from taichi_pneuma.apps import inflate
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.scene.sceneformat import scene_data
-from taichi_pneuma.scene.scenefile import key_reference, read_scene
 from taichi_pneuma.fem.geometry import Geometry, PointSet, Polygon
 from taichi_pneuma.io.units import UNITLESS, UNITS
 from taichi_pneuma.materials import IsochoricMaterial
 from taichi_pneuma.materials.isochoric import unstable_stretch
 from taichi_pneuma.materials.presets import PRESETS
 from taichi_pneuma.scene.build import ChamberControl, Material, Region, Scene
+from taichi_pneuma.scene.scenefile import key_reference, read_scene
+from taichi_pneuma.scene.sceneformat import scene_data
 from taichi_pneuma.scene.schedule import ChamberSchedule
-from taichi_pneuma.terms.chambers import KINDS as CHAMBER_KINDS, AreaControl, ClosedGas
+from taichi_pneuma.terms.chambers import KINDS as CHAMBER_KINDS
+from taichi_pneuma.terms.chambers import AreaControl, ClosedGas
 from taichi_pneuma.terms.effects import EFFECTS, Gravity, Ground, SelfContact
 
 # A dented wall (balloon_syringe.toml, coarser and stiffer, so that the air's compression matters) in mm and kPa

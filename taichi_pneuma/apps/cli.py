@@ -201,8 +201,8 @@ def scene_of_flags(args: argparse.Namespace):
 def build(scene, args: argparse.Namespace | None = None):
     """Mesh the scene, build its terms and print the mesh size, the supports, the terms (and, where a --quality
     preset of args made the mesh, its measured error: preset_note) and each chamber's rest area."""
-    from ..scene.build import describe_supports
     from ..result import ELEMENTS
+    from ..scene.build import describe_supports
 
     built = scene.build()
     mesh = built.mesh

@@ -46,12 +46,12 @@ from scipy.stats import qmc
 
 from ..errors import require, require_finite
 from ..fem.fields import ElementFields
-from ..scene.build import BuiltScene, Scene
-from ..solve.newton import NewtonOptions, NewtonSolver
 from ..result import Result
+from ..scene.build import BuiltScene, Scene
+from ..scene.targets import Target
+from ..solve.newton import NewtonOptions, NewtonSolver
 from ..solve.sensitivity import sensitivity
 from ..solve.simulate import MAX_CUTS, NoEquilibrium, StepRecord, chamber_records, settle, tip_dz, tip_measures
-from ..scene.targets import Target
 
 ARMIJO = 1e-4
 

@@ -38,9 +38,9 @@ from __future__ import annotations
 import os
 
 from ..errors import PneumaInputError
-from .build import Scene
-from . import sceneformat
 from ..io.output import read_input, reduce_to_stem
+from . import sceneformat
+from .build import Scene
 from .schema import KeyInfo, parse_toml
 
 MAX_SCENE_BYTES = 1_000_000

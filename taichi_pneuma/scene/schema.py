@@ -37,13 +37,13 @@ import contextvars
 import dataclasses
 import functools
 import re
+import tomllib
 import types
 import typing
-from dataclasses import dataclass
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
-import tomllib
 
 from ..errors import PneumaInputError, require
 from ..io.tomltext import dumps

@@ -19,8 +19,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import runtime
-from ..errors import require
 from ..backend import ti
+from ..errors import require
 
 
 def installed(module: str) -> bool:

@@ -10,10 +10,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..fem.fields import ElementFields
-from ..scene.build import BuiltScene
-from .newton import NewtonOptions, NewtonSolver, SolveRecord
 from ..result import Result
+from ..scene.build import BuiltScene
 from ..scene.schedule import Schedule
+from .newton import NewtonOptions, NewtonSolver, SolveRecord
 
 MAX_CUTS = 8
 

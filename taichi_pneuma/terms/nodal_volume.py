@@ -35,11 +35,20 @@ import numpy as np
 
 from ..backend import ti
 from ..errors import require
-from ..materials.law import element_parameters, embedded, volumetric_split
 from ..materials.invariants import cofactor
+from ..materials.law import element_parameters, embedded, volumetric_split
 from .base import Nodal, Scalars, Table, block_pattern, vertex_dofs
-from .elastic import (Elasticity, Gradients, Nodes, Parameters, Weights, deformation_gradient, elastic_energy,
-                      elastic_gradient, elastic_hessian)
+from .elastic import (
+    Elasticity,
+    Gradients,
+    Nodes,
+    Parameters,
+    Weights,
+    deformation_gradient,
+    elastic_energy,
+    elastic_gradient,
+    elastic_hessian,
+)
 
 PerNode = ti.types.ndarray(dtype=ti.f64, ndim=3)  # (m, k, j) float64: j values per node of each element
 
