@@ -233,7 +233,7 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
 
     increments, units, limit = built.scene.increments, built.scene.units, built.scene.max_stretch
     bar = tqdm(total=increments + 1, desc=label, unit="step", disable=True if args.quiet else None, leave=False)
-    past = []  # the step that first passed the scene's max_stretch
+    past: list[int] = []  # the step that first passed the scene's max_stretch
 
     def progress(step, positions, contact_force):
         if vtk is not None:

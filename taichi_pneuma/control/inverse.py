@@ -218,7 +218,8 @@ class Reacher:
         self.length = body_length(built)
         self.forward_solves = self.newton_iterations = 0
         rest = built.scene.schedule.rest_commands
-        self.pose, self._previous, self._factored = self._pose(rest, np.zeros_like(built.mesh.vertices)), None, None
+        self.pose, self._previous = self._pose(rest, np.zeros_like(built.mesh.vertices)), None
+        self._factored: Pose | None = None  # the pose whose exact Hessian the solver's factor is
         self.settle((self.lo + self.hi) / 2 if start is None else start)
 
     def _pose(self, commands: np.ndarray, u: np.ndarray) -> Pose:
@@ -365,7 +366,9 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
     restart, the best pose re-taken)."""
     built, mesh = reacher.built, reacher.built.mesh
     rest_tip = mesh.vertices[mesh.tip].mean(axis=0)
-    steps, states, descent = [], [], 0
+    steps: list[StepRecord] = []
+    states: list[np.ndarray] = []
+    descent = 0
     stretches = ElementFields(mesh.vertices, mesh.elements)
     for k, result in enumerate(results):
         target = result.target

@@ -57,6 +57,7 @@ def explore(scene: Scene, growth: float, size: tuple[int, int], backend: str = "
             renderer = FrameRenderer([track], trace=False, canvas=canvas, bounds=bounds)
             print(f"  area x{ratio:.3f}: p = {track.pressure[0, 0]:.2f}, tip dy = {tip:+.4f}, "
                   f"{record.iterations} Newton it, converged {record.converged}", flush=True)
+        assert renderer is not None  # made at the first frame (ratio None)
         canvas.show_image(renderer.frame(0))
         canvas.show()
         frames += 1
@@ -162,7 +163,8 @@ class LiveEquilibrium:
     def __init__(self, built, options: NewtonOptions | None = None):
         self.built, self.solver = built, NewtonSolver(built.model, options or NewtonOptions(tol=LIVE_TOL))
         self.u = np.zeros_like(built.mesh.vertices)
-        self.commands, self.residual, self.stuck, self.reuse = None, math.inf, False, False
+        self.commands: np.ndarray | None = None  # the commands of the state (None before the first frame)
+        self.residual, self.stuck, self.reuse = math.inf, False, False
         self.contraction = math.inf  # the last step's residual over its start's
         self.iterations = 0  # Newton steps taken since the commands last moved
 

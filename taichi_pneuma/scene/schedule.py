@@ -52,7 +52,8 @@ class ChamberSchedule:
 
     def command(self, step: float) -> float:
         steps = [0.0] + [float(s) for s, _ in self.keyframes]
-        values = [self.kind.rest] + [float(v) for _, v in self.keyframes]
+        # kind is a ChamberKind from __post_init__ on
+        values = [self.kind.rest] + [float(v) for _, v in self.keyframes]  # type: ignore[union-attr]
         if steps[1] == 0.0:
             steps, values = steps[1:], values[1:]
         return float(np.interp(step, steps, values))
@@ -78,7 +79,7 @@ class Schedule:
 
     @property
     def rest_commands(self) -> np.ndarray:
-        return np.array([c.kind.rest for c in self.chambers])
+        return np.array([c.kind.rest for c in self.chambers])  # type: ignore[union-attr]
 
 
 def area_ramp(growth: float, steps: int, stiffness: float = 1e5) -> ChamberSchedule:

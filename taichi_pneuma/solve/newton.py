@@ -276,6 +276,7 @@ class NewtonSolver:
                 self.model.set_displacements(u)
                 record.message = model.fault() or "line search found no decrease (energy at round-off)"
                 break
+            assert d is not None  # a descent direction, of slope < 0
             u = u + alpha * d
             energy = trial
             record.iterations += 1

@@ -62,7 +62,7 @@ class StepRecord:
     def row(self) -> dict[str, float]:
         """Flat columns: step, <chamber>.<field> for each chamber, <contact>.fx/.fy/.magnitude, solver figures,
         the extra columns."""
-        row = {"step": self.step}
+        row: dict[str, float] = {"step": self.step}
         for name, c in self.chambers.items():
             row.update({f"{name}.command": c.command, f"{name}.area": c.area, f"{name}.area_ratio": c.area_ratio,
                         f"{name}.pressure": c.pressure})
@@ -122,7 +122,10 @@ class RampFailed(RampStopped):
 
 
 class RampInterrupted(RampStopped):
-    """The caller's stop() asked the ramp to end after an increment (e.g. on Ctrl-C)."""
+    """The caller's stop() asked the ramp to end after an increment (e.g. on Ctrl-C); signum: the signal that
+    asked it, where the commands set it."""
+
+    signum: int | None = None
 
 
 def tip_rotation(rest: np.ndarray, current: np.ndarray) -> float:
@@ -245,7 +248,10 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     contact_terms = [(name, t) for name, terms in built.effects.items() for t in terms if t.reports_contact]
     u = np.zeros_like(mesh.vertices)
     stretches = ElementFields(mesh.vertices, mesh.elements)
-    steps, states, solves, forces = [], [], [], []
+    steps: list[StepRecord] = []
+    states: list[np.ndarray] = []  # positions
+    solves: list[SolveRecord] = []  # each step's last Newton solve
+    forces: list[np.ndarray] = []  # contact forces on the vertices
     reached = schedule.rest_commands
     previous = None  # (commands, u) of the equilibrium before the last one, for the predictor
     newton = {"linear_solver": solver.backend.name, "chord_steps": 0, "phase_seconds": collections.Counter()}
