@@ -257,7 +257,7 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
             return simulate(built, tol=args.tol, max_iterations=args.max_iterations, max_cuts=args.max_cuts,
                             progress=progress, stop=interrupted.is_set)
         except RampInterrupted as exc:
-            exc.signum = interrupted.signum
+            exc.signum = interrupted.signum  # type: ignore[attr-defined]  # read by signals.name_of()
             raise
 
 

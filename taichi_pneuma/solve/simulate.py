@@ -122,10 +122,7 @@ class RampFailed(RampStopped):
 
 
 class RampInterrupted(RampStopped):
-    """The caller's stop() asked the ramp to end after an increment (e.g. on Ctrl-C); signum: the signal that
-    asked it, where the commands set it."""
-
-    signum: int | None = None
+    """The caller's stop() asked the ramp to end after an increment (e.g. on Ctrl-C)."""
 
 
 def tip_rotation(rest: np.ndarray, current: np.ndarray) -> float:
