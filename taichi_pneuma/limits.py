@@ -48,7 +48,7 @@ def element_cap(weight: float = 1.0) -> int | None:
     return None if limit is None else max(1, int(limit // weight))
 
 
-def refusal(what: str, triangles: float, limit: int) -> str:
+def refusal(what: str, triangles: float, limit: int | None) -> str:
     return (f"{what}: about {triangles:.3g} triangles' worth, {BYTES_PER_TRIANGLE * triangles / 1e9:.3g} GB; the "
             f"limit is {limit} triangles (--max-triangles raises it)")
 

@@ -18,13 +18,13 @@ import pytest
 import taichi_pneuma as tp
 from taichi_pneuma import limits
 from taichi_pneuma.apps import inflate, sweep
-from taichi_pneuma.study import Sweep, parse_vary, plan, run_task, study_figure
-from taichi_pneuma.scene.targets import read_targets_csv
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Polygon
 from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.scene.schema import parse_assignment, parse_key
+from taichi_pneuma.scene.targets import read_targets_csv
+from taichi_pneuma.study import Sweep, parse_vary, plan, run_task, study_figure
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 CHEAP = (SCENES / "reference_beam.toml").read_text().replace("max_area = 0.0012", "max_area = 0.02") \
@@ -113,8 +113,8 @@ def test_self_contact_pairs_count_in_the_estimate_and_are_checked_before_they_ar
     line = error_line(capsys)
     assert "and 89400 self-contact pairs (walls of 300 nodes)" in line and "the limit is 20000 triangles" in line
     assert not (tmp_path / "out").exists()
-    from taichi_pneuma.terms.model import EnergyModel
     from taichi_pneuma.terms.contact import SelfContact
+    from taichi_pneuma.terms.model import EnergyModel
 
     config = EnergyModel(np.random.default_rng(0).random((100, 2)), 1.0, 1.0).config
     with limits.budget(1000), pytest.raises(PneumaInputError, match="self-contact would hold 9800 point-edge pairs"):

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from taichi_pneuma.live.interactive import LiveEquilibrium
-from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.scene.schedule import ChamberSchedule
+from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from tests.solid_meshes import box_with_cavity, scene_of
 
 TOL = 1e-6

@@ -140,7 +140,7 @@ def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, 
     print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}{pressure}")
     print(f"largest principal stretch: {summary['max_stretch']:.2f} (step {summary['max_stretch_step']}; a run past "
           f"max_stretch = {summary['max_stretch_limit']:g} warns)")
-    for name, (fx, fy, magnitude) in final.contact.items():
+    for name, (fx, fy, _) in final.contact.items():
         print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g}){force}")
     print(f"Newton: {summary['newton_iterations_total']} iterations over {summary['steps'] - 1} solves "
           f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "

@@ -12,7 +12,6 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 
-
 def pad3(vectors: np.ndarray) -> np.ndarray:
     """(n, 2) -> (n, 3) with z = 0; (n, 3) as is."""
     return vectors if vectors.shape[1] == 3 else np.column_stack([vectors, np.zeros(len(vectors))])

@@ -15,8 +15,24 @@ from ..fem.mesh import Mesh
 from ..fem.triangulation import triangulate
 from . import COLOR_FIELDS
 from .canvases import open_canvas
-from .colours import (AREA_CURVE, AXES, CHAMBER_FILL, CHAMBER_WALL, COLORBAR_PX, CURSOR, EDGE, FACE, GROUND,
-                      OUTLINE, PIN, PRESSURE_CURVE, TARGET, TEXT, TIP_PATH, colormap)
+from .colours import (
+    AREA_CURVE,
+    AXES,
+    CHAMBER_FILL,
+    CHAMBER_WALL,
+    COLORBAR_PX,
+    CURSOR,
+    EDGE,
+    FACE,
+    GROUND,
+    OUTLINE,
+    PIN,
+    PRESSURE_CURVE,
+    TARGET,
+    TEXT,
+    TIP_PATH,
+    colormap,
+)
 from .text import LINE_PX, MARGIN_PX, Label, draw_labels, label_box
 from .ticks import colorbar_ticks, nice_ticks, tick_label
 

@@ -20,21 +20,20 @@ from .. import runtime
 from ..errors import require, require_finite
 from ..fem.mesh import Mesh
 from ..fem.planar import BeamGeometry, Geometry
-from ..fem.supports import in_box, require_box
-from ..fem.supports import require_held
-from . import sceneformat
+from ..fem.supports import in_box, require_box, require_held
 from ..io.keys import dotted
 from ..io.output import check_stem
 from ..io.units import NODAL_STIFFNESS, PRESSURE, UNITLESS, Units, defaults, resolved, si_default
 from ..materials import IsochoricMaterial, StableNeoHookean
 from ..materials.presets import PresetMaterial
-from ..terms.model import EnergyModel
-from .schedule import MAX_STRETCH, ChamberSchedule, Schedule, area_ramp
 from ..terms import VOLUMETRIC, Clamp, Elasticity, NormalClamp
 from ..terms.base import Term
 from ..terms.chambers import Chamber, ChamberKind
 from ..terms.effects import Effect
+from ..terms.model import EnergyModel
 from ..terms.nodal_volume import require_nodal
+from . import sceneformat
+from .schedule import MAX_STRETCH, ChamberSchedule, Schedule, area_ramp
 
 
 @dataclass(frozen=True)

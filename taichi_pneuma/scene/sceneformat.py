@@ -11,26 +11,26 @@ import dataclasses
 import functools
 import typing
 
-from .targets import MAX_TARGETS, Target
 from ..errors import require
 from ..fem.elements import ORDERS
-from ..fem.planar import Geometry
-from ..fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
-from ..fem.supports import SIDES, PointSet, Roller
 from ..fem.gmsh_mesher import MeshSizes
 from ..fem.meshfile import MeshBody, MeshGeometry, MeshSurface
+from ..fem.planar import Geometry
 from ..fem.pneunet import PneuNet
+from ..fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 from ..fem.solid_geometry import SolidGeometry, is_solid_shape
 from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
+from ..fem.supports import SIDES, PointSet, Roller
+from ..io.tomltext import dumps
+from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, PRESSURE, UNITLESS, UNITS, default_in
 from ..materials import FORMS, IsochoricMaterial
 from ..materials.presets import PRESETS, PresetMaterial
-from .schedule import MAX_STRETCH, ChamberSchedule
 from ..terms import VOLUMETRIC
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
+from .schedule import MAX_STRETCH, ChamberSchedule
 from .schema import REQUIRED, Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
-from ..io.tomltext import dumps
-from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, PRESSURE, UNITLESS, UNITS, default_in
+from .targets import MAX_TARGETS, Target
 
 PAIR, BOX, TRIPLE = "[x, y]", "[x0, y0, x1, y1]", "[x, y, z]"
 CLAMP_STIFFNESS = 1e9  # the [clamp] stiffness key's default, in SI (Pa, 2D; Pa m, 3D)
