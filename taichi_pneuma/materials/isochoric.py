@@ -167,7 +167,8 @@ class IsochoricMaterial(MaterialForm):
     selector = "law"
     names = tuple(FORMS)
     keys = (POISSON_RATIO, BULK_MODULUS, *COEFFICIENT_KEYS)
-    summary = f"a form of the isochoric law (law = {', '.join(FORMS)}: C10, ... and K or nu, in the scene's pressure unit)"
+    summary = (f"a form of the isochoric law (law = {', '.join(FORMS)}: C10, ... and K or nu, in the scene's "
+               f"pressure unit)")
 
     def __post_init__(self):
         require(self.law in FORMS, f"law = {self.law!r} is not one of {', '.join(FORMS)}")

@@ -194,7 +194,8 @@ class Material(MaterialForm):
 
     @classmethod
     def refusal(cls, extra: list[str], values: dict) -> str:
-        return f"{', '.join(extra)} need law = {' or '.join(selector_names('law'))} (E and nu alone: stable neo-Hookean)"
+        laws = " or ".join(selector_names("law"))
+        return f"{', '.join(extra)} need law = {laws} (E and nu alone: stable neo-Hookean)"
 
     def law_parameters(self, units) -> tuple[type, np.ndarray]:
         """The law and its parameter vector (E and nu are in the scene's units already)."""

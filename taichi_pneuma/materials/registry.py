@@ -52,7 +52,7 @@ class MaterialKey:
 POISSON_RATIO = MaterialKey("nu", "poisson_ratio",
                             doc="Poisson's ratio, in (-1, 0.5); none: 0.45 (E), 0.49 (law), the preset's own")
 BULK_MODULUS = MaterialKey("K", "bulk_modulus", doc="bulk modulus, instead of nu (law or preset)", unit=PRESSURE)
-ALTERNATIVES = ("K", "nu")  # keys a material gives one of: a region giving either replaces both of its base's
+ALTERNATIVES = (BULK_MODULUS.name, POISSON_RATIO.name)  # keys a material gives one of: a region giving either replaces both of its base's
 
 
 class MaterialForm:
@@ -73,7 +73,8 @@ class MaterialForm:
     @classmethod
     def from_keys(cls, values: dict) -> "MaterialForm":
         """The material of a table's values (key -> value, None where not given): refuses (PneumaInputError) a
-        key of another form (refusal()) and a key whose field has no default; the material checks the rest."""
+        key of another form (refusal()) and one of its own keys left out whose field has no default; the
+        material's __post_init__ checks the values."""
         given = sorted(name for name, value in values.items() if value is not None)
         own = {cls.selector, *(key.name for key in cls.keys)}
         extra = [name for name in given if name not in own]

@@ -37,7 +37,7 @@ from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
 from .schema import REQUIRED, Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
 from ..io.tomltext import dumps
-from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, PRESSURE, UNITLESS, UNITS, default_in
+from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, UNITLESS, UNITS, default_in
 
 PAIR, BOX, TRIPLE = "[x, y]", "[x0, y0, x1, y1]", "[x, y, z]"
 CLAMP_STIFFNESS = 1e9  # the [clamp] stiffness key's default, in SI (Pa, 2D; Pa m, 3D)
@@ -127,10 +127,13 @@ def make_point_set(v: dict, default_side: str | None) -> PointSet | None:
     return PointSet(v["side"], v["box"])
 
 
-# The [material] table's keys: every material form's (materials/registry.py), each optional
-MATERIAL_KEYS = {name: Key(key.type, None, key.doc, key.allowed, key.unit, si=key.si)
-                 for name, key in all_keys().items()}
 MATERIAL_TAGS = tuple(SELECTORS)  # the keys choosing a material's form (material_kind)
+
+
+def material_entries() -> dict[str, Key]:
+    """The [material] table's keys: those of every registered material form (materials/registry.py), each
+    optional."""
+    return {name: Key(key.type, None, key.doc, key.allowed, key.unit, si=key.si) for name, key in all_keys().items()}
 
 
 def material_kind(keys: dict) -> dict:
@@ -149,7 +152,7 @@ def material_of(keys: dict):
 
 def material_keys(material) -> dict:
     """The [material] (or region) keys of a material, None where absent: material_of's inverse."""
-    return {**dict.fromkeys(MATERIAL_KEYS), **material.scene_values()}
+    return {**dict.fromkeys(all_keys()), **material.scene_values()}
 
 
 def item_type(hint):
@@ -162,12 +165,13 @@ def scene_table(scene_class) -> Table:
     """The declaration of a scene file of scene_class (scene.Scene)."""
     hints = typing.get_type_hints(scene_class)
     region_class, control_class = (item_type(hints[k]) for k in ("regions", "controls"))
+    entries = material_entries()  # the [material] keys of the forms registered now
 
     def make_material(v):  # the base first, then each region (its omitted keys the base's, unless it names a form)
-        base_keys = {k: v[k] for k in MATERIAL_KEYS}
+        base_keys = {k: v[k] for k in entries}
 
         def region(r):
-            return region_class(r["box"], material_of(region_values(base_keys, {k: r[k] for k in MATERIAL_KEYS})),
+            return region_class(r["box"], material_of(region_values(base_keys, {k: r[k] for k in entries})),
                                 r["group"])
 
         return material_of(base_keys), tuple(build(f"material.regions[{i}]", lambda: region(r))
@@ -177,12 +181,12 @@ def scene_table(scene_class) -> Table:
                                             f"lies in it", unit=LENGTH),
                     "group": Key(str, None, "instead of box (3D): the tetrahedra of the mesh's named volume group "
                                             "(a mesh file's physical group, a pneunet's \"layer\")"),
-                    **{k: dataclasses.replace(key, si=None) for k, key in MATERIAL_KEYS.items()}},  # none: the base's
+                    **{k: dataclasses.replace(key, si=None) for k, key in entries.items()}},  # none: the base's
                    parts=lambda r: {"box": r.box, "group": r.group, **material_keys(r.material)}, kind=material_kind,
                    tags=MATERIAL_TAGS)
     regions = Tables(region, "materials for the elements of a box or a volume group (later regions win); keys as "
                              "material's, and unless a region names a preset or law, each key it omits is material's")
-    material = Table({**MATERIAL_KEYS, "regions": regions}, make=make_material,
+    material = Table({**entries, "regions": regions}, make=make_material,
                      parts=lambda s: {**material_keys(s.material), "regions": s.regions}, optional=True,
                      kind=material_kind, tags=MATERIAL_TAGS,
                      doc=f"the body's material: {', '.join(f.summary for f in forms()[:-1])}, or {forms()[-1].summary}")
