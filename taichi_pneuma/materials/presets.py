@@ -32,6 +32,7 @@ import numpy as np
 
 from ..errors import require, require_finite
 from .isochoric import IsochoricMaterial, IsochoricPolynomial
+from .registry import BULK_MODULUS, POISSON_RATIO, MaterialForm, register_form
 
 
 @dataclass(frozen=True)
@@ -77,18 +78,27 @@ PRESETS = {
 }
 
 
+@register_form
 @dataclass(frozen=True)
-class PresetMaterial:
+class PresetMaterial(MaterialForm):
     """A scene's material from a preset: its name, and optionally a bulk modulus (in the scene's pressure unit) or
-    a Poisson's ratio replacing the preset's own."""
+    a Poisson's ratio replacing the preset's own. A scene file names it by `preset = "<name>"` (registry.py)."""
 
     preset: str
     bulk_modulus: float | None = None
     poisson_ratio: float | None = None
+    selector = "preset"
+    names = tuple(PRESETS)
+    keys = (POISSON_RATIO, BULK_MODULUS)
+    summary = "a preset (docs/materials.md)"
 
     def __post_init__(self):
         require(self.preset in PRESETS, f"preset = {self.preset!r} is not one of {', '.join(PRESETS)}")
         self.resolved(1.0)  # validates K and nu
+
+    @classmethod
+    def refusal(cls, extra: list[str], values: dict) -> str:
+        return f"preset = {values['preset']!r} gives the law and its coefficients: drop {', '.join(extra)}"
 
     def resolved(self, pascal: float | None) -> IsochoricMaterial:
         """The preset's material in a pressure unit of `pascal` Pa (None: the scene is unitless, which a preset
