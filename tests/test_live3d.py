@@ -1,4 +1,4 @@
-"""The 3D live window's solve (render/interactive.py LiveEquilibrium): one Newton step per frame, the previous
+"""The 3D live window's solve (live/interactive.py LiveEquilibrium): one Newton step per frame, the previous
 frame's factorisation reused while a slider moves. A slider that comes to rest settles to the equilibrium a
 full Newton solve finds at its final commands, and no frame on the way inverts a tetrahedron."""
 
