@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from typing import TYPE_CHECKING, cast
 
 from .. import runtime
 from ..errors import require
@@ -46,6 +47,9 @@ from .cli import (
     scene_of_flags,
     solve,
 )
+
+if TYPE_CHECKING:
+    from ..result import Result
 
 # by dimension: the tip the deflection is measured at, its rotation in the last step's line and over the run
 TIP_WORDS = {2: ("right edge", "tip rotation", "rotation"), 3: ("right face", "bend angle", "bend angle")}
@@ -111,11 +115,12 @@ def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, 
     try:
         result = solve(args, built, vtk=vtk)
     except RampStopped as stopped:
-        if stopped.result.steps:  # none when the rest state itself has no equilibrium
-            written = stopped.result.save_history(out, stem) + [vtk.pvd]
+        done = cast("Result", stopped.result)  # (solve's: tp.simulate made it a Result)
+        if done.steps:  # none when the rest state itself has no equilibrium
+            written = done.save_history(out, stem) + [vtk.pvd]
             if isinstance(stopped, RampInterrupted):
-                written.append(save_json(out / f"{stem}_summary.json", stopped.result.summary(interrupted=True)))
-            print(f"saved the {len(stopped.result.steps)} steps done in " + ", ".join(str(p) for p in written))
+                written.append(save_json(out / f"{stem}_summary.json", done.summary(interrupted=True)))
+            print(f"saved the {len(done.steps)} steps done in " + ", ".join(str(p) for p in written))
         raise
     final, summary = result.steps[-1], result.summary()
     area, length, pressure, force = (scene.units.suffix(d) for d in (AREA, LENGTH, PRESSURE, FORCE))
