@@ -119,7 +119,8 @@ class VolumeForm:
         self.weights = weights / (2.0 * np.trace(closure.projector))  # the reference triangle's area 1/2, 1/r
         self.projector = np.ascontiguousarray(closure.projector, dtype=np.float64)
         self.rows, self.cols = block_pattern(faces, 3)
-        self._last: tuple[np.ndarray, float, np.ndarray] | None = None  # (the wall nodes' displacements, V, dV/dx) of the last measure_and_gradient
+        # (the wall nodes' displacements, V, dV/dx) of the last measure_and_gradient
+        self._last: tuple[np.ndarray, float, np.ndarray] | None = None
         self.rest_measure = wall_volume(self.rest, np.zeros_like(self.rest), *self._data(),
                                         np.empty((len(self.nodes), 3)))
 
