@@ -190,7 +190,7 @@ class IsochoricMaterial(MaterialForm):
     @classmethod
     def form_keys(cls, values: dict) -> dict:
         """law, the coefficients its form takes, K and nu."""
-        return dict.fromkeys(("law", *FORMS.get(values.get("law"), ()), "K", "nu"))
+        return dict.fromkeys(("law", *FORMS.get(values.get("law", ""), ()), "K", "nu"))
 
     @classmethod
     def refusal(cls, extra: list[str], values: dict) -> str:
@@ -240,8 +240,8 @@ class IsochoricMaterial(MaterialForm):
         """The law and its parameter vector (the coefficients are in the scene's units already)."""
         return IsochoricPolynomial, self.row()
 
-    def scaled(self, factor: float) -> "IsochoricMaterial":
+    def scaled(self, factor: float) -> IsochoricMaterial:
         """The same material with every modulus (coefficients and a given K) multiplied by factor (a unit change)."""
-        return IsochoricMaterial(self.law, *(factor * getattr(self, n) for n in COEFFICIENTS),
+        return IsochoricMaterial(self.law, factor * self.C10, factor * self.C01, factor * self.C20, factor * self.C30,
                                  None if self.bulk_modulus is None else factor * self.bulk_modulus, self.poisson_ratio)
 

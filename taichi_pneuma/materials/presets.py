@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import require, require_finite
+from ..errors import PneumaInputError, require, require_finite
 from .isochoric import IsochoricMaterial, IsochoricPolynomial
 from .registry import BULK_MODULUS, POISSON_RATIO, MaterialForm, register_form
 
@@ -103,8 +103,9 @@ class PresetMaterial(MaterialForm):
     def resolved(self, pascal: float | None) -> IsochoricMaterial:
         """The preset's material in a pressure unit of `pascal` Pa (None: the scene is unitless, which a preset
         cannot be converted into), with this material's K or nu."""
-        require(pascal is not None, f"preset = {self.preset!r} needs the scene's units (units = \"mm-kPa\", "
-                                    f"\"mm-MPa\" or \"m-Pa\") to be converted into")
+        if pascal is None:
+            raise PneumaInputError(f"preset = {self.preset!r} needs the scene's units (units = \"mm-kPa\", "
+                                   f"\"mm-MPa\" or \"m-Pa\") to be converted into")
         base = PRESETS[self.preset].material.scaled(1.0 / require_finite("pressure unit", pascal))
         if self.bulk_modulus is None and self.poisson_ratio is None:
             return base

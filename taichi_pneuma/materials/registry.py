@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, TypeVar
 
 import numpy as np
 
@@ -71,7 +71,7 @@ class MaterialForm:
         return dict.fromkeys(([cls.selector] if cls.selector else []) + [key.name for key in cls.keys])
 
     @classmethod
-    def from_keys(cls, values: dict) -> "MaterialForm":
+    def from_keys(cls, values: dict) -> MaterialForm:
         """The material of a table's values (key -> value, None where not given): refuses (PneumaInputError) a
         key of another form (refusal()) and one of its own keys left out whose field has no default; the
         material's __post_init__ checks the values."""
@@ -80,7 +80,7 @@ class MaterialForm:
         extra = [name for name in given if name not in own]
         if extra:
             raise PneumaInputError(cls.refusal(extra, values))
-        fields = {f.name: f for f in dataclasses.fields(cls)}
+        fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]  # every form is a dataclass
         for key in cls.keys:
             missing = fields[key.field].default is dataclasses.MISSING and values.get(key.name) is None
             require(not missing, f"{cls.selector} = {values.get(cls.selector)!r} needs {key.name}")
@@ -110,7 +110,10 @@ NAMED: dict[tuple[str, str], type[MaterialForm]] = {}  # (selector, name) -> the
 REGISTERED: list[type[MaterialForm]] = []  # every form, in registration order
 
 
-def register_form(form: type[MaterialForm]) -> type[MaterialForm]:
+Form = TypeVar("Form", bound=type[MaterialForm])
+
+
+def register_form(form: Form) -> Form:
     """Class decorator: make a form known to scene files by its selector's names (the default form: by none); a
     key it shares with another form by name must be the same MaterialKey."""
     if form.selector is None:

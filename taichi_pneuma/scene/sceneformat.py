@@ -139,7 +139,9 @@ def material_kind(keys: dict) -> dict:
 
 def material_of(keys: dict):
     """The material of a [material] table's (or a region's) keys: that of the form they name."""
-    return form_of(keys).from_keys(keys)
+    form = form_of(keys)
+    assert form is not None, "the schema checked the selector's value against the forms' names"
+    return form.from_keys(keys)
 
 
 def material_keys(material) -> dict:
@@ -166,7 +168,7 @@ def scene_table(scene_class) -> Table:
             return region_class(r["box"], material_of(region_values(base_keys, {k: r[k] for k in entries})),
                                 r["group"])
 
-        return material_of(base_keys), tuple(build(f"material.regions[{i}]", lambda: region(r))
+        return material_of(base_keys), tuple(build(f"material.regions[{i}]", functools.partial(region, r))
                                              for i, r in enumerate(v["regions"]))
 
     region = Table({"box": Key(tuple, None, f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D): the elements whose centroid "
@@ -303,7 +305,7 @@ def read_scene(data: dict, name: str, scene_class):
 
 def scene_data(scene) -> dict:
     """The scene as the data of a scene file: every key explicit, defaults included, but absent optional ones."""
-    return scene_table(type(scene)).write_table(scene)
+    return scene_table(type(scene)).write_table(scene)  # type: ignore[arg-type]  # a class is hashable
 
 
 def to_toml(scene) -> str:
@@ -313,7 +315,7 @@ def to_toml(scene) -> str:
 
 def with_values(scene, values: dict):
     """A copy of scene with the dotted keys of `values` set, validated like a scene file."""
-    return edited(scene_table(type(scene)), scene, values)
+    return edited(scene_table(type(scene)), scene, values)  # type: ignore[arg-type]  # a class is hashable
 
 
 def key_reference(scene_class) -> list[KeyInfo]:
