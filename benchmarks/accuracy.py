@@ -17,7 +17,6 @@ from taichi_pneuma.io.output import write_atomic
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from sections import main, timed_ramp  # noqa: E402
 
-
 MESHES = {1: (0.005, 0.0025, 0.0012, 0.0006, 0.0003, 0.00015), 2: (0.02, 0.01, 0.005, 0.0025, 0.0012)}
 STUDY_NU = (0.45, 0.499)
 

@@ -11,8 +11,8 @@ level l in eight at its edge midpoints (and every wall triangle in four; a curve
 facets: the study measures the elements' error on one geometry, the mesh's own; moving the new wall nodes onto
 the ellipsoid turns tetrahedra inside out at this size), so the quadratic tetrahedra of level l have exactly the
 nodes of the linear ones of level l + 1. Every ramp has INCREMENTS increments (the volume-controlled equilibrium
-does not depend on the path). Per run: tip deflection (mean y displacement of the right face), chamber pressure at the final
-volume, wall and CPU time (the process's, all threads: the steadier figure on a shared machine) and
+does not depend on the path). Per run: tip deflection (mean y displacement of the right face), chamber pressure at
+the final volume, wall and CPU time (the process's, all threads: the steadier figure on a shared machine) and
 Newton iterations; every run's error against the reference: the Richardson extrapolation
 of the quadratic runs on three nested levels, else of the linear ones (with their observed order; where they
 converge monotonically), else the finest quadratic run.
@@ -38,10 +38,10 @@ from pathlib import Path
 import numpy as np
 
 from taichi_pneuma import api, runtime
-from taichi_pneuma.fem.supports import PointSet
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes, Solid, mesh_solid
 from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.fem.solids import Box, Ellipsoid
+from taichi_pneuma.fem.supports import PointSet
 from taichi_pneuma.fem.tetmesh import tet_mesh
 from taichi_pneuma.io.output import prepare_directory, save_json, save_text
 from taichi_pneuma.scene.build import ChamberControl, Material, Region, Scene
@@ -223,7 +223,8 @@ def main() -> None:
                 records.append(record)
                 print(f"{name} nu={nu} P{order} level {level}: {record['tetrahedra']} tetrahedra, {record['dofs']} "
                       f"DOFs, tip {record['tip']:+.5f}, pressure {record['pressure']:.1f}, "
-                      f"{record['seconds']:.1f} s ({record['cpu_seconds']:.1f} s CPU), {record['iterations']} Newton iterations",
+                      f"{record['seconds']:.1f} s ({record['cpu_seconds']:.1f} s CPU), "
+                      f"{record['iterations']} Newton iterations",
                       flush=True)
                 save_json(out / "accuracy_3d.json", {"machine": machine, "date": str(date.today()),
                                                      "increments": INCREMENTS, "runs": records})

@@ -42,7 +42,8 @@ def main() -> None:
             print(f"| {name} | unavailable: {exc} | |")
             continue
         renderer.frame(0)  # first frame: the canvas's own start-up
-        shapes = best_of(args.repeat, renderer, lambda i: (renderer.draw(i), renderer.canvas.image()))
+        shapes = best_of(args.repeat, renderer, lambda i, renderer=renderer: (renderer.draw(i),
+                                                                             renderer.canvas.image()))
         whole = best_of(args.repeat, renderer, renderer.frame)
         print(f"| {renderer.canvas.name} | {1e3 * shapes:.1f} | {1e3 * whole:.1f} |")
         renderer.canvas.close()

@@ -14,7 +14,6 @@ from taichi_pneuma.apps.bench import markdown
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from sections import main, timed_ramp  # noqa: E402
 
-
 LOCKING_NU = (0.45, 0.49, 0.499, 0.4999)
 LOCKING_BASE = {1: 0.005, 2: 0.02}
 

@@ -19,8 +19,8 @@ import numpy as np
 
 from taichi_pneuma import runtime
 from taichi_pneuma.control.inverse import Reacher, body_length
-from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.scene.scenefile import load_scene
+from taichi_pneuma.scene.targets import Target
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests"))

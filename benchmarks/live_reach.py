@@ -16,11 +16,11 @@ from pathlib import Path
 import numpy as np
 
 from taichi_pneuma import runtime
+from taichi_pneuma.control.inverse import Reacher, command_bounds
+from taichi_pneuma.live.interactive import fixed_view, follow_mouse
 from taichi_pneuma.render.canvases import GGUICanvas, GUICanvas
 from taichi_pneuma.render.frames import FrameRenderer, Track
-from taichi_pneuma.control.inverse import Reacher, command_bounds
 from taichi_pneuma.scene.scenefile import load_scene
-from taichi_pneuma.live.interactive import fixed_view, follow_mouse
 from taichi_pneuma.solve.newton import NewtonOptions
 
 SCENE = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes" / "bidirectional.toml"

@@ -23,10 +23,10 @@ from datetime import date
 from pathlib import Path
 
 from taichi_pneuma import api, runtime
-from taichi_pneuma.fem.planar import BeamGeometry
-from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.fem.layered import extrude
 from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface, write_mesh
+from taichi_pneuma.fem.planar import BeamGeometry
+from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.fem.tetmesh import tet_mesh
 from taichi_pneuma.io.output import prepare_directory, save_json, save_text
 from taichi_pneuma.scene.build import ChamberControl, Material, Scene, reference_scene

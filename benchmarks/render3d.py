@@ -30,12 +30,12 @@ import numpy as np
 from taichi_pneuma import runtime
 from taichi_pneuma.apps.bench import machine
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes, estimate_tets, mesh_solid
+from taichi_pneuma.fem.pneunet import PneuNet
+from taichi_pneuma.live.interactive3d import Slider, explore_3d
 from taichi_pneuma.render.camera import Camera
 from taichi_pneuma.render.colours import BACKGROUND
 from taichi_pneuma.render.frames3d import FrameRenderer3D, Track3D, open_view, section_faces, shaded_triangles
-from taichi_pneuma.live.interactive3d import Slider, explore_3d
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the sibling scripts (solid.py's Meshed)
 
@@ -64,6 +64,7 @@ def live_scene(size: float = 0.3, peak: float = 900.0, order: int = 1):
     control (to `peak` Pa), one material (the scene's stiffer layer aside): (built scene, outer faces, chamber
     walls)."""
     from solid import Meshed
+
     from taichi_pneuma.fem.supports import PointSet
     from taichi_pneuma.fem.tetmesh import tet_mesh
     from taichi_pneuma.scene.build import ChamberControl, Material, Scene

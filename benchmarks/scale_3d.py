@@ -32,8 +32,9 @@ def peak_rss_mb() -> float:
 
 def child(case: str, backend: str) -> dict:
     """One run in this process (module docstring); returns its record."""
-    from taichi_pneuma import runtime
     from solid import octant, phase_ms
+
+    from taichi_pneuma import runtime
     from taichi_pneuma.solve.newton import NewtonOptions
     from taichi_pneuma.solve.simulate import run_schedule
 

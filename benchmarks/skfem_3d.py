@@ -67,8 +67,8 @@ def main() -> None:
         result, seconds, cpu, phases = taichi_ramp(scene)
         runs.append({"seconds": seconds, "cpu_seconds": cpu, "iterations": int(sum(s.iterations for s in result.solves)),
                      "phases": phases})
-        print(f"taichi-pneuma ramp {repeat + 1}: {seconds:.2f} s ({cpu:.2f} s CPU), {runs[-1]['iterations']} Newton iterations, "
-              f"tip {result.tip_deflection:+.5f}", flush=True)
+        print(f"taichi-pneuma ramp {repeat + 1}: {seconds:.2f} s ({cpu:.2f} s CPU), "
+              f"{runs[-1]['iterations']} Newton iterations, tip {result.tip_deflection:+.5f}", flush=True)
     mesh = result.mesh
     chamber = result.built.chambers[0]
     ratios = [chamber_ratio for chamber_ratio in result.history[f"{chamber.chamber_name}.command"][1:]]
@@ -79,8 +79,9 @@ def main() -> None:
         f"  scikit-fem: volume {ratio:.2f}x, {its} Newton iterations, {time.perf_counter() - start:.0f} s", flush=True))
     skfem_seconds, skfem_cpu = time.perf_counter() - start, time.process_time() - cpu
     skfem_tip = float(theirs[mesh.tip, 1].mean())
-    print(f"scikit-fem ramp: {skfem_seconds:.2f} s ({skfem_cpu:.2f} s CPU), {iterations} Newton iterations, tip {skfem_tip:+.5f} "
-          f"(assembly {body.seconds['assembly']:.1f} s, spsolve {body.seconds['solve']:.1f} s)", flush=True)
+    print(f"scikit-fem ramp: {skfem_seconds:.2f} s ({skfem_cpu:.2f} s CPU), {iterations} Newton iterations, "
+          f"tip {skfem_tip:+.5f} (assembly {body.seconds['assembly']:.1f} s, spsolve {body.seconds['solve']:.1f} s)",
+          flush=True)
     warm = min(runs[1:] or runs, key=lambda r: r["seconds"])
     gap = float(np.abs(result.displacements[-1] - theirs).max() / np.abs(theirs).max())
     record = {"machine": f"{platform.node()}, {platform.machine()}, {os.cpu_count()} CPUs", "date": str(date.today()),

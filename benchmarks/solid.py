@@ -43,8 +43,8 @@ class Meshed:
 def octant(divisions: int, layers: int, order: int, increments: int = 3) -> "Scene":
     """A pressurised octant of the thick spherical shell 1 <= r <= 2 (layered.py: 3 divisions^2 layers
     tetrahedra), closed by its three symmetry planes; pressure 0 -> 0.05 E in `increments` increments."""
-    from taichi_pneuma.fem.supports import Roller
     from taichi_pneuma.fem.layered import spherical_shell_octant
+    from taichi_pneuma.fem.supports import Roller
     from taichi_pneuma.fem.tetmesh import tet_mesh
     from taichi_pneuma.scene.build import ChamberControl, Material, Scene
     from taichi_pneuma.scene.schedule import ChamberSchedule
@@ -65,8 +65,8 @@ def solid() -> tuple[str, dict]:
     and quadratic tetrahedra, Taichi's LLT, CHOLMOD and CG with multigrid (where auto's switch to it comes from);
     the elastic Hessian with the analytic eigensystem against the Jacobi one."""
     from taichi_pneuma.materials import StableNeoHookean
-    from taichi_pneuma.solve.newton import NewtonOptions
     from taichi_pneuma.scene.schedule import ChamberSchedule, Schedule
+    from taichi_pneuma.solve.newton import NewtonOptions
     from taichi_pneuma.solve.simulate import run_schedule
     from taichi_pneuma.terms import Elasticity
 

@@ -24,10 +24,10 @@ from pathlib import Path
 import numpy as np
 
 from taichi_pneuma.apps.bench import markdown
-from taichi_pneuma.study import LocalPool, RayCluster, Sweep, Task, parse_vary
-from taichi_pneuma.study.sweep import machine, versions
 from taichi_pneuma.io.output import prepare_directory, save_json, save_text
 from taichi_pneuma.scene.build import reference_scene
+from taichi_pneuma.study import LocalPool, RayCluster, Sweep, Task, parse_vary
+from taichi_pneuma.study.sweep import machine, versions
 
 BASE = reference_scene(0.15)
 AXES = [parse_vary("cy=-0.15:0.15:6"), parse_vary("material.E=5e3:2e4:4")]

@@ -4,8 +4,9 @@ they cannot drift from what they describe:
 - _generated/app_<name>.md: each app's usage and flags, read off its argparse parser (what --help prints);
 - _generated/scene_keys.md: every key of the scene file, from io/scenefile.key_reference() (the format's one
   declaration, io/sceneformat.py);
-- _generated/results_<page>.md: the tables under benchmarks/results/ (machine and date included), each with the docstring of the code that
-  wrote it and the command that writes it again; a table no page claims lands on the performance page;
+- _generated/results_<page>.md: the tables under benchmarks/results/ (machine and date included), each with the
+  docstring of the code that wrote it and the command that writes it again; a table no page claims lands on the
+  performance page;
 - api/<package>.md and api/index.md: an automodule directive per module of each subpackage (pkgutil's walk),
   so that a new module is in the reference without an edit here.
 
@@ -133,9 +134,8 @@ def app_page(name: str) -> str:
 
 
 def scene_keys_page() -> str:
-    from taichi_pneuma.scene.scenefile import key_reference
-
     from taichi_pneuma.io.units import si_text
+    from taichi_pneuma.scene.scenefile import key_reference
 
     def default(k) -> str:
         if not k.default:

@@ -1,4 +1,5 @@
-"""Write taichi_pneuma/scenes/beam_3d.msh, the mesh file of taichi_pneuma/scenes/beam_3d.toml, with gmsh (pip install gmsh).
+"""Write taichi_pneuma/scenes/beam_3d.msh, the mesh file of taichi_pneuma/scenes/beam_3d.toml, with gmsh
+(pip install gmsh).
 
 The reference beam in 3D: a 3.5 x 0.8 x 0.8 box centred at the origin with an ellipsoidal cavity of semi-axes
 (0.85, 0.22, 0.25) centred at (0, 0.15, 0); physical groups "body" (the tetrahedra) and "chamber" (the

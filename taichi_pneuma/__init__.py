@@ -1,7 +1,7 @@
 """taichi-pneuma: soft pneumatic actuators (hyperelastic FEM, chambers, projected Newton in Taichi).
 
     import taichi_pneuma as tp
-    scene = tp.load_scene("bidirectional")           # a shipped scene by name, a .toml path, or tp.reference_scene(E=2e4)
+    scene = tp.load_scene("bidirectional")           # a shipped scene by name or a .toml path; or tp.reference_scene()
     scene = scene.with_value("E", 2e4)                # a short name or any dotted scene-file key, validated
     result = tp.simulate(scene, progress=True)        # a progress bar while it solves
     print(result.tip_deflection, result.tip_rotation, result.history["tip_dy"])

@@ -14,11 +14,11 @@ from __future__ import annotations
 import os
 
 from . import limits, runtime
-from .scene import scenefile
-from .scene.shipped import find
-from .scene.build import BuiltScene, Scene
-from .solve.newton import NewtonOptions
 from .result import Result
+from .scene import scenefile
+from .scene.build import BuiltScene, Scene
+from .scene.shipped import find
+from .solve.newton import NewtonOptions
 from .solve.simulate import MAX_CUTS, RampStopped, run_schedule
 
 __all__ = ["Result", "load_scene", "simulate"]

@@ -25,8 +25,8 @@ from __future__ import annotations
 import importlib
 import os
 
-from .errors import PneumaInputError
 from .environment import BACKENDS
+from .errors import PneumaInputError
 
 CHOICE_VARIABLE = "PNEUMA_BACKEND"
 INSTALL = dict(zip(BACKENDS, ('pip install "taichi>=1.7,<1.8"', 'pip install "quadrants>=1.3.3,<1.5"')))
@@ -79,7 +79,7 @@ def memoize_source_positions(context) -> None:
     what the text is made of: the function's file, name, first line and source lines, and the node's kind, span
     and, for a block statement, the line of its body."""
     original = context.get_pos_info
-    memo = {}
+    memo: dict[tuple, str] = {}
 
     def get_pos_info(self, node):
         body = getattr(node, "body", None)
@@ -90,7 +90,7 @@ def memoize_source_positions(context) -> None:
             text = memo[key] = original(self, node)
         return text
 
-    get_pos_info.original = original
+    get_pos_info.original = original  # type: ignore[attr-defined]  # the method replaced, on the function
     context.get_pos_info = get_pos_info
 
 

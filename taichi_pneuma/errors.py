@@ -19,8 +19,8 @@ def quoted(value) -> str:
     return f"{text[:MAX_QUOTED]!r}... ({len(text)} characters)"
 
 
-def require(condition: bool, message: str) -> None:
-    """Raise PneumaInputError(message) unless condition holds."""
+def require(condition: object, message: str) -> None:
+    """Raise PneumaInputError(message) unless condition holds (is true: a bool, a NumPy bool, a non-empty list)."""
     if not condition:
         raise PneumaInputError(message)
 

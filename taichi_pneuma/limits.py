@@ -30,7 +30,7 @@ MAX_RUNS = 100_000  # runs of one design study (apps/sweep.py --max-runs)
 BYTES_PER_TETRAHEDRON = 12_000  # measured, see the module docstring
 
 
-def refusal(what: str, triangles: float, limit: int) -> str:
+def refusal(what: str, triangles: float, limit: int | None) -> str:
     return (f"{what}: about {triangles:.3g} triangles' worth, {BYTES_PER_TRIANGLE * triangles / 1e9:.3g} GB; the "
             f"limit is {limit} triangles (--max-triangles raises it)")
 

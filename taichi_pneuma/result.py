@@ -17,7 +17,6 @@ from .io.units import history_dimensions
 from .signals import holding
 from .solve.records import Run
 
-
 ELEMENTS = {2: "triangles", 3: "tetrahedra"}  # the summary's element count, by dimension
 
 

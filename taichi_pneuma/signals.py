@@ -26,7 +26,7 @@ import sys
 import threading
 from contextlib import contextmanager
 
-NAMES = {signal.SIGINT: "Ctrl-C", signal.SIGTERM: "SIGTERM"}
+NAMES: dict[int, str] = {signal.SIGINT: "Ctrl-C", signal.SIGTERM: "SIGTERM"}
 if hasattr(signal, "SIGHUP"):
     NAMES[signal.SIGHUP] = "SIGHUP"
 
@@ -135,18 +135,19 @@ def holding():
     if _held is not None or not in_main_thread():
         yield
         return
-    _held = []
+    held = []
+    _held = held
 
     def hold(signum: int) -> None:
-        if not _held:
+        if not held:
             print(f"interrupt ({NAMES[signum]}): writing the result files first", file=sys.stderr)
-        _held.append(signum)
+        held.append(signum)
 
     try:
         with handling(hold):
             yield
     finally:
-        held, _held = _held, None
+        _held = None
         for signum in dict.fromkeys(held):
             signal.raise_signal(signum)
 

@@ -25,8 +25,8 @@ def reference_ramp(taichi_cpu):
     """reference_ramp(cy): (built scene, Result) of the reference scene's full ramp (35 increments to 3.5x on
     its 1632-vertex mesh) with the chamber at height cy, solved the first time it is asked for. Callers read
     it and leave it as it is."""
-    from taichi_pneuma.scene.build import reference_scene
     from taichi_pneuma.result import Result
+    from taichi_pneuma.scene.build import reference_scene
     from taichi_pneuma.solve.simulate import run_schedule
 
     ramps = {}

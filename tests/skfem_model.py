@@ -20,9 +20,8 @@ gradient's norm decreases; converged when |gradient| <= tol x the sum of the thr
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp

@@ -21,10 +21,10 @@ from pathlib import Path
 import numpy as np
 
 from taichi_pneuma.fem.elements import TET_EDGES
-from taichi_pneuma.fem.planar import BeamGeometry
-from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.fem.layered import extrude, layered_tets, spherical_shell_octant
 from taichi_pneuma.fem.mesh import Mesh
+from taichi_pneuma.fem.planar import BeamGeometry
+from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.fem.tetmesh import tet_mesh
 from taichi_pneuma.limits import Budget
 from taichi_pneuma.scene.build import ChamberControl, Material, Scene

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import taichi_pneuma as tp
+from taichi_pneuma.render.plots import command_axis
 from taichi_pneuma.scene.sceneformat import scene_data
 from taichi_pneuma.scene.schema import parse_assignment
-from taichi_pneuma.render.plots import command_axis
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = sorted((ROOT / "taichi_pneuma" / "scenes").glob("*.toml"))

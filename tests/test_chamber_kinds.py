@@ -12,15 +12,15 @@ import pytest
 from test_terms import dense_hessian, fd_gradient, fd_hessian, random_state
 
 from taichi_pneuma.control.inverse import Reacher, ReachOptions, body_length, command_bounds
-from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.scene.scenefile import load_scene
+from taichi_pneuma.fem.tip import tip_measures, tip_outputs
 from taichi_pneuma.render.plots import command_axis
 from taichi_pneuma.scene.build import ChamberControl, reference_scene
-from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
+from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.scene.schedule import ChamberSchedule
+from taichi_pneuma.scene.targets import Target
+from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.solve.sensitivity import sensitivity
-from taichi_pneuma.fem.tip import tip_measures, tip_outputs
 from taichi_pneuma.solve.simulate import describe_commands, run_schedule, settle
 from taichi_pneuma.terms.chambers import (
     KINDS,

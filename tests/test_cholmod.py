@@ -8,11 +8,17 @@ from solid_meshes import box_with_cavity, scene_of
 
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.scene.build import Material
-from taichi_pneuma.solve import linsolve
-from taichi_pneuma.solve.linsolve import (DIRECT_MAX_DOFS_3D, FactorizationError, FixedPattern, make_backend,
-                                          nested_dissection, solve_low_rank_updated)
-from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.scene.schedule import ChamberSchedule
+from taichi_pneuma.solve import linsolve
+from taichi_pneuma.solve.linsolve import (
+    DIRECT_MAX_DOFS_3D,
+    FactorizationError,
+    FixedPattern,
+    make_backend,
+    nested_dissection,
+    solve_low_rank_updated,
+)
+from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.solve.simulate import run_schedule
 
 pytest.importorskip("cvxopt")

@@ -16,10 +16,10 @@ from solid_meshes import box_with_cavity, extruded_beam, scene_of, shell_octant
 import taichi_pneuma
 from taichi_pneuma import backend
 from taichi_pneuma.fem.meshfile import write_mesh
-from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.scene.build import Material, reference_scene
-from taichi_pneuma.solve.newton import NewtonSolver
+from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.scene.schedule import ChamberSchedule, area_ramp
+from taichi_pneuma.solve.newton import NewtonSolver
 from taichi_pneuma.solve.simulate import run_schedule
 
 SCENES = Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes"

@@ -6,15 +6,15 @@ import numpy as np
 import pytest
 
 import taichi_pneuma as tp
+from taichi_pneuma.fem.elements import TRIANGLE_P2
 from taichi_pneuma.fem.planar import Geometry, onto_curves
 from taichi_pneuma.fem.shapes import Ellipse, Polygon, Rectangle, RoundedRectangle
 from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.materials import lame_parameters
-from taichi_pneuma.fem.elements import TRIANGLE_P2
 from taichi_pneuma.scene.build import ChamberControl, Material, Scene
-from taichi_pneuma.terms.model import Configuration
 from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms.chambers import PressureControl
+from taichi_pneuma.terms.model import Configuration
 
 INNER, OUTER, NU, LOAD = 1.0, 2.0, 0.3, 1e-6
 

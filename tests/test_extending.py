@@ -1,17 +1,27 @@
 """docs/extending.md's worked examples are code the tests run: a new term (a tip load, checked here against
-Timoshenko beam theory), and every Python block of the page appears verbatim in the package or the tests."""
+Timoshenko beam theory), a new law's material form (read, checked, written and listed by the scene format once
+registered), and every Python block of the page appears verbatim in the package or the tests."""
 
 import re
+import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
+from test_materials import SaintVenantKirchhoff
 
+import taichi_pneuma as tp
+from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Rectangle
 from taichi_pneuma.fem.supports import PointSet
+from taichi_pneuma.materials import MaterialForm, register_form
+from taichi_pneuma.materials.neo_hookean import YOUNGS_MODULUS
+from taichi_pneuma.materials.registry import NAMED, POISSON_RATIO, REGISTERED
 from taichi_pneuma.scene.build import Material, Scene
+from taichi_pneuma.scene.scenefile import key_reference, read_scene
+from taichi_pneuma.scene.sceneformat import scene_table
 from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms.base import Term
 from taichi_pneuma.terms.effects import EFFECTS, Effect
@@ -71,6 +81,54 @@ def test_tip_load_bends_a_cantilever_as_timoshenko_predicts(tip_force_registered
     young, poisson = mu * (3 * lame + 2 * mu) / (lame + mu), lame / (2 * (lame + mu))
     theory = F * L ** 3 / (3 * young / (1 - poisson ** 2) * H ** 3 / 12) + F * L / (5 / 6 * mu * H)
     assert deflection == pytest.approx(theory, rel=0.01)
+
+
+@dataclass(frozen=True)
+class SaintVenantKirchhoffMaterial(MaterialForm):
+    """law = "saint_venant_kirchhoff": the Saint Venant-Kirchhoff law (tests/test_materials.py) of E and nu."""
+
+    youngs_modulus: float
+    poisson_ratio: float = 0.3
+    selector = "law"
+    names = ("saint_venant_kirchhoff",)
+    keys = (YOUNGS_MODULUS, POISSON_RATIO)
+    summary = "a Saint Venant-Kirchhoff material (law = saint_venant_kirchhoff: E and nu)"
+
+    def __post_init__(self):
+        Material(self.youngs_modulus, self.poisson_ratio)  # the checks of E and nu
+
+    def law_parameters(self, units):
+        return SaintVenantKirchhoff, SaintVenantKirchhoff.parameters(self.youngs_modulus, self.poisson_ratio)[0]
+
+
+@pytest.fixture
+def saint_venant_kirchhoff_registered():
+    register_form(SaintVenantKirchhoffMaterial)
+    scene_table.cache_clear()  # the scene format lists the forms registered when it is first declared
+    yield
+    del NAMED["law", "saint_venant_kirchhoff"]
+    REGISTERED.remove(SaintVenantKirchhoffMaterial)
+    scene_table.cache_clear()
+
+
+def test_a_registered_material_form_is_read_checked_written_and_listed_by_the_scene_format(
+        saint_venant_kirchhoff_registered):
+    """Once registered, the form's name is a value of material.law: its keys are read into the form, refused
+    where it lacks them or lacks a value, written back (the scene reads back equal) and listed in the key
+    reference; the scene's law is the form's."""
+    scene = tp.reference_scene().with_values({"material.law": "saint_venant_kirchhoff", "material.E": 2e4})
+    assert scene.material == SaintVenantKirchhoffMaterial(2e4)
+    assert scene.law_parameters()[0] is SaintVenantKirchhoff
+    assert 'law = "saint_venant_kirchhoff"' in scene.to_toml()
+    assert read_scene(tomllib.loads(scene.to_toml()), scene.name) == scene
+    law = next(row for row in key_reference() if row.key == "material.law")
+    assert law.allowed.endswith(", saint_venant_kirchhoff")
+    with pytest.raises(PneumaInputError, match="law = 'saint_venant_kirchhoff' needs E"):
+        tp.reference_scene().with_value("material.law", "saint_venant_kirchhoff")
+    with pytest.raises(PneumaInputError, match="law = 'saint_venant_kirchhoff' takes E, nu, not K"):
+        scene.with_value("material.K", 1.0)
+    with pytest.raises(PneumaInputError, match=r"nu = 0.5 must lie in \(-1, 0.5\)"):
+        scene.with_value("material.nu", 0.5)
 
 
 def test_every_python_block_of_the_page_is_code_the_tests_or_the_package_run():

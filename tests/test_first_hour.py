@@ -10,22 +10,22 @@ import math
 import re
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import imageio.v3 as iio
 import imageio_ffmpeg
 import numpy as np
 import pytest
-import tomllib
 from renderers import SOFTWARE
 
 import taichi_pneuma as tp
 from taichi_pneuma.apps import bench, inflate, reach, steer, sweep
-from taichi_pneuma.study import parse_vary, study_figure
-from taichi_pneuma.scene.shipped import SHIPPED
 from taichi_pneuma.render.colours import TIP_PATH
 from taichi_pneuma.render.frames import PIN_HALF_PX, FrameRenderer, Track
 from taichi_pneuma.render.text import label_box
+from taichi_pneuma.scene.shipped import SHIPPED
+from taichi_pneuma.study import parse_vary, study_figure
 
 ROOT = Path(__file__).resolve().parent.parent
 COARSE = ["--max-area", "0.01", "--growth", "2", "--steps", "3", "--quiet"]

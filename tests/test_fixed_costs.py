@@ -12,8 +12,8 @@ from taichi_pneuma import backend
 from taichi_pneuma.backend import ti
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem import gmsh_mesher
-from taichi_pneuma.fem.polygons import has_close_pair
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes, Solid, estimate_tets, mesh_solid
+from taichi_pneuma.fem.polygons import has_close_pair
 from taichi_pneuma.fem.solids import Box, Ellipsoid
 from taichi_pneuma.io import cache
 

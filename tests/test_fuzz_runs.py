@@ -1,8 +1,8 @@
 """Fuzzing what surrounds a run (issue 21): the state the output directory is in (Hypothesis: each result
 name absent, a file, a folder, a link to a file or folder outside, a dangling link or a FIFO), signals
-at random times, runs of the same scene at once, and any value of the package's environment variables. Whatever the state, a run ends with its files
-whole or one `error:` line, never follows a link out of --out, never blocks and never prints a
-traceback; a signal ends it with 128 + signal and the steps done kept consistently."""
+at random times, runs of the same scene at once, and any value of the package's environment variables. Whatever
+the state, a run ends with its files whole or one `error:` line, never follows a link out of --out, never blocks
+and never prints a traceback; a signal ends it with 128 + signal and the steps done kept consistently."""
 
 import importlib.util
 import json

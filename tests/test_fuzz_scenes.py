@@ -18,6 +18,7 @@ import json
 import math
 import tempfile
 import time
+import tomllib
 import warnings
 from contextlib import redirect_stderr, redirect_stdout
 from datetime import timedelta
@@ -25,7 +26,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import tomllib
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 from solid_meshes import box_with_cavity, lzma_vtu, moved_up

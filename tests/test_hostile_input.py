@@ -18,14 +18,14 @@ import pytest
 
 import taichi_pneuma as tp
 from taichi_pneuma.apps import inflate, sweep
-from taichi_pneuma.study import Sweep, parse_vary, plan, run_task, study_figure
-from taichi_pneuma.scene.targets import read_targets_csv
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.limits import Budget
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Polygon
+from taichi_pneuma.limits import Budget
 from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.scene.schema import parse_assignment, parse_key
+from taichi_pneuma.scene.targets import read_targets_csv
+from taichi_pneuma.study import Sweep, parse_vary, plan, run_task, study_figure
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 CHEAP = (SCENES / "reference_beam.toml").read_text().replace("max_area = 0.0012", "max_area = 0.02") \

@@ -13,8 +13,8 @@ from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Rectangle
 from taichi_pneuma.fem.supports import PointSet
 from taichi_pneuma.materials import IsochoricMaterial, IsochoricPolynomial
-from taichi_pneuma.terms.model import EnergyModel
 from taichi_pneuma.terms import Elasticity
+from taichi_pneuma.terms.model import EnergyModel
 
 # One material of each form (kPa, of Ecoflex-like magnitude)
 FORMS = {"neo_hookean": IsochoricMaterial("neo_hookean", 12.0, poisson_ratio=0.49999),

@@ -6,8 +6,8 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.planar import BeamGeometry
 from taichi_pneuma.io.output import prepare_directory
 from taichi_pneuma.scene.build import Material, reference_scene
-from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.scene.schedule import area_ramp
+from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.terms.chambers import AreaControl
 
 INF, NAN = float("inf"), float("nan")

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 from taichi_pneuma.control.inverse import Reacher, ReachOptions, body_length, command_bounds
-from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.scene.scenefile import load_scene
-from taichi_pneuma.scene.build import ChamberControl, reference_scene
-from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
-from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.fem.tip import tip_measures
+from taichi_pneuma.scene.build import ChamberControl, reference_scene
+from taichi_pneuma.scene.scenefile import load_scene
+from taichi_pneuma.scene.schedule import ChamberSchedule
+from taichi_pneuma.scene.targets import Target
+from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.solve.simulate import settle
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"

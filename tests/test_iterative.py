@@ -6,11 +6,18 @@ import pytest
 import scipy.sparse as sp
 from solid_meshes import box_with_cavity, scene_of
 
-from taichi_pneuma.solve import linsolve
-from taichi_pneuma.solve.linsolve import (AMG_MIN_DOFS, AmgConjugateGradient, FixedPattern, NotConverged,
-                                          make_backend, rigid_body_modes, solve_low_rank_updated)
-from taichi_pneuma.solve.newton import FORCING_MAX, NewtonOptions, NewtonSolver, forcing_term
 from taichi_pneuma.scene.schedule import area_ramp
+from taichi_pneuma.solve import linsolve
+from taichi_pneuma.solve.linsolve import (
+    AMG_MIN_DOFS,
+    AmgConjugateGradient,
+    FixedPattern,
+    NotConverged,
+    make_backend,
+    rigid_body_modes,
+    solve_low_rank_updated,
+)
+from taichi_pneuma.solve.newton import FORCING_MAX, NewtonOptions, NewtonSolver, forcing_term
 from taichi_pneuma.solve.simulate import run_schedule
 
 pytest.importorskip("pyamg")  # the multigrid library, not installed where it has no wheel (Linux aarch64)

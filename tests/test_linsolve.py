@@ -1,4 +1,5 @@
-"""The linear-solver backends agree with each other on the Newton matrices, and the Cholesky ones refuse indefinite ones."""
+"""The linear-solver backends agree with each other on the Newton matrices, and the Cholesky ones refuse indefinite
+ones."""
 
 import numpy as np
 import pytest

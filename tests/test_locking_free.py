@@ -25,9 +25,9 @@ import taichi_pneuma as tp
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.planar import BeamGeometry
 from taichi_pneuma.materials import IsochoricMaterial, IsochoricPolynomial
-from taichi_pneuma.terms.model import EnergyModel
 from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms import Elasticity, NodalVolumeElasticity
+from taichi_pneuma.terms.model import EnergyModel
 
 MATERIALS = {"neo_hookean": lambda nu: IsochoricMaterial("neo_hookean", 0.5, poisson_ratio=nu),
              "mooney_rivlin": lambda nu: IsochoricMaterial("mooney_rivlin", 1.0, 0.3, poisson_ratio=nu),

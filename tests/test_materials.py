@@ -12,10 +12,10 @@ from taichi_pneuma.backend import ti
 from taichi_pneuma.materials import LAWS, Law, StableNeoHookean, lame_parameters, register
 from taichi_pneuma.materials.law import element_parameters, stress_eigensystem
 from taichi_pneuma.scene.build import reference_scene
-from taichi_pneuma.terms.model import EnergyModel
 from taichi_pneuma.solve.newton import NewtonSolver
 from taichi_pneuma.terms import Clamp, Elasticity
 from taichi_pneuma.terms.chambers import AreaControl
+from taichi_pneuma.terms.model import EnergyModel
 
 Arrays1, Arrays2, Arrays3 = (ti.types.ndarray(dtype=ti.f64, ndim=n) for n in (1, 2, 3))
 MU, LAM = lame_parameters(1e4, 0.45)
@@ -158,7 +158,8 @@ def test_stable_neo_hookean_linearises_to_lame_constants_mu_and_lam_minus_mu():
 
 
 def test_plane_strain_energy_is_the_3d_law_at_unit_thickness_stretch():
-    """psi(F) of the stable neo-Hookean 2D law, mu (1 - J) + lam/2 (1 - J)^2 + mu/2 (|F|^2 - 2), at F = [[F2, 0], [0, 1]]."""
+    """psi(F) of the stable neo-Hookean 2D law, mu (1 - J) + lam/2 (1 - J)^2 + mu/2 (|F|^2 - 2), at
+    F = [[F2, 0], [0, 1]]."""
     F = random_F(20, dim=2)
     F2 = F[:, :2, :2]
     J = np.linalg.det(F2)

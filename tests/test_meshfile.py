@@ -14,10 +14,10 @@ import taichi_pneuma as tp
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.elements import TET_P2
+from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface, write_mesh
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Rectangle
 from taichi_pneuma.fem.supports import PointSet, Roller
-from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface, write_mesh
 from taichi_pneuma.render.paraview import VtkSeries
 from taichi_pneuma.scene.build import ChamberControl, Scene
 from taichi_pneuma.scene.schedule import ChamberSchedule, area_ramp

@@ -4,19 +4,19 @@ errors, and every output of a scene with units saying its unit (a unitless scene
 
 import csv
 import io
+import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
-import tomllib
 
 import taichi_pneuma as tp
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.io.units import UNITS
 from taichi_pneuma.materials import IsochoricMaterial
 from taichi_pneuma.materials.presets import PRESETS, PresetMaterial
 from taichi_pneuma.render.plots import history_figure
+from taichi_pneuma.scene.scenefile import read_scene
 
 PSI = 6894.757  # Pa
 # Engineering stress (kPa) at engineering strains 50, 100 and 200 % in the uniaxial tests of Marechal et al. 2021
@@ -186,8 +186,8 @@ def test_a_unitless_scenes_outputs_are_named_as_before():
 
 @pytest.mark.slow
 def test_the_pneunet_scene_curls_towards_its_paper_layer_which_does_not_stretch():
-    """taichi_pneuma/scenes/pneunet_mm_kpa.toml: the tip turns clockwise (towards the paper), more with every 10 kPa; the
-    bottom edge (the paper) keeps its length within 0.05 % while the top edge stretches by more than 10 %."""
+    """taichi_pneuma/scenes/pneunet_mm_kpa.toml: the tip turns clockwise (towards the paper), more with every 10
+    kPa; the bottom edge (the paper) keeps its length within 0.05 % while the top edge stretches by more than 10 %."""
     result = tp.simulate(tp.load_scene(Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes" /
                                        "pneunet_mm_kpa.toml"))
     assert result.converged and result.scene.units is UNITS["mm-kPa"]

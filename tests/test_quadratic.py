@@ -18,10 +18,10 @@ from test_terms import (
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Rectangle
 from taichi_pneuma.scene.build import Scene, reference_scene
-from taichi_pneuma.terms.model import Configuration
 from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms.chambers import PressureControl
 from taichi_pneuma.terms.effects import Gravity, Ground
+from taichi_pneuma.terms.model import Configuration
 
 # scikit-fem (an independent code, same model): P2 on the reference mesh refined twice, 96,384 nodes
 INDEPENDENT_CONVERGED_TIP = -0.2583

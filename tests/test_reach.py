@@ -14,10 +14,10 @@ from test_inverse import SCENES, forward
 from test_render import xvfb_display  # noqa: F401 (a fixture)
 
 from taichi_pneuma.apps.reach import main
-from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.render.colours import TARGET
 from taichi_pneuma.render.frames import FrameRenderer, Track
 from taichi_pneuma.scene.build import reference_scene
+from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.solve.simulate import run_schedule
 
 BIDIRECTIONAL = str(SCENES / "bidirectional.toml")
@@ -171,8 +171,8 @@ def test_design_out_of_range_is_unreachable(tmp_path, capsys):
 def test_live_drag_resolves_on_every_move_and_sliders_command_directly(xvfb_display, monkeypatch, capsys, bidirectional):
     """Under Xvfb, in a real ti.GUI window; the canvas's mouse query is scripted (the button held at two
     target positions, then released) and on the last frame the 'top' slider returns a value the user set."""
-    from taichi_pneuma.render.canvases import GUICanvas
     from taichi_pneuma.live.interactive import fixed_view, follow_mouse
+    from taichi_pneuma.render.canvases import GUICanvas
 
     size = (480, 192)
     view = FrameRenderer([Track(bidirectional.mesh, bidirectional.mesh.vertices[None], np.ones((1, 2)),

@@ -13,9 +13,9 @@ from test_render import xvfb_display  # noqa: F401  (the virtual display fixture
 from taichi_pneuma.backend import has_ggui
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.live import interactive3d
+from taichi_pneuma.live.interactive3d import Slider, commands_from, dragged, explore_3d
 from taichi_pneuma.render.camera import MAX_ELEVATION, Camera
 from taichi_pneuma.render.frames3d import CHAMBER, FrameRenderer3D, Track3D, open_view, render_video_3d
-from taichi_pneuma.live.interactive3d import Slider, commands_from, dragged, explore_3d
 from taichi_pneuma.render.surface import AMBIENT, BACK_FACE, NumpyView, rasterise, shade_faces
 
 CUBE = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)

@@ -10,11 +10,11 @@ import pytest
 
 import taichi_pneuma as tp
 from taichi_pneuma import limits
-from taichi_pneuma.fem import sizing
 from taichi_pneuma.control.inverse import Reacher, frames
-from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.errors import PneumaInputError
+from taichi_pneuma.fem import sizing
 from taichi_pneuma.render.frames import Track
+from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.terms.effects import Gravity, Ground, SelfContact
 
 EXTRA = ["target", "target_x", "target_y", "target_angle", "tip_x", "tip_y", "tip_error", "descent"]

@@ -12,8 +12,8 @@ import pytest
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.polygons import polygon_self_intersects
-from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.scene.build import ChamberControl, reference_scene
+from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 from taichi_pneuma.terms.effects import SelfContact

@@ -8,28 +8,28 @@ import ast
 import copy
 import dataclasses
 import re
+import tomllib
 from pathlib import Path
 
 import pytest
-import tomllib
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import taichi_pneuma as tp
-from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.errors import PneumaInputError
+from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 from taichi_pneuma.fem.supports import SIDES, PointSet, Roller
-from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface
 from taichi_pneuma.io.output import FORMULA
-from taichi_pneuma.scene.scenefile import key_reference, read_scene
-from taichi_pneuma.scene.sceneformat import scene_data
 from taichi_pneuma.io.units import UNITLESS, UNITS
 from taichi_pneuma.materials import FORMS, IsochoricMaterial
 from taichi_pneuma.materials.presets import PRESETS, PresetMaterial
 from taichi_pneuma.scene.build import ChamberControl, Material, Region, Scene
+from taichi_pneuma.scene.scenefile import key_reference, read_scene
+from taichi_pneuma.scene.sceneformat import scene_data
 from taichi_pneuma.scene.schedule import ChamberSchedule
+from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.terms.chambers import KINDS, AreaControl, PressureControl
 from taichi_pneuma.terms.effects import EFFECTS, Dynamics, Effect, Gravity, Ground, SelfContact
 

@@ -14,13 +14,13 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from solid_meshes import extruded_beam, scene_of
 
-from taichi_pneuma.scene.scenefile import load_scene
+from taichi_pneuma.fem.tip import tip_outputs
 from taichi_pneuma.scene.build import reference_scene
+from taichi_pneuma.scene.scenefile import load_scene
+from taichi_pneuma.scene.schedule import area_ramp
 from taichi_pneuma.solve.linsolve import FixedPattern
 from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
-from taichi_pneuma.scene.schedule import area_ramp
 from taichi_pneuma.solve.sensitivity import command_forces, sensitivity
-from taichi_pneuma.fem.tip import tip_outputs
 from taichi_pneuma.solve.simulate import settle
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"

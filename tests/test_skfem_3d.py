@@ -8,9 +8,9 @@ import pytest
 pytest.importorskip("skfem")
 
 from skfem import asm  # noqa: E402
-
 from skfem_model import SkfemBody, strain_energy  # noqa: E402
 from solid_meshes import box_with_cavity, scene_of  # noqa: E402
+
 from taichi_pneuma import api  # noqa: E402
 from taichi_pneuma.scene.build import Material  # noqa: E402
 from taichi_pneuma.scene.schedule import area_ramp  # noqa: E402

@@ -9,19 +9,19 @@ from test_terms import dense_hessian, fd_gradient, fd_hessian
 import taichi_pneuma as tp
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.elements import TET_EDGES, TRIANGLE_P2, boundary_facets
-from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.fem.layered import spherical_shell_octant
+from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.fem.tetmesh import tet_mesh
 from taichi_pneuma.limits import Budget
 from taichi_pneuma.materials import StableNeoHookean
 from taichi_pneuma.scene.build import Material
-from taichi_pneuma.terms.model import EnergyModel
-from taichi_pneuma.solve.newton import NewtonSolver
 from taichi_pneuma.scene.schedule import ChamberSchedule
+from taichi_pneuma.solve.newton import NewtonSolver
 from taichi_pneuma.terms import Clamp, Elasticity, NormalClamp
 from taichi_pneuma.terms.base import Term
 from taichi_pneuma.terms.chambers import AreaControl, PressureControl
 from taichi_pneuma.terms.effects import Gravity, Ground, SelfContact
+from taichi_pneuma.terms.model import EnergyModel
 
 RNG = np.random.default_rng(3)
 
@@ -32,7 +32,7 @@ def tet_volumes(points, tets):
     return np.linalg.det(np.stack([x[:, 1] - x[:, 0], x[:, 2] - x[:, 0], x[:, 3] - x[:, 0]], axis=2)) / 6
 
 
-def cone_volume(points, triangles, origin=np.zeros(3)):
+def cone_volume(points, triangles, origin=(0.0, 0.0, 0.0)):
     """1/6 sum (x0 - o) . ((x1 - o) x (x2 - o)) over flat triangles: the volume a closed surface encloses."""
     x0, x1, x2 = (points[triangles[:, i]] - origin for i in range(3))
     return float(np.einsum("ij,ij->i", x0, np.cross(x1, x2)).sum() / 6)
@@ -135,7 +135,8 @@ def test_every_3d_term_matches_finite_differences(body, order):
               model.add(NormalClamp(config, mesh.boundary[::3], (1.0, 2.0, 2.0), 1e3))]
     others += Gravity(2.0, 3.0).terms(config, mesh, mesh.nodal_measures(), Budget())
     lowest = mesh.vertices[mesh.boundary, 1].min()
-    others += [model.add(t) for t in Ground(lowest - 0.02, dhat=0.05, stiffness=10.0).terms(config, mesh, None, Budget())]
+    ground = Ground(lowest - 0.02, dhat=0.05, stiffness=10.0)
+    others += [model.add(t) for t in ground.terms(config, mesh, None, Budget())]
     model.add(others[2])
     u = state(mesh, 0.01, order)
     model.set_displacements(u)

@@ -15,16 +15,16 @@ from test_sensitivity import TIGHT, relative_error
 import taichi_pneuma as tp
 from taichi_pneuma.apps.reach import main as reach_main
 from taichi_pneuma.control.inverse import Reacher, ReachOptions
-from taichi_pneuma.study import RunOptions, Sweep, check_axes, parse_vary, run_task
-from taichi_pneuma.scene.targets import Target, read_targets_csv
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.meshfile import write_mesh
-from taichi_pneuma.scene.build import Material
-from taichi_pneuma.solve.newton import NewtonSolver
-from taichi_pneuma.scene.schedule import ChamberSchedule
-from taichi_pneuma.solve.sensitivity import sensitivity
 from taichi_pneuma.fem.tip import tip_outputs
+from taichi_pneuma.scene.build import Material
+from taichi_pneuma.scene.schedule import ChamberSchedule
+from taichi_pneuma.scene.targets import Target, read_targets_csv
+from taichi_pneuma.solve.newton import NewtonSolver
+from taichi_pneuma.solve.sensitivity import sensitivity
 from taichi_pneuma.solve.simulate import settle
+from taichi_pneuma.study import RunOptions, Sweep, check_axes, parse_vary, run_task
 
 CAVITIES = {"back": ((-0.75, 0.0, -0.24), (0.75, 0.2, -0.08)), "front": ((-0.75, 0.0, 0.08), (0.75, 0.2, 0.24))}
 PRESSURE = 2000.0  # up to E / 5: tip deflections of a few percent of the box's height

@@ -15,8 +15,8 @@ from test_chamber_kinds import check_command_force, check_derivatives, check_gas
 import taichi_pneuma as tp
 from taichi_pneuma.fem.meshfile import write_mesh
 from taichi_pneuma.scene.build import Material
-from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.scene.schedule import ChamberSchedule
+from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.solve.simulate import run_schedule, settle
 from taichi_pneuma.terms.chambers import KINDS, AreaControl, ClosedGas, PressureControl, Syringe
 

@@ -25,10 +25,10 @@ import taichi_pneuma as tp
 from taichi_pneuma.io.units import UNITS
 from taichi_pneuma.materials import IsochoricMaterial
 from taichi_pneuma.materials.presets import PresetMaterial
-from taichi_pneuma.terms.model import EnergyModel
-from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.scene.schedule import ChamberSchedule
+from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.terms import Elasticity, NormalClamp
+from taichi_pneuma.terms.model import EnergyModel
 
 # Yeoh and Mooney-Rivlin in units of C10; the preset in kPa (its Yeoh fit, converted from Pa)
 MATERIALS = {

@@ -11,10 +11,10 @@ import taichi_pneuma as tp
 from taichi_pneuma.fem.shapes import Polygon
 from taichi_pneuma.materials import StableNeoHookean, lame_parameters
 from taichi_pneuma.scene.build import Material, reference_scene
-from taichi_pneuma.terms.model import EnergyModel
 from taichi_pneuma.scene.schedule import ChamberSchedule, area_ramp
 from taichi_pneuma.terms import Elasticity
 from taichi_pneuma.terms.chambers import AreaControl
+from taichi_pneuma.terms.model import EnergyModel
 
 CONVERGED_2D_TIP = -0.25826  # the 2D reference ramp's converged tip deflection (P2, uniform refinement; docs/accuracy.md)
 

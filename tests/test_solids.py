@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
-from taichi_pneuma.fem.pneunet import PneuNet
-from taichi_pneuma.fem.solids import Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes, Solid, cavity_volume, estimate_tets, mesh_solid
+from taichi_pneuma.fem.pneunet import PneuNet
+from taichi_pneuma.fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
+from taichi_pneuma.fem.solids import Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
 
 gmsh = pytest.importorskip("gmsh", reason="gmsh is not installed (pip install 'taichi-pneuma[3d]')")
 
@@ -245,9 +245,8 @@ def test_shipped_scene_maps_one_to_one_onto_the_generator():
     """The shipped pneunet_3d.toml: its [body] keys are PneuNet's fields, its [mesh] keys MeshSizes' (and the
     order), its chambers and its region name the generated solid's surface and volume groups."""
     import dataclasses
-    from pathlib import Path
-
     import tomllib
+    from pathlib import Path
 
     scene = tomllib.loads((Path(__file__).parents[1] / "taichi_pneuma/scenes/pneunet_3d.toml").read_text())
     body = {k: v for k, v in scene["body"].items() if k != "shape"}

@@ -5,16 +5,16 @@ import csv
 import json
 import subprocess
 import sys
+import tomllib
 
 import numpy as np
 import pytest
-import tomllib
 
 import taichi_pneuma as tp
 from taichi_pneuma import backend
 from taichi_pneuma.apps.sweep import main
-from taichi_pneuma.study import RunOptions, Task, check_axes, parse_vary, plan, run_task, study_figure
 from taichi_pneuma.scene.scenefile import read_scene
+from taichi_pneuma.study import RunOptions, Task, check_axes, parse_vary, plan, run_task, study_figure
 
 CY = "chambers[0].center[1]"
 COARSE = ["--steps", "11", "--max-area", "0.01"]  # 380 vertices, 10 increments: ~0.1 s a ramp

@@ -28,8 +28,8 @@ from taichi_pneuma.fem.shapes import Ellipse, Rectangle
 from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.limits import Budget
 from taichi_pneuma.scene.build import ChamberControl, Scene
-from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.scene.schedule import area_ramp
+from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.solve.sensitivity import sensitivity
 from taichi_pneuma.solve.simulate import run_schedule
 

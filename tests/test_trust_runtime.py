@@ -10,17 +10,16 @@ import sys
 
 import numpy as np
 import pytest
+from solid_meshes import box_with_cavity, scene_of
 
 from taichi_pneuma.apps.inflate import main
+from taichi_pneuma.control.inverse import Reacher
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.materials import IsochoricMaterial
 from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.scene.schedule import ChamberSchedule
-from taichi_pneuma.control.inverse import Reacher
 from taichi_pneuma.solve.simulate import NoEquilibrium, RampFailed, run_schedule
 from taichi_pneuma.terms.chambers import AreaControl
-
-from solid_meshes import box_with_cavity, scene_of
 
 RING = """name = "ring"
 [body]

@@ -26,10 +26,10 @@ from solid_meshes import shell_octant
 import taichi_pneuma as tp
 from taichi_pneuma.apps import inflate
 from taichi_pneuma.errors import PneumaInputError
+from taichi_pneuma.fem.meshfile import write_mesh
 from taichi_pneuma.fem.planar import BeamGeometry, Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Rectangle
 from taichi_pneuma.fem.supports import PointSet
-from taichi_pneuma.fem.meshfile import write_mesh
 from taichi_pneuma.scene.build import ChamberControl, Scene
 from taichi_pneuma.scene.schedule import area_ramp
 from taichi_pneuma.terms.effects import Gravity, Ground
@@ -173,8 +173,8 @@ def test_the_first_line_lists_the_supports_and_a_refused_scene_exits_2(tmp_path,
     loose = scene_file(tmp_path, block_text(""), "loose")
     assert inflate.main(["--scene", str(loose), "--out", str(tmp_path / "out2"), "--no-video"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"error: the supports (no clamp) leave free: translation along x, translation along y, rotation "
-                   f"about z; a static body needs a [clamp] (side or box) or [[rollers]] that hold every rigid motion"]
+    assert err == ["error: the supports (no clamp) leave free: translation along x, translation along y, rotation "
+                   "about z; a static body needs a [clamp] (side or box) or [[rollers]] that hold every rigid motion"]
 
 
 def test_no_clamp_survives_the_scene_file_round_trip(tmp_path):

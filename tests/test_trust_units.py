@@ -15,8 +15,6 @@ import pytest
 import taichi_pneuma as tp
 from taichi_pneuma.apps import inflate
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.scene.sceneformat import scene_data
-from taichi_pneuma.scene.scenefile import key_reference, read_scene
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Polygon
 from taichi_pneuma.fem.supports import PointSet
@@ -25,8 +23,11 @@ from taichi_pneuma.materials import IsochoricMaterial
 from taichi_pneuma.materials.isochoric import unstable_stretch
 from taichi_pneuma.materials.presets import PRESETS
 from taichi_pneuma.scene.build import ChamberControl, Material, Region, Scene
+from taichi_pneuma.scene.scenefile import key_reference, read_scene
+from taichi_pneuma.scene.sceneformat import scene_data
 from taichi_pneuma.scene.schedule import ChamberSchedule
-from taichi_pneuma.terms.chambers import KINDS as CHAMBER_KINDS, AreaControl, ClosedGas
+from taichi_pneuma.terms.chambers import KINDS as CHAMBER_KINDS
+from taichi_pneuma.terms.chambers import AreaControl, ClosedGas
 from taichi_pneuma.terms.effects import EFFECTS, Gravity, Ground, SelfContact
 
 # A dented wall (balloon_syringe.toml, coarser and stiffer, so that the air's compression matters) in mm and kPa
@@ -372,7 +373,7 @@ def test_every_api_default_with_a_unit_is_the_scene_files_default():
     """Each si_default field of the chamber kinds, effects, Material, Scene and Geometry is the key of the key
     reference with the same SI default, unit and scaling: one declaration serves both."""
     rows = {row.key: row for row in key_reference()}
-    owners = [(cls, f"chambers[].{{}}") for cls in CHAMBER_KINDS.values()] + [
+    owners = [(cls, "chambers[].{}") for cls in CHAMBER_KINDS.values()] + [
         (cls, f"effects.{cls.name}.{{}}") for cls in EFFECTS.values()] + [
         (Material, "material.{}"), (Scene, "clamp.{}"), (Geometry, "mesh.{}")]
     names = {"youngs_modulus": "E", "clamp_stiffness": "stiffness"}

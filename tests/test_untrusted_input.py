@@ -15,10 +15,9 @@ import numpy as np
 import pytest
 
 from taichi_pneuma import limits
-from taichi_pneuma.fem import sizing
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem import triangulation
+from taichi_pneuma.fem import sizing, triangulation
 from taichi_pneuma.fem.shapes import MAX_WALL_POINTS
 from taichi_pneuma.io.output import check_stem, save_text
 from taichi_pneuma.scene.scenefile import MAX_SCENE_BYTES, load_scene

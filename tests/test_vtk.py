@@ -8,8 +8,8 @@ import pytest
 
 import taichi_pneuma as tp
 from taichi_pneuma.apps.inflate import main
-from taichi_pneuma.render.paraview import VtkSeries
 from taichi_pneuma.materials import lame_parameters
+from taichi_pneuma.render.paraview import VtkSeries
 
 
 def read_pvd(path):

@@ -14,9 +14,9 @@ import argparse
 import sys
 
 from .. import __version__, environment, limits, runtime, signals
-from ..fem import sizing
 from ..errors import PneumaInputError, require, require_finite
-from ..io.units import AREA, LENGTH, MEASURES, PRESSURE
+from ..fem import sizing
+from ..io.units import LENGTH, MEASURES, PRESSURE
 from ..render import COLOR_FIELDS, RENDERERS
 
 # --quality presets: (max triangle area, element order, Newton tolerance); see the accuracy study (docs).
@@ -208,8 +208,8 @@ def build(scene, args: argparse.Namespace):
     """Mesh the scene and build its terms in the budget of --max-triangles, and print the mesh size, the supports,
     the terms (and, where a --quality preset of args made the mesh, its measured error: preset_note) and each
     chamber's rest area."""
-    from ..scene.build import describe_supports
     from ..result import ELEMENTS
+    from ..scene.build import describe_supports
 
     built = scene.build(budget(args))
     mesh = built.mesh
@@ -240,7 +240,7 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
 
     increments, units, limit = built.scene.increments, built.scene.units, built.scene.max_stretch
     bar = tqdm(total=increments + 1, desc=label, unit="step", disable=True if args.quiet else None, leave=False)
-    past = []  # the step that first passed the scene's max_stretch
+    past: list[int] = []  # the step that first passed the scene's max_stretch
 
     def progress(step, positions, contact_force):
         if vtk is not None:
@@ -264,7 +264,7 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
             return simulate(built, tol=args.tol, max_iterations=args.max_iterations, max_cuts=args.max_cuts,
                             progress=progress, stop=interrupted.is_set)
         except RampInterrupted as exc:
-            exc.signum = interrupted.signum
+            exc.signum = interrupted.signum  # type: ignore[attr-defined]  # read by signals.name_of()
             raise
 
 

@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from typing import TYPE_CHECKING, cast
 
 from .. import runtime
 from ..errors import require
@@ -47,6 +48,9 @@ from .cli import (
     scene_of_flags,
     solve,
 )
+
+if TYPE_CHECKING:
+    from ..result import Result
 
 # by dimension: the tip the deflection is measured at, its rotation in the last step's line and over the run
 TIP_WORDS = {2: ("right edge", "tip rotation", "rotation"), 3: ("right face", "bend angle", "bend angle")}
@@ -112,11 +116,12 @@ def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, 
     try:
         result = solve(args, built, vtk=vtk)
     except RampStopped as stopped:
-        if stopped.result.steps:  # none when the rest state itself has no equilibrium
-            written = stopped.result.save_history(out, stem) + [vtk.pvd]
+        done = cast("Result", stopped.result)  # (solve's: tp.simulate made it a Result)
+        if done.steps:  # none when the rest state itself has no equilibrium
+            written = done.save_history(out, stem) + [vtk.pvd]
             if isinstance(stopped, RampInterrupted):
-                written.append(save_json(out / f"{stem}_summary.json", stopped.result.summary(interrupted=True)))
-            print(f"saved the {len(stopped.result.steps)} steps done in " + ", ".join(str(p) for p in written))
+                written.append(save_json(out / f"{stem}_summary.json", done.summary(interrupted=True)))
+            print(f"saved the {len(done.steps)} steps done in " + ", ".join(str(p) for p in written))
         raise
     final, summary = result.steps[-1], result.summary()
     area, length, pressure, force = (scene.units.suffix(d) for d in (AREA, LENGTH, PRESSURE, FORCE))
@@ -141,7 +146,7 @@ def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, 
     print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}{pressure}")
     print(f"largest principal stretch: {summary['max_stretch']:.2f} (step {summary['max_stretch_step']}; a run past "
           f"max_stretch = {summary['max_stretch_limit']:g} warns)")
-    for name, (fx, fy, magnitude) in final.contact.items():
+    for name, (fx, fy, _) in final.contact.items():
         print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g}){force}")
     print(f"Newton: {summary['newton_iterations_total']} iterations over {summary['steps'] - 1} solves "
           f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "

@@ -30,9 +30,10 @@ from .. import runtime
 from ..errors import PneumaInputError, parse_number, require, require_finite
 from ..io.output import lock_stems, prepare_directory, save_json
 from ..signals import holding
+
 if TYPE_CHECKING:
-    from ..scene.targets import Target
     from ..scene.build import Scene
+    from ..scene.targets import Target
 
 from .cli import (
     add_ramp_arguments,
@@ -102,8 +103,8 @@ def with_bounds(scene, bounds: list[list[str]]):
 def targets_of(args: argparse.Namespace, scene, required: bool = True) -> list:
     """--tip (with --angle, --weights), else --targets FILE.csv (a path or a shipped file's name), else the
     scene file's [[targets]] (if not required, else none)."""
-    from ..scene.targets import Target, read_targets_csv
     from ..scene.shipped import find
+    from ..scene.targets import Target, read_targets_csv
 
     require(args.tip is None or args.targets is None, "give --tip or --targets, not both")
     require(args.angle is None or args.tip is not None, "--angle needs --tip")
@@ -133,8 +134,8 @@ def reach_record(reacher, result) -> dict:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from ..control.inverse import ReachOptions, command_bounds
     from ..api import load_scene
+    from ..control.inverse import ReachOptions, command_bounds
 
     if args.design:
         return run_design(args)
@@ -190,8 +191,9 @@ def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: li
         done += 1
         bar.update()
         if not args.quiet:
-            bar.write(f"  target {done}/{len(targets)} {tuple(result.target.tip)}: {describe(reacher, result.pose.commands)}; "
-                      f"tip error {result.error:.3g}; {result.forward_solves} forward solves, {result.seconds:.2f} s")
+            bar.write(f"  target {done}/{len(targets)} {tuple(result.target.tip)}: "
+                      f"{describe(reacher, result.pose.commands)}; tip error {result.error:.3g}; "
+                      f"{result.forward_solves} forward solves, {result.seconds:.2f} s")
 
     with bar:
         results = reacher.follow(targets, progress)

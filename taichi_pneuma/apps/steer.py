@@ -73,24 +73,24 @@ def run_placements(args: argparse.Namespace, scenes, stems: list[str], size: tup
                 "interrupted": isinstance(stopped, RampInterrupted)})
             print(f"saved the ramps done in {path} and {', '.join(str(v.pvd) for v in series[:len(done)])}")
             raise
-    summary = {"tip_deflection": {}, "all_converged": True}
+    summary: dict = {"tip_deflection": {}, "all_converged": True}
     for (cy, title), result in zip(PLACEMENTS, solved):
         print(f"cy = {cy:+.2f} ({title}): tip deflection {result.tip_deflection:+.4f}, "
               f"peak |p| {result.peak_pressure:.1f}, ramp {result.seconds:.1f} s")
         summary["tip_deflection"][f"{cy:+.2f}"] = result.tip_deflection
         summary["all_converged"] &= result.converged
-    written = [vtk.pvd for vtk in series]
+    written: list = [vtk.pvd for vtk in series]
     if not args.no_video:
         from ..render.video import render_video
 
-        done = render_video(solved, args.video or out / "steer.mp4", out / "steer.png", size, args.fps, args.color,
-                            args.renderer, trace=False, titles=[f"cy = {cy:+.2f}: {title}" for cy, title in PLACEMENTS],
-                            quiet=args.quiet)
+        export = render_video(solved, args.video or out / "steer.mp4", out / "steer.png", size, args.fps, args.color,
+                              args.renderer, trace=False,
+                              titles=[f"cy = {cy:+.2f}: {title}" for cy, title in PLACEMENTS], quiet=args.quiet)
         seconds_per_step = sum(r.summary()["solve_seconds_per_step"] for r in solved) / len(solved)
-        print(render_report(done, seconds_per_step))
-        summary.update(renderer=done.renderer, video_frames=done.frames, video_size=[done.width, done.height],
-                       render_ms_per_frame=done.ms_per_frame, solve_seconds_per_step=seconds_per_step)
-        written += [done.video, done.png]
+        print(render_report(export, seconds_per_step))
+        summary.update(renderer=export.renderer, video_frames=export.frames, video_size=[export.width, export.height],
+                       render_ms_per_frame=export.ms_per_frame, solve_seconds_per_step=seconds_per_step)
+        written += [export.video, export.png]
     written.append(save_json(out / "steer_summary.json", summary))
     print("wrote " + ", ".join(str(p) for p in written))
     return summary

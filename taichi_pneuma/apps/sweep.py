@@ -89,7 +89,8 @@ def run_study(args: argparse.Namespace, sweep, executor) -> dict:
     where = "a local Ray" if args.ray == "" else f"Ray at {args.ray}" if args.ray else \
         f"a process pool of {min(executor.workers, len(sweep.todo))} workers"
     print(f"study {args.name}: {len(sweep.runs)} runs ({'full grid' if args.samples is None else 'Latin hypercube'} "
-          f"over {', '.join(a.label for a in sweep.axes)}); {len(sweep.runs) - len(sweep.todo)} done before, {len(sweep.todo)} to run"
+          f"over {', '.join(a.label for a in sweep.axes)}); {len(sweep.runs) - len(sweep.todo)} done before, "
+          f"{len(sweep.todo)} to run"
           + (f" on {where}" if sweep.todo else ""))
     bar = tqdm(total=len(sweep.todo), desc="runs", unit="run", disable=True if args.quiet else None, leave=False)
 

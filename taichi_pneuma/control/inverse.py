@@ -24,8 +24,8 @@ its predicted decrease is halved and solved again from the last accepted equilib
 iterate lies inside the bounds.
 
 A descent stops *reached* when |tip - t| <= tol L, over the coordinates t gives (and
-|theta - theta_t| <= angle_tol when the rotation is targeted); short of it when a step no longer moves the scaled commands by step_tol,
-decreases Phi by less than a fraction `stall` of it, or the halvings or max_iterations run out.
+|theta - theta_t| <= angle_tol when the rotation is targeted); short of it when a step no longer moves the scaled
+commands by step_tol, decreases Phi by less than a fraction `stall` of it, or the halvings or max_iterations run out.
 Then the descent starts again from the centre of the command box and from quasi-random commands
 (`restarts` in all: Phi need not be convex, e.g. the reference tip first lifts, then curls down as
 the chamber grows). If none reaches the target it is *unreachable*: the closest pose found is kept,
@@ -46,14 +46,14 @@ from scipy.stats import qmc
 
 from ..errors import require, require_finite
 from ..fem.fields import ElementFields
-from ..scene.build import BuiltScene, Scene
-from ..solve.newton import NewtonOptions, NewtonSolver
-from ..result import Result
-from ..solve.sensitivity import sensitivity
 from ..fem.tip import tip_measures
-from ..solve.records import StepRecord
-from ..solve.simulate import MAX_CUTS, NoEquilibrium, chamber_records, settle
+from ..result import Result
+from ..scene.build import BuiltScene, Scene
 from ..scene.targets import Target
+from ..solve.newton import NewtonOptions, NewtonSolver
+from ..solve.records import StepRecord
+from ..solve.sensitivity import sensitivity
+from ..solve.simulate import MAX_CUTS, NoEquilibrium, chamber_records, settle
 
 ARMIJO = 1e-4
 
@@ -161,7 +161,7 @@ class Objective:
     f = scale * (measured(pose) - target)[rows]: lengths over L, the rotation in radians; rows: x and y,
     z for an (x, y, z) target, and the rotation when targeted. rho is 0 unless chambers are redundant."""
 
-    def __init__(self, reacher: "Reacher", target: Target):
+    def __init__(self, reacher: Reacher, target: Target):
         self.target, self.reacher = target, reacher
         mesh = reacher.built.mesh
         require(len(target.tip) <= mesh.dim, f"target tip = {list(target.tip)!r}: a 2D scene's tip is [x, y]")
@@ -215,11 +215,13 @@ class Reacher:
         lo, hi = bounds if bounds is not None else command_bounds(built.scene)
         self.lo, self.hi = np.asarray(lo, float), np.asarray(hi, float)
         require(self.lo.shape == self.hi.shape == (len(self.names),) and np.all(self.lo < self.hi),
-                f"bounds {self.lo.tolist()} .. {self.hi.tolist()} must give min < max for each of {len(self.names)} chambers")
+                f"bounds {self.lo.tolist()} .. {self.hi.tolist()} must give min < max for each of "
+                f"{len(self.names)} chambers")
         self.length = body_length(built)
         self.forward_solves = self.newton_iterations = 0
         rest = built.scene.schedule.rest_commands
-        self.pose, self._previous, self._factored = self._pose(rest, np.zeros_like(built.mesh.vertices)), None, None
+        self.pose, self._previous = self._pose(rest, np.zeros_like(built.mesh.vertices)), None
+        self._factored: Pose | None = None  # the pose whose exact Hessian the solver's factor is
         self.settle((self.lo + self.hi) / 2 if start is None else start)
 
     def _pose(self, commands: np.ndarray, u: np.ndarray) -> Pose:
@@ -308,7 +310,7 @@ class Reacher:
             unit += list(qmc.Sobol(len(self.lo), seed=0).random(2 ** math.ceil(math.log2(self.options.restarts))))
         return [self.lo + s * (self.hi - self.lo) for s in unit[:self.options.restarts]]
 
-    def _descend(self, goal: "Objective", path: list[Pose]) -> tuple[bool, int]:
+    def _descend(self, goal: Objective, path: list[Pose]) -> tuple[bool, int]:
         """Bounded Gauss-Newton steps from the current pose (module docstring); (reached, iterations)."""
         opts = self.options
         for iteration in range(opts.max_iterations):
@@ -366,7 +368,9 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
     restart, the best pose re-taken)."""
     built, mesh = reacher.built, reacher.built.mesh
     rest_tip = mesh.vertices[mesh.tip].mean(axis=0)
-    steps, states, descent = [], [], 0
+    steps: list[StepRecord] = []
+    states: list[np.ndarray] = []
+    descent = 0
     stretches = ElementFields(mesh.vertices, mesh.elements)
     for k, result in enumerate(results):
         target = result.target

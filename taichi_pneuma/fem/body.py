@@ -13,13 +13,17 @@ import numpy as np
 from ..errors import require
 from .elements import ElementFamily, family_for
 from .shapes import MAX_SHAPES
-from .supports import node_sets
+from .supports import PointSet, Roller, node_sets
 
 
 class Body:
     """The part of a geometry that its dimension, order and supports make (module docstring)."""
 
     dim: int
+    order: int
+    clamp: PointSet | None
+    tip: PointSet
+    rollers: tuple[Roller, ...]
 
     @property
     def family(self) -> ElementFamily:

@@ -105,6 +105,11 @@ class ElementFamily:
         return self.dim + 1 + len(self.edges)
 
     @property
+    def outline(self) -> tuple:
+        """A triangle's boundary walked through its nodes: each facet's first node, then its midside node(s)."""
+        return tuple(node for facet in self.facets for node in (facet[0], *facet[2:]))
+
+    @property
     def reference_nodes(self) -> np.ndarray:
         """(k, d) node positions on the reference cell."""
         corners = self.cell.corners

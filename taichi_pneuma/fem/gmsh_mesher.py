@@ -53,6 +53,7 @@ import hashlib
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -124,11 +125,12 @@ class MeshSizes:
 @dataclass(frozen=True)
 class Solid:
     """A body shape with named chamber shapes (cavities) and named material-region shapes (the part of
-    the body inside a region's shape gets that region's material; later regions win where they overlap)."""
+    the body inside a region's shape gets that region's material; later regions win where they overlap). A shape
+    is any object with build(occ) -> the new volume's tag (fem.solids' shapes; __post_init__ checks it has one)."""
 
-    body: object
-    chambers: tuple[tuple[str, object], ...]
-    regions: tuple[tuple[str, object], ...] = ()
+    body: Any
+    chambers: tuple[tuple[str, Any], ...]
+    regions: tuple[tuple[str, Any], ...] = ()
 
     def __post_init__(self):
         for what, entries in (("chambers", self.chambers), ("regions", self.regions)):
@@ -183,7 +185,7 @@ def _session(verbose: bool = False):
         raise PneumaInputError(f"gmsh could not mesh the solid: {'; '.join(log[-3:]) or exc}") from None
     finally:
         gmsh.logger.stop()
-        if owner:
+        if callers is None:  # gmsh initialised here
             gmsh.finalize()
         else:
             gmsh.model.remove()
@@ -244,7 +246,8 @@ def estimate_tets(solid: Solid, sizes: MeshSizes) -> float:
     entry = _cache_key("measures", solid)
     cached = cache.load("gmsh-measures", entry, _valid_measures, 4096)
     if cached is not None:
-        return _estimate(*map(float, cached["measures"]), sizes)
+        volume, wall_area = map(float, cached["measures"])
+        return _estimate(volume, wall_area, sizes)
     with _session() as gmsh:
         pieces = _Pieces(gmsh, solid)
     cache.store("gmsh-measures", entry, {"measures": np.array([pieces.volume, pieces.wall_area])})
@@ -279,7 +282,8 @@ def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose
     cached = cache.load("gmsh-mesh", entry, lambda arrays: _valid_mesh(arrays, solid),
                         CACHE_BYTES_PER_TET * max(max_tets, 1) + 2 ** 20)
     if cached is not None:
-        _check_estimate(*map(float, cached["measures"]), sizes, max_tets)
+        volume, wall_area = map(float, cached["measures"])
+        _check_estimate(volume, wall_area, sizes, max_tets)
         _check_count(len(cached["tets"]), max_tets)
         return SolidMesh(cached["vertices"], cached["tets"],
                          {name: cached[f"chamber{i}"] for i, (name, _) in enumerate(solid.chambers)},

@@ -60,7 +60,7 @@ def extrude(mesh: Mesh, depth: float, layers: int = 1) -> tuple[np.ndarray, np.n
 def octant_grid(divisions: int) -> tuple[np.ndarray, np.ndarray]:
     """The triangle x, y, z >= 0, x + y + z = 1 cut into divisions^2 triangles: (points (p, 3), triangles)."""
     index = {}
-    points = []
+    points: list[tuple[int, int, int]] = []
     for i in range(divisions + 1):
         for j in range(divisions + 1 - i):
             index[i, j] = len(points)

@@ -56,13 +56,19 @@ class Mesh:
             object.__setattr__(self, "regions", np.zeros(len(self.elements), dtype=np.int64))
 
     @property
+    def _family(self) -> ElementFamily:
+        """family, which __post_init__ told where it was not given."""
+        assert self.family is not None
+        return self.family
+
+    @property
     def dim(self) -> int:
-        return self.family.dim
+        return self._family.dim
 
     @property
     def order(self) -> int:
         """1 for linear elements, 2 for quadratic ones."""
-        return self.family.order
+        return self._family.order
 
     @property
     def n_vertices(self) -> int:
@@ -89,10 +95,11 @@ class Mesh:
         triangle's corners and a third of its area at its midside nodes; -1/20 and 1/5 of the volume at a
         quadratic tetrahedron's), and on a quadratic triangle with curved (parabolic) sides: the consistent nodal
         weights of a uniform load, exact for a load linear in x."""
-        rule = self.family.cell.rules[self.family.measure_degree]
-        _, weights = self.family.quadrature(self.vertices, self.elements, rule)
+        family = self._family
+        rule = family.cell.rules[family.measure_degree]
+        _, weights = family.quadrature(self.vertices, self.elements, rule)
         out = np.zeros(self.n_vertices)
-        np.add.at(out, self.elements, weights @ self.family.shape_functions(rule[0]))
+        np.add.at(out, self.elements, weights @ family.shape_functions(rule[0]))
         return out
 
     nodal_areas = nodal_measures
@@ -100,8 +107,10 @@ class Mesh:
     def display_triangles(self) -> np.ndarray:
         """Linear triangles to draw: a 2D mesh's elements, a 3D one's surface facets, each split as its family's
         split says (a quadratic triangle in four at its midside nodes: corner triangles, then the middle one)."""
-        drawn = self.family.facet_family or self.family
-        return drawn.split_cells(self.surface if drawn is not self.family else self.elements)
+        family, surface = self._family, self.surface
+        assert surface is not None  # __post_init__ found it where it was not given
+        drawn = family.facet_family or family
+        return drawn.split_cells(surface if drawn is not family else self.elements)
 
 
 def triangle_areas(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:

@@ -29,10 +29,10 @@ import numpy as np
 from .. import limits
 from ..errors import PneumaInputError, quoted, require, require_distinct
 from ..limits import Budget
-from .supports import PointSet
 from .body import Body
 from .elements import FAMILIES
 from .mesh import Mesh
+from .supports import PointSet
 from .tetmesh import check_order, tet_mesh
 
 MAX_MESH_BYTES = 500_000_000

@@ -32,15 +32,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..limits import Budget
 from ..errors import PneumaInputError, require, require_distinct, require_finite
 from ..io.output import check_heading
 from ..io.units import PLANE_AREA, si_default
+from ..limits import Budget
 from .body import Body
 from .elements import ORDERS, TRIANGLE_P1, TRIANGLE_P2
 from .mesh import Mesh, triangle_areas
-from .polygons import (distance_to_polygon, enclosed_area, interior_point, points_in_polygon, polygon_self_intersects,
-                       require_spaced, segments_cross)
+from .polygons import (
+    distance_to_polygon,
+    enclosed_area,
+    interior_point,
+    points_in_polygon,
+    polygon_self_intersects,
+    require_spaced,
+    segments_cross,
+)
 from .refine import halved, split_in_four, with_edge_midpoints
 from .shapes import MAX_SHAPES, MAX_WALL_POINTS, Ellipse, Rectangle
 from .supports import PointSet, Roller

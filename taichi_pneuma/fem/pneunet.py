@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 
 from ..errors import require, require_finite
 from ..io.units import LENGTH, unit
-from .solids import Box, RoundedBox
 from .gmsh_mesher import MAX_SHAPES, Solid
+from .solids import Box, RoundedBox
 
 LAYER = "layer"
 # the defaults are the unitless pneunet_3d finger (4 long): a scene with units gives every length it uses

@@ -25,7 +25,7 @@ MAX_SHAPES = 64
 
 def _pair(name: str, value, positive: bool = False) -> tuple[float, float]:
     require(shape_of(value) == (2,), f"{name} = {value!r} must be a pair of numbers")
-    pair = tuple(require_finite(f"{name}", v) for v in value)
+    pair = (require_finite(f"{name}", value[0]), require_finite(f"{name}", value[1]))
     if positive:
         require(min(pair) > 0, f"{name} = {value!r} must be > 0")
     return pair

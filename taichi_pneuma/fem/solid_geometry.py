@@ -31,15 +31,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..limits import Budget
 from ..errors import require, require_distinct
 from ..io.output import check_heading
-from .supports import PointSet
+from ..limits import Budget
 from .body import Body
 from .gmsh_mesher import MAX_TETS, MeshSizes, Solid, estimate_tets, mesh_solid
+from .mesh import Mesh
 from .meshfile import MeshSurface
 from .pneunet import PneuNet
-from .mesh import Mesh
+from .supports import PointSet
 from .tetmesh import check_order, tet_mesh
 
 TETS_PER_NODE = 5

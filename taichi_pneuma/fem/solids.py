@@ -32,7 +32,7 @@ AXES = ("x", "y", "z")
 def _vector(name: str, value, positive: bool = False) -> tuple[float, float, float]:
     """value as three finite numbers (all > 0 if positive), or a PneumaInputError naming it."""
     require(shape_of(value) == (3,), f"{name} = {value!r} must be three numbers [x, y, z]")
-    vector = tuple(require_finite(name, v) for v in value)
+    vector = (require_finite(name, value[0]), require_finite(name, value[1]), require_finite(name, value[2]))
     if positive:
         require(min(vector) > 0, f"{name} = {list(value)!r} must be > 0 in each of x, y, z")
     return vector

@@ -156,7 +156,11 @@ class Roller:
 
     def select(self, vertices: np.ndarray) -> np.ndarray:
         """The indices of the held vertices; holding none is a PneumaInputError."""
-        where = f"point = {list(self.point)!r}" if self.point is not None else f"box = {list(self.box)!r}"
+        if self.point is not None:
+            where = f"point = {list(self.point)!r}"
+        else:
+            assert self.box is not None  # __post_init__: exactly one of point and box
+            where = f"box = {list(self.box)!r}"
         what = f"roller (normal = {list(self.normal)!r}, {where})"
         require(len(self.normal) == vertices.shape[1], f"{what}: its normal must have {vertices.shape[1]} components "
                                                        f"on this {vertices.shape[1]}D body")

@@ -113,8 +113,8 @@ def closure(name: str, vertices: np.ndarray, wall: np.ndarray, rollers) -> Closu
     require(np.trace(projector) > 0.5, f"chamber {name!r}: closed by parallel roller planes in every direction")
     origin = rim.mean(axis=0)
     if single:  # the point nearest the rim's centre on every single plane
-        normals, offsets = np.array([n for n, _ in single]), np.array([n @ p for n, p in single])
-        origin = origin + np.linalg.lstsq(normals, offsets - normals @ origin, rcond=None)[0]
+        single_normals, offsets = np.array([n for n, _ in single]), np.array([n @ p for n, p in single])
+        origin = origin + np.linalg.lstsq(single_normals, offsets - single_normals @ origin, rcond=None)[0]
     return Closure(origin, projector)
 
 
@@ -173,12 +173,14 @@ def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndar
                                    f"mesh's boundary")
         return rows
 
+    facet_family = family.facet_family
+    assert facet_family is not None  # a tetrahedron's facets are triangles
     walls, origins, taken = [], [], np.zeros(len(surface), dtype=bool)
     for name, faces in zip(names, given):
         rows = facets_of(faces, f"chamber {name!r}")
         require(not taken[rows].any(), f"chamber {name!r} shares wall triangles with another chamber")
         taken[rows] = True
-        wall = surface[rows][:, list(family.facet_family.mirror)]
+        wall = surface[rows][:, list(facet_family.mirror)]
         walls.append(wall)
         origins.append(closure(name, vertices, wall, rollers))
     outer = surface[facets_of(given[-1], "boundary")] if boundary is not None else surface[~taken]

@@ -124,7 +124,8 @@ def store(kind: str, entry: str | None, arrays: dict[str, np.ndarray]) -> None:
 
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as f:
-            np.savez(f, **arrays, **{KEY: np.array(entry)})
+            # NumPy's stubs take any keyword for savez's allow_pickle
+            np.savez(f, **arrays, **{KEY: np.array(entry)})  # type: ignore[arg-type]
 
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

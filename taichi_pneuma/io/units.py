@@ -11,7 +11,7 @@ force) pressure x length, an energy per unit depth pressure x length^2, a mass p
 that force = mass x acceleration: kg in mm-kPa, tonnes in mm-MPa). Angles are in degrees and times in seconds
 whatever the system.
 
-Defaults are stored in SI and converted into a scene's units: a key declares its dimension (io/schema.Key's
+Defaults are stored in SI and converted into a scene's units: a key declares its dimension (scene/schema.Key's
 unit; a chamber kind's or an effect's field through unit()), and a default of dimension L^a P^b in 2D (or
 3D) is divided by factor() = metre^a pascal^b when read (material presets likewise: a modulus in Pa divided
 by the pressure unit in Pa). A unitless scene takes every number as it is, as SI. Some defaults are numerical
@@ -61,7 +61,7 @@ def si_default(si, dimension: str, scaled: bool = True):
     return field(default=None, metadata={**unit(dimension, scaled), "si": si})
 
 
-def default_in(si, dimension: str, scaled: bool, units: "Units", dim: int, key: str):
+def default_in(si, dimension: str, scaled: bool, units: Units, dim: int, key: str):
     """The default `si` (a number or an array of numbers, in SI) of key `key` in `units` in a body of dimension
     dim: si / units.factor(dimension, dim); a numerical default (scaled=False) is taken as it is in a unitless
     scene and refused, naming the key, in a scene with units. Scene files and the Python API both come here."""
@@ -73,7 +73,7 @@ def default_in(si, dimension: str, scaled: bool, units: "Units", dim: int, key: 
     return tuple(v / factor for v in si) if isinstance(si, tuple) else si / factor
 
 
-def defaults(obj, units: "Units", dim: int, path: str) -> dict:
+def defaults(obj, units: Units, dim: int, path: str) -> dict:
     """The value in `units` (default_in) of every si_default field of obj (a dataclass) left None, by name; path:
     the scene-file table of obj, naming a key a scene with units must give."""
     if not dataclasses.is_dataclass(obj):
@@ -83,7 +83,7 @@ def defaults(obj, units: "Units", dim: int, path: str) -> dict:
             if "si" in f.metadata and getattr(obj, f.name) is None}
 
 
-def resolved(obj, units: "Units", dim: int, path: str):
+def resolved(obj, units: Units, dim: int, path: str):
     """obj with its defaults (defaults()) set; obj itself when it has none left None."""
     given = defaults(obj, units, dim, path)
     return dataclasses.replace(obj, **given) if given else obj

@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import base64
 import sys
+from collections.abc import Sequence
+from typing import Protocol
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
-
 
 
 def pad3(vectors: np.ndarray) -> np.ndarray:
@@ -31,7 +32,14 @@ def data_array(name: str, values: np.ndarray) -> str:
             f"{base64.b64encode(np.uint32(len(raw)).tobytes() + raw).decode()}\n</DataArray>\n")
 
 
-def vtu_text(points: np.ndarray, cells: list[tuple[object, np.ndarray]], point_data: dict[str, np.ndarray],
+class CellFamily(Protocol):
+    """What a cell block's element family (fem.elements.ElementFamily) tells the VTU: its VTK cell type number."""
+
+    @property
+    def vtk_cell(self) -> int: ...
+
+
+def vtu_text(points: np.ndarray, cells: Sequence[tuple[CellFamily, np.ndarray]], point_data: dict[str, np.ndarray],
              cell_data: dict[str, list[np.ndarray]], field_data: dict[str, float]) -> str:
     """A VTU file: points (n, 3), cell blocks (element family: its vtk_cell, (m, k) nodes), point arrays, cell arrays
     (one per block) and one Float64 value per field-data name."""

@@ -14,10 +14,10 @@ import time
 import numpy as np
 
 from ..limits import Budget
-from ..scene.build import Scene
-from ..solve.newton import CHORD_MAX_CONTRACTION, NewtonOptions, NewtonSolver
 from ..render.canvases import open_canvas
 from ..render.frames import FrameRenderer, Track
+from ..scene.build import Scene
+from ..solve.newton import CHORD_MAX_CONTRACTION, NewtonOptions, NewtonSolver
 
 # Newton tolerance of live forward solves: with the tangent predictor one Newton iteration reaches it
 # (the default 1e-6 often takes two); it moves the tip by ~1e-6 of the body length, far below the 1e-3 target tolerance.

@@ -46,8 +46,8 @@ def commands_from(sliders: list[Slider], shown: np.ndarray, values: list[float])
     """The new commands if the user moved a slider, else None: `values` as GGUI returns them (float32,
     clamped to each range here) compared with the commands on screen, to 1e-6 of each range."""
     low, high = np.array([s.low for s in sliders]), np.array([s.high for s in sliders])
-    values = np.clip(np.asarray(values, dtype=float), low, high)
-    return values if np.any(np.abs(values - shown) > 1e-6 * (high - low)) else None
+    clipped = np.clip(np.asarray(values, dtype=float), low, high)
+    return clipped if np.any(np.abs(clipped - shown) > 1e-6 * (high - low)) else None
 
 
 def dragged(camera: Camera, start: tuple[float, float], end: tuple[float, float]) -> Camera:
@@ -90,7 +90,8 @@ def explore_3d(solve, sliders: list[Slider], rest: np.ndarray, boundary: np.ndar
                 shown = moved
                 solves += 1
             x, caption = solve(shown)
-            cursor = tuple(float(c) for c in window.get_cursor_pos())
+            cursor_x, cursor_y = window.get_cursor_pos()
+            cursor = (float(cursor_x), float(cursor_y))
             pressed = window.is_pressed(ti.ui.LMB)
             if pressed and last is not None:
                 camera = dragged(camera, last, cursor)

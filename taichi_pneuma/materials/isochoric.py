@@ -52,13 +52,17 @@ import numpy as np
 
 from ..backend import ti
 from ..errors import require, require_finite
+from ..io.units import PRESSURE
 from .invariants import isochoric_gradients, isochoric_hessians, isochoric_invariants
 from .law import Law, register
+from .registry import BULK_MODULUS, POISSON_RATIO, MaterialForm, MaterialKey, register_form
 
 FORMS = {"neo_hookean": ("C10",), "mooney_rivlin": ("C10", "C01"), "yeoh": ("C10", "C20", "C30")}
 COEFFICIENTS = ("C10", "C01", "C20", "C30")
 DEFAULT_POISSON_RATIO = 0.49  # when a material gives neither K nor nu: nearly incompressible, as silicones are
 STRETCHES = (1 / 3, 3.0)  # the principal stretches a law must be stable for (module docstring)
+COEFFICIENT_KEYS = tuple(MaterialKey(c, c, doc=f"coefficient of the isochoric law's {c} term (the forms taking it; "
+                                              f"none: 0, C10 required)", unit=PRESSURE) for c in COEFFICIENTS)
 
 
 def path_invariants(lam: np.ndarray) -> dict:
@@ -146,10 +150,12 @@ def slopes(F, p):
     return p[0] + 2.0 * p[2] * a + 3.0 * p[3] * a * a, 2.0 * p[2] + 6.0 * p[3] * a, J
 
 
+@register_form
 @dataclass(frozen=True)
-class IsochoricMaterial:
+class IsochoricMaterial(MaterialForm):
     """A material of the isochoric law in one of its FORMS: coefficients in the scene's pressure unit (those
-    the form does not take are zero), and the bulk modulus K, or else Poisson's ratio nu (default 0.49)."""
+    the form does not take are zero), and the bulk modulus K, or else Poisson's ratio nu (default 0.49).
+    A scene file names it by `law = "<form>"` (registry.py)."""
 
     law: str
     C10: float
@@ -158,6 +164,11 @@ class IsochoricMaterial:
     C30: float = 0.0
     bulk_modulus: float | None = None
     poisson_ratio: float | None = None
+    selector = "law"
+    names = tuple(FORMS)
+    keys = (POISSON_RATIO, BULK_MODULUS, *COEFFICIENT_KEYS)
+    summary = (f"a form of the isochoric law (law = {', '.join(FORMS)}: C10, ... and K or nu, in the scene's "
+               f"pressure unit)")
 
     def __post_init__(self):
         require(self.law in FORMS, f"law = {self.law!r} is not one of {', '.join(FORMS)}")
@@ -175,6 +186,20 @@ class IsochoricMaterial:
         if self.poisson_ratio is not None:
             nu = require_finite("nu", self.poisson_ratio)
             require(-1 < nu < 0.5, f"nu = {self.poisson_ratio!r} must lie in (-1, 0.5)")
+
+    @classmethod
+    def form_keys(cls, values: dict) -> dict:
+        """law, the coefficients its form takes, K and nu."""
+        return dict.fromkeys(("law", *FORMS.get(values.get("law", ""), ()), "K", "nu"))
+
+    @classmethod
+    def refusal(cls, extra: list[str], values: dict) -> str:
+        return f"{extra[0]} = {values[extra[0]]!r}: law = {values['law']!r} takes C10, ... and K or nu, not {extra[0]}"
+
+    def scene_values(self) -> dict:
+        """law, K, nu and the coefficients its form takes (those it does not are zero, and not written)."""
+        return {"law": self.law, "K": self.bulk_modulus, "nu": self.poisson_ratio,
+                **{c: getattr(self, c) for c in FORMS[self.law]}}
 
     def require_stable(self) -> None:
         """Refuse a law that is not stable over STRETCHES (module docstring), naming its negative coefficients,
@@ -215,8 +240,8 @@ class IsochoricMaterial:
         """The law and its parameter vector (the coefficients are in the scene's units already)."""
         return IsochoricPolynomial, self.row()
 
-    def scaled(self, factor: float) -> "IsochoricMaterial":
+    def scaled(self, factor: float) -> IsochoricMaterial:
         """The same material with every modulus (coefficients and a given K) multiplied by factor (a unit change)."""
-        return IsochoricMaterial(self.law, *(factor * getattr(self, n) for n in COEFFICIENTS),
+        return IsochoricMaterial(self.law, factor * self.C10, factor * self.C01, factor * self.C20, factor * self.C30,
                                  None if self.bulk_modulus is None else factor * self.bulk_modulus, self.poisson_ratio)
 

@@ -35,14 +35,22 @@ and three scaling modes U diag(a) V^T for the eigenvectors a of the 3 x 3 Hessia
     A_ii = mu + lam (s_j s_k)^2,   A_ij = lam s_i s_j s_k^2 - c s_k,
 
 (at s = (s1, s2, 1) the twist and flip of axis z are the in-plane modes of the 2D system above).
+
+A scene names the law by Material(E, nu), the default material form (registry.py: a [material] table naming
+no law or preset).
 """
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..backend import ti
+from ..errors import require, require_finite
+from ..io.units import PRESSURE, si_default
 from .eigen import rotation_variant_svd, symmetric_eigensystem
 from .invariants import cofactor, determinant_hessian, flat
 from .law import Law, register
+from .registry import POISSON_RATIO, MaterialForm, MaterialKey, register_form, selector_names
 
 SQRT_HALF = 0.7071067811865476
 
@@ -156,3 +164,39 @@ def solid_eigensystem(F, p):
             vectors[6 + m, 3 * a + b] = U[a, 0] * rows[m, 0] * V[b, 0] + U[a, 1] * rows[m, 1] * V[b, 1] \
                 + U[a, 2] * rows[m, 2] * V[b, 2]
     return values, vectors
+
+
+YOUNGS_MODULUS = MaterialKey("E", "youngs_modulus", doc="Young's modulus of the stable neo-Hookean material, > 0",
+                             unit=PRESSURE, si=1e4)
+
+
+@register_form
+@dataclass(frozen=True)
+class Material(MaterialForm):
+    """Isotropic material of the stable neo-Hookean law: Young's modulus E > 0 (None: 1e4 Pa in the scene's
+    units, set by the Scene), Poisson's ratio -1 < nu < 0.5."""
+
+    youngs_modulus: float | None = si_default(YOUNGS_MODULUS.si, YOUNGS_MODULUS.unit)
+    poisson_ratio: float = 0.45
+    keys = (YOUNGS_MODULUS, POISSON_RATIO)
+    summary = "the stable neo-Hookean one of E and nu (no law or preset)"
+
+    def __post_init__(self):
+        require(self.youngs_modulus is None or require_finite("E", self.youngs_modulus) > 0,
+                f"E = {self.youngs_modulus!r} must be > 0")
+        nu = require_finite("nu", self.poisson_ratio)
+        require(-1 < nu < 0.5, f"nu = {self.poisson_ratio!r} must lie in (-1, 0.5)")
+
+    @classmethod
+    def form_keys(cls, values: dict) -> dict:
+        """E and nu, with the values a scene file that gives neither writes (unitless)."""
+        return {"E": YOUNGS_MODULUS.si, "nu": cls.poisson_ratio}
+
+    @classmethod
+    def refusal(cls, extra: list[str], values: dict) -> str:
+        laws = " or ".join(selector_names("law"))
+        return f"{', '.join(extra)} need law = {laws} (E and nu alone: stable neo-Hookean)"
+
+    def law_parameters(self, units) -> tuple[type, np.ndarray]:
+        """The law and its parameter vector (E and nu are in the scene's units already)."""
+        return StableNeoHookean, StableNeoHookean.parameters(self.youngs_modulus, self.poisson_ratio)[0]

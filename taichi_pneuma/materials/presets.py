@@ -30,8 +30,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import require, require_finite
+from ..errors import PneumaInputError, require, require_finite
 from .isochoric import IsochoricMaterial, IsochoricPolynomial
+from .registry import BULK_MODULUS, POISSON_RATIO, MaterialForm, register_form
 
 
 @dataclass(frozen=True)
@@ -77,24 +78,34 @@ PRESETS = {
 }
 
 
+@register_form
 @dataclass(frozen=True)
-class PresetMaterial:
+class PresetMaterial(MaterialForm):
     """A scene's material from a preset: its name, and optionally a bulk modulus (in the scene's pressure unit) or
-    a Poisson's ratio replacing the preset's own."""
+    a Poisson's ratio replacing the preset's own. A scene file names it by `preset = "<name>"` (registry.py)."""
 
     preset: str
     bulk_modulus: float | None = None
     poisson_ratio: float | None = None
+    selector = "preset"
+    names = tuple(PRESETS)
+    keys = (POISSON_RATIO, BULK_MODULUS)
+    summary = "a preset (docs/materials.md)"
 
     def __post_init__(self):
         require(self.preset in PRESETS, f"preset = {self.preset!r} is not one of {', '.join(PRESETS)}")
         self.resolved(1.0)  # validates K and nu
 
+    @classmethod
+    def refusal(cls, extra: list[str], values: dict) -> str:
+        return f"preset = {values['preset']!r} gives the law and its coefficients: drop {', '.join(extra)}"
+
     def resolved(self, pascal: float | None) -> IsochoricMaterial:
         """The preset's material in a pressure unit of `pascal` Pa (None: the scene is unitless, which a preset
         cannot be converted into), with this material's K or nu."""
-        require(pascal is not None, f"preset = {self.preset!r} needs the scene's units (units = \"mm-kPa\", "
-                                    f"\"mm-MPa\" or \"m-Pa\") to be converted into")
+        if pascal is None:
+            raise PneumaInputError(f"preset = {self.preset!r} needs the scene's units (units = \"mm-kPa\", "
+                                   f"\"mm-MPa\" or \"m-Pa\") to be converted into")
         base = PRESETS[self.preset].material.scaled(1.0 / require_finite("pressure unit", pascal))
         if self.bulk_modulus is None and self.poisson_ratio is None:
             return base

@@ -70,12 +70,12 @@ class Camera:
         return np.stack([width / 2 + focal * c[..., 0] / c[..., 2],
                          height / 2 - focal * c[..., 1] / c[..., 2]], axis=-1), c[..., 2]
 
-    def orbit(self, d_azimuth: float, d_elevation: float) -> "Camera":
+    def orbit(self, d_azimuth: float, d_elevation: float) -> Camera:
         """This camera turned about the target; the elevation is held within +-MAX_ELEVATION."""
         elevation = float(np.clip(self.elevation + d_elevation, -MAX_ELEVATION, MAX_ELEVATION))
         return replace(self, azimuth=(self.azimuth + d_azimuth) % 360.0, elevation=elevation)
 
-    def fitted(self, points: np.ndarray, width: int, height: int, margin: float = 0.06) -> "Camera":
+    def fitted(self, points: np.ndarray, width: int, height: int, margin: float = 0.06) -> Camera:
         """This camera's direction, aimed at the centre of the points' bounding box and moved just far enough
         that every corner of the box projects inside the frame, `margin` of it left free at each side."""
         lo, hi = np.min(points.reshape(-1, 3), axis=0), np.max(points.reshape(-1, 3), axis=0)

@@ -192,9 +192,10 @@ def open_canvas(width: int, height: int, backend: str = "auto", show: bool = Fal
         require(backend in ("auto", "pillow"), f"renderer = {backend!r} needs {missing}: use --renderer pillow")
         require(not show or backend == "pillow", f"a live window needs {missing}: install taichi "
                 f"({INSTALL['taichi']}; Python < 3.14, not Linux aarch64) and run with PNEUMA_BACKEND=taichi")
-        canvas = PillowCanvas(width, height, show)
-        log(f"renderer: {canvas.name}" + ("" if backend == "pillow" else f" ({NAME} has no GUI)"))
-        return canvas
+        pillow = PillowCanvas(width, height, show)
+        log(f"renderer: {pillow.name}" + ("" if backend == "pillow" else f" ({NAME} has no GUI)"))
+        return pillow
+    canvas: GGUICanvas | GUICanvas
     if backend == "ggui" or (backend == "auto" and not has_gui()):
         try:
             canvas = GGUICanvas(width, height, show)

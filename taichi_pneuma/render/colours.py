@@ -3,7 +3,7 @@ frames share BACKGROUND and the colour map)."""
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -29,7 +29,7 @@ COLORMAP = "viridis"  # a colour field's map: one scale for all tracks and steps
 COLORBAR_PX = 96  # width of the colour bar strip beside the panels
 
 
-@lru_cache(maxsize=None)
+@cache
 def _colormap_table() -> np.ndarray:
     """The colour map's table of RGB colours (matplotlib's, N entries)."""
     import matplotlib

@@ -15,8 +15,24 @@ from ..fem.mesh import Mesh
 from ..fem.triangulation import triangulate
 from . import COLOR_FIELDS
 from .canvases import open_canvas
-from .colours import (AREA_CURVE, AXES, CHAMBER_FILL, CHAMBER_WALL, COLORBAR_PX, CURSOR, EDGE, FACE, GROUND,
-                      OUTLINE, PIN, PRESSURE_CURVE, TARGET, TEXT, TIP_PATH, colormap)
+from .colours import (
+    AREA_CURVE,
+    AXES,
+    CHAMBER_FILL,
+    CHAMBER_WALL,
+    COLORBAR_PX,
+    CURSOR,
+    EDGE,
+    FACE,
+    GROUND,
+    OUTLINE,
+    PIN,
+    PRESSURE_CURVE,
+    TARGET,
+    TEXT,
+    TIP_PATH,
+    colormap,
+)
 from .text import LINE_PX, MARGIN_PX, Label, draw_labels, label_box
 from .ticks import colorbar_ticks, nice_ticks, tick_label
 
@@ -50,7 +66,7 @@ class Track:
     chamber_names: tuple[str, ...] = ()  # for the trace panel's legend (several chambers)
 
     @classmethod
-    def from_result(cls, result, title: str = "", color: str = "none") -> "Track":
+    def from_result(cls, result, title: str = "", color: str = "none") -> Track:
         """A track of a run (a solve.result.Result: every chamber of its scene, its ground line, a reach's
         targets from its target_x/target_y columns); color: 'none' or a COLOR_FIELDS key."""
         require(color == "none" or color in COLOR_FIELDS,
@@ -90,8 +106,8 @@ def mesh_edges(mesh: Mesh, boundary_only: bool = False) -> np.ndarray:
     """Unique undirected edges (e, 2) of the element outlines: a quadratic triangle's sides are drawn as
     two segments each, through their midside nodes; boundary_only: the edges of one element only (the
     body's outline and the chamber walls)."""
-    ring = [0, 1, 2] if mesh.order == 1 else [0, 3, 1, 4, 2, 5]
-    t = mesh.triangles[:, ring]
+    assert mesh.family is not None  # (Mesh fills it in)
+    t = mesh.triangles[:, list(mesh.family.outline)]
     edges = np.sort(np.stack([t, np.roll(t, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
     unique, counts = np.unique(edges, axis=0, return_counts=True)
     return unique[counts == 1] if boundary_only else unique
@@ -115,10 +131,10 @@ class FrameRenderer:
         self.frames = lengths.pop()
         self.canvas = canvas or open_canvas(width, height, backend, log=log)
         self.width, self.height = self.canvas.width, self.canvas.height
-        colored = [t for t in tracks if t.color is not None]
-        self.color_range = None
+        colored = [t.color for t in tracks if t.color is not None]
+        self.color_range: tuple[float, float] | None = None
         if colored:
-            values = np.concatenate([t.color.ravel() for t in colored])
+            values = np.concatenate([color.ravel() for color in colored])
             self.color_range = (float(values.min()), float(values.max()))
         self._art = [(mesh_edges(t.mesh, boundary_only=t.color is not None), t.mesh.display_triangles(),
                       chamber_triangles(t.mesh)) for t in tracks]
@@ -183,6 +199,7 @@ class FrameRenderer:
                 c.triangles(x[faces], FACE)
                 c.segments(x[edges], EDGE, 1.0)
             else:  # a quadratic element's four display triangles share its value (split_in_four's order)
+                assert self.color_range is not None  # (set when a track is coloured)
                 c.triangles(x[faces], colormap(np.tile(track.color[i], len(faces) // len(track.color[i])),
                                                *self.color_range))
                 c.segments(x[edges], OUTLINE, 1.0)
@@ -195,7 +212,7 @@ class FrameRenderer:
             left = self.panels[p][0] * self.width + MARGIN_PX
             labels += [Label(line, left, MARGIN_PX / 2 + LINE_PX * k) for k, line in enumerate(track.header(i))]
         if self.color_range is not None:
-            labels += self._draw_colorbar()
+            labels += self._draw_colorbar(*self.color_range)
         if self.trace:
             labels += self._draw_trace(i)
         return labels
@@ -216,14 +233,15 @@ class FrameRenderer:
         same = np.ones(i, bool) if track.descent is None else track.descent[:i] == track.descent[i]
         if same.any():
             c.triangles(_squares(tips[:i][same], 2.0 / np.array([self.width, self.height])), TIP_PATH)
+        assert track.targets is not None  # (drawn for a track with targets only)
         centre = self.to_canvas(panel, track.targets[i])
         arm = 9.0 / np.array([self.width, self.height])
         c.segments(np.array([[centre - arm, centre + arm], [centre + arm * (-1, 1), centre + arm * (1, -1)]]),
                    TARGET, 3.0)
 
-    def _draw_colorbar(self) -> list[Label]:
-        """A vertical colour bar with numbered ticks over the colour range."""
-        c, (lo, hi) = self.canvas, self.color_range
+    def _draw_colorbar(self, lo: float, hi: float) -> list[Label]:
+        """A vertical colour bar with numbered ticks over the colour range lo..hi."""
+        c = self.canvas
         x0 = self.colorbar_panel[0] * self.width + 8
         top, bottom = self.header_px + LINE_PX + 4, self.height - MARGIN_PX - 8
         k = 64
@@ -267,7 +285,7 @@ class FrameRenderer:
             return None
         import matplotlib
 
-        cycle = matplotlib.colormaps["tab10"].colors
+        cycle = matplotlib.colormaps["tab10"].colors  # type: ignore[attr-defined]  # tab10 is a ListedColormap
         return [tuple(cycle[k % len(cycle)]) for k in range(chambers)]
 
     def _draw_trace(self, i: int) -> list[Label]:

@@ -26,18 +26,21 @@ The renderer knows nothing of meshes or solvers: it takes positions (steps, n, 3
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import PneumaInputError, require, shape_of
 from ..fem.fields import ElementFields
-from ..fem.refine import split_in_four
 from ..io.units import LENGTH, PRESSURE
 from .camera import Camera
 from .colours import BACKGROUND, COLORBAR_PX, colormap
 from .surface import NumpyView, shade_faces
 from .text import LINE_PX, MARGIN_PX, Label, draw_labels
 from .ticks import colorbar_ticks
+
+if TYPE_CHECKING:
+    from .ggui3d import GGUIView
 
 VIEWS = ("auto", "numpy", "ggui")
 # the apps' --renderer (render.RENDERERS) -> the 3D view: the software renderers' counterpart is the NumPy rasteriser
@@ -85,7 +88,7 @@ class Track3D:
             require(len(values) == steps, f"trace {label!r} must give {steps} steps")
 
     @classmethod
-    def from_result(cls, result, color: str = "none") -> "Track3D":
+    def from_result(cls, result, color: str = "none") -> Track3D:
         """The track of a 3D run (a solve.result.Result): its outer surface and chamber walls (a quadratic
         facet drawn as its four linear triangles), coloured per face by a COLOR_FIELDS field of the tetrahedron
         under it ('none': plain), captions of the chambers' volume ratios and pressures and the tip, the
@@ -117,8 +120,8 @@ class Track3D:
 
 
 def surface_triangles(mesh) -> tuple[np.ndarray, tuple[np.ndarray, ...], np.ndarray]:
-    """A TetMesh's linear triangles to draw: the outer surface (b, 3), each chamber's wall, and for each outer
-    triangle the tetrahedron under it (b,). A quadratic facet is split in four (geometry.split_in_four)."""
+    """A 3D Mesh's linear triangles to draw: the outer surface, each chamber's wall, and for each outer triangle
+    the tetrahedron under it. A quadratic facet is split in four (its facet family's split_cells)."""
     from ..fem.tetmesh import facet_keys
 
     n, family = mesh.n_vertices, mesh.family
@@ -128,9 +131,9 @@ def surface_triangles(mesh) -> tuple[np.ndarray, tuple[np.ndarray, ...], np.ndar
     keys = facet_keys(faces.reshape(-1, faces.shape[2]), n)
     order = np.argsort(keys)
     under = order[np.searchsorted(keys, facet_keys(outer, n), sorter=order)] // faces.shape[1]
-    if mesh.order == 1:
-        return outer, tuple(mesh.chambers), under
-    return split_in_four(outer), tuple(split_in_four(wall) for wall in mesh.chambers), np.repeat(under, 4)
+    drawn = family.facet_family  # each piece of a facet lies on the facet's tetrahedron (split_cells' order)
+    return (drawn.split_cells(outer), tuple(drawn.split_cells(wall) for wall in mesh.chambers),
+            np.tile(under, len(drawn.split)))
 
 
 def open_view(backend: str, width: int, height: int, show: bool = False, log=print):
@@ -138,6 +141,7 @@ def open_view(backend: str, width: int, height: int, show: bool = False, log=pri
     saying through log() which one (and why it fell back)."""
     require(backend in VIEWS, f"renderer = {backend!r} is not one of {', '.join(VIEWS)}")
     require(width >= 64 and height >= 64, f"view size {width}x{height} must be at least 64x64")
+    view: NumpyView | GGUIView
     if backend == "numpy":
         view = NumpyView(width, height)
     else:
@@ -203,7 +207,7 @@ class FrameRenderer3D:
             np.ones(len(track.boundary), bool)
         self.kept = np.flatnonzero(keep)
         self.walls = np.concatenate(track.chambers) if track.chambers else np.zeros((0, 3), np.int64)
-        self.range = None
+        self.range: tuple[float, float] | None = None
         if track.color is not None:
             values = track.color if track.per_node else track.color[:, self.kept]
             self.range = (float(values.min()), float(values.max()))
@@ -224,10 +228,12 @@ class FrameRenderer3D:
         track = self.track
         faces = track.boundary[self.kept]
         body = None
-        if track.per_node:
-            body = colormap(track.color[i][faces].ravel(), *self.range).reshape(-1, 3, 3)
-        elif track.color is not None:
-            body = np.repeat(colormap(track.color[i][self.kept], *self.range)[:, None], 3, axis=1)
+        if track.color is not None:
+            assert self.range is not None  # (set for a coloured track)
+            if track.per_node:
+                body = colormap(track.color[i][faces].ravel(), *self.range).reshape(-1, 3, 3)
+            else:
+                body = np.repeat(colormap(track.color[i][self.kept], *self.range)[:, None], 3, axis=1)
         return shaded_triangles(track.positions[i], faces, self.walls, self.camera, body, self.ground)
 
     def frame(self, i: int) -> np.ndarray:
@@ -240,14 +246,13 @@ class FrameRenderer3D:
                   enumerate(([self.track.title] if self.track.title else []) + list(
                       self.track.captions[i] if self.track.captions else ()))]
         if self.range is not None:
-            labels += self._colorbar(image, view_w)
+            labels += self._colorbar(image, view_w, *self.range)
         if self._trace is not None:
             image[:, self.width - self.trace_px:] = self._trace.frame(i)
         return draw_labels(image, labels)
 
-    def _colorbar(self, image: np.ndarray, x0: int) -> list[Label]:
-        """A vertical colour strip (14 px) with numbered ticks over the colour range, drawn into image."""
-        lo, hi = self.range
+    def _colorbar(self, image: np.ndarray, x0: int, lo: float, hi: float) -> list[Label]:
+        """A vertical colour strip (14 px) with numbered ticks over the colour range lo..hi, drawn into image."""
         top, bottom = self.header_px + LINE_PX, self.height - MARGIN_PX - 8
         left = x0 + 8
         t = (bottom - np.arange(top, bottom)) / (bottom - top)
@@ -309,12 +314,12 @@ def render_video_3d(track: Track3D, video, png=None, size=(960, 540), fps: float
     from .video import check_video, export, frame_size
 
     check_video(video, fps)
-    size = frame_size(size)
+    width, height = frame_size(size)
     for path in (video, png):
         if path is not None:
             prepare_directory(Path(path).parent)
     backend = VIEW_OF_RENDERER.get(backend, backend)
-    renderer = FrameRenderer3D(track, *size, backend=backend, camera=camera, section=section, trace=trace, log=log)
+    renderer = FrameRenderer3D(track, width, height, backend=backend, camera=camera, section=section, trace=trace, log=log)
     try:
         return export(renderer, Path(video), None if png is None else Path(png), fps, quiet, png_frame)
     finally:

@@ -76,14 +76,15 @@ class VtkSeries:
         point_data = {units.label("displacement", LENGTH): pad3(positions - mesh.vertices), "chamber": self.chamber}
         if contact_force is not None:
             point_data[units.label("contact_force", FORCE)] = pad3(contact_force)
-        cell_data = {"det_F": fields["det_F"], "max_stretch": fields["max_stretch"],
-                     units.label("stress", PRESSURE): stress, units.label("von_mises", PRESSURE): fields["von_mises"]}
+        element_data = {"det_F": fields["det_F"], "max_stretch": fields["max_stretch"],
+                        units.label("stress", PRESSURE): stress, units.label("von_mises", PRESSURE): fields["von_mises"]}
+        cell_data: dict[str, list[np.ndarray]]
         if self.walls:  # the chamber walls' triangles: their chamber, and no element field
             cell_data = {name: [values, np.full((len(self.wall_chamber), *values.shape[1:]), np.nan)]
-                         for name, values in cell_data.items()}
+                         for name, values in element_data.items()}
             cell_data["chamber"] = [np.full(mesh.n_elements, -1), self.wall_chamber]
         else:
-            cell_data = {name: [values] for name, values in cell_data.items()}
+            cell_data = {name: [values] for name, values in element_data.items()}
         dimensions = history_dimensions(self.scene, step.contact, mesh.dim)
         row = {units.label(name, dimensions.get(name, "")): value for name, value in step.row().items()}
         text = vtu_text(self.points, self.cells + self.walls, point_data, cell_data, row)

@@ -65,5 +65,5 @@ class PillowCanvas:
         pass
 
 
-def _rgb8(color) -> tuple[int, int, int]:
+def _rgb8(color) -> tuple[int, ...]:
     return tuple(int(round(255 * c)) for c in color)

@@ -4,7 +4,7 @@ Sans), the same whichever canvas drew the shapes."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache, lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +27,7 @@ class Label:
     color: tuple = TEXT
 
 
-@lru_cache(maxsize=None)
+@cache
 def _font():
     import matplotlib
     from PIL import ImageFont

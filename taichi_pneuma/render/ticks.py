@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 
 
@@ -14,7 +16,8 @@ def nice_ticks(lo: float, hi: float, integer: bool = False, bins: int = 5) -> np
         pad = 0.1 * abs(lo) if lo != 0 else 1.0
         lo, hi = lo - pad, hi + pad
     bins = max(int(bins), 1)
-    return MaxNLocator(nbins=bins, integer=integer, min_n_ticks=min(3, bins + 1)).tick_values(lo, hi)
+    ticks = MaxNLocator(nbins=bins, integer=integer, min_n_ticks=min(3, bins + 1)).tick_values(lo, hi)
+    return cast(np.ndarray, ticks)  # an array (the stubs say Sequence[float])
 
 
 def tick_label(value: float) -> str:

@@ -9,9 +9,9 @@ leaves no truncated file under the real name.
 from __future__ import annotations
 
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable
 
 import numpy as np
 
@@ -109,7 +109,8 @@ def export(renderer, video: Path, png: Path | None, fps: float = 12.0, quiet: bo
     import imageio.v3 as iio
     from tqdm import tqdm
 
-    render_seconds, kept = 0.0, None
+    render_seconds = 0.0
+    kept: np.ndarray | None = None
     png_frame = png_frame % renderer.frames
 
     def frames():
@@ -124,6 +125,7 @@ def export(renderer, video: Path, png: Path | None, fps: float = 12.0, quiet: bo
             yield image
 
     count = write_video(video, frames(), fps)
+    assert kept is not None  # (frames() rendered frame png_frame)
     if png is not None:
         write_atomic(Path(png), lambda tmp: iio.imwrite(tmp, kept))
     return Export(Path(video), None if png is None else Path(png), count, kept.shape[1], kept.shape[0],
@@ -141,12 +143,12 @@ def render_video(runs: list, video, png=None, size=(960, 384), fps: float = 12.0
     from .frames import FrameRenderer, Track
 
     check_video(video, fps)
-    size = frame_size(size)
+    width, height = frame_size(size)
     for path in (video, png):
         if path is not None:
             prepare_directory(Path(path).parent)
     tracks = [Track.from_result(run, title, color) for run, title in zip(runs, titles or [""] * len(runs))]
-    renderer = FrameRenderer(tracks, *size, trace=trace, backend=backend, log=log)
+    renderer = FrameRenderer(tracks, width, height, trace=trace, backend=backend, log=log)
     try:
         return export(renderer, Path(video), None if png is None else Path(png), fps, quiet, png_frame)
     finally:

@@ -20,46 +20,20 @@ from .. import runtime
 from ..errors import require, require_finite
 from ..fem.mesh import Mesh
 from ..fem.planar import BeamGeometry, Geometry
-from ..fem.supports import in_box, require_box
-from ..fem.supports import require_held
-from . import sceneformat
+from ..fem.supports import in_box, require_box, require_held
 from ..io.keys import dotted
 from ..io.output import check_stem
+from ..io.units import NODAL_STIFFNESS, UNITLESS, Units, defaults, resolved, si_default
 from ..limits import Budget
-from ..io.units import NODAL_STIFFNESS, PRESSURE, UNITLESS, Units, defaults, resolved, si_default
-from ..materials import IsochoricMaterial, StableNeoHookean
-from ..materials.presets import PresetMaterial
-from ..terms.model import EnergyModel
-from .schedule import MAX_STRETCH, ChamberSchedule, Schedule, area_ramp
+from ..materials import Material, MaterialForm
 from ..terms import VOLUMETRIC, Clamp, Elasticity, NormalClamp
 from ..terms.base import Term
 from ..terms.chambers import Chamber, ChamberKind
 from ..terms.effects import Effect
+from ..terms.model import EnergyModel
 from ..terms.nodal_volume import require_nodal
-
-
-@dataclass(frozen=True)
-class Material:
-    """Isotropic material of the stable neo-Hookean law (materials/neo_hookean.py): Young's modulus E > 0
-    (None: 1e4 Pa in the scene's units, set by the Scene), Poisson's ratio -1 < nu < 0.5."""
-
-    youngs_modulus: float | None = si_default(1e4, PRESSURE)
-    poisson_ratio: float = 0.45
-
-    def __post_init__(self):
-        require(self.youngs_modulus is None or require_finite("E", self.youngs_modulus) > 0,
-                f"E = {self.youngs_modulus!r} must be > 0")
-        nu = require_finite("nu", self.poisson_ratio)
-        require(-1 < nu < 0.5, f"nu = {self.poisson_ratio!r} must lie in (-1, 0.5)")
-
-    def law_parameters(self, units: Units) -> tuple[type, np.ndarray]:
-        """The law and its parameter vector (E and nu are in the scene's units already)."""
-        return StableNeoHookean, StableNeoHookean.parameters(self.youngs_modulus, self.poisson_ratio)[0]
-
-
-# A body's material: the stable neo-Hookean one of (E, nu), a form of the isochoric law with its coefficients, or
-# a preset; each gives law_parameters(units)
-AnyMaterial = Material | IsochoricMaterial | PresetMaterial
+from . import sceneformat
+from .schedule import MAX_STRETCH, ChamberSchedule, Schedule, area_ramp
 
 
 @dataclass(frozen=True)
@@ -69,7 +43,7 @@ class Region:
     "layer"); later regions win."""
 
     box: tuple[float, float, float, float] | None
-    material: AnyMaterial
+    material: MaterialForm
     group: str | None = None
 
     def __post_init__(self):
@@ -131,7 +105,7 @@ class Scene:
     geometry: Geometry
     controls: tuple[ChamberControl, ...]
     increments: int
-    material: AnyMaterial = field(default_factory=Material)
+    material: MaterialForm = field(default_factory=Material)
     regions: tuple[Region, ...] = ()
     clamp_stiffness: float | None = si_default(sceneformat.CLAMP_STIFFNESS, NODAL_STIFFNESS)  # 1/2 K |u|^2 per node
     effects: tuple[Effect, ...] = ()

@@ -21,7 +21,8 @@
                  (syringe_volume, dead_volume, atmosphere, gamma) | ..., with that kind's parameters;
                  keyframes = [[step, value], ...]; bounds = [min, max] (inverse control)
     [schedule]   increments
-    [effects.gravity] density, g      [effects.ground] height, dhat, stiffness      [effects.self_contact] dhat, stiffness
+    [effects.gravity] density, g      [effects.ground] height, dhat, stiffness
+    [effects.self_contact] dhat, stiffness
     [effects.dynamics] density, dt
     [[targets]]  tip = [x, y], angle (degrees, optional), weights = [w_x, w_y, w_angle]  (inverse control, in order)
 
@@ -37,9 +38,9 @@ from __future__ import annotations
 import os
 
 from ..errors import PneumaInputError
-from .build import Scene
-from . import sceneformat
 from ..io.output import read_input, reduce_to_stem
+from . import sceneformat
+from .build import Scene
 from .schema import KeyInfo, parse_toml
 
 MAX_SCENE_BYTES = 1_000_000

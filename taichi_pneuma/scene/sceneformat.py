@@ -1,7 +1,7 @@
 """The scene file's format, declared once (schema.py's entries): read, written, edited by dotted keys and
 listed in the key reference from this one declaration.
 
-The classes the scene module defines (the scene, its material, regions and chamber controls) are taken
+The classes the scene module defines (the scene, its regions and chamber controls) are taken
 from the annotations of the Scene class passed in, so that scene.py imports this module without a cycle.
 """
 
@@ -11,26 +11,25 @@ import dataclasses
 import functools
 import typing
 
-from .targets import MAX_TARGETS, Target
 from ..errors import require
 from ..fem.elements import ORDERS
-from ..fem.planar import Geometry
-from ..fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
-from ..fem.supports import SIDES, PointSet, Roller
 from ..fem.gmsh_mesher import MeshSizes
 from ..fem.meshfile import MeshBody, MeshGeometry, MeshSurface
+from ..fem.planar import Geometry
 from ..fem.pneunet import PneuNet
+from ..fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 from ..fem.solid_geometry import SolidGeometry, is_solid_shape
 from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
-from ..materials import FORMS, IsochoricMaterial
-from ..materials.presets import PRESETS, PresetMaterial
-from .schedule import MAX_STRETCH, ChamberSchedule
+from ..fem.supports import SIDES, PointSet, Roller
+from ..io.tomltext import dumps
+from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, UNITLESS, UNITS, default_in
+from ..materials.registry import SELECTORS, all_keys, form_of, forms, region_values
 from ..terms import VOLUMETRIC
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
+from .schedule import MAX_STRETCH, ChamberSchedule
 from .schema import REQUIRED, Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
-from ..io.tomltext import dumps
-from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, PRESSURE, UNITLESS, UNITS, default_in
+from .targets import MAX_TARGETS, Target
 
 PAIR, BOX, TRIPLE = "[x, y]", "[x0, y0, x1, y1]", "[x, y, z]"
 CLAMP_STIFFNESS = 1e9  # the [clamp] stiffness key's default, in SI (Pa, 2D; Pa m, 3D)
@@ -120,64 +119,34 @@ def make_point_set(v: dict, default_side: str | None) -> PointSet | None:
     return PointSet(v["side"], v["box"])
 
 
-MATERIAL_KEYS = {
-    "preset": Key(str, None, "a published material (its law and coefficients, converted into the scene's units)",
-                  tuple(PRESETS)),
-    "law": Key(str, None, "a form of the isochoric law (C10, ... and K or nu); none: stable neo-Hookean (E, nu)",
-               tuple(FORMS)),
-    "E": Key(float, None, "Young's modulus of the stable neo-Hookean material, > 0", unit=PRESSURE, si=1e4),
-    "nu": Key(float, None, "Poisson's ratio, in (-1, 0.5); none: 0.45 (E), 0.49 (law), the preset's own"),
-    "K": Key(float, None, "bulk modulus, instead of nu (law or preset)", unit=PRESSURE),
-    **{c: Key(float, None, f"coefficient of the isochoric law's {c} term (the forms taking it; none: 0, C10 "
-                           f"required)", unit=PRESSURE) for c in ("C10", "C01", "C20", "C30")},
-}
+MATERIAL_TAGS = tuple(SELECTORS)  # the keys choosing a material's form (material_kind)
 
 
-STABLE_DEFAULTS = {"E": 1e4, "nu": 0.45}  # the stable neo-Hookean material's E and nu where not given
-MATERIAL_TAGS = ("preset", "law")  # the keys choosing a material's form (material_kind)
+def material_entries() -> dict[str, Key]:
+    """The [material] table's keys: those of every registered material form (materials/registry.py), each
+    optional."""
+    return {name: Key(key.type, None, key.doc, key.allowed, key.unit, si=key.si) for name, key in all_keys().items()}
 
 
 def material_kind(keys: dict) -> dict:
     """The keys of the material form that a [material] table's (or a region's) keys choose, each with the
-    default material_of gives it (REQUIRED: none): a preset's, a law's, or the stable neo-Hookean E and nu."""
-    if keys.get("preset") is not None:
-        return dict.fromkeys(("preset", "K", "nu"), REQUIRED)
-    if keys.get("law") is not None:
-        return dict.fromkeys(("law", *FORMS.get(keys["law"], ()), "K", "nu"), REQUIRED)
-    return dict(STABLE_DEFAULTS)
+    value a scene file writes for it when not given (REQUIRED: none): the form's form_keys, or the selector
+    alone when it names no form."""
+    form = form_of(keys)
+    chosen = form.form_keys(keys) if form else dict.fromkeys(s for s in SELECTORS if keys.get(s) is not None)
+    return {name: REQUIRED if default is None else default for name, default in chosen.items()}
 
 
-def material_of(keys: dict, material_class):
-    """The material of a [material] table's (or a region's) keys: a preset, a form of the isochoric law, or
-    (neither) the stable neo-Hookean material_class(E, nu)."""
-    given = sorted(k for k, value in keys.items() if value is not None)
-    coefficients = [c for c in ("C10", "C01", "C20", "C30") if keys[c] is not None]
-    if keys["preset"] is not None:
-        extra = [k for k in given if k not in ("preset", "K", "nu")]
-        require(not extra, f"preset = {keys['preset']!r} gives the law and its coefficients: drop {', '.join(extra)}")
-        return PresetMaterial(keys["preset"], keys["K"], keys["nu"])
-    if keys["law"] is None:
-        extra = [k for k in given if k not in ("E", "nu")]
-        require(not extra, f"{', '.join(extra)} need law = {' or '.join(FORMS)} (E and nu alone: stable neo-Hookean)")
-        # E left None: its SI default converted into the scene's units, set by the Scene (units.si_default)
-        return material_class(keys["E"], STABLE_DEFAULTS["nu"] if keys["nu"] is None else keys["nu"])
-    require(keys["E"] is None, f"E = {keys['E']!r}: law = {keys['law']!r} takes C10, ... and K or nu, not E")
-    require(keys["C10"] is not None, f"law = {keys['law']!r} needs C10")
-    return IsochoricMaterial(keys["law"], **{c: keys[c] for c in coefficients}, bulk_modulus=keys["K"],
-                             poisson_ratio=keys["nu"])
+def material_of(keys: dict):
+    """The material of a [material] table's (or a region's) keys: that of the form they name."""
+    form = form_of(keys)
+    assert form is not None, "the schema checked the selector's value against the forms' names"
+    return form.from_keys(keys)
 
 
 def material_keys(material) -> dict:
     """The [material] (or region) keys of a material, None where absent: material_of's inverse."""
-    keys = dict.fromkeys(MATERIAL_KEYS)
-    if isinstance(material, PresetMaterial):
-        keys.update(preset=material.preset, K=material.bulk_modulus, nu=material.poisson_ratio)
-    elif isinstance(material, IsochoricMaterial):
-        keys.update(law=material.law, K=material.bulk_modulus, nu=material.poisson_ratio,
-                    **{c: getattr(material, c) for c in FORMS[material.law]})
-    else:
-        keys.update(E=material.youngs_modulus, nu=material.poisson_ratio)
-    return keys
+    return {**dict.fromkeys(all_keys()), **material.scene_values()}
 
 
 def item_type(hint):
@@ -190,36 +159,31 @@ def scene_table(scene_class) -> Table:
     """The declaration of a scene file of scene_class (scene.Scene)."""
     hints = typing.get_type_hints(scene_class)
     region_class, control_class = (item_type(hints[k]) for k in ("regions", "controls"))
-    material_class = typing.get_args(hints["material"])[0]  # the stable neo-Hookean Material, first of the union
-    def make_material(v):  # the base first, then each region (its omitted keys the base's, unless it names a law)
-        base_keys = {k: v[k] for k in MATERIAL_KEYS}
-        base = material_of(base_keys, material_class)
+    entries = material_entries()  # the [material] keys of the forms registered now
+
+    def make_material(v):  # the base first, then each region (its omitted keys the base's, unless it names a form)
+        base_keys = {k: v[k] for k in entries}
 
         def region(r):
-            keys = {k: r[k] for k in MATERIAL_KEYS}
-            if keys["preset"] is None and keys["law"] is None:
-                volume = keys["K"] is not None or keys["nu"] is not None  # the region's K or nu replaces both
-                keys = {k: base_keys[k] if keys[k] is None and not (volume and k in ("K", "nu")) else keys[k]
-                        for k in keys}
-            return region_class(r["box"], material_of(keys, material_class), r["group"])
+            return region_class(r["box"], material_of(region_values(base_keys, {k: r[k] for k in entries})),
+                                r["group"])
 
-        return base, tuple(build(f"material.regions[{i}]", lambda: region(r)) for i, r in enumerate(v["regions"]))
+        return material_of(base_keys), tuple(build(f"material.regions[{i}]", functools.partial(region, r))
+                                             for i, r in enumerate(v["regions"]))
 
     region = Table({"box": Key(tuple, None, f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D): the elements whose centroid "
                                             f"lies in it", unit=LENGTH),
                     "group": Key(str, None, "instead of box (3D): the tetrahedra of the mesh's named volume group "
-                                            "(a mesh file's physical group, a pneunet's \"layer\")"), **MATERIAL_KEYS,
-                    "E": dataclasses.replace(MATERIAL_KEYS["E"], si=None)},  # none: the base's (make_material)
+                                            "(a mesh file's physical group, a pneunet's \"layer\")"),
+                    **{k: dataclasses.replace(key, si=None) for k, key in entries.items()}},  # none: the base's
                    parts=lambda r: {"box": r.box, "group": r.group, **material_keys(r.material)}, kind=material_kind,
                    tags=MATERIAL_TAGS)
     regions = Tables(region, "materials for the elements of a box or a volume group (later regions win); keys as "
                              "material's, and unless a region names a preset or law, each key it omits is material's")
-    material = Table({**MATERIAL_KEYS, "regions": regions}, make=make_material,
+    material = Table({**entries, "regions": regions}, make=make_material,
                      parts=lambda s: {**material_keys(s.material), "regions": s.regions}, optional=True,
                      kind=material_kind, tags=MATERIAL_TAGS,
-                     doc="the body's material: the stable neo-Hookean one of E and nu (no law or preset), a form of "
-                         "the isochoric law (law = neo_hookean, mooney_rivlin, yeoh: C10, ... and K or nu, in the "
-                         "scene's pressure unit), or a preset (docs/materials.md)")
+                     doc=f"the body's material: {', '.join(f.summary for f in forms()[:-1])}, or {forms()[-1].summary}")
     chamber = Table({"name": Key(str, doc="distinct among the chambers, not starting with = + - @ (it heads CSV "
                                           "columns)"), "shape": CHAMBER_SHAPES,
                      "control": Variant(KINDS, lambda kind: kind.name, "area", "the chamber kind (its keys its parameters)"),
@@ -341,7 +305,7 @@ def read_scene(data: dict, name: str, scene_class):
 
 def scene_data(scene) -> dict:
     """The scene as the data of a scene file: every key explicit, defaults included, but absent optional ones."""
-    return scene_table(type(scene)).write_table(scene)
+    return scene_table(type(scene)).write_table(scene)  # type: ignore[arg-type]  # a class is hashable
 
 
 def to_toml(scene) -> str:
@@ -351,7 +315,7 @@ def to_toml(scene) -> str:
 
 def with_values(scene, values: dict):
     """A copy of scene with the dotted keys of `values` set, validated like a scene file."""
-    return edited(scene_table(type(scene)), scene, values)
+    return edited(scene_table(type(scene)), scene, values)  # type: ignore[arg-type]  # a class is hashable
 
 
 def key_reference(scene_class) -> list[KeyInfo]:

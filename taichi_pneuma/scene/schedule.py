@@ -52,7 +52,8 @@ class ChamberSchedule:
 
     def command(self, step: float) -> float:
         steps = [0.0] + [float(s) for s, _ in self.keyframes]
-        values = [self.kind.rest] + [float(v) for _, v in self.keyframes]
+        # kind is a ChamberKind from __post_init__ on
+        values = [self.kind.rest] + [float(v) for _, v in self.keyframes]  # type: ignore[union-attr]
         if steps[1] == 0.0:
             steps, values = steps[1:], values[1:]
         return float(np.interp(step, steps, values))
@@ -78,11 +79,12 @@ class Schedule:
 
     @property
     def rest_commands(self) -> np.ndarray:
-        return np.array([c.kind.rest for c in self.chambers])
+        return np.array([c.kind.rest for c in self.chambers])  # type: ignore[union-attr]
 
 
 def area_ramp(growth: float, steps: int, stiffness: float = 1e5) -> ChamberSchedule:
-    """The reference ramp for one area-controlled chamber (stiffness k): area ratio 1 -> growth over steps - 1 increments."""
+    """The reference ramp for one area-controlled chamber (stiffness k): area ratio 1 -> growth over steps - 1
+    increments."""
     require(require_finite("growth", growth) > 0, f"growth = {growth!r} must be > 0")
     require(isinstance(steps, (int, np.integer)) and steps >= 2,
             f"steps = {steps!r} must be an integer >= 2 (the rest state and at least one increment)")

@@ -37,13 +37,13 @@ import contextvars
 import dataclasses
 import functools
 import re
+import tomllib
 import types
 import typing
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
-import tomllib
 
 from ..errors import PneumaInputError, require
 from ..io.tomltext import dumps
@@ -149,7 +149,7 @@ class Table:
             SYSTEM.reset(token)
 
     def read_values(self, data: dict, path: str):
-        known = set()
+        known: set[str] = set()
         values = read_keys(self.keys, data, path, known)
         unknown = sorted(set(data) - known)
         require(not unknown, f"unknown key '{join(path, unknown[0]) if unknown else ''}' "
@@ -162,7 +162,7 @@ class Table:
             data[name] = table
 
     def write_table(self, obj) -> dict:
-        data = {}
+        data: dict = {}
         write_keys(self.keys, self.parts(obj), data)
         return data
 
@@ -207,7 +207,8 @@ class Variant:
         return build(path, lambda: option.make(values))
 
     def write(self, value, name: str, data: dict) -> None:
-        tag = self.choose(value) if self.choose else next(k for k in self.options if isinstance(value, self.table(k).cls))
+        tag = self.choose(value) if self.choose else next(k for k in self.options
+                                                          if isinstance(value, self.table(k).cls))  # type: ignore[arg-type]
         data[name] = tag
         write_keys(self.table(tag).keys, self.table(tag).parts(value), data)
 
@@ -235,7 +236,8 @@ class Named:
     def write(self, value, name: str, data: dict) -> None:
         names = {cls: option for option, cls in self.registry.items()}
         if value:
-            data[name] = {names[type(item)]: dataclass_table(type(item)).write_table(item) for item in value}
+            data[name] = {names[type(item)]: dataclass_table(type(item)).write_table(item)  # type: ignore[arg-type]
+                          for item in value}
 
     def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
         key = join(path, name)
@@ -349,7 +351,7 @@ def edited(root: Table, obj, values: dict):
         raise PneumaInputError(message) from None
 
 
-def switched(table: "Table", node, parts: list, value) -> None:
+def switched(table: Table, node, parts: list, value) -> None:
     """If parts (a parsed dotted key) names, through tables and arrays of tables, a key that switches the kind
     of its table node to another (a Variant's tag, or one of its table's tags, the others then unset): drop
     from node the keys of the old kind that the new one lacks or that hold the old kind's default (keys the
@@ -365,6 +367,7 @@ def switched(table: "Table", node, parts: list, value) -> None:
             drop_kind(node, {k: e.default if isinstance(e, Key) else REQUIRED for k, e in keys.items()},
                       table_entries(entry.table(value).keys, {}))
     elif name in table.tags and not rest:
+        assert table.kind is not None  # a table with tags has a kind
         old = table.kind(node)
         new = table.kind({**{k: v for k, v in node.items() if k not in table.tags}, name: value})
         if set(old) != set(new):
@@ -400,7 +403,8 @@ def parse_key(key: str) -> list:
     parts = []
     for segment in key.split("."):
         match = KEY_PART.fullmatch(segment)
-        require(match is not None, f"{key!r} is not a dotted scene key (like material.E or chambers[0].center[1])")
+        if match is None:
+            raise PneumaInputError(f"{key!r} is not a dotted scene key (like material.E or chambers[0].center[1])")
         parts.append(match.group(1))
         parts += [int(i) for i in re.findall(r"\[(\d+)\]", match.group(2))]
     return parts
@@ -473,8 +477,8 @@ def read_toml(text: str, what: str) -> dict:
         data = tomllib.loads(text)
     except RecursionError:
         data = None
-    require(data is not None and not nested_past(data, MAX_DEPTH),
-            f"{what}: arrays or tables nested too deeply (at most {MAX_DEPTH} levels)")
+    if data is None or nested_past(data, MAX_DEPTH):
+        raise PneumaInputError(f"{what}: arrays or tables nested too deeply (at most {MAX_DEPTH} levels)")
     return data
 
 

@@ -1,8 +1,9 @@
 """The files shipped inside the package (taichi_pneuma/scenes/: scene files and a targets CSV), found by name.
 
 A path that exists is used as it is (or with the suffix added: `x` for `x.toml`); otherwise a bare name
-(`pneunet_finger` or `pneunet_finger.toml`, no directory part) is looked up among the shipped files, so `tp.load_scene("pneunet_finger")` and
-`--scene pneunet_finger` work from any directory, in a clone or an installed wheel.
+(`pneunet_finger` or `pneunet_finger.toml`, no directory part) is looked up among the shipped files, so
+`tp.load_scene("pneunet_finger")` and `--scene pneunet_finger` work from any directory, in a clone or an installed
+wheel.
 """
 
 from __future__ import annotations

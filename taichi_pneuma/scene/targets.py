@@ -67,7 +67,9 @@ def read_targets_csv(path: str | os.PathLike) -> list[Target]:
     targets = []
     for i, row in enumerate(rows, start=2):
         try:
-            cell = lambda key, default=None: default if not (row.get(key) or "").strip() else parse_number(key, row[key])
+            def cell(key, default=None, row=row):
+                """The row's number in column key; default where the cell is empty."""
+                return default if not (row.get(key) or "").strip() else parse_number(key, row[key])
             z = cell("z")
             targets.append(Target((cell("x"), cell("y")) + (() if z is None else (z,)), cell("angle"),
                                   (cell("wx", 1.0), cell("wy", 1.0), cell("wangle", 1.0)), cell("wz", 1.0)))

@@ -13,14 +13,16 @@ import importlib.util
 import itertools
 import os
 import sys
+from collections.abc import Sequence
 from contextlib import contextmanager
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
 
 from .. import runtime
-from ..errors import require
 from ..backend import ti
+from ..errors import require
 
 
 def installed(module: str) -> bool:
@@ -271,7 +273,7 @@ class AmgConjugateGradient:
         self._block = 1 if rest is None else np.shape(rest)[1]
         self.rtol = 1e-10
         self.iterations = 0  # CG iterations of the last solve
-        self._hierarchy = None
+        self._hierarchy: Any = None  # pyamg's multilevel solver
         self._indptr = None
 
     def factorize(self, matrix: sp.csr_matrix) -> None:
@@ -287,10 +289,10 @@ class AmgConjugateGradient:
         self._hierarchy = pyamg.smoothed_aggregation_solver(blocks, B=self._modes, symmetry="hermitian", **self.OPTIONS)
         self._preconditioner = self._hierarchy.aspreconditioner(cycle="V")
         self._indptr = matrix.indptr
-        self._fresh_rate = None  # iterations per decade of residual on this hierarchy's first solve
+        self._fresh_rate: float | None = None  # iterations per decade of residual on this hierarchy's first solve
         self._stale = False
 
-    def solve(self, rhs: np.ndarray, low_rank: list[tuple[np.ndarray, np.ndarray, float]] = (),
+    def solve(self, rhs: np.ndarray, low_rank: Sequence[tuple[np.ndarray, np.ndarray, float]] = (),
               rtol: float | None = None) -> np.ndarray:
         if rhs.ndim == 2:
             return np.column_stack([self.solve(column, low_rank, rtol) for column in rhs.T])
@@ -320,7 +322,7 @@ class AmgConjugateGradient:
         x, info = spla.cg(operator, rhs, rtol=rtol, maxiter=self.MAX_ITERATIONS, M=self._preconditioner,
                           callback=lambda _: next(count))
         self.iterations = next(count)
-        residual = np.linalg.norm(apply(x) - rhs) / max(np.linalg.norm(rhs), np.finfo(float).tiny)
+        residual = float(np.linalg.norm(apply(x) - rhs) / max(np.linalg.norm(rhs), np.finfo(float).tiny))
         if info != 0 or not residual <= 10 * rtol:
             raise NotConverged(f"CG reached a relative residual of {residual:.2e}, not {rtol:.2e}, in "
                                f"{self.iterations} iterations")

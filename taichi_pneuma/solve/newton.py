@@ -54,9 +54,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import require, require_finite
-from .linsolve import (BACKENDS, FactorizationError, FixedPattern, direct_backend, installed, make_backend,
-                       solve_low_rank_updated)
 from ..terms.model import EnergyModel
+from .linsolve import (
+    BACKENDS,
+    FactorizationError,
+    FixedPattern,
+    direct_backend,
+    installed,
+    make_backend,
+    solve_low_rank_updated,
+)
 
 ARMIJO_C1 = 1e-4
 MAX_HALVINGS = 40
@@ -269,6 +276,7 @@ class NewtonSolver:
                 self.model.set_displacements(u)
                 record.message = model.fault() or "line search found no decrease (energy at round-off)"
                 break
+            assert d is not None  # a descent direction, of slope < 0
             u = u + alpha * d
             energy = trial
             record.iterations += 1

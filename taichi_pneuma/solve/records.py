@@ -66,7 +66,7 @@ class StepRecord:
     def row(self) -> dict[str, float]:
         """Flat columns: step, <chamber>.<field> for each chamber, tip_dx, tip_dy (and tip_dz in 3D),
         tip_rotation, <contact>.fx/.fy/.magnitude, solver figures, the extra columns."""
-        row = {"step": self.step}
+        row: dict[str, float] = {"step": self.step}
         for name, c in self.chambers.items():
             row.update({f"{name}.command": c.command, f"{name}.area": c.area, f"{name}.area_ratio": c.area_ratio,
                         f"{name}.pressure": c.pressure})

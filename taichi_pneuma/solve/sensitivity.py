@@ -60,7 +60,7 @@ def command_forces(built: BuiltScene) -> np.ndarray:
     (k A_rest grad A under area control, grad A under pressure control)."""
     rhs = np.zeros((built.model.n_dofs, len(built.chambers)))
     for j, chamber in enumerate(built.chambers):
-        rhs[chamber.dofs, j] = chamber.command_force()
+        rhs[chamber.dofs, j] = chamber.command_force()  # type: ignore[attr-defined]  # (each kind's term has it)
     return rhs
 
 

@@ -114,7 +114,7 @@ def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.n
         trial = min(1.0, done + fraction)
         commands = origin + trial * (target - origin)
         built.set_commands(commands)
-        u_trial, record = solver.solve(predict(built, previous, (reached, u), commands), 
+        u_trial, record = solver.solve(predict(built, previous, (reached, u), commands),
                                        reuse_factor=solver.chord, stop=stop)
         records.append(record)
         if record.stopped:
@@ -163,7 +163,10 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     contact_terms = [(name, t) for name, terms in built.effects.items() for t in terms if t.reports_contact]
     u = np.zeros_like(mesh.vertices)
     stretches = ElementFields(mesh.vertices, mesh.elements)
-    steps, states, solves, forces = [], [], [], []
+    steps: list[StepRecord] = []
+    states: list[np.ndarray] = []  # positions
+    solves: list[SolveRecord] = []  # each step's last Newton solve
+    forces: list[np.ndarray] = []  # contact forces on the vertices
     reached = schedule.rest_commands
     previous = None  # (commands, u) of the equilibrium before the last one, for the predictor
     newton = {"linear_solver": solver.backend.name, "chord_steps": 0, "phase_seconds": collections.Counter()}

@@ -62,7 +62,8 @@ class LocalPool:
     def __init__(self, workers: int | None = None):
         self.workers = (os.cpu_count() or 1) if workers is None else workers
         require(isinstance(self.workers, int) and self.workers >= 1, f"--workers {workers!r} must be >= 1")
-        self._pool, self._saved_env = None, {}
+        self._pool: ProcessPoolExecutor | None = None
+        self._saved_env: dict[str, str | None] = {}
 
     def describe(self) -> dict:
         return {"executor": "process pool", "workers": self.workers}
@@ -86,9 +87,11 @@ class LocalPool:
     def run(self, tasks: list[Task]):
         """Yield (index, row) as runs finish; row None for a run lost with a crashed worker process.
         On Ctrl-C: cancel the runs not started, yield those in flight as they finish, re-raise."""
+        pool = self._pool
+        assert pool is not None  # (entered)
         with signals.ignored():  # the first `workers` submissions start the workers: they inherit it
-            futures = {self._pool.submit(run_task, task): i for i, task in enumerate(tasks[:self.workers])}
-        futures.update({self._pool.submit(run_task, task): i for i, task in enumerate(tasks) if i >= self.workers})
+            futures = {pool.submit(run_task, task): i for i, task in enumerate(tasks[:self.workers])}
+        futures.update({pool.submit(run_task, task): i for i, task in enumerate(tasks) if i >= self.workers})
         pending = set(futures)
 
         def outcome(future):

@@ -4,9 +4,14 @@ or a coloured scatter for two, a panel per key for more), failed runs marked, ne
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 from .table import cell, is_number
+
+if TYPE_CHECKING:
+    from matplotlib.collections import Collection
 
 MAX_DRAWN = 1e100  # numbers the plot draws as such (matplotlib's axis arithmetic overflows near 1e308)
 
@@ -71,7 +76,8 @@ def study_figure(rows: list[dict], keys: list[str], sampled: bool = False, label
     else:
         y, yl = positions[1]
         limit = float(np.abs(tip).max()) or 1.0
-        colours = dict(cmap="coolwarm", vmin=-limit, vmax=limit)
+        colours: dict[str, Any] = dict(cmap="coolwarm", vmin=-limit, vmax=limit)
+        image: Collection
         if sampled:
             image = ax.scatter(x[:n], y[:n], c=tip, s=40, edgecolors="k", linewidths=0.3, **colours)
         else:
@@ -82,7 +88,7 @@ def study_figure(rows: list[dict], keys: list[str], sampled: bool = False, label
             if grid.size <= 64:
                 for (i, j), value in np.ndenumerate(grid):
                     if np.isfinite(value):
-                        ax.text(xs[j], ys[i], f"{value:+.3f}", ha="center", va="center", fontsize=8,
+                        ax.text(float(xs[j]), float(ys[i]), f"{value:+.3f}", ha="center", va="center", fontsize=8,
                                 color="w" if abs(value) > 0.6 * limit else "k")
         figure.colorbar(image, ax=ax, label="tip dy")
         if yl:

@@ -18,9 +18,10 @@ import os
 import platform
 import time
 from dataclasses import asdict, dataclass
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from importlib import metadata
 from pathlib import Path
+from typing import Any
 
 from .. import backend, signals
 from ..errors import require
@@ -31,10 +32,12 @@ from .table import cell, read_done, run_key, table_columns, write_table
 from .task import RunOptions, Task
 from .vary import MAX_RUNS, Axis, check_axes, plan
 
+DEFAULT_OPTIONS = RunOptions()  # a study's solver options unless given
+
 
 def versions(ray: bool = False) -> dict:
     names = ["taichi-pneuma", backend.NAME, "numpy", "scipy"] + (["ray"] if ray else [])
-    found = {}
+    found: dict[str, str | None] = {}
     for name in names:
         try:
             found[name] = metadata.version(name)
@@ -76,7 +79,7 @@ class Sweep:
     (a different study under the same name is refused); run() runs the others."""
 
     def __init__(self, base: Scene, axes: list[Axis], out, name: str = "sweep", samples: int | None = None,
-                 seed: int = 0, options: RunOptions = RunOptions(), retry_failed: bool = False,
+                 seed: int = 0, options: RunOptions = DEFAULT_OPTIONS, retry_failed: bool = False,
                  max_runs: int = MAX_RUNS):
         require(len(axes) >= 1, "a study varies at least one key (--vary KEY=SPEC)")
         axes = check_axes(base, axes)
@@ -98,9 +101,9 @@ class Sweep:
                          for a in self.axes],
                 "sampling": "full grid" if self.samples is None else "latin hypercube",
                 "samples": self.samples, "seed": self.seed, "runs": len(self.runs)}
-        data = {**self.identity, "status": status, "grid": grid, "executor": executor,
+        data: dict[str, Any] = {**self.identity, "status": status, "grid": grid, "executor": executor,
                 "versions": versions(ray=bool(executor and executor["executor"] == "ray")),
-                "machine": machine(), "updated": datetime.now(timezone.utc).isoformat(timespec="seconds")}
+                "machine": machine(), "updated": datetime.now(UTC).isoformat(timespec="seconds")}
         if report is not None:
             data["result"] = {k: getattr(report, k) for k in ("planned", "skipped", "ran", "failed", "lost", "seconds")}
             data["result"]["runs_per_second"] = report.ran / report.seconds if report.ran else None

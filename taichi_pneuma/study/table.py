@@ -89,10 +89,10 @@ def read_done(table: Path, record: Path, identity: dict, columns: list[str], key
     require(same, f"{table} holds another study (other keys, base scene or solver options), or it or its "
                   f"JSON is missing, damaged or not a plain file; give another --name or --out, or delete it")
     done = {}
-    for text in rows:
-        row = {k: uncell(v) for k, v in text.items()}
+    for raw in rows:
+        row = {k: uncell(v) for k, v in raw.items()}
         if well_formed(row, columns, keys) and not (retry_failed and row["error"] is not None):
-            done[tuple(text[k] for k in keys)] = row
+            done[tuple(raw[k] for k in keys)] = row
     return done
 
 

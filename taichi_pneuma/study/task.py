@@ -7,11 +7,11 @@ from __future__ import annotations
 
 import io
 import time
+import tomllib
 from contextlib import redirect_stdout
 from dataclasses import dataclass, field
 
 import numpy as np
-import tomllib
 
 from .. import limits, runtime
 from ..errors import PneumaInputError

@@ -52,13 +52,20 @@ class Axis:
     def integer(self) -> bool:
         return self.is_range and isinstance(self.low, int) and isinstance(self.high, int)
 
+    @property
+    def ends(self) -> tuple[float, float]:
+        """A range's (low, high)."""
+        assert self.low is not None and self.high is not None, f"{self.key}: a list of values, not a range"
+        return self.low, self.high
+
     def grid(self) -> list:
         """The values of a full grid."""
         if not self.is_range:
             return list(self.items)
-        require(self.count is not None, f"--vary {self.key}={self.spec}: a range needs a count (start:stop:count) "
-                                        f"unless --samples is given")
-        values = np.linspace(self.low, self.high, self.count)
+        if self.count is None:
+            raise PneumaInputError(f"--vary {self.key}={self.spec}: a range needs a count (start:stop:count) "
+                                   f"unless --samples is given")
+        values = np.linspace(*self.ends, self.count)
         if self.integer:
             values = np.round(values).astype(int)
             require(len(set(values)) == len(values),
@@ -71,10 +78,11 @@ class Axis:
         likely), over the items of a list."""
         if not self.is_range:
             return [self.items[i] for i in np.minimum((u * len(self.items)).astype(int), len(self.items) - 1)]
+        low, high = self.ends
         if self.integer:
-            span = self.high - self.low + 1
-            return [int(v) for v in np.minimum(self.low + np.floor(u * span), self.high)]
-        return [float(v) for v in self.low + u * (self.high - self.low)]
+            span = high - low + 1
+            return [int(v) for v in np.minimum(low + np.floor(u * span), high)]
+        return [float(v) for v in low + u * (high - low)]
 
 
 def parse_vary(text: str) -> Axis:
@@ -168,6 +176,6 @@ def check_axes(base: Scene, axes: list[Axis]) -> list[Axis]:
             require(same, f"--vary {axis.key}: {value!r} is not a {kind} like the scene's {axis.key} = {current!r}")
         if isinstance(current, float):
             axis = replace(axis, items=tuple(float(v) for v in axis.items)) if not axis.is_range else \
-                replace(axis, low=float(axis.low), high=float(axis.high))
+                replace(axis, low=float(axis.ends[0]), high=float(axis.ends[1]))
         checked.append(axis)
     return checked

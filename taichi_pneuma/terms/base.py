@@ -3,20 +3,22 @@
 Kernels are module-level functions of arrays: mesh data, per-element parameters, the rest positions
 X and the displacements u arrive as `ti.types.ndarray` arguments (NumPy arrays on the caller's side),
 scalars as runtime arguments. Taichi's compile key holds an ndarray's dtype and ndim, not its shape,
-so a kernel is compiled once per process whatever the mesh, material or scene.
+so a kernel is compiled once per process whatever the mesh, material or scene. The argument types are TypeAliases
+so that a type checker reads them as annotations it cannot see into (Any), not as variables.
 """
 
 import math
+from typing import TypeAlias
 
 import numpy as np
 
 from ..backend import ti
 
-Nodal = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (n, d) float64: positions, displacements, forces, any d
-Scalars = ti.types.ndarray(dtype=ti.f64, ndim=1)  # (m,) float64
-Table = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (m, k) float64: per-element Hessian blocks
-Indices = ti.types.ndarray(dtype=ti.i32, ndim=1)  # (m,) int32 vertex indices
-Triples = ti.types.ndarray(dtype=ti.types.vector(3, ti.i32), ndim=1)  # (m, 3) int32 vertex triples
+Nodal: TypeAlias = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (n, d) float64: positions, displacements, forces, any d
+Scalars: TypeAlias = ti.types.ndarray(dtype=ti.f64, ndim=1)  # (m,) float64
+Table: TypeAlias = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (m, k) float64: per-element Hessian blocks
+Indices: TypeAlias = ti.types.ndarray(dtype=ti.i32, ndim=1)  # (m,) int32 vertex indices
+Triples: TypeAlias = ti.types.ndarray(dtype=ti.types.vector(3, ti.i32), ndim=1)  # (m, 3) int32 vertex triples
 HUGE = 1e300  # a finite stand-in for infinity in comparisons (smallest_positive_cubic_root)
 
 
@@ -150,6 +152,14 @@ class Term:
 
     name = "term"
     reports_contact = False
+
+    def energy(self) -> float:
+        """The term's energy at config.u (every term has one)."""
+        raise NotImplementedError
+
+    def gradient(self) -> np.ndarray:
+        """dE/du (n, d) at config.u (every term has one)."""
+        raise NotImplementedError
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         empty = np.zeros(0, dtype=np.int64)

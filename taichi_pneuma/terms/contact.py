@@ -255,7 +255,7 @@ class SelfContact(Term):
         self.config = config
         self.dhat, self.kappa = float(dhat), float(stiffness)
         rest = config.rest
-        pairs = []
+        per_loop = []
         for loop in loops:
             loop = np.asarray(loop, dtype=np.int64)
             k = len(loop)
@@ -263,8 +263,8 @@ class SelfContact(Term):
             keep = (i != j) & (i != (j + 1) % k)
             p, a, b = loop[i[keep]], loop[j[keep]], loop[(j[keep] + 1) % k]
             far = point_segment_distance(rest[p], rest[a], rest[b]) >= 2.0 * self.dhat
-            pairs.append(np.column_stack([p, a, b])[far])
-        pairs = np.vstack(pairs)
+            per_loop.append(np.column_stack([p, a, b])[far])
+        pairs = np.vstack(per_loop)
         self.pairs = int32s(pairs)
         self._rows, self._cols = block_pattern(pairs, config.dim)
 

@@ -21,6 +21,8 @@ them. The Hessian kernel's loops are runtime loops, not unrolled ones: Taichi tr
 which keeps its compile time short.
 """
 
+from typing import TypeAlias
+
 import numpy as np
 
 from ..backend import ti
@@ -30,10 +32,10 @@ from ..materials.law import element_parameters, embedded, stress_eigensystem
 from ..materials.neo_hookean import cofactor
 from .base import Nodal, Table, Term, block_pattern, int32s, smallest_positive_cubic_root, smallest_positive_root
 
-Nodes = ti.types.ndarray(dtype=ti.i32, ndim=2)  # (m, k): the nodes of each element
-Gradients = ti.types.ndarray(dtype=ti.f64, ndim=4)  # (m, nq, k, d): dN_a/dX at each quadrature point
-Weights = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (m, nq): the quadrature weights W
-Parameters = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (m, p): the law's parameter vector per element
+Nodes: TypeAlias = ti.types.ndarray(dtype=ti.i32, ndim=2)  # (m, k): the nodes of each element
+Gradients: TypeAlias = ti.types.ndarray(dtype=ti.f64, ndim=4)  # (m, nq, k, d): dN_a/dX at each quadrature point
+Weights: TypeAlias = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (m, nq): the quadrature weights W
+Parameters: TypeAlias = ti.types.ndarray(dtype=ti.f64, ndim=2)  # (m, p): the law's parameter vector per element
 MAX_NODES = {d: max(f.n_nodes for f in FAMILIES if f.dim == d) for d in {f.dim for f in FAMILIES}}
 
 

@@ -31,17 +31,28 @@ such part (its psi - lam/2 (J - 1)^2 is finite through J = 0), and on the beam o
 elements turned inside out at nu = 0.45 and 0.499: it names no volumetric part, and nodal volumes refuse it.
 """
 
+from typing import TypeAlias
+
 import numpy as np
 
 from ..backend import ti
 from ..errors import require
-from ..materials.law import element_parameters, embedded, volumetric_split
 from ..materials.invariants import cofactor
+from ..materials.law import element_parameters, embedded, volumetric_split
 from .base import Nodal, Scalars, Table, block_pattern, vertex_dofs
-from .elastic import (Elasticity, Gradients, Nodes, Parameters, Weights, deformation_gradient, elastic_energy,
-                      elastic_gradient, elastic_hessian)
+from .elastic import (
+    Elasticity,
+    Gradients,
+    Nodes,
+    Parameters,
+    Weights,
+    deformation_gradient,
+    elastic_energy,
+    elastic_gradient,
+    elastic_hessian,
+)
 
-PerNode = ti.types.ndarray(dtype=ti.f64, ndim=3)  # (m, k, j) float64: j values per node of each element
+PerNode: TypeAlias = ti.types.ndarray(dtype=ti.f64, ndim=3)  # (m, k, j) float64: j values per node of each element
 
 
 @ti.kernel

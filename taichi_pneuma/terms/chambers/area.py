@@ -51,7 +51,7 @@ class AreaChamber(Chamber):
 
     def __init__(self, kind: AreaControl, config, loop: np.ndarray, name: str = "main", order: int = 1, origin=None):
         super().__init__(kind, config, loop, name, order, origin)
-        self.k = float(kind.stiffness)
+        self.k = float(kind.stiffness)  # type: ignore[arg-type]
         self.target_area = self.rest_area
 
     def set_command(self, ratio: float) -> None:

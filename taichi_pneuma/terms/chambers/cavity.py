@@ -19,6 +19,8 @@ and no second derivative in one variable: the gradient and the Hessian (per tria
 its nodes, which depends on x) follow by the chain rule.
 """
 
+from typing import TypeAlias
+
 import numpy as np
 
 from ...backend import kernel, ti
@@ -26,8 +28,8 @@ from ...fem.elements import family_of
 from ...fem.tetmesh import Closure
 from ..base import Indices, Nodal, Scalars, Table, block_pattern, int32s
 
-Faces = ti.types.ndarray(dtype=ti.i32, ndim=2)  # (f, k) int32: each wall triangle's nodes, as wall positions
-Derivatives = ti.types.ndarray(dtype=ti.f64, ndim=3)  # (nq, k, 2): dN_a/dxi, dN_a/deta at each rule point
+Faces: TypeAlias = ti.types.ndarray(dtype=ti.i32, ndim=2)  # (f, k) int32: each wall triangle's nodes, as wall positions
+Derivatives: TypeAlias = ti.types.ndarray(dtype=ti.f64, ndim=3)  # (nq, k, 2): dN_a/dxi, dN_a/deta at each rule point
 
 
 @ti.func
@@ -117,7 +119,8 @@ class VolumeForm:
         self.weights = weights / (2.0 * np.trace(closure.projector))  # the reference triangle's area 1/2, 1/r
         self.projector = np.ascontiguousarray(closure.projector, dtype=np.float64)
         self.rows, self.cols = block_pattern(faces, 3)
-        self._last = None  # (the wall nodes' displacements, V, dV/dx) of the last measure_and_gradient
+        # (the wall nodes' displacements, V, dV/dx) of the last measure_and_gradient
+        self._last: tuple[np.ndarray, float, np.ndarray] | None = None
         self.rest_measure = wall_volume(self.rest, np.zeros_like(self.rest), *self._data(),
                                         np.empty((len(self.nodes), 3)))
 

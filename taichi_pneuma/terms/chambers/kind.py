@@ -39,7 +39,7 @@ class ChamberKind:
         """name -> (type, default) of the kind's parameters (its dataclass fields); default
         dataclasses.MISSING where the parameter is required."""
         types = typing.get_type_hints(cls)
-        return {f.name: (types[f.name], f.default) for f in dataclasses.fields(cls)}
+        return {f.name: (types[f.name], f.default) for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
 
     def check(self, what: str, values: list[float]) -> None:
         """Refuse (PneumaInputError naming `what` and the value) a command this kind cannot take;

@@ -34,6 +34,8 @@ so it is returned as sparse triplets unless the solver asks for the PSD Hessian 
 PSD elastic and clamp Hessians keep projected Newton a descent method).
 """
 
+from typing import TypeAlias
+
 import numpy as np
 
 from ...backend import kernel, ti
@@ -41,7 +43,7 @@ from ...errors import require
 from ..base import Indices, Scalars, Term, Vec2s, int32s, position, vertex_dofs
 from .cavity import VolumeForm
 
-Pairs = ti.types.ndarray(dtype=ti.types.vector(2, ti.i32), ndim=1)  # (P, 2) int32 index pairs
+Pairs: TypeAlias = ti.types.ndarray(dtype=ti.types.vector(2, ti.i32), ndim=1)  # (P, 2) int32 index pairs
 
 
 @kernel
@@ -167,6 +169,18 @@ class Chamber(Term):
                                     f"chamber's wall must enclose a cavity with the rubber outside it (its wall "
                                     f"oriented out of the cavity, into the rubber); the body's outer surface given as "
                                     f"a chamber encloses a negative {measure}")
+
+    def set_command(self, command: float) -> None:
+        """Set the kind's command q (a pressure, a pumped or a displaced volume)."""
+        raise NotImplementedError
+
+    def pressure_at(self, area: float) -> float:
+        """The pressure p(A) the kind gives at enclosed measure A."""
+        raise NotImplementedError
+
+    def command_force(self) -> np.ndarray:
+        """-dr/dq on the wall's DOFs (self.dofs): the derivative of the equilibrium residual by the command."""
+        raise NotImplementedError
 
     def area_and_gradient(self, u: np.ndarray | None = None) -> tuple[float, np.ndarray]:
         """A(x) and dA/dx on the wall nodes, (k, d) in the order of loop_vertices, at the model's displacements
