@@ -33,13 +33,16 @@ def load_scene(path: str | os.PathLike) -> Scene:
 
 def simulate(scene: Scene | BuiltScene, *, tol: float = NewtonOptions.tol,
              max_iterations: int = NewtonOptions.max_iterations, max_cuts: int = MAX_CUTS,
-             max_increments: int = limits.MAX_INCREMENTS, progress=None, stop=None) -> Result:
+             max_increments: int = limits.MAX_INCREMENTS, max_triangles: int | None = None, progress=None,
+             stop=None) -> Result:
     """Run the scene's schedule (meshing it first unless it is already built) and return its Result.
 
     tol: Newton tolerance on |gradient| / force scale; max_iterations per solve; max_cuts: halvings of an
     increment that does not converge; max_increments: a schedule of more is refused (PneumaInputError), as
-    the commands' --max-increments does. progress: True shows a progress bar (tqdm) while it solves; a
-    function progress(step_record, positions, contact_force) is called after every increment instead.
+    the commands' --max-increments does; max_triangles: a mesh (or self-contact's pairs) worth more linear
+    triangles is refused (PneumaInputError), the mesher stopping at it, as the commands' --max-triangles does
+    (None: no limit; a BuiltScene was meshed already). progress: True shows a progress bar (tqdm) while it
+    solves; a function progress(step_record, positions, contact_force) is called after every increment instead.
     stop() is asked after every increment but the last and before every Newton iteration, ending the run
     with tp.RampInterrupted (the increments done) when it returns True. Raises tp.RampFailed when an increment
     finds no equilibrium; both carry .result, the Result of the steps done. Initialises Taichi on the CPU unless
@@ -47,7 +50,7 @@ def simulate(scene: Scene | BuiltScene, *, tol: float = NewtonOptions.tol,
     limits.check_increments(scene.scene.increments if isinstance(scene, BuiltScene) else scene.increments,
                             max_increments, "simulate's max_increments")
     runtime.ensure_initialised()
-    built = scene if isinstance(scene, BuiltScene) else scene.build()
+    built = scene if isinstance(scene, BuiltScene) else scene.build(limits.Budget(max_triangles))
     options = NewtonOptions(tol=tol, max_iterations=max_iterations)
     try:
         if progress is not True:

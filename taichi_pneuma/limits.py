@@ -4,9 +4,10 @@ estimate, the limit and the command-line flag that raises it; before any work wh
 
 This module holds the limits, the measured costs they are counted in (BYTES_PER_TRIANGLE, BYTES_PER_TETRAHEDRON,
 BYTES_PER_PAIR, READ_BYTES...: where each figure comes from is on the performance page, docs/performance.md,
-"The resource limits"), the budget (budget(): element_cap() for a mesher, check_mesh() and check_pairs() for what
-was made) and the plain checks of counts (increments, frame pixels) and of a file reader's memory (memory_bound,
-read_allowance). Without a budget (library use that sets none) nothing is capped.
+"The resource limits"), the budget (Budget: element_cap() for a mesher, check_mesh() and check_pairs() for what
+was made; passed explicitly, Scene.build(budget) -> mesh(budget), terms(..., budget)) and the plain checks of counts
+(increments, frame pixels) and of a file reader's memory (memory_bound, read_allowance). Budget() (library use
+that sets none) caps nothing.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from __future__ import annotations
 import os
 import resource
 from contextlib import contextmanager
-from contextvars import ContextVar
+from dataclasses import dataclass
 
 from .errors import require
 
@@ -28,49 +29,42 @@ READ_BYTES_PER_FILE_BYTE = 16  # meshio's gmsh 2.2 reader peaks at 7.2 bytes per
 MAX_RUNS = 100_000  # runs of one design study (apps/sweep.py --max-runs)
 BYTES_PER_TETRAHEDRON = 12_000  # measured, see the module docstring
 
-_budget: ContextVar[int | None] = ContextVar("triangle budget", default=None)
-
-
-@contextmanager
-def budget(max_triangles: int = MAX_TRIANGLES):
-    """Mesh and allocate under a budget of max_triangles linear triangles (their worth of memory) in the block."""
-    token = _budget.set(int(max_triangles))
-    try:
-        yield
-    finally:
-        _budget.reset(token)
-
-
-def element_cap(weight: float = 1.0) -> int | None:
-    """The most elements (or points) a mesher may make in the active budget, each counting `weight` linear
-    triangles (a quadratic triangle 4, each uniform refinement 4 times more); None without a budget."""
-    limit = _budget.get()
-    return None if limit is None else max(1, int(limit // weight))
-
 
 def refusal(what: str, triangles: float, limit: int | None) -> str:
     return (f"{what}: about {triangles:.3g} triangles' worth, {BYTES_PER_TRIANGLE * triangles / 1e9:.3g} GB; the "
             f"limit is {limit} triangles (--max-triangles raises it)")
 
 
-def check_mesh(elements: int, weight: float, how: str, stopped_at: int | None = None) -> None:
-    """Refuse (in the active budget) a mesh whose elements, each worth `weight` triangles, pass the budget,
-    or that its mesher (how: "Triangle") stopped at its cap of stopped_at points before finishing."""
-    limit = _budget.get()
-    if limit is None:
-        return
-    require(stopped_at is None, f"the mesh needs more than {limit} triangles: {how} stopped at its cap of "
-                                f"{stopped_at} added points (thin features or narrow gaps need triangles as small "
-                                f"as they are wide, whatever max_area is); the limit is {limit} triangles "
-                                f"(--max-triangles raises it)")
-    require(elements * weight <= limit, refusal(f"the mesh has {elements} elements", elements * weight, limit))
+@dataclass(frozen=True)
+class Budget:
+    """What a mesher may make and a term allocate: `triangles` linear triangles (their worth of memory), or
+    None: nothing capped (Budget(), the library's default; the commands give Budget(--max-triangles)).
+    Scene.build hands it to the geometry's mesh() and to each effect's terms()."""
 
+    triangles: int | None = None
 
-def check_pairs(pairs: int, what: str) -> None:
-    """Refuse (in the active budget) a term about to allocate `pairs` contact pairs past the budget's memory."""
-    limit = _budget.get()
-    worth = pairs * BYTES_PER_PAIR / BYTES_PER_TRIANGLE
-    require(limit is None or worth <= limit, refusal(f"{what} would hold {pairs} point-edge pairs", worth, limit))
+    def element_cap(self, weight: float = 1.0) -> int | None:
+        """The most elements (or points) a mesher may make, each counting `weight` linear triangles (a quadratic
+        triangle 4, each uniform refinement 4 times more); None without a limit."""
+        return None if self.triangles is None else max(1, int(self.triangles // weight))
+
+    def check_mesh(self, elements: int, weight: float, how: str, stopped_at: int | None = None) -> None:
+        """Refuse a mesh whose elements, each worth `weight` triangles, pass the budget, or that its mesher
+        (how: "Triangle") stopped at its cap of stopped_at points before finishing."""
+        limit = self.triangles
+        if limit is None:
+            return
+        require(stopped_at is None, f"the mesh needs more than {limit} triangles: {how} stopped at its cap of "
+                                    f"{stopped_at} added points (thin features or narrow gaps need triangles as "
+                                    f"small as they are wide, whatever max_area is); the limit is {limit} triangles "
+                                    f"(--max-triangles raises it)")
+        require(elements * weight <= limit, refusal(f"the mesh has {elements} elements", elements * weight, limit))
+
+    def check_pairs(self, pairs: int, what: str) -> None:
+        """Refuse a term about to allocate `pairs` contact pairs past the budget's memory."""
+        limit = self.triangles
+        worth = pairs * BYTES_PER_PAIR / BYTES_PER_TRIANGLE
+        require(limit is None or worth <= limit, refusal(f"{what} would hold {pairs} point-edge pairs", worth, limit))
 
 
 def wall_pairs(points: list[int]) -> int:

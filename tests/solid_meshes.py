@@ -26,6 +26,7 @@ from taichi_pneuma.fem.mesh import Mesh
 from taichi_pneuma.fem.planar import BeamGeometry
 from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.fem.tetmesh import tet_mesh
+from taichi_pneuma.limits import Budget
 from taichi_pneuma.scene.build import ChamberControl, Material, Scene
 
 DEPTH = 0.8
@@ -46,8 +47,8 @@ class MeshOf:
     def chambers(self):
         return tuple((name, None) for name in self.names)
 
-    def mesh(self) -> Mesh:
-        return self.ready
+    def mesh(self, budget: Budget) -> Mesh:
+        return self.ready  # made already, in no budget
 
 
 def extruded_beam(max_area: float, order: int = 1, layers: int = 1, chamber_points: int = 32, cy: float = 0.15):

@@ -55,7 +55,7 @@ class TipForce(Effect):
     fy: float = 0.0
     name = "tip_force"
 
-    def terms(self, config, mesh, lumped_area) -> list:
+    def terms(self, config, mesh, lumped_area, budget) -> list:
         return [TipLoad(config, mesh.tip, (self.fx, self.fy))]
 
 

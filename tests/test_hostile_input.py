@@ -4,6 +4,7 @@ signals that end in one line and lose no finished work, bounded counts and files
 One section per kind; docs/untrusted_input.md lists every example with its outcome."""
 
 import csv
+import dataclasses
 import json
 import os
 import signal
@@ -16,11 +17,11 @@ import numpy as np
 import pytest
 
 import taichi_pneuma as tp
-from taichi_pneuma import limits
 from taichi_pneuma.apps import inflate, sweep
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Polygon
+from taichi_pneuma.limits import Budget
 from taichi_pneuma.scene.scenefile import load_scene
 from taichi_pneuma.scene.schema import parse_assignment, parse_key
 from taichi_pneuma.scene.targets import read_targets_csv
@@ -86,23 +87,22 @@ def test_a_thin_strip_is_stopped_by_the_triangle_budget_not_meshed_for_minutes(t
 
 def test_the_budget_leaves_meshes_under_it_unchanged_and_is_what_a_mesher_asks():
     """The cap (Triangle's S switch) stops nothing a budget allows: the same mesh as without one. A mesher
-    (2D or 3D) asks element_cap(weight) and reports through check_mesh."""
+    (2D or 3D) asks its budget's element_cap(weight) and reports through its check_mesh."""
     geometry = Geometry(Polygon(tuple(map(tuple, STRIP))), (("c", Ellipse((0.0, 0.2), (0.3, 0.1), 32)),), 0.02)
     small = Geometry(geometry.body, geometry.chambers, 0.02, order=2)
-    assert limits.element_cap() is None
-    with limits.budget(1000):
-        assert limits.element_cap() == 1000 and limits.element_cap(4) == 250
-        with pytest.raises(PneumaInputError, match="Triangle stopped at its cap of 1000 added points"):
-            geometry.mesh()
-        with pytest.raises(PneumaInputError, match="stopped at its cap of 250 added points"):
-            small.mesh()  # quadratic triangles count 4 times
+    assert Budget().element_cap() is None
+    budget = Budget(1000)
+    assert budget.element_cap() == 1000 and budget.element_cap(4) == 250
+    with pytest.raises(PneumaInputError, match="Triangle stopped at its cap of 1000 added points"):
+        geometry.mesh(budget)
+    with pytest.raises(PneumaInputError, match="stopped at its cap of 250 added points"):
+        small.mesh(budget)  # quadratic triangles count 4 times
     reference = tp.reference_scene(max_area=0.02).geometry
     free = reference.mesh()
-    with limits.budget(2 * free.n_triangles):
-        capped = reference.mesh()
+    capped = reference.mesh(Budget(2 * free.n_triangles))
     assert np.array_equal(capped.vertices, free.vertices) and np.array_equal(capped.triangles, free.triangles)
-    with limits.budget(free.n_triangles - 1), pytest.raises(PneumaInputError, match="the mesh has"):
-        reference.mesh()
+    with pytest.raises(PneumaInputError, match="the mesh has"):
+        reference.mesh(Budget(free.n_triangles - 1))
 
 
 def test_self_contact_pairs_count_in_the_estimate_and_are_checked_before_they_are_allocated(tmp_path, capsys):
@@ -113,12 +113,11 @@ def test_self_contact_pairs_count_in_the_estimate_and_are_checked_before_they_ar
     line = error_line(capsys)
     assert "and 89400 self-contact pairs (walls of 300 nodes)" in line and "the limit is 20000 triangles" in line
     assert not (tmp_path / "out").exists()
-    from taichi_pneuma.terms.contact import SelfContact
-    from taichi_pneuma.terms.model import EnergyModel
+    from taichi_pneuma.terms.effects import SelfContact
 
-    config = EnergyModel(np.random.default_rng(0).random((100, 2)), 1.0, 1.0).config
-    with limits.budget(1000), pytest.raises(PneumaInputError, match="self-contact would hold 9800 point-edge pairs"):
-        SelfContact(config, [np.arange(100)], 1e-3, 1.0)
+    scene = tp.reference_scene(max_area=0.02, chamber_points=100)  # 363 triangles, a wall of 100 nodes
+    with pytest.raises(PneumaInputError, match="self-contact would hold 9800 point-edge pairs"):
+        dataclasses.replace(scene, effects=(SelfContact(),)).build(Budget(1000))
 
 
 # --- 2. parsers with depth and length limits -------------------------------------------------------

@@ -12,6 +12,7 @@ from taichi_pneuma.fem.elements import TET_EDGES, TRIANGLE_P2, boundary_facets
 from taichi_pneuma.fem.layered import spherical_shell_octant
 from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.fem.tetmesh import tet_mesh
+from taichi_pneuma.limits import Budget
 from taichi_pneuma.materials import StableNeoHookean
 from taichi_pneuma.scene.build import Material
 from taichi_pneuma.scene.schedule import ChamberSchedule
@@ -132,9 +133,10 @@ def test_every_3d_term_matches_finite_differences(body, order):
     pinned = mesh.tip if body == "prism" else mesh.boundary[:5]
     others = [model.add(Clamp(config, pinned, 1e3)),
               model.add(NormalClamp(config, mesh.boundary[::3], (1.0, 2.0, 2.0), 1e3))]
-    others += Gravity(2.0, 3.0).terms(config, mesh, mesh.nodal_measures())
+    others += Gravity(2.0, 3.0).terms(config, mesh, mesh.nodal_measures(), Budget())
     lowest = mesh.vertices[mesh.boundary, 1].min()
-    others += [model.add(t) for t in Ground(lowest - 0.02, dhat=0.05, stiffness=10.0).terms(config, mesh, None)]
+    ground = Ground(lowest - 0.02, dhat=0.05, stiffness=10.0)
+    others += [model.add(t) for t in ground.terms(config, mesh, None, Budget())]
     model.add(others[2])
     u = state(mesh, 0.01, order)
     model.set_displacements(u)

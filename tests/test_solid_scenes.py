@@ -11,11 +11,11 @@ import pytest
 from test_render import xvfb_display  # noqa: F401  (the virtual display fixture)
 
 import taichi_pneuma as tp
-from taichi_pneuma import limits
 from taichi_pneuma.apps.inflate import main as inflate
 from taichi_pneuma.backend import has_ggui
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem import sizing
+from taichi_pneuma.limits import Budget
 from taichi_pneuma.render.frames3d import FrameRenderer3D, Track3D
 from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.scene.sceneformat import scene_data
@@ -192,10 +192,10 @@ def test_resource_guard_estimates_before_meshing_and_caps_gmsh():
     assert 500 < tets < 3000 and 0 < nodes < tets
     coarse = beam(size=0.5)  # its ellipsoid meshed by the curvature fallback: ~10 times the estimate
     assert coarse.geometry.size_estimate()[0] < 300
-    with limits.budget(400), pytest.raises(PneumaInputError, match=r"the mesh has \d+ tetrahedra; the limit is 400 "):
-        coarse.build()
-    with limits.budget(8 * 300), pytest.raises(PneumaInputError, match=r"the mesh has \d+ tetrahedra; the limit is 300 "):
-        coarse.with_value("mesh.order", 2).build()
+    with pytest.raises(PneumaInputError, match=r"the mesh has \d+ tetrahedra; the limit is 400 "):
+        coarse.build(Budget(400))
+    with pytest.raises(PneumaInputError, match=r"the mesh has \d+ tetrahedra; the limit is 300 "):
+        coarse.with_value("mesh.order", 2).build(Budget(8 * 300))
 
 
 def test_pneunet_from_the_command_line_curls_towards_its_layer(tmp_path):

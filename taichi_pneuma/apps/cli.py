@@ -199,13 +199,19 @@ def scene_of_flags(args: argparse.Namespace):
     return scene
 
 
-def build(scene, args: argparse.Namespace | None = None):
-    """Mesh the scene, build its terms and print the mesh size, the supports, the terms (and, where a --quality
-    preset of args made the mesh, its measured error: preset_note) and each chamber's rest area."""
+def budget(args: argparse.Namespace) -> limits.Budget:
+    """The budget meshes and terms are made in: --max-triangles."""
+    return limits.Budget(args.max_triangles)
+
+
+def build(scene, args: argparse.Namespace):
+    """Mesh the scene and build its terms in the budget of --max-triangles, and print the mesh size, the supports,
+    the terms (and, where a --quality preset of args made the mesh, its measured error: preset_note) and each
+    chamber's rest area."""
     from ..result import ELEMENTS
     from ..scene.build import describe_supports
 
-    built = scene.build()
+    built = scene.build(budget(args))
     mesh = built.mesh
     kind = ("" if mesh.order == 1 else "quadratic ") + ELEMENTS[mesh.dim]
     print(f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
@@ -285,7 +291,6 @@ def exit_code(app_run, args: argparse.Namespace) -> int:
     ramp (or a reach's start) with no equilibrium one line and exit 1, Ctrl-C, SIGTERM or SIGHUP one line and
     exit 128 + the signal (130, 143, 129, as shells report it): all three raise signals.Interrupted during the
     run, or stop a ramp within a Newton iteration (a signal after the last solve waits for the files).
-    Meshes and terms are made in the budget of --max-triangles (limits.budget).
 
     NumPy's floating-point warnings (overflow, invalid value) are silenced: a huge input value overflows
     harmlessly in a check that then refuses it, and a solve that produces NaN or inf fails its own checks."""
@@ -299,7 +304,7 @@ def exit_code(app_run, args: argparse.Namespace) -> int:
     from ..solve.simulate import NoEquilibrium, RampFailed, RampInterrupted
 
     try:
-        with np.errstate(all="ignore"), signals.interrupting(), limits.budget(args.max_triangles):
+        with np.errstate(all="ignore"), signals.interrupting():
             summary = app_run(args)
     except PneumaInputError as exc:
         print(f"error: {exc}", file=sys.stderr)

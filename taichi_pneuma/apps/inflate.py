@@ -38,6 +38,7 @@ from .cli import (
     add_ramp_arguments,
     add_video_arguments,
     app_parser,
+    budget,
     build,
     exit_code,
     newton_options,
@@ -91,10 +92,10 @@ def run(args: argparse.Namespace) -> dict:
     runtime.init(args.arch)
     if args.interactive and scene.geometry.dim == 3:
         from ..live.interactive import explore_solid
-        return explore_solid(scene, size, newton_options(args))
+        return explore_solid(scene, size, newton_options(args), budget=budget(args))
     if args.interactive:
         from ..live.interactive import explore
-        return explore(scene, args.growth, size, args.renderer, newton_options(args))
+        return explore(scene, args.growth, size, args.renderer, newton_options(args), budget=budget(args))
     with lock_stems(out, stem):  # no other run writes these files meanwhile
         return run_scene(args, scene, stem, size, out)
 

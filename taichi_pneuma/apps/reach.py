@@ -40,6 +40,7 @@ from .cli import (
     add_video_arguments,
     app_parser,
     apply_set,
+    budget,
     build,
     check_flags,
     exit_code,
@@ -162,7 +163,8 @@ def run(args: argparse.Namespace) -> dict:
     if args.interactive:
         from ..live.interactive import follow_mouse
         return follow_mouse(scene, (lo, hi), size, args.renderer, options,
-                            newton_options(args) if explicit_tol else None, targets[0] if targets else None)
+                            newton_options(args) if explicit_tol else None, targets[0] if targets else None,
+                            budget=budget(args))
     with lock_stems(out, stem):  # no other run writes these files meanwhile
         return reach_targets(args, scene, stem, targets, (lo, hi), options, size, out)
 
@@ -266,7 +268,7 @@ def run_design(args: argparse.Namespace) -> dict:
 
     def tip_dy(cy: float) -> float:
         started = time.perf_counter()
-        result = run_schedule(apply_set(scene_for(args, cy), args.set).build(), options=options,
+        result = run_schedule(apply_set(scene_for(args, cy), args.set).build(budget(args)), options=options,
                               max_cuts=args.max_cuts)
         if not args.quiet:
             print(f"  cy = {cy:+.6f}: tip dy {result.tip_deflection:+.6f} ({time.perf_counter() - started:.2f} s)",

@@ -5,8 +5,9 @@ the body's cells and each chamber's wall given by named groups (gmsh's physical 
                                which meshio gives whatever the format's own)
     MeshSurface(group)         a chamber's wall: the triangles (3- or 6-node) of the named group
     MeshGeometry(body, ...)    the scene's geometry: body, named chamber walls, element order, clamp, tip and
-                               rollers; mesh() reads the file and builds the Mesh (tetmesh.tet_mesh), whose
-                               region tags are the tetrahedra's gmsh physical tags where the file has them
+                               rollers; mesh(budget) reads the file and builds the Mesh (tetmesh.tet_mesh),
+                               refusing one past the budget (limits.Budget), whose region tags are the
+                               tetrahedra's gmsh physical tags where the file has them
 
 A file is read whole, so it may be at most MAX_MESH_BYTES, and under a memory bound (limits.read_allowance: a
 small file whose arrays are compressed, or whose nodes are numbered sparsely, could claim gigabytes); whatever
@@ -27,6 +28,7 @@ import numpy as np
 
 from .. import limits
 from ..errors import PneumaInputError, quoted, require, require_distinct
+from ..limits import Budget
 from .body import Body
 from .elements import FAMILIES
 from .mesh import Mesh
@@ -206,7 +208,9 @@ class MeshGeometry(Body):
         nodes = len(np.unique(tets))
         return len(tets), nodes + (7 * len(tets) if self.order == 2 and tets.shape[1] == 4 else 0)
 
-    def mesh(self) -> Mesh:
+    def mesh(self, budget: Budget = Budget()) -> Mesh:
+        """Read the file and build the Mesh; one past the budget (its tetrahedra, each worth its family's weight in
+        triangles) is refused, naming the file."""
         path = self.body.file
         source, tets, blocks = self.tetrahedra()
         physical = source.cell_data.get("gmsh:physical")
@@ -216,6 +220,7 @@ class MeshGeometry(Body):
             walls[name], _ = cells_of(source, TRIANGLES, shape.group, path)
             require(len(walls[name]) > 0, f"chamber {name!r}: group {shape.group!r} of {path!r} has no triangles")
         try:
+            budget.check_mesh(len(tets), self.family.weight, "meshio")
             return tet_mesh(source.points, tets, walls, regions=regions, order=self.order, clamp=self.clamp,
                             tip=self.tip, rollers=self.rollers, region_groups=volume_groups(source))
         except PneumaInputError as exc:

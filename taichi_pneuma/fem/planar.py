@@ -32,10 +32,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import limits
 from ..errors import PneumaInputError, require, require_distinct, require_finite
 from ..io.output import check_heading
 from ..io.units import PLANE_AREA, si_default
+from ..limits import Budget
 from .body import Body
 from .elements import ORDERS, TRIANGLE_P1, TRIANGLE_P2
 from .mesh import Mesh, triangle_areas
@@ -134,12 +134,12 @@ class Geometry(Body):
             walls.append((wall, origin))
         return outline, markers, walls
 
-    def mesh(self) -> Mesh:
+    def mesh(self, budget: Budget = Budget()) -> Mesh:
         """Mesh the body minus its chambers with Triangle ('pqa<max_area>'), split every triangle in four
         `refinements` times (uniform refinement: h halved each time), add a midside node to every edge for
         quadratic triangles, and name the node sets. A refined or quadratic mesh has its boundary nodes on the
-        exact curves of ellipses and rounded corners (onto_curves; module docstring). In a limits.budget,
-        Triangle adds at most limits.element_cap points and a mesh past the budget is refused."""
+        exact curves of ellipses and rounded corners (onto_curves; module docstring). Triangle adds at most the
+        budget's element_cap points and a mesh past the budget is refused (limits.Budget)."""
         require(self.max_area is not None, "max_area = None: the Scene sets the default (0.0012 in a unitless scene); "
                                            "give max_area to mesh a Geometry on its own")
         outline, outline_markers, walls = self.outline()
@@ -156,10 +156,10 @@ class Geometry(Body):
         if closed:
             pslg["holes"] = np.array([interior_point(p) for p in loops[1:]])
         weight = 4 ** self.refinements * self.family.weight  # linear triangles per Triangle's one
-        cap = limits.element_cap(weight)  # Triangle adds at most this many points (S), then stops
+        cap = budget.element_cap(weight)  # Triangle adds at most this many points (S), then stops
         out = triangulate_or_refuse(pslg, f"pqa{self.max_area:.17f}" + ("" if cap is None else f"S{cap}"))  # no exponent
         added = len(out["vertices"]) - len(pslg["vertices"])
-        limits.check_mesh(len(out["triangles"]), weight, "Triangle", cap if cap is not None and added >= cap else None)
+        budget.check_mesh(len(out["triangles"]), weight, "Triangle", cap if cap is not None and added >= cap else None)
         vertices = np.asarray(out["vertices"], dtype=np.float64)
         triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
         segments, markers = np.asarray(out["segments"], dtype=np.int64), out["segment_markers"].ravel()
@@ -267,8 +267,8 @@ class BeamGeometry:
                         (("main", Ellipse((self.cx, self.cy), (self.a, self.b), self.chamber_points)),),
                         self.max_area, PointSet("left"), order=self.order, refinements=self.refinements)
 
-    def mesh(self) -> Mesh:
-        return self.general().mesh()
+    def mesh(self, budget: Budget = Budget()) -> Mesh:
+        return self.general().mesh(budget)
 
 
 

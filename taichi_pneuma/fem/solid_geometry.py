@@ -22,17 +22,18 @@ by default) are thinner than its usual edge lengths, and gmsh meshes them with e
 THIN_WALL times the thinnest wall brings the estimate to 0.97-1.71 times gmsh's count at sizes 0.1-0.5 (the
 old shipped pneunet_3d, linear at 0.2: 1.24), erring towards refusing; graded finer near the chambers, GRADED_THIN_WALL
 times that (the shipped pneunet_3d, 0.12 near its chambers: 1.0). Meshing then runs
-under limits.element_cap, gmsh's output is checked against it (a quadratic tetrahedron counted 8
-times, its family's weight, as sizing.check_solid counts it), and limits.check_mesh refuses a mesh past the budget.
+under the budget's element_cap (mesh(budget), limits.Budget), gmsh's output is checked against it (a quadratic
+tetrahedron counted 8 times, its family's weight, as sizing.check_solid counts it), and the budget's check_mesh
+refuses a mesh past it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .. import limits
 from ..errors import require, require_distinct
 from ..io.output import check_heading
+from ..limits import Budget
 from .body import Body
 from .gmsh_mesher import MAX_TETS, MeshSizes, Solid, estimate_tets, mesh_solid
 from .mesh import Mesh
@@ -118,13 +119,13 @@ class SolidGeometry(Body):
         nodes = tets / TETS_PER_NODE + (EDGES_PER_TET * tets if self.family.edges else 0)
         return tets, int(round(nodes))
 
-    def mesh(self) -> Mesh:
-        """Mesh with gmsh (in the active limits.budget) and build the Mesh (module docstring)."""
+    def mesh(self, budget: Budget = Budget()) -> Mesh:
+        """Mesh with gmsh under the budget and build the Mesh (module docstring)."""
         weight = self.family.weight
-        cap = limits.element_cap(weight)
+        cap = budget.element_cap(weight)
         solid = self.solid()
         meshed = mesh_solid(solid, self.sizes, MAX_TETS if cap is None else cap)
-        limits.check_mesh(len(meshed.tets), weight, "gmsh")
+        budget.check_mesh(len(meshed.tets), weight, "gmsh")
         walls = {name: meshed.chambers[shape.group if isinstance(shape, MeshSurface) else name]
                  for name, shape in self.chambers}
         groups = {name: k for k, name in enumerate(meshed.region_names, start=1)}

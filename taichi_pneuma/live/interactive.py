@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 
+from ..limits import Budget
 from ..render.canvases import open_canvas
 from ..render.frames import FrameRenderer, Track
 from ..scene.build import Scene
@@ -32,11 +33,12 @@ def fixed_view(mesh) -> tuple[np.ndarray, np.ndarray]:
 
 
 def explore(scene: Scene, growth: float, size: tuple[int, int], backend: str = "auto",
-            options: NewtonOptions | None = None, max_frames: int | None = None) -> dict:
+            options: NewtonOptions | None = None, max_frames: int | None = None, budget: Budget = Budget()) -> dict:
     """Run the window until it is closed (or for max_frames frames); return {'all_converged', 'solves'}.
 
-    The slider commands the area ratio of the scene's first chamber (area control)."""
-    built = scene.build()
+    The slider commands the area ratio of the scene's first chamber (area control); the scene is built in the
+    budget (limits.Budget)."""
+    built = scene.build(budget)
     chamber = built.chambers[0]
     mesh, solver = built.mesh, NewtonSolver(built.model, options)
     canvas = open_canvas(*size, backend, show=True)
@@ -65,11 +67,13 @@ def explore(scene: Scene, growth: float, size: tuple[int, int], backend: str = "
 
 
 def follow_mouse(scene: Scene, bounds, size: tuple[int, int], backend: str = "auto", options=None,
-                 newton: NewtonOptions | None = None, target=None, max_frames: int | None = None) -> dict:
+                 newton: NewtonOptions | None = None, target=None, max_frames: int | None = None,
+                 budget: Budget = Budget()) -> dict:
     """Inverse control live: drag the target (a red cross) with the left mouse button and the chambers
     follow, re-solved (inverse.Reacher.reach, warm-started, without restarts: an unreachable target
     leaves the closest pose near the last one) on every move; a slider per chamber (bottom rows)
-    commands it directly. Runs until the window is closed (or for max_frames frames).
+    commands it directly. Runs until the window is closed (or for max_frames frames); the scene is built in the
+    budget (limits.Budget).
 
     Returns {'all_converged': every reach reached its target, 'reaches', 'direct', 'frames',
     'drag_fps': frames per second over the frames that re-solved a moved target, after the first
@@ -77,7 +81,7 @@ def follow_mouse(scene: Scene, bounds, size: tuple[int, int], backend: str = "au
     from ..control.inverse import Reacher, ReachOptions
     from ..scene.targets import Target
 
-    built = scene.build()
+    built = scene.build(budget)
     # a drag follows the closest pose nearby; one factorisation per frame
     options = dataclasses.replace(options or ReachOptions(), restarts=0, reuse_factor=True)
     reacher = Reacher(built, bounds, options, newton or NewtonOptions(tol=LIVE_TOL))
@@ -193,15 +197,16 @@ class LiveEquilibrium:
 
 
 def explore_solid(scene: Scene, size: tuple[int, int], options: NewtonOptions | None = None, spin: float = 0.0,
-                  max_frames: int | None = None) -> dict:
+                  max_frames: int | None = None, budget: Budget = Budget()) -> dict:
     """The live window of a 3D scene (interactive3d.explore_3d): a slider per chamber (chamber_sliders); each
     frame takes a Newton step toward the equilibrium at the commands on screen (LiveEquilibrium; the panel
     shows the residual); the camera orbits by mouse drag (and `spin` degrees per frame). Returns explore_3d's
-    summary with 'all_converged' (the state shown last is the equilibrium at the last commands) and 'residual'."""
+    summary with 'all_converged' (the state shown last is the equilibrium at the last commands) and 'residual'.
+    The scene is built in the budget (limits.Budget)."""
     from ..render.frames3d import surface_triangles
     from .interactive3d import explore_3d
 
-    built = scene.build()
+    built = scene.build(budget)
     mesh, live = built.mesh, LiveEquilibrium(built, options)
     outer, walls, _ = surface_triangles(mesh)
 

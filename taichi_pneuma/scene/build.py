@@ -24,6 +24,7 @@ from ..fem.supports import in_box, require_box, require_held
 from ..io.keys import dotted
 from ..io.output import check_stem
 from ..io.units import NODAL_STIFFNESS, UNITLESS, Units, defaults, resolved, si_default
+from ..limits import Budget
 from ..materials import Material, MaterialForm
 from ..terms import VOLUMETRIC, Clamp, Elasticity, NormalClamp
 from ..terms.base import Term
@@ -205,10 +206,11 @@ class Scene:
             parameters[taken] = row
         return law, parameters
 
-    def build(self) -> "BuiltScene":
-        """Mesh the geometry and instantiate exactly the terms this scene names."""
+    def build(self, budget: Budget = Budget()) -> "BuiltScene":
+        """Mesh the geometry and instantiate exactly the terms this scene names, the mesh and the effects' terms
+        under the budget (limits.Budget: Budget() caps nothing; the commands give Budget(--max-triangles))."""
         runtime.ensure_initialised()
-        mesh = self.geometry.mesh()
+        mesh = self.geometry.mesh(budget)
         require_held(mesh.vertices, support_rows(mesh, self.effects), describe_supports(mesh, self.effects))
         law, parameters = self.element_material(mesh)
         # Round-off scales, from the stiffest modulus (neo-Hookean: mu + lam, which grows without bound as
@@ -226,7 +228,7 @@ class Scene:
         for nodes, normal in mesh.rollers:
             model.add(NormalClamp(config, nodes, normal, self.clamp_stiffness))
         lumped_area = mesh.nodal_measures()
-        effects = {effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area)]
+        effects = {effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area, budget)]
                    for effect in self.effects}
         return BuiltScene(self, mesh, model, elastic, chambers, effects)
 

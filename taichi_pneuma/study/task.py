@@ -78,9 +78,9 @@ def run_task(task: Task) -> dict:
         scene = base.with_values(task.values)
         sizing.check_scene(scene, task.options.max_triangles, task.options.max_increments)
         options = task.options
-        with limits.budget(options.max_triangles):
-            row.update(measures(simulate(scene, tol=options.tol, max_iterations=options.max_iterations,
-                                         max_cuts=options.max_cuts), names), error=None)
+        row.update(measures(simulate(scene, tol=options.tol, max_iterations=options.max_iterations,
+                                     max_cuts=options.max_cuts, max_triangles=options.max_triangles), names),
+                   error=None)
     except RampStopped as exc:  # no equilibrium: keep the figures of the steps done
         if exc.result.steps:
             row.update(measures(exc.result, names), converged=False)

@@ -28,7 +28,6 @@ segment (a quadratic in the step fraction), the continuous collision check.
 
 import numpy as np
 
-from .. import limits
 from ..backend import kernel, ti
 from .base import Indices, Nodal, Table, Term, Triples, Vec2s, block_pattern, edge, int32s, position, quadratic_roots
 
@@ -256,7 +255,6 @@ class SelfContact(Term):
         self.config = config
         self.dhat, self.kappa = float(dhat), float(stiffness)
         rest = config.rest
-        limits.check_pairs(limits.wall_pairs([len(loop) for loop in loops]), "self-contact")  # before allocating them
         per_loop = []
         for loop in loops:
             loop = np.asarray(loop, dtype=np.int64)

@@ -3,7 +3,8 @@
 An effect is a frozen dataclass registered in EFFECTS under its name: its fields are the keys of its
 [effects.<name>] table in a scene file, read and written with the types their annotations declare
 (float: any number; int, str, bool; tuple or list: an array), a field's default being the key's.
-Its terms(config, mesh, lumped_area) returns the terms it adds to the energy model;
+Its terms(config, mesh, lumped_area, budget) returns the terms it adds to the energy model, checking what they
+would allocate against the budget (limits.Budget: self-contact's pairs) before allocating it;
 lumped_area[i] is the integral of node i's shape function over the body (mesh.nodal_measures(): a third of
 the rest area of the triangles at a linear-element vertex, a quarter of the tetrahedra's volume in 3D; mass =
 density x it).
@@ -38,7 +39,7 @@ class Effect:
     ground_height = None
     support = False
 
-    def terms(self, config, mesh, lumped_area) -> list:
+    def terms(self, config, mesh, lumped_area, budget) -> list:
         raise NotImplementedError
 
     def holds(self, mesh, effects) -> list:
@@ -68,7 +69,7 @@ class Gravity(Effect):
         _positive("density", self.density)
         _positive("g", self.g)
 
-    def terms(self, config, mesh, lumped_area) -> list:
+    def terms(self, config, mesh, lumped_area, budget) -> list:
         return [GravityTerm(config, self.density * lumped_area, self.g)]
 
 
@@ -102,7 +103,7 @@ class Ground(Effect):
             return []
         return [(PointSet("bottom").select(mesh.vertices, "ground"), np.diag(np.eye(mesh.dim)[1]))]
 
-    def terms(self, config, mesh, lumped_area) -> list:
+    def terms(self, config, mesh, lumped_area, budget) -> list:
         lowest = float(mesh.vertices[mesh.boundary, 1].min())
         require(lowest > self.height, f"ground height = {self.height!r} must lie below the body (lowest point {lowest:.6g})")
         return [GroundContact(config, mesh.boundary, self.height, self.dhat, self.stiffness)]
@@ -121,12 +122,14 @@ class SelfContact(Effect):
         _positive("dhat", self.dhat)
         _positive("stiffness", self.stiffness)
 
-    def terms(self, config, mesh, lumped_area) -> list:
+    def terms(self, config, mesh, lumped_area, budget) -> list:
         require(mesh.dim == 2, "self_contact is 2D only: a 3D scene cannot have [effects.self_contact] (the contact of "
                                "a collapsing 3D chamber's walls is not modelled)")
         require(all(origin is None for origin in mesh.wall_origins),
                 "self_contact: a chamber cut by a symmetry line is not supported (its wall would meet its mirror image)")
-        return [SelfContactTerm(config, list(mesh.chambers), self.dhat, self.stiffness)]
+        walls = list(mesh.chambers)
+        budget.check_pairs(self.pairs([len(wall) for wall in walls]), "self-contact")  # before allocating them
+        return [SelfContactTerm(config, walls, self.dhat, self.stiffness)]
 
     def pairs(self, walls: list[int]) -> int:
         return wall_pairs(walls)
@@ -150,7 +153,7 @@ class Dynamics(Effect):
         moves."""
         return [(np.arange(mesh.n_vertices), np.eye(mesh.dim))]
 
-    def terms(self, config, mesh, lumped_area) -> list:
+    def terms(self, config, mesh, lumped_area, budget) -> list:
         require(mesh.order == 1, "dynamics needs linear triangles (order = 1): the quadratic triangle's "
                                  "row-sum lumped mass vanishes at its corners")
         return [Inertia(config, self.density * lumped_area, self.dt)]
