@@ -28,8 +28,10 @@ def main() -> None:
         result = run_schedule(built)
         wall = time.perf_counter() - start
         iterations = int(result.history["iterations"].sum())
-        print(f"reference ramp: {wall:.2f} s, {iterations} Newton iterations, "
-              f"{1e3 * wall / iterations:.1f} ms/iteration, tip {result.tip_deflection:+.4f}")
+        print(
+            f"reference ramp: {wall:.2f} s, {iterations} Newton iterations, "
+            f"{1e3 * wall / iterations:.1f} ms/iteration, tip {result.tip_deflection:+.4f}"
+        )
 
 
 if __name__ == "__main__":

@@ -30,11 +30,19 @@ def converged_tip(poisson_ratio: float, levels: int = 3) -> dict:
         built, result, _ = timed_ramp(steps=11, order=2, refinements=level, nu=poisson_ratio)
         tips.append(result.tip_deflection)
         nodes.append(built.mesh.n_vertices)
-        print(f"  reference nu={poisson_ratio}: level {level}, {nodes[-1]} nodes, tip {tips[-1]:+.6f}",
-              file=sys.stderr, flush=True)
+        print(
+            f"  reference nu={poisson_ratio}: level {level}, {nodes[-1]} nodes, tip {tips[-1]:+.6f}",
+            file=sys.stderr,
+            flush=True,
+        )
     order = float(np.log2(abs(tips[0] - tips[1]) / abs(tips[1] - tips[2])))
-    return {"tips": tips, "nodes": nodes, "observed_order": order, "tip": tips[-1],
-            "remaining_error_estimate": abs(tips[2] - tips[1]) / (2 ** order - 1) / abs(tips[-1])}
+    return {
+        "tips": tips,
+        "nodes": nodes,
+        "observed_order": order,
+        "tip": tips[-1],
+        "remaining_error_estimate": abs(tips[2] - tips[1]) / (2**order - 1) / abs(tips[-1]),
+    }
 
 
 def accuracy(out: Path) -> tuple[str, dict]:
@@ -53,17 +61,35 @@ def accuracy(out: Path) -> tuple[str, dict]:
                 built, result, seconds = timed_ramp(max_area=max_area, order=order, nu=nu)
                 error = abs(result.tip_deflection / reference["tip"] - 1)
                 data["elements"][f"P{order}, nu = {nu}"].append(
-                    {"value": max_area, "nodes": built.mesh.n_vertices, "seconds": seconds, "tip": error})
-                rows.append([f"P{order}, nu = {nu}", f"{max_area:g}", built.mesh.n_vertices, f"{1e3 * seconds:.0f}",
-                             f"{result.tip_deflection:+.5f}", f"{100 * error:.2f} %"])
+                    {"value": max_area, "nodes": built.mesh.n_vertices, "seconds": seconds, "tip": error}
+                )
+                rows.append(
+                    [
+                        f"P{order}, nu = {nu}",
+                        f"{max_area:g}",
+                        built.mesh.n_vertices,
+                        f"{1e3 * seconds:.0f}",
+                        f"{result.tip_deflection:+.5f}",
+                        f"{100 * error:.2f} %",
+                    ]
+                )
     table = markdown(["elements", "max area", "nodes", "ramp (ms)", "tip dy", "tip error"], rows)
-    table += "\n" + markdown(["nu", "P2 reference tips, levels 0 / 1 / 2 (nodes)", "observed order",
-                              "estimated error of the finest"],
-                             [[nu, " / ".join(f"{t:+.5f} ({n})" for t, n in zip(r["tips"], r["nodes"])),
-                               f"{r['observed_order']:.2f}", f"{100 * r['remaining_error_estimate']:.3f} %"]
-                              for nu, r in data["references"].items()])
-    knobs = {"Newton tolerance": [(t, dict(options=NewtonOptions(tol=t))) for t in (1e-2, 1e-4, 1e-6, 1e-9)],
-             "ramp increments": [(n, dict(steps=n + 1)) for n in (5, 10, 35, 100)]}
+    table += "\n" + markdown(
+        ["nu", "P2 reference tips, levels 0 / 1 / 2 (nodes)", "observed order", "estimated error of the finest"],
+        [
+            [
+                nu,
+                " / ".join(f"{t:+.5f} ({n})" for t, n in zip(r["tips"], r["nodes"])),
+                f"{r['observed_order']:.2f}",
+                f"{100 * r['remaining_error_estimate']:.3f} %",
+            ]
+            for nu, r in data["references"].items()
+        ],
+    )
+    knobs = {
+        "Newton tolerance": [(t, dict(options=NewtonOptions(tol=t))) for t in (1e-2, 1e-4, 1e-6, 1e-9)],
+        "ramp increments": [(n, dict(steps=n + 1)) for n in (5, 10, 35, 100)],
+    }
     tight = timed_ramp(steps=101, options=NewtonOptions(tol=1e-9))[1].tip_deflection
     rows = []
     for knob, runs in knobs.items():

@@ -59,8 +59,9 @@ PLANS = {"beam": [(1, 0), (1, 1), (1, 2), (2, 0), (2, 1)], "pneunet": [(1, 0), (
 # tetrahedron corners of the eight children of a split tetrahedron: corners 0-3, edge midpoints 4-9 in the order
 # (01, 02, 03, 12, 13, 23); four corner tetrahedra, the inner octahedron cut along its 02-13 diagonal
 EDGES = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
-CHILDREN = np.array([[0, 4, 5, 6], [4, 1, 7, 8], [5, 7, 2, 9], [6, 8, 9, 3],
-                     [5, 8, 4, 6], [5, 8, 6, 9], [5, 8, 9, 7], [5, 8, 7, 4]])
+CHILDREN = np.array(
+    [[0, 4, 5, 6], [4, 1, 7, 8], [5, 7, 2, 9], [6, 8, 9, 3], [5, 8, 4, 6], [5, 8, 6, 9], [5, 8, 9, 7], [5, 8, 7, 4]]
+)
 FACE_CHILDREN = np.array([[0, 3, 5], [3, 1, 4], [5, 4, 2], [3, 4, 5]])  # corners 0-2, midpoints (01, 12, 20) 3-5
 
 
@@ -128,9 +129,17 @@ def run(case: Case, level, order: int, nu: float) -> dict:
     seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
     mesh = result.mesh
     pressures = [result.history[f"{name}.pressure"][-1] for name in result.chamber_names]
-    return {"tetrahedra": int(mesh.n_elements), "nodes": int(mesh.n_vertices), "dofs": 3 * int(mesh.n_vertices),
-            "tip": float(result.tip_deflection), "pressure": float(np.mean(pressures)), "seconds": seconds,
-            "cpu_seconds": cpu, "iterations": int(sum(s.iterations for s in result.solves)), "converged": bool(result.converged)}
+    return {
+        "tetrahedra": int(mesh.n_elements),
+        "nodes": int(mesh.n_vertices),
+        "dofs": 3 * int(mesh.n_vertices),
+        "tip": float(result.tip_deflection),
+        "pressure": float(np.mean(pressures)),
+        "seconds": seconds,
+        "cpu_seconds": cpu,
+        "iterations": int(sum(s.iterations for s in result.solves)),
+        "converged": bool(result.converged),
+    }
 
 
 def richardson(values: list[float]) -> tuple[float, float]:
@@ -141,7 +150,7 @@ def richardson(values: list[float]) -> tuple[float, float]:
     if not 0 < (v1 - v2) / (v0 - v1) < 1:
         return float("nan"), float("nan")
     order = float(np.log2((v0 - v1) / (v1 - v2)))
-    return v2 + (v2 - v1) / (2 ** order - 1), order
+    return v2 + (v2 - v1) / (2**order - 1), order
 
 
 def extrapolations(rows: list[dict], key: str) -> list[tuple[float, str]]:
@@ -153,8 +162,12 @@ def extrapolations(rows: list[dict], key: str) -> list[tuple[float, str]]:
         if len(values) >= 3:
             value, rate = richardson(values)
             if np.isfinite(value):
-                out.append((value, f"Richardson of P{order} levels {len(values) - 3}-{len(values) - 1}, "
-                                   f"observed order {rate:.2f}"))
+                out.append(
+                    (
+                        value,
+                        f"Richardson of P{order} levels {len(values) - 3}-{len(values) - 1}, observed order {rate:.2f}",
+                    )
+                )
     return out
 
 
@@ -174,20 +187,33 @@ def heading(machine: str, day: str) -> str:
 
 def report(records: list[dict]) -> str:
     lines = []
-    for (case, nu) in dict.fromkeys((r["case"], r["nu"]) for r in records):
-        rows = sorted((r for r in records if r["case"] == case and r["nu"] == nu), key=lambda r: (r["order"], r["level"]))
+    for case, nu in dict.fromkeys((r["case"], r["nu"]) for r in records):
+        rows = sorted(
+            (r for r in records if r["case"] == case and r["nu"] == nu), key=lambda r: (r["order"], r["level"])
+        )
         tip, tip_from = reference(rows, "tip")
         pressure, pressure_from = reference(rows, "pressure")
-        others = [f"{key} {value:.5g} ({how})" for key in ("tip", "pressure")  # reference() takes the first
-                  for value, how in extrapolations(rows, key)[1:]]
-        lines += [f"### {case}, nu = {nu}", "", f"Reference tip {tip:+.5f} ({tip_from}); pressure {pressure:.1f} "
-                  f"({pressure_from}).", *([f"Not taken: {'; '.join(others)}."] if others else []), "",
-                  "| elements | level | tetrahedra | DOFs | tip | tip error | pressure | pressure error | s | CPU s | "
-                  "Newton it |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+        others = [
+            f"{key} {value:.5g} ({how})"
+            for key in ("tip", "pressure")  # reference() takes the first
+            for value, how in extrapolations(rows, key)[1:]
+        ]
+        lines += [
+            f"### {case}, nu = {nu}",
+            "",
+            f"Reference tip {tip:+.5f} ({tip_from}); pressure {pressure:.1f} ({pressure_from}).",
+            *([f"Not taken: {'; '.join(others)}."] if others else []),
+            "",
+            "| elements | level | tetrahedra | DOFs | tip | tip error | pressure | pressure error | s | CPU s | "
+            "Newton it |",
+            "|---|---|---|---|---|---|---|---|---|---|---|",
+        ]
         for r in rows:
-            lines.append(f"| P{r['order']} | {r['level']} | {r['tetrahedra']} | {r['dofs']} | {r['tip']:+.5f} | "
-                         f"{abs(r['tip'] / tip - 1):.2%} | {r['pressure']:.1f} | {abs(r['pressure'] / pressure - 1):.2%} | "
-                         f"{r['seconds']:.1f} | {r['cpu_seconds']:.1f} | {r['iterations']} |")
+            lines.append(
+                f"| P{r['order']} | {r['level']} | {r['tetrahedra']} | {r['dofs']} | {r['tip']:+.5f} | "
+                f"{abs(r['tip'] / tip - 1):.2%} | {r['pressure']:.1f} | {abs(r['pressure'] / pressure - 1):.2%} | "
+                f"{r['seconds']:.1f} | {r['cpu_seconds']:.1f} | {r['iterations']} |"
+            )
         lines.append("")
     return "\n".join(lines)
 
@@ -196,10 +222,20 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--cases", nargs="+", default=["beam", "pneunet"], choices=["beam", "pneunet"])
     parser.add_argument("--nu", nargs="+", type=float, default=[0.45, 0.499])
-    parser.add_argument("--runs", nargs="+", default=None, metavar="ORDER:LEVEL",
-                        help="the runs to make (default: each case's plan, PLANS)")
-    parser.add_argument("--report", nargs="+", default=None, metavar="JSON",
-                        help="make no runs: write accuracy_3d.md of the runs in these accuracy_3d.json files")
+    parser.add_argument(
+        "--runs",
+        nargs="+",
+        default=None,
+        metavar="ORDER:LEVEL",
+        help="the runs to make (default: each case's plan, PLANS)",
+    )
+    parser.add_argument(
+        "--report",
+        nargs="+",
+        default=None,
+        metavar="JSON",
+        help="make no runs: write accuracy_3d.md of the runs in these accuracy_3d.json files",
+    )
     parser.add_argument("--out", default="benchmarks/results")
     args = parser.parse_args()
     out = prepare_directory(args.out)
@@ -218,16 +254,19 @@ def main() -> None:
         levels = meshes(case, 1 + max(level + order - 1 for order, level in plan))
         for nu in args.nu:
             for order, level in plan:
-                record = {"case": name, "nu": nu, "order": order, "level": level,
-                          **run(case, levels[level], order, nu)}
+                record = {"case": name, "nu": nu, "order": order, "level": level, **run(case, levels[level], order, nu)}
                 records.append(record)
-                print(f"{name} nu={nu} P{order} level {level}: {record['tetrahedra']} tetrahedra, {record['dofs']} "
-                      f"DOFs, tip {record['tip']:+.5f}, pressure {record['pressure']:.1f}, "
-                      f"{record['seconds']:.1f} s ({record['cpu_seconds']:.1f} s CPU), "
-                      f"{record['iterations']} Newton iterations",
-                      flush=True)
-                save_json(out / "accuracy_3d.json", {"machine": machine, "date": str(date.today()),
-                                                     "increments": INCREMENTS, "runs": records})
+                print(
+                    f"{name} nu={nu} P{order} level {level}: {record['tetrahedra']} tetrahedra, {record['dofs']} "
+                    f"DOFs, tip {record['tip']:+.5f}, pressure {record['pressure']:.1f}, "
+                    f"{record['seconds']:.1f} s ({record['cpu_seconds']:.1f} s CPU), "
+                    f"{record['iterations']} Newton iterations",
+                    flush=True,
+                )
+                save_json(
+                    out / "accuracy_3d.json",
+                    {"machine": machine, "date": str(date.today()), "increments": INCREMENTS, "runs": records},
+                )
     text = heading(machine, str(date.today())) + report(records)
     print(text)
     save_text(out / "accuracy_3d.md", text)

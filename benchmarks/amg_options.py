@@ -34,11 +34,14 @@ from accuracy_3d import case_of, meshes, scene_of  # noqa: E402
 
 RTOL, MAX_ITERATIONS = 1e-2, 300
 STRONG = ("symmetric", {"theta": 0.08})
-OPTION_SETS = {"pyamg's defaults": {}, "strength 0.08": {"strength": STRONG},
-               "energy smoothing": {"smooth": "energy"},
-               "strength 0.04, energy": {"strength": ("symmetric", {"theta": 0.04}), "smooth": "energy"},
-               "strength 0.08, energy (used)": {"strength": STRONG, "smooth": "energy"},
-               "strength 0.15, energy": {"strength": ("symmetric", {"theta": 0.15}), "smooth": "energy"}}
+OPTION_SETS = {
+    "pyamg's defaults": {},
+    "strength 0.08": {"strength": STRONG},
+    "energy smoothing": {"smooth": "energy"},
+    "strength 0.04, energy": {"strength": ("symmetric", {"theta": 0.04}), "smooth": "energy"},
+    "strength 0.08, energy (used)": {"strength": STRONG, "smooth": "energy"},
+    "strength 0.15, energy": {"strength": ("symmetric", {"theta": 0.15}), "smooth": "energy"},
+}
 
 
 def recorded_systems(level: int, count: int) -> tuple[list[dict], np.ndarray, int]:
@@ -76,15 +79,28 @@ def cg_run(system: dict, options: dict, modes: np.ndarray) -> dict:
         return y
 
     start = time.perf_counter()
-    hierarchy = pyamg.smoothed_aggregation_solver(matrix.tobsr(blocksize=(3, 3)), B=modes, symmetry="hermitian",
-                                                  **options)
+    hierarchy = pyamg.smoothed_aggregation_solver(
+        matrix.tobsr(blocksize=(3, 3)), B=modes, symmetry="hermitian", **options
+    )
     setup = time.perf_counter() - start
     count = itertools.count()
     start = time.perf_counter()
-    _, info = spla.cg(spla.LinearOperator(matrix.shape, matvec=apply), rhs, rtol=RTOL, maxiter=MAX_ITERATIONS,
-                      M=hierarchy.aspreconditioner(cycle="V"), callback=lambda _: next(count))
-    return {"levels": len(hierarchy.levels), "complexity": hierarchy.operator_complexity(), "setup_seconds": setup,
-            "iterations": next(count), "converged": info == 0, "cg_seconds": time.perf_counter() - start}
+    _, info = spla.cg(
+        spla.LinearOperator(matrix.shape, matvec=apply),
+        rhs,
+        rtol=RTOL,
+        maxiter=MAX_ITERATIONS,
+        M=hierarchy.aspreconditioner(cycle="V"),
+        callback=lambda _: next(count),
+    )
+    return {
+        "levels": len(hierarchy.levels),
+        "complexity": hierarchy.operator_complexity(),
+        "setup_seconds": setup,
+        "iterations": next(count),
+        "converged": info == 0,
+        "cg_seconds": time.perf_counter() - start,
+    }
 
 
 def main() -> None:
@@ -102,14 +118,20 @@ def main() -> None:
         for name, options in OPTION_SETS.items():
             rows.append({"system": k, "options": name, **cg_run(system, options, modes)})
             r = rows[-1]
-            print(f"system {k}, {name}: {r['levels']} levels, complexity {r['complexity']:.2f}, set-up "
-                  f"{r['setup_seconds']:.1f} s, {r['iterations']} CG iterations{'' if r['converged'] else ' (failed)'}, "
-                  f"{r['cg_seconds']:.1f} s", flush=True)
+            print(
+                f"system {k}, {name}: {r['levels']} levels, complexity {r['complexity']:.2f}, set-up "
+                f"{r['setup_seconds']:.1f} s, {r['iterations']} CG iterations{'' if r['converged'] else ' (failed)'}, "
+                f"{r['cg_seconds']:.1f} s",
+                flush=True,
+            )
     machine = f"{platform.node()}, {platform.machine()}, {os.cpu_count()} CPUs"
-    lines = [f"Machine: {machine}; {date.today()}. The quadratic beam, nested level {args.level}: {dofs} DOFs; "
-             f"CG to a relative residual of {RTOL:g}, at most {MAX_ITERATIONS} iterations.", "",
-             "| options | " + " | ".join(f"system {k}" for k in range(len(systems))) + " | levels | complexity |",
-             "|---|" + "---|" * (len(systems) + 2)]
+    lines = [
+        f"Machine: {machine}; {date.today()}. The quadratic beam, nested level {args.level}: {dofs} DOFs; "
+        f"CG to a relative residual of {RTOL:g}, at most {MAX_ITERATIONS} iterations.",
+        "",
+        "| options | " + " | ".join(f"system {k}" for k in range(len(systems))) + " | levels | complexity |",
+        "|---|" + "---|" * (len(systems) + 2),
+    ]
     for name in OPTION_SETS:
         mine = [r for r in rows if r["options"] == name]
         cells = [f"{r['iterations']}" + ("" if r["converged"] else " (failed)") for r in mine]
@@ -117,8 +139,10 @@ def main() -> None:
     text = "\n".join(lines) + "\n\nCells: CG iterations.\n"
     print(text)
     save_text(out / "amg_options.md", text)
-    save_json(out / "amg_options.json", {"machine": machine, "date": str(date.today()), "level": args.level,
-                                         "dofs": dofs, "rtol": RTOL, "runs": rows})
+    save_json(
+        out / "amg_options.json",
+        {"machine": machine, "date": str(date.today()), "level": args.level, "dofs": dofs, "rtol": RTOL, "runs": rows},
+    )
 
 
 if __name__ == "__main__":

@@ -40,10 +40,15 @@ def backends() -> tuple[str, dict]:
             backend.solve(rhs)
         solve = (time.perf_counter() - start) / 20
         _, ramp, seconds = timed_ramp(options=NewtonOptions(linear_solver=name))
-        data[name] = {"factorize_ms": 1e3 * factorize, "solve_ms": 1e3 * solve, "ramp_s": seconds,
-                      "tip_deflection": ramp.tip_deflection}
-        rows.append([name, f"{1e3 * factorize:.2f}", f"{1e3 * solve:.3f}", f"{seconds:.2f}",
-                     f"{ramp.tip_deflection:+.5f}"])
+        data[name] = {
+            "factorize_ms": 1e3 * factorize,
+            "solve_ms": 1e3 * solve,
+            "ramp_s": seconds,
+            "tip_deflection": ramp.tip_deflection,
+        }
+        rows.append(
+            [name, f"{1e3 * factorize:.2f}", f"{1e3 * solve:.3f}", f"{seconds:.2f}", f"{ramp.tip_deflection:+.5f}"]
+        )
     header = ["backend", "factorise (ms)", "solve (ms)", "reference ramp (s)", "tip dy"]
     return f"matrix: {matrix.shape[0]} DOFs, {matrix.nnz} non-zeros\n\n" + markdown(header, rows), data
 

@@ -32,8 +32,10 @@ def main() -> None:
     runtime.init("cpu")
     result = run_schedule(reference_scene(cy=0.15, steps=args.frames).build())
     track = Track.from_result(result, color="detF" if args.colored else "none")
-    print(f"{backend.NAME} {backend.VERSION}, {width}x{height}, {len(track.states)} frames, "
-          f"{result.mesh.n_triangles} triangles{', coloured' if args.colored else ''}")
+    print(
+        f"{backend.NAME} {backend.VERSION}, {width}x{height}, {len(track.states)} frames, "
+        f"{result.mesh.n_triangles} triangles{', coloured' if args.colored else ''}"
+    )
     print("| canvas | shapes + read-back (ms/frame) | with text (ms/frame) |\n|---|---|---|")
     for name in CANVASES:
         try:
@@ -42,8 +44,9 @@ def main() -> None:
             print(f"| {name} | unavailable: {exc} | |")
             continue
         renderer.frame(0)  # first frame: the canvas's own start-up
-        shapes = best_of(args.repeat, renderer, lambda i, renderer=renderer: (renderer.draw(i),
-                                                                             renderer.canvas.image()))
+        shapes = best_of(
+            args.repeat, renderer, lambda i, renderer=renderer: (renderer.draw(i), renderer.canvas.image())
+        )
         whole = best_of(args.repeat, renderer, renderer.frame)
         print(f"| {renderer.canvas.name} | {1e3 * shapes:.1f} | {1e3 * whole:.1f} |")
         renderer.canvas.close()

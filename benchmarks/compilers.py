@@ -35,20 +35,41 @@ def compilers() -> tuple[str, dict]:
         with tempfile.TemporaryDirectory() as out:
             for section in ("breakdown", "breakdown", "startup"):
                 command = [sys.executable, "-m", "taichi_pneuma.apps.bench", "--sections", section, "--out", out]
-                proc = subprocess.run(command, env={**os.environ, backend.CHOICE_VARIABLE: name}, capture_output=True,
-                                      text=True)
+                proc = subprocess.run(
+                    command, env={**os.environ, backend.CHOICE_VARIABLE: name}, capture_output=True, text=True
+                )
                 require(proc.returncode == 0, f"bench --sections {section} on {name} failed: {proc.stderr[-300:]}")
                 sections[section] = json.loads((Path(out) / f"bench_{section}.json").read_text())
         process, ramp = sections["startup"]["data"]["process"], sections["breakdown"]["data"]
-        data[name] = {"version": sections["breakdown"]["backend"], "startup": sections["startup"]["data"],
-                      "breakdown": ramp}
-        rows.append([data[name]["version"], f"{process[empty]['whole_s']:.2f}",
-                     f"{process[warm]['whole_s']:.2f}",
-                     f"{process[warm]['first_increment_s']:.2f}", f"{1e3 * ramp['first_call_s']:.0f}",
-                     f"{1e3 * ramp['ramp_s']:.0f}", ramp["iterations"], f"{1e3 * ramp['ramp_s'] / ramp['iterations']:.1f}",
-                     f"{ramp['tip_deflection']:.15f}"])
-    header = ["compiler", "main command, empty cache (s)", "warm cache (s)", "warm: to first increment (s)",
-              "first solve, warm cache (ms)", "reference ramp (ms)", "Newton iterations", "ms/iteration", "tip dy"]
+        data[name] = {
+            "version": sections["breakdown"]["backend"],
+            "startup": sections["startup"]["data"],
+            "breakdown": ramp,
+        }
+        rows.append(
+            [
+                data[name]["version"],
+                f"{process[empty]['whole_s']:.2f}",
+                f"{process[warm]['whole_s']:.2f}",
+                f"{process[warm]['first_increment_s']:.2f}",
+                f"{1e3 * ramp['first_call_s']:.0f}",
+                f"{1e3 * ramp['ramp_s']:.0f}",
+                ramp["iterations"],
+                f"{1e3 * ramp['ramp_s'] / ramp['iterations']:.1f}",
+                f"{ramp['tip_deflection']:.15f}",
+            ]
+        )
+    header = [
+        "compiler",
+        "main command, empty cache (s)",
+        "warm cache (s)",
+        "warm: to first increment (s)",
+        "first solve, warm cache (ms)",
+        "reference ramp (ms)",
+        "Newton iterations",
+        "ms/iteration",
+        "tip dy",
+    ]
     return markdown(header, rows), data
 
 

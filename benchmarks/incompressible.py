@@ -25,17 +25,32 @@ def incompressible() -> tuple[str, dict]:
     rows, data = [], []
     for nu in LOCKING_NU:
         for order, max_area in LOCKING_BASE.items():
-            runs = [timed_ramp(max_area=max_area, steps=11, order=order, refinements=level, nu=nu)
-                    for level in range(3)]
+            runs = [
+                timed_ramp(max_area=max_area, steps=11, order=order, refinements=level, nu=nu) for level in range(3)
+            ]
             tips = [result.tip_deflection for _, result, _ in runs]
             nodes = [built.mesh.n_vertices for built, _, _ in runs]
             p = float(np.log2(abs(tips[0] - tips[1]) / abs(tips[1] - tips[2])))
-            record = {"nu": nu, "order": order, "nodes": nodes, "tips": tips, "observed_order": p,
-                      "last_change": abs(tips[2] / tips[1] - 1), "seconds": [s for _, _, s in runs]}
+            record = {
+                "nu": nu,
+                "order": order,
+                "nodes": nodes,
+                "tips": tips,
+                "observed_order": p,
+                "last_change": abs(tips[2] / tips[1] - 1),
+                "seconds": [s for _, _, s in runs],
+            }
             data.append(record)
             print(f"  incompressible: {record}", file=sys.stderr, flush=True)
-            rows.append([nu, f"P{order}", " / ".join(f"{t:+.4f} ({n})" for t, n in zip(tips, nodes)), f"{p:.2f}",
-                         f"{100 * record['last_change']:.2f} %"])
+            rows.append(
+                [
+                    nu,
+                    f"P{order}",
+                    " / ".join(f"{t:+.4f} ({n})" for t, n in zip(tips, nodes)),
+                    f"{p:.2f}",
+                    f"{100 * record['last_change']:.2f} %",
+                ]
+            )
     header = ["nu", "elements", "tip dy, levels 0 / 1 / 2 (nodes)", "observed order", "change level 1 -> 2"]
     return markdown(header, rows), {"runs": data}
 

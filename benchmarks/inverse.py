@@ -32,12 +32,16 @@ def fd_errors() -> None:
     print("|---|---|---|---|---|---|---|")
     for name, (_, commands) in CASES.items():
         tip, du, built, _, _ = errors_against_finite_differences(name)
-        print(f"| {name} | {built.mesh.n_vertices} | {len(commands)} | {tip[0]:.1e} | {tip[1]:.1e} | {tip[2]:.1e} "
-              f"| {du:.1e} |")
+        print(
+            f"| {name} | {built.mesh.n_vertices} | {len(commands)} | {tip[0]:.1e} | {tip[1]:.1e} | {tip[2]:.1e} "
+            f"| {du:.1e} |"
+        )
 
 
 def twin_reaches(count: int) -> None:
-    print("| scene | vertices | reached | forward solves / reach | Newton it. / reach | s / reach | worst tip error / L |")
+    print(
+        "| scene | vertices | reached | forward solves / reach | Newton it. / reach | s / reach | worst tip error / L |"
+    )
     print("|---|---|---|---|---|---|---|")
     rng = np.random.default_rng(0)
     for name in ("reference_beam", "bidirectional", "pneunet_finger"):
@@ -49,10 +53,12 @@ def twin_reaches(count: int) -> None:
             target = Target(tuple(probe.settle(commands).tip))
             results.append(Reacher(built).reach(target))
         length = body_length(built)
-        print(f"| {name} | {built.mesh.n_vertices} | {sum(r.reached for r in results)}/{count} "
-              f"| {np.mean([r.forward_solves for r in results]):.1f} "
-              f"| {np.mean([r.newton_iterations for r in results]):.1f} | {np.mean([r.seconds for r in results]):.3f} "
-              f"| {max(r.error for r in results) / length:.1e} |")
+        print(
+            f"| {name} | {built.mesh.n_vertices} | {sum(r.reached for r in results)}/{count} "
+            f"| {np.mean([r.forward_solves for r in results]):.1f} "
+            f"| {np.mean([r.newton_iterations for r in results]):.1f} | {np.mean([r.seconds for r in results]):.3f} "
+            f"| {max(r.error for r in results) / length:.1e} |"
+        )
 
 
 def main() -> None:

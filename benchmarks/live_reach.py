@@ -35,8 +35,7 @@ def drag_path(scene, frames: int, size, radius: float = 0.3) -> list[tuple[float
     angles = np.linspace(0, 2 * np.pi, frames)
     tips = [reacher.settle(reacher.lo + span * (0.5 + radius * np.array([np.cos(a), np.sin(a)]))).tip for a in angles]
     track = Track(built.mesh, built.mesh.vertices[None], np.ones((1, 2)), np.zeros((1, 2)), np.zeros(1))
-    view = FrameRenderer([track], *size, trace=False, backend="gui", bounds=fixed_view(built.mesh),
-                                log=lambda *_: None)
+    view = FrameRenderer([track], *size, trace=False, backend="gui", bounds=fixed_view(built.mesh), log=lambda *_: None)
     return [tuple(view.to_canvas(0, tip)) for tip in tips]
 
 
@@ -56,8 +55,16 @@ def main() -> None:
     canvas = GGUICanvas if args.renderer == "ggui" else GUICanvas
     canvas.mouse = lambda self: (*next(path, (0.5, 0.5)), True)
     print(f"mesh: {scene.build().mesh.n_vertices} vertices")
-    print(follow_mouse(scene, command_bounds(scene), size, args.renderer, newton=NewtonOptions(tol=args.tol),
-                       max_frames=args.frames))
+    print(
+        follow_mouse(
+            scene,
+            command_bounds(scene),
+            size,
+            args.renderer,
+            newton=NewtonOptions(tol=args.tol),
+            max_frames=args.frames,
+        )
+    )
 
 
 if __name__ == "__main__":

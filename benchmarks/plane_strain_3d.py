@@ -46,10 +46,16 @@ def extruded_scene(level: int, order: int, folder: Path, max_area: float) -> Sce
     vertices, tets, walls = extrude(planar, DEPTH)
     mesh = tet_mesh(vertices, tets, {"main": walls[0]}, rollers=ROLLERS)
     path = write_mesh(folder / f"beam_{level}.msh", mesh, ("main",))
-    geometry = MeshGeometry(MeshBody(str(path)), (("main", MeshSurface("main")),), order, PointSet("left"),
-                            rollers=ROLLERS)
-    return Scene(geometry, (ChamberControl(area_ramp(3.5, STEPS, 1e5 / DEPTH)),), STEPS - 1, Material(1e4, 0.45),
-                 name=f"extruded_{level}_p{order}")
+    geometry = MeshGeometry(
+        MeshBody(str(path)), (("main", MeshSurface("main")),), order, PointSet("left"), rollers=ROLLERS
+    )
+    return Scene(
+        geometry,
+        (ChamberControl(area_ramp(3.5, STEPS, 1e5 / DEPTH)),),
+        STEPS - 1,
+        Material(1e4, 0.45),
+        name=f"extruded_{level}_p{order}",
+    )
 
 
 def richardson(tips: list[float]) -> tuple[float, float]:
@@ -59,7 +65,7 @@ def richardson(tips: list[float]) -> tuple[float, float]:
     if not 0 < (t1 - t2) / (t0 - t1) < 1:
         return math.nan, math.nan
     order = math.log2((t0 - t1) / (t1 - t2))
-    return t2 + (t2 - t1) / (2 ** order - 1), order
+    return t2 + (t2 - t1) / (2**order - 1), order
 
 
 def timed(scene):
@@ -70,10 +76,16 @@ def timed(scene):
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--levels", type=int, default=3, help="linear elements: refinements of the reference mesh, 0 .. levels-1")
+    parser.add_argument(
+        "--levels", type=int, default=3, help="linear elements: refinements of the reference mesh, 0 .. levels-1"
+    )
     parser.add_argument("--quadratic-levels", type=int, default=1, help="the same for quadratic elements")
-    parser.add_argument("--max-area", type=float, default=BeamGeometry.max_area,
-                        help="Triangle's max area of level 0 (the chamber's 128-gon, hence the converged tip, whatever it is)")
+    parser.add_argument(
+        "--max-area",
+        type=float,
+        default=BeamGeometry.max_area,
+        help="Triangle's max area of level 0 (the chamber's 128-gon, hence the converged tip, whatever it is)",
+    )
     parser.add_argument("--out", default="benchmarks/results")
     args = parser.parse_args()
     out = prepare_directory(args.out)
@@ -82,26 +94,59 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as folder:
         for order, levels in ((1, args.levels), (2, args.quadratic_levels)):
             for level in range(levels):
-                planar, planar_s = timed(reference_scene(steps=STEPS, order=order, refinements=level,
-                                                                  max_area=args.max_area))
+                planar, planar_s = timed(
+                    reference_scene(steps=STEPS, order=order, refinements=level, max_area=args.max_area)
+                )
                 solid, solid_s = timed(extruded_scene(level, order, Path(folder), args.max_area))
-                record = {"order": order, "level": level, "triangles": planar.mesh.n_elements,
-                          "tetrahedra": solid.mesh.n_elements, "nodes_3d": solid.mesh.n_vertices,
-                          "tip_2d": planar.tip_deflection, "tip_3d": solid.tip_deflection,
-                          "seconds_2d": planar_s, "seconds_3d": solid_s}
+                record = {
+                    "order": order,
+                    "level": level,
+                    "triangles": planar.mesh.n_elements,
+                    "tetrahedra": solid.mesh.n_elements,
+                    "nodes_3d": solid.mesh.n_vertices,
+                    "tip_2d": planar.tip_deflection,
+                    "tip_3d": solid.tip_deflection,
+                    "seconds_2d": planar_s,
+                    "seconds_3d": solid_s,
+                }
                 data.append(record)
                 gap = abs(record["tip_3d"] - record["tip_2d"])
-                rows.append([f"P{order}", level, record["triangles"], record["tetrahedra"], record["nodes_3d"],
-                             f"{record['tip_2d']:+.5f}", f"{record['tip_3d']:+.5f}", f"{gap:.5f}",
-                             *(f"{abs(record[k] / CONVERGED - 1):.2%}" for k in ("tip_2d", "tip_3d")),
-                             f"{planar_s:.1f}", f"{solid_s:.1f}"])
+                rows.append(
+                    [
+                        f"P{order}",
+                        level,
+                        record["triangles"],
+                        record["tetrahedra"],
+                        record["nodes_3d"],
+                        f"{record['tip_2d']:+.5f}",
+                        f"{record['tip_3d']:+.5f}",
+                        f"{gap:.5f}",
+                        *(f"{abs(record[k] / CONVERGED - 1):.2%}" for k in ("tip_2d", "tip_3d")),
+                        f"{planar_s:.1f}",
+                        f"{solid_s:.1f}",
+                    ]
+                )
                 print(rows[-1], flush=True)
-    header = ["elements", "refinements", "triangles", "tetrahedra", "3D nodes", "2D tip", "3D tip", "gap",
-              "2D error", "3D error", "2D s", "3D s"]
+    header = [
+        "elements",
+        "refinements",
+        "triangles",
+        "tetrahedra",
+        "3D nodes",
+        "2D tip",
+        "3D tip",
+        "gap",
+        "2D error",
+        "3D error",
+        "2D s",
+        "3D s",
+    ]
     table = "| " + " | ".join(header) + " |\n|" + "---|" * len(header) + "\n"
     table += "".join("| " + " | ".join(str(c) for c in row) + " |\n" for row in rows)
-    heading = (f"Machine: {platform.node()}, {platform.machine()}, {date.today()}; level 0: max area {args.max_area:g}; "
-               f"converged 2D tip {CONVERGED}\n\n")
+    heading = (
+        f"Machine: {platform.node()}, {platform.machine()}, {date.today()}; level 0: max area {args.max_area:g}; "
+        f"converged 2D tip {CONVERGED}\n\n"
+    )
     extrapolated, notes = {}, ""
     for order in (1, 2):
         for dim in ("2d", "3d"):
@@ -109,14 +154,24 @@ def main() -> None:
             if len(tips) >= 3:
                 value, observed = richardson(tips)
                 extrapolated[f"p{order}_{dim}"] = {"tip": value, "order": observed}
-                notes += (f"\nRichardson, P{order} {dim.upper()} levels {len(tips) - 3}-{len(tips) - 1}: converged tip "
-                          f"{value:+.5f} (observed order {observed:.2f}), {abs(value / CONVERGED - 1):.2%} from the "
-                          f"converged 2D {CONVERGED}")
+                notes += (
+                    f"\nRichardson, P{order} {dim.upper()} levels {len(tips) - 3}-{len(tips) - 1}: converged tip "
+                    f"{value:+.5f} (observed order {observed:.2f}), {abs(value / CONVERGED - 1):.2%} from the "
+                    f"converged 2D {CONVERGED}"
+                )
     print(heading + table + notes)
     stem = "plane_strain_3d" + ("" if args.max_area == BeamGeometry.max_area else f"_a{args.max_area:g}")
     save_text(out / f"{stem}.md", heading + table + notes + "\n")
-    save_json(out / f"{stem}.json", {"machine": platform.node(), "date": str(date.today()), "max_area": args.max_area,
-                                             "runs": data, "extrapolated": extrapolated})
+    save_json(
+        out / f"{stem}.json",
+        {
+            "machine": platform.node(),
+            "date": str(date.today()),
+            "max_area": args.max_area,
+            "runs": data,
+            "extrapolated": extrapolated,
+        },
+    )
 
 
 if __name__ == "__main__":

@@ -1,6 +1,8 @@
 """3D meshing and rendering costs: the PneuNet meshed by gmsh, and ms per frame of both 3D views.
 
-    python -m benchmarks.render3d [--frames 8] [--live-frames 30] [--only-live] [--out benchmarks/results]  (repository root)
+    python -m benchmarks.render3d [--frames 8] [--live-frames 30] [--only-live] [--out benchmarks/results]
+
+(from the repository root)
 
 Meshing: PneuNet() at the sizes below, wall time of mesh_solid (OpenCASCADE geometry, fragment, gmsh's
 Delaunay, reading the arrays back), tetrahedra, surface triangles, and the estimate mesh_solid checks.
@@ -39,8 +41,7 @@ from taichi_pneuma.render.frames3d import FrameRenderer3D, Track3D, open_view, s
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the sibling scripts (solid.py's Meshed)
 
-MESH_SIZES = {"coarse (interactive)": MeshSizes(0.3), "scene default": MeshSizes(0.1),
-              "fine": MeshSizes(0.05)}
+MESH_SIZES = {"coarse (interactive)": MeshSizes(0.3), "scene default": MeshSizes(0.1), "fine": MeshSizes(0.05)}
 RENDER_SIZES = {"~2k faces": MeshSizes(0.25), "~20k faces": MeshSizes(0.05)}
 
 
@@ -72,9 +73,10 @@ def live_scene(size: float = 0.3, peak: float = 900.0, order: int = 1):
 
     meshed = mesh_solid(PneuNet().solid(), MeshSizes(size))
     names = tuple(meshed.chambers)
-    geometry = Meshed(tet_mesh(meshed.vertices, meshed.tets, meshed.chambers, meshed.boundary, order=order,
-                               clamp=PointSet("left")),
-                      tuple((name, None) for name in names))
+    geometry = Meshed(
+        tet_mesh(meshed.vertices, meshed.tets, meshed.chambers, meshed.boundary, order=order, clamp=PointSet("left")),
+        tuple((name, None) for name in names),
+    )
     controls = tuple(ChamberControl(ChamberSchedule("pressure", ((1, peak),))) for _ in names)
     built = Scene(geometry, controls, 1, Material(1e4, 0.45)).build()
     return built, outer_faces(built.mesh), np.concatenate(built.mesh.chambers)[:, :3]
@@ -106,7 +108,7 @@ def live(frames: int, peak: float = 900.0, idle: int = 30, order: int = 1) -> li
         state = LiveEquilibrium(built, NewtonOptions(tol=LIVE_TOL))
         solver = state.solver
 
-        def step(commands):
+        def step(commands, mode=mode, state=state, solver=solver):  # this iteration's
             if mode == "one step":
                 state.frame(commands)
                 return state.iterations
@@ -116,7 +118,9 @@ def live(frames: int, peak: float = 900.0, idle: int = 30, order: int = 1) -> li
 
         solve_s, draw_s, cpu_s, iterations = [], [], [], []
         try:
-            for k in range(-1, frames + 1 + idle):  # frame -1 (a tiny pressure: the kernels' first calls) is the warm-up
+            for k in range(
+                -1, frames + 1 + idle
+            ):  # frame -1 (a tiny pressure: the kernels' first calls) is the warm-up
                 if k > frames and (mode == "full Newton" or state.converged):
                     break
                 start, cpu = time.perf_counter(), time.process_time()
@@ -131,14 +135,26 @@ def live(frames: int, peak: float = 900.0, idle: int = 30, order: int = 1) -> li
         finally:
             view.close()
         solve_ms, draw_ms = 1e3 * np.mean(solve_s), 1e3 * np.mean(draw_s)
-        records.append({"tets": len(mesh.elements), "nodes": len(mesh.vertices), "view": view.name, "mode": mode,
-                        "solve_ms": solve_ms, "draw_ms": draw_ms, "newton_iterations": float(np.mean(iterations)),
-                        "frames_per_second": 1e3 / (solve_ms + draw_ms), "linear_solver": solver.backend.name,
-                        "cpu_ms": 1e3 * np.mean(cpu_s), "frames_per_cpu_second": 1 / np.mean(cpu_s),
-                        "solve_frames_per_second": 1e3 / solve_ms, "tol": solver.options.tol,
-                        "idle_frames": k - frames if mode == "one step" else 0,
-                        "converged": bool(state.converged) if mode == "one step" else True,
-                        "distance_from_equilibrium": float(np.abs(state.u - reference).max() / np.abs(reference).max())})
+        records.append(
+            {
+                "tets": len(mesh.elements),
+                "nodes": len(mesh.vertices),
+                "view": view.name,
+                "mode": mode,
+                "solve_ms": solve_ms,
+                "draw_ms": draw_ms,
+                "newton_iterations": float(np.mean(iterations)),
+                "frames_per_second": 1e3 / (solve_ms + draw_ms),
+                "linear_solver": solver.backend.name,
+                "cpu_ms": 1e3 * np.mean(cpu_s),
+                "frames_per_cpu_second": 1 / np.mean(cpu_s),
+                "solve_frames_per_second": 1e3 / solve_ms,
+                "tol": solver.options.tol,
+                "idle_frames": k - frames if mode == "one step" else 0,
+                "converged": bool(state.converged) if mode == "one step" else True,
+                "distance_from_equilibrium": float(np.abs(state.u - reference).max() / np.abs(reference).max()),
+            }
+        )
         print(records[-1], flush=True)
     return records
 
@@ -156,10 +172,22 @@ def live_window(frames: int, peak: float = 900.0) -> dict:
         state.frame(np.full(len(built.chambers), next(ramp, peak)))
         return built.mesh.vertices + state.u, [f"residual {state.residual:.1e}"]
 
-    summary = explore_3d(solve, [Slider("pressure", 0.0, peak, 0.0)], built.mesh.vertices, boundary,
-                         tuple(c[:, :3] for c in built.mesh.chambers), size=(960, 640), max_frames=2 * frames)
-    return {"tets": len(built.mesh.elements), "frames": summary["frames"], "frames_per_second": summary["fps"],
-            "residual": state.residual, "converged": state.converged}
+    summary = explore_3d(
+        solve,
+        [Slider("pressure", 0.0, peak, 0.0)],
+        built.mesh.vertices,
+        boundary,
+        tuple(c[:, :3] for c in built.mesh.chambers),
+        size=(960, 640),
+        max_frames=2 * frames,
+    )
+    return {
+        "tets": len(built.mesh.elements),
+        "frames": summary["frames"],
+        "frames_per_second": summary["fps"],
+        "residual": state.residual,
+        "converged": state.converged,
+    }
 
 
 def main() -> None:
@@ -167,8 +195,13 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=8)
     parser.add_argument("--live-frames", type=int, default=30)
     parser.add_argument("--only-live", action="store_true", help="the live loop alone (to render3d_live.md, .json)")
-    parser.add_argument("--order", type=int, choices=(1, 2), default=1,
-                        help="the live loop's element order (2: quadratic tetrahedra; its tables get the suffix _p2)")
+    parser.add_argument(
+        "--order",
+        type=int,
+        choices=(1, 2),
+        default=1,
+        help="the live loop's element order (2: quadratic tetrahedra; its tables get the suffix _p2)",
+    )
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results"))
     args = parser.parse_args()
     runtime.init("cpu")
@@ -179,17 +212,30 @@ def main() -> None:
         mesh = mesh_solid(solid, sizes)
         seconds = time.perf_counter() - start
         faces = len(mesh.boundary) + sum(len(w) for w in mesh.chambers.values())
-        data["meshing"].append({"mesh": label, "size": sizes.size, "seconds": seconds, "tets": len(mesh.tets),
-                                "nodes": len(mesh.vertices), "surface_triangles": faces,
-                                "estimate": estimate_tets(solid, sizes)})
+        data["meshing"].append(
+            {
+                "mesh": label,
+                "size": sizes.size,
+                "seconds": seconds,
+                "tets": len(mesh.tets),
+                "nodes": len(mesh.vertices),
+                "surface_triangles": faces,
+                "estimate": estimate_tets(solid, sizes),
+            }
+        )
         print(data["meshing"][-1], flush=True)
     for label, sizes in {} if args.only_live else RENDER_SIZES.items():
         mesh = mesh_solid(solid, sizes)
         positions = bent(mesh.vertices, args.frames)
-        track = Track3D(positions, mesh.boundary, tuple(mesh.chambers.values()),
-                        color=np.linalg.norm(positions - mesh.vertices, axis=2), color_label="|u|",
-                        captions=tuple((f"step {i}",) for i in range(args.frames)),
-                        trace=(("curvature", np.linspace(0, 0.45, args.frames)),))
+        track = Track3D(
+            positions,
+            mesh.boundary,
+            tuple(mesh.chambers.values()),
+            color=np.linalg.norm(positions - mesh.vertices, axis=2),
+            color_label="|u|",
+            captions=tuple((f"step {i}",) for i in range(args.frames)),
+            trace=(("curvature", np.linspace(0, 0.45, args.frames)),),
+        )
         faces = len(mesh.boundary) + sum(len(w) for w in mesh.chambers.values())
         for backend in ("numpy", "ggui"):
             try:
@@ -206,16 +252,30 @@ def main() -> None:
                 cpu_ms = 1e3 * (time.process_time() - cpu) / args.frames
             finally:
                 renderer.canvas.close()
-            data["rendering"].append({"mesh": label, "surface_triangles": faces, "drawn_triangles": len(renderer.kept)
-                                      + len(renderer.walls), "view": renderer.canvas.name, "ms_per_frame": ms,
-                                      "cpu_ms_per_frame": cpu_ms})
+            data["rendering"].append(
+                {
+                    "mesh": label,
+                    "surface_triangles": faces,
+                    "drawn_triangles": len(renderer.kept) + len(renderer.walls),
+                    "view": renderer.canvas.name,
+                    "ms_per_frame": ms,
+                    "cpu_ms_per_frame": cpu_ms,
+                }
+            )
             print(data["rendering"][-1], flush=True)
     if os.environ.get("DISPLAY") and not args.only_live:
         mesh = mesh_solid(solid, MESH_SIZES["coarse (interactive)"])
         states = bent(mesh.vertices, 11)
-        summary = explore_3d(lambda q: (states[int(round(10 * q[0]))], [f"c1 = {q[0]:.2f}"]),
-                             [Slider(name, 0.0, 1.0, 0.0) for name in mesh.chambers], mesh.vertices, mesh.boundary,
-                             tuple(mesh.chambers.values()), size=(960, 640), spin=2.0, max_frames=60)
+        summary = explore_3d(
+            lambda q: (states[int(round(10 * q[0]))], [f"c1 = {q[0]:.2f}"]),
+            [Slider(name, 0.0, 1.0, 0.0) for name in mesh.chambers],
+            mesh.vertices,
+            mesh.boundary,
+            tuple(mesh.chambers.values()),
+            size=(960, 640),
+            spin=2.0,
+            max_frames=60,
+        )
         data["interactive"] = {"tets": len(mesh.tets), "frames_per_second": summary["fps"]}
         print(data["interactive"], flush=True)
     if os.environ.get("DISPLAY"):
@@ -224,36 +284,64 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     stem = ("render3d_live" if args.only_live else "render3d") + ("_p2" if args.order == 2 else "")  # the live loop
     # alone (or quadratic) leaves the full tables as they are
-    (args.out / f"{stem}.json").write_text(json.dumps({"machine": machine(), "load_average": load, "data": data}, indent=2))
+    (args.out / f"{stem}.json").write_text(
+        json.dumps({"machine": machine(), "load_average": load, "data": data}, indent=2)
+    )
     lines = [f"Machine: {machine()}; load average (1 min) at the start: {load:.1f}"]
     if data["meshing"]:
-        lines += ["", "| PneuNet mesh | size | tetrahedra | nodes | surface triangles | estimate | meshing (s) |",
-                  "|---|---|---|---|---|---|---|"]
-        lines += [f"| {r['mesh']} | {r['size']:g} | {r['tets']} | {r['nodes']} | {r['surface_triangles']} | "
-                  f"{r['estimate']:.0f} | {r['seconds']:.2f} |" for r in data["meshing"]]
+        lines += [
+            "",
+            "| PneuNet mesh | size | tetrahedra | nodes | surface triangles | estimate | meshing (s) |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        lines += [
+            f"| {r['mesh']} | {r['size']:g} | {r['tets']} | {r['nodes']} | {r['surface_triangles']} | "
+            f"{r['estimate']:.0f} | {r['seconds']:.2f} |"
+            for r in data["meshing"]
+        ]
     if data["rendering"]:
-        lines += ["", "| surface | triangles (drawn after the section) | view | ms / frame (960 x 540) | CPU ms / frame |",
-                  "|---|---|---|---|---|"]
-        lines += [f"| {r['mesh']} | {r['surface_triangles']} ({r['drawn_triangles']}) | {r['view']} | "
-                  f"{r['ms_per_frame']:.0f} | {r['cpu_ms_per_frame']:.0f} |" for r in data["rendering"]]
-    lines += ["", f"Live loop without a window (coarse PneuNet, its six chambers' pressure slider moved 0 -> 900 Pa in "
-                  f"{args.live_frames} frames, then held; 960 x 640; drawing includes the image's read-back):", "",
-              "| tetrahedra | nodes | view | solve per frame | linear solver | Newton it / moving frame | solve ms | "
-              "draw ms | frames/s | solve-only frames/s | CPU ms / frame | frames / CPU s | idle frames to converge | "
-              "max abs(u - u*) / max abs(u*) |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    lines += [f"| {r['tets']} | {r['nodes']} | {r['view']} | {r['mode']} | {r['linear_solver']} | "
-              f"{r['newton_iterations']:.1f} | {r['solve_ms']:.0f} | {r['draw_ms']:.0f} | {r['frames_per_second']:.1f} | "
-              f"{r['solve_frames_per_second']:.0f} | {r['cpu_ms']:.0f} | {r['frames_per_cpu_second']:.1f} | "
-              f"{r['idle_frames']} | {r['distance_from_equilibrium']:.1e} |" for r in data["live"]]
+        lines += [
+            "",
+            "| surface | triangles (drawn after the section) | view | ms / frame (960 x 540) | CPU ms / frame |",
+            "|---|---|---|---|---|",
+        ]
+        lines += [
+            f"| {r['mesh']} | {r['surface_triangles']} ({r['drawn_triangles']}) | {r['view']} | "
+            f"{r['ms_per_frame']:.0f} | {r['cpu_ms_per_frame']:.0f} |"
+            for r in data["rendering"]
+        ]
+    lines += [
+        "",
+        f"Live loop without a window (coarse PneuNet, its six chambers' pressure slider moved 0 -> 900 Pa in "
+        f"{args.live_frames} frames, then held; 960 x 640; drawing includes the image's read-back):",
+        "",
+        "| tetrahedra | nodes | view | solve per frame | linear solver | Newton it / moving frame | solve ms | "
+        "draw ms | frames/s | solve-only frames/s | CPU ms / frame | frames / CPU s | idle frames to converge | "
+        "max abs(u - u*) / max abs(u*) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    lines += [
+        f"| {r['tets']} | {r['nodes']} | {r['view']} | {r['mode']} | {r['linear_solver']} | "
+        f"{r['newton_iterations']:.1f} | {r['solve_ms']:.0f} | {r['draw_ms']:.0f} | {r['frames_per_second']:.1f} | "
+        f"{r['solve_frames_per_second']:.0f} | {r['cpu_ms']:.0f} | {r['frames_per_cpu_second']:.1f} | "
+        f"{r['idle_frames']} | {r['distance_from_equilibrium']:.1e} |"
+        for r in data["live"]
+    ]
     if "interactive" in data:
-        lines += ["", f"Interactive window (960 x 640, coarse PneuNet of {data['interactive']['tets']} tetrahedra, "
-                      f"no solve): {data['interactive']['frames_per_second']:.0f} frames/s"]
+        lines += [
+            "",
+            f"Interactive window (960 x 640, coarse PneuNet of {data['interactive']['tets']} tetrahedra, "
+            f"no solve): {data['interactive']['frames_per_second']:.0f} frames/s",
+        ]
     if "interactive_live" in data:
         r = data["interactive_live"]
-        lines += ["", f"Interactive window with the live solve (960 x 640, coarse PneuNet of {r['tets']} tetrahedra, one "
-                      f"Newton step per frame, the slider moved over {args.live_frames} frames then held, "
-                      f"{r['frames']} frames): {r['frames_per_second']:.1f} frames/s; final residual "
-                      f"{r['residual']:.1e} (converged: {r['converged']})"]
+        lines += [
+            "",
+            f"Interactive window with the live solve (960 x 640, coarse PneuNet of {r['tets']} tetrahedra, one "
+            f"Newton step per frame, the slider moved over {args.live_frames} frames then held, "
+            f"{r['frames']} frames): {r['frames_per_second']:.1f} frames/s; final residual "
+            f"{r['residual']:.1e} (converged: {r['converged']})",
+        ]
     (args.out / f"{stem}.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 

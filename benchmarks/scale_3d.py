@@ -52,12 +52,23 @@ def child(case: str, backend: str) -> dict:
     iterations, phases = phase_ms(result)
     peak = peak_rss_mb()
     tetrahedra = built.mesh.n_elements
-    return {"case": case, "backend": backend, "tetrahedra": tetrahedra, "nodes": built.mesh.n_vertices,
-            "dofs": built.model.n_dofs, "build_s": build, "ramp_s": seconds, "iterations": iterations,
-            "converged": bool(all(s.converged for s in result.steps)), "ms_per_iteration": 1e3 * seconds / iterations,
-            "phases_ms": phases, "rss_before_mb": before,
-            "peak_rss_mb": peak, "bytes_per_tetrahedron": 1e6 * (peak - before) / tetrahedra,
-            "tip": float(result.positions[-1][:, 0].max())}
+    return {
+        "case": case,
+        "backend": backend,
+        "tetrahedra": tetrahedra,
+        "nodes": built.mesh.n_vertices,
+        "dofs": built.model.n_dofs,
+        "build_s": build,
+        "ramp_s": seconds,
+        "iterations": iterations,
+        "converged": bool(all(s.converged for s in result.steps)),
+        "ms_per_iteration": 1e3 * seconds / iterations,
+        "phases_ms": phases,
+        "rss_before_mb": before,
+        "peak_rss_mb": peak,
+        "bytes_per_tetrahedron": 1e6 * (peak - before) / tetrahedra,
+        "tip": float(result.positions[-1][:, 0].max()),
+    }
 
 
 def main() -> None:
@@ -88,14 +99,34 @@ def main() -> None:
             r = json.loads(proc.stdout.strip().splitlines()[-1])
             records.append(r)
             print(json.dumps(r), file=sys.stderr, flush=True)
-            rows.append([f"{case}, {r['tetrahedra']:,}", f"{r['dofs']:,}", f"{r['build_s']:.1f}", backend,
-                         r["iterations"], f"{r['ms_per_iteration']:.0f}",
-                         *(f"{r['phases_ms'][p]:.0f}" for p in PHASES),
-                         f"{100 * (r['phases_ms']['factorize'] + r['phases_ms']['solve']) / r['ms_per_iteration']:.0f} %",
-                         f"{r['peak_rss_mb']:.0f}", f"{r['bytes_per_tetrahedron']:.0f}", "yes" if r["converged"] else "NO"])
-    header = ["tetrahedra", "DOFs", "build (s)", "backend", "Newton iterations", "ms / iteration",
-              *(f"{p} (ms)" for p in PHASES), "linear solve share", "peak RSS (MB)", "bytes / tetrahedron",
-              "converged"]
+            rows.append(
+                [
+                    f"{case}, {r['tetrahedra']:,}",
+                    f"{r['dofs']:,}",
+                    f"{r['build_s']:.1f}",
+                    backend,
+                    r["iterations"],
+                    f"{r['ms_per_iteration']:.0f}",
+                    *(f"{r['phases_ms'][p]:.0f}" for p in PHASES),
+                    f"{100 * (r['phases_ms']['factorize'] + r['phases_ms']['solve']) / r['ms_per_iteration']:.0f} %",
+                    f"{r['peak_rss_mb']:.0f}",
+                    f"{r['bytes_per_tetrahedron']:.0f}",
+                    "yes" if r["converged"] else "NO",
+                ]
+            )
+    header = [
+        "tetrahedra",
+        "DOFs",
+        "build (s)",
+        "backend",
+        "Newton iterations",
+        "ms / iteration",
+        *(f"{p} (ms)" for p in PHASES),
+        "linear solve share",
+        "peak RSS (MB)",
+        "bytes / tetrahedron",
+        "converged",
+    ]
     table = f"Machine: {machine()}\n\n" + markdown(header, rows)
     print(table)
     out = prepare_directory(args.out)

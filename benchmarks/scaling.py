@@ -22,11 +22,21 @@ def scaling() -> tuple[str, dict]:
     for max_area in (0.005, 0.0012, 0.0003, 0.0001, 0.00003, 0.00002):
         built, result, seconds = timed_ramp(max_area=max_area, steps=4, growth=1.5)
         iterations = int(result.history["iterations"].sum())
-        record = {"vertices": built.mesh.n_vertices, "ms_per_iteration": 1e3 * seconds / iterations,
-                  "ms_per_increment": 1e3 * seconds / 3, "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+        record = {
+            "vertices": built.mesh.n_vertices,
+            "ms_per_iteration": 1e3 * seconds / iterations,
+            "ms_per_increment": 1e3 * seconds / 3,
+            "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        }
         data.append(record)
-        rows.append([record["vertices"], f"{record['ms_per_iteration']:.1f}", f"{record['ms_per_increment']:.0f}",
-                     f"{record['peak_rss_mb']:.0f}"])
+        rows.append(
+            [
+                record["vertices"],
+                f"{record['ms_per_iteration']:.1f}",
+                f"{record['ms_per_increment']:.0f}",
+                f"{record['peak_rss_mb']:.0f}",
+            ]
+        )
         print(f"  scaling: {record}", file=sys.stderr, flush=True)
     n = np.log([r["vertices"] for r in data])
     exponent = np.polyfit(n, np.log([r["ms_per_iteration"] for r in data]), 1)[0]

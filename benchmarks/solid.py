@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from taichi_pneuma.apps.bench import PHASES, markdown
+from taichi_pneuma.scene.build import Scene
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from sections import main  # noqa: E402
@@ -40,7 +41,7 @@ class Meshed:
         return self.ready  # made already, in no budget
 
 
-def octant(divisions: int, layers: int, order: int, increments: int = 3) -> "Scene":
+def octant(divisions: int, layers: int, order: int, increments: int = 3) -> Scene:
     """A pressurised octant of the thick spherical shell 1 <= r <= 2 (layered.py: 3 divisions^2 layers
     tetrahedra), closed by its three symmetry planes; pressure 0 -> 0.05 E in `increments` increments."""
     from taichi_pneuma.fem.layered import spherical_shell_octant
@@ -50,10 +51,20 @@ def octant(divisions: int, layers: int, order: int, increments: int = 3) -> "Sce
     from taichi_pneuma.scene.schedule import ChamberSchedule
 
     vertices, tets, wall = spherical_shell_octant(1.0, 2.0, divisions, layers)
-    mesh = tet_mesh(vertices, tets, {"cavity": wall}, order=order, clamp=None,
-                    rollers=tuple(Roller(tuple(n), (0.0, 0.0, 0.0)) for n in np.eye(3)))
-    return Scene(Meshed(mesh), (ChamberControl(ChamberSchedule("pressure", ((increments, 500.0),))),), increments,
-                 Material(1e4, 0.45))
+    mesh = tet_mesh(
+        vertices,
+        tets,
+        {"cavity": wall},
+        order=order,
+        clamp=None,
+        rollers=tuple(Roller(tuple(n), (0.0, 0.0, 0.0)) for n in np.eye(3)),
+    )
+    return Scene(
+        Meshed(mesh),
+        (ChamberControl(ChamberSchedule("pressure", ((increments, 500.0),))),),
+        increments,
+        Material(1e4, 0.45),
+    )
 
 
 SOLID_MESHES = (("P1", 8, 4, 1), ("P1", 16, 6, 1), ("P1", 24, 12, 1), ("P2", 12, 6, 2))
@@ -87,17 +98,44 @@ def solid() -> tuple[str, dict]:
             seconds = time.perf_counter() - start
             iterations, per = phase_ms(result)
             linear = per["factorize"] + per["solve"]
-            record = {"elements": f"{label} tetrahedra", "tetrahedra": mesh.n_elements, "dofs": 3 * mesh.n_vertices,
-                      "backend": backend, "iterations": iterations, "ms_per_iteration": 1e3 * seconds / iterations,
-                      "phases_ms": per, "linear_solve_share": linear / (1e3 * seconds / iterations),
-                      "tip": float(result.positions[-1][:, 0].max())}
+            record = {
+                "elements": f"{label} tetrahedra",
+                "tetrahedra": mesh.n_elements,
+                "dofs": 3 * mesh.n_vertices,
+                "backend": backend,
+                "iterations": iterations,
+                "ms_per_iteration": 1e3 * seconds / iterations,
+                "phases_ms": per,
+                "linear_solve_share": linear / (1e3 * seconds / iterations),
+                "tip": float(result.positions[-1][:, 0].max()),
+            }
             data.append(record)
-            rows.append([f"{label}, {mesh.n_elements}", 3 * mesh.n_vertices, backend, iterations,
-                         f"{record['ms_per_iteration']:.0f}", *(f"{per[p]:.1f}" for p in PHASES),
-                         f"{100 * record['linear_solve_share']:.0f} %", f"{record['tip']:.6f}"])
+            rows.append(
+                [
+                    f"{label}, {mesh.n_elements}",
+                    3 * mesh.n_vertices,
+                    backend,
+                    iterations,
+                    f"{record['ms_per_iteration']:.0f}",
+                    *(f"{per[p]:.1f}" for p in PHASES),
+                    f"{100 * record['linear_solve_share']:.0f} %",
+                    f"{record['tip']:.6f}",
+                ]
+            )
             print(f"  solid: {record}", file=sys.stderr, flush=True)
-    table = markdown(["tetrahedra", "DOFs", "backend", "iterations", "ms / iteration", *(f"{p} (ms)" for p in PHASES),
-                      "linear solve share", "max x (pole)"], rows)
+    table = markdown(
+        [
+            "tetrahedra",
+            "DOFs",
+            "backend",
+            "iterations",
+            "ms / iteration",
+            *(f"{p} (ms)" for p in PHASES),
+            "linear solve share",
+            "max x (pole)",
+        ],
+        rows,
+    )
     eigen_rows = []
     for label, divisions, layers, order in (("P1", 24, 12, 1), ("P2", 12, 6, 2)):
         built = octant(divisions, layers, order).build()
@@ -111,8 +149,13 @@ def solid() -> tuple[str, dict]:
                 term.hessian_values(True)
             times[name] = (time.perf_counter() - start) / 5
         n = built.mesh.n_elements
-        eigen_rows.append([f"{label}, {n}", *(f"{1e3 * t:.1f} ({1e6 * t / n:.1f} us/element)" for t in times.values()),
-                           f"{times['Jacobi'] / times['analytic']:.1f}x"])
+        eigen_rows.append(
+            [
+                f"{label}, {n}",
+                *(f"{1e3 * t:.1f} ({1e6 * t / n:.1f} us/element)" for t in times.values()),
+                f"{times['Jacobi'] / times['analytic']:.1f}x",
+            ]
+        )
     table += "\nThe projected elastic Hessian, analytic eigensystem against Jacobi on the 9 x 9 d2psi/dF2:\n\n"
     table += markdown(["tetrahedra", "analytic (ms)", "Jacobi (ms)", "ratio"], eigen_rows)
     return table, {"runs": data}

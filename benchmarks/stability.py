@@ -35,8 +35,9 @@ CASES = [
 
 
 def run_case(cy=0.15, nu=0.45, k=1e5, E=1e4, max_area=0.0012, growth=3.5, steps=36) -> dict:
-    built = reference_scene(cy, growth=growth, steps=steps, youngs_modulus=E, poisson_ratio=nu, chamber_stiffness=k,
-                            max_area=max_area).build()
+    built = reference_scene(
+        cy, growth=growth, steps=steps, youngs_modulus=E, poisson_ratio=nu, chamber_stiffness=k, max_area=max_area
+    ).build()
     start = time.perf_counter()
     try:
         result = run_schedule(built)
@@ -46,11 +47,16 @@ def run_case(cy=0.15, nu=0.45, k=1e5, E=1e4, max_area=0.0012, growth=3.5, steps=
     iterations = result.history["iterations"][1:]
     return {
         "outcome": "converged" if all(s.converged for s in result.steps) else "not converged",
-        "vertices": built.mesh.n_vertices, "iterations_mean": float(iterations.mean()),
-        "iterations_max": int(iterations.max()), "cuts": int(result.history["cuts"].sum()),
-        "tip_deflection": result.tip_deflection, "area_ratio": final.area_ratio,
-        "area_error": final.area_ratio / final.command - 1, "peak_pressure": result.peak_pressure,
-        "min_det_F": float(result.history["min_det"].min()), "seconds": time.perf_counter() - start,
+        "vertices": built.mesh.n_vertices,
+        "iterations_mean": float(iterations.mean()),
+        "iterations_max": int(iterations.max()),
+        "cuts": int(result.history["cuts"].sum()),
+        "tip_deflection": result.tip_deflection,
+        "area_ratio": final.area_ratio,
+        "area_error": final.area_ratio / final.command - 1,
+        "peak_pressure": result.peak_pressure,
+        "min_det_F": float(result.history["min_det"].min()),
+        "seconds": time.perf_counter() - start,
     }
 
 
@@ -59,15 +65,19 @@ def main() -> None:
     parser.add_argument("--out", default="benchmarks/results")
     out = prepare_directory(parser.parse_args().out)
     runtime.init("cpu")
-    header = ("| case | outcome | Newton it. per increment (mean / max) | cuts | tip dy | A/A* - 1 | peak abs(p) "
-              "| min det F | s |\n|---|---|---|---|---|---|---|---|---|")
+    header = (
+        "| case | outcome | Newton it. per increment (mean / max) | cuts | tip dy | A/A* - 1 | peak abs(p) "
+        "| min det F | s |\n|---|---|---|---|---|---|---|---|---|"
+    )
     rows, records = [], {}
     for name, scene_args, ramp_args in CASES:
         r = records[name] = run_case(**scene_args, **ramp_args)
         if r["outcome"] == "converged":
-            rows.append(f"| {name} | converged | {r['iterations_mean']:.1f} / {r['iterations_max']} | {r['cuts']} "
-                        f"| {r['tip_deflection']:+.4f} | {r['area_error']:+.1e} | {r['peak_pressure']:.4g} "
-                        f"| {r['min_det_F']:.3f} | {r['seconds']:.1f} |")
+            rows.append(
+                f"| {name} | converged | {r['iterations_mean']:.1f} / {r['iterations_max']} | {r['cuts']} "
+                f"| {r['tip_deflection']:+.4f} | {r['area_error']:+.1e} | {r['peak_pressure']:.4g} "
+                f"| {r['min_det_F']:.3f} | {r['seconds']:.1f} |"
+            )
         else:
             rows.append(f"| {name} | {r['outcome']} | | | | | | | {r['seconds']:.1f} |")
         print(rows[-1], flush=True)

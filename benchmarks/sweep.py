@@ -44,8 +44,14 @@ def timed_study(executor) -> dict:
             report = sweep.run(executor)
         wall = time.perf_counter() - start
     seconds = [r["seconds"] for r in report.rows]
-    return {"runs": report.ran, "failed": report.failed, "wall_s": wall, "start_s": started - start,
-            "runs_per_s": report.ran / wall, "mean_run_s": float(np.mean(seconds))}
+    return {
+        "runs": report.ran,
+        "failed": report.failed,
+        "wall_s": wall,
+        "start_s": started - start,
+        "runs_per_s": report.ran / wall,
+        "mean_run_s": float(np.mean(seconds)),
+    }
 
 
 def timed_overhead(executor, workers: int, n: int = 24) -> dict:
@@ -53,15 +59,19 @@ def timed_overhead(executor, workers: int, n: int = 24) -> dict:
     scene = TINY.to_toml()
     tasks = [Task(scene, {"chambers[0].center[1]": float(cy)}) for cy in np.linspace(-0.1, 0.1, n)]
     with executor:
-        for _ in executor.run(tasks[:4 * workers]):  # warm: workers started, kernels loaded
+        for _ in executor.run(tasks[: 4 * workers]):  # warm: workers started, kernels loaded
             pass
         start = time.perf_counter()
         rows = [row for _, row in executor.run(tasks)]
         wall = time.perf_counter() - start
     inside = float(np.mean([r["seconds"] for r in rows]))
     assert all(r["error"] is None for r in rows), [r["error"] for r in rows]
-    return {"tasks": n, "wall_per_task_ms": 1e3 * wall / n, "inside_ms": 1e3 * inside,
-            "overhead_ms": 1e3 * (wall * workers / n - inside)}
+    return {
+        "tasks": n,
+        "wall_per_task_ms": 1e3 * wall / n,
+        "inside_ms": 1e3 * inside,
+        "overhead_ms": 1e3 * (wall * workers / n - inside),
+    }
 
 
 def main() -> None:
@@ -79,23 +89,59 @@ def main() -> None:
         overheads["Ray"] = timed_overhead(RayCluster(None, n), n)
     one = studies["pool, 1 worker"]["wall_s"]
     study_table = markdown(
-        ["executor", "runs", "wall (s)", "of which executor start (s)", "runs/s", "speedup vs 1 worker",
-         "mean run (s, inside the worker)"],
-        [[name, s["runs"], f"{s['wall_s']:.1f}", f"{s['start_s']:.1f}", f"{s['runs_per_s']:.2f}",
-          f"{one / s['wall_s']:.2f}", f"{s['mean_run_s']:.2f}"] for name, s in studies.items()])
+        [
+            "executor",
+            "runs",
+            "wall (s)",
+            "of which executor start (s)",
+            "runs/s",
+            "speedup vs 1 worker",
+            "mean run (s, inside the worker)",
+        ],
+        [
+            [
+                name,
+                s["runs"],
+                f"{s['wall_s']:.1f}",
+                f"{s['start_s']:.1f}",
+                f"{s['runs_per_s']:.2f}",
+                f"{one / s['wall_s']:.2f}",
+                f"{s['mean_run_s']:.2f}",
+            ]
+            for name, s in studies.items()
+        ],
+    )
     overhead_table = markdown(
-        [f"executor ({n} workers, warm)", "tiny tasks", "wall per task (ms)", "inside a task (ms)", "overhead per task (ms)"],
-        [[name, o["tasks"], f"{o['wall_per_task_ms']:.1f}", f"{o['inside_ms']:.1f}", f"{o['overhead_ms']:.1f}"]
-         for name, o in overheads.items()])
+        [
+            f"executor ({n} workers, warm)",
+            "tiny tasks",
+            "wall per task (ms)",
+            "inside a task (ms)",
+            "overhead per task (ms)",
+        ],
+        [
+            [name, o["tasks"], f"{o['wall_per_task_ms']:.1f}", f"{o['inside_ms']:.1f}", f"{o['overhead_ms']:.1f}"]
+            for name, o in overheads.items()
+        ],
+    )
     info = machine()
     where = f"{info['machine']}, {info['cpu']}, {info['cores']} cores, {date.today()}"
-    text = (f"Machine: {where}\n\n24-run study (reference beam, cy x E = 6 x 4, 35 increments each):\n\n"
-            f"{study_table}\nPer-task overhead:\n\n{overhead_table}")
+    text = (
+        f"Machine: {where}\n\n24-run study (reference beam, cy x E = 6 x 4, 35 increments each):\n\n"
+        f"{study_table}\nPer-task overhead:\n\n{overhead_table}"
+    )
     print(text)
     save_text(Path(out) / "bench_sweep.md", text)
-    save_json(Path(out) / "bench_sweep.json", {"machine": info, "date": str(date.today()),
-                                               "versions": versions(ray=not args.no_ray),
-                                               "studies": studies, "overheads": overheads})
+    save_json(
+        Path(out) / "bench_sweep.json",
+        {
+            "machine": info,
+            "date": str(date.today()),
+            "versions": versions(ray=not args.no_ray),
+            "studies": studies,
+            "overheads": overheads,
+        },
+    )
 
 
 if __name__ == "__main__":

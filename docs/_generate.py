@@ -29,51 +29,126 @@ APPS = ("inflate", "steer", "reach", "sweep", "bench")
 # results table stem -> (page, title, (module file, function or None: the docstring that says what it measures),
 #                         the command that writes it again)
 RESULTS_PAGES = {
-    "bench_startup": ("performance", "Start-up: kernels compile once; rendering against solving",
-                      ("taichi_pneuma/apps/bench.py", "startup"), "pneuma-bench --sections startup"),
-    "bench_breakdown": ("performance", "Where the time of the reference ramp goes",
-                        ("taichi_pneuma/apps/bench.py", "breakdown"), "pneuma-bench --sections breakdown"),
-    "bench_backends": ("performance", "Linear-solver backends", ("benchmarks/backends.py", "backends"),
-                       "python benchmarks/backends.py --out benchmarks/results"),
-    "bench_scaling": ("performance", "Scaling with the mesh size", ("benchmarks/scaling.py", "scaling"),
-                      "python benchmarks/scaling.py --out benchmarks/results"),
-    "bench_solid": ("performance", "3D: the cost of a Newton iteration on tetrahedra",
-                    ("benchmarks/solid.py", "solid"), "python benchmarks/solid.py --out benchmarks/results"),
-    "bench_presets_3d": ("performance", "3D presets on the shipped 3D scenes: time and error",
-                         ("taichi_pneuma/apps/bench.py", "presets_3d"), "pneuma-bench --sections presets_3d"),
-    "bench_sweep": ("performance", "Design studies: throughput on a process pool and on Ray",
-                    ("benchmarks/sweep.py", None), "python benchmarks/sweep.py --out benchmarks/results"),
-    "render3d": ("performance", "3D meshing and rendering", ("benchmarks/render3d.py", None),
-                 "python -m benchmarks.render3d --out benchmarks/results"),
-    "render3d_live": ("performance", "3D: the interactive loop without a window", ("benchmarks/render3d.py", None),
-                      "python -m benchmarks.render3d --only-live --out benchmarks/results"),
-    "render3d_live_p2": ("performance", "3D: the interactive loop on quadratic tetrahedra",
-                         ("benchmarks/render3d.py", None),
-                         "python -m benchmarks.render3d --only-live --order 2 --out benchmarks/results"),
-    "scale_3d": ("performance", "3D at scale: 200k linear and 50k quadratic tetrahedra", ("benchmarks/scale_3d.py", None),
-                 "python -m benchmarks.scale_3d --out benchmarks/results"),
-    "bench_accuracy": ("accuracy", "Accuracy against time: linear or quadratic triangles",
-                       ("benchmarks/accuracy.py", "accuracy"),
-                       "python benchmarks/accuracy.py --out benchmarks/results"),
-    "bench_incompressible": ("accuracy", "Near-incompressible rubber",
-                             ("benchmarks/incompressible.py", "incompressible"),
-                             "python benchmarks/incompressible.py --out benchmarks/results"),
-    "plane_strain_3d": ("accuracy", "Plane strain in 3D: tetrahedra against triangles",
-                        ("benchmarks/plane_strain_3d.py", None),
-                        "python benchmarks/plane_strain_3d.py --out benchmarks/results"),
-    "plane_strain_3d_a0.005": ("accuracy", "Plane strain in 3D: the converged values, by extrapolation",
-                               ("benchmarks/plane_strain_3d.py", None),
-                               "python benchmarks/plane_strain_3d.py --max-area 0.005 --out benchmarks/results"),
-    "accuracy_3d": ("accuracy", "What accuracy costs in 3D: linear or quadratic tetrahedra",
-                    ("benchmarks/accuracy_3d.py", None), "python benchmarks/accuracy_3d.py"),
-    "skfem_3d": ("performance", "3D against scikit-fem + SciPy: the beam_3d scene's mesh and ramp",
-                 ("benchmarks/skfem_3d.py", None), "python benchmarks/skfem_3d.py"),
-    "skfem_3d_coarse": ("performance", "3D against scikit-fem + SciPy: the same model, mesh and ramp",
-                        ("benchmarks/skfem_3d.py", None), "python benchmarks/skfem_3d.py --coarse"),
-    "amg_options": ("performance", "3D: multigrid options for quadratic tetrahedra",
-                    ("benchmarks/amg_options.py", None), "python benchmarks/amg_options.py"),
-    "stability": ("stability", "The hard cases", ("benchmarks/stability.py", None),
-                  "python benchmarks/stability.py --out benchmarks/results"),
+    "bench_startup": (
+        "performance",
+        "Start-up: kernels compile once; rendering against solving",
+        ("taichi_pneuma/apps/bench.py", "startup"),
+        "pneuma-bench --sections startup",
+    ),
+    "bench_breakdown": (
+        "performance",
+        "Where the time of the reference ramp goes",
+        ("taichi_pneuma/apps/bench.py", "breakdown"),
+        "pneuma-bench --sections breakdown",
+    ),
+    "bench_backends": (
+        "performance",
+        "Linear-solver backends",
+        ("benchmarks/backends.py", "backends"),
+        "python benchmarks/backends.py --out benchmarks/results",
+    ),
+    "bench_scaling": (
+        "performance",
+        "Scaling with the mesh size",
+        ("benchmarks/scaling.py", "scaling"),
+        "python benchmarks/scaling.py --out benchmarks/results",
+    ),
+    "bench_solid": (
+        "performance",
+        "3D: the cost of a Newton iteration on tetrahedra",
+        ("benchmarks/solid.py", "solid"),
+        "python benchmarks/solid.py --out benchmarks/results",
+    ),
+    "bench_presets_3d": (
+        "performance",
+        "3D presets on the shipped 3D scenes: time and error",
+        ("taichi_pneuma/apps/bench.py", "presets_3d"),
+        "pneuma-bench --sections presets_3d",
+    ),
+    "bench_sweep": (
+        "performance",
+        "Design studies: throughput on a process pool and on Ray",
+        ("benchmarks/sweep.py", None),
+        "python benchmarks/sweep.py --out benchmarks/results",
+    ),
+    "render3d": (
+        "performance",
+        "3D meshing and rendering",
+        ("benchmarks/render3d.py", None),
+        "python -m benchmarks.render3d --out benchmarks/results",
+    ),
+    "render3d_live": (
+        "performance",
+        "3D: the interactive loop without a window",
+        ("benchmarks/render3d.py", None),
+        "python -m benchmarks.render3d --only-live --out benchmarks/results",
+    ),
+    "render3d_live_p2": (
+        "performance",
+        "3D: the interactive loop on quadratic tetrahedra",
+        ("benchmarks/render3d.py", None),
+        "python -m benchmarks.render3d --only-live --order 2 --out benchmarks/results",
+    ),
+    "scale_3d": (
+        "performance",
+        "3D at scale: 200k linear and 50k quadratic tetrahedra",
+        ("benchmarks/scale_3d.py", None),
+        "python -m benchmarks.scale_3d --out benchmarks/results",
+    ),
+    "bench_accuracy": (
+        "accuracy",
+        "Accuracy against time: linear or quadratic triangles",
+        ("benchmarks/accuracy.py", "accuracy"),
+        "python benchmarks/accuracy.py --out benchmarks/results",
+    ),
+    "bench_incompressible": (
+        "accuracy",
+        "Near-incompressible rubber",
+        ("benchmarks/incompressible.py", "incompressible"),
+        "python benchmarks/incompressible.py --out benchmarks/results",
+    ),
+    "plane_strain_3d": (
+        "accuracy",
+        "Plane strain in 3D: tetrahedra against triangles",
+        ("benchmarks/plane_strain_3d.py", None),
+        "python benchmarks/plane_strain_3d.py --out benchmarks/results",
+    ),
+    "plane_strain_3d_a0.005": (
+        "accuracy",
+        "Plane strain in 3D: the converged values, by extrapolation",
+        ("benchmarks/plane_strain_3d.py", None),
+        "python benchmarks/plane_strain_3d.py --max-area 0.005 --out benchmarks/results",
+    ),
+    "accuracy_3d": (
+        "accuracy",
+        "What accuracy costs in 3D: linear or quadratic tetrahedra",
+        ("benchmarks/accuracy_3d.py", None),
+        "python benchmarks/accuracy_3d.py",
+    ),
+    "skfem_3d": (
+        "performance",
+        "3D against scikit-fem + SciPy: the beam_3d scene's mesh and ramp",
+        ("benchmarks/skfem_3d.py", None),
+        "python benchmarks/skfem_3d.py",
+    ),
+    "skfem_3d_coarse": (
+        "performance",
+        "3D against scikit-fem + SciPy: the same model, mesh and ramp",
+        ("benchmarks/skfem_3d.py", None),
+        "python benchmarks/skfem_3d.py --coarse",
+    ),
+    "amg_options": (
+        "performance",
+        "3D: multigrid options for quadratic tetrahedra",
+        ("benchmarks/amg_options.py", None),
+        "python benchmarks/amg_options.py",
+    ),
+    "stability": (
+        "stability",
+        "The hard cases",
+        ("benchmarks/stability.py", None),
+        "python benchmarks/stability.py --out benchmarks/results",
+    ),
 }
 
 
@@ -129,8 +204,7 @@ def app_page(name: str) -> str:
         help_text = re.sub(r"\s*\(default: .*\)$", "", help_text)
         rows.append([f"`{flag}`", default, help_text])
     usage = parser.format_usage().strip()
-    return (f"```text\n{usage}\n```\n\n{parser.description}\n\n"
-            + table(["flag", "default", "what it does"], rows))
+    return f"```text\n{usage}\n```\n\n{parser.description}\n\n" + table(["flag", "default", "what it does"], rows)
 
 
 def scene_keys_page() -> str:
@@ -144,13 +218,25 @@ def scene_keys_page() -> str:
             return f"`{k.default}`"
         return f"`{k.default}` ({'SI, converted' if k.scaled else 'unitless scenes only'})"
 
-    rows = [[f"`{k.key}`", k.type, default(k), si_text(k.unit) if k.unit else "", k.allowed,
-             f"`{k.when}`" if k.when else "", k.doc] for k in key_reference()]
-    return (f"{len(rows)} keys. A key with a unit takes the scene's units (`units = ...`; the unit column gives the "
-            f"SI one). Its default is in SI, converted into the scene's units; a numerical default (a penalty "
-            f"stiffness, a barrier distance, a mesh size: 'unitless scenes only') is for unitless scenes, and a "
-            f"scene with units gives the key.\n\n"
-            + table(["key", "type", "default", "unit", "allowed", "applies when", "meaning"], rows))
+    rows = [
+        [
+            f"`{k.key}`",
+            k.type,
+            default(k),
+            si_text(k.unit) if k.unit else "",
+            k.allowed,
+            f"`{k.when}`" if k.when else "",
+            k.doc,
+        ]
+        for k in key_reference()
+    ]
+    return (
+        f"{len(rows)} keys. A key with a unit takes the scene's units (`units = ...`; the unit column gives the "
+        f"SI one). Its default is in SI, converted into the scene's units; a numerical default (a penalty "
+        f"stiffness, a barrier distance, a mesh size: 'unitless scenes only') is for unitless scenes, and a "
+        f"scene with units gives the key.\n\n"
+        + table(["key", "type", "default", "unit", "allowed", "applies when", "meaning"], rows)
+    )
 
 
 def docstring_of(path: str, function: str | None) -> str:
@@ -166,12 +252,20 @@ def results_pages() -> dict[str, str]:
     pages = {"performance": [], "accuracy": [], "stability": []}
     for path in sorted(RESULTS.glob("*.md")):
         page, title, (source, function), command = RESULTS_PAGES.get(
-            path.stem, ("performance", path.stem, (None, None), "the script named in its JSON"))
+            path.stem, ("performance", path.stem, (None, None), "the script named in its JSON")
+        )
         about = docstring_of(source, function) if source else ""
         first = " ".join(about.split("\n\n")[0].split())
-        lines = [f"## {title}", "", first, "",
-                 f"Written by `{command}` to `benchmarks/results/{path.name}` (with `.json`):", "",
-                 path.read_text().strip(), ""]
+        lines = [
+            f"## {title}",
+            "",
+            first,
+            "",
+            f"Written by `{command}` to `benchmarks/results/{path.name}` (with `.json`):",
+            "",
+            path.read_text().strip(),
+            "",
+        ]
         picture = path.with_suffix(".png")
         if picture.exists():  # (the path as seen from the pages that include this one, in docs/)
             lines += [f"![{title}](../benchmarks/results/{picture.name})", ""]
@@ -195,26 +289,44 @@ them at work. The subpackages hold the parts a new term, law, chamber kind or el
 def api_packages() -> list[str]:
     import taichi_pneuma
 
-    return ["taichi_pneuma"] + sorted(f"taichi_pneuma.{m.name}" for m in pkgutil.iter_modules(taichi_pneuma.__path__)
-                                      if m.ispkg and m.name != "scenes")
+    return ["taichi_pneuma"] + sorted(
+        f"taichi_pneuma.{m.name}"
+        for m in pkgutil.iter_modules(taichi_pneuma.__path__)
+        if m.ispkg and m.name != "scenes"
+    )
 
 
 def api_page(package: str) -> str:
     """An automodule directive for the package (the top level: its own modules) or each module inside it."""
     module = importlib.import_module(package)
     if package == "taichi_pneuma":
-        names = ["taichi_pneuma"] + sorted(f"taichi_pneuma.{m.name}" for m in pkgutil.iter_modules(module.__path__)
-                                           if not m.ispkg and not m.name.startswith("_"))
+        names = ["taichi_pneuma"] + sorted(
+            f"taichi_pneuma.{m.name}"
+            for m in pkgutil.iter_modules(module.__path__)
+            if not m.ispkg and not m.name.startswith("_")
+        )
     else:
-        names = sorted(m.name for m in pkgutil.walk_packages(module.__path__, package + ".")
-                       if not m.name.rsplit(".", 1)[1].startswith("_"))
+        names = sorted(
+            m.name
+            for m in pkgutil.walk_packages(module.__path__, package + ".")
+            if not m.name.rsplit(".", 1)[1].startswith("_")
+        )
     # the top level re-exports names documented in their own modules: described here, indexed there
-    return "\n".join(f"## {name}\n\n```{{eval-rst}}\n.. automodule:: {name}\n"
-                     + ("   :no-members:\n" if name == "taichi_pneuma" else "") + "```\n" for name in names)
+    return "\n".join(
+        f"## {name}\n\n```{{eval-rst}}\n.. automodule:: {name}\n"
+        + ("   :no-members:\n" if name == "taichi_pneuma" else "")
+        + "```\n"
+        for name in names
+    )
 
 
-INLINE = [(re.compile(r"\\"), r"\\\\"), (re.compile(r"\|"), r"\\|"), (re.compile(r"\*"), r"\\*"),
-          (re.compile(r"(?<=\w)_(?=\W|$)"), r"\\_"), (re.compile(r"`"), r"\\`")]
+INLINE = [
+    (re.compile(r"\\"), r"\\\\"),
+    (re.compile(r"\|"), r"\\|"),
+    (re.compile(r"\*"), r"\\*"),
+    (re.compile(r"(?<=\w)_(?=\W|$)"), r"\\_"),
+    (re.compile(r"`"), r"\\`"),
+]
 
 
 def escape(line: str) -> str:

@@ -23,8 +23,14 @@ author = "the taichi-pneuma authors"
 copyright = "2026, the taichi-pneuma authors"
 release = version = taichi_pneuma.__version__
 
-extensions = ["myst_parser", "sphinx.ext.autodoc", "sphinx.ext.napoleon", "sphinx.ext.mathjax",
-              "sphinx.ext.viewcode", "sphinx_gallery.gen_gallery"]
+extensions = [
+    "myst_parser",
+    "sphinx.ext.autodoc",
+    "sphinx.ext.napoleon",
+    "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",
+    "sphinx_gallery.gen_gallery",
+]
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 root_doc = "index"
 exclude_patterns = ["_build", "_generated/*.md", "gallery/*.ipynb", "gallery/*.py", "gallery/*.zip"]
@@ -50,7 +56,7 @@ nitpick_ignore_regex = [(r"py:.*", r"(matplotlib|numpy|np|scipy|taichi|ti|concur
 sphinx_gallery_conf = {
     "examples_dirs": "../examples",
     "gallery_dirs": "gallery",
-    "filename_pattern": r"/plot_",        # every gallery script runs at build time
+    "filename_pattern": r"/plot_",  # every gallery script runs at build time
     "ignore_pattern": r"(^|/)(?!plot_)[^/]*\.py$",  # the other scripts in examples/ are tools and helpers
     "download_all_examples": False,
     "remove_config_comments": True,
@@ -70,5 +76,9 @@ def setup(app):
         if listener.handler is napoleon._process_docstring:
             app.disconnect(listener.id)
     app.connect("autodoc-process-docstring", _generate.plain_docstring, priority=400)
-    app.connect("autodoc-process-docstring", lambda app, what, *rest: None if what in ("attribute", "property", "data")
-                else napoleon._process_docstring(app, what, *rest))
+    app.connect(
+        "autodoc-process-docstring",
+        lambda app, what, *rest: (
+            None if what in ("attribute", "property", "data") else napoleon._process_docstring(app, what, *rest)
+        ),
+    )

@@ -28,8 +28,11 @@ def main(path: Path = OUT) -> None:
     occ.translate([(3, cavity)], 0.0, 0.15, 0.0)
     body, _ = occ.cut([(3, box)], [(3, cavity)])
     occ.synchronize()
-    walls = [tag for dim, tag in gmsh.model.getBoundary(body, oriented=False)  # not on the box's faces
-             if max(abs(c) - h for c, h in zip(occ.getCenterOfMass(dim, tag), (1.75, 0.4, 0.4))) < -1e-6]
+    walls = [
+        tag
+        for dim, tag in gmsh.model.getBoundary(body, oriented=False)  # not on the box's faces
+        if max(abs(c) - h for c, h in zip(occ.getCenterOfMass(dim, tag), (1.75, 0.4, 0.4))) < -1e-6
+    ]
     gmsh.model.addPhysicalGroup(3, [tag for _, tag in body], name="body")
     gmsh.model.addPhysicalGroup(2, walls, name="chamber")
     gmsh.option.setNumber("Mesh.MeshSizeMax", SIZE)

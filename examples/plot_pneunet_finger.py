@@ -16,8 +16,10 @@ import taichi_pneuma as tp
 scene = tp.load_scene("pneunet_finger")  # a scene shipped with the package, by name
 result = tp.simulate(scene)
 peak = result.peak_step()
-print(f"{len(result.chamber_names)} chambers; at step {peak}: pressure {result.pressure[peak].max():.0f}, "
-      f"tip rotation {result.history['tip_rotation'][peak]:+.1f} deg")
+print(
+    f"{len(result.chamber_names)} chambers; at step {peak}: pressure {result.pressure[peak].max():.0f}, "
+    f"tip rotation {result.history['tip_rotation'][peak]:+.1f} deg"
+)
 
 fig, ax = plt.subplots(figsize=(8, 4), layout="constrained")
 draw_result(ax, result, step=peak)

@@ -17,8 +17,10 @@ import taichi_pneuma as tp
 
 scene = tp.reference_scene(cy=0.15, steps=9, max_area=0.005)
 result = tp.simulate(scene)
-print(f"tip deflection {result.tip_deflection:+.4f}, rotation {result.tip_rotation:+.1f} deg, "
-      f"peak pressure {result.peak_pressure:.1f}")
+print(
+    f"tip deflection {result.tip_deflection:+.4f}, rotation {result.tip_rotation:+.1f} deg, "
+    f"peak pressure {result.peak_pressure:.1f}"
+)
 
 fig, ax = plt.subplots(figsize=(8, 3), layout="constrained")
 draw_result(ax, result)

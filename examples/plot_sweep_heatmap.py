@@ -19,8 +19,7 @@ from taichi_pneuma.study import LocalPool, Sweep, parse_vary
 
 if __name__ == "__main__":  # the workers are spawned processes, which import this file without running it
     base = tp.reference_scene(steps=5, max_area=0.01)
-    sweep = Sweep(base, [parse_vary("cy=-0.15:0.15:4"), parse_vary("E=5e3:2e4:3")],
-                  out=tempfile.mkdtemp(), name="cy_E")
+    sweep = Sweep(base, [parse_vary("cy=-0.15:0.15:4"), parse_vary("E=5e3:2e4:3")], out=tempfile.mkdtemp(), name="cy_E")
     with LocalPool(workers=2) as pool:
         report = sweep.run(pool)
     print(f"{report.ran} runs in {report.seconds:.1f} s, {report.failed} failed")

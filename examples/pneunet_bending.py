@@ -53,15 +53,20 @@ def main(out: Path, study: bool) -> None:
     fig, ax = plt.subplots(figsize=(6, 4), layout="constrained")
     for name, values in runs.items():
         ax.plot(pressure, values, "o-" if name.startswith("shipped") else ".--", label=name)
-    ax.set(xlabel="pressure [kPa]", ylabel="bending angle (tip rotation) [deg]",
-           title="PneuNet section: Elastosil M4601, paper layer (plane strain)")
+    ax.set(
+        xlabel="pressure [kPa]",
+        ylabel="bending angle (tip rotation) [deg]",
+        title="PneuNet section: Elastosil M4601, paper layer (plane strain)",
+    )
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small")
     fig.savefig(out / "pneunet_bending.png", dpi=100)
     for p, a in zip(pressure, angle):
         print(f"p = {p:6.1f} kPa: bending angle {a:6.2f} deg")
-    print(f"wrote {out / 'pneunet_bending.csv'}, {out / 'pneunet_bending.png'} ({result.seconds:.1f} s for the shipped "
-          f"scene, {result.mesh.n_vertices} nodes)")
+    print(
+        f"wrote {out / 'pneunet_bending.csv'}, {out / 'pneunet_bending.png'} ({result.seconds:.1f} s for the shipped "
+        f"scene, {result.mesh.n_vertices} nodes)"
+    )
 
 
 if __name__ == "__main__":

@@ -24,11 +24,29 @@ from .signals import quiet_while_loading  # noqa: E402
 quiet_while_loading()  # a command's Ctrl-C while its modules load: one line, no traceback
 
 # public name -> the module that defines it
-_EXPORTS = {"PneumaInputError": ".errors", "RampFailed": ".solve.simulate", "RampInterrupted": ".solve.simulate",
-            "Result": ".api", "Scene": ".scene", "init": ".runtime", "load_scene": ".api",
-            "reference_scene": ".scene", "simulate": ".api"}
-__all__ = ["PneumaInputError", "RampFailed", "RampInterrupted", "Result", "Scene", "__version__", "init", "load_scene",
-           "reference_scene", "simulate"]
+_EXPORTS = {
+    "PneumaInputError": ".errors",
+    "RampFailed": ".solve.simulate",
+    "RampInterrupted": ".solve.simulate",
+    "Result": ".api",
+    "Scene": ".scene",
+    "init": ".runtime",
+    "load_scene": ".api",
+    "reference_scene": ".scene",
+    "simulate": ".api",
+}
+__all__ = [
+    "PneumaInputError",
+    "RampFailed",
+    "RampInterrupted",
+    "Result",
+    "Scene",
+    "__version__",
+    "init",
+    "load_scene",
+    "reference_scene",
+    "simulate",
+]
 
 if TYPE_CHECKING:
     from .api import Result, load_scene, simulate

@@ -47,8 +47,9 @@ def _import(name: str):
     try:
         return importlib.import_module(name)
     except ImportError as exc:
-        raise BackendUnavailable(f"{CHOICE_VARIABLE}={name}, but {name} does not import ({exc}); install it with: "
-                                 f"{INSTALL[name]}") from None
+        raise BackendUnavailable(
+            f"{CHOICE_VARIABLE}={name}, but {name} does not import ({exc}); install it with: {INSTALL[name]}"
+        ) from None
 
 
 def _choose():
@@ -62,8 +63,9 @@ def _choose():
             return name, importlib.import_module(name)
         except ImportError:
             continue
-    raise BackendUnavailable("neither taichi nor quadrants is installed; install one with: "
-                             + " or ".join(INSTALL.values()))
+    raise BackendUnavailable(
+        "neither taichi nor quadrants is installed; install one with: " + " or ".join(INSTALL.values())
+    )
 
 
 def kernel(function):
@@ -83,8 +85,18 @@ def memoize_source_positions(context) -> None:
 
     def get_pos_info(self, node):
         body = getattr(node, "body", None)
-        key = (self.file, self.func.func.__name__, self.lineno_offset, tuple(self.src), type(node), node.lineno,
-               node.end_lineno, node.col_offset, node.end_col_offset, body[0].lineno if isinstance(body, list) else None)
+        key = (
+            self.file,
+            self.func.func.__name__,
+            self.lineno_offset,
+            tuple(self.src),
+            type(node),
+            node.lineno,
+            node.end_lineno,
+            node.col_offset,
+            node.end_col_offset,
+            body[0].lineno if isinstance(body, list) else None,
+        )
         text = memo.get(key)
         if text is None:
             text = memo[key] = original(self, node)

@@ -20,7 +20,11 @@ def check_environment() -> None:
     for variable, names in CHOICES.items():
         value = os.environ.get(variable, "")
         if value:
-            require(value in names, f"environment variable {variable}={quoted(value)} is not one of "
-                                    f"{', '.join(names)} (or unset)")
-            require(importlib.util.find_spec(value) is not None,
-                    f"environment variable {variable}={value}, but {value} is not installed here")
+            require(
+                value in names,
+                f"environment variable {variable}={quoted(value)} is not one of {', '.join(names)} (or unset)",
+            )
+            require(
+                importlib.util.find_spec(value) is not None,
+                f"environment variable {variable}={value}, but {value} is not installed here",
+            )

@@ -31,8 +31,10 @@ BYTES_PER_TETRAHEDRON = 12_000  # measured, see the module docstring
 
 
 def refusal(what: str, triangles: float, limit: int | None) -> str:
-    return (f"{what}: about {triangles:.3g} triangles' worth, {BYTES_PER_TRIANGLE * triangles / 1e9:.3g} GB; the "
-            f"limit is {limit} triangles (--max-triangles raises it)")
+    return (
+        f"{what}: about {triangles:.3g} triangles' worth, {BYTES_PER_TRIANGLE * triangles / 1e9:.3g} GB; the "
+        f"limit is {limit} triangles (--max-triangles raises it)"
+    )
 
 
 @dataclass(frozen=True)
@@ -54,10 +56,13 @@ class Budget:
         limit = self.triangles
         if limit is None:
             return
-        require(stopped_at is None, f"the mesh needs more than {limit} triangles: {how} stopped at its cap of "
-                                    f"{stopped_at} added points (thin features or narrow gaps need triangles as "
-                                    f"small as they are wide, whatever max_area is); the limit is {limit} triangles "
-                                    f"(--max-triangles raises it)")
+        require(
+            stopped_at is None,
+            f"the mesh needs more than {limit} triangles: {how} stopped at its cap of "
+            f"{stopped_at} added points (thin features or narrow gaps need triangles as "
+            f"small as they are wide, whatever max_area is); the limit is {limit} triangles "
+            f"(--max-triangles raises it)",
+        )
         require(elements * weight <= limit, refusal(f"the mesh has {elements} elements", elements * weight, limit))
 
     def check_pairs(self, pairs: int, what: str) -> None:
@@ -78,13 +83,20 @@ def check_increments(increments: int, limit: int = MAX_INCREMENTS, raised_by: st
     require(increments <= limit, f"the schedule has {count} increments; the limit is {limit} ({raised_by} raises it)")
 
 
-def check_frame(width: int, height: int, max_pixels: int = MAX_FRAME_PIXELS, what: str = "--size",
-                raised_by: str = "--max-frame-pixels") -> None:
+def check_frame(
+    width: int,
+    height: int,
+    max_pixels: int = MAX_FRAME_PIXELS,
+    what: str = "--size",
+    raised_by: str = "--max-frame-pixels",
+) -> None:
     """Refuse a video frame size of more than max_pixels pixels (what: the size's name in the message; raised_by:
     what raises the limit)."""
-    require(width * height <= max_pixels,
-            f"{what} {width}x{height} is {width * height} pixels per frame; the limit is {max_pixels} "
-            f"({raised_by} raises it)")
+    require(
+        width * height <= max_pixels,
+        f"{what} {width}x{height} is {width * height} pixels per frame; the limit is {max_pixels} "
+        f"({raised_by} raises it)",
+    )
 
 
 def address_space() -> int | None:

@@ -39,28 +39,53 @@ class Result(Run):
         stretch = self.history["max_stretch"]
         iterations, seconds = self.history["iterations"][1:], self.history["seconds"][1:]
         return {
-            "scene": self.scene.name, "terms": self.built.model.term_names(),
-            "vertices": self.mesh.n_vertices, ELEMENTS[self.mesh.dim]: self.mesh.n_elements,
+            "scene": self.scene.name,
+            "terms": self.built.model.term_names(),
+            "vertices": self.mesh.n_vertices,
+            ELEMENTS[self.mesh.dim]: self.mesh.n_elements,
             "element_order": self.mesh.order,
-            "chambers": {name: {"control": c.control, "rest_area": c.area / c.area_ratio, "final_area": c.area,
-                                "area_ratio": c.area_ratio, "final_pressure": c.pressure,
-                                "peak_pressure": float(np.abs(self.history[f"{name}.pressure"]).max())}
-                         for name, c in final.chambers.items()},
-            "tip_deflection": self.tip_deflection, **{c: float(v) for c, v in zip(TIP_COLUMNS[2:], final.tip[2:])},
+            "chambers": {
+                name: {
+                    "control": c.control,
+                    "rest_area": c.area / c.area_ratio,
+                    "final_area": c.area,
+                    "area_ratio": c.area_ratio,
+                    "final_pressure": c.pressure,
+                    "peak_pressure": float(np.abs(self.history[f"{name}.pressure"]).max()),
+                }
+                for name, c in final.chambers.items()
+            },
+            "tip_deflection": self.tip_deflection,
+            **{c: float(v) for c, v in zip(TIP_COLUMNS[2:], final.tip[2:])},
             "tip_rotation_deg": final.tip_rotation,
-            "peak_pressure": self.peak_pressure, "contact": final.contact, "extremes": self.extremes(),
-            "max_stretch": float(stretch.max()), "max_stretch_step": int(self.history["step"][np.argmax(stretch)]),
+            "peak_pressure": self.peak_pressure,
+            "contact": final.contact,
+            "extremes": self.extremes(),
+            "max_stretch": float(stretch.max()),
+            "max_stretch_step": int(self.history["step"][np.argmax(stretch)]),
             "max_stretch_limit": self.scene.max_stretch,
             "all_converged": self.converged,
             "max_residual": float(self.history["residual"].max()),
             "min_det_F": float(self.history["min_det"].min()),
-            "newton_iterations_total": int(iterations.sum()), "newton_iterations_max": int(iterations.max(initial=0)),
-            **({} if not self.newton else {"newton": {"linear_solver": self.newton["linear_solver"],
-                                                      "chord_steps": self.newton["chord_steps"],
-                                                      "phase_seconds": dict(self.newton["phase_seconds"])}}),
+            "newton_iterations_total": int(iterations.sum()),
+            "newton_iterations_max": int(iterations.max(initial=0)),
+            **(
+                {}
+                if not self.newton
+                else {
+                    "newton": {
+                        "linear_solver": self.newton["linear_solver"],
+                        "chord_steps": self.newton["chord_steps"],
+                        "phase_seconds": dict(self.newton["phase_seconds"]),
+                    }
+                }
+            ),
             "increment_cuts": int(self.history["cuts"].sum()),
-            "wall_seconds": self.seconds, "solve_seconds_per_step": float(seconds.mean()) if len(seconds) else 0.0,
-            "steps": len(self.steps), "interrupted": interrupted, "units": self.scene.units.summary(),
+            "wall_seconds": self.seconds,
+            "solve_seconds_per_step": float(seconds.mean()) if len(seconds) else 0.0,
+            "steps": len(self.steps),
+            "interrupted": interrupted,
+            "units": self.scene.units.summary(),
         }
 
     def history_csv(self) -> str:
@@ -85,22 +110,35 @@ class Result(Run):
         """
         out, stem = prepare_directory(directory), stem or self.scene.name
         mesh = self.mesh
-        cells = ({"triangles": mesh.elements} if mesh.dim == 2 else
-                 {"tetrahedra": mesh.elements, "surface": mesh.surface})
-        arrays = dict(positions=self.positions, rest=mesh.vertices, **cells, pinned=mesh.pinned,
-                      tip=mesh.tip, boundary=mesh.boundary, chamber_names=np.array(self.chamber_names),
-                      **{f"chamber_loop_{i}": loop for i, loop in enumerate(mesh.chambers)},
-                      command=self.command, area=self.area, pressure=self.pressure)
+        cells = (
+            {"triangles": mesh.elements} if mesh.dim == 2 else {"tetrahedra": mesh.elements, "surface": mesh.surface}
+        )
+        arrays = dict(
+            positions=self.positions,
+            rest=mesh.vertices,
+            **cells,
+            pinned=mesh.pinned,
+            tip=mesh.tip,
+            boundary=mesh.boundary,
+            chamber_names=np.array(self.chamber_names),
+            **{f"chamber_loop_{i}": loop for i, loop in enumerate(mesh.chambers)},
+            command=self.command,
+            area=self.area,
+            pressure=self.pressure,
+        )
         if self.contact_forces is not None:
             arrays["contact_forces"] = self.contact_forces
         if self.ground_height is not None:
             arrays["ground_height"] = np.array(self.ground_height)
         with holding(), lock_stem(out, stem):
-            return [save_text(out / f"{stem}_history.csv", self.history_csv()),
-                    save_npz(out / f"{stem}_states.npz", **arrays)]
+            return [
+                save_text(out / f"{stem}_history.csv", self.history_csv()),
+                save_npz(out / f"{stem}_states.npz", **arrays),
+            ]
 
-    def save(self, directory, stem: str | None = None, vtk: bool = True, extra: dict | None = None,
-             plot: bool = True) -> list[Path]:
+    def save(
+        self, directory, stem: str | None = None, vtk: bool = True, extra: dict | None = None, plot: bool = True
+    ) -> list[Path]:
         """Write the result files under directory, named <stem>_* (default: the scene's name): history CSV,
         states npz, the plot PNG (unless plot is False), the scene TOML, the summary JSON (with `extra`
         merged in) and, unless vtk is False, the ParaView files <stem>.pvd + <stem>_vtk/*.vtu. Returns the
@@ -121,9 +159,20 @@ class Result(Run):
             written.append(save_json(out / f"{stem}_summary.json", {**self.summary(), **(extra or {})}))
         return written
 
-    def video(self, path, png=None, size=(960, 384), fps: float = 12.0, color: str = "stretch",
-              renderer: str = "auto", trace: bool = True, quiet: bool = True, log=print, png_step: int | None = None,
-              max_frame_pixels: int = limits.MAX_FRAME_PIXELS):
+    def video(
+        self,
+        path,
+        png=None,
+        size=(960, 384),
+        fps: float = 12.0,
+        color: str = "stretch",
+        renderer: str = "auto",
+        trace: bool = True,
+        quiet: bool = True,
+        log=print,
+        png_step: int | None = None,
+        max_frame_pixels: int = limits.MAX_FRAME_PIXELS,
+    ):
         """Render one frame per step into path (.mp4 or .gif; its directory is created), and frame png_step
         (default peak_step(), the most deformed) into png if given. size: (width, height) or '960x384';
         color: 'stretch', 'detF' or 'none'; renderer: 'auto', 'ggui', 'gui' or 'pillow'. A 3D run is drawn in
@@ -138,12 +187,23 @@ class Result(Run):
         if self.mesh.dim == 3:
             from .render.frames3d import Track3D, render_video_3d
 
-            return render_video_3d(Track3D.from_result(self, color), path, png, size, fps, renderer, trace=trace,
-                                   quiet=quiet, log=log, png_frame=png_frame)
+            return render_video_3d(
+                Track3D.from_result(self, color),
+                path,
+                png,
+                size,
+                fps,
+                renderer,
+                trace=trace,
+                quiet=quiet,
+                log=log,
+                png_frame=png_frame,
+            )
         from .render.video import render_video
 
-        return render_video([self], path, png, size, fps, color, renderer, trace, quiet=quiet, log=log,
-                            png_frame=png_frame)
+        return render_video(
+            [self], path, png, size, fps, color, renderer, trace, quiet=quiet, log=log, png_frame=png_frame
+        )
 
     def plot(self):
         """The history as a matplotlib Figure with axes (plots.py): pressure against area ratio, and tip

@@ -28,8 +28,9 @@ def probe(arch: str) -> None:
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [package, os.environ.get("PYTHONPATH")]))}
     code = f"import sys; from taichi_pneuma import runtime; sys.exit(runtime.start_alone({arch!r}))"
     try:
-        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
-                              timeout=PROBE_SECONDS, check=False)
+        done = subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=PROBE_SECONDS, check=False
+        )
     except subprocess.TimeoutExpired:
         raise PneumaInputError(f"arch = {arch!r}: Taichi did not start it within {PROBE_SECONDS} s here") from None
     if done.returncode == 0:
@@ -37,10 +38,15 @@ def probe(arch: str) -> None:
     errors = [line for line in done.stderr.splitlines() if line.startswith("error: ")]
     if errors:
         raise PneumaInputError(errors[-1].removeprefix("error: "))
-    how = (f"signal {signal.Signals(-done.returncode).name}" if done.returncode < 0 and
-           -done.returncode in signal.valid_signals() else f"exit code {done.returncode}")
-    raise PneumaInputError(f"arch = {arch!r}: starting it here crashed a test process ({how}; no working driver for "
-                           f"it?); use cpu, or cuda (an NVIDIA GPU)")
+    how = (
+        f"signal {signal.Signals(-done.returncode).name}"
+        if done.returncode < 0 and -done.returncode in signal.valid_signals()
+        else f"exit code {done.returncode}"
+    )
+    raise PneumaInputError(
+        f"arch = {arch!r}: starting it here crashed a test process ({how}; no working driver for "
+        f"it?); use cpu, or cuda (an NVIDIA GPU)"
+    )
 
 
 def start_alone(arch: str) -> int:
@@ -87,12 +93,15 @@ def start(arch: str, cpu_threads: int | None = None) -> None:
     if arch != "cpu" and chosen in (ti.x64, ti.arm64):  # Taichi falls back to the CPU with a warning only
         ti.reset()
         other = "" if arch == "cuda" else ", or cuda (an NVIDIA GPU)"
-        raise PneumaInputError(f"arch = {arch!r} is not available here (Taichi would run on the CPU instead); use "
-                               f"cpu{other}")
+        raise PneumaInputError(
+            f"arch = {arch!r} is not available here (Taichi would run on the CPU instead); use cpu{other}"
+        )
     if chosen not in (ti.x64, ti.arm64, ti.cuda):  # the backends whose kernels have 64-bit floats
         ti.reset()
-        raise PneumaInputError(f"arch = {arch!r} gives Taichi's {chosen.name} backend here, which cannot run this "
-                               f"program's 64-bit kernels; use cpu, or cuda (an NVIDIA GPU)")
+        raise PneumaInputError(
+            f"arch = {arch!r} gives Taichi's {chosen.name} backend here, which cannot run this "
+            f"program's 64-bit kernels; use cpu, or cuda (an NVIDIA GPU)"
+        )
     _current = arch
 
 

@@ -99,8 +99,10 @@ def stopping():
             raise Interrupted(signum)
         requested.signum = signum
         requested.set()
-        print(f"interrupt ({NAMES[signum]}): stopping, keeping the increments done (again to stop at once)",
-              file=sys.stderr)
+        print(
+            f"interrupt ({NAMES[signum]}): stopping, keeping the increments done (again to stop at once)",
+            file=sys.stderr,
+        )
 
     with handling(first):
         yield requested

@@ -138,13 +138,21 @@ class SkfemBody:
         on_wall = self.wall_basis.interpolate(u)
         dV = asm(cavity_gradient, self.wall_basis, u=on_wall)
         wall = np.flatnonzero(dV)
-        rank_one = sp.coo_matrix((self.stiffness * np.outer(dV[wall], dV[wall]).ravel(),
-                                  (np.repeat(wall, len(wall)), np.tile(wall, len(wall)))), shape=(len(u), len(u)))
+        rank_one = sp.coo_matrix(
+            (
+                self.stiffness * np.outer(dV[wall], dV[wall]).ravel(),
+                (np.repeat(wall, len(wall)), np.tile(wall, len(wall))),
+            ),
+            shape=(len(u), len(u)),
+        )
         clamp = np.zeros(self.basis.N)
         clamp[self.clamp_dofs] = self.clamp_stiffness
-        hessian = (asm(tangent, self.basis, **self.fields(u))
-                   + self.stiffness * excess * asm(cavity_hessian, self.wall_basis, u=on_wall)
-                   + rank_one + sp.diags(clamp)).tocsr()
+        hessian = (
+            asm(tangent, self.basis, **self.fields(u))
+            + self.stiffness * excess * asm(cavity_hessian, self.wall_basis, u=on_wall)
+            + rank_one
+            + sp.diags(clamp)
+        ).tocsr()
         self.seconds["assembly"] += time.perf_counter() - start
         return hessian
 
@@ -162,7 +170,7 @@ class SkfemBody:
             step = spsolve(hessian, gradient)
             self.seconds["solve"] += time.perf_counter() - start
             for halving in range(11):
-                trial = u - step / 2 ** halving
+                trial = u - step / 2**halving
                 trial_gradient, trial_scale, trial_excess = self.forces(trial, target)
                 if np.linalg.norm(trial_gradient) < np.linalg.norm(gradient):
                     break

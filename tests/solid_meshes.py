@@ -58,8 +58,9 @@ def extruded_beam(max_area: float, order: int = 1, layers: int = 1, chamber_poin
     return tet_mesh(vertices, tets, {"main": walls[0]}, order=order, clamp=PointSet("left"), rollers=Z_ROLLERS), planar
 
 
-def shell_octant(divisions: int, layers: int, order: int = 1, inner: float = 1.0, outer: float = 2.0,
-                 curved: bool = False) -> Mesh:
+def shell_octant(
+    divisions: int, layers: int, order: int = 1, inner: float = 1.0, outer: float = 2.0, curved: bool = False
+) -> Mesh:
     """The octant mesh; curved (order 2): every midside node moved radially to the mean radius of its edge's ends,
     so that the quadratic (isoparametric) tetrahedra fit the spheres."""
     vertices, tets, wall = spherical_shell_octant(inner, outer, divisions, layers)
@@ -95,13 +96,16 @@ def box_with_cavities(cavities: dict, layers: int, order: int = 1) -> Mesh:
     facets on its box."""
     x, y = np.meshgrid(np.linspace(-1.75, 1.75, 8), np.linspace(-0.4, 0.4, 5), indexing="ij")
     corner = np.arange(40).reshape(8, 5)[:-1, :-1].ravel()
-    triangles = np.vstack([np.column_stack([corner, corner + 5, corner + 6]),
-                           np.column_stack([corner, corner + 6, corner + 1])])
-    vertices = np.vstack([np.column_stack([x.ravel(), y.ravel(), np.full(40, z)])
-                          for z in np.linspace(-0.4, 0.4, layers + 1)])
+    triangles = np.vstack(
+        [np.column_stack([corner, corner + 5, corner + 6]), np.column_stack([corner, corner + 6, corner + 1])]
+    )
+    vertices = np.vstack(
+        [np.column_stack([x.ravel(), y.ravel(), np.full(40, z)]) for z in np.linspace(-0.4, 0.4, layers + 1)]
+    )
     tets = layered_tets(40, triangles, layers)
-    inside = lambda points, box, slack: np.all((points > np.subtract(box[0], slack))
-                                               & (points < np.add(box[1], slack)), axis=1)
+    inside = lambda points, box, slack: np.all(
+        (points > np.subtract(box[0], slack)) & (points < np.add(box[1], slack)), axis=1
+    )
     for box in cavities.values():
         tets = tets[~inside(vertices[tets].mean(axis=1), box, 0.0)]
     faces = np.vstack([tets[:, list(f)] for f in ((1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1))])
@@ -113,6 +117,7 @@ def box_with_cavities(cavities: dict, layers: int, order: int = 1) -> Mesh:
 
 
 # hostile mesh files (issue 28): small files that would claim gigabytes
+
 
 def lzma_vtu(path: Path, blocks: int = 40, block: int = 64 * 2**20) -> Path:
     """A VTU of one tetrahedron whose points array is LZMA-compressed: blocks of `block` zero bytes each, one
@@ -141,6 +146,9 @@ def moved_up(text: str, by: int) -> str:
     count, *lines = nodes.split("\n")
     lines = [f"{int(number) + by} {xyz}" for number, xyz in (line.split(None, 1) for line in lines)]
     cells, *rows = elements.split("\n")
-    rows = [" ".join(f[:3 + int(f[2])] + [str(int(n) + by) for n in f[3 + int(f[2]):]]) for f in map(str.split, rows)]
-    return "\n".join([head + "$Nodes", count, *lines, "$EndNodes", between + "$Elements", cells, *rows]) \
-        + "\n$EndElements" + tail
+    rows = [" ".join(f[: 3 + int(f[2])] + [str(int(n) + by) for n in f[3 + int(f[2]) :]]) for f in map(str.split, rows)]
+    return (
+        "\n".join([head + "$Nodes", count, *lines, "$EndNodes", between + "$Elements", cells, *rows])
+        + "\n$EndElements"
+        + tail
+    )

@@ -58,16 +58,19 @@ def test_with_value_changes_exactly_one_key():
     assert both.schedule.commands(10)[0] == 2.0 and both.increments == 10
 
 
-@pytest.mark.parametrize("key, value, named", [
-    ("material.nu", 0.5, "material.nu"),
-    ("chambers[0].center[1]", 0.5, "chambers[0].center[1]"),  # the chamber would leave the beam
-    ("chambers[2].center", [0, 0], "chambers[2].center"),
-    ("material.Young", 1.0, "material.Young"),
-    ("schedule.increments", 5, "schedule.increments"),  # a keyframe at step 35 lies past it
-    ("mesh.max_area", "fine", "mesh.max_area"),
-    ("material.E.x", 1, "material.E.x"),
-    ("chambers.0", 1, "chambers.0"),
-])
+@pytest.mark.parametrize(
+    "key, value, named",
+    [
+        ("material.nu", 0.5, "material.nu"),
+        ("chambers[0].center[1]", 0.5, "chambers[0].center[1]"),  # the chamber would leave the beam
+        ("chambers[2].center", [0, 0], "chambers[2].center"),
+        ("material.Young", 1.0, "material.Young"),
+        ("schedule.increments", 5, "schedule.increments"),  # a keyframe at step 35 lies past it
+        ("mesh.max_area", "fine", "mesh.max_area"),
+        ("material.E.x", 1, "material.E.x"),
+        ("chambers.0", 1, "chambers.0"),
+    ],
+)
 def test_bad_key_or_value_is_one_error_naming_the_key(key, value, named):
     with pytest.raises(tp.PneumaInputError) as error:
         tp.reference_scene().with_value(key, value)
@@ -85,7 +88,7 @@ def test_set_values_are_read_as_toml_values():
 
 def readme_api_example() -> str:
     text = (ROOT / "README.md").read_text()
-    section = text[text.index("## Python API"):]
+    section = text[text.index("## Python API") :]
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
 
 

@@ -28,9 +28,11 @@ def test_an_unknown_backend_is_named():
 def test_the_kernel_cache_goes_where_the_backends_variable_says(tmp_path):
     """TI_OFFLINE_CACHE_FILE_PATH for Taichi, QD_OFFLINE_CACHE_FILE_PATH for Quadrants: a kernel compiled
     in a fresh process is written under it."""
-    code = ("from taichi_pneuma import runtime; runtime.init('cpu'); "
-            "from taichi_pneuma.scene.build import reference_scene; "
-            "reference_scene(0.15, max_area=0.05).build().model.energy()")
+    code = (
+        "from taichi_pneuma import runtime; runtime.init('cpu'); "
+        "from taichi_pneuma.scene.build import reference_scene; "
+        "reference_scene(0.15, max_area=0.05).build().model.energy()"
+    )
     proc = python(code, **{backend.environment_name("cache"): str(tmp_path / "cache"), "PNEUMA_BACKEND": backend.NAME})
     assert proc.returncode == 0, proc.stderr
     assert any(path.is_file() for path in (tmp_path / "cache").rglob("*"))

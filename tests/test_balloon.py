@@ -46,7 +46,7 @@ def test_volume_control_finds_the_limit_point(runs):
     low = peak + int(np.argmin(pressure[peak:]))
     assert result.converged and 3 < peak and low < len(pressure) - 3
     assert max(s.cuts for s in result.steps) == 0  # exact Newton past the peak (Cholesky refuses its sparse part)
-    assert np.all(np.diff(pressure[:peak + 1]) > 0) and np.all(np.diff(pressure[peak:low + 1]) < 0)
+    assert np.all(np.diff(pressure[: peak + 1]) > 0) and np.all(np.diff(pressure[peak : low + 1]) < 0)
     assert pressure[low] < 0.3 * pressure[peak] and pressure[-1] > 2 * pressure[peak]
     assert np.all(np.diff(volume) > 0)
 
@@ -87,12 +87,27 @@ def test_pressure_control_stops_at_the_peak_with_one_error_line(runs, tmp_path):
     peak of volume control's curve (to 1%); the steps done are saved."""
     err = io.StringIO()
     with redirect_stderr(err), redirect_stdout(io.StringIO()):
-        code = main(["--scene", str(SCENES / "balloon_pressure.toml"), "--out", str(tmp_path), "--no-video", "--quiet",
-                     "--max-cuts", "3", "--max-iterations", "20"])
+        code = main(
+            [
+                "--scene",
+                str(SCENES / "balloon_pressure.toml"),
+                "--out",
+                str(tmp_path),
+                "--no-video",
+                "--quiet",
+                "--max-cuts",
+                "3",
+                "--max-iterations",
+                "20",
+            ]
+        )
     lines = err.getvalue().strip().splitlines()
     assert code == 1 and len(lines) == 1
-    match = re.fullmatch(r"error: step \d+: no equilibrium at pressure ([0-9.]+) \(last equilibrium at pressure "
-                         r"([0-9.]+)\) after 3 cuts; residual .*", lines[0])
+    match = re.fullmatch(
+        r"error: step \d+: no equilibrium at pressure ([0-9.]+) \(last equilibrium at pressure "
+        r"([0-9.]+)\) after 3 cuts; residual .*",
+        lines[0],
+    )
     assert match
     peak = runs("volume").pressure[:, 0][limit_point(runs("volume").pressure[:, 0])]
     assert float(match[2]) == pytest.approx(peak, rel=1e-2) and float(match[1]) > float(match[2])

@@ -35,9 +35,13 @@ from taichi_pneuma.terms.chambers import (
 ATMOSPHERE = 1e3  # a soft gas for the reference beam (E = 1e4): gauge pressures of a few hundred
 SYRINGE = Syringe(ATMOSPHERE, syringe_volume=1.0, dead_volume=0.3)
 EXAMPLES = {  # kind, a command that inflates the coarse beam's chamber (rest area 0.57)
-    "area": (AreaControl(), 1.5), "pressure": (PressureControl(), 300.0), "closed_gas": (ClosedGas(ATMOSPHERE), 0.6),
-    "adiabatic_gas": (ClosedGas(ATMOSPHERE, gamma=1.4), 0.6), "syringe": (SYRINGE, 0.6),
-    "adiabatic_syringe": (dataclasses.replace(SYRINGE, gamma=1.4), 0.6)}
+    "area": (AreaControl(), 1.5),
+    "pressure": (PressureControl(), 300.0),
+    "closed_gas": (ClosedGas(ATMOSPHERE), 0.6),
+    "adiabatic_gas": (ClosedGas(ATMOSPHERE, gamma=1.4), 0.6),
+    "syringe": (SYRINGE, 0.6),
+    "adiabatic_syringe": (dataclasses.replace(SYRINGE, gamma=1.4), 0.6),
+}
 
 
 def test_every_registered_kind_has_an_example():
@@ -48,8 +52,9 @@ def test_every_registered_kind_has_an_example():
 def kind_scene(kind, keyframes, **coarse):
     """The reference beam (coarse by default) with its chamber driven by `kind` through `keyframes`."""
     scene = reference_scene(**({"chamber_points": 32, "max_area": 0.02} | coarse))
-    return dataclasses.replace(scene, controls=(ChamberControl(ChamberSchedule(kind, keyframes)),),
-                               increments=int(keyframes[-1][0]))
+    return dataclasses.replace(
+        scene, controls=(ChamberControl(ChamberSchedule(kind, keyframes)),), increments=int(keyframes[-1][0])
+    )
 
 
 @pytest.fixture(scope="module", params=list(EXAMPLES))
@@ -121,11 +126,14 @@ def gas_law_constant(chamber_record, kind, rest_area: float, gamma: float) -> tu
         gas, air = c.area + barrel - c.command, rest_area + barrel
     else:
         gas, air = c.area, rest_area + c.command
-    return (c.pressure + p_atm) * gas ** gamma, p_atm * air ** gamma
+    return (c.pressure + p_atm) * gas**gamma, p_atm * air**gamma
 
 
-@pytest.mark.parametrize("kind", [ClosedGas(ATMOSPHERE), ClosedGas(ATMOSPHERE, gamma=1.4), SYRINGE],
-                         ids=["isothermal", "adiabatic", "syringe"])
+@pytest.mark.parametrize(
+    "kind",
+    [ClosedGas(ATMOSPHERE), ClosedGas(ATMOSPHERE, gamma=1.4), SYRINGE],
+    ids=["isothermal", "adiabatic", "syringe"],
+)
 def test_gas_kinds_obey_their_gas_law_along_a_ramp(kind):
     """At every equilibrium of a ramp p_abs G = n R T (isothermal) or p_abs G^1.4 = its rest value (adiabatic);
     the chamber inflates and its gauge pressure rises."""
@@ -150,8 +158,13 @@ def test_a_gas_is_the_pressure_load_of_its_own_pressure():
         result = run_schedule(kind_scene(kind, ((2, 0.8),)).build())
         final = result.steps[-1].chambers["main"]
         built = kind_scene(PressureControl(), ((1, final.pressure),)).build()
-        u = settle(built, NewtonSolver(built.model), np.zeros(1), np.zeros_like(built.mesh.vertices),
-                   np.array([final.pressure]))[0]
+        u = settle(
+            built,
+            NewtonSolver(built.model),
+            np.zeros(1),
+            np.zeros_like(built.mesh.vertices),
+            np.array([final.pressure]),
+        )[0]
         moved = result.positions[-1] - built.mesh.vertices
         assert np.abs(u - moved).max() < 1e-6 * np.abs(moved).max()
 
@@ -169,8 +182,11 @@ def test_the_syringe_compresses_its_air_more_the_more_there_is_of_it():
     assert np.abs(emptied.positions[-1] - pumped.positions[-1]).max() < 1e-9
 
 
-@pytest.mark.parametrize("kind", [ClosedGas(ATMOSPHERE), ClosedGas(ATMOSPHERE, gamma=1.4), SYRINGE],
-                         ids=["closed_gas", "adiabatic", "syringe"])
+@pytest.mark.parametrize(
+    "kind",
+    [ClosedGas(ATMOSPHERE), ClosedGas(ATMOSPHERE, gamma=1.4), SYRINGE],
+    ids=["closed_gas", "adiabatic", "syringe"],
+)
 def test_gas_sensitivities_match_finite_differences_of_resolves(kind):
     built = kind_scene(kind, ((1, 0.6),), max_area=0.01, chamber_points=64).build()
     solver = NewtonSolver(built.model, NewtonOptions(tol=1e-10))
@@ -192,8 +208,13 @@ def test_syringe_twin_through_inverse_control(seed):
     scene = kind_scene(SYRINGE, ((1, 0.8),), max_area=0.01, chamber_points=64)
     built = scene.build()
     displaced = np.random.default_rng(seed).uniform(0.1, 0.7, 1)
-    u = settle(built, NewtonSolver(built.model, NewtonOptions(tol=1e-9)), np.zeros(1),
-               np.zeros_like(built.mesh.vertices), displaced)[0]
+    u = settle(
+        built,
+        NewtonSolver(built.model, NewtonOptions(tol=1e-9)),
+        np.zeros(1),
+        np.zeros_like(built.mesh.vertices),
+        displaced,
+    )[0]
     (dx, dy), _ = tip_measures(built.mesh, u)
     tip = built.mesh.vertices[built.mesh.tip].mean(axis=0) + (dx, dy)
     result = Reacher(built, options=ReachOptions(tol=1e-7), newton=NewtonOptions(tol=1e-9)).reach(Target(tuple(tip)))
@@ -232,8 +253,11 @@ def test_a_registered_kind_is_a_scene_file_control(tmp_path):
     path.write_text(text.replace("atmosphere = 1000.0", "stiffness = 1e5"))
     with pytest.raises(PneumaInputError, match=r"unknown key 'chambers\[0\].stiffness' \(allowed here: atmosphere,"):
         load_scene(path)
-    path.write_text(text.replace('"closed_gas"', '"volume"').replace("atmosphere = 1000.0", "stiffness = 2e5")
-                    .replace("gamma = 1.4\n", ""))
+    path.write_text(
+        text.replace('"closed_gas"', '"volume"')
+        .replace("atmosphere = 1000.0", "stiffness = 2e5")
+        .replace("gamma = 1.4\n", "")
+    )
     assert load_scene(path).controls[0].kind == AreaControl(stiffness=2e5)
     syringe = kind_scene(SYRINGE, ((4, 0.8),))
     path.write_text(syringe.to_toml())
@@ -251,36 +275,53 @@ def test_the_apps_ask_the_kind():
     assert command_axis(command, [c.kind.quantity for c in scene.controls])[1] == "commanded air pumped in"
     built = scene.build()
     assert Reacher(built, bounds=([0.0], [0.5])).units == ["air pumped in"]
-    assert describe_commands(built, np.array([0.5]), np.array([0.25])) == \
-        "air pumped in 0.5 (last equilibrium at air pumped in 0.25)"
+    assert (
+        describe_commands(built, np.array([0.5]), np.array([0.25]))
+        == "air pumped in 0.5 (last equilibrium at air pumped in 0.25)"
+    )
     area = kind_scene(AreaControl(), ((1, 2.0),)).build()
-    assert describe_commands(area, np.array([2.0]), np.array([1.5])) == \
-        f"commanded area {2 * area.chambers[0].rest_area:.6g} (2 x rest)"
+    assert (
+        describe_commands(area, np.array([2.0]), np.array([1.5]))
+        == f"commanded area {2 * area.chambers[0].rest_area:.6g} (2 x rest)"
+    )
 
 
-@pytest.mark.parametrize("make, message", [
-    (lambda: ChamberSchedule("area", ((1, 0.0),)), r"keyframes area ratio 0.0 must lie in \(0, 1000\]"),
-    (lambda: ChamberSchedule(AreaControl(), ((1, 1.5), (2, 2e3))), r"keyframes area ratio 2000.0 must lie in"),
-    (lambda: AreaControl(stiffness=0.0), r"chamber stiffness k = 0.0 must be > 0"),
-    (lambda: ChamberSchedule("pressure", ((1, -5.0),)), r"keyframes pressure -5.0 is negative; set allow_vacuum"),
-    (lambda: ChamberControl(ChamberSchedule("area", ((1, 2.0),)), (0.5, 2e3)),
-     r"bounds = \[0.5, 2000.0\]: area ratio 2000.0 must lie in"),
-    (lambda: ChamberControl(ChamberSchedule("pressure", ((1, 2.0),)), (-1.0, 2.0)),
-     r"bounds = \[-1.0, 2.0\]: pressure -1.0 is negative"),
-    (lambda: ChamberSchedule(ClosedGas(), ((1, -1.0),)), r"keyframes air pumped in -1.0 must be >= 0"),
-    (lambda: ClosedGas(atmosphere=0.0), r"atmosphere = 0.0 must be > 0"),
-    (lambda: ClosedGas(gamma=0.9), r"gamma = 0.9 must lie in \[1, 5/3\]"),
-    (lambda: ClosedGas(gamma=float("nan")), r"gamma = nan must be a finite number"),
-    (lambda: ChamberSchedule("bellows", ((1, 1.0),)),
-     r"control = 'bellows' is not one of area, volume, closed_gas, pressure, syringe"),
-    (lambda: ChamberSchedule("syringe", ((1, 1.0),)), r"control = 'syringe' has no default for syringe_volume"),
-    (lambda: Syringe(syringe_volume=0.0), r"syringe_volume = 0.0 must be > 0"),
-    (lambda: Syringe(syringe_volume=1.0, dead_volume=-0.1), r"dead_volume = -0.1 must be >= 0"),
-    (lambda: ChamberSchedule(SYRINGE, ((1, 0.5), (2, 1.5))),
-     r"keyframes displaced volume 1.5 exceeds syringe_volume = 1.0 \(the plunger stops at the barrel's end\)"),
-    (lambda: ChamberControl(ChamberSchedule(SYRINGE, ((1, 0.5),)), (-0.5, 2.0)),
-     r"bounds = \[-0.5, 2.0\]: displaced volume 2.0 exceeds"),
-])
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda: ChamberSchedule("area", ((1, 0.0),)), r"keyframes area ratio 0.0 must lie in \(0, 1000\]"),
+        (lambda: ChamberSchedule(AreaControl(), ((1, 1.5), (2, 2e3))), r"keyframes area ratio 2000.0 must lie in"),
+        (lambda: AreaControl(stiffness=0.0), r"chamber stiffness k = 0.0 must be > 0"),
+        (lambda: ChamberSchedule("pressure", ((1, -5.0),)), r"keyframes pressure -5.0 is negative; set allow_vacuum"),
+        (
+            lambda: ChamberControl(ChamberSchedule("area", ((1, 2.0),)), (0.5, 2e3)),
+            r"bounds = \[0.5, 2000.0\]: area ratio 2000.0 must lie in",
+        ),
+        (
+            lambda: ChamberControl(ChamberSchedule("pressure", ((1, 2.0),)), (-1.0, 2.0)),
+            r"bounds = \[-1.0, 2.0\]: pressure -1.0 is negative",
+        ),
+        (lambda: ChamberSchedule(ClosedGas(), ((1, -1.0),)), r"keyframes air pumped in -1.0 must be >= 0"),
+        (lambda: ClosedGas(atmosphere=0.0), r"atmosphere = 0.0 must be > 0"),
+        (lambda: ClosedGas(gamma=0.9), r"gamma = 0.9 must lie in \[1, 5/3\]"),
+        (lambda: ClosedGas(gamma=float("nan")), r"gamma = nan must be a finite number"),
+        (
+            lambda: ChamberSchedule("bellows", ((1, 1.0),)),
+            r"control = 'bellows' is not one of area, volume, closed_gas, pressure, syringe",
+        ),
+        (lambda: ChamberSchedule("syringe", ((1, 1.0),)), r"control = 'syringe' has no default for syringe_volume"),
+        (lambda: Syringe(syringe_volume=0.0), r"syringe_volume = 0.0 must be > 0"),
+        (lambda: Syringe(syringe_volume=1.0, dead_volume=-0.1), r"dead_volume = -0.1 must be >= 0"),
+        (
+            lambda: ChamberSchedule(SYRINGE, ((1, 0.5), (2, 1.5))),
+            r"keyframes displaced volume 1.5 exceeds syringe_volume = 1.0 \(the plunger stops at the barrel's end\)",
+        ),
+        (
+            lambda: ChamberControl(ChamberSchedule(SYRINGE, ((1, 0.5),)), (-0.5, 2.0)),
+            r"bounds = \[-0.5, 2.0\]: displaced volume 2.0 exceeds",
+        ),
+    ],
+)
 def test_bad_commands_and_parameters_are_refused_naming_the_value(make, message):
     with pytest.raises(PneumaInputError, match=message):
         make()

@@ -15,12 +15,23 @@ def test_chamber_escaping_the_beam_is_one_clear_line(tmp_path, capsys):
     assert len(lines) == 1 and lines[0].startswith("error: ") and "cy = 0.5" in lines[0]
 
 
-@pytest.mark.parametrize("flags, word", [
-    (["--nu", "0.5"], "nu = 0.5"), (["--E", "-1"], "E = -1"), (["--k", "0"], "k = 0"),
-    (["--growth", "nan"], "--growth"), (["--steps", "1"], "steps = 1"), (["--steps", "0"], "steps = 0"),
-    (["--nu", "-1"], "nu = -1"), (["--E", "inf"], "--E = inf"), (["--growth", "-1"], "growth = -1"),
-    (["--cx", "1.2"], "horizontally"), (["--max-cuts", "-1"], "--max-cuts = -1"), (["--tol", "0"], "tol = 0"),
-])
+@pytest.mark.parametrize(
+    "flags, word",
+    [
+        (["--nu", "0.5"], "nu = 0.5"),
+        (["--E", "-1"], "E = -1"),
+        (["--k", "0"], "k = 0"),
+        (["--growth", "nan"], "--growth"),
+        (["--steps", "1"], "steps = 1"),
+        (["--steps", "0"], "steps = 0"),
+        (["--nu", "-1"], "nu = -1"),
+        (["--E", "inf"], "--E = inf"),
+        (["--growth", "-1"], "growth = -1"),
+        (["--cx", "1.2"], "horizontally"),
+        (["--max-cuts", "-1"], "--max-cuts = -1"),
+        (["--tol", "0"], "tol = 0"),
+    ],
+)
 def test_bad_values_are_refused_with_exit_2(tmp_path, capsys, flags, word):
     assert main([*flags, "--out", str(tmp_path / "out")]) == 2
     assert word in capsys.readouterr().err
@@ -36,8 +47,25 @@ def test_unwritable_output_directory(tmp_path, capsys):
 
 def test_short_run_writes_history_states_and_summary(tmp_path, capsys):
     out = tmp_path / "out"
-    assert main(["--cy", "0.15", "--growth", "1.5", "--steps", "4", "--max-area", "0.01", "--out", str(out), "--no-video",
-                 "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "--cy",
+                "0.15",
+                "--growth",
+                "1.5",
+                "--steps",
+                "4",
+                "--max-area",
+                "0.01",
+                "--out",
+                str(out),
+                "--no-video",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     printed = capsys.readouterr().out
     assert "vertices" in printed and "tip deflection" in printed and "peak chamber pressure" in printed
     summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
@@ -52,7 +80,10 @@ def test_short_run_writes_history_states_and_summary(tmp_path, capsys):
 
 def test_unconverged_ramp_stops_with_one_line_and_keeps_the_steps_done(tmp_path, capsys):
     out = tmp_path / "out"
-    assert main(["--steps", "2", "--max-iterations", "5", "--max-cuts", "0", "--no-video", "--quiet", "--out", str(out)]) == 1
+    assert (
+        main(["--steps", "2", "--max-iterations", "5", "--max-cuts", "0", "--no-video", "--quiet", "--out", str(out)])
+        == 1
+    )
     errors = [l for l in capsys.readouterr().err.splitlines() if l.strip()]
     assert len(errors) == 1 and errors[0].startswith("error: step 1: no equilibrium at commanded area")
     assert "residual" in errors[0]
@@ -65,7 +96,10 @@ def test_quality_presets_set_mesh_and_tolerance_unless_overridden(tmp_path, caps
     from taichi_pneuma.apps.cli import QUALITY
     from taichi_pneuma.fem.planar import BeamGeometry
 
-    for flags, max_area in ((["--quality", "draft"], QUALITY["draft"][0]), (["--quality", "draft", "--max-area", "0.01"], 0.01)):
+    for flags, max_area in (
+        (["--quality", "draft"], QUALITY["draft"][0]),
+        (["--quality", "draft", "--max-area", "0.01"], 0.01),
+    ):
         out = tmp_path / str(max_area)
         assert main([*flags, "--steps", "3", "--growth", "1.2", "--no-video", "--quiet", "--out", str(out)]) == 0
         summary = json.loads((out / "inflate_cy+0.15_draft_summary.json").read_text())  # named by the preset
@@ -105,21 +139,30 @@ def test_set_changes_the_run(tmp_path, capsys):
     at 3x; the scene file written beside the results says so."""
     flags = ["--growth", "3.5", "--steps", "4", "--max-area", "0.01", "--no-video", "--quiet"]
     tips = {}
-    for name, extra in (("default", []), ("set", ["--set", "chambers[0].center[1]=-0.15", "--set", "chambers[0].keyframes=[[3, 3.0]]"])):
+    for name, extra in (
+        ("default", []),
+        ("set", ["--set", "chambers[0].center[1]=-0.15", "--set", "chambers[0].keyframes=[[3, 3.0]]"]),
+    ):
         out = tmp_path / name
         assert main([*flags, *extra, "--out", str(out)]) == 0
         summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
         tips[name], ratio = summary["tip_deflection"], summary["chambers"]["main"]["area_ratio"]
     assert tips["default"] < -0.1 and tips["set"] > 0.1 and ratio == pytest.approx(3.0, abs=0.01)
     from taichi_pneuma.scene.scenefile import load_scene
+
     scene = load_scene(tmp_path / "set" / "inflate_cy+0.15_scene.toml")
     assert scene.geometry.chambers[0][1].center == (0.0, -0.15) and scene.controls[0].schedule.keyframes == ((3, 3.0),)
 
 
-@pytest.mark.parametrize("assignment, word", [
-    ("material.nu=0.5", "material.nu"), ("chambers[1].center=[0, 0]", "chambers[1].center"),
-    ("mesh.maxarea=0.1", "mesh.maxarea"), ("material.E", "KEY=VALUE"),
-])
+@pytest.mark.parametrize(
+    "assignment, word",
+    [
+        ("material.nu=0.5", "material.nu"),
+        ("chambers[1].center=[0, 0]", "chambers[1].center"),
+        ("mesh.maxarea=0.1", "mesh.maxarea"),
+        ("material.E", "KEY=VALUE"),
+    ],
+)
 def test_bad_set_is_one_line_and_exit_2(tmp_path, capsys, assignment, word):
     assert main(["--set", assignment, "--steps", "2", "--no-video", "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err

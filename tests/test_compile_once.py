@@ -31,7 +31,9 @@ def package_kernels() -> dict[str, object]:
     for info in pkgutil.walk_packages(taichi_pneuma.__path__, "taichi_pneuma."):
         module = importlib.import_module(info.name)
         for name, obj in vars(module).items():
-            if getattr(obj, "_primal", None) is not None and obj.__module__ == module.__name__:  # Quadrants' funcs: None
+            if (
+                getattr(obj, "_primal", None) is not None and obj.__module__ == module.__name__
+            ):  # Quadrants' funcs: None
                 kernels[f"{module.__name__}.{name}"] = obj
     return kernels
 
@@ -57,8 +59,11 @@ def test_new_scenes_compile_no_kernel():
         assert before[f"taichi_pneuma.terms.elastic.{name}"] >= 1
     # another mesh size, material, chamber stiffness and place; then two and six chambers, area and pressure
     # control; then quadratic elements (the same kernels: element size is a runtime loop bound)
-    run_schedule(reference_scene(-0.1, growth=1.2, steps=3, youngs_modulus=3e4, poisson_ratio=0.3,
-                                 chamber_stiffness=1e6, max_area=0.02).build())
+    run_schedule(
+        reference_scene(
+            -0.1, growth=1.2, steps=3, youngs_modulus=3e4, poisson_ratio=0.3, chamber_stiffness=1e6, max_area=0.02
+        ).build()
+    )
     solve_once(load_scene(SCENES / "bidirectional.toml").build(), [1.2, 1.1])
     solve_once(load_scene(SCENES / "pneunet_finger.toml").build(), [50.0] * 6)
     run_schedule(reference_scene(0.15, growth=1.2, steps=3, max_area=0.05, chamber_points=32, order=2).build())

@@ -19,8 +19,11 @@ H = 1e-4  # the energies are quadratic: central differences are exact up to roun
 
 def terms(config):
     nodes = np.array([0, 2, 3, 5])
-    return {"clamp": Clamp(config, nodes, 1e3), "roller y": NormalClamp(config, nodes, (0.0, 2.0), 1e3),
-            "roller slanted": NormalClamp(config, nodes, (0.6, -0.8), 1e3)}
+    return {
+        "clamp": Clamp(config, nodes, 1e3),
+        "roller y": NormalClamp(config, nodes, (0.0, 2.0), 1e3),
+        "roller slanted": NormalClamp(config, nodes, (0.6, -0.8), 1e3),
+    }
 
 
 @pytest.mark.parametrize("name", ["clamp", "roller y", "roller slanted"])
@@ -65,13 +68,16 @@ def test_roller_selects_a_line_or_a_box():
         Roller((1.0, 0.0), (5.0, 0.0)).select(vertices)
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    (dict(normal=(0, 0), point=(0, 0)), "must not be zero"),
-    (dict(normal=(0, 1)), "exactly one of 'point'"),
-    (dict(normal=(0, 1), point=(0, 0), box=(0, 0, 1, 1)), "exactly one of 'point'"),
-    (dict(normal=(0, 1), point=(0, 0), tolerance=0.0), "tolerance"),
-    (dict(normal=(0, 1), box=(1, 0, 0, 1)), "x0 < x1"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(normal=(0, 0), point=(0, 0)), "must not be zero"),
+        (dict(normal=(0, 1)), "exactly one of 'point'"),
+        (dict(normal=(0, 1), point=(0, 0), box=(0, 0, 1, 1)), "exactly one of 'point'"),
+        (dict(normal=(0, 1), point=(0, 0), tolerance=0.0), "tolerance"),
+        (dict(normal=(0, 1), box=(1, 0, 0, 1)), "x0 < x1"),
+    ],
+)
 def test_bad_roller_is_refused(kwargs, message):
     with pytest.raises(PneumaInputError, match=message):
         Roller(**kwargs)
@@ -82,8 +88,10 @@ def test_roller_and_tip_keys_round_trip_through_the_scene_file():
     data = scene_data(scene)
     assert data["tip"] == {"side": "right"}
     data["tip"] = {"box": [1.7, -0.1, 1.8, 0.1]}
-    data["rollers"] = [{"normal": [1.0, 0.0], "point": [1.75, 0.0]}, {"normal": [0.0, 1.0], "box": [1.7, -0.5, 1.8, 0.5],
-                                                                      "tolerance": 1e-3}]
+    data["rollers"] = [
+        {"normal": [1.0, 0.0], "point": [1.75, 0.0]},
+        {"normal": [0.0, 1.0], "box": [1.7, -0.5, 1.8, 0.5], "tolerance": 1e-3},
+    ]
     scene = read_scene(data, "s")
     assert scene.geometry.tip == PointSet(box=(1.7, -0.1, 1.8, 0.1))
     assert scene.geometry.rollers[1] == Roller((0.0, 1.0), box=(1.7, -0.5, 1.8, 0.5), tolerance=1e-3)
@@ -98,8 +106,13 @@ def test_roller_wall_at_the_right_end_holds_it_horizontally():
     """The docs' worked example: a roller wall at x = 1.75 keeps the inflated beam's end face on the wall (tip dx
     and rotation held, to the penalty's reaction / K) while it slides along it (tip dy free, if smaller than a
     free end's)."""
-    geometry = Geometry(Rectangle((0.0, 0.0), (3.5, 0.8)), (("main", Ellipse((0.0, 0.15), (0.85, 0.22), 32)),), 0.02,
-                        PointSet("left"), rollers=(Roller(normal=(1.0, 0.0), point=(1.75, 0.0)),))
+    geometry = Geometry(
+        Rectangle((0.0, 0.0), (3.5, 0.8)),
+        (("main", Ellipse((0.0, 0.15), (0.85, 0.22), 32)),),
+        0.02,
+        PointSet("left"),
+        rollers=(Roller(normal=(1.0, 0.0), point=(1.75, 0.0)),),
+    )
     free = reference_scene(max_area=0.02, chamber_points=32, steps=4)
     held = Scene(geometry, free.controls, free.increments)
     tips = [run_schedule(scene.build()).steps[-1] for scene in (free, held)]

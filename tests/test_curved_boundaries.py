@@ -26,8 +26,14 @@ def ring(n: int, curved: bool = True) -> Geometry:
     rigid motions (the symmetric solution does not move across them)."""
     circles = [Ellipse((0.0, 0.0), (r, r), k) for r, k in ((OUTER, 2 * n), (INNER, n))]
     body, hole = circles if curved else [Polygon(tuple(map(tuple, c.polygon()))) for c in circles]
-    return Geometry(body, (("c", hole),), (2 * np.pi / n) ** 2, None, order=2,
-                    rollers=(Roller((0.0, 1.0), (0.0, 0.0)), Roller((1.0, 0.0), (0.0, 0.0))))
+    return Geometry(
+        body,
+        (("c", hole),),
+        (2 * np.pi / n) ** 2,
+        None,
+        order=2,
+        rollers=(Roller((0.0, 1.0), (0.0, 0.0)), Roller((1.0, 0.0), (0.0, 0.0))),
+    )
 
 
 def lame_errors(geometries) -> np.ndarray:
@@ -40,7 +46,7 @@ def lame_errors(geometries) -> np.ndarray:
     linearised moduli G = mu, lam' = lam - mu. p / mu = 1e-6 keeps the geometric nonlinearity below the
     errors measured."""
     mu, lam = lame_parameters(1.0, NU)
-    p, a2, b2 = LOAD * mu, INNER ** 2, OUTER ** 2
+    p, a2, b2 = LOAD * mu, INNER**2, OUTER**2
     A, B = p * a2 / (2 * lam * (b2 - a2)), p * a2 * b2 / (2 * mu * (b2 - a2))  # lam' + G = lam
     errors = []
     for geometry in geometries:
@@ -67,8 +73,11 @@ def test_quadratic_ring_converges_to_lame_at_third_order_with_curved_boundaries(
 
 def wall_area(mesh, chamber: int = 0) -> float:
     """The area the chamber's quadratic wall encloses (parabolic arcs through its nodes)."""
-    return PressureControl().term(Configuration(mesh.vertices), mesh.chambers[chamber], "c", 2,
-                                  mesh.wall_origins[chamber]).rest_area
+    return (
+        PressureControl()
+        .term(Configuration(mesh.vertices), mesh.chambers[chamber], "c", 2, mesh.wall_origins[chamber])
+        .rest_area
+    )
 
 
 def test_chamber_and_body_areas_converge_at_fourth_order_to_the_ellipse():
@@ -78,14 +87,23 @@ def test_chamber_and_body_areas_converge_at_fourth_order_to_the_ellipse():
     exact_hole = np.pi * a * b
     errors = []
     for n in (8, 16, 32):
-        mesh = Geometry(Rectangle((0.0, 0.0), (4.0, 4.0)), (("c", Ellipse((0.1, 0.05), (a, b), n)),),
-                        (2 * np.pi / n) ** 2, order=2).mesh()
+        mesh = Geometry(
+            Rectangle((0.0, 0.0), (4.0, 4.0)), (("c", Ellipse((0.1, 0.05), (a, b), n)),), (2 * np.pi / n) ** 2, order=2
+        ).mesh()
         errors.append([abs(wall_area(mesh) / exact_hole - 1), abs(mesh.area / (16.0 - exact_hole) - 1)])
     errors = np.array(errors)
     assert np.all(np.log2(errors[:-1] / errors[1:]) > 3.7)
     polygon = Ellipse((0.1, 0.05), (a, b), 32).polygon()
-    assert errors[-1, 0] < abs(0.5 * np.sum(polygon[:, 0] * np.roll(polygon[:, 1], -1)
-                                            - np.roll(polygon[:, 0], -1) * polygon[:, 1]) / exact_hole - 1) / 500
+    assert (
+        errors[-1, 0]
+        < abs(
+            0.5
+            * np.sum(polygon[:, 0] * np.roll(polygon[:, 1], -1) - np.roll(polygon[:, 0], -1) * polygon[:, 1])
+            / exact_hole
+            - 1
+        )
+        / 500
+    )
 
 
 def on_rounded_rectangle(points, center, size, radius) -> np.ndarray:
@@ -109,7 +127,7 @@ def test_boundary_nodes_lie_on_the_exact_curves_and_interior_edges_stay_straight
     assert np.allclose(np.hypot(x[mesh.boundary, 0] / 2.0, x[mesh.boundary, 1]), 1.0, atol=1e-14)
     assert on_rounded_rectangle(x[mesh.chambers[0]], (-0.8, 0.0), (0.6, 0.8), 0.2).max() < 1e-14
     assert np.allclose(np.hypot((x[mesh.chambers[1], 0] - 0.8) / 0.4, x[mesh.chambers[1], 1] / 0.3), 1.0, atol=1e-14)
-    assert len(mesh.boundary) > 16 * 2 ** refinements * order  # Triangle split the body's chords
+    assert len(mesh.boundary) > 16 * 2**refinements * order  # Triangle split the body's chords
     if order == 2:
         t = mesh.triangles
         walls = np.concatenate([mesh.boundary, *mesh.chambers])
@@ -134,8 +152,14 @@ def test_straight_sides_of_a_rounded_rectangle_keep_their_midside_nodes_at_the_m
 def test_half_model_wall_cut_by_the_symmetry_line_is_curved_up_to_the_line():
     """The half beam's notched chamber: its open wall's nodes on the ellipse, its ends on the line, and its
     area (closed by the flat cap) half the ellipse's, to the fourth-order error of the parabolic arcs."""
-    mesh = Geometry(Rectangle((0.0, 0.2), (3.5, 0.4)), (("main", Ellipse((0.0, 0.0), (0.85, 0.22), 32)),), 0.01,
-                    PointSet("left"), order=2, rollers=(Roller((0.0, 1.0), (0.0, 0.0)),)).mesh()
+    mesh = Geometry(
+        Rectangle((0.0, 0.2), (3.5, 0.4)),
+        (("main", Ellipse((0.0, 0.0), (0.85, 0.22), 32)),),
+        0.01,
+        PointSet("left"),
+        order=2,
+        rollers=(Roller((0.0, 1.0), (0.0, 0.0)),),
+    ).mesh()
     wall = mesh.vertices[mesh.chambers[0]]
     assert np.allclose(np.hypot(wall[:, 0] / 0.85, wall[:, 1] / 0.22), 1.0, atol=1e-14)
     assert wall[0, 1] == wall[-1, 1] == 0.0
@@ -150,8 +174,16 @@ def test_a_midside_node_that_would_fold_its_triangle_stays_at_the_middle():
     (s = 0.29, H = 0.42): that edge stays straight; with it at (2, 2) (0.14 of the way) it is curved."""
     hole = Ellipse((0.0, 0.0), (1.0, 1.0), 8)
     for corner, curved in ((0.8, False), (2.0, True)):
-        vertices = np.array([[1.0, 0.0], [0.0, 1.0], [corner, corner], [0.5, 0.5],
-                             [0.5 * (1 + corner), 0.5 * corner], [0.5 * corner, 0.5 * (1 + corner)]])
+        vertices = np.array(
+            [
+                [1.0, 0.0],
+                [0.0, 1.0],
+                [corner, corner],
+                [0.5, 0.5],
+                [0.5 * (1 + corner), 0.5 * corner],
+                [0.5 * corner, 0.5 * (1 + corner)],
+            ]
+        )
         triangles = np.array([[1, 0, 2, 3, 4, 5]])
         moved = onto_curves(vertices, np.array([[1, 3], [3, 0]]), np.array([2, 2]), {2: hole.project}, triangles)
         assert np.allclose(moved[3], [np.sqrt(0.5)] * 2 if curved else [0.5, 0.5], atol=1e-15)

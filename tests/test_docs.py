@@ -43,8 +43,12 @@ def test_every_benchmark_table_is_on_a_page():
 def test_the_readme_is_short_and_self_contained():
     readme = (ROOT / "README.md").read_text()
     assert len(readme.splitlines()) <= 200
-    sources = [ROOT / "README.md", *(ROOT / "docs").rglob("*.md"), *(ROOT / "taichi_pneuma").rglob("*.py"),
-               *(ROOT / "examples").glob("*.py")]
+    sources = [
+        ROOT / "README.md",
+        *(ROOT / "docs").rglob("*.md"),
+        *(ROOT / "taichi_pneuma").rglob("*.py"),
+        *(ROOT / "examples").glob("*.py"),
+    ]
     citing = [p for p in sources if re.search(r"SPEC\.md|\.\./shared", p.read_text())]
     assert not citing
     for link in re.findall(r"\]\(((?:docs/|CHANGELOG|LICENSE)[^)#]*)", readme):  # every local link resolves
@@ -53,8 +57,16 @@ def test_the_readme_is_short_and_self_contained():
 
 def test_plain_docstrings_become_valid_rest():
     """Inline markup escaped, an indented block made literal, a list set off by blank lines."""
-    lines = ["The energy |F|^2 of x_ and *a:", "", "    E = 1/2 k (A - A*)^2", "text after it", "- one", "- two",
-             "  continued", "after the list"]
+    lines = [
+        "The energy |F|^2 of x_ and *a:",
+        "",
+        "    E = 1/2 k (A - A*)^2",
+        "text after it",
+        "- one",
+        "- two",
+        "  continued",
+        "after the list",
+    ]
     generate.plain_docstring(None, "function", "f", None, {}, lines)
     assert lines[0] == r"The energy \|F\|^2 of x\_ and \*a:"
     assert lines[2:5] == ["::", "", "    E = 1/2 k (A - A*)^2"]  # literal: left as it is

@@ -15,8 +15,9 @@ from taichi_pneuma.terms.effects import Gravity, Ground, SelfContact
 
 def thin_chamber_scene(*effects, control="pressure"):
     """A small plate with a flat elliptical chamber (gap 0.02 at its middle), coarse."""
-    geometry = Geometry(Rectangle((0.0, 0.0), (1.0, 0.3)), (("slit", Ellipse((0.0, 0.0), (0.3, 0.01), 24)),), 0.01,
-                        PointSet("left"))
+    geometry = Geometry(
+        Rectangle((0.0, 0.0), (1.0, 0.3)), (("slit", Ellipse((0.0, 0.0), (0.3, 0.01), 24)),), 0.01, PointSet("left")
+    )
     keyframes = ((0, 1.0), (1, 0.2)) if control == "area" else ((0, 0.0), (1, 10.0))
     return Scene(geometry, (ChamberControl(ChamberSchedule(control, keyframes)),), 1, effects=effects)
 
@@ -24,8 +25,9 @@ def thin_chamber_scene(*effects, control="pressure"):
 @pytest.fixture(scope="module")
 def squeezed():
     """Every effect, with the walls squeezed to a gap of 0.006 < dhat and the plate 0.004 above the ground."""
-    built = thin_chamber_scene(Gravity(1.0), Ground(-0.16, dhat=0.01, stiffness=100.0),
-                               SelfContact(dhat=0.008, stiffness=100.0)).build()
+    built = thin_chamber_scene(
+        Gravity(1.0), Ground(-0.16, dhat=0.01, stiffness=100.0), SelfContact(dhat=0.008, stiffness=100.0)
+    ).build()
     built.set_commands([5.0])
     X = built.mesh.vertices
     u = np.column_stack([np.zeros(len(X)), -0.7 * X[:, 1] - 0.111])  # y -> 0.3 y - 0.111: bottom at -0.156
@@ -103,6 +105,6 @@ def test_dynamics_step_response_overshoots_then_decays_to_the_static_shape():
     first_peak = int(np.argmax(tip[:50]))
     assert 0.3 < first_peak * dt < 0.8
     assert tip[first_peak] > 1.3 * static_tip  # overshoot
-    assert tip[first_peak:first_peak + 30].min() < static_tip  # swings back below the static shape
-    second_peak = tip[first_peak + 25:].max()
+    assert tip[first_peak : first_peak + 30].min() < static_tip  # swings back below the static shape
+    second_peak = tip[first_peak + 25 :].max()
     assert static_tip < second_peak < tip[first_peak]  # and the swing decays

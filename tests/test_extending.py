@@ -74,12 +74,14 @@ def test_tip_load_bends_a_cantilever_as_timoshenko_predicts(tip_force_registered
     to 1 % (the clamp holds the whole wall, which beam theory does not)."""
     E, nu, L, H, F = 1e4, 0.3, 3.5, 0.8, -1.0
     body = Rectangle((0.0, 0.0), (L, H))
-    scene = Scene(Geometry(body, (), 0.01, PointSet("left"), order=2), (), 1, Material(E, nu), effects=(TipForce(fy=F),))
+    scene = Scene(
+        Geometry(body, (), 0.01, PointSet("left"), order=2), (), 1, Material(E, nu), effects=(TipForce(fy=F),)
+    )
     deflection = run_schedule(scene.build()).steps[-1].tip_dy
     mu, lam = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
     lame = lam - mu
     young, poisson = mu * (3 * lame + 2 * mu) / (lame + mu), lame / (2 * (lame + mu))
-    theory = F * L ** 3 / (3 * young / (1 - poisson ** 2) * H ** 3 / 12) + F * L / (5 / 6 * mu * H)
+    theory = F * L**3 / (3 * young / (1 - poisson**2) * H**3 / 12) + F * L / (5 / 6 * mu * H)
     assert deflection == pytest.approx(theory, rel=0.01)
 
 
@@ -112,7 +114,8 @@ def saint_venant_kirchhoff_registered():
 
 
 def test_a_registered_material_form_is_read_checked_written_and_listed_by_the_scene_format(
-        saint_venant_kirchhoff_registered):
+    saint_venant_kirchhoff_registered,
+):
     """Once registered, the form's name is a value of material.law: its keys are read into the form, refused
     where it lacks them or lacks a value, written back (the scene reads back equal) and listed in the key
     reference; the scene's law is the form's."""

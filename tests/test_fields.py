@@ -28,7 +28,7 @@ def test_uniaxial_plane_strain_stretch_matches_the_closed_form():
 
 
 def hand_von_mises(xx, yy, zz, xy):
-    return np.sqrt(((xx - yy) ** 2 + (yy - zz) ** 2 + (zz - xx) ** 2) / 2 + 3 * xy ** 2)
+    return np.sqrt(((xx - yy) ** 2 + (yy - zz) ** 2 + (zz - xx) ** 2) / 2 + 3 * xy**2)
 
 
 def test_simple_shear_and_biaxial_stretch_match_hand_formulas():
@@ -69,8 +69,10 @@ def test_stress_matches_the_elastic_terms_gradient_under_a_homogeneous_deformati
     positions = X @ F.T
     built.model.set_displacements(positions - X)
     g = built.elastic.gradient()
-    measured = np.array([[np.sum(g * (X @ np.outer(np.eye(2)[a], np.eye(2)[b]).T)) for b in range(2)]
-                         for a in range(2)]) / built.mesh.area
+    measured = (
+        np.array([[np.sum(g * (X @ np.outer(np.eye(2)[a], np.eye(2)[b]).T)) for b in range(2)] for a in range(2)])
+        / built.mesh.area
+    )
     fields = element_fields(X, positions, built.mesh.triangles, *built.scene.element_material(built.mesh))
     sigma = fields["stress"][0, :2, :2]
     J = np.linalg.det(F)

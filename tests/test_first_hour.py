@@ -38,6 +38,7 @@ def small():
 
 # --- the API ---------------------------------------------------------------------------------------
 
+
 def test_reference_scene_and_with_value_take_the_command_lines_short_names():
     short = tp.reference_scene(E=2e4, nu=0.4, k=2e5, max_area=0.01)
     long = tp.reference_scene(youngs_modulus=2e4, poisson_ratio=0.4, chamber_stiffness=2e5, max_area=0.01)
@@ -48,8 +49,9 @@ def test_reference_scene_and_with_value_take_the_command_lines_short_names():
         tp.reference_scene(youngs=1.0)
     base = tp.reference_scene(max_area=0.01)
     assert base.with_value("E", 3e4) == base.with_value("material.E", 3e4)
-    assert base.with_values({"cy": -0.1, "nu": 0.3}) == base.with_values({"chambers[0].center[1]": -0.1,
-                                                                          "material.nu": 0.3})
+    assert base.with_values({"cy": -0.1, "nu": 0.3}) == base.with_values(
+        {"chambers[0].center[1]": -0.1, "material.nu": 0.3}
+    )
     with pytest.raises(tp.PneumaInputError, match="material.nu"):
         base.with_value("nu", 0.5)  # the error names the key the short name stands for
 
@@ -108,8 +110,9 @@ def test_video_takes_a_size_string_and_creates_its_directories(small, tmp_path):
 
 def test_the_frame_png_is_the_most_deformed_step(tmp_path):
     """A ramp up to 2x and back to rest: the PNG is the frame at the peak (step 2), pixel for pixel."""
-    scene = tp.reference_scene(max_area=0.02).with_values({"schedule.increments": 4,
-                                                           "chambers[0].keyframes": [[2, 2.0], [4, 1.0]]})
+    scene = tp.reference_scene(max_area=0.02).with_values(
+        {"schedule.increments": 4, "chambers[0].keyframes": [[2, 2.0], [4, 1.0]]}
+    )
     result = tp.simulate(scene)
     assert result.peak_step() == 2
     result.video(tmp_path / "v.mp4", png=tmp_path / "v.png", size=(320, 160), renderer=SOFTWARE)
@@ -119,6 +122,7 @@ def test_the_frame_png_is_the_most_deformed_step(tmp_path):
 
 
 # --- shipped scenes ----------------------------------------------------------------------------------
+
 
 def test_shipped_scenes_load_by_name_from_anywhere(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
@@ -151,13 +155,16 @@ def test_help_is_complete_and_starts_without_taichi():
     for name, module in APPS.items():
         description = module.parser().description
         assert description == " ".join(module.__doc__.split("\n\n")[0].split()) and description.endswith("."), name
-    code = ("import sys\nfrom taichi_pneuma.apps import inflate, reach, steer, sweep, bench\n"
-            "[m.parser().format_help() for m in (inflate, reach, steer, sweep, bench)]\n"
-            "print(sorted(m for m in ('taichi', 'scipy', 'triangle', 'matplotlib') if m in sys.modules))")
+    code = (
+        "import sys\nfrom taichi_pneuma.apps import inflate, reach, steer, sweep, bench\n"
+        "[m.parser().format_help() for m in (inflate, reach, steer, sweep, bench)]\n"
+        "print(sorted(m for m in ('taichi', 'scipy', 'triangle', 'matplotlib') if m in sys.modules))"
+    )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert proc.stdout.strip() == "[]"
-    helped = subprocess.run([sys.executable, "-m", "taichi_pneuma.apps.inflate", "--help"], capture_output=True,
-                            text=True, check=True)
+    helped = subprocess.run(
+        [sys.executable, "-m", "taichi_pneuma.apps.inflate", "--help"], capture_output=True, text=True, check=True
+    )
     assert "[Taichi]" not in helped.stdout + helped.stderr and "--no-video" in helped.stdout
 
 
@@ -172,8 +179,20 @@ def test_set_takes_short_names(tmp_path):
 
 
 def test_video_in_a_new_directory_is_made_and_an_unwritable_one_fails_before_solving(tmp_path, capsys):
-    assert inflate.main([*COARSE, "--size", "320x160", "--video", str(tmp_path / "a" / "b" / "v.mp4"),
-                         "--out", str(tmp_path / "out")]) == 0
+    assert (
+        inflate.main(
+            [
+                *COARSE,
+                "--size",
+                "320x160",
+                "--video",
+                str(tmp_path / "a" / "b" / "v.mp4"),
+                "--out",
+                str(tmp_path / "out"),
+            ]
+        )
+        == 0
+    )
     assert imageio_ffmpeg.count_frames_and_secs(str(tmp_path / "a" / "b" / "v.mp4"))[0] == 3
     blocker = tmp_path / "file"
     blocker.write_text("not a directory")
@@ -188,23 +207,31 @@ def test_no_video_writes_no_picture_and_everything_else(tmp_path):
     assert inflate.main([*COARSE, "--no-video", "--out", str(tmp_path)]) == 0
     written = sorted(p.name for p in tmp_path.iterdir())
     assert not [n for n in written if n.endswith((".png", ".mp4", ".gif"))]  # as --help and the README say
-    assert {"inflate_cy+0.15_history.csv", "inflate_cy+0.15_states.npz", "inflate_cy+0.15_summary.json",
-            "inflate_cy+0.15_scene.toml", "inflate_cy+0.15.pvd"} <= set(written)
+    assert {
+        "inflate_cy+0.15_history.csv",
+        "inflate_cy+0.15_states.npz",
+        "inflate_cy+0.15_summary.json",
+        "inflate_cy+0.15_scene.toml",
+        "inflate_cy+0.15.pvd",
+    } <= set(written)
 
 
 def test_reach_has_no_bar_in_a_piped_log_and_follows_color(tmp_path, capsys):
     """Two targets (the bar's case), output to a stream that is not a terminal (as a pipe or a log file):
     no bar text, no carriage returns. --color changes the picture."""
     built = tp.reference_scene(max_area=0.01).build()
-    tips = [tp.simulate(tp.reference_scene(max_area=0.01, growth=g, steps=2)).positions[-1][built.mesh.tip].mean(axis=0)
-            for g in (2.0, 3.0)]
+    tips = [
+        tp.simulate(tp.reference_scene(max_area=0.01, growth=g, steps=2)).positions[-1][built.mesh.tip].mean(axis=0)
+        for g in (2.0, 3.0)
+    ]
     csv = tmp_path / "t.csv"
     csv.write_text("x,y\n" + "".join(f"{float(x)!r},{float(y)!r}\n" for x, y in tips))
     pngs = []
     for color in ("stretch", "detF"):
         out = tmp_path / color
-        code = reach.main(["--max-area", "0.01", "--targets", str(csv), "--color", color, "--size", "320x160",
-                           "--out", str(out)])
+        code = reach.main(
+            ["--max-area", "0.01", "--targets", str(csv), "--color", color, "--size", "320x160", "--out", str(out)]
+        )
         printed = capsys.readouterr()
         assert code == 0, printed.err
         assert "\r" not in printed.out + printed.err and "reaching" not in printed.out + printed.err
@@ -213,6 +240,7 @@ def test_reach_has_no_bar_in_a_piped_log_and_follows_color(tmp_path, capsys):
 
 
 # --- pictures ----------------------------------------------------------------------------------------
+
 
 def boxes_overlap(a, b) -> bool:
     return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
@@ -224,10 +252,10 @@ def test_small_frames_keep_labels_apart_and_markers_inside(small, size):
     renderer = FrameRenderer([track], *size, backend=SOFTWARE)
     labels = renderer.draw(2)
     steps = [label_box(label) for label in labels if label.anchor == "mt" and label.text.isdigit()]
-    assert all(not boxes_overlap(a, b) for k, a in enumerate(steps) for b in steps[k + 1:])
+    assert all(not boxes_overlap(a, b) for k, a in enumerate(steps) for b in steps[k + 1 :])
     if renderer.trace:  # the left axis' numbers too
         left = [label_box(label) for label in labels if label.anchor == "rm"]
-        assert len(left) >= 2 and all(not boxes_overlap(a, b) for k, a in enumerate(left) for b in left[k + 1:])
+        assert len(left) >= 2 and all(not boxes_overlap(a, b) for k, a in enumerate(left) for b in left[k + 1 :])
     else:
         assert size[0] * size[1] <= 320 * 128  # left out only where its plot would be too small
     pins = renderer.to_canvas(0, track.states[2][track.mesh.pinned]) * size
@@ -253,7 +281,7 @@ def test_several_chambers_have_their_own_colours_and_names_in_the_trace():
     x = left + (right - left) * step / (len(result.steps) - 1)
     for k in (0, 1):
         y = bottom + (top - bottom) * (result.area_ratio[step, k] - lo) / (hi - lo)
-        patch = image[int(y) - 2:int(y) + 3, int(x) - 2:int(x) + 3].reshape(-1, 3).astype(float)
+        patch = image[int(y) - 2 : int(y) + 3, int(x) - 2 : int(x) + 3].reshape(-1, 3).astype(float)
         assert np.min(np.abs(patch - np.round(np.array(colors[k]) * 255)).max(axis=1)) < 40, k
 
 
@@ -265,15 +293,25 @@ def test_the_tip_path_is_not_joined_across_a_restart():
     shift = lambda dx, dy: mesh.vertices + np.array([dx, dy])
     states = np.array([shift(0, 0), shift(0, -0.2), shift(0, 0.6), shift(0, 0.3)])
     tip = states[:, mesh.tip].mean(axis=1)
-    track = Track(mesh, states, np.ones((4, 1)), np.zeros((4, 1)), tip[:, 1] - tip[0, 1],
-                  targets=np.tile(tip[1] + (0, 0.05), (4, 1)), target_index=np.array([0, 0, 1, 1]),
-                  descent=np.array([0, 0, 1, 1]))
+    track = Track(
+        mesh,
+        states,
+        np.ones((4, 1)),
+        np.zeros((4, 1)),
+        tip[:, 1] - tip[0, 1],
+        targets=np.tile(tip[1] + (0, 0.05), (4, 1)),
+        target_index=np.array([0, 0, 1, 1]),
+        descent=np.array([0, 0, 1, 1]),
+    )
     renderer = FrameRenderer([track], 480, 320, trace=False, backend=SOFTWARE)
     image = renderer.frame(3)
     px = lambda p: (renderer.to_canvas(0, np.array([p]))[0] * (480, 320)) * (1, -1) + (0, 320)
     orange = np.round(np.array(TIP_PATH) * 255)
-    near = lambda p: np.min(np.abs(image[int(px(p)[1]) - 2:int(px(p)[1]) + 3,
-                                         int(px(p)[0]) - 2:int(px(p)[0]) + 3].reshape(-1, 3) - orange).max(axis=1))
+    near = lambda p: np.min(
+        np.abs(
+            image[int(px(p)[1]) - 2 : int(px(p)[1]) + 3, int(px(p)[0]) - 2 : int(px(p)[0]) + 3].reshape(-1, 3) - orange
+        ).max(axis=1)
+    )
     assert near(tip[1]) < 30  # where target 0 was reached
     assert near(tip[2]) < 30  # the current descent's earlier iterate: a dot
     assert near((tip[1] + tip[2]) / 2) > 100  # no line across the restart's jump
@@ -295,8 +333,27 @@ def test_sweep_plot_labels_the_short_name_and_draws_no_failed_run_as_data():
 
 
 def test_sweep_prints_rows_under_the_short_name(tmp_path, capsys):
-    assert sweep.main(["--vary", "cy=0.1,0.35", "--max-area", "0.02", "--growth", "1.2", "--steps", "2",
-                       "--workers", "1", "--out", str(tmp_path), "--name", "s"]) == 0
+    assert (
+        sweep.main(
+            [
+                "--vary",
+                "cy=0.1,0.35",
+                "--max-area",
+                "0.02",
+                "--growth",
+                "1.2",
+                "--steps",
+                "2",
+                "--workers",
+                "1",
+                "--out",
+                str(tmp_path),
+                "--name",
+                "s",
+            ]
+        )
+        == 0
+    )
     printed = capsys.readouterr().out
     assert "full grid over cy)" in printed and "  cy = 0.35: error:" in printed
     assert json.loads((tmp_path / "s.json").read_text())["keys"] == ["chambers[0].center[1]"]  # the CSV keeps keys

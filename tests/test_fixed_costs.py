@@ -39,12 +39,14 @@ def test_close_pairs_are_those_of_all_pairwise_distances():
 def test_a_2d_run_without_video_loads_no_module_it_does_not_use(tmp_path):
     """pneuma-inflate --no-video on the reference beam loads no plotting, video, mesh-file, spatial-search or
     gmsh module."""
-    code = ("import runpy, sys\n"
-            "sys.argv = ['pneuma-inflate', '--cy', '0.15', '--steps', '2', '--max-area', '0.01', '--no-video', "
-            f"'--quiet', '--out', {str(tmp_path)!r}]\n"
-            "try:\n    runpy.run_module('taichi_pneuma.apps.inflate', run_name='__main__')\n"
-            "except SystemExit as exc:\n    assert not exc.code, exc.code\n"
-            "print(' '.join(sorted(sys.modules)))\n")
+    code = (
+        "import runpy, sys\n"
+        "sys.argv = ['pneuma-inflate', '--cy', '0.15', '--steps', '2', '--max-area', '0.01', '--no-video', "
+        f"'--quiet', '--out', {str(tmp_path)!r}]\n"
+        "try:\n    runpy.run_module('taichi_pneuma.apps.inflate', run_name='__main__')\n"
+        "except SystemExit as exc:\n    assert not exc.code, exc.code\n"
+        "print(' '.join(sorted(sys.modules)))\n"
+    )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)
     loaded = set(done.stdout.splitlines()[-1].split())
     for unused in ("matplotlib", "imageio", "imageio_ffmpeg", "PIL", "scipy.spatial", "meshio", "gmsh", "pyamg"):
@@ -67,11 +69,15 @@ def counting_gmsh(monkeypatch) -> list:
 
 
 def same_mesh(a, b) -> bool:
-    return (all(np.array_equal(getattr(a, k), getattr(b, k)) and getattr(a, k).dtype == getattr(b, k).dtype
-                for k in ("vertices", "tets", "boundary", "regions"))
-            and a.chambers.keys() == b.chambers.keys()
-            and all(np.array_equal(a.chambers[k], b.chambers[k]) for k in a.chambers)
-            and a.region_names == b.region_names)
+    return (
+        all(
+            np.array_equal(getattr(a, k), getattr(b, k)) and getattr(a, k).dtype == getattr(b, k).dtype
+            for k in ("vertices", "tets", "boundary", "regions")
+        )
+        and a.chambers.keys() == b.chambers.keys()
+        and all(np.array_equal(a.chambers[k], b.chambers[k]) for k in a.chambers)
+        and a.region_names == b.region_names
+    )
 
 
 def test_a_second_mesh_of_the_same_solid_comes_from_the_cache_bit_for_bit(cache_dir, monkeypatch):
@@ -111,7 +117,7 @@ def test_a_corrupt_or_foreign_cache_file_is_ignored_and_rewritten(cache_dir, mon
     if spoil == "garbage":
         path.write_bytes(b"not a mesh" * 100)
     elif spoil == "truncated":
-        path.write_bytes(path.read_bytes()[:len(path.read_bytes()) // 2])
+        path.write_bytes(path.read_bytes()[: len(path.read_bytes()) // 2])
     else:
         if spoil == "foreign":
             arrays["__key__"] = np.array("0" * 64)
@@ -137,7 +143,7 @@ def test_the_cache_folder_follows_the_environment(tmp_path, monkeypatch):
         monkeypatch.setenv(cache.VARIABLE, off)
         assert cache.directory() is None
         cache.store("test", "0" * 64, {"a": np.zeros(3)})
-        assert cache.load("test", "0" * 64, lambda arrays: True, 10 ** 6) is None
+        assert cache.load("test", "0" * 64, lambda arrays: True, 10**6) is None
     assert not any(tmp_path.rglob("*.npz"))
 
 

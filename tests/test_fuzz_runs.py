@@ -28,14 +28,29 @@ from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.environment import CHOICES
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
-CHEAP = (SCENES / "reference_beam.toml").read_text().replace("max_area = 0.0012", "max_area = 0.02") \
-    .replace("[35, 3.5]", "[2, 1.3]").replace("increments = 35", "increments = 2")
+CHEAP = (
+    (SCENES / "reference_beam.toml")
+    .read_text()
+    .replace("max_area = 0.0012", "max_area = 0.02")
+    .replace("[35, 3.5]", "[2, 1.3]")
+    .replace("increments = 35", "increments = 2")
+)
 ENV = {**os.environ, "PYTHONUNBUFFERED": "1"}
 STEM = "reference_beam"
-NAMES = [f"{STEM}_history.csv", f"{STEM}_states.npz", f"{STEM}_summary.json", f"{STEM}_scene.toml", f"{STEM}.pvd",
-         f"{STEM}_vtk", f".{STEM}.lock", f".{STEM}_history.csv.partial.csv", f".{STEM}_summary.json.partial.json",
-         f".{STEM}_history.csv.999999999.abcdefgh.partial", f"{STEM}_vtk/{STEM}_0000.vtu",
-         f"{STEM}_vtk/.{STEM}_0001.vtu.partial.vtu"]
+NAMES = [
+    f"{STEM}_history.csv",
+    f"{STEM}_states.npz",
+    f"{STEM}_summary.json",
+    f"{STEM}_scene.toml",
+    f"{STEM}.pvd",
+    f"{STEM}_vtk",
+    f".{STEM}.lock",
+    f".{STEM}_history.csv.partial.csv",
+    f".{STEM}_summary.json.partial.json",
+    f".{STEM}_history.csv.999999999.abcdefgh.partial",
+    f"{STEM}_vtk/{STEM}_0000.vtu",
+    f"{STEM}_vtk/.{STEM}_0001.vtu.partial.vtu",
+]
 STATES = ["file", "folder", "link to a file", "link to a folder", "dangling link", "fifo"]
 
 
@@ -61,8 +76,13 @@ def snapshot(directory: Path) -> dict:
     return {str(p.relative_to(directory)): p.read_bytes() if p.is_file() else None for p in directory.rglob("*")}
 
 
-@settings(max_examples=25, deadline=timedelta(seconds=60), derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.too_slow])
+@settings(
+    max_examples=25,
+    deadline=timedelta(seconds=60),
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
 @given(st.lists(st.tuples(st.sampled_from(NAMES), st.sampled_from(STATES)), max_size=4, unique_by=lambda s: s[0]))
 def test_any_state_of_the_output_directory_gives_whole_files_or_one_error_line(planted):
     note(f"planted: {planted}")
@@ -95,11 +115,22 @@ def test_any_state_of_the_output_directory_gives_whole_files_or_one_error_line(p
             assert code == 2 and len(lines) == 1 and lines[0].startswith("error: "), lines
 
 
-@settings(max_examples=30, deadline=timedelta(seconds=60), derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.too_slow])
-@given(st.sampled_from(sorted(CHOICES)), st.one_of(
-    st.sampled_from(["", "taichi", "quadrants", "triangle", "meshpy", "TAICHI", " taichi", "x" * 5000, "../taichi"]),
-    st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="\x00"), max_size=30)))
+@settings(
+    max_examples=30,
+    deadline=timedelta(seconds=60),
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+@given(
+    st.sampled_from(sorted(CHOICES)),
+    st.one_of(
+        st.sampled_from(
+            ["", "taichi", "quadrants", "triangle", "meshpy", "TAICHI", " taichi", "x" * 5000, "../taichi"]
+        ),
+        st.text(st.characters(blacklist_categories=("Cs",), blacklist_characters="\x00"), max_size=30),
+    ),
+)
 def test_any_value_of_the_environment_variables_runs_or_is_one_error_line(variable, value):
     """PNEUMA_BACKEND and PNEUMA_TRIANGLE set to anything: a run (the name allowed and installed) or one error line
     naming the variable, before any work (issue 28: the sweep recorded the error per row and exited 0)."""
@@ -125,9 +156,25 @@ def test_any_value_of_the_environment_variables_runs_or_is_one_error_line(variab
 
 
 def run_and_signal(out: Path, signum: int, delay: float) -> tuple[int, str]:
-    proc = subprocess.Popen([sys.executable, "-m", "taichi_pneuma.apps.inflate", "--steps", "60", "--max-area", "0.02",
-                             "--no-video", "--quiet", "--out", str(out)], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True, env=ENV)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "taichi_pneuma.apps.inflate",
+            "--steps",
+            "60",
+            "--max-area",
+            "0.02",
+            "--no-video",
+            "--quiet",
+            "--out",
+            str(out),
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=ENV,
+    )
     time.sleep(delay)
     proc.send_signal(signum)
     _, stderr = proc.communicate(timeout=120)
@@ -170,12 +217,33 @@ def test_signals_at_random_times_end_with_128_plus_signal_and_consistent_files(t
 def test_runs_of_one_scene_at_once_never_interleave(tmp_path):
     """Three runs of the same scene into one --out: each ends done or refused (another run holds the
     stem); the files left are one run's, whole."""
-    procs = [subprocess.Popen([sys.executable, "-m", "taichi_pneuma.apps.inflate", "--steps", "30", "--max-area", "0.02",
-                               "--no-video", "--quiet", "--out", str(tmp_path)], stdout=subprocess.DEVNULL,
-                              stderr=subprocess.PIPE, text=True, env=ENV) for _ in range(3)]
+    procs = [
+        subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "taichi_pneuma.apps.inflate",
+                "--steps",
+                "30",
+                "--max-area",
+                "0.02",
+                "--no-video",
+                "--quiet",
+                "--out",
+                str(tmp_path),
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=ENV,
+        )
+        for _ in range(3)
+    ]
     outcomes = [(p.wait(timeout=300), p.stderr.read()) for p in procs]
-    assert all(code == 0 or (code == 2 and "another run is writing the results named 'inflate_cy+0.15'" in err)
-               for code, err in outcomes), outcomes
+    assert all(
+        code == 0 or (code == 2 and "another run is writing the results named 'inflate_cy+0.15'" in err)
+        for code, err in outcomes
+    ), outcomes
     assert any(code == 0 for code, _ in outcomes)
     consistent(tmp_path)
     summary = json.loads((tmp_path / "inflate_cy+0.15_summary.json").read_text())

@@ -36,15 +36,46 @@ from taichi_pneuma.scene.sceneformat import SOLIDS
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 INCREMENTS = 3
-FLAGS = ["--no-video", "--quiet", "--max-triangles", "3000", "--max-increments", "20", "--max-iterations", "20",
-         "--max-cuts", "2"]
+FLAGS = [
+    "--no-video",
+    "--quiet",
+    "--max-triangles",
+    "3000",
+    "--max-increments",
+    "20",
+    "--max-iterations",
+    "20",
+    "--max-cuts",
+    "2",
+]
 TIME_BOUND = 20.0  # seconds per example (a guarded example takes well under 1 s)
 
 NUMBERS = [math.nan, math.inf, -math.inf, 0, 0.0, -1, -1.0, -0.5, 1e-300, 1e300, -1e300, 10**30, 10**9, 2.5]
 WRONG_TYPES = ["text", "", True, [], [1.0], [1, 2, 3], [[0, 1], [2]], {"x": 1}, "1e4"]
 # {WORK} becomes the example's own temporary folder: an absolute name that escaped would land there, not in /
-ODD_NAMES = ["../escaped", "../../etc/evil", "{WORK}/absolute", "a/b", "a\\b", ".hidden", "..", ".", "", " ",
-             "x" * 300, "naïve", "tab\tname", "new\nline", "nul\u0000", "-rf", "*", "~", "$HOME", "con", "ok_name"]
+ODD_NAMES = [
+    "../escaped",
+    "../../etc/evil",
+    "{WORK}/absolute",
+    "a/b",
+    "a\\b",
+    ".hidden",
+    "..",
+    ".",
+    "",
+    " ",
+    "x" * 300,
+    "naïve",
+    "tab\tname",
+    "new\nline",
+    "nul\u0000",
+    "-rf",
+    "*",
+    "~",
+    "$HOME",
+    "con",
+    "ok_name",
+]
 EXTRA_KEYS = ["extra", "centre", "Name", "max_area", "E", "ε"]
 # a thin arm on the body's right side: quality meshing needs about length / width triangles in it
 ARM_WIDTHS, ARM_LENGTHS = [1e-6, 1e-4, 1e-2], [1.0, 10.0, 100.0, 1000.0]
@@ -80,8 +111,11 @@ MESH_FILES = [MESHES.name, "x" * 5000, str(SPARSE_MESH), str(lzma_vtu(Path(MESHE
 # balloon_syringe driven otherwise: one of the three is enough; beam_3d_ellipsoid is beam_3d's body from shapes
 # (pneunet_3d fuzzes the 3D shapes and gmsh)
 SAME_BODY = {"balloon_volume", "balloon_pressure", "beam_3d_ellipsoid"}
-BASES = {path.stem: cheap(tomllib.loads(path.read_text())) for path in sorted(SCENES.glob("*.toml"))
-         if path.stem not in SAME_BODY}
+BASES = {
+    path.stem: cheap(tomllib.loads(path.read_text()))
+    for path in sorted(SCENES.glob("*.toml"))
+    if path.stem not in SAME_BODY
+}
 
 
 def toml_value(value) -> str:
@@ -111,8 +145,11 @@ def paths(node, prefix=()):
 
 def mutate(scene: dict, draw) -> str:
     """Apply one mutation to scene (in place), choosing with draw(strategy); return what it did."""
-    kind = draw(st.sampled_from(["value", "value", "scale", "delete", "extra", "name", "overlap", "length", "thin",
-                                 "mesh file"]))
+    kind = draw(
+        st.sampled_from(
+            ["value", "value", "scale", "delete", "extra", "name", "overlap", "length", "thin", "mesh file"]
+        )
+    )
     chambers = scene.get("chambers")
     if kind == "mesh file":
         if not isinstance(scene.get("body"), dict) or scene["body"].get("shape") != "mesh":
@@ -122,8 +159,11 @@ def mutate(scene: dict, draw) -> str:
     if kind == "thin":
         return thin_arm(scene, draw(st.sampled_from(ARM_WIDTHS)), draw(st.sampled_from(ARM_LENGTHS)))
     if kind == "name":
-        owner = draw(st.sampled_from([scene] + [c for c in chambers if isinstance(c, dict)]
-                                     if isinstance(chambers, list) else [scene]))
+        owner = draw(
+            st.sampled_from(
+                [scene] + [c for c in chambers if isinstance(c, dict)] if isinstance(chambers, list) else [scene]
+            )
+        )
         owner["name"] = draw(st.sampled_from(ODD_NAMES))
         return f"{'scene' if owner is scene else 'chamber'} name = {owner['name']!r}"
     if kind == "overlap":
@@ -134,11 +174,16 @@ def mutate(scene: dict, draw) -> str:
             copied["name"] = "copy"
         chambers.append(copied)
         return "overlap: chambers[0] duplicated"
-    fits = {"value": lambda v: True, "delete": lambda v: True, "extra": lambda v: isinstance(v, dict),
-            "scale": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool),
-            "length": lambda v: isinstance(v, list)}[kind]
-    candidates = [(path, value) for path, value in [((), scene)] * (kind == "extra") + list(paths(scene))
-                  if fits(value)]
+    fits = {
+        "value": lambda v: True,
+        "delete": lambda v: True,
+        "extra": lambda v: isinstance(v, dict),
+        "scale": lambda v: isinstance(v, (int, float)) and not isinstance(v, bool),
+        "length": lambda v: isinstance(v, list),
+    }[kind]
+    candidates = [
+        (path, value) for path, value in [((), scene)] * (kind == "extra") + list(paths(scene)) if fits(value)
+    ]
     if not candidates:
         return f"{kind} (nothing to mutate)"
     path, value = draw(st.sampled_from(candidates))
@@ -174,8 +219,19 @@ def thin_arm(scene: dict, width: float, length: float) -> str:
         assert body["shape"] == "rectangle" and all(math.isfinite(v) for v in (x0, x1, y0, y1))
     except (AssertionError, AttributeError, KeyError, TypeError, ValueError):
         return "thin (no rectangle body)"
-    scene["body"] = {"shape": "polygon", "points": [[x0, y0], [x1, y0], [x1, cy - width / 2], [x1 + length, cy - width / 2],
-                                                    [x1 + length, cy + width / 2], [x1, cy + width / 2], [x1, y1], [x0, y1]]}
+    scene["body"] = {
+        "shape": "polygon",
+        "points": [
+            [x0, y0],
+            [x1, y0],
+            [x1, cy - width / 2],
+            [x1 + length, cy - width / 2],
+            [x1 + length, cy + width / 2],
+            [x1, cy + width / 2],
+            [x1, y1],
+            [x0, y1],
+        ],
+    }
     return f"thin arm {width:g} x {length:g}"
 
 
@@ -203,7 +259,7 @@ def scene_text(draw) -> tuple[str, bytes]:
         text += deep(kind, n).encode()
         done.append(f"deep {kind} of {n}")
     if draw(st.integers(0, 9)) == 0:
-        text = text[:draw(st.integers(0, len(text)))]
+        text = text[: draw(st.integers(0, len(text)))]
         done.append("cut off")
     return f"{base}: " + "; ".join(done), text
 
@@ -227,7 +283,14 @@ def run_in_sandbox(text: bytes) -> tuple[int, list[str], list[str], float]:
         outside = [str(p) for p in work.rglob("*") if p.is_file() and p != scene and out not in p.parents]
         if code == 0:
             names = sorted(p.name for p in out.iterdir())
-            endings = ("_history.csv", "_states.npz", "_summary.json", "_scene.toml", ".pvd", "_vtk")  # --no-video: no PNG
+            endings = (
+                "_history.csv",
+                "_states.npz",
+                "_summary.json",
+                "_scene.toml",
+                ".pvd",
+                "_vtk",
+            )  # --no-video: no PNG
             assert len(names) == len(endings) and all(any(n.endswith(e) for n in names) for e in endings), names
         return code, lines, outside, seconds
 
@@ -243,8 +306,13 @@ def test_cheap_bases_run(bases_outcomes):
     assert bases_outcomes == {name: (0, [], []) for name in BASES}
 
 
-@settings(max_examples=100, deadline=timedelta(seconds=TIME_BOUND), derandomize=True, database=None,
-          suppress_health_check=[HealthCheck.too_slow])
+@settings(
+    max_examples=100,
+    deadline=timedelta(seconds=TIME_BOUND),
+    derandomize=True,
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
 @given(st.data())
 def test_mutated_scene_files_run_or_stop_with_one_error_line(bases_outcomes, data):
     description, text = scene_text(data.draw)

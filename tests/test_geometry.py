@@ -46,13 +46,16 @@ def test_named_vertex_sets():
     assert ys[0] == pytest.approx(-0.4) and ys[-1] == pytest.approx(0.4)
 
 
-@pytest.mark.parametrize("kwargs, word", [
-    (dict(cy=0.5), "cy = 0.5"),
-    (dict(cy=-0.18), "vertically"),
-    (dict(cx=1.0), "horizontally"),
-    (dict(a=-1.0), "a = -1.0"),
-    (dict(max_area=float("nan")), "max_area"),
-])
+@pytest.mark.parametrize(
+    "kwargs, word",
+    [
+        (dict(cy=0.5), "cy = 0.5"),
+        (dict(cy=-0.18), "vertically"),
+        (dict(cx=1.0), "horizontally"),
+        (dict(a=-1.0), "a = -1.0"),
+        (dict(max_area=float("nan")), "max_area"),
+    ],
+)
 def test_chamber_outside_the_beam_is_refused(kwargs, word):
     with pytest.raises(PneumaInputError, match=word):
         BeamGeometry(**kwargs)

@@ -14,8 +14,9 @@ REFERENCE_TIP = -0.279
 
 
 def ramp(cy=0.15, growth=3.5, steps=36, k=1e5, E=1e4, nu=0.45, max_area=0.0012):
-    built = reference_scene(cy=cy, growth=growth, steps=steps, youngs_modulus=E, poisson_ratio=nu, chamber_stiffness=k,
-                            max_area=max_area).build()
+    built = reference_scene(
+        cy=cy, growth=growth, steps=steps, youngs_modulus=E, poisson_ratio=nu, chamber_stiffness=k, max_area=max_area
+    ).build()
     return built, run_schedule(built)
 
 
@@ -42,7 +43,7 @@ def test_large_growth_balloons_and_keeps_curling(growth):
     assert_stable(built, result)
     assert result.steps[-1].chambers["main"].area_ratio == pytest.approx(growth, rel=0.01)
     tips = result.history["tip_dy"]
-    assert tips[-1] < -0.9 and np.all(np.diff(tips[len(tips) // 2:]) < 0)  # curls further as it balloons
+    assert tips[-1] < -0.9 and np.all(np.diff(tips[len(tips) // 2 :]) < 0)  # curls further as it balloons
 
 
 @pytest.mark.slow
@@ -98,7 +99,9 @@ def test_chamber_stiffness_extremes(k):
         assert abs(area_error) < 1e-5
         assert result.tip_deflection == pytest.approx(REFERENCE_TIP, abs=0.01)
     else:  # a soft chamber falls short by p / k
-        assert area_error == pytest.approx(-final.pressure / (k * final.command * built.chambers[0].rest_area), rel=1e-9)
+        assert area_error == pytest.approx(
+            -final.pressure / (k * final.command * built.chambers[0].rest_area), rel=1e-9
+        )
         assert area_error < -0.05
 
 

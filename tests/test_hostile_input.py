@@ -28,11 +28,21 @@ from taichi_pneuma.scene.targets import read_targets_csv
 from taichi_pneuma.study import Sweep, parse_vary, plan, run_task, study_figure
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
-CHEAP = (SCENES / "reference_beam.toml").read_text().replace("max_area = 0.0012", "max_area = 0.02") \
-    .replace("[35, 3.5]", "[2, 1.3]").replace("increments = 35", "increments = 2")
+CHEAP = (
+    (SCENES / "reference_beam.toml")
+    .read_text()
+    .replace("max_area = 0.0012", "max_area = 0.02")
+    .replace("[35, 3.5]", "[2, 1.3]")
+    .replace("increments = 35", "increments = 2")
+)
 QUICK = ["--no-video", "--quiet"]
-RESULTS = {"reference_beam.pvd", "reference_beam_history.csv", "reference_beam_states.npz",
-           "reference_beam_summary.json", "reference_beam_scene.toml"}
+RESULTS = {
+    "reference_beam.pvd",
+    "reference_beam_history.csv",
+    "reference_beam_states.npz",
+    "reference_beam_summary.json",
+    "reference_beam_scene.toml",
+}
 STRIP = [[-1, -0.5], [1, -0.5], [1, -5e-5], [100, -5e-5], [100, 5e-5], [1, 5e-5], [1, 0.5], [-1, 0.5]]
 ENV = {**os.environ, "PYTHONUNBUFFERED": "1"}
 SIGNAL_NAMES = {signal.SIGINT: "Ctrl-C", signal.SIGTERM: "SIGTERM", signal.SIGHUP: "SIGHUP"}
@@ -70,13 +80,19 @@ class Inline:
 
 # --- 1. size guards ---------------------------------------------------------------------------------
 
+
 def test_a_thin_strip_is_stopped_by_the_triangle_budget_not_meshed_for_minutes(tmp_path, capsys):
     """The estimate sees area and outline (about 256 triangles); quality meshing fills the 1e-4 wide,
     99 long strip with ~745,000 triangles (before: 73 s, then out of memory). Triangle now stops at its
     cap of added points."""
     body = f'[body]\nshape = "polygon"\npoints = {STRIP}'
-    path = scene_file(tmp_path, CHEAP, ('[body]\nshape = "rectangle"\ncenter = [0.0, 0.0]\nsize = [3.5, 0.8]', body),
-                      ("semi_axes = [0.85, 0.22]", "semi_axes = [0.3, 0.1]"), ("center = [0.0, 0.15]", "center = [0.0, 0.2]"))
+    path = scene_file(
+        tmp_path,
+        CHEAP,
+        ('[body]\nshape = "rectangle"\ncenter = [0.0, 0.0]\nsize = [3.5, 0.8]', body),
+        ("semi_axes = [0.85, 0.22]", "semi_axes = [0.3, 0.1]"),
+        ("center = [0.0, 0.15]", "center = [0.0, 0.2]"),
+    )
     start = time.perf_counter()
     assert run_inflate(tmp_path, path, "--max-triangles", "20000") == 2
     assert time.perf_counter() - start < 10.0
@@ -122,12 +138,17 @@ def test_self_contact_pairs_count_in_the_estimate_and_are_checked_before_they_ar
 
 # --- 2. parsers with depth and length limits -------------------------------------------------------
 
-@pytest.mark.parametrize("text, words", [
-    ("a" + ".a" * 499_000 + " = 1\n", "a dotted key of more than 16 parts"),  # 998 kB: before, minutes
-    ("[" + ".".join(["x"] * 3000) + "]\n", "a dotted key of more than 16 parts"),  # before: RecursionError
-    ("a = " + "{a = " * 3000 + "1" + "}" * 3000, "nested too deeply"),
-    ("a = " + "[" * 20 + "]" * 20, "nested too deeply \\(at most 16 levels\\)"),
-], ids=["499000-part key", "3000-part header", "deep inline tables", "20 deep arrays"])
+
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("a" + ".a" * 499_000 + " = 1\n", "a dotted key of more than 16 parts"),  # 998 kB: before, minutes
+        ("[" + ".".join(["x"] * 3000) + "]\n", "a dotted key of more than 16 parts"),  # before: RecursionError
+        ("a = " + "{a = " * 3000 + "1" + "}" * 3000, "nested too deeply"),
+        ("a = " + "[" * 20 + "]" * 20, "nested too deeply \\(at most 16 levels\\)"),
+    ],
+    ids=["499000-part key", "3000-part header", "deep inline tables", "20 deep arrays"],
+)
 def test_deep_or_long_keys_in_a_scene_file_are_refused_at_once(tmp_path, text, words):
     path = tmp_path / "deep.toml"
     path.write_text(text)
@@ -137,12 +158,16 @@ def test_deep_or_long_keys_in_a_scene_file_are_refused_at_once(tmp_path, text, w
     assert time.perf_counter() - start < 2.0
 
 
-@pytest.mark.parametrize("assignment, words", [
-    ("name=" + "[" * 3000 + "]" * 3000, "nested too deeply"),
-    (".".join(["a"] * 20_000) + "=1", "has more than 16 parts"),
-    ("chambers[0].name=ab\udcff", "is not valid UTF-8"),  # a byte the terminal could not decode
-    ("name=" + "x" * 100_001, "the value has 100001 characters"),
-], ids=["3000-deep value", "20000-part key", "undecodable byte", "long value"])
+@pytest.mark.parametrize(
+    "assignment, words",
+    [
+        ("name=" + "[" * 3000 + "]" * 3000, "nested too deeply"),
+        (".".join(["a"] * 20_000) + "=1", "has more than 16 parts"),
+        ("chambers[0].name=ab\udcff", "is not valid UTF-8"),  # a byte the terminal could not decode
+        ("name=" + "x" * 100_001, "the value has 100001 characters"),
+    ],
+    ids=["3000-deep value", "20000-part key", "undecodable byte", "long value"],
+)
 def test_deep_long_or_undecodable_set_values_are_one_error_line(tmp_path, capsys, assignment, words):
     """Before: RecursionError tracebacks; the undecodable byte crashed the CSV/VTU writer after the run."""
     assert run_inflate(tmp_path, scene_file(tmp_path), "--set", assignment) == 2
@@ -160,14 +185,19 @@ def test_keys_and_values_read_the_same_within_the_limits():
 
 # --- 3. result files: no link followed, no other run interleaved -----------------------------------
 
+
 def test_links_planted_in_out_are_replaced_or_refused_never_followed(tmp_path):
     """Before: a link at the predictable temporary name made the run overwrite the file it points to."""
     victim = tmp_path / "victim.txt"
     victim.write_text("precious")
     out = tmp_path / "out"
     out.mkdir()
-    for name in (".reference_beam_history.csv.partial.csv", ".reference_beam_summary.json.partial.json",
-                 "reference_beam_summary.json", ".reference_beam.pvd.partial.pvd"):
+    for name in (
+        ".reference_beam_history.csv.partial.csv",
+        ".reference_beam_summary.json.partial.json",
+        "reference_beam_summary.json",
+        ".reference_beam.pvd.partial.pvd",
+    ):
         (out / name).symlink_to(victim)
     assert run_inflate(tmp_path, scene_file(tmp_path)) == 0
     assert victim.read_text() == "precious"
@@ -190,8 +220,10 @@ def test_a_link_at_the_vtk_folder_is_refused_and_its_target_untouched(tmp_path, 
 
 def hold_lock(path: Path) -> subprocess.Popen:
     """Another process holding path's flock (as a run of the same stem does) until it is killed."""
-    holder = ("import fcntl, os, sys, time; fd = os.open(sys.argv[1], os.O_RDWR | os.O_CREAT); "
-              "fcntl.flock(fd, fcntl.LOCK_EX); print('held', flush=True); time.sleep(60)")
+    holder = (
+        "import fcntl, os, sys, time; fd = os.open(sys.argv[1], os.O_RDWR | os.O_CREAT); "
+        "fcntl.flock(fd, fcntl.LOCK_EX); print('held', flush=True); time.sleep(60)"
+    )
     proc = subprocess.Popen([sys.executable, "-c", holder, str(path)], stdout=subprocess.PIPE, text=True)
     assert proc.stdout.readline().strip() == "held"
     return proc
@@ -227,10 +259,24 @@ def test_two_different_sweeps_under_one_name_one_is_refused(tmp_path):
     """Two processes at once: whichever comes second is refused, by the lock or (if the first has ended)
     as another study; the survivor's rows are all there."""
     out = tmp_path / "out"
-    command = [sys.executable, "-m", "taichi_pneuma.apps.sweep", "--steps", "3", "--max-area", "0.02", "--workers", "1",
-               "--out", str(out), "--quiet"]
-    procs = [subprocess.Popen([*command, "--vary", vary], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                              env=ENV) for vary in ("cy=-0.1,0.1", "E=1e4,2e4")]
+    command = [
+        sys.executable,
+        "-m",
+        "taichi_pneuma.apps.sweep",
+        "--steps",
+        "3",
+        "--max-area",
+        "0.02",
+        "--workers",
+        "1",
+        "--out",
+        str(out),
+        "--quiet",
+    ]
+    procs = [
+        subprocess.Popen([*command, "--vary", vary], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+        for vary in ("cy=-0.1,0.1", "E=1e4,2e4")
+    ]
     outcomes = [(p.wait(timeout=300), p.stderr.read()) for p in procs]
     assert sorted(code for code, _ in outcomes) == [0, 2], outcomes
     refused = next(err for code, err in outcomes if code == 2)
@@ -242,6 +288,7 @@ def test_two_different_sweeps_under_one_name_one_is_refused(tmp_path):
 
 # --- 4. failures that became tracebacks -------------------------------------------------------------
 
+
 def test_a_ramp_that_fails_at_step_0_is_one_line_and_saves_nothing(tmp_path, capsys):
     """Before: IndexError/KeyError in save_history (no step done)."""
     path = scene_file(tmp_path, (SCENES / "finger_on_ground.toml").read_text(), ("max_area = 0.004", "max_area = 0.02"))
@@ -252,8 +299,12 @@ def test_a_ramp_that_fails_at_step_0_is_one_line_and_saves_nothing(tmp_path, cap
 
 def test_a_huge_time_step_is_the_quasistatic_limit_not_an_overflow(tmp_path, capsys):
     """Before: OverflowError in masses / dt**2."""
-    assert run_inflate(tmp_path, scene_file(tmp_path), "--set", "effects.dynamics.density=1",
-                       "--set", "effects.dynamics.dt=1e300") == 0
+    assert (
+        run_inflate(
+            tmp_path, scene_file(tmp_path), "--set", "effects.dynamics.density=1", "--set", "effects.dynamics.dt=1e300"
+        )
+        == 0
+    )
     dynamic = json.loads((tmp_path / "out" / "reference_beam_summary.json").read_text())["tip_deflection"]
     assert run_inflate(tmp_path, scene_file(tmp_path), out="static") == 0
     static = json.loads((tmp_path / "static" / "reference_beam_summary.json").read_text())["tip_deflection"]
@@ -261,7 +312,8 @@ def test_a_huge_time_step_is_the_quasistatic_limit_not_an_overflow(tmp_path, cap
 
 
 def test_a_file_at_the_vtk_folder_is_refused_before_solving_and_a_folder_at_a_partial_name_is_no_obstacle(
-        tmp_path, capsys):
+    tmp_path, capsys
+):
     """Before: FileExistsError / IsADirectoryError after the run, its results not saved."""
     out = tmp_path / "out"
     out.mkdir()
@@ -303,14 +355,22 @@ def test_damaged_study_files_are_one_error_or_a_rerun_never_a_traceback(tmp_path
 
 
 @pytest.mark.filterwarnings("ignore:constrained_layout not applied")  # 1e100-wide tick labels
-@pytest.mark.parametrize("keys, values", [
-    (["k"], [(1.0, 1e308), (2.0, -1e308)]), (["k"], [(1e308, 1.0)]), (["k", "j"], [((-1e308, 1.0), 1.0), ((1e308, 2.0), 2.0)]),
-    (["k", "j"], [((-1.0, 1.0), -1e308), ((1.0, 2.0), 1e308)]), (["k"], [(1e-300, 1e-300), (2e-300, -1e-300)]),
-])
+@pytest.mark.parametrize(
+    "keys, values",
+    [
+        (["k"], [(1.0, 1e308), (2.0, -1e308)]),
+        (["k"], [(1e308, 1.0)]),
+        (["k", "j"], [((-1e308, 1.0), 1.0), ((1e308, 2.0), 2.0)]),
+        (["k", "j"], [((-1.0, 1.0), -1e308), ((1.0, 2.0), 1e308)]),
+        (["k"], [(1e-300, 1e-300), (2e-300, -1e-300)]),
+    ],
+)
 def test_the_study_plot_draws_extreme_values(keys, values):
     """Before: LinAlgError, 'Axis limits cannot be NaN or Inf', 'arange: cannot compute length' after the CSV."""
-    rows = [{**dict(zip(keys, k if isinstance(k, tuple) else (k,))), "tip_dy": tip, "tip_dx": 0.0, "error": None}
-            for k, tip in values]
+    rows = [
+        {**dict(zip(keys, k if isinstance(k, tuple) else (k,))), "tip_dy": tip, "tip_dx": 0.0, "error": None}
+        for k, tip in values
+    ]
     import io
 
     study_figure(rows, keys).savefig(io.BytesIO(), format="png", dpi=50)
@@ -319,14 +379,34 @@ def test_the_study_plot_draws_extreme_values(keys, values):
 def test_arch_gpu_without_a_gpu_that_runs_64_bit_kernels_is_one_error_line(tmp_path):
     """Before: a RuntimeError traceback from the Vulkan code generator (no 64-bit atan2); where Taichi finds no
     Vulkan driver at all, a segfault (exit -11), which the probe process now turns into the error line."""
-    proc = subprocess.run([sys.executable, "-m", "taichi_pneuma.apps.inflate", "--arch", "gpu", "--steps", "2",
-                           "--max-area", "0.02", *QUICK, "--out", str(tmp_path / "out")],
-                          capture_output=True, text=True, env=ENV, timeout=120, check=False)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "taichi_pneuma.apps.inflate",
+            "--arch",
+            "gpu",
+            "--steps",
+            "2",
+            "--max-area",
+            "0.02",
+            *QUICK,
+            "--out",
+            str(tmp_path / "out"),
+        ],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        timeout=120,
+        check=False,
+    )
     if "Starting on arch=cuda" in proc.stdout + proc.stderr:
         pytest.skip("this machine has CUDA: --arch gpu runs")
     assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
-    assert ("which cannot run this program's 64-bit kernels; use cpu, or cuda" in proc.stderr
-            or "starting it here crashed a test process (signal SIGSEGV" in proc.stderr), proc.stderr
+    assert (
+        "which cannot run this program's 64-bit kernels; use cpu, or cuda" in proc.stderr
+        or "starting it here crashed a test process (signal SIGSEGV" in proc.stderr
+    ), proc.stderr
 
 
 def interrupted_early(command: list[str], delay: float, **kwargs) -> subprocess.CompletedProcess:
@@ -348,8 +428,9 @@ def test_ctrl_c_while_loading_or_in_bench_is_one_line_and_130(tmp_path, app):
     Before: a KeyboardInterrupt traceback of the imports, or of the benchmark."""
     command = [sys.executable, "-m", f"taichi_pneuma.apps.{app}", "--out", str(tmp_path / "out")]
     if app == "bench":
-        proc = subprocess.Popen([*command, "--sections", "breakdown"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                text=True, env=ENV)
+        proc = subprocess.Popen(
+            [*command, "--sections", "breakdown"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV
+        )
         for line in proc.stdout:
             if line.startswith("## breakdown"):
                 proc.send_signal(signal.SIGINT)
@@ -364,11 +445,27 @@ def test_ctrl_c_while_loading_or_in_bench_is_one_line_and_130(tmp_path, app):
 
 # --- 5. signals ---------------------------------------------------------------------------------------
 
+
 def signalled_at_step_3(app: str, steps: int, out: Path, signum: int) -> tuple[int, str]:
     """Run an app's ramps of `steps` commanded areas, send it signum once step 3 is reported; (exit code, stderr)."""
-    proc = subprocess.Popen([sys.executable, "-m", f"taichi_pneuma.apps.{app}", "--steps", str(steps), "--max-area",
-                             "0.02", "--no-video", "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=ENV)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            f"taichi_pneuma.apps.{app}",
+            "--steps",
+            str(steps),
+            "--max-area",
+            "0.02",
+            "--no-video",
+            "--out",
+            str(out),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=ENV,
+    )
     for line in proc.stdout:
         if f"step   3/{steps - 1}" in line:
             proc.send_signal(signum)
@@ -408,8 +505,12 @@ def test_a_signal_while_results_are_saved_waits_for_them(tmp_path, monkeypatch):
             result.save(tmp_path, vtk=False, plot=False)
     finally:
         signal.signal(signal.SIGINT, previous)
-    assert sorted(os.listdir(tmp_path)) == ["reference_cy+0.15_history.csv", "reference_cy+0.15_scene.toml",
-                                            "reference_cy+0.15_states.npz", "reference_cy+0.15_summary.json"]
+    assert sorted(os.listdir(tmp_path)) == [
+        "reference_cy+0.15_history.csv",
+        "reference_cy+0.15_scene.toml",
+        "reference_cy+0.15_states.npz",
+        "reference_cy+0.15_summary.json",
+    ]
 
 
 def test_steer_saves_the_ramps_done_on_ctrl_c(tmp_path):
@@ -425,9 +526,26 @@ def test_steer_saves_the_ramps_done_on_ctrl_c(tmp_path):
 def test_a_terminal_ctrl_c_early_in_a_sweep_ends_it_without_a_hang(tmp_path):
     """Ctrl-C to the whole process group while the workers start. Before: a traceback of the imports,
     or a hang (InvalidStateError in the executor thread) until a second Ctrl-C."""
-    done = interrupted_early([sys.executable, "-m", "taichi_pneuma.apps.sweep", "--vary", "cy=-0.1,0,0.1,0.15",
-                              "--steps", "5", "--max-area", "0.02", "--workers", "2", "--out", str(tmp_path / "out"),
-                              "--quiet"], 4.0, start_new_session=True)
+    done = interrupted_early(
+        [
+            sys.executable,
+            "-m",
+            "taichi_pneuma.apps.sweep",
+            "--vary",
+            "cy=-0.1,0,0.1,0.15",
+            "--steps",
+            "5",
+            "--max-area",
+            "0.02",
+            "--workers",
+            "2",
+            "--out",
+            str(tmp_path / "out"),
+            "--quiet",
+        ],
+        4.0,
+        start_new_session=True,
+    )
     assert done.returncode in (0, 130) and "Traceback" not in done.stderr, done.stderr
     errors = [line for line in done.stderr.splitlines() if line.startswith("error:")]
     assert errors == (["error: interrupted (Ctrl-C)"] if done.returncode else [])
@@ -457,9 +575,27 @@ def children(pid: int) -> list[int]:
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_sweep_workers_die_with_their_parent_killed_outright(tmp_path):
     """Before: SIGKILL (or SIGTERM) of the sweep left its workers running as orphans (~190 MB each)."""
-    proc = subprocess.Popen([sys.executable, "-m", "taichi_pneuma.apps.sweep", "--vary", "cy=-0.1,-0.05,0,0.05,0.1,0.15",
-                             "--steps", "200", "--max-area", "0.01", "--workers", "2", "--out", str(tmp_path / "out")],
-                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=ENV)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "taichi_pneuma.apps.sweep",
+            "--vary",
+            "cy=-0.1,-0.05,0,0.05,0.1,0.15",
+            "--steps",
+            "200",
+            "--max-area",
+            "0.01",
+            "--workers",
+            "2",
+            "--out",
+            str(tmp_path / "out"),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+        env=ENV,
+    )
     for line in proc.stdout:
         if line.startswith("study sweep:"):
             break
@@ -501,6 +637,7 @@ def test_partial_files_of_killed_runs_are_cleaned(tmp_path):
 
 # --- 6. unbounded work -------------------------------------------------------------------------------
 
+
 def test_too_many_targets_are_refused_at_once(tmp_path):
     """Before: 25,000 [[targets]] were accepted (two hours of reaches); /dev/zero was read until the OOM
     killer ended it at 21.8 GB."""
@@ -535,12 +672,13 @@ def test_the_run_count_of_a_grid_is_counted_in_python_integers():
     """Four axes of 65,536 values: 2^64 runs, which NumPy's int64 product wrapped to 0 (then planned)."""
     axes = [parse_vary(f"chambers[0].keyframes[1][{i % 2}]=1:65536:65536") for i in range(4)]
     start = time.perf_counter()
-    with pytest.raises(PneumaInputError, match=f"the grid has {2 ** 64} runs; the limit is 100000"):
+    with pytest.raises(PneumaInputError, match=f"the grid has {2**64} runs; the limit is 100000"):
         plan(axes)
     assert time.perf_counter() - start < 5.0
 
 
 # --- 7. data -------------------------------------------------------------------------------------------
+
 
 def test_varying_a_chamber_name_keeps_the_study_columns_and_cells_are_formula_safe(tmp_path):
     """Before: the run's chamber columns were blank (named after the run's chamber, not the study's);

@@ -17,9 +17,11 @@ from taichi_pneuma.terms import Elasticity
 from taichi_pneuma.terms.model import EnergyModel
 
 # One material of each form (kPa, of Ecoflex-like magnitude)
-FORMS = {"neo_hookean": IsochoricMaterial("neo_hookean", 12.0, poisson_ratio=0.49999),
-         "mooney_rivlin": IsochoricMaterial("mooney_rivlin", 10.0, C01=3.0, poisson_ratio=0.49999),
-         "yeoh": IsochoricMaterial("yeoh", 8.0, C20=0.4, C30=0.01, poisson_ratio=0.49999)}
+FORMS = {
+    "neo_hookean": IsochoricMaterial("neo_hookean", 12.0, poisson_ratio=0.49999),
+    "mooney_rivlin": IsochoricMaterial("mooney_rivlin", 10.0, C01=3.0, poisson_ratio=0.49999),
+    "yeoh": IsochoricMaterial("yeoh", 8.0, C20=0.4, C30=0.01, poisson_ratio=0.49999),
+}
 STRETCHES = np.linspace(1.05, 3.0, 8)
 
 
@@ -34,20 +36,20 @@ def at(material, F):
 def w_derivatives(m, I1):
     """dW/dI1 and dW/dI2 of the material's W at first invariant I1 (its own formula, written out again here)."""
     a = I1 - 3.0
-    return m.C10 + 2 * m.C20 * a + 3 * m.C30 * a ** 2, m.C01
+    return m.C10 + 2 * m.C20 * a + 3 * m.C30 * a**2, m.C01
 
 
 def uniaxial_3d(m, lam):
     """Incompressible uniaxial tension: P = 2 (lam - lam^-2) (W1 + W2 / lam), I1 = lam^2 + 2 / lam."""
-    w1, w2 = w_derivatives(m, lam ** 2 + 2 / lam)
-    return 2 * (lam - lam ** -2) * (w1 + w2 / lam)
+    w1, w2 = w_derivatives(m, lam**2 + 2 / lam)
+    return 2 * (lam - lam**-2) * (w1 + w2 / lam)
 
 
 def uniaxial_plane_strain(m, lam):
     """Incompressible uniaxial tension in plane strain (stretches lam, 1/lam, 1):
     P = 2 (lam - lam^-3) (W1 + W2), I1 = I2 = lam^2 + lam^-2 + 1."""
-    w1, w2 = w_derivatives(m, lam ** 2 + lam ** -2 + 1)
-    return 2 * (lam - lam ** -3) * (w1 + w2)
+    w1, w2 = w_derivatives(m, lam**2 + lam**-2 + 1)
+    return 2 * (lam - lam**-3) * (w1 + w2)
 
 
 @pytest.mark.parametrize("form", FORMS)
@@ -68,9 +70,11 @@ def test_small_strain_limit_is_linear_elasticity_with_the_laws_moduli(form):
 
 def lateral_stretch(material, lam, free):
     """The stretch of the free directions (indices) of F = diag(lam, t, t or 1) that zeroes their stress."""
+
     def stress(t):
         F = np.diag([lam, t, t if len(free) == 2 else 1.0])
         return at(material, F[None])[1][0, free[0], free[0]]
+
     return brentq(stress, 0.2, 1.5, xtol=1e-15)
 
 
@@ -88,7 +92,8 @@ def test_uniaxial_tension_near_incompressibility_follows_the_closed_form(form):
         t = lateral_stretch(material, lam, (1,))
         assert abs(lam * t - 1) < 1e-3
         assert at(material, np.diag([lam, t, 1.0])[None])[1][0, 0, 0] == pytest.approx(
-            uniaxial_plane_strain(material, lam), rel=1e-3)
+            uniaxial_plane_strain(material, lam), rel=1e-3
+        )
 
 
 def strip_reaction(material, order, lam, length=4.0, height=1.0):
@@ -96,12 +101,12 @@ def strip_reaction(material, order, lam, length=4.0, height=1.0):
     prescribed (0 and (lam - 1) length), every other degree of freedom free but one y at the left end, solved by
     Newton on the elastic term. Returns the force per unit depth on the right end (sum of dE/dx_x there)."""
     runtime.ensure_initialised()
-    mesh = Geometry(Rectangle((length / 2, height / 2), (length, height)), (), 0.08, PointSet("left"),
-                    order).mesh()
+    mesh = Geometry(Rectangle((length / 2, height / 2), (length, height)), (), 0.08, PointSet("left"), order).mesh()
     X = mesh.vertices
     model = EnergyModel(X, force_floor=1e-9, energy_resolution=1e-12)
-    term = model.add(Elasticity(model.config, mesh.triangles, IsochoricPolynomial,
-                                np.tile(material.row(), (mesh.n_triangles, 1))))
+    term = model.add(
+        Elasticity(model.config, mesh.triangles, IsochoricPolynomial, np.tile(material.row(), (mesh.n_triangles, 1)))
+    )
     left, right = np.isclose(X[:, 0], 0.0), np.isclose(X[:, 0], length)
     fixed = np.zeros(X.shape, dtype=bool)
     fixed[left | right, 0] = True
@@ -131,6 +136,6 @@ def test_a_meshed_plane_strain_strip_follows_the_closed_form(form, order):
     stress within 1e-3, up to a stretch of 2.5."""
     material = FORMS[form]
     for lam in (1.2, 1.8, 2.5):
-        assert strip_reaction(material, order, lam) / 1.0 == pytest.approx(uniaxial_plane_strain(material, lam),
-                                                                           rel=1e-3)
-
+        assert strip_reaction(material, order, lam) / 1.0 == pytest.approx(
+            uniaxial_plane_strain(material, lam), rel=1e-3
+        )

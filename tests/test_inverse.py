@@ -56,8 +56,10 @@ def drawn_commands(built, seed):
     return lo + np.random.default_rng(seed).uniform(0.05, 0.95, len(lo)) * (hi - lo)
 
 
-@pytest.mark.parametrize("name, angle", [("reference", False), ("bidirectional", False), ("bidirectional", True),
-                                         ("bidirectional_pressure", False)])
+@pytest.mark.parametrize(
+    "name, angle",
+    [("reference", False), ("bidirectional", False), ("bidirectional", True), ("bidirectional_pressure", False)],
+)
 @pytest.mark.parametrize("seed", [1, 2])
 def test_twin_commands_are_recovered_where_unique(built, name, angle, seed):
     built = built(name)
@@ -117,9 +119,15 @@ def test_target_that_needs_a_bound(built):
 
 
 def test_bounds_from_the_scene_file_and_defaults(tmp_path):
-    text = (SCENES / "bidirectional.toml").read_text().replace(
-        'keyframes = [[0, 1.0], [8, 2.5], [16, 1.0]]', 'keyframes = [[0, 1.0], [8, 2.5], [16, 1.0]]\nbounds = [1.2, 2.0]')
-    (tmp_path / "b.toml").write_text(text + '\n[[targets]]\ntip = [1.8, -0.1]\nangle = -3.0\nweights = [1, 2, 0.5]\n')
+    text = (
+        (SCENES / "bidirectional.toml")
+        .read_text()
+        .replace(
+            "keyframes = [[0, 1.0], [8, 2.5], [16, 1.0]]",
+            "keyframes = [[0, 1.0], [8, 2.5], [16, 1.0]]\nbounds = [1.2, 2.0]",
+        )
+    )
+    (tmp_path / "b.toml").write_text(text + "\n[[targets]]\ntip = [1.8, -0.1]\nangle = -3.0\nweights = [1, 2, 0.5]\n")
     scene = load_scene(tmp_path / "b.toml")
     lo, hi = command_bounds(scene)
     assert lo.tolist() == [1.2, 1.0] and hi.tolist() == [2.0, 2.5]  # top from the file; bottom from its keyframes
@@ -127,19 +135,34 @@ def test_bounds_from_the_scene_file_and_defaults(tmp_path):
     assert command_bounds(load_scene(SCENES / "pneunet_finger.toml"))[1].tolist() == [900.0] * 6
 
 
-@pytest.mark.parametrize("make, pattern", [
-    (lambda: Target((float("nan"), 0.0)), "target tip = nan"),
-    (lambda: Target((1.0, 0.0), float("inf")), "target angle = inf"),
-    (lambda: Target((1.0,),), r"target tip = \[1.0\] must be \[x, y\]"),
-    (lambda: Target((1.0, 0.0), None, (0.0, 0.0, 1.0)), "w_x or w_y > 0"),
-    (lambda: ChamberControl(ChamberSchedule("pressure", ((1, 10.0),)), bounds=(900.0, 0.0)), "min 900 must be < max 0"),
-    (lambda: ChamberControl(ChamberSchedule("area", ((1, 2.0),)), bounds=(0.0, 2.0)),
-     r"bounds = \[0.0, 2.0\]: area ratio 0.0 must lie in \(0, 1000\]"),
-    (lambda: ChamberControl(ChamberSchedule("pressure", ((1, 10.0),)), bounds=(-5.0, 2.0)),
-     "pressure -5.0 is negative; set allow_vacuum"),
-    (lambda: ReachOptions(tol=0.0), "tol = 0.0 must be > 0"),
-    (lambda: ReachOptions(restarts=-1), "restarts = -1 must be an integer >= 0"),
-])
+@pytest.mark.parametrize(
+    "make, pattern",
+    [
+        (lambda: Target((float("nan"), 0.0)), "target tip = nan"),
+        (lambda: Target((1.0, 0.0), float("inf")), "target angle = inf"),
+        (
+            lambda: Target(
+                (1.0,),
+            ),
+            r"target tip = \[1.0\] must be \[x, y\]",
+        ),
+        (lambda: Target((1.0, 0.0), None, (0.0, 0.0, 1.0)), "w_x or w_y > 0"),
+        (
+            lambda: ChamberControl(ChamberSchedule("pressure", ((1, 10.0),)), bounds=(900.0, 0.0)),
+            "min 900 must be < max 0",
+        ),
+        (
+            lambda: ChamberControl(ChamberSchedule("area", ((1, 2.0),)), bounds=(0.0, 2.0)),
+            r"bounds = \[0.0, 2.0\]: area ratio 0.0 must lie in \(0, 1000\]",
+        ),
+        (
+            lambda: ChamberControl(ChamberSchedule("pressure", ((1, 10.0),)), bounds=(-5.0, 2.0)),
+            "pressure -5.0 is negative; set allow_vacuum",
+        ),
+        (lambda: ReachOptions(tol=0.0), "tol = 0.0 must be > 0"),
+        (lambda: ReachOptions(restarts=-1), "restarts = -1 must be an integer >= 0"),
+    ],
+)
 def test_bad_input_is_refused(make, pattern):
     with pytest.raises(PneumaInputError, match=pattern):
         make()

@@ -62,8 +62,10 @@ def imported(source: str, module: str, is_package: bool, modules) -> set[str]:
 def imports() -> dict[str, set[str]]:
     """Every module of the package -> the package's modules it imports."""
     modules = {module_name(p): p for p in PACKAGE.rglob("*.py")}
-    return {module: imported(path.read_text(encoding="utf-8"), module, path.name == "__init__.py", modules)
-            for module, path in modules.items()}
+    return {
+        module: imported(path.read_text(encoding="utf-8"), module, path.name == "__init__.py", modules)
+        for module, path in modules.items()
+    }
 
 
 def test_every_part_of_the_package_has_a_layer():
@@ -71,8 +73,12 @@ def test_every_part_of_the_package_has_a_layer():
 
 
 def test_no_module_imports_from_a_higher_layer():
-    upward = [f"{module} -> {target}" for module, targets in imports().items() for target in targets
-              if RANK[part_of(target)] > RANK[part_of(module)]]
+    upward = [
+        f"{module} -> {target}"
+        for module, targets in imports().items()
+        for target in targets
+        if RANK[part_of(target)] > RANK[part_of(module)]
+    ]
     assert upward == []
 
 
@@ -82,7 +88,7 @@ def test_no_modules_import_each_other_around_a_loop():
 
     def visit(module, path):
         if module in path:
-            loops.append(path[path.index(module):] + [module])
+            loops.append(path[path.index(module) :] + [module])
             return
         if module in done:
             return
@@ -95,13 +101,16 @@ def test_no_modules_import_each_other_around_a_loop():
     assert loops == []
 
 
-@pytest.mark.parametrize("source, expected", [
-    ("from ..fem.mesh import Mesh", {"taichi_pneuma.fem.mesh"}),
-    ("from .. import limits", {"taichi_pneuma.limits"}),
-    ("def f():\n    from ..result import Result", {"taichi_pneuma.result"}),
-    ("from .frames import Track", {"taichi_pneuma.render.frames"}),
-    ("import numpy", set()),
-])
+@pytest.mark.parametrize(
+    "source, expected",
+    [
+        ("from ..fem.mesh import Mesh", {"taichi_pneuma.fem.mesh"}),
+        ("from .. import limits", {"taichi_pneuma.limits"}),
+        ("def f():\n    from ..result import Result", {"taichi_pneuma.result"}),
+        ("from .frames import Track", {"taichi_pneuma.render.frames"}),
+        ("import numpy", set()),
+    ],
+)
 def test_the_import_reader_resolves_relative_and_lazy_imports(source, expected):
     modules = {"taichi_pneuma.fem.mesh", "taichi_pneuma.limits", "taichi_pneuma.result", "taichi_pneuma.render.frames"}
     assert imported(source, "taichi_pneuma.render.probe", False, modules) == expected

@@ -29,9 +29,11 @@ from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms import Elasticity, NodalVolumeElasticity
 from taichi_pneuma.terms.model import EnergyModel
 
-MATERIALS = {"neo_hookean": lambda nu: IsochoricMaterial("neo_hookean", 0.5, poisson_ratio=nu),
-             "mooney_rivlin": lambda nu: IsochoricMaterial("mooney_rivlin", 1.0, 0.3, poisson_ratio=nu),
-             "yeoh": lambda nu: IsochoricMaterial("yeoh", 1.0, C20=0.2, C30=0.01, poisson_ratio=nu)}
+MATERIALS = {
+    "neo_hookean": lambda nu: IsochoricMaterial("neo_hookean", 0.5, poisson_ratio=nu),
+    "mooney_rivlin": lambda nu: IsochoricMaterial("mooney_rivlin", 1.0, 0.3, poisson_ratio=nu),
+    "yeoh": lambda nu: IsochoricMaterial("yeoh", 1.0, C20=0.2, C30=0.01, poisson_ratio=nu),
+}
 SCENES = Path(tp.__file__).parent / "scenes"
 
 
@@ -155,12 +157,14 @@ def test_the_scene_file_chooses_nodal_volumes_for_linear_elements_of_the_isochor
 
 def test_nodal_volumes_compile_once():
     """After a run with nodal volumes, other meshes and materials compile no kernel."""
-    runs = [(shell_octant(2, 1), MATERIALS["neo_hookean"](0.49)), (shell_octant(3, 2), MATERIALS["yeoh"](0.499)),
-            (shell_octant(3, 1), IsochoricMaterial("mooney_rivlin", 0.4, 0.1, bulk_modulus=300.0))]
+    runs = [
+        (shell_octant(2, 1), MATERIALS["neo_hookean"](0.49)),
+        (shell_octant(3, 2), MATERIALS["yeoh"](0.499)),
+        (shell_octant(3, 1), IsochoricMaterial("mooney_rivlin", 0.4, 0.1, bulk_modulus=300.0)),
+    ]
     for i, (mesh, material) in enumerate(runs):
         if i == 1:
             before = compiled_instances()
-        scene = scene_of(mesh, [ChamberSchedule("pressure", ((0, 0.0), (1, 0.05)))], 1, material,
-                         volumetric="nodal")
+        scene = scene_of(mesh, [ChamberSchedule("pressure", ((0, 0.0), (1, 0.05)))], 1, material, volumetric="nodal")
         assert tp.simulate(scene).converged
     assert compiled_instances() == before

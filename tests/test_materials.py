@@ -49,8 +49,9 @@ class SaintVenantKirchhoff(Law):
         S, B = 2.0 * p[0] * E + p[1] * E.trace() * I, F @ F.transpose()
         M = ti.Matrix.zero(ti.f64, 9, 9)
         for i, j, k, l in ti.ndrange(3, 3, 3, 3):
-            M[3 * i + j, 3 * k + l] = (I[i, k] * S[l, j] + p[0] * (F[i, l] * F[k, j] + B[i, k] * I[j, l])
-                                       + p[1] * F[i, j] * F[k, l])
+            M[3 * i + j, 3 * k + l] = (
+                I[i, k] * S[l, j] + p[0] * (F[i, l] * F[k, j] + B[i, k] * I[j, l]) + p[1] * F[i, j] * F[k, l]
+            )
         return M
 
 
@@ -82,8 +83,9 @@ def evaluate(law: ti.template(), F: Arrays3, parameters: Arrays2, psi: Arrays1, 
 
 
 @ti.kernel
-def eigensystems(law: ti.template(), d: ti.template(), F: Arrays3, parameters: Arrays2, values: Arrays2,
-                 vectors: Arrays3):
+def eigensystems(
+    law: ti.template(), d: ti.template(), F: Arrays3, parameters: Arrays2, values: Arrays2, vectors: Arrays3
+):
     """stress_eigensystem of the law on the leading d x d block at each F (N, 3, 3)."""
     for i in range(F.shape[0]):
         lambdas, V = stress_eigensystem(law, load(F, i), element_parameters(law, parameters, i), d)
@@ -148,12 +150,15 @@ def test_stable_neo_hookean_linearises_to_lame_constants_mu_and_lam_minus_mu():
     """At F = I, d2psi/dF2 is the linear elasticity tensor (lam - mu) d_ij d_kl + mu (d_ik d_jl + d_il d_jk):
     that of Saint Venant-Kirchhoff with Lame constants (mu, lam - mu)."""
     d = np.eye(3)
-    linear = ((LAM - MU) * np.einsum("ij,kl->ijkl", d, d)
-              + MU * (np.einsum("ik,jl->ijkl", d, d) + np.einsum("il,jk->ijkl", d, d))).reshape(9, 9)
+    linear = (
+        (LAM - MU) * np.einsum("ij,kl->ijkl", d, d)
+        + MU * (np.einsum("ik,jl->ijkl", d, d) + np.einsum("il,jk->ijkl", d, d))
+    ).reshape(9, 9)
     assert at(StableNeoHookean, np.eye(3)[None])[2][0] == pytest.approx(linear, abs=1e-9 * MU)
     svk = np.empty((1, 9, 9))
-    evaluate(SaintVenantKirchhoff, np.eye(3)[None].copy(), np.array([[MU, LAM - MU]]), np.empty(1),
-             np.empty((1, 3, 3)), svk)
+    evaluate(
+        SaintVenantKirchhoff, np.eye(3)[None].copy(), np.array([[MU, LAM - MU]]), np.empty(1), np.empty((1, 3, 3)), svk
+    )
     assert svk[0] == pytest.approx(linear, abs=1e-9 * MU)
 
 
@@ -163,7 +168,7 @@ def test_plane_strain_energy_is_the_3d_law_at_unit_thickness_stretch():
     F = random_F(20, dim=2)
     F2 = F[:, :2, :2]
     J = np.linalg.det(F2)
-    expected = MU * (1 - J) + LAM / 2 * (1 - J) ** 2 + MU / 2 * (np.sum(F2 ** 2, axis=(1, 2)) - 2)
+    expected = MU * (1 - J) + LAM / 2 * (1 - J) ** 2 + MU / 2 * (np.sum(F2**2, axis=(1, 2)) - 2)
     assert at(StableNeoHookean, F)[0] == pytest.approx(expected, rel=1e-12, abs=1e-12 * MU)
 
 
@@ -194,8 +199,9 @@ def coarse_body(order, dim=2):
     if dim == 3:
         mesh = shell_octant(2, 1, order)
     else:
-        scene = reference_scene(cy=0.15, chamber_points=16 if order == 2 else 32,
-                                max_area=0.05 if order == 2 else 0.02, order=order)
+        scene = reference_scene(
+            cy=0.15, chamber_points=16 if order == 2 else 32, max_area=0.05 if order == 2 else 0.02, order=order
+        )
         mesh = scene.build().mesh
     return mesh, 0.02 * np.random.default_rng(order).standard_normal(mesh.vertices.shape)
 
@@ -227,7 +233,10 @@ def test_elastic_term_energy_gradient_and_hessian_match_finite_differences(law, 
 @pytest.mark.parametrize("order", [1, 2])
 def test_generic_path_gives_the_analytic_hessian(order, dim):
     mesh, u = coarse_body(order, dim)
-    (model, analytic), (jacobi_model, jacobi) = elastic_model(mesh, StableNeoHookean), elastic_model(mesh, JacobiNeoHookean)
+    (model, analytic), (jacobi_model, jacobi) = (
+        elastic_model(mesh, StableNeoHookean),
+        elastic_model(mesh, JacobiNeoHookean),
+    )
     model.set_displacements(u)
     jacobi_model.set_displacements(u)
     for psd_only in (True, False):

@@ -38,8 +38,9 @@ def write_msh(path, mesh):
     """The mesh (tetrahedra: group "body"), its chamber wall turned inside out (group "chamber"), as write_mesh
     writes it (gmsh 2.2 or Abaqus by the file's suffix)."""
     wall = mesh.chambers[0]
-    return write_mesh(path, dataclasses.replace(mesh, chambers=(wall[:, list(mesh.family.facet_family.mirror)],)),
-                      ("chamber",))
+    return write_mesh(
+        path, dataclasses.replace(mesh, chambers=(wall[:, list(mesh.family.facet_family.mirror)],)), ("chamber",)
+    )
 
 
 def scene_text(mesh_file, order=1, steps=2, more=""):
@@ -106,18 +107,21 @@ def test_mesh_paths_are_relative_to_the_scene_file_and_round_trip(tmp_path):
     assert scene.with_value("chambers[0].stiffness", 2e5).controls[0].kind.stiffness == 2e5
 
 
-@pytest.mark.parametrize("case, message", [
-    ("missing group", "has no group 'cavity' \\(its groups: chamber, body\\)"),
-    ("no file", "does not exist"),
-    ("not a mesh", "cannot be read by meshio"),
-    ("no tetrahedra", "has no tetrahedra"),
-    ("max_area", "mesh.max_area: a mesh file's body keeps the file's elements"),
-    ("open wall", "lies on no roller plane"),
-    ("surface on a 2D body", "needs a body from a mesh file"),
-    ("polygon wall on a mesh body", "chambers are the mesh file's groups"),
-    ("3D roller on a 2D body", "a 2D body's rollers have 2 components"),
-    ("self contact", "self_contact is 2D only"),
-])
+@pytest.mark.parametrize(
+    "case, message",
+    [
+        ("missing group", "has no group 'cavity' \\(its groups: chamber, body\\)"),
+        ("no file", "does not exist"),
+        ("not a mesh", "cannot be read by meshio"),
+        ("no tetrahedra", "has no tetrahedra"),
+        ("max_area", "mesh.max_area: a mesh file's body keeps the file's elements"),
+        ("open wall", "lies on no roller plane"),
+        ("surface on a 2D body", "needs a body from a mesh file"),
+        ("polygon wall on a mesh body", "chambers are the mesh file's groups"),
+        ("3D roller on a 2D body", "a 2D body's rollers have 2 components"),
+        ("self contact", "self_contact is 2D only"),
+    ],
+)
 def test_bad_mesh_scenes_are_one_clear_error(tmp_path, case, message):
     mesh, _ = extruded_beam(0.2, chamber_points=8)
     write_msh(tmp_path / "beam.msh", mesh)
@@ -129,8 +133,9 @@ def test_bad_mesh_scenes_are_one_clear_error(tmp_path, case, message):
     elif case == "not a mesh":
         (tmp_path / "beam.msh").write_text("$MeshFormat\nnonsense\n")
     elif case == "no tetrahedra":
-        meshio.write(tmp_path / "beam.msh", meshio.Mesh(mesh.vertices, [("triangle", mesh.surface)]), "gmsh22",
-                     binary=False)
+        meshio.write(
+            tmp_path / "beam.msh", meshio.Mesh(mesh.vertices, [("triangle", mesh.surface)]), "gmsh22", binary=False
+        )
     elif case == "max_area":
         text = text.replace("order = 1", "order = 1\nmax_area = 0.01")
     elif case == "open wall":
@@ -169,7 +174,7 @@ def test_inflate_runs_a_mesh_file_scene_and_writes_3d_results(tmp_path, capsys):
     assert summary["tetrahedra"] == mesh.n_elements and summary["all_converged"]
     assert abs(summary["tip_deflection"]) > 0.01 and abs(summary["tip_dz"]) < 1e-6
     header = (out / "beam3d_history.csv").read_text().splitlines()[0].split(",")
-    assert header[header.index("tip_dy") + 1: header.index("tip_dy") + 3] == ["tip_dz", "tip_rotation"]
+    assert header[header.index("tip_dy") + 1 : header.index("tip_dy") + 3] == ["tip_dz", "tip_rotation"]
     states = np.load(out / "beam3d_states.npz")
     assert np.array_equal(states["tetrahedra"], mesh.elements) and states["positions"].shape == (3, mesh.n_vertices, 3)
     grid = meshio.read(out / "beam3d_vtk" / "beam3d_0002.vtu")
@@ -219,8 +224,14 @@ def test_the_api_simulates_and_saves_a_3d_scene(tmp_path):
     assert fields["stress"].shape == (mesh.n_elements, 3, 3) and fields["von_mises"].shape == (mesh.n_elements,)
     assert np.all(fields["max_stretch"] >= 1.0 - 1e-12)
     written = result.save(tmp_path / "out")
-    assert {p.name for p in written} >= {"beam3d_history.csv", "beam3d_states.npz", "beam3d_plot.png",
-                                         "beam3d_scene.toml", "beam3d_summary.json", "beam3d.pvd"}
+    assert {p.name for p in written} >= {
+        "beam3d_history.csv",
+        "beam3d_states.npz",
+        "beam3d_plot.png",
+        "beam3d_scene.toml",
+        "beam3d_summary.json",
+        "beam3d.pvd",
+    }
 
 
 def test_a_3d_material_region_is_a_box_of_six_numbers(tmp_path):
@@ -271,11 +282,15 @@ def test_a_curved_quadratic_gmsh_mesh_is_read_as_is(tmp_path):
         gmsh.write(str(tmp_path / "curved.msh"))
     finally:
         gmsh.finalize()
-    sphere = 4 / 3 * np.pi * 0.3 ** 3
+    sphere = 4 / 3 * np.pi * 0.3**3
     errors = []
     for name in ("linear", "curved"):
-        geometry = MeshGeometry(MeshBody(str(tmp_path / f"{name}.msh")), (("c", MeshSurface("chamber")),),
-                                order=1 if name == "linear" else 2, clamp=PointSet("left"))
+        geometry = MeshGeometry(
+            MeshBody(str(tmp_path / f"{name}.msh")),
+            (("c", MeshSurface("chamber")),),
+            order=1 if name == "linear" else 2,
+            clamp=PointSet("left"),
+        )
         built = Scene(geometry, (ChamberControl(area_ramp(1.1, 2)),), 1).build()
         assert built.mesh.elements.shape[1] == (4 if name == "linear" else 10)
         errors.append(abs(built.chambers[0].rest_area / sphere - 1))

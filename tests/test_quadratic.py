@@ -31,8 +31,13 @@ INDEPENDENT_CONVERGED_TIP = -0.2583
 def coarse_p2():
     """A coarse quadratic beam on the ground under gravity, chamber commanded to 1.5x, in a random state."""
     scene = reference_scene(cy=0.15, chamber_points=16, max_area=0.05, order=2)
-    scene = Scene(scene.geometry, scene.controls, scene.increments, scene.material,
-                  effects=(Gravity(2.0), Ground(-0.45, dhat=0.06, stiffness=50.0)))
+    scene = Scene(
+        scene.geometry,
+        scene.controls,
+        scene.increments,
+        scene.material,
+        effects=(Gravity(2.0), Ground(-0.45, dhat=0.06, stiffness=50.0)),
+    )
     built = scene.build()
     built.set_commands([1.5])
     return built, random_state(built, scale=0.01, seed=5)
@@ -100,8 +105,9 @@ def test_nodal_areas_integrate_linear_loads_exactly():
     the ellipse), whose hole has, by Green's theorem, area 1/2 int (x y' - y x') ds and moments
     (1/2 int x^2 y' ds, -1/2 int y^2 x' ds), integrands of degree <= 5: 3-point Gauss-Legendre is exact.
     Off the curved triangles (those with a node on the wall), corners carry no weight."""
-    geometry = Geometry(Rectangle((0.3, -0.1), (1.2, 0.5)), (("c", Ellipse((0.2, 0.0), (0.3, 0.1), 24)),), 0.01,
-                        order=2)
+    geometry = Geometry(
+        Rectangle((0.3, -0.1), (1.2, 0.5)), (("c", Ellipse((0.2, 0.0), (0.3, 0.1), 24)),), 0.01, order=2
+    )
     mesh = geometry.mesh()
     weights = mesh.nodal_areas()
     loop = mesh.chambers[0]
@@ -112,8 +118,9 @@ def test_nodal_areas_integrate_linear_loads_exactly():
     x = a * (1 - s) * (1 - 2 * s) + m * 4 * s * (1 - s) + b * s * (2 * s - 1)  # (3 points, arcs, 2)
     dx = a * (4 * s - 3) + m * (4 - 8 * s) + b * (4 * s - 1)
     hole_area = 0.5 * np.einsum("q,qk->", w, x[..., 0] * dx[..., 1] - x[..., 1] * dx[..., 0])
-    hole_moment = 0.5 * np.array([np.einsum("q,qk->", w, x[..., 0] ** 2 * dx[..., 1]),
-                                  -np.einsum("q,qk->", w, x[..., 1] ** 2 * dx[..., 0])])
+    hole_moment = 0.5 * np.array(
+        [np.einsum("q,qk->", w, x[..., 0] ** 2 * dx[..., 1]), -np.einsum("q,qk->", w, x[..., 1] ** 2 * dx[..., 0])]
+    )
     assert weights.sum() == pytest.approx(1.2 * 0.5 - hole_area, rel=1e-12)
     assert weights @ mesh.vertices == pytest.approx(np.array([0.3, -0.1]) * 0.6 - hole_moment, rel=1e-12)
     curved = np.isin(mesh.triangles, loop).any(axis=1)
@@ -131,8 +138,14 @@ def test_reference_ramp_on_p2_is_within_one_percent_of_the_converged_figure():
 
 def tip_under_refinement(order: int) -> list[float]:
     """Tip deflection of a small problem (coarse beam, 1.5x in 3 increments) on 3 uniformly refined meshes."""
-    return [run_schedule(reference_scene(0.15, growth=1.5, steps=4, max_area=0.02, chamber_points=32, order=order,
-                                         refinements=r).build()).tip_deflection for r in range(3)]
+    return [
+        run_schedule(
+            reference_scene(
+                0.15, growth=1.5, steps=4, max_area=0.02, chamber_points=32, order=order, refinements=r
+            ).build()
+        ).tip_deflection
+        for r in range(3)
+    ]
 
 
 @pytest.mark.slow

@@ -35,8 +35,10 @@ def test_the_first_line_names_the_preset_and_its_measured_error_where_a_preset_m
         args = parser().parse_args(list(flags))
         return preset_note(scene_of_flags(args), args)
 
-    assert note("--cy", "0.15") == f"; --quality default: tip within {QUALITY_ERROR[2]['default']:g} % of converged " \
-                                   "on the reference beam"
+    assert (
+        note("--cy", "0.15") == f"; --quality default: tip within {QUALITY_ERROR[2]['default']:g} % of converged "
+        "on the reference beam"
+    )
     assert "--quality high: tip within" in note("--scene", "pneunet_3d", "--quality", "high")
     assert note("--scene", "pneunet_3d") == ""  # the scene's own [mesh]
     assert note("--scene", "beam_3d", "--quality", "high") == ""  # a mesh file's tetrahedra

@@ -65,8 +65,22 @@ def test_trajectory_from_scene_targets_and_csv_with_video(tmp_path, capsys, bidi
     (tmp_path / "traj.toml").write_text(text)
     (tmp_path / "traj.csv").write_text("x,y\n" + "".join(f"{x!r},{y!r}\n" for x, y in tips))
     out = tmp_path / "out"
-    assert main(["--scene", str(tmp_path / "traj.toml"), "--out", str(out), "--renderer", SOFTWARE, "--size", "320x128",
-                 "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "--scene",
+                str(tmp_path / "traj.toml"),
+                "--out",
+                str(out),
+                "--renderer",
+                SOFTWARE,
+                "--size",
+                "320x128",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     assert capsys.readouterr().out.splitlines()[-1].startswith("reached: all 3 targets in order")
     history = np.genfromtxt(out / "reach_bidirectional_history.csv", delimiter=",", names=True, deletechars="")
     assert sorted(set(history["target"].astype(int))) == [0, 1, 2]
@@ -114,19 +128,25 @@ increments = 2
 """
 
 
-@pytest.mark.parametrize("flags, word", [
-    (["--tip", "nan", "0"], "target tip = nan"),
-    (["--tip", "1.8", "0", "--weights", "0", "0", "1"], "w_x or w_y > 0"),
-    (["--tip", "1.8", "0", "--bounds", "top", "3", "2"], "--bounds top: bounds = [3.0, 2.0]: min 3 must be < max 2"),
-    (["--tip", "1.8", "0", "--bounds", "middle", "1", "2"], "unknown chamber 'middle' (chambers: top, bottom)"),
-    (["--tip", "1.8", "0", "--bounds", "top", "0", "2"], "area ratio 0.0 must lie in (0, 1000]"),
-    (["--angle", "5"], "--angle needs --tip"),
-    (["--tip", "1.8", "0", "--targets", "t.csv"], "give --tip or --targets, not both"),
-    (["--targets", "missing.csv"], "'missing.csv' cannot be read"),
-    (["--scene", str(SCENES / "pneunet_finger.toml")], "no target: give --tip X Y"),  # a scene without [[targets]]
-    (["--tip", "1.8", "0", "--tip-tol", "0"], "tol = 0.0 must be > 0"),
-    (["--tip-dy", "-0.2"], "--tip-dy needs --design cy"),
-])
+@pytest.mark.parametrize(
+    "flags, word",
+    [
+        (["--tip", "nan", "0"], "target tip = nan"),
+        (["--tip", "1.8", "0", "--weights", "0", "0", "1"], "w_x or w_y > 0"),
+        (
+            ["--tip", "1.8", "0", "--bounds", "top", "3", "2"],
+            "--bounds top: bounds = [3.0, 2.0]: min 3 must be < max 2",
+        ),
+        (["--tip", "1.8", "0", "--bounds", "middle", "1", "2"], "unknown chamber 'middle' (chambers: top, bottom)"),
+        (["--tip", "1.8", "0", "--bounds", "top", "0", "2"], "area ratio 0.0 must lie in (0, 1000]"),
+        (["--angle", "5"], "--angle needs --tip"),
+        (["--tip", "1.8", "0", "--targets", "t.csv"], "give --tip or --targets, not both"),
+        (["--targets", "missing.csv"], "'missing.csv' cannot be read"),
+        (["--scene", str(SCENES / "pneunet_finger.toml")], "no target: give --tip X Y"),  # a scene without [[targets]]
+        (["--tip", "1.8", "0", "--tip-tol", "0"], "tol = 0.0 must be > 0"),
+        (["--tip-dy", "-0.2"], "--tip-dy needs --design cy"),
+    ],
+)
 def test_bad_input_is_one_error_line_and_exit_2(tmp_path, capsys, flags, word):
     assert main(["--scene", BIDIRECTIONAL, *flags, "--out", str(tmp_path / "out"), *QUIET]) == 2
     err = capsys.readouterr().err
@@ -136,14 +156,43 @@ def test_bad_input_is_one_error_line_and_exit_2(tmp_path, capsys, flags, word):
 
 def test_angle_needs_a_tip_with_two_vertices(tmp_path, capsys):
     (tmp_path / "pointed.toml").write_text(POINTED)
-    assert main(["--scene", str(tmp_path / "pointed.toml"), "--tip", "1.4", "0", "--angle", "5",
-                 "--out", str(tmp_path), *QUIET]) == 2
+    assert (
+        main(
+            [
+                "--scene",
+                str(tmp_path / "pointed.toml"),
+                "--tip",
+                "1.4",
+                "0",
+                "--angle",
+                "5",
+                "--out",
+                str(tmp_path),
+                *QUIET,
+            ]
+        )
+        == 2
+    )
     assert "tip rotation needs at least 2 tip vertices (this mesh has 1)" in capsys.readouterr().err
 
 
 def test_bad_input_from_the_shell_has_no_traceback(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "taichi_pneuma.apps.reach", "--scene", BIDIRECTIONAL, "--tip", "1",
-                           "inf", "--out", str(tmp_path)], capture_output=True, text=True)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "taichi_pneuma.apps.reach",
+            "--scene",
+            BIDIRECTIONAL,
+            "--tip",
+            "1",
+            "inf",
+            "--out",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+    )
     errors = [line for line in proc.stderr.splitlines() if line.strip() and not line.startswith("[Taichi]")]
     assert proc.returncode == 2 and errors == ["error: target tip = inf must be a finite number"]
 
@@ -168,16 +217,26 @@ def test_design_out_of_range_is_unreachable(tmp_path, capsys):
 
 
 @needs_window
-def test_live_drag_resolves_on_every_move_and_sliders_command_directly(xvfb_display, monkeypatch, capsys, bidirectional):
+def test_live_drag_resolves_on_every_move_and_sliders_command_directly(
+    xvfb_display,  # noqa: F811 (the fixture, imported by name)
+    monkeypatch,
+    capsys,
+    bidirectional,
+):
     """Under Xvfb, in a real ti.GUI window; the canvas's mouse query is scripted (the button held at two
     target positions, then released) and on the last frame the 'top' slider returns a value the user set."""
     from taichi_pneuma.live.interactive import fixed_view, follow_mouse
     from taichi_pneuma.render.canvases import GUICanvas
 
     size = (480, 192)
-    view = FrameRenderer([Track(bidirectional.mesh, bidirectional.mesh.vertices[None], np.ones((1, 2)),
-                                np.zeros((1, 2)), np.zeros(1))], *size, trace=False, backend="gui",
-                         bounds=fixed_view(bidirectional.mesh), log=lambda *_: None)
+    view = FrameRenderer(
+        [Track(bidirectional.mesh, bidirectional.mesh.vertices[None], np.ones((1, 2)), np.zeros((1, 2)), np.zeros(1))],
+        *size,
+        trace=False,
+        backend="gui",
+        bounds=fixed_view(bidirectional.mesh),
+        log=lambda *_: None,
+    )
     tips = [forward(bidirectional, q)[0] for q in ([1.6, 1.2], [1.9, 1.3])]  # reachable targets
     at = [tuple(view.to_canvas(0, tip)) for tip in tips]
     script = iter([(*at[0], True), (*at[0], True), (*at[1], True), (*at[1], False), (0.5, 0.5, False)])

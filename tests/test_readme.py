@@ -21,8 +21,10 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-SKIP = re.compile(r"^(python3 -m venv|\.venv/bin/|pip |\. \.venv|source |ray |python -m pytest|pneuma-bench)"
-                  r"|--ray|--interactive|--design")
+SKIP = re.compile(
+    r"^(python3 -m venv|\.venv/bin/|pip |\. \.venv|source |ray |python -m pytest|pneuma-bench)"
+    r"|--ray|--interactive|--design"
+)
 FAST = ["--quality", "draft", "--steps", "8"]
 ONE_WORKER = ["--workers", "1"]
 
@@ -42,8 +44,9 @@ def entry_point(argv: list[str]):
     if argv[0] in scripts:
         module, _, function = scripts[argv[0]].partition(":")
         return getattr(importlib.import_module(module), function), argv[1:]
-    assert argv[:2] == ["python", "-m"] and argv[2].startswith("taichi_pneuma.apps."), \
+    assert argv[:2] == ["python", "-m"] and argv[2].startswith("taichi_pneuma.apps."), (
         f"a README command this test cannot run: {' '.join(argv)}"
+    )
     return importlib.import_module(argv[2]).main, argv[3:]
 
 

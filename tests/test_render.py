@@ -83,10 +83,10 @@ def test_ground_line_is_drawn_where_the_ground_is(track):
     x_mid = float(track.states[0, :, 0].mean())
     on_line = pixels_at(renderer, image, np.array([[x_mid, lowest - 0.02]]))
     assert np.all(np.abs(on_line - rgb8(GROUND)) <= 3)
-    no_ground = FrameRenderer([track], 480, 192, trace=False, backend=SOFTWARE, canvas=renderer.canvas,
-                              bounds=bounds)
-    assert np.all(np.abs(pixels_at(no_ground, no_ground.frame(0), np.array([[x_mid, lowest - 0.02]]))
-                         - rgb8(BACKGROUND)) <= 3)
+    no_ground = FrameRenderer([track], 480, 192, trace=False, backend=SOFTWARE, canvas=renderer.canvas, bounds=bounds)
+    assert np.all(
+        np.abs(pixels_at(no_ground, no_ground.frame(0), np.array([[x_mid, lowest - 0.02]])) - rgb8(BACKGROUND)) <= 3
+    )
 
 
 def test_view_frames_every_state(track):
@@ -126,16 +126,31 @@ def test_no_video_initialises_no_renderer_and_draws_no_picture(tmp_path, monkeyp
     monkeypatch.setattr(render_frames, "open_canvas", refuse)
     assert inflate.main([*COARSE, "--no-video", "--out", str(tmp_path)]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == [
-        f"inflate_cy+0.15{end}" for end in (".pvd", "_history.csv", "_scene.toml", "_states.npz", "_summary.json",
-                                             "_vtk")]
+        f"inflate_cy+0.15{end}"
+        for end in (".pvd", "_history.csv", "_scene.toml", "_states.npz", "_summary.json", "_vtk")
+    ]
 
 
 def test_inflate_renders_with_ti_gui_by_default_and_refuses_ggui_without_vulkan(tmp_path):
     """'auto' is ti.GUI (the faster renderer), so no Vulkan is needed (a backend without Taichi's GUIs,
     Quadrants, falls back to Pillow); asking for GGUI where Vulkan is missing is one error line before any solve."""
     env = dict(os.environ, VK_ICD_FILENAMES=str(tmp_path / "no_vulkan.json"))
-    run = lambda *flags: subprocess.run([sys.executable, "-m", "taichi_pneuma.apps.inflate", *COARSE, "--size", "320x160",
-                                         "--out", str(tmp_path), *flags], capture_output=True, text=True, env=env)
+    run = lambda *flags: subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "taichi_pneuma.apps.inflate",
+            *COARSE,
+            "--size",
+            "320x160",
+            "--out",
+            str(tmp_path),
+            *flags,
+        ],
+        capture_output=True,
+        text=True,
+        env=env,
+    )
     proc = run()
     assert proc.returncode == 0, proc.stderr
     name = "ti.GUI (software)" if has_gui() else "Pillow (software)"
@@ -148,7 +163,11 @@ def test_inflate_renders_with_ti_gui_by_default_and_refuses_ggui_without_vulkan(
     assert iio.imread(tmp_path / "inflate_cy+0.15.png").shape == (160, 320, 3)
     refused = run("--renderer", "ggui")
     errors = [line for line in refused.stderr.splitlines() if line.startswith("error:")]
-    assert refused.returncode == 2 and len(errors) == 1 and ("renderer = 'ggui' is unavailable" if has_gui() else "renderer = 'ggui' needs") in errors[0]
+    assert (
+        refused.returncode == 2
+        and len(errors) == 1
+        and ("renderer = 'ggui' is unavailable" if has_gui() else "renderer = 'ggui' needs") in errors[0]
+    )
 
 
 def test_steer_plays_three_panels_in_one_video(tmp_path, capsys):
@@ -163,10 +182,15 @@ def test_steer_plays_three_panels_in_one_video(tmp_path, capsys):
     assert iio.imread(tmp_path / "steer.png").shape == (128, 384, 3)
 
 
-@pytest.mark.parametrize("flags, word", [
-    (["--size", "300"], "--size = '300'"), (["--size", "99x64"], "--size = '99x64'"),
-    (["--fps", "0"], "fps = 0"), (["--video", "x.avi"], "x.avi"),
-])
+@pytest.mark.parametrize(
+    "flags, word",
+    [
+        (["--size", "300"], "--size = '300'"),
+        (["--size", "99x64"], "--size = '99x64'"),
+        (["--fps", "0"], "fps = 0"),
+        (["--video", "x.avi"], "x.avi"),
+    ],
+)
 def test_bad_rendering_flags_exit_2(tmp_path, capsys, flags, word):
     assert inflate.main([*COARSE, *flags, "--out", str(tmp_path)]) == 2
     assert word in capsys.readouterr().err
@@ -209,11 +233,15 @@ def test_pillow_draws_the_picture_ggui_draws(track):
 def xvfb_display(monkeypatch):
     """A virtual X display on a free display number, ready when yielded (skips when Xvfb is not installed)."""
     import shutil
+
     if not shutil.which("Xvfb"):
         pytest.skip("Xvfb is not installed (apt-get install xvfb)")
     read_end, write_end = os.pipe()
-    proc = subprocess.Popen(["Xvfb", "-displayfd", str(write_end), "-screen", "0", "800x600x24"],
-                            pass_fds=(write_end,), stderr=subprocess.DEVNULL)
+    proc = subprocess.Popen(
+        ["Xvfb", "-displayfd", str(write_end), "-screen", "0", "800x600x24"],
+        pass_fds=(write_end,),
+        stderr=subprocess.DEVNULL,
+    )
     os.close(write_end)
     with os.fdopen(read_end) as ready:
         number = ready.readline().strip()  # Xvfb writes its display number once it accepts connections
@@ -249,8 +277,12 @@ def test_text_never_covers_the_body(track):
         for p, t in enumerate(titled):
             uv = renderer.to_canvas(p, t.states[i])
             px = np.column_stack([uv[:, 0] * renderer.width, (1 - uv[:, 1]) * renderer.height])
-            inside = ((px[:, None, 0] >= boxes[None, :, 0]) & (px[:, None, 0] <= boxes[None, :, 2])
-                      & (px[:, None, 1] >= boxes[None, :, 1]) & (px[:, None, 1] <= boxes[None, :, 3]))
+            inside = (
+                (px[:, None, 0] >= boxes[None, :, 0])
+                & (px[:, None, 0] <= boxes[None, :, 2])
+                & (px[:, None, 1] >= boxes[None, :, 1])
+                & (px[:, None, 1] <= boxes[None, :, 3])
+            )
             assert not inside.any()
 
 
@@ -261,9 +293,11 @@ def test_body_colours_follow_det_f_and_the_colour_bar_numbers(ramp):
 
     mesh, result = ramp
     colored = Track.from_result(result, color="detF")
+
     def areas(x):
         a, b, c = (x[mesh.triangles[:, k]] for k in range(3))
         return (b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0]
+
     det = np.array([areas(x) / areas(mesh.vertices) for x in result.positions])  # det F = area ratio
     assert colored.color == pytest.approx(det, rel=1e-10) and colored.color_label == "det F"
     renderer = FrameRenderer([colored], 480, 192, trace=False, backend=SOFTWARE)
@@ -290,8 +324,10 @@ def test_trace_axis_numbers_match_the_drawn_curves(track):
     step_x = {float(l.text): l.x for l in labels if l.anchor == "mt" and l.text.replace(".", "").isdigit()}
     assert set(step_x) >= {0.0, 1.0, 2.0}
     y_of = {}
-    for anchor, color, values in (("rm", AREA_CURVE, track.area_ratio[:, 0]),
-                                  ("lm", PRESSURE_CURVE, track.pressure[:, 0])):
+    for anchor, color, values in (
+        ("rm", AREA_CURVE, track.area_ratio[:, 0]),
+        ("lm", PRESSURE_CURVE, track.pressure[:, 0]),
+    ):
         ticks = [(float(l.text), l.y) for l in labels if l.anchor == anchor and l.color == color]
         assert len(ticks) >= 3
         (v0, y0), (v1, y1) = ticks[0], ticks[-1]
@@ -302,7 +338,7 @@ def test_trace_axis_numbers_match_the_drawn_curves(track):
             y, x = y_of[color][step], step_x[float(step)]
             if abs(y - y_of[other][step]) < 8:
                 continue  # the curves meet here
-            patch = image[int(y) - 2:int(y) + 3, int(x) - 2:int(x) + 3].reshape(-1, 3)
+            patch = image[int(y) - 2 : int(y) + 3, int(x) - 2 : int(x) + 3].reshape(-1, 3)
             assert np.min(np.abs(patch - rgb8(color)).max(axis=1)) < 40, (color, step)
             checked += 1
     assert checked >= 2

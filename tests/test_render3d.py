@@ -65,9 +65,20 @@ def finger():
     positions = np.array(states)
     color = np.linalg.norm(positions - rest, axis=2)
     captions = tuple((f"step {i}/3",) for i in range(4))
-    trace = (("curvature", np.array([0.0, 0.15, 0.3, 0.45])), ("tip y", positions[:, rest[:, 0] > 1.99, 1].mean(axis=1)))
-    return Track3D(positions, outer_faces, (chamber,), color=color, color_label="|u|", title="bent block",
-                   captions=captions, trace=trace)
+    trace = (
+        ("curvature", np.array([0.0, 0.15, 0.3, 0.45])),
+        ("tip y", positions[:, rest[:, 0] > 1.99, 1].mean(axis=1)),
+    )
+    return Track3D(
+        positions,
+        outer_faces,
+        (chamber,),
+        color=color,
+        color_label="|u|",
+        title="bent block",
+        captions=captions,
+        trace=trace,
+    )
 
 
 def test_camera_basis_projection_and_orbit():
@@ -131,7 +142,7 @@ def test_colours_are_interpolated_perspective_correctly():
     colors = np.array([[[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]]])
     image = NumpyView(400, 400).render(corners, colors, camera, (1, 1, 1))
     midpoint = corners[0, :2].mean(axis=0) + [0.0, 0.02, 0.0]  # just inside the triangle
-    (c, r), = np.floor(camera.project(midpoint[None], 400, 400)[0]).astype(int)
+    ((c, r),) = np.floor(camera.project(midpoint[None], 400, 400)[0]).astype(int)
     assert np.allclose(image[r, c], [0.5, 0.02, 0.48], atol=0.03)
 
 
@@ -166,12 +177,13 @@ def test_ggui_scene_draws_what_the_rasteriser_draws(finger):
 
 
 def view_of(renderer, image):
-    return image[renderer.header_px:, :renderer.canvas.width]
+    return image[renderer.header_px :, : renderer.canvas.width]
 
 
 def test_frames_show_the_chambers_through_the_section_and_never_crop_the_body(finger):
     """With the section the chamber's blue shows inside the body; without it the closed body hides it. The
     camera fitted to every state keeps the body off the view's border in every frame."""
+
     def chamber_blue(v):
         return np.count_nonzero((v[..., 2] > v[..., 0] + 40.0) & (v[..., 2] > v[..., 1] + 20.0))
 
@@ -202,7 +214,7 @@ def test_colour_field_and_colour_bar(finger):
     assert np.any(np.all(np.isclose(unshaded, high, atol=0.02), axis=-1))  # the yellow end reached
     image = renderer.frame(3)
     x0 = renderer.canvas.width + 8
-    strip = image[renderer.header_px + 20:renderer.height - 20, x0 + 7]
+    strip = image[renderer.header_px + 20 : renderer.height - 20, x0 + 7]
     assert np.allclose(strip[0] / 255, colormap(np.array([hi]), lo, hi)[0], atol=0.03)
     assert np.allclose(strip[-1] / 255, low, atol=0.03)
 
@@ -210,18 +222,19 @@ def test_colour_field_and_colour_bar(finger):
 def test_header_and_trace_cursor(finger):
     renderer = FrameRenderer3D(finger, 800, 360, backend="numpy")
     frames = [renderer.frame(i) for i in range(renderer.frames)]
-    assert all(np.any(f[:renderer.header_px, :200] < 128) for f in frames)  # title and caption text
+    assert all(np.any(f[: renderer.header_px, :200] < 128) for f in frames)  # title and caption text
     columns = renderer._trace.columns
     assert columns == sorted(columns) and len(set(columns)) == renderer.frames
-    panel = [f[:, renderer.width - renderer.trace_px:] for f in frames]
+    panel = [f[:, renderer.width - renderer.trace_px :] for f in frames]
     for i, p in enumerate(panel):
         rows = slice(*renderer._trace.rows)
         assert np.all(p[rows, columns[i]][5:-5] == 60)  # the cursor: a grey column across the plot box
 
 
 def test_video_has_every_frame(finger, tmp_path):
-    export = render_video_3d(finger, tmp_path / "ramp.mp4", tmp_path / "last.png", size=(480, 272), backend="numpy",
-                             log=lambda _: None)
+    export = render_video_3d(
+        finger, tmp_path / "ramp.mp4", tmp_path / "last.png", size=(480, 272), backend="numpy", log=lambda _: None
+    )
     frames = list(iio.imiter(tmp_path / "ramp.mp4"))
     assert export.frames == 4 == len(frames) and frames[0].shape == (272, 480, 3)
     assert iio.imread(tmp_path / "last.png").shape == (272, 480, 3)
@@ -264,16 +277,27 @@ def test_interactive_window_resolves_on_slider_moves_and_spins(xvfb_display, fin
     except Exception as exc:  # no Vulkan: GGUI cannot open a window
         pytest.skip(str(exc))
     script = iter([[0.0], [0.0], [0.5], [0.5], [1.0]])
-    monkeypatch.setattr(interactive3d, "commands_from",
-                        lambda sliders, shown, values, real=commands_from: real(sliders, shown, next(script)))
+    monkeypatch.setattr(
+        interactive3d,
+        "commands_from",
+        lambda sliders, shown, values, real=commands_from: real(sliders, shown, next(script)),
+    )
     calls = []
 
     def solve(commands):
         calls.append(commands.tolist())
         return finger.positions[int(round(3 * commands[0]))], [f"command {commands[0]:.2f}"]
 
-    summary = explore_3d(solve, [Slider("c", 0.0, 1.0, 0.0)], finger.positions[0], finger.boundary, finger.chambers,
-                         size=(320, 240), spin=5.0, max_frames=5)
+    summary = explore_3d(
+        solve,
+        [Slider("c", 0.0, 1.0, 0.0)],
+        finger.positions[0],
+        finger.boundary,
+        finger.chambers,
+        size=(320, 240),
+        spin=5.0,
+        max_frames=5,
+    )
     assert calls == [[0.0], [0.0], [0.0], [0.5], [0.5], [1.0]]  # solve: every frame, at the commands on screen
     assert summary["solves"] == 3 and summary["frames"] == 5
     assert summary["azimuth"] == pytest.approx(30.0 + 25.0)

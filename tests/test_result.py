@@ -46,7 +46,7 @@ def test_reach_frames_are_one_result_with_the_target_columns():
     for k in (0, 1):  # each target's last frame is within the tolerance of it
         assert history["tip_error"][np.flatnonzero(history["target"] == k)[-1]] <= 1e-3 * 3.5
     # the ramp's columns first, the reach's last: the history CSV's header
-    assert run.history_csv().splitlines()[0].split(",")[-len(EXTRA):] == EXTRA
+    assert run.history_csv().splitlines()[0].split(",")[-len(EXTRA) :] == EXTRA
     assert np.array_equal(Track.from_result(run).targets, targets)  # the video's cross follows them
 
 
@@ -73,9 +73,15 @@ def test_the_limits_count_the_contact_forces_of_every_effect_that_has_them():
     memory, whatever the effect's name; one without contact adds none. Self-contact adds its pairs: each
     node of the 128-node wall with each of the 126 edges not incident to it."""
     long = tp.reference_scene(max_area=0.01, steps=2001)
-    estimate = {name: memory_estimate(dataclasses.replace(long, effects=effects)) for name, effects in (
-        ("none", ()), ("gravity", (Gravity(density=1.0),)), ("floor", (Floor(height=-1.0),)),
-        ("self_contact", (SelfContact(),)))}
+    estimate = {
+        name: memory_estimate(dataclasses.replace(long, effects=effects))
+        for name, effects in (
+            ("none", ()),
+            ("gravity", (Gravity(density=1.0),)),
+            ("floor", (Floor(height=-1.0),)),
+            ("self_contact", (SelfContact(),)),
+        )
+    }
     assert estimate["gravity"] == estimate["none"]
     assert estimate["floor"] > 1.5 * estimate["none"]
     pairs = 128 * 126 * limits.BYTES_PER_PAIR / 1e9

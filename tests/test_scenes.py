@@ -33,8 +33,9 @@ def run_scene_cli(name, tmp_path):
 
 def test_reference_file_is_the_spec_scene():
     """So its run is the reference ramp, whose figures test_reference.py checks."""
-    assert dataclasses.replace(load_scene(SCENES / "reference_beam.toml"), name="x") == \
-        dataclasses.replace(reference_scene(cy=0.15), name="x")
+    assert dataclasses.replace(load_scene(SCENES / "reference_beam.toml"), name="x") == dataclasses.replace(
+        reference_scene(cy=0.15), name="x"
+    )
 
 
 def test_bidirectional_tip_goes_down_back_then_up(tmp_path):
@@ -82,7 +83,9 @@ def test_self_contact_keeps_a_chamber_deflated_to_0p2_simple():
 
 
 def pressure_version(scene, pressure):
-    return dataclasses.replace(scene, controls=(ChamberControl(ChamberSchedule("pressure", ((0, 0.0), (scene.increments, pressure)))),))
+    return dataclasses.replace(
+        scene, controls=(ChamberControl(ChamberSchedule("pressure", ((0, 0.0), (scene.increments, pressure)))),)
+    )
 
 
 def test_pressure_control_to_the_reached_pressure_gives_the_same_shape():
@@ -96,18 +99,27 @@ def test_pressure_control_to_the_reached_pressure_gives_the_same_shape():
 @pytest.mark.slow
 def test_pressure_past_the_limit_point_stops_naming_the_pressure():
     built = pressure_version(coarse_reference(steps=5), 3000.0).build()
-    with pytest.raises(RampFailed, match=r"step 1: no equilibrium at pressure [0-9.]+ \(last equilibrium at pressure "
-                                         r"[0-9.]+\) after 4 cuts") as failure:
+    with pytest.raises(
+        RampFailed,
+        match=r"step 1: no equilibrium at pressure [0-9.]+ \(last equilibrium at pressure "
+        r"[0-9.]+\) after 4 cuts",
+    ) as failure:
         run_schedule(built, max_cuts=4)
     assert len(failure.value.result.steps) == 1
 
 
 BAD = {
     "unknown key": ('name = "main"', 'name = "main"\ncentre = [0.0, 0.0]', "unknown key 'chambers[0].centre'"),
-    "chamber outside the body": ("center = [0.0, 0.15]", "center = [0.0, 0.35]", "chamber 'main' is not inside the body"),
-    "negative pressure": ('control = "area"\nstiffness = 1e5\nkeyframes = [[0, 1.0], [35, 3.5]]',
-                          'control = "pressure"\nkeyframes = [[0, 0.0], [35, -50.0]]',
-                          "chambers[0]: keyframes pressure -50.0 is negative"),
+    "chamber outside the body": (
+        "center = [0.0, 0.15]",
+        "center = [0.0, 0.35]",
+        "chamber 'main' is not inside the body",
+    ),
+    "negative pressure": (
+        'control = "area"\nstiffness = 1e5\nkeyframes = [[0, 1.0], [35, 3.5]]',
+        'control = "pressure"\nkeyframes = [[0, 0.0], [35, -50.0]]',
+        "chambers[0]: keyframes pressure -50.0 is negative",
+    ),
     "not a number": ("E = 1e4", 'E = "soft"', "material.E = 'soft' must be a number"),
     "bad effect": ("[schedule]", "[effects.magnetism]\nstrength = 1\n[schedule]", "unknown key 'effects.magnetism'"),
 }

@@ -54,8 +54,13 @@ def bodies(draw, cx, cy, w, h):
         return Rectangle((cx, cy), (w, h))
     if kind == "polygon":
         bulge = draw(grid(0.05, 0.5))
-        points = [(cx - w / 2, cy - h / 2), (cx, cy - h / 2 - bulge), (cx + w / 2, cy - h / 2),
-                  (cx + w / 2, cy + h / 2), (cx - w / 2, cy + h / 2)]
+        points = [
+            (cx - w / 2, cy - h / 2),
+            (cx, cy - h / 2 - bulge),
+            (cx + w / 2, cy - h / 2),
+            (cx + w / 2, cy + h / 2),
+            (cx - w / 2, cy + h / 2),
+        ]
         return Polygon(tuple(points if draw(st.booleans()) else points[::-1]))
     tabs = []
     for _ in range(draw(st.integers(0, 2))):
@@ -120,23 +125,45 @@ def scenes(draw):
     """Valid scenes: chambers in separate cells of the body's core rectangle, every key of the file drawn."""
     cx, cy, w, h = draw(grid(-2, 2)), draw(grid(-2, 2)), draw(grid(2, 4)), draw(grid(0.5, 1.0))
     body = draw(bodies(cx, cy, w, h))
-    names = draw(st.lists(st.text(st.characters(blacklist_categories=("Cs",)), min_size=1, max_size=6)
-                          .filter(lambda name: not name.startswith(FORMULA)), min_size=1, max_size=3, unique=True))
+    names = draw(
+        st.lists(
+            st.text(st.characters(blacklist_categories=("Cs",)), min_size=1, max_size=6).filter(
+                lambda name: not name.startswith(FORMULA)
+            ),
+            min_size=1,
+            max_size=3,
+            unique=True,
+        )
+    )
     cell = w / len(names)
-    shapes = [draw(chamber_shapes(cx - w / 2 + (i + 0.5) * cell, cy, cell / 2 - 0.05, h / 2 - 0.05))
-              for i in range(len(names))]
+    shapes = [
+        draw(chamber_shapes(cx - w / 2 + (i + 0.5) * cell, cy, cell / 2 - 0.05, h / 2 - 0.05))
+        for i in range(len(names))
+    ]
     chamber_controls = tuple(draw(controls()) for _ in names)
-    clamp, tip = (PointSet(draw(st.sampled_from(SIDES))) if draw(st.booleans()) else
-                  PointSet(None, (cx - w / 2, cy - h / 2, cx - w / 2 + draw(number(0.01, 1.0)), cy + h / 2))
-                  for _ in range(2))
-    rollers = tuple(Roller((draw(number(-1, 1)), 1.0), (draw(number(-5, 5)), draw(number(-5, 5))), None,
-                           draw(number(1e-9, 1e-2))) if draw(st.booleans()) else
-                    Roller((1.0, 0.0), None, (cx - w / 2, cy - h / 2, cx - w / 2 + 0.1, cy + h / 2))
-                    for _ in range(draw(st.integers(0, 2))))
+    clamp, tip = (
+        PointSet(draw(st.sampled_from(SIDES)))
+        if draw(st.booleans())
+        else PointSet(None, (cx - w / 2, cy - h / 2, cx - w / 2 + draw(number(0.01, 1.0)), cy + h / 2))
+        for _ in range(2)
+    )
+    rollers = tuple(
+        Roller((draw(number(-1, 1)), 1.0), (draw(number(-5, 5)), draw(number(-5, 5))), None, draw(number(1e-9, 1e-2)))
+        if draw(st.booleans())
+        else Roller((1.0, 0.0), None, (cx - w / 2, cy - h / 2, cx - w / 2 + 0.1, cy + h / 2))
+        for _ in range(draw(st.integers(0, 2)))
+    )
     clamp = None if draw(st.booleans()) else clamp  # no clamp: no [clamp] table (or its stiffness alone)
     try:  # rarely, drawn outlines are too close to mesh (Geometry refuses them): not a scene to round-trip
-        geometry = Geometry(body, tuple(zip(names, shapes)), draw(number(1e-4, 1.0)), clamp,
-                            draw(st.sampled_from([1, 2])), tip=tip, rollers=rollers)
+        geometry = Geometry(
+            body,
+            tuple(zip(names, shapes)),
+            draw(number(1e-4, 1.0)),
+            clamp,
+            draw(st.sampled_from([1, 2])),
+            tip=tip,
+            rollers=rollers,
+        )
     except PneumaInputError:
         assume(False)
     units = draw(st.sampled_from([UNITLESS, *UNITS.values()]))
@@ -145,17 +172,36 @@ def scenes(draw):
     else:
         materials = isochoric_materials(presets=units is not UNITLESS)
     material = draw(materials)
-    regions = tuple(Region((x, y, x + draw(number(0.01, 5.0)), y + draw(number(0.01, 5.0))), draw(materials))
-                    for x, y in draw(st.lists(st.tuples(number(-5, 5), number(-5, 5)), max_size=2)))
-    effects = tuple(draw(effects_of(EFFECTS[name]))
-                    for name in draw(st.lists(st.sampled_from(sorted(EFFECTS)), unique=True, max_size=4)))
-    targets = tuple(Target((draw(number(-10, 10)), draw(number(-10, 10))), draw(st.none() | number(-180, 180)),
-                           (draw(number(0.01, 10)), draw(number(0, 10)), draw(number(0, 10))))
-                    for _ in range(draw(st.integers(0, 3))))
+    regions = tuple(
+        Region((x, y, x + draw(number(0.01, 5.0)), y + draw(number(0.01, 5.0))), draw(materials))
+        for x, y in draw(st.lists(st.tuples(number(-5, 5), number(-5, 5)), max_size=2))
+    )
+    effects = tuple(
+        draw(effects_of(EFFECTS[name]))
+        for name in draw(st.lists(st.sampled_from(sorted(EFFECTS)), unique=True, max_size=4))
+    )
+    targets = tuple(
+        Target(
+            (draw(number(-10, 10)), draw(number(-10, 10))),
+            draw(st.none() | number(-180, 180)),
+            (draw(number(0.01, 10)), draw(number(0, 10)), draw(number(0, 10))),
+        )
+        for _ in range(draw(st.integers(0, 3)))
+    )
     increments = max(c.schedule.last_step for c in chamber_controls) + draw(st.integers(1, 5))
     name = draw(st.from_regex(r"[A-Za-z][A-Za-z0-9_+.\-]{0,20}", fullmatch=True))
-    return Scene(geometry, chamber_controls, increments, material, regions, draw(number(1e-3, 1e15)), effects, name,
-                 targets, units)
+    return Scene(
+        geometry,
+        chamber_controls,
+        increments,
+        material,
+        regions,
+        draw(number(1e-3, 1e15)),
+        effects,
+        name,
+        targets,
+        units,
+    )
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -171,8 +217,9 @@ def inverse_scene() -> Scene:
     """The reference scene with command bounds on its chamber and two targets."""
     scene = tp.reference_scene(cy=0.15)
     control = dataclasses.replace(scene.controls[0], bounds=(0.5, 4.0))
-    return dataclasses.replace(scene, controls=(control,),
-                               targets=(Target((3.2, -0.6), -30.0, (1.0, 1.0, 0.1)), Target((3.3, 0.4))))
+    return dataclasses.replace(
+        scene, controls=(control,), targets=(Target((3.2, -0.6), -30.0, (1.0, 1.0, 0.1)), Target((3.3, 0.4)))
+    )
 
 
 def test_bounds_and_targets_round_trip_through_a_file_and_survive_with_value(tmp_path):
@@ -208,16 +255,24 @@ def test_effect_parameters_keep_their_declared_types(monkeypatch):
     scene = dataclasses.replace(tp.reference_scene(), effects=(probe,))
     again = read_scene(tomllib.loads(scene.to_toml()), "x").effects[0]
     assert again == probe
-    assert [type(getattr(again, f)) for f in ("count", "label", "enabled", "offsets", "weights", "scale")] == \
-        [int, str, bool, tuple, list, int]
+    assert [type(getattr(again, f)) for f in ("count", "label", "enabled", "offsets", "weights", "scale")] == [
+        int,
+        str,
+        bool,
+        tuple,
+        list,
+        int,
+    ]
     assert scene.with_value("effects.probe.count", 5).effects[0].count == 5
     defaults = tp.reference_scene().with_value("effects.probe.count", 1).effects[0]
     assert defaults == Probe(1) and defaults.weights == [1.0]
-    for key, value, message in [("count", 2.5, "effects.probe.count = 2.5 must be of type int"),
-                                ("label", 1, "effects.probe.label = 1 must be of type str"),
-                                ("enabled", 1, "effects.probe.enabled = 1 must be of type bool"),
-                                ("offsets", 0.5, "effects.probe.offsets = 0.5 must be of type list"),
-                                ("scale", True, "effects.probe.scale = True must be a number")]:
+    for key, value, message in [
+        ("count", 2.5, "effects.probe.count = 2.5 must be of type int"),
+        ("label", 1, "effects.probe.label = 1 must be of type str"),
+        ("enabled", 1, "effects.probe.enabled = 1 must be of type bool"),
+        ("offsets", 0.5, "effects.probe.offsets = 0.5 must be of type list"),
+        ("scale", True, "effects.probe.scale = True must be a number"),
+    ]:
         with pytest.raises(PneumaInputError, match=message.replace(".", r"\.")):
             scene.with_value(f"effects.probe.{key}", value)
 
@@ -230,32 +285,79 @@ def covering_scenes() -> list[Scene]:
     both forms of the clamp, the tip and rollers, a region, every effect, targets with an angle, every unit
     system and every material key (presets, each form of the isochoric law, K and nu)."""
     core = tp.reference_scene()
-    chambers = (("e", Ellipse((-1.0, 0.0), (0.3, 0.2), 16)), ("r", RoundedRectangle((0.0, 0.0), (0.5, 0.4), 0.1)),
-                ("p", Polygon(((0.8, -0.2), (1.2, -0.2), (1.0, 0.2)))))
+    chambers = (
+        ("e", Ellipse((-1.0, 0.0), (0.3, 0.2), 16)),
+        ("r", RoundedRectangle((0.0, 0.0), (0.5, 0.4), 0.1)),
+        ("p", Polygon(((0.8, -0.2), (1.2, -0.2), (1.0, 0.2)))),
+    )
     area, pressure = ChamberSchedule("area", ((4, 2.0),)), ChamberSchedule(PressureControl(True), ((4, 50.0),))
     union = RectangleUnion((Rectangle((0.0, 0.0), (3.5, 0.8)), Rectangle((1.5, 0.5), (0.3, 0.4))))
     every = dataclasses.replace(
-        core, geometry=Geometry(union, chambers, rollers=(Roller((0.0, 1.0), (0.0, -0.4)), Roller((1.0, 0.0), box=BOX))),
+        core,
+        geometry=Geometry(union, chambers, rollers=(Roller((0.0, 1.0), (0.0, -0.4)), Roller((1.0, 0.0), box=BOX))),
         increments=4,
         controls=(ChamberControl(area, bounds=(0.5, 3.0)), ChamberControl(pressure), ChamberControl(area)),
         regions=(Region((-1.75, -0.4, 1.75, -0.3), Material(5e4, 0.4)),),
-        effects=(Gravity(1.0), Ground(-1.0), SelfContact(), Dynamics(1.0, 0.01)), targets=(Target((3.0, -0.5), 5.0),))
-    boxed = dataclasses.replace(core, geometry=Geometry(Rectangle((0.0, 0.0), (3.5, 0.8)), core.geometry.chambers,
-                                                        clamp=PointSet(None, BOX), tip=PointSet(None, BOX)))
-    polygon = dataclasses.replace(core, geometry=Geometry(Polygon(((-1.75, -0.4), (1.75, -0.4), (0.0, 0.9))),
-                                                          (("c", Ellipse((0.0, 0.0), (0.2, 0.1))),)))
-    kinds = [dataclasses.replace(core, increments=4, controls=(ChamberControl(ChamberSchedule(kind(**{
-        name: 3.0 for name, (_, default) in kind.parameters().items() if default is dataclasses.MISSING}), ((4, 2.0),))),))
-             for kind in set(KINDS.values())]  # every registered kind (tests register more): defaults, 3.0 if required
+        effects=(Gravity(1.0), Ground(-1.0), SelfContact(), Dynamics(1.0, 0.01)),
+        targets=(Target((3.0, -0.5), 5.0),),
+    )
+    boxed = dataclasses.replace(
+        core,
+        geometry=Geometry(
+            Rectangle((0.0, 0.0), (3.5, 0.8)),
+            core.geometry.chambers,
+            clamp=PointSet(None, BOX),
+            tip=PointSet(None, BOX),
+        ),
+    )
+    polygon = dataclasses.replace(
+        core,
+        geometry=Geometry(
+            Polygon(((-1.75, -0.4), (1.75, -0.4), (0.0, 0.9))), (("c", Ellipse((0.0, 0.0), (0.2, 0.1))),)
+        ),
+    )
+    kinds = [
+        dataclasses.replace(
+            core,
+            increments=4,
+            controls=(
+                ChamberControl(
+                    ChamberSchedule(
+                        kind(
+                            **{
+                                name: 3.0
+                                for name, (_, default) in kind.parameters().items()
+                                if default is dataclasses.MISSING
+                            }
+                        ),
+                        ((4, 2.0),),
+                    )
+                ),
+            ),
+        )
+        for kind in set(KINDS.values())
+    ]  # every registered kind (tests register more): defaults, 3.0 if required
     box = (-1.75, -0.4, 1.75, -0.3)
-    silicones = [dataclasses.replace(core, units=units, material=material, regions=tuple(Region(box, m) for m in regions))
-                 for units, material, regions in (
-                     (UNITS["mm-kPa"], PresetMaterial("ecoflex_00_30", poisson_ratio=0.45),
-                      (IsochoricMaterial("yeoh", 10.0, C20=1.0, C30=0.1, bulk_modulus=1e3),)),
-                     (UNITS["m-Pa"], IsochoricMaterial("yeoh", 1e4, C20=1e3, C30=10.0, bulk_modulus=1e6),
-                      (PresetMaterial("paper", bulk_modulus=1e9),)),
-                     (UNITS["mm-MPa"], IsochoricMaterial("mooney_rivlin", 0.1, C01=0.02, poisson_ratio=0.49),
-                      (IsochoricMaterial("mooney_rivlin", 0.2, C01=0.01, poisson_ratio=0.45),)))]
+    silicones = [
+        dataclasses.replace(core, units=units, material=material, regions=tuple(Region(box, m) for m in regions))
+        for units, material, regions in (
+            (
+                UNITS["mm-kPa"],
+                PresetMaterial("ecoflex_00_30", poisson_ratio=0.45),
+                (IsochoricMaterial("yeoh", 10.0, C20=1.0, C30=0.1, bulk_modulus=1e3),),
+            ),
+            (
+                UNITS["m-Pa"],
+                IsochoricMaterial("yeoh", 1e4, C20=1e3, C30=10.0, bulk_modulus=1e6),
+                (PresetMaterial("paper", bulk_modulus=1e9),),
+            ),
+            (
+                UNITS["mm-MPa"],
+                IsochoricMaterial("mooney_rivlin", 0.1, C01=0.02, poisson_ratio=0.49),
+                (IsochoricMaterial("mooney_rivlin", 0.2, C01=0.01, poisson_ratio=0.45),),
+            ),
+        )
+    ]
     mesh_body = MeshGeometry(MeshBody("beam_3d.msh"), (("main", MeshSurface("chamber")),))
     solid = dataclasses.replace(core, geometry=mesh_body)
     nodal = dataclasses.replace(silicones[0], volumetric="nodal")  # linear elements with nodal volumes
@@ -270,21 +372,37 @@ def shaped_scenes(core: Scene) -> list[Scene]:
     from taichi_pneuma.fem.solid_geometry import SolidGeometry
     from taichi_pneuma.fem.solids import Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
 
-    chambers = (("a", Ellipsoid((-1.2, 0.0, 0.0), (0.2, 0.1, 0.1))), ("b", Box((-0.8, 0.0, 0.0), (0.2, 0.2, 0.2))),
-                ("c", RoundedBox((-0.4, 0.0, 0.0), (0.2, 0.2, 0.2), 0.05)), ("d", Cylinder((0.0, 0.0, 0.0), 0.1, 0.2, "x")),
-                ("e", Extrusion(Ellipse((0.4, 0.0), (0.1, 0.1)), 0.2)),
-                ("f", Extrusion(RoundedRectangle((0.8, 0.0), (0.2, 0.2), 0.05), 0.2, 0.05)),
-                ("g", Extrusion(Polygon(((1.1, -0.1), (1.3, -0.1), (1.2, 0.1))), 0.2)))
-    bodies = [Box((0.0, 0.0, 0.0), (3.5, 0.8, 0.8)), RoundedBox((0.0, 0.0, 0.0), (3.5, 0.8, 0.8), 0.1),
-              Cylinder((0.0, 0.0, 0.0), 0.4, 3.5, "x"), Ellipsoid((0.0, 0.0, 0.0), (1.75, 0.4, 0.4)),
-              Extrusion(Rectangle((0.0, 0.0), (3.5, 0.8)), 0.8), Extrusion(Polygon(((-1.75, -0.4), (1.75, -0.4), (0.0, 0.9))), 0.8),
-              Extrusion(RectangleUnion((Rectangle((0.0, 0.0), (3.5, 0.8)), Rectangle((1.5, 0.5), (0.3, 0.4)))), 0.8)]
+    chambers = (
+        ("a", Ellipsoid((-1.2, 0.0, 0.0), (0.2, 0.1, 0.1))),
+        ("b", Box((-0.8, 0.0, 0.0), (0.2, 0.2, 0.2))),
+        ("c", RoundedBox((-0.4, 0.0, 0.0), (0.2, 0.2, 0.2), 0.05)),
+        ("d", Cylinder((0.0, 0.0, 0.0), 0.1, 0.2, "x")),
+        ("e", Extrusion(Ellipse((0.4, 0.0), (0.1, 0.1)), 0.2)),
+        ("f", Extrusion(RoundedRectangle((0.8, 0.0), (0.2, 0.2), 0.05), 0.2, 0.05)),
+        ("g", Extrusion(Polygon(((1.1, -0.1), (1.3, -0.1), (1.2, 0.1))), 0.2)),
+    )
+    bodies = [
+        Box((0.0, 0.0, 0.0), (3.5, 0.8, 0.8)),
+        RoundedBox((0.0, 0.0, 0.0), (3.5, 0.8, 0.8), 0.1),
+        Cylinder((0.0, 0.0, 0.0), 0.4, 3.5, "x"),
+        Ellipsoid((0.0, 0.0, 0.0), (1.75, 0.4, 0.4)),
+        Extrusion(Rectangle((0.0, 0.0), (3.5, 0.8)), 0.8),
+        Extrusion(Polygon(((-1.75, -0.4), (1.75, -0.4), (0.0, 0.9))), 0.8),
+        Extrusion(RectangleUnion((Rectangle((0.0, 0.0), (3.5, 0.8)), Rectangle((1.5, 0.5), (0.3, 0.4)))), 0.8),
+    ]
     area = ChamberControl(ChamberSchedule("area", ((4, 2.0),)))
-    every = dataclasses.replace(core, increments=4, controls=(area,) * len(chambers),
-                                geometry=SolidGeometry(bodies[0], chambers, MeshSizes(0.2, 0.1, 0.3), order=2))
+    every = dataclasses.replace(
+        core,
+        increments=4,
+        controls=(area,) * len(chambers),
+        geometry=SolidGeometry(bodies[0], chambers, MeshSizes(0.2, 0.1, 0.3), order=2),
+    )
     one = [dataclasses.replace(core, geometry=SolidGeometry(body, chambers[:1], MeshSizes(0.2))) for body in bodies[1:]]
-    pneunet = dataclasses.replace(core, geometry=SolidGeometry(PneuNet(), (("c1", MeshSurface("c1")),), MeshSizes(0.2)),
-                                  regions=(Region(None, Material(5e4, 0.45), "layer"),))
+    pneunet = dataclasses.replace(
+        core,
+        geometry=SolidGeometry(PneuNet(), (("c1", MeshSurface("c1")),), MeshSizes(0.2)),
+        regions=(Region(None, Material(5e4, 0.45), "layer"),),
+    )
     return [every, *one, pneunet]
 
 
@@ -338,18 +456,25 @@ def test_every_table_refuses_an_unknown_key_and_names_a_missing_required_one():
         for path, table in tables_in(data):
             extra = copy.deepcopy(data)
             dict(tables_in(extra))[path]["bogus"] = 1
-            with pytest.raises(PneumaInputError, match=rf"unknown key '{'.'.join(filter(None, [path, 'bogus']))}'"
-                               .replace("[", r"\[").replace("]", r"\]")):
+            with pytest.raises(
+                PneumaInputError,
+                match=rf"unknown key '{'.'.join(filter(None, [path, 'bogus']))}'".replace("[", r"\[").replace(
+                    "]", r"\]"
+                ),
+            ):
                 read_scene(extra, "x")
             for key in table:
                 general = f"{path}.{key}" if path else key
-                rows = [row for row in reference if row.key == re.sub(r"\[\d+\]", "[]", general) and applies(row, table)]
+                rows = [
+                    row for row in reference if row.key == re.sub(r"\[\d+\]", "[]", general) and applies(row, table)
+                ]
                 assert len(rows) == 1
                 if rows[0].default == "required":
                     missing = copy.deepcopy(data)
                     del dict(tables_in(missing))[path][key]
-                    with pytest.raises(PneumaInputError, match=rf"missing key '{general}'"
-                                       .replace("[", r"\[").replace("]", r"\]")):
+                    with pytest.raises(
+                        PneumaInputError, match=rf"missing key '{general}'".replace("[", r"\[").replace("]", r"\]")
+                    ):
                         read_scene(missing, "x")
 
 
@@ -361,8 +486,11 @@ def imports_of(path: Path) -> set[str]:
     found = set()
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.ImportFrom):
-            base = ".".join(package.split(".")[:len(package.split(".")) + 1 - node.level] + [node.module or ""]) \
-                if node.level else node.module
+            base = (
+                ".".join(package.split(".")[: len(package.split(".")) + 1 - node.level] + [node.module or ""])
+                if node.level
+                else node.module
+            )
             base = base.rstrip(".")
             found |= {base} if node.module else set()
             found |= {f"{base}.{alias.name}" for alias in node.names}
@@ -374,8 +502,10 @@ def imports_of(path: Path) -> set[str]:
 def test_scene_reaches_no_module_that_imports_it_back():
     """The circle scene -> scenetoml -> scenefile -> scene (hidden by function-level imports) is gone:
     counting every import, inside functions too, nothing scene.py imports leads back to it."""
-    modules = {".".join(p.relative_to(PACKAGE.parent).with_suffix("").parts).removesuffix(".__init__"): p
-               for p in PACKAGE.rglob("*.py")}
+    modules = {
+        ".".join(p.relative_to(PACKAGE.parent).with_suffix("").parts).removesuffix(".__init__"): p
+        for p in PACKAGE.rglob("*.py")
+    }
     graph = {name: imports_of(path) & set(modules) for name, path in modules.items()}
     reached, todo = set(), ["taichi_pneuma.scene.build"]
     while todo:

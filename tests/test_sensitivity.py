@@ -45,12 +45,14 @@ def equilibrium(built, commands, solver):
 
 
 def finite_differences(built, solver, commands, u):
-    """Central differences of the tip outputs (dx, dy, rotation, in 3D dz) (3 or 4, m) and of every displacement (n, 2, m)."""
+    """Central differences of the tip outputs (dx, dy, rotation, in 3D dz) (3 or 4, m) and of every displacement
+    (n, 2, m)."""
     tips, states = [], []
     for j, chamber in enumerate(built.chambers):
         h = STEP[chamber.kind.name]
-        plus, minus = (settle(built, solver, commands, u, commands + sign * h * np.eye(len(commands))[j])[0]
-                       for sign in (1, -1))
+        plus, minus = (
+            settle(built, solver, commands, u, commands + sign * h * np.eye(len(commands))[j])[0] for sign in (1, -1)
+        )
         tips.append((tip_outputs(built.mesh, plus) - tip_outputs(built.mesh, minus)) / (2 * h))
         states.append((plus - minus) / (2 * h))
     return np.column_stack(tips), np.stack(states, axis=-1)
@@ -83,7 +85,11 @@ def errors_against_finite_differences(case):
 def test_sensitivities_match_finite_differences_of_resolves(case):
     tip_errors, du_error, built, s, fd_tip = errors_against_finite_differences(case)
     chambers = len(CASES[case][1])
-    assert s.tip.shape == (3 + (built.mesh.dim == 3), chambers) and s.displacements.shape == (built.mesh.n_vertices, built.mesh.dim, chambers)
+    assert s.tip.shape == (3 + (built.mesh.dim == 3), chambers) and s.displacements.shape == (
+        built.mesh.n_vertices,
+        built.mesh.dim,
+        chambers,
+    )
     assert np.all(np.abs(fd_tip).max(axis=1) > 0)  # every tip output moves
     assert tip_errors.max() <= 1e-5  # tip dx, dy and rotation
     assert du_error <= 1e-5
@@ -98,7 +104,7 @@ def test_psd_projected_hessian_gives_wrong_sensitivities():
     model = built.model
     model.set_displacements(u)
     projected = FixedPattern(*model.hessian_pattern(), model.n_dofs).matrix(model.hessian_values(psd_only=True))
-    (_, gradient, k), = model.low_rank()
+    ((_, gradient, k),) = model.low_rank()
     rows = built.chambers[0].dofs
     dense = projected.toarray()
     dense[np.ix_(rows, rows)] += k * np.outer(gradient, gradient)

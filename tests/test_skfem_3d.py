@@ -21,10 +21,12 @@ RATIOS = (1.25,)
 @pytest.fixture(scope="module")
 def both():
     mesh = box_with_cavity()
-    reference = SkfemBody(mesh.vertices, mesh.elements, mesh.chambers[0], mesh.pinned, E=1e4, nu=0.45,
-                          stiffness=1e6, clamp_stiffness=1e9)
-    scene = scene_of(mesh, [area_ramp(RATIOS[-1], len(RATIOS) + 1, 1e6)], len(RATIOS), Material(1e4, 0.45),
-                     clamp_stiffness=1e9)
+    reference = SkfemBody(
+        mesh.vertices, mesh.elements, mesh.chambers[0], mesh.pinned, E=1e4, nu=0.45, stiffness=1e6, clamp_stiffness=1e9
+    )
+    scene = scene_of(
+        mesh, [area_ramp(RATIOS[-1], len(RATIOS) + 1, 1e6)], len(RATIOS), Material(1e4, 0.45), clamp_stiffness=1e9
+    )
     result = api.simulate(scene, tol=1e-9)
     return mesh, reference, result
 

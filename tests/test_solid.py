@@ -53,10 +53,13 @@ def test_tet_mesh_orients_drops_unused_nodes_and_adds_midside_nodes():
         # the surface facets point out of the body: the divergence theorem gives its volume
         assert cone_volume(mesh.vertices, mesh.surface) == pytest.approx(volume, rel=1e-12)
         # the chamber wall (given inside out) points out of the cavity: cones from the origin fill the cavity
-        assert cone_volume(mesh.vertices, mesh.chambers[0]) == pytest.approx(
-            abs(cone_volume(vertices, wall)), rel=1e-12) and cone_volume(mesh.vertices, mesh.chambers[0]) > 0
-        assert np.array_equal(np.unique(np.concatenate([mesh.boundary, mesh.chambers[0].ravel()])),
-                              np.unique(mesh.surface))
+        assert (
+            cone_volume(mesh.vertices, mesh.chambers[0]) == pytest.approx(abs(cone_volume(vertices, wall)), rel=1e-12)
+            and cone_volume(mesh.vertices, mesh.chambers[0]) > 0
+        )
+        assert np.array_equal(
+            np.unique(np.concatenate([mesh.boundary, mesh.chambers[0].ravel()])), np.unique(mesh.surface)
+        )
         if order == 2:
             for k, (i, j) in enumerate(TET_EDGES):
                 middle = 0.5 * (mesh.vertices[mesh.elements[:, i]] + mesh.vertices[mesh.elements[:, j]])
@@ -74,16 +77,19 @@ def test_quadratic_boundary_facets_are_the_midside_nodes_of_their_edges():
             assert np.allclose(x[:, 3 + k], 0.5 * (x[:, k] + x[:, (k + 1) % 3]), atol=1e-15)
 
 
-@pytest.mark.parametrize("case, message", [
-    ("interior face", "is not a face on the mesh's boundary"),
-    ("open wall", "lies on no roller plane"),
-    ("gmsh order", "node 8 is not near the middle of edge 13"),
-    ("quadratic as linear", "set order = 2"),
-    ("flat", "is flat"),
-    ("2D points", "vertices must be finite"),
-    ("bad index", "names a vertex that does not exist"),
-    ("shared wall", "shares wall triangles"),
-])
+@pytest.mark.parametrize(
+    "case, message",
+    [
+        ("interior face", "is not a face on the mesh's boundary"),
+        ("open wall", "lies on no roller plane"),
+        ("gmsh order", "node 8 is not near the middle of edge 13"),
+        ("quadratic as linear", "set order = 2"),
+        ("flat", "is flat"),
+        ("2D points", "vertices must be finite"),
+        ("bad index", "names a vertex that does not exist"),
+        ("shared wall", "shares wall triangles"),
+    ],
+)
 def test_bad_mesh_data_is_refused_naming_the_problem(case, message):
     vertices, tets, wall = spherical_shell_octant(1.0, 2.0, 2, 2)
     arguments = dict(clamp=None, rollers=PLANES)
@@ -126,13 +132,18 @@ def test_every_3d_term_matches_finite_differences(body, order):
     model = EnergyModel(mesh.vertices, force_floor=1.0, energy_resolution=1e-12)
     config = model.config
     n = mesh.n_elements
-    elastic = model.add(Elasticity(config, mesh.elements, StableNeoHookean,
-                                   StableNeoHookean.parameters(np.full(n, 1e4), np.full(n, 0.45))))
+    elastic = model.add(
+        Elasticity(
+            config, mesh.elements, StableNeoHookean, StableNeoHookean.parameters(np.full(n, 1e4), np.full(n, 0.45))
+        )
+    )
     chamber = model.add(AreaControl(1e4).term(config, mesh.chambers[0], "c", order, mesh.wall_origins[0]))
     chamber.set_command(1.4)
     pinned = mesh.tip if body == "prism" else mesh.boundary[:5]
-    others = [model.add(Clamp(config, pinned, 1e3)),
-              model.add(NormalClamp(config, mesh.boundary[::3], (1.0, 2.0, 2.0), 1e3))]
+    others = [
+        model.add(Clamp(config, pinned, 1e3)),
+        model.add(NormalClamp(config, mesh.boundary[::3], (1.0, 2.0, 2.0), 1e3)),
+    ]
     others += Gravity(2.0, 3.0).terms(config, mesh, mesh.nodal_measures(), Budget())
     lowest = mesh.vertices[mesh.boundary, 1].min()
     ground = Ground(lowest - 0.02, dhat=0.05, stiffness=10.0)
@@ -182,8 +193,11 @@ def test_curved_quadratic_wall_volume_is_exact():
     weights = (np.outer(w, w) * (1 - a)).ravel()
     N, dN = TRIANGLE_P2.shape_functions(points), TRIANGLE_P2.shape_gradients(points)
     x = (curved.vertices + u)[curved.chambers[0]]  # (f, 6, 3)
-    y, s_, t_ = (np.einsum("qa,fai->fqi", N, x), np.einsum("qa,fai->fqi", dN[:, :, 0], x),
-                 np.einsum("qa,fai->fqi", dN[:, :, 1], x))
+    y, s_, t_ = (
+        np.einsum("qa,fai->fqi", N, x),
+        np.einsum("qa,fai->fqi", dN[:, :, 0], x),
+        np.einsum("qa,fai->fqi", dN[:, :, 1], x),
+    )
     expected = np.einsum("q,fqi,fqi->", weights, y, np.cross(s_, t_)) / 3
     assert chamber.area() == pytest.approx(expected, rel=1e-13)
     assert abs(chamber.rest_area - np.pi / 6) < 0.1 * abs(cone_volume(mesh.vertices, mesh.chambers[0]) - np.pi / 6)
@@ -271,8 +285,14 @@ def test_patch_test_a_homogeneous_deformation_is_reproduced_exactly(order):
     target = mesh.vertices @ (F - np.eye(3)).T
     model = EnergyModel(mesh.vertices, force_floor=1e-6, energy_resolution=1e-12)
     n = mesh.n_elements
-    elastic = model.add(Elasticity(model.config, mesh.elements, StableNeoHookean,
-                                   StableNeoHookean.parameters(np.full(n, 1e4), np.full(n, 0.45))))
+    elastic = model.add(
+        Elasticity(
+            model.config,
+            mesh.elements,
+            StableNeoHookean,
+            StableNeoHookean.parameters(np.full(n, 1e4), np.full(n, 0.45)),
+        )
+    )
     model.set_displacements(target)
     force = elastic.gradient()
     assert np.abs(force[interior]).max() < 1e-12 * np.abs(force[boundary]).max()
@@ -288,8 +308,9 @@ def test_inversion_bound_is_the_first_root_of_the_determinant():
     mesh = shell_octant(2, 1)
     model = EnergyModel(mesh.vertices, 1.0, 1e-12)
     n = mesh.n_elements
-    elastic = Elasticity(model.config, mesh.elements, StableNeoHookean,
-                         StableNeoHookean.parameters(np.full(n, 1.0), np.full(n, 0.3)))
+    elastic = Elasticity(
+        model.config, mesh.elements, StableNeoHookean, StableNeoHookean.parameters(np.full(n, 1.0), np.full(n, 0.3))
+    )
     for seed in range(5):
         u, dx = state(mesh, 0.05, seed), state(mesh, 0.5, seed + 10)
         model.set_displacements(u)
@@ -307,11 +328,21 @@ def test_3d_body_resting_on_the_ground_carries_its_weight():
     """The extruded beam, free but for a roller at its left face and the z rollers, lies on the ground under
     gravity: the ground's total force on it is its weight rho g V, straight up."""
     mesh, _ = extruded_beam(0.1, chamber_points=16)
-    mesh = tet_mesh(mesh.vertices, mesh.elements, {"main": mesh.chambers[0]}, clamp=None,
-                    rollers=Z_ROLLERS + (Roller((1.0, 0.0, 0.0), (-1.75, 0.0, 0.0)),))
+    mesh = tet_mesh(
+        mesh.vertices,
+        mesh.elements,
+        {"main": mesh.chambers[0]},
+        clamp=None,
+        rollers=Z_ROLLERS + (Roller((1.0, 0.0, 0.0), (-1.75, 0.0, 0.0)),),
+    )
     density, g = 1.0, 9.81
-    scene = scene_of(mesh, [ChamberSchedule("pressure", ((1, 0.0),))], 1, Material(1e4, 0.45),
-                     effects=(Gravity(density, g), Ground(-0.41, dhat=0.01, stiffness=1e3)))
+    scene = scene_of(
+        mesh,
+        [ChamberSchedule("pressure", ((1, 0.0),))],
+        1,
+        Material(1e4, 0.45),
+        effects=(Gravity(density, g), Ground(-0.41, dhat=0.01, stiffness=1e3)),
+    )
     result = tp.simulate(scene)
     assert result.converged
     fx, fy, _ = result.steps[-1].contact["ground"]

@@ -48,9 +48,16 @@ def test_3d_tip_jacobian_matches_finite_differences_of_resolves(twin):
     u = settle(built, solver, np.zeros(2), np.zeros_like(twin.vertices), commands)[0]
     s = sensitivity(built, commands, u)
     h = 0.1
-    fd = np.column_stack([(tip_outputs(twin, settle(built, solver, commands, u, commands + h * e)[0])
-                           - tip_outputs(twin, settle(built, solver, commands, u, commands - h * e)[0])) / (2 * h)
-                          for e in np.eye(2)])
+    fd = np.column_stack(
+        [
+            (
+                tip_outputs(twin, settle(built, solver, commands, u, commands + h * e)[0])
+                - tip_outputs(twin, settle(built, solver, commands, u, commands - h * e)[0])
+            )
+            / (2 * h)
+            for e in np.eye(2)
+        ]
+    )
     assert s.tip.shape == (4, 2)
     assert np.all(np.abs(fd).max(axis=1) > 1e-3 * np.abs(fd).max())  # every output moves, dz included
     assert np.sign(fd[3, 0]) == -np.sign(fd[3, 1])  # the back cavity pushes the tip to +z, the front one to -z
@@ -76,17 +83,22 @@ def test_reach_finds_an_xyz_target_on_a_3d_body(twin):
 def mesh_file_scene(tmp_path, mesh) -> str:
     """A scene file naming the mesh written as gmsh 2.2 beside it: both cavities pressure-controlled."""
     write_mesh(tmp_path / "twin.msh", mesh, tuple(CAVITIES))
-    chambers = "".join(f'''
+    chambers = "".join(
+        f'''
 [[chambers]]
 name = "{name}"
 shape = "mesh_surface"
 group = "{name}"
 control = "pressure"
 keyframes = [[0, 0.0], [2, {PRESSURE}]]
-''' for name in CAVITIES)
+'''
+        for name in CAVITIES
+    )
     path = tmp_path / "twin.toml"
-    path.write_text(f'name = "twin"\n[body]\nshape = "mesh"\nfile = "twin.msh"\n[material]\nE = 1e4\nnu = 0.45\n'
-                    f'[clamp]\nside = "left"\n[schedule]\nincrements = 2\n{chambers}')
+    path.write_text(
+        f'name = "twin"\n[body]\nshape = "mesh"\nfile = "twin.msh"\n[material]\nE = 1e4\nnu = 0.45\n'
+        f'[clamp]\nside = "left"\n[schedule]\nincrements = 2\n{chambers}'
+    )
     return str(path)
 
 
@@ -95,8 +107,9 @@ def test_reach_app_takes_tip_x_y_z_on_a_3d_scene(tmp_path, twin, capsys):
     built = tp.load_scene(scene).build()
     reacher = Reacher(built)
     goal = reacher.settle(np.array([0.3 * PRESSURE, PRESSURE])).tip
-    code = reach_main(["--scene", scene, "--tip", *map(str, goal), "--no-video", "--out", str(tmp_path / "out"),
-                       "--quiet"])
+    code = reach_main(
+        ["--scene", scene, "--tip", *map(str, goal), "--no-video", "--out", str(tmp_path / "out"), "--quiet"]
+    )
     out = capsys.readouterr().out
     assert code == 0 and "reached: tip (" in out
     summary = json.loads((tmp_path / "out" / "reach_twin_summary.json").read_text())
@@ -106,8 +119,9 @@ def test_reach_app_takes_tip_x_y_z_on_a_3d_scene(tmp_path, twin, capsys):
         rows = list(csv.DictReader(f))
     assert float(rows[-1]["tip_z"]) == pytest.approx(summary["tip"][2], abs=1e-12)
     assert float(rows[-1]["target_z"]) == pytest.approx(goal[2], abs=1e-12)
-    assert float(rows[-1]["tip_dz"]) == pytest.approx(summary["tip"][2] - twin.vertices[built.mesh.tip, 2].mean(),
-                                                      abs=1e-12)
+    assert float(rows[-1]["tip_dz"]) == pytest.approx(
+        summary["tip"][2] - twin.vertices[built.mesh.tip, 2].mean(), abs=1e-12
+    )
     assert reach_main(["--scene", scene, "--tip", "1", "2", "3", "4", "--no-video", "--out", str(tmp_path)]) == 2
     assert "--tip takes X Y or X Y Z, not 4 numbers" in capsys.readouterr().err
     assert reach_main(["--scene", scene, "--tip", "1", "2", "3", "--interactive", "--out", str(tmp_path)]) == 2
@@ -155,8 +169,9 @@ def test_sweep_runs_a_3d_mesh_file_scene(tmp_path, twin):
     assert [r["error"] for r in rows] == [None, None] and "tip_dz" in sweep.columns
     assert rows[0]["tip_dz"] > 0 and rows[1]["tip_dz"] < rows[0]["tip_dz"] - 0.005  # measured 0.0087 and -0.0035
     with open(sweep.csv, newline="") as f:
-        assert [float(r["tip_dz"]) for r in sorted(csv.DictReader(f), key=lambda r: float(r[axes[0].key]))] == \
-            pytest.approx([r["tip_dz"] for r in rows], rel=1e-12)
+        assert [
+            float(r["tip_dz"]) for r in sorted(csv.DictReader(f), key=lambda r: float(r[axes[0].key]))
+        ] == pytest.approx([r["tip_dz"] for r in rows], rel=1e-12)
 
 
 def test_simulate_fields_and_save_of_a_3d_mesh_file_scene(tmp_path, twin):

@@ -23,17 +23,23 @@ from taichi_pneuma.terms.chambers import KINDS, AreaControl, ClosedGas, Pressure
 ATMOSPHERE = 1e3  # with E = 1e4: gauge pressures of a few hundred
 SYRINGE = Syringe(ATMOSPHERE, syringe_volume=0.5, dead_volume=0.1)
 # kind, a command that inflates the octant's cavity (rest volume about 0.5) or the box's (0.12)
-KINDS_3D = {"area": (AreaControl(1e4), 1.4), "pressure": (PressureControl(), 300.0),
-            "closed_gas": (ClosedGas(ATMOSPHERE), 0.2), "adiabatic_gas": (ClosedGas(ATMOSPHERE, gamma=1.4), 0.2),
-            "syringe": (SYRINGE, 0.2), "adiabatic_syringe": (dataclasses.replace(SYRINGE, gamma=1.4), 0.2)}
+KINDS_3D = {
+    "area": (AreaControl(1e4), 1.4),
+    "pressure": (PressureControl(), 300.0),
+    "closed_gas": (ClosedGas(ATMOSPHERE), 0.2),
+    "adiabatic_gas": (ClosedGas(ATMOSPHERE, gamma=1.4), 0.2),
+    "syringe": (SYRINGE, 0.2),
+    "adiabatic_syringe": (dataclasses.replace(SYRINGE, gamma=1.4), 0.2),
+}
 
 
 def test_every_registered_kind_is_checked_in_3d():
     assert {kind.name for kind in KINDS.values()} == {kind.name for kind, _ in KINDS_3D.values()}
 
 
-@pytest.fixture(scope="module", params=[(name, order) for order in (1, 2) for name in KINDS_3D],
-                ids=lambda p: f"{p[0]}-P{p[1]}")
+@pytest.fixture(
+    scope="module", params=[(name, order) for order in (1, 2) for name in KINDS_3D], ids=lambda p: f"{p[0]}-P{p[1]}"
+)
 def octant(request):
     """The octant cavity (A = 1, B = 2, closed by the three coordinate planes) of each kind, commanded to inflate,
     in a random state."""
@@ -71,15 +77,19 @@ def test_max_step_is_where_the_gas_volume_vanishes(kind):
     assert chamber.energy() == np.inf
 
 
-@pytest.mark.parametrize("kind", [ClosedGas(ATMOSPHERE), ClosedGas(ATMOSPHERE, gamma=1.4), SYRINGE],
-                         ids=["isothermal", "adiabatic", "syringe"])
+@pytest.mark.parametrize(
+    "kind",
+    [ClosedGas(ATMOSPHERE), ClosedGas(ATMOSPHERE, gamma=1.4), SYRINGE],
+    ids=["isothermal", "adiabatic", "syringe"],
+)
 def test_gas_kinds_obey_their_gas_law_on_a_3d_cavity(kind):
     """The clamped box with its closed cavity (rest volume 0.12), air pumped in (or a syringe pushed) over 3
     increments: at every equilibrium p_abs V = p_atm V0 (isothermal; V0 the air's volume at p_atm: the cavity's
     rest volume plus the air pumped in, or plus the tube and barrel for the syringe, whose gas volume counts them
     too) or p_abs V^1.4 = p_atm V0^1.4 (adiabatic); the cavity inflates and its pressure rises."""
-    result = run_schedule(scene_of(box_with_cavity(), [ChamberSchedule(kind, ((3, 0.05),))], 3,
-                                   Material(1e4, 0.45)).build())
+    result = run_schedule(
+        scene_of(box_with_cavity(), [ChamberSchedule(kind, ((3, 0.05),))], 3, Material(1e4, 0.45)).build()
+    )
     rest = result.steps[0].chambers["main"].area
     assert 1.01 < check_gas_law(result, kind) < 1 + 0.05 / rest  # inflated, the air compressed
 
@@ -87,12 +97,14 @@ def test_gas_kinds_obey_their_gas_law_on_a_3d_cavity(kind):
 def test_a_gas_is_the_pressure_load_of_its_own_pressure_in_3d():
     mesh = box_with_cavity()
     tight = NewtonOptions(tol=1e-10)  # the two equilibria agree to what the solves leave
-    final = run_schedule(scene_of(mesh, [ChamberSchedule(ClosedGas(ATMOSPHERE), ((2, 0.05),))], 2).build(),
-                         options=tight)
+    final = run_schedule(
+        scene_of(mesh, [ChamberSchedule(ClosedGas(ATMOSPHERE), ((2, 0.05),))], 2).build(), options=tight
+    )
     reached = final.steps[-1].chambers["main"]
     built = scene_of(mesh, [ChamberSchedule("pressure", ((1, reached.pressure),))], 1).build()
-    u = settle(built, NewtonSolver(built.model, tight), np.zeros(1), np.zeros_like(mesh.vertices),
-               np.array([reached.pressure]))[0]
+    u = settle(
+        built, NewtonSolver(built.model, tight), np.zeros(1), np.zeros_like(mesh.vertices), np.array([reached.pressure])
+    )[0]
     moved = final.positions[-1] - mesh.vertices
     assert np.abs(u - moved).max() < 1e-6 * np.abs(moved).max()
 
@@ -101,7 +113,7 @@ def test_closed_gas_scene_in_mm_and_kpa(tmp_path):
     """A mesh-file scene in mm and kPa (an Ecoflex 00-30 box, its 0.12 mm^3 cavity pumped with 0.01 mm^3 of air
     at 101.325 kPa): Boyle's law in those units, and the chamber's command and measure labelled mm^3."""
     write_mesh(tmp_path / "box.msh", box_with_cavity(), ("chamber",))
-    (tmp_path / "box.toml").write_text('''name = "box"
+    (tmp_path / "box.toml").write_text("""name = "box"
 units = "mm-kPa"
 [body]
 shape = "mesh"
@@ -119,7 +131,7 @@ atmosphere = 101.325
 keyframes = [[0, 0.0], [2, 0.01]]
 [schedule]
 increments = 2
-''')
+""")
     result = tp.simulate(tp.load_scene(tmp_path / "box.toml"))
     assert result.converged
     final, rest = result.steps[-1].chambers["main"], result.steps[0].chambers["main"].area

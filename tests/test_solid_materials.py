@@ -41,18 +41,18 @@ MATERIALS = {
 def slopes(material, ibar1):
     """(W1, W2) = (dW/dIbar1, dW/dIbar2) of the material at Ibar1."""
     a = ibar1 - 3.0
-    return material.C10 + 2 * material.C20 * a + 3 * material.C30 * a ** 2, material.C01
+    return material.C10 + 2 * material.C20 * a + 3 * material.C30 * a**2, material.C01
 
 
 def principal_stress(material, stretches, i):
     """dpsi/dlam_i, psi = W(Ibar1, Ibar2) + K/2 (J - 1)^2 at principal stretches (lam_1, lam_2, lam_3): the
     nominal stress along axis i."""
     lam = np.asarray(stretches, float)
-    J, I1 = lam.prod(), np.sum(lam ** 2)
+    J, I1 = lam.prod(), np.sum(lam**2)
     I2 = sum((lam[a] * lam[b]) ** 2 for a, b in ((0, 1), (1, 2), (0, 2)))
     others = np.delete(lam, i)
     dI1 = J ** (-2 / 3) * (2 * lam[i] - 2 / 3 * I1 / lam[i])
-    dI2 = J ** (-4 / 3) * (2 * lam[i] * np.sum(others ** 2) - 4 / 3 * I2 / lam[i])
+    dI2 = J ** (-4 / 3) * (2 * lam[i] * np.sum(others**2) - 4 / 3 * I2 / lam[i])
     W1, W2 = slopes(material, J ** (-2 / 3) * I1)
     return W1 * dI1 + W2 * dI2 + material.bulk * (J - 1) * J / lam[i]
 
@@ -64,8 +64,8 @@ def uniaxial_stress(material, stretch):
 
 
 def incompressible_uniaxial_stress(material, stretch):
-    W1, W2 = slopes(material, stretch ** 2 + 2 / stretch)
-    return 2 * (stretch - stretch ** -2) * (W1 + W2 / stretch)
+    W1, W2 = slopes(material, stretch**2 + 2 / stretch)
+    return 2 * (stretch - stretch**-2) * (W1 + W2 / stretch)
 
 
 @pytest.mark.parametrize("order", [1, 2])
@@ -88,32 +88,36 @@ def test_uniaxial_tension_of_a_block_gives_the_nominal_stress_of_the_law(name, o
     pulled = np.flatnonzero(x[:, 0] == high[0])
     length = high[0] - low[0]
     model.add(HeldAt(config, pulled, ((stretch - 1) * length, 0.0, 0.0), 1e9 * scale, axes=[0]))
-    guess = (x - low) * (np.array([stretch, stretch ** -0.5, stretch ** -0.5]) - 1)  # incompressible, exact in x
+    guess = (x - low) * (np.array([stretch, stretch**-0.5, stretch**-0.5]) - 1)  # incompressible, exact in x
     u, record = NewtonSolver(model, NewtonOptions(tol=1e-6)).solve(guess)
     assert record.converged
     area = (high[1] - low[1]) * (high[2] - low[2])
     nominal = elastic.gradient()[pulled, 0].sum() / area
     moved = x + u  # the stretches between opposite faces (the rollers' faces give a little under their reaction)
-    stretches = np.array([(moved[x[:, i] == high[i], i].mean() - moved[x[:, i] == low[i], i].mean())
-                          / (high[i] - low[i]) for i in range(3)])
+    stretches = np.array(
+        [
+            (moved[x[:, i] == high[i], i].mean() - moved[x[:, i] == low[i], i].mean()) / (high[i] - low[i])
+            for i in range(3)
+        ]
+    )
     expected, lateral = uniaxial_stress(material, stretches[0])
     assert nominal == pytest.approx(expected, rel=1e-7)
     assert stretches[1:] == pytest.approx([lateral, lateral], rel=1e-7)
     # nearly incompressible (K = 1000 mu0): the incompressible closed form to O(stress / K) (measured 2e-3)
     bound = 2 * nominal / material.bulk
     assert nominal == pytest.approx(incompressible_uniaxial_stress(material, stretch), rel=bound)
-    assert lateral == pytest.approx(stretch ** -0.5, rel=bound)
+    assert lateral == pytest.approx(stretch**-0.5, rel=bound)
 
 
 def sphere_pressure(material, inner_stretch, ratio=2.0):
     """The closed-form cavity pressure of the incompressible sphere of outer / inner radius `ratio`."""
-    outer = (1 + (inner_stretch ** 3 - 1) / ratio ** 3) ** (1 / 3)
+    outer = (1 + (inner_stretch**3 - 1) / ratio**3) ** (1 / 3)
 
     def slope(lam):  # W'(lam) at the stretches (lam, lam, lam^-2)
-        W1, W2 = slopes(material, 2 * lam ** 2 + lam ** -4)
-        return 4 * W1 * (lam - lam ** -5) + 4 * W2 * (lam ** 3 - lam ** -3)
+        W1, W2 = slopes(material, 2 * lam**2 + lam**-4)
+        return 4 * W1 * (lam - lam**-5) + 4 * W2 * (lam**3 - lam**-3)
 
-    return quad(lambda lam: slope(lam) / (lam ** 3 - 1), outer, inner_stretch, epsabs=0, epsrel=1e-12)[0]
+    return quad(lambda lam: slope(lam) / (lam**3 - 1), outer, inner_stretch, epsabs=0, epsrel=1e-12)[0]
 
 
 def sphere_errors(material, divisions):
@@ -122,8 +126,7 @@ def sphere_errors(material, divisions):
     errors = []
     for n in divisions:
         mesh = shell_octant(n, max(n // 2, 1), order=2, curved=True)
-        result = tp.simulate(scene_of(mesh, [ChamberSchedule("volume", ((0, 1.0), (3, 2.0)))], 3,
-                                      material))
+        result = tp.simulate(scene_of(mesh, [ChamberSchedule("volume", ((0, 1.0), (3, 2.0)))], 3, material))
         assert result.converged
         inner = np.abs(np.linalg.norm(mesh.vertices, axis=1) - 1) < 1e-9
         stretch = np.linalg.norm((mesh.vertices + result.displacements[-1])[inner], axis=1).mean()

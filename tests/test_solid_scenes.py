@@ -83,10 +83,16 @@ def scene_of(text: str, name: str = "s"):
 
 def beam(size: float = 0.5, increments: int = 2, order: int = 1):
     """The shipped 3D reference beam from shapes on a coarse mesh, a short ramp."""
-    return tp.load_scene("beam_3d_ellipsoid").with_values({
-        "mesh.size": size, "mesh.near_chambers": size, "mesh.distance": size, "mesh.order": order,
-        "schedule.increments": increments,
-        "chambers[0].keyframes": [[0, 1.0], [increments, 1.5]]})
+    return tp.load_scene("beam_3d_ellipsoid").with_values(
+        {
+            "mesh.size": size,
+            "mesh.near_chambers": size,
+            "mesh.distance": size,
+            "mesh.order": order,
+            "schedule.increments": increments,
+            "chambers[0].keyframes": [[0, 1.0], [increments, 1.5]],
+        }
+    )
 
 
 @pytest.fixture(scope="module")
@@ -105,9 +111,14 @@ def test_every_3d_shape_reads_writes_back_and_meshes_to_its_volume():
     for name, exact in FLAT.items():
         assert volumes[name] == pytest.approx(exact, rel=1e-9)
     p, q, r, radius = 0.3, 0.2, 0.3, 0.05  # the rounded box's inner box (size - 2 radius), swept by the ball
-    curved = {"ellipsoid": 4 / 3 * np.pi * 0.25 * 0.15 * 0.2, "cylinder": np.pi * 0.12 ** 2 * 0.4,
-              "rounded": p * q * r + 2 * (p * q + q * r + r * p) * radius + np.pi * (p + q + r) * radius ** 2
-              + 4 / 3 * np.pi * radius ** 3}
+    curved = {
+        "ellipsoid": 4 / 3 * np.pi * 0.25 * 0.15 * 0.2,
+        "cylinder": np.pi * 0.12**2 * 0.4,
+        "rounded": p * q * r
+        + 2 * (p * q + q * r + r * p) * radius
+        + np.pi * (p + q + r) * radius**2
+        + 4 / 3 * np.pi * radius**3,
+    }
     for name, exact in curved.items():
         assert 0.85 * exact < volumes[name] < exact
     mesh = built.mesh
@@ -132,19 +143,26 @@ def test_pneunet_layer_is_its_volume_group_and_stiffer():
     centroid_y = mesh.vertices[mesh.elements].mean(axis=1)[:, 1]
     bottom = mesh.vertices[:, 1].min()
     assert stiff.any() and np.array_equal(stiff, centroid_y < bottom + scene.geometry.body.layer)
-    with pytest.raises(PneumaInputError, match=r"group = 'floor': the mesh has no such volume group \(its groups: layer\)"):
+    with pytest.raises(
+        PneumaInputError, match=r"group = 'floor': the mesh has no such volume group \(its groups: layer\)"
+    ):
         scene.with_value("material.regions[0].group", "floor").build()
 
 
-@pytest.mark.parametrize("change, message", [
-    ({"mesh.max_area": 0.01}, "mesh.max_area: a 3D body from shapes takes mesh.size"),
-    ({"mesh.size": DELETE}, "missing key 'mesh.size'"),
-    ({"mesh.size": -0.1}, "size = -0.1 must be > 0"),
-    ({"mesh.near_chambers": 0.0}, r"near_chambers = 0.0 must be > 0"),
-    ({"chambers[0].shape": "ellipse", "chambers[0].center": [0, 0.15], "chambers[0].semi_axes": [0.8, 0.2]},
-     "chamber 'main': a 3D body's chambers are 3D shapes"),
-    ({"chambers[0].semi_axes": [0.85, 0.22]}, r"semi_axes = \(0.85, 0.22\) must be three numbers"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"mesh.max_area": 0.01}, "mesh.max_area: a 3D body from shapes takes mesh.size"),
+        ({"mesh.size": DELETE}, "missing key 'mesh.size'"),
+        ({"mesh.size": -0.1}, "size = -0.1 must be > 0"),
+        ({"mesh.near_chambers": 0.0}, r"near_chambers = 0.0 must be > 0"),
+        (
+            {"chambers[0].shape": "ellipse", "chambers[0].center": [0, 0.15], "chambers[0].semi_axes": [0.8, 0.2]},
+            "chamber 'main': a 3D body's chambers are 3D shapes",
+        ),
+        ({"chambers[0].semi_axes": [0.85, 0.22]}, r"semi_axes = \(0.85, 0.22\) must be three numbers"),
+    ],
+)
 def test_bad_3d_keys_are_one_error_naming_them(change, message):
     data = scene_data(beam())
     for key, value in change.items():
@@ -185,8 +203,11 @@ def test_resource_guard_estimates_before_meshing_and_caps_gmsh():
     estimate passes a small budget but whose gmsh output does not is refused after meshing, quadratic
     tetrahedra counted 8 times."""
     fine = beam(size=0.01)
-    with pytest.raises(PneumaInputError, match=r"the mesh has \d+ tetrahedra and needs about .* GB; the limit is "
-                                               r"200000 elements \(--max-triangles raises it\)"):
+    with pytest.raises(
+        PneumaInputError,
+        match=r"the mesh has \d+ tetrahedra and needs about .* GB; the limit is "
+        r"200000 elements \(--max-triangles raises it\)",
+    ):
         sizing.check_scene(fine)
     tets, nodes = beam(size=0.3).geometry.size_estimate()
     assert 500 < tets < 3000 and 0 < nodes < tets
@@ -202,9 +223,25 @@ def test_pneunet_from_the_command_line_curls_towards_its_layer(tmp_path):
     """The shipped PneuNet on a coarse mesh: inflated, the finger curls down (towards the stiff layer), and
     deflated it returns to rest."""
     ramps = [arg for i in range(6) for arg in ("--set", f"chambers[{i}].keyframes=[[0, 0.0], [3, 900.0], [6, 0.0]]")]
-    code = inflate(["--scene", "pneunet_3d", "--set", "mesh.size=0.5", "--set", "mesh.near_chambers=0.5",
-                    "--set", "mesh.order=1", "--set", "schedule.increments=6", *ramps,
-                    "--no-video", "--quiet", "--out", str(tmp_path)])
+    code = inflate(
+        [
+            "--scene",
+            "pneunet_3d",
+            "--set",
+            "mesh.size=0.5",
+            "--set",
+            "mesh.near_chambers=0.5",
+            "--set",
+            "mesh.order=1",
+            "--set",
+            "schedule.increments=6",
+            *ramps,
+            "--no-video",
+            "--quiet",
+            "--out",
+            str(tmp_path),
+        ]
+    )
     assert code == 0
     states = np.load(tmp_path / "pneunet_3d_states.npz")
     tip_dy = (states["positions"][:, states["tip"], 1] - states["rest"][states["tip"], 1]).mean(axis=1)
@@ -215,7 +252,7 @@ def test_pneunet_from_the_command_line_curls_towards_its_layer(tmp_path):
 
 def body_pixels(renderer, image):
     """The 3D view's pixels that are not the white background."""
-    view = image[renderer.header_px:, :renderer.canvas.width]
+    view = image[renderer.header_px :, : renderer.canvas.width]
     return np.any(view < 250, axis=2)
 
 
@@ -242,7 +279,7 @@ def test_frames_of_a_3d_run_show_the_body_where_it_is(tiny_run, view):
             assert columns.min() >= lo[0] - 2 and columns.max() <= hi[0] + 2
             assert rows.min() >= lo[1] - 2 and rows.max() <= hi[1] + 2
             assert np.ptp(columns) > 0.9 * (hi[0] - lo[0]) and np.ptp(rows) > 0.8 * (hi[1] - lo[1])
-            view_image = image[renderer.header_px:, :renderer.canvas.width].astype(float)
+            view_image = image[renderer.header_px :, : renderer.canvas.width].astype(float)
             blue = (view_image[..., 2] > view_image[..., 0] + 40) & (view_image[..., 2] > view_image[..., 1] + 20)
             assert np.count_nonzero(blue) > 100
     finally:
@@ -268,10 +305,29 @@ def test_3d_frame_colours_are_the_tetrahedra_under_the_faces(tiny_run):
 def test_3d_video_from_the_command_line(tmp_path):
     """inflate on a 3D scene writes an mp4 of one 3D frame per step and the most deformed frame's PNG, with the
     chamber visible."""
-    code = inflate(["--scene", "beam_3d_ellipsoid", "--set", "mesh.size=0.5", "--set", "mesh.near_chambers=0.5",
-                    "--set", "mesh.order=1", "--set", "schedule.increments=2",
-                    "--set", "chambers[0].keyframes=[[0, 1.0], [2, 1.5]]", "--renderer", "pillow", "--size", "480x240",
-                    "--quiet", "--out", str(tmp_path)])
+    code = inflate(
+        [
+            "--scene",
+            "beam_3d_ellipsoid",
+            "--set",
+            "mesh.size=0.5",
+            "--set",
+            "mesh.near_chambers=0.5",
+            "--set",
+            "mesh.order=1",
+            "--set",
+            "schedule.increments=2",
+            "--set",
+            "chambers[0].keyframes=[[0, 1.0], [2, 1.5]]",
+            "--renderer",
+            "pillow",
+            "--size",
+            "480x240",
+            "--quiet",
+            "--out",
+            str(tmp_path),
+        ]
+    )
     assert code == 0
     frames = list(iio.imiter(tmp_path / "beam_3d_ellipsoid.mp4"))
     assert len(frames) == 3 and frames[0].shape == (240, 480, 3)
@@ -307,7 +363,9 @@ def test_interactive_3d_scene_resolves_per_chamber_slider(xvfb_display, monkeypa
     assert (slider.name, slider.low, slider.high, slider.value) == ("main", 1.0, 1.5, 1.0)
     script = iter([[1.0], [1.2], [1.2]] + [[1.4]] * 9)  # the last command held: the live loop converges
     real = interactive3d.commands_from
-    monkeypatch.setattr(interactive3d, "commands_from", lambda sliders, shown, values: real(sliders, shown, next(script)))
+    monkeypatch.setattr(
+        interactive3d, "commands_from", lambda sliders, shown, values: real(sliders, shown, next(script))
+    )
     summary = explore_solid(scene, (320, 240), spin=10.0, max_frames=12)
     assert summary["solves"] == 3 and summary["frames"] == 12 and summary["all_converged"]
     assert summary["commands"] == pytest.approx([1.4], abs=1e-6)

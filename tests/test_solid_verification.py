@@ -16,7 +16,9 @@ from taichi_pneuma.terms import Elasticity
 from taichi_pneuma.terms.chambers import AreaControl
 from taichi_pneuma.terms.model import EnergyModel
 
-CONVERGED_2D_TIP = -0.25826  # the 2D reference ramp's converged tip deflection (P2, uniform refinement; docs/accuracy.md)
+CONVERGED_2D_TIP = (
+    -0.25826
+)  # the 2D reference ramp's converged tip deflection (P2, uniform refinement; docs/accuracy.md)
 
 
 def test_extruded_p1_body_has_exactly_depth_times_the_plane_strain_energy_forces_and_area():
@@ -32,8 +34,14 @@ def test_extruded_p1_body_has_exactly_depth_times_the_plane_strain_energy_forces
     for body, displacement in ((planar, in_plane), (mesh, u)):
         model = EnergyModel(body.vertices, 1.0, 1e-12)
         n = body.n_elements
-        elastic = model.add(Elasticity(model.config, body.elements, StableNeoHookean,
-                                       StableNeoHookean.parameters(np.full(n, 1e4), np.full(n, 0.45))))
+        elastic = model.add(
+            Elasticity(
+                model.config,
+                body.elements,
+                StableNeoHookean,
+                StableNeoHookean.parameters(np.full(n, 1e4), np.full(n, 0.45)),
+            )
+        )
         chamber = model.add(AreaControl(1.0).term(model.config, body.chambers[0], "c", 1, body.wall_origins[0]))
         model.set_displacements(displacement)
         energies.append(elastic.energy())
@@ -79,7 +87,7 @@ def lame_errors(meshes, nu=0.3, load=1e-5):
     nonlinearity to stay below the discretisation errors measured."""
     mu, lam = lame_parameters(1.0, nu)
     bulk, p = lam - mu / 3, load * mu
-    exact = lambda r: p / 7 * (r / (3 * bulk) + 8 / (4 * mu * r ** 2))
+    exact = lambda r: p / 7 * (r / (3 * bulk) + 8 / (4 * mu * r**2))
     errors = []
     for mesh in meshes:
         result = tp.simulate(scene_of(mesh, [ChamberSchedule("pressure", ((1, p),))], 1, Material(1.0, nu)))

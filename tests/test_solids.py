@@ -19,7 +19,7 @@ BODY = Box((0.0, 0.0, 0.0), (1.6, 0.8, 0.8))
 def rounded_box_volume(size, r):
     """Steiner's formula: the inner box (size - 2r) swept by a ball of radius r."""
     p, q, s = (v - 2 * r for v in size)
-    return p * q * s + 2 * (p * q + q * s + s * p) * r + np.pi * (p + q + s) * r ** 2 + 4 / 3 * np.pi * r ** 3
+    return p * q * s + 2 * (p * q + q * s + s * p) * r + np.pi * (p + q + s) * r**2 + 4 / 3 * np.pi * r**3
 
 
 def tet_volumes(mesh):
@@ -45,12 +45,18 @@ CHAMBERS = {
     "box": (Box((0.1, 0.0, 0.0), (0.6, 0.3, 0.4)), 0.6 * 0.3 * 0.4, None),
     "rounded_box": (RoundedBox((0.0, 0.0, 0.0), (0.8, 0.4, 0.4), 0.1), rounded_box_volume((0.8, 0.4, 0.4), 0.1), 0.1),
     "ellipsoid": (Ellipsoid((0.0, 0.05, 0.0), (0.5, 0.25, 0.2)), 4 / 3 * np.pi * 0.5 * 0.25 * 0.2, 0.08),
-    "cylinder": (Cylinder((0.0, 0.0, 0.0), 0.2, 1.0, "x"), np.pi * 0.2 ** 2 * 1.0, 0.2),
+    "cylinder": (Cylinder((0.0, 0.0, 0.0), 0.2, 1.0, "x"), np.pi * 0.2**2 * 1.0, 0.2),
     "extruded_ellipse": (Extrusion(Ellipse((0.0, 0.0), (0.2, 0.3)), 0.5), np.pi * 0.2 * 0.3 * 0.5, 0.13),
-    "extruded_rounded_rectangle": (Extrusion(RoundedRectangle((0.0, 0.0), (0.8, 0.4), 0.1), 0.5),
-                                   (0.8 * 0.4 - (4 - np.pi) * 0.01) * 0.5, 0.1),
-    "extruded_polygon": (Extrusion(Polygon(((-0.4, -0.2), (0.4, -0.2), (0.0, 0.25))), 0.4, z=0.1),
-                         0.5 * 0.8 * 0.45 * 0.4, None),
+    "extruded_rounded_rectangle": (
+        Extrusion(RoundedRectangle((0.0, 0.0), (0.8, 0.4), 0.1), 0.5),
+        (0.8 * 0.4 - (4 - np.pi) * 0.01) * 0.5,
+        0.1,
+    ),
+    "extruded_polygon": (
+        Extrusion(Polygon(((-0.4, -0.2), (0.4, -0.2), (0.0, 0.25))), 0.4, z=0.1),
+        0.5 * 0.8 * 0.45 * 0.4,
+        None,
+    ),
 }
 
 
@@ -84,19 +90,28 @@ def test_cavity_volume_converges_at_second_order(name):
     """Halving the wall's mesh size cuts the volume error about four times (linear triangles on a curved
     surface: an O(h^2) gap); observed order between 1.6 and 2.6."""
     shape, exact, _ = CHAMBERS[name]
-    errors = [abs(cavity_volume(m.vertices, m.chambers["c"]) - exact) for m in
-              (mesh_solid(Solid(BODY, (("c", shape),)), MeshSizes(0.3, near_chambers=h, distance=0.05))
-               for h in (0.1, 0.05))]
+    errors = [
+        abs(cavity_volume(m.vertices, m.chambers["c"]) - exact)
+        for m in (
+            mesh_solid(Solid(BODY, (("c", shape),)), MeshSizes(0.3, near_chambers=h, distance=0.05))
+            for h in (0.1, 0.05)
+        )
+    ]
     assert 1.6 < np.log2(errors[0] / errors[1]) < 2.6
 
 
-@pytest.mark.parametrize("body, volume", [
-    (Cylinder((0.0, 0.0, 0.0), 0.6, 2.0, "x"), np.pi * 0.36 * 2.0),
-    (Extrusion(Rectangle((0.0, 0.0), (2.0, 1.2)), 1.0), 2.4),
-    (Extrusion(RectangleUnion((Rectangle((0.0, 0.0), (2.0, 1.2)), Rectangle((0.5, 0.9), (1.0, 0.6)))), 1.0),
-     2.4 + 1.0 * 0.6),
-    (Extrusion(Polygon(((-1.0, -0.6), (1.0, -0.6), (1.2, 0.6), (-1.0, 0.8))), 1.0), 2.74),  # shoelace area x depth
-])
+@pytest.mark.parametrize(
+    "body, volume",
+    [
+        (Cylinder((0.0, 0.0, 0.0), 0.6, 2.0, "x"), np.pi * 0.36 * 2.0),
+        (Extrusion(Rectangle((0.0, 0.0), (2.0, 1.2)), 1.0), 2.4),
+        (
+            Extrusion(RectangleUnion((Rectangle((0.0, 0.0), (2.0, 1.2)), Rectangle((0.5, 0.9), (1.0, 0.6)))), 1.0),
+            2.4 + 1.0 * 0.6,
+        ),
+        (Extrusion(Polygon(((-1.0, -0.6), (1.0, -0.6), (1.2, 0.6), (-1.0, 0.8))), 1.0), 2.74),  # shoelace area x depth
+    ],
+)
 def test_bodies_mesh_to_their_volume(body, volume):
     """Every body shape: the tetrahedra fill its volume (exactly for flat faces) around a box chamber."""
     chamber = Box((0.0, 0.0, 0.0), (0.4, 0.3, 0.3))
@@ -111,8 +126,10 @@ def test_regions_are_the_parts_of_the_body_inside_their_shapes():
     intersection with the body exactly; the interfaces are conforming (no tetrahedron straddles them)."""
     bottom = Box((0.0, -0.3, 0.0), (1.6, 0.2, 0.8))
     corner = Box((0.6, -0.3, 0.0), (0.4, 0.4, 2.0))  # overlaps the bottom slab and sticks out of the body
-    mesh = mesh_solid(Solid(BODY, (("c", Box((0.0, 0.1, 0.0), (0.4, 0.2, 0.4))),), (("bottom", bottom), ("corner", corner))),
-                      MeshSizes(0.2))
+    mesh = mesh_solid(
+        Solid(BODY, (("c", Box((0.0, 0.1, 0.0), (0.4, 0.2, 0.4))),), (("bottom", bottom), ("corner", corner))),
+        MeshSizes(0.2),
+    )
     assert mesh.region_names == ("bottom", "corner")
     centroid = mesh.vertices[mesh.tets].mean(axis=1)
     in_bottom = centroid[:, 1] < -0.2
@@ -151,41 +168,68 @@ def test_estimate_bounds_the_count_before_meshing():
         mesh_solid(solid, MeshSizes(0.002))
 
 
-@pytest.mark.parametrize("solid, message", [
-    (Solid(BODY, (("c", Ellipsoid((5.0, 0.0, 0.0), (0.3, 0.2, 0.2))),)), "chamber 'c' lies outside the body"),
-    (Solid(BODY, (("a", Ellipsoid((0.0, 0.0, 0.0), (0.3, 0.2, 0.2))), ("b", Ellipsoid((0.2, 0.0, 0.0), (0.3, 0.2, 0.2))))),
-     "chambers 'a' and 'b' overlap"),
-    (Solid(BODY, (("a", Box((-0.2, 0.0, 0.0), (0.4, 0.2, 0.2))), ("b", Box((0.2, 0.0, 0.0), (0.4, 0.2, 0.2))))),
-     "chamber 'a' touches another chamber"),
-    (Solid(BODY, (("c", Box((0.0, 0.0, 0.0), (2.0, 1.0, 1.0))),)), "no rubber is left"),
-    (Solid(BODY, (("c", Box((0.0, 0.0, 0.0), (0.2, 0.2, 0.2))),), (("r", Box((5.0, 5.0, 5.0), (1.0, 1.0, 1.0))),)),
-     "region 'r' lies outside the body"),
-    # two outline points 1e-13 apart: OpenCASCADE cannot make the line between them
-    (Solid(BODY, (("c", Extrusion(Polygon(((0.0, 0.0), (0.3, 0.0), (0.3, 1e-13), (0.3, 0.2), (0.0, 0.2))), 0.3)),)),
-     "gmsh could not mesh the solid: .*Could not create line"),
-])
+@pytest.mark.parametrize(
+    "solid, message",
+    [
+        (Solid(BODY, (("c", Ellipsoid((5.0, 0.0, 0.0), (0.3, 0.2, 0.2))),)), "chamber 'c' lies outside the body"),
+        (
+            Solid(
+                BODY,
+                (
+                    ("a", Ellipsoid((0.0, 0.0, 0.0), (0.3, 0.2, 0.2))),
+                    ("b", Ellipsoid((0.2, 0.0, 0.0), (0.3, 0.2, 0.2))),
+                ),
+            ),
+            "chambers 'a' and 'b' overlap",
+        ),
+        (
+            Solid(BODY, (("a", Box((-0.2, 0.0, 0.0), (0.4, 0.2, 0.2))), ("b", Box((0.2, 0.0, 0.0), (0.4, 0.2, 0.2))))),
+            "chamber 'a' touches another chamber",
+        ),
+        (Solid(BODY, (("c", Box((0.0, 0.0, 0.0), (2.0, 1.0, 1.0))),)), "no rubber is left"),
+        (
+            Solid(
+                BODY, (("c", Box((0.0, 0.0, 0.0), (0.2, 0.2, 0.2))),), (("r", Box((5.0, 5.0, 5.0), (1.0, 1.0, 1.0))),)
+            ),
+            "region 'r' lies outside the body",
+        ),
+        # two outline points 1e-13 apart: OpenCASCADE cannot make the line between them
+        (
+            Solid(
+                BODY, (("c", Extrusion(Polygon(((0.0, 0.0), (0.3, 0.0), (0.3, 1e-13), (0.3, 0.2), (0.0, 0.2))), 0.3)),)
+            ),
+            "gmsh could not mesh the solid: .*Could not create line",
+        ),
+    ],
+)
 def test_bad_solids_are_one_clear_error_and_leave_gmsh_finalised(solid, message):
     with pytest.raises(PneumaInputError, match=message):
         mesh_solid(solid, MeshSizes(0.2))
     assert not gmsh.isInitialized()
 
 
-@pytest.mark.parametrize("make, message", [
-    (lambda: Solid(BODY, (("body", Box((0, 0, 0), (0.2, 0.2, 0.2))),)), "names .* other than 'body'"),
-    (lambda: Solid(BODY, (("a", Box((0, 0, 0), (0.2, 0.2, 0.2))),), (("a", Box((0, 0, 0), (1, 1, 1))),)), "distinct"),
-    (lambda: Solid((1, 2), ()), "body: .* is not a 3D shape"),
-    (lambda: MeshSizes(0.1, near_chambers=-0.2), r"near_chambers = -0.2 must be > 0"),
-    (lambda: MeshSizes(float("nan")), "size = nan must be a finite number"),
-    (lambda: Box((0, 0, 0), (1, -1, 1)), "size = .* must be > 0"),
-    (lambda: Box((0, 0), (1, 1, 1)), r"center = \(0, 0\) must be three numbers"),
-    (lambda: RoundedBox((0, 0, 0), (1, 1, 0.4), 0.2), r"radius = 0.2 must lie in \(0, 0.2\)"),
-    (lambda: Cylinder((0, 0, 0), 0.1, 1.0, "w"), "axis = 'w' is not one of x, y, z"),
-    (lambda: Extrusion("circle", 1.0), "is not a 2D shape"),
-    (lambda: PneuNet(chambers=0), "chambers = 0 must be an integer from 1 to 64"),
-    (lambda: PneuNet(chambers=2.5), "chambers = 2.5 must be an integer"),
-    (lambda: PneuNet(gap=-0.1), "gap = -0.1 must be > 0"),
-    (lambda: PneuNet(radius=0.3), r"radius = 0.3 must be < 0.2 \(half the chamber's shortest side\)"),
-])
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda: Solid(BODY, (("body", Box((0, 0, 0), (0.2, 0.2, 0.2))),)), "names .* other than 'body'"),
+        (
+            lambda: Solid(BODY, (("a", Box((0, 0, 0), (0.2, 0.2, 0.2))),), (("a", Box((0, 0, 0), (1, 1, 1))),)),
+            "distinct",
+        ),
+        (lambda: Solid((1, 2), ()), "body: .* is not a 3D shape"),
+        (lambda: MeshSizes(0.1, near_chambers=-0.2), r"near_chambers = -0.2 must be > 0"),
+        (lambda: MeshSizes(float("nan")), "size = nan must be a finite number"),
+        (lambda: Box((0, 0, 0), (1, -1, 1)), "size = .* must be > 0"),
+        (lambda: Box((0, 0), (1, 1, 1)), r"center = \(0, 0\) must be three numbers"),
+        (lambda: RoundedBox((0, 0, 0), (1, 1, 0.4), 0.2), r"radius = 0.2 must lie in \(0, 0.2\)"),
+        (lambda: Cylinder((0, 0, 0), 0.1, 1.0, "w"), "axis = 'w' is not one of x, y, z"),
+        (lambda: Extrusion("circle", 1.0), "is not a 2D shape"),
+        (lambda: PneuNet(chambers=0), "chambers = 0 must be an integer from 1 to 64"),
+        (lambda: PneuNet(chambers=2.5), "chambers = 2.5 must be an integer"),
+        (lambda: PneuNet(gap=-0.1), "gap = -0.1 must be > 0"),
+        (lambda: PneuNet(radius=0.3), r"radius = 0.3 must be < 0.2 \(half the chamber's shortest side\)"),
+    ],
+)
 def test_bad_parameters_are_named(make, message):
     with pytest.raises(PneumaInputError, match=message):
         make()

@@ -39,10 +39,13 @@ def errors_only(capsys):
 
 # --- planning ------------------------------------------------------------------------------------
 
+
 def test_ranges_and_lists_give_the_grid_of_every_combination():
     base = tp.reference_scene()
-    axes = check_axes(base, [parse_vary("cy=-0.15:0.15:3"), parse_vary("material.E=1e4,2e4"),
-                             parse_vary("schedule.increments=10:40:4")])
+    axes = check_axes(
+        base,
+        [parse_vary("cy=-0.15:0.15:3"), parse_vary("material.E=1e4,2e4"), parse_vary("schedule.increments=10:40:4")],
+    )
     assert axes[0].grid() == [-0.15, 0.0, 0.15]
     assert axes[2].grid() == [10, 20, 30, 40] and all(type(v) is int for v in axes[2].grid())
     runs = plan(axes)
@@ -55,8 +58,9 @@ def test_ranges_and_lists_give_the_grid_of_every_combination():
 
 def test_latin_hypercube_puts_one_sample_in_every_stratum_of_every_range():
     base = tp.reference_scene()
-    axes = check_axes(base, [parse_vary("cy=-0.2:0.2"), parse_vary("material.E=5e3:2e4:7"),
-                             parse_vary("schedule.increments=5:14")])
+    axes = check_axes(
+        base, [parse_vary("cy=-0.2:0.2"), parse_vary("material.E=5e3:2e4:7"), parse_vary("schedule.increments=5:14")]
+    )
     runs = plan(axes, samples=10, seed=3)
     assert len(runs) == 10
     cy = np.array([r[CY] for r in runs])
@@ -70,8 +74,11 @@ def test_latin_hypercube_puts_one_sample_in_every_stratum_of_every_range():
 
 
 def test_a_task_never_raises_and_names_what_went_wrong():
-    base = tp.reference_scene().with_values({"mesh.max_area": 0.05, "schedule.increments": 2,
-                                             "chambers[0].keyframes": [[2, 1.5]]}).to_toml()
+    base = (
+        tp.reference_scene()
+        .with_values({"mesh.max_area": 0.05, "schedule.increments": 2, "chambers[0].keyframes": [[2, 1.5]]})
+        .to_toml()
+    )
     ok = run_task(Task(base, {"material.E": 2e4}))
     assert ok["error"] is None and ok["converged"] and ok["increments"] == 2
     assert ok["main.area_ratio"] == pytest.approx(1.5, rel=0.02) and ok["main.peak_pressure"] > 0
@@ -99,22 +106,26 @@ def test_the_plot_shows_the_rows_tip_deflections():
 
 # --- bad input -----------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("flags, words", [
-    (["--vary", "material.foo=1,2"], "unknown key 'material.foo'"),
-    (["--vary", "cy=0.1:0.2:0"], "count '0' must be an integer"),
-    (["--vary", "cy=0.1:0.2:x"], "count 'x'"),
-    (["--vary", "cy=0.1:0.2"], "needs a count"),
-    (["--vary", "cy=0:nan:3"], "must be a finite number"),
-    (["--vary", "material.E=soft,hard"], "'soft' is not a number"),
-    (["--vary", "cy=0.1,0.1"], "listed twice"),
-    (["--vary", "cy"], "must look like KEY="),
-    (["--vary", "cy=0.1", "--vary", "chambers[0].center[1]=0.2"], "varied twice"),
-    (["--vary", "cy=0.1", "--workers", "0"], "--workers 0"),
-    (["--vary", "cy=0:0.1:400", "--vary", "E=1:2:400"], "160000 runs; the limit is 100000"),
-    (["--vary", "cy=0:0.1", "--samples", "0"], "--samples 0"),
-    (["--vary", "cy=0.1", "--name", "../x"], "cannot name the result files"),
-    (["--vary", "cy=0.1", "--nu", "0.5"], "nu = 0.5"),
-])
+
+@pytest.mark.parametrize(
+    "flags, words",
+    [
+        (["--vary", "material.foo=1,2"], "unknown key 'material.foo'"),
+        (["--vary", "cy=0.1:0.2:0"], "count '0' must be an integer"),
+        (["--vary", "cy=0.1:0.2:x"], "count 'x'"),
+        (["--vary", "cy=0.1:0.2"], "needs a count"),
+        (["--vary", "cy=0:nan:3"], "must be a finite number"),
+        (["--vary", "material.E=soft,hard"], "'soft' is not a number"),
+        (["--vary", "cy=0.1,0.1"], "listed twice"),
+        (["--vary", "cy"], "must look like KEY="),
+        (["--vary", "cy=0.1", "--vary", "chambers[0].center[1]=0.2"], "varied twice"),
+        (["--vary", "cy=0.1", "--workers", "0"], "--workers 0"),
+        (["--vary", "cy=0:0.1:400", "--vary", "E=1:2:400"], "160000 runs; the limit is 100000"),
+        (["--vary", "cy=0:0.1", "--samples", "0"], "--samples 0"),
+        (["--vary", "cy=0.1", "--name", "../x"], "cannot name the result files"),
+        (["--vary", "cy=0.1", "--nu", "0.5"], "nu = 0.5"),
+    ],
+)
 def test_bad_input_is_one_error_line_and_exit_2_with_nothing_written(tmp_path, capsys, flags, words):
     out = tmp_path / "out"
     assert main([*flags, "--out", str(out)]) == 2
@@ -125,6 +136,7 @@ def test_bad_input_is_one_error_line_and_exit_2_with_nothing_written(tmp_path, c
 
 
 # --- running studies -----------------------------------------------------------------------------
+
 
 def coarse_rows(heights) -> dict:
     """The rows of COARSE reference ramps at these chamber heights, each run here in this process (run_task)."""
@@ -191,8 +203,27 @@ def test_a_ramp_with_no_equilibrium_is_a_row_and_the_study_goes_on(tmp_path):
     with at most 12 and no cut-back, the first has no equilibrium and the second converges. One worker runs all
     four: it goes on after a failed run."""
     out = tmp_path / "study"
-    assert main([*COARSE, "--max-iterations", "12", "--max-cuts", "0", "--vary", "chambers[0].keyframes[1][0]=1,10",
-                 "--vary", "cy=-0.1,0.1", "--workers", "1", "--out", str(out), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                *COARSE,
+                "--max-iterations",
+                "12",
+                "--max-cuts",
+                "0",
+                "--vary",
+                "chambers[0].keyframes[1][0]=1,10",
+                "--vary",
+                "cy=-0.1,0.1",
+                "--workers",
+                "1",
+                "--out",
+                str(out),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     rows = {(int(r["chambers[0].keyframes[1][0]"]), float(r[CY])): r for r in read_rows(out / "sweep.csv")}
     assert len(rows) == 4
     for cy in (-0.1, 0.1):
@@ -205,25 +236,46 @@ def test_a_ramp_with_no_equilibrium_is_a_row_and_the_study_goes_on(tmp_path):
 
 # --- Ray ------------------------------------------------------------------------------------------
 
+
 def test_cy_sweep_on_a_local_ray_gives_the_rows_of_single_runs(tmp_path):
     """The command a user runs: the app starts a local Ray (2 CPUs) for the study and stops it."""
     pytest.importorskip("ray")
     out = tmp_path / "ray"
-    proc = subprocess.run([sys.executable, "-m", "taichi_pneuma.apps.sweep", "--vary", "cy=-0.15,0,0.15", *COARSE, "--ray",
-                           "--workers", "2", "--out", str(out), "--quiet"], capture_output=True, text=True, timeout=300)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "taichi_pneuma.apps.sweep",
+            "--vary",
+            "cy=-0.15,0,0.15",
+            *COARSE,
+            "--ray",
+            "--workers",
+            "2",
+            "--out",
+            str(out),
+            "--quiet",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr
     rows = by_height(read_rows(out / "sweep.csv"))
     single = coarse_rows((-0.15, 0.0, 0.15))
     assert sorted(rows) == sorted(single)
     for cy, alone in single.items():
-        assert float(rows[cy]["tip_dy"]) == pytest.approx(alone["tip_dy"], rel=SAME, abs=SAME) and rows[cy]["error"] == ""
+        assert (
+            float(rows[cy]["tip_dy"]) == pytest.approx(alone["tip_dy"], rel=SAME, abs=SAME) and rows[cy]["error"] == ""
+        )
     record = json.loads((out / "sweep.json").read_text())
     assert record["executor"]["executor"] == "ray" and record["executor"]["ray_cpus"] == 2
     assert record["versions"]["ray"] and record["result"]["ran"] == 3
 
 
-@pytest.mark.parametrize("address, words", [("127.0.0.1:1", "no Ray cluster answers there"),
-                                             ("localhost", "an address is HOST:PORT")])
+@pytest.mark.parametrize(
+    "address, words", [("127.0.0.1:1", "no Ray cluster answers there"), ("localhost", "an address is HOST:PORT")]
+)
 def test_a_ray_address_nothing_answers_is_refused_at_once(tmp_path, capsys, address, words):
     pytest.importorskip("ray")
     assert main(["--vary", "cy=0.1", "--ray", address, "--out", str(tmp_path / "out")]) == 2

@@ -39,8 +39,9 @@ ELLIPSE = Ellipse((0.0, 0.0), (0.85, 0.22), POINTS)
 
 
 def half_geometry(**kwargs) -> Geometry:
-    return Geometry(Rectangle((0.0, 0.2), (3.5, 0.4)), (("main", ELLIPSE),), MAX_AREA, PointSet("left"),
-                    rollers=(MIRROR,), **kwargs)
+    return Geometry(
+        Rectangle((0.0, 0.2), (3.5, 0.4)), (("main", ELLIPSE),), MAX_AREA, PointSet("left"), rollers=(MIRROR,), **kwargs
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -64,13 +65,22 @@ def mirrored(half: Mesh) -> tuple[Mesh, np.ndarray]:
     triangles = np.vstack([half.triangles, image[half.triangles][:, [0, 2, 1]]])
     wall = half.chambers[0]
     loop = np.concatenate([wall, image[wall[-2:0:-1]]])
-    return Mesh(vertices, triangles, (loop,), np.union1d(half.boundary, image[half.boundary]),
-                np.union1d(half.pinned, image[half.pinned]), half.tip, (None,), ()), image
+    return Mesh(
+        vertices,
+        triangles,
+        (loop,),
+        np.union1d(half.boundary, image[half.boundary]),
+        np.union1d(half.pinned, image[half.pinned]),
+        half.tip,
+        (None,),
+        (),
+    ), image
 
 
 def ramp(geometry, stiffness: float, clamp_stiffness: float):
-    built = Scene(geometry, (ChamberControl(area_ramp(3.5, STEPS, stiffness)),), STEPS - 1,
-                  clamp_stiffness=clamp_stiffness).build()
+    built = Scene(
+        geometry, (ChamberControl(area_ramp(3.5, STEPS, stiffness)),), STEPS - 1, clamp_stiffness=clamp_stiffness
+    ).build()
     return built, run_schedule(built, options=NewtonOptions(tol=1e-9))
 
 
@@ -93,7 +103,7 @@ def test_half_mesh_cuts_the_chamber_wall_at_the_line():
     half_polygon = signed_area(ELLIPSE.polygon()) / 2
     assert enclosed_area(wall, mesh.wall_origins[0]) == pytest.approx(half_polygon, rel=1e-12)
     assert mesh.area == pytest.approx(3.5 * 0.4 - half_polygon, rel=1e-12)
-    (held, normal), = mesh.rollers
+    ((held, normal),) = mesh.rollers
     assert np.array_equal(held, np.flatnonzero(mesh.vertices[:, 1] == 0.0)) and normal.tolist() == [0.0, 1.0]
     assert set(mesh.chambers[0][[0, -1]]) <= set(held)
 
@@ -106,13 +116,18 @@ def test_quadratic_half_mesh_wall_is_corner_midside_corner():
     assert wall[0, 1] == wall[-1, 1] == 0.0  # the ends on the line
     chord, along = wall[2::2] - wall[0:-1:2], wall[1::2] - wall[0:-1:2]  # each midside node between its corners
     assert np.all(np.abs(np.sum(along * chord, axis=1) / np.sum(chord * chord, axis=1) - 0.5) < 0.1)
-    assert enclosed_area(wall[0::2], mesh.wall_origins[0]) == pytest.approx(signed_area(ELLIPSE.polygon()) / 2,
-                                                                           rel=1e-12)
+    assert enclosed_area(wall[0::2], mesh.wall_origins[0]) == pytest.approx(
+        signed_area(ELLIPSE.polygon()) / 2, rel=1e-12
+    )
 
 
 def test_quarter_model_closes_the_chamber_at_the_lines_crossing():
-    geometry = Geometry(Rectangle((0.875, 0.2), (1.75, 0.4)), (("main", ELLIPSE),), MAX_AREA,
-                        rollers=(MIRROR, Roller((1.0, 0.0), (0.0, 0.0))))
+    geometry = Geometry(
+        Rectangle((0.875, 0.2), (1.75, 0.4)),
+        (("main", ELLIPSE),),
+        MAX_AREA,
+        rollers=(MIRROR, Roller((1.0, 0.0), (0.0, 0.0))),
+    )
     mesh = geometry.mesh()
     wall = mesh.vertices[mesh.chambers[0]]
     assert mesh.wall_origins[0].tolist() == [0.0, 0.0]
@@ -121,11 +136,19 @@ def test_quarter_model_closes_the_chamber_at_the_lines_crossing():
     assert mesh.area == pytest.approx(1.75 * 0.4 - signed_area(ELLIPSE.polygon()) / 4, rel=1e-12)
 
 
-@pytest.mark.parametrize("body, rollers, message", [
-    (Rectangle((0.0, 0.1), (3.5, 0.2)), (MIRROR, Roller((0.0, 1.0), (0.0, 0.2))), "into one wall from line to line"),
-    (Rectangle((0.0, 0.2), (3.5, 0.4)), (), "not inside the body"),
-    (Rectangle((0.0, 0.2), (3.5, 0.4)), (Roller((0.0, 1.0), box=(-2, -0.1, 2, 0.1)),), "not inside the body"),
-], ids=["between parallel lines", "no roller", "box roller"])
+@pytest.mark.parametrize(
+    "body, rollers, message",
+    [
+        (
+            Rectangle((0.0, 0.1), (3.5, 0.2)),
+            (MIRROR, Roller((0.0, 1.0), (0.0, 0.2))),
+            "into one wall from line to line",
+        ),
+        (Rectangle((0.0, 0.2), (3.5, 0.4)), (), "not inside the body"),
+        (Rectangle((0.0, 0.2), (3.5, 0.4)), (Roller((0.0, 1.0), box=(-2, -0.1, 2, 0.1)),), "not inside the body"),
+    ],
+    ids=["between parallel lines", "no roller", "box roller"],
+)
 def test_a_chamber_cut_off_a_symmetry_line_is_refused(body, rollers, message):
     with pytest.raises(PneumaInputError, match=message):
         Geometry(body, (("main", ELLIPSE),), MAX_AREA, rollers=rollers)
@@ -151,7 +174,7 @@ def test_open_wall_area_gradient_and_hessian_match_finite_differences(order):
     area_gradient = chamber.area_and_gradient()[1].ravel()
     hessian = np.zeros((built.model.n_dofs,) * 2)
     np.add.at(hessian, chamber.hessian_pattern(), chamber.hessian_values())
-    (low_dofs, v, c), = chamber.low_rank()
+    ((low_dofs, v, c),) = chamber.low_rank()
     hessian[np.ix_(low_dofs, low_dofs)] += c * np.outer(v, v)
     steps = h * np.eye(len(dofs))
     fd = [(at(s)[:2], at(-s)[:2]) for s in steps]
@@ -167,7 +190,7 @@ def test_half_model_equals_mirrored_full_model(models):
     u_half = half.positions[-1] - rest
     u_full = full.positions[-1] - full_built.mesh.vertices
     scale = np.abs(u_half).max()
-    assert np.abs(u_half - u_full[:len(rest)]).max() <= 1e-8 * scale
+    assert np.abs(u_half - u_full[: len(rest)]).max() <= 1e-8 * scale
     assert np.abs(u_half - u_full[image] * [1.0, -1.0]).max() <= 1e-8 * scale
     for h, f in zip(half.steps, full.steps):
         for name in ("tip_dx", "tip_dy", "tip_rotation"):
@@ -190,8 +213,12 @@ def test_named_tip_drives_history_and_sensitivities(models):
     the means over exactly those nodes."""
     (half_built, half), _, _, _ = models
     box = (1.7, 0.19, 1.8, 0.41)
-    built = Scene(half_geometry(tip=PointSet(box=box)), (ChamberControl(area_ramp(3.5, STEPS, 2 * K)),), STEPS - 1,
-                  clamp_stiffness=1e13).build()
+    built = Scene(
+        half_geometry(tip=PointSet(box=box)),
+        (ChamberControl(area_ramp(3.5, STEPS, 2 * K)),),
+        STEPS - 1,
+        clamp_stiffness=1e13,
+    ).build()
     rest = built.mesh.vertices
     chosen = np.flatnonzero((rest[:, 0] >= 1.7) & (rest[:, 1] >= 0.19))
     assert np.array_equal(built.mesh.tip, chosen) and len(chosen) >= 2

@@ -184,8 +184,11 @@ def test_projected_element_blocks_equal_eigen_clamped_blocks(coarse):
     w, (mu, lam) = elastic.weights[:, 0], elastic.parameters.T
     g = np.stack([F[:, 1, 1], -F[:, 1, 0], -F[:, 0, 1], F[:, 0, 0]], axis=1)
     hj = np.array([[0, 0, 0, 1], [0, 0, -1, 0], [0, -1, 0, 0], [1, 0, 0, 0]], dtype=float)
-    M = (mu[:, None, None] * np.eye(4) + lam[:, None, None] * g[:, :, None] * g[:, None, :]
-         - (mu + lam * (1 - J))[:, None, None] * hj)
+    M = (
+        mu[:, None, None] * np.eye(4)
+        + lam[:, None, None] * g[:, :, None] * g[:, None, :]
+        - (mu + lam * (1 - J))[:, None, None] * hj
+    )
     values, vectors = np.linalg.eigh(M)
     assert (values < 0).any(axis=1).mean() > 0.5  # most elements need the projection
     clamped = vectors @ (np.maximum(values, 0)[:, :, None] * vectors.transpose(0, 2, 1))

@@ -18,9 +18,12 @@ from taichi_pneuma.scene.scenefile import load_scene
 
 INSTALLED = triangulation.installed()
 SCENES = Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes"
-MESHES = {"cy=0": lambda: BeamGeometry(cy=0.0).mesh(), "cy=+0.15": lambda: BeamGeometry(cy=0.15).mesh(),
-          "cy=-0.15": lambda: BeamGeometry(cy=-0.15).mesh(),
-          "bidirectional": lambda: load_scene(SCENES / "bidirectional.toml").geometry.mesh()}
+MESHES = {
+    "cy=0": lambda: BeamGeometry(cy=0.0).mesh(),
+    "cy=+0.15": lambda: BeamGeometry(cy=0.15).mesh(),
+    "cy=-0.15": lambda: BeamGeometry(cy=-0.15).mesh(),
+    "bidirectional": lambda: load_scene(SCENES / "bidirectional.toml").geometry.mesh(),
+}
 COUNTS = {"cy=0": (1601, 2916), "cy=+0.15": (1632, 2976), "cy=-0.15": (1633, 2980)}
 
 
@@ -50,8 +53,7 @@ def test_bindings_give_identical_meshes(name, monkeypatch):
 def test_out_of_precision_is_one_input_error_on_each_binding(binding, monkeypatch):
     """A chamber 1e-17 of the body's size: Triangle's refinement runs out of precision (the `triangle` package
     raises; meshpy's Triangle ends the process, which no test can catch: that binding is left out)."""
-    geometry = Geometry(Rectangle((0.0, 0.0), (1e17, 1e17)), (("main", Ellipse((0.0, 0.15), (0.85, 0.22), 128)),),
-                        1e33)
+    geometry = Geometry(Rectangle((0.0, 0.0), (1e17, 1e17)), (("main", Ellipse((0.0, 0.15), (0.85, 0.22), 128)),), 1e33)
     with pytest.raises(PneumaInputError, match="Triangle could not mesh the geometry"):
         mesh_with(binding, geometry.mesh, monkeypatch)
 

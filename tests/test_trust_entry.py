@@ -20,8 +20,14 @@ CHEAP = ["--steps", "4", "--max-area", "0.02"]
 
 
 def app(name: str, *args: str, env: dict | None = None, timeout: float = 120) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", f"taichi_pneuma.apps.{name}", *args], capture_output=True,
-                          text=True, env=env or ENV, timeout=timeout, check=False)
+    return subprocess.run(
+        [sys.executable, "-m", f"taichi_pneuma.apps.{name}", *args],
+        capture_output=True,
+        text=True,
+        env=env or ENV,
+        timeout=timeout,
+        check=False,
+    )
 
 
 def one_error_line(done: subprocess.CompletedProcess, *needles: str) -> str:
@@ -34,11 +40,17 @@ def one_error_line(done: subprocess.CompletedProcess, *needles: str) -> str:
 
 # --- 1. signals -----------------------------------------------------------------------------------------
 
+
 def signalled_when(line_seen: str, signum: int, out: Path, *flags: str, delay: float = 0.0):
     """Run pneuma-inflate, send signum `delay` s after it prints a line containing line_seen; (exit code, stderr,
     seconds from the signal to the exit). A run still alive 20 s after the signal is killed (exit None)."""
-    proc = subprocess.Popen([sys.executable, "-m", "taichi_pneuma.apps.inflate", *CHEAP, "--out", str(out), *flags],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "taichi_pneuma.apps.inflate", *CHEAP, "--out", str(out), *flags],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=ENV,
+    )
     for line in proc.stdout:
         if line_seen in line:
             time.sleep(delay)
@@ -54,8 +66,11 @@ def signalled_when(line_seen: str, signum: int, out: Path, *flags: str, delay: f
     return proc.returncode, stderr, time.perf_counter() - sent
 
 
-@pytest.mark.parametrize("signum, delay", [(signal.SIGINT, 0.0), (signal.SIGTERM, 0.0), (signal.SIGTERM, 0.1)],
-                         ids=["SIGINT", "SIGTERM", "SIGTERM-0.1s-later"])
+@pytest.mark.parametrize(
+    "signum, delay",
+    [(signal.SIGINT, 0.0), (signal.SIGTERM, 0.0), (signal.SIGTERM, 0.1)],
+    ids=["SIGINT", "SIGTERM", "SIGTERM-0.1s-later"],
+)
 def test_a_signal_once_the_last_increment_is_solved_waits_for_every_result_file(tmp_path, signum, delay):
     """The signal comes as the last step's line is printed (the run is finished, no file written yet). Before:
     only the PVD and the VTU files were left."""
@@ -64,7 +79,8 @@ def test_a_signal_once_the_last_increment_is_solved_waits_for_every_result_file(
     # 128 + signal once the files are written (0 only where the run ended before the signal came)
     assert code in (0, 128 + signum) and "Traceback" not in stderr, stderr
     assert [line for line in stderr.splitlines() if line.startswith("error:")] == [
-        f"error: interrupted ({'Ctrl-C' if signum == signal.SIGINT else 'SIGTERM'})"][:code != 0]
+        f"error: interrupted ({'Ctrl-C' if signum == signal.SIGINT else 'SIGTERM'})"
+    ][: code != 0]
     summary = json.loads((out / f"{STEM}_summary.json").read_text())
     assert summary["steps"] == 4 and summary["interrupted"] is False and summary["video_frames"] == 4
     rows = (out / f"{STEM}_history.csv").read_text().splitlines()
@@ -80,8 +96,9 @@ def test_a_signal_while_an_increment_cuts_back_ends_the_run_within_a_second(tmp_
     """One Newton iteration per try and 100000 cuts allowed: step 1 creeps by ever smaller cuts. Before: the
     first SIGTERM was noted and waited for the increment's end, minutes away."""
     out = tmp_path / "out"
-    code, stderr, seconds = signalled_when("step   0/3", signal.SIGTERM, out, "--max-iterations", "1",
-                                           "--max-cuts", "100000", "--no-video", delay=1.0)
+    code, stderr, seconds = signalled_when(
+        "step   0/3", signal.SIGTERM, out, "--max-iterations", "1", "--max-cuts", "100000", "--no-video", delay=1.0
+    )
     assert code == 143 and seconds < 2.0 and "Traceback" not in stderr, (code, seconds, stderr)
     errors = [line for line in stderr.splitlines() if line.startswith("error:")]
     assert errors == ["error: interrupted during step 1 of 3 (SIGTERM)"]
@@ -91,11 +108,14 @@ def test_a_signal_while_an_increment_cuts_back_ends_the_run_within_a_second(tmp_
 
 # --- 2. memory from small files ---------------------------------------------------------------------------
 
+
 def scene_of_mesh(directory: Path, mesh: Path) -> Path:
     scene = directory / "scene.toml"
-    scene.write_text(f'name = "small_file"\n[body]\nshape = "mesh"\nfile = "{mesh.name}"\n[clamp]\nside = "left"\n'
-                     '[[chambers]]\nname = "main"\nshape = "mesh_surface"\ngroup = "chamber"\ncontrol = "volume"\n'
-                     'keyframes = [[0, 1.0], [2, 1.5]]\n[schedule]\nincrements = 2\n')
+    scene.write_text(
+        f'name = "small_file"\n[body]\nshape = "mesh"\nfile = "{mesh.name}"\n[clamp]\nside = "left"\n'
+        '[[chambers]]\nname = "main"\nshape = "mesh_surface"\ngroup = "chamber"\ncontrol = "volume"\n'
+        "keyframes = [[0, 1.0], [2, 1.5]]\n[schedule]\nincrements = 2\n"
+    )
     return scene
 
 
@@ -103,9 +123,22 @@ def test_a_small_mesh_file_that_claims_gigabytes_is_refused_at_low_memory(tmp_pa
     """Before: 5.3 GB resident (meshio decompressed every block, then failed on the array's size)."""
     mesh = lzma_vtu(tmp_path / "mesh.vtu")
     assert mesh.stat().st_size < 600_000
-    proc = subprocess.Popen([sys.executable, "-m", "taichi_pneuma.apps.inflate", "--scene",
-                             str(scene_of_mesh(tmp_path, mesh)), "--no-video", "--out", str(tmp_path / "out")],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=ENV)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "taichi_pneuma.apps.inflate",
+            "--scene",
+            str(scene_of_mesh(tmp_path, mesh)),
+            "--no-video",
+            "--out",
+            str(tmp_path / "out"),
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=ENV,
+    )
     stderr = proc.stderr.read()
     _, status, usage = os.wait4(proc.pid, 0)
     proc.returncode = os.waitstatus_to_exitcode(status)
@@ -115,11 +148,16 @@ def test_a_small_mesh_file_that_claims_gigabytes_is_refused_at_low_memory(tmp_pa
 
 # --- 3. one line for every bad input, at every entry point ----------------------------------------------
 
-@pytest.mark.parametrize("command, needles", [
-    (["inflate", "--scene", "{tmp}"], ["is not a regular file"]),
-    (["inflate", "--scene", "x" * 5000], ["(5000 characters) cannot be read (File name too long)"]),
-    (["reach", "--targets", "{tmp}"], ["targets file", "is not a regular file"]),
-], ids=["scene-folder", "scene-5000-characters", "targets-folder"])
+
+@pytest.mark.parametrize(
+    "command, needles",
+    [
+        (["inflate", "--scene", "{tmp}"], ["is not a regular file"]),
+        (["inflate", "--scene", "x" * 5000], ["(5000 characters) cannot be read (File name too long)"]),
+        (["reach", "--targets", "{tmp}"], ["targets file", "is not a regular file"]),
+    ],
+    ids=["scene-folder", "scene-5000-characters", "targets-folder"],
+)
 def test_a_path_that_is_a_folder_or_too_long_is_one_error_line(tmp_path, command, needles):
     """Before: IsADirectoryError and OSError (File name too long) tracebacks, exit 1."""
     done = app(*[part.replace("{tmp}", str(tmp_path)) for part in command], "--out", str(tmp_path / "out"))
@@ -128,10 +166,16 @@ def test_a_path_that_is_a_folder_or_too_long_is_one_error_line(tmp_path, command
 
 
 @pytest.mark.parametrize("variable", ["PNEUMA_BACKEND", "PNEUMA_TRIANGLE"])
-@pytest.mark.parametrize("name, args", [
-    ("inflate", CHEAP + ["--no-video"]), ("steer", CHEAP + ["--no-video"]), ("reach", ["--tip", "3", "0"]),
-    ("sweep", ["--vary", "cy=0,0.1", "--workers", "1", *CHEAP]), ("bench", ["--sections", "startup"]),
-])
+@pytest.mark.parametrize(
+    "name, args",
+    [
+        ("inflate", CHEAP + ["--no-video"]),
+        ("steer", CHEAP + ["--no-video"]),
+        ("reach", ["--tip", "3", "0"]),
+        ("sweep", ["--vary", "cy=0,0.1", "--workers", "1", *CHEAP]),
+        ("bench", ["--sections", "startup"]),
+    ],
+)
 def test_an_environment_variable_naming_no_backend_is_one_error_line_at_every_command(tmp_path, variable, name, args):
     """Before: an ImportError traceback (exit 1), and the sweep recorded the error in every row and exited 0."""
     done = app(name, *args, "--out", str(tmp_path / "out"), env={**ENV, variable: "garbage"})
@@ -150,8 +194,14 @@ except tp.PneumaInputError as exc:
 
 def test_the_api_under_an_environment_variable_naming_no_backend_raises_the_input_error():
     """Before: an ImportError that is no PneumaInputError, unlike every other bad input through the API."""
-    done = subprocess.run([sys.executable, "-c", API_BACKEND], capture_output=True, text=True, timeout=120,
-                          env={**ENV, "PNEUMA_BACKEND": "garbage"}, check=False)
+    done = subprocess.run(
+        [sys.executable, "-c", API_BACKEND],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**ENV, "PNEUMA_BACKEND": "garbage"},
+        check=False,
+    )
     assert done.returncode == 0 and "refused: PNEUMA_BACKEND='garbage' is not one of" in done.stdout, done.stderr
 
 
@@ -174,6 +224,7 @@ def test_an_arch_taichi_would_quietly_run_on_the_cpu_is_one_error_line(tmp_path)
 
 
 # --- 4. the Python API ------------------------------------------------------------------------------------
+
 
 def test_the_api_refuses_what_the_commands_refuse(tmp_path):
     """Before: 10**400 increments ran without end, a 100000x100000 video tried to allocate 149 GiB, and
@@ -211,7 +262,13 @@ def test_a_gmsh_file_numbering_its_nodes_from_4e9_reads_as_the_dense_one_at_low_
     dense = write_mesh(tmp_path / "dense.msh", extruded_beam(0.05)[0], ("main",))
     sparse = tmp_path / "sparse.msh"
     sparse.write_text(moved_up(dense.read_text(), 4_000_000_000))
-    done = subprocess.run([sys.executable, "-c", SPARSE_READ, str(dense), str(sparse)], capture_output=True,
-                          text=True, env=ENV, timeout=120, check=False)
+    done = subprocess.run(
+        [sys.executable, "-c", SPARSE_READ, str(dense), str(sparse)],
+        capture_output=True,
+        text=True,
+        env=ENV,
+        timeout=120,
+        check=False,
+    )
     assert done.returncode == 0, done.stderr
     assert int(done.stdout.split()[-1]) < 600e6

@@ -71,9 +71,25 @@ def test_a_chamber_closed_past_what_the_body_allows_stops_where_its_wall_crosses
     with one line naming the step and the chamber, exit 1, and the steps before it (simple walls) are kept.
     (Run in a process of its own: in this one, Taichi's CPU flags read the subnormal 1e-320 as 0.)"""
     out = tmp_path / "out"
-    run = subprocess.run([sys.executable, "-m", "taichi_pneuma.apps.inflate", "--growth", growth, "--steps", "6",
-                          "--max-area", "0.005", "--no-video", "--quiet", "--out", str(out)],
-                         capture_output=True, text=True)
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "taichi_pneuma.apps.inflate",
+            "--growth",
+            growth,
+            "--steps",
+            "6",
+            "--max-area",
+            "0.005",
+            "--no-video",
+            "--quiet",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert run.returncode == 1
     errors = [line for line in run.stderr.splitlines() if line.strip() and not line.startswith("[Taichi]")]
     assert len(errors) == 1 and errors[0].startswith("error: step ")
@@ -118,8 +134,10 @@ def test_a_3d_chamber_wall_with_a_node_dragged_across_its_neighbours_is_folded(t
     chamber = built.chambers[0]
     assert chamber.wall_fault() is None
     rest = built.mesh.vertices
-    top = chamber.loop_vertices[np.isclose(rest[chamber.loop_vertices, 1], 0.2)
-                                & np.all(np.abs(rest[chamber.loop_vertices][:, [0, 2]]) < [0.5, 0.1], axis=1)]
+    top = chamber.loop_vertices[
+        np.isclose(rest[chamber.loop_vertices, 1], 0.2)
+        & np.all(np.abs(rest[chamber.loop_vertices][:, [0, 2]]) < [0.5, 0.1], axis=1)
+    ]
     u = np.zeros_like(rest)
     u[top[0], 0] = 1.2  # past the neighbours 0.5 away along x
     built.model.set_displacements(u)
@@ -149,8 +167,13 @@ def test_a_law_that_gives_energy_by_stretching_is_named_as_the_cause_not_newton(
     """Yeoh with C20 = -800 < 0 (C10 = 1724): W = C10 a + C20 a^2 falls below its rest value 0 once a = Ibar1 - 3 >
     2.2, so no equilibrium exists past it. The coefficient is set on the built term, past any check at load."""
     scene = reference_scene(growth=3.5, steps=8, max_area=0.005)
-    built = type(scene)(scene.geometry, scene.controls, scene.increments,
-                        IsochoricMaterial("neo_hookean", C10=1724.0, poisson_ratio=0.45), name=scene.name).build()
+    built = type(scene)(
+        scene.geometry,
+        scene.controls,
+        scene.increments,
+        IsochoricMaterial("neo_hookean", C10=1724.0, poisson_ratio=0.45),
+        name=scene.name,
+    ).build()
     built.elastic.parameters[:, 2] = -800.0
     with pytest.raises(RampFailed) as failure:
         run_schedule(built)
@@ -166,8 +189,9 @@ def test_a_stable_law_is_never_blamed(reference_ramp):
 
 
 def ring_scene(tmp_path) -> str:
-    points = [[round(2 * math.cos(2 * math.pi * i / 48), 6), round(2 * math.sin(2 * math.pi * i / 48), 6)]
-              for i in range(48)]
+    points = [
+        [round(2 * math.cos(2 * math.pi * i / 48), 6), round(2 * math.sin(2 * math.pi * i / 48), 6)] for i in range(48)
+    ]
     path = tmp_path / "ring.toml"
     path.write_text(RING.format(points=points))
     return str(path)
@@ -202,8 +226,21 @@ def test_a_ring_pressurised_past_its_limit_warns_once_and_reports_its_largest_st
 
 def test_the_largest_stretch_allowed_is_a_scene_key(tmp_path, capsys):
     out = tmp_path / "out"
-    assert main(["--scene", ring_scene(tmp_path), "--set", "schedule.max_stretch=50", "--no-video", "--quiet",
-                 "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "--scene",
+                ring_scene(tmp_path),
+                "--set",
+                "schedule.max_stretch=50",
+                "--no-video",
+                "--quiet",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert not [line for line in capsys.readouterr().err.splitlines() if line.startswith("warning:")]
     assert json.loads((out / "ring_summary.json").read_text())["max_stretch_limit"] == 50
     assert main(["--scene", ring_scene(tmp_path), "--set", "schedule.max_stretch=0.5", "--out", str(out)]) == 2

@@ -45,39 +45,47 @@ OCTANT_ROLLERS = "".join(ROLLER.format(list(n), [0.0, 0.0, 0.0]) for n in np.eye
 
 def exact_inner_stretch(d: int, pressure: float = PRESSURE) -> float:
     """r(A)/A of the incompressible neo-Hookean thick ring (d = 2) or sphere (d = 3) (module docstring)."""
+
     def load(c):
         def integrand(big_r):
-            r = (big_r ** d + c) ** (1 / d)
+            r = (big_r**d + c) ** (1 / d)
             lam = r / big_r
-            return (d - 1) * MU * (lam ** 2 - lam ** (2 - 2 * d)) * big_r ** (d - 1) / r ** d
+            return (d - 1) * MU * (lam**2 - lam ** (2 - 2 * d)) * big_r ** (d - 1) / r**d
+
         return quad(integrand, INNER, OUTER, epsabs=1e-13, epsrel=1e-13)[0]
 
     c = brentq(lambda c: load(c) - pressure, 0.0, 10.0, xtol=1e-14)
-    return (INNER ** d + c) ** (1 / d) / INNER
+    return (INNER**d + c) ** (1 / d) / INNER
 
 
 def ring_text(supports: str = RING_ROLLERS, increments: int = 4) -> str:
     """The quarter ring as a scene file: the quarter disk of radius 2 less the bore of radius 1, cut by the
     symmetry lines x = 0 and y = 0 (the bore closed by them), under pressure control."""
-    return (f'[body]\nshape = "polygon"\npoints = {QUARTER_DISK}\n[mesh]\nmax_area = 0.02\norder = 2\n{MATERIAL}'
-            f'{supports}[[chambers]]\nname = "bore"\nshape = "ellipse"\ncenter = [0.0, 0.0]\nsemi_axes = [1.0, 1.0]\n'
-            f'points = 64\ncontrol = "pressure"\nkeyframes = [[0, 0.0], [{increments}, {PRESSURE}]]\n'
-            f'[schedule]\nincrements = {increments}\n')
+    return (
+        f'[body]\nshape = "polygon"\npoints = {QUARTER_DISK}\n[mesh]\nmax_area = 0.02\norder = 2\n{MATERIAL}'
+        f'{supports}[[chambers]]\nname = "bore"\nshape = "ellipse"\ncenter = [0.0, 0.0]\nsemi_axes = [1.0, 1.0]\n'
+        f'points = 64\ncontrol = "pressure"\nkeyframes = [[0, 0.0], [{increments}, {PRESSURE}]]\n'
+        f"[schedule]\nincrements = {increments}\n"
+    )
 
 
 def octant_text(supports: str = OCTANT_ROLLERS) -> str:
     """The octant of the thick sphere from a mesh file (octant.msh, curved quadratic tetrahedra), the cavity
     closed by the three symmetry planes, under pressure control."""
-    return (f'[body]\nshape = "mesh"\nfile = "octant.msh"\n[mesh]\norder = 2\n{MATERIAL}{supports}'
-            f'[[chambers]]\nname = "cavity"\nshape = "mesh_surface"\ngroup = "cavity"\ncontrol = "pressure"\n'
-            f'keyframes = [[0, 0.0], [4, {PRESSURE}]]\n[schedule]\nincrements = 4\n')
+    return (
+        f'[body]\nshape = "mesh"\nfile = "octant.msh"\n[mesh]\norder = 2\n{MATERIAL}{supports}'
+        f'[[chambers]]\nname = "cavity"\nshape = "mesh_surface"\ngroup = "cavity"\ncontrol = "pressure"\n'
+        f"keyframes = [[0, 0.0], [4, {PRESSURE}]]\n[schedule]\nincrements = 4\n"
+    )
 
 
 def block_text(supports: str) -> str:
     """A 2 x 1 block (left edge on x = 0) with an elliptic chamber inside, area-controlled."""
-    return (f'[body]\nshape = "rectangle"\ncenter = [1.0, 0.5]\nsize = [2.0, 1.0]\n[mesh]\nmax_area = 0.05\n{supports}'
-            f'[[chambers]]\nname = "c"\nshape = "ellipse"\ncenter = [1.0, 0.5]\nsemi_axes = [0.5, 0.2]\n'
-            f'keyframes = [[0, 1.0], [2, 1.5]]\n[schedule]\nincrements = 2\n')
+    return (
+        f'[body]\nshape = "rectangle"\ncenter = [1.0, 0.5]\nsize = [2.0, 1.0]\n[mesh]\nmax_area = 0.05\n{supports}'
+        f'[[chambers]]\nname = "c"\nshape = "ellipse"\ncenter = [1.0, 0.5]\nsemi_axes = [0.5, 0.2]\n'
+        f"keyframes = [[0, 1.0], [2, 1.5]]\n[schedule]\nincrements = 2\n"
+    )
 
 
 def scene_file(tmp_path, text: str, name: str = "scene"):
@@ -123,12 +131,16 @@ def test_a_sphere_octant_from_a_mesh_file_held_by_three_symmetry_planes_inflates
     assert len(result.mesh.pinned) == 0
 
 
-@pytest.mark.parametrize("supports, free", [
-    ("", "translation along x, translation along y, rotation about z"),
-    (ROLLER.format([1.0, 0.0], [0.0, 0.0]), "translation along y"),
-    (ROLLER.format([1.0, 1.0], [0.0, 0.0]), "translation along [0.707, -0.707], rotation about z"),
-    (ROLLER.format([1.0, 0.0], [0.0, 0.0]) + ROLLER.format([1.0, 0.0], [2.0, 0.0]), "translation along y"),
-], ids=["none", "a roller on x = 0", "a slanted roller through one vertex", "rollers on two parallel edges"])
+@pytest.mark.parametrize(
+    "supports, free",
+    [
+        ("", "translation along x, translation along y, rotation about z"),
+        (ROLLER.format([1.0, 0.0], [0.0, 0.0]), "translation along y"),
+        (ROLLER.format([1.0, 1.0], [0.0, 0.0]), "translation along [0.707, -0.707], rotation about z"),
+        (ROLLER.format([1.0, 0.0], [0.0, 0.0]) + ROLLER.format([1.0, 0.0], [2.0, 0.0]), "translation along y"),
+    ],
+    ids=["none", "a roller on x = 0", "a slanted roller through one vertex", "rollers on two parallel edges"],
+)
 def test_a_body_whose_supports_leave_a_motion_free_is_refused_naming_it(tmp_path, supports, free):
     scene = tp.load_scene(scene_file(tmp_path, block_text(supports)))
     with pytest.raises(PneumaInputError, match=f"leave free: {re.escape(free)};"):
@@ -138,14 +150,21 @@ def test_a_body_whose_supports_leave_a_motion_free_is_refused_naming_it(tmp_path
 def test_a_3d_body_from_a_mesh_file_without_its_clamp_is_refused_naming_the_six_free_motions():
     scene = tp.load_scene("beam_3d")
     loose = replace(scene, geometry=replace(scene.geometry, clamp=None))
-    with pytest.raises(PneumaInputError, match="leave free: translation along x, translation along y, translation "
-                                               "along z, rotation about x, rotation about y, rotation about z;"):
+    with pytest.raises(
+        PneumaInputError,
+        match="leave free: translation along x, translation along y, translation "
+        "along z, rotation about x, rotation about y, rotation about z;",
+    ):
         loose.build()
 
 
 def test_a_clamp_at_one_vertex_leaves_the_rotation_about_it_free():
-    geometry = Geometry(Rectangle((0.0, 0.0), (1.0, 0.4)), (("c", Ellipse((0.0, 0.0), (0.2, 0.1), 16)),), 0.02,
-                        PointSet(box=(-0.51, -0.21, -0.49, -0.19)))
+    geometry = Geometry(
+        Rectangle((0.0, 0.0), (1.0, 0.4)),
+        (("c", Ellipse((0.0, 0.0), (0.2, 0.1), 16)),),
+        0.02,
+        PointSet(box=(-0.51, -0.21, -0.49, -0.19)),
+    )
     scene = Scene(geometry, (ChamberControl(area_ramp(1.2, 2, 1e5)),), 1)
     with pytest.raises(PneumaInputError, match=r"\(clamp 1 vertices\) leave free: rotation about z;"):
         scene.build()
@@ -173,8 +192,10 @@ def test_the_first_line_lists_the_supports_and_a_refused_scene_exits_2(tmp_path,
     loose = scene_file(tmp_path, block_text(""), "loose")
     assert inflate.main(["--scene", str(loose), "--out", str(tmp_path / "out2"), "--no-video"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == ["error: the supports (no clamp) leave free: translation along x, translation along y, rotation "
-                   "about z; a static body needs a [clamp] (side or box) or [[rollers]] that hold every rigid motion"]
+    assert err == [
+        "error: the supports (no clamp) leave free: translation along x, translation along y, rotation "
+        "about z; a static body needs a [clamp] (side or box) or [[rollers]] that hold every rigid motion"
+    ]
 
 
 def test_no_clamp_survives_the_scene_file_round_trip(tmp_path):
@@ -201,9 +222,22 @@ def test_geometries_have_no_clamp_unless_given_and_the_reference_beam_keeps_its_
 def test_switching_the_chamber_kind_from_the_command_line_drops_the_old_kinds_defaults(tmp_path, capsys):
     """--set chambers[0].control=pressure on the area-controlled reference beam: its default stiffness is no
     longer an 'unknown key'; the chamber is pressure-controlled, its keyframes now pressures."""
-    flags = ["--scene", "reference_beam", "--set", "chambers[0].control=pressure",
-             "--set", "chambers[0].keyframes=[[0, 0.0], [2, 50.0]]", "--set", "schedule.increments=2",
-             "--set", "mesh.max_area=0.02", "--out", str(tmp_path / "out"), "--no-video", "--quiet"]
+    flags = [
+        "--scene",
+        "reference_beam",
+        "--set",
+        "chambers[0].control=pressure",
+        "--set",
+        "chambers[0].keyframes=[[0, 0.0], [2, 50.0]]",
+        "--set",
+        "schedule.increments=2",
+        "--set",
+        "mesh.max_area=0.02",
+        "--out",
+        str(tmp_path / "out"),
+        "--no-video",
+        "--quiet",
+    ]
     assert inflate.main(flags) == 0
     assert "chamber main: pressure control" in capsys.readouterr().out
 
@@ -216,11 +250,13 @@ def test_switching_a_variant_through_the_api_keeps_what_the_user_set_and_refuses
     square = ((-0.3, 0.1), (0.3, 0.1), (0.3, 0.2), (-0.3, 0.2))
     polygon = scene.with_values({"chambers[0].shape": "polygon", "chambers[0].points": square})
     assert polygon.geometry.chambers[0][1].points == square  # the ellipse's points = 128 dropped, not refused
-    rounded = scene.with_values({"chambers[0].shape": "rounded_rectangle", "chambers[0].size": [1.0, 0.3],
-                                 "chambers[0].radius": 0.1})
+    rounded = scene.with_values(
+        {"chambers[0].shape": "rounded_rectangle", "chambers[0].size": [1.0, 0.3], "chambers[0].radius": 0.1}
+    )
     assert rounded.geometry.chambers[0][1].center == (0.0, 0.15)  # a key both shapes have keeps its value
     gas = scene.with_value("chambers[0].control", "closed_gas").with_values(
-        {"chambers[0].control": "syringe", "chambers[0].syringe_volume": 10.0})
+        {"chambers[0].control": "syringe", "chambers[0].syringe_volume": 10.0}
+    )
     assert gas.controls[0].kind.syringe_volume == 10.0
 
 

@@ -31,7 +31,7 @@ from taichi_pneuma.terms.chambers import AreaControl, ClosedGas
 from taichi_pneuma.terms.effects import EFFECTS, Gravity, Ground, SelfContact
 
 # A dented wall (balloon_syringe.toml, coarser and stiffer, so that the air's compression matters) in mm and kPa
-SYRINGE = '''units = "mm-kPa"
+SYRINGE = """units = "mm-kPa"
 [body]
 shape = "polygon"
 points = [[-15.0, -5.0], [15.0, -5.0], [15.0, 5.0], [8.0, 5.0], [0.0, 1.5], [-8.0, 5.0], [-15.0, 5.0]]
@@ -54,10 +54,10 @@ dead_volume = 20.0
 keyframes = [[6, 58.0]]
 [schedule]
 increments = 6
-'''
+"""
 
 # Scenes between them holding every key with a unit and a default (each written out), for the walk below
-PLANAR = '''[body]
+PLANAR = """[body]
 shape = "rectangle"
 center = [0.0, 0.0]
 size = [3.5, 0.8]
@@ -92,10 +92,12 @@ stiffness = 1e3
 [effects.self_contact]
 dhat = 0.005
 stiffness = 1e4
-'''
-KINDS = {"closed_gas": 'control = "closed_gas"\natmosphere = 101325.0',
-         "syringe": 'control = "syringe"\natmosphere = 101325.0\nsyringe_volume = 2.0\ndead_volume = 0.0'}
-EXTRUDED = '''[body]
+"""
+KINDS = {
+    "closed_gas": 'control = "closed_gas"\natmosphere = 101325.0',
+    "syringe": 'control = "syringe"\natmosphere = 101325.0\nsyringe_volume = 2.0\ndead_volume = 0.0',
+}
+EXTRUDED = """[body]
 shape = "extrusion"
 depth = 0.8
 z = 0.0
@@ -119,8 +121,8 @@ center = [0.0, 0.1]
 semi_axes = [0.5, 0.15]
 [schedule]
 increments = 2
-'''
-PNEUNET = '''[body]
+"""
+PNEUNET = """[body]
 shape = "pneunet"
 chamber_length = 0.4
 chamber_height = 0.5
@@ -141,20 +143,63 @@ control = "pressure"
 keyframes = [[2, 100.0]]
 [schedule]
 increments = 2
-'''
-BASES = [(tomllib.loads(text), dim) for text, dim in (
-    (PLANAR, 2), *((PLANAR.replace('control = "area"\nstiffness = 1e5', kind), 2) for kind in KINDS.values()),
-    (EXTRUDED, 3), (PNEUNET, 3))]
+"""
+BASES = [
+    (tomllib.loads(text), dim)
+    for text, dim in (
+        (PLANAR, 2),
+        *((PLANAR.replace('control = "area"\nstiffness = 1e5', kind), 2) for kind in KINDS.values()),
+        (EXTRUDED, 3),
+        (PNEUNET, 3),
+    )
+]
 
 # The size of each system's unit of each dimension in SI, by hand: (2D, 3D). A mass is pressure x length x s^2
 # (kg in mm-kPa, t in mm-MPa); a 2D energy is per unit depth; a chamber's measure an area (2D) or a volume (3D)
-DIMENSIONS = ("length", "area", "plane area", "pressure", "acceleration", "density", "time",
-              "nodal penalty stiffness", "measure penalty stiffness")
+DIMENSIONS = (
+    "length",
+    "area",
+    "plane area",
+    "pressure",
+    "acceleration",
+    "density",
+    "time",
+    "nodal penalty stiffness",
+    "measure penalty stiffness",
+)
 BY_HAND = {
-    "mm-kPa": dict(zip(DIMENSIONS, ((1e-3, 1e-3), (1e-6, 1e-9), (1e-6, 1e-6), (1e3, 1e3), (1e-3, 1e-3), (1e9, 1e9),
-                                    (1.0, 1.0), (1e3, 1.0), (1e9, 1e12)))),
-    "mm-MPa": dict(zip(DIMENSIONS, ((1e-3, 1e-3), (1e-6, 1e-9), (1e-6, 1e-6), (1e6, 1e6), (1e-3, 1e-3), (1e12, 1e12),
-                                    (1.0, 1.0), (1e6, 1e3), (1e12, 1e15)))),
+    "mm-kPa": dict(
+        zip(
+            DIMENSIONS,
+            (
+                (1e-3, 1e-3),
+                (1e-6, 1e-9),
+                (1e-6, 1e-6),
+                (1e3, 1e3),
+                (1e-3, 1e-3),
+                (1e9, 1e9),
+                (1.0, 1.0),
+                (1e3, 1.0),
+                (1e9, 1e12),
+            ),
+        )
+    ),
+    "mm-MPa": dict(
+        zip(
+            DIMENSIONS,
+            (
+                (1e-3, 1e-3),
+                (1e-6, 1e-9),
+                (1e-6, 1e-6),
+                (1e6, 1e6),
+                (1e-3, 1e-3),
+                (1e12, 1e12),
+                (1.0, 1.0),
+                (1e6, 1e3),
+                (1e12, 1e15),
+            ),
+        )
+    ),
     "m-Pa": dict.fromkeys(DIMENSIONS, (1.0, 1.0)),
 }
 
@@ -191,11 +236,18 @@ def test_every_default_with_a_unit_is_si_converted_into_every_unit_system():
     system's unit (by hand, BY_HAND); a numerical default (calibrated for unitless scenes) is refused in a scene
     with units, naming the key, and taken as it is in a unitless one."""
     rows = [row for row in key_reference() if row.unit and row.default not in ("required", "none")]
-    assert {row.key for row in rows} >= {"chambers[].atmosphere", "clamp.stiffness", "effects.gravity.g",
-                                         "chambers[].stiffness", "effects.ground.dhat", "rollers[].tolerance"}
+    assert {row.key for row in rows} >= {
+        "chambers[].atmosphere",
+        "clamp.stiffness",
+        "effects.gravity.g",
+        "chambers[].stiffness",
+        "effects.ground.dhat",
+        "rollers[].tolerance",
+    }
     for row in rows:
-        base = next(((data, dim) for data, dim in BASES if at(data, row.key)[0] is not None
-                     and applies(data, row.when)), None)
+        base = next(
+            ((data, dim) for data, dim in BASES if at(data, row.key)[0] is not None and applies(data, row.when)), None
+        )
         assert base is not None, f"no scene of the walk has {row.key} ({row.when})"
         data, dim = base
         default = tomllib.loads(f"v = {row.default}")["v"]
@@ -225,8 +277,9 @@ def test_a_mm_kpa_syringe_without_atmosphere_compresses_its_air_from_101_325_kpa
     assert peaks[0] == pytest.approx(peaks[1], rel=1e-9)
     rest, last = runs[0].steps[0].chambers["main"].area, runs[0].steps[-1].chambers["main"]
     # p_abs G = p_atm V_atm: G = A + dead + syringe - displaced, V_atm = A_rest + dead + syringe
-    assert (last.pressure + 101.325) * (last.area + 20.0 + 60.0 - 58.0) == pytest.approx(101.325 * (rest + 80.0),
-                                                                                         rel=1e-9)
+    assert (last.pressure + 101.325) * (last.area + 20.0 + 60.0 - 58.0) == pytest.approx(
+        101.325 * (rest + 80.0), rel=1e-9
+    )
 
 
 def test_the_default_modulus_is_1e4_pa_and_max_area_must_be_given_with_units():
@@ -251,14 +304,17 @@ def error_line(capsys) -> str:
 
 def inflate_scene(tmp_path, text: str, *flags) -> int:
     (tmp_path / "scene.toml").write_text(text)
-    return inflate.main(["--scene", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "out"), "--no-video",
-                         "--quiet", *flags])
+    return inflate.main(
+        ["--scene", str(tmp_path / "scene.toml"), "--out", str(tmp_path / "out"), "--no-video", "--quiet", *flags]
+    )
 
 
 def test_a_material_region_that_selects_no_element_is_refused_naming_it(tmp_path, capsys):
     """Before: a region box outside the body was silently ignored (the run went on with the base material)."""
-    text = PLANAR.replace("E = 1e4\n", "E = 1e4\nregions = [{ box = [-1.75, -0.4, 1.75, -0.3], E = 5e4 },"
-                                       " { box = [5.0, 5.0, 6.0, 6.0], E = 5e4 }]\n")
+    text = PLANAR.replace(
+        "E = 1e4\n",
+        "E = 1e4\nregions = [{ box = [-1.75, -0.4, 1.75, -0.3], E = 5e4 }, { box = [5.0, 5.0, 6.0, 6.0], E = 5e4 }]\n",
+    )
     assert inflate_scene(tmp_path, text) == 2
     line = error_line(capsys)
     assert "material.regions[1]: box = [5.0, 5.0, 6.0, 6.0] holds no element's centroid" in line
@@ -266,8 +322,13 @@ def test_a_material_region_that_selects_no_element_is_refused_naming_it(tmp_path
 
 def test_a_material_region_group_without_elements_is_refused_naming_it():
     """A volume group the mesh names but whose tetrahedra all lie in other groups."""
-    mesh = SimpleNamespace(n_elements=3, vertices=np.zeros((4, 3)), elements=np.zeros((3, 4), dtype=int),
-                           regions=np.zeros(3, dtype=int), region_groups={"layer": 1})
+    mesh = SimpleNamespace(
+        n_elements=3,
+        vertices=np.zeros((4, 3)),
+        elements=np.zeros((3, 4), dtype=int),
+        regions=np.zeros(3, dtype=int),
+        region_groups={"layer": 1},
+    )
     scene = tp.load_scene("reference_beam")
     scene = dataclasses.replace(scene, regions=(Region(None, scene.material, "layer"),))
     with pytest.raises(PneumaInputError, match=r"material.regions\[0\]: group = 'layer' has no elements"):
@@ -277,14 +338,21 @@ def test_a_material_region_group_without_elements_is_refused_naming_it():
 LAW = PLANAR.replace("E = 1e4\n", 'law = "yeoh"\nC10 = 100.0\n')
 
 
-@pytest.mark.parametrize("assignments, coefficient, where", [
-    (["material.C20=-10"], "C20 = -10", "uniaxial tension at stretch 1.83"),
-    (["material.C20=10", "material.C30=-5"], "C30 = -5", "uniaxial tension at stretch 1.86"),
-    (["material.law=mooney_rivlin", "material.C10=1000", "material.C01=-800"], "C01 = -800",
-     "uniaxial compression at stretch 0.888"),
-])
-def test_a_law_that_is_not_stable_is_refused_at_load_naming_the_coefficient(tmp_path, capsys, assignments,
-                                                                             coefficient, where):
+@pytest.mark.parametrize(
+    "assignments, coefficient, where",
+    [
+        (["material.C20=-10"], "C20 = -10", "uniaxial tension at stretch 1.83"),
+        (["material.C20=10", "material.C30=-5"], "C30 = -5", "uniaxial tension at stretch 1.86"),
+        (
+            ["material.law=mooney_rivlin", "material.C10=1000", "material.C01=-800"],
+            "C01 = -800",
+            "uniaxial compression at stretch 0.888",
+        ),
+    ],
+)
+def test_a_law_that_is_not_stable_is_refused_at_load_naming_the_coefficient(
+    tmp_path, capsys, assignments, coefficient, where
+):
     """Before: Yeoh with C20 < 0 and Mooney-Rivlin with C01 = -800 failed at step 3-4 with 'not a descent
     direction (g.d = nan)', blaming Newton; Yeoh with C30 < 0 ran silently. By hand, incompressible uniaxial
     tension has d2w/dlam2 = W1 (2 + 4/lam^3) + W11 (2 lam - 2/lam^2)^2 + 6 C01 / lam^4, W1 = C10 + 2 C20 a + 3 C30
@@ -325,8 +393,14 @@ DENT = Polygon(((-8.0, -2.0), (8.0, -2.0), (8.0, 4.6), (0.0, 1.1), (-8.0, 4.6)))
 def wall_scene(kind, material=None, max_area: float | None = 2.0, effects=(), units=MM_KPA) -> Scene:
     """SYRINGE's dented wall built in Python: 30 x 10 mm, E = 2000 kPa, the air pumped in 40 mm^2 over 4 steps."""
     geometry = Geometry(WALL, (("main", DENT),), max_area, PointSet("bottom"), tip=PointSet(box=(-0.5, 0.5, 0.5, 2.0)))
-    return Scene(geometry, (ChamberControl(ChamberSchedule(kind, ((4, 40.0),))),), 4,
-                 Material(2000.0, 0.45) if material is None else material, effects=effects, units=units)
+    return Scene(
+        geometry,
+        (ChamberControl(ChamberSchedule(kind, ((4, 40.0),))),),
+        4,
+        Material(2000.0, 0.45) if material is None else material,
+        effects=effects,
+        units=units,
+    )
 
 
 def test_an_api_built_mm_kpa_closed_gas_chamber_takes_101_325_kpa_as_its_default_atmosphere():
@@ -336,8 +410,10 @@ def test_an_api_built_mm_kpa_closed_gas_chamber_takes_101_325_kpa_as_its_default
     the peak is 39.9 kPa at 101.325 kPa and 68.1 kPa with a nearly incompressible gas (101325 kPa)."""
     assert wall_scene(ClosedGas()).controls[0].kind.atmosphere == pytest.approx(101.325, rel=1e-12)
     stiff = Material(1e5, 0.45)
-    peaks = [max(step.chambers["main"].pressure for step in tp.simulate(wall_scene(kind, stiff)).steps)
-             for kind in ("closed_gas", ClosedGas(atmosphere=101.325), ClosedGas(atmosphere=101325.0))]
+    peaks = [
+        max(step.chambers["main"].pressure for step in tp.simulate(wall_scene(kind, stiff)).steps)
+        for kind in ("closed_gas", ClosedGas(atmosphere=101.325), ClosedGas(atmosphere=101325.0))
+    ]
     assert peaks[0] == pytest.approx(peaks[1], rel=1e-9)
     assert peaks[2] > 1.5 * peaks[1]
 
@@ -347,18 +423,25 @@ def test_api_defaults_with_a_unit_are_si_converted_by_the_scene():
     depth per length^2, a pressure) = 1e6 kPa. mm-MPa: E = 0.01 MPa. A unitless scene keeps the SI numbers."""
     units = {"mm-kPa": (10.0, 9810.0, 1e6), "mm-MPa": (0.01, 9810.0, 1e3), None: (1e4, 9.81, 1e9)}
     for name, (E, g, clamp) in units.items():
-        scene = wall_scene("pressure", Material(), effects=(Gravity(density=1.0),),
-                           units=UNITLESS if name is None else UNITS[name])
+        scene = wall_scene(
+            "pressure", Material(), effects=(Gravity(density=1.0),), units=UNITLESS if name is None else UNITS[name]
+        )
         assert scene.material.youngs_modulus == pytest.approx(E, rel=1e-12)
         assert scene.effects[0].g == pytest.approx(g, rel=1e-12)
         assert scene.clamp_stiffness == pytest.approx(clamp, rel=1e-12)
         assert read_scene(tomllib.loads(scene.to_toml()), "scene") == scene
 
 
-@pytest.mark.parametrize("change, key", [
-    (dict(kind="area"), "chambers[0].stiffness"), (dict(kind=AreaControl()), "chambers[0].stiffness"),
-    (dict(effects=(Ground(height=-10.0),)), "effects.ground.dhat"),
-    (dict(effects=(SelfContact(),)), "effects.self_contact.dhat"), (dict(max_area=None), "mesh.max_area")])
+@pytest.mark.parametrize(
+    "change, key",
+    [
+        (dict(kind="area"), "chambers[0].stiffness"),
+        (dict(kind=AreaControl()), "chambers[0].stiffness"),
+        (dict(effects=(Ground(height=-10.0),)), "effects.ground.dhat"),
+        (dict(effects=(SelfContact(),)), "effects.self_contact.dhat"),
+        (dict(max_area=None), "mesh.max_area"),
+    ],
+)
 def test_api_numerical_defaults_are_refused_in_a_scene_with_units_naming_the_key(change, key):
     """As in a scene file: a default calibrated for unitless scenes (area penalty 1e5, contact dhat, max_area
     0.0012) left None in a scene with units is one PneumaInputError naming the key; unitless, it is taken."""
@@ -373,9 +456,11 @@ def test_every_api_default_with_a_unit_is_the_scene_files_default():
     """Each si_default field of the chamber kinds, effects, Material, Scene and Geometry is the key of the key
     reference with the same SI default, unit and scaling: one declaration serves both."""
     rows = {row.key: row for row in key_reference()}
-    owners = [(cls, "chambers[].{}") for cls in CHAMBER_KINDS.values()] + [
-        (cls, f"effects.{cls.name}.{{}}") for cls in EFFECTS.values()] + [
-        (Material, "material.{}"), (Scene, "clamp.{}"), (Geometry, "mesh.{}")]
+    owners = (
+        [(cls, "chambers[].{}") for cls in CHAMBER_KINDS.values()]
+        + [(cls, f"effects.{cls.name}.{{}}") for cls in EFFECTS.values()]
+        + [(Material, "material.{}"), (Scene, "clamp.{}"), (Geometry, "mesh.{}")]
+    )
     names = {"youngs_modulus": "E", "clamp_stiffness": "stiffness"}
     found = 0
     for cls, key in owners:
@@ -383,6 +468,9 @@ def test_every_api_default_with_a_unit_is_the_scene_files_default():
             if "si" in f.metadata:
                 row = rows[key.format(names.get(f.name, f.name))]
                 assert (tomllib.loads(f"v = {row.default}")["v"], row.unit, row.scaled) == (
-                    f.metadata["si"], f.metadata["unit"], f.metadata["scaled"]), row.key
+                    f.metadata["si"],
+                    f.metadata["unit"],
+                    f.metadata["scaled"],
+                ), row.key
                 found += 1
     assert found >= 10

@@ -24,9 +24,14 @@ from taichi_pneuma.scene.scenefile import MAX_SCENE_BYTES, load_scene
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 # the reference scene file made cheap: a coarse mesh, 2 increments
-CHEAP = (SCENES / "reference_beam.toml").read_text().replace("max_area = 0.0012", "max_area = 0.02") \
-    .replace("[35, 3.5]", "[2, 1.3]").replace("increments = 35", "increments = 2")
-CHAMBER = CHEAP[CHEAP.index("[[chambers]]"):CHEAP.index("[schedule]")]
+CHEAP = (
+    (SCENES / "reference_beam.toml")
+    .read_text()
+    .replace("max_area = 0.0012", "max_area = 0.02")
+    .replace("[35, 3.5]", "[2, 1.3]")
+    .replace("increments = 35", "increments = 2")
+)
+CHAMBER = CHEAP[CHEAP.index("[[chambers]]") : CHEAP.index("[schedule]")]
 QUICK = ["--no-video", "--quiet"]
 
 
@@ -52,8 +57,9 @@ def error_line(capsys) -> str:
     return lines[0]
 
 
-@pytest.mark.parametrize("name", ["../escaped", "../../etc/evil", "/tmp/evil", "sub/dir", ".hidden", "..", "",
-                                  "x" * 101, "tab\tname"])
+@pytest.mark.parametrize(
+    "name", ["../escaped", "../../etc/evil", "/tmp/evil", "sub/dir", ".hidden", "..", "", "x" * 101, "tab\tname"]
+)
 def test_a_scene_name_that_is_no_plain_file_name_is_refused_and_nothing_is_written(tmp_path, capsys, name):
     path = reference_with(tmp_path, ('name = "reference_beam"', f"name = {json.dumps(name)}"))
     assert main(["--scene", str(path), "--out", str(tmp_path / "out"), *QUICK]) == 2
@@ -73,8 +79,8 @@ def test_without_a_name_the_file_name_is_reduced_to_a_plain_one_and_everything_l
     assert main(["--scene", str(path), "--out", str(out), *QUICK]) == 0
     steps = json.loads((out / "my_beam__v2__summary.json").read_text())["steps"]
     assert files_under(tmp_path) == {"scenes/..my beam (v2).toml", "out/my_beam__v2_.pvd"} | {
-        f"out/my_beam__v2__{suffix}" for suffix in ("history.csv", "states.npz", "summary.json", "scene.toml")} | {
-        f"out/my_beam__v2__vtk/my_beam__v2__{i:04d}.vtu" for i in range(steps)}
+        f"out/my_beam__v2__{suffix}" for suffix in ("history.csv", "states.npz", "summary.json", "scene.toml")
+    } | {f"out/my_beam__v2__vtk/my_beam__v2__{i:04d}.vtu" for i in range(steps)}
 
 
 def test_a_file_that_cannot_be_written_is_one_error_naming_it(tmp_path):
@@ -84,11 +90,14 @@ def test_a_file_that_cannot_be_written_is_one_error_naming_it(tmp_path):
     assert files_under(tmp_path) == set()
 
 
-@pytest.mark.parametrize("content, message", [
-    (b"name = \"x\"\n" + b"#" * MAX_SCENE_BYTES, f"larger than {MAX_SCENE_BYTES} bytes"),
-    (b"name = \"caf\xe9\"\n", "not UTF-8"),
-    (b"a = " + b"[" * 5000 + b"]" * 5000, "nested too deeply"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (b'name = "x"\n' + b"#" * MAX_SCENE_BYTES, f"larger than {MAX_SCENE_BYTES} bytes"),
+        (b'name = "caf\xe9"\n', "not UTF-8"),
+        (b"a = " + b"[" * 5000 + b"]" * 5000, "nested too deeply"),
+    ],
+)
 def test_oversized_binary_or_deeply_nested_files_are_refused(tmp_path, content, message):
     path = tmp_path / "bad.toml"
     path.write_bytes(content)
@@ -130,13 +139,22 @@ def test_the_triangle_estimate_is_close_to_the_mesh_triangle_makes(scene):
             assert refused and "--max-triangles" in str(exc)
 
 
-@pytest.mark.parametrize("replacement, words", [
-    (("increments = 2", "increments = 1000000000"),
-     "the schedule has 1000000000 increments; the limit is 2000 (--max-increments raises it)"),
-    (("points = 128", "points = 1000000000"), f"points = 1000000000 must be an integer in [8, {MAX_WALL_POINTS}]"),
-    ((CHAMBER, "".join(CHAMBER.replace('"main"', f'"c{i}"') for i in range(65))), "65 chambers: at most 64 are allowed"),
-    (("[2, 1.3]", "[2, 1e300]"), "keyframes area ratio 1e+300 must lie in (0, 1000]"),
-], ids=["increments", "wall points", "chambers", "area ratio"])
+@pytest.mark.parametrize(
+    "replacement, words",
+    [
+        (
+            ("increments = 2", "increments = 1000000000"),
+            "the schedule has 1000000000 increments; the limit is 2000 (--max-increments raises it)",
+        ),
+        (("points = 128", "points = 1000000000"), f"points = 1000000000 must be an integer in [8, {MAX_WALL_POINTS}]"),
+        (
+            (CHAMBER, "".join(CHAMBER.replace('"main"', f'"c{i}"') for i in range(65))),
+            "65 chambers: at most 64 are allowed",
+        ),
+        (("[2, 1.3]", "[2, 1e300]"), "keyframes area ratio 1e+300 must lie in (0, 1000]"),
+    ],
+    ids=["increments", "wall points", "chambers", "area ratio"],
+)
 def test_absurd_sizes_are_refused_at_once(tmp_path, capsys, replacement, words):
     path = reference_with(tmp_path, replacement)
     start = time.perf_counter()
@@ -148,15 +166,23 @@ def test_absurd_sizes_are_refused_at_once(tmp_path, capsys, replacement, words):
 ELLIPSE = 'shape = "ellipse"\ncenter = [0.0, 0.15]\nsemi_axes = [0.85, 0.22]\npoints = 128'
 
 
-@pytest.mark.parametrize("replacements, words", [
-    ([(ELLIPSE, 'shape = "rounded_rectangle"\ncenter = [0.0, 0.15]\nsize = [1.0, 0.3]\nradius = 1e-300')],
-     "chamber 'main': two of its outline points coincide (closer than 1e-09 of its size 1)"),
-    ([("size = [3.5, 0.8]", "size = [1e17, 1e17]"), ("max_area = 0.02", "max_area = 1e33")],
-     "Triangle could not mesh the geometry"),
-    ([("size = [3.5, 0.8]", "size = [[3.5], 0.8]")], "body: size = ([3.5], 0.8) must be a pair of numbers"),
-    ([("center = [0.0, 0.15]", 'center = ["0.0", 0.15]')], "chambers[0]: center = '0.0' is not a number"),
-    ([("E = 1e4", "E = 1" + "0" * 400)], "material: E = 1" + "0" * 400 + " must be a finite number"),
-], ids=["coincident points", "out of precision", "ragged list", "numeric string", "huge integer"])
+@pytest.mark.parametrize(
+    "replacements, words",
+    [
+        (
+            [(ELLIPSE, 'shape = "rounded_rectangle"\ncenter = [0.0, 0.15]\nsize = [1.0, 0.3]\nradius = 1e-300')],
+            "chamber 'main': two of its outline points coincide (closer than 1e-09 of its size 1)",
+        ),
+        (
+            [("size = [3.5, 0.8]", "size = [1e17, 1e17]"), ("max_area = 0.02", "max_area = 1e33")],
+            "Triangle could not mesh the geometry",
+        ),
+        ([("size = [3.5, 0.8]", "size = [[3.5], 0.8]")], "body: size = ([3.5], 0.8) must be a pair of numbers"),
+        ([("center = [0.0, 0.15]", 'center = ["0.0", 0.15]')], "chambers[0]: center = '0.0' is not a number"),
+        ([("E = 1e4", "E = 1" + "0" * 400)], "material: E = 1" + "0" * 400 + " must be a finite number"),
+    ],
+    ids=["coincident points", "out of precision", "ragged list", "numeric string", "huge integer"],
+)
 def test_what_the_fuzzer_found_is_one_error_line(tmp_path, capsys, replacements, words):
     """Before: a segfault of the whole process, Triangle's RuntimeError, ValueError, TypeError, OverflowError.
     meshpy's Triangle ends the process where it runs out of precision (docs/backends.md): that case needs `triangle`."""
@@ -172,8 +198,9 @@ def test_absurd_flags_are_refused_naming_the_flag(tmp_path, capsys):
     assert main(["--steps", "100000", "--out", out, *QUICK]) == 2
     assert "99999 increments; the limit is 2000 (--max-increments raises it)" in error_line(capsys)
     assert main(["--size", "100000x100000", "--out", out, "--quiet"]) == 2
-    assert ("--size 100000x100000 is 10000000000 pixels per frame; the limit is 8294400 "
-            "(--max-frame-pixels raises it)") in error_line(capsys)
+    assert (
+        "--size 100000x100000 is 10000000000 pixels per frame; the limit is 8294400 (--max-frame-pixels raises it)"
+    ) in error_line(capsys)
     assert main(["--max-area", "1e-7", "--max-triangles", "0", "--out", out, *QUICK]) == 2
     assert "--max-triangles = 0 must be >= 1" in error_line(capsys)
     assert not (tmp_path / "out").exists()
@@ -182,9 +209,24 @@ def test_absurd_flags_are_refused_naming_the_flag(tmp_path, capsys):
 def test_ctrl_c_during_a_ramp_keeps_the_steps_done_and_exits_130(tmp_path):
     """A real process and a real SIGINT: sent once the third increment is reported."""
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-m", "taichi_pneuma.apps.inflate", "--steps", "400", "--max-area", "0.01",
-                             "--no-video", "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "taichi_pneuma.apps.inflate",
+            "--steps",
+            "400",
+            "--max-area",
+            "0.01",
+            "--no-video",
+            "--out",
+            str(out),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
     for line in proc.stdout:
         if "step   3/399" in line:
             proc.send_signal(signal.SIGINT)
@@ -203,8 +245,12 @@ def test_ctrl_c_during_a_ramp_keeps_the_steps_done_and_exits_130(tmp_path):
     assert summary["interrupted"] is True and summary["steps"] == done + 1
     assert len(history) == done + 1 and states["positions"].shape[0] == done + 1
     assert history["step"][-1] == done and summary["all_converged"]
-    assert sorted(os.listdir(out)) == ["inflate_cy+0.15.pvd", "inflate_cy+0.15_history.csv",
-                                       "inflate_cy+0.15_states.npz", "inflate_cy+0.15_summary.json",
-                                       "inflate_cy+0.15_vtk"]
+    assert sorted(os.listdir(out)) == [
+        "inflate_cy+0.15.pvd",
+        "inflate_cy+0.15_history.csv",
+        "inflate_cy+0.15_states.npz",
+        "inflate_cy+0.15_summary.json",
+        "inflate_cy+0.15_vtk",
+    ]
     assert len(os.listdir(out / "inflate_cy+0.15_vtk")) == done + 1  # the VTU of every step done
     assert (out / "inflate_cy+0.15.pvd").read_text().count("<DataSet ") == done + 1

@@ -50,8 +50,9 @@ def test_every_step_reads_back_with_its_fields(run, tmp_path):
         assert np.allclose(current, positions, rtol=0, atol=1e-14)
         # det F of a linear triangle is its area ratio; the smallest is the Taichi kernel's min det F
         det = grid.cell_data["det_F"][0]
-        assert det == pytest.approx(signed_areas(current, mesh.triangles) / signed_areas(mesh.vertices, mesh.triangles),
-                                    rel=1e-10)
+        assert det == pytest.approx(
+            signed_areas(current, mesh.triangles) / signed_areas(mesh.vertices, mesh.triangles), rel=1e-10
+        )
         assert det.min() == pytest.approx(record.min_det, rel=1e-10)
         F = deformation_gradient(mesh.vertices, current, mesh.triangles)
         C_eigen = np.linalg.eigvalsh(np.swapaxes(F, 1, 2) @ F)
@@ -66,7 +67,7 @@ def test_every_step_reads_back_with_its_fields(run, tmp_path):
         assert stress[:, 3] == pytest.approx(mu / det * b[:, 0, 1], rel=1e-8, abs=1e-6)
         assert np.all(stress[:, 4:] == 0)
         xx, yy, zz, xy = stress[:, :4].T
-        vm = np.sqrt(((xx - yy) ** 2 + (yy - zz) ** 2 + (zz - xx) ** 2) / 2 + 3 * xy ** 2)
+        vm = np.sqrt(((xx - yy) ** 2 + (yy - zz) ** 2 + (zz - xx) ** 2) / 2 + 3 * xy**2)
         assert grid.cell_data["von_mises"][0] == pytest.approx(vm, rel=1e-10)
         chamber = grid.point_data["chamber"]
         assert np.all(chamber[mesh.chambers[0]] == 0) and np.sum(chamber == 0) == len(mesh.chambers[0])
@@ -81,8 +82,25 @@ def test_every_step_reads_back_with_its_fields(run, tmp_path):
 
 def test_a_failed_run_leaves_its_finished_steps_readable(tmp_path):
     out = tmp_path / "out"
-    assert main(["--steps", "2", "--max-area", "0.01", "--max-iterations", "3", "--max-cuts", "0", "--no-video",
-                 "--quiet", "--out", str(out)]) == 1
+    assert (
+        main(
+            [
+                "--steps",
+                "2",
+                "--max-area",
+                "0.01",
+                "--max-iterations",
+                "3",
+                "--max-cuts",
+                "0",
+                "--no-video",
+                "--quiet",
+                "--out",
+                str(out),
+            ]
+        )
+        == 1
+    )
     entries = read_pvd(out / "inflate_cy+0.15.pvd")
     assert [t for t, _ in entries] == [0.0]  # the rest state converged, step 1 did not
     grid = meshio.read(entries[0][1])
@@ -92,7 +110,12 @@ def test_a_failed_run_leaves_its_finished_steps_readable(tmp_path):
 
 def test_contact_scenes_write_the_contact_force(tmp_path):
     scene = tp.load_scene("finger_on_ground").with_values(
-        {"mesh.max_area": 0.02, "schedule.increments": 2, **{f"chambers[{i}].keyframes": [[2, 200.0]] for i in range(5)}})
+        {
+            "mesh.max_area": 0.02,
+            "schedule.increments": 2,
+            **{f"chambers[{i}].keyframes": [[2, 200.0]] for i in range(5)},
+        }
+    )
     result = tp.simulate(scene)
     entries = read_pvd(VtkSeries(tmp_path, "f", result.built).write_all(result))
     force = meshio.read(entries[-1][1]).point_data["contact_force"]
@@ -111,8 +134,10 @@ def test_quadratic_elements_are_vtk_six_node_triangles_with_their_mean_det_f(tmp
     assert np.array_equal(elements, result.mesh.triangles)
     x = grid.points[:, :2] + grid.point_data["displacement"][:, :2]
     cross = lambda a, b: a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    area = lambda p: sum((4 * cross(p[a], p[m]) + 4 * cross(p[m], p[b]) - cross(p[a], p[b])) / 6
-                         for a, m, b in ((0, 3, 1), (1, 4, 2), (2, 5, 0)))
+    area = lambda p: sum(
+        (4 * cross(p[a], p[m]) + 4 * cross(p[m], p[b]) - cross(p[a], p[b])) / 6
+        for a, m, b in ((0, 3, 1), (1, 4, 2), (2, 5, 0))
+    )
     rest = grid.points[:, :2]
     ratio = area(np.swapaxes(x[elements], 0, 1)) / area(np.swapaxes(rest[elements], 0, 1))
     assert grid.cell_data["det_F"][0] == pytest.approx(ratio, rel=1e-10)

@@ -33,12 +33,15 @@ from ..io.output import prepare_directory, save_json, save_text
 SECTIONS = ("startup", "breakdown", "presets_3d")
 # sections that were pneuma-bench's and are now scripts of the repository: python benchmarks/<name>.py
 MOVED = ("accuracy", "incompressible", "scaling", "backends", "solid", "compilers")
-REFERENCE_TUTORIAL_SECONDS = 25.0  # the seed pipeline (a NumPy/SciPy tutorial) on the cy = 0.15 ramp, this kind of machine
+REFERENCE_TUTORIAL_SECONDS = (
+    25.0  # the seed pipeline (a NumPy/SciPy tutorial) on the cy = 0.15 ramp, this kind of machine
+)
 PHASES = ("gradient", "hessian", "assemble", "factorize", "solve", "line_search")
 
 
 def machine() -> str:
-    return f"{platform.node()}, {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, {date.today()}"
+    cores = f"{os.cpu_count()} cores"
+    return f"{platform.node()}, {platform.machine()}, {cores}, Python {platform.python_version()}, {date.today()}"
 
 
 def markdown(header: list[str], rows: list[list]) -> str:
@@ -70,7 +73,7 @@ def main_command_process(cache_dir: str, out: str, flags: tuple = ()) -> tuple[f
     start = time.perf_counter()
     first = float("nan")
     with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env) as proc:
-        for line in proc.stdout:
+        for line in proc.stdout:  # type: ignore[union-attr]
             if first != first and FIRST_INCREMENT.search(line):
                 first = time.perf_counter() - start
     whole = time.perf_counter() - start
@@ -86,15 +89,19 @@ def first_versus_typical(result) -> tuple[float, float]:
 
 
 # the main command's processes: label, flags, kernel cache (the first run fills the empty one)
-PROCESSES = (("`--no-video`, empty kernel cache", ("--no-video",)), ("`--no-video`, warm kernel cache", ("--no-video",)),
-             ("with its video (renderer auto: ti.GUI), warm", ()),
-             ("with its video, `--renderer ggui` (GGUI on Vulkan), warm", ("--renderer", "ggui")))
+PROCESSES = (
+    ("`--no-video`, empty kernel cache", ("--no-video",)),
+    ("`--no-video`, warm kernel cache", ("--no-video",)),
+    ("with its video (renderer auto: ti.GUI), warm", ()),
+    ("with its video, `--renderer ggui` (GGUI on Vulkan), warm", ("--renderer", "ggui")),
+)
 
 
 def startup() -> tuple[str, dict]:
     """Kernel compilation at start-up, and rendering. The main command's whole process, and its time to the
     first increment, from an empty kernel cache (as on a fresh machine) and then from the cache it left,
-    without and with its video (each renderer), against the seed pipeline's 25 s for the same ramp (a NumPy/SciPy tutorial); per
+    without and with its video (each renderer), against the seed pipeline's 25 s for the same ramp (a NumPy/SciPy
+    tutorial); per
     renderer, rendering per frame against solving per step in the same process; and, in this process,
     three scenes in turn that differ in mesh size, E, nu, k and number of chambers: their build time and
     their first two increments against two typical ones."""
@@ -102,42 +109,95 @@ def startup() -> tuple[str, dict]:
     from ..scene.build import reference_scene
     from ..solve.simulate import run_schedule
 
-    rows, render_rows, data = [], [], {"process": {}, "rendering": {}, "scenes": []}
+    rows, render_rows, data = [], [], {"process": {}, "rendering": {}, "scenes": []}  # type: ignore[var-annotated]
     with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as out:
         for label, flags in PROCESSES:
             first, whole, summary = main_command_process(cache, out, flags)
-            data["process"][label] = {"first_increment_s": first, "whole_s": whole, "ok": summary is not None}
+            data["process"][label] = {"first_increment_s": first, "whole_s": whole, "ok": summary is not None}  # type: ignore[index]
             if summary is None:
                 rows.append([f"main command {label}", "unavailable", "", ""])
                 continue
-            rows.append([f"main command {label}", f"{whole:.2f}", f"{first:.2f}",
-                         f"{REFERENCE_TUTORIAL_SECONDS / whole:.1f}x faster"])
+            rows.append(
+                [
+                    f"main command {label}",
+                    f"{whole:.2f}",
+                    f"{first:.2f}",
+                    f"{REFERENCE_TUTORIAL_SECONDS / whole:.1f}x faster",
+                ]
+            )
             if "renderer" in summary:
                 frame_ms, step_ms = summary["render_ms_per_frame"], 1e3 * summary["solve_seconds_per_step"]
-                data["rendering"][summary["renderer"]] = {"ms_per_frame": frame_ms, "solve_ms_per_step": step_ms,
-                                                          "whole_s": whole}
-                render_rows.append([summary["renderer"], f"{frame_ms:.1f}", f"{step_ms:.1f}",
-                                    f"{frame_ms / step_ms:.2f}", f"{whole:.2f}"])
-    table = markdown(["whole process", "s", "to first increment (s)", "against the seed pipeline's 25 s for this ramp"],
-                     rows)
-    table += "\n" + markdown(["renderer (960x384 frames, coloured by stretch)", "render ms / frame",
-                              "solve ms / step (same process)", "frame / step", "whole process (s)"], render_rows)
-    scenes = [("reference cy=+0.15 (first in process)", lambda: reference_scene(0.15)),
-              ("cy=+0.10, max area 0.002, E 2e4, nu 0.4, k 2e5",
-               lambda: reference_scene(0.10, E=2e4, nu=0.4, k=2e5, max_area=0.002)),
-              ("bidirectional.toml (2 chambers)", lambda: load_scene("bidirectional"))]
+                data["rendering"][summary["renderer"]] = {  # type: ignore[index]
+                    "ms_per_frame": frame_ms,
+                    "solve_ms_per_step": step_ms,
+                    "whole_s": whole,
+                }
+                render_rows.append(
+                    [
+                        summary["renderer"],
+                        f"{frame_ms:.1f}",
+                        f"{step_ms:.1f}",
+                        f"{frame_ms / step_ms:.2f}",
+                        f"{whole:.2f}",
+                    ]
+                )
+    table = markdown(
+        ["whole process", "s", "to first increment (s)", "against the seed pipeline's 25 s for this ramp"], rows
+    )
+    table += "\n" + markdown(
+        [
+            "renderer (960x384 frames, coloured by stretch)",
+            "render ms / frame",
+            "solve ms / step (same process)",
+            "frame / step",
+            "whole process (s)",
+        ],
+        render_rows,
+    )
+    scenes = [
+        ("reference cy=+0.15 (first in process)", lambda: reference_scene(0.15)),
+        (
+            "cy=+0.10, max area 0.002, E 2e4, nu 0.4, k 2e5",
+            lambda: reference_scene(0.10, E=2e4, nu=0.4, k=2e5, max_area=0.002),
+        ),
+        ("bidirectional.toml (2 chambers)", lambda: load_scene("bidirectional")),
+    ]
     rows = []
     for label, make in scenes:
         start = time.perf_counter()
         built = make().build()
         build_seconds = time.perf_counter() - start
         first, typical = first_versus_typical(run_schedule(built))
-        data["scenes"].append({"scene": label, "vertices": built.mesh.n_vertices, "build_s": build_seconds,
-                               "first_two_increments_s": first, "two_typical_increments_s": typical})
-        rows.append([label, built.mesh.n_vertices, f"{1e3 * build_seconds:.0f}", f"{1e3 * first:.0f}",
-                     f"{1e3 * typical:.0f}", f"{first / typical:.1f}x"])
-    table += "\n" + markdown(["scene, in one process", "vertices", "build (ms)", "increments 1-2 (ms)",
-                               "two typical increments (ms)", "ratio"], rows)
+        data["scenes"].append(  # type: ignore[attr-defined]
+            {
+                "scene": label,
+                "vertices": built.mesh.n_vertices,
+                "build_s": build_seconds,
+                "first_two_increments_s": first,
+                "two_typical_increments_s": typical,
+            }
+        )
+        rows.append(
+            [
+                label,
+                built.mesh.n_vertices,  # type: ignore[list-item]
+                f"{1e3 * build_seconds:.0f}",
+                f"{1e3 * first:.0f}",
+                f"{1e3 * typical:.0f}",
+                f"{first / typical:.1f}x",
+            ]
+        )
+    table += "\n" + markdown(
+        [
+            "scene, in one process",
+            "vertices",
+            "build (ms)",
+            "increments 1-2 (ms)",
+            "two typical increments (ms)",
+            "ratio",
+        ],
+        rows,
+    )
     return table, data
 
 
@@ -155,30 +215,51 @@ def breakdown() -> tuple[str, dict]:
     start = time.perf_counter()
     result = run_schedule(built)
     ramp_seconds = time.perf_counter() - start
-    phases = collections.Counter()
+    phases = collections.Counter()  # type: ignore[var-annotated]
     for solve in result.solves:
         phases.update(solve.phase_seconds)
     iterations = int(result.history["iterations"].sum())
     increments = len(result.steps) - 1
-    rows = [["mesh + terms (Triangle, fields)", f"{1e3 * build_seconds:.0f}", "once"],
-            ["first solve: kernel compile / cache load", f"{1e3 * first_call:.0f}", "once per process"]]
-    rows += [[f"ramp: {p}", f"{1e3 * phases[p]:.0f}", f"{1e3 * phases[p] / iterations:.2f} ms/iteration"] for p in PHASES]
+    rows = [
+        ["mesh + terms (Triangle, fields)", f"{1e3 * build_seconds:.0f}", "once"],
+        ["first solve: kernel compile / cache load", f"{1e3 * first_call:.0f}", "once per process"],
+    ]
+    rows += [
+        [f"ramp: {p}", f"{1e3 * phases[p]:.0f}", f"{1e3 * phases[p] / iterations:.2f} ms/iteration"] for p in PHASES
+    ]
     other = ramp_seconds - sum(phases.values())
-    rows += [["ramp: other (history, predictor, Python)", f"{1e3 * other:.0f}", ""],
-             ["**ramp total (35 increments)**", f"**{1e3 * ramp_seconds:.0f}**",
-              f"{increments / ramp_seconds:.0f} increments/s, {iterations} Newton iterations "
-              f"({iterations / increments:.1f} per increment), {1e3 * ramp_seconds / iterations:.1f} ms/iteration"],
-             ["seed pipeline, a NumPy/SciPy tutorial (its stated figure, not measured here)", f"{1e3 * REFERENCE_TUTORIAL_SECONDS:.0f}",
-              f"{REFERENCE_TUTORIAL_SECONDS / ramp_seconds:.0f}x slower than this ramp"]]
-    data = {"build_s": build_seconds, "first_call_s": first_call, "ramp_s": ramp_seconds, "phases_s": dict(phases),
-            "iterations": iterations, "increments_per_s": increments / ramp_seconds,
-            "tip_deflection": result.tip_deflection, "peak_pressure": result.peak_pressure}
+    rows += [
+        ["ramp: other (history, predictor, Python)", f"{1e3 * other:.0f}", ""],
+        [
+            "**ramp total (35 increments)**",
+            f"**{1e3 * ramp_seconds:.0f}**",
+            f"{increments / ramp_seconds:.0f} increments/s, {iterations} Newton iterations "
+            f"({iterations / increments:.1f} per increment), {1e3 * ramp_seconds / iterations:.1f} ms/iteration",
+        ],
+        [
+            "seed pipeline, a NumPy/SciPy tutorial (its stated figure, not measured here)",
+            f"{1e3 * REFERENCE_TUTORIAL_SECONDS:.0f}",
+            f"{REFERENCE_TUTORIAL_SECONDS / ramp_seconds:.0f}x slower than this ramp",
+        ],
+    ]
+    data = {
+        "build_s": build_seconds,
+        "first_call_s": first_call,
+        "ramp_s": ramp_seconds,
+        "phases_s": dict(phases),
+        "iterations": iterations,
+        "increments_per_s": increments / ramp_seconds,
+        "tip_deflection": result.tip_deflection,
+        "peak_pressure": result.peak_pressure,
+    }
     return markdown(["part", "ms", "note"], rows), data
 
 
 # the shipped 3D scenes and the presets run on each (the PneuNet's accurate preset takes about an hour on 2 cores)
-PRESET_SCENES_3D = {"beam_3d_ellipsoid": ("draft", "default", "high", "accurate"),
-                    "pneunet_3d": ("draft", "default", "high")}
+PRESET_SCENES_3D = {
+    "beam_3d_ellipsoid": ("draft", "default", "high", "accurate"),
+    "pneunet_3d": ("draft", "default", "high"),
+}
 # the converged peak tip deflection (the largest |mean y displacement| of the tip face over the run), for the
 # presets' errors, each from quadratic meshes refined towards it (beam_3d_ellipsoid: docs/solid.md, "3D presets";
 # pneunet_3d: docs/3d.md, its near-chamber size down to 0.07)
@@ -195,8 +276,19 @@ def presets_3d() -> tuple[str, dict]:
     for name, qualities in PRESET_SCENES_3D.items():
         for quality in qualities:
             with tempfile.TemporaryDirectory() as out:
-                command = [sys.executable, "-m", "taichi_pneuma.apps.inflate", "--scene", name, "--quality", quality,
-                           "--no-video", "--quiet", "--out", out]
+                command = [
+                    sys.executable,
+                    "-m",
+                    "taichi_pneuma.apps.inflate",
+                    "--scene",
+                    name,
+                    "--quality",
+                    quality,
+                    "--no-video",
+                    "--quiet",
+                    "--out",
+                    out,
+                ]
                 start = time.perf_counter()
                 proc = subprocess.run(command, capture_output=True, text=True)
                 whole = time.perf_counter() - start
@@ -207,19 +299,50 @@ def presets_3d() -> tuple[str, dict]:
             converged = CONVERGED_TIP_3D[name]
             error = None if converged is None else abs(peak / converged - 1)
             newton = summary["newton"]
-            record = {"scene": name, "quality": quality, "dofs": 3 * summary["vertices"],
-                      "order": summary["element_order"], "iterations": summary["newton_iterations_total"],
-                      "chord_steps": newton["chord_steps"], "linear_solver": newton["linear_solver"],
-                      "phase_seconds": newton["phase_seconds"], "ramp_s": summary["wall_seconds"], "whole_s": whole,
-                      "peak_tip": peak, "error": error}
+            record = {
+                "scene": name,
+                "quality": quality,
+                "dofs": 3 * summary["vertices"],
+                "order": summary["element_order"],
+                "iterations": summary["newton_iterations_total"],
+                "chord_steps": newton["chord_steps"],
+                "linear_solver": newton["linear_solver"],
+                "phase_seconds": newton["phase_seconds"],
+                "ramp_s": summary["wall_seconds"],
+                "whole_s": whole,
+                "peak_tip": peak,
+                "error": error,
+            }
             data.append(record)
             print(f"  presets_3d: {record}", file=sys.stderr, flush=True)
-            rows.append([name, quality, f"{record['dofs']:,}", record["order"],
-                         f"{record['iterations']} ({record['chord_steps']})", record["linear_solver"],
-                         *(f"{newton['phase_seconds'].get(p, 0.0):.1f}" for p in phases), f"{record['ramp_s']:.1f}",
-                         f"{whole:.1f}", f"{peak:.5f}", "" if error is None else f"{100 * error:.2f} %"])
-    header = ["scene", "quality", "DOFs", "order", "Newton iterations (chord)", "solver",
-              *(f"{p} (s)" for p in phases), "ramp (s)", "whole process (s)", "peak tip dy", "error"]
+            rows.append(
+                [
+                    name,
+                    quality,
+                    f"{record['dofs']:,}",
+                    record["order"],
+                    f"{record['iterations']} ({record['chord_steps']})",
+                    record["linear_solver"],
+                    *(f"{newton['phase_seconds'].get(p, 0.0):.1f}" for p in phases),
+                    f"{record['ramp_s']:.1f}",
+                    f"{whole:.1f}",
+                    f"{peak:.5f}",
+                    "" if error is None else f"{100 * error:.2f} %",
+                ]
+            )
+    header = [
+        "scene",
+        "quality",
+        "DOFs",
+        "order",
+        "Newton iterations (chord)",
+        "solver",
+        *(f"{p} (s)" for p in phases),
+        "ramp (s)",
+        "whole process (s)",
+        "peak tip dy",
+        "error",
+    ]
     return markdown(header, rows), {"runs": data, "converged_tip": CONVERGED_TIP_3D}
 
 
@@ -231,8 +354,10 @@ def save_section(out: Path, section: str, table: str, data, arch: str) -> None:
     heading = f"Machine: {machine()}, {backend.NAME} {backend.VERSION}, arch {arch}\n\n"
     print(heading + table, flush=True)
     save_text(out / f"bench_{section}.md", heading + table)
-    save_json(out / f"bench_{section}.json", {"machine": machine(), "backend": f"{backend.NAME} {backend.VERSION}",
-                                              "arch": arch, **{"data": data}})
+    save_json(
+        out / f"bench_{section}.json",
+        {"machine": machine(), "backend": f"{backend.NAME} {backend.VERSION}", "arch": arch, **{"data": data}},
+    )
 
 
 def parser():
@@ -240,8 +365,11 @@ def parser():
 
     p = app_parser("pneuma-bench", __doc__)
     p.add_argument("--sections", default=",".join(SECTIONS), help=f"comma-separated, from {', '.join(SECTIONS)}")
-    p.add_argument("--out", default="out/bench",
-                   help="directory for the tables and JSON (benchmarks/results: the tracked ones of a clone)")
+    p.add_argument(
+        "--out",
+        default="out/bench",
+        help="directory for the tables and JSON (benchmarks/results: the tracked ones of a clone)",
+    )
     p.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
     return p
 
@@ -265,8 +393,11 @@ def main(argv: list[str] | None = None) -> int:
 def run(args: argparse.Namespace) -> int:
     sections = [s.strip() for s in args.sections.split(",") if s.strip()]
     for s in sections:
-        require(s not in MOVED, f"--sections: {s!r} is a script of the repository now (python benchmarks/{s}.py); "
-                                f"pneuma-bench's sections are {', '.join(SECTIONS)}")
+        require(
+            s not in MOVED,
+            f"--sections: {s!r} is a script of the repository now (python benchmarks/{s}.py); "
+            f"pneuma-bench's sections are {', '.join(SECTIONS)}",
+        )
         require(s in SECTIONS, f"--sections: {s!r} is not one of {', '.join(SECTIONS)}")
     out = prepare_directory(args.out)
     runtime.init(args.arch)

@@ -21,18 +21,28 @@ from ..render import COLOR_FIELDS, RENDERERS
 
 # --quality presets: (max triangle area, element order, Newton tolerance); see the accuracy study (docs).
 # "default" is the reference beam's mesh and the solver's default tolerance (tests/test_cli.py checks they agree).
-QUALITY = {"draft": (0.005, 1, 1e-4), "default": (0.0012, 1, 1e-6), "high": (0.005, 2, 1e-6),
-           "accurate": (0.0012, 2, 1e-9)}
+QUALITY = {
+    "draft": (0.005, 1, 1e-4),
+    "default": (0.0012, 1, 1e-6),
+    "high": (0.005, 2, 1e-6),
+    "accurate": (0.0012, 2, 1e-9),
+}
 # The 3D presets: (tetrahedron edge length of a body meshed from shapes, the edge length near its chambers (None:
 # the same) growing back over that edge length, element order, Newton tolerance), read off beam_3d_ellipsoid's
 # tip against mesh size and grading (docs/solid.md, "3D presets"): the error is near the chambers' thin walls.
-QUALITY_3D = {"draft": (0.3, None, 1, 1e-4), "default": (0.3, 0.15, 2, 1e-6), "high": (0.3, 0.1, 2, 1e-6),
-              "accurate": (0.2, 0.08, 2, 1e-9)}
+QUALITY_3D = {
+    "draft": (0.3, None, 1, 1e-4),
+    "default": (0.3, 0.15, 2, 1e-6),
+    "high": (0.3, 0.1, 2, 1e-6),
+    "accurate": (0.2, 0.08, 2, 1e-9),
+}
 # each preset's measured tip error against the converged tip, on the reference beam (2D, nu = 0.45: docs/accuracy.md)
 # and on beam_3d_ellipsoid (3D: docs/solid.md; pneunet_3d's peak tip: 5.1 % and 2.2 % at default and high, docs/3d.md;
 # pneuma-bench --sections presets_3d measures both): the run's first line
-QUALITY_ERROR = {2: {"draft": 28.4, "default": 8.0, "high": 0.64, "accurate": 0.07},
-                 3: {"draft": 26, "default": 1.8, "high": 0.7, "accurate": 0.2}}
+QUALITY_ERROR = {
+    2: {"draft": 28.4, "default": 8.0, "high": 0.64, "accurate": 0.07},
+    3: {"draft": 26, "default": 1.8, "high": 0.7, "accurate": 0.2},
+}
 MEASURE = {2: "area", 3: "volume"}  # what a chamber encloses, by dimension
 MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_iterations, simulate.MAX_CUTS)
 
@@ -40,8 +50,11 @@ MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_ite
 def app_parser(prog: str, doc: str) -> argparse.ArgumentParser:
     """An app's parser: its description is the first paragraph of the app's docstring, defaults shown;
     --version prints the package's version."""
-    p = argparse.ArgumentParser(prog=prog, description=" ".join(doc.split("\n\n")[0].split()),
-                                formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    p = argparse.ArgumentParser(
+        prog=prog,
+        description=" ".join(doc.split("\n\n")[0].split()),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
     p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     return p
 
@@ -67,27 +80,57 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--E", type=float, default=1e4, help="Young's modulus")
     p.add_argument("--nu", type=float, default=0.45, help="Poisson's ratio, in (-1, 0.5)")
     p.add_argument("--k", type=float, default=1e5, help="chamber stiffness (area control penalty)")
-    p.add_argument("--quality", default="default", choices=list(QUALITY), action=GivenQuality,
-                   help="mesh density, element order and Newton tolerance, read off the accuracy-vs-time study: "
-                        + "; ".join(f"{k}: max area {a:g}, order {o}, tol {t:g}" for k, (a, o, t) in QUALITY.items())
-                        + "; in 3D " + "; ".join(f"{k}: tetrahedron size {h:g}"
-                                                 + ("" if near is None else f" ({near:g} near the chambers)")
-                                                 + f", order {o}, tol {t:g}" for k, (h, near, o, t) in QUALITY_3D.items())
-                        + " (given, it remeshes a 3D scene file's body from shapes; without it the scene keeps "
-                          "its [mesh]); a quality other than the default adds _QUALITY to the result file names")
-    p.add_argument("--max-area", type=float, default=None, help="Triangle's maximum triangle area (overrides --quality)")
-    p.add_argument("--order", type=int, default=None, choices=(1, 2),
-                   help="1: linear triangles, 2: quadratic triangles (overrides --quality)")
-    p.add_argument("--tol", type=float, default=None,
-                   help="Newton tolerance on |gradient| / force scale (overrides --quality)")
-    p.add_argument("--max-iterations", type=int, default=MAX_ITERATIONS,
-                   help="Newton iterations per solve before it counts as failed")
-    p.add_argument("--max-cuts", type=int, default=MAX_CUTS,
-                   help="times a non-converging increment may be halved before the run stops")
-    p.add_argument("--max-triangles", type=int, default=limits.MAX_TRIANGLES,
-                   help="refuse a scene whose mesh is estimated (before meshing) to have more triangles")
-    p.add_argument("--max-increments", type=int, default=limits.MAX_INCREMENTS,
-                   help="refuse a schedule of more increments")
+    p.add_argument(
+        "--quality",
+        default="default",
+        choices=list(QUALITY),
+        action=GivenQuality,
+        help="mesh density, element order and Newton tolerance, read off the accuracy-vs-time study: "
+        + "; ".join(f"{k}: max area {a:g}, order {o}, tol {t:g}" for k, (a, o, t) in QUALITY.items())
+        + "; in 3D "
+        + "; ".join(
+            f"{k}: tetrahedron size {h:g}"
+            + ("" if near is None else f" ({near:g} near the chambers)")
+            + f", order {o}, tol {t:g}"
+            for k, (h, near, o, t) in QUALITY_3D.items()
+        )
+        + " (given, it remeshes a 3D scene file's body from shapes; without it the scene keeps "
+        "its [mesh]); a quality other than the default adds _QUALITY to the result file names",
+    )
+    p.add_argument(
+        "--max-area", type=float, default=None, help="Triangle's maximum triangle area (overrides --quality)"
+    )
+    p.add_argument(
+        "--order",
+        type=int,
+        default=None,
+        choices=(1, 2),
+        help="1: linear triangles, 2: quadratic triangles (overrides --quality)",
+    )
+    p.add_argument(
+        "--tol", type=float, default=None, help="Newton tolerance on |gradient| / force scale (overrides --quality)"
+    )
+    p.add_argument(
+        "--max-iterations",
+        type=int,
+        default=MAX_ITERATIONS,
+        help="Newton iterations per solve before it counts as failed",
+    )
+    p.add_argument(
+        "--max-cuts",
+        type=int,
+        default=MAX_CUTS,
+        help="times a non-converging increment may be halved before the run stops",
+    )
+    p.add_argument(
+        "--max-triangles",
+        type=int,
+        default=limits.MAX_TRIANGLES,
+        help="refuse a scene whose mesh is estimated (before meshing) to have more triangles",
+    )
+    p.add_argument(
+        "--max-increments", type=int, default=limits.MAX_INCREMENTS, help="refuse a schedule of more increments"
+    )
     p.add_argument("--out", default="out", help="directory for the result files")
     p.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
     p.add_argument("--quiet", action="store_true", help="no per-step lines, no progress bars")
@@ -95,21 +138,36 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
 
 def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
     """The rendering flags shared by the apps."""
-    p.add_argument("--video", default=None,
-                   help="video file (.mp4 H.264 or .gif; its directory is created); default <out>/<name>.mp4")
+    p.add_argument(
+        "--video",
+        default=None,
+        help="video file (.mp4 H.264 or .gif; its directory is created); default <out>/<name>.mp4",
+    )
     p.add_argument("--fps", type=float, default=12.0, help="video frames per second (one frame per step)")
     p.add_argument("--size", default=size, help="frame size WIDTHxHEIGHT in pixels")
-    p.add_argument("--renderer", default="auto", choices=RENDERERS,
-                   help="gui: ti.GUI's software rasteriser; ggui: Taichi's GGUI (needs Vulkan); pillow: Pillow, no "
-                        "Taichi GUI; auto: ti.GUI, the faster of the two wherever measured (docs/performance.md), "
-                        "else Pillow where the backend has no GUI")
-    p.add_argument("--no-video", action="store_true",
-                   help="no pictures: no video, no frame PNG, no plot PNG (and no renderer or matplotlib started); "
-                        "the history, states, scene, summary and ParaView files are still written")
-    p.add_argument("--color", default="stretch", choices=["none", *COLOR_FIELDS],
-                   help="colour the body by a field: the largest principal stretch, det F, or none (mesh edges)")
-    p.add_argument("--max-frame-pixels", type=int, default=limits.MAX_FRAME_PIXELS,
-                   help="refuse a --size of more pixels per frame")
+    p.add_argument(
+        "--renderer",
+        default="auto",
+        choices=RENDERERS,
+        help="gui: ti.GUI's software rasteriser; ggui: Taichi's GGUI (needs Vulkan); pillow: Pillow, no "
+        "Taichi GUI; auto: ti.GUI, the faster of the two wherever measured (docs/performance.md), "
+        "else Pillow where the backend has no GUI",
+    )
+    p.add_argument(
+        "--no-video",
+        action="store_true",
+        help="no pictures: no video, no frame PNG, no plot PNG (and no renderer or matplotlib started); "
+        "the history, states, scene, summary and ParaView files are still written",
+    )
+    p.add_argument(
+        "--color",
+        default="stretch",
+        choices=["none", *COLOR_FIELDS],
+        help="colour the body by a field: the largest principal stretch, det F, or none (mesh edges)",
+    )
+    p.add_argument(
+        "--max-frame-pixels", type=int, default=limits.MAX_FRAME_PIXELS, help="refuse a --size of more pixels per frame"
+    )
 
 
 def rendering_flags(args: argparse.Namespace) -> tuple[int, int]:
@@ -121,7 +179,7 @@ def rendering_flags(args: argparse.Namespace) -> tuple[int, int]:
     from ..io.output import prepare_directory
     from ..render.video import check_video, frame_size
 
-    check_video(args.video or "default.mp4", args.fps)
+    check_video(args.video or "default.mp4", args.fps)  # type: ignore[arg-type]
     width, height = frame_size(args.size, "--size")
     limits.check_frame(width, height, args.max_frame_pixels)
     if args.video and not args.no_video:
@@ -157,8 +215,17 @@ def scene_for(args: argparse.Namespace, cy: float):
     from ..scene.build import reference_scene
 
     check_flags(args)
-    scene = reference_scene(require_finite("--cy", cy), args.cx, args.growth, args.steps, args.E, args.nu, args.k,
-                            args.max_area, order=args.order)
+    scene = reference_scene(
+        require_finite("--cy", cy),
+        args.cx,
+        args.growth,
+        args.steps,
+        args.E,
+        args.nu,
+        args.k,
+        args.max_area,
+        order=args.order,
+    )
     sizing.check_scene(scene, args.max_triangles, args.max_increments)
     return scene
 
@@ -169,8 +236,9 @@ def with_quality_3d(scene, args: argparse.Namespace):
     if not getattr(args, "quality_given", False) or scene.dim != 3 or not hasattr(scene.geometry, "sizes"):
         return scene
     size, near, order, _ = QUALITY_3D[args.quality]
-    return scene.with_values({"mesh.size": size, "mesh.near_chambers": near or size, "mesh.distance": size,
-                              "mesh.order": order})
+    return scene.with_values(
+        {"mesh.size": size, "mesh.near_chambers": near or size, "mesh.distance": size, "mesh.order": order}
+    )
 
 
 def preset_note(scene, args: argparse.Namespace | None) -> str:
@@ -214,13 +282,17 @@ def build(scene, args: argparse.Namespace):
     built = scene.build(budget(args))
     mesh = built.mesh
     kind = ("" if mesh.order == 1 else "quadratic ") + ELEMENTS[mesh.dim]
-    print(f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
-          f"{mesh.n_elements} {kind}; {describe_supports(mesh, scene.effects)}; "
-          f"terms: {', '.join(built.model.term_names())}{preset_note(scene, args)}")
+    print(
+        f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
+        f"{mesh.n_elements} {kind}; {describe_supports(mesh, scene.effects)}; "
+        f"terms: {', '.join(built.model.term_names())}{preset_note(scene, args)}"
+    )
     for chamber in built.chambers:
         control = MEASURE[mesh.dim] if chamber.kind.name == "area" else chamber.kind.name  # "volume" in 3D
-        print(f"chamber {chamber.chamber_name}: {control} control, wall {chamber.n_wall} vertices, "
-              f"rest {MEASURE[mesh.dim]} {chamber.rest_area:.3f}{scene.units.suffix(MEASURES[mesh.dim])}")
+        print(
+            f"chamber {chamber.chamber_name}: {control} control, wall {chamber.n_wall} vertices, "
+            f"rest {MEASURE[mesh.dim]} {chamber.rest_area:.3f}{scene.units.suffix(MEASURES[mesh.dim])}"
+        )
     return built
 
 
@@ -248,29 +320,44 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
         bar.update()
         if step.max_stretch > limit and not past:
             past.append(step.step)
-            tqdm.write(f"warning: step {step.step}: the largest principal stretch {step.max_stretch:.2f} is past "
-                       f"max_stretch = {limit:g} (schedule.max_stretch): the material model is not meant for it, its "
-                       f"results from here on are extrapolated", file=sys.stderr)
+            tqdm.write(
+                f"warning: step {step.step}: the largest principal stretch {step.max_stretch:.2f} is past "
+                f"max_stretch = {limit:g} (schedule.max_stretch): the material model is not meant for it, its "
+                f"results from here on are extrapolated",
+                file=sys.stderr,
+            )
         if not args.quiet:
-            chambers = "  ".join(f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}{units.suffix(PRESSURE)}"
-                                 for name, c in step.chambers.items())
+            chambers = "  ".join(
+                f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}{units.suffix(PRESSURE)}"
+                for name, c in step.chambers.items()
+            )
             tip = f"{step.tip_dy:+.4f}{units.suffix(LENGTH)}"
-            tqdm.write(f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {tip} "
-                       f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  {step.cuts} cuts  "
-                       f"residual {step.residual:.1e}")
+            tqdm.write(
+                f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {tip} "
+                f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  {step.cuts} cuts  "
+                f"residual {step.residual:.1e}"
+            )
 
     with bar, signals.stopping() as interrupted:
         try:
-            return simulate(built, tol=args.tol, max_iterations=args.max_iterations, max_cuts=args.max_cuts,
-                            progress=progress, stop=interrupted.is_set)
+            return simulate(
+                built,
+                tol=args.tol,
+                max_iterations=args.max_iterations,
+                max_cuts=args.max_cuts,
+                progress=progress,
+                stop=interrupted.is_set,
+            )
         except RampInterrupted as exc:
             exc.signum = interrupted.signum  # type: ignore[attr-defined]  # read by signals.name_of()
             raise
 
 
 def render_report(export, seconds_per_step: float) -> str:
-    return (f"video: {export.frames} frames {export.width}x{export.height}; rendering {export.ms_per_frame:.1f} "
-            f"ms/frame vs solving {1000 * seconds_per_step:.0f} ms/step")
+    return (
+        f"video: {export.frames} frames {export.width}x{export.height}; rendering {export.ms_per_frame:.1f} "
+        f"ms/frame vs solving {1000 * seconds_per_step:.0f} ms/step"
+    )
 
 
 def apply_set(scene, assignments: list[str]):

@@ -58,20 +58,31 @@ TIP_WORDS = {2: ("right edge", "tip rotation", "rotation"), 3: ("right face", "b
 
 def parser() -> argparse.ArgumentParser:
     p = app_parser("pneuma-inflate", __doc__)
-    p.add_argument("--scene", help="a scene file (TOML) or the name of a shipped scene (bidirectional, "
-                                   "finger_on_ground, pneunet_finger, reference_beam; 3D: beam_3d, beam_3d_ellipsoid, "
-                                   "pneunet_3d); the reference-beam flags "
-                                   "(--cy --cx --growth --steps --E --nu --k --max-area --order) are then ignored")
+    p.add_argument(
+        "--scene",
+        help="a scene file (TOML) or the name of a shipped scene (bidirectional, "
+        "finger_on_ground, pneunet_finger, reference_beam; 3D: beam_3d, beam_3d_ellipsoid, "
+        "pneunet_3d); the reference-beam flags "
+        "(--cy --cx --growth --steps --E --nu --k --max-area --order) are then ignored",
+    )
     p.add_argument("--cy", type=float, default=0.15, help="chamber centre height (above the neutral axis curls down)")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="change a dotted scene-file key or a short name (cy cx E nu k max_area), e.g. --set "
-                        "chambers[0].center[1]=0.1 --set material.E=2e4 (repeatable; the reference beam's keys are "
-                        "those of the shipped reference_beam.toml)")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="change a dotted scene-file key or a short name (cy cx E nu k max_area), e.g. --set "
+        "chambers[0].center[1]=0.1 --set material.E=2e4 (repeatable; the reference beam's keys are "
+        "those of the shipped reference_beam.toml)",
+    )
     add_ramp_arguments(p)
     add_video_arguments(p, "960x384")
-    p.add_argument("--interactive", action="store_true",
-                   help="open a window (needs a display) with a slider for the commanded area (3D: one per chamber, "
-                        "the view turned by dragging); re-solves live")
+    p.add_argument(
+        "--interactive",
+        action="store_true",
+        help="open a window (needs a display) with a slider for the commanded area (3D: one per chamber, "
+        "the view turned by dragging); re-solves live",
+    )
     return p
 
 
@@ -84,17 +95,23 @@ def run(args: argparse.Namespace) -> dict:
     size = rendering_flags(args)
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
     if args.interactive:
-        require(bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")),
-                "--interactive needs a display (DISPLAY is not set); run without it for headless video output")
-        require(scene.geometry.dim == 3 or isinstance(scene.controls[0].kind, AreaControl),
-                "--interactive needs an area-controlled first chamber (a 2D scene)")
+        require(
+            bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")),
+            "--interactive needs a display (DISPLAY is not set); run without it for headless video output",
+        )
+        require(
+            scene.geometry.dim == 3 or isinstance(scene.controls[0].kind, AreaControl),
+            "--interactive needs an area-controlled first chamber (a 2D scene)",
+        )
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     if args.interactive and scene.geometry.dim == 3:
         from ..live.interactive import explore_solid
+
         return explore_solid(scene, size, newton_options(args), budget=budget(args))
     if args.interactive:
         from ..live.interactive import explore
+
         return explore(scene, args.growth, size, args.renderer, newton_options(args), budget=budget(args))
     with lock_stems(out, stem):  # no other run writes these files meanwhile
         return run_scene(args, scene, stem, size, out)
@@ -134,30 +151,49 @@ def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, 
         return f"{text.format(e['min'])} (step {e['min_step']}) to {text.format(e['max'])} (step {e['max_step']})"
 
     for name, c in final.chambers.items():
-        print(f"{name}: {MEASURE[result.mesh.dim]} {c.area / c.area_ratio:.3f} -> {c.area:.3f}{measure} "
-              f"(x{c.area_ratio:.2f}), pressure {c.pressure:.1f}{pressure}; over the run "
-              f"{span(f'{name}.area_ratio', 'x{:.2f}')}, pressure {span(f'{name}.pressure', '{:.1f}' + pressure)}")
+        print(
+            f"{name}: {MEASURE[result.mesh.dim]} {c.area / c.area_ratio:.3f} -> {c.area:.3f}{measure} "
+            f"(x{c.area_ratio:.2f}), pressure {c.pressure:.1f}{pressure}; over the run "
+            f"{span(f'{name}.area_ratio', 'x{:.2f}')}, pressure {span(f'{name}.pressure', '{:.1f}' + pressure)}"
+        )
     side, turn, turn_over_run = TIP_WORDS[result.mesh.dim]
     beyond_y = "".join(f"tip dz {dz:+.4f}{length}; " for dz in final.tip[2:])
-    print(f"tip deflection (mean y displacement of the {side}): {result.tip_deflection:+.4f}{length}; "
-          f"{beyond_y}{turn} {final.tip_rotation:+.1f} deg")
-    tip = [f"{column[4:]} {span(column, '{:+.4f}' + length)}" for column in TIP_COLUMNS[:result.mesh.dim]]
+    print(
+        f"tip deflection (mean y displacement of the {side}): {result.tip_deflection:+.4f}{length}; "
+        f"{beyond_y}{turn} {final.tip_rotation:+.1f} deg"
+    )
+    tip = [f"{column[4:]} {span(column, '{:+.4f}' + length)}" for column in TIP_COLUMNS[: result.mesh.dim]]
     print(f"tip over the run: {', '.join(tip)}; {turn_over_run} {span('tip_rotation', '{:+.1f}')} deg")
     print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}{pressure}")
-    print(f"largest principal stretch: {summary['max_stretch']:.2f} (step {summary['max_stretch_step']}; a run past "
-          f"max_stretch = {summary['max_stretch_limit']:g} warns)")
+    print(
+        f"largest principal stretch: {summary['max_stretch']:.2f} (step {summary['max_stretch_step']}; a run past "
+        f"max_stretch = {summary['max_stretch_limit']:g} warns)"
+    )
     for name, (fx, fy, _) in final.contact.items():
         print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g}){force}")
-    print(f"Newton: {summary['newton_iterations_total']} iterations over {summary['steps'] - 1} solves "
-          f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
-          f"all converged: {summary['all_converged']}; run {result.seconds:.2f} s")
+    print(
+        f"Newton: {summary['newton_iterations_total']} iterations over {summary['steps'] - 1} solves "
+        f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
+        f"all converged: {summary['all_converged']}; run {result.seconds:.2f} s"
+    )
     # results saved before rendering: a Ctrl-C there loses none
     written = result.save(out, stem, vtk=False, plot=not args.no_video) + [vtk.pvd]
     if not args.no_video:
-        done = result.video(args.video or out / f"{stem}.mp4", out / f"{stem}.png", size, args.fps, args.color,
-                            args.renderer, quiet=args.quiet)
-        summary.update(renderer=done.renderer, video_frames=done.frames, video_size=[done.width, done.height],
-                       render_ms_per_frame=done.ms_per_frame)
+        done = result.video(
+            args.video or out / f"{stem}.mp4",
+            out / f"{stem}.png",
+            size,
+            args.fps,
+            args.color,
+            args.renderer,
+            quiet=args.quiet,
+        )
+        summary.update(
+            renderer=done.renderer,
+            video_frames=done.frames,
+            video_size=[done.width, done.height],
+            render_ms_per_frame=done.ms_per_frame,
+        )
         print(render_report(done, summary["solve_seconds_per_step"]))
         written = [done.video, done.png] + written
         save_json(out / f"{stem}_summary.json", summary)

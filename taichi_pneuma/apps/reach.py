@@ -57,31 +57,61 @@ TIP_TOL, ANGLE_TOL, RESTARTS = 1e-3, 0.5, 4
 
 def parser() -> argparse.ArgumentParser:
     p = app_parser("pneuma-reach", __doc__)
-    p.add_argument("--scene", help="a scene file (TOML) or the name of a shipped scene; default the reference beam "
-                                   "of the flags below")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="change a dotted scene-file key or a short name (cy cx E nu k max_area) of the scene "
-                        "(repeatable)")
+    p.add_argument(
+        "--scene",
+        help="a scene file (TOML) or the name of a shipped scene; default the reference beam of the flags below",
+    )
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="change a dotted scene-file key or a short name (cy cx E nu k max_area) of the scene (repeatable)",
+    )
     p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
-    p.add_argument("--tip", nargs="+", type=float, metavar="COORD",
-                   help="target position of the tip point: X Y, or X Y Z on a 3D body")
+    p.add_argument(
+        "--tip",
+        nargs="+",
+        type=float,
+        metavar="COORD",
+        help="target position of the tip point: X Y, or X Y Z on a 3D body",
+    )
     p.add_argument("--angle", type=float, default=None, help="target tip rotation in degrees (with --tip)")
-    p.add_argument("--weights", nargs=3, type=float, default=[1.0, 1.0, 1.0], metavar=("WX", "WY", "WANGLE"),
-                   help="weights of the x, y and rotation errors (with --tip)")
-    p.add_argument("--targets", help="CSV of targets followed in order (columns x, y, optional angle, wx, wy, wangle), "
-                                     "a path or the name of a shipped one (pneunet_finger_targets.csv)")
-    p.add_argument("--bounds", nargs=3, action="append", default=[], metavar=("CHAMBER", "MIN", "MAX"),
-                   help="command bounds of a chamber (pressure or area ratio); repeatable")
+    p.add_argument(
+        "--weights",
+        nargs=3,
+        type=float,
+        default=[1.0, 1.0, 1.0],
+        metavar=("WX", "WY", "WANGLE"),
+        help="weights of the x, y and rotation errors (with --tip)",
+    )
+    p.add_argument(
+        "--targets",
+        help="CSV of targets followed in order (columns x, y, optional angle, wx, wy, wangle), "
+        "a path or the name of a shipped one (pneunet_finger_targets.csv)",
+    )
+    p.add_argument(
+        "--bounds",
+        nargs=3,
+        action="append",
+        default=[],
+        metavar=("CHAMBER", "MIN", "MAX"),
+        help="command bounds of a chamber (pressure or area ratio); repeatable",
+    )
     p.add_argument("--tip-tol", type=float, default=TIP_TOL, help="tip tolerance, a fraction of the body length")
     p.add_argument("--angle-tol", type=float, default=ANGLE_TOL, help="rotation tolerance, degrees")
-    p.add_argument("--restarts", type=int, default=RESTARTS,
-                   help="descents from other commands when one stops short of the target")
+    p.add_argument(
+        "--restarts", type=int, default=RESTARTS, help="descents from other commands when one stops short of the target"
+    )
     p.add_argument("--design", choices=["cy"], help="find the reference chamber height cy for --tip-dy instead")
     p.add_argument("--tip-dy", type=float, help="with --design cy: the tip deflection the ramp should end at")
     add_ramp_arguments(p)
     add_video_arguments(p, "960x384")
-    p.add_argument("--interactive", action="store_true",
-                   help="a window (needs a display): drag the target with the mouse, a slider per chamber")
+    p.add_argument(
+        "--interactive",
+        action="store_true",
+        help="a window (needs a display): drag the target with the mouse, a slider per chamber",
+    )
     return p
 
 
@@ -93,8 +123,7 @@ def with_bounds(scene, bounds: list[list[str]]):
         require(name in names, f"--bounds: unknown chamber {name!r} (chambers: {', '.join(names)})")
         i = names.index(name)
         try:
-            controls[i] = dataclasses.replace(controls[i], bounds=(parse_number("min", low),
-                                                                   parse_number("max", high)))
+            controls[i] = dataclasses.replace(controls[i], bounds=(parse_number("min", low), parse_number("max", high)))
         except PneumaInputError as exc:
             raise PneumaInputError(f"--bounds {name}: {exc}") from None
     return dataclasses.replace(scene, controls=tuple(controls))
@@ -113,8 +142,10 @@ def targets_of(args: argparse.Namespace, scene, required: bool = True) -> list:
         return [Target(tuple(args.tip), args.angle, tuple(args.weights))]
     if args.targets is not None:
         return read_targets_csv(find(args.targets, ".csv", "targets file"))
-    require(bool(scene.targets) or not required,
-            "no target: give --tip X Y, --targets FILE.csv, or [[targets]] in the scene file")
+    require(
+        bool(scene.targets) or not required,
+        "no target: give --tip X Y, --targets FILE.csv, or [[targets]] in the scene file",
+    )
     return list(scene.targets)
 
 
@@ -123,14 +154,24 @@ def describe(reacher, commands) -> str:
 
 
 def reach_record(reacher, result) -> dict:
-    return {"target": {"tip": list(result.target.tip), "angle": result.target.angle,
-                       "weights": list(result.target.weights)},
-            "tip": result.pose.tip.tolist(), "tip_rotation_deg": result.pose.rotation, "tip_error": result.error,
-            "angle_error_deg": result.angle_error, "reached": result.reached,
-            "commands": dict(zip(reacher.names, result.pose.commands.tolist())),
-            "active_bounds": [{"chamber": n, "bound": side, "value": v} for n, side, _, v in result.active],
-            "iterations": result.iterations, "forward_solves": result.forward_solves,
-            "newton_iterations": result.newton_iterations, "seconds": result.seconds}
+    return {
+        "target": {
+            "tip": list(result.target.tip),
+            "angle": result.target.angle,
+            "weights": list(result.target.weights),
+        },
+        "tip": result.pose.tip.tolist(),
+        "tip_rotation_deg": result.pose.rotation,
+        "tip_error": result.error,
+        "angle_error_deg": result.angle_error,
+        "reached": result.reached,
+        "commands": dict(zip(reacher.names, result.pose.commands.tolist())),
+        "active_bounds": [{"chamber": n, "bound": side, "value": v} for n, side, _, v in result.active],
+        "iterations": result.iterations,
+        "forward_solves": result.forward_solves,
+        "newton_iterations": result.newton_iterations,
+        "seconds": result.seconds,
+    }
 
 
 def run(args: argparse.Namespace) -> dict:
@@ -156,21 +197,39 @@ def run(args: argparse.Namespace) -> dict:
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
     if args.interactive:
         require(scene.dim == 2, "--interactive reach works on 2D scenes (drag a target in the plane)")
-        require(bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")),
-                "--interactive needs a display (DISPLAY is not set)")
+        require(
+            bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")),
+            "--interactive needs a display (DISPLAY is not set)",
+        )
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     if args.interactive:
         from ..live.interactive import follow_mouse
-        return follow_mouse(scene, (lo, hi), size, args.renderer, options,
-                            newton_options(args) if explicit_tol else None, targets[0] if targets else None,
-                            budget=budget(args))
+
+        return follow_mouse(
+            scene,
+            (lo, hi),
+            size,
+            args.renderer,
+            options,
+            newton_options(args) if explicit_tol else None,
+            targets[0] if targets else None,
+            budget=budget(args),
+        )
     with lock_stems(out, stem):  # no other run writes these files meanwhile
         return reach_targets(args, scene, stem, targets, (lo, hi), options, size, out)
 
 
-def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: list[Target], bounds, options,
-                  size: tuple[int, int], out) -> dict:
+def reach_targets(
+    args: argparse.Namespace,
+    scene: Scene,
+    stem: str,
+    targets: list[Target],
+    bounds,
+    options,
+    size: tuple[int, int],
+    out,
+) -> dict:
     from tqdm import tqdm
 
     from ..control.inverse import Reacher
@@ -178,11 +237,19 @@ def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: li
     (lo, hi), built = bounds, build(scene, args)
     start = time.perf_counter()
     reacher = Reacher(built, (lo, hi), options, newton_options(args), args.max_cuts)
-    print("bounds: " + ", ".join(f"{n} {a:g} .. {b:g}" for n, a, b in zip(reacher.names, lo, hi))
-          + f"; start (box centre) solved in {time.perf_counter() - start:.2f} s")
+    print(
+        "bounds: "
+        + ", ".join(f"{n} {a:g} .. {b:g}" for n, a, b in zip(reacher.names, lo, hi))
+        + f"; start (box centre) solved in {time.perf_counter() - start:.2f} s"
+    )
     # a bar on a terminal only (disable=None: off when stderr is not a TTY, so never in a piped log)
-    bar = tqdm(total=len(targets), desc="reaching", unit="target",
-               disable=True if args.quiet or len(targets) < 2 else None, leave=False)
+    bar = tqdm(
+        total=len(targets),
+        desc="reaching",
+        unit="target",
+        disable=True if args.quiet or len(targets) < 2 else None,
+        leave=False,
+    )
 
     done = 0
 
@@ -191,9 +258,11 @@ def reach_targets(args: argparse.Namespace, scene: Scene, stem: str, targets: li
         done += 1
         bar.update()
         if not args.quiet:
-            bar.write(f"  target {done}/{len(targets)} {tuple(result.target.tip)}: "
-                      f"{describe(reacher, result.pose.commands)}; tip error {result.error:.3g}; "
-                      f"{result.forward_solves} forward solves, {result.seconds:.2f} s")
+            bar.write(
+                f"  target {done}/{len(targets)} {tuple(result.target.tip)}: "
+                f"{describe(reacher, result.pose.commands)}; tip error {result.error:.3g}; "
+                f"{result.forward_solves} forward solves, {result.seconds:.2f} s"
+            )
 
     with bar:
         results = reacher.follow(targets, progress)
@@ -213,22 +282,37 @@ def save_reaches(args: argparse.Namespace, reacher, results: list, stem: str, si
     solves = [r.forward_solves for r in results]
     seconds = [r.seconds for r in results]
     summary = {
-        "scene": built.scene.name, "vertices": built.mesh.n_vertices, ELEMENTS[built.mesh.dim]: built.mesh.n_elements,
-        "body_length": reacher.length, "bounds": {n: [a, b] for n, a, b in zip(reacher.names, lo, hi)},
+        "scene": built.scene.name,
+        "vertices": built.mesh.n_vertices,
+        ELEMENTS[built.mesh.dim]: built.mesh.n_elements,
+        "body_length": reacher.length,
+        "bounds": {n: [a, b] for n, a, b in zip(reacher.names, lo, hi)},
         **reach_record(reacher, last),
-        "targets_reached": sum(r.reached for r in results), "targets": len(results),
+        "targets_reached": sum(r.reached for r in results),
+        "targets": len(results),
         "worst_tip_error": max(r.error for r in results),
-        "forward_solves_per_reach": float(np.mean(solves)), "seconds_per_reach": float(np.mean(seconds)),
+        "forward_solves_per_reach": float(np.mean(solves)),
+        "seconds_per_reach": float(np.mean(seconds)),
         "reaches": [reach_record(reacher, r) for r in results],
         "all_converged": all(r.reached for r in results),
     }
     print("commands: " + describe(reacher, last.pose.commands))
-    print(f"forward solves: {sum(solves)} for {len(results)} target(s) ({np.mean(solves):.1f} per reach, "
-          f"{sum(r.newton_iterations for r in results)} Newton iterations); {np.mean(seconds):.3f} s per reach")
+    print(
+        f"forward solves: {sum(solves)} for {len(results)} target(s) ({np.mean(solves):.1f} per reach, "
+        f"{sum(r.newton_iterations for r in results)} Newton iterations); {np.mean(seconds):.3f} s per reach"
+    )
     written = []
     if not args.no_video:
-        done = trajectory.video(args.video or out / f"{stem}.mp4", out / f"{stem}.png", size, args.fps,
-                                args.color, args.renderer, quiet=args.quiet, png_step=-1)  # the pose reached
+        done = trajectory.video(
+            args.video or out / f"{stem}.mp4",
+            out / f"{stem}.png",
+            size,
+            args.fps,
+            args.color,
+            args.renderer,
+            quiet=args.quiet,
+            png_step=-1,
+        )  # the pose reached
         summary.update(renderer=done.renderer, video_frames=done.frames, video_size=[done.width, done.height])
         print(render_report(done, float(np.mean([s.seconds for s in trajectory.steps]))))
         written += [done.video, done.png]
@@ -240,8 +324,10 @@ def save_reaches(args: argparse.Namespace, reacher, results: list, stem: str, si
             print(last.summary_line())
         else:
             tip = ", ".join(f"{v:.6g}" for v in last.pose.tip)
-            print(f"reached: all {len(results)} targets in order; last tip ({tip}); "
-                  f"worst tip error {summary['worst_tip_error']:.3g}")
+            print(
+                f"reached: all {len(results)} targets in order; last tip ({tip}); "
+                f"worst tip error {summary['worst_tip_error']:.3g}"
+            )
     else:
         k, first = unreached[0]
         where = "" if len(results) == 1 else f"target {k} of {len(results)} ({len(unreached)} unreachable): "
@@ -257,8 +343,10 @@ def run_design(args: argparse.Namespace) -> dict:
 
     require(args.tip_dy is not None, "--design cy needs --tip-dy D")
     wanted = require_finite("--tip-dy", args.tip_dy)
-    require(not args.scene and args.tip is None and args.targets is None and not args.interactive,
-            "--design cy works on the reference beam of the flags (no --scene, --tip, --targets, --interactive)")
+    require(
+        not args.scene and args.tip is None and args.targets is None and not args.interactive,
+        "--design cy works on the reference beam of the flags (no --scene, --tip, --targets, --interactive)",
+    )
     apply_set(scene_for(args, 0.0), args.set)  # validates the reference-beam flags and --set
     out = prepare_directory(args.out)
     runtime.init(args.arch)
@@ -268,27 +356,44 @@ def run_design(args: argparse.Namespace) -> dict:
 
     def tip_dy(cy: float) -> float:
         started = time.perf_counter()
-        result = run_schedule(apply_set(scene_for(args, cy), args.set).build(budget(args)), options=options,
-                              max_cuts=args.max_cuts)
+        result = run_schedule(
+            apply_set(scene_for(args, cy), args.set).build(budget(args)), options=options, max_cuts=args.max_cuts
+        )
         if not args.quiet:
-            print(f"  cy = {cy:+.6f}: tip dy {result.tip_deflection:+.6f} ({time.perf_counter() - started:.2f} s)",
-                  flush=True)
+            print(
+                f"  cy = {cy:+.6f}: tip dy {result.tip_deflection:+.6f} ({time.perf_counter() - started:.2f} s)",
+                flush=True,
+            )
         return result.tip_deflection
 
     result = solve_design(tip_dy, -limit, limit, wanted)
-    summary = {"design": "cy", "tip_dy_wanted": wanted, "cy": result.value, "tip_dy": result.measure,
-               "tip_dy_error": abs(result.measure - wanted), "found": result.found, "range": [-limit, limit],
-               "evaluations": len(result.evaluations), "seconds": result.seconds,
-               "history": [{"cy": c, "tip_dy": m} for c, m in result.evaluations], "all_converged": result.found}
+    summary = {
+        "design": "cy",
+        "tip_dy_wanted": wanted,
+        "cy": result.value,
+        "tip_dy": result.measure,
+        "tip_dy_error": abs(result.measure - wanted),
+        "found": result.found,
+        "range": [-limit, limit],
+        "evaluations": len(result.evaluations),
+        "seconds": result.seconds,
+        "history": [{"cy": c, "tip_dy": m} for c, m in result.evaluations],
+        "all_converged": result.found,
+    }
     path = save_json(out / "design_cy_summary.json", summary)
     print(f"evaluations: {len(result.evaluations)} ramps (a new mesh each) in {result.seconds:.1f} s; wrote {path}")
     if result.found:
-        print(f"reached: cy = {result.value:+.6f} ends the ramp at tip dy {result.measure:+.6f} "
-              f"(error {abs(result.measure - wanted):.2g})")
+        print(
+            f"reached: cy = {result.value:+.6f} ends the ramp at tip dy {result.measure:+.6f} "
+            f"(error {abs(result.measure - wanted):.2g})"
+        )
     else:
-        print(f"unreachable: tip dy {wanted:+.6g} lies outside what cy in [{-limit:+.6f}, {limit:+.6f}] gives "
-              f"({min(m for _, m in result.evaluations):+.6f} .. {max(m for _, m in result.evaluations):+.6f}); "
-              f"closest cy = {result.value:+.6f}, tip dy {result.measure:+.6f}", file=sys.stderr)
+        print(
+            f"unreachable: tip dy {wanted:+.6g} lies outside what cy in [{-limit:+.6f}, {limit:+.6f}] gives "
+            f"({min(m for _, m in result.evaluations):+.6f} .. {max(m for _, m in result.evaluations):+.6f}); "
+            f"closest cy = {result.value:+.6f}, tip dy {result.measure:+.6f}",
+            file=sys.stderr,
+        )
     return summary
 
 

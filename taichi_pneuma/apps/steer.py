@@ -35,9 +35,13 @@ PLACEMENTS = ((0.15, "chamber high -> curls down"), (0.0, "centred -> no bend"),
 
 def parser() -> argparse.ArgumentParser:
     p = app_parser("pneuma-steer", __doc__)
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="change a dotted scene-file key or a short name (cx E nu k max_area) of the three scenes "
-                        "(repeatable)")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="change a dotted scene-file key or a short name (cx E nu k max_area) of the three scenes (repeatable)",
+    )
     add_ramp_arguments(p)
     add_video_arguments(p, "1344x320")
     return p
@@ -67,29 +71,50 @@ def run_placements(args: argparse.Namespace, scenes, stems: list[str], size: tup
             solved.append(solve(args, b, f"cy = {cy:+.2f}", vtk))
         except RampStopped as stopped:  # the ramps done, and the steps of this one, are kept
             done = {f"{c:+.2f}": r for (c, _), r in zip(PLACEMENTS, solved + [stopped.result]) if r.steps}
-            path = save_json(out / "steer_summary.json", {
-                "tip_deflection": {k: r.tip_deflection for k, r in done.items()},
-                "steps": {k: len(r.steps) for k, r in done.items()}, "all_converged": False,
-                "interrupted": isinstance(stopped, RampInterrupted)})
-            print(f"saved the ramps done in {path} and {', '.join(str(v.pvd) for v in series[:len(done)])}")
+            path = save_json(
+                out / "steer_summary.json",
+                {
+                    "tip_deflection": {k: r.tip_deflection for k, r in done.items()},
+                    "steps": {k: len(r.steps) for k, r in done.items()},
+                    "all_converged": False,
+                    "interrupted": isinstance(stopped, RampInterrupted),
+                },
+            )
+            print(f"saved the ramps done in {path} and {', '.join(str(v.pvd) for v in series[: len(done)])}")
             raise
     summary: dict = {"tip_deflection": {}, "all_converged": True}
     for (cy, title), result in zip(PLACEMENTS, solved):
-        print(f"cy = {cy:+.2f} ({title}): tip deflection {result.tip_deflection:+.4f}, "
-              f"peak |p| {result.peak_pressure:.1f}, ramp {result.seconds:.1f} s")
+        print(
+            f"cy = {cy:+.2f} ({title}): tip deflection {result.tip_deflection:+.4f}, "
+            f"peak |p| {result.peak_pressure:.1f}, ramp {result.seconds:.1f} s"
+        )
         summary["tip_deflection"][f"{cy:+.2f}"] = result.tip_deflection
         summary["all_converged"] &= result.converged
     written: list = [vtk.pvd for vtk in series]
     if not args.no_video:
         from ..render.video import render_video
 
-        export = render_video(solved, args.video or out / "steer.mp4", out / "steer.png", size, args.fps, args.color,
-                              args.renderer, trace=False,
-                              titles=[f"cy = {cy:+.2f}: {title}" for cy, title in PLACEMENTS], quiet=args.quiet)
+        export = render_video(
+            solved,
+            args.video or out / "steer.mp4",
+            out / "steer.png",
+            size,
+            args.fps,
+            args.color,
+            args.renderer,
+            trace=False,
+            titles=[f"cy = {cy:+.2f}: {title}" for cy, title in PLACEMENTS],
+            quiet=args.quiet,
+        )
         seconds_per_step = sum(r.summary()["solve_seconds_per_step"] for r in solved) / len(solved)
         print(render_report(export, seconds_per_step))
-        summary.update(renderer=export.renderer, video_frames=export.frames, video_size=[export.width, export.height],
-                       render_ms_per_frame=export.ms_per_frame, solve_seconds_per_step=seconds_per_step)
+        summary.update(
+            renderer=export.renderer,
+            video_frames=export.frames,
+            video_size=[export.width, export.height],
+            render_ms_per_frame=export.ms_per_frame,
+            solve_seconds_per_step=seconds_per_step,
+        )
         written += [export.video, export.png]
     written.append(save_json(out / "steer_summary.json", summary))
     print("wrote " + ", ".join(str(p) for p in written))

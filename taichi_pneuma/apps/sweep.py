@@ -32,29 +32,58 @@ from .cli import add_ramp_arguments, app_parser, exit_code, scene_of_flags
 
 def parser() -> argparse.ArgumentParser:
     p = app_parser("pneuma-sweep", __doc__)
-    p.add_argument("--vary", action="append", default=[], metavar="KEY=SPEC", required=True,
-                   help="a dotted scene key and its values: start:stop:count (evenly spaced, ends included; "
-                        "integers if both ends are), start:stop (with --samples) or v1,v2,...; repeatable (a full "
-                        "grid over all). Short keys: " + ", ".join(f"{k} = {v}" for k, v in SHORT_KEYS.items()))
-    p.add_argument("--samples", type=int, default=None,
-                   help="run N points of a Latin hypercube over the ranges (a list is sampled by its items; a "
-                        "range's count is ignored) instead of the full grid")
-    p.add_argument("--seed", type=int, default=0,
-                   help="seed of the Latin hypercube (the same seed plans the same runs)")
-    p.add_argument("--workers", type=int, default=None,
-                   help="worker processes (default: every core); with --ray and no address, the local Ray's CPUs")
-    p.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
-                   help="run the tasks on Ray (pip install 'taichi-pneuma[ray]'): a local Ray started for the "
-                        "study without ADDRESS, else the cluster whose head is at ADDRESS (HOST:PORT, auto, "
-                        "ray://HOST:PORT)")
+    p.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        metavar="KEY=SPEC",
+        required=True,
+        help="a dotted scene key and its values: start:stop:count (evenly spaced, ends included; "
+        "integers if both ends are), start:stop (with --samples) or v1,v2,...; repeatable (a full "
+        "grid over all). Short keys: " + ", ".join(f"{k} = {v}" for k, v in SHORT_KEYS.items()),
+    )
+    p.add_argument(
+        "--samples",
+        type=int,
+        default=None,
+        help="run N points of a Latin hypercube over the ranges (a list is sampled by its items; a "
+        "range's count is ignored) instead of the full grid",
+    )
+    p.add_argument(
+        "--seed", type=int, default=0, help="seed of the Latin hypercube (the same seed plans the same runs)"
+    )
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="worker processes (default: every core); with --ray and no address, the local Ray's CPUs",
+    )
+    p.add_argument(
+        "--ray",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="ADDRESS",
+        help="run the tasks on Ray (pip install 'taichi-pneuma[ray]'): a local Ray started for the "
+        "study without ADDRESS, else the cluster whose head is at ADDRESS (HOST:PORT, auto, "
+        "ray://HOST:PORT)",
+    )
     p.add_argument("--name", default="sweep", help="the result files are <out>/<name>.csv, .json and .png")
     p.add_argument("--retry-failed", action="store_true", help="run again the runs recorded with an error")
     p.add_argument("--max-runs", type=int, default=limits.MAX_RUNS, help="refuse a study of more runs")
-    p.add_argument("--scene", help="the base scene file (TOML) or the name of a shipped scene; the reference-beam "
-                                   "flags (--cy --cx --growth --steps --E --nu --k --max-area --order) are then ignored")
+    p.add_argument(
+        "--scene",
+        help="the base scene file (TOML) or the name of a shipped scene; the reference-beam "
+        "flags (--cy --cx --growth --steps --E --nu --k --max-area --order) are then ignored",
+    )
     p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="change a dotted key of the base scene for every run (repeatable)")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="change a dotted key of the base scene for every run (repeatable)",
+    )
     add_ramp_arguments(p)
     p.set_defaults(max_frame_pixels=limits.MAX_FRAME_PIXELS)  # checked by cli.check_flags; no video here
     return p
@@ -65,8 +94,10 @@ def row_line(row: dict, keys: list[str], labels: list[str]) -> str:
     seconds = "" if row.get("seconds") is None else f" ({row['seconds']:.1f} s)"  # none: the run was lost
     if row.get("error") is not None:
         return f"  {values}: error: {row['error']}{seconds}"
-    return (f"  {values}: tip dy {row['tip_dy']:+.4f} dx {row['tip_dx']:+.4f} rot {row['tip_rotation']:+.1f} deg, "
-            f"{row['iterations']} Newton it{seconds}")
+    return (
+        f"  {values}: tip dy {row['tip_dy']:+.4f} dx {row['tip_dx']:+.4f} rot {row['tip_rotation']:+.1f} deg, "
+        f"{row['iterations']} Newton it{seconds}"
+    )
 
 
 def run(args: argparse.Namespace) -> dict:
@@ -75,8 +106,9 @@ def run(args: argparse.Namespace) -> dict:
     axes = [parse_vary(text) for text in args.vary]
     base = scene_of_flags(args)
     executor = LocalPool(args.workers) if args.ray is None else RayCluster(args.ray or None, args.workers)
-    options = RunOptions(args.tol, args.max_iterations, args.max_cuts, args.max_triangles, args.max_increments,
-                         args.arch)
+    options = RunOptions(
+        args.tol, args.max_iterations, args.max_cuts, args.max_triangles, args.max_increments, args.arch
+    )
     out = prepare_directory(args.out)
     with lock_stem(out, check_stem(args.name)):  # from reading the rows done to writing the last: this run's
         sweep = Sweep(base, axes, out, args.name, args.samples, args.seed, options, args.retry_failed, args.max_runs)
@@ -86,12 +118,18 @@ def run(args: argparse.Namespace) -> dict:
 def run_study(args: argparse.Namespace, sweep, executor) -> dict:
     from tqdm import tqdm
 
-    where = "a local Ray" if args.ray == "" else f"Ray at {args.ray}" if args.ray else \
-        f"a process pool of {min(executor.workers, len(sweep.todo))} workers"
-    print(f"study {args.name}: {len(sweep.runs)} runs ({'full grid' if args.samples is None else 'Latin hypercube'} "
-          f"over {', '.join(a.label for a in sweep.axes)}); {len(sweep.runs) - len(sweep.todo)} done before, "
-          f"{len(sweep.todo)} to run"
-          + (f" on {where}" if sweep.todo else ""))
+    where = (
+        "a local Ray"
+        if args.ray == ""
+        else f"Ray at {args.ray}"
+        if args.ray
+        else f"a process pool of {min(executor.workers, len(sweep.todo))} workers"
+    )
+    print(
+        f"study {args.name}: {len(sweep.runs)} runs ({'full grid' if args.samples is None else 'Latin hypercube'} "
+        f"over {', '.join(a.label for a in sweep.axes)}); {len(sweep.runs) - len(sweep.todo)} done before, "
+        f"{len(sweep.todo)} to run" + (f" on {where}" if sweep.todo else "")
+    )
     bar = tqdm(total=len(sweep.todo), desc="runs", unit="run", disable=True if args.quiet else None, leave=False)
 
     def on_row(row):
@@ -111,11 +149,14 @@ def run_study(args: argparse.Namespace, sweep, executor) -> dict:
         raise
     ok = len(report.rows) - report.failed
     rate = f"; {report.ran / report.seconds:.2f} runs/s" if report.ran else ""
-    print(f"{report.planned} runs: {ok} without error, {report.failed} failed, {report.ran} run now in "
-          f"{report.seconds:.1f} s{rate}")
+    print(
+        f"{report.planned} runs: {ok} without error, {report.failed} failed, {report.ran} run now in "
+        f"{report.seconds:.1f} s{rate}"
+    )
     if report.lost:
-        print(f"error: {report.lost} runs lost with a crashed worker process; the same command runs them",
-              file=sys.stderr)
+        print(
+            f"error: {report.lost} runs lost with a crashed worker process; the same command runs them", file=sys.stderr
+        )
     print("wrote " + ", ".join(str(p) for p in report.files))
     # exit_code's contract: 0 when "all_converged"; here, when every planned run has its row
     return {"all_converged": report.lost == 0}

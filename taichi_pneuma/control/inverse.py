@@ -67,7 +67,9 @@ def command_bounds(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
             low, high = control.bounds
         else:
             low, high = control.kind.default_bounds([float(v) for _, v in control.schedule.keyframes])
-            require(low < high, f"chamber {name!r}: its keyframes span no range of commands; give it bounds = [min, max]")
+            require(
+                low < high, f"chamber {name!r}: its keyframes span no range of commands; give it bounds = [min, max]"
+            )
         lo.append(low)
         hi.append(high)
     return np.array(lo, float), np.array(hi, float)
@@ -101,10 +103,14 @@ class ReachOptions:
     def __post_init__(self):
         for name in ("tol", "angle_tol", "step_tol"):
             require(require_finite(name, getattr(self, name)) > 0, f"{name} = {getattr(self, name)!r} must be > 0")
-        require(require_finite("regularization", self.regularization) >= 0,
-                f"regularization = {self.regularization!r} must be >= 0")
-        require(isinstance(self.max_iterations, int) and self.max_iterations >= 1,
-                f"max_iterations = {self.max_iterations!r} must be an integer >= 1")
+        require(
+            require_finite("regularization", self.regularization) >= 0,
+            f"regularization = {self.regularization!r} must be >= 0",
+        )
+        require(
+            isinstance(self.max_iterations, int) and self.max_iterations >= 1,
+            f"max_iterations = {self.max_iterations!r} must be an integer >= 1",
+        )
         for name in ("max_halvings", "restarts"):
             value = getattr(self, name)
             require(isinstance(value, int) and value >= 0, f"{name} = {value!r} must be an integer >= 0")
@@ -146,13 +152,17 @@ class ReachResult:
         """One line: 'reached: ...' or 'unreachable: closest tip error ...; chamber ... at its max ...'."""
         tip = ", ".join(f"{v:.6g}" for v in self.pose.tip)
         rotation = f", rotation {self.pose.rotation:+.2f} deg" + (
-            f" (error {self.angle_error:.3g} deg)" if self.angle_error is not None else "")
+            f" (error {self.angle_error:.3g} deg)" if self.angle_error is not None else ""
+        )
         if self.reached:
             return f"reached: tip ({tip}){rotation}; tip error {self.error:.3g}"
-        bounds = "; ".join(f"chamber {name!r} at its {side} {unit} {value:g}" for name, side, unit, value in self.active)
+        bounds = "; ".join(
+            f"chamber {name!r} at its {side} {unit} {value:g}" for name, side, unit, value in self.active
+        )
         angle = f", rotation error {self.angle_error:.3g} deg" if self.angle_error is not None else ""
-        return (f"unreachable: closest tip error {self.error:.3g}{angle} at tip ({tip}); "
-                + (bounds or "no bound active (a local minimum of the tip error)"))
+        return f"unreachable: closest tip error {self.error:.3g}{angle} at tip ({tip}); " + (
+            bounds or "no bound active (a local minimum of the tip error)"
+        )
 
 
 class Objective:
@@ -165,9 +175,11 @@ class Objective:
         self.target, self.reacher = target, reacher
         mesh = reacher.built.mesh
         require(len(target.tip) <= mesh.dim, f"target tip = {list(target.tip)!r}: a 2D scene's tip is [x, y]")
-        require(target.angle is None or len(mesh.tip) >= 2,
-                f"target angle {target.angle!r}: the tip rotation needs at least 2 tip vertices "
-                f"(this mesh has {len(mesh.tip)})")
+        require(
+            target.angle is None or len(mesh.tip) >= 2,
+            f"target angle {target.angle!r}: the tip rotation needs at least 2 tip vertices "
+            f"(this mesh has {len(mesh.tip)})",
+        )
         self.rows = [0, 1] + ([3] if len(target.tip) == 3 else []) + ([2] if target.angle is not None else [])
         self.rho = reacher.options.regularization if len(reacher.names) > len(self.rows) else 0.0
         self.span = reacher.hi - reacher.lo
@@ -175,8 +187,9 @@ class Objective:
         self.s_ref = np.clip((rest - reacher.lo) / self.span, 0.0, 1.0)
         w_x, w_y, w_angle = target.weights
         length = reacher.length
-        self.scale = np.array([w_x / length, w_y / length, w_angle * math.pi / 180.0,
-                               target.weight_z / length])[self.rows]
+        self.scale = np.array([w_x / length, w_y / length, w_angle * math.pi / 180.0, target.weight_z / length])[
+            self.rows
+        ]
         x, y, *z = target.tip
         self.wanted = np.array([x, y, target.angle or 0.0, *(z or [0.0])])[self.rows]
 
@@ -184,7 +197,7 @@ class Objective:
         """(f, s, Phi) at a pose."""
         f = self.scale * (measured(pose)[self.rows] - self.wanted)
         s = (pose.commands - self.reacher.lo) / self.span
-        return f, s, float(f @ f + self.rho ** 2 * np.sum((s - self.s_ref) ** 2))
+        return f, s, float(f @ f + self.rho**2 * np.sum((s - self.s_ref) ** 2))
 
     def done(self, pose: Pose) -> bool:
         """Within tol L of the tip point, and angle_tol of the rotation when it is targeted."""
@@ -206,17 +219,26 @@ class Reacher:
     poor place to linearise, as with no pressure a chamber's first effect on the tip is often the
     opposite of its later one (the reference beam's tip first lifts, then curls down)."""
 
-    def __init__(self, built: BuiltScene, bounds=None, options: ReachOptions | None = None,
-                 newton: NewtonOptions | None = None, max_cuts: int = MAX_CUTS, start=None):
+    def __init__(
+        self,
+        built: BuiltScene,
+        bounds=None,
+        options: ReachOptions | None = None,
+        newton: NewtonOptions | None = None,
+        max_cuts: int = MAX_CUTS,
+        start=None,
+    ):
         self.built, self.options, self.max_cuts = built, options or ReachOptions(), max_cuts
         self.solver = NewtonSolver(built.model, newton)
         self.names = [c.chamber_name for c in built.chambers]
         self.units = [c.kind.quantity for c in built.chambers]
         lo, hi = bounds if bounds is not None else command_bounds(built.scene)
         self.lo, self.hi = np.asarray(lo, float), np.asarray(hi, float)
-        require(self.lo.shape == self.hi.shape == (len(self.names),) and np.all(self.lo < self.hi),
-                f"bounds {self.lo.tolist()} .. {self.hi.tolist()} must give min < max for each of "
-                f"{len(self.names)} chambers")
+        require(
+            self.lo.shape == self.hi.shape == (len(self.names),) and np.all(self.lo < self.hi),
+            f"bounds {self.lo.tolist()} .. {self.hi.tolist()} must give min < max for each of "
+            f"{len(self.names)} chambers",
+        )
         self.length = body_length(built)
         self.forward_solves = self.newton_iterations = 0
         rest = built.scene.schedule.rest_commands
@@ -242,15 +264,20 @@ class Reacher:
             previous = (self.pose.commands - dq, self.pose.u - tangent @ dq)
         start = time.perf_counter()
         try:
-            u, _, previous, records, _ = settle(self.built, self.solver, self.pose.commands, self.pose.u, commands,
-                                                previous, self.max_cuts)
+            u, _, previous, records, _ = settle(
+                self.built, self.solver, self.pose.commands, self.pose.u, commands, previous, self.max_cuts
+            )
         finally:
             self.forward_solves += 1
         iterations = sum(r.iterations for r in records)
         self.newton_iterations += iterations
         self._previous = previous
-        self.pose = dataclasses.replace(self._pose(commands, u), iterations=iterations, residual=records[-1].residual,
-                                        seconds=time.perf_counter() - start)
+        self.pose = dataclasses.replace(
+            self._pose(commands, u),
+            iterations=iterations,
+            residual=records[-1].residual,
+            seconds=time.perf_counter() - start,
+        )
         # Newton's last factor: the exact Hessian within one Newton step of this equilibrium
         self._factored = self.pose if records[-1].iterations and records[-1].exact_factor else None
         return self.pose
@@ -296,19 +323,33 @@ class Reacher:
         self.built.set_commands(best.commands)
         self.built.model.set_displacements(best.u)
         error, angle_error = self._errors(target, best)
-        active = [(name, side, unit, float(value))
-                  for name, unit, value, low, high in zip(self.names, self.units, best.commands, self.lo, self.hi)
-                  for side, bound in (("min", low), ("max", high)) if value == bound]
-        return ReachResult(target, best, error, angle_error, reached, active, iterations,
-                           self.forward_solves - solves0, self.newton_iterations - newton0,
-                           time.perf_counter() - start, path, jumps)
+        active = [
+            (name, side, unit, float(value))
+            for name, unit, value, low, high in zip(self.names, self.units, best.commands, self.lo, self.hi)
+            for side, bound in (("min", low), ("max", high))
+            if value == bound
+        ]
+        return ReachResult(
+            target,
+            best,
+            error,
+            angle_error,
+            reached,
+            active,
+            iterations,
+            self.forward_solves - solves0,
+            self.newton_iterations - newton0,
+            time.perf_counter() - start,
+            path,
+            jumps,
+        )
 
     def _restart_commands(self) -> list[np.ndarray]:
         """Commands to restart a descent from: the centre of the box, then scrambled Sobol points."""
         unit = [np.full(len(self.lo), 0.5)]
         if self.options.restarts > 1:
             unit += list(qmc.Sobol(len(self.lo), seed=0).random(2 ** math.ceil(math.log2(self.options.restarts))))
-        return [self.lo + s * (self.hi - self.lo) for s in unit[:self.options.restarts]]
+        return [self.lo + s * (self.hi - self.lo) for s in unit[: self.options.restarts]]
 
     def _descend(self, goal: Objective, path: list[Pose]) -> tuple[bool, int]:
         """Bounded Gauss-Newton steps from the current pose (module docstring); (reached, iterations)."""
@@ -317,8 +358,14 @@ class Reacher:
             if goal.done(self.pose):
                 return True, iteration
             f, s, phi = goal.value(self.pose)
-            sens = sensitivity(self.built, self.pose.commands, self.pose.u, self.solver.pattern, self.solver.backend,
-                               factorised=self.options.reuse_factor and self._factored is self.pose)
+            sens = sensitivity(
+                self.built,
+                self.pose.commands,
+                self.pose.u,
+                self.solver.pattern,
+                self.solver.backend,
+                factorised=self.options.reuse_factor and self._factored is self.pose,
+            )
             jac = goal.scale[:, None] * sens.tip[goal.rows] * goal.span
             a = np.vstack([jac, goal.rho * np.eye(len(s))])
             b = np.concatenate([-f, -goal.rho * (s - goal.s_ref)])
@@ -356,7 +403,7 @@ class Reacher:
 
 def tip_error(target: Target, pose: Pose) -> float:
     """The distance from the tip point to the target's, over the coordinates the target gives (x, y[, z])."""
-    return float(np.linalg.norm(pose.tip[:len(target.tip)] - target.tip))
+    return float(np.linalg.norm(pose.tip[: len(target.tip)] - target.tip))
 
 
 def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
@@ -374,20 +421,39 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
     stretches = ElementFields(mesh.vertices, mesh.elements)
     for k, result in enumerate(results):
         target = result.target
-        for j, pose in enumerate(result.path[1 if k else 0:], start=1 if k else 0):
+        for j, pose in enumerate(result.path[1 if k else 0 :], start=1 if k else 0):
             descent += j in result.jumps
             built.set_commands(pose.commands)
             built.model.set_displacements(pose.u)
-            extra = {"target": k, "target_x": target.tip[0], "target_y": target.tip[1],
-                     "target_angle": math.nan if target.angle is None else target.angle,
-                     "tip_x": pose.tip[0], "tip_y": pose.tip[1], "tip_error": tip_error(target, pose),
-                     "descent": descent}
+            extra = {
+                "target": k,
+                "target_x": target.tip[0],
+                "target_y": target.tip[1],
+                "target_angle": math.nan if target.angle is None else target.angle,
+                "tip_x": pose.tip[0],
+                "tip_y": pose.tip[1],
+                "tip_error": tip_error(target, pose),
+                "descent": descent,
+            }
             if mesh.dim == 3:
                 extra.update(target_z=target.tip[2] if len(target.tip) == 3 else math.nan, tip_z=pose.tip[2])
-            steps.append(StepRecord(len(steps), chamber_records(built, pose.commands), pose.tip - rest_tip,
-                                    pose.rotation, pose.iterations, pose.residual, True, 0, 1,
-                                    built.elastic.min_determinant(), pose.seconds, extra=extra,
-                                    max_stretch=stretches.largest_stretch(mesh.vertices + pose.u)))
+            steps.append(
+                StepRecord(
+                    len(steps),
+                    chamber_records(built, pose.commands),
+                    pose.tip - rest_tip,
+                    pose.rotation,
+                    pose.iterations,
+                    pose.residual,
+                    True,
+                    0,
+                    1,
+                    built.elastic.min_determinant(),
+                    pose.seconds,
+                    extra=extra,
+                    max_stretch=stretches.largest_stretch(mesh.vertices + pose.u),
+                )
+            )
             states.append(mesh.vertices + pose.u)
     built.set_commands(reacher.pose.commands)
     built.model.set_displacements(reacher.pose.u)

@@ -34,8 +34,10 @@ class Body:
         """Refuse more than MAX_SHAPES rollers, and a roller whose normal has not dim components."""
         require(len(self.rollers) <= MAX_SHAPES, f"{len(self.rollers)} rollers: at most {MAX_SHAPES} are allowed")
         for roller in self.rollers:
-            require(len(roller.normal) == self.dim, f"roller normal = {list(roller.normal)!r}: a {self.dim}D body's "
-                                                    f"rollers have {self.dim} components")
+            require(
+                len(roller.normal) == self.dim,
+                f"roller normal = {list(roller.normal)!r}: a {self.dim}D body's rollers have {self.dim} components",
+            )
 
     def node_sets(self, vertices: np.ndarray) -> tuple:
         """(pinned, tip, rollers) on a mesh of these vertices: supports.node_sets of its clamp, tip and rollers."""

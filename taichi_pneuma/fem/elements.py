@@ -70,12 +70,22 @@ def symmetric_points(*orbits: tuple[float, ...]) -> np.ndarray:
 
 DUNAVANT_A = (0.44594849091596488632, 0.091576213509770743460)  # the degree-4 rule's two orbits (a, a, 1 - 2a)
 DUNAVANT_W = (0.22338158967801146570, 0.10995174365532186764)  # and their weights (Dunavant 1985)
-TRIANGLE = Simplex(2, {1: (np.array([[1 / 3, 1 / 3]]), np.array([1.0])),
-                       2: (np.array([[1 / 6, 1 / 6], [2 / 3, 1 / 6], [1 / 6, 2 / 3]]), np.full(3, 1 / 3)),
-                       4: (symmetric_points(*((a, a, 1 - 2 * a) for a in DUNAVANT_A)), np.repeat(DUNAVANT_W, 3))})
+TRIANGLE = Simplex(
+    2,
+    {
+        1: (np.array([[1 / 3, 1 / 3]]), np.array([1.0])),
+        2: (np.array([[1 / 6, 1 / 6], [2 / 3, 1 / 6], [1 / 6, 2 / 3]]), np.full(3, 1 / 3)),
+        4: (symmetric_points(*((a, a, 1 - 2 * a) for a in DUNAVANT_A)), np.repeat(DUNAVANT_W, 3)),
+    },
+)
 TET_A, TET_B = (5 + 3 * math.sqrt(5)) / 20, (5 - math.sqrt(5)) / 20  # the degree-2 rule's barycentric weights
-TETRAHEDRON = Simplex(3, {1: (np.array([[0.25, 0.25, 0.25]]), np.array([1.0])),
-                          2: (symmetric_points((TET_A, TET_B, TET_B, TET_B)), np.full(4, 0.25))})
+TETRAHEDRON = Simplex(
+    3,
+    {
+        1: (np.array([[0.25, 0.25, 0.25]]), np.array([1.0])),
+        2: (symmetric_points((TET_A, TET_B, TET_B, TET_B)), np.full(4, 0.25)),
+    },
+)
 
 
 @dataclass(frozen=True)
@@ -165,21 +175,57 @@ class ElementFamily:
         return np.where(flip[:, None], cells[:, list(self.mirror)], cells)
 
 
-TRIANGLE_P1 = ElementFamily("P1 triangle", TRIANGLE, order=1, quadrature_degree=1,
-                            facets=((0, 1), (1, 2), (2, 0)), meshio_cell="triangle", vtk_cell=5, mirror=(0, 2, 1),
-                            split=((0, 1, 2),))
-TRIANGLE_P2 = ElementFamily("P2 triangle", TRIANGLE, order=2, quadrature_degree=2,
-                            edges=((0, 1), (1, 2), (2, 0)), facets=((0, 1, 3), (1, 2, 4), (2, 0, 5)),
-                            meshio_cell="triangle6", vtk_cell=22, mirror=(0, 2, 1, 5, 4, 3),
-                            split=((0, 3, 5), (3, 1, 4), (5, 4, 2), (3, 4, 5)), measure_degree=4, weight=4)
+TRIANGLE_P1 = ElementFamily(
+    "P1 triangle",
+    TRIANGLE,
+    order=1,
+    quadrature_degree=1,
+    facets=((0, 1), (1, 2), (2, 0)),
+    meshio_cell="triangle",
+    vtk_cell=5,
+    mirror=(0, 2, 1),
+    split=((0, 1, 2),),
+)
+TRIANGLE_P2 = ElementFamily(
+    "P2 triangle",
+    TRIANGLE,
+    order=2,
+    quadrature_degree=2,
+    edges=((0, 1), (1, 2), (2, 0)),
+    facets=((0, 1, 3), (1, 2, 4), (2, 0, 5)),
+    meshio_cell="triangle6",
+    vtk_cell=22,
+    mirror=(0, 2, 1, 5, 4, 3),
+    split=((0, 3, 5), (3, 1, 4), (5, 4, 2), (3, 4, 5)),
+    measure_degree=4,
+    weight=4,
+)
 TET_EDGES = ((0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3))
-TET_P1 = ElementFamily("P1 tetrahedron", TETRAHEDRON, order=1, quadrature_degree=1,
-                       facets=((1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1)), meshio_cell="tetra", vtk_cell=10,
-                       facet_family=TRIANGLE_P1, mirror=(0, 2, 1, 3))
-TET_P2 = ElementFamily("P2 tetrahedron", TETRAHEDRON, order=2, quadrature_degree=2, edges=TET_EDGES,
-                       facets=((1, 2, 3, 5, 9, 8), (0, 3, 2, 7, 9, 6), (0, 1, 3, 4, 8, 7), (0, 2, 1, 6, 5, 4)),
-                       meshio_cell="tetra10", vtk_cell=24, facet_family=TRIANGLE_P2,
-                       mirror=(0, 2, 1, 3, 6, 5, 4, 7, 9, 8), measure_degree=2, weight=8)
+TET_P1 = ElementFamily(
+    "P1 tetrahedron",
+    TETRAHEDRON,
+    order=1,
+    quadrature_degree=1,
+    facets=((1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1)),
+    meshio_cell="tetra",
+    vtk_cell=10,
+    facet_family=TRIANGLE_P1,
+    mirror=(0, 2, 1, 3),
+)
+TET_P2 = ElementFamily(
+    "P2 tetrahedron",
+    TETRAHEDRON,
+    order=2,
+    quadrature_degree=2,
+    edges=TET_EDGES,
+    facets=((1, 2, 3, 5, 9, 8), (0, 3, 2, 7, 9, 6), (0, 1, 3, 4, 8, 7), (0, 2, 1, 6, 5, 4)),
+    meshio_cell="tetra10",
+    vtk_cell=24,
+    facet_family=TRIANGLE_P2,
+    mirror=(0, 2, 1, 3, 6, 5, 4, 7, 9, 8),
+    measure_degree=2,
+    weight=8,
+)
 FAMILIES = (TRIANGLE_P1, TRIANGLE_P2, TET_P1, TET_P2)
 
 
@@ -201,8 +247,10 @@ def family_of(elements: np.ndarray, dim: int) -> ElementFamily:
     for family in FAMILIES:
         if (family.dim, family.n_nodes) == (dim, k):
             return family
-    raise PneumaInputError(f"elements of {k} nodes in {dim}D: not one of "
-                           + ", ".join(f"{f.name} ({f.n_nodes} nodes, {f.dim}D)" for f in FAMILIES))
+    raise PneumaInputError(
+        f"elements of {k} nodes in {dim}D: not one of "
+        + ", ".join(f"{f.name} ({f.n_nodes} nodes, {f.dim}D)" for f in FAMILIES)
+    )
 
 
 def boundary_facets(family: ElementFamily, elements: np.ndarray) -> np.ndarray:
@@ -210,6 +258,6 @@ def boundary_facets(family: ElementFamily, elements: np.ndarray) -> np.ndarray:
     boundary, each facet in its element's node order (outward normal to the right in 2D, corners
     counter-clockwise seen from outside in 3D)."""
     facets = elements[:, np.array(family.facets)].reshape(-1, len(family.facets[0]))
-    corners = np.sort(facets[:, :family.dim], axis=1)
+    corners = np.sort(facets[:, : family.dim], axis=1)
     _, index, counts = np.unique(corners, axis=0, return_index=True, return_counts=True)
     return facets[np.sort(index[counts == 1])]

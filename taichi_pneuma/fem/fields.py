@@ -46,11 +46,14 @@ class ElementFields:
 
     def at(self, positions: np.ndarray, law=None, parameters=None) -> dict[str, np.ndarray]:
         """Per element (quadrature-weighted means): det_F and max_stretch, and, given a material law and its
-        parameter vectors (one per element, (m, p)), stress (the mean Cauchy stress, (m, 3, 3)) and von_mises (of it)."""
+        parameter vectors (one per element, (m, p)), stress (the mean Cauchy stress, (m, 3, 3)) and von_mises (of
+        it)."""
         F, weights = self.deformation_gradients(positions), self.weights
         m, nq = weights.shape
-        mean = lambda values: np.einsum("mq,mq...->m...", weights, values.reshape(m, nq, *values.shape[1:])) \
+        mean = lambda values: (
+            np.einsum("mq,mq...->m...", weights, values.reshape(m, nq, *values.shape[1:]))
             / weights.sum(axis=1).reshape(-1, *([1] * (values.ndim - 1)))
+        )
         flat = F.reshape(m * nq, *F.shape[2:])
         fields = {"det_F": mean(np.linalg.det(flat)), "max_stretch": mean(max_stretch(flat))}
         if law is not None:
@@ -73,8 +76,13 @@ def cauchy_stress(F: np.ndarray, law, parameters: np.ndarray) -> np.ndarray:
     """Cauchy stress (N, 3, 3) of each F (N, d, d) under the law with parameter vectors (N, p), from the law's
     own P: sigma = P F^T / J (module docstring)."""
     out = np.empty((len(F), 3, 3))
-    cauchy_stresses(law, F.shape[1], np.ascontiguousarray(F, dtype=np.float64),
-                    np.ascontiguousarray(parameters, dtype=np.float64), out)
+    cauchy_stresses(
+        law,
+        F.shape[1],
+        np.ascontiguousarray(F, dtype=np.float64),
+        np.ascontiguousarray(parameters, dtype=np.float64),
+        out,
+    )
     return out
 
 
@@ -86,7 +94,8 @@ def von_mises(sigma: np.ndarray) -> np.ndarray:
     return np.sqrt(0.5 * normal + 3.0 * shear)
 
 
-def element_fields(rest: np.ndarray, positions: np.ndarray, elements: np.ndarray, law=None, parameters=None
-                    ) -> dict[str, np.ndarray]:
+def element_fields(
+    rest: np.ndarray, positions: np.ndarray, elements: np.ndarray, law=None, parameters=None
+) -> dict[str, np.ndarray]:
     """ElementFields(rest, elements).at(positions, law, parameters), for one state."""
     return ElementFields(rest, elements).at(positions, law, parameters)

@@ -66,8 +66,14 @@ INSTALL = "pip install 'taichi-pneuma[3d]'"
 REGULAR_TET = 1 / (6 * np.sqrt(2))  # volume of the regular tetrahedron of unit edge
 BODY_GROUP = "body"
 # the global gmsh options meshing sets; a caller's gmsh session gets its values back afterwards
-OPTIONS = ("General.Terminal", "Mesh.Algorithm", "Mesh.MeshSizeMax", "Mesh.MeshSizeFromPoints", "Mesh.MeshSizeFromCurvature",
-           "Mesh.MeshSizeExtendFromBoundary")
+OPTIONS = (
+    "General.Terminal",
+    "Mesh.Algorithm",
+    "Mesh.MeshSizeMax",
+    "Mesh.MeshSizeFromPoints",
+    "Mesh.MeshSizeFromCurvature",
+    "Mesh.MeshSizeExtendFromBoundary",
+)
 # gmsh's surface meshers, (Mesh.Algorithm, Mesh.MeshSizeFromCurvature), tried in turn until every surface and
 # volume is meshed: Frontal-Delaunay with the sizes alone; then Delaunay with edges also shortened to 2 pi R / 12 on
 # surfaces of curvature radius R. Frontal-Delaunay leaves a coarsely meshed B-spline surface (an ellipsoid:
@@ -77,7 +83,13 @@ SURFACE_MESHERS = ((6, 0), (5, 12))
 MAX_SAMPLING = 200  # points per direction on a wall surface for its distance field
 # a tetrahedron's four faces (corners in its local numbering), each oriented outward for a positive tetrahedron
 TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
-MESHER_SOURCES = ("gmsh_mesher.py", "solids.py", "pneunet.py", "shapes.py", "polygons.py")  # the code a cached mesh depends on
+MESHER_SOURCES = (
+    "gmsh_mesher.py",
+    "solids.py",
+    "pneunet.py",
+    "shapes.py",
+    "polygons.py",
+)  # the code a cached mesh depends on
 CACHE_BYTES_PER_TET = 256  # a cached mesh's arrays take about 50 bytes per tetrahedron: a larger file is not read
 
 
@@ -93,8 +105,10 @@ class MeshSizes:
     def __post_init__(self):
         require(require_finite("size", self.size) > 0, f"size = {self.size!r} must be > 0")
         if self.near_chambers is not None:
-            require(require_finite("near_chambers", self.near_chambers) > 0,
-                    f"near_chambers = {self.near_chambers!r} must be > 0")
+            require(
+                require_finite("near_chambers", self.near_chambers) > 0,
+                f"near_chambers = {self.near_chambers!r} must be > 0",
+            )
         if self.distance is not None:
             require(require_finite("distance", self.distance) > 0, f"distance = {self.distance!r} must be > 0")
 
@@ -119,7 +133,7 @@ class MeshSizes:
         near, far = self.near, float(self.size)
         if self.shell == 0.0:
             return 0.0
-        return 1 / near ** 2 + self.grading / (far - near) * (1 / near ** 2 - 1 / far ** 2) / 2
+        return 1 / near**2 + self.grading / (far - near) * (1 / near**2 - 1 / far**2) / 2
 
 
 @dataclass(frozen=True)
@@ -136,8 +150,10 @@ class Solid:
         for what, entries in (("chambers", self.chambers), ("regions", self.regions)):
             require(len(entries) <= MAX_SHAPES, f"{len(entries)} {what}: at most {MAX_SHAPES} are allowed")
         names = [name for name, _ in self.chambers + self.regions]
-        require(all(isinstance(n, str) and n and n != BODY_GROUP for n in names),
-                f"chamber and region names {names!r} must be non-empty strings other than {BODY_GROUP!r}")
+        require(
+            all(isinstance(n, str) and n and n != BODY_GROUP for n in names),
+            f"chamber and region names {names!r} must be non-empty strings other than {BODY_GROUP!r}",
+        )
         require_distinct("chamber and region names", names)
         for what, shape in [("body", self.body)] + list(self.chambers + self.regions):
             require(callable(getattr(shape, "build", None)), f"{what}: {shape!r} is not a 3D shape")
@@ -204,14 +220,14 @@ class _Pieces:
         _, pieces = occ.fragment([(3, body)], [(3, t) for t in tools])
         occ.synchronize()
         volumes = [{tag for _, tag in p} for p in pieces]
-        inside, chambers, regions = volumes[0], volumes[1:1 + len(solid.chambers)], volumes[1 + len(solid.chambers):]
+        inside, chambers, regions = volumes[0], volumes[1 : 1 + len(solid.chambers)], volumes[1 + len(solid.chambers) :]
         cavities = [c & inside for c in chambers]
         for (name, _), cavity in zip(solid.chambers, cavities):
             require(cavity, f"chamber {name!r} lies outside the body")
         for (name, _), region in zip(solid.regions, regions):
             require(region & inside, f"region {name!r} lies outside the body")
         for i, (a, c) in enumerate(zip(solid.chambers, cavities)):
-            for b, d in zip(solid.chambers[i + 1:], cavities[i + 1:]):
+            for b, d in zip(solid.chambers[i + 1 :], cavities[i + 1 :]):
                 require(not c & d, f"chambers {a[0]!r} and {b[0]!r} overlap")
         hollow = set().union(*cavities)
         self.rubber = {tag: 0 for tag in sorted(inside - hollow)}
@@ -257,47 +273,69 @@ def estimate_tets(solid: Solid, sizes: MeshSizes) -> float:
 def _estimate(volume: float, wall_area: float, sizes: MeshSizes) -> float:
     area = min(wall_area, volume / sizes.shell) if sizes.shell else 0.0
     bulk = volume - area * sizes.shell
-    return (bulk / sizes.size ** 3 + area * sizes.shell_density()) / REGULAR_TET
+    return (bulk / sizes.size**3 + area * sizes.shell_density()) / REGULAR_TET
 
 
 def _check_estimate(volume: float, wall_area: float, sizes: MeshSizes, max_tets: int) -> None:
     estimate = _estimate(volume, wall_area, sizes)
-    require(estimate <= max_tets,
-            f"the mesh would have about {estimate:.3g} tetrahedra (volume {volume:.4g}, size {sizes.size:g}, "
-            f"near chambers {sizes.near:g}); the limit is {max_tets} tetrahedra (--max-triangles raises it)")
+    require(
+        estimate <= max_tets,
+        f"the mesh would have about {estimate:.3g} tetrahedra (volume {volume:.4g}, size {sizes.size:g}, "
+        f"near chambers {sizes.near:g}); the limit is {max_tets} tetrahedra (--max-triangles raises it)",
+    )
 
 
 def _check_count(tets: int, max_tets: int) -> None:
     require(tets <= max_tets, f"the mesh has {tets} tetrahedra; the limit is {max_tets} (--max-triangles raises it)")
 
 
-def mesh_solid(solid: Solid, sizes: MeshSizes, max_tets: int = MAX_TETS, verbose: bool = False,
-               surface_meshers: tuple = SURFACE_MESHERS) -> SolidMesh:
+def mesh_solid(
+    solid: Solid,
+    sizes: MeshSizes,
+    max_tets: int = MAX_TETS,
+    verbose: bool = False,
+    surface_meshers: tuple = SURFACE_MESHERS,
+) -> SolidMesh:
     """Mesh the solid with linear tetrahedra (gmsh: OpenCASCADE fragment, Delaunay), or raise one
     PneumaInputError: bad geometry, an estimate or a mesh over max_tets (--max-triangles raises it), or
     gmsh failing (its error line quoted). surface_meshers: the (Mesh.Algorithm, Mesh.MeshSizeFromCurvature)
     pairs tried in turn (a study that must keep one mesh pins one). A mesh in the cache (module docstring) is
     returned without running gmsh."""
     entry = _cache_key("mesh", solid, sizes, tuple(tuple(pair) for pair in surface_meshers))
-    cached = cache.load("gmsh-mesh", entry, lambda arrays: _valid_mesh(arrays, solid),
-                        CACHE_BYTES_PER_TET * max(max_tets, 1) + 2 ** 20)
+    cached = cache.load(
+        "gmsh-mesh", entry, lambda arrays: _valid_mesh(arrays, solid), CACHE_BYTES_PER_TET * max(max_tets, 1) + 2**20
+    )
     if cached is not None:
         volume, wall_area = map(float, cached["measures"])
         _check_estimate(volume, wall_area, sizes, max_tets)
         _check_count(len(cached["tets"]), max_tets)
-        return SolidMesh(cached["vertices"], cached["tets"],
-                         {name: cached[f"chamber{i}"] for i, (name, _) in enumerate(solid.chambers)},
-                         cached["boundary"], cached["regions"], tuple(name for name, _ in solid.regions))
+        return SolidMesh(
+            cached["vertices"],
+            cached["tets"],
+            {name: cached[f"chamber{i}"] for i, (name, _) in enumerate(solid.chambers)},
+            cached["boundary"],
+            cached["regions"],
+            tuple(name for name, _ in solid.regions),
+        )
     meshed, measures = _mesh(solid, sizes, max_tets, verbose, surface_meshers)
-    cache.store("gmsh-mesh", entry, {"vertices": meshed.vertices, "tets": meshed.tets, "boundary": meshed.boundary,
-                                     "regions": meshed.regions, "measures": measures,
-                                     **{f"chamber{i}": meshed.chambers[name]
-                                        for i, (name, _) in enumerate(solid.chambers)}})
+    cache.store(
+        "gmsh-mesh",
+        entry,
+        {
+            "vertices": meshed.vertices,
+            "tets": meshed.tets,
+            "boundary": meshed.boundary,
+            "regions": meshed.regions,
+            "measures": measures,
+            **{f"chamber{i}": meshed.chambers[name] for i, (name, _) in enumerate(solid.chambers)},
+        },
+    )
     return meshed
 
 
-def _mesh(solid: Solid, sizes: MeshSizes, max_tets: int, verbose: bool, surface_meshers: tuple
-          ) -> tuple[SolidMesh, np.ndarray]:
+def _mesh(
+    solid: Solid, sizes: MeshSizes, max_tets: int, verbose: bool, surface_meshers: tuple
+) -> tuple[SolidMesh, np.ndarray]:
     """gmsh's mesh of the solid, and the rubber's volume and the walls' area."""
     with _session(verbose) as gmsh:
         pieces = _Pieces(gmsh, solid)
@@ -350,7 +388,9 @@ def _cache_key(kind: str, *parts) -> str | None:
 def _valid_measures(arrays: dict) -> bool:
     """A cached (volume, wall area): two finite positive doubles."""
     measures = arrays["measures"]
-    return measures.dtype == np.float64 and measures.shape == (2,) and bool(np.all(np.isfinite(measures) & (measures > 0)))
+    return (
+        measures.dtype == np.float64 and measures.shape == (2,) and bool(np.all(np.isfinite(measures) & (measures > 0)))
+    )
 
 
 def _valid_mesh(arrays: dict, solid: Solid) -> bool:
@@ -362,16 +402,25 @@ def _valid_mesh(arrays: dict, solid: Solid) -> bool:
         return False
     vertices, tets, regions = arrays["vertices"], arrays["tets"], arrays["regions"]
     faces = [arrays[name] for name in ["boundary", *walls]]
-    if not (vertices.dtype == np.float64 and vertices.ndim == 2 and vertices.shape[1] == 3 and len(vertices) >= 4
-            and np.isfinite(vertices).all()):
+    if not (
+        vertices.dtype == np.float64
+        and vertices.ndim == 2
+        and vertices.shape[1] == 3
+        and len(vertices) >= 4
+        and np.isfinite(vertices).all()
+    ):
         return False
     shaped = [(tets, 4), *((f, 3) for f in faces)]
     if not all(a.dtype == np.int64 and a.ndim == 2 and a.shape[1] == k and len(a) > 0 for a, k in shaped):
         return False
     if not all(a.min() >= 0 and a.max() < len(vertices) for a, _ in shaped):
         return False
-    if not (regions.dtype == np.int64 and regions.shape == (len(tets),) and regions.min() >= 0
-            and regions.max() <= len(solid.regions)):
+    if not (
+        regions.dtype == np.int64
+        and regions.shape == (len(tets),)
+        and regions.min() >= 0
+        and regions.max() <= len(solid.regions)
+    ):
         return False
     x = vertices[tets]
     return bool(np.all(np.linalg.det(x[:, 1:] - x[:, :1]) > 0))
@@ -379,8 +428,9 @@ def _valid_mesh(arrays: dict, solid: Solid) -> bool:
 
 def _complete(gmsh, pieces: _Pieces) -> bool:
     """Whether every rubber volume has tetrahedra and every chamber wall triangles."""
-    return (all(len(_elements(gmsh, 3, [v], 4, 4)) for v in pieces.rubber)
-            and all(len(_elements(gmsh, 2, [s], 2, 3)) for walls in pieces.walls.values() for s in walls))
+    return all(len(_elements(gmsh, 3, [v], 4, 4)) for v in pieces.rubber) and all(
+        len(_elements(gmsh, 2, [s], 2, 3)) for walls in pieces.walls.values() for s in walls
+    )
 
 
 def _set_sizes(gmsh, sizes: MeshSizes, walls: list[int]) -> None:
@@ -398,8 +448,12 @@ def _set_sizes(gmsh, sizes: MeshSizes, walls: list[int]) -> None:
         field.setNumber(distance, "Sampling", int(np.clip(2 * extent / sizes.near, 20, MAX_SAMPLING)))
         threshold = field.add("Threshold")
         field.setNumber(threshold, "InField", distance)
-        for key, value in (("SizeMin", sizes.near), ("SizeMax", sizes.size), ("DistMin", sizes.near),
-                           ("DistMax", sizes.near + sizes.grading)):
+        for key, value in (
+            ("SizeMin", sizes.near),
+            ("SizeMax", sizes.size),
+            ("DistMin", sizes.near),
+            ("DistMax", sizes.near + sizes.grading),
+        ):
             field.setNumber(threshold, key, value)
         field.setAsBackgroundMesh(threshold)
 
@@ -414,12 +468,16 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
     """The mesh's arrays: nodes renumbered 0..n-1 (those of tetrahedra only), tetrahedra oriented, faces
     matched to the tetrahedra's boundary faces for their orientation."""
     mesh = gmsh.model.mesh
-    blocks = {k: _elements(gmsh, 3, [v for v, r in pieces.rubber.items() if r == k], 4, 4)
-              for k in range(len(solid.regions) + 1)}
+    blocks = {
+        k: _elements(gmsh, 3, [v for v, r in pieces.rubber.items() if r == k], 4, 4)
+        for k in range(len(solid.regions) + 1)
+    }
     tags = np.concatenate(list(blocks.values()))
     regions = np.concatenate([np.full(len(b), k) for k, b in blocks.items()])
-    require(all(len(b) for k, b in blocks.items() if any(r == k for r in pieces.rubber.values())),
-            "gmsh left a part of the body without tetrahedra")
+    require(
+        all(len(b) for k, b in blocks.items() if any(r == k for r in pieces.rubber.values())),
+        "gmsh left a part of the body without tetrahedra",
+    )
     _check_count(len(tags), max_tets)
     node_tags, coords, _ = mesh.getNodes()
     used, tets = np.unique(tags, return_inverse=True)
@@ -445,8 +503,9 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
         chambers[name] = faces[rows][:, ::-1].copy()  # outward from the rubber = into the cavity: reversed
         on_wall.update(rows)
     boundary = faces[[i for i in outer if i not in on_wall]]
-    return SolidMesh(vertices, tets, chambers, boundary, regions.astype(np.int64),
-                     tuple(name for name, _ in solid.regions))
+    return SolidMesh(
+        vertices, tets, chambers, boundary, regions.astype(np.int64), tuple(name for name, _ in solid.regions)
+    )
 
 
 def positively_oriented(vertices: np.ndarray, tets: np.ndarray) -> np.ndarray:

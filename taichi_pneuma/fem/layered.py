@@ -24,8 +24,14 @@ def layered_tets(n: int, triangles: np.ndarray, layers: int) -> np.ndarray:
     out = []
     for k in range(layers):
         lo, hi = k * n, (k + 1) * n
-        out += [np.column_stack(t) for t in ((a + lo, b + lo, c + lo, c + hi), (a + lo, b + lo, b + hi, c + hi),
-                                             (a + lo, a + hi, b + hi, c + hi))]
+        out += [
+            np.column_stack(t)
+            for t in (
+                (a + lo, b + lo, c + lo, c + hi),
+                (a + lo, b + lo, b + hi, c + hi),
+                (a + lo, a + hi, b + hi, c + hi),
+            )
+        ]
     return np.vstack(out)
 
 
@@ -51,7 +57,7 @@ def extrude(mesh: Mesh, depth: float, layers: int = 1) -> tuple[np.ndarray, np.n
     vertices = np.vstack([np.column_stack([mesh.vertices[used], np.full(n, zk)]) for zk in z])
     walls = []
     for loop, origin in zip(mesh.chambers, mesh.wall_origins):
-        nodes = number[loop[::mesh.order]]  # the wall's corners
+        nodes = number[loop[:: mesh.order]]  # the wall's corners
         pairs = np.column_stack([nodes, np.roll(nodes, -1)])
         walls.append(layered_sides(n, pairs if origin is None else pairs[:-1], layers))
     return vertices, layered_tets(n, number[corners], layers), walls
@@ -74,8 +80,9 @@ def octant_grid(divisions: int) -> tuple[np.ndarray, np.ndarray]:
     return np.array(points, dtype=np.float64) / divisions, np.array(triangles)
 
 
-def spherical_shell_octant(inner: float, outer: float, divisions: int, layers: int
-                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def spherical_shell_octant(
+    inner: float, outer: float, divisions: int, layers: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """An octant (x, y, z >= 0) of the shell inner <= |x| <= outer: the octant triangle's grid projected onto
     the sphere, extruded radially in equal layers. Returns (vertices, tetrahedra, the inner surface's
     triangles): the cavity wall, open on the three coordinate planes."""

@@ -23,6 +23,7 @@ import os
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -34,6 +35,9 @@ from .elements import FAMILIES
 from .mesh import Mesh
 from .supports import PointSet
 from .tetmesh import check_order, tet_mesh
+
+if TYPE_CHECKING:
+    import meshio
 
 MAX_MESH_BYTES = 500_000_000
 SPARSE_NODES = 4  # a gmsh 2.2 file whose largest node number passes this many times its node count is renumbered
@@ -67,9 +71,15 @@ class MeshSurface:
 def read_mesh(path: str) -> meshio.Mesh:
     """meshio's reading of the file, every failure one PneumaInputError naming it (the last file read is kept:
     the resource check and the build read it once)."""
-    require(os.path.isfile(path), f"mesh file {quoted(path)} " +
-            ("is not a regular file (a folder, a FIFO or a device cannot be read as one)" if os.path.exists(path)
-             else "does not exist"))
+    require(
+        os.path.isfile(path),
+        f"mesh file {quoted(path)} "
+        + (
+            "is not a regular file (a folder, a FIFO or a device cannot be read as one)"
+            if os.path.exists(path)
+            else "does not exist"
+        ),
+    )
     stat = os.stat(path)
     return read_file(path, stat.st_size, stat.st_mtime_ns)
 
@@ -94,9 +104,11 @@ def read_file(path: str, size: int, modified: int) -> meshio.Mesh:
     except PneumaInputError:
         raise
     except MemoryError:
-        raise PneumaInputError(f"mesh file {path!r} ({size} bytes) needs more than {allowance} bytes of memory to "
-                               f"read, the most a file of its size may take (compressed arrays that expand, or "
-                               f"node numbers far larger than the node count)") from None
+        raise PneumaInputError(
+            f"mesh file {path!r} ({size} bytes) needs more than {allowance} bytes of memory to "
+            f"read, the most a file of its size may take (compressed arrays that expand, or "
+            f"node numbers far larger than the node count)"
+        ) from None
     except Exception as exc:  # meshio raises many kinds (ReadError, KeyError, ValueError, ...) on a bad file
         raise PneumaInputError(f"mesh file {path!r} cannot be read by meshio ({type(exc).__name__}: {exc})") from None
 
@@ -110,9 +122,10 @@ def dense_gmsh22(path: str) -> bytes | None:
         lines = f.read(64).split(b"\n")
         if len(lines) < 2 or lines[0].strip() != b"$MeshFormat" or not lines[1].strip().startswith(b"2.2 0"):
             return None
-        data = f.seek(0) or f.read()
+        f.seek(0)
+        data = f.read()
     start, end = data.find(b"$Nodes\n"), data.find(b"\n$EndNodes")
-    head, _, body = data[start + 7:end].partition(b"\n")
+    head, _, body = data[start + 7 : end].partition(b"\n")
     nodes = body.split(b"\n")
     if start < 0 or end < start or not head.strip().isdigit() or len(nodes) != int(head):
         return None  # meshio's reader says what is wrong
@@ -120,34 +133,43 @@ def dense_gmsh22(path: str) -> bytes | None:
     if numbers.max(initial=0) <= SPARSE_NODES * len(numbers):
         return None
     order = np.argsort(numbers)
-    new = {}  # a cell's node number -> its new number
+    new: dict[bytes, bytes] = {}  # a cell's node number -> its new number
 
     def renumber(number: bytes) -> bytes:
         k = np.searchsorted(numbers[order], int(number))
-        require(k < len(order) and numbers[order[k]] == int(number), f"mesh file {path!r}: an element names node "
-                                                                     f"{int(number)}, which $Nodes does not list")
+        require(
+            k < len(order) and numbers[order[k]] == int(number),
+            f"mesh file {path!r}: an element names node {int(number)}, which $Nodes does not list",
+        )
         return b"%d" % (order[k] + 1)
+
     renumbered = [b"%d %s" % (i + 1, line.split(None, 1)[1]) for i, line in enumerate(nodes)]
     first, last = data.find(b"$Elements\n", end), data.find(b"\n$EndElements", end)
-    count, _, elements = data[first + 10:last].partition(b"\n")
+    count, _, elements = data[first + 10 : last].partition(b"\n")
     cells = []
     for line in elements.split(b"\n"):
         fields = line.split()
         tagged = 3 + int(fields[2])
         cells.append(b" ".join(fields[:tagged] + [new.setdefault(n, renumber(n)) for n in fields[tagged:]]))
-    return b"\n".join([data[:start + 7] + head, *renumbered, data[end + 1:first + 10] + count, *cells,
-                       data[last + 1:]])
+    return b"\n".join(
+        [data[: start + 7] + head, *renumbered, data[end + 1 : first + 10] + count, *cells, data[last + 1 :]]
+    )
 
 
 def groups(mesh: meshio.Mesh) -> dict[str, list]:
     """The file's named groups: name -> per cell block the indices of its cells in the group (meshio's cell sets;
     for a gmsh 2.2 file, which meshio gives no cell sets, its physical names and each cell's physical tag)."""
-    named = {name: [np.asarray([] if ids is None else ids, dtype=np.int64) for ids in sets]
-             for name, sets in mesh.cell_sets.items() if not name.startswith("gmsh:")}
+    named = {
+        name: [np.asarray([] if ids is None else ids, dtype=np.int64) for ids in sets]
+        for name, sets in mesh.cell_sets.items()
+        if not name.startswith("gmsh:")
+    }
     tags = mesh.cell_data.get("gmsh:physical")
     if not named and tags is not None:
-        named = {name: [np.flatnonzero(block_tags == tag) for block_tags in tags]
-                 for name, (tag, _) in mesh.field_data.items()}
+        named = {
+            name: [np.flatnonzero(block_tags == tag) for block_tags in tags]
+            for name, (tag, _) in mesh.field_data.items()
+        }
     return named
 
 
@@ -190,8 +212,10 @@ class MeshGeometry(Body):
         self.check_supports()
         require_distinct("chamber names", [name for name, _ in self.chambers])
         for name, shape in self.chambers:
-            require(isinstance(shape, MeshSurface), f"chamber {name!r}: a mesh body's chambers are the mesh file's "
-                                                    f"groups (shape = \"mesh_surface\")")
+            require(
+                isinstance(shape, MeshSurface),
+                f"chamber {name!r}: a mesh body's chambers are the mesh file's groups (shape = \"mesh_surface\")",
+            )
 
     def tetrahedra(self) -> tuple[meshio.Mesh, np.ndarray, list]:
         """The file's meshio mesh, its tetrahedra (m, 4 or 10) and their cell blocks."""
@@ -221,8 +245,17 @@ class MeshGeometry(Body):
             require(len(walls[name]) > 0, f"chamber {name!r}: group {shape.group!r} of {path!r} has no triangles")
         try:
             budget.check_mesh(len(tets), self.family.weight, "meshio")
-            return tet_mesh(source.points, tets, walls, regions=regions, order=self.order, clamp=self.clamp,
-                            tip=self.tip, rollers=self.rollers, region_groups=volume_groups(source))
+            return tet_mesh(
+                source.points,
+                tets,
+                walls,
+                regions=regions,
+                order=self.order,
+                clamp=self.clamp,
+                tip=self.tip,
+                rollers=self.rollers,
+                region_groups=volume_groups(source),
+            )
         except PneumaInputError as exc:
             raise PneumaInputError(f"mesh file {path!r}: {exc}") from None
 
@@ -235,16 +268,22 @@ def write_mesh(path, mesh: Mesh, names: tuple[str, ...]) -> Path:
 
     path = Path(path)
     require(path.suffix in (".msh", ".inp"), f"{path}: write_mesh writes .msh (gmsh 2.2) or .inp (Abaqus) files")
-    walls = mesh.family.facet_family.meshio_cell
-    cells = [(walls, wall) for wall in mesh.chambers] + [(mesh.family.meshio_cell, mesh.elements)]
+    walls = mesh.family.facet_family.meshio_cell  # type: ignore[union-attr]
+    cells = [(walls, wall) for wall in mesh.chambers] + [(mesh.family.meshio_cell, mesh.elements)]  # type: ignore[union-attr]
     if path.suffix == ".inp":
-        sets = {name: [np.arange(len(data)) if i == j else np.zeros(0, dtype=np.int64) for j, (_, data) in
-                       enumerate(cells)] for i, name in enumerate((*names, "body"))}
+        sets = {
+            name: [np.arange(len(data)) if i == j else np.zeros(0, dtype=np.int64) for j, (_, data) in enumerate(cells)]
+            for i, name in enumerate((*names, "body"))
+        }
         meshio.write(path, meshio.Mesh(mesh.vertices, cells, cell_sets=sets), file_format="abaqus")
     else:
         tags = [np.full(len(data), i + 2) for i, (_, data) in enumerate(cells[:-1])] + [np.ones(mesh.n_elements, int)]
         groups = {name: np.array([i + 2, 2]) for i, name in enumerate(names)} | {"body": np.array([1, 3])}
         data = {"gmsh:physical": tags, "gmsh:geometrical": tags}
-        meshio.write(path, meshio.Mesh(mesh.vertices, cells, cell_data=data, field_data=groups), file_format="gmsh22",
-                     binary=False)
+        meshio.write(
+            path,
+            meshio.Mesh(mesh.vertices, cells, cell_data=data, field_data=groups),
+            file_format="gmsh22",
+            binary=False,
+        )
     return path

@@ -29,6 +29,7 @@ PneumaInputError too. Chamber names are distinct and head CSV columns, so none s
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -67,8 +68,8 @@ class Geometry(Body):
     chamber crossing such lines keeps its part on the body's side (cut_by_lines), a notch in the body's
     outline whose wall runs from line to line; its area is closed by the flat cap along the lines."""
 
-    body: object
-    chambers: tuple[tuple[str, object], ...]
+    body: Any  # a 2D shape: anything with polygon()
+    chambers: tuple[tuple[str, Any], ...]
     max_area: float | None = si_default(0.0012, PLANE_AREA, scaled=False)  # None: 0.0012, unitless scenes only
     clamp: PointSet | None = None
     order: int = 1
@@ -79,21 +80,30 @@ class Geometry(Body):
     dim = 2
 
     def __post_init__(self):
-        require(self.max_area is None or require_finite("max_area", self.max_area) > 0,
-                f"max_area = {self.max_area!r} must be > 0")
+        require(
+            self.max_area is None or require_finite("max_area", self.max_area) > 0,
+            f"max_area = {self.max_area!r} must be > 0",
+        )
         require(self.order in ORDERS, f"order = {self.order!r} must be 1 (linear triangles) or 2 (quadratic)")
-        require(self.refinements in range(MAX_REFINEMENTS + 1),
-                f"refinements = {self.refinements!r} must be an integer from 0 to {MAX_REFINEMENTS}")
+        require(
+            self.refinements in range(MAX_REFINEMENTS + 1),
+            f"refinements = {self.refinements!r} must be an integer from 0 to {MAX_REFINEMENTS}",
+        )
         require(len(self.chambers) <= MAX_SHAPES, f"{len(self.chambers)} chambers: at most {MAX_SHAPES} are allowed")
         self.check_supports()
         for name, shape in self.chambers:
-            require(callable(getattr(shape, "polygon", None)), f"chamber {name!r}: a {type(shape).__name__} wall needs "
-                                                               f"a body from a mesh file or 3D shapes (a 3D body)")
+            require(
+                callable(getattr(shape, "polygon", None)),
+                f"chamber {name!r}: a {type(shape).__name__} wall needs "
+                f"a body from a mesh file or 3D shapes (a 3D body)",
+            )
         body = self.body.polygon()
         polygons = [(name, shape.polygon()) for name, shape in self.chambers]
         points = len(body) + sum(len(p) for _, p in polygons)
-        require(points <= MAX_WALL_POINTS, f"the body and chamber outlines have {points} points in all; "
-                                           f"at most {MAX_WALL_POINTS} are allowed")
+        require(
+            points <= MAX_WALL_POINTS,
+            f"the body and chamber outlines have {points} points in all; at most {MAX_WALL_POINTS} are allowed",
+        )
         names = [name for name, _ in polygons]
         require_distinct("chamber names", names)
         for name in names:
@@ -103,20 +113,27 @@ class Geometry(Body):
         outline, _, walls = self.outline()
         if any(origin is not None for _, origin in walls):
             require_spaced("the body with its cut chambers", outline)
-            require(not polygon_self_intersects(outline), "the body's outline, with the chambers cut by symmetry "
-                                                          "lines notched into it, crosses itself")
+            require(
+                not polygon_self_intersects(outline),
+                "the body's outline, with the chambers cut by symmetry lines notched into it, crosses itself",
+            )
         polygons = [(name, poly) for (name, poly), (_, origin) in zip(polygons, walls) if origin is None]
         for name, poly in polygons:
             outside = ~points_in_polygon(poly, outline) | (distance_to_polygon(poly, outline) < MARGIN)
             crossing = segments_cross(poly, np.roll(poly, -1, axis=0), outline, np.roll(outline, -1, axis=0)).any()
-            require(not outside.any() and not crossing,
-                    f"chamber {name!r} is not inside the body (a wall point at {poly[np.argmax(outside)].tolist()} "
-                    f"lies outside it or closer than {MARGIN:g} to its boundary)")
+            require(
+                not outside.any() and not crossing,
+                f"chamber {name!r} is not inside the body (a wall point at {poly[np.argmax(outside)].tolist()} "
+                f"lies outside it or closer than {MARGIN:g} to its boundary)",
+            )
         for i, (name_a, a) in enumerate(polygons):
-            for name_b, b in polygons[i + 1:]:
-                touching = (points_in_polygon(a, b).any() or points_in_polygon(b, a).any()
-                            or distance_to_polygon(a, b).min() < MARGIN
-                            or segments_cross(a, np.roll(a, -1, axis=0), b, np.roll(b, -1, axis=0)).any())
+            for name_b, b in polygons[i + 1 :]:
+                touching = (
+                    points_in_polygon(a, b).any()
+                    or points_in_polygon(b, a).any()
+                    or distance_to_polygon(a, b).min() < MARGIN
+                    or segments_cross(a, np.roll(a, -1, axis=0), b, np.roll(b, -1, axis=0)).any()
+                )
                 require(not touching, f"chambers {name_a!r} and {name_b!r} overlap (or are closer than {MARGIN:g})")
 
     def outline(self) -> tuple[np.ndarray, np.ndarray, list]:
@@ -140,8 +157,11 @@ class Geometry(Body):
         quadratic triangles, and name the node sets. A refined or quadratic mesh has its boundary nodes on the
         exact curves of ellipses and rounded corners (onto_curves; module docstring). Triangle adds at most the
         budget's element_cap points and a mesh past the budget is refused (limits.Budget)."""
-        require(self.max_area is not None, "max_area = None: the Scene sets the default (0.0012 in a unitless scene); "
-                                           "give max_area to mesh a Geometry on its own")
+        require(
+            self.max_area is not None,
+            "max_area = None: the Scene sets the default (0.0012 in a unitless scene); "
+            "give max_area to mesh a Geometry on its own",
+        )
         outline, outline_markers, walls = self.outline()
         closed = [c for c, (_, origin) in enumerate(walls, start=1) if origin is None]
         loops = [outline] + [walls[c - 1][0] for c in closed]
@@ -150,14 +170,17 @@ class Geometry(Body):
         pslg = {
             "vertices": np.vstack(loops),
             "segments": np.vstack([ring(len(p), o) for p, o in zip(loops, offsets)]),
-            "segment_markers": np.concatenate([outline_markers] + [np.full(len(walls[c - 1][0]), OUTER_MARKER + c)
-                                                                   for c in closed]),
+            "segment_markers": np.concatenate(
+                [outline_markers] + [np.full(len(walls[c - 1][0]), OUTER_MARKER + c) for c in closed]
+            ),
         }
         if closed:
             pslg["holes"] = np.array([interior_point(p) for p in loops[1:]])
-        weight = 4 ** self.refinements * self.family.weight  # linear triangles per Triangle's one
+        weight = 4**self.refinements * self.family.weight  # linear triangles per Triangle's one
         cap = budget.element_cap(weight)  # Triangle adds at most this many points (S), then stops
-        out = triangulate_or_refuse(pslg, f"pqa{self.max_area:.17f}" + ("" if cap is None else f"S{cap}"))  # no exponent
+        out = triangulate_or_refuse(
+            pslg, f"pqa{self.max_area:.17f}" + ("" if cap is None else f"S{cap}")
+        )  # no exponent
         added = len(out["vertices"]) - len(pslg["vertices"])
         budget.check_mesh(len(out["triangles"]), weight, "Triangle", cap if cap is not None and added >= cap else None)
         vertices = np.asarray(out["vertices"], dtype=np.float64)
@@ -169,13 +192,17 @@ class Geometry(Body):
             vertices = onto_curves(vertices, segments, markers, curves, triangles)
         for _ in range(self.refinements):
             vertices, mid = with_edge_midpoints(vertices, triangles)
-            triangles = split_in_four(np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])]))
+            triangles = split_in_four(
+                np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])])
+            )
             segments, markers = halved(segments, markers, mid)
             vertices = onto_curves(vertices, segments, markers, curves, triangles)
         mid = None
         if self.family.edges:  # quadratic: a midside node on every edge
             vertices, mid = with_edge_midpoints(vertices, triangles, self.family.edges)
-            triangles = np.column_stack([triangles] + [mid(triangles[:, i], triangles[:, j]) for i, j in self.family.edges])
+            triangles = np.column_stack(
+                [triangles] + [mid(triangles[:, i], triangles[:, j]) for i, j in self.family.edges]
+            )
             vertices = onto_curves(vertices, *halved(segments, markers, mid), curves, triangles)
         chambers = []
         for c, (_, origin) in enumerate(walls, start=1):
@@ -183,15 +210,23 @@ class Geometry(Body):
             nodes = nodes if enclosed_area(vertices[nodes], origin) > 0 else nodes[::-1].copy()
             if mid is not None:  # corner, midside, corner, ...: each edge from its first corner
                 starts = nodes if origin is None else nodes[:-1]
-                edges = np.column_stack([starts, mid(starts, np.roll(nodes, -1)[:len(starts)])]).ravel()
+                edges = np.column_stack([starts, mid(starts, np.roll(nodes, -1)[: len(starts)])]).ravel()
                 nodes = edges if origin is None else np.append(edges, nodes[-1])
             chambers.append(nodes)
         outer = segments[markers == OUTER_MARKER]
         boundary = np.unique(outer if mid is None else np.column_stack([outer, mid(outer[:, 0], outer[:, 1])]))
         pinned, tip, rollers = self.node_sets(vertices)
-        return Mesh(vertices, triangles, tuple(chambers), boundary, pinned, tip, tuple(origin for _, origin in walls),
-                    rollers, self.family)
-
+        return Mesh(
+            vertices,
+            triangles,
+            tuple(chambers),
+            boundary,
+            pinned,
+            tip,
+            tuple(origin for _, origin in walls),
+            rollers,
+            self.family,
+        )
 
 
 def jacobians(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -201,8 +236,9 @@ def jacobians(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarray) -
     return j[..., 0, 0] * j[..., 1, 1] - j[..., 0, 1] * j[..., 1, 0]
 
 
-def onto_curves(vertices: np.ndarray, segments: np.ndarray, markers: np.ndarray, curves: dict,
-                triangles: np.ndarray) -> np.ndarray:
+def onto_curves(
+    vertices: np.ndarray, segments: np.ndarray, markers: np.ndarray, curves: dict, triangles: np.ndarray
+) -> np.ndarray:
     """The vertices with every node of the boundary segments of marker m moved onto the exact curve of the
     shape they came from, curves[m] (its project: an ellipse, a rounded corner; a marker without a curve, a
     straight polygon, leaves its nodes). A node on segments of two markers stays: the end of a chamber wall
@@ -218,12 +254,14 @@ def onto_curves(vertices: np.ndarray, segments: np.ndarray, markers: np.ndarray,
         nodes = np.flatnonzero((lowest == marker) & (highest == marker))
         moved[nodes] = project(vertices[nodes])
     linear = triangles.shape[1] == 3
-    at_nodes = triangle_areas(moved, triangles)[:, None] if linear else jacobians(moved, triangles,
-                                                                                    TRIANGLE_P2.reference_nodes)
+    at_nodes = (
+        triangle_areas(moved, triangles)[:, None]
+        if linear
+        else jacobians(moved, triangles, TRIANGLE_P2.reference_nodes)
+    )
     folded = triangles[np.min(at_nodes, axis=1) <= 0].ravel()
     moved[folded] = vertices[folded]
     return moved
-
 
 
 @dataclass(frozen=True)
@@ -263,13 +301,17 @@ class BeamGeometry:
 
     def general(self) -> Geometry:
         """The same beam as a general Geometry (body rectangle, one ellipse chamber named 'main', left clamp)."""
-        return Geometry(Rectangle((0.0, 0.0), (self.length, self.height)),
-                        (("main", Ellipse((self.cx, self.cy), (self.a, self.b), self.chamber_points)),),
-                        self.max_area, PointSet("left"), order=self.order, refinements=self.refinements)
+        return Geometry(
+            Rectangle((0.0, 0.0), (self.length, self.height)),
+            (("main", Ellipse((self.cx, self.cy), (self.a, self.b), self.chamber_points)),),
+            self.max_area,
+            PointSet("left"),
+            order=self.order,
+            refinements=self.refinements,
+        )
 
     def mesh(self, budget: Budget = Budget()) -> Mesh:
         return self.general().mesh(budget)
-
 
 
 def orient_counter_clockwise(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
@@ -287,7 +329,9 @@ def chain(edges: np.ndarray, closed: bool = True) -> np.ndarray:
         neighbours.setdefault(int(j), []).append(int(i))
     ends = [v for v, n in neighbours.items() if len(n) == 1]
     if any(len(n) > 2 for n in neighbours.values()) or len(ends) != (0 if closed else 2):
-        raise PneumaInputError(f"Triangle could not keep a chamber wall a simple {'closed loop' if closed else 'open chain'}")
+        raise PneumaInputError(
+            f"Triangle could not keep a chamber wall a simple {'closed loop' if closed else 'open chain'}"
+        )
     start = int(edges[0][0]) if closed else ends[0]
     nodes, previous, current = [start], None, start
     while True:

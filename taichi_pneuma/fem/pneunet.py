@@ -45,9 +45,10 @@ class PneuNet:
     layer: float = field(default=0.15, metadata=LENGTH_DEFAULT)
 
     def __post_init__(self):
-        require(isinstance(self.chambers, int) and not isinstance(self.chambers, bool)
-                and 1 <= self.chambers <= MAX_SHAPES,
-                f"chambers = {self.chambers!r} must be an integer from 1 to {MAX_SHAPES}")
+        require(
+            isinstance(self.chambers, int) and not isinstance(self.chambers, bool) and 1 <= self.chambers <= MAX_SHAPES,
+            f"chambers = {self.chambers!r} must be an integer from 1 to {MAX_SHAPES}",
+        )
         for name in ("chamber_length", "chamber_height", "chamber_width", "gap", "wall", "end", "base"):
             value = getattr(self, name)
             require(require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
@@ -55,16 +56,20 @@ class PneuNet:
             value = getattr(self, name)
             require(require_finite(name, value) >= 0, f"{name} = {value!r} must be >= 0")
         shortest = min(self.chamber_length, self.chamber_height, self.chamber_width)
-        require(self.radius < shortest / 2,
-                f"radius = {self.radius!r} must be < {shortest / 2:g} (half the chamber's shortest side)")
+        require(
+            self.radius < shortest / 2,
+            f"radius = {self.radius!r} must be < {shortest / 2:g} (half the chamber's shortest side)",
+        )
 
     @property
     def size(self) -> tuple[float, float, float]:
         """The block's (length, height, width)."""
         n = self.chambers
-        return (2 * self.end + n * self.chamber_length + (n - 1) * self.gap,
-                self.layer + self.base + self.chamber_height + self.wall,
-                self.chamber_width + 2 * self.wall)
+        return (
+            2 * self.end + n * self.chamber_length + (n - 1) * self.gap,
+            self.layer + self.base + self.chamber_height + self.wall,
+            self.chamber_width + 2 * self.wall,
+        )
 
     @property
     def thinnest(self) -> float:
@@ -79,8 +84,9 @@ class PneuNet:
         chambers = []
         for i in range(self.chambers):
             x = -length / 2 + self.end + self.chamber_length / 2 + i * (self.chamber_length + self.gap)
-            shape = (RoundedBox((x, y, 0.0), chamber, self.radius) if self.radius > 0
-                     else Box((x, y, 0.0), chamber))
+            shape = RoundedBox((x, y, 0.0), chamber, self.radius) if self.radius > 0 else Box((x, y, 0.0), chamber)
             chambers.append((f"c{i + 1}", shape))
-        regions = ((LAYER, Box((0.0, (self.layer - height) / 2, 0.0), (length, self.layer, width))),) if self.layer else ()
+        regions = (
+            ((LAYER, Box((0.0, (self.layer - height) / 2, 0.0), (length, self.layer, width))),) if self.layer else ()
+        )
         return Solid(Box((0.0, 0.0, 0.0), self.size), tuple(chambers), regions)

@@ -67,7 +67,9 @@ def distance_to_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
 def interior_point(polygon: np.ndarray) -> np.ndarray:
     """A point strictly inside a simple polygon: the centroid of the largest triangle of its triangulation."""
     k = len(polygon)
-    tri = triangulate_or_refuse({"vertices": polygon, "segments": np.column_stack([np.arange(k), (np.arange(k) + 1) % k])}, "p")
+    tri = triangulate_or_refuse(
+        {"vertices": polygon, "segments": np.column_stack([np.arange(k), (np.arange(k) + 1) % k])}, "p"
+    )
     corners = tri["vertices"][tri["triangles"]]
     e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
     return corners[np.argmax(np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]))].mean(axis=0)
@@ -83,14 +85,15 @@ def enclosed_area(points: np.ndarray, origin: np.ndarray | None = None) -> float
     return 0.5 * float(np.sum(r[:-1, 0] * r[1:, 1] - r[:-1, 1] * r[1:, 0]))
 
 
-
 def require_spaced(what: str, polygon: np.ndarray) -> None:
     """Refuse an outline with two points closer than MIN_SPACING of its size (Triangle crashes on them)."""
     size = float(np.ptp(polygon, axis=0).max())
     require(np.isfinite(size), f"{what}: its outline points overflow to infinity")
-    require(not has_close_pair((polygon - polygon.min(axis=0)) / size, MIN_SPACING),
-            f"{what}: two of its outline points coincide (closer than {MIN_SPACING:g} of its size {size:.3g}): "
-            f"a radius, size or point spacing too small, or coordinates too large, to mesh")
+    require(
+        not has_close_pair((polygon - polygon.min(axis=0)) / size, MIN_SPACING),
+        f"{what}: two of its outline points coincide (closer than {MIN_SPACING:g} of its size {size:.3g}): "
+        f"a radius, size or point spacing too small, or coordinates too large, to mesh",
+    )
 
 
 def has_close_pair(points: np.ndarray, r: float) -> bool:
@@ -102,4 +105,3 @@ def has_close_pair(points: np.ndarray, r: float) -> bool:
     first = np.repeat(np.arange(len(p)), counts)
     second = first + 1 + np.arange(len(first)) - np.repeat(np.cumsum(counts) - counts, counts)
     return bool(np.any(np.sum((p[second] - p[first]) ** 2, axis=1) <= r * r))
-

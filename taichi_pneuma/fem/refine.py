@@ -25,9 +25,10 @@ def with_edge_midpoints(vertices: np.ndarray, elements: np.ndarray, edges=((0, 1
 def halved(segments: np.ndarray, markers: np.ndarray, mid) -> tuple[np.ndarray, np.ndarray]:
     """Boundary segments (s, 2) and their markers split at their midpoint nodes mid(a, b): (2 s, 2), (2 s,)."""
     halves = mid(segments[:, 0], segments[:, 1])
-    return (np.vstack([np.column_stack([segments[:, 0], halves]), np.column_stack([halves, segments[:, 1]])]),
-            np.concatenate([markers, markers]))
-
+    return (
+        np.vstack([np.column_stack([segments[:, 0], halves]), np.column_stack([halves, segments[:, 1]])]),
+        np.concatenate([markers, markers]),
+    )
 
 
 def split_in_four(triangles: np.ndarray) -> np.ndarray:
@@ -35,4 +36,3 @@ def split_in_four(triangles: np.ndarray) -> np.ndarray:
     20): the three corner triangles, then the middle one; all counter-clockwise when the input is."""
     c0, c1, c2, m01, m12, m20 = triangles.T
     return np.vstack([np.column_stack(t) for t in ((c0, m01, m20), (m01, c1, m12), (m20, m12, c2), (m01, m12, m20))])
-

@@ -44,8 +44,10 @@ class Rectangle:
 
     def polygon(self) -> np.ndarray:
         (cx, cy), (w, h) = self.center, self.size
-        return np.array([[cx - w / 2, cy - h / 2], [cx + w / 2, cy - h / 2],
-                         [cx + w / 2, cy + h / 2], [cx - w / 2, cy + h / 2]], dtype=np.float64)
+        return np.array(
+            [[cx - w / 2, cy - h / 2], [cx + w / 2, cy - h / 2], [cx + w / 2, cy + h / 2], [cx - w / 2, cy + h / 2]],
+            dtype=np.float64,
+        )
 
 
 @dataclass(frozen=True)
@@ -59,8 +61,10 @@ class Ellipse:
     def __post_init__(self):
         _pair("center", self.center)
         _pair("semi_axes", self.semi_axes, positive=True)
-        require(isinstance(self.points, (int, np.integer)) and 8 <= self.points <= MAX_WALL_POINTS,
-                f"points = {self.points!r} must be an integer in [8, {MAX_WALL_POINTS}]")
+        require(
+            isinstance(self.points, (int, np.integer)) and 8 <= self.points <= MAX_WALL_POINTS,
+            f"points = {self.points!r} must be an integer in [8, {MAX_WALL_POINTS}]",
+        )
 
     def polygon(self) -> np.ndarray:
         t = np.linspace(0.0, 2.0 * np.pi, self.points, endpoint=False)
@@ -88,14 +92,23 @@ class RoundedRectangle:
         _pair("center", self.center)
         w, h = _pair("size", self.size, positive=True)
         r = require_finite("radius", self.radius)
-        require(0 < r < min(w, h) / 2, f"radius = {self.radius!r} must lie in (0, {min(w, h) / 2:g}) (half the shorter side)")
-        require(isinstance(self.corner_points, (int, np.integer)) and 2 <= self.corner_points <= MAX_WALL_POINTS // 4,
-                f"corner_points = {self.corner_points!r} must be an integer in [2, {MAX_WALL_POINTS // 4}]")
+        require(
+            0 < r < min(w, h) / 2,
+            f"radius = {self.radius!r} must lie in (0, {min(w, h) / 2:g}) (half the shorter side)",
+        )
+        require(
+            isinstance(self.corner_points, (int, np.integer)) and 2 <= self.corner_points <= MAX_WALL_POINTS // 4,
+            f"corner_points = {self.corner_points!r} must be an integer in [2, {MAX_WALL_POINTS // 4}]",
+        )
 
     def polygon(self) -> np.ndarray:
         (cx, cy), (w, h), r = self.center, self.size, self.radius
-        corners = [(cx + w / 2 - r, cy - h / 2 + r), (cx + w / 2 - r, cy + h / 2 - r),
-                   (cx - w / 2 + r, cy + h / 2 - r), (cx - w / 2 + r, cy - h / 2 + r)]
+        corners = [
+            (cx + w / 2 - r, cy - h / 2 + r),
+            (cx + w / 2 - r, cy + h / 2 - r),
+            (cx - w / 2 + r, cy + h / 2 - r),
+            (cx - w / 2 + r, cy - h / 2 + r),
+        ]
         points = []
         for k, (ox, oy) in enumerate(corners):
             t = np.linspace(-np.pi / 2 + k * np.pi / 2, k * np.pi / 2, self.corner_points)
@@ -122,8 +135,10 @@ class Polygon:
     def __post_init__(self):
         pts = np.asarray(self.points, dtype=object)
         require(len(pts) <= MAX_WALL_POINTS, f"points: {len(pts)} given, at most {MAX_WALL_POINTS} are allowed")
-        require(pts.ndim == 2 and pts.shape[1] == 2 and len(pts) >= 3,
-                f"points = {self.points!r} must be a list of at least 3 [x, y] pairs")
+        require(
+            pts.ndim == 2 and pts.shape[1] == 2 and len(pts) >= 3,
+            f"points = {self.points!r} must be a list of at least 3 [x, y] pairs",
+        )
         for p in self.points:
             _pair("points", p)
         poly = np.asarray(self.points, dtype=np.float64)
@@ -144,8 +159,10 @@ class RectangleUnion:
     def __post_init__(self):
         require(1 <= len(self.rectangles) <= MAX_SHAPES, f"rectangles must list 1 to {MAX_SHAPES} rectangles")
         loops = union_boundary([r.polygon() for r in self.rectangles])
-        require(len(loops) == 1, f"rectangles: their union has {len(loops)} boundary loops; it must be one "
-                                 f"connected region without holes")
+        require(
+            len(loops) == 1,
+            f"rectangles: their union has {len(loops)} boundary loops; it must be one connected region without holes",
+        )
 
     def polygon(self) -> np.ndarray:
         return union_boundary([r.polygon() for r in self.rectangles])[0]
@@ -167,8 +184,12 @@ def union_boundary(polygons: list[np.ndarray]) -> list[np.ndarray]:
     successor: dict[tuple[int, int], tuple[int, int]] = {}
     for i, j in zip(*np.nonzero(inside)):
         # cell (i, j) spans grid corners (i - 1 .. i, j - 1 .. j); sides with outside neighbours, CCW
-        for (di, dj), a, b in (((0, -1), (i - 1, j - 1), (i, j - 1)), ((1, 0), (i, j - 1), (i, j)),
-                               ((0, 1), (i, j), (i - 1, j)), ((-1, 0), (i - 1, j), (i - 1, j - 1))):
+        for (di, dj), a, b in (
+            ((0, -1), (i - 1, j - 1), (i, j - 1)),
+            ((1, 0), (i, j - 1), (i, j)),
+            ((0, 1), (i, j), (i - 1, j)),
+            ((-1, 0), (i - 1, j), (i - 1, j - 1)),
+        ):
             if not inside[i + di, j + dj]:
                 require(a not in successor, "rectangles: their union touches itself at a corner")
                 successor[a] = b
@@ -183,4 +204,3 @@ def union_boundary(polygons: list[np.ndarray]) -> list[np.ndarray]:
         turn = (pts[:, 0] - prev[:, 0]) * (nxt_[:, 1] - pts[:, 1]) - (pts[:, 1] - prev[:, 1]) * (nxt_[:, 0] - pts[:, 0])
         loops.append(pts[turn != 0])
     return loops
-

@@ -20,8 +20,7 @@ from ..errors import require
 from .polygons import signed_area
 
 
-def check_scene(scene, max_triangles: int = limits.MAX_TRIANGLES,
-                max_increments: int = limits.MAX_INCREMENTS) -> None:
+def check_scene(scene, max_triangles: int = limits.MAX_TRIANGLES, max_increments: int = limits.MAX_INCREMENTS) -> None:
     """Refuse (PneumaInputError) a scene whose estimated mesh (its terms' pairs included) or increment count
     is past the limits."""
     geometry = scene.geometry
@@ -42,8 +41,11 @@ def check_solid(scene, max_elements: int) -> None:
     per_step = 2 if any(e.contact for e in scene.effects) else 1
     memory = limits.BYTES_PER_TETRAHEDRON * linear + 24 * per_step * nodes * (scene.increments + 1)
     quadratic = f" quadratic tetrahedra, counted {family.weight} times" if family.order == 2 else " tetrahedra"
-    require(linear <= max_elements, f"the mesh has {tetrahedra}{quadratic} and needs about {memory / 1e9:.3g} GB; "
-                                    f"the limit is {max_elements} elements (--max-triangles raises it)")
+    require(
+        linear <= max_elements,
+        f"the mesh has {tetrahedra}{quadratic} and needs about {memory / 1e9:.3g} GB; "
+        f"the limit is {max_elements} elements (--max-triangles raises it)",
+    )
 
 
 def check_planar(scene, max_triangles: int) -> None:
@@ -52,10 +54,10 @@ def check_planar(scene, max_triangles: int) -> None:
     loops = [geometry.body.polygon()] + [shape.polygon() for _, shape in geometry.chambers]
     area = abs(signed_area(loops[0])) - sum(abs(signed_area(loop)) for loop in loops[1:])
     points = sum(len(loop) for loop in loops)
-    nodes_per_point = 2 ** geometry.refinements * geometry.order
+    nodes_per_point = 2**geometry.refinements * geometry.order
     walls = [len(loop) * nodes_per_point for loop in loops[1:]]
     pairs = sum(effect.pairs(walls) for effect in scene.effects)
-    triangles = (1.6 * area / geometry.max_area + 3 * points) * 4 ** geometry.refinements
+    triangles = (1.6 * area / geometry.max_area + 3 * points) * 4**geometry.refinements
     family = geometry.family
     linear = triangles * family.weight
     worth = linear + pairs * limits.BYTES_PER_PAIR / limits.BYTES_PER_TRIANGLE
@@ -64,7 +66,9 @@ def check_planar(scene, max_triangles: int) -> None:
     memory = limits.BYTES_PER_TRIANGLE * worth + 16 * per_step * vertices * (scene.increments + 1)
     quadratic = f" quadratic triangles, counted {family.weight} times" if family.order == 2 else " triangles"
     contact = f" and {pairs} self-contact pairs (walls of {max(walls)} nodes)" if pairs else ""
-    require(worth <= max_triangles,
-            f"the mesh would have about {triangles:.3g}{quadratic} (meshed area {area:.4g} / max_area "
-            f"{geometry.max_area:.3g}, {points} outline points){contact} and need about {memory / 1e9:.3g} GB; "
-            f"the limit is {max_triangles} triangles (--max-triangles raises it)")
+    require(
+        worth <= max_triangles,
+        f"the mesh would have about {triangles:.3g}{quadratic} (meshed area {area:.4g} / max_area "
+        f"{geometry.max_area:.3g}, {points} outline points){contact} and need about {memory / 1e9:.3g} GB; "
+        f"the limit is {max_triangles} triangles (--max-triangles raises it)",
+    )

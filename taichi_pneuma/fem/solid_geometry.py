@@ -79,15 +79,21 @@ class SolidGeometry(Body):
         for name, shape in self.chambers:
             check_heading("chamber name", name)
             if generated:
-                require(isinstance(shape, MeshSurface),
-                        f"chamber {name!r}: a pneunet body makes its own chambers c1 .. c{self.body.chambers}; name "
-                        f"one by shape = \"mesh_surface\" and group = \"c1\" ...")
-                require(shape.group in groups,
-                        f"chamber {name!r}: group = {shape.group!r} is none of the pneunet's chambers {', '.join(groups)}")
+                require(
+                    isinstance(shape, MeshSurface),
+                    f"chamber {name!r}: a pneunet body makes its own chambers c1 .. c{self.body.chambers}; name "
+                    f'one by shape = "mesh_surface" and group = "c1" ...',
+                )
+                require(
+                    shape.group in groups,
+                    f"chamber {name!r}: group = {shape.group!r} is none of the pneunet's chambers {', '.join(groups)}",
+                )
             else:
-                require(is_solid_shape(shape) and not isinstance(shape, PneuNet),
-                        f"chamber {name!r}: a 3D body's chambers are 3D shapes (ellipsoid, box, rounded_box, "
-                        f"cylinder, extrusion of a 2D chamber shape), not {type(shape).__name__}")
+                require(
+                    is_solid_shape(shape) and not isinstance(shape, PneuNet),
+                    f"chamber {name!r}: a 3D body's chambers are 3D shapes (ellipsoid, box, rounded_box, "
+                    f"cylinder, extrusion of a 2D chamber shape), not {type(shape).__name__}",
+                )
         require_distinct("chamber names", [name for name, _ in self.chambers])
         if generated:
             require_distinct("chamber groups", [shape.group for _, shape in self.chambers])
@@ -126,8 +132,19 @@ class SolidGeometry(Body):
         solid = self.solid()
         meshed = mesh_solid(solid, self.sizes, MAX_TETS if cap is None else cap)
         budget.check_mesh(len(meshed.tets), weight, "gmsh")
-        walls = {name: meshed.chambers[shape.group if isinstance(shape, MeshSurface) else name]
-                 for name, shape in self.chambers}
+        walls = {
+            name: meshed.chambers[shape.group if isinstance(shape, MeshSurface) else name]
+            for name, shape in self.chambers
+        }
         groups = {name: k for k, name in enumerate(meshed.region_names, start=1)}
-        return tet_mesh(meshed.vertices, meshed.tets, walls, regions=meshed.regions, order=self.order,
-                        clamp=self.clamp, tip=self.tip, rollers=self.rollers, region_groups=groups)
+        return tet_mesh(
+            meshed.vertices,
+            meshed.tets,
+            walls,
+            regions=meshed.regions,
+            order=self.order,
+            clamp=self.clamp,
+            tip=self.tip,
+            rollers=self.rollers,
+            region_groups=groups,
+        )

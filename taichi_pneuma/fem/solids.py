@@ -73,13 +73,15 @@ class RoundedBox:
         _vector("center", self.center)
         shortest = min(_vector("size", self.size, positive=True))
         r = require_finite("radius", self.radius)
-        require(0 < r < shortest / 2, f"radius = {self.radius!r} must lie in (0, {shortest / 2:g}) (half the shortest side)")
+        require(
+            0 < r < shortest / 2, f"radius = {self.radius!r} must lie in (0, {shortest / 2:g}) (half the shortest side)"
+        )
 
     def build(self, occ) -> int:
         before = set(occ.getEntities(1))
         box = Box(self.center, self.size).build(occ)
         edges = sorted(tag for _, tag in set(occ.getEntities(1)) - before)
-        (_, volume), = occ.fillet([box], edges, [self.radius])
+        ((_, volume),) = occ.fillet([box], edges, [self.radius])
         return volume
 
 
@@ -129,8 +131,10 @@ class Extrusion:
     z: float = 0.0
 
     def __post_init__(self):
-        require(callable(getattr(self.profile, "polygon", None)),
-                f"profile = {self.profile!r} is not a 2D shape (rectangle, ellipse, rounded_rectangle, polygon or union)")
+        require(
+            callable(getattr(self.profile, "polygon", None)),
+            f"profile = {self.profile!r} is not a 2D shape (rectangle, ellipse, rounded_rectangle, polygon or union)",
+        )
         _positive("depth", self.depth)
         require_finite("z", self.z)
 

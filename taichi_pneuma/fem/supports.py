@@ -77,8 +77,11 @@ def require_held(vertices: np.ndarray, rows, supports: str) -> None:
     """Refuse (PneumaInputError naming them) supports, described by the text `supports`, that leave a rigid
     motion free."""
     free = free_motions(vertices, rows)
-    require(not free, f"the supports ({supports}) leave free: {', '.join(free)}; a static body needs a [clamp] "
-                      f"(side or box) or [[rollers]] that hold every rigid motion")
+    require(
+        not free,
+        f"the supports ({supports}) leave free: {', '.join(free)}; a static body needs a [clamp] "
+        f"(side or box) or [[rollers]] that hold every rigid motion",
+    )
 
 
 @dataclass(frozen=True)
@@ -119,8 +122,11 @@ def clamped(clamp: PointSet | None, vertices: np.ndarray) -> np.ndarray:
 def node_sets(clamp: PointSet | None, tip: PointSet, rollers, vertices: np.ndarray) -> tuple:
     """(pinned, tip, rollers) on a mesh of these vertices: the clamped nodes, the tip's nodes and per roller (its
     held nodes, its unit normal); a set that selects no vertex is a PneumaInputError naming it."""
-    return (clamped(clamp, vertices), tip.select(vertices, "tip"),
-            tuple((roller.select(vertices), roller.unit_normal) for roller in rollers))
+    return (
+        clamped(clamp, vertices),
+        tip.select(vertices, "tip"),
+        tuple((roller.select(vertices), roller.unit_normal) for roller in rollers),
+    )
 
 
 @dataclass(frozen=True)
@@ -140,11 +146,15 @@ class Roller:
     def __post_init__(self):
         normal = vector("normal", self.normal)
         require(any(normal), f"normal = {list(self.normal)!r} must not be zero")
-        require((self.point is None) != (self.box is None),
-                "give exactly one of 'point' (the roller line through it) and 'box'")
+        require(
+            (self.point is None) != (self.box is None),
+            "give exactly one of 'point' (the roller line through it) and 'box'",
+        )
         if self.point is not None:
-            require(len(vector("point", self.point)) == len(normal),
-                    f"point = {list(self.point)!r} must have as many components as normal = {list(self.normal)!r}")
+            require(
+                len(vector("point", self.point)) == len(normal),
+                f"point = {list(self.point)!r} must have as many components as normal = {list(self.normal)!r}",
+            )
         else:
             require_box("box", self.box)
         require(require_finite("tolerance", self.tolerance) > 0, f"tolerance = {self.tolerance!r} must be > 0")
@@ -162,8 +172,10 @@ class Roller:
             assert self.box is not None  # __post_init__: exactly one of point and box
             where = f"box = {list(self.box)!r}"
         what = f"roller (normal = {list(self.normal)!r}, {where})"
-        require(len(self.normal) == vertices.shape[1], f"{what}: its normal must have {vertices.shape[1]} components "
-                                                       f"on this {vertices.shape[1]}D body")
+        require(
+            len(self.normal) == vertices.shape[1],
+            f"{what}: its normal must have {vertices.shape[1]} components on this {vertices.shape[1]}D body",
+        )
         if self.point is not None:
             chosen = np.abs((vertices - np.asarray(self.point, dtype=np.float64)) @ self.unit_normal) <= self.tolerance
         else:
@@ -182,13 +194,16 @@ def vector(name: str, value) -> tuple[float, ...]:
 def require_box(name: str, box) -> None:
     """Refuse, naming it, a box that is not [x0, y0, x1, y1] (2D) or [x0, y0, z0, x1, y1, z1] (3D) of finite
     numbers with each lower bound below its upper one."""
-    require(shape_of(box) in ((4,), (6,)),
-            f"{name} = {box!r} must be [x0, y0, x1, y1] (or [x0, y0, z0, x1, y1, z1] in 3D)")
+    require(
+        shape_of(box) in ((4,), (6,)), f"{name} = {box!r} must be [x0, y0, x1, y1] (or [x0, y0, z0, x1, y1, z1] in 3D)"
+    )
     for v in box:
         require_finite(name, v)
     half = len(box) // 2
-    require(all(box[i] < box[half + i] for i in range(half)),
-            f"{name} = {list(box)!r} must have x0 < x1 and y0 < y1" + (" and z0 < z1" if half == 3 else ""))
+    require(
+        all(box[i] < box[half + i] for i in range(half)),
+        f"{name} = {list(box)!r} must have x0 < x1 and y0 < y1" + (" and z0 < z1" if half == 3 else ""),
+    )
 
 
 def in_box(points: np.ndarray, box, what: str = "box") -> np.ndarray:
@@ -197,4 +212,3 @@ def in_box(points: np.ndarray, box, what: str = "box") -> np.ndarray:
     require(len(box) == 2 * d, f"{what}: box = {list(box)!r} must have {2 * d} numbers on this {d}D body")
     lower, upper = np.asarray(box[:d], dtype=np.float64), np.asarray(box[d:], dtype=np.float64)
     return np.all((points >= lower) & (points <= upper), axis=1)
-

@@ -68,8 +68,10 @@ def cut_by_lines(polygon: np.ndarray, lines, tol: float, what: str) -> tuple[np.
     on = np.column_stack([np.abs((polygon - p) @ n) <= tol for n, p in cutting])
     cap = on.any(axis=1)
     starts, ends = np.flatnonzero(cap & ~np.roll(cap, 1)), np.flatnonzero(cap & ~np.roll(cap, -1))
-    single = f"{what}: the symmetry lines must cut it into one wall from line to line (not between two parallel " \
-             f"lines, nor crossing a line more than twice)"
+    single = (
+        f"{what}: the symmetry lines must cut it into one wall from line to line (not between two parallel "
+        f"lines, nor crossing a line more than twice)"
+    )
     require(len(starts) == 1, single)
     k, m, count = starts[0], ends[0], len(polygon)
     wall = polygon[(m + np.arange((k - m) % count + 1)) % count]
@@ -79,14 +81,17 @@ def cut_by_lines(polygon: np.ndarray, lines, tol: float, what: str) -> tuple[np.
         return wall, 0.5 * (wall[0] + wall[-1])
     used = np.flatnonzero(holding.any(axis=0))
     normals = np.array([cutting[i][0] for i in used])
-    require(len(used) == 2 and abs(np.linalg.det(normals)) > 1e-12,
-            f"{what}: its cap runs along {len(used)} symmetry lines; a cap on one line or two crossing ones is supported")
+    require(
+        len(used) == 2 and abs(np.linalg.det(normals)) > 1e-12,
+        f"{what}: its cap runs along {len(used)} symmetry lines; a cap on one line or two crossing ones is supported",
+    )
     origin = np.linalg.solve(normals, [normals[i] @ cutting[line][1] for i, line in enumerate(used)])
     return wall, origin
 
 
-def notch(outline: np.ndarray, markers: np.ndarray, wall: np.ndarray, origin: np.ndarray, marker: int, tol: float,
-          what: str):
+def notch(
+    outline: np.ndarray, markers: np.ndarray, wall: np.ndarray, origin: np.ndarray, marker: int, tol: float, what: str
+):
     """The outline (counter-clockwise, with per-segment markers) with the cap between an open wall's ends cut
     out and the wall put in its place, reversed (the material on the left); the wall's segments get `marker`.
 
@@ -101,7 +106,11 @@ def notch(outline: np.ndarray, markers: np.ndarray, wall: np.ndarray, origin: np
         d = np.linalg.norm(point - (a + t[:, None] * e), axis=1)
         d[markers != OUTER_MARKER] = np.inf
         i = int(np.argmin(d))
-        require(d[i] <= tol, f"{what} ends at {point.tolist()} on a symmetry line, off the body's edge (outside the body, or in another chamber)")
+        require(
+            d[i] <= tol,
+            f"{what} ends at {point.tolist()} on a symmetry line, off the body's edge (outside the body, or in "
+            "another chamber)",
+        )
         return i, t[i]
 
     (ia, ta), (ib, tb) = locate(wall[0]), locate(wall[-1])
@@ -109,7 +118,8 @@ def notch(outline: np.ndarray, markers: np.ndarray, wall: np.ndarray, origin: np
     walk = (ia + 1 + np.arange(steps)) % count
     cut = np.vstack([wall[:1], outline[walk], wall[-1:], wall[-2:0:-1]])
     expected = signed_area(outline) - enclosed_area(wall, origin)
-    require(steps > 0 and abs(signed_area(cut) - expected) <= 1e-9 * abs(signed_area(outline)),
-            f"{what}: the symmetry lines cut it off the body's edge (its cap is not a part of that edge)")
+    require(
+        steps > 0 and abs(signed_area(cut) - expected) <= 1e-9 * abs(signed_area(outline)),
+        f"{what}: the symmetry lines cut it off the body's edge (its cap is not a part of that edge)",
+    )
     return cut, np.concatenate([[markers[ia]], markers[walk], np.full(len(wall) - 1, marker)])
-

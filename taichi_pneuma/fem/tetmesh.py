@@ -76,8 +76,11 @@ def check_midside_nodes(vertices: np.ndarray, tets: np.ndarray, family: ElementF
     for k, (i, j) in enumerate(family.edges):
         a, b, m = vertices[tets[:, i]], vertices[tets[:, j]], vertices[tets[:, 4 + k]]
         off = np.linalg.norm(m - 0.5 * (a + b), axis=1) > 0.25 * np.linalg.norm(b - a, axis=1)
-        require(not off.any(), f"10-node tetrahedron {int(np.argmax(off))}: node {4 + k} is not near the middle of "
-                               f"edge {i}{j} (the node order must be VTK's: edges 01, 12, 20, 03, 13, 23)")
+        require(
+            not off.any(),
+            f"10-node tetrahedron {int(np.argmax(off))}: node {4 + k} is not near the middle of "
+            f"edge {i}{j} (the node order must be VTK's: edges 01, 12, 20, 03, 13, 23)",
+        )
 
 
 def closure(name: str, vertices: np.ndarray, wall: np.ndarray, rollers) -> Closure | None:
@@ -90,12 +93,16 @@ def closure(name: str, vertices: np.ndarray, wall: np.ndarray, rollers) -> Closu
     if counts.min() == 2:
         return None
     rim = vertices[np.unique(unique[counts == 1])]
-    planes = [(r.unit_normal, np.asarray(r.point, dtype=np.float64), r.tolerance)
-              for r in rollers if r.point is not None]
+    planes = [
+        (r.unit_normal, np.asarray(r.point, dtype=np.float64), r.tolerance) for r in rollers if r.point is not None
+    ]
     on = np.array([np.abs((rim - p) @ n) <= tol for n, p, tol in planes]).reshape(len(planes), len(rim))
     off = ~on.any(axis=0)
-    require(not off.any(), f"chamber {name!r}: its wall is open, and its rim at {rim[np.argmax(off)].tolist()} lies "
-                           f"on no roller plane (a symmetry plane closing it: [[rollers]] with a point)")
+    require(
+        not off.any(),
+        f"chamber {name!r}: its wall is open, and its rim at {rim[np.argmax(off)].tolist()} lies "
+        f"on no roller plane (a symmetry plane closing it: [[rollers]] with a point)",
+    )
     groups: list[list] = []  # the planes holding the rim, parallel ones together (each plane once)
     for n, p, tol in (planes[i] for i in np.flatnonzero(on.any(axis=1))):
         group = next((g for g in groups if abs(n @ g[0][0]) > PARALLEL), None)
@@ -107,8 +114,10 @@ def closure(name: str, vertices: np.ndarray, wall: np.ndarray, rollers) -> Closu
     single = [g[0] for g in groups if len(g) == 1]
     normals, projector = [g[0][0] for g in groups], np.eye(3)
     for n in (g[0][0] for g in groups if len(g) == 2):
-        require(all(abs(n @ m) < 1e-9 for m in normals if m is not n),
-                f"chamber {name!r}: a pair of parallel roller planes closing it is not perpendicular to the others")
+        require(
+            all(abs(n @ m) < 1e-9 for m in normals if m is not n),
+            f"chamber {name!r}: a pair of parallel roller planes closing it is not perpendicular to the others",
+        )
         projector -= np.outer(n, n)
     require(np.trace(projector) > 0.5, f"chamber {name!r}: closed by parallel roller planes in every direction")
     origin = rim.mean(axis=0)
@@ -123,10 +132,18 @@ def check_order(order) -> None:
     require(order in (1, 2), f"order = {order!r} must be 1 (linear tetrahedra) or 2 (quadratic)")
 
 
-def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndarray],
-             boundary: np.ndarray | None = None, regions: np.ndarray | None = None, order: int = 1,
-             clamp: PointSet | None = None,
-             tip: PointSet = PointSet("right"), rollers=(), region_groups: dict | None = None) -> Mesh:
+def tet_mesh(
+    vertices: np.ndarray,
+    tets: np.ndarray,
+    chambers: dict[str, np.ndarray],
+    boundary: np.ndarray | None = None,
+    regions: np.ndarray | None = None,
+    order: int = 1,
+    clamp: PointSet | None = None,
+    tip: PointSet = PointSet("right"),
+    rollers=(),
+    region_groups: dict | None = None,
+) -> Mesh:
     """The Mesh of plain arrays (module docstring): vertices (n, 3); tets (m, 4) or (m, 10); chambers: name ->
     its wall's triangles (f, 3) (or (f, 6): the first three columns are used), in the scene's order;
     boundary: the outer boundary's triangles (None: every boundary facet on no chamber wall); regions: (m,)
@@ -134,21 +151,28 @@ def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndar
     no node clamped), the tip and the rollers select their nodes."""
     vertices = np.asarray(vertices, dtype=np.float64)
     tets = np.asarray(tets)
-    require(vertices.ndim == 2 and vertices.shape[1] == 3 and len(vertices) >= 4 and np.isfinite(vertices).all(),
-            f"vertices must be finite (n, 3) coordinates, not an array of shape {vertices.shape}")
-    require(tets.ndim == 2 and tets.shape[1] in (4, 10) and len(tets) > 0 and np.issubdtype(tets.dtype, np.integer),
-            f"tetrahedra must be an (m, 4) or (m, 10) integer array, not {tets.dtype} of shape {tets.shape}")
+    require(
+        vertices.ndim == 2 and vertices.shape[1] == 3 and len(vertices) >= 4 and np.isfinite(vertices).all(),
+        f"vertices must be finite (n, 3) coordinates, not an array of shape {vertices.shape}",
+    )
+    require(
+        tets.ndim == 2 and tets.shape[1] in (4, 10) and len(tets) > 0 and np.issubdtype(tets.dtype, np.integer),
+        f"tetrahedra must be an (m, 4) or (m, 10) integer array, not {tets.dtype} of shape {tets.shape}",
+    )
     require(tets.min() >= 0 and tets.max() < len(vertices), "a tetrahedron names a vertex that does not exist")
     check_order(order)
     require(order == 2 or tets.shape[1] == 4, "the mesh has 10-node (quadratic) tetrahedra: set order = 2")
     regions = np.zeros(len(tets), dtype=np.int64) if regions is None else np.asarray(regions, dtype=np.int64)
     require(regions.shape == (len(tets),), f"regions: {regions.shape} tags for {len(tets)} tetrahedra")
     names = list(chambers)
-    given = [np.asarray(chambers[name], dtype=np.int64).reshape(-1, np.shape(chambers[name])[-1])[:, :3]
-             for name in names] + ([] if boundary is None else [np.asarray(boundary, dtype=np.int64)[:, :3]])
+    given = [
+        np.asarray(chambers[name], dtype=np.int64).reshape(-1, np.shape(chambers[name])[-1])[:, :3] for name in names
+    ] + ([] if boundary is None else [np.asarray(boundary, dtype=np.int64)[:, :3]])
     for name, faces in zip(names + ["boundary"], given):
-        require(faces.size == 0 or (faces.min() >= 0 and faces.max() < len(vertices)),
-                f"{name}: a triangle names a vertex that does not exist")
+        require(
+            faces.size == 0 or (faces.min() >= 0 and faces.max() < len(vertices)),
+            f"{name}: a triangle names a vertex that does not exist",
+        )
     vertices, tets, given = used_nodes(vertices, tets.astype(np.int64), given)
     family, given_family = family_for(3, order), family_of(tets, 3)
     tets = positively_oriented(vertices, tets, given_family)
@@ -169,8 +193,10 @@ def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndar
         at = np.minimum(np.searchsorted(keys, wanted, sorter=order_of_keys), len(keys) - 1)
         rows = order_of_keys[at]
         missing = keys[rows] != wanted
-        require(not missing.any(), f"{what}: triangle {faces[np.argmax(missing)].tolist()} is not a face on the "
-                                   f"mesh's boundary")
+        require(
+            not missing.any(),
+            f"{what}: triangle {faces[np.argmax(missing)].tolist()} is not a face on the mesh's boundary",
+        )
         return rows
 
     facet_family = family.facet_family
@@ -185,5 +211,17 @@ def tet_mesh(vertices: np.ndarray, tets: np.ndarray, chambers: dict[str, np.ndar
         origins.append(closure(name, vertices, wall, rollers))
     outer = surface[facets_of(given[-1], "boundary")] if boundary is not None else surface[~taken]
     pinned, tip_nodes, held = node_sets(clamp, tip, rollers, vertices)
-    return Mesh(vertices, tets, tuple(walls), np.unique(outer), pinned, tip_nodes, tuple(origins), held, family, surface,
-                regions, dict(region_groups or {}))
+    return Mesh(
+        vertices,
+        tets,
+        tuple(walls),
+        np.unique(outer),
+        pinned,
+        tip_nodes,
+        tuple(origins),
+        held,
+        family,
+        surface,
+        regions,
+        dict(region_groups or {}),
+    )

@@ -36,7 +36,9 @@ def default_binding() -> str:
         return forced
     found = installed()
     if not found:
-        raise ImportError("no Triangle binding is installed: pip install triangle (Python <= 3.13) or pip install meshpy")
+        raise ImportError(
+            "no Triangle binding is installed: pip install triangle (Python <= 3.13) or pip install meshpy"
+        )
     return found[0]
 
 
@@ -56,18 +58,24 @@ def triangulate_or_refuse(pslg: dict, flags: str) -> dict:
         out = triangulate(pslg, flags)
     except RuntimeError:
         out = {}
-    require(len(out.get("triangles", ())) > 0, "Triangle could not mesh the geometry (it ran out of floating-point "
-                                               "precision: features too small for the body's size?)")
+    require(
+        len(out.get("triangles", ())) > 0,
+        "Triangle could not mesh the geometry (it ran out of floating-point "
+        "precision: features too small for the body's size?)",
+    )
     return out
-
 
 
 def _with_triangle(pslg: dict, flags: str) -> dict:
     import triangle
 
     out = triangle.triangulate(pslg, flags)  # it prefixes 'Qz' itself
-    return _normalised(out.get("vertices", ()), out.get("triangles", ()), out.get("segments", ()),
-                       out.get("segment_markers", ()) if "segment_markers" in pslg else ())
+    return _normalised(
+        out.get("vertices", ()),
+        out.get("triangles", ()),
+        out.get("segments", ()),
+        out.get("segment_markers", ()) if "segment_markers" in pslg else (),
+    )
 
 
 def _with_meshpy(pslg: dict, flags: str) -> dict:
@@ -99,7 +107,9 @@ def _normalised(vertices, triangles, segments, markers) -> dict:
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     first = np.argmin(triangles, axis=1)
     triangles = np.take_along_axis(triangles, (first[:, None] + np.arange(3)) % 3, axis=1)
-    return {"vertices": np.asarray(vertices, dtype=np.float64).reshape(-1, 2),
-            "triangles": triangles,
-            "segments": np.asarray(segments, dtype=np.int64).reshape(-1, 2),
-            "segment_markers": np.asarray(markers, dtype=np.int64).ravel()}
+    return {
+        "vertices": np.asarray(vertices, dtype=np.float64).reshape(-1, 2),
+        "triangles": triangles,
+        "segments": np.asarray(segments, dtype=np.int64).reshape(-1, 2),
+        "segment_markers": np.asarray(markers, dtype=np.int64).ravel(),
+    }

@@ -46,18 +46,22 @@ FORMULA = ("=", "+", "-", "@", "\t", "\r")  # a spreadsheet reads a CSV cell sta
 
 def check_stem(name) -> str:
     """Return name if it can name result files inside the output directory, else raise naming it and what is allowed."""
-    require(isinstance(name, str) and len(name) <= MAX_NAME and STEM.fullmatch(name) is not None,
-            f"name = {name!r} cannot name the result files: use 1 to {MAX_NAME} letters, digits and _ + - . "
-            f"(not starting with '.')")
+    require(
+        isinstance(name, str) and len(name) <= MAX_NAME and STEM.fullmatch(name) is not None,
+        f"name = {name!r} cannot name the result files: use 1 to {MAX_NAME} letters, digits and _ + - . "
+        f"(not starting with '.')",
+    )
     return name
 
 
 def check_heading(what: str, name) -> None:
     """Refuse a name that heads CSV columns (a chamber's: <name>.pressure) if it starts with one of FORMULA,
     which would make a spreadsheet read the heading as a formula."""
-    require(not (isinstance(name, str) and name.startswith(FORMULA)),
-            f"{what} {name!r} cannot start with = + - @, a tab or a carriage return: it heads CSV columns, which a "
-            f"spreadsheet would read as a formula")
+    require(
+        not (isinstance(name, str) and name.startswith(FORMULA)),
+        f"{what} {name!r} cannot start with = + - @, a tab or a carriage return: it heads CSV columns, which a "
+        f"spreadsheet would read as a formula",
+    )
 
 
 def reduce_to_stem(text: str) -> str:
@@ -134,8 +138,10 @@ class Subfolder:
             self.fd = os.open(self.path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_DIRECTORY", 0) | NOFOLLOW)
         except OSError:
             kind = "a link" if self.path.is_symlink() else "a file"
-            raise PneumaInputError(f"{str(self.path)!r} is {kind}, not a folder: the results cannot go in it "
-                                   f"(a link inside the output directory is never followed); remove it") from None
+            raise PneumaInputError(
+                f"{str(self.path)!r} is {kind}, not a folder: the results cannot go in it "
+                f"(a link inside the output directory is never followed); remove it"
+            ) from None
         weakref.finalize(self, os.close, self.fd)
 
     def names(self) -> list[str]:
@@ -158,8 +164,11 @@ def write_atomic(path: str | os.PathLike, write, folder: Subfolder | None = None
     An OSError (disk full, permission, a folder at path) becomes a PneumaInputError naming the file."""
     path = Path(path)
     try:
-        with (nullcontext(scratch) if scratch is not None else
-              private_folder(path.parent if folder is None else folder.directory, path.name)) as private:
+        with (
+            nullcontext(scratch)
+            if scratch is not None
+            else private_folder(path.parent if folder is None else folder.directory, path.name)
+        ) as private:
             tmp = private / path.name
             write(tmp)
             if folder is None:
@@ -182,6 +191,7 @@ def save_json(path: Path, data: dict) -> Path:
 def save_npz(path: Path, **arrays) -> Path:
     """The arrays as an .npz file, uncompressed: float states compress by ~10 % at ~20x the time (0.16
     against 0.007 s for the reference ramp's states)."""
+
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as f:
             np.savez(f, **arrays)
@@ -222,8 +232,10 @@ def acquire(directory: Path, stem: str) -> int:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             os.close(fd)
-            raise PneumaInputError(f"another run is writing the results named {stem!r} in {str(directory)!r} (it "
-                                   f"holds {path.name}); wait for it to end, or give another --out or name") from None
+            raise PneumaInputError(
+                f"another run is writing the results named {stem!r} in {str(directory)!r} (it "
+                f"holds {path.name}); wait for it to end, or give another --out or name"
+            ) from None
         if same_file(fd, path):  # else the last holder removed the file between our open and flock: again
             return fd
         os.close(fd)
@@ -263,6 +275,7 @@ def lock_stems(directory: str | os.PathLike, *stems: str):
 
 # --- input files -----------------------------------------------------------------------------------
 
+
 def read_input(path: str | os.PathLike, max_bytes: int, what: str, follow_links: bool = True) -> bytes:
     """The bytes of the input file at path (`what` names it in errors: "scene file"), refused unless it is a
     regular file of at most max_bytes bytes: a FIFO, a device or a folder is refused without reading or
@@ -273,8 +286,9 @@ def read_input(path: str | os.PathLike, max_bytes: int, what: str, follow_links:
         raise PneumaInputError(f"{what} {quoted(path)} cannot be read ({exc.strerror})") from None
     if not stat.S_ISREG(os.fstat(fd).st_mode):  # checked before open(fd), which refuses a folder with its own error
         os.close(fd)
-        raise PneumaInputError(f"{what} {quoted(path)} is not a regular file (a FIFO, a device or a folder cannot "
-                               f"be read as one)")
+        raise PneumaInputError(
+            f"{what} {quoted(path)} is not a regular file (a FIFO, a device or a folder cannot be read as one)"
+        )
     with open(fd, "rb") as f:
         try:
             data = f.read(max_bytes + 1)

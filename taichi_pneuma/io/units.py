@@ -41,11 +41,19 @@ NODAL_STIFFNESS = "nodal penalty stiffness"  # energy per length^2 at a node: K 
 MEASURE_STIFFNESS = "measure penalty stiffness"  # pressure per chamber measure: k of E = 1/2 k (A - A*)^2
 # (length, pressure, time) exponents of each dimension in 2D and in 3D (a chamber's measure is an area, a volume
 # per unit depth, in 2D; an energy is per unit depth in 2D); times are in seconds in every system
-EXPONENTS = {LENGTH: ((1, 0, 0),) * 2, AREA: ((2, 0, 0), (3, 0, 0)), VOLUME: ((3, 0, 0),) * 2,
-             PLANE_AREA: ((2, 0, 0),) * 2,
-             PRESSURE: ((0, 1, 0),) * 2, ANGLE: ((0, 0, 0),) * 2, TIME: ((0, 0, 1),) * 2,
-             ACCELERATION: ((1, 0, -2),) * 2, DENSITY: ((-2, 1, 2),) * 2,
-             NODAL_STIFFNESS: ((0, 1, 0), (1, 1, 0)), MEASURE_STIFFNESS: ((-2, 1, 0), (-3, 1, 0))}
+EXPONENTS = {
+    LENGTH: ((1, 0, 0),) * 2,
+    AREA: ((2, 0, 0), (3, 0, 0)),
+    VOLUME: ((3, 0, 0),) * 2,
+    PLANE_AREA: ((2, 0, 0),) * 2,
+    PRESSURE: ((0, 1, 0),) * 2,
+    ANGLE: ((0, 0, 0),) * 2,
+    TIME: ((0, 0, 1),) * 2,
+    ACCELERATION: ((1, 0, -2),) * 2,
+    DENSITY: ((-2, 1, 2),) * 2,
+    NODAL_STIFFNESS: ((0, 1, 0), (1, 1, 0)),
+    MEASURE_STIFFNESS: ((-2, 1, 0), (-3, 1, 0)),
+}
 
 
 def unit(dimension: str, scaled: bool = True) -> dict:
@@ -67,8 +75,11 @@ def default_in(si, dimension: str, scaled: bool, units: Units, dim: int, key: st
     scene and refused, naming the key, in a scene with units. Scene files and the Python API both come here."""
     if units.name is None:
         return si
-    require(scaled, f"missing key '{key}': a scene with units gives it (in {units.name}); its default {si!r} is a "
-                    f"numerical parameter for unitless scenes")
+    require(
+        scaled,
+        f"missing key '{key}': a scene with units gives it (in {units.name}); its default {si!r} is a "
+        f"numerical parameter for unitless scenes",
+    )
     factor = units.factor(dimension, dim)
     return tuple(v / factor for v in si) if isinstance(si, tuple) else si / factor
 
@@ -78,9 +89,11 @@ def defaults(obj, units: Units, dim: int, path: str) -> dict:
     the scene-file table of obj, naming a key a scene with units must give."""
     if not dataclasses.is_dataclass(obj):
         return {}
-    return {f.name: default_in(f.metadata["si"], f.metadata["unit"], f.metadata["scaled"], units, dim,
-                               f"{path}.{f.name}") for f in dataclasses.fields(obj)
-            if "si" in f.metadata and getattr(obj, f.name) is None}
+    return {
+        f.name: default_in(f.metadata["si"], f.metadata["unit"], f.metadata["scaled"], units, dim, f"{path}.{f.name}")
+        for f in dataclasses.fields(obj)
+        if "si" in f.metadata and getattr(obj, f.name) is None
+    }
 
 
 def resolved(obj, units: Units, dim: int, path: str):
@@ -96,9 +109,11 @@ def si_text(dimension: str) -> str:
 
     def text(exponents) -> str:
         length, pressure, time = exponents
-        parts = [f"{symbol}^{e}" if e != 1 else symbol for symbol, e in (("Pa", pressure), ("m", length), ("s", time))
-                 if e]
+        parts = [
+            f"{symbol}^{e}" if e != 1 else symbol for symbol, e in (("Pa", pressure), ("m", length), ("s", time)) if e
+        ]
         return " ".join(parts) or "1"
+
     plane, solid = (text(e) for e in EXPONENTS[dimension])
     return plane if plane == solid else f"{plane} (2D), {solid} (3D)"
 
@@ -118,9 +133,15 @@ class Units:
         "" when unitless or dimensionless ("")."""
         if self.name is None or not dimension:
             return ""
-        return {LENGTH: self.length, AREA: f"{self.length}^2", PRESSURE: self.pressure,
-                FORCE: f"{self.pressure} {self.length}", ANGLE: "deg", TIME: "s",
-                VOLUME: f"{self.length}^3"}[dimension]
+        return {
+            LENGTH: self.length,
+            AREA: f"{self.length}^2",
+            PRESSURE: self.pressure,
+            FORCE: f"{self.pressure} {self.length}",
+            ANGLE: "deg",
+            TIME: "s",
+            VOLUME: f"{self.length}^3",
+        }[dimension]
 
     def label(self, name: str, dimension: str) -> str:
         """name with its unit in brackets ("main.pressure [kPa]"); name itself when there is none."""
@@ -128,7 +149,7 @@ class Units:
         return f"{name} [{unit}]" if unit else name
 
     def suffix(self, dimension: str) -> str:
-        """" kPa" after a printed value; "" when there is no unit."""
+        """ " kPa" after a printed value; "" when there is no unit."""
         unit = self.symbol(dimension)
         return f" {unit}" if unit else ""
 
@@ -136,7 +157,7 @@ class Units:
         """The size in SI of this system's unit of `dimension` in a body of dimension dim (a value in SI divided
         by it is the value in this system): metre^a pascal^b for L^a P^b."""
         length, pressure, _ = EXPONENTS[dimension][dim - 2]
-        return self.metre ** length * self.pascal ** pressure
+        return self.metre**length * self.pascal**pressure
 
     def summary(self) -> dict | None:
         """The summary JSON's "units" entry: the system and each dimension's unit (None when unitless)."""
@@ -146,13 +167,31 @@ class Units:
 
 
 UNITLESS = Units()
-UNITS = {u.name: u for u in (Units("mm-kPa", "mm", "kPa", 1e-3, 1e3), Units("mm-MPa", "mm", "MPa", 1e-3, 1e6),
-                             Units("m-Pa", "m", "Pa", 1.0, 1.0))}
+UNITS = {
+    u.name: u
+    for u in (
+        Units("mm-kPa", "mm", "kPa", 1e-3, 1e3),
+        Units("mm-MPa", "mm", "MPa", 1e-3, 1e6),
+        Units("m-Pa", "m", "Pa", 1.0, 1.0),
+    )
+}
 
 # Dimensions of the history columns that are not per chamber or per contact (those are set by history_dimensions)
-FIXED_COLUMNS = {"tip_dx": LENGTH, "tip_dy": LENGTH, "tip_dz": LENGTH, "tip_rotation": ANGLE, "seconds": TIME,
-                 "target_x": LENGTH, "target_y": LENGTH, "target_z": LENGTH, "target_angle": ANGLE, "tip_x": LENGTH,
-                 "tip_y": LENGTH, "tip_z": LENGTH, "tip_error": LENGTH}
+FIXED_COLUMNS = {
+    "tip_dx": LENGTH,
+    "tip_dy": LENGTH,
+    "tip_dz": LENGTH,
+    "tip_rotation": ANGLE,
+    "seconds": TIME,
+    "target_x": LENGTH,
+    "target_y": LENGTH,
+    "target_z": LENGTH,
+    "target_angle": ANGLE,
+    "tip_x": LENGTH,
+    "tip_y": LENGTH,
+    "tip_z": LENGTH,
+    "tip_error": LENGTH,
+}
 
 
 def in_dimension(dimension: str, dim: int) -> str:
@@ -167,8 +206,13 @@ def history_dimensions(scene, contacts=(), dim: int = 2) -> dict[str, str]:
     terms and the body's dimension dim."""
     dimensions = dict(FIXED_COLUMNS)
     for name, control in zip(scene.chamber_names, scene.controls):
-        dimensions.update({f"{name}.command": in_dimension(control.kind.dimension, dim),
-                           f"{name}.area": MEASURES[dim], f"{name}.pressure": PRESSURE})
+        dimensions.update(
+            {
+                f"{name}.command": in_dimension(control.kind.dimension, dim),
+                f"{name}.area": MEASURES[dim],
+                f"{name}.pressure": PRESSURE,
+            }
+        )
     for name in contacts:
         dimensions.update({f"{name}.{part}": FORCE for part in ("fx", "fy", "magnitude")})
     return dimensions

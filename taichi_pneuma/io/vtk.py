@@ -28,8 +28,10 @@ def data_array(name: str, values: np.ndarray) -> str:
     values = np.ascontiguousarray(values, dtype=values.dtype.newbyteorder("="))
     raw = values.tobytes()
     components = f' NumberOfComponents="{values.shape[1]}"' if values.ndim == 2 else ""
-    return (f'<DataArray type="{XML_TYPES[values.dtype]}" Name={quoteattr(name)}{components} format="binary">\n'
-            f"{base64.b64encode(np.uint32(len(raw)).tobytes() + raw).decode()}\n</DataArray>\n")
+    return (
+        f'<DataArray type="{XML_TYPES[values.dtype]}" Name={quoteattr(name)}{components} format="binary">\n'
+        f"{base64.b64encode(np.uint32(len(raw)).tobytes() + raw).decode()}\n</DataArray>\n"
+    )
 
 
 class CellFamily(Protocol):
@@ -39,29 +41,47 @@ class CellFamily(Protocol):
     def vtk_cell(self) -> int: ...
 
 
-def vtu_text(points: np.ndarray, cells: Sequence[tuple[CellFamily, np.ndarray]], point_data: dict[str, np.ndarray],
-             cell_data: dict[str, list[np.ndarray]], field_data: dict[str, float]) -> str:
+def vtu_text(
+    points: np.ndarray,
+    cells: Sequence[tuple[CellFamily, np.ndarray]],
+    point_data: dict[str, np.ndarray],
+    cell_data: dict[str, list[np.ndarray]],
+    field_data: dict[str, float],
+) -> str:
     """A VTU file: points (n, 3), cell blocks (element family: its vtk_cell, (m, k) nodes), point arrays, cell arrays
     (one per block) and one Float64 value per field-data name."""
-    fields = "".join(f'<DataArray type="Float64" Name={quoteattr(name)} NumberOfTuples="1" format="ascii">'
-                     f"{float(value)!r}</DataArray>" for name, value in field_data.items())
+    fields = "".join(
+        f'<DataArray type="Float64" Name={quoteattr(name)} NumberOfTuples="1" format="ascii">'
+        f"{float(value)!r}</DataArray>"
+        for name, value in field_data.items()
+    )
     connectivity = np.concatenate([nodes.ravel() for _, nodes in cells]).astype(np.int64)
     offsets = np.cumsum(np.concatenate([np.full(len(nodes), nodes.shape[1]) for _, nodes in cells])).astype(np.int64)
     types = np.concatenate([np.full(len(nodes), family.vtk_cell) for family, nodes in cells]).astype(np.int64)
     order = "LittleEndian" if sys.byteorder == "little" else "BigEndian"
-    return "".join([
-        f'<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="0.1" byte_order="{order}">\n',
-        f"<UnstructuredGrid><FieldData>{fields}</FieldData>\n",
-        f'<Piece NumberOfPoints="{len(points)}" NumberOfCells="{len(types)}">\n<Points>\n',
-        data_array("Points", points), "</Points>\n<Cells>\n", data_array("connectivity", connectivity),
-        data_array("offsets", offsets), data_array("types", types), "</Cells>\n<PointData>\n",
-        *(data_array(name, values) for name, values in point_data.items()), "</PointData>\n<CellData>\n",
-        *(data_array(name, np.concatenate(blocks)) for name, blocks in cell_data.items()),
-        "</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n"])
+    return "".join(
+        [
+            f'<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="0.1" byte_order="{order}">\n',
+            f"<UnstructuredGrid><FieldData>{fields}</FieldData>\n",
+            f'<Piece NumberOfPoints="{len(points)}" NumberOfCells="{len(types)}">\n<Points>\n',
+            data_array("Points", points),
+            "</Points>\n<Cells>\n",
+            data_array("connectivity", connectivity),
+            data_array("offsets", offsets),
+            data_array("types", types),
+            "</Cells>\n<PointData>\n",
+            *(data_array(name, values) for name, values in point_data.items()),
+            "</PointData>\n<CellData>\n",
+            *(data_array(name, np.concatenate(blocks)) for name, blocks in cell_data.items()),
+            "</CellData>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n",
+        ]
+    )
 
 
 def pvd_text(entries: list[tuple[float, str]]) -> str:
     """A PVD collection of (timestep, relative file name) entries."""
     rows = "".join(f'    <DataSet timestep="{t!r}" part="0" file={quoteattr(name)}/>\n' for t, name in entries)
-    return (f'<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n{rows}'
-            f"  </Collection>\n</VTKFile>\n")
+    return (
+        f'<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n{rows}'
+        f"  </Collection>\n</VTKFile>\n"
+    )

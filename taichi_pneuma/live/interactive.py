@@ -32,8 +32,15 @@ def fixed_view(mesh) -> tuple[np.ndarray, np.ndarray]:
     return lo - room, hi + room
 
 
-def explore(scene: Scene, growth: float, size: tuple[int, int], backend: str = "auto",
-            options: NewtonOptions | None = None, max_frames: int | None = None, budget: Budget = Budget()) -> dict:
+def explore(
+    scene: Scene,
+    growth: float,
+    size: tuple[int, int],
+    backend: str = "auto",
+    options: NewtonOptions | None = None,
+    max_frames: int | None = None,
+    budget: Budget = Budget(),
+) -> dict:
     """Run the window until it is closed (or for max_frames frames); return {'all_converged', 'solves'}.
 
     The slider commands the area ratio of the scene's first chamber (area control); the scene is built in the
@@ -55,20 +62,37 @@ def explore(scene: Scene, growth: float, size: tuple[int, int], backend: str = "
             converged &= record.converged
             solves += 1
             tip = u[mesh.tip, 1].mean()
-            track = Track(mesh, (mesh.vertices + u)[None], np.array([[chamber.area() / chamber.rest_area]]),
-                          np.array([[chamber.pressure()]]), np.array([tip]), "interactive")
+            track = Track(
+                mesh,
+                (mesh.vertices + u)[None],
+                np.array([[chamber.area() / chamber.rest_area]]),
+                np.array([[chamber.pressure()]]),
+                np.array([tip]),
+                "interactive",
+            )
             renderer = FrameRenderer([track], trace=False, canvas=canvas, bounds=bounds)
-            print(f"  area x{ratio:.3f}: p = {track.pressure[0, 0]:.2f}, tip dy = {tip:+.4f}, "
-                  f"{record.iterations} Newton it, converged {record.converged}", flush=True)
-        canvas.show_image(renderer.frame(0))
+            print(
+                f"  area x{ratio:.3f}: p = {track.pressure[0, 0]:.2f}, tip dy = {tip:+.4f}, "
+                f"{record.iterations} Newton it, converged {record.converged}",
+                flush=True,
+            )
+        canvas.show_image(renderer.frame(0))  # type: ignore[union-attr]
         canvas.show()
         frames += 1
     return {"all_converged": bool(converged), "solves": solves}
 
 
-def follow_mouse(scene: Scene, bounds, size: tuple[int, int], backend: str = "auto", options=None,
-                 newton: NewtonOptions | None = None, target=None, max_frames: int | None = None,
-                 budget: Budget = Budget()) -> dict:
+def follow_mouse(
+    scene: Scene,
+    bounds,
+    size: tuple[int, int],
+    backend: str = "auto",
+    options=None,
+    newton: NewtonOptions | None = None,
+    target=None,
+    max_frames: int | None = None,
+    budget: Budget = Budget(),
+) -> dict:
     """Inverse control live: drag the target (a red cross) with the left mouse button and the chambers
     follow, re-solved (inverse.Reacher.reach, warm-started, without restarts: an unreachable target
     leaves the closest pose near the last one) on every move; a slider per chamber (bottom rows)
@@ -88,13 +112,22 @@ def follow_mouse(scene: Scene, bounds, size: tuple[int, int], backend: str = "au
     mesh = built.mesh
     canvas = open_canvas(*size, backend, show=True)
     target = np.array(target.tip if target is not None else reacher.pose.tip, float)
-    track = Track(mesh, (mesh.vertices + reacher.pose.u)[None], np.ones((1, len(built.chambers))),
-                  np.zeros((1, len(built.chambers))), np.zeros(1), "drag the red cross", targets=target[None].copy())
+    track = Track(
+        mesh,
+        (mesh.vertices + reacher.pose.u)[None],
+        np.ones((1, len(built.chambers))),
+        np.zeros((1, len(built.chambers))),
+        np.zeros(1),
+        "drag the red cross",
+        targets=target[None].copy(),
+    )
     renderer = FrameRenderer([track], trace=False, canvas=canvas, bounds=fixed_view(mesh))
     strip = len(built.chambers) * canvas.slider_row_px / canvas.height  # the sliders' rows at the bottom
     reached, reaches, direct, frames, drag_seconds, solves = True, [], 0, 0, [], 0
-    print(f"interactive: drag the target with the left mouse button; {len(built.chambers)} sliders below; "
-          f"close the window to quit")
+    print(
+        f"interactive: drag the target with the left mouse button; {len(built.chambers)} sliders below; "
+        f"close the window to quit"
+    )
 
     def show(pose):
         track.states[0] = mesh.vertices + pose.u
@@ -107,8 +140,12 @@ def follow_mouse(scene: Scene, bounds, size: tuple[int, int], backend: str = "au
     while canvas.running and (max_frames is None or frames < max_frames):
         start = time.perf_counter()
         q = reacher.pose.commands
-        moved = np.array([canvas.slider(name, value, low, high, row=j) for j, (name, value, low, high)
-                          in enumerate(zip(reacher.names, q, reacher.lo, reacher.hi))])
+        moved = np.array(
+            [
+                canvas.slider(name, value, low, high, row=j)
+                for j, (name, value, low, high) in enumerate(zip(reacher.names, q, reacher.lo, reacher.hi))
+            ]
+        )
         x, y, pressed = canvas.mouse()
         pointed = renderer.to_world(0, np.array([x, y]))
         dragged = pressed and y > strip and not np.array_equal(pointed, target)
@@ -127,14 +164,27 @@ def follow_mouse(scene: Scene, bounds, size: tuple[int, int], backend: str = "au
         frames += 1
         if dragged and len(reaches) > 1:  # a frame that re-solved a moved target, after the first (warm-up)
             drag_seconds.append(time.perf_counter() - start)
-    summary = {"all_converged": bool(reached), "reaches": len(reaches), "direct": direct, "frames": frames,
-               "commands": reacher.pose.commands.tolist(), "tip": reacher.pose.tip.tolist(), "target": target.tolist(),
-               "drag_fps": 1 / float(np.mean(drag_seconds)) if drag_seconds else None,
-               "ms_per_reach": 1000 * float(np.mean(reaches)) if reaches else None,
-               "forward_solves_per_reach": solves / len(reaches) if reaches else None}
-    print(f"interactive: {summary['reaches']} reaches, {direct} direct commands, {frames} frames; "
-          + (f"while dragging {summary['drag_fps']:.1f} frames/s, {summary['ms_per_reach']:.1f} ms and "
-             f"{summary['forward_solves_per_reach']:.2f} forward solves per reach" if drag_seconds else "no drag"))
+    summary = {
+        "all_converged": bool(reached),
+        "reaches": len(reaches),
+        "direct": direct,
+        "frames": frames,
+        "commands": reacher.pose.commands.tolist(),
+        "tip": reacher.pose.tip.tolist(),
+        "target": target.tolist(),
+        "drag_fps": 1 / float(np.mean(drag_seconds)) if drag_seconds else None,
+        "ms_per_reach": 1000 * float(np.mean(reaches)) if reaches else None,
+        "forward_solves_per_reach": solves / len(reaches) if reaches else None,
+    }
+    print(
+        f"interactive: {summary['reaches']} reaches, {direct} direct commands, {frames} frames; "
+        + (
+            f"while dragging {summary['drag_fps']:.1f} frames/s, {summary['ms_per_reach']:.1f} ms and "
+            f"{summary['forward_solves_per_reach']:.2f} forward solves per reach"
+            if drag_seconds
+            else "no drag"
+        )
+    )
     return summary
 
 
@@ -160,9 +210,9 @@ class LiveEquilibrium:
     chord step (the previous frame's factorisation reused, no Hessian assembled: solve's reuse_factor); while
     they rest, chord steps as long as each contracts the residual by CHORD_MAX_CONTRACTION or better, else a
     full Newton step, one per frame until the residual |g| / force scale is within the Newton tolerance, so the
-    state a resting slider settles to is the equilibrium a full Newton solve finds at those commands. The line search never lets a tetrahedron invert (terms' max_step). A step the line
-    search refuses leaves the state as it was and the next frame takes a fresh Hessian; where even that
-    fails, the loop waits for the commands to move."""
+    state a resting slider settles to is the equilibrium a full Newton solve finds at those commands. The line
+    search never lets a tetrahedron invert (terms' max_step). A step the line search refuses leaves the state as
+    it was and the next frame takes a fresh Hessian; where even that fails, the loop waits for the commands to move."""
 
     def __init__(self, built, options: NewtonOptions | None = None):
         self.built, self.solver = built, NewtonSolver(built.model, options or NewtonOptions(tol=LIVE_TOL))
@@ -179,7 +229,7 @@ class LiveEquilibrium:
         """One frame's step at the commands; whether the state changed."""
         moved = self.commands is None or not np.array_equal(commands, self.commands)
         if moved:
-            self.commands = np.array(commands, dtype=float)
+            self.commands = np.array(commands, dtype=float)  # type: ignore[assignment]
             self.built.set_commands(self.commands)
             self.stuck, self.iterations = False, 0
         elif self.converged or self.stuck:
@@ -196,8 +246,14 @@ class LiveEquilibrium:
         return bool(record.iterations)
 
 
-def explore_solid(scene: Scene, size: tuple[int, int], options: NewtonOptions | None = None, spin: float = 0.0,
-                  max_frames: int | None = None, budget: Budget = Budget()) -> dict:
+def explore_solid(
+    scene: Scene,
+    size: tuple[int, int],
+    options: NewtonOptions | None = None,
+    spin: float = 0.0,
+    max_frames: int | None = None,
+    budget: Budget = Budget(),
+) -> dict:
     """The live window of a 3D scene (interactive3d.explore_3d): a slider per chamber (chamber_sliders); each
     frame takes a Newton step toward the equilibrium at the commands on screen (LiveEquilibrium; the panel
     shows the residual); the camera orbits by mouse drag (and `spin` degrees per frame). Returns explore_3d's
@@ -215,9 +271,13 @@ def explore_solid(scene: Scene, size: tuple[int, int], options: NewtonOptions | 
         volumes = ", ".join(f"x{c.area() / c.rest_area:.2f}" for c in built.chambers)
         tip = live.u[mesh.tip].mean(axis=0)
         state = "equilibrium" if live.converged else "stuck" if live.stuck else "converging"
-        return mesh.vertices + live.u, [f"volume {volumes}", f"tip dy {tip[1]:+.4f} dz {tip[2]:+.4f}",
-                                        f"residual {live.residual:.1e} ({state}, {live.iterations} Newton it)"]
+        return mesh.vertices + live.u, [
+            f"volume {volumes}",
+            f"tip dy {tip[1]:+.4f} dz {tip[2]:+.4f}",
+            f"residual {live.residual:.1e} ({state}, {live.iterations} Newton it)",
+        ]
 
-    summary = explore_3d(solve, chamber_sliders(scene), mesh.vertices, outer, walls, size, spin=spin,
-                         max_frames=max_frames)
+    summary = explore_3d(
+        solve, chamber_sliders(scene), mesh.vertices, outer, walls, size, spin=spin, max_frames=max_frames
+    )
     return {**summary, "all_converged": live.converged, "residual": live.residual}

@@ -38,8 +38,10 @@ class Slider:
 
     def __post_init__(self):
         low, high, value = (require_finite(f"slider {self.name!r}", v) for v in (self.low, self.high, self.value))
-        require(low < high and low <= value <= high,
-                f"slider {self.name!r}: need low < high and the value within, got {low:g}, {high:g}, {value:g}")
+        require(
+            low < high and low <= value <= high,
+            f"slider {self.name!r}: need low < high and the value within, got {low:g}, {high:g}, {value:g}",
+        )
 
 
 def commands_from(sliders: list[Slider], shown: np.ndarray, values: list[float]) -> np.ndarray | None:
@@ -62,9 +64,18 @@ def in_panel(cursor: tuple[float, float], rows: int, height: int) -> bool:
     return cursor[0] <= PANEL_WIDTH and cursor[1] >= 1 - (rows + 1) * ROW_HEIGHT_PX / height
 
 
-def explore_3d(solve, sliders: list[Slider], rest: np.ndarray, boundary: np.ndarray, chambers: tuple,
-               size: tuple[int, int] = (960, 640), camera: Camera | None = None, spin: float = 0.0,
-               section: bool = True, max_frames: int | None = None) -> dict:
+def explore_3d(
+    solve,
+    sliders: list[Slider],
+    rest: np.ndarray,
+    boundary: np.ndarray,
+    chambers: tuple,
+    size: tuple[int, int] = (960, 640),
+    camera: Camera | None = None,
+    spin: float = 0.0,
+    section: bool = True,
+    max_frames: int | None = None,
+) -> dict:
     """Run the window until it is closed (or for max_frames frames). Returns {'solves' (slider moves, and the
     first solve), 'frames', 'fps' (frames per second over the frames after the first), 'commands', 'azimuth',
     'elevation'}."""
@@ -104,5 +115,11 @@ def explore_3d(solve, sliders: list[Slider], rest: np.ndarray, boundary: np.ndar
             frames += 1
     finally:
         view.close()
-    return {"solves": solves, "frames": frames, "fps": (frames - 1) / seconds if seconds else None,
-            "commands": shown.tolist(), "azimuth": camera.azimuth, "elevation": camera.elevation}
+    return {
+        "solves": solves,
+        "frames": frames,
+        "fps": (frames - 1) / seconds if seconds else None,
+        "commands": shown.tolist(),
+        "azimuth": camera.azimuth,
+        "elevation": camera.elevation,
+    }

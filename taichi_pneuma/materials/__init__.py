@@ -17,6 +17,21 @@ from .neo_hookean import Material, StableNeoHookean, lame_parameters
 from .presets import PRESETS, PresetMaterial
 from .registry import MaterialForm, MaterialKey, register_form
 
-__all__ = ["FORMS", "LAWS", "PRESETS", "IsochoricMaterial", "IsochoricPolynomial", "Law", "Material", "MaterialForm",
-           "MaterialKey", "PresetMaterial", "StableNeoHookean", "bulk_modulus", "cauchy_stresses", "lame_parameters",
-           "register", "register_form"]
+__all__ = [
+    "FORMS",
+    "LAWS",
+    "PRESETS",
+    "IsochoricMaterial",
+    "IsochoricPolynomial",
+    "Law",
+    "Material",
+    "MaterialForm",
+    "MaterialKey",
+    "PresetMaterial",
+    "StableNeoHookean",
+    "bulk_modulus",
+    "cauchy_stresses",
+    "lame_parameters",
+    "register",
+    "register_form",
+]

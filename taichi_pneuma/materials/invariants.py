@@ -28,8 +28,10 @@ def cofactor(F):
     """cof F = dJ/dF of a 3 x 3 matrix: (cof F)_ij = F_(i+1)(j+1) F_(i+2)(j+2) - F_(i+1)(j+2) F_(i+2)(j+1), mod 3."""
     C = ti.Matrix.zero(ti.f64, 3, 3)
     for i, j in ti.static(ti.ndrange(3, 3)):
-        C[i, j] = F[(i + 1) % 3, (j + 1) % 3] * F[(i + 2) % 3, (j + 2) % 3] \
+        C[i, j] = (
+            F[(i + 1) % 3, (j + 1) % 3] * F[(i + 2) % 3, (j + 2) % 3]
             - F[(i + 1) % 3, (j + 2) % 3] * F[(i + 2) % 3, (j + 1) % 3]
+        )
     return C
 
 
@@ -109,5 +111,8 @@ def isochoric_hessians(F):
     I2 = 0.5 * (I1 * I1 - C.norm_sqr())
     HJ = determinant_hessian(F)
     dI1, dI2 = 2.0 * flat(F), 2.0 * flat(I1 * F - F @ C)
-    return (power_times(-2.0 / 3.0, J, g, HJ, I1, dI1, 2.0 * ti.Matrix.identity(ti.f64, 9)),
-            power_times(-4.0 / 3.0, J, g, HJ, I2, dI2, second_invariant_hessian(F)), HJ)
+    return (
+        power_times(-2.0 / 3.0, J, g, HJ, I1, dI1, 2.0 * ti.Matrix.identity(ti.f64, 9)),
+        power_times(-4.0 / 3.0, J, g, HJ, I2, dI2, second_invariant_hessian(F)),
+        HJ,
+    )

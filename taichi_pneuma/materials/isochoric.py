@@ -61,17 +61,25 @@ FORMS = {"neo_hookean": ("C10",), "mooney_rivlin": ("C10", "C01"), "yeoh": ("C10
 COEFFICIENTS = ("C10", "C01", "C20", "C30")
 DEFAULT_POISSON_RATIO = 0.49  # when a material gives neither K nor nu: nearly incompressible, as silicones are
 STRETCHES = (1 / 3, 3.0)  # the principal stretches a law must be stable for (module docstring)
-COEFFICIENT_KEYS = tuple(MaterialKey(c, c, doc=f"coefficient of the isochoric law's {c} term (the forms taking it; "
-                                              f"none: 0, C10 required)", unit=PRESSURE) for c in COEFFICIENTS)
+COEFFICIENT_KEYS = tuple(
+    MaterialKey(
+        c,
+        c,
+        doc=f"coefficient of the isochoric law's {c} term (the forms taking it; none: 0, C10 required)",
+        unit=PRESSURE,
+    )
+    for c in COEFFICIENTS
+)
 
 
 def path_invariants(lam: np.ndarray) -> dict:
     """(I1 - 3, I1', I1'', I2'') along each stability path, at stretches lam of that path keeping every principal
     stretch within STRETCHES (equibiaxially lam in [3^-1/2, 3^1/2]: its third stretch is lam^-2)."""
-    return {"uniaxial": (lam ** 2 + 2 / lam - 3, 2 * lam - 2 / lam ** 2, 2 + 4 / lam ** 3, 6 / lam ** 4),
-            "equibiaxial": (2 * lam ** 2 + lam ** -4 - 3, 4 * lam - 4 * lam ** -5, 4 + 20 * lam ** -6,
-                            12 * lam ** 2 + 12 * lam ** -4),
-            "pure shear": (lam ** 2 + lam ** -2 - 2, 2 * lam - 2 * lam ** -3, 2 + 6 * lam ** -4, 2 + 6 * lam ** -4)}
+    return {
+        "uniaxial": (lam**2 + 2 / lam - 3, 2 * lam - 2 / lam**2, 2 + 4 / lam**3, 6 / lam**4),
+        "equibiaxial": (2 * lam**2 + lam**-4 - 3, 4 * lam - 4 * lam**-5, 4 + 20 * lam**-6, 12 * lam**2 + 12 * lam**-4),
+        "pure shear": (lam**2 + lam**-2 - 2, 2 * lam - 2 * lam**-3, 2 + 6 * lam**-4, 2 + 6 * lam**-4),
+    }
 
 
 def unstable_stretch(C10: float, C01: float, C20: float, C30: float) -> tuple[str, float] | None:
@@ -81,9 +89,9 @@ def unstable_stretch(C10: float, C01: float, C20: float, C30: float) -> tuple[st
     lam = np.exp(np.linspace(low, high, 4001))
     bounds = {"equibiaxial": np.sqrt(STRETCHES)}
     for path, (a, da, dda, ddb) in path_invariants(lam).items():
-        W1, W11 = C10 + 2 * C20 * a + 3 * C30 * a ** 2, 2 * C20 + 6 * C30 * a
+        W1, W11 = C10 + 2 * C20 * a + 3 * C30 * a**2, 2 * C20 + 6 * C30 * a
         inside = (lam >= bounds.get(path, STRETCHES)[0]) & (lam <= bounds.get(path, STRETCHES)[1])
-        falling = inside & (W1 * dda + W11 * da ** 2 + C01 * ddb <= 0)
+        falling = inside & (W1 * dda + W11 * da**2 + C01 * ddb <= 0)
         if falling.any():
             return path, float(lam[falling][np.argmin(np.abs(np.log(lam[falling])))])
     return None
@@ -138,8 +146,13 @@ class IsochoricPolynomial(Law):
         W1, W11, J = slopes(F, p)
         dI1, _, dJ = isochoric_gradients(F)
         d2I1, d2I2, d2J = isochoric_hessians(F)
-        return (W11 * dI1.outer_product(dI1) + W1 * d2I1 + p[1] * d2I2
-                + p[4] * dJ.outer_product(dJ) + p[4] * (J - 1.0) * d2J)
+        return (
+            W11 * dI1.outer_product(dI1)
+            + W1 * d2I1
+            + p[1] * d2I2
+            + p[4] * dJ.outer_product(dJ)
+            + p[4] * (J - 1.0) * d2J
+        )
 
 
 @ti.func
@@ -167,20 +180,28 @@ class IsochoricMaterial(MaterialForm):
     selector = "law"
     names = tuple(FORMS)
     keys = (POISSON_RATIO, BULK_MODULUS, *COEFFICIENT_KEYS)
-    summary = (f"a form of the isochoric law (law = {', '.join(FORMS)}: C10, ... and K or nu, in the scene's "
-               f"pressure unit)")
+    summary = (
+        f"a form of the isochoric law (law = {', '.join(FORMS)}: C10, ... and K or nu, in the scene's pressure unit)"
+    )
 
     def __post_init__(self):
         require(self.law in FORMS, f"law = {self.law!r} is not one of {', '.join(FORMS)}")
         for name in COEFFICIENTS:
             value = require_finite(name, getattr(self, name))
-            require(name in FORMS[self.law] or value == 0,
-                    f"{name} = {value!r}: law {self.law!r} takes only {', '.join(FORMS[self.law])}")
-        require(self.shear_modulus > 0, f"C10 = {self.C10!r}, C01 = {self.C01!r}: the initial shear modulus "
-                                        f"2 (C10 + C01) = {self.shear_modulus:g} must be > 0")
+            require(
+                name in FORMS[self.law] or value == 0,
+                f"{name} = {value!r}: law {self.law!r} takes only {', '.join(FORMS[self.law])}",
+            )
+        require(
+            self.shear_modulus > 0,
+            f"C10 = {self.C10!r}, C01 = {self.C01!r}: the initial shear modulus "
+            f"2 (C10 + C01) = {self.shear_modulus:g} must be > 0",
+        )
         self.require_stable()
-        require(self.bulk_modulus is None or self.poisson_ratio is None,
-                f"K = {self.bulk_modulus!r} and nu = {self.poisson_ratio!r}: give one of them, not both")
+        require(
+            self.bulk_modulus is None or self.poisson_ratio is None,
+            f"K = {self.bulk_modulus!r} and nu = {self.poisson_ratio!r}: give one of them, not both",
+        )
         if self.bulk_modulus is not None:
             require(require_finite("K", self.bulk_modulus) > 0, f"K = {self.bulk_modulus!r} must be > 0")
         if self.poisson_ratio is not None:
@@ -198,8 +219,12 @@ class IsochoricMaterial(MaterialForm):
 
     def scene_values(self) -> dict:
         """law, K, nu and the coefficients its form takes (those it does not are zero, and not written)."""
-        return {"law": self.law, "K": self.bulk_modulus, "nu": self.poisson_ratio,
-                **{c: getattr(self, c) for c in FORMS[self.law]}}
+        return {
+            "law": self.law,
+            "K": self.bulk_modulus,
+            "nu": self.poisson_ratio,
+            **{c: getattr(self, c) for c in FORMS[self.law]},
+        }
 
     def require_stable(self) -> None:
         """Refuse a law that is not stable over STRETCHES (module docstring), naming its negative coefficients,
@@ -211,11 +236,14 @@ class IsochoricMaterial(MaterialForm):
         given = ", ".join(f"{c} = {getattr(self, c)!r}" for c in FORMS[self.law])
         negative = [c for c in COEFFICIENTS if getattr(self, c) < 0]
         mode = path if path == "pure shear" else f"{path} {'tension' if lam > 1 else 'compression'}"
-        require(False, f"law = {self.law!r} with {given} is not stable (Drucker): in {mode} at stretch {lam:.3g} "
-                       f"its nominal stress stops growing with the stretch, because of "
-                       f"{' and '.join(f'{c} = {getattr(self, c)!r}' for c in negative)} < 0; a law must be stable "
-                       f"for principal stretches 1/{1 / STRETCHES[0]:g} to {STRETCHES[1]:g} (the presets' fitted "
-                       f"range)")
+        require(
+            False,
+            f"law = {self.law!r} with {given} is not stable (Drucker): in {mode} at stretch {lam:.3g} "
+            f"its nominal stress stops growing with the stretch, because of "
+            f"{' and '.join(f'{c} = {getattr(self, c)!r}' for c in negative)} < 0; a law must be stable "
+            f"for principal stretches 1/{1 / STRETCHES[0]:g} to {STRETCHES[1]:g} (the presets' fitted "
+            f"range)",
+        )
 
     @property
     def shear_modulus(self) -> float:
@@ -242,6 +270,12 @@ class IsochoricMaterial(MaterialForm):
 
     def scaled(self, factor: float) -> IsochoricMaterial:
         """The same material with every modulus (coefficients and a given K) multiplied by factor (a unit change)."""
-        return IsochoricMaterial(self.law, factor * self.C10, factor * self.C01, factor * self.C20, factor * self.C30,
-                                 None if self.bulk_modulus is None else factor * self.bulk_modulus, self.poisson_ratio)
-
+        return IsochoricMaterial(
+            self.law,
+            factor * self.C10,
+            factor * self.C01,
+            factor * self.C20,
+            factor * self.C30,
+            None if self.bulk_modulus is None else factor * self.bulk_modulus,
+            self.poisson_ratio,
+        )

@@ -141,8 +141,13 @@ def stress_eigensystem(law: ti.template(), F, p, d: ti.template()):
 
 
 @ti.kernel
-def cauchy_stresses(law: ti.template(), d: ti.template(), F: ti.types.ndarray(dtype=ti.f64, ndim=3),
-                    parameters: ti.types.ndarray(dtype=ti.f64, ndim=2), out: ti.types.ndarray(dtype=ti.f64, ndim=3)):
+def cauchy_stresses(
+    law: ti.template(),
+    d: ti.template(),
+    F: ti.types.ndarray(dtype=ti.f64, ndim=3),
+    parameters: ti.types.ndarray(dtype=ti.f64, ndim=2),
+    out: ti.types.ndarray(dtype=ti.f64, ndim=3),
+):
     """out[i] = sigma = P F^T / J (3 x 3) of each F[i] (d x d, embedded in 3 x 3) under parameters[i]."""
     for i in range(F.shape[0]):
         Fd = ti.Matrix.zero(ti.f64, d, d)

@@ -82,8 +82,9 @@ class StableNeoHookean(Law):
 
     @staticmethod
     def parameters(youngs_modulus, poisson_ratio) -> np.ndarray:
-        return np.column_stack(lame_parameters(np.asarray(youngs_modulus, dtype=np.float64),
-                                               np.asarray(poisson_ratio, dtype=np.float64)))
+        return np.column_stack(
+            lame_parameters(np.asarray(youngs_modulus, dtype=np.float64), np.asarray(poisson_ratio, dtype=np.float64))
+        )
 
     @staticmethod
     def modulus(parameters) -> np.ndarray:
@@ -161,13 +162,15 @@ def solid_eigensystem(F, p):
     for m in ti.static(range(3)):
         values[6 + m] = scalings[m]
         for a, b in ti.static(ti.ndrange(3, 3)):
-            vectors[6 + m, 3 * a + b] = U[a, 0] * rows[m, 0] * V[b, 0] + U[a, 1] * rows[m, 1] * V[b, 1] \
-                + U[a, 2] * rows[m, 2] * V[b, 2]
+            vectors[6 + m, 3 * a + b] = (
+                U[a, 0] * rows[m, 0] * V[b, 0] + U[a, 1] * rows[m, 1] * V[b, 1] + U[a, 2] * rows[m, 2] * V[b, 2]
+            )
     return values, vectors
 
 
-YOUNGS_MODULUS = MaterialKey("E", "youngs_modulus", doc="Young's modulus of the stable neo-Hookean material, > 0",
-                             unit=PRESSURE, si=1e4)
+YOUNGS_MODULUS = MaterialKey(
+    "E", "youngs_modulus", doc="Young's modulus of the stable neo-Hookean material, > 0", unit=PRESSURE, si=1e4
+)
 
 
 @register_form
@@ -182,8 +185,10 @@ class Material(MaterialForm):
     summary = "the stable neo-Hookean one of E and nu (no law or preset)"
 
     def __post_init__(self):
-        require(self.youngs_modulus is None or require_finite("E", self.youngs_modulus) > 0,
-                f"E = {self.youngs_modulus!r} must be > 0")
+        require(
+            self.youngs_modulus is None or require_finite("E", self.youngs_modulus) > 0,
+            f"E = {self.youngs_modulus!r} must be > 0",
+        )
         nu = require_finite("nu", self.poisson_ratio)
         require(-1 < nu < 0.5, f"nu = {self.poisson_ratio!r} must lie in (-1, 0.5)")
 

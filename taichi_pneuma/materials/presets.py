@@ -49,32 +49,49 @@ class Preset:
 MPA, KPA = 1e6, 1e3
 PRESETS = {
     "ecoflex_00_30": Preset(
-        "Ecoflex 00-30 (Smooth-On)", IsochoricMaterial("yeoh", 7.86 * KPA, C20=0.0943 * KPA, C30=0.0),
-        "[M] data, Yeoh fit (this project)", "uniaxial tension, engineering strain 0-200 % (rms error 0.44 kPa)",
-        "[S] Shore 00-30; 100 % modulus 10 psi (69 kPa); tensile strength 200 psi (1.38 MPa); elongation 900 %"),
+        "Ecoflex 00-30 (Smooth-On)",
+        IsochoricMaterial("yeoh", 7.86 * KPA, C20=0.0943 * KPA, C30=0.0),
+        "[M] data, Yeoh fit (this project)",
+        "uniaxial tension, engineering strain 0-200 % (rms error 0.44 kPa)",
+        "[S] Shore 00-30; 100 % modulus 10 psi (69 kPa); tensile strength 200 psi (1.38 MPa); elongation 900 %",
+    ),
     "ecoflex_00_50": Preset(
-        "Ecoflex 00-50 (Smooth-On)", IsochoricMaterial("yeoh", 10.7 * KPA, C20=0.231 * KPA, C30=0.0),
-        "[M] data, Yeoh fit (this project)", "uniaxial tension, engineering strain 0-200 % (rms error 0.65 kPa)",
-        "[S] Shore 00-50; 100 % modulus 12 psi (83 kPa); tensile strength 315 psi (2.17 MPa); elongation 980 %"),
+        "Ecoflex 00-50 (Smooth-On)",
+        IsochoricMaterial("yeoh", 10.7 * KPA, C20=0.231 * KPA, C30=0.0),
+        "[M] data, Yeoh fit (this project)",
+        "uniaxial tension, engineering strain 0-200 % (rms error 0.65 kPa)",
+        "[S] Shore 00-50; 100 % modulus 12 psi (83 kPa); tensile strength 315 psi (2.17 MPa); elongation 980 %",
+    ),
     "dragon_skin_10": Preset(
-        "Dragon Skin 10 Medium (Smooth-On)", IsochoricMaterial("yeoh", 25.0 * KPA, C20=1.81 * KPA, C30=0.0),
-        "[M] data, Yeoh fit (this project)", "uniaxial tension, engineering strain 0-200 % (rms error 3.9 kPa)",
-        "[S] Shore 10A; 100 % modulus 22 psi (152 kPa); tensile strength 475 psi (3.28 MPa); elongation 1000 %"),
+        "Dragon Skin 10 Medium (Smooth-On)",
+        IsochoricMaterial("yeoh", 25.0 * KPA, C20=1.81 * KPA, C30=0.0),
+        "[M] data, Yeoh fit (this project)",
+        "uniaxial tension, engineering strain 0-200 % (rms error 3.9 kPa)",
+        "[S] Shore 10A; 100 % modulus 22 psi (152 kPa); tensile strength 475 psi (3.28 MPa); elongation 1000 %",
+    ),
     "dragon_skin_30": Preset(
-        "Dragon Skin 30 (Smooth-On)", IsochoricMaterial("yeoh", 103.0 * KPA, C20=5.08 * KPA, C30=0.0),
-        "[M] data, Yeoh fit (this project)", "uniaxial tension, engineering strain 0-200 % (rms error 13 kPa)",
-        "[S] Shore 30A; 100 % modulus 86 psi (593 kPa); tensile strength 500 psi (3.45 MPa); elongation 364 %"),
+        "Dragon Skin 30 (Smooth-On)",
+        IsochoricMaterial("yeoh", 103.0 * KPA, C20=5.08 * KPA, C30=0.0),
+        "[M] data, Yeoh fit (this project)",
+        "uniaxial tension, engineering strain 0-200 % (rms error 13 kPa)",
+        "[S] Shore 30A; 100 % modulus 86 psi (593 kPa); tensile strength 500 psi (3.45 MPa); elongation 364 %",
+    ),
     "elastosil_m4601": Preset(
-        "Elastosil M 4601 A/B (Wacker)", IsochoricMaterial("yeoh", 0.11 * MPA, C20=0.02 * MPA),
-        "[P] Yeoh fit", "the strains of fiber-reinforced and PneuNet bending actuators (as used in [P])",
-        "[S] Shore A 28; tensile strength 6.5 MPa; elongation at break 700 %"),
+        "Elastosil M 4601 A/B (Wacker)",
+        IsochoricMaterial("yeoh", 0.11 * MPA, C20=0.02 * MPA),
+        "[P] Yeoh fit",
+        "the strains of fiber-reinforced and PneuNet bending actuators (as used in [P])",
+        "[S] Shore A 28; tensile strength 6.5 MPa; elongation at break 700 %",
+    ),
     "paper": Preset(
         "paper, as an inextensible strain-limiting layer",
         IsochoricMaterial("neo_hookean", 6.5e9 / (4 * 1.2), poisson_ratio=0.2),
         "[P] linear elastic E = 6.5 GPa, nu = 0.2, here the neo-Hookean form with the same small-strain moduli "
-        "(C10 = E / (4 (1 + nu)))", "small strains only: the layer barely stretches; its bending stiffness is "
+        "(C10 = E / (4 (1 + nu)))",
+        "small strains only: the layer barely stretches; its bending stiffness is "
         "that of the meshed layer's thickness (a thin sheet is far more flexible than a thick band of it)",
-        "-"),
+        "-",
+    ),
 }
 
 
@@ -104,13 +121,16 @@ class PresetMaterial(MaterialForm):
         """The preset's material in a pressure unit of `pascal` Pa (None: the scene is unitless, which a preset
         cannot be converted into), with this material's K or nu."""
         if pascal is None:
-            raise PneumaInputError(f"preset = {self.preset!r} needs the scene's units (units = \"mm-kPa\", "
-                                   f"\"mm-MPa\" or \"m-Pa\") to be converted into")
+            raise PneumaInputError(
+                f'preset = {self.preset!r} needs the scene\'s units (units = "mm-kPa", '
+                f'"mm-MPa" or "m-Pa") to be converted into'
+            )
         base = PRESETS[self.preset].material.scaled(1.0 / require_finite("pressure unit", pascal))
         if self.bulk_modulus is None and self.poisson_ratio is None:
             return base
-        return IsochoricMaterial(base.law, base.C10, base.C01, base.C20, base.C30, self.bulk_modulus,
-                                 self.poisson_ratio)
+        return IsochoricMaterial(
+            base.law, base.C10, base.C01, base.C20, base.C30, self.bulk_modulus, self.poisson_ratio
+        )
 
     def law_parameters(self, units) -> tuple[type, np.ndarray]:
         """The law and its parameter vector in the scene's units (io/units.py; a unitless scene's name is None)."""

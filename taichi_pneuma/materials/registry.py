@@ -29,9 +29,11 @@ from ..io.units import PRESSURE
 
 # The keys that name a material's form, by priority (a table naming a preset and a law is read as the preset,
 # which refuses law), and what each means
-SELECTORS = {"preset": "a published material (its law and coefficients, converted into the scene's units)",
-             "law": "a law by name with its coefficients (the isochoric law's forms: C10, ... and K or nu); none: "
-                    "stable neo-Hookean (E, nu)"}
+SELECTORS = {
+    "preset": "a published material (its law and coefficients, converted into the scene's units)",
+    "law": "a law by name with its coefficients (the isochoric law's forms: C10, ... and K or nu); none: "
+    "stable neo-Hookean (E, nu)",
+}
 
 
 @dataclass(frozen=True)
@@ -49,10 +51,14 @@ class MaterialKey:
     si: float | None = None
 
 
-POISSON_RATIO = MaterialKey("nu", "poisson_ratio",
-                            doc="Poisson's ratio, in (-1, 0.5); none: 0.45 (E), 0.49 (law), the preset's own")
+POISSON_RATIO = MaterialKey(
+    "nu", "poisson_ratio", doc="Poisson's ratio, in (-1, 0.5); none: 0.45 (E), 0.49 (law), the preset's own"
+)
 BULK_MODULUS = MaterialKey("K", "bulk_modulus", doc="bulk modulus, instead of nu (law or preset)", unit=PRESSURE)
-ALTERNATIVES = (BULK_MODULUS.name, POISSON_RATIO.name)  # keys a material gives one of: a region giving either replaces both of its base's
+ALTERNATIVES = (
+    BULK_MODULUS.name,
+    POISSON_RATIO.name,
+)  # keys a material gives one of: a region giving either replaces both of its base's
 
 
 class MaterialForm:
@@ -92,8 +98,10 @@ class MaterialForm:
     @classmethod
     def refusal(cls, extra: list[str], values: dict) -> str:
         """The message refusing the given keys `extra` that this form does not take."""
-        return f"{cls.selector} = {values.get(cls.selector)!r} takes {', '.join(k.name for k in cls.keys)}, not " \
-               f"{', '.join(extra)}"
+        return (
+            f"{cls.selector} = {values.get(cls.selector)!r} takes {', '.join(k.name for k in cls.keys)}, not "
+            f"{', '.join(extra)}"
+        )
 
     def scene_values(self) -> dict:
         """Its scene-file keys (its selector first) and their values, None where not given: from_keys' inverse."""
@@ -170,5 +178,7 @@ def region_values(base: dict, region: dict) -> dict:
     if any(region.get(selector) is not None for selector in SELECTORS):
         return region
     alternative = any(region.get(name) is not None for name in ALTERNATIVES)
-    return {name: base.get(name) if value is None and not (alternative and name in ALTERNATIVES) else value
-            for name, value in region.items()}
+    return {
+        name: base.get(name) if value is None and not (alternative and name in ALTERNATIVES) else value
+        for name, value in region.items()
+    }

@@ -38,15 +38,18 @@ class Camera:
         for name in ("distance", "azimuth", "elevation", "fov"):
             require_finite(name, getattr(self, name))
         require(self.distance > 0, f"distance = {self.distance!r} must be > 0")
-        require(abs(self.elevation) <= MAX_ELEVATION, f"elevation = {self.elevation!r} must lie in "
-                                                      f"[-{MAX_ELEVATION:g}, {MAX_ELEVATION:g}] degrees")
+        require(
+            abs(self.elevation) <= MAX_ELEVATION,
+            f"elevation = {self.elevation!r} must lie in [-{MAX_ELEVATION:g}, {MAX_ELEVATION:g}] degrees",
+        )
         require(0 < self.fov < 170, f"fov = {self.fov!r} must lie in (0, 170) degrees")
 
     @property
     def eye(self) -> np.ndarray:
         az, el = np.radians(self.azimuth), np.radians(self.elevation)
         return np.asarray(self.target, float) + self.distance * np.array(
-            [np.cos(el) * np.sin(az), np.sin(el), np.cos(el) * np.cos(az)])
+            [np.cos(el) * np.sin(az), np.sin(el), np.cos(el) * np.cos(az)]
+        )
 
     def basis(self) -> np.ndarray:
         """Rows: right r, up u, forward f (orthonormal, right-handed as r x u = -f)."""
@@ -67,8 +70,9 @@ class Camera:
         """(pixels (..., 2) as (column, row from the top), depth (...)) of world points."""
         c = self.to_camera(points)
         focal = self.focal(height)
-        return np.stack([width / 2 + focal * c[..., 0] / c[..., 2],
-                         height / 2 - focal * c[..., 1] / c[..., 2]], axis=-1), c[..., 2]
+        return np.stack(
+            [width / 2 + focal * c[..., 0] / c[..., 2], height / 2 - focal * c[..., 1] / c[..., 2]], axis=-1
+        ), c[..., 2]
 
     def orbit(self, d_azimuth: float, d_elevation: float) -> Camera:
         """This camera turned about the target; the elevation is held within +-MAX_ELEVATION."""

@@ -190,8 +190,11 @@ def open_canvas(width: int, height: int, backend: str = "auto", show: bool = Fal
 
         missing = f"Taichi's GUI (ti.GUI or GGUI), which {NAME} {VERSION} does not have"
         require(backend in ("auto", "pillow"), f"renderer = {backend!r} needs {missing}: use --renderer pillow")
-        require(not show or backend == "pillow", f"a live window needs {missing}: install taichi "
-                f"({INSTALL['taichi']}; Python < 3.14, not Linux aarch64) and run with PNEUMA_BACKEND=taichi")
+        require(
+            not show or backend == "pillow",
+            f"a live window needs {missing}: install taichi "
+            f"({INSTALL['taichi']}; Python < 3.14, not Linux aarch64) and run with PNEUMA_BACKEND=taichi",
+        )
         pillow = PillowCanvas(width, height, show)
         log(f"renderer: {pillow.name}" + ("" if backend == "pillow" else f" ({NAME} has no GUI)"))
         return pillow

@@ -69,8 +69,9 @@ class Track:
     def from_result(cls, result, title: str = "", color: str = "none") -> Track:
         """A track of a run (a solve.result.Result: every chamber of its scene, its ground line, a reach's
         targets from its target_x/target_y columns); color: 'none' or a COLOR_FIELDS key."""
-        require(color == "none" or color in COLOR_FIELDS,
-                f"color = {color!r} is not one of none, {', '.join(COLOR_FIELDS)}")
+        require(
+            color == "none" or color in COLOR_FIELDS, f"color = {color!r} is not one of none, {', '.join(COLOR_FIELDS)}"
+        )
         mesh, history = result.mesh, result.history
         values, label = None, ""
         if color != "none":
@@ -78,16 +79,30 @@ class Track:
             fields = ElementFields(mesh.vertices, mesh.triangles)
             values = np.array([fields.at(x)[key] for x in result.positions])
         targets = np.column_stack([history["target_x"], history["target_y"]]) if "target_x" in history else None
-        return cls(mesh, result.positions, result.area_ratio, result.pressure, history["tip_dy"], title,
-                   result.ground_height, targets, values, label, history.get("target"), history.get("descent"),
-                   tuple(result.chamber_names))
+        return cls(
+            mesh,
+            result.positions,
+            result.area_ratio,
+            result.pressure,
+            history["tip_dy"],
+            title,
+            result.ground_height,
+            targets,
+            values,
+            label,
+            history.get("target"),
+            history.get("descent"),
+            tuple(result.chamber_names),
+        )
 
     def header(self, i: int) -> list[str]:
         """The lines above the body at step i."""
         areas = ", ".join(f"x{r:.2f}" for r in self.area_ratio[i])
         pressures = ", ".join(f"{p:.1f}" for p in self.pressure[i])
         return ([self.title] if self.title else []) + [
-            f"step {i}/{len(self.states) - 1}   area {areas}", f"p = {pressures}   tip dy = {self.tip_dy[i]:+.4f}"]
+            f"step {i}/{len(self.states) - 1}   area {areas}",
+            f"p = {pressures}   tip dy = {self.tip_dy[i]:+.4f}",
+        ]
 
 
 def chamber_triangles(mesh: Mesh) -> np.ndarray:
@@ -122,8 +137,17 @@ class FrameRenderer:
     canvas: draw on this canvas instead of opening one.
     """
 
-    def __init__(self, tracks: list[Track], width: int = 960, height: int = 384, trace: bool = True,
-                 backend: str = "auto", log=print, canvas=None, bounds=None):
+    def __init__(
+        self,
+        tracks: list[Track],
+        width: int = 960,
+        height: int = 384,
+        trace: bool = True,
+        backend: str = "auto",
+        log=print,
+        canvas=None,
+        bounds=None,
+    ):
         require(len(tracks) >= 1, "nothing to render: no tracks")
         lengths = {len(t.states) for t in tracks}
         require(len(lengths) == 1, f"tracks have different step counts {sorted(lengths)}")
@@ -136,13 +160,21 @@ class FrameRenderer:
         if colored:
             values = np.concatenate([color.ravel() for color in colored])
             self.color_range = (float(values.min()), float(values.max()))
-        self._art = [(mesh_edges(t.mesh, boundary_only=t.color is not None), t.mesh.display_triangles(),
-                      chamber_triangles(t.mesh)) for t in tracks]
+        self._art = [
+            (
+                mesh_edges(t.mesh, boundary_only=t.color is not None),
+                t.mesh.display_triangles(),
+                chamber_triangles(t.mesh),
+            )
+            for t in tracks
+        ]
         # horizontal layout in normalised units: beam panels | colour bar | trace panel (left out when its
         # plot box would be too small to read, at a small --size)
         left, top, right, bottom = TRACE_MARGINS_PX
-        self.trace = trace and (0.38 * self.width - left - right >= TRACE_MIN_BOX_PX[0]
-                                and self.height - top - bottom >= TRACE_MIN_BOX_PX[1])
+        self.trace = trace and (
+            0.38 * self.width - left - right >= TRACE_MIN_BOX_PX[0]
+            and self.height - top - bottom >= TRACE_MIN_BOX_PX[1]
+        )
         trace_w = 0.38 if self.trace else 0.0
         bar_w = COLORBAR_PX / self.width if colored else 0.0
         beam_w = 1.0 - trace_w - bar_w
@@ -151,10 +183,12 @@ class FrameRenderer:
         self.colorbar_panel = (beam_w, beam_w + bar_w)
         self.trace_panel = (beam_w + bar_w, 1.0)
         self.header_px = MARGIN_PX + LINE_PX * HEADER_LINES  # the same view whether a track has a title or not
-        points = np.concatenate([t.states.reshape(-1, 2) for t in self.tracks]
-                                + [t.targets for t in self.tracks if t.targets is not None])
-        self._lo, self._hi = (np.asarray(b, float) for b in (bounds if bounds is not None else
-                                                             (points.min(axis=0), points.max(axis=0))))
+        points = np.concatenate(
+            [t.states.reshape(-1, 2) for t in self.tracks] + [t.targets for t in self.tracks if t.targets is not None]
+        )
+        self._lo, self._hi = (
+            np.asarray(b, float) for b in (bounds if bounds is not None else (points.min(axis=0), points.max(axis=0)))
+        )
         self._fit_view(self._lo, self._hi)
 
     def _fit_view(self, lo: np.ndarray, hi: np.ndarray) -> None:
@@ -200,8 +234,9 @@ class FrameRenderer:
                 c.segments(x[edges], EDGE, 1.0)
             else:  # a quadratic element's four display triangles share its value (split_in_four's order)
                 assert self.color_range is not None  # (set when a track is coloured)
-                c.triangles(x[faces], colormap(np.tile(track.color[i], len(faces) // len(track.color[i])),
-                                               *self.color_range))
+                c.triangles(
+                    x[faces], colormap(np.tile(track.color[i], len(faces) // len(track.color[i])), *self.color_range)
+                )
                 c.segments(x[edges], OUTLINE, 1.0)
             c.triangles(x[chamber], CHAMBER_FILL)
             for loop in track.mesh.chambers:
@@ -223,9 +258,9 @@ class FrameRenderer:
         i's descent (Gauss-Newton's iterates: equilibria apart, not a path the tip moved along, so not
         joined; a restart begins a new descent)."""
         c = self.canvas
-        tips = self.to_canvas(panel, track.states[:i + 1, track.mesh.tip].mean(axis=1))
+        tips = self.to_canvas(panel, track.states[: i + 1, track.mesh.tip].mean(axis=1))
         if track.target_index is not None:
-            done = np.flatnonzero(np.diff(track.target_index[:i + 1]) != 0)  # the last frame of each earlier target
+            done = np.flatnonzero(np.diff(track.target_index[: i + 1]) != 0)  # the last frame of each earlier target
             if len(done) > 1:
                 c.segments(np.stack([tips[done[:-1]], tips[done[1:]]], axis=1), TIP_PATH, 2.0)
             if len(done):
@@ -236,8 +271,9 @@ class FrameRenderer:
         assert track.targets is not None  # (drawn for a track with targets only)
         centre = self.to_canvas(panel, track.targets[i])
         arm = 9.0 / np.array([self.width, self.height])
-        c.segments(np.array([[centre - arm, centre + arm], [centre + arm * (-1, 1), centre + arm * (1, -1)]]),
-                   TARGET, 3.0)
+        c.segments(
+            np.array([[centre - arm, centre + arm], [centre + arm * (-1, 1), centre + arm * (1, -1)]]), TARGET, 3.0
+        )
 
     def _draw_colorbar(self, lo: float, hi: float) -> list[Label]:
         """A vertical colour bar with numbered ticks over the colour range lo..hi."""
@@ -246,13 +282,21 @@ class FrameRenderer:
         top, bottom = self.header_px + LINE_PX + 4, self.height - MARGIN_PX - 8
         k = 64
         ys = np.linspace(bottom, top, k + 1)
-        quads = np.array([[[x0, a], [x0 + 14, a], [x0 + 14, b]] for a, b in zip(ys[:-1], ys[1:])] +
-                         [[[x0, a], [x0 + 14, b], [x0, b]] for a, b in zip(ys[:-1], ys[1:])])
+        quads = np.array(
+            [[[x0, a], [x0 + 14, a], [x0 + 14, b]] for a, b in zip(ys[:-1], ys[1:])]
+            + [[[x0, a], [x0 + 14, b], [x0, b]] for a, b in zip(ys[:-1], ys[1:])]
+        )
         colors = colormap(lo + (hi - lo) * (np.arange(k) + 0.5) / k, lo, hi)
         c.triangles(self._norm(quads), np.vstack([colors, colors]))
-        labels = [Label(self.tracks[0].color_label if all(t.color_label == self.tracks[0].color_label
-                                                          for t in self.tracks) else "colour", x0 - 4,
-                        self.header_px)]
+        labels = [
+            Label(
+                self.tracks[0].color_label
+                if all(t.color_label == self.tracks[0].color_label for t in self.tracks)
+                else "colour",
+                x0 - 4,
+                self.header_px,
+            )
+        ]
         for y, figure in colorbar_ticks(lo, hi, top, bottom):
             c.segments(self._norm(np.array([[[x0 + 14, y], [x0 + 19, y]]])), AXES, 1.0)
             labels.append(Label(figure, x0 + 22, y, "lm"))
@@ -269,8 +313,13 @@ class FrameRenderer:
         left, top, right, bottom = TRACE_MARGINS_PX
         box = (x0 + left, top, x1 - right, self.height - bottom)
         bins_x, bins_y = ((box[2] - box[0]) // TICK_ROOM_PX[0], (box[3] - box[1]) // TICK_ROOM_PX[1])
-        axes = {"step": (0.0, float(self.frames - 1),
-                         nice_ticks(0, max(self.frames - 1, 1), integer=True, bins=min(5, bins_x)))}
+        axes = {
+            "step": (
+                0.0,
+                float(self.frames - 1),
+                nice_ticks(0, max(self.frames - 1, 1), integer=True, bins=min(5, bins_x)),
+            )
+        }
         for key, attr in (("area", "area_ratio"), ("pressure", "pressure")):
             values = np.concatenate([getattr(t, attr).ravel() for t in self.tracks])
             ticks = nice_ticks(float(values.min()), float(values.max()), bins=min(5, bins_y))
@@ -309,8 +358,10 @@ class FrameRenderer:
                 ticks.append([[to_x(s), bottom], [to_x(s), bottom + 5]])
                 labels.append(Label(f"{s:g}", to_x(s), bottom + 7, "mt"))
         labels.append(Label("step", (left + right) / 2, bottom + 7 + LINE_PX, "mt"))
-        for axis, x, sign, anchor, color in (("area", left, -1, "rm", AREA_CURVE),
-                                             ("pressure", right, 1, "lm", PRESSURE_CURVE)):
+        for axis, x, sign, anchor, color in (
+            ("area", left, -1, "rm", AREA_CURVE),
+            ("pressure", right, 1, "lm", PRESSURE_CURVE),
+        ):
             for v in spec[axis][2]:
                 ticks.append([[x, to_y(axis, v)], [x + 5 * sign, to_y(axis, v)]])
                 labels.append(Label(tick_label(v), x + 7 * sign, to_y(axis, v), anchor, TEXT if per_chamber else color))
@@ -330,14 +381,16 @@ class FrameRenderer:
                     else:
                         color = per_chamber[k]
                         c.triangles(_squares(pts, 0.5 * marker), color)
-                    c.triangles(_squares(pts[i:i + 1], marker), color)
+                    c.triangles(_squares(pts[i : i + 1], marker), color)
         c.segments(self._norm(np.array([[[to_x(i), bottom], [to_x(i), top]]])), CURSOR, 1.0)
         x_text = self.trace_panel[0] * self.width + MARGIN_PX
         if per_chamber is None:
             titles = [("area / rest area (left axis)", AREA_CURVE), ("pressure p (right axis)", PRESSURE_CURVE)]
         else:
             titles = [("area / rest area: lines, left axis", TEXT), ("pressure p: dots, right axis", TEXT)]
-        labels += [Label(text, x_text, MARGIN_PX / 2 + LINE_PX * k, color=color) for k, (text, color) in enumerate(titles)]
+        labels += [
+            Label(text, x_text, MARGIN_PX / 2 + LINE_PX * k, color=color) for k, (text, color) in enumerate(titles)
+        ]
         cursor = Label(f"cursor: step {i}", x_text, MARGIN_PX / 2 + 2 * LINE_PX)
         labels.append(cursor)
         if per_chamber is not None:

@@ -71,17 +71,25 @@ class Track3D:
 
     def __post_init__(self):
         steps = shape_of(self.positions)
-        require(steps is not None and len(steps) == 3 and steps[2] == 3 and steps[0] >= 1 and steps[1] >= 3,
-                f"positions must be (steps, nodes, 3), not {steps}")
+        require(
+            steps is not None and len(steps) == 3 and steps[2] == 3 and steps[0] >= 1 and steps[1] >= 3,
+            f"positions must be (steps, nodes, 3), not {steps}",
+        )
         steps, n = steps[0], steps[1]
         for faces in (self.boundary, *self.chambers):
-            require(shape_of(faces) is not None and np.ndim(faces) == 2 and np.shape(faces)[1] == 3
-                    and np.all((np.asarray(faces) >= 0) & (np.asarray(faces) < n)),
-                    f"triangles must be (k, 3) node indices in 0..{n - 1}")
+            require(
+                shape_of(faces) is not None
+                and np.ndim(faces) == 2
+                and np.shape(faces)[1] == 3
+                and np.all((np.asarray(faces) >= 0) & (np.asarray(faces) < n)),
+                f"triangles must be (k, 3) node indices in 0..{n - 1}",
+            )
         if self.color is not None:
-            require(np.shape(self.color) in ((steps, len(self.boundary)), (steps, n)),
-                    f"color must be (steps, boundary faces) = {(steps, len(self.boundary))} or (steps, nodes) = "
-                    f"{(steps, n)}, not {np.shape(self.color)}")
+            require(
+                np.shape(self.color) in ((steps, len(self.boundary)), (steps, n)),
+                f"color must be (steps, boundary faces) = {(steps, len(self.boundary))} or (steps, nodes) = "
+                f"{(steps, n)}, not {np.shape(self.color)}",
+            )
         require(self.captions is None or len(self.captions) == steps, f"captions must give {steps} steps")
         require(len(self.trace) <= 2, f"trace: {len(self.trace)} series given, at most 2 (left and right axis)")
         for label, values in self.trace:
@@ -95,8 +103,9 @@ class Track3D:
         volume ratio and pressure traced, and the scene's ground."""
         from . import COLOR_FIELDS
 
-        require(color == "none" or color in COLOR_FIELDS,
-                f"color = {color!r} is not one of none, {', '.join(COLOR_FIELDS)}")
+        require(
+            color == "none" or color in COLOR_FIELDS, f"color = {color!r} is not one of none, {', '.join(COLOR_FIELDS)}"
+        )
         mesh, history, units = result.mesh, result.history, result.scene.units
         outer, walls, under = surface_triangles(mesh)
         values, label = None, ""
@@ -106,13 +115,30 @@ class Track3D:
             values = np.array([fields.at(x)[key][under] for x in result.positions])
         steps = len(result.positions)
         names = result.chamber_names
-        captions = tuple((f"step {i}/{steps - 1}   volume " + ", ".join(f"x{r:.2f}" for r in result.area_ratio[i])
-                          + "   p = " + ", ".join(f"{p:.4g}" for p in result.pressure[i]) + units.suffix(PRESSURE),
-                          f"tip dy = {history['tip_dy'][i]:+.4f}   dz = {history['tip_dz'][i]:+.4f}{units.suffix(LENGTH)}"
-                          f"   bend {history['tip_rotation'][i]:+.1f} deg") for i in range(steps))
+        captions = tuple(
+            (
+                f"step {i}/{steps - 1}   volume "
+                + ", ".join(f"x{r:.2f}" for r in result.area_ratio[i])
+                + "   p = "
+                + ", ".join(f"{p:.4g}" for p in result.pressure[i])
+                + units.suffix(PRESSURE),
+                f"tip dy = {history['tip_dy'][i]:+.4f}   dz = {history['tip_dz'][i]:+.4f}{units.suffix(LENGTH)}"
+                f"   bend {history['tip_rotation'][i]:+.1f} deg",
+            )
+            for i in range(steps)
+        )
         trace = (("volume / rest volume", result.area_ratio), (f"pressure{units.suffix(PRESSURE)}", result.pressure))
-        return cls(result.positions, outer, walls, values, label, f"{result.scene.name}: " + ", ".join(names),
-                   captions, trace, result.ground_height)
+        return cls(
+            result.positions,
+            outer,
+            walls,
+            values,
+            label,
+            f"{result.scene.name}: " + ", ".join(names),
+            captions,
+            trace,
+            result.ground_height,
+        )
 
     @property
     def per_node(self) -> bool:
@@ -132,8 +158,11 @@ def surface_triangles(mesh) -> tuple[np.ndarray, tuple[np.ndarray, ...], np.ndar
     order = np.argsort(keys)
     under = order[np.searchsorted(keys, facet_keys(outer, n), sorter=order)] // faces.shape[1]
     drawn = family.facet_family  # each piece of a facet lies on the facet's tetrahedron (split_cells' order)
-    return (drawn.split_cells(outer), tuple(drawn.split_cells(wall) for wall in mesh.chambers),
-            np.tile(under, len(drawn.split)))
+    return (
+        drawn.split_cells(outer),
+        tuple(drawn.split_cells(wall) for wall in mesh.chambers),
+        np.tile(under, len(drawn.split)),
+    )
 
 
 def open_view(backend: str, width: int, height: int, show: bool = False, log=print):
@@ -170,8 +199,9 @@ def section_faces(rest: np.ndarray, faces: np.ndarray, camera: Camera) -> np.nda
     return np.sign(towards_eye[axis]) * (rest[faces].mean(axis=1)[:, axis] - middle) <= 0
 
 
-def shaded_triangles(x: np.ndarray, faces: np.ndarray, walls: np.ndarray, camera: Camera, body=None,
-                     ground: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def shaded_triangles(
+    x: np.ndarray, faces: np.ndarray, walls: np.ndarray, camera: Camera, body=None, ground: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """The world triangles (f, 3, 3) of the body's faces, the chamber walls and the ground quad (if any) at
     positions x, and their corner colours shaded for camera: the body's corner colours (len(faces), 3, 3)
     or BODY, the walls CHAMBER, the ground GROUND."""
@@ -190,8 +220,18 @@ class FrameRenderer3D:
     camera: its direction and field of view (default Camera()); it is aimed and fitted to every state.
     section: open the body to show the chambers; trace: draw the trace panel (if the track has series)."""
 
-    def __init__(self, track: Track3D, width: int = 960, height: int = 540, backend: str = "auto",
-                 camera: Camera | None = None, section: bool = True, trace: bool = True, log=print, view=None):
+    def __init__(
+        self,
+        track: Track3D,
+        width: int = 960,
+        height: int = 540,
+        backend: str = "auto",
+        camera: Camera | None = None,
+        section: bool = True,
+        trace: bool = True,
+        log=print,
+        view=None,
+    ):
         self.track, self.frames = track, len(track.positions)
         self.width, self.height = width, height
         self.header_px = MARGIN_PX + LINE_PX * (1 + max((len(c) for c in track.captions or [()]), default=0))
@@ -199,12 +239,17 @@ class FrameRenderer3D:
         self.bar_px = COLORBAR_PX if track.color is not None else 0
         view_size = (width - self.trace_px - self.bar_px, height - self.header_px)
         self.canvas = view or open_view(backend, *view_size, log=log)
-        require((self.canvas.width, self.canvas.height) == view_size,
-                f"the view is {self.canvas.width}x{self.canvas.height}, the layout needs {view_size[0]}x{view_size[1]}")
+        require(
+            (self.canvas.width, self.canvas.height) == view_size,
+            f"the view is {self.canvas.width}x{self.canvas.height}, the layout needs {view_size[0]}x{view_size[1]}",
+        )
         self.camera = (camera or Camera()).fitted(track.positions, *view_size)
         rest = track.positions[0]
-        keep = section_faces(rest, track.boundary, self.camera) if section and track.chambers else \
-            np.ones(len(track.boundary), bool)
+        keep = (
+            section_faces(rest, track.boundary, self.camera)
+            if section and track.chambers
+            else np.ones(len(track.boundary), bool)
+        )
         self.kept = np.flatnonzero(keep)
         self.walls = np.concatenate(track.chambers) if track.chambers else np.zeros((0, 3), np.int64)
         self.range: tuple[float, float] | None = None
@@ -241,14 +286,18 @@ class FrameRenderer3D:
         require(0 <= i < self.frames, f"frame {i} is outside 0..{self.frames - 1}")
         image = np.full((self.height, self.width, 3), _rgb8(BACKGROUND), dtype=np.uint8)
         view_w = self.width - self.trace_px - self.bar_px
-        image[self.header_px:, :view_w] = _rgb8(self.canvas.render(*self.triangles(i), self.camera, BACKGROUND))
-        labels = [Label(line, MARGIN_PX, MARGIN_PX / 2 + LINE_PX * k) for k, line in
-                  enumerate(([self.track.title] if self.track.title else []) + list(
-                      self.track.captions[i] if self.track.captions else ()))]
+        image[self.header_px :, :view_w] = _rgb8(self.canvas.render(*self.triangles(i), self.camera, BACKGROUND))
+        labels = [
+            Label(line, MARGIN_PX, MARGIN_PX / 2 + LINE_PX * k)
+            for k, line in enumerate(
+                ([self.track.title] if self.track.title else [])
+                + list(self.track.captions[i] if self.track.captions else ())
+            )
+        ]
         if self.range is not None:
             labels += self._colorbar(image, view_w, *self.range)
         if self._trace is not None:
-            image[:, self.width - self.trace_px:] = self._trace.frame(i)
+            image[:, self.width - self.trace_px :] = self._trace.frame(i)
         return draw_labels(image, labels)
 
     def _colorbar(self, image: np.ndarray, x0: int, lo: float, hi: float) -> list[Label]:
@@ -256,11 +305,11 @@ class FrameRenderer3D:
         top, bottom = self.header_px + LINE_PX, self.height - MARGIN_PX - 8
         left = x0 + 8
         t = (bottom - np.arange(top, bottom)) / (bottom - top)
-        image[top:bottom, left:left + 14] = _rgb8(colormap(lo + (hi - lo) * t, lo, hi))[:, None]
+        image[top:bottom, left : left + 14] = _rgb8(colormap(lo + (hi - lo) * t, lo, hi))[:, None]
         labels = [Label(self.track.color_label or "colour", left - 4, self.header_px)]
         for row, figure in colorbar_ticks(lo, hi, top, bottom):
             y = int(round(row))
-            image[max(y - 1, 0):y + 1, left + 14:left + 19] = 90
+            image[max(y - 1, 0) : y + 1, left + 14 : left + 19] = 90
             labels.append(Label(figure, left + 22, y, "lm"))
         return labels
 
@@ -297,13 +346,24 @@ class TracePanel:
 
     def frame(self, i: int) -> np.ndarray:
         image = self.image.copy()
-        image[self.rows[0]:self.rows[1], self.columns[i]] = (60, 60, 60)
+        image[self.rows[0] : self.rows[1], self.columns[i]] = (60, 60, 60)
         return image
 
 
-def render_video_3d(track: Track3D, video, png=None, size=(960, 540), fps: float = 12.0,
-                    backend: str = "auto", camera: Camera | None = None, section: bool = True, trace: bool = True,
-                    quiet: bool = True, log=print, png_frame: int = -1):
+def render_video_3d(
+    track: Track3D,
+    video,
+    png=None,
+    size=(960, 540),
+    fps: float = 12.0,
+    backend: str = "auto",
+    camera: Camera | None = None,
+    section: bool = True,
+    trace: bool = True,
+    quiet: bool = True,
+    log=print,
+    png_frame: int = -1,
+):
     """Render every step of track into video (.mp4 or .gif) and frame png_frame (default the last) into png if
     given (their directories are created); size: (width, height) or 'WIDTHxHEIGHT'; backend: a view (VIEWS)
     or an app's --renderer (VIEW_OF_RENDERER). The view is opened for it and closed after (also when the
@@ -319,9 +379,10 @@ def render_video_3d(track: Track3D, video, png=None, size=(960, 540), fps: float
         if path is not None:
             prepare_directory(Path(path).parent)
     backend = VIEW_OF_RENDERER.get(backend, backend)
-    renderer = FrameRenderer3D(track, width, height, backend=backend, camera=camera, section=section, trace=trace, log=log)
+    renderer = FrameRenderer3D(
+        track, width, height, backend=backend, camera=camera, section=section, trace=trace, log=log
+    )
     try:
         return export(renderer, Path(video), None if png is None else Path(png), fps, quiet, png_frame)
     finally:
         renderer.canvas.close()
-

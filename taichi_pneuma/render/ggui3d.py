@@ -54,8 +54,11 @@ class GGUIView:
         if len(corners):
             with warnings.catch_warnings():  # GGUI's normals kernel casts its f64 loop bound to i32: harmless
                 warnings.simplefilter("ignore")
-                self.scene.mesh(self._field("vertices", corners.reshape(-1, 3)),
-                                per_vertex_color=self._field("colors", colors.reshape(-1, 3)), two_sided=True)
+                self.scene.mesh(
+                    self._field("vertices", corners.reshape(-1, 3)),
+                    per_vertex_color=self._field("colors", colors.reshape(-1, 3)),
+                    two_sided=True,
+                )
         self.canvas.set_background_color(tuple(background))
         self.canvas.scene(self.scene)
 

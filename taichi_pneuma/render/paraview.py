@@ -47,7 +47,9 @@ class VtkSeries:
         self.directory, self.stem, self.mesh = Path(directory), stem, mesh
         self._folder = Subfolder(self.directory, f"{stem}_vtk")
         self.folder = self._folder.path
-        stale = re.compile(rf"{re.escape(stem)}_\d{{4,}}\.vtu|\..*\.partial.*")  # an earlier run's steps, a killed write
+        stale = re.compile(
+            rf"{re.escape(stem)}_\d{{4,}}\.vtu|\..*\.partial.*"
+        )  # an earlier run's steps, a killed write
         for name in self._folder.names():
             if stale.fullmatch(name):
                 self._folder.remove(name)
@@ -76,12 +78,18 @@ class VtkSeries:
         point_data = {units.label("displacement", LENGTH): pad3(positions - mesh.vertices), "chamber": self.chamber}
         if contact_force is not None:
             point_data[units.label("contact_force", FORCE)] = pad3(contact_force)
-        element_data = {"det_F": fields["det_F"], "max_stretch": fields["max_stretch"],
-                        units.label("stress", PRESSURE): stress, units.label("von_mises", PRESSURE): fields["von_mises"]}
+        element_data = {
+            "det_F": fields["det_F"],
+            "max_stretch": fields["max_stretch"],
+            units.label("stress", PRESSURE): stress,
+            units.label("von_mises", PRESSURE): fields["von_mises"],
+        }
         cell_data: dict[str, list[np.ndarray]]
         if self.walls:  # the chamber walls' triangles: their chamber, and no element field
-            cell_data = {name: [values, np.full((len(self.wall_chamber), *values.shape[1:]), np.nan)]
-                         for name, values in element_data.items()}
+            cell_data = {
+                name: [values, np.full((len(self.wall_chamber), *values.shape[1:]), np.nan)]
+                for name, values in element_data.items()
+            }
             cell_data["chamber"] = [np.full(mesh.n_elements, -1), self.wall_chamber]
         else:
             cell_data = {name: [values] for name, values in element_data.items()}

@@ -60,11 +60,12 @@ def history_figure(result, figure=None):
         pressure.plot(x, result.pressure[:, c], ".-", label=short(name))
     tip.plot(x, result.history["tip_dy"], ".-", color="k")
     ratio, measure = RATIO[result.mesh.dim]
-    for ax, xl, yl, title in ((pa, ratio, pressure_label, f"pressure against {measure} ratio"),
-                              (tip, x_label, units.label("tip deflection dy", LENGTH),
-                               "tip deflection (mean y displacement of the tip)"),
-                              (area, x_label, ratio, f"chamber {measure}"),
-                              (pressure, x_label, pressure_label, "chamber pressure")):
+    for ax, xl, yl, title in (
+        (pa, ratio, pressure_label, f"pressure against {measure} ratio"),
+        (tip, x_label, units.label("tip deflection dy", LENGTH), "tip deflection (mean y displacement of the tip)"),
+        (area, x_label, ratio, f"chamber {measure}"),
+        (pressure, x_label, pressure_label, "chamber pressure"),
+    ):
         ax.set(xlabel=xl, ylabel=yl, title=title)
         ax.grid(True, alpha=0.3)
     if len(result.chamber_names) > 1:
@@ -76,7 +77,7 @@ def history_figure(result, figure=None):
 def short(text: str, most: int = 24) -> str:
     """A name for a legend or title: cut to `most` characters, unprintable characters (tabs, ...) as '?'."""
     text = "".join(c if c.isprintable() else "?" for c in text)
-    return text if len(text) <= most else text[:most - 3] + "..."
+    return text if len(text) <= most else text[: most - 3] + "..."
 
 
 def save_history_png(result, path) -> None:

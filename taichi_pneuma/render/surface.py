@@ -41,8 +41,9 @@ def shade_faces(corners: np.ndarray, camera: Camera) -> np.ndarray:
     return lambert * np.where(facing, 1.0, BACK_FACE)
 
 
-def rasterise(pixels: np.ndarray, depth: np.ndarray, colors: np.ndarray, width: int, height: int,
-              background=(1.0, 1.0, 1.0)) -> np.ndarray:
+def rasterise(
+    pixels: np.ndarray, depth: np.ndarray, colors: np.ndarray, width: int, height: int, background=(1.0, 1.0, 1.0)
+) -> np.ndarray:
     """The (height, width, 3) float image of triangles: corner pixels (f, 3, 2) as (column, row from the top),
     corner depths (f, 3) (> 0: in front of the eye; triangles with a corner behind are skipped) and corner
     colours (f, 3, 3) or one colour per triangle (f, 3)."""
@@ -76,8 +77,12 @@ def _edge_functions(pixels: np.ndarray) -> np.ndarray:
     edge = np.stack([x2 - x1, x0 - x2, x1 - x0], axis=1)  # the edge opposite corner k, from corner k + 1
     start = np.stack([x1, x2, x0], axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.stack([-edge[..., 1], edge[..., 0], edge[..., 1] * start[..., 0] - edge[..., 0] * start[..., 1]],
-                        axis=-1) / area[:, None, None]
+        return (
+            np.stack(
+                [-edge[..., 1], edge[..., 0], edge[..., 1] * start[..., 0] - edge[..., 0] * start[..., 1]], axis=-1
+            )
+            / area[:, None, None]
+        )
 
 
 def _covered(pixels: np.ndarray, depth: np.ndarray, edges: np.ndarray, width: int, height: int):

@@ -39,8 +39,9 @@ def label_box(label: Label) -> tuple[float, float, float, float]:
     """The pixel box (left, top, right, bottom) the label's text covers."""
     from PIL import Image, ImageDraw
 
-    return ImageDraw.Draw(Image.new("RGB", (1, 1))).textbbox((label.x, label.y), label.text, font=_font(),
-                                                             anchor=label.anchor)
+    return ImageDraw.Draw(Image.new("RGB", (1, 1))).textbbox(
+        (label.x, label.y), label.text, font=_font(), anchor=label.anchor
+    )
 
 
 @lru_cache(maxsize=4096)
@@ -66,7 +67,7 @@ def draw_labels(image: np.ndarray, labels: list[Label]) -> np.ndarray:
         cx0, cy0, cx1, cy1 = max(x0, 0), max(y0, 0), min(x0 + w, width), min(y0 + h, height)
         if cx0 >= cx1 or cy0 >= cy1:
             continue
-        a = alpha[cy0 - y0:cy1 - y0, cx0 - x0:cx1 - x0, None]
+        a = alpha[cy0 - y0 : cy1 - y0, cx0 - x0 : cx1 - x0, None]
         region = image[cy0:cy1, cx0:cx1].astype(np.float32)
         color = np.array(label.color, dtype=np.float32) * 255
         image[cy0:cy1, cx0:cx1] = (region + (color - region) * a + 0.5).astype(np.uint8)

@@ -29,5 +29,8 @@ def colorbar_ticks(lo: float, hi: float, top: float, bottom: float) -> list[tupl
     """A vertical colour bar's ticks over the colour range lo..hi, drawn from pixel row bottom (lo) up to
     top (hi): (row, figure) of each round tick within the range."""
     span = hi - lo if hi > lo else 1.0
-    return [(bottom + (top - bottom) * (t - lo) / span, tick_label(t))
-            for t in nice_ticks(lo, hi) if lo - 1e-12 <= t <= hi + 1e-12]
+    return [
+        (bottom + (top - bottom) * (t - lo) / span, tick_label(t))
+        for t in nice_ticks(lo, hi)
+        if lo - 1e-12 <= t <= hi + 1e-12
+    ]

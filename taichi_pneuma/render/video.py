@@ -29,8 +29,9 @@ FORMATS = {
 
 def check_video(path: Path, fps: float) -> tuple[str, str, list[str]]:
     """Raise PneumaInputError unless path has a known extension and fps > 0; return its encoder settings."""
-    require(Path(path).suffix.lower() in FORMATS,
-            f"video file {str(path)!r}: extension must be one of {', '.join(FORMATS)}")
+    require(
+        Path(path).suffix.lower() in FORMATS, f"video file {str(path)!r}: extension must be one of {', '.join(FORMATS)}"
+    )
     require(require_finite("fps", fps) > 0, f"fps = {fps!r} must be > 0")
     return FORMATS[Path(path).suffix.lower()]
 
@@ -44,11 +45,15 @@ def frame_size(size, what: str = "size") -> tuple[int, int]:
             size = tuple(int(v) for v in size.lower().split("x"))
         except ValueError:
             raise PneumaInputError(f"{what} = {text!r} must look like 960x384 (WIDTHxHEIGHT)") from None
-    require(isinstance(size, (tuple, list)) and len(size) == 2 and all(isinstance(v, int) for v in size),
-            f"{what} = {text!r} must be 'WIDTHxHEIGHT' like '960x384' or a pair of integers (960, 384)")
+    require(
+        isinstance(size, (tuple, list)) and len(size) == 2 and all(isinstance(v, int) for v in size),
+        f"{what} = {text!r} must be 'WIDTHxHEIGHT' like '960x384' or a pair of integers (960, 384)",
+    )
     width, height = size
-    require(width >= 64 and height >= 64 and width % 2 == 0 and height % 2 == 0,
-            f"{what} = {text!r}: width and height must be even and >= 64")
+    require(
+        width >= 64 and height >= 64 and width % 2 == 0 and height % 2 == 0,
+        f"{what} = {text!r}: width and height must be even and >= 64",
+    )
     return width, height
 
 
@@ -67,12 +72,21 @@ def write_video(path: Path, frames: Iterable[np.ndarray], fps: float = 12.0) -> 
             for frame in frames:
                 if encoder is None:
                     size = (frame.shape[1], frame.shape[0])
-                    encoder = imageio_ffmpeg.write_frames(str(tmp), size, fps=fps, codec=codec, pix_fmt_out=pix_fmt,
-                                                          macro_block_size=1, output_params=params,
-                                                          ffmpeg_log_level="error")
+                    encoder = imageio_ffmpeg.write_frames(
+                        str(tmp),
+                        size,
+                        fps=fps,
+                        codec=codec,
+                        pix_fmt_out=pix_fmt,
+                        macro_block_size=1,
+                        output_params=params,
+                        ffmpeg_log_level="error",
+                    )
                     encoder.send(None)
-                require(frame.shape == (size[1], size[0], 3) and frame.dtype == np.uint8,
-                        f"frame {count} is {frame.shape} {frame.dtype}, expected {(size[1], size[0], 3)} uint8")
+                require(
+                    frame.shape == (size[1], size[0], 3) and frame.dtype == np.uint8,
+                    f"frame {count} is {frame.shape} {frame.dtype}, expected {(size[1], size[0], 3)} uint8",
+                )
                 encoder.send(np.ascontiguousarray(frame))
                 count += 1
             require(count > 0, f"video file {str(path)!r}: no frames to write")
@@ -101,8 +115,9 @@ class Export:
         return 1000 * self.render_seconds / self.frames
 
 
-def export(renderer, video: Path, png: Path | None, fps: float = 12.0, quiet: bool = False,
-           png_frame: int = -1) -> Export:
+def export(
+    renderer, video: Path, png: Path | None, fps: float = 12.0, quiet: bool = False, png_frame: int = -1
+) -> Export:
     """Stream every frame of renderer (a render.FrameRenderer) into video, then save frame png_frame
     (default the last) as png if given. The progress bar shows on a terminal only (never in a log:
     tqdm's disable=None)."""
@@ -115,8 +130,9 @@ def export(renderer, video: Path, png: Path | None, fps: float = 12.0, quiet: bo
 
     def frames():
         nonlocal render_seconds, kept
-        for i in tqdm(range(renderer.frames), desc="rendering", unit="frame", disable=True if quiet else None,
-                      leave=False):
+        for i in tqdm(
+            range(renderer.frames), desc="rendering", unit="frame", disable=True if quiet else None, leave=False
+        ):
             start = time.perf_counter()
             image = renderer.frame(i)
             render_seconds += time.perf_counter() - start
@@ -128,13 +144,31 @@ def export(renderer, video: Path, png: Path | None, fps: float = 12.0, quiet: bo
     assert kept is not None  # (frames() rendered frame png_frame)
     if png is not None:
         write_atomic(Path(png), lambda tmp: iio.imwrite(tmp, kept))
-    return Export(Path(video), None if png is None else Path(png), count, kept.shape[1], kept.shape[0],
-                  render_seconds, renderer.canvas.name)
+    return Export(
+        Path(video),
+        None if png is None else Path(png),
+        count,
+        kept.shape[1],
+        kept.shape[0],
+        render_seconds,
+        renderer.canvas.name,
+    )
 
 
-def render_video(runs: list, video, png=None, size=(960, 384), fps: float = 12.0, color: str = "stretch",
-                 backend: str = "auto", trace: bool = True, titles: list[str] | None = None, quiet: bool = True,
-                 log=print, png_frame: int = -1) -> Export:
+def render_video(
+    runs: list,
+    video,
+    png=None,
+    size=(960, 384),
+    fps: float = 12.0,
+    color: str = "stretch",
+    backend: str = "auto",
+    trace: bool = True,
+    titles: list[str] | None = None,
+    quiet: bool = True,
+    log=print,
+    png_frame: int = -1,
+) -> Export:
     """Render runs (solve.result.Result, all of one length) side by side, one beam panel each (titled by
     titles), one frame per step, into video (.mp4 or .gif) and frame png_frame (default the last) into png
     if given; their directories are created. size: (width, height) or 'WIDTHxHEIGHT'; color: 'stretch',

@@ -58,8 +58,11 @@ class Region:
         if self.box is not None:
             return in_box(mesh.vertices[mesh.elements].mean(axis=1), self.box, "material region")
         groups = getattr(mesh, "region_groups", {})
-        require(self.group in groups, f"material region group = {self.group!r}: the mesh has no such volume group "
-                                      f"(its groups: {', '.join(groups) or 'none'})")
+        require(
+            self.group in groups,
+            f"material region group = {self.group!r}: the mesh has no such volume group "
+            f"(its groups: {', '.join(groups) or 'none'})",
+        )
         return mesh.regions == groups[self.group]
 
 
@@ -81,7 +84,7 @@ class ChamberControl:
 
     @property
     def kind(self) -> ChamberKind:
-        return self.schedule.kind
+        return self.schedule.kind  # type: ignore[return-value]
 
     def term(self, config, loop: np.ndarray, name: str, order: int, origin: np.ndarray | None = None) -> Chamber:
         return self.kind.term(config, loop, name, order, origin)
@@ -118,17 +121,23 @@ class Scene:
     def __post_init__(self):
         self.resolve_defaults()
         check_stem(self.name)  # the result files are named after the scene
-        require(require_finite("max_stretch", self.max_stretch) > 1,
-                f"max_stretch = {self.max_stretch!r} must be > 1 (a principal stretch; 1 is the rest state)")
-        require(self.volumetric in VOLUMETRIC, f"volumetric = {self.volumetric!r} is not one of "
-                                               f"{', '.join(map(repr, VOLUMETRIC))}")
+        require(
+            require_finite("max_stretch", self.max_stretch) > 1,
+            f"max_stretch = {self.max_stretch!r} must be > 1 (a principal stretch; 1 is the rest state)",
+        )
+        require(
+            self.volumetric in VOLUMETRIC,
+            f"volumetric = {self.volumetric!r} is not one of {', '.join(map(repr, VOLUMETRIC))}",
+        )
         require_finite("clamp stiffness", self.clamp_stiffness)
         require(self.clamp_stiffness > 0, f"clamp stiffness = {self.clamp_stiffness!r} must be > 0")
-        require(len(self.controls) == len(self.geometry.chambers),
-                f"{len(self.controls)} chamber controls for {len(self.geometry.chambers)} chambers")
+        require(
+            len(self.controls) == len(self.geometry.chambers),
+            f"{len(self.controls)} chamber controls for {len(self.geometry.chambers)} chambers",
+        )
         kinds = [e.name for e in self.effects]
         require(len(set(kinds)) == len(kinds), f"effects {kinds!r} name one effect twice")
-        self.schedule  # validates the increments against the keyframes
+        _ = self.schedule  # validates the increments against the keyframes
         law, _ = self.law_parameters()  # resolves the presets, checks that the body has one law
         if self.volumetric == "nodal":
             require_nodal(law, getattr(self.geometry, "order", 1))
@@ -137,6 +146,7 @@ class Scene:
         """Set every default left None (units.si_default) of the scene, its geometry, its material and regions,
         its chamber kinds and its effects to its value in the scene's units (units.defaults, the conversion that
         scene files and the Python API share)."""
+
         def put(name, value):
             object.__setattr__(self, name, value)
 
@@ -145,23 +155,35 @@ class Scene:
             put(name, value)
         put("geometry", resolved(self.geometry, units, dim, "mesh"))  # a 2D Geometry's max_area
         put("material", resolved(self.material, units, dim, "material"))
-        put("regions", tuple(dataclasses.replace(r, material=resolved(r.material, units, dim, f"material.regions[{i}]"))
-                             for i, r in enumerate(self.regions)))
-        put("controls", tuple(dataclasses.replace(c, schedule=dataclasses.replace(
-            c.schedule, kind=resolved(c.kind, units, dim, f"chambers[{i}]"))) for i, c in enumerate(self.controls)))
+        put(
+            "regions",
+            tuple(
+                dataclasses.replace(r, material=resolved(r.material, units, dim, f"material.regions[{i}]"))
+                for i, r in enumerate(self.regions)
+            ),
+        )
+        put(
+            "controls",
+            tuple(
+                dataclasses.replace(
+                    c, schedule=dataclasses.replace(c.schedule, kind=resolved(c.kind, units, dim, f"chambers[{i}]"))
+                )
+                for i, c in enumerate(self.controls)
+            ),
+        )
         put("effects", tuple(resolved(e, units, dim, f"effects.{e.name}") for e in self.effects))
 
     def to_toml(self) -> str:
         """This scene as a scene file (TOML); scenefile.load_scene reads it back to an equal scene."""
         return sceneformat.to_toml(self)
 
-    def with_value(self, key: str, value) -> "Scene":
+    def with_value(self, key: str, value) -> Scene:
         """A copy with one dotted scene-file key changed (e.g. "chambers[0].center[1]", 0.1, or a short name
         of io/keys.py: "cy", "E", "nu", "k", ...), validated like a scene file; a bad key or value raises
         PneumaInputError naming the key."""
         return self.with_values({key: value})
 
-    def with_values(self, values: dict) -> "Scene":
+    def with_values(self, values: dict) -> Scene:
         """A copy with several dotted keys (or short names) changed at once (validated once, after all are set)."""
         return sceneformat.with_values(self, {dotted(key): value for key, value in values.items()})
 
@@ -185,9 +207,12 @@ class Scene:
         rows = [base]
         for i, region in enumerate(self.regions):
             other, row = region.material.law_parameters(self.units)
-            require(other is law, f"material.regions[{i}]: its law {other.name!r} is not the body's {law.name!r}: a "
-                                  f"body has one law (E and nu: stable_neo_hookean; law = neo_hookean, mooney_rivlin, "
-                                  f"yeoh and presets: isochoric_polynomial)")
+            require(
+                other is law,
+                f"material.regions[{i}]: its law {other.name!r} is not the body's {law.name!r}: a "  # type: ignore[attr-defined]
+                f"body has one law (E and nu: stable_neo_hookean; law = neo_hookean, mooney_rivlin, "
+                f"yeoh and presets: isochoric_polynomial)",
+            )
             rows.append(row)
         return law, rows
 
@@ -199,14 +224,20 @@ class Scene:
         parameters = np.tile(base, (mesh.n_elements, 1))
         for i, (region, row) in enumerate(zip(self.regions, rows)):
             taken = region.contains(mesh)
-            require(taken.any(), f"material.regions[{i}]: " + (
-                f"box = {list(region.box)} holds no element's centroid (the body's bounding box is "
-                f"{[round(float(v), 6) for v in (*mesh.vertices.min(axis=0), *mesh.vertices.max(axis=0))]})"
-                if region.box is not None else f"group = {region.group!r} has no elements"))
+            require(
+                taken.any(),
+                f"material.regions[{i}]: "
+                + (
+                    f"box = {list(region.box)} holds no element's centroid (the body's bounding box is "
+                    f"{[round(float(v), 6) for v in (*mesh.vertices.min(axis=0), *mesh.vertices.max(axis=0))]})"
+                    if region.box is not None
+                    else f"group = {region.group!r} has no elements"
+                ),
+            )
             parameters[taken] = row
         return law, parameters
 
-    def build(self, budget: Budget = Budget()) -> "BuiltScene":
+    def build(self, budget: Budget = Budget()) -> BuiltScene:
         """Mesh the geometry and instantiate exactly the terms this scene names, the mesh and the effects' terms
         under the budget (limits.Budget: Budget() caps nothing; the commands give Budget(--max-triangles))."""
         runtime.ensure_initialised()
@@ -216,37 +247,49 @@ class Scene:
         # Round-off scales, from the stiffest modulus (neo-Hookean: mu + lam, which grows without bound as
         # nu -> 1/2): forces below 1e-6 modulus (body measure)^((d - 1) / d) (a stress times the measure of a
         # cross-section: sqrt(area) in 2D, volume^(2/3) in 3D), energies below 1e-12 modulus (body measure).
-        modulus = float(np.max(law.modulus(parameters)))
-        model = EnergyModel(mesh.vertices, force_floor=1e-6 * modulus * mesh.measure ** ((mesh.dim - 1) / mesh.dim),
-                            energy_resolution=1e-12 * modulus * mesh.measure)
+        modulus = float(np.max(law.modulus(parameters)))  # type: ignore[attr-defined]
+        model = EnergyModel(
+            mesh.vertices,
+            force_floor=1e-6 * modulus * mesh.measure ** ((mesh.dim - 1) / mesh.dim),
+            energy_resolution=1e-12 * modulus * mesh.measure,
+        )
         config = model.config
         elastic = model.add(VOLUMETRIC[self.volumetric](config, mesh.elements, law, parameters))
-        chambers = [model.add(control.term(config, loop, name, mesh.order, origin)) for control, loop, origin, name
-                    in zip(self.controls, mesh.chambers, mesh.wall_origins, self.chamber_names)]
+        chambers = [
+            model.add(control.term(config, loop, name, mesh.order, origin))
+            for control, loop, origin, name in zip(self.controls, mesh.chambers, mesh.wall_origins, self.chamber_names)
+        ]
         if len(mesh.pinned):
-            model.add(Clamp(config, mesh.pinned, self.clamp_stiffness))
+            model.add(Clamp(config, mesh.pinned, self.clamp_stiffness))  # type: ignore[arg-type]
         for nodes, normal in mesh.rollers:
-            model.add(NormalClamp(config, nodes, normal, self.clamp_stiffness))
+            model.add(NormalClamp(config, nodes, normal, self.clamp_stiffness))  # type: ignore[arg-type]
         lumped_area = mesh.nodal_measures()
-        effects = {effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area, budget)]
-                   for effect in self.effects}
-        return BuiltScene(self, mesh, model, elastic, chambers, effects)
+        effects = {
+            effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area, budget)]
+            for effect in self.effects
+        }
+        return BuiltScene(self, mesh, model, elastic, chambers, effects)  # type: ignore[arg-type]
 
 
 def support_rows(mesh: Mesh, effects) -> list:
     """What holds the body, as support rows (nodes, d x d projector) (fem/supports.py): the clamp (every
     component), each roller (its normal component), and the effects that hold motions (Effect.holds: the
     ground under gravity, inertia)."""
-    return ([(mesh.pinned, np.eye(mesh.dim))] + [(nodes, np.outer(n, n)) for nodes, n in mesh.rollers]
-            + [row for effect in effects for row in effect.holds(mesh, effects)])
+    return (
+        [(mesh.pinned, np.eye(mesh.dim))]
+        + [(nodes, np.outer(n, n)) for nodes, n in mesh.rollers]
+        + [row for effect in effects for row in effect.holds(mesh, effects)]
+    )
 
 
 def describe_supports(mesh: Mesh, effects) -> str:
     """The supports in words: 'clamp 17 vertices' (or 'no clamp'), each roller by its normal with its count,
     the support effects by name (ground)."""
     clamp = f"clamp {len(mesh.pinned)} vertices" if len(mesh.pinned) else "no clamp"
-    rollers = [f"roller [{', '.join(f'{c:.3g}' for c in n + 0.0)}] {len(nodes)} vertices"  # + 0.0: no -0
-               for nodes, n in mesh.rollers]
+    rollers = [
+        f"roller [{', '.join(f'{c:.3g}' for c in n + 0.0)}] {len(nodes)} vertices"  # + 0.0: no -0
+        for nodes, n in mesh.rollers
+    ]
     return ", ".join([clamp] + rollers + [effect.name for effect in effects if effect.support])
 
 
@@ -266,9 +309,20 @@ class BuiltScene:
             chamber.set_command(command)
 
 
-def reference_scene(cy: float = 0.15, cx: float = 0.0, growth: float = 3.5, steps: int = 36, E: float = 1e4,
-                    nu: float = 0.45, k: float = 1e5, max_area: float = 0.0012, chamber_points: int = 128,
-                    order: int = 1, refinements: int = 0, **long_names) -> Scene:
+def reference_scene(
+    cy: float = 0.15,
+    cx: float = 0.0,
+    growth: float = 3.5,
+    steps: int = 36,
+    E: float = 1e4,
+    nu: float = 0.45,
+    k: float = 1e5,
+    max_area: float = 0.0012,
+    chamber_points: int = 128,
+    order: int = 1,
+    refinements: int = 0,
+    **long_names,
+) -> Scene:
     """The reference scene: the clamped 3.5 x 0.8 beam, one ellipse chamber at (cx, cy) ramped in area from 1 to
     growth over steps commanded areas (rest included); E, nu: Young's modulus and Poisson's ratio; k: the
     chamber's area penalty stiffness (the names of the command line's flags; youngs_modulus,
@@ -278,7 +332,13 @@ def reference_scene(cy: float = 0.15, cx: float = 0.0, growth: float = 3.5, step
     k = long_names.pop("chamber_stiffness", k)
     if long_names:
         raise TypeError(f"reference_scene() got an unexpected keyword argument {next(iter(long_names))!r}")
-    beam = BeamGeometry(cx=cx, cy=cy, max_area=max_area, chamber_points=chamber_points, order=order,
-                        refinements=refinements)
-    return Scene(beam.general(), (ChamberControl(area_ramp(growth, steps, k)),), steps - 1, Material(E, nu),
-                 name=f"reference_cy{cy:+.2f}")
+    beam = BeamGeometry(
+        cx=cx, cy=cy, max_area=max_area, chamber_points=chamber_points, order=order, refinements=refinements
+    )
+    return Scene(
+        beam.general(),
+        (ChamberControl(area_ramp(growth, steps, k)),),
+        steps - 1,
+        Material(E, nu),
+        name=f"reference_cy{cy:+.2f}",
+    )

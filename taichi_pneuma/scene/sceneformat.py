@@ -35,81 +35,147 @@ PAIR, BOX, TRIPLE = "[x, y]", "[x0, y0, x1, y1]", "[x, y, z]"
 CLAMP_STIFFNESS = 1e9  # the [clamp] stiffness key's default, in SI (Pa, 2D; Pa m, 3D)
 POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3", unit=LENGTH))
 PLANAR_BODIES = {
-    "rectangle": record(Rectangle, "an axis-aligned rectangle", center=Key(tuple, (0.0, 0.0), PAIR, unit=LENGTH),
-                        size=Key(tuple, doc="[width, height]", unit=LENGTH)),
+    "rectangle": record(
+        Rectangle,
+        "an axis-aligned rectangle",
+        center=Key(tuple, (0.0, 0.0), PAIR, unit=LENGTH),
+        size=Key(tuple, doc="[width, height]", unit=LENGTH),
+    ),
     "polygon": POLYGON,
-    "union": record(RectangleUnion, "a union of axis-aligned rectangles (one region, no holes)",
-                    rectangles=Tables(record(Rectangle, center=Key(tuple, doc=PAIR, unit=LENGTH),
-                                             size=Key(tuple, doc="[w, h]", unit=LENGTH)))),
+    "union": record(
+        RectangleUnion,
+        "a union of axis-aligned rectangles (one region, no holes)",
+        rectangles=Tables(
+            record(Rectangle, center=Key(tuple, doc=PAIR, unit=LENGTH), size=Key(tuple, doc="[w, h]", unit=LENGTH))
+        ),
+    ),
 }
 PLANAR_CHAMBERS = {
-    "ellipse": record(Ellipse, "an ellipse", center=Key(tuple, doc=PAIR, unit=LENGTH),
-                      semi_axes=Key(tuple, doc="[a, b]", unit=LENGTH),
-                      points=Key(int, 64, "wall points, 8 or more (2D)")),
-    "rounded_rectangle": record(RoundedRectangle, "a rectangle with quarter-circle corners",
-                                center=Key(tuple, doc=PAIR, unit=LENGTH), size=Key(tuple, doc="[w, h]", unit=LENGTH),
-                                radius=Key(float, doc="corner radius, below half the shorter side", unit=LENGTH),
-                                corner_points=Key(int, 6, "points per corner (2D)")),
+    "ellipse": record(
+        Ellipse,
+        "an ellipse",
+        center=Key(tuple, doc=PAIR, unit=LENGTH),
+        semi_axes=Key(tuple, doc="[a, b]", unit=LENGTH),
+        points=Key(int, 64, "wall points, 8 or more (2D)"),
+    ),
+    "rounded_rectangle": record(
+        RoundedRectangle,
+        "a rectangle with quarter-circle corners",
+        center=Key(tuple, doc=PAIR, unit=LENGTH),
+        size=Key(tuple, doc="[w, h]", unit=LENGTH),
+        radius=Key(float, doc="corner radius, below half the shorter side", unit=LENGTH),
+        corner_points=Key(int, 6, "points per corner (2D)"),
+    ),
     "polygon": POLYGON,
 }
 
 
 def extrusion(profiles: dict, what: str) -> Table:
     """The 3D shape of a 2D shape (one of profiles, in the table `profile`) swept along z over depth."""
-    profile = Table({"shape": Variant(profiles, doc=f"the 2D {what} shape swept")}, make=lambda v: v["shape"],
-                    parts=lambda shape: {"shape": shape}, doc="the 2D shape (in the x-y plane), its keys as in 2D")
-    return record(Extrusion, f"a 2D {what} shape swept along z (3D)", profile=profile,
-                  depth=Key(float, doc="its extent along z", unit=LENGTH),
-                  z=Key(float, 0.0, "the z of its middle", unit=LENGTH))
+    profile = Table(
+        {"shape": Variant(profiles, doc=f"the 2D {what} shape swept")},
+        make=lambda v: v["shape"],
+        parts=lambda shape: {"shape": shape},
+        doc="the 2D shape (in the x-y plane), its keys as in 2D",
+    )
+    return record(
+        Extrusion,
+        f"a 2D {what} shape swept along z (3D)",
+        profile=profile,
+        depth=Key(float, doc="its extent along z", unit=LENGTH),
+        z=Key(float, 0.0, "the z of its middle", unit=LENGTH),
+    )
 
 
 SOLIDS = {  # the 3D shapes bodies and chambers share (fem/solids.py); with extrusion and pneunet, the 3D bodies
-    "box": record(Box, "an axis-aligned box (3D)", center=Key(tuple, doc=TRIPLE, unit=LENGTH),
-                  size=Key(tuple, doc=TRIPLE, unit=LENGTH)),
-    "rounded_box": record(RoundedBox, "a box with every edge and corner rounded (3D)",
-                          center=Key(tuple, doc=TRIPLE, unit=LENGTH), size=Key(tuple, doc=TRIPLE, unit=LENGTH),
-                          radius=Key(float, doc="below half the shortest side", unit=LENGTH)),
-    "cylinder": record(Cylinder, "a circular cylinder (3D)", center=Key(tuple, doc=TRIPLE, unit=LENGTH),
-                       radius=Key(float, unit=LENGTH), length=Key(float, unit=LENGTH),
-                       axis=Key(str, "z", "its axis", AXES)),
-    "ellipsoid": record(Ellipsoid, "an axis-aligned ellipsoid (3D)", center=Key(tuple, doc=TRIPLE, unit=LENGTH),
-                        semi_axes=Key(tuple, doc="[a, b, c]", unit=LENGTH)),
+    "box": record(
+        Box,
+        "an axis-aligned box (3D)",
+        center=Key(tuple, doc=TRIPLE, unit=LENGTH),
+        size=Key(tuple, doc=TRIPLE, unit=LENGTH),
+    ),
+    "rounded_box": record(
+        RoundedBox,
+        "a box with every edge and corner rounded (3D)",
+        center=Key(tuple, doc=TRIPLE, unit=LENGTH),
+        size=Key(tuple, doc=TRIPLE, unit=LENGTH),
+        radius=Key(float, doc="below half the shortest side", unit=LENGTH),
+    ),
+    "cylinder": record(
+        Cylinder,
+        "a circular cylinder (3D)",
+        center=Key(tuple, doc=TRIPLE, unit=LENGTH),
+        radius=Key(float, unit=LENGTH),
+        length=Key(float, unit=LENGTH),
+        axis=Key(str, "z", "its axis", AXES),
+    ),
+    "ellipsoid": record(
+        Ellipsoid,
+        "an axis-aligned ellipsoid (3D)",
+        center=Key(tuple, doc=TRIPLE, unit=LENGTH),
+        semi_axes=Key(tuple, doc="[a, b, c]", unit=LENGTH),
+    ),
 }
-BODY_SHAPES = Variant({
-    **PLANAR_BODIES,
-    "mesh": record(MeshBody, "a 3D body read from a mesh file (any meshio format with tetrahedra)",
-                   file=Key(str, doc="the mesh file, relative to the scene file")),
-    **SOLIDS,
-    "extrusion": extrusion(PLANAR_BODIES, "body"),
-    "pneunet": PneuNet,
-}, doc="the body's outline (2D), or a 3D body (a mesh file, a 3D shape meshed by gmsh, or the PneuNet generator)")
-CHAMBER_SHAPES = Variant({
-    **PLANAR_CHAMBERS,
-    "mesh_surface": record(MeshSurface, "the wall of a mesh body's chamber: a group of the mesh file's triangles "
-                                        "(of a pneunet body: its chambers c1 .. cn)",
-                           group=Key(str, doc="the group (gmsh physical group) of the wall's triangles")),
-    **SOLIDS,
-    "extrusion": extrusion(PLANAR_CHAMBERS, "chamber"),
-}, doc="the chamber's wall")
-TARGET = record(Target, "a pose the tip should reach (inverse control)",
-                tip=Key(tuple, doc="[x, y], or [x, y, z] on a 3D body (z free when not given)", unit=LENGTH),
-                angle=Key(float, None, "tip rotation in degrees (none: free)"),
-                weights=Key(tuple, (1.0, 1.0, 1.0), "[w_x, w_y, w_angle]"),
-                weight_z=Key(float, 1.0, "w_z, the weight of a 3D tip's z error"))
+BODY_SHAPES = Variant(
+    {
+        **PLANAR_BODIES,
+        "mesh": record(
+            MeshBody,
+            "a 3D body read from a mesh file (any meshio format with tetrahedra)",
+            file=Key(str, doc="the mesh file, relative to the scene file"),
+        ),
+        **SOLIDS,
+        "extrusion": extrusion(PLANAR_BODIES, "body"),
+        "pneunet": PneuNet,
+    },
+    doc="the body's outline (2D), or a 3D body (a mesh file, a 3D shape meshed by gmsh, or the PneuNet generator)",
+)
+CHAMBER_SHAPES = Variant(
+    {
+        **PLANAR_CHAMBERS,
+        "mesh_surface": record(
+            MeshSurface,
+            "the wall of a mesh body's chamber: a group of the mesh file's triangles "
+            "(of a pneunet body: its chambers c1 .. cn)",
+            group=Key(str, doc="the group (gmsh physical group) of the wall's triangles"),
+        ),
+        **SOLIDS,
+        "extrusion": extrusion(PLANAR_CHAMBERS, "chamber"),
+    },
+    doc="the chamber's wall",
+)
+TARGET = record(
+    Target,
+    "a pose the tip should reach (inverse control)",
+    tip=Key(tuple, doc="[x, y], or [x, y, z] on a 3D body (z free when not given)", unit=LENGTH),
+    angle=Key(float, None, "tip rotation in degrees (none: free)"),
+    weights=Key(tuple, (1.0, 1.0, 1.0), "[w_x, w_y, w_angle]"),
+    weight_z=Key(float, 1.0, "w_z, the weight of a 3D tip's z error"),
+)
 
 
-ROLLER = record(Roller, "a roller support: the nodes' displacement along normal held, tangential motion free",
-                normal=Key(tuple, doc="[nx, ny] ([nx, ny, nz] in 3D)"),
-                point=Key(tuple, None, "[x, y]: the nodes within tolerance of the line through it, normal to normal "
-                                       "(3D: [x, y, z], a plane)", unit=LENGTH),
-                box=Key(tuple, None, f"{BOX}: the nodes in it (instead of point)", unit=LENGTH),
-                tolerance=Key(float, 1e-6, unit=LENGTH))
+ROLLER = record(
+    Roller,
+    "a roller support: the nodes' displacement along normal held, tangential motion free",
+    normal=Key(tuple, doc="[nx, ny] ([nx, ny, nz] in 3D)"),
+    point=Key(
+        tuple,
+        None,
+        "[x, y]: the nodes within tolerance of the line through it, normal to normal (3D: [x, y, z], a plane)",
+        unit=LENGTH,
+    ),
+    box=Key(tuple, None, f"{BOX}: the nodes in it (instead of point)", unit=LENGTH),
+    tolerance=Key(float, 1e-6, unit=LENGTH),
+)
 
 
 def point_set(neither: str, **more) -> dict:
     """The keys of a [clamp] or [tip] node set: side, or box (then no side); neither: what neither means."""
-    return {"side": Key(str, None, f"a side of the body's bounding box (neither side nor box: {neither})", SIDES),
-            "box": Key(tuple, None, f"{BOX}: the nodes in it", unit=LENGTH), **more}
+    return {
+        "side": Key(str, None, f"a side of the body's bounding box (neither side nor box: {neither})", SIDES),
+        "box": Key(tuple, None, f"{BOX}: the nodes in it", unit=LENGTH),
+        **more,
+    }
 
 
 def make_point_set(v: dict, default_side: str | None) -> PointSet | None:
@@ -165,127 +231,259 @@ def scene_table(scene_class) -> Table:
         base_keys = {k: v[k] for k in entries}
 
         def region(r):
-            return region_class(r["box"], material_of(region_values(base_keys, {k: r[k] for k in entries})),
-                                r["group"])
+            return region_class(r["box"], material_of(region_values(base_keys, {k: r[k] for k in entries})), r["group"])
 
-        return material_of(base_keys), tuple(build(f"material.regions[{i}]", functools.partial(region, r))
-                                             for i, r in enumerate(v["regions"]))
+        return material_of(base_keys), tuple(
+            build(f"material.regions[{i}]", functools.partial(region, r)) for i, r in enumerate(v["regions"])
+        )
 
-    region = Table({"box": Key(tuple, None, f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D): the elements whose centroid "
-                                            f"lies in it", unit=LENGTH),
-                    "group": Key(str, None, "instead of box (3D): the tetrahedra of the mesh's named volume group "
-                                            "(a mesh file's physical group, a pneunet's \"layer\")"),
-                    **{k: dataclasses.replace(key, si=None) for k, key in entries.items()}},  # none: the base's
-                   parts=lambda r: {"box": r.box, "group": r.group, **material_keys(r.material)}, kind=material_kind,
-                   tags=MATERIAL_TAGS)
-    regions = Tables(region, "materials for the elements of a box or a volume group (later regions win); keys as "
-                             "material's, and unless a region names a preset or law, each key it omits is material's")
-    material = Table({**entries, "regions": regions}, make=make_material,
-                     parts=lambda s: {**material_keys(s.material), "regions": s.regions}, optional=True,
-                     kind=material_kind, tags=MATERIAL_TAGS,
-                     doc=f"the body's material: {', '.join(f.summary for f in forms()[:-1])}, or {forms()[-1].summary}")
-    chamber = Table({"name": Key(str, doc="distinct among the chambers, not starting with = + - @ (it heads CSV "
-                                          "columns)"), "shape": CHAMBER_SHAPES,
-                     "control": Variant(KINDS, lambda kind: kind.name, "area", "the chamber kind (its keys its parameters)"),
-                     "keyframes": Key(tuple, doc="[[step, command], ...], steps whole and increasing"),
-                     "bounds": Key(tuple, None, "[min, max] of the command under inverse control")},
-                    make=lambda v: (v["name"], v["shape"],
-                                    control_class(ChamberSchedule(v["control"], v["keyframes"]), v["bounds"])),
-                    parts=lambda c: {"name": c[0], "shape": c[1], "control": c[2].kind,
-                                     "keyframes": c[2].schedule.keyframes, "bounds": c[2].bounds})
+    region = Table(
+        {
+            "box": Key(
+                tuple,
+                None,
+                f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D): the elements whose centroid lies in it",
+                unit=LENGTH,
+            ),
+            "group": Key(
+                str,
+                None,
+                "instead of box (3D): the tetrahedra of the mesh's named volume group "
+                "(a mesh file's physical group, a pneunet's \"layer\")",
+            ),
+            **{k: dataclasses.replace(key, si=None) for k, key in entries.items()},
+        },  # none: the base's
+        parts=lambda r: {"box": r.box, "group": r.group, **material_keys(r.material)},
+        kind=material_kind,
+        tags=MATERIAL_TAGS,
+    )
+    regions = Tables(
+        region,
+        "materials for the elements of a box or a volume group (later regions win); keys as "
+        "material's, and unless a region names a preset or law, each key it omits is material's",
+    )
+    material = Table(
+        {**entries, "regions": regions},
+        make=make_material,
+        parts=lambda s: {**material_keys(s.material), "regions": s.regions},
+        optional=True,
+        kind=material_kind,
+        tags=MATERIAL_TAGS,
+        doc=f"the body's material: {', '.join(f.summary for f in forms()[:-1])}, or {forms()[-1].summary}",
+    )
+    chamber = Table(
+        {
+            "name": Key(str, doc="distinct among the chambers, not starting with = + - @ (it heads CSV columns)"),
+            "shape": CHAMBER_SHAPES,
+            "control": Variant(KINDS, lambda kind: kind.name, "area", "the chamber kind (its keys its parameters)"),
+            "keyframes": Key(tuple, doc="[[step, command], ...], steps whole and increasing"),
+            "bounds": Key(tuple, None, "[min, max] of the command under inverse control"),
+        },
+        make=lambda v: (
+            v["name"],
+            v["shape"],
+            control_class(ChamberSchedule(v["control"], v["keyframes"]), v["bounds"]),
+        ),
+        parts=lambda c: {
+            "name": c[0],
+            "shape": c[1],
+            "control": c[2].kind,
+            "keyframes": c[2].schedule.keyframes,
+            "bounds": c[2].bounds,
+        },
+    )
 
     def make_scene(v):
         require(v["chambers"], "scene names no chamber: add at least one [[chambers]] table")
-        require(len(v["targets"]) <= MAX_TARGETS, f"{len(v['targets'])} [[targets]]: at most {MAX_TARGETS} are "
-                                                  f"allowed (each is a reach)")
+        require(
+            len(v["targets"]) <= MAX_TARGETS,
+            f"{len(v['targets'])} [[targets]]: at most {MAX_TARGETS} are allowed (each is a reach)",
+        )
         (material, regions), (clamp, clamp_stiffness) = v["material"], v["clamp"]
         chambers, mesh = tuple((name, shape) for name, shape, _ in v["chambers"]), v["mesh"]
         sized = [k for k in ("size", "near_chambers", "distance") if mesh[k] is not None]
         planar = ["max_area"] if mesh["max_area"] is not None else []
         if is_solid_shape(v["body"]):
-            require(mesh["max_area"] is None, "mesh.max_area: a 3D body from shapes takes mesh.size (the tetrahedra's "
-                                              "edge length), not max_area")
-            require(mesh["size"] is not None, "missing key 'mesh.size': a 3D body from shapes needs the tetrahedra's "
-                                              "edge length")
+            require(
+                mesh["max_area"] is None,
+                "mesh.max_area: a 3D body from shapes takes mesh.size (the tetrahedra's edge length), not max_area",
+            )
+            require(
+                mesh["size"] is not None,
+                "missing key 'mesh.size': a 3D body from shapes needs the tetrahedra's edge length",
+            )
             sizes = build("mesh", lambda: MeshSizes(mesh["size"], mesh["near_chambers"], mesh["distance"]))
             geometry = SolidGeometry(v["body"], chambers, sizes, mesh["order"], clamp, v["tip"], v["rollers"])
         elif isinstance(v["body"], MeshBody):
-            require(not planar + sized, f"mesh.{(planar + sized + [''])[0]}: a mesh file's body keeps the file's "
-                                        f"elements (mesh.order only)")
+            require(
+                not planar + sized,
+                f"mesh.{(planar + sized + [''])[0]}: a mesh file's body keeps the file's elements (mesh.order only)",
+            )
             geometry = MeshGeometry(v["body"], chambers, mesh["order"], clamp, v["tip"], v["rollers"])
         else:
             require(not sized, f"mesh.{sized[0] if sized else ''}: a 2D body takes mesh.max_area")
-            geometry = Geometry(v["body"], chambers, mesh["max_area"], clamp=clamp, order=mesh["order"], tip=v["tip"],
-                                rollers=v["rollers"])
-        return scene_class(geometry, tuple(control for *_, control in v["chambers"]), v["schedule"]["increments"],
-                           material, regions, clamp_stiffness, v["effects"], v["name"], v["targets"],
-                           UNITLESS if v["units"] is None else UNITS[v["units"]], v["schedule"]["max_stretch"],
-                           mesh["volumetric"])
+            geometry = Geometry(
+                v["body"],
+                chambers,
+                mesh["max_area"],
+                clamp=clamp,
+                order=mesh["order"],
+                tip=v["tip"],
+                rollers=v["rollers"],
+            )
+        return scene_class(
+            geometry,
+            tuple(control for *_, control in v["chambers"]),
+            v["schedule"]["increments"],
+            material,
+            regions,
+            clamp_stiffness,
+            v["effects"],
+            v["name"],
+            v["targets"],
+            UNITLESS if v["units"] is None else UNITS[v["units"]],
+            v["schedule"]["max_stretch"],
+            mesh["volumetric"],
+        )
 
     def clamp_parts(scene):
         """The [clamp] keys; without a clamp, its stiffness only if not the default (so no [clamp] is written)."""
         clamp, stiffness = scene.geometry.clamp, scene.clamp_stiffness
         default = default_in(CLAMP_STIFFNESS, NODAL_STIFFNESS, True, scene.units, scene.dim, "clamp.stiffness")
-        return {"side": getattr(clamp, "side", None), "box": getattr(clamp, "box", None),
-                "stiffness": None if clamp is None and stiffness == default else stiffness}
+        return {
+            "side": getattr(clamp, "side", None),
+            "box": getattr(clamp, "box", None),
+            "stiffness": None if clamp is None and stiffness == default else stiffness,
+        }
 
     def mesh_parts(scene):
         geometry = scene.geometry
         refinements = getattr(geometry, "refinements", 0)
-        require(refinements == 0, f"a geometry refined {refinements} times has no scene-file form "
-                                  f"(scene files have no refinements key)")
+        require(
+            refinements == 0,
+            f"a geometry refined {refinements} times has no scene-file form (scene files have no refinements key)",
+        )
         sizes = getattr(geometry, "sizes", None)
-        return {"max_area": getattr(geometry, "max_area", None), "order": geometry.order,
-                **{k: getattr(sizes, k, None) for k in ("size", "near_chambers", "distance")},
-                "volumetric": None if scene.volumetric == "element" else scene.volumetric}  # default: not written
+        return {
+            "max_area": getattr(geometry, "max_area", None),
+            "order": geometry.order,
+            **{k: getattr(sizes, k, None) for k in ("size", "near_chambers", "distance")},
+            "volumetric": None if scene.volumetric == "element" else scene.volumetric,
+        }  # default: not written
 
-    return Table(system=scene_system, keys={
-        "name": Key(str, None, "names the result files (a plain file name); none: the scene file's own name"),
-        "description": Key(str, "", "free text, not kept"),
-        "units": Key(str, None, "the system of the scene's lengths and pressures (io/units.py; none: unitless)",
-                     tuple(UNITS)),
-        "body": Table({"shape": BODY_SHAPES}, make=lambda v: v["shape"], parts=lambda body: {"shape": body}),
-        "mesh": Table({"max_area": Key(float, None, "largest triangle area (2D)", unit=PLANE_AREA, scaled=False,
-                                       si=0.0012),
-                       "size": Key(float, None, "tetrahedron edge length in the bulk (3D body from shapes; required "
-                                                "there)", unit=LENGTH),
-                       "near_chambers": Key(float, None, "edge length within that distance of the chamber walls (3D "
-                                                         "shapes; none: size; at most size)", unit=LENGTH),
-                       "distance": Key(float, None, "over which the edge length grows from near_chambers back to size "
-                                                    "(3D shapes; none: 2 size)", unit=LENGTH),
-                       "order": Key(int, 1, "1: linear triangles (tetrahedra), 2: quadratic (2D: boundary nodes on "
-                                            "the exact ellipses and rounded corners; 3D: straight midside nodes "
-                                            "added)", ORDERS),
-                       "volumetric": Key(str, "element", "where the law's volumetric part U(J) is evaluated: element "
-                                                         "(each quadrature point), nodal (on each node's patch volume "
-                                                         "ratio; order 1 and law = neo_hookean, mooney_rivlin, yeoh or "
-                                                         "a preset: linear elements that do not lock as nu -> 1/2)",
-                                         tuple(VOLUMETRIC))},
-                      parts=mesh_parts, optional=True),
-        "material": material,
-        "clamp": Table(point_set("no clamp", stiffness=Key(float, None, "penalty stiffness of the clamp and the "
-                                                                        "rollers (E = 1/2 K |u|^2 per node)",
-                                                           unit=NODAL_STIFFNESS, si=CLAMP_STIFFNESS)),
-                       make=lambda v: (make_point_set(v, None), v["stiffness"]), parts=clamp_parts, optional=True,
-                       doc="the clamped nodes; no [clamp] table (or one without side and box): no clamp, the body held "
-                           "by its rollers"),
-        "tip": Table(point_set("right"), make=lambda v: make_point_set(v, "right"),
-                     parts=lambda g: {"side": g.tip.side, "box": g.tip.box}, optional=True,
-                     doc="the nodes whose mean displacement and rotation the history, sensitivities and reach use"),
-        "rollers": Tables(ROLLER, "roller supports; one along a body edge is a symmetry line that may cut chambers"),
-        "chambers": Tables(chamber, "the chambers, at least one"),
-        "schedule": Table({"increments": Key(int, doc="solves after the rest state"),
-                           "max_stretch": Key(float, MAX_STRETCH, "a run whose largest principal stretch passes it "
-                                                                  "warns (once, at the first step past it)")},
-                          parts=lambda s: {"increments": s.increments, "max_stretch": s.max_stretch}),
-        "effects": Named(EFFECTS, "the effects the scene adds, by name"),
-        "targets": Tables(TARGET, "poses for inverse control, in order"),
-    }, make=make_scene, parts=lambda s: {
-        "name": s.name, "description": None, "units": s.units.name, "body": s.geometry.body, "mesh": s,
-        "material": s, "clamp": s,
-        "tip": s.geometry, "rollers": s.geometry.rollers,
-        "chambers": [(name, shape, control) for (name, shape), control in zip(s.geometry.chambers, s.controls)],
-        "schedule": s, "effects": s.effects, "targets": s.targets})
+    return Table(
+        system=scene_system,
+        keys={
+            "name": Key(str, None, "names the result files (a plain file name); none: the scene file's own name"),
+            "description": Key(str, "", "free text, not kept"),
+            "units": Key(
+                str, None, "the system of the scene's lengths and pressures (io/units.py; none: unitless)", tuple(UNITS)
+            ),
+            "body": Table({"shape": BODY_SHAPES}, make=lambda v: v["shape"], parts=lambda body: {"shape": body}),
+            "mesh": Table(
+                {
+                    "max_area": Key(
+                        float, None, "largest triangle area (2D)", unit=PLANE_AREA, scaled=False, si=0.0012
+                    ),
+                    "size": Key(
+                        float,
+                        None,
+                        "tetrahedron edge length in the bulk (3D body from shapes; required there)",
+                        unit=LENGTH,
+                    ),
+                    "near_chambers": Key(
+                        float,
+                        None,
+                        "edge length within that distance of the chamber walls (3D shapes; none: size; at most size)",
+                        unit=LENGTH,
+                    ),
+                    "distance": Key(
+                        float,
+                        None,
+                        "over which the edge length grows from near_chambers back to size (3D shapes; none: 2 size)",
+                        unit=LENGTH,
+                    ),
+                    "order": Key(
+                        int,
+                        1,
+                        "1: linear triangles (tetrahedra), 2: quadratic (2D: boundary nodes on "
+                        "the exact ellipses and rounded corners; 3D: straight midside nodes "
+                        "added)",
+                        ORDERS,
+                    ),
+                    "volumetric": Key(
+                        str,
+                        "element",
+                        "where the law's volumetric part U(J) is evaluated: element "
+                        "(each quadrature point), nodal (on each node's patch volume "
+                        "ratio; order 1 and law = neo_hookean, mooney_rivlin, yeoh or "
+                        "a preset: linear elements that do not lock as nu -> 1/2)",
+                        tuple(VOLUMETRIC),
+                    ),
+                },
+                parts=mesh_parts,
+                optional=True,
+            ),
+            "material": material,
+            "clamp": Table(
+                point_set(
+                    "no clamp",
+                    stiffness=Key(
+                        float,
+                        None,
+                        "penalty stiffness of the clamp and the rollers (E = 1/2 K |u|^2 per node)",
+                        unit=NODAL_STIFFNESS,
+                        si=CLAMP_STIFFNESS,
+                    ),
+                ),
+                make=lambda v: (make_point_set(v, None), v["stiffness"]),
+                parts=clamp_parts,
+                optional=True,
+                doc="the clamped nodes; no [clamp] table (or one without side and box): no clamp, the body held "
+                "by its rollers",
+            ),
+            "tip": Table(
+                point_set("right"),
+                make=lambda v: make_point_set(v, "right"),
+                parts=lambda g: {"side": g.tip.side, "box": g.tip.box},
+                optional=True,
+                doc="the nodes whose mean displacement and rotation the history, sensitivities and reach use",
+            ),
+            "rollers": Tables(
+                ROLLER, "roller supports; one along a body edge is a symmetry line that may cut chambers"
+            ),
+            "chambers": Tables(chamber, "the chambers, at least one"),
+            "schedule": Table(
+                {
+                    "increments": Key(int, doc="solves after the rest state"),
+                    "max_stretch": Key(
+                        float,
+                        MAX_STRETCH,
+                        "a run whose largest principal stretch passes it warns (once, at the first step past it)",
+                    ),
+                },
+                parts=lambda s: {"increments": s.increments, "max_stretch": s.max_stretch},
+            ),
+            "effects": Named(EFFECTS, "the effects the scene adds, by name"),
+            "targets": Tables(TARGET, "poses for inverse control, in order"),
+        },
+        make=make_scene,
+        parts=lambda s: {
+            "name": s.name,
+            "description": None,
+            "units": s.units.name,
+            "body": s.geometry.body,
+            "mesh": s,
+            "material": s,
+            "clamp": s,
+            "tip": s.geometry,
+            "rollers": s.geometry.rollers,
+            "chambers": [(name, shape, control) for (name, shape), control in zip(s.geometry.chambers, s.controls)],
+            "schedule": s,
+            "effects": s.effects,
+            "targets": s.targets,
+        },
+    )
 
 
 def scene_system(data: dict) -> tuple:
@@ -294,8 +492,10 @@ def scene_system(data: dict) -> tuple:
     body = data.get("body")
     shape = body.get("shape") if isinstance(body, dict) else None
     units = data.get("units")
-    return (UNITS[units] if isinstance(units, str) and units in UNITS else UNITLESS,
-            3 if isinstance(shape, str) and shape in BODY_SHAPES.options and shape not in PLANAR_BODIES else 2)
+    return (
+        UNITS[units] if isinstance(units, str) and units in UNITS else UNITLESS,
+        3 if isinstance(shape, str) and shape in BODY_SHAPES.options and shape not in PLANAR_BODIES else 2,
+    )
 
 
 def read_scene(data: dict, name: str, scene_class):

@@ -24,6 +24,7 @@ from ..terms.chambers import AreaControl, ChamberKind, default_kind
 # way to the others' (700-1000 %); the stable neo-Hookean law has no such data at all.
 MAX_STRETCH = 5.0
 
+
 @dataclass(frozen=True)
 class ChamberSchedule:
     """Keyframes ((step, value), ...) of one chamber driven by `kind`, whose check() the values pass.
@@ -37,12 +38,16 @@ class ChamberSchedule:
     def __post_init__(self):
         if not isinstance(self.kind, ChamberKind):
             object.__setattr__(self, "kind", default_kind(self.kind))
-        require(len(self.keyframes) >= 1 and all(shape_of(k) == (2,) for k in self.keyframes),
-                f"keyframes = {self.keyframes!r} must be a non-empty list of [step, value] pairs")
+        require(
+            len(self.keyframes) >= 1 and all(shape_of(k) == (2,) for k in self.keyframes),
+            f"keyframes = {self.keyframes!r} must be a non-empty list of [step, value] pairs",
+        )
         steps = [require_finite("keyframes step", s) for s, _ in self.keyframes]
         values = [require_finite("keyframes value", v) for _, v in self.keyframes]
-        require(all(float(s).is_integer() and s >= 0 for s in steps),
-                f"keyframes steps {steps!r} must be whole numbers >= 0")
+        require(
+            all(float(s).is_integer() and s >= 0 for s in steps),
+            f"keyframes steps {steps!r} must be whole numbers >= 0",
+        )
         require(all(b > a for a, b in zip(steps, steps[1:])), f"keyframes steps {steps!r} must increase")
         self.kind.check("keyframes", values)
 
@@ -67,11 +72,15 @@ class Schedule:
     chambers: tuple[ChamberSchedule, ...]
 
     def __post_init__(self):
-        require(isinstance(self.increments, (int, np.integer)) and self.increments >= 1,
-                f"increments = {self.increments!r} must be an integer >= 1")
+        require(
+            isinstance(self.increments, (int, np.integer)) and self.increments >= 1,
+            f"increments = {self.increments!r} must be an integer >= 1",
+        )
         for c in self.chambers:
-            require(c.last_step <= self.increments,
-                    f"keyframe step {c.last_step} lies past the last increment ({self.increments})")
+            require(
+                c.last_step <= self.increments,
+                f"keyframe step {c.last_step} lies past the last increment ({self.increments})",
+            )
 
     def commands(self, step: float) -> np.ndarray:
         """Every chamber's command at (possibly fractional) step."""
@@ -86,6 +95,8 @@ def area_ramp(growth: float, steps: int, stiffness: float = 1e5) -> ChamberSched
     """The reference ramp for one area-controlled chamber (stiffness k): area ratio 1 -> growth over steps - 1
     increments."""
     require(require_finite("growth", growth) > 0, f"growth = {growth!r} must be > 0")
-    require(isinstance(steps, (int, np.integer)) and steps >= 2,
-            f"steps = {steps!r} must be an integer >= 2 (the rest state and at least one increment)")
+    require(
+        isinstance(steps, (int, np.integer)) and steps >= 2,
+        f"steps = {steps!r} must be an integer >= 2 (the rest state and at least one increment)",
+    )
     return ChamberSchedule(AreaControl(stiffness), ((0, 1.0), (steps - 1, float(growth))))

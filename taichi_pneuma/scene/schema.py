@@ -56,7 +56,9 @@ MAX_DEPTH = 16
 MAX_VALUE_CHARS = 100_000
 # TOML strings and comments (whose dots are no key's), then a run of MAX_KEY_PARTS dots between key
 # parts (bare words or strings): a float or a date has one dot, so such a run is a dotted key
-TOML_STRING_OR_COMMENT = re.compile(r'"""(?:[^\\]|\\.)*?"""|\'\'\'.*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*', re.DOTALL)
+TOML_STRING_OR_COMMENT = re.compile(
+    r'"""(?:[^\\]|\\.)*?"""|\'\'\'.*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*', re.DOTALL
+)
 TOML_KEY_RUN = re.compile(rf'(?<![\w"-])(?:(?:[\w-]++|"")[ \t]*+\.[ \t]*+){{{MAX_KEY_PARTS}}}')
 TYPE_NAMES = {float: "number", int: "integer", str: "string", bool: "boolean", tuple: "array", list: "array"}
 SYSTEM = contextvars.ContextVar("SYSTEM", default=(UNITLESS, 2))  # (units, dim) the defaults read are in
@@ -93,13 +95,19 @@ class Key:
             return self.converted(full)
         value = data[name]
         if self.type is float:
-            require(isinstance(value, (int, float)) and not isinstance(value, bool), f"{full} = {value!r} must be a number")
+            require(
+                isinstance(value, (int, float)) and not isinstance(value, bool), f"{full} = {value!r} must be a number"
+            )
         else:
             kind = list if self.type is tuple else self.type
-            require(isinstance(value, kind) and not (kind is int and isinstance(value, bool)),
-                    f"{full} = {value!r} must be of type {kind.__name__}")
-        require(not self.allowed or value in self.allowed,
-                f"{full} = {value!r} is not one of {', '.join(map(str, self.allowed))}")
+            require(
+                isinstance(value, kind) and not (kind is int and isinstance(value, bool)),
+                f"{full} = {value!r} must be of type {kind.__name__}",
+            )
+        require(
+            not self.allowed or value in self.allowed,
+            f"{full} = {value!r} is not one of {', '.join(map(str, self.allowed))}",
+        )
         return freeze(value) if self.type is tuple else value
 
     def converted(self, full: str):
@@ -115,8 +123,18 @@ class Key:
 
     def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
         shown = self.default if self.si is None else self.si
-        return [KeyInfo(join(path, name), TYPE_NAMES[self.type], default_text(shown),
-                        ", ".join(map(str, self.allowed)), when, self.doc, self.unit, self.scaled)]
+        return [
+            KeyInfo(
+                join(path, name),
+                TYPE_NAMES[self.type],
+                default_text(shown),
+                ", ".join(map(str, self.allowed)),
+                when,
+                self.doc,
+                self.unit,
+                self.scaled,
+            )
+        ]
 
 
 @dataclass(frozen=True)
@@ -152,8 +170,10 @@ class Table:
         known: set[str] = set()
         values = read_keys(self.keys, data, path, known)
         unknown = sorted(set(data) - known)
-        require(not unknown, f"unknown key '{join(path, unknown[0]) if unknown else ''}' "
-                             f"(allowed here: {', '.join(sorted(known))})")
+        require(
+            not unknown,
+            f"unknown key '{join(path, unknown[0]) if unknown else ''}' (allowed here: {', '.join(sorted(known))})",
+        )
         return build(path, lambda: self.make(values))
 
     def write(self, value, name: str, data: dict) -> None:
@@ -168,8 +188,9 @@ class Table:
 
     def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
         key = join(path, name)
-        return [KeyInfo(key, "table", "{}" if self.optional else "required", "", when, self.doc)] + \
-            key_rows(self.keys, key)
+        return [KeyInfo(key, "table", "{}" if self.optional else "required", "", when, self.doc)] + key_rows(
+            self.keys, key
+        )
 
 
 @dataclass(frozen=True)
@@ -207,8 +228,9 @@ class Variant:
         return build(path, lambda: option.make(values))
 
     def write(self, value, name: str, data: dict) -> None:
-        tag = self.choose(value) if self.choose else next(k for k in self.options
-                                                          if isinstance(value, self.table(k).cls))  # type: ignore[arg-type]
+        tag = (
+            self.choose(value) if self.choose else next(k for k in self.options if isinstance(value, self.table(k).cls))  # type: ignore[arg-type]
+        )
         data[name] = tag
         write_keys(self.table(tag).keys, self.table(tag).parts(value), data)
 
@@ -229,30 +251,38 @@ class Named:
         key, tables = join(path, name), data.get(name, {})
         require(isinstance(tables, dict), f"{key} must be a table, not {tables!r}")
         for option in tables:
-            require(option in self.registry, f"unknown key '{join(key, option)}' (allowed here: {', '.join(self.registry)})")
-        return tuple(dataclass_table(self.registry[option]).read_table(table, join(key, option))
-                     for option, table in tables.items())
+            require(
+                option in self.registry, f"unknown key '{join(key, option)}' (allowed here: {', '.join(self.registry)})"
+            )
+        return tuple(
+            dataclass_table(self.registry[option]).read_table(table, join(key, option))
+            for option, table in tables.items()
+        )
 
     def write(self, value, name: str, data: dict) -> None:
         names = {cls: option for option, cls in self.registry.items()}
         if value:
-            data[name] = {names[type(item)]: dataclass_table(type(item)).write_table(item)  # type: ignore[arg-type]
-                          for item in value}
+            data[name] = {
+                names[type(item)]: dataclass_table(type(item)).write_table(item)  # type: ignore[arg-type]
+                for item in value
+            }
 
     def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
         key = join(path, name)
         rows = [KeyInfo(key, "table", "{}", ", ".join(self.registry), when, self.doc)]
         for option, cls in self.registry.items():
             table = dataclass_table(cls)
-            rows += [KeyInfo(join(key, option), "table", "none", "", when, table.doc)] + \
-                key_rows(table.keys, join(key, option))
+            rows += [KeyInfo(join(key, option), "table", "none", "", when, table.doc)] + key_rows(
+                table.keys, join(key, option)
+            )
         return rows
 
 
 def record(cls, doc: str = "", **keys) -> Table:
     """A table whose keys are fields of the dataclass cls."""
-    return Table(keys, make=lambda values: cls(**values), parts=lambda obj: {k: getattr(obj, k) for k in keys},
-                 cls=cls, doc=doc)
+    return Table(
+        keys, make=lambda values: cls(**values), parts=lambda obj: {k: getattr(obj, k) for k in keys}, cls=cls, doc=doc
+    )
 
 
 @functools.cache
@@ -264,14 +294,24 @@ def dataclass_table(cls) -> Table:
     for f in dataclasses.fields(cls):
         hint = hints[f.name]
         if isinstance(hint, types.UnionType):
-            hint, = (arg for arg in typing.get_args(hint) if arg is not type(None))
+            (hint,) = (arg for arg in typing.get_args(hint) if arg is not type(None))
         kind = typing.get_origin(hint) or hint
         if kind not in TYPE_NAMES:
             raise TypeError(f"{cls.__name__}.{f.name}: {hints[f.name]} has no scene-file form")
-        default = (f.default if f.default is not dataclasses.MISSING else
-                   f.default_factory() if f.default_factory is not dataclasses.MISSING else REQUIRED)
-        keys[f.name] = Key(kind, default, unit=f.metadata.get("unit", ""), scaled=f.metadata.get("scaled", True),
-                           si=f.metadata.get("si"))
+        default = (
+            f.default
+            if f.default is not dataclasses.MISSING
+            else f.default_factory()
+            if f.default_factory is not dataclasses.MISSING
+            else REQUIRED
+        )
+        keys[f.name] = Key(
+            kind,
+            default,
+            unit=f.metadata.get("unit", ""),
+            scaled=f.metadata.get("scaled", True),
+            si=f.metadata.get("si"),
+        )
     return record(cls, " ".join((cls.__doc__ or "").split("\n\n")[0].split()), **keys)
 
 
@@ -331,6 +371,7 @@ def default_text(default) -> str:
 
 # --- editing by dotted keys ---
 
+
 def edited(root: Table, obj, values: dict):
     """A copy of obj with the dotted keys of `values` set in its data, read back (validated) through root;
     a bad key or value raises one PneumaInputError naming the key. A value that switches a Variant's tag
@@ -364,8 +405,11 @@ def switched(table: Table, node, parts: list, value) -> None:
         old = node.get(name, entry.default)
         if old != value and old in entry.options and isinstance(value, str) and value in entry.options:
             keys = table_entries(entry.table(old).keys, node)
-            drop_kind(node, {k: e.default if isinstance(e, Key) else REQUIRED for k, e in keys.items()},
-                      table_entries(entry.table(value).keys, {}))
+            drop_kind(
+                node,
+                {k: e.default if isinstance(e, Key) else REQUIRED for k, e in keys.items()},
+                table_entries(entry.table(value).keys, {}),
+            )
     elif name in table.tags and not rest:
         assert table.kind is not None  # a table with tags has a kind
         old = table.kind(node)
@@ -398,8 +442,10 @@ def table_entries(keys: dict, data: dict) -> dict:
 
 def parse_key(key: str) -> list:
     """'chambers[0].center[1]' -> ['chambers', 0, 'center', 1]; at most MAX_KEY_PARTS parts."""
-    require(key.count(".") + key.count("[") < MAX_KEY_PARTS,
-            f"the key {key[:40]!r}... has more than {MAX_KEY_PARTS} parts: no scene key is that deep")
+    require(
+        key.count(".") + key.count("[") < MAX_KEY_PARTS,
+        f"the key {key[:40]!r}... has more than {MAX_KEY_PARTS} parts: no scene key is that deep",
+    )
     parts = []
     for segment in key.split("."):
         match = KEY_PART.fullmatch(segment)
@@ -441,13 +487,16 @@ def parse_assignment(text: str) -> tuple[str, object]:
 def parse_value(raw: str, what: str):
     """A value as TOML reads it (1e4, true, [0, 0.1], "x"), else the text (stripped) as a string; refused
     (naming `what`) past MAX_VALUE_CHARS characters, past the limits of read_toml, or not valid UTF-8."""
-    require(len(raw) <= MAX_VALUE_CHARS, f"{what}: the value has {len(raw)} characters; at most {MAX_VALUE_CHARS} "
-                                         f"are allowed")
+    require(
+        len(raw) <= MAX_VALUE_CHARS,
+        f"{what}: the value has {len(raw)} characters; at most {MAX_VALUE_CHARS} are allowed",
+    )
     try:
         raw.encode("utf-8")
     except UnicodeEncodeError:
-        raise PneumaInputError(f"{what}: {raw[:60]!r} is not valid UTF-8 (bytes the terminal could not "
-                               f"decode)") from None
+        raise PneumaInputError(
+            f"{what}: {raw[:60]!r} is not valid UTF-8 (bytes the terminal could not decode)"
+        ) from None
     try:
         return read_toml(f"v = {raw.strip()}", what)["v"]
     except tomllib.TOMLDecodeError:
@@ -471,8 +520,10 @@ def read_toml(text: str, what: str) -> dict:
     """tomllib.loads(text) within the limits of the module docstring (PneumaInputError naming `what` past
     them); text that is not TOML raises tomllib.TOMLDecodeError."""
     stripped = TOML_STRING_OR_COMMENT.sub(lambda m: "" if m.group().startswith("#") else '""', text)
-    require(TOML_KEY_RUN.search(stripped) is None,
-            f"{what}: a dotted key of more than {MAX_KEY_PARTS} parts (the scene format has none deeper than 5)")
+    require(
+        TOML_KEY_RUN.search(stripped) is None,
+        f"{what}: a dotted key of more than {MAX_KEY_PARTS} parts (the scene format has none deeper than 5)",
+    )
     try:
         data = tomllib.loads(text)
     except RecursionError:

@@ -36,5 +36,7 @@ def find(name: str | os.PathLike, suffix: str = ".toml", what: str = "scene file
         for candidate in (SHIPPED / path.name, SHIPPED / f"{path.name}{suffix}"):
             if candidate.suffix == suffix and candidate.is_file():
                 return candidate
-    raise PneumaInputError(f"{what} {quoted(name)} cannot be read (no such file, and none of that name ships with "
-                           f"the package: {', '.join(shipped(suffix))})")
+    raise PneumaInputError(
+        f"{what} {quoted(name)} cannot be read (no such file, and none of that name ships with "
+        f"the package: {', '.join(shipped(suffix))})"
+    )

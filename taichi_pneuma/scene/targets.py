@@ -44,10 +44,14 @@ class Target:
             object.__setattr__(self, "angle", require_finite("target angle", self.angle))
         require(len(self.weights) == 3, f"target weights = {list(self.weights)!r} must be [w_x, w_y, w_angle]")
         weights = tuple(require_finite("target weight", w) for w in self.weights)
-        require(all(w >= 0 for w in weights) and (weights[0] > 0 or weights[1] > 0),
-                f"target weights = {list(self.weights)!r} must be >= 0, w_x or w_y > 0")
+        require(
+            all(w >= 0 for w in weights) and (weights[0] > 0 or weights[1] > 0),
+            f"target weights = {list(self.weights)!r} must be >= 0, w_x or w_y > 0",
+        )
         object.__setattr__(self, "weights", weights)
-        require(require_finite("target weight", self.weight_z) >= 0, f"target weight_z = {self.weight_z!r} must be >= 0")
+        require(
+            require_finite("target weight", self.weight_z) >= 0, f"target weight_z = {self.weight_z!r} must be >= 0"
+        )
 
 
 def read_targets_csv(path: str | os.PathLike) -> list[Target]:
@@ -59,20 +63,32 @@ def read_targets_csv(path: str | os.PathLike) -> list[Target]:
     except (csv.Error, UnicodeDecodeError) as exc:
         raise PneumaInputError(f"{path}: not a CSV file ({exc})") from None
     require(rows, f"{path}: no targets (a header line x,y[,angle,...] and one row per target)")
-    require(len(rows) <= MAX_TARGETS, f"{path}: more than {MAX_TARGETS} targets; at most {MAX_TARGETS} are allowed "
-                                      f"(each is a reach)")
+    require(
+        len(rows) <= MAX_TARGETS,
+        f"{path}: more than {MAX_TARGETS} targets; at most {MAX_TARGETS} are allowed (each is a reach)",
+    )
     unknown = sorted(set(header) - set(COLUMNS), key=str)
-    require(not unknown and {"x", "y"} <= set(header),
-            f"{path}: columns {list(header)!r} must include x and y and be among {', '.join(COLUMNS)}")
+    require(
+        not unknown and {"x", "y"} <= set(header),
+        f"{path}: columns {list(header)!r} must include x and y and be among {', '.join(COLUMNS)}",
+    )
     targets = []
     for i, row in enumerate(rows, start=2):
         try:
+
             def cell(key, default=None, row=row):
                 """The row's number in column key; default where the cell is empty."""
                 return default if not (row.get(key) or "").strip() else parse_number(key, row[key])
+
             z = cell("z")
-            targets.append(Target((cell("x"), cell("y")) + (() if z is None else (z,)), cell("angle"),
-                                  (cell("wx", 1.0), cell("wy", 1.0), cell("wangle", 1.0)), cell("wz", 1.0)))
+            targets.append(
+                Target(
+                    (cell("x"), cell("y")) + (() if z is None else (z,)),
+                    cell("angle"),
+                    (cell("wx", 1.0), cell("wy", 1.0), cell("wangle", 1.0)),
+                    cell("wz", 1.0),
+                )
+            )
         except PneumaInputError as exc:
             raise PneumaInputError(f"{path}, line {i}: {exc}") from None
     return targets

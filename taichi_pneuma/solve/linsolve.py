@@ -49,7 +49,7 @@ class FixedPattern:
         data = np.zeros(self.nnz)
         start = 0
         for part in [values] if isinstance(values, np.ndarray) else values:
-            slots = self._slot[start:start + len(part)]
+            slots = self._slot[start : start + len(part)]
             if len(part) > self.nnz:
                 data += np.bincount(slots, weights=part, minlength=self.nnz)
             else:
@@ -106,8 +106,13 @@ class CholespyCholesky:
 
         try:
             with silenced_stdout():
-                self._factor = CholeskySolverD(matrix.shape[0], matrix.indptr.astype(np.int32),
-                                               matrix.indices.astype(np.int32), matrix.data, MatrixType.CSR)
+                self._factor = CholeskySolverD(
+                    matrix.shape[0],
+                    matrix.indptr.astype(np.int32),
+                    matrix.indices.astype(np.int32),
+                    matrix.data,
+                    MatrixType.CSR,
+                )
         except ValueError as exc:
             raise FactorizationError(str(exc)) from None
 
@@ -160,11 +165,15 @@ class CholmodCholesky:
         if matrix.indptr is not self._indptr:
             n = matrix.shape[0]
             rows = np.repeat(np.arange(n, dtype=np.int64), np.diff(matrix.indptr))
-            self._matrix = cvxopt.spmatrix(cvxopt.matrix(matrix.data), cvxopt.matrix(matrix.indices.astype(np.int64)),
-                                           cvxopt.matrix(rows), (n, n))
+            self._matrix = cvxopt.spmatrix(
+                cvxopt.matrix(matrix.data), cvxopt.matrix(matrix.indices.astype(np.int64)), cvxopt.matrix(rows), (n, n)
+            )
             order = nested_dissection(matrix, self._block)
-            self._symbolic = cholmod.symbolic(self._matrix, uplo="L") if order is None else \
-                cholmod.symbolic(self._matrix, p=cvxopt.matrix(order.tolist(), tc="i"), uplo="L")
+            self._symbolic = (
+                cholmod.symbolic(self._matrix, uplo="L")
+                if order is None
+                else cholmod.symbolic(self._matrix, p=cvxopt.matrix(order.tolist(), tc="i"), uplo="L")
+            )
             self._indptr = matrix.indptr
         self._matrix.V = cvxopt.matrix(matrix.data)
         try:
@@ -182,8 +191,12 @@ class CholmodCholesky:
 
 
 @ti.kernel
-def _fill_builder(builder: ti.types.sparse_matrix_builder(), rows: ti.types.ndarray(), cols: ti.types.ndarray(),
-                  vals: ti.types.ndarray()):
+def _fill_builder(
+    builder: ti.types.sparse_matrix_builder(),
+    rows: ti.types.ndarray(),
+    cols: ti.types.ndarray(),
+    vals: ti.types.ndarray(),
+):
     for i in range(rows.shape[0]):
         builder[rows[i], cols[i]] += vals[i]
 
@@ -292,8 +305,9 @@ class AmgConjugateGradient:
         self._fresh_rate: float | None = None  # iterations per decade of residual on this hierarchy's first solve
         self._stale = False
 
-    def solve(self, rhs: np.ndarray, low_rank: Sequence[tuple[np.ndarray, np.ndarray, float]] = (),
-              rtol: float | None = None) -> np.ndarray:
+    def solve(
+        self, rhs: np.ndarray, low_rank: Sequence[tuple[np.ndarray, np.ndarray, float]] = (), rtol: float | None = None
+    ) -> np.ndarray:
         if rhs.ndim == 2:
             return np.column_stack([self.solve(column, low_rank, rtol) for column in rhs.T])
         rtol = self.rtol if rtol is None else rtol
@@ -301,7 +315,7 @@ class AmgConjugateGradient:
             return self._cg(rhs, low_rank, rtol)
         except NotConverged:
             if self._fresh_rate is None:  # a fresh hierarchy: the matrix is at fault (indefinite), and so is its
-                self._stale = True        # hierarchy, which must not precondition the next matrix of this pattern
+                self._stale = True  # hierarchy, which must not precondition the next matrix of this pattern
                 raise
             self._setup()
             return self._cg(rhs, low_rank, rtol)
@@ -319,13 +333,20 @@ class AmgConjugateGradient:
 
         operator = spla.LinearOperator(matrix.shape, matvec=apply, dtype=np.float64)
         count = itertools.count()
-        x, info = spla.cg(operator, rhs, rtol=rtol, maxiter=self.MAX_ITERATIONS, M=self._preconditioner,
-                          callback=lambda _: next(count))
+        x, info = spla.cg(
+            operator,
+            rhs,
+            rtol=rtol,
+            maxiter=self.MAX_ITERATIONS,
+            M=self._preconditioner,
+            callback=lambda _: next(count),
+        )
         self.iterations = next(count)
         residual = float(np.linalg.norm(apply(x) - rhs) / max(np.linalg.norm(rhs), np.finfo(float).tiny))
         if info != 0 or not residual <= 10 * rtol:
-            raise NotConverged(f"CG reached a relative residual of {residual:.2e}, not {rtol:.2e}, in "
-                               f"{self.iterations} iterations")
+            raise NotConverged(
+                f"CG reached a relative residual of {residual:.2e}, not {rtol:.2e}, in {self.iterations} iterations"
+            )
         rate = self.iterations / max(-np.log10(max(residual, 1e-16)), 1.0)
         if self._fresh_rate is None:
             self._fresh_rate = rate
@@ -333,8 +354,13 @@ class AmgConjugateGradient:
         return x
 
 
-BACKENDS = {"amg": AmgConjugateGradient, "cholespy": CholespyCholesky, "cholmod": CholmodCholesky,
-            "scipy": ScipySuperLU, "taichi": TaichiLLT}
+BACKENDS = {
+    "amg": AmgConjugateGradient,
+    "cholespy": CholespyCholesky,
+    "cholmod": CholmodCholesky,
+    "scipy": ScipySuperLU,
+    "taichi": TaichiLLT,
+}
 # auto in 3D: CHOLMOD up to this many DOFs, CG with multigrid above (a factor's memory grows as n^(4/3) and its
 # time as n^2, multigrid's about as n). On the quadratic beam's Hessians (2 cores; docs/solid.md, "Linear solvers
 # in 3D") CHOLMOD refactorises 59k DOFs in 1.1 s and 119k in 3.9 s, where multigrid's set-up and one solve to 1e-2
@@ -363,12 +389,18 @@ def make_backend(name: str, rest: np.ndarray | None = None):
     positions (n, d): the multigrid's near-null space, CHOLMOD's node blocks."""
     name = auto_backend(rest) if name == "auto" else name
     if name == "amg":
-        require(installed("pyamg"), "linear solver 'amg' needs pyamg, which is not installed (pip install pyamg; it "
-                                    "has no wheel for Linux aarch64): choose auto, cholmod, taichi, cholespy or scipy")
+        require(
+            installed("pyamg"),
+            "linear solver 'amg' needs pyamg, which is not installed (pip install pyamg; it "
+            "has no wheel for Linux aarch64): choose auto, cholmod, taichi, cholespy or scipy",
+        )
         return AmgConjugateGradient(rest)
     if name == "cholmod":
-        require(installed("cvxopt"), "linear solver 'cholmod' needs CVXOPT, which is not installed (pip install "
-                                     "'taichi-pneuma[3d]'): choose auto, amg, taichi, cholespy or scipy")
+        require(
+            installed("cvxopt"),
+            "linear solver 'cholmod' needs CVXOPT, which is not installed (pip install "
+            "'taichi-pneuma[3d]'): choose auto, amg, taichi, cholespy or scipy",
+        )
         return CholmodCholesky(1 if rest is None else rest.shape[1])
     return BACKENDS[name]()
 
@@ -380,8 +412,9 @@ def direct_backend() -> str:
     return "taichi" if runtime.current_arch() in (None, "cpu") else "cholespy" if installed("cholespy") else "scipy"
 
 
-def solve_low_rank_updated(backend, rhs: np.ndarray, low_rank: list[tuple[np.ndarray, np.ndarray, float]],
-                           rtol: float | None = None):
+def solve_low_rank_updated(
+    backend, rhs: np.ndarray, low_rank: list[tuple[np.ndarray, np.ndarray, float]], rtol: float | None = None
+):
     """Solve (S + sum_j c_j u_j u_j^T) d = rhs with S factorised in `backend` (the iterative one: set up), to the
     relative residual rtol where the backend is iterative (a direct one solves exactly)."""
     if isinstance(backend, AmgConjugateGradient):
@@ -392,6 +425,6 @@ def solve_low_rank_updated(backend, rhs: np.ndarray, low_rank: list[tuple[np.nda
     for j, (dofs, u, _) in enumerate(low_rank):
         U[dofs, j] = u
     solved = backend.solve(np.column_stack([rhs, U]))  # one pass over the factor for all right-hand sides
-    y, Z = solved[:, :-len(low_rank)].reshape(rhs.shape), solved[:, -len(low_rank):]
+    y, Z = solved[:, : -len(low_rank)].reshape(rhs.shape), solved[:, -len(low_rank) :]
     capacitance = np.diag([1.0 / c for _, _, c in low_rank]) + U.T @ Z
     return y - Z @ np.linalg.solve(capacitance, U.T @ y)

@@ -129,10 +129,14 @@ class NewtonOptions:
 
     def __post_init__(self):
         require(require_finite("tol", self.tol) > 0, f"tol = {self.tol!r} must be > 0")
-        require(isinstance(self.max_iterations, int) and self.max_iterations >= 1,
-                f"max_iterations = {self.max_iterations!r} must be an integer >= 1")
-        require(self.linear_solver in ("auto", *BACKENDS),
-                f"linear solver = {self.linear_solver!r} is not one of auto, {', '.join(BACKENDS)}")
+        require(
+            isinstance(self.max_iterations, int) and self.max_iterations >= 1,
+            f"max_iterations = {self.max_iterations!r} must be an integer >= 1",
+        )
+        require(
+            self.linear_solver in ("auto", *BACKENDS),
+            f"linear solver = {self.linear_solver!r} is not one of auto, {', '.join(BACKENDS)}",
+        )
 
 
 class NewtonSolver:
@@ -146,10 +150,18 @@ class NewtonSolver:
         self.backend = make_backend(self.options.linear_solver, model.config.rest)
         # an exact H that CHOLMOD refuses is not handed to an LU: in 3D an LU costs 15x the Cholesky factorisation
         # (1.15 s against 0.07 s at 12k DOFs) and fills far more; the PSD H serves instead
-        self.indefinite_backend = None if self.backend.name == "cholmod" else \
-            self.backend if self.backend.name == "scipy" else make_backend("scipy")
-        self.direct_backend = self.backend if self.backend.name != "amg" else \
-            make_backend("cholmod" if installed("cvxopt") else direct_backend(), model.config.rest)
+        self.indefinite_backend = (
+            None
+            if self.backend.name == "cholmod"
+            else self.backend
+            if self.backend.name == "scipy"
+            else make_backend("scipy")
+        )
+        self.direct_backend = (
+            self.backend
+            if self.backend.name != "amg"
+            else make_backend("cholmod" if installed("cvxopt") else direct_backend(), model.config.rest)
+        )
         self.factored_by, self.factored = self.backend, False  # the backend holding the last factorisation
         self.factored_exact = False  # ... and whether it is of an exact Hessian
         self.chord = model.config.dim == 3 if self.options.chord_steps is None else self.options.chord_steps
@@ -173,8 +185,9 @@ class NewtonSolver:
             return self.backend, self.indefinite_backend
         return (self.backend,)
 
-    def _direction(self, g: np.ndarray, psd_only: bool, clock: PhaseClock, indefinite: bool = False,
-                   rtol: float | None = None) -> tuple[np.ndarray, float]:
+    def _direction(
+        self, g: np.ndarray, psd_only: bool, clock: PhaseClock, indefinite: bool = False, rtol: float | None = None
+    ) -> tuple[np.ndarray, float]:
         """Newton direction d = -H^-1 g (to the relative residual rtol where the backend is iterative) and the
         slope g.d (nan when every backend fails); indefinite: see _backends."""
         with clock("hessian"):
@@ -214,11 +227,13 @@ class NewtonSolver:
         if not chord_last:
             return True
         rho = record.residuals[-1] / record.residuals[-2]
-        return rho <= CHORD_MAX_CONTRACTION and math.log(self.options.tol / record.residual) >= \
-            CHORD_MAX_NEEDED * math.log(rho)
+        return rho <= CHORD_MAX_CONTRACTION and math.log(
+            self.options.tol / record.residual
+        ) >= CHORD_MAX_NEEDED * math.log(rho)
 
-    def solve(self, u0: np.ndarray, max_iterations: int | None = None,
-              reuse_factor: bool = False, stop=None) -> tuple[np.ndarray, SolveRecord]:
+    def solve(
+        self, u0: np.ndarray, max_iterations: int | None = None, reuse_factor: bool = False, stop=None
+    ) -> tuple[np.ndarray, SolveRecord]:
         """Minimise the model's energy over displacements from u0 (n, d); returns the final u (n, d) and the record.
 
         max_iterations: this call's cap (default the options'; a live loop takes one step per frame).

@@ -68,15 +68,30 @@ class StepRecord:
         tip_rotation, <contact>.fx/.fy/.magnitude, solver figures, the extra columns."""
         row: dict[str, float] = {"step": self.step}
         for name, c in self.chambers.items():
-            row.update({f"{name}.command": c.command, f"{name}.area": c.area, f"{name}.area_ratio": c.area_ratio,
-                        f"{name}.pressure": c.pressure})
+            row.update(
+                {
+                    f"{name}.command": c.command,
+                    f"{name}.area": c.area,
+                    f"{name}.area_ratio": c.area_ratio,
+                    f"{name}.pressure": c.pressure,
+                }
+            )
         row.update({column: float(value) for column, value in zip(TIP_COLUMNS, self.tip)})
         row["tip_rotation"] = self.tip_rotation
         for name, (fx, fy, magnitude) in self.contact.items():
             row.update({f"{name}.fx": fx, f"{name}.fy": fy, f"{name}.magnitude": magnitude})
-        row.update({"iterations": self.iterations, "residual": self.residual, "converged": self.converged,
-                    "cuts": self.cuts, "substeps": self.substeps, "min_det": self.min_det,
-                    "max_stretch": self.max_stretch, "seconds": self.seconds})
+        row.update(
+            {
+                "iterations": self.iterations,
+                "residual": self.residual,
+                "converged": self.converged,
+                "cuts": self.cuts,
+                "substeps": self.substeps,
+                "min_det": self.min_det,
+                "max_stretch": self.max_stretch,
+                "seconds": self.seconds,
+            }
+        )
         row.update(self.extra)
         return row
 
@@ -170,8 +185,9 @@ class Run:
 
     def fields(self, step: int = -1) -> dict[str, np.ndarray]:
         """Per element at a step: det_F, max_stretch, stress (Cauchy, (m, 3, 3)), von_mises (fields.py)."""
-        return element_fields(self.mesh.vertices, self.positions[step], self.mesh.elements,
-                              *self.scene.element_material(self.mesh))
+        return element_fields(
+            self.mesh.vertices, self.positions[step], self.mesh.elements, *self.scene.element_material(self.mesh)
+        )
 
     def extremes(self) -> dict[str, dict]:
         """The range over the run of the tip's measures (tip_dx, tip_dy, in 3D tip_dz, tip_rotation) and of each
@@ -179,12 +195,19 @@ class Run:
         first step at it, "max": ..., "max_step": ...}. A schedule that goes out and back ends near rest; its
         extremes keep what it reached."""
         history = self.history
-        columns = [*TIP_COLUMNS[:self.mesh.dim], "tip_rotation",
-                   *(f"{name}.{key}" for name in self.chamber_names for key in ("area", "area_ratio", "pressure"))]
+        columns = [
+            *TIP_COLUMNS[: self.mesh.dim],
+            "tip_rotation",
+            *(f"{name}.{key}" for name in self.chamber_names for key in ("area", "area_ratio", "pressure")),
+        ]
         extremes = {}
         for column in columns:
             values = history[column]
             low, high = int(np.argmin(values)), int(np.argmax(values))
-            extremes[column] = {"min": float(values[low]), "min_step": int(history["step"][low]),
-                                "max": float(values[high]), "max_step": int(history["step"][high])}
+            extremes[column] = {
+                "min": float(values[low]),
+                "min_step": int(history["step"][low]),
+                "max": float(values[high]),
+                "max_step": int(history["step"][high]),
+            }
         return extremes

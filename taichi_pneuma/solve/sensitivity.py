@@ -74,8 +74,9 @@ def tip_rotation_gradient(rest_tip: np.ndarray, current_tip: np.ndarray) -> np.n
     return (cc * d_s - s * r) / (s * s + cc * cc)
 
 
-def solve_exact(built: BuiltScene, rhs: np.ndarray, pattern: FixedPattern | None = None, backend=None,
-                factorised: bool = False):
+def solve_exact(
+    built: BuiltScene, rhs: np.ndarray, pattern: FixedPattern | None = None, backend=None, factorised: bool = False
+):
     """Solve H x = rhs with H the exact Hessian at the model's current state; return (x, backend name).
 
     pattern, backend: reuse a Newton solver's (its symbolic analysis) instead of new ones; factorised:
@@ -95,8 +96,14 @@ def solve_exact(built: BuiltScene, rhs: np.ndarray, pattern: FixedPattern | None
     return solve_low_rank_updated(backend, rhs, model.low_rank()), backend.name
 
 
-def sensitivity(built: BuiltScene, commands: np.ndarray, u: np.ndarray, pattern: FixedPattern | None = None,
-                backend=None, factorised: bool = False) -> Sensitivity:
+def sensitivity(
+    built: BuiltScene,
+    commands: np.ndarray,
+    u: np.ndarray,
+    pattern: FixedPattern | None = None,
+    backend=None,
+    factorised: bool = False,
+) -> Sensitivity:
     """du/dq and the tip Jacobian at the equilibrium u (n, d) of `commands`; leaves them set on `built`.
     pattern, backend, factorised: see solve_exact. The tip outputs are fem.tip.tip_outputs (dx, dy, the rotation in the
     x-y plane (in 3D the bend angle about z), then in 3D dz)."""

@@ -42,8 +42,9 @@ def chamber_records(built: BuiltScene, commands: np.ndarray) -> dict[str, Chambe
     records = {}
     for chamber, command in zip(built.chambers, commands):
         area = chamber.area()
-        records[chamber.chamber_name] = ChamberRecord(chamber.kind.name, float(command), area, area / chamber.rest_area,
-                                                      chamber.pressure())
+        records[chamber.chamber_name] = ChamberRecord(
+            chamber.kind.name, float(command), area, area / chamber.rest_area, chamber.pressure()
+        )
     return records
 
 
@@ -80,8 +81,10 @@ def state_fault(built: BuiltScene, commands: np.ndarray) -> str | None:
     for chamber, command in zip(built.chambers, commands):
         fault = chamber.wall_fault()
         if fault is not None:
-            return (f"chamber {chamber.chamber_name!r} {fault} at {chamber.kind.quantity} {command:.4g}: the body "
-                    f"cannot take its chamber that far (a wall through itself is not physical)")
+            return (
+                f"chamber {chamber.chamber_name!r} {fault} at {chamber.kind.quantity} {command:.4g}: the body "
+                f"cannot take its chamber that far (a wall through itself is not physical)"
+            )
     min_det = built.elastic.min_determinant()
     return None if min_det > 0 else f"an element turned inside out (min det F = {min_det:.3g})"
 
@@ -95,8 +98,16 @@ class Stopped(Exception):
     last equilibrium's u."""
 
 
-def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.ndarray, target: np.ndarray,
-           previous=None, max_cuts: int = MAX_CUTS, stop=None):
+def settle(
+    built: BuiltScene,
+    solver: NewtonSolver,
+    reached: np.ndarray,
+    u: np.ndarray,
+    target: np.ndarray,
+    previous=None,
+    max_cuts: int = MAX_CUTS,
+    stop=None,
+):
     """Solve the equilibrium at commands `target`, starting from the equilibrium u at commands `reached`.
 
     A Newton solve that does not converge is cut back: the remaining change of all chamber commands is
@@ -114,8 +125,9 @@ def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.n
         trial = min(1.0, done + fraction)
         commands = origin + trial * (target - origin)
         built.set_commands(commands)
-        u_trial, record = solver.solve(predict(built, previous, (reached, u), commands),
-                                       reuse_factor=solver.chord, stop=stop)
+        u_trial, record = solver.solve(
+            predict(built, previous, (reached, u), commands), reuse_factor=solver.chord, stop=stop
+        )
         records.append(record)
         if record.stopped:
             built.model.set_displacements(u)
@@ -136,12 +148,20 @@ def settle(built: BuiltScene, solver: NewtonSolver, reached: np.ndarray, u: np.n
             fraction /= 2
         else:
             built.model.set_displacements(u)
-            raise NoEquilibrium(f"no equilibrium at {describe_commands(built, commands, reached)} after {cuts} cuts; "
-                                f"residual {record.residual:.2e} ({record.message})")
+            raise NoEquilibrium(
+                f"no equilibrium at {describe_commands(built, commands, reached)} after {cuts} cuts; "
+                f"residual {record.residual:.2e} ({record.message})"
+            )
 
 
-def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: NewtonOptions | None = None,
-                 progress=None, max_cuts: int = MAX_CUTS, stop=None) -> Run:
+def run_schedule(
+    built: BuiltScene,
+    schedule: Schedule | None = None,
+    options: NewtonOptions | None = None,
+    progress=None,
+    max_cuts: int = MAX_CUTS,
+    stop=None,
+) -> Run:
     """Solve for equilibrium at each step of the schedule (the scene's own by default), each from the last.
 
     An increment whose Newton solve does not converge is cut back: the remaining change of all
@@ -172,9 +192,15 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
     newton = {"linear_solver": solver.backend.name, "chord_steps": 0, "phase_seconds": collections.Counter()}
 
     def partial():
-        return Run(built, steps, np.array(states).reshape(-1, *mesh.vertices.shape), solves,
-                      np.array(forces).reshape(-1, *mesh.vertices.shape) if contact_terms else None,
-                      time.perf_counter() - started, newton)
+        return Run(
+            built,
+            steps,
+            np.array(states).reshape(-1, *mesh.vertices.shape),
+            solves,
+            np.array(forces).reshape(-1, *mesh.vertices.shape) if contact_terms else None,
+            time.perf_counter() - started,
+            newton,
+        )
 
     for i in range(schedule.increments + 1):
         start = time.perf_counter()
@@ -200,10 +226,20 @@ def run_schedule(built: BuiltScene, schedule: Schedule | None = None, options: N
             vertex_forces += f
             fx, fy = f.sum(axis=0)[:2]  # (in 3D only the ground reports contact, along y)
             contact[name] = (float(fx), float(fy), float(np.linalg.norm(f, axis=1).sum()))
-        step = StepRecord(i, chambers, *tip_measures(mesh, u),
-                          sum(r.iterations for r in records), final.residual, final.converged, cuts,
-                          len(records) - cuts, built.elastic.min_determinant(), time.perf_counter() - start, contact,
-                          max_stretch=stretches.largest_stretch(mesh.vertices + u))
+        step = StepRecord(
+            i,
+            chambers,
+            *tip_measures(mesh, u),
+            sum(r.iterations for r in records),
+            final.residual,
+            final.converged,
+            cuts,
+            len(records) - cuts,
+            built.elastic.min_determinant(),
+            time.perf_counter() - start,
+            contact,
+            max_stretch=stretches.largest_stretch(mesh.vertices + u),
+        )
         steps.append(step)
         states.append(mesh.vertices + u)
         forces.append(vertex_forces)

@@ -16,5 +16,17 @@ from .sweep import Report, Sweep
 from .task import RunOptions, Task, run_task
 from .vary import Axis, check_axes, parse_vary, plan
 
-__all__ = ["Axis", "LocalPool", "RayCluster", "Report", "RunOptions", "Sweep", "Task", "check_axes", "parse_vary",
-           "plan", "run_task", "study_figure"]
+__all__ = [
+    "Axis",
+    "LocalPool",
+    "RayCluster",
+    "Report",
+    "RunOptions",
+    "Sweep",
+    "Task",
+    "check_axes",
+    "parse_vary",
+    "plan",
+    "run_task",
+    "study_figure",
+]

@@ -26,8 +26,12 @@ from .task import Task, one_line, run_task
 
 PR_SET_PDEATHSIG = 1  # prctl's option: the signal a process gets when its parent dies (Linux)
 # Worker processes: one thread each (Taichi's pool is set by runtime.init), no Taichi banner per worker
-WORKER_ENV = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-              backend.environment_name("banner"): "0"}
+WORKER_ENV = {
+    "OMP_NUM_THREADS": "1",
+    "OPENBLAS_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+    backend.environment_name("banner"): "0",
+}
 
 
 def _worker_start(parent: int) -> None:
@@ -46,6 +50,7 @@ def parent_watch(parent: int) -> None:
     if sys.platform.startswith("linux"):
         ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
     else:
+
         def watch():
             while os.getppid() == parent:
                 time.sleep(1.0)
@@ -72,8 +77,9 @@ class LocalPool:
         # workers are spawned as runs are submitted and inherit this environment (read as numpy loads)
         self._saved_env = {k: os.environ.get(k) for k in WORKER_ENV}
         os.environ.update(WORKER_ENV)
-        self._pool = ProcessPoolExecutor(self.workers, mp_context=get_context("spawn"), initializer=_worker_start,
-                                         initargs=(os.getpid(),))
+        self._pool = ProcessPoolExecutor(
+            self.workers, mp_context=get_context("spawn"), initializer=_worker_start, initargs=(os.getpid(),)
+        )
         return self
 
     def __exit__(self, *exc):
@@ -90,7 +96,7 @@ class LocalPool:
         pool = self._pool
         assert pool is not None  # (entered)
         with signals.ignored():  # the first `workers` submissions start the workers: they inherit it
-            futures = {pool.submit(run_task, task): i for i, task in enumerate(tasks[:self.workers])}
+            futures = {pool.submit(run_task, task): i for i, task in enumerate(tasks[: self.workers])}
         futures.update({pool.submit(run_task, task): i for i, task in enumerate(tasks) if i >= self.workers})
         pending = set(futures)
 
@@ -119,8 +125,9 @@ class LocalPool:
 def check_address(address: str) -> None:
     """Refuse at once a host:port nothing listens on (ray.init would retry it for ever)."""
     host, sep, port = address.rpartition(":")
-    require(bool(sep) and host and port.isdigit(),
-            f"--ray {address!r}: an address is HOST:PORT, ray://HOST:PORT or auto")
+    require(
+        bool(sep) and host and port.isdigit(), f"--ray {address!r}: an address is HOST:PORT, ray://HOST:PORT or auto"
+    )
     try:
         socket.create_connection((host, int(port)), timeout=5).close()
     except OSError as exc:
@@ -143,8 +150,12 @@ class RayCluster:
     def describe(self) -> dict:
         import ray
 
-        return {"executor": "ray", "address": self.address or "local", "ray_cpus": ray.cluster_resources().get("CPU"),
-                "ray_nodes": len(ray.nodes())}
+        return {
+            "executor": "ray",
+            "address": self.address or "local",
+            "ray_cpus": ray.cluster_resources().get("CPU"),
+            "ray_nodes": len(ray.nodes()),
+        }
 
     def __enter__(self):
         import ray
@@ -153,8 +164,13 @@ class RayCluster:
             # address "local": a new Ray even where one runs already (ray.init(None) would join that one)
             local = {"num_cpus": self.workers or os.cpu_count()} if self.address is None else {}
             try:
-                ray.init(address=self.address or "local", include_dashboard=False, log_to_driver=False,
-                         runtime_env={"env_vars": WORKER_ENV}, **local)
+                ray.init(
+                    address=self.address or "local",
+                    include_dashboard=False,
+                    log_to_driver=False,
+                    runtime_env={"env_vars": WORKER_ENV},
+                    **local,
+                )
             except (ConnectionError, ValueError, RuntimeError) as exc:
                 raise PneumaInputError(f"--ray {self.address or ''}: {one_line(exc)}") from None
             self._started = True

@@ -88,8 +88,15 @@ def study_figure(rows: list[dict], keys: list[str], sampled: bool = False, label
             if grid.size <= 64:
                 for (i, j), value in np.ndenumerate(grid):
                     if np.isfinite(value):
-                        ax.text(float(xs[j]), float(ys[i]), f"{value:+.3f}", ha="center", va="center", fontsize=8,
-                                color="w" if abs(value) > 0.6 * limit else "k")
+                        ax.text(
+                            float(xs[j]),
+                            float(ys[i]),
+                            f"{value:+.3f}",
+                            ha="center",
+                            va="center",
+                            fontsize=8,
+                            color="w" if abs(value) > 0.6 * limit else "k",
+                        )
         figure.colorbar(image, ax=ax, label="tip dy")
         if yl:
             ax.set_yticks(range(len(yl)), yl)

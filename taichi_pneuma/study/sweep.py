@@ -49,12 +49,19 @@ def versions(ray: bool = False) -> dict:
 def machine() -> dict:
     model = None
     try:
-        model = next(line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
-                     if line.startswith("model name"))
+        model = next(
+            line.split(":", 1)[1].strip()
+            for line in Path("/proc/cpuinfo").read_text().splitlines()
+            if line.startswith("model name")
+        )
     except (OSError, StopIteration):
         pass
-    return {"platform": platform.platform(), "machine": platform.machine(), "cpu": model or platform.processor(),
-            "cores": os.cpu_count()}
+    return {
+        "platform": platform.platform(),
+        "machine": platform.machine(),
+        "cpu": model or platform.processor(),
+        "cores": os.cpu_count(),
+    }
 
 
 @dataclass
@@ -78,9 +85,18 @@ class Sweep:
     <out>/<name>.csv, .json and .png. Creating it reads the rows a previous run of the same study left
     (a different study under the same name is refused); run() runs the others."""
 
-    def __init__(self, base: Scene, axes: list[Axis], out, name: str = "sweep", samples: int | None = None,
-                 seed: int = 0, options: RunOptions = DEFAULT_OPTIONS, retry_failed: bool = False,
-                 max_runs: int = MAX_RUNS):
+    def __init__(
+        self,
+        base: Scene,
+        axes: list[Axis],
+        out,
+        name: str = "sweep",
+        samples: int | None = None,
+        seed: int = 0,
+        options: RunOptions = DEFAULT_OPTIONS,
+        retry_failed: bool = False,
+        max_runs: int = MAX_RUNS,
+    ):
         require(len(axes) >= 1, "a study varies at least one key (--vary KEY=SPEC)")
         axes = check_axes(base, axes)
         self.base, self.axes, self.samples, self.seed, self.options = base, axes, samples, seed, options
@@ -97,13 +113,25 @@ class Sweep:
         self.todo = [run for run in self.runs if run_key(run) not in self.done]
 
     def record(self, status: str, executor: dict | None = None, report: Report | None = None) -> dict:
-        grid = {"axes": [{"key": a.key, "spec": a.spec, **({"values": a.grid()} if self.samples is None else {})}
-                         for a in self.axes],
-                "sampling": "full grid" if self.samples is None else "latin hypercube",
-                "samples": self.samples, "seed": self.seed, "runs": len(self.runs)}
-        data: dict[str, Any] = {**self.identity, "status": status, "grid": grid, "executor": executor,
-                "versions": versions(ray=bool(executor and executor["executor"] == "ray")),
-                "machine": machine(), "updated": datetime.now(UTC).isoformat(timespec="seconds")}
+        grid = {
+            "axes": [
+                {"key": a.key, "spec": a.spec, **({"values": a.grid()} if self.samples is None else {})}
+                for a in self.axes
+            ],
+            "sampling": "full grid" if self.samples is None else "latin hypercube",
+            "samples": self.samples,
+            "seed": self.seed,
+            "runs": len(self.runs),
+        }
+        data: dict[str, Any] = {
+            **self.identity,
+            "status": status,
+            "grid": grid,
+            "executor": executor,
+            "versions": versions(ray=bool(executor and executor["executor"] == "ray")),
+            "machine": machine(),
+            "updated": datetime.now(UTC).isoformat(timespec="seconds"),
+        }
         if report is not None:
             data["result"] = {k: getattr(report, k) for k in ("planned", "skipped", "ran", "failed", "lost", "seconds")}
             data["result"]["runs_per_second"] = report.ran / report.seconds if report.ran else None
@@ -114,8 +142,9 @@ class Sweep:
         everything = {**self.done, **new}
         order = [run_key(run) for run in self.runs]
         planned = set(order)
-        return [everything[k] for k in order if k in everything], \
-            [row for k, row in everything.items() if k not in planned]
+        return [everything[k] for k in order if k in everything], [
+            row for k, row in everything.items() if k not in planned
+        ]
 
     def run(self, executor, on_row=None) -> Report:
         """Run the runs not done before on an entered executor (LocalPool, RayCluster; None when there is
@@ -150,14 +179,22 @@ class Sweep:
             status = "done" if lost == 0 else "incomplete"
         finally:
             rows, others = self.rows(new)
-            report = Report(len(self.runs), len(self.runs) - len(self.todo), len(new),
-                            sum(row.get("error") is not None for row in rows), lost, time.perf_counter() - start,
-                            rows, [self.csv, self.json])
+            report = Report(
+                len(self.runs),
+                len(self.runs) - len(self.todo),
+                len(new),
+                sum(row.get("error") is not None for row in rows),
+                lost,
+                time.perf_counter() - start,
+                rows,
+                [self.csv, self.json],
+            )
             with signals.holding():  # a signal meanwhile waits for the files
                 write_table(self.csv, self.columns, rows + others)
                 save_json(self.json, self.record(status, described, report))
         if any(row.get("tip_dy") is not None and row.get("error") is None for row in rows):
-            figure = study_figure(rows, self.keys, sampled=self.samples is not None,
-                                  labels=[a.label for a in self.axes])
+            figure = study_figure(
+                rows, self.keys, sampled=self.samples is not None, labels=[a.label for a in self.axes]
+            )
             report.files.append(write_atomic(self.png, lambda tmp: figure.savefig(tmp, format="png", dpi=100)))
         return report

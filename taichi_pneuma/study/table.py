@@ -53,7 +53,7 @@ def table_columns(keys: list[str], base) -> list[str]:
     """The CSV's columns for a study of the Scene `base` varying `keys`: the keys, the tip's figures (tip_dz for a
     3D body), each chamber's area ratio and peak pressure (named after the base scene's chambers), then
     converged, iterations, increments, vertices, seconds and error."""
-    tip = [*TIP_COLUMNS[:2], "tip_rotation", *TIP_COLUMNS[2:base.dim]]
+    tip = [*TIP_COLUMNS[:2], "tip_rotation", *TIP_COLUMNS[2 : base.dim]]
     figures = tip + [f"{c}.{f}" for c in base.chamber_names for f in ("area_ratio", "peak_pressure")]
     return keys + figures + ["converged", "iterations", "increments", "vertices", "seconds", "error"]
 
@@ -65,11 +65,13 @@ def write_table(path: Path, columns: list[str], rows: list[dict]) -> Path:
     def write(tmp):
         with open(tmp, "w", newline="", encoding="utf-8") as f:
             csv.writer(f).writerows([columns] + writer_rows)
+
     return write_atomic(path, write)
 
 
-def read_done(table: Path, record: Path, identity: dict, columns: list[str], keys: list[str],
-              retry_failed: bool = False) -> dict[tuple, dict]:
+def read_done(
+    table: Path, record: Path, identity: dict, columns: list[str], keys: list[str], retry_failed: bool = False
+) -> dict[tuple, dict]:
     """Rows of a previous run of a study, by their values (the cells of `keys`): none where there is no table;
     refused where the table's columns or its JSON record's `identity` entries are not the study's. The CSV and
     JSON are read back within MAX_RECORD_BYTES and not through a link; a row that is not one the study writes (a
@@ -86,8 +88,11 @@ def read_done(table: Path, record: Path, identity: dict, columns: list[str], key
         rows = [row for row in reader if None not in row.values() and None not in row]
     except (PneumaInputError, ValueError, RecursionError, csv.Error):
         same = False
-    require(same, f"{table} holds another study (other keys, base scene or solver options), or it or its "
-                  f"JSON is missing, damaged or not a plain file; give another --name or --out, or delete it")
+    require(
+        same,
+        f"{table} holds another study (other keys, base scene or solver options), or it or its "
+        f"JSON is missing, damaged or not a plain file; give another --name or --out, or delete it",
+    )
     done = {}
     for raw in rows:
         row = {k: uncell(v) for k, v in raw.items()}
@@ -99,7 +104,7 @@ def read_done(table: Path, record: Path, identity: dict, columns: list[str], key
 def well_formed(row: dict, columns: list[str], keys: list[str]) -> bool:
     """Whether a row read back is one run_task could have made: its figures finite numbers (or empty, for
     a run that failed before any step), converged a boolean, the error a string."""
-    figures = columns[len(keys):-1]
+    figures = columns[len(keys) : -1]
     numbers = [row[k] for k in figures if k != "converged"]
     if not all(v is None or (is_number(v) and math.isfinite(v)) for v in numbers):
         return False

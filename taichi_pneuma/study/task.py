@@ -46,7 +46,7 @@ class Task:
 def one_line(exc: BaseException) -> str:
     """The exception's message on one line, cut to MAX_ERROR characters."""
     text = " ".join(str(exc).split()) or type(exc).__name__
-    return text if len(text) <= MAX_ERROR else text[:MAX_ERROR - 3] + "..."
+    return text if len(text) <= MAX_ERROR else text[: MAX_ERROR - 3] + "..."
 
 
 def measures(result, names: list[str]) -> dict:
@@ -58,8 +58,12 @@ def measures(result, names: list[str]) -> dict:
     for i, name in enumerate(names):
         row[f"{name}.area_ratio"] = float(result.area_ratio[-1, i])
         row[f"{name}.peak_pressure"] = float(np.abs(result.pressure[:, i]).max())
-    row.update(converged=result.converged, iterations=int(result.history["iterations"].sum()),
-               increments=len(result.steps) - 1, vertices=int(result.mesh.n_vertices))
+    row.update(
+        converged=result.converged,
+        iterations=int(result.history["iterations"].sum()),
+        increments=len(result.steps) - 1,
+        vertices=int(result.mesh.n_vertices),
+    )
     return row
 
 
@@ -78,9 +82,19 @@ def run_task(task: Task) -> dict:
         scene = base.with_values(task.values)
         sizing.check_scene(scene, task.options.max_triangles, task.options.max_increments)
         options = task.options
-        row.update(measures(simulate(scene, tol=options.tol, max_iterations=options.max_iterations,
-                                     max_cuts=options.max_cuts, max_triangles=options.max_triangles), names),
-                   error=None)
+        row.update(
+            measures(
+                simulate(
+                    scene,
+                    tol=options.tol,
+                    max_iterations=options.max_iterations,
+                    max_cuts=options.max_cuts,
+                    max_triangles=options.max_triangles,
+                ),
+                names,
+            ),
+            error=None,
+        )
     except RampStopped as exc:  # no equilibrium: keep the figures of the steps done
         if exc.result.steps:
             row.update(measures(exc.result, names), converged=False)

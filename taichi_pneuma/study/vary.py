@@ -63,14 +63,16 @@ class Axis:
         if not self.is_range:
             return list(self.items)
         if self.count is None:
-            raise PneumaInputError(f"--vary {self.key}={self.spec}: a range needs a count (start:stop:count) "
-                                   f"unless --samples is given")
+            raise PneumaInputError(
+                f"--vary {self.key}={self.spec}: a range needs a count (start:stop:count) unless --samples is given"
+            )
         values = np.linspace(*self.ends, self.count)
         if self.integer:
             values = np.round(values).astype(int)
-            require(len(set(values)) == len(values),
-                    f"--vary {self.key}={self.spec}: {self.count} integers do not fit between {self.low} and "
-                    f"{self.high}")
+            require(
+                len(set(values)) == len(values),
+                f"--vary {self.key}={self.spec}: {self.count} integers do not fit between {self.low} and {self.high}",
+            )
         return [v.item() for v in values]
 
     def sample(self, u: np.ndarray) -> list:
@@ -104,14 +106,18 @@ def parse_vary(text: str) -> Axis:
         count = None
         if len(parts) == 3:
             count = parse_value(parts[2], where)
-            require(isinstance(count, int) and not isinstance(count, bool) and 1 <= count <= MAX_RUNS,
-                    f"{where}: count {parts[2]!r} must be an integer from 1 to {MAX_RUNS}")
+            require(
+                isinstance(count, int) and not isinstance(count, bool) and 1 <= count <= MAX_RUNS,
+                f"{where}: count {parts[2]!r} must be an integer from 1 to {MAX_RUNS}",
+            )
         return Axis(key, spec, ends[0], ends[1], count, name=name)
     items = [p.strip() for p in spec.split(",")]
     require(all(items), f"{where}: an empty value in the list")
     values = tuple(parse_value(p, where) for p in items)
-    require(all(len(cell(v)) <= MAX_CELL for v in values),
-            f"--vary {key}: a value of more than {MAX_CELL} characters (as a CSV cell)")
+    require(
+        all(len(cell(v)) <= MAX_CELL for v in values),
+        f"--vary {key}: a value of more than {MAX_CELL} characters (as a CSV cell)",
+    )
     require(len({cell(v) for v in values}) == len(values), f"{where}: a value is listed twice")
     return Axis(key, spec, items=values, name=name)
 
@@ -175,7 +181,10 @@ def check_axes(base: Scene, axes: list[Axis]) -> list[Axis]:
             kind = "number" if is_number(current) else type(current).__name__
             require(same, f"--vary {axis.key}: {value!r} is not a {kind} like the scene's {axis.key} = {current!r}")
         if isinstance(current, float):
-            axis = replace(axis, items=tuple(float(v) for v in axis.items)) if not axis.is_range else \
-                replace(axis, low=float(axis.ends[0]), high=float(axis.ends[1]))
+            axis = (
+                replace(axis, items=tuple(float(v) for v in axis.items))
+                if not axis.is_range
+                else replace(axis, low=float(axis.ends[0]), high=float(axis.ends[1]))
+            )
         checked.append(axis)
     return checked

@@ -23,5 +23,14 @@ from .nodal_volume import NodalVolumeElasticity
 # where the elastic term evaluates the law's volumetric part (Scene.volumetric, the scene file's mesh.volumetric)
 VOLUMETRIC = {"element": Elasticity, "nodal": NodalVolumeElasticity}
 
-__all__ = ["VOLUMETRIC", "AreaChamber", "Clamp", "Elasticity", "NodalVolumeElasticity", "NormalClamp",
-           "PressureChamber", "Term", "vertex_dofs"]
+__all__ = [
+    "VOLUMETRIC",
+    "AreaChamber",
+    "Clamp",
+    "Elasticity",
+    "NodalVolumeElasticity",
+    "NormalClamp",
+    "PressureChamber",
+    "Term",
+    "vertex_dofs",
+]

@@ -9,7 +9,6 @@ entries only (the clamp's diagonal, a roller along an axis one entry per node). 
 holds the nodes on the line to it and leaves them free to slide along it.
 """
 
-
 import numpy as np
 
 from .base import Term

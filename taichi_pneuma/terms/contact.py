@@ -25,7 +25,6 @@ Step bound: the first time in [0, 1] at which p becomes collinear with (a, b) wh
 segment (a quadratic in the step fraction), the continuous collision check.
 """
 
-
 import numpy as np
 
 from ..backend import kernel, ti
@@ -46,8 +45,9 @@ def barrier(d, dhat, kappa):
 
 
 @kernel
-def ground_energy(rest: Nodal, u: Nodal, verts: Indices, height: ti.f64, dhat: ti.f64,
-                  kappa: ti.f64) -> tuple[ti.f64, ti.f64]:
+def ground_energy(
+    rest: Nodal, u: Nodal, verts: Indices, height: ti.f64, dhat: ti.f64, kappa: ti.f64
+) -> tuple[ti.f64, ti.f64]:
     """(sum of the barriers over the vertices above the ground, smallest distance to it)."""
     total = 0.0
     nearest = ti.math.inf
@@ -60,8 +60,16 @@ def ground_energy(rest: Nodal, u: Nodal, verts: Indices, height: ti.f64, dhat: t
 
 
 @kernel
-def ground_derivatives(rest: Nodal, u: Nodal, verts: Indices, height: ti.f64, dhat: ti.f64, kappa: ti.f64,
-                       gradient: Nodal, hessian: ti.types.ndarray(dtype=ti.f64, ndim=1)):
+def ground_derivatives(
+    rest: Nodal,
+    u: Nodal,
+    verts: Indices,
+    height: ti.f64,
+    dhat: ti.f64,
+    kappa: ti.f64,
+    gradient: Nodal,
+    hessian: ti.types.ndarray(dtype=ti.f64, ndim=1),
+):
     """gradient = dE/dx (zero off the listed vertices); hessian[k] = b''(d_k), the y-y entry of vertex k."""
     for v, i in ti.ndrange(gradient.shape[0], gradient.shape[1]):
         gradient[v, i] = 0.0
@@ -101,8 +109,9 @@ class GroundContact(Term):
 
     def _derivatives(self) -> tuple[np.ndarray, np.ndarray]:
         gradient, hessian = np.empty_like(self.config.u), np.empty(len(self.verts))
-        ground_derivatives(self.config.rest, self.config.u, self.verts, self.height, self.dhat, self.kappa,
-                           gradient, hessian)
+        ground_derivatives(
+            self.config.rest, self.config.u, self.verts, self.height, self.dhat, self.kappa, gradient, hessian
+        )
         return gradient, hessian
 
     def gradient(self) -> np.ndarray:
@@ -115,8 +124,9 @@ class GroundContact(Term):
         return self._derivatives()[1]
 
     def max_step(self, dx: np.ndarray) -> float:
-        return ground_step(self.config.rest, self.config.u, np.ascontiguousarray(dx, dtype=np.float64), self.verts,
-                           self.height)
+        return ground_step(
+            self.config.rest, self.config.u, np.ascontiguousarray(dx, dtype=np.float64), self.verts, self.height
+        )
 
 
 @ti.func
@@ -178,14 +188,18 @@ def squared_distance(rest: ti.template(), u: ti.template(), pairs: ti.template()
             d2L[2 + k, 4 + k] = -2.0
             d2L[4 + k, 2 + k] = -2.0
         cross_terms = dc.outer_product(dL) + dL.outer_product(dc)
-        H = (2.0 / L * dc.outer_product(dc) + 2.0 * c / L * d2c - 2.0 * c / (L * L) * cross_terms
-             + 2.0 * c * c / (L * L * L) * dL.outer_product(dL) - c * c / (L * L) * d2L)
+        H = (
+            2.0 / L * dc.outer_product(dc)
+            + 2.0 * c / L * d2c
+            - 2.0 * c / (L * L) * cross_terms
+            + 2.0 * c * c / (L * L * L) * dL.outer_product(dL)
+            - c * c / (L * L) * d2L
+        )
     return s, g, H
 
 
 @kernel
-def self_contact_energy(rest: Vec2s, u: Vec2s, pairs: Triples, dhat: ti.f64,
-                        kappa: ti.f64) -> tuple[ti.f64, ti.f64]:
+def self_contact_energy(rest: Vec2s, u: Vec2s, pairs: Triples, dhat: ti.f64, kappa: ti.f64) -> tuple[ti.f64, ti.f64]:
     """(sum of the barriers over the pairs at positive distance, smallest squared distance)."""
     total = 0.0
     nearest = ti.math.inf
@@ -198,8 +212,9 @@ def self_contact_energy(rest: Vec2s, u: Vec2s, pairs: Triples, dhat: ti.f64,
 
 
 @kernel
-def self_contact_derivatives(rest: Vec2s, u: Vec2s, pairs: Triples, dhat: ti.f64, kappa: ti.f64, exact: ti.i32,
-                             gradient: Vec2s, hessian: Table):
+def self_contact_derivatives(
+    rest: Vec2s, u: Vec2s, pairs: Triples, dhat: ti.f64, kappa: ti.f64, exact: ti.i32, gradient: Vec2s, hessian: Table
+):
     """gradient = dE/dx; hessian[q] = the 6 x 6 block of pair q, row-major (Gauss-Newton part unless exact)."""
     for v in range(gradient.shape[0]):
         gradient[v] = ti.Vector([0.0, 0.0])
@@ -277,8 +292,9 @@ class SelfContact(Term):
 
     def _derivatives(self, exact: bool) -> tuple[np.ndarray, np.ndarray]:
         gradient, hessian = np.empty_like(self.config.u), np.empty((len(self.pairs), 36))
-        self_contact_derivatives(self.config.rest, self.config.u, self.pairs, self.dhat, self.kappa, int(exact),
-                                 gradient, hessian)
+        self_contact_derivatives(
+            self.config.rest, self.config.u, self.pairs, self.dhat, self.kappa, int(exact), gradient, hessian
+        )
         return gradient, hessian.ravel()
 
     def gradient(self) -> np.ndarray:
@@ -291,7 +307,9 @@ class SelfContact(Term):
         return self._derivatives(not psd_only)[1]
 
     def max_step(self, dx: np.ndarray) -> float:
-        return self_contact_step(self.config.rest, self.config.u, np.ascontiguousarray(dx, dtype=np.float64), self.pairs)
+        return self_contact_step(
+            self.config.rest, self.config.u, np.ascontiguousarray(dx, dtype=np.float64), self.pairs
+        )
 
     def min_distance(self) -> float:
         """Smallest point-edge distance over all pairs."""

@@ -70,7 +70,7 @@ class Gravity(Effect):
         _positive("g", self.g)
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
-        return [GravityTerm(config, self.density * lumped_area, self.g)]
+        return [GravityTerm(config, self.density * lumped_area, self.g)]  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)
@@ -86,7 +86,7 @@ class Ground(Effect):
     support = True
 
     @property
-    def ground_height(self) -> float:
+    def ground_height(self) -> float:  # type: ignore[override]
         return self.height
 
     def __post_init__(self):
@@ -105,8 +105,10 @@ class Ground(Effect):
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
         lowest = float(mesh.vertices[mesh.boundary, 1].min())
-        require(lowest > self.height, f"ground height = {self.height!r} must lie below the body (lowest point {lowest:.6g})")
-        return [GroundContact(config, mesh.boundary, self.height, self.dhat, self.stiffness)]
+        require(
+            lowest > self.height, f"ground height = {self.height!r} must lie below the body (lowest point {lowest:.6g})"
+        )
+        return [GroundContact(config, mesh.boundary, self.height, self.dhat, self.stiffness)]  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)
@@ -123,13 +125,18 @@ class SelfContact(Effect):
         _positive("stiffness", self.stiffness)
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
-        require(mesh.dim == 2, "self_contact is 2D only: a 3D scene cannot have [effects.self_contact] (the contact of "
-                               "a collapsing 3D chamber's walls is not modelled)")
-        require(all(origin is None for origin in mesh.wall_origins),
-                "self_contact: a chamber cut by a symmetry line is not supported (its wall would meet its mirror image)")
+        require(
+            mesh.dim == 2,
+            "self_contact is 2D only: a 3D scene cannot have [effects.self_contact] (the contact of "
+            "a collapsing 3D chamber's walls is not modelled)",
+        )
+        require(
+            all(origin is None for origin in mesh.wall_origins),
+            "self_contact: a chamber cut by a symmetry line is not supported (its wall would meet its mirror image)",
+        )
         walls = list(mesh.chambers)
         budget.check_pairs(self.pairs([len(wall) for wall in walls]), "self-contact")  # before allocating them
-        return [SelfContactTerm(config, walls, self.dhat, self.stiffness)]
+        return [SelfContactTerm(config, walls, self.dhat, self.stiffness)]  # type: ignore[arg-type]
 
     def pairs(self, walls: list[int]) -> int:
         return wall_pairs(walls)
@@ -154,8 +161,11 @@ class Dynamics(Effect):
         return [(np.arange(mesh.n_vertices), np.eye(mesh.dim))]
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
-        require(mesh.order == 1, "dynamics needs linear triangles (order = 1): the quadratic triangle's "
-                                 "row-sum lumped mass vanishes at its corners")
+        require(
+            mesh.order == 1,
+            "dynamics needs linear triangles (order = 1): the quadratic triangle's "
+            "row-sum lumped mass vanishes at its corners",
+        )
         return [Inertia(config, self.density * lumped_area, self.dt)]
 
 

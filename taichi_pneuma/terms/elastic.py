@@ -40,8 +40,9 @@ MAX_NODES = {d: max(f.n_nodes for f in FAMILIES if f.dim == d) for d in {f.dim f
 
 
 @ti.func
-def deformation_gradient(rest: ti.template(), u: ti.template(), nodes: ti.template(), grads: ti.template(), e, q,
-                         d: ti.template()):
+def deformation_gradient(
+    rest: ti.template(), u: ti.template(), nodes: ti.template(), grads: ti.template(), e, q, d: ti.template()
+):
     """F (d x d) at quadrature point q of element e, from the edges x_a - x_0 = (X_a - X_0) + (u_a - u_0)
     (formed from rest and displacement differences, so short edges keep their digits)."""
     F = ti.Matrix.zero(ti.f64, d, d)
@@ -54,8 +55,16 @@ def deformation_gradient(rest: ti.template(), u: ti.template(), nodes: ti.templa
 
 
 @ti.kernel
-def elastic_energy(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal, nodes: Nodes, grads: Gradients,
-                   weights: Weights, parameters: Parameters) -> tuple[ti.f64, ti.f64]:
+def elastic_energy(
+    law: ti.template(),
+    d: ti.template(),
+    rest: Nodal,
+    u: Nodal,
+    nodes: Nodes,
+    grads: Gradients,
+    weights: Weights,
+    parameters: Parameters,
+) -> tuple[ti.f64, ti.f64]:
     """(sum_q W_q psi(F_q), min_q det F_q): the energy, and whether an element is inverted somewhere."""
     total = 0.0
     smallest = ti.math.inf
@@ -67,8 +76,17 @@ def elastic_energy(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal, 
 
 
 @ti.kernel
-def energy_densities(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal, nodes: Nodes, grads: Gradients,
-                     weights: Weights, parameters: Parameters, out: Weights):
+def energy_densities(
+    law: ti.template(),
+    d: ti.template(),
+    rest: Nodal,
+    u: Nodal,
+    nodes: Nodes,
+    grads: Gradients,
+    weights: Weights,
+    parameters: Parameters,
+    out: Weights,
+):
     """out[e, q] = psi(F_q) of element e."""
     for e, q in ti.ndrange(nodes.shape[0], weights.shape[1]):
         F = embedded(deformation_gradient(rest, u, nodes, grads, e, q, d), d)
@@ -76,8 +94,17 @@ def energy_densities(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal
 
 
 @ti.kernel
-def elastic_gradient(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal, nodes: Nodes, grads: Gradients,
-                     weights: Weights, parameters: Parameters, out: Nodal):
+def elastic_gradient(
+    law: ti.template(),
+    d: ti.template(),
+    rest: Nodal,
+    u: Nodal,
+    nodes: Nodes,
+    grads: Gradients,
+    weights: Weights,
+    parameters: Parameters,
+    out: Nodal,
+):
     """out = dE/dx: W_q P_q G_qa scattered to the nodes."""
     for v, i in ti.ndrange(out.shape[0], d):
         out[v, i] = 0.0
@@ -93,8 +120,18 @@ def elastic_gradient(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal
 
 
 @ti.kernel
-def elastic_hessian(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal, nodes: Nodes, grads: Gradients,
-                    weights: Weights, parameters: Parameters, project: ti.i32, out: Table):
+def elastic_hessian(
+    law: ti.template(),
+    d: ti.template(),
+    rest: Nodal,
+    u: Nodal,
+    nodes: Nodes,
+    grads: Gradients,
+    weights: Weights,
+    parameters: Parameters,
+    project: ti.i32,
+    out: Table,
+):
     """out[e] = the dk x dk block of element e, row-major: for nodes a <= b the d x d block (and its transpose at
     b, a) sum_q (D_qa^T M_q D_qb), (D_qa^T M D_qb)_ik = sum_jl G_qa,j M_(ij)(kl) G_qb,l, with M_q = W_q sum_s
     lambda_qs v_qs v_qs^T (eigenvalues clamped to >= 0 if project): M once per point, then T_b = M D_qb per
@@ -136,8 +173,8 @@ def elastic_hessian(law: ti.template(), d: ti.template(), rest: Nodal, u: Nodal,
 def inversion_step(d: ti.template(), rest: Nodal, u: Nodal, dx: Nodal, nodes: Nodes, grads: Gradients) -> ti.f64:
     """Smallest alpha > 0 with det(F_q + alpha dF_q) = 0 over all quadrature points (inf if none):
 
-        d = 2:  det F + alpha cof F : dF + alpha^2 det dF,
-        d = 3:  det F + alpha cof F : dF + alpha^2 F : cof dF + alpha^3 det dF."""
+    d = 2:  det F + alpha cof F : dF + alpha^2 det dF,
+    d = 3:  det F + alpha cof F : dF + alpha^2 F : cof dF + alpha^3 det dF."""
     bound = ti.math.inf
     for e, q in ti.ndrange(nodes.shape[0], grads.shape[1]):
         F = deformation_gradient(rest, u, nodes, grads, e, q, d)
@@ -149,8 +186,12 @@ def inversion_step(d: ti.template(), rest: Nodal, u: Nodal, dx: Nodal, nodes: No
             cross = F[0, 0] * dF[1, 1] + F[1, 1] * dF[0, 0] - F[0, 1] * dF[1, 0] - F[1, 0] * dF[0, 1]
             ti.atomic_min(bound, smallest_positive_root(F.determinant(), cross, dF.determinant()))
         else:
-            ti.atomic_min(bound, smallest_positive_cubic_root(F.determinant(), (cofactor(F) * dF).sum(),
-                                                              (F * cofactor(dF)).sum(), dF.determinant()))
+            ti.atomic_min(
+                bound,
+                smallest_positive_cubic_root(
+                    F.determinant(), (cofactor(F) * dF).sum(), (F * cofactor(dF)).sum(), dF.determinant()
+                ),
+            )
     return bound
 
 
@@ -173,8 +214,16 @@ class Elasticity(Term):
         self._rows, self._cols = block_pattern(self.nodes, self.dim)
 
     def _arguments(self):
-        return (self.law, self.dim, self.config.rest, self.config.u, self.nodes, self.grads, self.weights,
-                self.parameters)
+        return (
+            self.law,
+            self.dim,
+            self.config.rest,
+            self.config.u,
+            self.nodes,
+            self.grads,
+            self.weights,
+            self.parameters,
+        )
 
     def energy(self) -> float:
         return elastic_energy(*self._arguments())[0]
@@ -195,8 +244,14 @@ class Elasticity(Term):
 
     def max_step(self, dx: np.ndarray) -> float:
         """Largest step fraction along dx that keeps det F positive at every quadrature point."""
-        return inversion_step(self.dim, self.config.rest, self.config.u, np.ascontiguousarray(dx, dtype=np.float64),
-                              self.nodes, self.grads)
+        return inversion_step(
+            self.dim,
+            self.config.rest,
+            self.config.u,
+            np.ascontiguousarray(dx, dtype=np.float64),
+            self.nodes,
+            self.grads,
+        )
 
     def fault(self) -> str | None:
         """The material law as the cause of a breakdown, in words, or None: at some quadrature point its energy
@@ -214,10 +269,13 @@ class Elasticity(Term):
             return None
         F = ElementFields(self.config.rest, self.nodes).deformation_gradients(self.config.rest + self.config.u)[e, q]
         stretches = ", ".join(f"{s:.3g}" for s in np.linalg.svd(F, compute_uv=False))
-        why = (f"its energy density there, {density[e, q]:.4g}, lies below the rest state's {rest[e, q]:.4g}, so it "
-               f"gives energy by deforming further and no equilibrium exists; check its coefficients over the "
-               f"stretches reached" if np.isfinite(density[e, q]) else
-               "its energy density there is not finite: these stretches are outside the law's range")
+        why = (
+            f"its energy density there, {density[e, q]:.4g}, lies below the rest state's {rest[e, q]:.4g}, so it "
+            f"gives energy by deforming further and no equilibrium exists; check its coefficients over the "
+            f"stretches reached"
+            if np.isfinite(density[e, q])
+            else "its energy density there is not finite: these stretches are outside the law's range"
+        )
         return f"the material law {self.law.name!r} is unstable at element {e} (principal stretches {stretches}): {why}"
 
     def min_determinant(self) -> float:

@@ -6,7 +6,6 @@
 Linear in x: one NumPy expression, no kernel.
 """
 
-
 import numpy as np
 
 from .base import Term

@@ -10,7 +10,6 @@ uhat = 2 u_n - u_{n-1}. Gradient m_i / h^2 (u_i - uhat_i); Hessian diag(m_i / h^
 Quadratic and per vertex: one NumPy expression each, no kernel.
 """
 
-
 import numpy as np
 
 from .base import Term, vertex_dofs

@@ -56,8 +56,16 @@ PerNode: TypeAlias = ti.types.ndarray(dtype=ti.f64, ndim=3)  # (m, k, j) float64
 
 
 @ti.kernel
-def volume_gradients(d: ti.template(), rest: Nodal, u: Nodal, nodes: Nodes, grads: Gradients, weights: Weights,
-                     volumes: Scalars, out: PerNode):
+def volume_gradients(
+    d: ti.template(),
+    rest: Nodal,
+    u: Nodal,
+    nodes: Nodes,
+    grads: Gradients,
+    weights: Weights,
+    volumes: Scalars,
+    out: PerNode,
+):
     """volumes[e] = v_e = V_e det F_e and out[e, b] = dv_e/dx_b = V_e cof F_e G_eb of each linear element."""
     for e in range(nodes.shape[0]):
         F = embedded(deformation_gradient(rest, u, nodes, grads, e, 0, d), d)
@@ -72,8 +80,9 @@ def volume_gradients(d: ti.template(), rest: Nodal, u: Nodal, nodes: Nodes, grad
 
 
 @ti.kernel
-def nodal_volumetric(law: ti.template(), nodes: Nodes, weights: Weights, parameters: Parameters, ratios: Scalars,
-                     out: PerNode):
+def nodal_volumetric(
+    law: ti.template(), nodes: Nodes, weights: Weights, parameters: Parameters, ratios: Scalars, out: PerNode
+):
     """out[e, a] = s_e (U_e, U_e', U_e'') at J_a = ratios[node a], s_e = V_e / (number of nodes)."""
     for e, a in ti.ndrange(nodes.shape[0], nodes.shape[1]):
         U = law.volumetric(ratios[nodes[e, a]], element_parameters(law, parameters, e))
@@ -102,8 +111,8 @@ def star_structure(nodes: np.ndarray, n: int):
     first, second = pairs // n, pairs % n
     start = np.searchsorted(first, np.arange(n + 1))
     size = np.diff(start)
-    a = np.repeat(np.arange(n), size ** 2)
-    local = np.arange(len(a)) - np.repeat(np.cumsum(size ** 2) - size ** 2, size ** 2)
+    a = np.repeat(np.arange(n), size**2)
+    local = np.arange(len(a)) - np.repeat(np.cumsum(size**2) - size**2, size**2)
     ab, ac = start[a] + local // size[a], start[a] + local % size[a]
     blocks, block = np.unique(second[ab] * n + second[ac], return_inverse=True)
     triplets = np.ascontiguousarray(np.column_stack([a, ab, ac, block]), dtype=np.int32)
@@ -113,10 +122,12 @@ def star_structure(nodes: np.ndarray, n: int):
 def require_nodal(law, order: int) -> None:
     """Refuse (PneumaInputError) nodal volumes on elements of order 2 or under a law without a volumetric part."""
     require(order == 1, f"volumetric = 'nodal' takes linear elements (order = 1), not order {order}")
-    require(hasattr(law, "volumetric"),
-            f"volumetric = 'nodal' takes a law split into an isochoric part and a volumetric one (law = neo_hookean, "
-            f"mooney_rivlin, yeoh or a preset), not {law.name!r} (E and nu): its elements, left with no volume "
-            f"stiffness of their own, turn inside out")
+    require(
+        hasattr(law, "volumetric"),
+        f"volumetric = 'nodal' takes a law split into an isochoric part and a volumetric one (law = neo_hookean, "
+        f"mooney_rivlin, yeoh or a preset), not {law.name!r} (E and nu): its elements, left with no volume "
+        f"stiffness of their own, turn inside out",
+    )
 
 
 class NodalVolumeElasticity(Elasticity):
@@ -144,8 +155,9 @@ class NodalVolumeElasticity(Elasticity):
         """(v_e (m,), dv_e/dx_b (m, k, d), J_a (n,))."""
         volumes = np.empty(len(self.nodes))
         gradients = np.empty((*self.nodes.shape, self.dim))
-        volume_gradients(self.dim, self.config.rest, self.config.u, self.nodes, self.grads, self.weights, volumes,
-                         gradients)
+        volume_gradients(
+            self.dim, self.config.rest, self.config.u, self.nodes, self.grads, self.weights, volumes, gradients
+        )
         k = self.nodes.shape[1]
         nodal = np.bincount(self.nodes.ravel(), np.repeat(volumes / k, k), minlength=len(self.rest_volumes))
         return volumes, gradients, nodal / self.rest_volumes
@@ -154,8 +166,7 @@ class NodalVolumeElasticity(Elasticity):
         """Per node: (energy sum, c_a = sum s_e U_e'(J_a), C_a = sum s_e U_e''(J_a)) as one (3, n) array."""
         out = np.empty((*self.nodes.shape, 3))
         nodal_volumetric(self.law, self.nodes, self.weights, self.parameters, ratios, out)
-        return np.array([np.bincount(self.nodes.ravel(), out[..., i].ravel(), minlength=len(ratios))
-                         for i in range(3)])
+        return np.array([np.bincount(self.nodes.ravel(), out[..., i].ravel(), minlength=len(ratios)) for i in range(3)])
 
     def _split_arguments(self, pressures):
         """The elastic kernels' arguments for the law without U plus the element pressures' work (pbar_e)."""
@@ -185,9 +196,13 @@ class NodalVolumeElasticity(Elasticity):
         elastic_hessian(*self._split_arguments(pressures), int(psd_only), elements)
         k = self.nodes.shape[1]
         contributions = np.broadcast_to(gradients[:, None, :, :] / k, (len(self.nodes), k, k, self.dim))
-        g = np.column_stack([np.bincount(self.pair_of.ravel(), contributions[..., i].ravel(), minlength=self.n_pairs)
-                             for i in range(self.dim)])
-        coefficients = sums[2] / self.rest_volumes ** 2
+        g = np.column_stack(
+            [
+                np.bincount(self.pair_of.ravel(), contributions[..., i].ravel(), minlength=self.n_pairs)
+                for i in range(self.dim)
+            ]
+        )
+        coefficients = sums[2] / self.rest_volumes**2
         if psd_only:
             coefficients = np.maximum(coefficients, 0.0)
         star = np.empty((self.n_blocks, self.dim * self.dim))

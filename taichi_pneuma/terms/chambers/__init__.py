@@ -12,6 +12,20 @@ from .pressure import PressureChamber, PressureControl
 from .syringe import Syringe, SyringeChamber
 from .wall import Chamber
 
-__all__ = ["KINDS", "MAX_AREA_RATIO", "AreaChamber", "AreaControl", "Chamber", "ChamberKind", "ClosedGas",
-           "ClosedGasChamber", "PressureChamber", "PressureControl", "Syringe", "SyringeChamber", "chamber_kind",
-           "default_kind", "register"]
+__all__ = [
+    "KINDS",
+    "MAX_AREA_RATIO",
+    "AreaChamber",
+    "AreaControl",
+    "Chamber",
+    "ChamberKind",
+    "ClosedGas",
+    "ClosedGasChamber",
+    "PressureChamber",
+    "PressureControl",
+    "Syringe",
+    "SyringeChamber",
+    "chamber_kind",
+    "default_kind",
+    "register",
+]

@@ -35,8 +35,10 @@ class AreaControl(ChamberKind):
     rest = 1.0
 
     def __post_init__(self):
-        require(self.stiffness is None or require_finite("stiffness", self.stiffness) > 0,
-                f"chamber stiffness k = {self.stiffness!r} must be > 0")
+        require(
+            self.stiffness is None or require_finite("stiffness", self.stiffness) > 0,
+            f"chamber stiffness k = {self.stiffness!r} must be > 0",
+        )
 
     def check(self, what: str, values: list[float]) -> None:
         for value in values:

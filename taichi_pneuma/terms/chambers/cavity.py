@@ -33,8 +33,16 @@ Derivatives: TypeAlias = ti.types.ndarray(dtype=ti.f64, ndim=3)  # (nq, k, 2): d
 
 
 @ti.func
-def face_point(rest: ti.template(), u: ti.template(), wall: ti.template(), faces: ti.template(),
-               shapes: ti.template(), derivatives: ti.template(), f, q):
+def face_point(
+    rest: ti.template(),
+    u: ti.template(),
+    wall: ti.template(),
+    faces: ti.template(),
+    shapes: ti.template(),
+    derivatives: ti.template(),
+    f,
+    q,
+):
     """(y, y_xi, y_eta) at rule point q of wall triangle f."""
     y, s, t = ti.Vector.zero(ti.f64, 3), ti.Vector.zero(ti.f64, 3), ti.Vector.zero(ti.f64, 3)
     for a in range(faces.shape[1]):
@@ -53,8 +61,17 @@ def cross_matrix(v):
 
 
 @kernel
-def wall_volume(rest: Nodal, u: Nodal, wall: Indices, faces: Faces, shapes: Table, derivatives: Derivatives,
-                weights: Scalars, projector: Table, gradient: Nodal) -> ti.f64:
+def wall_volume(
+    rest: Nodal,
+    u: Nodal,
+    wall: Indices,
+    faces: Faces,
+    shapes: Table,
+    derivatives: Derivatives,
+    weights: Scalars,
+    projector: Table,
+    gradient: Nodal,
+) -> ti.f64:
     """V(x) = sum_f sum_q w_q (P y) . (y_xi x y_eta) (the weights carry 1/r and the reference area); gradient[i] =
     dV/dx of wall node i."""
     P = ti.Matrix([[projector[i, j] for j in ti.static(range(3))] for i in ti.static(range(3))])
@@ -74,8 +91,17 @@ def wall_volume(rest: Nodal, u: Nodal, wall: Indices, faces: Faces, shapes: Tabl
 
 
 @kernel
-def wall_volume_hessian(rest: Nodal, u: Nodal, wall: Indices, faces: Faces, shapes: Table, derivatives: Derivatives,
-                        weights: Scalars, projector: Table, out: Table):
+def wall_volume_hessian(
+    rest: Nodal,
+    u: Nodal,
+    wall: Indices,
+    faces: Faces,
+    shapes: Table,
+    derivatives: Derivatives,
+    weights: Scalars,
+    projector: Table,
+    out: Table,
+):
     """out[f] = d2V/dx2 on the nodes of wall triangle f, a dense 3k x 3k block, row-major."""
     P = ti.Matrix([[projector[i, j] for j in ti.static(range(3))] for i in ti.static(range(3))])
     for f in range(faces.shape[0]):
@@ -90,8 +116,14 @@ def wall_volume_hessian(rest: Nodal, u: Nodal, wall: Indices, faces: Faces, shap
             for a, b in ti.ndrange(k, k):
                 na, sa, ta = shapes[q, a], derivatives[q, a, 0], derivatives[q, a, 1]
                 nb, sb, tb = shapes[q, b], derivatives[q, b, 0], derivatives[q, b, 1]
-                block = (na * sb * ys + sa * nb * ys.transpose() + na * tb * yt + ta * nb * yt.transpose()
-                         + sa * tb * st + ta * sb * st.transpose())
+                block = (
+                    na * sb * ys
+                    + sa * nb * ys.transpose()
+                    + na * tb * yt
+                    + ta * nb * yt.transpose()
+                    + sa * tb * st
+                    + ta * sb * st.transpose()
+                )
                 for i, j in ti.static(ti.ndrange(3, 3)):
                     out[f, n * (3 * a + i) + 3 * b + j] += block[i, j]
 
@@ -107,8 +139,14 @@ class VolumeForm:
         faces = np.asarray(faces, dtype=np.int64)
         self.config = config
         self.nodes = np.unique(faces)
-        closure = origin if isinstance(origin, Closure) else Closure(
-            config.rest[self.nodes].mean(axis=0) if origin is None else np.asarray(origin, dtype=np.float64), np.eye(3))
+        closure = (
+            origin
+            if isinstance(origin, Closure)
+            else Closure(
+                config.rest[self.nodes].mean(axis=0) if origin is None else np.asarray(origin, dtype=np.float64),
+                np.eye(3),
+            )
+        )
         self.rest = config.rest - closure.origin
         self.wall = int32s(self.nodes)
         self.faces = int32s(np.searchsorted(self.nodes, faces))
@@ -121,8 +159,9 @@ class VolumeForm:
         self.rows, self.cols = block_pattern(faces, 3)
         # (the wall nodes' displacements, V, dV/dx) of the last measure_and_gradient
         self._last: tuple[np.ndarray, float, np.ndarray] | None = None
-        self.rest_measure = wall_volume(self.rest, np.zeros_like(self.rest), *self._data(),
-                                        np.empty((len(self.nodes), 3)))
+        self.rest_measure = wall_volume(
+            self.rest, np.zeros_like(self.rest), *self._data(), np.empty((len(self.nodes), 3))
+        )
 
     def _data(self):
         return self.wall, self.faces, self.shapes, self.derivatives, self.weights, self.projector
@@ -147,14 +186,17 @@ class VolumeForm:
         (x1 - x0) x (x2 - x0) of its corners turned against its rest normal, n . n_rest <= 0: the wall folded
         through itself there), or the enclosed volume not positive (turned inside out). Surfaces that pass
         through each other without a flip are not looked for."""
+
         def normals(x):
             corners = x[self.nodes][self.faces[:, :3]]
             return np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
 
         flipped = np.flatnonzero(np.einsum("fi,fi->f", normals(self.rest), normals(self.rest + u)) <= 0)
         if len(flipped):
-            return f"wall folded through itself ({len(flipped)} of its {len(self.faces)} triangles flipped, " \
-                   f"the first triangle {flipped[0]})"
+            return (
+                f"wall folded through itself ({len(flipped)} of its {len(self.faces)} triangles flipped, "
+                f"the first triangle {flipped[0]})"
+            )
         volume = self.measure_and_gradient(u)[0]
         return None if volume > 0 else f"wall turned inside out (enclosed volume {volume:.4g})"
 

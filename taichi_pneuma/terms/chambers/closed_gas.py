@@ -42,10 +42,14 @@ class ClosedGas(ChamberKind):
     dimension = "area"  # the chamber measure's unit: a volume per unit depth in 2D, a volume in 3D (units.in_dimension)
 
     def __post_init__(self):
-        require(self.atmosphere is None or require_finite("atmosphere", self.atmosphere) > 0,
-                f"atmosphere = {self.atmosphere!r} must be > 0")
-        require(1 <= require_finite("gamma", self.gamma) <= 5 / 3,
-                f"gamma = {self.gamma!r} must lie in [1, 5/3] (1: isothermal, 1.4: adiabatic air)")
+        require(
+            self.atmosphere is None or require_finite("atmosphere", self.atmosphere) > 0,
+            f"atmosphere = {self.atmosphere!r} must be > 0",
+        )
+        require(
+            1 <= require_finite("gamma", self.gamma) <= 5 / 3,
+            f"gamma = {self.gamma!r} must lie in [1, 5/3] (1: isothermal, 1.4: adiabatic air)",
+        )
 
     def check(self, what: str, values: list[float]) -> None:
         for value in values:
@@ -81,7 +85,7 @@ class ClosedGasChamber(Chamber):
             return math.inf
         if gamma == 1:
             return -p_atm * self.air * math.log(gas) + p_atm * area
-        return p_atm * self.air ** gamma * gas ** (1 - gamma) / (gamma - 1) + p_atm * area
+        return p_atm * self.air**gamma * gas ** (1 - gamma) / (gamma - 1) + p_atm * area
 
     def low_rank(self) -> list[tuple[np.ndarray, np.ndarray, float]]:
         area, gradient = self.area_and_gradient()

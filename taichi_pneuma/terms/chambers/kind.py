@@ -80,6 +80,9 @@ def default_kind(name: str) -> ChamberKind:
     it has no default for: such a kind is given with them, e.g. Syringe(syringe_volume=1.0))."""
     kind = chamber_kind(name)
     required = [key for key, (_, default) in kind.parameters().items() if default is dataclasses.MISSING]
-    require(not required, f"control = {name!r} has no default for {', '.join(required)}: "
-                          f"give {kind.__name__}({', '.join(f'{key}=...' for key in required)})")
+    require(
+        not required,
+        f"control = {name!r} has no default for {', '.join(required)}: "
+        f"give {kind.__name__}({', '.join(f'{key}=...' for key in required)})",
+    )
     return kind()

@@ -29,8 +29,10 @@ class PressureControl(ChamberKind):
 
     def check(self, what: str, values: list[float]) -> None:
         for value in values:
-            require(value >= 0 or self.allow_vacuum,
-                    f"{what} pressure {value!r} is negative; set allow_vacuum = true for suction")
+            require(
+                value >= 0 or self.allow_vacuum,
+                f"{what} pressure {value!r} is negative; set allow_vacuum = true for suction",
+            )
 
     def term(self, config, loop, name: str, order: int, origin=None) -> "PressureChamber":
         return PressureChamber(self, config, loop, name, order, origin)
@@ -39,8 +41,9 @@ class PressureControl(ChamberKind):
 class PressureChamber(Chamber):
     """A prescribed pressure p does work p A(x) on the wall."""
 
-    def __init__(self, kind: PressureControl, config, loop: np.ndarray, name: str = "main", order: int = 1,
-                 origin=None):
+    def __init__(
+        self, kind: PressureControl, config, loop: np.ndarray, name: str = "main", order: int = 1, origin=None
+    ):
         super().__init__(kind, config, loop, name, order, origin)
         self.prescribed = 0.0
 

@@ -41,14 +41,21 @@ class Syringe(ClosedGas):
 
     def __post_init__(self):
         super().__post_init__()
-        require(require_finite("syringe_volume", self.syringe_volume) > 0,
-                f"syringe_volume = {self.syringe_volume!r} must be > 0")
-        require(require_finite("dead_volume", self.dead_volume) >= 0, f"dead_volume = {self.dead_volume!r} must be >= 0")
+        require(
+            require_finite("syringe_volume", self.syringe_volume) > 0,
+            f"syringe_volume = {self.syringe_volume!r} must be > 0",
+        )
+        require(
+            require_finite("dead_volume", self.dead_volume) >= 0, f"dead_volume = {self.dead_volume!r} must be >= 0"
+        )
 
     def check(self, what: str, values: list[float]) -> None:
         for value in values:
-            require(value <= self.syringe_volume, f"{what} displaced volume {value!r} exceeds syringe_volume = "
-                                                  f"{self.syringe_volume!r} (the plunger stops at the barrel's end)")
+            require(
+                value <= self.syringe_volume,
+                f"{what} displaced volume {value!r} exceeds syringe_volume = "
+                f"{self.syringe_volume!r} (the plunger stops at the barrel's end)",
+            )
 
     def term(self, config, loop, name: str, order: int, origin=None) -> "SyringeChamber":
         return SyringeChamber(self, config, loop, name, order, origin)

@@ -67,7 +67,7 @@ def area_form(k: int, order: int, closed: bool = True) -> tuple[np.ndarray, np.n
     a closed loop, or an open chain (no edge from its last node back to its first)."""
     ring = np.arange(k)
     if order == 1:
-        pairs = np.column_stack([ring, np.roll(ring, -1)])[:k if closed else k - 1]
+        pairs = np.column_stack([ring, np.roll(ring, -1)])[: k if closed else k - 1]
         return pairs, np.full(len(pairs), 0.5)
     a = ring[0::2] if closed else ring[0:-1:2]
     m, b = a + 1, (a + 2) % k
@@ -85,7 +85,7 @@ def crossing_segments(points: np.ndarray, closed: bool) -> tuple[int, int] | Non
 
     over all O(k^2) pairs at once (k ~ 100 wall nodes)."""
     a = points if closed else points[:-1]
-    b = np.roll(points, -1, axis=0)[:len(a)]
+    b = np.roll(points, -1, axis=0)[: len(a)]
     n = len(a)
     i, j = np.triu_indices(n, 2)
     if closed:  # the last segment touches the first
@@ -95,8 +95,9 @@ def crossing_segments(points: np.ndarray, closed: bool) -> tuple[int, int] | Non
     def side(p, q, r):
         return (q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0])
 
-    hits = np.flatnonzero((side(a[i], b[i], a[j]) * side(a[i], b[i], b[j]) < 0)
-                          & (side(a[j], b[j], a[i]) * side(a[j], b[j], b[i]) < 0))
+    hits = np.flatnonzero(
+        (side(a[i], b[i], a[j]) * side(a[i], b[i], b[j]) < 0) & (side(a[j], b[j], a[i]) * side(a[j], b[j], b[i]) < 0)
+    )
     return (int(i[hits[0]]), int(j[hits[0]])) if len(hits) else None
 
 
@@ -165,10 +166,13 @@ class Chamber(Term):
         self.n_wall = len(self.loop_vertices)
         self.rest_area = self.form.rest_measure
         measure = "area" if config.dim == 2 else "volume"
-        require(self.rest_area > 0, f"chamber {name!r}: rest {measure} {self.rest_area:.4g} is not positive: a "
-                                    f"chamber's wall must enclose a cavity with the rubber outside it (its wall "
-                                    f"oriented out of the cavity, into the rubber); the body's outer surface given as "
-                                    f"a chamber encloses a negative {measure}")
+        require(
+            self.rest_area > 0,
+            f"chamber {name!r}: rest {measure} {self.rest_area:.4g} is not positive: a "
+            f"chamber's wall must enclose a cavity with the rubber outside it (its wall "
+            f"oriented out of the cavity, into the rubber); the body's outer surface given as "
+            f"a chamber encloses a negative {measure}",
+        )
 
     def set_command(self, command: float) -> None:
         """Set the kind's command q (a pressure, a pumped or a displaced volume)."""
