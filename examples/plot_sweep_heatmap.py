@@ -2,7 +2,7 @@
 A design study: tip deflection over chamber height and stiffness
 ================================================================
 
-A :class:`~taichi_pneuma.study.Sweep` runs a scene once per point of a grid over any of its
+A :class:`~taichi_pneuma.study.sweep.Sweep` runs a scene once per point of a grid over any of its
 keys (here the chamber height ``cy`` and Young's modulus ``E``) on a pool of worker processes, appends a
 row per run to a CSV as it finishes (a study run again resumes), and plots the result: for two keys a
 heatmap of the tip deflection. ``pneuma-sweep --vary cy=-0.15:0.15:4 --vary E=5e3:2e4:3`` is the same
