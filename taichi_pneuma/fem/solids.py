@@ -8,6 +8,8 @@ z the depth (a 2D shape in the x-y plane is extruded along z). Shapes are axis-a
   i.e. the inner box (size - 2 radius) swept by a ball of that radius;
 - Ellipsoid(center, semi_axes): sum ((x_i - c_i) / a_i)^2 <= 1;
 - Cylinder(center, radius, length, axis): a circular cylinder along axis 'x', 'y' or 'z';
+- HalfCylinder(center, radius, length, axis): the half of that cylinder (axis 'x' or 'z') above the plane
+  y = center y: a flat face at the bottom, a round top (a fibre-reinforced bending actuator's body and chamber);
 - Extrusion(profile, depth, z): a 2D shape of the scene format (fem.shapes: Rectangle, Ellipse,
   RoundedRectangle, Polygon, RectangleUnion) swept along z from z - depth / 2 to z + depth / 2.
   Rectangles, ellipses and rounded rectangles are built from their exact curves (the 2D shape's
@@ -120,6 +122,34 @@ class Cylinder:
     def build(self, occ) -> int:
         direction = np.eye(3)[AXES.index(self.axis)] * self.length
         return occ.addCylinder(*(np.asarray(self.center) - direction / 2), *direction, self.radius)
+
+
+@dataclass(frozen=True)
+class HalfCylinder:
+    """The half y >= center y of the circular cylinder of `radius` and `length` along `axis` ('x' or 'z', normal to
+    y) centred on center: its flat face lies in the plane y = center y, its round side above it."""
+
+    center: tuple[float, float, float]
+    radius: float
+    length: float
+    axis: str = "x"
+
+    def __post_init__(self):
+        _vector("center", self.center)
+        _positive("radius", self.radius)
+        _positive("length", self.length)
+        require(
+            self.axis in ("x", "z"),
+            f"axis = {self.axis!r} is not one of x, z (a half cylinder's flat face is normal to y)",
+        )
+
+    def build(self, occ) -> int:
+        cylinder = Cylinder(self.center, self.radius, self.length, self.axis).build(occ)
+        reach = 2 * (self.radius + self.length)  # a box over everything above the flat face
+        corner = np.subtract(self.center, reach / 2) * [1, 0, 1] + [0, self.center[1], 0]
+        upper = occ.addBox(*corner, reach, reach, reach)
+        (kept, *_), _ = occ.intersect([(3, cylinder)], [(3, upper)])
+        return kept[1]
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ from ..fem.planar import Geometry
 from ..fem.pneunet import PneuNet
 from ..fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 from ..fem.solid_geometry import SolidGeometry, is_solid_shape
-from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
+from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, HalfCylinder, RoundedBox
 from ..fem.supports import SIDES, PointSet, Roller
 from ..io.tomltext import dumps
 from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, UNITLESS, UNITS, default_in
@@ -108,6 +108,14 @@ SOLIDS = {  # the 3D shapes bodies and chambers share (fem/solids.py); with extr
         radius=Key(float, unit=LENGTH),
         length=Key(float, unit=LENGTH),
         axis=Key(str, "z", "its axis", AXES),
+    ),
+    "half_cylinder": record(
+        HalfCylinder,
+        "the half of a circular cylinder above the plane y = center y: a flat bottom face, a round top (3D)",
+        center=Key(tuple, doc=f"{TRIPLE}: the middle of the flat face", unit=LENGTH),
+        radius=Key(float, unit=LENGTH),
+        length=Key(float, unit=LENGTH),
+        axis=Key(str, "x", "its axis", ("x", "z")),
     ),
     "ellipsoid": record(
         Ellipsoid,
