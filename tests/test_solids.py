@@ -9,7 +9,7 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes, Solid, cavity_volume, estimate_tets, mesh_solid
 from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
-from taichi_pneuma.fem.solids import Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
+from taichi_pneuma.fem.solids import Box, Cylinder, Ellipsoid, Extrusion, HalfCylinder, RoundedBox
 
 gmsh = pytest.importorskip("gmsh", reason="gmsh is not installed (pip install 'taichi-pneuma[3d]')")
 
@@ -46,6 +46,7 @@ CHAMBERS = {
     "rounded_box": (RoundedBox((0.0, 0.0, 0.0), (0.8, 0.4, 0.4), 0.1), rounded_box_volume((0.8, 0.4, 0.4), 0.1), 0.1),
     "ellipsoid": (Ellipsoid((0.0, 0.05, 0.0), (0.5, 0.25, 0.2)), 4 / 3 * np.pi * 0.5 * 0.25 * 0.2, 0.08),
     "cylinder": (Cylinder((0.0, 0.0, 0.0), 0.2, 1.0, "x"), np.pi * 0.2**2 * 1.0, 0.2),
+    "half_cylinder": (HalfCylinder((0.0, -0.1, 0.0), 0.25, 1.0, "x"), np.pi * 0.25**2 / 2 * 1.0, 0.25),
     "extruded_ellipse": (Extrusion(Ellipse((0.0, 0.0), (0.2, 0.3)), 0.5), np.pi * 0.2 * 0.3 * 0.5, 0.13),
     "extruded_rounded_rectangle": (
         Extrusion(RoundedRectangle((0.0, 0.0), (0.8, 0.4), 0.1), 0.5),
@@ -104,6 +105,7 @@ def test_cavity_volume_converges_at_second_order(name):
     "body, volume",
     [
         (Cylinder((0.0, 0.0, 0.0), 0.6, 2.0, "x"), np.pi * 0.36 * 2.0),
+        (HalfCylinder((0.0, -0.2, 0.0), 0.6, 2.0, "x", base=0.3), (np.pi * 0.36 / 2 + 1.2 * 0.3) * 2.0),
         (Extrusion(Rectangle((0.0, 0.0), (2.0, 1.2)), 1.0), 2.4),
         (
             Extrusion(RectangleUnion((Rectangle((0.0, 0.0), (2.0, 1.2)), Rectangle((0.5, 0.9), (1.0, 0.6)))), 1.0),
@@ -117,7 +119,7 @@ def test_bodies_mesh_to_their_volume(body, volume):
     chamber = Box((0.0, 0.0, 0.0), (0.4, 0.3, 0.3))
     mesh = mesh_solid(Solid(body, (("c", chamber),)), MeshSizes(0.2, near_chambers=0.1))
     filled = tet_volumes(mesh).sum() + cavity_volume(mesh.vertices, mesh.chambers["c"])
-    tolerance = 1e-12 if not isinstance(body, Cylinder) else 0.5 * (0.2 / 0.6) ** 2
+    tolerance = 1e-12 if not isinstance(body, (Cylinder, HalfCylinder)) else 0.5 * (0.2 / 0.6) ** 2
     assert filled == pytest.approx(volume, rel=tolerance)
 
 
@@ -223,6 +225,8 @@ def test_bad_solids_are_one_clear_error_and_leave_gmsh_finalised(solid, message)
         (lambda: Box((0, 0), (1, 1, 1)), r"center = \(0, 0\) must be three numbers"),
         (lambda: RoundedBox((0, 0, 0), (1, 1, 0.4), 0.2), r"radius = 0.2 must lie in \(0, 0.2\)"),
         (lambda: Cylinder((0, 0, 0), 0.1, 1.0, "w"), "axis = 'w' is not one of x, y, z"),
+        (lambda: HalfCylinder((0, 0, 0), 0.1, 1.0, "y"), "axis = 'y' is not one of x, z"),
+        (lambda: HalfCylinder((0, 0, 0), 0.1, 1.0, "x", base=-0.1), "base = -0.1 must be >= 0"),
         (lambda: Extrusion("circle", 1.0), "is not a 2D shape"),
         (lambda: PneuNet(chambers=0), "chambers = 0 must be an integer from 1 to 64"),
         (lambda: PneuNet(chambers=2.5), "chambers = 2.5 must be an integer"),

@@ -8,8 +8,9 @@ z the depth (a 2D shape in the x-y plane is extruded along z). Shapes are axis-a
   i.e. the inner box (size - 2 radius) swept by a ball of that radius;
 - Ellipsoid(center, semi_axes): sum ((x_i - c_i) / a_i)^2 <= 1;
 - Cylinder(center, radius, length, axis): a circular cylinder along axis 'x', 'y' or 'z';
-- HalfCylinder(center, radius, length, axis): the half of that cylinder (axis 'x' or 'z') above the plane
-  y = center y: a flat face at the bottom, a round top (a fibre-reinforced bending actuator's body and chamber);
+- HalfCylinder(center, radius, length, axis, base): the half of that cylinder (axis 'x' or 'z') above the plane
+  y = center y, on a box of height `base` below it as wide as the diameter: a flat bottom face and a round top, the
+  section of a fibre-reinforced bending actuator's body (a base) and of its chamber (none);
 - Extrusion(profile, depth, z): a 2D shape of the scene format (fem.shapes: Rectangle, Ellipse,
   RoundedRectangle, Polygon, RectangleUnion) swept along z from z - depth / 2 to z + depth / 2.
   Rectangles, ellipses and rounded rectangles are built from their exact curves (the 2D shape's
@@ -127,12 +128,14 @@ class Cylinder:
 @dataclass(frozen=True)
 class HalfCylinder:
     """The half y >= center y of the circular cylinder of `radius` and `length` along `axis` ('x' or 'z', normal to
-    y) centred on center: its flat face lies in the plane y = center y, its round side above it."""
+    y) centred on center, standing on a box of height `base` (>= 0) below the plane y = center y, of the cylinder's
+    diameter and length: its flat face lies in the plane y = center y - base, its round side above."""
 
     center: tuple[float, float, float]
     radius: float
     length: float
     axis: str = "x"
+    base: float = 0.0
 
     def __post_init__(self):
         _vector("center", self.center)
@@ -142,6 +145,7 @@ class HalfCylinder:
             self.axis in ("x", "z"),
             f"axis = {self.axis!r} is not one of x, z (a half cylinder's flat face is normal to y)",
         )
+        require(require_finite("base", self.base) >= 0, f"base = {self.base!r} must be >= 0")
 
     def build(self, occ) -> int:
         cylinder = Cylinder(self.center, self.radius, self.length, self.axis).build(occ)
@@ -149,7 +153,14 @@ class HalfCylinder:
         corner = np.subtract(self.center, reach / 2) * [1, 0, 1] + [0, self.center[1], 0]
         upper = occ.addBox(*corner, reach, reach, reach)
         (kept, *_), _ = occ.intersect([(3, cylinder)], [(3, upper)])
-        return kept[1]
+        if self.base == 0:
+            return kept[1]
+        along = np.eye(3)[AXES.index(self.axis)]
+        size = along * self.length + (1 - along) * 2 * self.radius
+        size[1] = self.base
+        corner = np.asarray(self.center) - size / 2 - [0, self.base / 2, 0]
+        (fused, *_), _ = occ.fuse([kept], [(3, occ.addBox(*corner, *size))])
+        return fused[1]
 
 
 @dataclass(frozen=True)

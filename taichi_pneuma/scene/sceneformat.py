@@ -111,11 +111,13 @@ SOLIDS = {  # the 3D shapes bodies and chambers share (fem/solids.py); with extr
     ),
     "half_cylinder": record(
         HalfCylinder,
-        "the half of a circular cylinder above the plane y = center y: a flat bottom face, a round top (3D)",
+        "the half of a circular cylinder above the plane y = center y, on a box of height base: a flat bottom face, a "
+        "round top (3D)",
         center=Key(tuple, doc=f"{TRIPLE}: the middle of the flat face", unit=LENGTH),
         radius=Key(float, unit=LENGTH),
         length=Key(float, unit=LENGTH),
         axis=Key(str, "x", "its axis", ("x", "z")),
+        base=Key(float, 0.0, "the height of a box under the flat face, as wide as the diameter", unit=LENGTH),
     ),
     "ellipsoid": record(
         Ellipsoid,
