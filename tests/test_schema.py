@@ -370,7 +370,7 @@ def shaped_scenes(core: Scene) -> list[Scene]:
     from taichi_pneuma.fem.gmsh_mesher import MeshSizes
     from taichi_pneuma.fem.pneunet import PneuNet
     from taichi_pneuma.fem.solid_geometry import SolidGeometry
-    from taichi_pneuma.fem.solids import Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
+    from taichi_pneuma.fem.solids import Box, Cylinder, Ellipsoid, Extrusion, HalfCylinder, RoundedBox
 
     chambers = (
         ("a", Ellipsoid((-1.2, 0.0, 0.0), (0.2, 0.1, 0.1))),
@@ -380,6 +380,7 @@ def shaped_scenes(core: Scene) -> list[Scene]:
         ("e", Extrusion(Ellipse((0.4, 0.0), (0.1, 0.1)), 0.2)),
         ("f", Extrusion(RoundedRectangle((0.8, 0.0), (0.2, 0.2), 0.05), 0.2, 0.05)),
         ("g", Extrusion(Polygon(((1.1, -0.1), (1.3, -0.1), (1.2, 0.1))), 0.2)),
+        ("h", HalfCylinder((1.5, 0.0, 0.0), 0.1, 0.2, "x", base=0.05)),
     )
     bodies = [
         Box((0.0, 0.0, 0.0), (3.5, 0.8, 0.8)),
