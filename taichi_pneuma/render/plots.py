@@ -45,7 +45,7 @@ class NotebookFigure(Figure):
 # would find them itself, at twice the time of the whole plot (0.75 against 1.7 s measured)
 # the ratio a chamber's axis shows, and what it measures, by the body's dimension
 RATIO = {2: ("area ratio A / A_rest", "area"), 3: ("volume ratio V / V_rest", "volume")}
-LAYOUT = dict(left=0.05, right=0.95, bottom=0.07, top=0.92, wspace=0.3, hspace=0.32)
+LAYOUT = dict(left=0.05, right=0.95, bottom=0.07, top=0.89, wspace=0.3, hspace=0.35)
 
 
 def history_figure(result, figure=None):
