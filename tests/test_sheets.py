@@ -1,10 +1,12 @@
 """Strain-limiting sheets ([[layers]]): the membrane's energy, gradient and Hessian against finite differences, its
 energies and edge forces against the closed forms of prescribed homogeneous stretches, the faces a layer covers,
 and the acceptance check: a meshed bottom layer of thickness h and modulus E_s t / h converges to the sheet's tip
-deflection as h -> 0."""
+deflection as h -> 0, in 2D and 3D."""
 
 import dataclasses
+import math
 import tomllib
+from itertools import permutations
 
 import numpy as np
 import pytest
@@ -13,7 +15,7 @@ from solid_meshes import box_with_cavity, scene_of
 
 import taichi_pneuma as tp
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.mesh import triangle_areas
+from taichi_pneuma.fem.elements import boundary_facets, family_of
 from taichi_pneuma.materials.neo_hookean import StableNeoHookean
 from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.scene.schedule import area_ramp
@@ -186,60 +188,62 @@ def test_a_bad_layer_is_refused_naming_the_key(keys, message):
         Layer(**{"name": "s", "E": E, "nu": NU, "thickness": T, "side": "bottom", **keys})
 
 
-# The acceptance check: a clamped 1 x 0.1 cantilever (plane strain, E = 1, nu = 0.3) under its weight, with a
-# sheet of membrane stiffness E_s t = 0.1 on its bottom, against the same body with a meshed layer of thickness h
-# and modulus E_s t / h below it (two rows of elements). The body's mesh is the same in every case.
-LENGTH, HEIGHT, COLUMNS, SHEET = 1.0, 0.1, 40, 0.1
+# The acceptance check: a clamped 1 x 0.1 (x 0.1 in 3D) cantilever (E = 1, nu = 0.3; plane strain in 2D) under its
+# weight, with a sheet of membrane stiffness E_s t = 0.1 on its bottom, against the same body with a meshed layer of
+# thickness h and modulus E_s t / h below it (four rows of elements). The body's mesh is the same in every case.
+LENGTH, HEIGHT, COLUMNS, ROWS, SHEET = 1.0, 0.1, 32, 4, 0.1
 
 
-def grid(ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A structured mesh of COLUMNS x (len(ys) - 1) quads over [0, LENGTH] x ys, each split in two triangles
-    (alternating diagonals), counter-clockwise."""
-    n = COLUMNS + 1
-    x, y = np.meshgrid(np.linspace(0.0, LENGTH, n), ys)
-    triangles = []
-    for j in range(len(ys) - 1):
-        for i in range(COLUMNS):
-            a, b, c, d = j * n + i, j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i
-            triangles += [[a, b, c], [a, c, d]] if (i + j) % 2 == 0 else [[a, b, d], [b, c, d]]
-    return np.column_stack([x.ravel(), y.ravel()]), np.array(triangles)
+def kuhn_grid(axes: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The structured simplex mesh of the grid of these axes' coordinates: each cell split into d! simplices, one
+    per order of the axes (the Kuhn split: from the cell's low corner one step along each axis in that order), each
+    of positive measure."""
+    d, shape = len(axes), tuple(len(a) for a in axes)
+    vertices = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, d)
+    origins = np.stack(np.meshgrid(*(np.arange(n - 1) for n in shape), indexing="ij"), axis=-1).reshape(-1, 1, d)
+    paths = [
+        np.cumsum(np.vstack([np.zeros(d, int), np.eye(d, dtype=int)[list(p)]]), axis=0) for p in permutations(range(d))
+    ]
+    simplices = np.vstack([np.ravel_multi_index(tuple(np.moveaxis(origins + path, -1, 0)), shape) for path in paths])
+    edges = vertices[simplices[:, 1:]] - vertices[simplices[:, :1]]
+    flip = np.linalg.det(edges) < 0
+    simplices[flip, 1], simplices[flip, 2] = simplices[flip, 2], simplices[flip, 1].copy()
+    return vertices, simplices
 
 
-def tip_deflection(h: float | None, sheet: bool = True) -> float:
-    """The mean vertical tip displacement with the sheet (h None), with the meshed layer of thickness h (the layer
-    has no weight, nor has the sheet), or of the body alone (h None, sheet False)."""
-    body = np.linspace(0.0, HEIGHT, 5)
-    vertices, triangles = grid(body if h is None else np.concatenate([np.linspace(-h, 0.0, 3)[:-1], body]))
+def tip_deflection(d: int, h: float | None, sheet: bool = True) -> float:
+    """The mean vertical tip displacement of the d-dimensional cantilever with the sheet (h None), with the meshed
+    layer of thickness h (the layer has no weight, nor has the sheet), or of the body alone (h None, sheet False)."""
+    body = np.linspace(0.0, HEIGHT, ROWS + 1)
+    ys = body if h is None else np.concatenate([np.linspace(-h, 0.0, ROWS + 1)[:-1], body])
+    vertices, cells = kuhn_grid([np.linspace(0.0, LENGTH, COLUMNS + 1), ys, np.array([0.0, HEIGHT])][:d])
     model = EnergyModel(vertices, 1e-9, 1e-15)
     config = model.config
-    layer = vertices[triangles].mean(axis=1)[:, 1] < 0
+    layer = vertices[cells].mean(axis=1)[:, 1] < 0
     moduli = np.where(layer, SHEET / (h or 1.0), 1.0)
-    model.add(
-        Elasticity(
-            config, triangles, StableNeoHookean, np.array([StableNeoHookean.parameters(m, 0.3)[0] for m in moduli])
-        )
-    )
+    law = StableNeoHookean
+    model.add(Elasticity(config, cells, law, np.array([law.parameters(m, 0.3)[0] for m in moduli])))
     model.add(Clamp(config, np.flatnonzero(vertices[:, 0] == 0.0), 1e4))
+    measures = np.abs(np.linalg.det(vertices[cells[:, 1:]] - vertices[cells[:, :1]])) / math.factorial(d)
     masses = np.zeros(len(vertices))
-    np.add.at(masses, triangles[~layer], triangle_areas(vertices, triangles[~layer])[:, None] / 3)
+    np.add.at(masses, cells[~layer], measures[~layer, None] / (d + 1))
     model.add(Gravity(config, masses, 1e-3))
     if h is None and sheet:
-        bottom = np.flatnonzero(vertices[:, 1] == 0.0)  # in order of x
-        model.add(Membrane(config, np.column_stack([bottom[:-1], bottom[1:]]), 1.0, SHEET, 0.3))
+        facets = boundary_facets(family_of(cells, d), cells)
+        model.add(Membrane(config, facets[(vertices[facets, 1] == 0.0).all(axis=1)], 1.0, SHEET, 0.3))
     u, record = NewtonSolver(model).solve(np.zeros_like(vertices))
     assert record.converged
     return float(u[vertices[:, 0] == LENGTH, 1].mean())
 
 
-def test_a_meshed_layer_of_the_same_membrane_stiffness_converges_to_the_sheet_as_it_thins():
-    sheet = tip_deflection(None)
-    assert abs(sheet) < 0.7 * abs(tip_deflection(None, sheet=False))  # the sheet stiffens the beam markedly
-    thicknesses = (0.04, 0.02, 0.01, 0.005)
-    meshed = np.array([tip_deflection(h) for h in thicknesses])
+@pytest.mark.parametrize("d", [2, 3])
+def test_a_meshed_layer_of_the_same_membrane_stiffness_converges_to_the_sheet_as_it_thins(d):
+    """The meshed layer differs from the sheet by its own offset below the bottom (h/2) and bending: O(h)."""
+    sheet = tip_deflection(d, None)
+    assert abs(sheet) < 0.7 * abs(tip_deflection(d, None, sheet=False))  # the sheet stiffens the beam markedly
+    meshed = np.array([tip_deflection(d, h) for h in (0.04, 0.02, 0.01, 0.005)])
     differences = np.abs(meshed - sheet) / abs(sheet)
-    assert np.all(np.diff(differences) < 0)  # shrinking with h ...
-    assert np.all(0.35 < differences[1:] / differences[:-1]) and np.all(
-        differences[1:] / differences[:-1] < 0.65
-    )  # ... as h
-    assert differences[-1] < 0.05
+    ratios = differences[1:] / differences[:-1]
+    assert np.all((0.4 < ratios) & (ratios < 0.62))  # shrinking about as h, halved at each step
+    assert differences[-1] < 0.06
     assert abs(2 * meshed[-1] - meshed[-2] - sheet) < 0.02 * abs(sheet)  # Richardson's extrapolation to h = 0
