@@ -14,19 +14,21 @@ import scipy.sparse as sp
 from solid_meshes import box_with_cavity, scene_of
 
 import taichi_pneuma as tp
+from taichi_pneuma import backend
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.elements import boundary_facets, family_of
 from taichi_pneuma.materials.neo_hookean import StableNeoHookean
 from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.scene.schedule import area_ramp
 from taichi_pneuma.solve.newton import NewtonSolver
-from taichi_pneuma.terms import Clamp, Elasticity
+from taichi_pneuma.terms import Clamp, Elasticity, membrane
 from taichi_pneuma.terms.gravity import Gravity
 from taichi_pneuma.terms.membrane import Membrane
 from taichi_pneuma.terms.model import Configuration, EnergyModel
 from taichi_pneuma.terms.sheets import Layer
 
 T, E, NU = 0.01, 2e5, 0.3
+INSTANCES = {"taichi": "compiled_kernels", "quadrants": "materialized_kernels"}  # a kernel's compiled instances
 LAM, MU, E_PLANE = E * NU / (1 - NU**2), E / (2 * (1 + NU)), E / (1 - NU**2)
 
 
@@ -247,3 +249,19 @@ def test_a_meshed_layer_of_the_same_membrane_stiffness_converges_to_the_sheet_as
     assert np.all((0.4 < ratios) & (ratios < 0.62))  # shrinking about as h, halved at each step
     assert differences[-1] < 0.06
     assert abs(2 * meshed[-1] - meshed[-2] - sheet) < 0.02 * abs(sheet)  # Richardson's extrapolation to h = 0
+
+
+def test_membrane_kernels_compile_once_per_dimension_whatever_the_cells_or_the_sheet():
+    """(tests/test_compile_once.py checks the package's kernels on scenes without layers.)"""
+    kernels = (membrane.membrane_energy, membrane.membrane_gradient, membrane.membrane_hessian)
+    count = lambda: [len(getattr(k._primal, INSTANCES[backend.NAME])) for k in kernels]  # noqa: E731
+
+    def evaluate(d, scale):
+        rest, cells = patch(d, seed=int(10 * scale))
+        term = Membrane(Configuration(scale * rest), np.vstack([cells, cells[::-1]]), scale * T, scale * E, NU / scale)
+        term.energy(), term.gradient(), term.hessian_values(), term.hessian_values(True)
+
+    evaluate(2, 1.0), evaluate(3, 1.0)
+    before = count()
+    evaluate(2, 2.0), evaluate(3, 2.0)
+    assert count() == before
