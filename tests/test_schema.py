@@ -32,6 +32,7 @@ from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.terms.chambers import KINDS, AreaControl, PressureControl
 from taichi_pneuma.terms.effects import EFFECTS, Dynamics, Effect, Gravity, Ground, SelfContact
+from taichi_pneuma.terms.sheets import Layer
 
 PACKAGE = Path(__file__).resolve().parent.parent / "taichi_pneuma"
 
@@ -282,8 +283,8 @@ BOX = (-1.75, -0.4, -1.7, 0.4)
 
 def covering_scenes() -> list[Scene]:
     """Scenes that between them have every key of the file: each body and chamber shape, both controls,
-    both forms of the clamp, the tip and rollers, a region, every effect, targets with an angle, every unit
-    system and every material key (presets, each form of the isochoric law, K and nu)."""
+    both forms of the clamp, the tip and rollers, a region, every effect, targets with an angle, layers by side and
+    by box, every unit system and every material key (presets, each form of the isochoric law, K and nu)."""
     core = tp.reference_scene()
     chambers = (
         ("e", Ellipse((-1.0, 0.0), (0.3, 0.2), 16)),
@@ -300,6 +301,7 @@ def covering_scenes() -> list[Scene]:
         regions=(Region((-1.75, -0.4, 1.75, -0.3), Material(5e4, 0.4)),),
         effects=(Gravity(1.0), Ground(-1.0), SelfContact(), Dynamics(1.0, 0.01)),
         targets=(Target((3.0, -0.5), 5.0),),
+        layers=(Layer("sheet", 1e6, 0.3, 0.01, side="bottom"),),
     )
     boxed = dataclasses.replace(
         core,
@@ -309,6 +311,7 @@ def covering_scenes() -> list[Scene]:
             clamp=PointSet(None, BOX),
             tip=PointSet(None, BOX),
         ),
+        layers=(Layer("patch", 2e5, 0.0, 0.005, box=(-1.75, -0.4, 1.75, -0.3)),),
     )
     polygon = dataclasses.replace(
         core,

@@ -117,6 +117,7 @@ class Scene:
     units: Units = UNITLESS
     max_stretch: float = MAX_STRETCH
     volumetric: str = "element"
+    layers: tuple = ()  # terms.sheets.Layer: strain-limiting sheets bonded to faces of the body
 
     def __post_init__(self):
         self.resolve_defaults()
@@ -268,6 +269,9 @@ class Scene:
             effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area, budget)]
             for effect in self.effects
         }
+        for spec in self.layers:
+            for term in spec.terms(config, mesh, lumped_area, budget):
+                model.add(term)
         return BuiltScene(self, mesh, model, elastic, chambers, effects)  # type: ignore[arg-type]
 
 

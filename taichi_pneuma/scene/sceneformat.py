@@ -22,11 +22,12 @@ from ..fem.solid_geometry import SolidGeometry, is_solid_shape
 from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, HalfCylinder, RoundedBox
 from ..fem.supports import SIDES, PointSet, Roller
 from ..io.tomltext import dumps
-from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, UNITLESS, UNITS, default_in
+from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, PRESSURE, UNITLESS, UNITS, default_in
 from ..materials.registry import SELECTORS, all_keys, form_of, forms, region_values
 from ..terms import VOLUMETRIC
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
+from ..terms.sheets import Layer
 from .schedule import MAX_STRETCH, ChamberSchedule
 from .schema import REQUIRED, Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
 from .targets import MAX_TARGETS, Target
@@ -161,6 +162,19 @@ TARGET = record(
     angle=Key(float, None, "tip rotation in degrees (none: free)"),
     weights=Key(tuple, (1.0, 1.0, 1.0), "[w_x, w_y, w_angle]"),
     weight_z=Key(float, 1.0, "w_z, the weight of a 3D tip's z error"),
+)
+
+LAYER = record(
+    Layer,
+    "a strain-limiting sheet bonded to a face of the body (a membrane on its boundary facets there)",
+    name=Key(str, doc="names the layer in messages"),
+    side=Key(str, None, "the face: a side of the body's bounding box (or box)", SIDES),
+    box=Key(
+        tuple, None, f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D): the boundary facets in it (instead of side)", unit=LENGTH
+    ),
+    E=Key(float, doc="the sheet's Young's modulus", unit=PRESSURE),
+    nu=Key(float, doc="the sheet's Poisson's ratio, in [0, 0.5)"),
+    thickness=Key(float, doc="the sheet's thickness", unit=LENGTH),
 )
 
 
@@ -354,6 +368,7 @@ def scene_table(scene_class) -> Table:
             UNITLESS if v["units"] is None else UNITS[v["units"]],
             v["schedule"]["max_stretch"],
             mesh["volumetric"],
+            layers=v["layers"],
         )
 
     def clamp_parts(scene):
@@ -476,6 +491,7 @@ def scene_table(scene_class) -> Table:
             ),
             "effects": Named(EFFECTS, "the effects the scene adds, by name"),
             "targets": Tables(TARGET, "poses for inverse control, in order"),
+            "layers": Tables(LAYER, "strain-limiting sheets, each bonded to a face of the body"),
         },
         make=make_scene,
         parts=lambda s: {
@@ -492,6 +508,7 @@ def scene_table(scene_class) -> Table:
             "schedule": s,
             "effects": s.effects,
             "targets": s.targets,
+            "layers": s.layers,
         },
     )
 

@@ -1,0 +1,201 @@
+"""A thin elastic sheet bonded to the body's nodes: a Saint Venant-Kirchhoff plane-stress membrane on cells of
+m + 1 = d nodes (3D: triangles, m = 2; 2D: segments, m = 1, per unit depth), so a sheet of thickness t costs no
+elements of size t.
+
+A cell's rest shape is its m x m edge matrix Dm in its own tangent plane (3D: Dm = [[e1.t1, e2.t1], [0, e2.t2]]
+in the orthonormal basis t1 = e1 / |e1|, t2 in the plane; 2D: Dm = [L0]); with D = Dm^-1 and the vectors
+g_a = D[a - 1, :] (a = 1..m), g_0 = -sum_a g_a, the deformation gradient (d x m) is
+
+    F = sum_a x_a g_a^T = [x_1 - x_0, ..., x_m - x_0] D,
+    G = (F^T F - I) / 2                              (m x m Green strain),
+    psi = lam/2 tr(G)^2 + mu tr(G^2),   lam = E nu / (1 - nu^2) (plane stress),  mu = E / (2 (1 + nu)),
+
+and the energy is sum over cells W psi, W = t A0 (3D), t L0 (2D). In 2D, G = g = (s^2 - 1) / 2 with the stretch
+s = l / L0 and psi = (lam/2 + mu) g^2 = E' g^2 / 2, E' = E / (1 - nu^2). With S = dpsi/dG = lam tr(G) I + 2 mu G,
+the force on node a is W F S g_a and the Hessian block of nodes a, b is
+
+    H_(ai)(bk) = W [ delta_ik g_a.S g_b + lam (F g_a)_i (F g_b)_k + mu ((F F^T)_ik g_a.g_b + (F g_b)_i (F g_a)_k) ].
+
+It is indefinite under compression (the sheet buckles: tr(G) < 0 makes S negative); psd_only projects each
+cell's d^2 x d^2 block onto the PSD cone, its negative eigenvalues clamped to 0, in NumPy (a batched
+np.linalg.eigh after the kernel: Taichi has no eigensolver past 3 x 3).
+
+The kernels take the dimension d as a template argument and everything else (cells, rest shapes, weights, lam
+and mu) as arrays and runtime scalars: they compile once per d, whatever the mesh or the sheet.
+"""
+
+from typing import TypeAlias
+
+import numpy as np
+
+from ..backend import ti
+from .base import Nodal, Scalars, Table, Term, block_pattern, int32s
+
+Cells: TypeAlias = ti.types.ndarray(dtype=ti.i32, ndim=2)  # (f, d): the nodes of each cell
+
+
+@ti.func
+def strain_state(
+    rest: ti.template(), u: ti.template(), cells: ti.template(), inverse: ti.template(), c, d: ti.template()
+):
+    """(F (d x m), the shape vectors g_0..g_m of cell c as the rows of a d x m matrix), m = d - 1, from D (the
+    cell's row of inverse) and the edges x_a - x_0 = (X_a - X_0) + (u_a - u_0)."""
+    m = ti.static(d - 1)
+    D = ti.Matrix([[inverse[c, m * a + j] for j in ti.static(range(m))] for a in ti.static(range(m))], dt=ti.f64)
+    edges = ti.Matrix.zero(ti.f64, d, m)
+    n0 = cells[c, 0]
+    for a in ti.static(range(m)):
+        na = cells[c, a + 1]
+        for i in ti.static(range(d)):
+            edges[i, a] = (rest[na, i] - rest[n0, i]) + (u[na, i] - u[n0, i])
+    shapes = ti.Matrix.zero(ti.f64, d, m)
+    for a, j in ti.static(ti.ndrange(m, m)):
+        shapes[a + 1, j] = D[a, j]
+        shapes[0, j] -= D[a, j]
+    return edges @ D, shapes
+
+
+@ti.func
+def row(A, a, m: ti.template()):
+    """Row a of A (m columns) as a vector."""
+    return ti.Vector([A[a, j] for j in ti.static(range(m))], dt=ti.f64)
+
+
+@ti.func
+def second_piola(F, lam, mu, m: ti.template()):
+    """(G, S): the Green strain and S = lam tr(G) I + 2 mu G."""
+    G = 0.5 * (F.transpose() @ F - ti.Matrix.identity(ti.f64, m))
+    return G, lam * G.trace() * ti.Matrix.identity(ti.f64, m) + 2.0 * mu * G
+
+
+@ti.kernel
+def membrane_energy(
+    d: ti.template(), rest: Nodal, u: Nodal, cells: Cells, inverse: Table, weights: Scalars, lam: ti.f64, mu: ti.f64
+) -> ti.f64:
+    """sum_c W_c (lam/2 tr(G)^2 + mu tr(G^2))."""
+    total = 0.0
+    for c in range(cells.shape[0]):
+        F, _shapes = strain_state(rest, u, cells, inverse, c, d)
+        G, _S = second_piola(F, lam, mu, ti.static(d - 1))
+        total += weights[c] * (0.5 * lam * G.trace() ** 2 + mu * (G * G).sum())
+    return total
+
+
+@ti.kernel
+def membrane_gradient(
+    d: ti.template(),
+    rest: Nodal,
+    u: Nodal,
+    cells: Cells,
+    inverse: Table,
+    weights: Scalars,
+    lam: ti.f64,
+    mu: ti.f64,
+    out: Nodal,
+):
+    """out = dE/dx: W F S g_a scattered to the cells' nodes."""
+    for v, i in ti.ndrange(out.shape[0], d):
+        out[v, i] = 0.0
+    for c in range(cells.shape[0]):
+        m = ti.static(d - 1)
+        F, shapes = strain_state(rest, u, cells, inverse, c, d)
+        _G, S = second_piola(F, lam, mu, m)
+        P = weights[c] * F @ S
+        for a in ti.static(range(d)):
+            force = P @ row(shapes, a, m)
+            for i in ti.static(range(d)):
+                out[cells[c, a], i] += force[i]
+
+
+@ti.kernel
+def membrane_hessian(
+    d: ti.template(),
+    rest: Nodal,
+    u: Nodal,
+    cells: Cells,
+    inverse: Table,
+    weights: Scalars,
+    lam: ti.f64,
+    mu: ti.f64,
+    out: Table,
+):
+    """out[c] = the exact d^2 x d^2 block of cell c, row-major (module docstring's H_(ai)(bk))."""
+    for c in range(cells.shape[0]):
+        m = ti.static(d - 1)
+        n = ti.static(d * d)
+        F, shapes = strain_state(rest, u, cells, inverse, c, d)
+        _G, S = second_piola(F, lam, mu, m)
+        FFt = F @ F.transpose()
+        W = weights[c]
+        for a, b in ti.static(ti.ndrange(d, d)):
+            ga, gb = row(shapes, a, m), row(shapes, b, m)
+            Fa, Fb = F @ ga, F @ gb
+            geometric = ga.dot(S @ gb)
+            for i, k in ti.static(ti.ndrange(d, d)):
+                h = lam * Fa[i] * Fb[k] + mu * (FFt[i, k] * ga.dot(gb) + Fb[i] * Fa[k])
+                if ti.static(i == k):
+                    h += geometric
+                out[c, n * (d * a + i) + d * b + k] = W * h
+
+
+def rest_shapes(rest: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(D = Dm^-1 flattened (f, m^2), the rest measures A0 (3D) or L0 (2D) (f,)) of cells (f, d) of the rest
+    positions, Dm in each cell's own orthonormal tangent basis (module docstring)."""
+    corners = rest[cells]
+    e1 = corners[:, 1] - corners[:, 0]
+    length = np.linalg.norm(e1, axis=1)
+    if cells.shape[1] == 2:
+        return (1.0 / length)[:, None], length
+    e2 = corners[:, 2] - corners[:, 0]
+    normal = np.cross(e1, e2)
+    double_area = np.linalg.norm(normal, axis=1)
+    t1 = e1 / length[:, None]
+    t2 = np.cross(normal / double_area[:, None], t1)
+    Dm = np.zeros((len(cells), 2, 2))
+    Dm[:, 0, 0], Dm[:, 0, 1], Dm[:, 1, 1] = length, np.einsum("fi,fi->f", e2, t1), np.einsum("fi,fi->f", e2, t2)
+    return np.linalg.inv(Dm).reshape(len(cells), 4), 0.5 * double_area
+
+
+def projected(blocks: np.ndarray) -> np.ndarray:
+    """Each symmetric block (f, n, n) with its negative eigenvalues clamped to 0 (V max(Lambda, 0) V^T)."""
+    values, vectors = np.linalg.eigh(blocks)
+    return np.einsum("fij,fj,fkj->fik", vectors, np.maximum(values, 0.0), vectors)
+
+
+class Membrane(Term):
+    """A Saint Venant-Kirchhoff plane-stress membrane of thickness t, Young's modulus E and Poisson's ratio nu on
+    cells (f, d) of the configuration's nodes: triangles in 3D, segments in 2D (module docstring)."""
+
+    name = "membrane"
+
+    def __init__(self, config, cells: np.ndarray, thickness: float, E: float, nu: float):
+        self.config = config
+        self.dim = config.rest.shape[1]
+        self.cells = int32s(cells)
+        assert self.cells.shape[1] == self.dim, "a membrane's cells have d nodes (3D: triangles, 2D: segments)"
+        inverse, measures = rest_shapes(config.rest, self.cells)
+        self.inverse = np.ascontiguousarray(inverse)
+        self.weights = np.ascontiguousarray(thickness * measures)
+        self.lam, self.mu = E * nu / (1.0 - nu**2), E / (2.0 * (1.0 + nu))
+        self._rows, self._cols = block_pattern(self.cells, self.dim)
+
+    def _arguments(self):
+        c = self.config
+        return self.dim, c.rest, c.u, self.cells, self.inverse, self.weights, self.lam, self.mu
+
+    def energy(self) -> float:
+        return membrane_energy(*self._arguments())
+
+    def gradient(self) -> np.ndarray:
+        out = np.empty_like(self.config.rest)
+        membrane_gradient(*self._arguments(), out)
+        return out
+
+    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._rows, self._cols
+
+    def hessian_values(self, psd_only: bool = False) -> np.ndarray:
+        n = self.dim * self.dim
+        out = np.empty((len(self.cells), n * n))
+        membrane_hessian(*self._arguments(), out)
+        return (projected(out.reshape(-1, n, n)) if psd_only else out).ravel()
