@@ -19,8 +19,8 @@ from taichi_pneuma.fem.fiber_paths import Crossed, Helix, Line, Polyline, Rings
 from taichi_pneuma.fem.mesh import Mesh
 from taichi_pneuma.fem.tip import tip_twist
 from taichi_pneuma.scene.build import Material, reference_scene
-from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.scene.scenefile import read_scene
+from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms.fibers import Fiber
 from taichi_pneuma.terms.model import Configuration
 
@@ -35,7 +35,10 @@ def rectangle(nx: int = 6, ny: int = 3, width: float = 3.0, height: float = 1.0)
     x, y = np.meshgrid(np.linspace(0, width, nx + 1), np.linspace(0, height, ny + 1), indexing="ij")
     corner = (np.arange((nx + 1) * (ny + 1)).reshape(nx + 1, ny + 1)[:-1, :-1]).ravel()
     triangles = np.vstack(
-        [np.column_stack([corner, corner + ny + 1, corner + ny + 2]), np.column_stack([corner, corner + ny + 2, corner + 1])]
+        [
+            np.column_stack([corner, corner + ny + 1, corner + ny + 2]),
+            np.column_stack([corner, corner + ny + 2, corner + 1]),
+        ]
     )
     empty = np.zeros(0, dtype=np.int64)
     return Mesh(np.column_stack([x.ravel(), y.ravel()]), triangles, (), empty, empty, empty, (), ())
@@ -84,7 +87,9 @@ def test_cord_gradient_and_hessian_match_finite_differences(case):
     config.u[:] = u0 - step
     behind = term.gradient()
     config.u[:] = u0
-    assert np.allclose((ahead - behind).ravel(), 2 * hessian @ step.ravel(), rtol=0, atol=1e-6 * np.abs(hessian @ step.ravel()).max())
+    assert np.allclose(
+        (ahead - behind).ravel(), 2 * hessian @ step.ravel(), rtol=0, atol=1e-6 * np.abs(hessian @ step.ravel()).max()
+    )
     used = np.unique(term.hessian_pattern()[0])
     assert np.linalg.eigvalsh(hessian[np.ix_(used, used)]).min() > -1e-9 * np.abs(hessian).max()  # PSD
     assert np.array_equal(term.hessian_values(psd_only=True), term.hessian_values())

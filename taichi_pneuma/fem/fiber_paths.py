@@ -111,9 +111,7 @@ class Polyline(Layout):
             f"points = {self.points!r} must list at least 2 points",
         )
         corners = [_point(f"points[{i}]", p) for i, p in enumerate(self.points)]
-        require(
-            len({len(c) for c in corners}) == 1, f"points = {list(self.points)!r} mix 2D and 3D points"
-        )
+        require(len({len(c) for c in corners}) == 1, f"points = {list(self.points)!r} mix 2D and 3D points")
         steps = np.linalg.norm(np.diff(np.array(corners), axis=0), axis=1)
         require(np.all(steps > 0), f"points = {list(self.points)!r} repeat a point ({int(np.argmin(steps)) + 1})")
 
@@ -209,10 +207,11 @@ class Spiral(Layout):
         length = self.turns * math.hypot(2 * math.pi * self.radius, self.advance)
         t = np.linspace(0.0, self.turns, max(2, math.ceil(length / spacing)) + 1)
         theta = math.radians(self.phase) + sense * 2 * math.pi * t
-        return c + self.radius * (np.outer(np.cos(theta), e1) + np.outer(np.sin(theta), e2)) + np.outer(
-            self.advance * t, ea
+        return (
+            c
+            + self.radius * (np.outer(np.cos(theta), e1) + np.outer(np.sin(theta), e2))
+            + np.outer(self.advance * t, ea)
         )
-
 
 
 @dataclass(frozen=True)
@@ -239,5 +238,11 @@ class Crossed(Spiral):
         return [self.helix(1, spacing), self.helix(-1, spacing)]
 
 
-LAYOUTS = {"line": Line, "polyline": Polyline, "rings": Rings, "helix": Helix, "crossed": Crossed}
+LAYOUTS: dict[str, type[Layout]] = {
+    "line": Line,
+    "polyline": Polyline,
+    "rings": Rings,
+    "helix": Helix,
+    "crossed": Crossed,
+}
 PLANAR = tuple(name for name, cls in LAYOUTS.items() if cls.planar)

@@ -13,6 +13,7 @@ import typing
 
 from ..errors import require
 from ..fem.elements import ORDERS
+from ..fem.fiber_paths import LAYOUTS, PLANAR
 from ..fem.gmsh_mesher import MeshSizes
 from ..fem.meshfile import MeshBody, MeshGeometry, MeshSurface
 from ..fem.planar import Geometry
@@ -22,7 +23,6 @@ from ..fem.solid_geometry import SolidGeometry, is_solid_shape
 from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, RoundedBox
 from ..fem.supports import SIDES, PointSet, Roller
 from ..io.tomltext import dumps
-from ..fem.fiber_paths import LAYOUTS, PLANAR
 from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, PRESSURE, SECTION, UNITLESS, UNITS, default_in
 from ..materials.registry import SELECTORS, all_keys, form_of, forms, region_values
 from ..terms import VOLUMETRIC

@@ -228,10 +228,7 @@ class Fiber:
         )
         starts = np.cumsum([0] + [len(c) for c in curves])
         segments = np.vstack(
-            [
-                np.column_stack([np.arange(s, e - 1), np.arange(s + 1, e)])
-                for s, e in zip(starts[:-1], starts[1:])
-            ]
+            [np.column_stack([np.arange(s, e - 1), np.arange(s + 1, e)]) for s, e in zip(starts[:-1], starts[1:])]
             + ([np.column_stack([starts[1:] - 1, starts[:-1]])] if self.path.closed else [])
         )
         nodes, weights = embed(mesh, np.vstack(curves), self.what)
