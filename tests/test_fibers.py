@@ -21,6 +21,7 @@ from taichi_pneuma.fem.tip import tip_twist
 from taichi_pneuma.scene.build import Material, reference_scene
 from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.scene.schedule import ChamberSchedule
+from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms.fibers import Fiber
 from taichi_pneuma.terms.model import Configuration
 
@@ -294,3 +295,55 @@ def test_tip_twist_is_the_rotation_about_x_by_the_right_hand_rule():
     angle = math.radians(20.0)
     rotation = np.array([[1, 0, 0], [0, math.cos(angle), -math.sin(angle)], [0, math.sin(angle), math.cos(angle)]])
     assert tip_twist(rest, rest @ rotation.T + [0.5, 0.1, -0.2]) == pytest.approx(20.0, rel=1e-12)
+
+
+TUBE = """
+[body]
+shape = "cylinder"
+center = [0.0, 0.0, 0.0]
+radius = 0.3
+length = 2.0
+axis = "x"
+[mesh]
+size = 0.15
+[material]
+E = 1e4
+nu = 0.4
+[clamp]
+side = "left"
+[[chambers]]
+name = "c"
+shape = "cylinder"
+center = [0.0, 0.0, 0.0]
+radius = 0.15
+length = 1.6
+axis = "x"
+control = "pressure"
+keyframes = [[2, 2000.0]]
+[schedule]
+increments = 2
+"""
+WINDING = 'center = [-1.0, 0.0, 0.0], axis = "x", radius = 0.23, angle = 45.0, turns = 1.3'  # 1.9 of its 2.0 long
+
+
+def tube_twist(path: str) -> float:
+    """The tip twist (degrees) of the pressurised tube wound with one fibre of this path (E A = 1e6 pi 0.05^2 / 4,
+    about the wall's E A, 1e4 pi (0.3^2 - 0.15^2))."""
+    fiber = f"[[fibers]]\nE = 1e6\ndiameter = 0.05\npath = {{ {path}, {WINDING} }}\n"
+    run = run_schedule(read_scene(tomllib.loads(TUBE + fiber), "tube").build())
+    mesh, x = run.built.mesh, run.positions[-1]
+    return tip_twist(mesh.vertices[mesh.tip], x[mesh.tip])
+
+
+def test_a_pressurised_tube_wound_with_one_helix_twists_by_its_hand_and_a_crossed_pair_barely():
+    """Inflation lengthens the tube and widens it, stretching a 45-degree fibre; the tube twists to unwind it: a
+    right-handed helix (turning counter-clockwise about +x as it advances) turns the tip clockwise (negative twist),
+    a left-handed one as much counter-clockwise; a crossed pair balances (measured: -12.3, +12.3, -0.4 degrees)."""
+    pytest.importorskip("gmsh", reason="gmsh is not installed (pip install 'taichi-pneuma[3d]')")
+    right, left = (
+        tube_twist('layout = "helix", handedness = "right"'),
+        tube_twist('layout = "helix", handedness = "left"'),
+    )
+    crossed = tube_twist('layout = "crossed"')
+    assert right < -5.0 and left > 5.0 and abs(right + left) < 0.1 * abs(right)
+    assert abs(crossed) < 0.1 * min(abs(right), abs(left))
