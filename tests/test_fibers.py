@@ -18,6 +18,7 @@ from taichi_pneuma.fem.embedding import TET_P2_SPLIT, embed
 from taichi_pneuma.fem.fiber_paths import Crossed, Helix, Line, Polyline, Rings
 from taichi_pneuma.fem.mesh import Mesh
 from taichi_pneuma.fem.tip import tip_twist
+from taichi_pneuma.limits import Budget
 from taichi_pneuma.scene.build import Material, reference_scene
 from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.scene.schedule import ChamberSchedule
@@ -47,7 +48,7 @@ def rectangle(nx: int = 6, ny: int = 3, width: float = 3.0, height: float = 1.0)
 
 def cords(mesh: Mesh, fiber: Fiber):
     config = Configuration(mesh.vertices)
-    (term,) = fiber.terms(config, mesh, None, None)
+    (term,) = fiber.terms(config, mesh, None, Budget())
     return config, term
 
 
@@ -188,7 +189,7 @@ def test_a_helix_lies_at_its_radius_advances_a_pitch_per_turn_and_turns_by_its_h
     assert np.allclose(along, sense * (angle - angle[0]) / (2 * np.pi) * pitch, rtol=0, atol=1e-12)
     assert math.degrees(angle[0]) == pytest.approx(30.0)
     steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
-    assert steps.max() <= 0.01
+    assert steps.max() <= 0.01 and steps.sum() == pytest.approx(helix.length, rel=1e-3)  # chords of its arcs
 
 
 def test_a_helix_by_winding_angle_is_the_helix_of_its_pitch():
@@ -216,6 +217,18 @@ def test_a_helix_by_winding_angle_is_the_helix_of_its_pitch():
 def test_bad_fiber_keys_are_refused_naming_them(make, message):
     with pytest.raises(PneumaInputError, match=message):
         make()
+
+
+def test_a_fiber_sampled_past_the_budget_or_the_cap_is_refused():
+    line = Line((-1.7, -0.3, 0.0), (1.7, -0.3, 0.0))
+    config = Configuration(box_with_cavity().vertices)
+    with pytest.raises(PneumaInputError, match=r"fiber 'x' would hold 340 cord segments: .*the limit is 100 triangles"):
+        Fiber(line, 1e3, area=0.01, spacing=0.01, name="x").terms(config, box_with_cavity(), None, Budget(100))
+    with pytest.raises(
+        PneumaInputError,
+        match=r"spacing 1e-05 would sample its length 3.4 at 3.4e\+05 points; at most 100000 are allowed",
+    ):
+        Fiber(line, 1e3, area=0.01, spacing=1e-5, name="x").terms(config, box_with_cavity(), None, Budget())
 
 
 def test_a_rings_layout_is_closed_loops_spaced_along_its_axis():

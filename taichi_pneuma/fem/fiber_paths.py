@@ -70,6 +70,11 @@ class Layout:
     def curves(self, spacing: float) -> list[np.ndarray]:
         raise NotImplementedError
 
+    @property
+    def length(self) -> float:
+        """The curves' total length."""
+        raise NotImplementedError
+
     def sample(self, spacing: float) -> np.ndarray:
         """Every curve's samples (P, d), curve after curve."""
         return np.vstack(self.curves(spacing))
@@ -98,6 +103,10 @@ class Line(Layout):
     def curves(self, spacing: float) -> list[np.ndarray]:
         return [sampled(np.array([self.start, self.end], dtype=float), spacing)]
 
+    @property
+    def length(self) -> float:
+        return float(np.linalg.norm(np.subtract(self.end, self.start)))
+
 
 @dataclass(frozen=True)
 class Polyline(Layout):
@@ -121,6 +130,10 @@ class Polyline(Layout):
 
     def curves(self, spacing: float) -> list[np.ndarray]:
         return [sampled(np.array(self.points, dtype=float), spacing)]
+
+    @property
+    def length(self) -> float:
+        return float(np.linalg.norm(np.diff(np.array(self.points, dtype=float), axis=0), axis=1).sum())
 
 
 def _frame(center, axis: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -165,6 +178,10 @@ class Rings(Layout):
         circle = self.radius * (np.outer(np.cos(theta), e1) + np.outer(np.sin(theta), e2))
         return [c + k * self.spacing * ea + circle for k in range(self.count)]
 
+    @property
+    def length(self) -> float:
+        return self.count * 2 * math.pi * self.radius
+
 
 @dataclass(frozen=True)
 class Spiral(Layout):
@@ -201,11 +218,15 @@ class Spiral(Layout):
             return self.pitch
         return 2 * math.pi * self.radius / math.tan(math.radians(self.angle))  # type: ignore[arg-type]
 
+    @property
+    def helix_length(self) -> float:
+        """One helix's length: turns sqrt((2 pi radius)^2 + advance^2)."""
+        return self.turns * math.hypot(2 * math.pi * self.radius, self.advance)
+
     def helix(self, sense: int, spacing: float) -> np.ndarray:
         """The helix of handedness sense (+1 right, -1 left) sampled no coarser than spacing."""
         c, e1, e2, ea = _frame(self.center, self.axis)
-        length = self.turns * math.hypot(2 * math.pi * self.radius, self.advance)
-        t = np.linspace(0.0, self.turns, max(2, math.ceil(length / spacing)) + 1)
+        t = np.linspace(0.0, self.turns, max(2, math.ceil(self.helix_length / spacing)) + 1)
         theta = math.radians(self.phase) + sense * 2 * math.pi * t
         return (
             c
@@ -229,6 +250,10 @@ class Helix(Spiral):
     def curves(self, spacing: float) -> list[np.ndarray]:
         return [self.helix(1 if self.handedness == "right" else -1, spacing)]
 
+    @property
+    def length(self) -> float:
+        return self.helix_length
+
 
 @dataclass(frozen=True)
 class Crossed(Spiral):
@@ -236,6 +261,10 @@ class Crossed(Spiral):
 
     def curves(self, spacing: float) -> list[np.ndarray]:
         return [self.helix(1, spacing), self.helix(-1, spacing)]
+
+    @property
+    def length(self) -> float:
+        return 2 * self.helix_length
 
 
 LAYOUTS: dict[str, type[Layout]] = {

@@ -31,10 +31,12 @@ from ..backend import kernel, ti
 from ..errors import require, require_finite
 from ..fem.embedding import embed
 from ..fem.fiber_paths import LAYOUTS, PLANAR, Layout
+from ..limits import BYTES_PER_TRIANGLE, refusal
 from .base import Nodal, Scalars, Table, Term, block_pattern, int32s
 
 Pairs: TypeAlias = ti.types.ndarray(dtype=ti.i32, ndim=2)  # (P, d + 1) embedding nodes, or (s, 2) segment points
 MAX_FIBER_POINTS = 100_000  # sample points of one fibre: each segment's Hessian block is up to 24 x 24
+BYTES_PER_ENTRY = 24  # a Hessian entry: its value and its row and column indices
 
 
 @ti.func
@@ -208,7 +210,8 @@ class Fiber:
         return self.area if self.diameter is None else math.pi * self.diameter**2 / 4  # type: ignore[return-value]
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
-        """One Cords term of this fibre's segments, embedded in the mesh."""
+        """One Cords term of this fibre's segments, embedded in the mesh; refused past MAX_FIBER_POINTS sample points,
+        or past the budget (limits.Budget) by the memory of their Hessian blocks."""
         d = mesh.dim
         require(
             d == 3 or self.path.planar,
@@ -219,17 +222,21 @@ class Fiber:
         corners = mesh.vertices[mesh.elements[:, : d + 1]]
         edges = [np.linalg.norm(corners[:, i] - corners[:, j], axis=1) for i in range(d + 1) for j in range(i)]
         spacing = self.spacing or 0.5 * float(np.mean(edges))
-        curves = self.path.curves(spacing)
-        count = sum(len(c) for c in curves)
         require(
-            count <= MAX_FIBER_POINTS,
-            f"{self.what}: spacing {spacing:.6g} samples it at {count} points; at most {MAX_FIBER_POINTS} are "
-            f"allowed (give a larger spacing)",
+            self.path.length / spacing <= MAX_FIBER_POINTS,
+            f"{self.what}: spacing {spacing:.6g} would sample its length {self.path.length:.6g} at "
+            f"{self.path.length / spacing:.3g} points; at most {MAX_FIBER_POINTS} are allowed (give a larger spacing)",
         )
+        curves = self.path.curves(spacing)
         starts = np.cumsum([0] + [len(c) for c in curves])
         segments = np.vstack(
             [np.column_stack([np.arange(s, e - 1), np.arange(s + 1, e)]) for s, e in zip(starts[:-1], starts[1:])]
             + ([np.column_stack([starts[1:] - 1, starts[:-1]])] if self.path.closed else [])
+        )
+        worth = len(segments) * (2 * (d + 1) * d) ** 2 * BYTES_PER_ENTRY / BYTES_PER_TRIANGLE
+        require(
+            budget.triangles is None or worth <= budget.triangles,
+            refusal(f"{self.what} would hold {len(segments)} cord segments", worth, budget.triangles),
         )
         nodes, weights = embed(mesh, np.vstack(curves), self.what)
         at_rest = np.einsum("pi,pid->pd", weights, mesh.vertices[nodes])
