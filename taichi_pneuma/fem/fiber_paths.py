@@ -1,7 +1,8 @@
 """The curves an embedded fibre follows (a [[fibers]] table's `path`, chosen by its `layout` key): each a frozen
 dataclass whose fields are its keys, checked on construction, with curves(spacing), a list of polylines (k, d)
 sampling its curves with segments no longer than spacing (a closed curve's last point is not repeated: `closed`
-says it joins its first), and sample(spacing), all of them stacked.
+says it joins its first), sample(spacing), all of them stacked, and length, their total length (what a spacing's
+sample count is told from before sampling). axis is 'z' when not given.
 
     line      start, end: a straight cord (2D or 3D)
     polyline  points, at least 2: a cord through them (2D or 3D)
