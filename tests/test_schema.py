@@ -407,7 +407,26 @@ def shaped_scenes(core: Scene) -> list[Scene]:
         geometry=SolidGeometry(PneuNet(), (("c1", MeshSurface("c1")),), MeshSizes(0.2)),
         regions=(Region(None, Material(5e4, 0.45), "layer"),),
     )
-    return [every, *one, pneunet]
+    return [every, *one, pneunet, fibered(one[0])]
+
+
+def fibered(solid: Scene) -> Scene:
+    """A 3D scene with a fibre of every layout, each of area and diameter, with and without name and spacing."""
+    from taichi_pneuma.fem.fiber_paths import Crossed, Helix, Line, Polyline, Rings
+    from taichi_pneuma.terms.fibers import Fiber
+
+    paths = (
+        Line((-1.5, -0.3, 0.0), (1.5, -0.3, 0.0)),
+        Polyline(((-1.5, 0.3, 0.0), (0.0, 0.2, 0.1), (1.5, 0.3, 0.0))),
+        Rings((-1.5, 0.0, 0.0), 0.3, 4, 0.5, "x"),
+        Helix((-1.5, 0.0, 0.0), 0.3, 3.0, "x", pitch=0.9, handedness="left", phase=45.0),
+        Crossed((-1.5, 0.0, 0.0), 0.3, 3.0, "x", angle=40.0),
+    )
+    fibers = tuple(
+        Fiber(path, 1e6, area=1e-4, name=f"f{i}", spacing=0.05) if i % 2 else Fiber(path, 2e6, diameter=0.01)
+        for i, path in enumerate(paths)
+    )
+    return dataclasses.replace(solid, fibers=fibers)
 
 
 def key_paths(node, path=""):

@@ -18,6 +18,13 @@ def tip_rotation(rest: np.ndarray, current: np.ndarray) -> float:
     return math.degrees(math.atan2(float(np.sum(r[:, 0] * c[:, 1] - r[:, 1] * c[:, 0])), float(np.sum(r * c))))
 
 
+def tip_twist(rest: np.ndarray, current: np.ndarray) -> float:
+    """The twist (degrees) of a 3D tip about the x axis: the least-squares rigid rotation (tip_rotation) of the tip
+    points' (y, z) coordinates, rest (k, 3) to current (k, 3). Positive by the right-hand rule about +x: counter-
+    clockwise seen from +x looking back down the axis (y turning towards z)."""
+    return tip_rotation(rest[:, 1:3], current[:, 1:3])
+
+
 def tip_measures(mesh, u: np.ndarray) -> tuple[np.ndarray, float]:
     """(displacement (d,), rotation in degrees) of the tip: the mean displacement of the mesh's tip nodes and
     their rigid rotation in the x-y plane, u the (n, d) displacements."""

@@ -37,6 +37,7 @@ VOLUME = "volume"  # a 3D chamber's measure
 MEASURES = {2: AREA, 3: VOLUME}  # what a chamber encloses, by dimension
 ACCELERATION, DENSITY = "acceleration", "density"
 PLANE_AREA = "plane area"  # an area in 2D and 3D alike (a triangle's), where AREA is a chamber's measure
+SECTION = "cross-section"  # a fibre's cross-section: an area in 3D, an area per unit depth (a length) in 2D
 NODAL_STIFFNESS = "nodal penalty stiffness"  # energy per length^2 at a node: K of E = 1/2 K |u|^2 (per depth in 2D)
 MEASURE_STIFFNESS = "measure penalty stiffness"  # pressure per chamber measure: k of E = 1/2 k (A - A*)^2
 # (length, pressure, time) exponents of each dimension in 2D and in 3D (a chamber's measure is an area, a volume
@@ -46,6 +47,7 @@ EXPONENTS = {
     AREA: ((2, 0, 0), (3, 0, 0)),
     VOLUME: ((3, 0, 0),) * 2,
     PLANE_AREA: ((2, 0, 0),) * 2,
+    SECTION: ((1, 0, 0), (2, 0, 0)),
     PRESSURE: ((0, 1, 0),) * 2,
     ANGLE: ((0, 0, 0),) * 2,
     TIME: ((0, 0, 1),) * 2,

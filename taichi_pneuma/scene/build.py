@@ -97,7 +97,8 @@ class Scene:
     largest principal stretch a run may reach before it warns that it has left the material model's range
     (MAX_STRETCH by default); volumetric: where the law's volumetric part U(J) is evaluated, "element" (at each
     quadrature point) or "nodal" (on the nodes' patch volume ratios, for linear elements and the isochoric laws:
-    they then do not lock as nu -> 1/2; terms/nodal_volume.py).
+    they then do not lock as nu -> 1/2; terms/nodal_volume.py); fibers: embedded tension-only cords (terms/fibers.py
+    Fiber), each adding its term after the effects'.
 
     A parameter with a unit left None in it or in its parts (units.si_default: a chamber kind's atmosphere, the
     material's E, gravity's g, the clamp stiffness, ...) is set on construction to its SI default converted into
@@ -117,6 +118,7 @@ class Scene:
     units: Units = UNITLESS
     max_stretch: float = MAX_STRETCH
     volumetric: str = "element"
+    fibers: tuple = ()  # terms.fibers.Fiber: embedded tension-only cords
     layers: tuple = ()  # terms.sheets.Layer: strain-limiting sheets bonded to faces of the body
 
     def __post_init__(self):
@@ -269,7 +271,7 @@ class Scene:
             effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area, budget)]
             for effect in self.effects
         }
-        for spec in self.layers:
+        for spec in (*self.fibers, *self.layers):
             for term in spec.terms(config, mesh, lumped_area, budget):
                 model.add(term)
         return BuiltScene(self, mesh, model, elastic, chambers, effects)  # type: ignore[arg-type]

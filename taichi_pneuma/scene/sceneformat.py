@@ -13,6 +13,7 @@ import typing
 
 from ..errors import require
 from ..fem.elements import ORDERS
+from ..fem.fiber_paths import LAYOUTS, PLANAR
 from ..fem.gmsh_mesher import MeshSizes
 from ..fem.meshfile import MeshBody, MeshGeometry, MeshSurface
 from ..fem.planar import Geometry
@@ -22,11 +23,12 @@ from ..fem.solid_geometry import SolidGeometry, is_solid_shape
 from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, HalfCylinder, RoundedBox
 from ..fem.supports import SIDES, PointSet, Roller
 from ..io.tomltext import dumps
-from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, PRESSURE, UNITLESS, UNITS, default_in
+from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, PRESSURE, SECTION, UNITLESS, UNITS, default_in
 from ..materials.registry import SELECTORS, all_keys, form_of, forms, region_values
 from ..terms import VOLUMETRIC
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
+from ..terms.fibers import Fiber
 from ..terms.sheets import Layer
 from .schedule import MAX_STRETCH, ChamberSchedule
 from .schema import REQUIRED, Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
@@ -162,6 +164,27 @@ TARGET = record(
     angle=Key(float, None, "tip rotation in degrees (none: free)"),
     weights=Key(tuple, (1.0, 1.0, 1.0), "[w_x, w_y, w_angle]"),
     weight_z=Key(float, 1.0, "w_z, the weight of a 3D tip's z error"),
+)
+FIBER = record(
+    Fiber,
+    "an embedded fibre: a tension-only elastic cord that follows the body",
+    name=Key(str, None, "names it in messages"),
+    path=Table(
+        {
+            "layout": Variant(
+                LAYOUTS,
+                doc=f"the fibre's curve (fem/fiber_paths.py); 2D: {', '.join(PLANAR)}; 3D: also rings, helix (one "
+                "helix), crossed (a right- and a left-handed helix)",
+            )
+        },
+        make=lambda v: v["layout"],
+        parts=lambda path: {"layout": path},
+        doc="its curve: layout and the layout's keys",
+    ),
+    E=Key(float, doc="Young's modulus of the cord", unit=PRESSURE),
+    area=Key(float, None, "cross-section (2D: per unit depth); give area or diameter", unit=SECTION),
+    diameter=Key(float, None, "diameter of a round cord (3D), instead of area", unit=LENGTH),
+    spacing=Key(float, None, "sample spacing along the curve (none: half the mean element edge)", unit=LENGTH),
 )
 
 LAYER = record(
@@ -368,6 +391,7 @@ def scene_table(scene_class) -> Table:
             UNITLESS if v["units"] is None else UNITS[v["units"]],
             v["schedule"]["max_stretch"],
             mesh["volumetric"],
+            fibers=v["fibers"],
             layers=v["layers"],
         )
 
@@ -491,6 +515,7 @@ def scene_table(scene_class) -> Table:
             ),
             "effects": Named(EFFECTS, "the effects the scene adds, by name"),
             "targets": Tables(TARGET, "poses for inverse control, in order"),
+            "fibers": Tables(FIBER, "embedded fibres (tension-only cords), each a term of the energy"),
             "layers": Tables(LAYER, "strain-limiting sheets, each bonded to a face of the body"),
         },
         make=make_scene,
@@ -508,6 +533,7 @@ def scene_table(scene_class) -> Table:
             "schedule": s,
             "effects": s.effects,
             "targets": s.targets,
+            "fibers": s.fibers,
             "layers": s.layers,
         },
     )

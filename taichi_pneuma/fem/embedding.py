@@ -1,0 +1,94 @@
+"""Points embedded in a mesh: each point written as barycentric weights of the corners of a linear simplex of the
+mesh that contains it, so that it follows the piecewise-linear interpolant of the nodes, p = sum_i w_i x_i.
+
+The linear simplices (pieces) of an element: a linear element is its own piece; a quadratic triangle is the four
+triangles through its midside nodes (its family's split); a quadratic tetrahedron (nodes 0-3 its corners, 4-9 the
+middles of edges 01, 12, 20, 03, 13, 23, fem/elements.py) the eight tetrahedra through its midside nodes
+(TET_P2_SPLIT, each of positive volume, an eighth of the element's on a straight one): one at each corner, and the
+inner octahedron cut along its diagonal from the middle of edge 20 (node 6) to that of edge 13 (node 8) into four.
+
+Location: the pieces' centroids in a k-d tree; for each point the barycentric coordinates
+lambda = [1 - sum(T^-1 (p - X_0)), T^-1 (p - X_0)], T = [X_1 - X_0, ..., X_d - X_0], in its k nearest pieces
+(k doubled for the points not yet found, up to every piece). Each piece's distance outside is
+max_i(-lambda_i / |grad lambda_i|) (lambda_i over the height of corner i, exact for one violated facet); a point
+whose nearest piece is farther out than TOLERANCE times the body's bounding-box diagonal lies outside the body (a
+chamber's cavity is outside it too) and is refused; a point on the boundary is inside. The chosen piece's
+coordinates are clipped to >= 0 and renormalised (a move of at most that tolerance).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..errors import require
+
+TOLERANCE = 1e-9  # of the body's bounding-box diagonal
+FIRST_CANDIDATES = 8
+TET_P2_SPLIT = (
+    (0, 4, 6, 7),
+    (4, 1, 5, 8),
+    (6, 5, 2, 9),
+    (7, 8, 9, 3),
+    (6, 8, 7, 4),
+    (6, 8, 9, 7),
+    (6, 8, 5, 9),
+    (6, 8, 4, 5),
+)
+
+
+def pieces(mesh) -> np.ndarray:
+    """The linear simplices (m p, d + 1) of the mesh's elements (see the module docstring)."""
+    family = mesh.family
+    if family.order == 1:
+        split: tuple = (tuple(range(family.dim + 1)),)
+    else:
+        split = family.split if family.dim == 2 else TET_P2_SPLIT
+    return np.vstack([mesh.elements[:, list(piece)] for piece in split])
+
+
+def _coordinates(inverse, origin, gradient_norms, points, candidates) -> tuple[np.ndarray, np.ndarray]:
+    """(lambda (p, c, d + 1), distance outside (p, c)) of points (p, d) in candidate pieces (p, c)."""
+    local = np.einsum("pcij,pcj->pci", inverse[candidates], points[:, None, :] - origin[candidates])
+    lam = np.concatenate([1.0 - local.sum(axis=2, keepdims=True), local], axis=2)
+    return lam, np.max(-lam / gradient_norms[candidates], axis=2)
+
+
+def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """(nodes (P, d + 1) int64, weights (P, d + 1) float64): each point (P, d) as the barycentric weights of the
+    corners of a linear piece of the mesh that contains it; a point outside the body is a PneumaInputError naming
+    `what`, the point and the body's bounding box."""
+    points = np.asarray(points, dtype=float).reshape(-1, mesh.dim)
+    simplices = pieces(mesh)
+    corners = mesh.vertices[simplices]  # (s, d + 1, d)
+    inverse = np.linalg.inv(np.swapaxes(corners[:, 1:] - corners[:, :1], 1, 2))  # (s, d, d): T^-1
+    gradients = np.concatenate([-inverse.sum(axis=1, keepdims=True), inverse], axis=1)  # grad lambda_i, (s, d+1, d)
+    norms = np.linalg.norm(gradients, axis=2)
+    low, high = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
+    tolerance = TOLERANCE * float(np.linalg.norm(high - low))
+    tree = cKDTree(corners.mean(axis=1))
+    best = np.zeros(len(points), dtype=np.int64)
+    outside = np.full(len(points), np.inf)
+    todo, k = np.arange(len(points)), FIRST_CANDIDATES
+    while len(todo):
+        k = min(k, len(simplices))
+        _, near = tree.query(points[todo], k=k)
+        near = near.reshape(len(todo), k)
+        _, distance = _coordinates(inverse, corners[:, 0], norms, points[todo], near)
+        pick = np.argmin(distance, axis=1)
+        better = distance[np.arange(len(todo)), pick] < outside[todo]
+        best[todo[better]] = near[better, pick[better]]
+        outside[todo[better]] = distance[better, pick[better]]
+        if k == len(simplices):
+            break
+        todo, k = todo[outside[todo] > tolerance], 4 * k
+    bad = np.flatnonzero(outside > tolerance)
+    require(
+        len(bad) == 0,
+        f"{what}: {len(bad)} of its {len(points)} points lie outside the body (or in a chamber), the first "
+        f"{[round(float(v), 6) for v in points[bad[0]]] if len(bad) else ''} (the body's bounding box is "
+        f"{[round(float(v), 6) for v in (*low, *high)]})",
+    )
+    lam, _ = _coordinates(inverse, corners[:, 0], norms, points, best[:, None])
+    weights = np.clip(lam[:, 0], 0.0, None)
+    return simplices[best].astype(np.int64), weights / weights.sum(axis=1, keepdims=True)

@@ -1,0 +1,278 @@
+"""The curves an embedded fibre follows (a [[fibers]] table's `path`, chosen by its `layout` key): each a frozen
+dataclass whose fields are its keys, checked on construction, with curves(spacing), a list of polylines (k, d)
+sampling its curves with segments no longer than spacing (a closed curve's last point is not repeated: `closed`
+says it joins its first), sample(spacing), all of them stacked, and length, their total length (what a spacing's
+sample count is told from before sampling). axis is 'z' when not given.
+
+    line      start, end: a straight cord (2D or 3D)
+    polyline  points, at least 2: a cord through them (2D or 3D)
+    rings     center (of the first ring), axis, radius, count, spacing: `count` closed circles of `radius` about
+              the axis through center, the k-th centred at center + k spacing e_axis (3D)
+    helix     center (a point on the axis where the helix starts), axis, radius, turns, pitch (axial advance per
+              turn) or angle (winding angle from the axis, degrees: pitch = 2 pi radius / tan(angle)),
+              handedness, phase (the start angle, degrees) (3D)
+    crossed   the keys of helix but handedness: a right-handed and a left-handed helix of the same start (3D)
+
+A helix is x(t) = center + radius (cos theta e_1 + sin theta e_2) + pitch t e_axis, t in [0, turns], with
+theta = phase + s 2 pi t, s = +1 for a right-handed helix and -1 for a left-handed one, where (e_1, e_2, e_axis)
+is the right-handed frame (y, z, x), (z, x, y), (x, y, z) of axis x, y, z: a right-handed helix turns
+counter-clockwise seen from +axis (looking back down it) while it advances along +axis (the right-hand rule
+about +axis, as a common screw thread); a left-handed one clockwise.
+
+In 2D only line and polyline apply (a layer of cords per unit depth); PLANAR names them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import require, require_finite, shape_of
+from ..io.units import LENGTH, unit
+
+AXES = ("x", "y", "z")
+FRAMES = {"x": (1, 2, 0), "y": (2, 0, 1), "z": (0, 1, 2)}  # (e_1, e_2, e_axis) indices: right-handed
+HANDEDNESS = ("right", "left")
+
+
+def _point(name: str, value) -> np.ndarray:
+    """value as 2 or 3 finite numbers, or a PneumaInputError naming it."""
+    require(shape_of(value) in ((2,), (3,)), f"{name} = {value!r} must be a point [x, y] or [x, y, z]")
+    return np.array([require_finite(name, v) for v in value])
+
+
+def _positive(name: str, value) -> float:
+    v = require_finite(name, value)
+    require(v > 0, f"{name} = {value!r} must be > 0")
+    return v
+
+
+def sampled(corners: np.ndarray, spacing: float, closed: bool = False) -> np.ndarray:
+    """The polyline through corners (k, d) with each side cut into equal pieces no longer than spacing (closed:
+    the side from the last corner back to the first too, whose end is not repeated)."""
+    ends = np.vstack([corners, corners[:1]]) if closed else corners
+    pieces = [
+        a + np.outer(np.arange(n) / n, b - a)
+        for a, b in zip(ends[:-1], ends[1:])
+        for n in [max(1, math.ceil(float(np.linalg.norm(b - a)) / spacing))]
+    ]
+    return np.vstack(pieces if closed else [*pieces, ends[-1:]])
+
+
+class Layout:
+    """A fibre's curves: curves(spacing) -> polylines; closed: whether each joins its last point to its first;
+    planar: whether it applies in 2D."""
+
+    closed = False
+    planar = True
+
+    def curves(self, spacing: float) -> list[np.ndarray]:
+        raise NotImplementedError
+
+    @property
+    def length(self) -> float:
+        """The curves' total length."""
+        raise NotImplementedError
+
+    def sample(self, spacing: float) -> np.ndarray:
+        """Every curve's samples (P, d), curve after curve."""
+        return np.vstack(self.curves(spacing))
+
+    @property
+    def dim(self) -> int:
+        return 3
+
+
+@dataclass(frozen=True)
+class Line(Layout):
+    """A straight cord from start to end."""
+
+    start: tuple = field(metadata=unit(LENGTH))
+    end: tuple = field(metadata=unit(LENGTH))
+
+    def __post_init__(self):
+        a, b = _point("start", self.start), _point("end", self.end)
+        require(len(a) == len(b), f"start = {list(self.start)!r} and end = {list(self.end)!r} differ in dimension")
+        require(np.any(a != b), f"start = end = {list(self.start)!r}: a line needs two distinct points")
+
+    @property
+    def dim(self) -> int:
+        return len(self.start)
+
+    def curves(self, spacing: float) -> list[np.ndarray]:
+        return [sampled(np.array([self.start, self.end], dtype=float), spacing)]
+
+    @property
+    def length(self) -> float:
+        return float(np.linalg.norm(np.subtract(self.end, self.start)))
+
+
+@dataclass(frozen=True)
+class Polyline(Layout):
+    """A cord through points (at least 2), in order."""
+
+    points: tuple = field(metadata=unit(LENGTH))
+
+    def __post_init__(self):
+        require(
+            isinstance(self.points, (tuple, list)) and len(self.points) >= 2,
+            f"points = {self.points!r} must list at least 2 points",
+        )
+        corners = [_point(f"points[{i}]", p) for i, p in enumerate(self.points)]
+        require(len({len(c) for c in corners}) == 1, f"points = {list(self.points)!r} mix 2D and 3D points")
+        steps = np.linalg.norm(np.diff(np.array(corners), axis=0), axis=1)
+        require(np.all(steps > 0), f"points = {list(self.points)!r} repeat a point ({int(np.argmin(steps)) + 1})")
+
+    @property
+    def dim(self) -> int:
+        return len(self.points[0])
+
+    def curves(self, spacing: float) -> list[np.ndarray]:
+        return [sampled(np.array(self.points, dtype=float), spacing)]
+
+    @property
+    def length(self) -> float:
+        return float(np.linalg.norm(np.diff(np.array(self.points, dtype=float), axis=0), axis=1).sum())
+
+
+def _frame(center, axis: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(center, e_1, e_2, e_axis) of the right-handed frame about axis."""
+    e = np.eye(3)
+    i, j, k = FRAMES[axis]
+    return np.array(center, dtype=float), e[i], e[j], e[k]
+
+
+def _check_axis_center(center, axis) -> None:
+    require(shape_of(center) == (3,), f"center = {center!r} must be a point [x, y, z] (3D)")
+    _point("center", center)
+    require(axis in AXES, f"axis = {axis!r} is not one of {', '.join(AXES)}")
+
+
+@dataclass(frozen=True)
+class Rings(Layout):
+    """count closed circles of radius about the axis, the first centred at center, the next ones spacing apart
+    along +axis."""
+
+    center: tuple = field(metadata=unit(LENGTH))
+    radius: float = field(metadata=unit(LENGTH))
+    count: int
+    spacing: float = field(metadata=unit(LENGTH))
+    axis: str = "z"
+    closed = True
+    planar = False
+
+    def __post_init__(self):
+        _check_axis_center(self.center, self.axis)
+        _positive("radius", self.radius)
+        require(
+            isinstance(self.count, int) and not isinstance(self.count, bool) and self.count >= 1,
+            f"count = {self.count!r} must be a whole number >= 1",
+        )
+        _positive("spacing", self.spacing)
+
+    def curves(self, spacing: float) -> list[np.ndarray]:
+        c, e1, e2, ea = _frame(self.center, self.axis)
+        n = max(3, math.ceil(2 * math.pi * self.radius / spacing))
+        theta = 2 * math.pi * np.arange(n) / n
+        circle = self.radius * (np.outer(np.cos(theta), e1) + np.outer(np.sin(theta), e2))
+        return [c + k * self.spacing * ea + circle for k in range(self.count)]
+
+    @property
+    def length(self) -> float:
+        return self.count * 2 * math.pi * self.radius
+
+
+@dataclass(frozen=True)
+class Spiral(Layout):
+    """What a helix and a crossed pair share: the axis, start, radius, turns and pitch (or angle) of a helix."""
+
+    center: tuple = field(metadata=unit(LENGTH))
+    radius: float = field(metadata=unit(LENGTH))
+    turns: float
+    axis: str = "z"
+    pitch: float | None = field(default=None, metadata=unit(LENGTH))
+    angle: float | None = None
+    phase: float = 0.0
+    planar = False
+
+    def __post_init__(self):
+        _check_axis_center(self.center, self.axis)
+        _positive("radius", self.radius)
+        _positive("turns", self.turns)
+        require(
+            (self.pitch is None) != (self.angle is None),
+            f"pitch = {self.pitch!r}, angle = {self.angle!r}: give exactly one of pitch and angle",
+        )
+        if self.pitch is not None:
+            _positive("pitch", self.pitch)
+        else:
+            a = require_finite("angle", self.angle)
+            require(0 < a < 90, f"angle = {self.angle!r} must lie in (0, 90) degrees (from the axis)")
+        require_finite("phase", self.phase)
+
+    @property
+    def advance(self) -> float:
+        """The axial advance per turn: pitch, or 2 pi radius / tan(angle)."""
+        if self.pitch is not None:
+            return self.pitch
+        return 2 * math.pi * self.radius / math.tan(math.radians(self.angle))  # type: ignore[arg-type]
+
+    @property
+    def helix_length(self) -> float:
+        """One helix's length: turns sqrt((2 pi radius)^2 + advance^2)."""
+        return self.turns * math.hypot(2 * math.pi * self.radius, self.advance)
+
+    def helix(self, sense: int, spacing: float) -> np.ndarray:
+        """The helix of handedness sense (+1 right, -1 left) sampled no coarser than spacing."""
+        c, e1, e2, ea = _frame(self.center, self.axis)
+        t = np.linspace(0.0, self.turns, max(2, math.ceil(self.helix_length / spacing)) + 1)
+        theta = math.radians(self.phase) + sense * 2 * math.pi * t
+        return (
+            c
+            + self.radius * (np.outer(np.cos(theta), e1) + np.outer(np.sin(theta), e2))
+            + np.outer(self.advance * t, ea)
+        )
+
+
+@dataclass(frozen=True)
+class Helix(Spiral):
+    """One helix of the given handedness ("right": counter-clockwise seen from +axis as it advances along +axis)."""
+
+    handedness: str = "right"
+
+    def __post_init__(self):
+        super().__post_init__()
+        require(
+            self.handedness in HANDEDNESS, f"handedness = {self.handedness!r} is not one of {', '.join(HANDEDNESS)}"
+        )
+
+    def curves(self, spacing: float) -> list[np.ndarray]:
+        return [self.helix(1 if self.handedness == "right" else -1, spacing)]
+
+    @property
+    def length(self) -> float:
+        return self.helix_length
+
+
+@dataclass(frozen=True)
+class Crossed(Spiral):
+    """Two helices of opposite handedness (right, then left) on the same axis, start and pitch."""
+
+    def curves(self, spacing: float) -> list[np.ndarray]:
+        return [self.helix(1, spacing), self.helix(-1, spacing)]
+
+    @property
+    def length(self) -> float:
+        return 2 * self.helix_length
+
+
+LAYOUTS: dict[str, type[Layout]] = {
+    "line": Line,
+    "polyline": Polyline,
+    "rings": Rings,
+    "helix": Helix,
+    "crossed": Crossed,
+}
+PLANAR = tuple(name for name, cls in LAYOUTS.items() if cls.planar)
