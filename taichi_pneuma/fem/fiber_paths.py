@@ -13,6 +13,13 @@ sample count is told from before sampling). axis is 'z' when not given.
               handedness, phase (the start angle, degrees) (3D)
     crossed   the keys of helix but handedness: a right-handed and a left-handed helix of the same start (3D)
 
+A helix or crossed pair with `flat` (a depth >= 0) winds on a D section instead of the circle: the half of the circle
+above the plane through the axis normal to y (axis x or z), its two sides continued straight down to `flat` below the
+axis and joined there by a straight bottom (a fibre-reinforced bending actuator's section: the thread runs around
+its round top and across its flat base). Its perimeter P = pi radius + 2 flat + 2 radius takes the circle's place:
+pitch = P / tan(angle), and the curve at parameter t is the point at arc length (phase / 360 + s t) P along the
+section (counted from its top, counter-clockwise about +axis), advanced pitch t along the axis.
+
 A helix is x(t) = center + radius (cos theta e_1 + sin theta e_2) + pitch t e_axis, t in [0, turns], with
 theta = phase + s 2 pi t, s = +1 for a right-handed helix and -1 for a left-handed one, where (e_1, e_2, e_axis)
 is the right-handed frame (y, z, x), (z, x, y), (x, y, z) of axis x, y, z: a right-handed helix turns
@@ -195,6 +202,7 @@ class Spiral(Layout):
     pitch: float | None = field(default=None, metadata=unit(LENGTH))
     angle: float | None = None
     phase: float = 0.0
+    flat: float | None = field(default=None, metadata=unit(LENGTH))
     planar = False
 
     def __post_init__(self):
@@ -211,23 +219,50 @@ class Spiral(Layout):
             a = require_finite("angle", self.angle)
             require(0 < a < 90, f"angle = {self.angle!r} must lie in (0, 90) degrees (from the axis)")
         require_finite("phase", self.phase)
+        if self.flat is not None:
+            require(require_finite("flat", self.flat) >= 0, f"flat = {self.flat!r} must be >= 0")
+            require(self.axis != "y", "flat: a D section's flat side is normal to y: the axis must be x or z, not y")
+
+    @property
+    def perimeter(self) -> float:
+        """The section's perimeter: 2 pi radius, or the D section's pi radius + 2 flat + 2 radius (flat)."""
+        if self.flat is None:
+            return 2 * math.pi * self.radius
+        return (math.pi + 2) * self.radius + 2 * self.flat
+
+    def section(self, arc: np.ndarray) -> np.ndarray:
+        """The points (k, 3) of the D section (flat) at arc lengths `arc` from its top, counter-clockwise about
+        +axis, relative to center: the quarter arcs, the sides and the bottom sampled finely and interpolated."""
+        r, flat = self.radius, float(self.flat)  # type: ignore[arg-type]
+        up = np.eye(3)[1]
+        side = np.cross(np.eye(3)[AXES.index(self.axis)], up)
+        phi = np.linspace(0.0, math.pi / 2, 257)
+        quarter = r * (np.outer(np.cos(phi), up) + np.outer(np.sin(phi), side))
+        corners = np.array([r * side - flat * up, -r * side - flat * up, -r * side])
+        outline = np.vstack([quarter, corners, quarter[::-1] - 2 * np.outer(quarter[::-1] @ side, side)])
+        lengths = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(outline, axis=0), axis=1))])
+        where = np.mod(arc, lengths[-1])
+        return np.column_stack([np.interp(where, lengths, outline[:, k]) for k in range(3)])
 
     @property
     def advance(self) -> float:
         """The axial advance per turn: pitch, or 2 pi radius / tan(angle)."""
         if self.pitch is not None:
             return self.pitch
-        return 2 * math.pi * self.radius / math.tan(math.radians(self.angle))  # type: ignore[arg-type]
+        return self.perimeter / math.tan(math.radians(self.angle))  # type: ignore[arg-type]
 
     @property
     def helix_length(self) -> float:
-        """One helix's length: turns sqrt((2 pi radius)^2 + advance^2)."""
-        return self.turns * math.hypot(2 * math.pi * self.radius, self.advance)
+        """One helix's length: turns sqrt(P^2 + advance^2), P the section's perimeter."""
+        return self.turns * math.hypot(self.perimeter, self.advance)
 
     def helix(self, sense: int, spacing: float) -> np.ndarray:
         """The helix of handedness sense (+1 right, -1 left) sampled no coarser than spacing."""
         c, e1, e2, ea = _frame(self.center, self.axis)
         t = np.linspace(0.0, self.turns, max(2, math.ceil(self.helix_length / spacing)) + 1)
+        if self.flat is not None:
+            arc = (self.phase / 360 + sense * t) * self.perimeter
+            return c + self.section(arc) + np.outer(self.advance * t, ea)
         theta = math.radians(self.phase) + sense * 2 * math.pi * t
         return (
             c
