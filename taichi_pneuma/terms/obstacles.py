@@ -31,6 +31,7 @@ The shape's kind is a runtime integer and its parameters a small float array (PA
 once whatever the scene. A moving obstacle's translation from its placed position is set by set_offset.
 """
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -38,7 +39,7 @@ import numpy as np
 from ..backend import kernel, ti
 from ..errors import require, require_finite, shape_of
 from ..io.units import LENGTH, NODAL_STIFFNESS, si_default
-from .base import Indices, Nodal, Scalars, Table, Term, block_pattern, int32s
+from .base import HUGE, Indices, Nodal, Scalars, Table, Term, block_pattern, int32s
 from .contact import barrier
 
 PLANE, SPHERE, BOX, CYLINDER, CAPSULE = range(5)
@@ -383,7 +384,7 @@ class ObstacleContact(Term):
         return self._derivatives(not psd_only)[1]
 
     def max_step(self, dx: np.ndarray) -> float:
-        return obstacle_step(
+        bound = obstacle_step(
             self.config.rest,
             self.config.u,
             np.ascontiguousarray(dx, dtype=np.float64),
@@ -391,6 +392,7 @@ class ObstacleContact(Term):
             self.kind,
             self.parameters,
         )
+        return math.inf if bound >= HUGE else float(bound)  # Taichi's inf comes back as the largest double
 
     def fault(self) -> str | None:
         nearest = self.nearest()
