@@ -33,8 +33,9 @@ class Result(Run):
 
     def summary(self, interrupted: bool = False) -> dict:
         """The figures of the run (the summary JSON); interrupted: the run was stopped after these steps. Besides
-        the last step's values: extremes() (each with its step), the largest principal stretch over the run, its
-        step and the scene's max_stretch (past which a run warns)."""
+        the last step's values (contact: per contact term (fx, fy, magnitude), in 3D contact_fz; clamp: the clamp's
+        reaction force and moment, StepRecord.clamp, when there is a clamp): extremes() (each with its step), the
+        largest principal stretch over the run, its step and the scene's max_stretch (past which a run warns)."""
         final = self.steps[-1]
         stretch = self.history["max_stretch"]
         iterations, seconds = self.history["iterations"][1:], self.history["seconds"][1:]
@@ -60,6 +61,8 @@ class Result(Run):
             "tip_rotation_deg": final.tip_rotation,
             "peak_pressure": self.peak_pressure,
             "contact": final.contact,
+            **({"contact_fz": final.contact_fz} if final.contact_fz else {}),
+            **({"clamp": final.clamp} if final.clamp else {}),
             "extremes": self.extremes(),
             "max_stretch": float(stretch.max()),
             "max_stretch_step": int(self.history["step"][np.argmax(stretch)]),

@@ -3,14 +3,19 @@ differences, its step bound against hand-computed hit times, and in runs: the cl
 contact and the loads, a moving obstacle pushing the tip, and bad input refused."""
 
 import math
+import tomllib
 
 import numpy as np
 import pytest
 
 from taichi_pneuma import runtime
 from taichi_pneuma.errors import PneumaInputError
+from taichi_pneuma.result import Result
+from taichi_pneuma.scene.scenefile import read_scene
+from taichi_pneuma.solve.newton import NewtonOptions
+from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms.model import Configuration
-from taichi_pneuma.terms.obstacles import Box, Capsule, Cylinder, Obstacle, ObstacleContact, Plane, Sphere
+from taichi_pneuma.terms.obstacles import Box, Capsule, Cylinder, ObstacleContact, Plane, Sphere
 
 H = 1e-6
 
@@ -122,3 +127,119 @@ def test_max_step_stops_a_node_just_before_the_surface(shape, start, direction, 
     alpha = term.max_step(np.array([direction], dtype=float))
     assert hit * (1 - 1e-3) <= alpha <= hit
     assert term.max_step(-np.array([direction], dtype=float)) == math.inf  # moving away
+
+
+def beam(obstacles: str, gravity: bool = True, increments: int = 2) -> dict:
+    """A clamped 2 x 0.3 cantilever (x from 0 to 2) with a closed pressure chamber at 50, sagging under gravity
+    (rho g L^4 / (E h^2) ~ 0.26 at the tip), with the given [[obstacles]] TOML."""
+    weight = "[effects.gravity]\ndensity = 1.0\n" if gravity else ""
+    text = f"""
+[body]
+shape = "rectangle"
+center = [1.0, 0.0]
+size = [2.0, 0.3]
+[mesh]
+max_area = 0.006
+[material]
+E = 1e4
+nu = 0.3
+[clamp]
+side = "left"
+{weight}
+[[chambers]]
+name = "main"
+shape = "ellipse"
+center = [0.6, 0.0]
+semi_axes = [0.3, 0.06]
+points = 24
+control = "pressure"
+keyframes = [[{increments}, 50.0]]
+[schedule]
+increments = {increments}
+{obstacles}
+"""
+    return tomllib.loads(text)
+
+
+POST = """
+[[obstacles]]
+name = "post"
+shape = "sphere"
+center = [1.8, -0.45]
+radius = 0.2
+dhat = 0.02
+stiffness = 10.0
+"""
+
+
+def moment(arm: np.ndarray, force: np.ndarray) -> float:
+    return float(np.sum(arm[:, 0] * force[:, 1] - arm[:, 1] * force[:, 0]))
+
+
+def test_the_clamp_reaction_balances_the_contact_the_pressure_and_the_weight():
+    """Every converged step: clamp reaction + obstacle force + pressure resultant + weight = 0, and their moments
+    about the clamp's rest centroid, within the solver's residual (tol x force scale); the contact is active."""
+    built = read_scene(beam(POST), "sag").build()
+    run = Result.of(run_schedule(built))
+    mesh, tol = built.mesh, NewtonOptions().tol
+    centre = mesh.vertices[mesh.pinned].mean(axis=0)
+    loads = [t for t in built.model.terms if t.name not in ("post", "clamp") and t is not built.elastic]
+    assert sorted(t.name for t in loads) == ["chamber:main", "gravity"]
+    history = run.history
+    for i, step in enumerate(run.steps):
+        built.model.set_displacements(run.displacements[i])
+        built.set_commands(built.scene.schedule.commands(i))
+        forces = [-t.gradient() for t in loads]
+        arm = run.positions[i] - centre
+        obstacle = np.array([history["post.fx"][i], history["post.fy"][i]])
+        post = -built.obstacles[0].gradient()
+        assert obstacle == pytest.approx(post.sum(axis=0), abs=1e-12)
+        total = sum(f.sum(axis=0) for f in forces) + obstacle + [history["clamp.fx"][i], history["clamp.fy"][i]]
+        turning = sum(moment(arm, f) for f in forces) + moment(arm, post) + history["clamp.mz"][i]
+        scale = built.model.gradient()[1]
+        assert step.converged
+        assert np.linalg.norm(total) <= tol * scale * math.sqrt(mesh.n_vertices)
+        assert abs(turning) <= 2.0 * tol * scale * math.sqrt(mesh.n_vertices)
+        assert history["post.fy"][i] > 0.01 * history["clamp.fy"][i] > 0  # the post carries part of the weight
+    assert np.all([built.obstacles[0].nearest() > 0])
+    assert set(run.summary()["clamp"]) == {"fx", "fy", "mz"}
+    header = run.history_csv().splitlines()[0].split(",")
+    assert {"post.fx", "post.fy", "post.magnitude", "clamp.fx", "clamp.fy", "clamp.mz"} <= set(header)
+
+
+def test_a_moving_obstacle_pushes_the_tip_harder_as_it_advances():
+    """A disc under the tip rising 0.15 over 3 steps (keyframes): its upward force on the body grows step by step,
+    the tip rises, and no boundary node ends inside it."""
+    rising = POST.replace("center = [1.8, -0.45]", "center = [1.9, -0.4]") + "keyframes = [[3, [0.0, 0.15, 0.0]]]\n"
+    built = read_scene(beam(rising, gravity=False, increments=3), "push").build()
+    run = run_schedule(built)
+    lift = run.history["post.fy"]
+    assert np.all(np.diff(lift[1:]) > 0) and lift[-1] > 0
+    assert run.steps[-1].tip_dy > 0.0
+    assert built.obstacles[0].offset == pytest.approx([0.0, 0.15, 0.0])
+    assert built.obstacles[0].nearest() > 0
+
+
+def test_an_obstacle_scene_reads_back_from_its_toml():
+    moving = POST + "keyframes = [[1, [0.0, 0.1, 0.0]], [2, [0.1, 0.1, 0.0]]]\n"
+    plane = '\n[[obstacles]]\nname = "floor"\nshape = "plane"\npoint = [0.0, -0.5]\nnormal = [0.0, 1.0]\n'
+    capsule = '\n[[obstacles]]\nname = "bar"\nshape = "capsule"\ncenter = [1.0, 0.6]\nradius = 0.1\nlength = 1.0\naxis = "x"\n'
+    scene = read_scene(beam(moving + plane + capsule), "many")
+    assert [type(o.shape).__name__ for o in scene.obstacles] == ["Sphere", "Plane", "Capsule"]
+    assert read_scene(tomllib.loads(scene.to_toml()), "many") == scene
+    assert scene.schedule.commands(1.5)[1:] == pytest.approx([0.05, 0.1, 0.0])
+
+
+@pytest.mark.parametrize(
+    ("table", "message"),
+    [
+        ('name = "in"\nshape = "sphere"\ncenter = [1.0, 0.0]\nradius = 0.1', "obstacle 'in' overlaps the body"),
+        ('name = "odd"\nshape = "cone"\ncenter = [1.0, 0.0]', "shape = 'cone' is not one of plane, box"),
+        ('name = "k"\nshape = "sphere"\ncenter = [1.0, -1.0]\nradius = 0.1\nkeyframes = [[1, 0.5]]', "keyframes"),
+        ('name = "main"\nshape = "sphere"\ncenter = [1.0, -1.0]\nradius = 0.1', "obstacle name 'main'"),
+    ],
+    ids=["overlapping", "unknown-shape", "bad-keyframe", "chamber-name"],
+)
+def test_bad_obstacles_are_refused_naming_them(table, message):
+    with pytest.raises(PneumaInputError, match=message):
+        read_scene(beam(f"[[obstacles]]\n{table}\n"), "bad").build()

@@ -117,6 +117,7 @@ class Scene:
     units: Units = UNITLESS
     max_stretch: float = MAX_STRETCH
     volumetric: str = "element"
+    obstacles: tuple = ()  # terms.obstacles.Obstacle: rigid obstacles the body's boundary touches
 
     def __post_init__(self):
         self.resolve_defaults()
@@ -137,6 +138,10 @@ class Scene:
         )
         kinds = [e.name for e in self.effects]
         require(len(set(kinds)) == len(kinds), f"effects {kinds!r} name one effect twice")
+        names = [o.name for o in self.obstacles]
+        require(len(set(names)) == len(names), f"obstacle names {names!r} must be distinct")
+        clash = sorted(set(names) & {*self.chamber_names, "clamp", *kinds})
+        require(not clash, f"obstacle name {clash[0] if clash else ''!r} is a chamber's, an effect's or the clamp's")
         _ = self.schedule  # validates the increments against the keyframes
         law, _ = self.law_parameters()  # resolves the presets, checks that the body has one law
         if self.volumetric == "nodal":
@@ -172,6 +177,7 @@ class Scene:
             ),
         )
         put("effects", tuple(resolved(e, units, dim, f"effects.{e.name}") for e in self.effects))
+        put("obstacles", tuple(resolved(o, units, dim, f"obstacles[{i}]") for i, o in enumerate(self.obstacles)))
 
     def to_toml(self) -> str:
         """This scene as a scene file (TOML); scenefile.load_scene reads it back to an equal scene."""
@@ -189,7 +195,7 @@ class Scene:
 
     @property
     def schedule(self) -> Schedule:
-        return Schedule(self.increments, tuple(c.schedule for c in self.controls))
+        return Schedule(self.increments, tuple(c.schedule for c in self.controls), self.obstacles)
 
     @property
     def dim(self) -> int:
@@ -268,7 +274,11 @@ class Scene:
             effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area, budget)]
             for effect in self.effects
         }
-        return BuiltScene(self, mesh, model, elastic, chambers, effects)  # type: ignore[arg-type]
+        obstacles = []
+        for spec in self.obstacles:
+            for term in spec.terms(config, mesh, lumped_area, budget):
+                obstacles.append(model.add(term))
+        return BuiltScene(self, mesh, model, elastic, chambers, effects, obstacles)  # type: ignore[arg-type]
 
 
 def support_rows(mesh: Mesh, effects) -> list:
@@ -295,7 +305,8 @@ def describe_supports(mesh: Mesh, effects) -> str:
 
 @dataclass
 class BuiltScene:
-    """A meshed scene: its EnergyModel, and handles on the terms a run drives or reports."""
+    """A meshed scene: its EnergyModel, and handles on the terms a run drives or reports (obstacles: the
+    obstacles' contact terms, in the scene's order)."""
 
     scene: Scene
     mesh: Mesh
@@ -303,10 +314,27 @@ class BuiltScene:
     elastic: Elasticity
     chambers: list[Chamber]
     effects: dict[str, list[Term]]
+    obstacles: list = field(default_factory=list)
+
+    @property
+    def clamp(self) -> Term | None:
+        """The clamp's term, or None in a scene without one."""
+        return next((t for t in self.model.terms if isinstance(t, Clamp)), None)
+
+    def contact_terms(self) -> list[Term]:
+        """Every term that reports a contact force, each under its name: the effects' (ground, self_contact), then
+        the obstacles' (their names)."""
+        return [t for terms in self.effects.values() for t in terms if t.reports_contact] + list(self.obstacles)
 
     def set_commands(self, commands: np.ndarray) -> None:
+        """The chambers' commands, then (Schedule.commands) each moving obstacle's translation; a vector of the
+        chambers' commands alone leaves the obstacles where they are."""
         for chamber, command in zip(self.chambers, commands):
             chamber.set_command(command)
+        offsets = np.asarray(commands[len(self.chambers) :], dtype=float).reshape(-1, 3)
+        moving = [term for term, spec in zip(self.obstacles, self.scene.obstacles) if spec.moving]
+        for term, offset in zip(moving, offsets):
+            term.set_offset(offset)
 
 
 def reference_scene(

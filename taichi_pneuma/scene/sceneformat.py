@@ -27,6 +27,7 @@ from ..materials.registry import SELECTORS, all_keys, form_of, forms, region_val
 from ..terms import VOLUMETRIC
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
+from .obstacleformat import OBSTACLE
 from .schedule import MAX_STRETCH, ChamberSchedule
 from .schema import REQUIRED, Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
 from .targets import MAX_TARGETS, Target
@@ -344,6 +345,7 @@ def scene_table(scene_class) -> Table:
             UNITLESS if v["units"] is None else UNITS[v["units"]],
             v["schedule"]["max_stretch"],
             mesh["volumetric"],
+            obstacles=v["obstacles"],
         )
 
     def clamp_parts(scene):
@@ -466,6 +468,7 @@ def scene_table(scene_class) -> Table:
             ),
             "effects": Named(EFFECTS, "the effects the scene adds, by name"),
             "targets": Tables(TARGET, "poses for inverse control, in order"),
+            "obstacles": Tables(OBSTACLE, "rigid obstacles the body's outer boundary cannot cross (frictionless)"),
         },
         make=make_scene,
         parts=lambda s: {
@@ -482,6 +485,7 @@ def scene_table(scene_class) -> Table:
             "schedule": s,
             "effects": s.effects,
             "targets": s.targets,
+            "obstacles": s.obstacles,
         },
     )
 

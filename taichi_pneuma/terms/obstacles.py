@@ -429,7 +429,7 @@ class Obstacle:
         frames = self.keyframes
         require(
             isinstance(frames, (tuple, list))
-            and all(shape_of(k) is not None and len(k) == 2 and shape_of(k[1]) in ((2,), (3,)) for k in frames),
+            and all(isinstance(k, (tuple, list)) and len(k) == 2 and shape_of(k[1]) in ((2,), (3,)) for k in frames),
             f"obstacle {self.name!r}: keyframes = {frames!r} must be a list of [step, [dx, dy, dz]]",
         )
         steps = [require_finite("keyframes step", s) for s, _ in frames]
@@ -462,8 +462,8 @@ class Obstacle:
         return np.array([np.interp(step, steps, column) for column in np.transpose(values)])
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
-        """Its contact term on the body's outer boundary; refused when it overlaps the rest body (a boundary node
-        at d <= 0) or a 3D scene gives a point or vector with 2 numbers."""
+        """Its contact term on the body's outer boundary; refused when it overlaps the rest body (a node at d <= 0)
+        or a 3D scene gives a point or vector with 2 numbers."""
         flat = [key for key in self.shape.vectors if len(getattr(self.shape, key)) == 2]
         flat += ["keyframes"] if any(len(v) == 2 for _, v in self.keyframes) else []
         require(
@@ -471,10 +471,11 @@ class Obstacle:
             f"obstacle {self.name!r}: {flat[0] if flat else ''} has 2 numbers; a 3D scene gives [x, y, z]",
         )
         term = ObstacleContact(config, mesh.boundary, self.shape, self.name, self.dhat, self.stiffness)  # type: ignore[arg-type]
-        nearest = term.nearest()
+        every = ObstacleContact(config, np.arange(mesh.n_vertices), self.shape, self.name, 1.0, 1.0)
+        nearest = every.nearest()  # a node inside it, on the boundary or (an obstacle within the body) not
         require(
             nearest > 0,
-            f"obstacle {self.name!r} overlaps the body at rest (a boundary node {-nearest:.3g} inside it): "
+            f"obstacle {self.name!r} overlaps the body at rest (a node {-nearest:.3g} inside it): "
             f"place it clear of the body",
         )
         return [term]
