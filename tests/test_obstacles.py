@@ -9,11 +9,12 @@ import numpy as np
 import pytest
 
 from taichi_pneuma import runtime
+from taichi_pneuma.control.inverse import Reacher
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.result import Result
 from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.solve.newton import NewtonOptions
-from taichi_pneuma.solve.simulate import run_schedule
+from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 from taichi_pneuma.terms.model import Configuration
 from taichi_pneuma.terms.obstacles import Box, Capsule, Cylinder, ObstacleContact, Plane, Sphere
 
@@ -201,7 +202,9 @@ def test_the_clamp_reaction_balances_the_contact_the_pressure_and_the_weight():
         assert np.linalg.norm(total) <= tol * scale * math.sqrt(mesh.n_vertices)
         assert abs(turning) <= 2.0 * tol * scale * math.sqrt(mesh.n_vertices)
         assert history["post.fy"][i] > 0.01 * history["clamp.fy"][i] > 0  # the post carries part of the weight
-    assert np.all([built.obstacles[0].nearest() > 0])
+    weight = 9.81 * mesh.measure  # rho g x the body's area (the chamber's hole excluded), carried by post and clamp
+    assert history["post.fy"][-1] + history["clamp.fy"][-1] == pytest.approx(weight, rel=1e-6)
+    assert built.obstacles[0].nearest() > 0
     assert set(run.summary()["clamp"]) == {"fx", "fy", "mz"}
     header = run.history_csv().splitlines()[0].split(",")
     assert {"post.fx", "post.fy", "post.magnitude", "clamp.fx", "clamp.fy", "clamp.mz"} <= set(header)
@@ -243,3 +246,19 @@ def test_an_obstacle_scene_reads_back_from_its_toml():
 def test_bad_obstacles_are_refused_naming_them(table, message):
     with pytest.raises(PneumaInputError, match=message):
         read_scene(beam(f"[[obstacles]]\n{table}\n"), "bad").build()
+
+
+def test_an_obstacle_moved_through_the_body_ends_the_ramp_naming_it():
+    """A disc raised 0.3 in one step (its top 0.2 into the beam's rest position) still overlaps the body when the
+    one cut-back allowed halves the motion: RampFailed names it, its residual not finite."""
+    raised = POST + "keyframes = [[1, [0.0, 0.3, 0.0]]]\n"
+    built = read_scene(beam(raised, increments=1), "raised").build()
+    with pytest.raises(RampFailed, match="after 1 cuts; residual nan .obstacle 'post' overlaps the body") as failure:
+        run_schedule(built, max_cuts=1)
+    assert len(failure.value.result.steps) == 1  # the rest state
+
+
+def test_inverse_control_refuses_a_moving_obstacle():
+    built = read_scene(beam(POST + "keyframes = [[1, [0.0, 0.1, 0.0]]]\n"), "reach").build()
+    with pytest.raises(PneumaInputError, match="obstacle 'post' moves"):
+        Reacher(built)
