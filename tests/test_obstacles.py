@@ -226,7 +226,8 @@ def test_a_moving_obstacle_pushes_the_tip_harder_as_it_advances():
 def test_an_obstacle_scene_reads_back_from_its_toml():
     moving = POST + "keyframes = [[1, [0.0, 0.1, 0.0]], [2, [0.1, 0.1, 0.0]]]\n"
     plane = '\n[[obstacles]]\nname = "floor"\nshape = "plane"\npoint = [0.0, -0.5]\nnormal = [0.0, 1.0]\n'
-    capsule = '\n[[obstacles]]\nname = "bar"\nshape = "capsule"\ncenter = [1.0, 0.6]\nradius = 0.1\nlength = 1.0\naxis = "x"\n'
+    capsule = '\n[[obstacles]]\nname = "bar"\nshape = "capsule"\ncenter = [1.0, 0.6]\nradius = 0.1\nlength = 1.0\n'
+    capsule += 'axis = "x"\n'
     scene = read_scene(beam(moving + plane + capsule), "many")
     assert [type(o.shape).__name__ for o in scene.obstacles] == ["Sphere", "Plane", "Capsule"]
     assert read_scene(tomllib.loads(scene.to_toml()), "many") == scene

@@ -96,7 +96,8 @@ class Schedule:
 
     @property
     def rest_commands(self) -> np.ndarray:
-        return np.array([c.kind.rest for c in self.chambers] + [0.0] * (3 * len(self.moving)))  # type: ignore[union-attr]
+        rests = [float(c.kind.rest) for c in self.chambers]  # type: ignore[union-attr]
+        return np.array(rests + [0.0] * (3 * len(self.moving)))
 
 
 def area_ramp(growth: float, steps: int, stiffness: float = 1e5) -> ChamberSchedule:

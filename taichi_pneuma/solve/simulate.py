@@ -62,10 +62,10 @@ def clamp_reaction(built: BuiltScene) -> dict[str, float]:
     force = f.sum(axis=0)
     if built.mesh.dim == 2:
         moment = [float(np.sum(arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0]))]
-        names = ("fx", "fy", "mz")
+        names = ["fx", "fy", "mz"]
     else:
         moment = np.cross(arm, f).sum(axis=0).tolist()
-        names = ("fx", "fy", "fz", "mx", "my", "mz")
+        names = ["fx", "fy", "fz", "mx", "my", "mz"]
     return dict(zip(names, [*map(float, force), *moment]))
 
 

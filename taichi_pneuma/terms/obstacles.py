@@ -56,7 +56,7 @@ def vector(name: str, value, length: int | None = None) -> tuple[float, ...]:
         f"{name} = {value!r} must be " + ("[x, y] or [x, y, z]" if length is None else f"{length} numbers"),
     )
     values = [require_finite(name, v) for v in value]
-    return (*values, 0.0)[:3]  # type: ignore[return-value]
+    return (*values, 0.0)[:3]
 
 
 def positive(name: str, value) -> float:
