@@ -283,7 +283,10 @@ BOX = (-1.75, -0.4, -1.7, 0.4)
 def covering_scenes() -> list[Scene]:
     """Scenes that between them have every key of the file: each body and chamber shape, both controls,
     both forms of the clamp, the tip and rollers, a region, every effect, targets with an angle, every unit
-    system and every material key (presets, each form of the isochoric law, K and nu)."""
+    system and every material key (presets, each form of the isochoric law, K and nu), every obstacle shape."""
+    from taichi_pneuma.terms import obstacles
+    from taichi_pneuma.terms.obstacles import Obstacle
+
     core = tp.reference_scene()
     chambers = (
         ("e", Ellipse((-1.0, 0.0), (0.3, 0.2), 16)),
@@ -300,6 +303,13 @@ def covering_scenes() -> list[Scene]:
         regions=(Region((-1.75, -0.4, 1.75, -0.3), Material(5e4, 0.4)),),
         effects=(Gravity(1.0), Ground(-1.0), SelfContact(), Dynamics(1.0, 0.01)),
         targets=(Target((3.0, -0.5), 5.0),),
+        obstacles=(
+            Obstacle("floor", obstacles.Plane((0.0, -2.0), (0.0, 1.0)), 0.01, 1e3),
+            Obstacle("block", obstacles.Box((3.0, 0.0), (0.5, 0.5)), 0.01, 1e3, ((2, (0.0, 0.1, 0.0)),)),
+            Obstacle("ball", obstacles.Sphere((3.0, -1.0, 0.0), 0.2), 0.02, 1e2),
+            Obstacle("post", obstacles.Cylinder((3.0, 1.0), 0.2, 1.0), 0.01, 1e3),
+            Obstacle("bar", obstacles.Capsule((0.0, 1.5), 0.1, 1.0, "x"), 0.01, 1e3),
+        ),
     )
     boxed = dataclasses.replace(
         core,
