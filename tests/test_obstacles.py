@@ -4,6 +4,7 @@ contact and the loads, a moving obstacle pushing the tip, and bad input refused.
 
 import math
 import tomllib
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -11,6 +12,7 @@ import pytest
 from taichi_pneuma import runtime
 from taichi_pneuma.control.inverse import Reacher
 from taichi_pneuma.errors import PneumaInputError
+from taichi_pneuma.io.units import MOMENT, UNITS, history_dimensions
 from taichi_pneuma.result import Result
 from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.solve.newton import NewtonOptions
@@ -263,3 +265,15 @@ def test_inverse_control_refuses_a_moving_obstacle():
     built = read_scene(beam(POST + "keyframes = [[1, [0.0, 0.1, 0.0]]]\n"), "reach").build()
     with pytest.raises(PneumaInputError, match="obstacle 'post' moves"):
         Reacher(built)
+
+
+def test_the_force_and_moment_columns_carry_their_units():
+    """mm-kPa: a 2D force is per unit depth (kPa mm = N/m), its moment kPa mm^2; in 3D a force is kPa mm^2 (mN)
+    and a moment kPa mm^3."""
+    units, scene = UNITS["mm-kPa"], SimpleNamespace(chamber_names=[], controls=[])
+    for dim, force, turning in ((2, "kPa mm", "kPa mm^2"), (3, "kPa mm^2", "kPa mm^3")):
+        dimensions = history_dimensions(scene, ["post"], dim)
+        assert units.label("post.fy", dimensions["post.fy"]) == f"post.fy [{force}]"
+        assert units.label("clamp.fx", dimensions["clamp.fx"]) == f"clamp.fx [{force}]"
+        assert units.label("clamp.mz", dimensions["clamp.mz"]) == f"clamp.mz [{turning}]"
+    assert units.factor(MOMENT, 2) == pytest.approx(1e-3)  # 1 kPa mm^2 = 1e3 Pa x 1e-6 m^2 (N m per m)
