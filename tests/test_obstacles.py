@@ -212,9 +212,10 @@ def test_the_clamp_reaction_balances_the_contact_the_pressure_and_the_weight():
     assert {"post.fx", "post.fy", "post.magnitude", "clamp.fx", "clamp.fy", "clamp.mz"} <= set(header)
 
 
-def test_a_moving_obstacle_pushes_the_tip_harder_as_it_advances():
+def test_a_moving_obstacle_pushes_the_tip_harder_as_it_advances(tmp_path):
     """A disc under the tip rising 0.15 over 3 steps (keyframes): its upward force on the body grows step by step,
-    the tip rises, and no boundary node ends inside it."""
+    the tip rises, and no boundary node ends inside it; the per-node contact forces (ParaView's contact_force)
+    sum to its force, and the states npz has its centre per step."""
     rising = POST.replace("center = [1.8, -0.45]", "center = [1.9, -0.4]") + "keyframes = [[3, [0.0, 0.15, 0.0]]]\n"
     built = read_scene(beam(rising, gravity=False, increments=3), "push").build()
     run = run_schedule(built)
@@ -223,6 +224,11 @@ def test_a_moving_obstacle_pushes_the_tip_harder_as_it_advances():
     assert run.steps[-1].tip_dy > 0.0
     assert built.obstacles[0].offset == pytest.approx([0.0, 0.15, 0.0])
     assert built.obstacles[0].nearest() > 0
+    assert run.contact_forces[-1].sum(axis=0) == pytest.approx([run.history["post.fx"][-1], lift[-1]], rel=1e-12)
+    _, npz = Result.of(run).save_history(tmp_path)
+    with np.load(npz) as states:
+        assert states["obstacle_names"].tolist() == ["post"]
+        assert states["obstacle_positions"][:, 0, 1] == pytest.approx([-0.4, -0.35, -0.3, -0.25])
 
 
 def test_an_obstacle_scene_reads_back_from_its_toml():
