@@ -283,3 +283,16 @@ def test_the_force_and_moment_columns_carry_their_units():
         assert units.label("clamp.fx", dimensions["clamp.fx"]) == f"clamp.fx [{force}]"
         assert units.label("clamp.mz", dimensions["clamp.mz"]) == f"clamp.mz [{turning}]"
     assert units.factor(MOMENT, 2) == pytest.approx(1e-3)  # 1 kPa mm^2 = 1e3 Pa x 1e-6 m^2 (N m per m)
+
+
+def test_the_obstacle_kernels_compile_once_for_every_shape_and_dimension():
+    """Shape kinds and parameters are runtime values, and one kernel serves 2D and 3D: one compiled instance each."""
+    from taichi_pneuma import backend
+    from taichi_pneuma.terms import obstacles
+
+    for points, shape in (([(0.0, 1.5)], SHAPES["sphere"]), ([(0.0, 1.2, 0.0)], SHAPES["capsule"])):
+        term = contact(points, shape)
+        term.energy(), term.hessian_values(), term.max_step(np.ones((1, len(points[0]))))
+    store = {"taichi": "compiled_kernels", "quadrants": "materialized_kernels"}[backend.NAME]
+    for kernel in (obstacles.obstacle_energy, obstacles.obstacle_derivatives, obstacles.obstacle_step):
+        assert len(getattr(kernel._primal, store)) == 1
