@@ -6,7 +6,8 @@ builder refuses supports that leave a rigid-body motion free (fem/supports.py), 
 chamber term per chamber (of the chamber's kind), the clamp (when there is one: no [clamp], no clamp), and a
 roller term per roller of the geometry (both of stiffness clamp_stiffness); each effect
 the scene names adds its own term(s), and an effect it does not name adds nothing: no field is
-allocated and no kernel compiled or launched for it.
+allocated and no kernel compiled or launched for it. Each rigid obstacle (terms/obstacles.py Obstacle) adds its
+contact term last; a moving one's translation rides in the commands vector after the chambers' (Schedule.commands).
 """
 
 from __future__ import annotations
