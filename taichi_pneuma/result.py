@@ -33,8 +33,9 @@ class Result(Run):
 
     def summary(self, interrupted: bool = False) -> dict:
         """The figures of the run (the summary JSON); interrupted: the run was stopped after these steps. Besides
-        the last step's values: extremes() (each with its step), the largest principal stretch over the run, its
-        step and the scene's max_stretch (past which a run warns)."""
+        the last step's values (contact: per contact term (fx, fy, magnitude), in 3D contact_fz; clamp: the clamp's
+        reaction force and moment, StepRecord.clamp, when there is a clamp): extremes() (each with its step), the
+        largest principal stretch over the run, its step and the scene's max_stretch (past which a run warns)."""
         final = self.steps[-1]
         stretch = self.history["max_stretch"]
         iterations, seconds = self.history["iterations"][1:], self.history["seconds"][1:]
@@ -60,6 +61,8 @@ class Result(Run):
             "tip_rotation_deg": final.tip_rotation,
             "peak_pressure": self.peak_pressure,
             "contact": final.contact,
+            **({"contact_fz": final.contact_fz} if final.contact_fz else {}),
+            **({"clamp": final.clamp} if final.clamp else {}),
             "extremes": self.extremes(),
             "max_stretch": float(stretch.max()),
             "max_stretch_step": int(self.history["step"][np.argmax(stretch)]),
@@ -88,6 +91,13 @@ class Result(Run):
             "units": self.scene.units.summary(),
         }
 
+    def obstacle_positions(self) -> np.ndarray:
+        """(steps, obstacles, 3): each obstacle's placed point (a plane's point, the other shapes' centre) moved by
+        its keyframes' translation at each step (a 2D scene's z is 0)."""
+        return np.array(
+            [[o.shape.parameters()[:3] + o.offset(step.step) for o in self.scene.obstacles] for step in self.steps]
+        ).reshape(len(self.steps), len(self.scene.obstacles), 3)
+
     def history_csv(self) -> str:
         """The history as CSV text: a header (the columns' names, each with its unit in a scene with units:
         "main.pressure [kPa]"), then one row per step (StepRecord.row)."""
@@ -106,7 +116,8 @@ class Result(Run):
         The npz holds positions (steps, n, d), rest, triangles (in 3D: tetrahedra and surface, the body's
         boundary triangles), pinned, tip, boundary, chamber_names and one chamber_loop_<i> per chamber
         (in 3D its wall's triangles), command / area / pressure as (steps, chambers), and, where the
-        scene has them, contact_forces (steps, n, d) and ground_height.
+        scene has them, contact_forces (steps, n, d), ground_height, obstacle_names and obstacle_positions
+        (steps, obstacles, 3).
         """
         out, stem = prepare_directory(directory), stem or self.scene.name
         mesh = self.mesh
@@ -130,6 +141,9 @@ class Result(Run):
             arrays["contact_forces"] = self.contact_forces
         if self.ground_height is not None:
             arrays["ground_height"] = np.array(self.ground_height)
+        if self.scene.obstacles:
+            arrays["obstacle_names"] = np.array([o.name for o in self.scene.obstacles])
+            arrays["obstacle_positions"] = self.obstacle_positions()
         with holding(), lock_stem(out, stem):
             return [
                 save_text(out / f"{stem}_history.csv", self.history_csv()),

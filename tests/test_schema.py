@@ -284,7 +284,11 @@ BOX = (-1.75, -0.4, -1.7, 0.4)
 def covering_scenes() -> list[Scene]:
     """Scenes that between them have every key of the file: each body and chamber shape, both controls,
     both forms of the clamp, the tip and rollers, a region, every effect, targets with an angle, layers by side and
-    by box, every unit system and every material key (presets, each form of the isochoric law, K and nu)."""
+    by box, every unit system and every material key (presets, each form of the isochoric law, K and nu), every
+    obstacle shape."""
+    from taichi_pneuma.terms import obstacles
+    from taichi_pneuma.terms.obstacles import Obstacle
+
     core = tp.reference_scene()
     chambers = (
         ("e", Ellipse((-1.0, 0.0), (0.3, 0.2), 16)),
@@ -302,6 +306,13 @@ def covering_scenes() -> list[Scene]:
         effects=(Gravity(1.0), Ground(-1.0), SelfContact(), Dynamics(1.0, 0.01)),
         targets=(Target((3.0, -0.5), 5.0),),
         layers=(Layer("sheet", 1e6, 0.3, 0.01, side="bottom"),),
+        obstacles=(
+            Obstacle("floor", obstacles.Plane((0.0, -2.0), (0.0, 1.0)), 0.01, 1e3),
+            Obstacle("block", obstacles.Box((3.0, 0.0), (0.5, 0.5)), 0.01, 1e3, ((2, (0.0, 0.1, 0.0)),)),
+            Obstacle("ball", obstacles.Sphere((3.0, -1.0, 0.0), 0.2), 0.02, 1e2),
+            Obstacle("post", obstacles.Cylinder((3.0, 1.0), 0.2, 1.0), 0.01, 1e3),
+            Obstacle("bar", obstacles.Capsule((0.0, 1.5), 0.1, 1.0, "x"), 0.01, 1e3),
+        ),
     )
     boxed = dataclasses.replace(
         core,
@@ -420,7 +431,7 @@ def fibered(solid: Scene) -> Scene:
         Polyline(((-1.5, 0.3, 0.0), (0.0, 0.2, 0.1), (1.5, 0.3, 0.0))),
         Rings((-1.5, 0.0, 0.0), 0.3, 4, 0.5, "x"),
         Helix((-1.5, 0.0, 0.0), 0.3, 3.0, "x", pitch=0.9, handedness="left", phase=45.0),
-        Crossed((-1.5, 0.0, 0.0), 0.3, 3.0, "x", angle=40.0),
+        Crossed((-1.5, 0.0, 0.0), 0.3, 3.0, "x", angle=40.0, flat=0.1),
     )
     fibers = tuple(
         Fiber(path, 1e6, area=1e-4, name=f"f{i}", spacing=0.05) if i % 2 else Fiber(path, 2e6, diameter=0.01)

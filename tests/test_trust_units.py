@@ -29,6 +29,7 @@ from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms.chambers import KINDS as CHAMBER_KINDS
 from taichi_pneuma.terms.chambers import AreaControl, ClosedGas
 from taichi_pneuma.terms.effects import EFFECTS, Gravity, Ground, SelfContact
+from taichi_pneuma.terms.obstacles import Obstacle
 
 # A dented wall (balloon_syringe.toml, coarser and stiffer, so that the air's compression matters) in mm and kPa
 SYRINGE = """units = "mm-kPa"
@@ -92,6 +93,13 @@ stiffness = 1e3
 [effects.self_contact]
 dhat = 0.005
 stiffness = 1e4
+[[obstacles]]
+name = "post"
+shape = "sphere"
+center = [2.5, 0.0]
+radius = 0.2
+dhat = 0.01
+stiffness = 1e3
 """
 KINDS = {
     "closed_gas": 'control = "closed_gas"\natmosphere = 101325.0',
@@ -144,6 +152,26 @@ keyframes = [[2, 100.0]]
 [schedule]
 increments = 2
 """
+HALF_CYLINDER = """[body]
+shape = "half_cylinder"
+center = [0.0, 0.0, 0.0]
+radius = 0.4
+length = 3.5
+base = 0.1
+[mesh]
+size = 0.2
+[[chambers]]
+name = "main"
+shape = "half_cylinder"
+center = [0.0, 0.1, 0.0]
+radius = 0.2
+length = 3.0
+base = 0.0
+control = "pressure"
+keyframes = [[2, 100.0]]
+[schedule]
+increments = 2
+"""
 BASES = [
     (tomllib.loads(text), dim)
     for text, dim in (
@@ -151,6 +179,7 @@ BASES = [
         *((PLANAR.replace('control = "area"\nstiffness = 1e5', kind), 2) for kind in KINDS.values()),
         (EXTRUDED, 3),
         (PNEUNET, 3),
+        (HALF_CYLINDER, 3),
     )
 ]
 
@@ -459,7 +488,7 @@ def test_every_api_default_with_a_unit_is_the_scene_files_default():
     owners = (
         [(cls, "chambers[].{}") for cls in CHAMBER_KINDS.values()]
         + [(cls, f"effects.{cls.name}.{{}}") for cls in EFFECTS.values()]
-        + [(Material, "material.{}"), (Scene, "clamp.{}"), (Geometry, "mesh.{}")]
+        + [(Material, "material.{}"), (Scene, "clamp.{}"), (Geometry, "mesh.{}"), (Obstacle, "obstacles[].{}")]
     )
     names = {"youngs_modulus": "E", "clamp_stiffness": "stiffness"}
     found = 0

@@ -228,6 +228,12 @@ class Reacher:
         max_cuts: int = MAX_CUTS,
         start=None,
     ):
+        moving = [o.name for o in built.scene.obstacles if o.moving]
+        require(
+            not moving,
+            f"obstacle {moving[0] if moving else ''!r} moves (has keyframes): inverse control drives the chambers "
+            f"only, so a scene's obstacles must be static there (drop its keyframes)",
+        )
         self.built, self.options, self.max_cuts = built, options or ReachOptions(), max_cuts
         self.solver = NewtonSolver(built.model, newton)
         self.names = [c.chamber_name for c in built.chambers]

@@ -34,6 +34,8 @@ from ..errors import require
 
 LENGTH, AREA, PRESSURE, FORCE, ANGLE, TIME = "length", "area", "pressure", "force", "angle", "time"
 VOLUME = "volume"  # a 3D chamber's measure
+MOMENT = "moment"  # force x length (per unit depth in 2D, as FORCE)
+FORCE_3D, MOMENT_3D = "force (3D)", "moment (3D)"  # FORCE and MOMENT in a 3D body (in_dimension): not per depth
 MEASURES = {2: AREA, 3: VOLUME}  # what a chamber encloses, by dimension
 ACCELERATION, DENSITY = "acceleration", "density"
 PLANE_AREA = "plane area"  # an area in 2D and 3D alike (a triangle's), where AREA is a chamber's measure
@@ -50,6 +52,10 @@ EXPONENTS = {
     SECTION: ((1, 0, 0), (2, 0, 0)),
     PRESSURE: ((0, 1, 0),) * 2,
     ANGLE: ((0, 0, 0),) * 2,
+    FORCE: ((1, 1, 0),) * 2,
+    FORCE_3D: ((2, 1, 0),) * 2,
+    MOMENT: ((2, 1, 0),) * 2,
+    MOMENT_3D: ((3, 1, 0),) * 2,
     TIME: ((0, 0, 1),) * 2,
     ACCELERATION: ((1, 0, -2),) * 2,
     DENSITY: ((-2, 1, 2),) * 2,
@@ -143,6 +149,9 @@ class Units:
             ANGLE: "deg",
             TIME: "s",
             VOLUME: f"{self.length}^3",
+            MOMENT: f"{self.pressure} {self.length}^2",
+            FORCE_3D: f"{self.pressure} {self.length}^2",
+            MOMENT_3D: f"{self.pressure} {self.length}^3",
         }[dimension]
 
     def label(self, name: str, dimension: str) -> str:
@@ -197,15 +206,19 @@ FIXED_COLUMNS = {
 
 
 def in_dimension(dimension: str, dim: int) -> str:
-    """A chamber quantity's dimension in a body of dimension dim: AREA (a chamber's measure, or a volume of air
-    per unit depth) is VOLUME in 3D; others are themselves."""
-    return MEASURES[dim] if dimension == AREA else dimension
+    """A quantity's dimension in a body of dimension dim: AREA (a chamber's measure, or a volume of air per unit
+    depth) is VOLUME in 3D, FORCE and MOMENT (per unit depth in 2D) FORCE_3D and MOMENT_3D; others are
+    themselves."""
+    if dim == 3:
+        return {AREA: VOLUME, FORCE: FORCE_3D, MOMENT: MOMENT_3D}.get(dimension, dimension)
+    return dimension
 
 
 def history_dimensions(scene, contacts=(), dim: int = 2) -> dict[str, str]:
     """The dimension of every history column (simulate.StepRecord.row) with one, for a scene (its chambers'
     commands have their kinds' dimensions; a chamber's measure is a volume in 3D), the names of its contact
-    terms and the body's dimension dim."""
+    terms (their fx, fy, fz, magnitude) and the body's dimension dim; the clamp's reaction (clamp.fx, ...: forces;
+    clamp.mx, .my, .mz: moments)."""
     dimensions = dict(FIXED_COLUMNS)
     for name, control in zip(scene.chamber_names, scene.controls):
         dimensions.update(
@@ -215,6 +228,9 @@ def history_dimensions(scene, contacts=(), dim: int = 2) -> dict[str, str]:
                 f"{name}.pressure": PRESSURE,
             }
         )
+    force, moment = in_dimension(FORCE, dim), in_dimension(MOMENT, dim)
     for name in contacts:
-        dimensions.update({f"{name}.{part}": FORCE for part in ("fx", "fy", "magnitude")})
+        dimensions.update({f"{name}.{part}": force for part in ("fx", "fy", "fz", "magnitude")})
+    dimensions.update({f"clamp.f{axis}": force for axis in "xyz"})
+    dimensions.update({f"clamp.m{axis}": moment for axis in "xyz"})
     return dimensions

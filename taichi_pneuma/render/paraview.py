@@ -33,7 +33,7 @@ import numpy as np
 
 from ..fem.fields import ElementFields
 from ..io.output import Subfolder, held_private_folder, save_text, write_atomic
-from ..io.units import FORCE, LENGTH, PRESSURE, history_dimensions
+from ..io.units import FORCE, LENGTH, PRESSURE, history_dimensions, in_dimension
 from ..io.vtk import pad3, pvd_text, vtu_text
 
 SYMMETRIC_TENSOR = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))  # ParaView's 6-component order
@@ -77,7 +77,7 @@ class VtkSeries:
         units = self.scene.units
         point_data = {units.label("displacement", LENGTH): pad3(positions - mesh.vertices), "chamber": self.chamber}
         if contact_force is not None:
-            point_data[units.label("contact_force", FORCE)] = pad3(contact_force)
+            point_data[units.label("contact_force", in_dimension(FORCE, mesh.dim))] = pad3(contact_force)
         element_data = {
             "det_F": fields["det_F"],
             "max_stretch": fields["max_stretch"],

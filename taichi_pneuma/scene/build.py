@@ -6,7 +6,8 @@ builder refuses supports that leave a rigid-body motion free (fem/supports.py), 
 chamber term per chamber (of the chamber's kind), the clamp (when there is one: no [clamp], no clamp), and a
 roller term per roller of the geometry (both of stiffness clamp_stiffness); each effect
 the scene names adds its own term(s), and an effect it does not name adds nothing: no field is
-allocated and no kernel compiled or launched for it.
+allocated and no kernel compiled or launched for it. Each rigid obstacle (terms/obstacles.py Obstacle) adds its
+contact term last; a moving one's translation rides in the commands vector after the chambers' (Schedule.commands).
 """
 
 from __future__ import annotations
@@ -120,6 +121,7 @@ class Scene:
     volumetric: str = "element"
     fibers: tuple = ()  # terms.fibers.Fiber: embedded tension-only cords
     layers: tuple = ()  # terms.sheets.Layer: strain-limiting sheets bonded to faces of the body
+    obstacles: tuple = ()  # terms.obstacles.Obstacle: rigid obstacles the body's boundary touches
 
     def __post_init__(self):
         self.resolve_defaults()
@@ -140,6 +142,10 @@ class Scene:
         )
         kinds = [e.name for e in self.effects]
         require(len(set(kinds)) == len(kinds), f"effects {kinds!r} name one effect twice")
+        names = [o.name for o in self.obstacles]
+        require(len(set(names)) == len(names), f"obstacle names {names!r} must be distinct")
+        clash = sorted(set(names) & {*self.chamber_names, "clamp", *kinds})
+        require(not clash, f"obstacle name {clash[0] if clash else ''!r} is a chamber's, an effect's or the clamp's")
         _ = self.schedule  # validates the increments against the keyframes
         law, _ = self.law_parameters()  # resolves the presets, checks that the body has one law
         if self.volumetric == "nodal":
@@ -175,6 +181,7 @@ class Scene:
             ),
         )
         put("effects", tuple(resolved(e, units, dim, f"effects.{e.name}") for e in self.effects))
+        put("obstacles", tuple(resolved(o, units, dim, f"obstacles[{i}]") for i, o in enumerate(self.obstacles)))
 
     def to_toml(self) -> str:
         """This scene as a scene file (TOML); scenefile.load_scene reads it back to an equal scene."""
@@ -192,7 +199,7 @@ class Scene:
 
     @property
     def schedule(self) -> Schedule:
-        return Schedule(self.increments, tuple(c.schedule for c in self.controls))
+        return Schedule(self.increments, tuple(c.schedule for c in self.controls), self.obstacles)
 
     @property
     def dim(self) -> int:
@@ -274,7 +281,10 @@ class Scene:
         for spec in (*self.fibers, *self.layers):
             for term in spec.terms(config, mesh, lumped_area, budget):
                 model.add(term)
-        return BuiltScene(self, mesh, model, elastic, chambers, effects)  # type: ignore[arg-type]
+        obstacles = [
+            model.add(term) for spec in self.obstacles for term in spec.terms(config, mesh, lumped_area, budget)
+        ]
+        return BuiltScene(self, mesh, model, elastic, chambers, effects, obstacles)  # type: ignore[arg-type]
 
 
 def support_rows(mesh: Mesh, effects) -> list:
@@ -301,7 +311,8 @@ def describe_supports(mesh: Mesh, effects) -> str:
 
 @dataclass
 class BuiltScene:
-    """A meshed scene: its EnergyModel, and handles on the terms a run drives or reports."""
+    """A meshed scene: its EnergyModel, and handles on the terms a run drives or reports (obstacles: the
+    obstacles' contact terms, in the scene's order)."""
 
     scene: Scene
     mesh: Mesh
@@ -309,10 +320,27 @@ class BuiltScene:
     elastic: Elasticity
     chambers: list[Chamber]
     effects: dict[str, list[Term]]
+    obstacles: list = field(default_factory=list)
+
+    @property
+    def clamp(self) -> Term | None:
+        """The clamp's term, or None in a scene without one."""
+        return next((t for t in self.model.terms if isinstance(t, Clamp)), None)
+
+    def contact_terms(self) -> list[Term]:
+        """Every term that reports a contact force, each under its name: the effects' (ground, self_contact), then
+        the obstacles' (their names)."""
+        return [t for terms in self.effects.values() for t in terms if t.reports_contact] + list(self.obstacles)
 
     def set_commands(self, commands: np.ndarray) -> None:
+        """The chambers' commands, then (Schedule.commands) each moving obstacle's translation; a vector of the
+        chambers' commands alone leaves the obstacles where they are."""
         for chamber, command in zip(self.chambers, commands):
             chamber.set_command(command)
+        offsets = np.asarray(commands[len(self.chambers) :], dtype=float).reshape(-1, 3)
+        moving = [term for term, spec in zip(self.obstacles, self.scene.obstacles) if spec.moving]
+        for term, offset in zip(moving, offsets):
+            term.set_offset(offset)
 
 
 def reference_scene(

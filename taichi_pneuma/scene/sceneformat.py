@@ -30,6 +30,7 @@ from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
 from ..terms.fibers import Fiber
 from ..terms.sheets import Layer
+from .obstacleformat import OBSTACLE
 from .schedule import MAX_STRETCH, ChamberSchedule
 from .schema import REQUIRED, Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
 from .targets import MAX_TARGETS, Target
@@ -393,6 +394,7 @@ def scene_table(scene_class) -> Table:
             mesh["volumetric"],
             fibers=v["fibers"],
             layers=v["layers"],
+            obstacles=v["obstacles"],
         )
 
     def clamp_parts(scene):
@@ -517,6 +519,7 @@ def scene_table(scene_class) -> Table:
             "targets": Tables(TARGET, "poses for inverse control, in order"),
             "fibers": Tables(FIBER, "embedded fibres (tension-only cords), each a term of the energy"),
             "layers": Tables(LAYER, "strain-limiting sheets, each bonded to a face of the body"),
+            "obstacles": Tables(OBSTACLE, "rigid obstacles the body's outer boundary cannot cross (frictionless)"),
         },
         make=make_scene,
         parts=lambda s: {
@@ -535,6 +538,7 @@ def scene_table(scene_class) -> Table:
             "targets": s.targets,
             "fibers": s.fibers,
             "layers": s.layers,
+            "obstacles": s.obstacles,
         },
     )
 

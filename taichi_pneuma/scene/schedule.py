@@ -66,29 +66,38 @@ class ChamberSchedule:
 
 @dataclass(frozen=True)
 class Schedule:
-    """The increments of a run and one ChamberSchedule per chamber, in the scene's chamber order."""
+    """The increments of a run and one ChamberSchedule per chamber, in the scene's chamber order; obstacles: the
+    scene's obstacles (terms/obstacles.py Obstacle), whose moving ones' translations (3 each, in order) follow the
+    chambers' commands in the commands vector, so that a cut-back increment moves them by the same fraction."""
 
     increments: int
     chambers: tuple[ChamberSchedule, ...]
+    obstacles: tuple = ()
 
     def __post_init__(self):
         require(
             isinstance(self.increments, (int, np.integer)) and self.increments >= 1,
             f"increments = {self.increments!r} must be an integer >= 1",
         )
-        for c in self.chambers:
+        for c in (*self.chambers, *self.obstacles):
             require(
                 c.last_step <= self.increments,
                 f"keyframe step {c.last_step} lies past the last increment ({self.increments})",
             )
 
+    @property
+    def moving(self) -> tuple:
+        """The obstacles that move (have keyframes), whose translations the commands carry."""
+        return tuple(o for o in self.obstacles if o.moving)
+
     def commands(self, step: float) -> np.ndarray:
-        """Every chamber's command at (possibly fractional) step."""
-        return np.array([c.command(step) for c in self.chambers])
+        """Every chamber's command at (possibly fractional) step, then each moving obstacle's translation (3)."""
+        return np.array([c.command(step) for c in self.chambers] + [x for o in self.moving for x in o.offset(step)])
 
     @property
     def rest_commands(self) -> np.ndarray:
-        return np.array([c.kind.rest for c in self.chambers])  # type: ignore[union-attr]
+        rests = [float(c.kind.rest) for c in self.chambers]  # type: ignore[union-attr]
+        return np.array(rests + [0.0] * (3 * len(self.moving)))
 
 
 def area_ramp(growth: float, steps: int, stiffness: float = 1e5) -> ChamberSchedule:

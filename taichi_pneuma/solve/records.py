@@ -33,7 +33,10 @@ class StepRecord:
 
     tip: the mean displacement of the tip nodes (d,) (fem/tip.py); tip_rotation: their rigid rotation in
     degrees (counter-clockwise positive, least squares; in 3D the bend angle, about z); contact: per contact
-    term the total force it exerts on the body (fx, fy) and the sum of its per-node force magnitudes; extra:
+    term (by its name: ground, self_contact, each obstacle's) the total force it exerts on the body (fx, fy) and the
+    sum of its per-node force magnitudes, and in 3D (contact_fz) that force's z component; clamp: the clamp's
+    reaction on the body, its force and its moment about the pinned nodes' rest centroid (simulate.clamp_reaction:
+    fx, fy, mz; in 3D fx, fy, fz, mx, my, mz), empty without a clamp; extra:
     further columns by name, last in the row (a reach's target and tip error, inverse.frames); max_stretch: the
     largest principal stretch at any quadrature point (ElementFields.largest_stretch).
     """
@@ -52,6 +55,8 @@ class StepRecord:
     contact: dict[str, tuple[float, float, float]] = field(default_factory=dict)
     extra: dict[str, float] = field(default_factory=dict)
     max_stretch: float = math.nan
+    contact_fz: dict[str, float] = field(default_factory=dict)
+    clamp: dict[str, float] = field(default_factory=dict)
 
     @property
     def tip_dx(self) -> float:
@@ -65,7 +70,8 @@ class StepRecord:
 
     def row(self) -> dict[str, float]:
         """Flat columns: step, <chamber>.<field> for each chamber, tip_dx, tip_dy (and tip_dz in 3D),
-        tip_rotation, <contact>.fx/.fy/.magnitude, solver figures, the extra columns."""
+        tip_rotation, <contact>.fx/.fy(/.fz)/.magnitude, clamp.fx/.fy(/.fz)/(.mx/.my/).mz, solver figures, the extra
+        columns."""
         row: dict[str, float] = {"step": self.step}
         for name, c in self.chambers.items():
             row.update(
@@ -79,7 +85,11 @@ class StepRecord:
         row.update({column: float(value) for column, value in zip(TIP_COLUMNS, self.tip)})
         row["tip_rotation"] = self.tip_rotation
         for name, (fx, fy, magnitude) in self.contact.items():
-            row.update({f"{name}.fx": fx, f"{name}.fy": fy, f"{name}.magnitude": magnitude})
+            row.update({f"{name}.fx": fx, f"{name}.fy": fy})
+            if name in self.contact_fz:
+                row[f"{name}.fz"] = self.contact_fz[name]
+            row[f"{name}.magnitude"] = magnitude
+        row.update({f"clamp.{key}": value for key, value in self.clamp.items()})
         row.update(
             {
                 "iterations": self.iterations,

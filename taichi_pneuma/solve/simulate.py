@@ -48,6 +48,27 @@ def chamber_records(built: BuiltScene, commands: np.ndarray) -> dict[str, Chambe
     return records
 
 
+def clamp_reaction(built: BuiltScene) -> dict[str, float]:
+    """The force the clamp exerts on the body, R = -sum_i g_i over the pinned nodes (g: the clamp term's
+    gradient), and its moment about the centroid c of the pinned nodes' rest positions, M = sum_i (x_i - c) x f_i
+    (x_i the current positions, f_i = -g_i): {"fx", "fy", "mz"} in 2D, {"fx", "fy", "fz", "mx", "my", "mz"} in 3D;
+    empty without a clamp."""
+    clamp = built.clamp
+    if clamp is None:
+        return {}
+    pinned = built.mesh.pinned
+    f = -clamp.gradient()[pinned]
+    arm = built.model.config.u[pinned] + built.mesh.vertices[pinned] - built.mesh.vertices[pinned].mean(axis=0)
+    force = f.sum(axis=0)
+    if built.mesh.dim == 2:
+        moment = [float(np.sum(arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0]))]
+        names = ["fx", "fy", "mz"]
+    else:
+        moment = np.cross(arm, f).sum(axis=0).tolist()
+        names = ["fx", "fy", "fz", "mx", "my", "mz"]
+    return dict(zip(names, [*map(float, force), *moment]))
+
+
 class RampStopped(RuntimeError):
     """The ramp ended before its last increment; `result` holds the steps done (a Run; tp.simulate's: a Result)."""
 
@@ -180,7 +201,7 @@ def run_schedule(
     schedule = schedule or built.scene.schedule
     solver = NewtonSolver(built.model, options)
     mesh = built.mesh
-    contact_terms = [(name, t) for name, terms in built.effects.items() for t in terms if t.reports_contact]
+    contact_terms = built.contact_terms()
     u = np.zeros_like(mesh.vertices)
     stretches = ElementFields(mesh.vertices, mesh.elements)
     steps: list[StepRecord] = []
@@ -220,12 +241,14 @@ def run_schedule(
             newton["phase_seconds"].update(record.phase_seconds)
         final = records[-1]
         chambers = chamber_records(built, target)
-        contact, vertex_forces = {}, np.zeros_like(u)
-        for name, term in contact_terms:
+        contact, contact_fz, vertex_forces = {}, {}, np.zeros_like(u)
+        for term in contact_terms:
             f = -term.gradient()
             vertex_forces += f
-            fx, fy = f.sum(axis=0)[:2]  # (in 3D only the ground reports contact, along y)
-            contact[name] = (float(fx), float(fy), float(np.linalg.norm(f, axis=1).sum()))
+            total = f.sum(axis=0)
+            contact[term.name] = (float(total[0]), float(total[1]), float(np.linalg.norm(f, axis=1).sum()))
+            if mesh.dim == 3:
+                contact_fz[term.name] = float(total[2])
         step = StepRecord(
             i,
             chambers,
@@ -239,6 +262,8 @@ def run_schedule(
             time.perf_counter() - start,
             contact,
             max_stretch=stretches.largest_stretch(mesh.vertices + u),
+            contact_fz=contact_fz,
+            clamp=clamp_reaction(built),
         )
         steps.append(step)
         states.append(mesh.vertices + u)

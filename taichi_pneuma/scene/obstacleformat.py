@@ -1,0 +1,72 @@
+"""The scene file's [[obstacles]] tables (terms/obstacles.py Obstacle), declared with schema.py's entries:
+
+[[obstacles]]
+name = "post"
+shape = "sphere"               # plane, box, sphere, cylinder, capsule; the shape's keys follow
+center = [3.0, -0.6]
+radius = 0.3
+dhat = 0.01                    # the barrier's threshold and stiffness, as [effects.ground]'s
+stiffness = 1e3
+keyframes = [[10, [0.0, 0.2, 0.0]]]   # its translation by step (none: static)
+"""
+
+from ..io.units import LENGTH, NODAL_STIFFNESS
+from ..terms.obstacles import AXES, SHAPES, Box, Capsule, Cylinder, Obstacle, Plane, Sphere
+from .schema import Key, Table, Variant, record
+
+POINT = "[x, y] (2D) or [x, y, z]"
+
+
+def round_shape(cls, doc: str) -> Table:
+    """A cylinder's or a capsule's keys."""
+    return record(
+        cls,
+        doc,
+        center=Key(tuple, doc=POINT, unit=LENGTH),
+        radius=Key(float, unit=LENGTH),
+        length=Key(float, doc="its length along the axis (a capsule's: of its segment)", unit=LENGTH),
+        axis=Key(str, "z", "its axis (2D: z a circle)", AXES),
+    )
+
+
+OBSTACLE_SHAPES = Variant(
+    {
+        "plane": record(
+            Plane,
+            "a half-space (2D: a half-plane), the body on its normal's side",
+            point=Key(tuple, doc=f"a point of it, {POINT}", unit=LENGTH),
+            normal=Key(tuple, doc="[nx, ny] or [nx, ny, nz], towards the body"),
+        ),
+        "box": record(
+            Box,
+            "an axis-aligned box (2D: a rectangle)",
+            center=Key(tuple, doc=POINT, unit=LENGTH),
+            size=Key(tuple, doc="[w, h] (2D) or [w, h, depth]", unit=LENGTH),
+        ),
+        "sphere": record(
+            Sphere, "a ball (2D: a disc)", center=Key(tuple, doc=POINT, unit=LENGTH), radius=Key(float, unit=LENGTH)
+        ),
+        "cylinder": round_shape(Cylinder, "a circular cylinder with flat caps"),
+        "capsule": round_shape(Capsule, "the points within radius of a segment"),
+    },
+    choose=lambda shape: {cls: name for name, cls in SHAPES.items()}[type(shape)],  # a Capsule is a Cylinder too
+    doc="the obstacle's shape",
+)
+OBSTACLE = Table(
+    {
+        "name": Key(str, doc="distinct, not a chamber's (it heads the history's <name>.fx, ... columns)"),
+        "shape": OBSTACLE_SHAPES,
+        "dhat": Key(float, None, "the contact barrier's threshold distance", unit=LENGTH, scaled=False, si=0.01),
+        "stiffness": Key(float, None, "the barrier's stiffness", unit=NODAL_STIFFNESS, scaled=False, si=1e3),
+        "keyframes": Key(tuple, None, "[[step, [dx, dy, dz]], ...]: its translation, linear between steps"),
+    },
+    make=lambda v: Obstacle(v["name"], v["shape"], v["dhat"], v["stiffness"], v["keyframes"] or ()),
+    parts=lambda o: {
+        "name": o.name,
+        "shape": o.shape,
+        "dhat": o.dhat,
+        "stiffness": o.stiffness,
+        "keyframes": o.keyframes or None,
+    },
+    cls=Obstacle,
+)

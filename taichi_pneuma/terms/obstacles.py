@@ -1,0 +1,481 @@
+"""Rigid obstacles: frictionless contact of the body's outer boundary nodes with a shape given by its signed distance.
+
+Each shape is a signed distance d(x) in 3D, positive outside (a 2D scene evaluates it at x = (x, y, 0), so a
+sphere is a circle there, a cylinder or capsule along z a circle, one along x or y a rectangle or a stadium):
+
+    plane     d = (x - p) . n                                    (the body on the normal's side)
+    sphere    d = |x - c| - R
+    box       q = |x - c| - h (h the half-size): d = |max(q, 0)| outside, max_k q_k inside
+    cylinder  t = (x - c) . a, w = (x - c) - t a, q = (|w| - R, |t| - L/2): the box distance of q (flat caps)
+    capsule   d = |x - c - clamp(t, -L/2, L/2) a| - R
+
+Each is an exact Euclidean distance outside, so 1-Lipschitz. The energy is that of the ground (terms/contact.py):
+E = sum_i b(d_i) over the boundary nodes, the log barrier b of threshold dhat and stiffness kappa; gradient
+b'(d_i) n_i (n = grad d, the unit normal); Hessian per node b''(d) n n^T (PSD, always) plus, when not psd_only,
+b'(d) Hess d. Hess d is exact wherever the closest feature of the shape is
+
+    a plane (a face, a cap, the plane itself)      0
+    a point (a box corner, a sphere's or an end's centre)     (I - n n^T) / r
+    a line (a box edge, the axis of a side)        (I - a a^T - n n^T) / r
+    a circle (the rim of a cylinder, radius R)     (I - n n^T - (R / rho) b b^T) / r
+
+with r the distance to the feature, a the line's direction, b the circle's tangent and rho the distance to the
+axis; all four are implemented, as one formula (I - n n^T - s t t^T) / r (s = 0, 1, R / rho).
+
+max_step(dx): for each node, the largest alpha at which x + alpha dx has not crossed the surface, by conservative
+advancement (t += d(x + t dx) / |dx|, never past the first contact since d is 1-Lipschitz), stopped when d falls
+below 1e-3 of its start (a bound just short of the contact) or t passes STEP_CAP (then inf: the solver never steps
+past 1); exact for the plane (d / -(dx . n)).
+
+The shape's kind is a runtime integer and its parameters a small float array (PARAMETERS), so the kernels compile
+once whatever the scene. A moving obstacle's translation from its placed position is set by set_offset.
+"""
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..backend import kernel, ti
+from ..errors import require, require_finite, shape_of
+from ..io.units import LENGTH, NODAL_STIFFNESS, si_default
+from .base import HUGE, Indices, Nodal, Scalars, Table, Term, block_pattern, int32s
+from .contact import barrier
+
+PLANE, SPHERE, BOX, CYLINDER, CAPSULE = range(5)
+PARAMETERS = 8  # position (3: a point or centre), vector (3: normal, half-size or axis), radius, half-length
+AXES = ("x", "y", "z")
+STEP_CAP = 4.0  # max_step's conservative advancement stops past this step fraction (inf)
+ADVANCES = 100  # and after this many advances (the bound reached, short of the contact)
+
+
+def vector(name: str, value, length: int | None = None) -> tuple[float, ...]:
+    """A point or vector given as [x, y] (z = 0; 2D scenes only) or [x, y, z], as 3 floats."""
+    require(
+        isinstance(value, (tuple, list)) and len(value) in ((2, 3) if length is None else (length,)),
+        f"{name} = {value!r} must be " + ("[x, y] or [x, y, z]" if length is None else f"{length} numbers"),
+    )
+    values = [require_finite(name, v) for v in value]
+    return (*values, 0.0)[:3]
+
+
+def positive(name: str, value) -> float:
+    require(require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
+    return float(value)
+
+
+def axis_vector(axis: str) -> tuple[float, float, float]:
+    require(axis in AXES, f"axis = {axis!r} is not one of {', '.join(AXES)}")
+    return tuple(float(k == AXES.index(axis)) for k in range(3))  # type: ignore[return-value]
+
+
+class Shape:
+    """An obstacle shape: kind (its kernel's shape index), vectors (its keys that are points or vectors, which a
+    3D scene must give with 3 numbers) and parameters(): the PARAMETERS floats the kernels read."""
+
+    kind = PLANE
+    vectors: tuple[str, ...] = ("center",)
+
+    def parameters(self) -> np.ndarray:
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class Plane(Shape):
+    """The half-space on the normal's side of the plane (2D: the line) through point."""
+
+    point: tuple
+    normal: tuple
+    kind = PLANE
+    vectors = ("point", "normal")
+
+    def __post_init__(self):
+        vector("point", self.point)
+        n = np.array(vector("normal", self.normal))
+        require(np.linalg.norm(n) > 0, f"normal = {self.normal!r} must not be zero")
+
+    def parameters(self) -> np.ndarray:
+        n = np.array(vector("normal", self.normal))
+        return np.array([*vector("point", self.point), *(n / np.linalg.norm(n)), 0.0, 0.0])
+
+
+@dataclass(frozen=True)
+class Sphere(Shape):
+    """A ball (2D: a disc) of the given radius."""
+
+    center: tuple
+    radius: float
+    kind = SPHERE
+
+    def __post_init__(self):
+        vector("center", self.center)
+        positive("radius", self.radius)
+
+    def parameters(self) -> np.ndarray:
+        return np.array([*vector("center", self.center), 0.0, 0.0, 0.0, self.radius, 0.0])
+
+
+@dataclass(frozen=True)
+class Box(Shape):
+    """An axis-aligned box; its size [w, h] in 2D ([w, h, depth] in 3D)."""
+
+    center: tuple
+    size: tuple
+    kind = BOX
+    vectors = ("center", "size")
+
+    def __post_init__(self):
+        vector("center", self.center)
+        require(
+            all(positive("size", s) for s in vector("size", self.size)[: len(self.size)]),
+            f"size = {self.size!r} must be > 0",
+        )
+
+    def parameters(self) -> np.ndarray:
+        half = [0.5 * s for s in self.size] + [1e300]  # a 2D box has no z extent
+        return np.array([*vector("center", self.center), *half[:3], 0.0, 0.0])
+
+
+@dataclass(frozen=True)
+class Cylinder(Shape):
+    """A circular cylinder with flat caps, its axis along x, y or z (2D: along z a disc, along x or y a rectangle)."""
+
+    center: tuple
+    radius: float
+    length: float
+    axis: str = "z"
+    kind = CYLINDER
+
+    def __post_init__(self):
+        vector("center", self.center)
+        positive("radius", self.radius)
+        positive("length", self.length)
+        axis_vector(self.axis)
+
+    def parameters(self) -> np.ndarray:
+        return np.array([*vector("center", self.center), *axis_vector(self.axis), self.radius, 0.5 * self.length])
+
+
+@dataclass(frozen=True)
+class Capsule(Cylinder):
+    """The points within radius of a segment of the given length along x, y or z (2D along x or y: a stadium)."""
+
+    kind = CAPSULE
+
+
+SHAPES = {"plane": Plane, "sphere": Sphere, "box": Box, "cylinder": Cylinder, "capsule": Capsule}
+
+
+@ti.func
+def row3(a: ti.template(), v):
+    """Row v of (n, d) nodal data as a 3-vector (z = 0 in 2D)."""
+    x = ti.Vector([0.0, 0.0, 0.0])
+    for k in ti.static(range(3)):
+        if k < a.shape[1]:
+            x[k] = a[v, k]
+    return x
+
+
+@ti.func
+def point_of(rest: ti.template(), u: ti.template(), v):
+    """x_v = X_v + u_v as a 3-vector."""
+    return row3(rest, v) + row3(u, v)
+
+
+@ti.func
+def signed_distance(x, kind, p: ti.template()):
+    """(d, n, r, s, t) at x: the signed distance, its gradient n, and its Hessian as (I - n n^T - s t t^T) / r
+    (r = 0: none, a flat feature)."""
+    c = ti.Vector([p[0], p[1], p[2]])
+    v = ti.Vector([p[3], p[4], p[5]])
+    radius, half = p[6], p[7]
+    y = x - c
+    d, r, s = 0.0, 0.0, 0.0
+    n = ti.Vector([0.0, 0.0, 0.0])
+    t = ti.Vector([0.0, 0.0, 0.0])
+    if kind == PLANE:
+        d, n = y.dot(v), v
+    elif kind == SPHERE:
+        rho = y.norm()
+        d, n, r = rho - radius, y / rho, rho
+    elif kind == BOX:
+        q = ti.abs(y) - v
+        if q.max() > 0:
+            w = ti.Vector([0.0, 0.0, 0.0])
+            count = 0
+            for k in ti.static(range(3)):
+                if q[k] > 0:
+                    w[k] = ti.math.sign(y[k]) * q[k]
+                    count += 1
+                else:
+                    t[k] = 1.0  # the edge's direction, when two components are out
+            d = w.norm()
+            n = w / d
+            if count >= 2:
+                r = d
+                s = ti.select(count == 2, 1.0, 0.0)
+        else:
+            d = q.max()
+            for k in ti.static(range(3)):
+                if q[k] == d and n.norm_sqr() == 0:
+                    n[k] = ti.math.sign(y[k])
+    else:
+        along = y.dot(v)
+        if kind == CAPSULE:
+            w = y - ti.math.clamp(along, -half, half) * v
+            rho = w.norm()
+            d, n, r = rho - radius, w / rho, rho
+            if ti.abs(along) < half:
+                s, t = 1.0, v
+        else:  # CYLINDER
+            w = y - along * v
+            rho = w.norm()
+            radial, axial = rho - radius, ti.abs(along) - half
+            cap = ti.math.sign(along) * v
+            if radial > 0 and axial > 0:  # the rim: a circle
+                out = radial * (w / rho) + axial * cap
+                d = out.norm()
+                n, r, s, t = out / d, d, radius / rho, v.cross(w / rho)
+            elif radial > axial:  # the side (or inside, nearer the side): the axis line
+                d, n, r, s, t = radial, w / rho, rho, 1.0, v
+            else:  # a cap (or inside, nearer a cap)
+                d, n = axial, cap
+    return d, n, r, s, t
+
+
+@kernel
+def obstacle_energy(
+    rest: Nodal, u: Nodal, verts: Indices, kind: ti.i32, p: Scalars, dhat: ti.f64, kappa: ti.f64
+) -> tuple[ti.f64, ti.f64]:
+    """(sum of the barriers over the listed vertices outside the obstacle, smallest signed distance)."""
+    total = 0.0
+    nearest = ti.math.inf
+    for k in range(verts.shape[0]):
+        d = signed_distance(point_of(rest, u, verts[k]), kind, p)[0]
+        ti.atomic_min(nearest, d)
+        if d > 0:
+            total += barrier(d, dhat, kappa)[0]
+    return total, nearest
+
+
+@kernel
+def obstacle_derivatives(
+    rest: Nodal,
+    u: Nodal,
+    verts: Indices,
+    kind: ti.i32,
+    p: Scalars,
+    dhat: ti.f64,
+    kappa: ti.f64,
+    exact: ti.i32,
+    gradient: Nodal,
+    hessian: Table,
+) -> ti.f64:
+    """gradient = dE/dx; hessian[k] = the 3 x 3 block of vertex k, row-major (its d x d corner is the node's);
+    returns the smallest signed distance."""
+    nearest = ti.math.inf
+    for v, i in ti.ndrange(gradient.shape[0], gradient.shape[1]):
+        gradient[v, i] = 0.0
+    for k in range(verts.shape[0]):
+        d, n, r, s, t = signed_distance(point_of(rest, u, verts[k]), kind, p)
+        ti.atomic_min(nearest, d)
+        H = ti.Matrix.zero(ti.f64, 3, 3)
+        if d > 0 and d < dhat:
+            _, db, ddb = barrier(d, dhat, kappa)
+            for i in ti.static(range(3)):
+                if i < gradient.shape[1]:
+                    gradient[verts[k], i] = db * n[i]
+            H = ddb * n.outer_product(n)
+            if exact and r > 0:
+                H += db / r * (ti.Matrix.identity(ti.f64, 3) - n.outer_product(n) - s * t.outer_product(t))
+        for i, j in ti.static(ti.ndrange(3, 3)):
+            hessian[k, 3 * i + j] = H[i, j]
+    return nearest
+
+
+@kernel
+def obstacle_step(rest: Nodal, u: Nodal, dx: Nodal, verts: Indices, kind: ti.i32, p: Scalars) -> ti.f64:
+    """Largest alpha (a bound short of the contact; inf past STEP_CAP) at which no listed vertex moving along dx
+    has reached the obstacle."""
+    bound = ti.math.inf
+    for k in range(verts.shape[0]):
+        x = point_of(rest, u, verts[k])
+        m = row3(dx, verts[k])
+        speed = m.norm()
+        if speed > 0:
+            d0 = signed_distance(x, kind, p)[0]
+            if kind == PLANE:
+                rate = m.dot(ti.Vector([p[3], p[4], p[5]]))
+                if rate < 0:
+                    ti.atomic_min(bound, ti.max(d0, 0.0) / -rate)
+            else:
+                t, d, steps = 0.0, d0, 0
+                while d > 1e-3 * d0 and t <= STEP_CAP and steps < ADVANCES:
+                    t += d / speed
+                    d = signed_distance(x + t * m, kind, p)[0]
+                    steps += 1
+                if t <= STEP_CAP:
+                    ti.atomic_min(bound, ti.max(t, 0.0))
+    return bound
+
+
+class ObstacleContact(Term):
+    """Barriers keeping the given vertices outside a rigid obstacle (a Shape), which set_offset translates."""
+
+    reports_contact = True
+
+    def __init__(self, config, vertices: np.ndarray, shape: Shape, name: str, dhat: float, stiffness: float):
+        self.config = config
+        self.name, self.kind = name, int(shape.kind)
+        self.dhat, self.kappa = float(dhat), float(stiffness)
+        self.placed = shape.parameters()
+        self.parameters = self.placed.copy()
+        self.verts = int32s(vertices)
+        self._rows, self._cols = block_pattern(np.asarray(vertices)[:, None], config.dim)
+
+    @property
+    def offset(self) -> np.ndarray:
+        """The obstacle's translation from its placed position (3,)."""
+        return self.parameters[:3] - self.placed[:3]
+
+    def set_offset(self, offset) -> None:
+        """Translate the obstacle by offset ([dx, dy] or [dx, dy, dz]) from its placed position."""
+        self.parameters[:3] = self.placed[:3] + np.pad(np.asarray(offset, dtype=np.float64), (0, 3 - len(offset)))
+
+    def _energy(self) -> tuple[float, float]:
+        return obstacle_energy(
+            self.config.rest, self.config.u, self.verts, self.kind, self.parameters, self.dhat, self.kappa
+        )
+
+    def nearest(self) -> float:
+        """The smallest signed distance of a listed vertex to the obstacle (<= 0: one touches or is inside it)."""
+        return float(self._energy()[1])
+
+    def energy(self) -> float:
+        total, nearest = self._energy()
+        return total if nearest > 0 else np.inf
+
+    def _derivatives(self, exact: bool) -> tuple[np.ndarray, np.ndarray]:
+        d = self.config.dim
+        gradient, hessian = np.empty_like(self.config.u), np.empty((len(self.verts), 9))
+        nearest = obstacle_derivatives(
+            self.config.rest,
+            self.config.u,
+            self.verts,
+            self.kind,
+            self.parameters,
+            self.dhat,
+            self.kappa,
+            int(exact),
+            gradient,
+            hessian,
+        )
+        if not nearest > 0:  # inside the obstacle: no finite force (fault() says why)
+            gradient[:] = np.nan
+        return gradient, hessian.reshape(-1, 3, 3)[:, :d, :d].ravel()
+
+    def gradient(self) -> np.ndarray:
+        return self._derivatives(False)[0]
+
+    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._rows, self._cols
+
+    def hessian_values(self, psd_only: bool = False) -> np.ndarray:
+        return self._derivatives(not psd_only)[1]
+
+    def max_step(self, dx: np.ndarray) -> float:
+        bound = obstacle_step(
+            self.config.rest,
+            self.config.u,
+            np.ascontiguousarray(dx, dtype=np.float64),
+            self.verts,
+            self.kind,
+            self.parameters,
+        )
+        return math.inf if bound >= HUGE else float(bound)  # Taichi's inf comes back as the largest double
+
+    def fault(self) -> str | None:
+        nearest = self.nearest()
+        if nearest > 0:
+            return None
+        return (
+            f"obstacle {self.name!r} overlaps the body (a boundary node {-nearest:.3g} inside it, at its offset "
+            f"{np.round(self.offset, 6).tolist()}): it moved too far for the body to give way"
+        )
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """A rigid obstacle ([[obstacles]]): its name (heads its history columns), shape (a Shape), the barrier's
+    threshold dhat and stiffness (as [effects.ground]'s), and keyframes ((step, [dx, dy(, dz)]), ...): its
+    translation from its placed position, piecewise linear over the schedule's steps from 0 at step 0 and held
+    after the last (as a chamber's commands, scene/schedule.py); none: a static obstacle."""
+
+    name: str
+    shape: Shape
+    dhat: float | None = si_default(0.01, LENGTH, scaled=False)
+    stiffness: float | None = si_default(1e3, NODAL_STIFFNESS, scaled=False)
+    keyframes: tuple = field(default=())
+
+    def __post_init__(self):
+        require(
+            isinstance(self.name, str) and self.name != "" and self.name[0] not in "=+-@",
+            f"obstacle name = {self.name!r} must be a non-empty string not starting with = + - @",
+        )
+        require(isinstance(self.shape, Shape), f"obstacle {self.name!r}: shape = {self.shape!r} is not a shape")
+        for key in ("dhat", "stiffness"):
+            value = getattr(self, key)
+            require(value is None or require_finite(key, value) > 0, f"{key} = {value!r} must be > 0")
+        frames = self.keyframes
+        require(
+            isinstance(frames, (tuple, list))
+            and all(isinstance(k, (tuple, list)) and len(k) == 2 and shape_of(k[1]) in ((2,), (3,)) for k in frames),
+            f"obstacle {self.name!r}: keyframes = {frames!r} must be a list of [step, [dx, dy, dz]]",
+        )
+        steps = [require_finite("keyframes step", s) for s, _ in frames]
+        for _, offset in frames:
+            vector("keyframes offset", list(offset))
+        require(
+            all(float(s).is_integer() and s >= 0 for s in steps),
+            f"obstacle {self.name!r}: keyframes steps {steps!r} must be whole numbers >= 0",
+        )
+        require(
+            all(b > a for a, b in zip(steps, steps[1:])),
+            f"obstacle {self.name!r}: keyframes steps {steps!r} must increase",
+        )
+        object.__setattr__(self, "keyframes", tuple((s, tuple(offset)) for s, offset in frames))
+
+    @property
+    def moving(self) -> bool:
+        return bool(self.keyframes)
+
+    @property
+    def last_step(self) -> int:
+        return int(self.keyframes[-1][0]) if self.keyframes else 0
+
+    def offset(self, step: float) -> np.ndarray:
+        """The translation (3,) at a (possibly fractional) step: linear between the keyframes, 0 at step 0."""
+        steps = [0.0] + [float(s) for s, _ in self.keyframes]
+        values = [(0.0, 0.0, 0.0)] + [vector("keyframes offset", list(v)) for _, v in self.keyframes]
+        if len(steps) > 1 and steps[1] == 0.0:
+            steps, values = steps[1:], values[1:]
+        return np.array([np.interp(step, steps, column) for column in np.transpose(values)])
+
+    def terms(self, config, mesh, lumped_area, budget) -> list:
+        """Its contact term on the body's outer boundary; refused when it overlaps the rest body (a node at d <= 0)
+        or a 3D scene gives a point or vector with 2 numbers."""
+        flat = [key for key in self.shape.vectors if len(getattr(self.shape, key)) == 2]
+        flat += ["keyframes"] if any(len(v) == 2 for _, v in self.keyframes) else []
+        require(
+            mesh.dim == 2 or not flat,
+            f"obstacle {self.name!r}: {flat[0] if flat else ''} has 2 numbers; a 3D scene gives [x, y, z]",
+        )
+        term = ObstacleContact(config, mesh.boundary, self.shape, self.name, self.dhat, self.stiffness)  # type: ignore[arg-type]
+        every = ObstacleContact(config, np.arange(mesh.n_vertices), self.shape, self.name, 1.0, 1.0)
+        nearest = every.nearest()  # a node inside it, on the boundary or (an obstacle within the body) not
+        require(
+            nearest > 0,
+            f"obstacle {self.name!r} overlaps the body at rest (a node {-nearest:.3g} inside it): "
+            f"place it clear of the body",
+        )
+        return [term]
