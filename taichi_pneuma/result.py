@@ -59,6 +59,8 @@ class Result(Run):
             "tip_deflection": self.tip_deflection,
             **{c: float(v) for c, v in zip(TIP_COLUMNS[2:], final.tip[2:])},
             "tip_rotation_deg": final.tip_rotation,
+            **({} if final.tip_twist is None else {"tip_twist_deg": final.tip_twist}),
+            **({} if final.blocked_force is None else {"blocked_force": final.blocked_force}),
             "peak_pressure": self.peak_pressure,
             "contact": final.contact,
             **({"contact_fz": final.contact_fz} if final.contact_fz else {}),

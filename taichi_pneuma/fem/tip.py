@@ -1,6 +1,6 @@
 """What a run reads off the tip: the mean displacement of the mesh's tip nodes (the geometry's named tip; the
 right edge, in 3D the right face, by default), a d-vector, and their rigid rotation in the x-y plane (in 3D the
-bend angle about z)."""
+bend angle about z); in 3D also their twist about the x axis (the body's axis)."""
 
 from __future__ import annotations
 
@@ -23,6 +23,14 @@ def tip_twist(rest: np.ndarray, current: np.ndarray) -> float:
     points' (y, z) coordinates, rest (k, 3) to current (k, 3). Positive by the right-hand rule about +x: counter-
     clockwise seen from +x looking back down the axis (y turning towards z)."""
     return tip_rotation(rest[:, 1:3], current[:, 1:3])
+
+
+def tip_twist_of(mesh, u: np.ndarray) -> float | None:
+    """The twist (tip_twist) of the mesh's tip nodes at displacements u (n, 3); None in 2D (no twist)."""
+    if mesh.dim == 2:
+        return None
+    rest = mesh.vertices[mesh.tip]
+    return tip_twist(rest, rest + u[mesh.tip])
 
 
 def tip_measures(mesh, u: np.ndarray) -> tuple[np.ndarray, float]:

@@ -193,6 +193,7 @@ FIXED_COLUMNS = {
     "tip_dy": LENGTH,
     "tip_dz": LENGTH,
     "tip_rotation": ANGLE,
+    "tip_twist": ANGLE,
     "seconds": TIME,
     "target_x": LENGTH,
     "target_y": LENGTH,
@@ -231,6 +232,6 @@ def history_dimensions(scene, contacts=(), dim: int = 2) -> dict[str, str]:
     force, moment = in_dimension(FORCE, dim), in_dimension(MOMENT, dim)
     for name in contacts:
         dimensions.update({f"{name}.{part}": force for part in ("fx", "fy", "fz", "magnitude")})
-    dimensions.update({f"clamp.f{axis}": force for axis in "xyz"})
+    dimensions.update({f"clamp.f{axis}": force for axis in "xyz"}, blocked_force=force)
     dimensions.update({f"clamp.m{axis}": moment for axis in "xyz"})
     return dimensions

@@ -38,7 +38,10 @@ class StepRecord:
     reaction on the body, its force and its moment about the pinned nodes' rest centroid (simulate.clamp_reaction:
     fx, fy, mz; in 3D fx, fy, fz, mx, my, mz), empty without a clamp; extra:
     further columns by name, last in the row (a reach's target and tip error, inverse.frames); max_stretch: the
-    largest principal stretch at any quadrature point (ElementFields.largest_stretch).
+    largest principal stretch at any quadrature point (ElementFields.largest_stretch); tip_twist: in 3D the tip's
+    twist about x in degrees (fem/tip.py tip_twist), else None; blocked_force: in a scene with obstacles the
+    magnitude of the total force between the body and all of them (the force an actuator exerts on the objects it
+    is held against), else None.
     """
 
     step: int
@@ -57,6 +60,8 @@ class StepRecord:
     max_stretch: float = math.nan
     contact_fz: dict[str, float] = field(default_factory=dict)
     clamp: dict[str, float] = field(default_factory=dict)
+    tip_twist: float | None = None
+    blocked_force: float | None = None
 
     @property
     def tip_dx(self) -> float:
@@ -70,8 +75,8 @@ class StepRecord:
 
     def row(self) -> dict[str, float]:
         """Flat columns: step, <chamber>.<field> for each chamber, tip_dx, tip_dy (and tip_dz in 3D),
-        tip_rotation, <contact>.fx/.fy(/.fz)/.magnitude, clamp.fx/.fy(/.fz)/(.mx/.my/).mz, solver figures, the extra
-        columns."""
+        tip_rotation (and tip_twist in 3D), <contact>.fx/.fy(/.fz)/.magnitude, blocked_force (with obstacles),
+        clamp.fx/.fy(/.fz)/(.mx/.my/).mz, solver figures, the extra columns."""
         row: dict[str, float] = {"step": self.step}
         for name, c in self.chambers.items():
             row.update(
@@ -84,11 +89,15 @@ class StepRecord:
             )
         row.update({column: float(value) for column, value in zip(TIP_COLUMNS, self.tip)})
         row["tip_rotation"] = self.tip_rotation
+        if self.tip_twist is not None:
+            row["tip_twist"] = self.tip_twist
         for name, (fx, fy, magnitude) in self.contact.items():
             row.update({f"{name}.fx": fx, f"{name}.fy": fy})
             if name in self.contact_fz:
                 row[f"{name}.fz"] = self.contact_fz[name]
             row[f"{name}.magnitude"] = magnitude
+        if self.blocked_force is not None:
+            row["blocked_force"] = self.blocked_force
         row.update({f"clamp.{key}": value for key, value in self.clamp.items()})
         row.update(
             {
@@ -200,14 +209,15 @@ class Run:
         )
 
     def extremes(self) -> dict[str, dict]:
-        """The range over the run of the tip's measures (tip_dx, tip_dy, in 3D tip_dz, tip_rotation) and of each
-        chamber's (<chamber>.area, .area_ratio, .pressure), by history column: {"min": value, "min_step": the
-        first step at it, "max": ..., "max_step": ...}. A schedule that goes out and back ends near rest; its
-        extremes keep what it reached."""
+        """The range over the run of the tip's measures (tip_dx, tip_dy, in 3D tip_dz, tip_rotation, in 3D tip_twist),
+        of the blocked force (with obstacles) and of each chamber's (<chamber>.area, .area_ratio, .pressure), by
+        history column: {"min": value, "min_step": the first step at it, "max": ..., "max_step": ...}. A schedule
+        that goes out and back ends near rest; its extremes keep what it reached."""
         history = self.history
         columns = [
             *TIP_COLUMNS[: self.mesh.dim],
             "tip_rotation",
+            *(column for column in ("tip_twist", "blocked_force") if column in history),
             *(f"{name}.{key}" for name in self.chamber_names for key in ("area", "area_ratio", "pressure")),
         ]
         extremes = {}

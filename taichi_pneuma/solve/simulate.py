@@ -8,7 +8,7 @@ import time
 import numpy as np
 
 from ..fem.fields import ElementFields
-from ..fem.tip import tip_measures
+from ..fem.tip import tip_measures, tip_twist_of
 from ..scene.build import BuiltScene
 from ..scene.schedule import Schedule
 from .newton import NewtonOptions, NewtonSolver, SolveRecord
@@ -242,10 +242,13 @@ def run_schedule(
         final = records[-1]
         chambers = chamber_records(built, target)
         contact, contact_fz, vertex_forces = {}, {}, np.zeros_like(u)
+        on_obstacles = np.zeros(mesh.dim)
         for term in contact_terms:
             f = -term.gradient()
             vertex_forces += f
             total = f.sum(axis=0)
+            if any(term is obstacle for obstacle in built.obstacles):
+                on_obstacles += total
             contact[term.name] = (float(total[0]), float(total[1]), float(np.linalg.norm(f, axis=1).sum()))
             if mesh.dim == 3:
                 contact_fz[term.name] = float(total[2])
@@ -264,6 +267,8 @@ def run_schedule(
             max_stretch=stretches.largest_stretch(mesh.vertices + u),
             contact_fz=contact_fz,
             clamp=clamp_reaction(built),
+            tip_twist=tip_twist_of(mesh, u),
+            blocked_force=float(np.linalg.norm(on_obstacles)) if built.obstacles else None,
         )
         steps.append(step)
         states.append(mesh.vertices + u)
