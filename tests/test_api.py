@@ -122,8 +122,12 @@ def test_example_script_runs(tmp_path, monkeypatch, capsys):
 
 def test_plot_shows_the_history_on_labelled_axes(small):
     fig = small.plot()
-    (pa, tip), (area, pressure) = np.reshape(fig.axes, (2, 2))
+    (pa, tip, bending), (area, pressure, extension) = np.reshape(fig.axes, (2, 3))
     assert pa.get_xlabel().startswith("area ratio") and pa.get_ylabel().startswith("pressure")
+    assert bending.get_xlabel() == extension.get_xlabel() == "pressure p"  # the actuator's column: against pressure
+    assert np.array_equal(bending.lines[0].get_xdata(), small.pressure[:, 0])
+    assert np.array_equal(bending.lines[0].get_ydata(), small.history["tip_rotation"])
+    assert np.array_equal(extension.lines[0].get_ydata(), small.history["tip_dx"])
     assert tip.get_xlabel() == area.get_xlabel() == pressure.get_xlabel() == "commanded area ratio"
     assert np.array_equal(pa.lines[0].get_xdata(), small.area_ratio[:, 0])
     assert np.array_equal(pa.lines[0].get_ydata(), small.pressure[:, 0])

@@ -19,7 +19,6 @@ coordinates are clipped to >= 0 and renormalised (a move of at most that toleran
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from ..errors import require
 
@@ -66,6 +65,7 @@ def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
     norms = np.linalg.norm(gradients, axis=2)
     low, high = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
     tolerance = TOLERANCE * float(np.linalg.norm(high - low))
+    from scipy.spatial import cKDTree  # imported here: a scene without fibres does not load it
     tree = cKDTree(corners.mean(axis=1))
     best = np.zeros(len(points), dtype=np.int64)
     outside = np.full(len(points), np.inf)
