@@ -66,6 +66,7 @@ def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
     low, high = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
     tolerance = TOLERANCE * float(np.linalg.norm(high - low))
     from scipy.spatial import cKDTree  # imported here: a scene without fibres does not load it
+
     tree = cKDTree(corners.mean(axis=1))
     best = np.zeros(len(points), dtype=np.int64)
     outside = np.full(len(points), np.inf)
