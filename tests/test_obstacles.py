@@ -18,7 +18,8 @@ from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 from taichi_pneuma.terms.model import Configuration
-from taichi_pneuma.terms.obstacles import Box, Capsule, Cylinder, ObstacleContact, Plane, Sphere
+from taichi_pneuma.terms.obstacle_shapes import Box, Capsule, Cylinder, Plane, Sphere
+from taichi_pneuma.terms.obstacles import ObstacleContact
 
 H = 1e-6
 

@@ -286,7 +286,7 @@ def covering_scenes() -> list[Scene]:
     both forms of the clamp, the tip and rollers, a region, every effect, targets with an angle, layers by side and
     by box, every unit system and every material key (presets, each form of the isochoric law, K and nu), every
     obstacle shape."""
-    from taichi_pneuma.terms import obstacles
+    from taichi_pneuma.terms import obstacle_shapes as obstacles
     from taichi_pneuma.terms.obstacles import Obstacle
 
     core = tp.reference_scene()

@@ -25,6 +25,8 @@ from .colours import (
     EDGE,
     FACE,
     GROUND,
+    OBSTACLE,
+    OBSTACLE_FILL,
     OUTLINE,
     PIN,
     PRESSURE_CURVE,
@@ -64,6 +66,7 @@ class Track:
     target_index: np.ndarray | None = None  # (steps,) inverse control: the target a frame pursues
     descent: np.ndarray | None = None  # (steps,) inverse control: the descent a frame belongs to (restarts)
     chamber_names: tuple[str, ...] = ()  # for the trace panel's legend (several chambers)
+    obstacles: tuple = ()  # per rigid obstacle: (outline (k, 2), closed, its offset (steps, 2) per step)
 
     @classmethod
     def from_result(cls, result, title: str = "", color: str = "none") -> Track:
@@ -93,6 +96,11 @@ class Track:
             history.get("target"),
             history.get("descent"),
             tuple(result.chamber_names),
+            tuple(
+                (*o.shape.outline(2 * float(np.ptp(mesh.vertices, axis=0).max())), offsets)
+                for o in result.scene.obstacles
+                for offsets in [np.array([o.offset(s.step)[:2] for s in result.steps])]
+            ),
         )
 
     def header(self, i: int) -> list[str]:
@@ -218,6 +226,17 @@ class FrameRenderer:
         labels = self.draw(i)
         return draw_labels(self.canvas.image(), labels)
 
+    def _draw_obstacle(self, panel: int, outline: np.ndarray, closed: bool) -> None:
+        """A rigid obstacle: a closed (convex) outline filled as a fan from its centroid, then its edge; a plane's
+        line as one segment."""
+        x = self.to_canvas(panel, outline)
+        if closed:
+            centre = np.broadcast_to(x.mean(axis=0), x.shape)
+            self.canvas.triangles(np.stack([centre, x, np.roll(x, -1, axis=0)], axis=1), OBSTACLE_FILL)
+            self.canvas.segments(np.stack([x, np.roll(x, -1, axis=0)], axis=1), OBSTACLE, 2.0)
+        else:
+            self.canvas.segments(x[None], OBSTACLE, 3.0)
+
     def draw(self, i: int) -> list[Label]:
         """Draw frame i's shapes on the canvas; return its text labels (drawn by frame())."""
         require(0 <= i < self.frames, f"frame {i} is outside 0..{self.frames - 1}")
@@ -229,6 +248,8 @@ class FrameRenderer:
             if track.ground is not None:
                 ends = self.to_canvas(p, np.array([[self._lo[0], track.ground], [self._hi[0], track.ground]]))
                 c.segments(ends[None], GROUND, 3.0)
+            for outline, closed, offsets in track.obstacles:
+                self._draw_obstacle(p, outline + offsets[i], closed)
             if track.color is None:
                 c.triangles(x[faces], FACE)
                 c.segments(x[edges], EDGE, 1.0)

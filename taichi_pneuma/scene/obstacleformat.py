@@ -11,7 +11,8 @@ keyframes = [[10, [0.0, 0.2, 0.0]]]   # its translation by step (none: static)
 """
 
 from ..io.units import LENGTH, NODAL_STIFFNESS
-from ..terms.obstacles import AXES, SHAPES, Box, Capsule, Cylinder, Obstacle, Plane, Sphere
+from ..terms.obstacle_shapes import AXES, SHAPES, Box, Capsule, Cylinder, Plane, Sphere
+from ..terms.obstacles import Obstacle
 from .schema import Key, Table, Variant, record
 
 POINT = "[x, y] (2D) or [x, y, z]"
