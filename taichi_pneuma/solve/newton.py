@@ -70,6 +70,7 @@ MAX_HALVINGS = 40
 STEP_SAFETY = 0.9
 FORCING_MAX = 0.01  # forcing_term's largest eta
 CHORD_MAX_CONTRACTION = 0.5  # a chord step contracting the residual less than this is followed by a fresh Hessian
+BRANCH_SWEEPS = 4  # direction re-solves on the branches at u + d of kinked terms (the module docstring)
 CHORD_MAX_NEEDED = 3  # ... and so is one after which more than this many would be needed to reach tol
 
 
@@ -189,7 +190,20 @@ class NewtonSolver:
         self, g: np.ndarray, psd_only: bool, clock: PhaseClock, indefinite: bool = False, rtol: float | None = None
     ) -> tuple[np.ndarray, float]:
         """Newton direction d = -H^-1 g (to the relative residual rtol where the backend is iterative) and the
-        slope g.d (nan when every backend fails); indefinite: see _backends."""
+        slope g.d (nan when every backend fails); indefinite: see _backends. Where kinked terms' pieces change
+        branch between u and u + d, d is solved again with H and g of the branches at u + d (BRANCH_SWEEPS)."""
+        d = self._solve(-g, psd_only, clock, indefinite, rtol)
+        for _ in range(BRANCH_SWEEPS):
+            if not np.isfinite(d[0]) or not self.model.choose_branches(d):
+                break
+            d = self._solve(-g - self.model.branch_shift(), psd_only, clock, indefinite, rtol)
+        self.model.choose_branches(None)
+        return d, float(g @ d)
+
+    def _solve(
+        self, rhs: np.ndarray, psd_only: bool, clock: PhaseClock, indefinite: bool, rtol: float | None
+    ) -> np.ndarray:
+        """H^-1 rhs with a fresh Hessian (nan where every backend fails)."""
         with clock("hessian"):
             values = self.model.hessian_parts(psd_only)
             low_rank = self.model.low_rank()
@@ -200,15 +214,15 @@ class NewtonSolver:
                 with clock("factorize"):
                     backend.factorize(matrix)
                 with clock("solve"):
-                    d = solve_low_rank_updated(backend, -g, low_rank, rtol)
+                    d = solve_low_rank_updated(backend, rhs, low_rank, rtol)
                 break
             except FactorizationError:  # singular, indefinite for a Cholesky backend, CG not converged
                 self.cg_failed |= psd_only and backend.name == "amg"
                 continue
         else:
-            return g * math.nan, math.nan
+            return rhs * math.nan
         self.factored_by, self.factored, self.factored_exact = backend, True, not psd_only
-        return d, float(g @ d)
+        return d
 
     def _reused_direction(self, g: np.ndarray, clock: PhaseClock, rtol: float) -> tuple[np.ndarray, float]:
         """d = -H_old^-1 g with the factorisation the backend holds (a chord step) and the slope g.d; nan where

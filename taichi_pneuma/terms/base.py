@@ -174,6 +174,18 @@ class Term:
     def max_step(self, dx: np.ndarray) -> float:
         return math.inf
 
+    def choose_branches(self, dx: np.ndarray | None) -> int:
+        """A kinked term (piecewise smooth: each piece s on one of the smooth branches psi_s^b of its energy, the
+        branch a function of the state, as a tension-only cord is taut or slack) makes hessian_values and
+        branch_shift use, for every piece, the branch it is on at u + dx (dx (n, d); None: at u, the default) and
+        returns how many pieces that moves to another branch than the one they used; a smooth term returns 0."""
+        return 0
+
+    def branch_shift(self) -> np.ndarray | None:
+        """The gradient at u of the chosen branches' energies minus the true gradient, (n, d) (None: zero, as for
+        every smooth term and for a kinked one whose pieces are on their own branches at u)."""
+        return None
+
     def fault(self) -> str | None:
         """Why no equilibrium can be found from the current state, in words, when this term is the cause (e.g. a
         material law that is unstable there), else None; asked when a Newton solve breaks down."""
