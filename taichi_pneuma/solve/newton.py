@@ -165,7 +165,9 @@ class NewtonSolver:
         )
         self.factored_by, self.factored = self.backend, False  # the backend holding the last factorisation
         self.factored_exact = False  # ... and whether it is of an exact Hessian
-        self.chord = model.config.dim == 3 if self.options.chord_steps is None else self.options.chord_steps
+        self.chord = (
+            model.config.dim == 3 and not model.kinked if self.options.chord_steps is None else self.options.chord_steps
+        )
         self.cg_failed = False  # CG failed on a PSD Hessian of this model: the direct backend serves from then on
 
     def _energy_at(self, u: np.ndarray) -> float:

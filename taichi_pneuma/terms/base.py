@@ -148,10 +148,12 @@ class Term:
     A term holds the model's Configuration (config.rest, config.u: (n, d) NumPy arrays) and its own
     data as NumPy arrays, and evaluates itself by calling module-level kernels on them.
     reports_contact: whether -gradient() is a contact force the history reports.
+    kinked: whether the term is piecewise smooth (see choose_branches).
     """
 
     name = "term"
     reports_contact = False
+    kinked = False  # piecewise smooth: choose_branches may move pieces to other branches
 
     def energy(self) -> float:
         """The term's energy at config.u (every term has one)."""

@@ -133,6 +133,7 @@ class Cords(Term):
     (P, d + 1)); segments (s, 2) point indices, stiffness (s,) E A, rest_length (s,) L0 > 0."""
 
     name = "fibers"
+    kinked = True
 
     def __init__(self, config, nodes, weights, segments, stiffness, rest_length):
         self.config = config

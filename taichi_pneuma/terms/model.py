@@ -87,6 +87,11 @@ class EnergyModel:
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
         return np.concatenate(self.hessian_parts(psd_only))
 
+    @property
+    def kinked(self) -> bool:
+        """Whether a term is kinked (Term.kinked)."""
+        return any(t.kinked for t in self.terms)
+
     def choose_branches(self, dx: np.ndarray | None) -> int:
         """Every kinked term's pieces take the branch they are on at u + dx (flat or (n, d); None: at u) for the
         Hessian and branch_shift (Term.choose_branches); returns how many pieces changed branch."""
