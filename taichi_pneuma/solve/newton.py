@@ -30,6 +30,16 @@ reach the tolerance; otherwise a fresh Hessian. A solve may also start with one 
 increment, the live window's next frame). The rule counts steps, not seconds, so a run's iterates do not depend
 on the machine's load. (In 2D a factorisation costs about what the rest of an iteration does: no chord steps.)
 
+A kinked term (Term.choose_branches: piecewise smooth, as a tension-only cord is taut or slack) makes Newton's
+quadratic model wrong wherever a piece changes branch between u and u + d: a slack cord's model carries no stiffness,
+the step stretches it far, the line search halves, and the active set thrashes (a stiff embedded cord: 143
+iterations and 2 cut-backs for one increment). So d is solved again, up to BRANCH_SWEEPS times, with H and g of the
+branches each piece is on at u + d (g shifted by the gradient difference, Term.branch_shift: a slack cord taut at
+u + d enters with its two-sided force k (l - L0) < 0 and stiffness k n n^T), until no piece changes branch: a
+primal-dual active-set / semismooth Newton step on the model (each sweep a factorisation). The energy, gradient and
+residual stay the exact ones. A model with a kinked term takes no chord steps: a factorisation of another iterate's
+branches is a poor model (the fibre-reinforced actuator: 20-40% more iterations and time with them).
+
 The step u <- u + alpha d (u: displacements) starts at alpha = min(1, 0.9 max_step), the terms'
 safe bound (no triangle inverts), and halves until the Armijo condition
 

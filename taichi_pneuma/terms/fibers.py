@@ -17,6 +17,10 @@ nodes of a segment's two points (slot c_s = -w_ai for the first point's nodes, +
 c_s c_t d2psi/dp_b2). The kernels are dimension-generic (d from the arrays' shapes, vectors padded to 3), so they
 compile once per process for 2D and 3D alike.
 
+The kink at l = L0 is handled by the Newton solver's branch sweeps (solve/newton.py): choose_branches(dx) makes the
+Hessian and branch_shift use the segments taut at u + dx (two-sided there, k (l - L0) of either sign) and leave out
+those slack there; energy and gradient are always the exact tension-only ones.
+
 In 2D a fibre is a layer of cords per unit depth: its `area` is a cross-section per unit depth (a length), and E A a
 force per unit depth like every 2D force.
 """
