@@ -104,6 +104,33 @@ def segment_vectors(term) -> list[np.ndarray]:
     return list(points[term.segments[:, 1]] - points[term.segments[:, 0]])
 
 
+@pytest.mark.parametrize("case", CASES)
+def test_on_the_branches_at_u_plus_dx_a_cord_is_two_sided_where_taut_there_and_absent_where_slack(case):
+    mesh, fiber = CASES[case]
+    config, term = cords(mesh, fiber)
+    rng = np.random.default_rng(2)
+    config.u[:] = rng.normal(0.0, 0.01, config.u.shape) + 0.005 * mesh.vertices
+    dx = rng.normal(0.0, 0.01, config.u.shape)
+    now = np.array([np.linalg.norm(r) for r in segment_vectors(term)]) > term.rest_length
+    u0 = config.u.copy()
+    config.u[:] = u0 + dx
+    ahead = np.array([np.linalg.norm(r) for r in segment_vectors(term)]) > term.rest_length
+    config.u[:] = u0
+    assert 0 < np.count_nonzero(ahead != now) < len(now)
+    assert term.choose_branches(dx) == np.count_nonzero(ahead != now)
+    expected = np.zeros_like(config.u)  # k (l - L0) n of every segment taut at u + dx, slack ones left out
+    for s, r in enumerate(segment_vectors(term)):
+        if ahead[s]:
+            force = fiber.E * fiber.section(mesh.dim) / term.rest_length[s] * (np.linalg.norm(r) - term.rest_length[s])
+            a, b = term.segments[s]
+            np.add.at(expected, term.nodes[b], term.weights[b][:, None] * force * r / np.linalg.norm(r))
+            np.add.at(expected, term.nodes[a], -term.weights[a][:, None] * force * r / np.linalg.norm(r))
+    assert np.allclose(term.gradient() + term.branch_shift(), expected, rtol=0, atol=1e-12 * np.abs(expected).max())
+    assert np.count_nonzero(term.hessian_values().reshape(len(now), -1).any(axis=1)) == np.count_nonzero(ahead)
+    assert term.choose_branches(None) == np.count_nonzero(ahead != now)
+    assert term.branch_shift() is None
+
+
 STRAIGHT = {
     "3D": (box_with_cavities({}, 2), Line((-1.75, 0.1, 0.05), (1.75, 0.1, 0.05)), dict(diameter=0.2), 0.0),
     "2D": (rectangle(), Line((0.0, 0.4), (3.0, 0.4)), dict(area=0.02), 1.5),

@@ -148,10 +148,12 @@ class Term:
     A term holds the model's Configuration (config.rest, config.u: (n, d) NumPy arrays) and its own
     data as NumPy arrays, and evaluates itself by calling module-level kernels on them.
     reports_contact: whether -gradient() is a contact force the history reports.
+    kinked: whether the term is piecewise smooth (see choose_branches).
     """
 
     name = "term"
     reports_contact = False
+    kinked = False  # piecewise smooth: choose_branches may move pieces to other branches
 
     def energy(self) -> float:
         """The term's energy at config.u (every term has one)."""
@@ -173,6 +175,18 @@ class Term:
 
     def max_step(self, dx: np.ndarray) -> float:
         return math.inf
+
+    def choose_branches(self, dx: np.ndarray | None) -> int:
+        """A kinked term (piecewise smooth: each piece s on one of the smooth branches psi_s^b of its energy, the
+        branch a function of the state, as a tension-only cord is taut or slack) makes hessian_values and
+        branch_shift use, for every piece, the branch it is on at u + dx (dx (n, d); None: at u, the default) and
+        returns how many pieces that moves to another branch than the one they used; a smooth term returns 0."""
+        return 0
+
+    def branch_shift(self) -> np.ndarray | None:
+        """The gradient at u of the chosen branches' energies minus the true gradient, (n, d) (None: zero, as for
+        every smooth term and for a kinked one whose pieces are on their own branches at u)."""
+        return None
 
     def fault(self) -> str | None:
         """Why no equilibrium can be found from the current state, in words, when this term is the cause (e.g. a

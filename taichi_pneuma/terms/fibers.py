@@ -17,6 +17,10 @@ nodes of a segment's two points (slot c_s = -w_ai for the first point's nodes, +
 c_s c_t d2psi/dp_b2). The kernels are dimension-generic (d from the arrays' shapes, vectors padded to 3), so they
 compile once per process for 2D and 3D alike.
 
+The kink at l = L0 is handled by the Newton solver's branch sweeps (solve/newton.py): choose_branches(dx) makes the
+Hessian and branch_shift use the segments taut at u + dx (two-sided there, k (l - L0) of either sign) and leave out
+those slack there; energy and gradient are always the exact tension-only ones.
+
 In 2D a fibre is a layer of cords per unit depth: its `area` is a cross-section per unit depth (a length), and E A a
 force per unit depth like every 2D force.
 """
@@ -32,7 +36,7 @@ from ..errors import require, require_finite
 from ..fem.embedding import embed
 from ..fem.fiber_paths import LAYOUTS, PLANAR, Layout
 from ..limits import BYTES_PER_TRIANGLE, refusal
-from .base import Nodal, Scalars, Table, Term, block_pattern, int32s
+from .base import Indices, Nodal, Scalars, Table, Term, block_pattern, int32s
 
 Pairs: TypeAlias = ti.types.ndarray(dtype=ti.i32, ndim=2)  # (P, d + 1) embedding nodes, or (s, 2) segment points
 MAX_FIBER_POINTS = 100_000  # sample points of one fibre: each segment's Hessian block is up to 24 x 24
@@ -74,16 +78,18 @@ def cord_gradient(
     segments: Pairs,
     stiffness: Scalars,
     rest_length: Scalars,
+    branch: Indices,
     out: Nodal,
 ):
-    """out = dE/dx: k (l - L0) n times w_bi at the second point's nodes, times -w_ai at the first's."""
+    """out = dE/dx: k (l - L0) n times w_bi at the second point's nodes, times -w_ai at the first's, for each taut
+    segment: l > L0 where branch[s] < 0, else branch[s] == 1."""
     for v, i in ti.ndrange(out.shape[0], out.shape[1]):
         out[v, i] = 0.0
     for s in range(segments.shape[0]):
         a, b = segments[s, 0], segments[s, 1]
         r = segment_vector(rest, u, nodes, weights, a, b)
         l = r.norm()
-        if l > rest_length[s]:
+        if ti.select(branch[s] < 0, l > rest_length[s], branch[s] == 1):
             force = stiffness[s] / rest_length[s] * (l - rest_length[s]) / l * r
             for j in range(nodes.shape[1]):
                 for i in ti.static(range(3)):
@@ -101,10 +107,11 @@ def cord_hessian(
     segments: Pairs,
     stiffness: Scalars,
     rest_length: Scalars,
+    branch: Indices,
     out: Table,
 ):
-    """out[s] = the segment's (2 (d + 1) d)^2 block, row-major: c_p c_q (k n n^T + k (l - L0) / l (I - n n^T)) at
-    node slots (p, q), zero for a slack segment."""
+    """out[s] = the segment's (2 (d + 1) d)^2 block, row-major: c_p c_q (k n n^T + k max(l - L0, 0) / l (I - n n^T))
+    at node slots (p, q) for a taut segment (as in cord_gradient), zero for a slack one."""
     for s in range(segments.shape[0]):
         d, k = rest.shape[1], nodes.shape[1]
         n = 2 * k * d
@@ -112,11 +119,11 @@ def cord_hessian(
         r = segment_vector(rest, u, nodes, weights, a, b)
         l = r.norm()
         H = ti.Matrix.zero(ti.f64, 3, 3)
-        if l > rest_length[s]:
+        if ti.select(branch[s] < 0, l > rest_length[s], branch[s] == 1):
             stiff = stiffness[s] / rest_length[s]
             direction = r / l
             nn = direction.outer_product(direction)
-            H = stiff * nn + stiff * (l - rest_length[s]) / l * (ti.Matrix.identity(ti.f64, 3) - nn)
+            H = stiff * nn + stiff * ti.max(l - rest_length[s], 0.0) / l * (ti.Matrix.identity(ti.f64, 3) - nn)
         for p, q in ti.ndrange(2 * k, 2 * k):
             cp = ti.select(p < k, -weights[a, p % k], weights[b, p % k])
             cq = ti.select(q < k, -weights[a, q % k], weights[b, q % k])
@@ -130,6 +137,7 @@ class Cords(Term):
     (P, d + 1)); segments (s, 2) point indices, stiffness (s,) E A, rest_length (s,) L0 > 0."""
 
     name = "fibers"
+    kinked = True
 
     def __init__(self, config, nodes, weights, segments, stiffness, rest_length):
         self.config = config
@@ -140,6 +148,8 @@ class Cords(Term):
         blocks = np.hstack([self.nodes[self.segments[:, 0]], self.nodes[self.segments[:, 1]]])
         self._pattern = block_pattern(blocks, config.dim)
         self._block = (2 * self.nodes.shape[1] * config.dim) ** 2
+        self._own = np.full(len(self.segments), -1, dtype=np.int32)  # every segment on its own branch
+        self.branch = self._own  # the branches the Hessian uses: -1 its own, 0 slack, 1 taut
 
     def _arguments(self) -> tuple:
         c = self.config
@@ -148,17 +158,38 @@ class Cords(Term):
     def energy(self) -> float:
         return cord_energy(*self._arguments())
 
-    def gradient(self) -> np.ndarray:
+    def _gradient(self, branch: np.ndarray) -> np.ndarray:
         out = np.empty_like(self.config.u)
-        cord_gradient(*self._arguments(), out)
+        cord_gradient(*self._arguments(), branch, out)
         return out
+
+    def gradient(self) -> np.ndarray:
+        return self._gradient(self._own)
+
+    def _taut(self, u: np.ndarray) -> np.ndarray:
+        """Whether each segment is taut (l > L0) at displacements u."""
+        rest, moved = (np.einsum("pi,pid->pd", self.weights, x[self.nodes]) for x in (self.config.rest, u))
+        first, second = self.segments.T
+        r = (rest[second] - rest[first]) + (moved[second] - moved[first])
+        return np.linalg.norm(r, axis=1) > self.rest_length
+
+    def choose_branches(self, dx: np.ndarray | None) -> int:
+        """Taut or slack as at u + dx; the count of segments whose branch changes."""
+        now = self._taut(self.config.u)
+        new = self._own if dx is None else self._taut(self.config.u + dx).astype(np.int32)
+        changed = int(np.count_nonzero(np.where(new < 0, now, new) != np.where(self.branch < 0, now, self.branch)))
+        self.branch = new
+        return changed
+
+    def branch_shift(self) -> np.ndarray | None:
+        return None if self.branch is self._own else self._gradient(self.branch) - self.gradient()
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         return self._pattern
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
         out = np.empty((len(self.segments), self._block))
-        cord_hessian(*self._arguments(), out)
+        cord_hessian(*self._arguments(), self.branch, out)
         return out.ravel()
 
 

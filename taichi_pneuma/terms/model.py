@@ -87,6 +87,26 @@ class EnergyModel:
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
         return np.concatenate(self.hessian_parts(psd_only))
 
+    @property
+    def kinked(self) -> bool:
+        """Whether a term is kinked (Term.kinked)."""
+        return any(t.kinked for t in self.terms)
+
+    def choose_branches(self, dx: np.ndarray | None) -> int:
+        """Every kinked term's pieces take the branch they are on at u + dx (flat or (n, d); None: at u) for the
+        Hessian and branch_shift (Term.choose_branches); returns how many pieces changed branch."""
+        shaped = None if dx is None else dx.reshape(self.config.u.shape)
+        return sum(t.choose_branches(shaped) for t in self.terms)
+
+    def branch_shift(self) -> np.ndarray:
+        """The gradient (flat) at u of the energy on the chosen branches minus the true gradient (Term.branch_shift)."""
+        shift = np.zeros(self.n_dofs)
+        for t in self.terms:
+            part = t.branch_shift()
+            if part is not None:
+                shift += part.ravel()
+        return shift
+
     def low_rank(self) -> list[tuple[np.ndarray, np.ndarray, float]]:
         return [part for t in self.terms for part in t.low_rank()]
 
