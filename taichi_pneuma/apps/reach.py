@@ -4,6 +4,7 @@
     pneuma-reach --scene beam_3d --tip 1.769 -0.179 0.006 --no-video    (a 3D body: X Y Z)
     pneuma-reach --scene pneunet_finger --targets pneunet_finger_targets.csv   (or a scene's [[targets]])
     pneuma-reach --design cy --tip-dy -0.2
+    pneuma-reach --scene gripper_2d --output object.magnitude --value 20     (any history column)
 
 X Y is where the tip point (the mean of the tip vertices, as in inflate's tip deflection) should be,
 in scene coordinates (X Y Z on a 3D body; X Y alone leaves z free); --angle DEG adds the tip rotation
@@ -14,7 +15,10 @@ commands found and a summary line starting with `reached:`; an unreachable targe
 written. Writes under --out the video (the target marker and the tip's path), its last frame,
 the per-frame history CSV (commands, tip, target, error), the states and a summary JSON.
 --design cy --tip-dy D instead finds the chamber height cy at which the reference ramp ends at tip
-deflection D.
+deflection D. --output COLUMN --value V instead follows the scene's own schedule to where a history column
+(tip_rotation: the bending angle, tip_twist, tip_dx, blocked_force, a contact force, ...) equals V
+(control/outputs.py), prints `reached:` with the commands there (or `unreachable:` with the closest step, exit 1)
+and writes <scene>_output_summary.json.
 """
 
 from __future__ import annotations
@@ -105,6 +109,13 @@ def parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--design", choices=["cy"], help="find the reference chamber height cy for --tip-dy instead")
     p.add_argument("--tip-dy", type=float, help="with --design cy: the tip deflection the ramp should end at")
+    p.add_argument(
+        "--output",
+        metavar="COLUMN",
+        help="instead of a tip target: the history column (tip_rotation, blocked_force, ...) to bring to --value "
+        "along the scene's schedule",
+    )
+    p.add_argument("--value", type=float, help="with --output: the value the column should take")
     add_ramp_arguments(p)
     add_video_arguments(p, "960x384")
     p.add_argument(
@@ -180,6 +191,8 @@ def run(args: argparse.Namespace) -> dict:
 
     if args.design:
         return run_design(args)
+    if args.output is not None or args.value is not None:
+        return run_output(args)
     require(args.tip_dy is None, "--tip-dy needs --design cy")
     explicit_tol = args.tol is not None  # live mode keeps interactive.LIVE_TOL unless --tol is given
     check_flags(args)
@@ -332,6 +345,49 @@ def save_reaches(args: argparse.Namespace, reacher, results: list, stem: str, si
         k, first = unreached[0]
         where = "" if len(results) == 1 else f"target {k} of {len(results)} ({len(unreached)} unreachable): "
         print(where + first.summary_line(), file=sys.stderr)
+    return summary
+
+
+def run_output(args: argparse.Namespace) -> dict:
+    """--output COLUMN --value V: the commands along the scene's schedule at which the column equals V."""
+    from ..api import load_scene
+    from ..control.outputs import reach_output
+
+    require(args.output is not None and args.value is not None, "--output COLUMN and --value V go together")
+    wanted = require_finite("--value", args.value)
+    require(
+        args.tip is None and args.targets is None and not args.interactive,
+        "--output works along the scene's schedule (no --tip, --targets, --interactive)",
+    )
+    check_flags(args)
+    scene = apply_set(load_scene(args.scene) if args.scene else scene_for(args, args.cy), args.set)
+    out = prepare_directory(args.out)
+    runtime.init(args.arch)
+    built = build(scene, args)
+    result = reach_output(built, args.output, wanted, newton_options(args))
+    commands = ", ".join(f"{name} {c:.6g}" for name, c in zip(scene.chamber_names, result.commands))
+    summary = {
+        "scene": scene.name,
+        "output": args.output,
+        "wanted": wanted,
+        "found": result.found,
+        "value": result.value,
+        "step": result.step,
+        "commands": dict(zip(scene.chamber_names, map(float, result.commands))),
+        "evaluations": len(result.evaluations),
+        "seconds": result.seconds,
+        "all_converged": result.found and result.run.converged,  # exit 1 when not reached
+    }
+    path = save_json(out / f"{scene.name}_output_summary.json", summary)
+    print(f"wrote {path}")
+    if result.found:
+        print(f"reached: {args.output} = {result.value:.6g} at step {result.step:.4f} of the schedule: {commands}")
+    else:
+        print(
+            f"unreachable: {args.output} = {wanted:.6g} is not crossed by the schedule; closest {result.value:.6g} "
+            f"at step {result.step:g}: {commands}",
+            file=sys.stderr,
+        )
     return summary
 
 

@@ -175,6 +175,53 @@ def settle(
             )
 
 
+def step_record(
+    built: BuiltScene,
+    step: int,
+    commands: np.ndarray,
+    u: np.ndarray,
+    records: list[SolveRecord],
+    cuts: int,
+    seconds: float,
+    stretches: ElementFields,
+) -> tuple[StepRecord, np.ndarray]:
+    """What a run records of the equilibrium u at `commands` (the model holding it), reached by the Newton solves
+    `records` with `cuts` cut-backs in `seconds`: its StepRecord (chambers, tip, contact forces by term, the clamp's
+    reaction, the largest stretch) and the summed contact force per node (n, d)."""
+    mesh = built.mesh
+    contact, contact_fz, vertex_forces = {}, {}, np.zeros_like(u)
+    on_obstacles = np.zeros(mesh.dim)
+    for term in built.contact_terms():
+        f = -term.gradient()
+        vertex_forces += f
+        total = f.sum(axis=0)
+        if any(term is obstacle for obstacle in built.obstacles):
+            on_obstacles += total
+        contact[term.name] = (float(total[0]), float(total[1]), float(np.linalg.norm(f, axis=1).sum()))
+        if mesh.dim == 3:
+            contact_fz[term.name] = float(total[2])
+    final = records[-1]
+    record = StepRecord(
+        step,
+        chamber_records(built, commands),
+        *tip_measures(mesh, u),
+        sum(r.iterations for r in records),
+        final.residual,
+        final.converged,
+        cuts,
+        len(records) - cuts,
+        built.elastic.min_determinant(),
+        seconds,
+        contact,
+        max_stretch=stretches.largest_stretch(mesh.vertices + u),
+        contact_fz=contact_fz,
+        clamp=clamp_reaction(built),
+        tip_twist=tip_twist_of(mesh, u),
+        blocked_force=float(np.linalg.norm(on_obstacles)) if built.obstacles else None,
+    )
+    return record, vertex_forces
+
+
 def run_schedule(
     built: BuiltScene,
     schedule: Schedule | None = None,
@@ -239,41 +286,11 @@ def run_schedule(
         for record in records:
             newton["chord_steps"] += record.chord_steps
             newton["phase_seconds"].update(record.phase_seconds)
-        final = records[-1]
-        chambers = chamber_records(built, target)
-        contact, contact_fz, vertex_forces = {}, {}, np.zeros_like(u)
-        on_obstacles = np.zeros(mesh.dim)
-        for term in contact_terms:
-            f = -term.gradient()
-            vertex_forces += f
-            total = f.sum(axis=0)
-            if any(term is obstacle for obstacle in built.obstacles):
-                on_obstacles += total
-            contact[term.name] = (float(total[0]), float(total[1]), float(np.linalg.norm(f, axis=1).sum()))
-            if mesh.dim == 3:
-                contact_fz[term.name] = float(total[2])
-        step = StepRecord(
-            i,
-            chambers,
-            *tip_measures(mesh, u),
-            sum(r.iterations for r in records),
-            final.residual,
-            final.converged,
-            cuts,
-            len(records) - cuts,
-            built.elastic.min_determinant(),
-            time.perf_counter() - start,
-            contact,
-            max_stretch=stretches.largest_stretch(mesh.vertices + u),
-            contact_fz=contact_fz,
-            clamp=clamp_reaction(built),
-            tip_twist=tip_twist_of(mesh, u),
-            blocked_force=float(np.linalg.norm(on_obstacles)) if built.obstacles else None,
-        )
+        step, vertex_forces = step_record(built, i, target, u, records, cuts, time.perf_counter() - start, stretches)
         steps.append(step)
         states.append(mesh.vertices + u)
         forces.append(vertex_forces)
-        solves.append(final)
+        solves.append(records[-1])
         if progress is not None:
             progress(step, states[-1], vertex_forces if contact_terms else None)
         if stop is not None and i < schedule.increments and stop():

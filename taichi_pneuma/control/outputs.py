@@ -1,0 +1,128 @@
+"""Inverse control of anything a ramp measures: the commands at which a history column (the bending angle
+tip_rotation, the twist tip_twist, the extension tip_dx, the blocked force, a contact force, a chamber's pressure ...)
+takes a wanted value D, along the scene's own schedule.
+
+The schedule's commands c(s) (piecewise linear in the step s, solve.simulate's ramp) are followed from rest, the
+column m measured after every step. At the first step k where m(k) - D changes sign (or is zero), the root of
+m(c(s)) = D for s in [k - 1, k] is found by SciPy's brentq, each evaluation one equilibrium solved from the state
+of step k - 1 (simulate.settle, with its cut-backs): the state a ramp would reach at c(s), to the Newton tolerance,
+and m read off it as the ramp reads it (simulate.step_record). A column the ramp never brings to D is reported with
+the step that came closest; the ramp then runs whole. A quasistatic state depends on its path only through what
+remembers it (none of the elastic, pressure, fibre, sheet or frictionless contact terms do), so the root is the
+equilibrium of the scene at those commands.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..errors import require, require_finite
+from ..fem.fields import ElementFields
+from ..scene.build import BuiltScene
+from ..solve.newton import NewtonOptions, NewtonSolver
+from ..solve.records import Run
+from ..solve.simulate import RampInterrupted, run_schedule, settle, step_record
+
+
+@dataclass
+class OutputReach:
+    """column, wanted: what was asked; found: whether the ramp crossed it; value: the column at the result (the
+    closest step's when not found); step: the (fractional) step of the schedule at which it is reached; commands:
+    the chambers' commands there; run: the ramp's steps up to the crossing (all of them when not found);
+    evaluations: the brentq evaluations (step, value); seconds: the wall time."""
+
+    column: str
+    wanted: float
+    found: bool
+    value: float
+    step: float
+    commands: np.ndarray
+    run: Run
+    evaluations: list[tuple[float, float]]
+    seconds: float
+
+
+def crossing(values: np.ndarray, wanted: float) -> int | None:
+    """The first step k >= 1 with values[k - 1] - wanted and values[k] - wanted of opposite signs (or one zero)."""
+    gaps = np.asarray(values, dtype=float) - wanted
+    for k in range(1, len(gaps)):
+        if gaps[k - 1] * gaps[k] <= 0:
+            return k
+    return None
+
+
+def reach_output(
+    built: BuiltScene, column: str, wanted: float, options: NewtonOptions | None = None, xtol: float = 1e-6
+) -> OutputReach:
+    """The commands along built's schedule at which history column `column` equals `wanted` (module docstring);
+    a column the scene's history does not have is refused, naming the ones it has."""
+    started = time.perf_counter()
+    wanted = require_finite(column, wanted)
+    schedule = built.scene.schedule
+    seen: list[float] = []
+
+    def watch(step, positions, forces) -> None:
+        row = step.row()
+        require(
+            column in row,
+            f"output {column!r} is not a history column of this scene: one of {', '.join(sorted(row))}",
+        )
+        seen.append(float(row[column]))
+
+    def crossed() -> bool:
+        return crossing(np.array(seen), wanted) is not None
+
+    try:
+        run = run_schedule(built, options=options, progress=watch, stop=crossed)
+    except RampInterrupted as stopped:
+        run = stopped.result
+    values = run.history[column]
+    k = crossing(values, wanted)
+    if k is None:
+        closest = int(np.argmin(np.abs(values - wanted)))
+        return OutputReach(
+            column,
+            wanted,
+            False,
+            float(values[closest]),
+            float(closest),
+            schedule.commands(closest),
+            run,
+            [],
+            time.perf_counter() - started,
+        )
+    u0, c0 = run.displacements[k - 1], schedule.commands(k - 1)
+    solver = NewtonSolver(built.model, options)
+    stretches = ElementFields(built.mesh.vertices, built.mesh.elements)
+    evaluations: list[tuple[float, float]] = []
+
+    def measure(s: float) -> float:
+        commands = schedule.commands(s)
+        u, _, _, records, cuts = settle(built, solver, c0, u0, commands)
+        built.set_commands(commands)
+        built.model.set_displacements(u)
+        record, _ = step_record(built, k, commands, u, records, cuts, math.nan, stretches)
+        evaluations.append((s, float(record.row()[column])))
+        return evaluations[-1][1] - wanted
+
+    if values[k] == wanted:
+        step = float(k)
+    else:
+        step = float(brentq(measure, k - 1, k, xtol=xtol)) if values[k - 1] != wanted else float(k - 1)
+    value = wanted + measure(step)
+    return OutputReach(
+        column,
+        wanted,
+        True,
+        value,
+        step,
+        schedule.commands(step),
+        run,
+        evaluations,
+        time.perf_counter() - started,
+    )
