@@ -432,6 +432,7 @@ def fibered(solid: Scene) -> Scene:
         Rings((-1.5, 0.0, 0.0), 0.3, 4, 0.5, "x"),
         Helix((-1.5, 0.0, 0.0), 0.3, 3.0, "x", pitch=0.9, handedness="left", phase=45.0),
         Crossed((-1.5, 0.0, 0.0), 0.3, 3.0, "x", angle=40.0, flat=0.1),
+        Helix((-1.5, 0.0, 0.0), 0.3, axis="x", angle=60.0, extent=2.5),
     )
     fibers = tuple(
         Fiber(path, 1e6, area=1e-4, name=f"f{i}", spacing=0.05) if i % 2 else Fiber(path, 2e6, diameter=0.01)

@@ -8,10 +8,14 @@ sample count is told from before sampling). axis is 'z' when not given.
     polyline  points, at least 2: a cord through them (2D or 3D)
     rings     center (of the first ring), axis, radius, count, spacing: `count` closed circles of `radius` about
               the axis through center, the k-th centred at center + k spacing e_axis (3D)
-    helix     center (a point on the axis where the helix starts), axis, radius, turns, pitch (axial advance per
+    helix     center (a point on the axis where the helix starts), axis, radius, turns (or extent: its axial
+              extent, extent / pitch turns), pitch (axial advance per
               turn) or angle (winding angle from the axis, degrees: pitch = 2 pi radius / tan(angle)),
               handedness, phase (the start angle, degrees) (3D)
     crossed   the keys of helix but handedness: a right-handed and a left-handed helix of the same start (3D)
+
+A helix or crossed layout of `strands` n > 1 is n helices of each hand, their starts 360 / n degrees apart (a braid
+of n carriers each way).
 
 A helix or crossed pair with `flat` (a depth >= 0) winds on a D section instead of the circle: the half of the circle
 above the plane through the axis normal to y (axis x or z), its two sides continued straight down to `flat` below the
@@ -42,6 +46,7 @@ from ..io.units import LENGTH, unit
 AXES = ("x", "y", "z")
 FRAMES = {"x": (1, 2, 0), "y": (2, 0, 1), "z": (0, 1, 2)}  # (e_1, e_2, e_axis) indices: right-handed
 HANDEDNESS = ("right", "left")
+MAX_STRANDS = 256  # helices of one hand in a helix or crossed layout (a braid)
 
 
 def _point(name: str, value) -> np.ndarray:
@@ -197,18 +202,28 @@ class Spiral(Layout):
 
     center: tuple = field(metadata=unit(LENGTH))
     radius: float = field(metadata=unit(LENGTH))
-    turns: float
+    turns: float | None = None
     axis: str = "z"
     pitch: float | None = field(default=None, metadata=unit(LENGTH))
     angle: float | None = None
     phase: float = 0.0
     flat: float | None = field(default=None, metadata=unit(LENGTH))
+    extent: float | None = field(default=None, metadata=unit(LENGTH))
+    strands: int = 1
     planar = False
 
     def __post_init__(self):
         _check_axis_center(self.center, self.axis)
         _positive("radius", self.radius)
-        _positive("turns", self.turns)
+        require(
+            (self.turns is None) != (self.extent is None),
+            f"turns = {self.turns!r}, extent = {self.extent!r}: give exactly one of turns and extent",
+        )
+        _positive("turns" if self.extent is None else "extent", self.turns if self.extent is None else self.extent)
+        require(
+            isinstance(self.strands, int) and not isinstance(self.strands, bool) and 1 <= self.strands <= MAX_STRANDS,
+            f"strands = {self.strands!r} must be a whole number from 1 to {MAX_STRANDS}",
+        )
         require(
             (self.pitch is None) != (self.angle is None),
             f"pitch = {self.pitch!r}, angle = {self.angle!r}: give exactly one of pitch and angle",
@@ -254,16 +269,26 @@ class Spiral(Layout):
     @property
     def helix_length(self) -> float:
         """One helix's length: turns sqrt(P^2 + advance^2), P the section's perimeter."""
-        return self.turns * math.hypot(self.perimeter, self.advance)
+        return self.count * math.hypot(self.perimeter, self.advance)
 
-    def helix(self, sense: int, spacing: float) -> np.ndarray:
-        """The helix of handedness sense (+1 right, -1 left) sampled no coarser than spacing."""
+    @property
+    def count(self) -> float:
+        """Its turns: turns, or extent / advance (its axial extent over the advance per turn)."""
+        return self.turns if self.turns is not None else self.extent / self.advance  # type: ignore[operator]
+
+    def helices(self, sense: int, spacing: float) -> list[np.ndarray]:
+        """The strands of handedness sense (+1 right, -1 left), their phases 360 / strands degrees apart."""
+        return [self.helix(sense, spacing, self.phase + 360 * k / self.strands) for k in range(self.strands)]
+
+    def helix(self, sense: int, spacing: float, phase: float) -> np.ndarray:
+        """The helix of handedness sense (+1 right, -1 left) starting at phase (degrees), sampled no coarser than
+        spacing."""
         c, e1, e2, ea = _frame(self.center, self.axis)
-        t = np.linspace(0.0, self.turns, max(2, math.ceil(self.helix_length / spacing)) + 1)
+        t = np.linspace(0.0, self.count, max(2, math.ceil(self.helix_length / spacing)) + 1)
         if self.flat is not None:
-            arc = (self.phase / 360 + sense * t) * self.perimeter
+            arc = (phase / 360 + sense * t) * self.perimeter
             return c + self.section(arc) + np.outer(self.advance * t, ea)
-        theta = math.radians(self.phase) + sense * 2 * math.pi * t
+        theta = math.radians(phase) + sense * 2 * math.pi * t
         return (
             c
             + self.radius * (np.outer(np.cos(theta), e1) + np.outer(np.sin(theta), e2))
@@ -284,11 +309,11 @@ class Helix(Spiral):
         )
 
     def curves(self, spacing: float) -> list[np.ndarray]:
-        return [self.helix(1 if self.handedness == "right" else -1, spacing)]
+        return self.helices(1 if self.handedness == "right" else -1, spacing)
 
     @property
     def length(self) -> float:
-        return self.helix_length
+        return self.strands * self.helix_length
 
 
 @dataclass(frozen=True)
@@ -296,11 +321,11 @@ class Crossed(Spiral):
     """Two helices of opposite handedness (right, then left) on the same axis, start and pitch."""
 
     def curves(self, spacing: float) -> list[np.ndarray]:
-        return [self.helix(1, spacing), self.helix(-1, spacing)]
+        return self.helices(1, spacing) + self.helices(-1, spacing)
 
     @property
     def length(self) -> float:
-        return 2 * self.helix_length
+        return 2 * self.strands * self.helix_length
 
 
 LAYOUTS: dict[str, type[Layout]] = {

@@ -50,10 +50,12 @@ def run_key(values: dict) -> tuple:
 
 
 def table_columns(keys: list[str], base) -> list[str]:
-    """The CSV's columns for a study of the Scene `base` varying `keys`: the keys, the tip's figures (tip_dz for a
-    3D body), each chamber's area ratio and peak pressure (named after the base scene's chambers), then
-    converged, iterations, increments, vertices, seconds and error."""
+    """The CSV's columns for a study of the Scene `base` varying `keys`: the keys, the tip's figures (tip_dz and the
+    twist tip_twist for a 3D body), the blocked force (a scene with obstacles), each chamber's area ratio and peak
+    pressure (named after the base scene's chambers), then converged, iterations, increments, vertices, seconds
+    and error."""
     tip = [*TIP_COLUMNS[:2], "tip_rotation", *TIP_COLUMNS[2 : base.dim]]
+    tip += (["tip_twist"] if base.dim == 3 else []) + (["blocked_force"] if base.obstacles else [])
     figures = tip + [f"{c}.{f}" for c in base.chamber_names for f in ("area_ratio", "peak_pressure")]
     return keys + figures + ["converged", "iterations", "increments", "vertices", "seconds", "error"]
 

@@ -55,6 +55,10 @@ def measures(result, names: list[str]) -> dict:
     final = result.steps[-1]
     row = {"tip_dx": float(final.tip_dx), "tip_dy": float(final.tip_dy), "tip_rotation": float(final.tip_rotation)}
     row.update({column: float(value) for column, value in zip(TIP_COLUMNS[2:], final.tip[2:])})  # 3D: tip_dz
+    if final.tip_twist is not None:
+        row["tip_twist"] = float(final.tip_twist)
+    if final.blocked_force is not None:
+        row["blocked_force"] = float(final.blocked_force)
     for i, name in enumerate(names):
         row[f"{name}.area_ratio"] = float(result.area_ratio[-1, i])
         row[f"{name}.peak_pressure"] = float(np.abs(result.pressure[:, i]).max())
