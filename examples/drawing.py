@@ -30,6 +30,17 @@ def draw_result(ax, result, step=-1, **style):
     return draw_body(ax, result.positions[step], result.mesh, result.fields(step)["max_stretch"], **style)
 
 
+def draw_obstacles(ax, result, step=-1, reach=1e3):
+    """A 2D Result's rigid obstacles at `step`, filled grey (a plane's line across `reach`)."""
+    for obstacle in result.scene.obstacles:
+        points, closed = obstacle.shape.outline(reach)
+        points = points + obstacle.offset(result.steps[step].step)[:2]
+        if closed:
+            ax.fill(*points.T, color="0.8", ec="0.35", lw=1.0)
+        else:
+            ax.plot(*points.T, color="0.35", lw=1.5)
+
+
 def draw_surface(ax, positions, faces, color=(0.55, 0.7, 0.9)):
     """The surface triangles `faces` of a 3D body at `positions` (n, 3), lit from above; the scene's y axis
     drawn upwards."""
