@@ -31,7 +31,7 @@ from .. import runtime
 from ..errors import require
 from ..fem.tip import COLUMNS as TIP_COLUMNS
 from ..io.output import lock_stems, prepare_directory, save_json
-from ..io.units import AREA, FORCE, LENGTH, MEASURES, PRESSURE
+from ..io.units import AREA, FORCE, LENGTH, MEASURES, MOMENT, PRESSURE, in_dimension
 from ..signals import holding
 from .cli import (
     MEASURE,
@@ -141,7 +141,8 @@ def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, 
             print(f"saved the {len(done.steps)} steps done in " + ", ".join(str(p) for p in written))
         raise
     final, summary = result.steps[-1], result.summary()
-    area, length, pressure, force = (scene.units.suffix(d) for d in (AREA, LENGTH, PRESSURE, FORCE))
+    area, length, pressure = (scene.units.suffix(d) for d in (AREA, LENGTH, PRESSURE))
+    force, moment = (scene.units.suffix(in_dimension(d, result.mesh.dim)) for d in (FORCE, MOMENT))
     measure = scene.units.suffix(MEASURES[result.mesh.dim])
     extremes = summary["extremes"]
 
@@ -159,8 +160,9 @@ def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, 
     side, turn, turn_over_run = TIP_WORDS[result.mesh.dim]
     beyond_y = "".join(f"tip dz {dz:+.4f}{length}; " for dz in final.tip[2:])
     print(
-        f"tip deflection (mean y displacement of the {side}): {result.tip_deflection:+.4f}{length}; "
-        f"{beyond_y}{turn} {final.tip_rotation:+.1f} deg"
+        f"tip deflection (mean y displacement of the {side if scene.geometry.tip.box is None else 'tip'}): "
+        f"{result.tip_deflection:+.4f}{length}; {beyond_y}{turn} {final.tip_rotation:+.1f} deg"
+        + ("" if final.tip_twist is None else f"; twist about x {final.tip_twist:+.1f} deg")
     )
     tip = [f"{column[4:]} {span(column, '{:+.4f}' + length)}" for column in TIP_COLUMNS[: result.mesh.dim]]
     print(f"tip over the run: {', '.join(tip)}; {turn_over_run} {span('tip_rotation', '{:+.1f}')} deg")
@@ -169,8 +171,15 @@ def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, 
         f"largest principal stretch: {summary['max_stretch']:.2f} (step {summary['max_stretch_step']}; a run past "
         f"max_stretch = {summary['max_stretch_limit']:g} warns)"
     )
-    for name, (fx, fy, _) in final.contact.items():
-        print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g}){force}")
+    for name, (fx, fy, magnitude) in final.contact.items():
+        fz = f", {final.contact_fz[name]:+.4g}" if name in final.contact_fz else ""
+        print(f"{name} contact force on the body: ({fx:+.4g}, {fy:+.4g}{fz}){force}; sum of |f| {magnitude:.4g}{force}")
+    if final.blocked_force is not None:
+        print(f"blocked force (on the obstacles): {final.blocked_force:.4g}{force}")
+    if final.clamp:
+        forces = ", ".join(f"{final.clamp[k]:+.4g}" for k in final.clamp if k.startswith("f"))
+        moments = ", ".join(f"{final.clamp[k]:+.4g}" for k in final.clamp if k.startswith("m"))
+        print(f"clamp reaction: force ({forces}){force}, moment ({moments}){moment}")
     print(
         f"Newton: {summary['newton_iterations_total']} iterations over {summary['steps'] - 1} solves "
         f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
