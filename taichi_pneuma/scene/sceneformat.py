@@ -13,7 +13,6 @@ import typing
 
 from ..errors import require
 from ..fem.elements import ORDERS
-from ..fem.fiber_paths import LAYOUTS, PLANAR
 from ..fem.gmsh_mesher import MeshSizes
 from ..fem.meshfile import MeshBody, MeshGeometry, MeshSurface
 from ..fem.planar import Geometry
@@ -23,14 +22,13 @@ from ..fem.solid_geometry import SolidGeometry, is_solid_shape
 from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, HalfCylinder, RoundedBox
 from ..fem.supports import SIDES, PointSet, Roller
 from ..io.tomltext import dumps
-from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, PRESSURE, SECTION, UNITLESS, UNITS, default_in
+from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, UNITLESS, UNITS, default_in
 from ..materials.registry import SELECTORS, all_keys, form_of, forms, region_values
 from ..terms import VOLUMETRIC
 from ..terms.chambers import KINDS
 from ..terms.effects import EFFECTS
-from ..terms.fibers import Fiber
-from ..terms.sheets import Layer
 from .obstacleformat import OBSTACLE
+from .reinforcementformat import FIBER, LAYER
 from .schedule import MAX_STRETCH, ChamberSchedule
 from .schema import REQUIRED, Key, KeyInfo, Named, Table, Tables, Variant, build, edited, key_rows, record
 from .targets import MAX_TARGETS, Target
@@ -166,41 +164,6 @@ TARGET = record(
     weights=Key(tuple, (1.0, 1.0, 1.0), "[w_x, w_y, w_angle]"),
     weight_z=Key(float, 1.0, "w_z, the weight of a 3D tip's z error"),
 )
-FIBER = record(
-    Fiber,
-    "an embedded fibre: a tension-only elastic cord that follows the body",
-    name=Key(str, None, "names it in messages"),
-    path=Table(
-        {
-            "layout": Variant(
-                LAYOUTS,
-                doc=f"the fibre's curve (fem/fiber_paths.py); 2D: {', '.join(PLANAR)}; 3D: also rings, helix (one "
-                "helix), crossed (a right- and a left-handed helix)",
-            )
-        },
-        make=lambda v: v["layout"],
-        parts=lambda path: {"layout": path},
-        doc="its curve: layout and the layout's keys",
-    ),
-    E=Key(float, doc="Young's modulus of the cord", unit=PRESSURE),
-    area=Key(float, None, "cross-section (2D: per unit depth); give area or diameter", unit=SECTION),
-    diameter=Key(float, None, "diameter of a round cord (3D), instead of area", unit=LENGTH),
-    spacing=Key(float, None, "sample spacing along the curve (none: half the mean element edge)", unit=LENGTH),
-)
-
-LAYER = record(
-    Layer,
-    "a strain-limiting sheet bonded to a face of the body (a membrane on its boundary facets there)",
-    name=Key(str, doc="names the layer in messages"),
-    side=Key(str, None, "the face: a side of the body's bounding box (or box)", SIDES),
-    box=Key(
-        tuple, None, f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D): the boundary facets in it (instead of side)", unit=LENGTH
-    ),
-    E=Key(float, doc="the sheet's Young's modulus", unit=PRESSURE),
-    nu=Key(float, doc="the sheet's Poisson's ratio, in [0, 0.5)"),
-    thickness=Key(float, doc="the sheet's thickness", unit=LENGTH),
-)
-
 
 ROLLER = record(
     Roller,

@@ -1,0 +1,60 @@
+"""The scene file's [[fibers]] and [[layers]] tables (terms/fibers.py Fiber, terms/sheets.py Layer): what
+reinforces the body, declared with schema.py's entries:
+
+[[fibers]]
+name = "thread"
+E = 31e6                       # the cord's Young's modulus
+diameter = 0.2                 # or area (2D: a cross-section per unit depth)
+path = { layout = "crossed", center = [1.0, 2.0, 0.0], axis = "x", radius = 7.0, pitch = 4.0, extent = 98.0 }
+
+[[layers]]
+name = "sheet"
+side = "bottom"                # or box = [...]: the face the sheet is bonded to
+E = 6.5e6
+nu = 0.2
+thickness = 0.1
+"""
+
+from ..fem.fiber_paths import LAYOUTS, PLANAR
+from ..fem.supports import SIDES
+from ..io.units import LENGTH, PRESSURE, SECTION
+from ..terms.fibers import Fiber
+from ..terms.sheets import Layer
+from .schema import Key, Table, Variant, record
+
+BOX = "[x0, y0, x1, y1]"
+
+FIBER = record(
+    Fiber,
+    "an embedded fibre: a tension-only elastic cord that follows the body",
+    name=Key(str, None, "names it in messages"),
+    path=Table(
+        {
+            "layout": Variant(
+                LAYOUTS,
+                doc=f"the fibre's curve (fem/fiber_paths.py); 2D: {', '.join(PLANAR)}; 3D: also rings, helix (one "
+                "helix), crossed (a right- and a left-handed helix)",
+            )
+        },
+        make=lambda v: v["layout"],
+        parts=lambda path: {"layout": path},
+        doc="its curve: layout and the layout's keys",
+    ),
+    E=Key(float, doc="Young's modulus of the cord", unit=PRESSURE),
+    area=Key(float, None, "cross-section (2D: per unit depth); give area or diameter", unit=SECTION),
+    diameter=Key(float, None, "diameter of a round cord (3D), instead of area", unit=LENGTH),
+    spacing=Key(float, None, "sample spacing along the curve (none: half the mean element edge)", unit=LENGTH),
+)
+
+LAYER = record(
+    Layer,
+    "a strain-limiting sheet bonded to a face of the body (a membrane on its boundary facets there)",
+    name=Key(str, doc="names the layer in messages"),
+    side=Key(str, None, "the face: a side of the body's bounding box (or box)", SIDES),
+    box=Key(
+        tuple, None, f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D): the boundary facets in it (instead of side)", unit=LENGTH
+    ),
+    E=Key(float, doc="the sheet's Young's modulus", unit=PRESSURE),
+    nu=Key(float, doc="the sheet's Poisson's ratio, in [0, 0.5)"),
+    thickness=Key(float, doc="the sheet's thickness", unit=LENGTH),
+)
