@@ -5,7 +5,7 @@ TIME_BOUND, with no traceback and no file outside --out.
 
 Each example runs in this process (apps.inflate.main), so its cost is capped: every shipped scene is
 first made cheap (max_area 0.02, for a mesh-file body a small mesh file, for a 3D body from shapes tetrahedra
-of edge 0.5, and its schedule squeezed
+of edge 0.5, 8 mm in a scene in millimetres, and its schedule squeezed
 into INCREMENTS increments), and the run
 flags (FLAGS) set low resource limits and few Newton iterations, so that a mutation which makes a
 scene big or slow is refused by the resource guards, as any such scene would be. A traceback is an
@@ -90,9 +90,18 @@ def cheap(scene: dict) -> dict:
     if body["shape"] == "mesh":  # a mesh file's body: a small one instead
         body["file"], scene["mesh"] = str(SMALL_MESH), {}
     elif body["shape"] in (*SOLIDS, "extrusion", "pneunet"):  # a 3D body from shapes: coarse tetrahedra
-        scene["mesh"] = {"size": 0.5}
+        # in millimetres, 8 mm and 4 near the chambers: a fibre wound inside a 2 mm wall must stay inside its facets
+        # (and fibres sampled every 4 mm: their cord segments' Hessian blocks within FLAGS' memory budget)
+        millimetres = scene.get("units") == "mm-kPa"
+        scene["mesh"] = {"size": 8.0, "near_chambers": 4.0} if millimetres else {"size": 0.5}
+        for fiber in scene.get("fibers", []) if millimetres else []:
+            fiber["spacing"] = 4.0
     else:
-        length = max(body["size"]) if "size" in body else float(np.ptp(np.array(body["points"]), axis=0).max())
+        corners = [
+            np.array(r["center"]) + np.array(r["size"]) * sign / 2 for r in body.get("rectangles", []) for sign in (-1, 1)
+        ]  # a union of rectangles: their corners
+        points = np.array(body.get("points", corners))
+        length = max(body["size"]) if "size" in body else float(np.ptp(points, axis=0).max())
         scene["mesh"] = {"max_area": 0.02 * (length / 4.0) ** 2}
     n = scene["schedule"]["increments"]
     scene["schedule"]["increments"] = INCREMENTS

@@ -1,0 +1,123 @@
+"""The shipped 3D actuator scenes' accuracy and time: the bending angle (tip_rotation) of fiber_bending_3d and the
+blocked force of blocked_force_3d against pressure at three or more mesh resolutions (linear tetrahedra; quadratic
+ones on the coarsest mesh), the twist (tip_twist) of fiber_twist_3d at two, each run's wall and CPU time, and the
+mesh convergence: the relative change of the final bending angle, blocked force and twist between the two finest
+linear meshes.
+
+Each mesh is the shipped scene's with its three gmsh lengths (size, near_chambers, distance) scaled by one factor
+(MESHES: 1.5 coarser, 1 the shipped mesh, then finer); the ramps are the shipped ones.
+
+    python benchmarks/actuators.py [--cases fiber_bending_3d ...] [--out benchmarks/results]
+
+Progress lines as it goes; actuators.json is rewritten after every run (machine, date); actuators.md at the end.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+from datetime import date
+from pathlib import Path
+
+import numpy as np
+
+from taichi_pneuma import api, runtime
+from taichi_pneuma.io.output import prepare_directory, save_json, save_text
+
+SCENES = Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes"
+# (order, mesh scale) per case: the lengths of the shipped mesh times the scale
+PLANS = {
+    "fiber_bending_3d": [(1, 1.5), (1, 1.0), (1, 0.75), (1, 0.6), (2, 1.5)],
+    "blocked_force_3d": [(1, 1.5), (1, 1.0), (1, 0.75), (1, 0.6), (2, 1.5)],
+    "fiber_twist_3d": [(1, 1.0), (1, 0.75)],
+}
+MEASURES = {"fiber_bending_3d": "tip_rotation", "blocked_force_3d": "blocked_force", "fiber_twist_3d": "tip_twist"}
+LENGTHS = ("size", "near_chambers", "distance")
+
+
+def run(name: str, order: int, scale: float) -> dict:
+    """One ramp of the named scene on its mesh scaled by scale, of the given order: its measure per increment."""
+    scene = api.load_scene(SCENES / f"{name}.toml")
+    mesh = scene.geometry.sizes  # type: ignore[attr-defined]
+    values = {f"mesh.{key}": getattr(mesh, key) * scale for key in LENGTHS}
+    scene = scene.with_values({**values, "mesh.order": order})
+    start, cpu = time.perf_counter(), time.process_time()
+    result = api.simulate(scene)
+    seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
+    history = result.history
+    return {
+        "case": name,
+        "order": order,
+        "scale": scale,
+        "tetrahedra": int(result.mesh.n_elements),
+        "nodes": int(result.mesh.n_vertices),
+        "pressure": [float(p) for p in history[f"{result.chamber_names[0]}.pressure"]],
+        "value": [float(v) for v in history[MEASURES[name]]],
+        "seconds": seconds,
+        "cpu_seconds": cpu,
+        "iterations": int(sum(s.iterations for s in result.solves)),
+        "converged": bool(result.converged),
+    }
+
+
+def report(records: list[dict], machine: str, day: str) -> str:
+    lines = [f"Machine: {machine}; {day}.", ""]
+    for name in dict.fromkeys(r["case"] for r in records):
+        rows = [r for r in records if r["case"] == name]
+        measure = MEASURES[name]
+        lines += [f"### {name}: {measure} against pressure (kPa)", ""]
+        pressures = rows[0]["pressure"]
+        header = " | ".join(f"{p:g}" for p in pressures[1:])
+        lines += [
+            f"| elements | mesh scale | tetrahedra | nodes | {header} | s | CPU s | Newton it |",
+            "|---|---|---|---|" + "---|" * (len(pressures) - 1) + "---|---|---|",
+        ]
+        for r in rows:
+            values = " | ".join(f"{v:.4g}" for v in r["value"][1:])
+            lines.append(
+                f"| P{r['order']} | {r['scale']:g} | {r['tetrahedra']} | {r['nodes']} | {values} | "
+                f"{r['seconds']:.1f} | {r['cpu_seconds']:.1f} | {r['iterations']} |"
+            )
+        linear = sorted((r for r in rows if r["order"] == 1), key=lambda r: -r["scale"])
+        if len(linear) >= 2:
+            coarse, fine = linear[-2]["value"][-1], linear[-1]["value"][-1]
+            lines += [
+                "",
+                f"Final {measure}: {fine:.4g} at mesh scale {linear[-1]['scale']:g}, {coarse:.4g} at "
+                f"{linear[-2]['scale']:g}: a relative change of {abs(fine / coarse - 1):.1%} between the two finest "
+                "linear meshes.",
+            ]
+        lines.append("")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--cases", nargs="+", default=list(PLANS), choices=list(PLANS))
+    parser.add_argument("--out", default="benchmarks/results")
+    args = parser.parse_args()
+    out = prepare_directory(args.out)
+    runtime.init("cpu")
+    machine = f"{platform.node()}, {platform.machine()}, {os.cpu_count()} CPUs"
+    records: list[dict] = []
+    for name in args.cases:
+        for order, scale in PLANS[name]:
+            record = run(name, order, scale)
+            records.append(record)
+            print(
+                f"{name} P{order} scale {scale:g}: {record['tetrahedra']} tetrahedra, {record['nodes']} nodes, "
+                f"final {MEASURES[name]} {record['value'][-1]:.4g}, {record['seconds']:.1f} s "
+                f"({record['cpu_seconds']:.1f} s CPU), {record['iterations']} Newton iterations",
+                flush=True,
+            )
+            save_json(out / "actuators.json", {"machine": machine, "date": str(date.today()), "runs": records})
+    text = report(records, machine, str(date.today()))
+    print(text)
+    save_text(out / "actuators.md", text)
+    assert np.isfinite([r["value"][-1] for r in records]).all()
+
+
+if __name__ == "__main__":
+    main()
