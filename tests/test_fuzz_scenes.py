@@ -98,7 +98,9 @@ def cheap(scene: dict) -> dict:
             fiber["spacing"] = 4.0
     else:
         corners = [
-            np.array(r["center"]) + np.array(r["size"]) * sign / 2 for r in body.get("rectangles", []) for sign in (-1, 1)
+            np.array(r["center"]) + np.array(r["size"]) * sign / 2
+            for r in body.get("rectangles", [])
+            for sign in (-1, 1)
         ]  # a union of rectangles: their corners
         points = np.array(body.get("points", corners))
         length = max(body["size"]) if "size" in body else float(np.ptp(points, axis=0).max())
