@@ -8,6 +8,12 @@ The twist's sense: a single helix of fixed length l wound on a tube of radius r 
 phi obeys l^2 = (r phi)^2 + h^2; pressure pushes r and h up, so phi must fall: the tube unwinds its helix. A
 right-handed helix turns counter-clockwise about +x as it advances along +x; unwinding turns the tip (at +x)
 clockwise seen from +x: a negative twist by the right-hand rule (fem/tip.py), a left-handed helix the opposite.
+
+Measured (the coarse mesh: 716 nodes, 2153 linear tetrahedra for the bending actuator): at 30 kPa it turns by
+-17.5 degrees (-2.6 without its threads), its sheet's length changes by 5e-5 and its top ridge's by +3.1 %; the
+section's height grows by 0.52 mm (1.00 mm without threads); held, the plate's force is 47.7 and 97.8 mN at 10 and
+20 kPa, balanced by the clamp's to 2e-4 of it, the tip within 0.02 mm of its height (free: -11.2 mm at 20 kPa);
+the tube twists by -21.2 degrees at 40 kPa wound right-handed, +21.7 left-handed.
 """
 
 from pathlib import Path
@@ -93,6 +99,7 @@ def test_the_bending_actuator_bends_towards_its_sheet_which_barely_stretches_whi
 
 def test_the_crossed_helix_holds_the_radial_growth_down(bending):
     wound, bare = bending
+    assert wound.tip_rotation < 2 * bare.tip_rotation < 0  # the growth held goes into bending: -17.5 and -2.6 deg
     assert section_growth(bare) > 0
     assert section_growth(wound) < 0.7 * section_growth(bare)  # 0.53 and 1.01 mm measured (coarse, 30 kPa)
 
@@ -105,7 +112,7 @@ def test_the_held_actuators_force_grows_with_pressure_and_the_clamp_balances_the
     plate = np.array([row["plate.fx"], row["plate.fy"], row["plate.fz"]])
     clamp = np.array([high.clamp["fx"], high.clamp["fy"], high.clamp["fz"]])
     assert plate[1] > 0  # the plate pushes the tip up, away from the sheet's side
-    assert np.linalg.norm(plate + clamp) < 1e-2 * np.linalg.norm(plate)
+    assert np.linalg.norm(plate + clamp) < 2e-3 * np.linalg.norm(plate)  # 2e-4 measured: the solve's tolerance
     assert abs(high.tip_dy) < 0.1 * abs(coarse("fiber_bending_3d", 20.0, 1).tip_deflection)
 
 
