@@ -32,7 +32,7 @@ SCENES = Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes"
 PLANS = {
     "fiber_bending_3d": [(1, 1.5), (1, 1.0), (1, 0.75), (1, 0.6), (2, 1.5)],
     "blocked_force_3d": [(1, 1.5), (1, 1.0), (1, 0.75), (1, 0.6), (2, 1.5)],
-    "fiber_twist_3d": [(1, 1.0), (1, 0.75)],
+    "fiber_twist_3d": [(1, 1.0), (1, 0.75), (1, 0.6), (2, 1.5)],
 }
 MEASURES = {"fiber_bending_3d": "tip_rotation", "blocked_force_3d": "blocked_force", "fiber_twist_3d": "tip_twist"}
 LENGTHS = ("size", "near_chambers", "distance")
