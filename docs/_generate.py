@@ -125,6 +125,12 @@ RESULTS_PAGES = {
         ("benchmarks/accuracy_3d.py", None),
         "python benchmarks/accuracy_3d.py",
     ),
+    "actuators": (
+        "accuracy",
+        "The shipped 3D actuators: bending angle, blocked force and twist against pressure, mesh convergence",
+        ("benchmarks/actuators.py", None),
+        "python benchmarks/actuators.py",
+    ),
     "skfem_3d": (
         "performance",
         "3D against scikit-fem + SciPy: the beam_3d scene's mesh and ramp",
