@@ -131,7 +131,7 @@ def test_shipped_scenes_load_by_name_from_anywhere(tmp_path, monkeypatch):
     assert len(tp.load_scene("bidirectional").targets) == 3  # a scene with [[targets]] ships
     (tmp_path / "pneunet_finger.toml").write_text(tp.load_scene("bidirectional").to_toml())
     assert tp.load_scene("pneunet_finger").name == "bidirectional"  # a file that exists is read first
-    with pytest.raises(tp.PneumaInputError, match=r"'nosuch' cannot be read .*bidirectional, finger_on_ground"):
+    with pytest.raises(tp.PneumaInputError, match=r"'nosuch' cannot be read .*bidirectional, blocked_force_3d"):
         tp.load_scene("nosuch")
 
 
