@@ -263,7 +263,7 @@ def test_an_obstacle_moved_through_the_body_ends_the_ramp_naming_it():
     one cut-back allowed halves the motion: RampFailed names it, its residual not finite."""
     raised = POST + "keyframes = [[1, [0.0, 0.3, 0.0]]]\n"
     built = read_scene(beam(raised, increments=1), "raised").build()
-    with pytest.raises(RampFailed, match="after 1 cuts; residual nan .obstacle 'post' overlaps the body") as failure:
+    with pytest.raises(RampFailed, match="after 1 cuts; residual nan .'post' overlaps the body") as failure:
         run_schedule(built, max_cuts=1)
     assert len(failure.value.result.steps) == 1  # the rest state
 

@@ -9,9 +9,9 @@ The barrier on a distance d with activation threshold d_hat and stiffness kappa 
 C2 at d_hat, infinite as d -> 0, so the energy forbids touching; max_step keeps every distance
 positive along a Newton step (the solver steps at most 0.9 of it), so no step jumps through.
 
-Ground: d_i = y_i - h for each vertex on the body's outer boundary (the line, or in 3D the plane, y = h).
-The Hessian b''(d) e_y e_y^T is PSD and exact. Step bound: d_i / (-dy_i) where dy_i < 0. (Self-contact
-is 2D only.)
+Ground: d_i = y_i - h for each vertex on the body's outer boundary (the line, or in 3D the plane, y = h): the
+plane obstacle of terms/obstacles.py (the effect builds one), whose Hessian b''(d) e_y e_y^T is PSD and exact and
+whose step bound is d_i / (-dy_i) where dy_i < 0. (Self-contact is 2D only.)
 
 Self-contact of a chamber wall: for each wall vertex p and each wall edge (a, b) not incident to
 it (and not within 2 d_hat of it at rest: neighbours along a smooth wall), d is the point-segment
@@ -28,7 +28,7 @@ segment (a quadratic in the step fraction), the continuous collision check.
 import numpy as np
 
 from ..backend import kernel, ti
-from .base import Indices, Nodal, Table, Term, Triples, Vec2s, block_pattern, edge, int32s, position, quadratic_roots
+from .base import Table, Term, Triples, Vec2s, block_pattern, edge, int32s, position, quadratic_roots
 
 
 @ti.func
@@ -42,91 +42,6 @@ def barrier(d, dhat, kappa):
         db = -kappa * r * (2.0 * lg + r / d)
         ddb = -kappa * (2.0 * lg + 4.0 * r / d - r * r / (d * d))
     return b, db, ddb
-
-
-@kernel
-def ground_energy(
-    rest: Nodal, u: Nodal, verts: Indices, height: ti.f64, dhat: ti.f64, kappa: ti.f64
-) -> tuple[ti.f64, ti.f64]:
-    """(sum of the barriers over the vertices above the ground, smallest distance to it)."""
-    total = 0.0
-    nearest = ti.math.inf
-    for k in range(verts.shape[0]):
-        d = rest[verts[k], 1] + u[verts[k], 1] - height
-        ti.atomic_min(nearest, d)
-        if d > 0:
-            total += barrier(d, dhat, kappa)[0]
-    return total, nearest
-
-
-@kernel
-def ground_derivatives(
-    rest: Nodal,
-    u: Nodal,
-    verts: Indices,
-    height: ti.f64,
-    dhat: ti.f64,
-    kappa: ti.f64,
-    gradient: Nodal,
-    hessian: ti.types.ndarray(dtype=ti.f64, ndim=1),
-):
-    """gradient = dE/dx (zero off the listed vertices); hessian[k] = b''(d_k), the y-y entry of vertex k."""
-    for v, i in ti.ndrange(gradient.shape[0], gradient.shape[1]):
-        gradient[v, i] = 0.0
-    for k in range(verts.shape[0]):
-        d = rest[verts[k], 1] + u[verts[k], 1] - height
-        _, db, ddb = barrier(d, dhat, kappa)
-        gradient[verts[k], 1] = db
-        hessian[k] = ddb
-
-
-@kernel
-def ground_step(rest: Nodal, u: Nodal, dx: Nodal, verts: Indices, height: ti.f64) -> ti.f64:
-    """Smallest alpha > 0 at which a listed vertex moving along dx reaches the ground (inf if none)."""
-    bound = ti.math.inf
-    for k in range(verts.shape[0]):
-        dy = dx[verts[k], 1]
-        if dy < 0:
-            ti.atomic_min(bound, (rest[verts[k], 1] + u[verts[k], 1] - height) / -dy)
-    return bound
-
-
-class GroundContact(Term):
-    """Barrier keeping the given vertices above the line (plane) y = height."""
-
-    name = "ground"
-    reports_contact = True
-
-    def __init__(self, config, vertices: np.ndarray, height: float, dhat: float, stiffness: float):
-        self.config = config
-        self.height, self.dhat, self.kappa = float(height), float(dhat), float(stiffness)
-        self.verts = int32s(vertices)
-        self._dofs = config.dim * np.asarray(vertices, dtype=np.int64) + 1
-
-    def energy(self) -> float:
-        total, nearest = ground_energy(self.config.rest, self.config.u, self.verts, self.height, self.dhat, self.kappa)
-        return total if nearest > 0 else np.inf
-
-    def _derivatives(self) -> tuple[np.ndarray, np.ndarray]:
-        gradient, hessian = np.empty_like(self.config.u), np.empty(len(self.verts))
-        ground_derivatives(
-            self.config.rest, self.config.u, self.verts, self.height, self.dhat, self.kappa, gradient, hessian
-        )
-        return gradient, hessian
-
-    def gradient(self) -> np.ndarray:
-        return self._derivatives()[0]
-
-    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        return self._dofs, self._dofs
-
-    def hessian_values(self, psd_only: bool = False) -> np.ndarray:
-        return self._derivatives()[1]
-
-    def max_step(self, dx: np.ndarray) -> float:
-        return ground_step(
-            self.config.rest, self.config.u, np.ascontiguousarray(dx, dtype=np.float64), self.verts, self.height
-        )
 
 
 @ti.func

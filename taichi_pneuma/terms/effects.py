@@ -20,10 +20,11 @@ from ..errors import require, require_finite
 from ..fem.supports import PointSet
 from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, TIME, si_default, unit
 from ..limits import wall_pairs
-from .contact import GroundContact
 from .contact import SelfContact as SelfContactTerm
 from .gravity import Gravity as GravityTerm
 from .inertia import Inertia
+from .obstacle_shapes import Plane
+from .obstacles import ObstacleContact
 
 
 class Effect:
@@ -108,7 +109,8 @@ class Ground(Effect):
         require(
             lowest > self.height, f"ground height = {self.height!r} must lie below the body (lowest point {lowest:.6g})"
         )
-        return [GroundContact(config, mesh.boundary, self.height, self.dhat, self.stiffness)]  # type: ignore[arg-type]
+        ground = Plane((0.0, self.height, 0.0), (0.0, 1.0, 0.0))  # the body on its +y side
+        return [ObstacleContact(config, mesh.boundary, ground, "ground", self.dhat, self.stiffness)]  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)

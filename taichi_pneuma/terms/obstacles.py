@@ -280,9 +280,10 @@ class ObstacleContact(Term):
         nearest = self.nearest()
         if nearest > 0:
             return None
+        moved = f", at its offset {np.round(self.offset, 6).tolist()}" if np.any(self.offset) else ""
         return (
-            f"obstacle {self.name!r} overlaps the body (a boundary node {-nearest:.3g} inside it, at its offset "
-            f"{np.round(self.offset, 6).tolist()}): it moved too far for the body to give way"
+            f"{self.name!r} overlaps the body (a boundary node {-nearest:.3g} inside it{moved}): "
+            f"it {'moved' if moved else 'reached'} too far for the body to give way"
         )
 
 
