@@ -1,0 +1,17 @@
+"""A scale bar: the round length (1, 2 or 5 times a power of ten) that fills about a fifth of a view, and its label
+with the scene's length unit, so that a frame says how big the body is."""
+
+from __future__ import annotations
+
+import math
+
+
+def scale_bar(view_width: float, unit: str = "", fraction: float = 0.2) -> tuple[float, str]:
+    """(length, label) of the largest round length 10^k x {1, 2, 5} not above fraction x view_width (world units);
+    the label is the length's figure followed by the unit suffix ('' in a unitless scene, ' mm' in mm-kPa)."""
+    if not (math.isfinite(view_width) and view_width > 0):
+        raise ValueError(f"view_width = {view_width!r} must be a finite length > 0")
+    target = fraction * view_width
+    power = 10.0 ** math.floor(math.log10(target))
+    length = max(m * power for m in (1.0, 2.0, 5.0) if m * power <= target * (1 + 1e-12))
+    return length, f"{length:g}{unit}"
