@@ -261,7 +261,7 @@ PRESET_SCENES_3D = {
     "pneunet_3d": ("draft", "default", "high"),
 }
 # the converged peak tip deflection (the largest |mean y displacement| of the tip face over the run), for the
-# presets' errors, each from quadratic meshes refined towards it (beam_3d_ellipsoid: docs/solid.md, "3D presets";
+# presets' errors, each from quadratic meshes refined towards it (beam_3d_ellipsoid: docs/3d.md, "3D presets";
 # pneunet_3d: docs/3d.md, its near-chamber size down to 0.07)
 CONVERGED_TIP_3D = {"beam_3d_ellipsoid": -0.1974, "pneunet_3d": -1.100}
 

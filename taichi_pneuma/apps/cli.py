@@ -29,7 +29,7 @@ QUALITY = {
 }
 # The 3D presets: (tetrahedron edge length of a body meshed from shapes, the edge length near its chambers (None:
 # the same) growing back over that edge length, element order, Newton tolerance), read off beam_3d_ellipsoid's
-# tip against mesh size and grading (docs/solid.md, "3D presets"): the error is near the chambers' thin walls.
+# tip against mesh size and grading (docs/3d.md, "3D presets"): the error is near the chambers' thin walls.
 QUALITY_3D = {
     "draft": (0.3, None, 1, 1e-4),
     "default": (0.3, 0.15, 2, 1e-6),
@@ -37,7 +37,7 @@ QUALITY_3D = {
     "accurate": (0.2, 0.08, 2, 1e-9),
 }
 # each preset's measured tip error against the converged tip, on the reference beam (2D, nu = 0.45: docs/accuracy.md)
-# and on beam_3d_ellipsoid (3D: docs/solid.md; pneunet_3d's peak tip: 5.1 % and 2.2 % at default and high, docs/3d.md;
+# and on beam_3d_ellipsoid (3D: docs/3d.md; pneunet_3d's peak tip: 5.1 % and 2.2 % at default and high;
 # pneuma-bench --sections presets_3d measures both): the run's first line
 QUALITY_ERROR = {
     2: {"draft": 28.4, "default": 8.0, "high": 0.64, "accurate": 0.07},

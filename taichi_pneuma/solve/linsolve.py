@@ -277,7 +277,7 @@ class AmgConjugateGradient:
     # strength of connection |a_ij| >= 0.08 sqrt(|a_ii a_jj|) (of the node blocks' norms), not pyamg's 0: the dense
     # node graph of quadratic tetrahedra otherwise makes aggregates of ~30 nodes and a weak coarse level;
     # energy-minimising prolongation smoothing, not one Jacobi step. Measured on the quadratic 3D beam's
-    # Hessians (32k DOFs): 3-10 CG iterations to 1e-2 where pyamg's defaults took 8-29 (docs/solid.md)
+    # Hessians (32k DOFs): 3-10 CG iterations to 1e-2 where pyamg's defaults took 8-29 (docs/3d.md)
     OPTIONS = {"strength": ("symmetric", {"theta": 0.08}), "smooth": "energy"}
     STALE_FACTOR = 2.0
 
@@ -362,7 +362,7 @@ BACKENDS = {
     "taichi": TaichiLLT,
 }
 # auto in 3D: CHOLMOD up to this many DOFs, CG with multigrid above (a factor's memory grows as n^(4/3) and its
-# time as n^2, multigrid's about as n). On the quadratic beam's Hessians (2 cores; docs/solid.md, "Linear solvers
+# time as n^2, multigrid's about as n). On the quadratic beam's Hessians (2 cores; docs/3d.md, "Linear solvers
 # in 3D") CHOLMOD refactorises 59k DOFs in 1.1 s and 119k in 3.9 s, where multigrid's set-up and one solve to 1e-2
 # take 3.0 s and 15 s, and each later solve 0.6 s and 5.4 s; the 250k bound itself is extrapolated (n^2), not
 # measured
