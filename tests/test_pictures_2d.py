@@ -6,8 +6,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from renderers import SOFTWARE
 
 import taichi_pneuma as tp
+from taichi_pneuma.render.colours import GHOST
+from taichi_pneuma.render.frames import FrameRenderer, Track
 from taichi_pneuma.render.plots import history_figure
 
 
@@ -77,3 +80,73 @@ def test_a_two_chamber_plot_names_both_chambers_in_their_own_colours(two_chamber
     assert pressure.lines[0].get_color() != pressure.lines[1].get_color()
     for line, k in zip(pressure.lines, (0, 1)):
         assert np.array_equal(line.get_ydata(), two_chamber_run.pressure[:, k])
+
+
+def curled(mesh, degrees: float = 150.0, steps: int = 6) -> np.ndarray:
+    """States (steps, n, 2) of the body turned rigidly about its left end by 0 .. degrees: the tip sweeps far
+    outside the rest shape's box (up and back over the clamp)."""
+    pivot = np.array([mesh.vertices[:, 0].min(), 0.0])
+    states = []
+    for angle in np.radians(np.linspace(0.0, degrees, steps)):
+        turn = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+        states.append(pivot + (mesh.vertices - pivot) @ turn.T)
+    return np.array(states)
+
+
+def curled_track(mesh, units=("", "", "")) -> Track:
+    states = curled(mesh)
+    steps = len(states)
+    ones = np.ones((steps, 1))
+    tip = states[:, mesh.tip, 1].mean(axis=1) - states[0, mesh.tip, 1].mean()
+    return Track(mesh, states, ones, ones * np.linspace(0, 75.2, steps)[:, None], tip, units=units, area=ones * 12.5)
+
+
+def pixels(renderer, points: np.ndarray) -> np.ndarray:
+    """World points -> pixel coordinates (origin top-left, y down), as the image is indexed."""
+    return renderer.to_canvas(0, points) * (renderer.width, -renderer.height) + (0, renderer.height)
+
+
+@pytest.mark.parametrize("size", [(960, 384), (384, 160)])
+def test_every_steps_body_is_inside_its_panel_below_the_header(area_run, size):
+    track = curled_track(area_run.mesh)
+    renderer = FrameRenderer([track], *size, backend=SOFTWARE)
+    x0, x1 = (v * size[0] for v in renderer.panels[0])
+    for state in track.states:
+        px = pixels(renderer, state)
+        assert px[:, 0].min() >= x0 and px[:, 0].max() <= x1
+        assert px[:, 1].min() >= renderer.header_px - 1e-9 and px[:, 1].max() <= size[1]
+
+
+@pytest.mark.parametrize("units, unit", [(("", "", ""), ""), ((" mm", " mm^2", " kPa"), " mm")])
+def test_the_scale_bar_is_a_round_length_in_the_scenes_unit_where_no_step_is(area_run, units, unit):
+    track = curled_track(area_run.mesh, units)
+    renderer = FrameRenderer([track], 960, 384, backend=SOFTWARE)
+    length, label, (left, top, right, bottom) = renderer.scale_bar
+    mantissa = length / 10 ** np.floor(np.log10(length))
+    assert np.isclose(mantissa, 1) or np.isclose(mantissa, 2) or np.isclose(mantissa, 5)
+    assert label == f"{length:g}{unit}"
+    panel_world = (renderer.panels[0][1] - renderer.panels[0][0]) * 960 / renderer._scale
+    assert 0.08 * panel_world < length <= 0.2 * panel_world  # 1-2-5 steps: within a factor 2.5 of a fifth
+    for state in track.states:
+        px = pixels(renderer, state)
+        assert not np.any((px[:, 0] >= left) & (px[:, 0] <= right) & (px[:, 1] >= top) & (px[:, 1] <= bottom))
+    image = renderer.frame(len(track.states) - 1)
+    ends = pixels(renderer, np.array([[0.0, 0.0], [length, 0.0]]))  # the bar is `length` long at the view's scale
+    row = (
+        image[int(bottom) - 6 : int(bottom) - 1, int(left) : int(right)].min(axis=(0, 2)) < 200
+    )  # drawn, not background
+    assert abs(np.count_nonzero(row) - (ends[1, 0] - ends[0, 0])) <= 3
+    assert label in [text.text for text in renderer.draw(0)]
+
+
+def test_a_header_with_units_says_them_and_the_rest_shape_is_a_ghost(area_run):
+    track = curled_track(area_run.mesh, (" mm", " mm^2", " kPa"))
+    assert track.header(5) == ["step 5/5   area 12.5 mm^2", f"p = 75.2 kPa   tip dy = {track.tip_dy[5]:+.4g} mm"]
+    renderer = FrameRenderer([track], 960, 384, trace=False, backend=SOFTWARE)
+    image = renderer.frame(5).astype(int)
+    mesh = area_run.mesh
+    right = mesh.vertices[:, 0].max()
+    end = mesh.vertices[np.abs(mesh.vertices[:, 0] - right) < 1e-9]  # the rest shape's right side, left by step 5
+    x, y = pixels(renderer, end.mean(axis=0, keepdims=True))[0].astype(int)
+    patch = image[y - 2 : y + 3, x - 2 : x + 3].reshape(-1, 3)
+    assert np.min(np.abs(patch - np.round(np.array(GHOST) * 255)).max(axis=1)) < 25
