@@ -4,11 +4,15 @@ scale bar in the scene's unit, and pneuma-steer's captions say what each run's t
 
 from __future__ import annotations
 
+import json
+import re
+
 import numpy as np
 import pytest
 from renderers import SOFTWARE
 
 import taichi_pneuma as tp
+from taichi_pneuma.apps import steer
 from taichi_pneuma.render.colours import GHOST
 from taichi_pneuma.render.frames import FrameRenderer, Track
 from taichi_pneuma.render.plots import history_figure
@@ -150,3 +154,35 @@ def test_a_header_with_units_says_them_and_the_rest_shape_is_a_ghost(area_run):
     x, y = pixels(renderer, end.mean(axis=0, keepdims=True))[0].astype(int)
     patch = image[y - 2 : y + 3, x - 2 : x + 3].reshape(-1, 3)
     assert np.min(np.abs(patch - np.round(np.array(GHOST) * 255)).max(axis=1)) < 25
+
+
+def test_a_tip_that_rises_then_falls_is_told_so_and_a_still_one_stays():
+    rise_fall = np.array([0.0, 0.1, 0.26, 0.2, 0.0, -0.15, -0.28])
+    assert steer.tip_story(rise_fall, 0.28) == "tip up to +0.26 (step 2), then down to -0.28 (step 6)"
+    assert steer.tip_story(-np.abs(rise_fall), 0.28) == "tip down to -0.28 (step 6)"
+    assert steer.tip_story(np.array([0.0, 0.004, -0.0061]), 0.28) == "tip stays within +-0.01"
+
+
+def test_steer_captions_give_each_runs_tip_extremes(tmp_path, capsys):
+    """A short coarse steer run (no video): each caption's numbers are its run's largest and smallest tip
+    deflection and their steps, read from the summary's tip histories; the high chamber's tip rises first."""
+    flags = ["--max-area", "0.01", "--steps", "8", "--no-video", "--quiet", "--out", str(tmp_path)]
+    assert steer.main(flags) == 0
+    summary = json.loads((tmp_path / "steer_summary.json").read_text())
+    printed = capsys.readouterr().out
+    for key, caption in summary["caption"].items():
+        tip = np.array(summary["tip_history"][key])
+        assert caption in printed and f"(cy = {key})" in caption
+        told = {
+            word: (float(value), int(step))
+            for word, value, step in re.findall(r"(up|down) to ([-+.\d]+) \(step (\d+)\)", caption)
+        }
+        if "up" in told:
+            assert told["up"] == (round(tip.max(), 2), int(np.argmax(tip)))
+        if "down" in told:
+            assert told["down"] == (round(tip.min(), 2), int(np.argmin(tip)))
+    high = np.array(summary["tip_history"]["+0.15"])
+    assert high.max() > 0.1 and high[-1] < -0.1 and np.argmax(high) < np.argmin(high)  # rises, then falls
+    assert re.search(r"tip up to .*, then down to ", summary["caption"]["+0.15"])
+    assert re.search(r"^chamber low .*: tip down to .*, then up to ", summary["caption"]["-0.15"])
+    assert "tip stays within +-" in summary["caption"]["+0.00"]
