@@ -16,6 +16,7 @@ from taichi_pneuma.apps import steer
 from taichi_pneuma.render.colours import GHOST
 from taichi_pneuma.render.frames import FrameRenderer, Track
 from taichi_pneuma.render.plots import history_figure
+from taichi_pneuma.render.view2d import view_bounds
 
 
 @pytest.fixture(scope="module")
@@ -186,3 +187,18 @@ def test_steer_captions_give_each_runs_tip_extremes(tmp_path, capsys):
     assert re.search(r"tip up to .*, then down to ", summary["caption"]["+0.15"])
     assert re.search(r"^chamber low .*: tip down to .*, then up to ", summary["caption"]["-0.15"])
     assert "tip stays within +-" in summary["caption"]["+0.00"]
+
+
+def test_the_view_takes_in_the_obstacles_near_the_body_and_no_far_one(area_run):
+    """view_bounds: a closed obstacle that comes within a tenth of the body's size is in view at every step's
+    offset; one far away, and a plane's long line, are not."""
+    mesh = area_run.mesh
+    lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
+    square = np.array([[0.0, 0.0], [0.2, 0.0], [0.2, 0.2], [0.0, 0.2]])
+    near = (square + (hi[0] + 0.1, 0.0), True, np.array([[0.0, 0.0], [0.0, 0.3]]))  # 0.1 right of the tip, rising
+    far = (square + (hi[0] + 10.0, 0.0), True, np.zeros((2, 2)))
+    plane = (np.array([[-50.0, lo[1] - 0.05], [50.0, lo[1] - 0.05]]), False, np.zeros((2, 2)))
+    states = np.array([mesh.vertices, mesh.vertices])
+    track = Track(mesh, states, np.ones((2, 1)), np.zeros((2, 1)), np.zeros(2), obstacles=(near, far, plane))
+    view_lo, view_hi = view_bounds([track])
+    assert np.allclose(view_lo, lo) and np.allclose(view_hi, [hi[0] + 0.3, max(hi[1], 0.5)])
