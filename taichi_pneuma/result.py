@@ -222,9 +222,10 @@ class Result(Run):
         )
 
     def plot(self):
-        """The history as a matplotlib Figure with axes (plots.py): pressure against area ratio, and tip
-        deflection, area ratio and pressure against the command. A notebook shows it as a PNG; in a
-        script, fig.savefig("x.png")."""
+        """The history as a matplotlib Figure with axes (plots.py): pressure against area ratio, the chambers'
+        responses against the command, and the tip's (deflection, bending angle, extension, blocked force) against
+        the driving pressure or the step; only the panels that change over the run. A notebook shows it as a PNG;
+        in a script, fig.savefig("x.png")."""
         from .render.plots import history_figure
 
         return history_figure(self)

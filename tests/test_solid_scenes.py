@@ -342,7 +342,7 @@ def test_api_video_and_plot_of_a_3d_run(tiny_run, tmp_path):
     export = tiny_run.video(tmp_path / "v.gif", tmp_path / "v.png", size=(320, 192), renderer="gui")
     assert export.frames == len(tiny_run.steps) and iio.imread(tmp_path / "v.png").shape == (192, 320, 3)
     figure = tiny_run.plot()
-    assert "volume ratio V / V_rest" in [ax.get_ylabel() for ax in figure.axes]
+    assert "volume ratio V / V_rest" in [ax.get_xlabel() for ax in figure.axes]
 
 
 @pytest.mark.skipif(not has_ggui(), reason="the live 3D window is GGUI's, which this backend lacks")

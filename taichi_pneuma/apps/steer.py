@@ -2,9 +2,11 @@
 
     pneuma-steer                                 (or python -m taichi_pneuma.apps.steer)
 
-Solves the three ramps (cy = +0.15, 0, -0.15), prints their tip deflections, writes each ramp's ParaView
-files (steer_cy+0.15.pvd, ...) and, unless --no-video, plays them side by side in one video (all panels in
-one frame of reference, bodies coloured by --color on one scale) with a PNG of the last frame.
+Solves the three ramps (cy = +0.15, 0, -0.15), prints their tip deflections and what each tip did (its
+caption: "chamber high (cy = +0.15): tip up to +0.26 (step 9), then down to -0.28 (step 35)", read off the
+run's tip history), writes each ramp's ParaView files (steer_cy+0.15.pvd, ...) and, unless --no-video, plays
+them side by side in one video (all panels in one frame of reference, bodies coloured by --color on one scale,
+each under its caption) with a PNG of the last frame. steer_summary.json has the captions and tip histories.
 A ramp stopped (Ctrl-C, SIGTERM, SIGHUP, or no equilibrium) still writes steer_summary.json with the
 steps each ramp did (interrupted: true for a signal).
 """
@@ -12,7 +14,10 @@ steps each ramp did (interrupted: true for a signal).
 from __future__ import annotations
 
 import argparse
+import math
 import sys
+
+import numpy as np
 
 from .. import runtime
 from ..io.output import lock_stems, prepare_directory, save_json
@@ -30,7 +35,29 @@ from .cli import (
     solve,
 )
 
-PLACEMENTS = ((0.15, "chamber high -> curls down"), (0.0, "centred -> no bend"), (-0.15, "chamber low -> curls up"))
+PLACEMENTS = ((0.15, "chamber high"), (0.0, "centred"), (-0.15, "chamber low"))
+STILL = 0.1  # a tip that never moves by more than this fraction of the largest |tip| of the runs compared "stays"
+
+
+def tip_story(tip: np.ndarray, scale: float) -> str:
+    """What a tip did over a run, from its history tip (steps,) of tip deflections: "tip stays within +-b" (b its
+    largest |tip|, rounded up to 0.01) when that is at most STILL x scale (the largest |tip| of the runs compared);
+    else each extreme beyond that band in the order reached, "tip up to +0.26 (step 9), then down to -0.28
+    (step 35)", so a tip that rises before it falls is not told as only falling."""
+    tip = np.asarray(tip, float)
+    band = STILL * scale
+    if np.abs(tip).max() <= band:
+        return f"tip stays within +-{math.ceil(np.abs(tip).max() * 100 - 1e-9) / 100:.2f}"
+    high, low = int(np.argmax(tip)), int(np.argmin(tip))
+    moves = sorted((k, word) for k, word, reach in ((high, "up", tip[high]), (low, "down", -tip[low])) if reach > band)
+    return "tip " + ", then ".join(f"{word} to {tip[k]:+.2f} (step {k})" for k, word in moves)
+
+
+def captions(results) -> list[str]:
+    """Each placement's caption: its name, its cy and its tip's story (tip_story, on the scale of all three)."""
+    tips = [r.history["tip_dy"] for r in results]
+    scale = max(float(np.abs(t).max()) for t in tips)
+    return [f"{name} (cy = {cy:+.2f}): {tip_story(t, scale)}" for (cy, name), t in zip(PLACEMENTS, tips)]
 
 
 def parser() -> argparse.ArgumentParser:
@@ -82,13 +109,17 @@ def run_placements(args: argparse.Namespace, scenes, stems: list[str], size: tup
             )
             print(f"saved the ramps done in {path} and {', '.join(str(v.pvd) for v in series[: len(done)])}")
             raise
-    summary: dict = {"tip_deflection": {}, "all_converged": True}
-    for (cy, title), result in zip(PLACEMENTS, solved):
+    summary: dict = {"tip_deflection": {}, "caption": {}, "tip_history": {}, "all_converged": True}
+    told = captions(solved)
+    for (cy, _), caption, result in zip(PLACEMENTS, told, solved):
         print(
-            f"cy = {cy:+.2f} ({title}): tip deflection {result.tip_deflection:+.4f}, "
+            f"{caption}; tip deflection {result.tip_deflection:+.4f}, "
             f"peak |p| {result.peak_pressure:.1f}, ramp {result.seconds:.1f} s"
         )
-        summary["tip_deflection"][f"{cy:+.2f}"] = result.tip_deflection
+        key = f"{cy:+.2f}"
+        summary["tip_deflection"][key] = result.tip_deflection
+        summary["caption"][key] = caption
+        summary["tip_history"][key] = [float(v) for v in result.history["tip_dy"]]
         summary["all_converged"] &= result.converged
     written: list = [vtk.pvd for vtk in series]
     if not args.no_video:
@@ -103,7 +134,7 @@ def run_placements(args: argparse.Namespace, scenes, stems: list[str], size: tup
             args.color,
             args.renderer,
             trace=False,
-            titles=[f"cy = {cy:+.2f}: {title}" for cy, title in PLACEMENTS],
+            titles=[caption.replace(": ", "\n", 1) for caption in told],  # name and cy, then the story
             quiet=args.quiet,
         )
         seconds_per_step = sum(r.summary()["solve_seconds_per_step"] for r in solved) / len(solved)

@@ -10,6 +10,7 @@ import numpy as np
 BACKGROUND = (1.0, 1.0, 1.0)
 FACE = (0.72, 0.89, 0.66)  # the body's faces, light green, when it is not coloured by a field
 EDGE = (0.18, 0.49, 0.20)  # the element edges over FACE
+GHOST = (0.78, 0.78, 0.78)  # the rest shape's outline under the body, light grey
 OUTLINE = (0.2, 0.2, 0.2)  # the body's outline when it is coloured by a field (no inner edges)
 CHAMBER_ALPHA = 0.35
 # the chamber's fill: translucent blue blended onto BACKGROUND (the chamber is a hole in the mesh: only

@@ -1,7 +1,9 @@
 """Offscreen frames of 2D runs: FrameRenderer draws one or more tracks (a run's states and figures) side by
 side on a canvas (canvases.py), each frame a beam panel per track, a colour bar when the body is coloured by a
 field, and a trace panel of the chambers' area and pressure against the step (what a frame shows:
-docs/guide/output.md). Every beam panel shares one world-to-pixel map fitted to all states of all tracks."""
+docs/guide/output.md). Every beam panel shares one world-to-pixel map fitted to all states of all tracks, their
+rest shapes and the obstacles near them; the rest outline is drawn as a light ghost under the body, and a scale
+bar (scalebar.py, in the scene's length unit) in a corner of the first panel that no step's body covers."""
 
 from __future__ import annotations
 
@@ -12,7 +14,7 @@ import numpy as np
 from ..errors import require
 from ..fem.fields import ElementFields
 from ..fem.mesh import Mesh
-from ..fem.triangulation import triangulate
+from ..io.units import AREA, LENGTH, PRESSURE
 from . import COLOR_FIELDS
 from .canvases import open_canvas
 from .colours import (
@@ -24,6 +26,7 @@ from .colours import (
     CURSOR,
     EDGE,
     FACE,
+    GHOST,
     GROUND,
     OBSTACLE,
     OBSTACLE_FILL,
@@ -35,8 +38,10 @@ from .colours import (
     TIP_PATH,
     colormap,
 )
+from .scalebar import emptiest, scale_bar
 from .text import LINE_PX, MARGIN_PX, Label, draw_labels, label_box
 from .ticks import colorbar_ticks, nice_ticks, tick_label
+from .view2d import chamber_triangles, mesh_edges, view_bounds
 
 HEADER_LINES = 3  # title (if any), step and area, pressure and tip: the band above the body, title or not
 # the trace panel: the plot box's margins (pixels: left, top, right, bottom) and the smallest box worth
@@ -45,6 +50,7 @@ TRACE_MARGINS_PX = (58, MARGIN_PX + 3 * LINE_PX + 8, 58, 2 * LINE_PX + 12)
 TRACE_MIN_BOX_PX = (60, 40)
 TICK_ROOM_PX = (34, 20)
 PIN_HALF_PX = 3.5  # half the side of a clamp marker
+SCALE_BAR_PX = (4, 14)  # the scale bar's end ticks (half height) and the room its label takes above it
 
 
 @dataclass(frozen=True)
@@ -67,6 +73,8 @@ class Track:
     descent: np.ndarray | None = None  # (steps,) inverse control: the descent a frame belongs to (restarts)
     chamber_names: tuple[str, ...] = ()  # for the trace panel's legend (several chambers)
     obstacles: tuple = ()  # per rigid obstacle: (outline (k, 2), closed, its offset (steps, 2) per step)
+    units: tuple[str, str, str] = ("", "", "")  # the suffixes of a length, an area and a pressure (' mm', ...)
+    area: np.ndarray | None = None  # (steps, chambers) the chambers' areas, shown in the header with units
 
     @classmethod
     def from_result(cls, result, title: str = "", color: str = "none") -> Track:
@@ -101,39 +109,24 @@ class Track:
                 for o in result.scene.obstacles
                 for offsets in [np.array([o.offset(s.step)[:2] for s in result.steps])]
             ),
+            tuple(result.scene.units.suffix(d) for d in (LENGTH, AREA, PRESSURE)),
+            np.column_stack([history[f"{name}.area"] for name in result.chamber_names]),
         )
 
     def header(self, i: int) -> list[str]:
-        """The lines above the body at step i."""
-        areas = ", ".join(f"x{r:.2f}" for r in self.area_ratio[i])
-        pressures = ", ".join(f"{p:.1f}" for p in self.pressure[i])
-        return ([self.title] if self.title else []) + [
+        """The lines above the body at step i (a title may have several, split at newlines). In a scene with
+        units the areas, pressures and the tip's deflection say their unit; without, areas are area ratios."""
+        length, area, pressure = self.units
+        if area and self.area is not None:
+            areas = ", ".join(f"{a:.4g}" for a in self.area[i]) + area
+        else:
+            areas = ", ".join(f"x{r:.2f}" for r in self.area_ratio[i])
+        pressures = ", ".join(f"{p:.1f}" for p in self.pressure[i]) + pressure
+        tip = f"{self.tip_dy[i]:+.4g}{length}" if length else f"{self.tip_dy[i]:+.4f}"
+        return (self.title.split("\n") if self.title else []) + [
             f"step {i}/{len(self.states) - 1}   area {areas}",
-            f"p = {pressures}   tip dy = {self.tip_dy[i]:+.4f}",
+            f"p = {pressures}   tip dy = {tip}",
         ]
-
-
-def chamber_triangles(mesh: Mesh) -> np.ndarray:
-    """Triangulate every chamber's rest wall loop (no added points); reused on every deformed loop."""
-    parts = []
-    for loop in mesh.chambers:
-        k = len(loop)
-        ring = np.column_stack([np.arange(k), (np.arange(k) + 1) % k])
-        out = triangulate({"vertices": mesh.vertices[loop], "segments": ring}, "p")
-        require(len(out["vertices"]) == k, "chamber wall loop could not be triangulated without extra points")
-        parts.append(loop[out["triangles"]])
-    return np.concatenate(parts)
-
-
-def mesh_edges(mesh: Mesh, boundary_only: bool = False) -> np.ndarray:
-    """Unique undirected edges (e, 2) of the element outlines: a quadratic triangle's sides are drawn as
-    two segments each, through their midside nodes; boundary_only: the edges of one element only (the
-    body's outline and the chamber walls)."""
-    assert mesh.family is not None  # (Mesh fills it in)
-    t = mesh.triangles[:, list(mesh.family.outline)]
-    edges = np.sort(np.stack([t, np.roll(t, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
-    unique, counts = np.unique(edges, axis=0, return_counts=True)
-    return unique[counts == 1] if boundary_only else unique
 
 
 class FrameRenderer:
@@ -190,14 +183,13 @@ class FrameRenderer:
         self.panels = [(beam_w * i / n, beam_w * (i + 1) / n) for i in range(n)]
         self.colorbar_panel = (beam_w, beam_w + bar_w)
         self.trace_panel = (beam_w + bar_w, 1.0)
-        self.header_px = MARGIN_PX + LINE_PX * HEADER_LINES  # the same view whether a track has a title or not
-        points = np.concatenate(
-            [t.states.reshape(-1, 2) for t in self.tracks] + [t.targets for t in self.tracks if t.targets is not None]
-        )
-        self._lo, self._hi = (
-            np.asarray(b, float) for b in (bounds if bounds is not None else (points.min(axis=0), points.max(axis=0)))
-        )
+        # the same view whether a track has a title or not; a title of several lines takes more room
+        lines = max([HEADER_LINES] + [len(t.header(0)) for t in tracks])
+        self.header_px = MARGIN_PX + LINE_PX * lines
+        self._lo, self._hi = (np.asarray(b, float) for b in (bounds if bounds is not None else view_bounds(tracks)))
         self._fit_view(self._lo, self._hi)
+        self._ghosts = [mesh_edges(t.mesh, boundary_only=True) for t in tracks]
+        self.scale_bar = self._place_scale_bar()
 
     def _fit_view(self, lo: np.ndarray, hi: np.ndarray) -> None:
         """One map world -> normalised canvas for every beam panel showing the box lo..hi, equal axes,
@@ -220,6 +212,30 @@ class FrameRenderer:
         x0, x1 = self.panels[panel]
         centre_px = np.array([(x0 + x1) / 2 * self.width, self.height / 2]) + self._offset_px
         return self._centre + (np.asarray(uv) * np.array([self.width, self.height]) - centre_px) / self._scale
+
+    def _place_scale_bar(self) -> tuple[float, str, np.ndarray]:
+        """(length, label, pixel box (left, top, right, bottom)) of the first panel's scale bar: scalebar.py's
+        round length for the panel's width in world units, in the first corner (bottom left, bottom right, top
+        left, top right, below the header) whose box holds no point of any step's body (else the one holding
+        fewest)."""
+        x0, x1 = (v * self.width for v in self.panels[0])
+        length, label = scale_bar((x1 - x0) / self._scale, self.tracks[0].units[0])
+        text = label_box(Label(label, 0, 0, "mb"))
+        box_w = max(length * self._scale, text[2] - text[0]) + 8
+        box_h = SCALE_BAR_PX[1] + SCALE_BAR_PX[0] + 6
+        lefts, tops = (x0 + MARGIN_PX, x1 - MARGIN_PX - box_w), (self.height - MARGIN_PX - box_h, self.header_px)
+        boxes = np.array([[left, top, left + box_w, top + box_h] for top in tops for left in lefts])
+        points = np.concatenate([self.to_canvas(0, t.states.reshape(-1, 2)) for t in self.tracks])
+        return length, label, boxes[emptiest(boxes, points * (self.width, self.height) * (1, -1) + (0, self.height))]
+
+    def _draw_scale_bar(self) -> list[Label]:
+        """The scale bar: a line of its length with end ticks at the bottom of its box, its label above."""
+        length, text, (left, _, right, bottom) = self.scale_bar
+        half, y = SCALE_BAR_PX[0], bottom - 4
+        a, b = (left + right) / 2 - length * self._scale / 2, (left + right) / 2 + length * self._scale / 2
+        bar = np.array([[[a, y], [b, y]], [[a, y - half], [a, y + half]], [[b, y - half], [b, y + half]]])
+        self.canvas.segments(self._norm(bar), TEXT, 2.0)
+        return [Label(text, (a + b) / 2, y - half - 2, "mb")]
 
     def frame(self, i: int) -> np.ndarray:
         """Frame i as an (height, width, 3) uint8 image, text included."""
@@ -250,6 +266,8 @@ class FrameRenderer:
                 c.segments(ends[None], GROUND, 3.0)
             for outline, closed, offsets in track.obstacles:
                 self._draw_obstacle(p, outline + offsets[i], closed)
+            rest = self.to_canvas(p, track.mesh.vertices)
+            c.segments(rest[self._ghosts[p]], GHOST, 1.5)
             if track.color is None:
                 c.triangles(x[faces], FACE)
                 c.segments(x[edges], EDGE, 1.0)
@@ -267,6 +285,7 @@ class FrameRenderer:
                 self._draw_target(p, track, i)
             left = self.panels[p][0] * self.width + MARGIN_PX
             labels += [Label(line, left, MARGIN_PX / 2 + LINE_PX * k) for k, line in enumerate(track.header(i))]
+        labels += self._draw_scale_bar()
         if self.color_range is not None:
             labels += self._draw_colorbar(*self.color_range)
         if self.trace:
@@ -361,7 +380,8 @@ class FrameRenderer:
     def _draw_trace(self, i: int) -> list[Label]:
         """Area / rest area (left axis) and pressure (right axis) of every chamber against the step, on
         numbered axes; cursor at step i. One chamber: two lines, area blue and pressure red. Several: each
-        chamber in its own colour (named in a legend), its area ratio as a line, its pressure as dots."""
+        chamber in its own colour (named in a legend), its area ratio as a line, its pressure as dots; a
+        quantity the same in every chamber (chambers on one supply) is drawn once, in black."""
         c, spec = self.canvas, self.trace_axes()
         left, top, right, bottom = spec["box"]
         corners = np.array([[left, bottom], [right, bottom], [right, top], [left, top]])
@@ -389,18 +409,23 @@ class FrameRenderer:
         c.segments(self._norm(np.array(ticks)), AXES, 1.0)
         steps = np.arange(self.frames)
         marker = 4.0 / np.array([self.width, self.height])
+        shared = {}
         for track in self.tracks:
             for k in range(track.area_ratio.shape[1]):
                 for axis, values in (("area", track.area_ratio[:, k]), ("pressure", track.pressure[:, k])):
+                    every = track.area_ratio if axis == "area" else track.pressure
+                    shared[axis] = per_chamber is not None and bool(np.all(every == every[:, :1]))
+                    if shared[axis] and k > 0:
+                        continue
                     pts = self._norm(np.column_stack([to_x(steps), to_y(axis, values)]))
                     if per_chamber is None:
                         color = AREA_CURVE if axis == "area" else PRESSURE_CURVE
                         c.segments(np.stack([pts[:-1], pts[1:]], axis=1), color, 2.0)
                     elif axis == "area":
-                        color = per_chamber[k]
+                        color = TEXT if shared[axis] else per_chamber[k]
                         c.segments(np.stack([pts[:-1], pts[1:]], axis=1), color, 2.0)
                     else:
-                        color = per_chamber[k]
+                        color = TEXT if shared[axis] else per_chamber[k]
                         c.triangles(_squares(pts, 0.5 * marker), color)
                     c.triangles(_squares(pts[i : i + 1], marker), color)
         c.segments(self._norm(np.array([[[to_x(i), bottom], [to_x(i), top]]])), CURSOR, 1.0)
@@ -408,7 +433,9 @@ class FrameRenderer:
         if per_chamber is None:
             titles = [("area / rest area (left axis)", AREA_CURVE), ("pressure p (right axis)", PRESSURE_CURVE)]
         else:
-            titles = [("area / rest area: lines, left axis", TEXT), ("pressure p: dots, right axis", TEXT)]
+            same = lambda axis: " (all, black)" if shared.get(axis) else ""
+            titles = [(f"area / rest area{same('area')}: lines, left axis", TEXT)]
+            titles += [(f"pressure p{same('pressure')}: dots, right axis", TEXT)]
         labels += [
             Label(text, x_text, MARGIN_PX / 2 + LINE_PX * k, color=color) for k, (text, color) in enumerate(titles)
         ]

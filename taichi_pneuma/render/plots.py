@@ -1,21 +1,30 @@
-"""A run's history as a matplotlib figure with axes: six panels, one curve per chamber where there are several.
+"""A run's history as a matplotlib figure with axes: only the panels that say something about this run.
 
-    pressure against area ratio        tip deflection against the command   bending angle (and twist) against p
-    area ratio against the command     pressure against the command         extension (and blocked force) against p
+Candidate panels, in this order:
 
-The last column is what an actuator is judged by, against the pressure p of the first chamber: the bending
-angle (tip_rotation) and, in 3D, the twist about the body's axis (tip_twist); the axial extension (tip_dx) and,
-when the scene has obstacles, the blocked force (blocked_force, on its own axis at the right).
+    pressure against area ratio              each chamber's curve p(A / A_rest)
+    chamber area ratio against the command   left out where it is the command (y = x) or the first panel again
+    chamber pressure against the command     (the command is the other of area ratio and pressure)
+    tip deflection, bending angle (and twist in 3D), axial extension, blocked force (with obstacles):
+        the actuator's responses, against the pressure p of the chamber that drives the run, else the step
 
-"The command" is the chambers' commanded value (area ratio or pressure) when every chamber gets the
-same command at every step (one chamber, or chambers driven together); otherwise the step. In a scene
-with units every axis with a dimension says its unit ("pressure p [kPa]").
+"The command" is the chambers' commanded value (area ratio, pressure, displaced volume, ...) when every
+chamber gets the same command at every step (command_axis); otherwise the step. A chamber's curve of its own
+commanded quantity is not drawn (it is the schedule, not a response); a curve constant over the run (a twist of
+zero, a chamber at rest) is not drawn, and a panel left without curves is left out. Chambers whose curves are
+identical (a PneuNet's chambers on one supply) are one curve, "all 6 chambers"; otherwise each chamber has its own
+colour (the same in every panel) and a legend entry with its name. The run is "driven by one chamber" when the
+chambers whose command varies all have the same pressure history (one chamber, or chambers on one supply); the
+responses are then drawn against that pressure. The grid has as many axes as panels. In a scene with units every
+axis with a dimension says its unit ("pressure p [kPa]").
 """
 
 from __future__ import annotations
 
 import io
+import math
 import warnings
+from dataclasses import dataclass, field
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -41,71 +50,156 @@ class NotebookFigure(Figure):
         return buffer.getvalue()
 
 
-# the four panels' margins and gaps on the 10 x 7 inch figure, fixed: matplotlib's constrained layout
-# would find them itself, at twice the time of the whole plot (0.75 against 1.7 s measured)
 # the ratio a chamber's axis shows, and what it measures, by the body's dimension
 RATIO = {2: ("area ratio A / A_rest", "area"), 3: ("volume ratio V / V_rest", "volume")}
-LAYOUT = dict(left=0.05, right=0.95, bottom=0.07, top=0.89, wspace=0.3, hspace=0.35)
+# one panel's size and the figure's margins in inches, fixed: matplotlib's constrained layout would find them
+# itself, at twice the time of the whole plot (0.75 against 1.7 s measured)
+PANEL_IN, MARGIN_IN = (5.0, 3.4), dict(left=0.7, right=0.3, bottom=0.55, top=0.75)
+
+
+@dataclass
+class Panel:
+    """One axes: its title and axis labels, and its curves as (label, x, y, colour) (label '' for no legend)."""
+
+    title: str
+    x_label: str
+    y_label: str
+    curves: list = field(default_factory=list)
+
+
+def constant(values: np.ndarray) -> bool:
+    """True when values do not change over the run (to rounding: a spread within 1e-9 of their size)."""
+    values = np.asarray(values, float)
+    return bool(np.ptp(values) <= 1e-9 * (1.0 + np.abs(values).max()))
+
+
+def chamber_colour(k: int) -> str:
+    """Chamber k's colour in every panel (matplotlib's tab10 cycle)."""
+    return f"C{k % 10}"
+
+
+def chamber_curves(names: list[str], xs: np.ndarray, ys: np.ndarray, keep: list[bool]) -> list:
+    """Curves (label, x, y, colour) of the chambers kept (xs, ys: (steps, chambers); x may be one column for
+    all), those whose y is constant left out. Chambers with identical curves are one curve, labelled by their
+    names ('all n chambers' when they are all of them), in the first one's colour (black for all)."""
+    xs = np.broadcast_to(np.asarray(xs, float).reshape(len(ys), -1), ys.shape)
+    groups: list[list[int]] = []
+    for k in (k for k in range(ys.shape[1]) if keep[k] and not constant(ys[:, k])):
+        like = [g for g in groups if all(np.allclose(a[:, k], a[:, g[0]], rtol=1e-9, atol=0) for a in (xs, ys))]
+        if like:
+            like[0].append(k)
+        else:
+            groups.append([k])
+    if len(names) == 1 or (len(groups) == 1 and len(groups[0]) == len(names)):
+        label = f"all {len(names)} chambers" if len(names) > 1 else ""
+        return [(label, xs[:, 0], ys[:, 0], "k")] if groups else []
+    return [(", ".join(short(names[k]) for k in g), xs[:, g[0]], ys[:, g[0]], chamber_colour(g[0])) for g in groups]
+
+
+def response_axis(result) -> tuple[np.ndarray, str]:
+    """The x of the response panels: the pressure of the chamber(s) driving the run (module docstring) and its
+    label, else the step."""
+    names, pressure, command = result.chamber_names, result.pressure, result.command
+    driving = [k for k in range(len(names)) if not constant(command[:, k])] or list(range(len(names)))
+    p = pressure[:, driving[0]]
+    if constant(p) or not all(np.allclose(pressure[:, k], p, rtol=1e-9, atol=0) for k in driving):
+        return np.arange(len(p), dtype=float), "step"
+    which = "" if len(names) == 1 else f" of all {len(names)} chambers" if len(driving) == len(names) else ""
+    if len(names) > 1 and not which:
+        which = " of " + ", ".join(short(names[k]) for k in driving)
+    return p, result.scene.units.label("pressure p" + which, PRESSURE)
+
+
+def history_panels(result) -> list[Panel]:
+    """The panels of the module docstring that have something to draw for this run."""
+    units, kinds, history, names = (
+        result.scene.units,
+        [c.kind for c in result.scene.controls],
+        result.history,
+        result.chamber_names,
+    )
+    quantities = [kind.quantity for kind in kinds]
+    ratio, measure = RATIO[result.mesh.dim]
+    pressure_label = units.label("pressure p", PRESSURE)
+    x, x_label = command_axis(result.command, quantities)
+    commanded = x_label != "step"
+    x_label = x_label if not commanded else units.label(x_label, in_dimension(kinds[0].dimension, result.mesh.dim))
+    panels = [
+        Panel(
+            f"pressure against {measure} ratio",
+            ratio,
+            pressure_label,
+            chamber_curves(names, result.area_ratio, result.pressure, [True] * len(names)),
+        )
+    ]
+    for quantity, other, values, title, y_label in (
+        ("area ratio", "pressure", result.area_ratio, f"chamber {measure}", ratio),
+        ("pressure", "area ratio", result.pressure, "chamber pressure", pressure_label),
+    ):
+        if not (commanded and quantities[0] == other):  # else: the first panel with its axes swapped
+            keep = [q != quantity for q in quantities]  # a chamber's own command is the schedule, not a response
+            panels.append(Panel(title, x_label, y_label, chamber_curves(names, x, values, keep)))
+    xr, xr_label = response_axis(result)
+    twist = "tip_twist" in history and not constant(history["tip_twist"])
+    one = lambda key, label="", colour="k": [] if constant(history[key]) else [(label, xr, history[key], colour)]
+    bending = one("tip_rotation", "bending angle" if twist else "")
+    bending += one("tip_twist", "twist about x", "tab:orange") if twist else []
+    panels += [
+        Panel(
+            "tip deflection (mean y displacement of the tip)",
+            xr_label,
+            units.label("tip deflection dy", LENGTH),
+            one("tip_dy"),
+        ),
+        Panel(
+            "bending angle (tip rotation)" + (" and twist" if len(bending) > 1 else ""),
+            xr_label,
+            units.label("angle", ANGLE),
+            bending,
+        ),
+        Panel(
+            "axial extension (mean x displacement of the tip)",
+            xr_label,
+            units.label("extension dx", LENGTH),
+            one("tip_dx"),
+        ),
+    ]
+    if "blocked_force" in history:
+        panels.append(
+            Panel("force on the obstacles", xr_label, units.label("blocked force", FORCE), one("blocked_force"))
+        )
+    return [p for p in panels if p.curves]
 
 
 def history_figure(result, figure=None):
-    """Draw the history of an api.Result on `figure` (a new NotebookFigure, laid out by LAYOUT, by default)."""
-    fig = figure if figure is not None else NotebookFigure(figsize=(15, 7))
+    """Draw the history of an api.Result on `figure` (by default a new NotebookFigure sized to the panels): one
+    axes per panel of history_panels, in a grid of up to three columns (two for four panels)."""
+    panels = history_panels(result)
+    n = max(len(panels), 1)
+    cols = 2 if n == 4 else min(n, 3)
+    rows = math.ceil(n / cols)
+    size = (PANEL_IN[0] * cols, PANEL_IN[1] * rows + 0.4)
+    fig = figure if figure is not None else NotebookFigure(figsize=size)
     if figure is None:
-        fig.subplots_adjust(**LAYOUT)
-    (pa, tip, bending), (area, pressure, extension) = fig.subplots(2, 3)
-    units, kinds = result.scene.units, [c.kind for c in result.scene.controls]
-    x, x_label = command_axis(result.command, [kind.quantity for kind in kinds])
-    x_label = x_label if x_label == "step" else units.label(x_label, in_dimension(kinds[0].dimension, result.mesh.dim))
-    pressure_label = units.label("pressure p", PRESSURE)
-    for c, name in enumerate(result.chamber_names):
-        pa.plot(result.area_ratio[:, c], result.pressure[:, c], ".-", label=short(name))
-        area.plot(x, result.area_ratio[:, c], ".-", label=short(name))
-        pressure.plot(x, result.pressure[:, c], ".-", label=short(name))
-    tip.plot(x, result.history["tip_dy"], ".-", color="k")
-    ratio, measure = RATIO[result.mesh.dim]
-    for ax, xl, yl, title in (
-        (pa, ratio, pressure_label, f"pressure against {measure} ratio"),
-        (tip, x_label, units.label("tip deflection dy", LENGTH), "tip deflection (mean y displacement of the tip)"),
-        (area, x_label, ratio, f"chamber {measure}"),
-        (pressure, x_label, pressure_label, "chamber pressure"),
-    ):
-        ax.set(xlabel=xl, ylabel=yl, title=title)
+        m = MARGIN_IN
+        fig.subplots_adjust(
+            left=m["left"] / size[0],
+            right=1 - m["right"] / size[0],
+            bottom=m["bottom"] / size[1],
+            top=1 - m["top"] / size[1],
+            wspace=0.3,
+            hspace=0.55,
+        )
+    for k, panel in enumerate(panels):
+        ax = fig.add_subplot(rows, cols, k + 1)
+        for label, x, y, colour in panel.curves:
+            ax.plot(x, y, ".-", color=colour, label=label or None)
+        ax.set(xlabel=panel.x_label, ylabel=panel.y_label, title=panel.title)
         ax.grid(True, alpha=0.3)
-    if len(result.chamber_names) > 1:
-        pa.legend(fontsize="small")
-    actuator_panels(result, bending, extension)
+        if any(label for label, *_ in panel.curves):
+            ax.legend(fontsize="small")
     fig.suptitle(short(result.scene.name, 80))
     return fig
-
-
-def actuator_panels(result, bending, extension) -> None:
-    """Draw the bending angle and twist (on `bending`) and the extension and blocked force (on `extension`, the force
-    on a twin axis) against the first chamber's pressure (module docstring)."""
-    units, history = result.scene.units, result.history
-    names = result.chamber_names
-    x = result.pressure[:, 0]
-    x_label = units.label("pressure p" + (f" of {short(names[0])}" if len(names) > 1 else ""), PRESSURE)
-    bending.plot(x, history["tip_rotation"], ".-", color="k", label="bending angle")
-    if "tip_twist" in history:
-        bending.plot(x, history["tip_twist"], ".-", color="tab:orange", label="twist about x")
-        bending.legend(fontsize="small")
-    extension.plot(x, history["tip_dx"], ".-", color="k")
-    for ax, yl, title in (
-        (
-            bending,
-            units.label("angle", ANGLE),
-            "bending angle (tip rotation)" + (" and twist" if "tip_twist" in history else ""),
-        ),
-        (extension, units.label("extension dx", LENGTH), "axial extension (mean x displacement of the tip)"),
-    ):
-        ax.set(xlabel=x_label, ylabel=yl, title=title)
-        ax.grid(True, alpha=0.3)
-    if "blocked_force" in history:
-        force = extension.twinx()
-        force.plot(x, history["blocked_force"], ".-", color="tab:red")
-        force.set_ylabel(units.label("blocked force", FORCE), color="tab:red")
-        extension.set_title("extension, and the force on the obstacles (red)")
 
 
 def short(text: str, most: int = 24) -> str:
