@@ -10,7 +10,7 @@ from pathlib import Path
 
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
-sys.path[:0] = [str(ROOT), str(DOCS), str(ROOT / "examples")]  # the package, _generate, the gallery's drawing
+sys.path[:0] = [str(ROOT), str(DOCS)]  # the package (the gallery scripts import only it), _generate
 
 import _generate  # noqa: E402
 

@@ -11,9 +11,9 @@ mesh and 8 increments keep the example short.
 import tempfile
 
 import matplotlib.pyplot as plt
-from drawing import draw_result
 
 import taichi_pneuma as tp
+from taichi_pneuma.render.drawing import draw_result
 
 scene = tp.reference_scene(cy=0.15, steps=9, max_area=0.005)
 result = tp.simulate(scene)
