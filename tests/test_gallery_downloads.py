@@ -3,6 +3,7 @@ folder, `python plot_x.py` there, with nothing of the repository on the path but
 helper beside the scripts would be missing from the download). It must finish without a traceback and write
 nothing outside its folder: nothing beside it, and its temporary files (TMPDIR) removed."""
 
+import importlib.util
 import os
 import subprocess
 import sys
@@ -36,6 +37,8 @@ def test_a_downloaded_gallery_script_runs_alone_in_an_empty_folder(script, tmp_p
     seconds = time.perf_counter() - start
     output = run.stdout + run.stderr
     print(f"{script.name}: {seconds:.1f} s")
+    if run.returncode and "taichi-pneuma[3d]" in output and importlib.util.find_spec("gmsh") is None:
+        pytest.skip("the script meshes a 3D shape, and gmsh is not installed")
     assert run.returncode == 0, output[-3000:]
     assert "Traceback" not in output, output[-3000:]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["download", "tmp"]
