@@ -1,14 +1,19 @@
-"""The site's pages that are generated at build time, from the code and the tracked benchmark results, so that
-they cannot drift from what they describe:
+"""The site's pages that are generated from the code and the tracked benchmark results, so that they cannot drift
+from what they describe. At build time (docs/conf.py):
 
 - _generated/app_<name>.md: each app's usage and flags, read off its argparse parser (what --help prints);
-- _generated/scene_keys.md: every key of the scene file, from io/scenefile.key_reference() (the format's one
-  declaration, io/sceneformat.py);
 - _generated/results_<page>.md: the tables under benchmarks/results/ (machine and date included), each with the
   docstring of the code that wrote it and the command that writes it again; a table no page claims lands on the
   performance page;
 - api/<package>.md and api/index.md: an automodule directive per module of each subpackage (pkgutil's walk),
   so that a new module is in the reference without an edit here.
+
+Committed (readable in the repository; `python docs/_generate.py` writes them again, tests/test_docs_generated.py
+checks they are current):
+
+- guide/scene_keys_2d.md and guide/scene_keys_3d.md: every key of the scene file, from
+  scene/scenefile.key_reference() (the format's one declaration, scene/sceneformat.py), the 3D body and chamber
+  shapes' keys in the second, every other key (those of every scene and of the 2D shapes) in the first.
 
 plain_docstring() reads the docstrings, written as plain text for help() and a terminal, as reStructuredText
 (the characters reST would take as markup escaped, indented blocks made literal) for autodoc.
@@ -22,9 +27,12 @@ import pkgutil
 import re
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+DOCS = Path(__file__).resolve().parent
+ROOT = DOCS.parent
 RESULTS = ROOT / "benchmarks" / "results"
 APPS = ("inflate", "steer", "reach", "sweep", "bench")
+SCENE_KEYS = {2: "guide/scene_keys_2d.md", 3: "guide/scene_keys_3d.md"}  # under docs/, committed
+REGENERATE = "python docs/_generate.py"
 
 # results table stem -> (page, title, (module file, function or None: the docstring that says what it measures),
 #                         the command that writes it again)
@@ -163,7 +171,6 @@ def write_all(out: Path) -> None:
     out.mkdir(exist_ok=True)
     for name in APPS:
         write_if_changed(out / f"app_{name}.md", app_page(name))
-    write_if_changed(out / "scene_keys.md", scene_keys_page())
     for page, text in results_pages().items():
         write_if_changed(out / f"results_{page}.md", text)
     api = out.parent / "api"
@@ -213,7 +220,37 @@ def app_page(name: str) -> str:
     return f"```text\n{usage}\n```\n\n{parser.description}\n\n" + table(["flag", "default", "what it does"], rows)
 
 
-def scene_keys_page() -> str:
+def write_committed() -> list[Path]:
+    """Write the committed generated pages (SCENE_KEYS); return their paths."""
+    paths = []
+    for dim, name in SCENE_KEYS.items():
+        write_if_changed(DOCS / name, scene_keys_page(dim))
+        paths.append(DOCS / name)
+    return paths
+
+
+def key_dimensions(keys: list) -> list[int]:
+    """Each key's table: 3 for a key of a 3D body or chamber shape (a variant of body.shape or chambers[].shape
+    other than the declaration's PLANAR_BODIES and PLANAR_CHAMBERS) or of a table inside one, 2 for the others
+    (the 2D shapes' keys and those of every scene)."""
+    from taichi_pneuma.scene.sceneformat import PLANAR_BODIES, PLANAR_CHAMBERS
+
+    planar = {"body.shape": PLANAR_BODIES, "chambers[].shape": PLANAR_CHAMBERS}
+    enclosing: list[tuple[str, int]] = []  # the shape variant's keys this key lies inside, with their dimension
+    dims = []
+    for k in keys:
+        enclosing = [(key, dim) for key, dim in enclosing if k.key.startswith((key + ".", key + "[]"))]
+        tag, _, value = k.when.partition(" = ")
+        own = (2 if value.strip('"') in planar[tag] else 3) if tag in planar else None
+        dim = enclosing[-1][1] if enclosing else own
+        if dim is not None:
+            enclosing.append((k.key, dim))
+        dims.append(dim or 2)
+    return dims
+
+
+def scene_keys_page(dim: int) -> str:
+    """The table of the scene file's keys of SCENE_KEYS[dim] (key_dimensions), with what the columns mean."""
     from taichi_pneuma.io.units import si_text
     from taichi_pneuma.scene.scenefile import key_reference
 
@@ -224,6 +261,7 @@ def scene_keys_page() -> str:
             return f"`{k.default}`"
         return f"`{k.default}` ({'SI, converted' if k.scaled else 'unitless scenes only'})"
 
+    keys = key_reference()
     rows = [
         [
             f"`{k.key}`",
@@ -234,10 +272,21 @@ def scene_keys_page() -> str:
             f"`{k.when}`" if k.when else "",
             k.doc,
         ]
-        for k in key_reference()
+        for k, d in zip(keys, key_dimensions(keys))
+        if d == dim
     ]
+    other = Path(SCENE_KEYS[5 - dim]).name
+    which = (
+        f"{len(rows)} keys: those of every scene, which apply to 2D and 3D bodies alike, and those of the 2D body "
+        f"and chamber shapes; the 3D shapes' keys are in {other}."
+        if dim == 2
+        else f"{len(rows)} keys of the 3D body and chamber shapes (a mesh file, the solids meshed by gmsh, a 2D "
+        f"shape extruded, the PneuNet generator); the keys of every scene, which apply to 3D bodies too, are in "
+        f"{other}."
+    )
     return (
-        f"{len(rows)} keys. A key with a unit takes the scene's units (`units = ...`; the unit column gives the "
+        f"<!-- written by `{REGENERATE}` from the scene file's declaration (scene/sceneformat.py): do not edit -->\n\n"
+        f"{which} A key with a unit takes the scene's units (`units = ...`; the unit column gives the "
         f"SI one). Its default is in SI, converted into the scene's units; a numerical default (a penalty "
         f"stiffness, a barrier distance, a mesh size: 'unitless scenes only') is for unitless scenes, and a "
         f"scene with units gives the key.\n\n"
@@ -375,3 +424,11 @@ def plain_docstring(app, what, name, obj, options, lines: list[str]) -> None:
         in_list = item or (in_list and depth == 2)
         out.append(escape(line))
     lines[:] = out
+
+
+if __name__ == "__main__":
+    import sys
+
+    sys.path.insert(0, str(ROOT))  # the package of this checkout, before an installed one
+    for path in write_committed():
+        print(f"wrote {path.relative_to(ROOT)}")

@@ -1,6 +1,7 @@
 """Sphinx configuration of the taichi-pneuma site: MyST Markdown pages, an API reference from the docstrings
 (autodoc + napoleon), the example gallery (sphinx-gallery, executed at every build) and pages generated at build
-time from the code and the benchmark results (_generate.py), so that none of them can drift.
+time from the code and the benchmark results (_generate.py; the scene-key tables are committed, and written by
+python docs/_generate.py), so that none of them can drift.
 
     pip install ".[docs]" && python -m sphinx -W --keep-going -n -b html docs docs/_build/html
 """
@@ -10,7 +11,7 @@ from pathlib import Path
 
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
-sys.path[:0] = [str(ROOT), str(DOCS), str(ROOT / "examples")]  # the package, _generate, the gallery's drawing
+sys.path[:0] = [str(ROOT), str(DOCS)]  # the package (the gallery scripts import only it), _generate
 
 import _generate  # noqa: E402
 
@@ -33,7 +34,15 @@ extensions = [
 ]
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 root_doc = "index"
-exclude_patterns = ["_build", "_generated/*.md", "gallery/*.ipynb", "gallery/*.py", "gallery/*.zip"]
+# pages that are only included into others (guide/scene_keys_*.md: committed, python docs/_generate.py writes them)
+exclude_patterns = [
+    "_build",
+    "_generated/*.md",
+    "guide/scene_keys_*.md",
+    "gallery/*.ipynb",
+    "gallery/*.py",
+    "gallery/*.zip",
+]
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 suppress_warnings = ["myst.header"]  # pages included into others start below their first heading level

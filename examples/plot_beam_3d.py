@@ -11,9 +11,9 @@ reference (``pneuma-inflate --scene beam_3d``).
 
 import matplotlib.pyplot as plt
 import numpy as np
-from drawing import draw_surface
 
 import taichi_pneuma as tp
+from taichi_pneuma.render.drawing import draw_surface
 
 scene = tp.load_scene("beam_3d").with_values({"schedule.increments": 5, "chambers[0].keyframes": [[5, 2.0]]})
 result = tp.simulate(scene)

@@ -8,21 +8,23 @@ keep it from ballooning, and a paper sheet on its flat bottom (``[[layers]]``) t
 Pressurised, it lengthens everywhere but along the sheet, and bends towards it. ``blocked_force_3d`` holds the same
 actuator against a plate under its tip (``[[obstacles]]``): the force it presses with is its blocked force.
 ``fiber_twist_3d`` winds a tube with a single helix, and it twists. Here on coarser meshes, for speed: the actuator's
-tetrahedra 1.5 times the shipped size (it bends 49 degrees at 120 kPa there, 56 on the shipped mesh; quadratic
-tetrahedra bend it further, benchmarks/results/actuators.md), the twisting tube on linear tetrahedra (which twist
-about a third too little: its scene ships quadratic ones).
+tetrahedra twice the shipped size (it bends 49 degrees at 120 kPa there, 56 on the shipped mesh; quadratic
+tetrahedra bend it further, benchmarks/results/actuators.md, and the coarse mesh presses with 11 % less blocked force
+than the shipped one's 729 mN), the twisting tube on linear tetrahedra 1.5 times the shipped size (which twist about
+a third too little: its scene ships quadratic ones).
 """
 
 import matplotlib.pyplot as plt
 import numpy as np
-from drawing import draw_surface
 
 import taichi_pneuma as tp
+from taichi_pneuma.render.drawing import draw_surface
 
-COARSE = {"mesh.size": 6.0, "mesh.near_chambers": 3.0, "mesh.distance": 3.0}
+COARSE = {"mesh.size": 8.0, "mesh.near_chambers": 4.0, "mesh.distance": 4.0}  # twice the shipped sizes
 bending = tp.simulate(tp.load_scene("fiber_bending_3d").with_values(COARSE))
 blocked = tp.simulate(tp.load_scene("blocked_force_3d").with_values(COARSE))
-twist = tp.simulate(tp.load_scene("fiber_twist_3d").with_value("mesh.order", 1))
+LINEAR = {"mesh.order": 1, "mesh.size": 4.5, "mesh.near_chambers": 3.0, "mesh.distance": 3.0}  # 1.5 times
+twist = tp.simulate(tp.load_scene("fiber_twist_3d").with_values(LINEAR))
 mesh = bending.mesh
 outer = mesh.surface[np.isin(mesh.surface[:, :3], mesh.boundary).all(axis=1)]  # the chamber's wall left out
 p = bending.pressure[:, 0]

@@ -10,9 +10,9 @@ Its history reports the cylinder's contact force at every step: the grip force a
 """
 
 import matplotlib.pyplot as plt
-from drawing import draw_obstacles, draw_result
 
 import taichi_pneuma as tp
+from taichi_pneuma.render.drawing import draw_obstacles, draw_result
 
 result = tp.simulate(tp.load_scene("gripper_2d"))
 pressure = result.pressure[:, 0]

@@ -9,9 +9,9 @@ balloon, push each other apart along the top, and the finger curls towards its s
 
 import matplotlib.pyplot as plt
 import numpy as np
-from drawing import draw_result
 
 import taichi_pneuma as tp
+from taichi_pneuma.render.drawing import draw_result
 
 scene = tp.load_scene("pneunet_finger")  # a scene shipped with the package, by name
 result = tp.simulate(scene)

@@ -11,10 +11,10 @@ up); the reacher follows them in order, each from the pose the last one reached
 """
 
 import matplotlib.pyplot as plt
-from drawing import draw_body
 
 import taichi_pneuma as tp
 from taichi_pneuma.control.inverse import Reacher
+from taichi_pneuma.render.drawing import draw_body
 
 tp.init("cpu")
 scene = tp.load_scene("bidirectional")

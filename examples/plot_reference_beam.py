@@ -11,9 +11,9 @@ mesh and 8 increments keep the example short.
 import tempfile
 
 import matplotlib.pyplot as plt
-from drawing import draw_result
 
 import taichi_pneuma as tp
+from taichi_pneuma.render.drawing import draw_result
 
 scene = tp.reference_scene(cy=0.15, steps=9, max_area=0.005)
 result = tp.simulate(scene)
@@ -28,10 +28,12 @@ ax.set_title(f"area x{result.area_ratio[-1, 0]:.2f}: tip {result.tip_deflection:
 
 # %%
 # ``result.save`` writes the history (CSV), states (npz), summary, scene file, ParaView files and the plot of
-# the history: pressure against area ratio, and the tip, area and pressure against the command.
-written = result.save(tempfile.mkdtemp())
-plot = next(path for path in written if path.name.endswith("_plot.png"))
+# the history: pressure against area ratio, and the tip, area and pressure against the command (here into a
+# temporary folder, removed after the plot is read back).
+with tempfile.TemporaryDirectory() as out:
+    written = result.save(out)
+    plot = plt.imread(next(path for path in written if path.name.endswith("_plot.png")))
 fig, ax = plt.subplots(figsize=(10, 7), layout="constrained")
-ax.imshow(plt.imread(plot))
+ax.imshow(plot)
 ax.set_axis_off()
 plt.show()

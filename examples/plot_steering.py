@@ -7,9 +7,9 @@ and curls up (``pneuma-steer`` runs the three on the reference mesh).
 """
 
 import matplotlib.pyplot as plt
-from drawing import draw_result
 
 import taichi_pneuma as tp
+from taichi_pneuma.render.drawing import draw_result
 
 fig, axes = plt.subplots(3, 1, figsize=(6, 8), layout="constrained")
 for ax, cy in zip(axes, (0.15, 0.0, -0.15)):

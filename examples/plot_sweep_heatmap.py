@@ -19,11 +19,13 @@ from taichi_pneuma.study import LocalPool, Sweep, parse_vary
 
 if __name__ == "__main__":  # the workers are spawned processes, which import this file without running it
     base = tp.reference_scene(steps=5, max_area=0.01)
-    sweep = Sweep(base, [parse_vary("cy=-0.15:0.15:4"), parse_vary("E=5e3:2e4:3")], out=tempfile.mkdtemp(), name="cy_E")
-    with LocalPool(workers=2) as pool:
+    axes = [parse_vary("cy=-0.15:0.15:4"), parse_vary("E=5e3:2e4:3")]
+    with tempfile.TemporaryDirectory() as out, LocalPool(workers=2) as pool:  # the folder removed at the end
+        sweep = Sweep(base, axes, out=out, name="cy_E")
         report = sweep.run(pool)
+        image = plt.imread(sweep.png)  # the study's plot, written beside its CSV and JSON
     print(f"{report.ran} runs in {report.seconds:.1f} s, {report.failed} failed")
     fig, ax = plt.subplots(figsize=(6, 4.5), layout="constrained")
-    ax.imshow(plt.imread(sweep.png))  # the study's plot, written beside its CSV and JSON
+    ax.imshow(image)
     ax.set_axis_off()
     plt.show()

@@ -49,7 +49,8 @@ def simulate(
     the commands' --max-increments does; max_triangles: a mesh (or self-contact's pairs) worth more linear
     triangles is refused (PneumaInputError), the mesher stopping at it, as the commands' --max-triangles does
     (None: no limit; a BuiltScene was meshed already). progress: True shows a progress bar (tqdm) while it
-    solves; a function progress(step_record, positions, contact_force) is called after every increment instead.
+    solves; a function progress(step_record, positions, contact_force) is called after every increment instead
+    (positions and contact forces (n, d), d = 2 or 3, as a row of Result.positions and Result.contact_forces).
     stop() is asked after every increment but the last and before every Newton iteration, ending the run
     with tp.RampInterrupted (the increments done) when it returns True. Raises tp.RampFailed when an increment
     finds no equilibrium; both carry .result, the Result of the steps done. Initialises Taichi on the CPU unless

@@ -24,7 +24,16 @@ class Result(Run):
     """A run (solve.records.Run: the built scene, its steps and positions, the figures read off them) with what
     is made from it: the summary, the history CSV and states npz, ParaView files, a video, a plot. One type for
     all runs: a ramp (tp.simulate), the steps a stopped ramp did (tp.RampFailed.result), the frames of a
-    sequence of reaches (inverse.frames)."""
+    sequence of reaches (inverse.frames).
+
+    Its arrays, with d = 2 for a plane body and 3 for a solid one, and n the mesh's nodes (mesh.n_vertices: its
+    corners, and on a quadratic (P2) mesh its midside nodes too, in the order of mesh.vertices):
+    positions (steps, n, d): the node positions per step, rest state first; displacements (steps, n, d): the
+    same from the rest mesh; contact_forces (steps, n, d): the summed contact force per node (None without
+    contact); command, area, area_ratio, pressure (steps, chambers): per chamber, in chamber_names' order;
+    obstacle_positions() (steps, obstacles, 3): each obstacle's placed point; mesh.vertices (n, d): the rest
+    nodes.
+    """
 
     @classmethod
     def of(cls, run: Run) -> Result:

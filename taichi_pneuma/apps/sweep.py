@@ -90,7 +90,11 @@ def parser() -> argparse.ArgumentParser:
 
 
 def row_line(row: dict, keys: list[str], labels: list[str]) -> str:
-    values = ", ".join(f"{label} = {row[k]}" for k, label in zip(keys, labels))
+    """A run's line in the log: its varied values (floats to 12 digits: the CSV keeps them all), then its tip's
+    motion or its error."""
+    from ..study.table import shown
+
+    values = ", ".join(f"{label} = {shown(row[k])}" for k, label in zip(keys, labels))
     seconds = "" if row.get("seconds") is None else f" ({row['seconds']:.1f} s)"  # none: the run was lost
     if row.get("error") is not None:
         return f"  {values}: error: {row['error']}{seconds}"

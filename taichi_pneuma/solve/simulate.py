@@ -238,8 +238,8 @@ def run_schedule(
     RampFailed names the step, the commands (for pressure control, the last pressure reached) and
     the residual, and carries the steps done; so does an equilibrium that is no physical state (settle's
     state_fault: a chamber wall through itself, an inverted element), which is not kept. progress, if given, is called
-    after every increment as progress(step_record, positions, contact_force): the positions (n, 2) and, if
-    the scene has contact, the summed contact force per vertex (n, 2), else None; stop, if given, is asked
+    after every increment as progress(step_record, positions, contact_force): the positions (n, d), d = 2 or
+    3, and, if the scene has contact, the summed contact force per node (n, d), else None; stop, if given, is asked
     stop() after every increment but the last and before every Newton iteration (so a run cutting back asks
     it too), and when it returns True the ramp ends there with RampInterrupted carrying the steps done (not
     the increment it was solving). Returns the run's records, a Run (its seconds: the wall time of this call).

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .table import cell, is_number
+from .table import cell, is_number, shown
 
 if TYPE_CHECKING:
     from matplotlib.collections import Collection
@@ -18,11 +18,12 @@ MAX_DRAWN = 1e100  # numbers the plot draws as such (matplotlib's axis arithmeti
 
 def _positions(values: list) -> tuple[np.ndarray, list | None]:
     """Numbers as they are, if a plot can draw them (MAX_DRAWN); anything else as category indices
-    (returned with their labels)."""
+    (returned with their labels: each distinct value, by its CSV cell, as shown() writes it)."""
     if all(is_number(v) and abs(v) <= MAX_DRAWN for v in values):
         return np.array(values, dtype=float), None
-    labels = list(dict.fromkeys(cell(v) for v in values))
-    return np.array([labels.index(cell(v)) for v in values], dtype=float), labels
+    first = {cell(v): v for v in reversed(values)}  # each cell's first value, in order of first appearance
+    cells = list(dict.fromkeys(cell(v) for v in values))
+    return np.array([cells.index(cell(v)) for v in values], dtype=float), [shown(first[c]) for c in cells]
 
 
 def _edges(centres: np.ndarray) -> np.ndarray:

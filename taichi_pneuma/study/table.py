@@ -35,6 +35,17 @@ def cell(value) -> str:
     return json.dumps(value, ensure_ascii=False) if value.startswith(FORMULA) or uncell(value) != value else value
 
 
+def shown(value) -> str:
+    """A varied value as the log and the figure show it: a float to 12 significant digits (np.linspace's round-off,
+    0.07499999999999998, shown as 0.075), a list item by item, anything else as str; the CSV and the JSON keep
+    every digit (cell)."""
+    if isinstance(value, float):
+        return f"{value:.12g}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(shown(item) for item in value) + "]"
+    return str(value)
+
+
 def uncell(text: str):
     """The value of a CSV cell (cell's inverse)."""
     if text == "":

@@ -1,7 +1,10 @@
-"""The gallery's pictures, in matplotlib: a 2D body coloured per element, a 3D body's surface shaded by its normals.
+"""Matplotlib pictures of a Result, for notebooks, scripts and the gallery: a 2D body coloured per element
+(draw_body, draw_result), a 2D scene's rigid obstacles (draw_obstacles), a 3D body's surface shaded by its
+normals (draw_surface). Each draws onto the matplotlib axes it is given, so it composes with other plots.
 
-The apps draw the same states with the project's own renderer (videos and PNGs, `pneuma-inflate`); these
-few lines keep each gallery script to its subject.
+The apps draw the same states with the project's own renderer (videos and PNGs, frames.py and frames3d.py);
+these few functions keep a script that plots a run to its subject. They read a Result's attributes
+(positions, mesh, fields, scene, steps) and import nothing above this layer.
 """
 
 import matplotlib.pyplot as plt
