@@ -45,6 +45,7 @@ from .section import AXES, Section, plane_facing, section_of
 from .surface import NumpyView, shade_faces
 from .text import LINE_PX, MARGIN_PX, Label, draw_labels, label_box
 from .ticks import colorbar_ticks, tick_label
+from .trace3d import TracePanel
 
 if TYPE_CHECKING:
     from .ggui3d import GGUIView
@@ -58,7 +59,6 @@ CLAMP = (0.85, 0.2, 0.35)
 GROUND = (0.78, 0.76, 0.72)
 LIFT = 0.3  # a field's colour: (1 - LIFT) map + LIFT white
 TRACE_SHARE = 0.36  # of the frame's width
-TRACE_COLORS = ("#1f3fe0", "#d62718")
 EDGE_PX = 1.5  # an obstacle's edges
 FRAME_CAMERA = Camera(azimuth=-35.0)  # from the clamped end's side (scenes clamp the left end): the clamp in view
 
@@ -144,19 +144,8 @@ class Track3D:
             fields = ElementFields(mesh.vertices, mesh.elements)
             cells = np.array([fields.at(x)[key] for x in result.positions])
             values = cells[:, under]
-        steps = len(result.positions)
-        length, pressure = units.suffix(LENGTH), units.suffix(PRESSURE)
-        captions = tuple(
-            (
-                f"step {i}/{steps - 1}   volume "
-                + ", ".join(f"x{r:.2f}" for r in result.area_ratio[i])
-                + "   p = "
-                + ", ".join(f"{p:.4g}{pressure}" for p in result.pressure[i]),
-                f"tip dy = {history['tip_dy'][i]:+.3g}{length}   dz = {history['tip_dz'][i]:+.3g}{length}"
-                f"   bend {history['tip_rotation'][i]:+.1f} deg",
-            )
-            for i in range(steps)
-        )
+        captions = step_captions(result.area_ratio, result.pressure, history, units)
+        pressure = units.suffix(PRESSURE)
         trace = (("volume / rest volume", result.area_ratio), (f"pressure{pressure}", result.pressure))
         return cls(
             result.positions,
@@ -172,12 +161,30 @@ class Track3D:
             cells,
             np.asarray(mesh.pinned, np.int64),
             guides3d.obstacle_geometry(result),
-            length,
+            units.suffix(LENGTH),
         )
 
     @property
     def per_node(self) -> bool:
         return self.color is not None and np.shape(self.color)[1] == len(self.positions[0]) != len(self.boundary)
+
+
+def step_captions(area_ratio: np.ndarray, pressure: np.ndarray, history: dict, units) -> tuple[tuple[str, ...], ...]:
+    """Each step's header lines: the chambers' volume ratios (steps, chambers) and pressures, the tip's dy and dz
+    (history's tip_dy, tip_dz) and bend (tip_rotation), every value with its unit (units: io.units.Units)."""
+    length, p = units.suffix(LENGTH), units.suffix(PRESSURE)
+    steps = len(area_ratio)
+    return tuple(
+        (
+            f"step {i}/{steps - 1}   volume "
+            + ", ".join(f"x{r:.2f}" for r in area_ratio[i])
+            + "   p = "
+            + ", ".join(f"{v:.4g}{p}" for v in pressure[i]),
+            f"tip dy = {history['tip_dy'][i]:+.3g}{length}   dz = {history['tip_dz'][i]:+.3g}{length}"
+            f"   bend {history['tip_rotation'][i]:+.1f} deg",
+        )
+        for i in range(steps)
+    )
 
 
 def surface_triangles(mesh) -> tuple[np.ndarray, tuple[np.ndarray, ...], np.ndarray]:
@@ -281,10 +288,10 @@ class FrameRenderer3D:
         plane = plane_facing(rest, camera.eye - np.asarray(camera.target)) if cut else (0, np.inf, 1.0)
         walls = np.concatenate(track.chambers) if track.chambers else np.zeros((0, 3), np.int64)
         self.section: Section = section_of(rest, track.boundary, walls, track.tetrahedra if cut else None, *plane)
-        self.key = self._key(cut)
-        lines = max((len(c) for c in track.captions or [()]), default=0) + 1 + bool(self.key)
-        self.header_px = MARGIN_PX + LINE_PX * lines
         self.trace_px = int(TRACE_SHARE * width) if trace and track.trace else 0
+        self.key = self._place_key(self._key(cut), width - self.trace_px - MARGIN_PX)
+        lines = max((len(c) for c in track.captions or [()]), default=0) + bool(track.title)
+        self.header_px = MARGIN_PX + LINE_PX * (lines + max((row + 1 for _, _, row in self.key), default=0))
         self.bar_px = COLORBAR_PX if track.color is not None else 0
         view_size = (width - self.trace_px - self.bar_px, height - self.header_px)
         self.canvas = view or open_view(backend, *view_size, log=log)
@@ -398,16 +405,27 @@ class FrameRenderer3D:
         image, labels, _ = self.compose(i)
         return draw_labels(image, labels)
 
+    @staticmethod
+    def _place_key(key: list[tuple[str, tuple]], limit: float) -> list[tuple[Label, float, int]]:
+        """The key's pieces side by side, a piece that would pass pixel column limit starting a new line: (label
+        at x and row 0, its x, its line)."""
+        placed, x, row = [], float(MARGIN_PX), 0
+        for text, color in key:
+            label = Label(text, x, 0.0, "la", color)
+            width = label_box(label)[2] - x
+            if x > MARGIN_PX and x + width > limit:
+                x, row = float(MARGIN_PX), row + 1
+            placed.append((Label(text, x, 0.0, "la", color), x, row))
+            x += width + 16
+        return placed
+
     def _header(self, i: int) -> list[Label]:
-        """The title, step i's captions and the key, a line each, the key's pieces side by side."""
+        """The title, step i's captions and the key, a line each (the key's pieces side by side)."""
         captions = list(self.track.captions[i] if self.track.captions else ())
         lines = ([self.track.title] if self.track.title else []) + captions
         labels = [Label(line, MARGIN_PX, MARGIN_PX / 2 + LINE_PX * k) for k, line in enumerate(lines)]
-        x, y = float(MARGIN_PX), MARGIN_PX / 2 + LINE_PX * len(lines)
-        for text, color in self.key:
-            label = Label(text, x, y, "la", color)
-            labels.append(label)
-            x = label_box(label)[2] + 16
+        for label, x, row in self.key:
+            labels.append(Label(label.text, x, MARGIN_PX / 2 + LINE_PX * (len(lines) + row), "la", label.color))
         return labels
 
     def _colorbar(self, image: np.ndarray, x0: int, lo: float, hi: float) -> list[Label]:
@@ -428,37 +446,6 @@ class FrameRenderer3D:
 def _rgb8(colors) -> np.ndarray:
     """Colours in [0, 1] (any shape ending in 3) as uint8."""
     return (np.asarray(colors) * 255 + 0.5).astype(np.uint8)
-
-
-class TracePanel:
-    """The series of a track against the step, drawn once by matplotlib onto a (height, width) image;
-    frame(i) adds the cursor at step i."""
-
-    def __init__(self, trace, steps: int, width: int, height: int):
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-
-        figure = Figure(figsize=(width / 100, height / 100), dpi=100)
-        canvas = FigureCanvasAgg(figure)
-        axes = figure.add_axes((0.2, 0.14, 0.6, 0.72))
-        step = np.arange(steps)
-        for k, ((label, values), color) in enumerate(zip(trace, TRACE_COLORS)):
-            ax = axes if k == 0 else axes.twinx()
-            ax.plot(step, np.reshape(values, (steps, -1)), color=color, marker="o", markersize=2.5, lw=1.5)
-            ax.set_ylabel(label, color=color)
-            ax.tick_params(axis="y", colors=color)
-        axes.set_xlabel("step")
-        axes.set_xlim(0, max(steps - 1, 1))
-        canvas.draw()
-        self.image = np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
-        box = axes.get_window_extent()
-        self.columns = [int(round(c)) for c in axes.transData.transform(np.column_stack([step, step * 0]))[:, 0]]
-        self.rows = (int(round(height - box.y1)), int(round(height - box.y0)))
-
-    def frame(self, i: int) -> np.ndarray:
-        image = self.image.copy()
-        image[self.rows[0] : self.rows[1], self.columns[i]] = (60, 60, 60)
-        return image
 
 
 def render_video_3d(
