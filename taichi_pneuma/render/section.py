@@ -122,13 +122,25 @@ def section_of(
     kept_walls, _ = _clip(walls, points)
     cut, cut_of = _cut(tetrahedra, points) if tetrahedra is not None else (np.zeros((0, 3), np.int64), np.zeros(0, int))
     a, b, t = (np.array(v) for v in (points.a, points.b, points.t))
-    section = Section(axis, value, sign, a, b, t.astype(float), kept, kept_of, kept_walls, cut, cut_of)
-    if len(cut):  # the cut faces' rest normals towards the removed side
-        x = section.points(rest)[cut]
-        normal = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
-        flip = sign * normal[:, axis] < 0
-        cut[flip] = cut[flip][:, ::-1]
-    return section
+    at_rest = rest[a] * (1 - t)[:, None] + rest[b] * t[:, None]
+    tiny = 1e-12 * float(np.ptp(rest, axis=0).max()) ** 2
+
+    def normals(triangles: np.ndarray) -> np.ndarray:
+        x = at_rest[triangles]
+        return np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]).reshape(-1, 3)
+
+    # a corner on the plane makes zero-area pieces: dropped
+    kept_keep, walls_keep, cut_keep = (np.linalg.norm(normals(f), axis=1) > tiny for f in (kept, kept_walls, cut))
+    kept, kept_of, kept_walls, cut, cut_of = (
+        kept[kept_keep],
+        kept_of[kept_keep],
+        kept_walls[walls_keep],
+        cut[cut_keep],
+        cut_of[cut_keep],
+    )
+    flip = sign * normals(cut)[:, axis] < 0  # the cut faces' rest normals towards the removed side
+    cut[flip] = cut[flip][:, ::-1]
+    return Section(axis, value, sign, a, b, t.astype(float), kept, kept_of, kept_walls, cut, cut_of)
 
 
 def plane_facing(rest: np.ndarray, towards_eye: np.ndarray) -> tuple[int, float, float]:
