@@ -57,7 +57,7 @@ BODY = (0.72, 0.89, 0.66)
 CHAMBER = (0.3, 0.5, 0.95)
 CLAMP = (0.85, 0.2, 0.35)
 GROUND = (0.78, 0.76, 0.72)
-LIFT = 0.3  # a field's colour: (1 - LIFT) map + LIFT white
+LIFT = 0.35  # a field's colour: (1 - LIFT) map + LIFT white
 TRACE_SHARE = 0.36  # of the frame's width
 EDGE_PX = 1.5  # an obstacle's edges
 FRAME_CAMERA = Camera(azimuth=-35.0)  # from the clamped end's side (scenes clamp the left end): the clamp in view

@@ -12,10 +12,10 @@ b_k is linear in x, so b_k >= 0 bounds the row's columns from one side, and all 
 their pixels are enumerated at once (ragged arrays, no loop over triangles). Cost: proportional to the
 covered pixels, times the overdraw.
 
-Shading (shade_faces) is flat, two-sided, under a key light fixed to the camera (above, left and in front
-of the body, so the top, front and side of a box differ clearly) plus a small headlight highlight: with n the
-face's unit normal turned towards the eye, l the direction to the light and h the unit half-way vector of l and
-the direction to the eye v,
+Shading (shade_faces) is flat, two-sided, under a key light fixed to the camera (beside the eye, a little right
+of and above it, so the faces towards the eye, the top and the sides of a box differ clearly) plus a small
+highlight: with n the face's unit normal turned towards the eye, l the direction to the light and h the unit
+half-way vector of l and the direction to the eye v,
 
     colour = base (AMBIENT + DIFFUSE max(n . l, 0)) + SPECULAR max(n . h, 0)^SHININESS   (white highlight)
 
@@ -32,7 +32,7 @@ from .camera import Camera
 AMBIENT, DIFFUSE = 0.38, 0.62  # shade = AMBIENT + DIFFUSE max(n . l, 0): in [AMBIENT, 1]
 SPECULAR, SHININESS = 0.18, 24.0  # the highlight, added white
 BACK_FACE = 0.75
-LIGHT = (-0.35, 0.6, -0.72)  # the direction to the key light in camera (right, up, forward) units
+LIGHT = (0.35, 0.15, -1.0)  # the direction to the key light in camera (right, up, forward) units: by the eye
 
 
 def shade_faces(corners: np.ndarray, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
