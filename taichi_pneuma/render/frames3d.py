@@ -232,13 +232,14 @@ def open_view(backend: str, width: int, height: int, show: bool = False, log=pri
     return view
 
 
-def section_faces(rest: np.ndarray, faces: np.ndarray, camera: Camera) -> np.ndarray:
-    """Which faces to keep: those whose rest centroid lies on the far side of the mid-plane of the rest
-    bounding box normal to the world axis closest to the direction from the target to the eye."""
-    towards_eye = camera.eye - np.asarray(camera.target)
-    axis = int(np.argmax(np.abs(towards_eye)))
-    middle = (rest[:, axis].min() + rest[:, axis].max()) / 2
-    return np.sign(towards_eye[axis]) * (rest[faces].mean(axis=1)[:, axis] - middle) <= 0
+def open_section(
+    rest: np.ndarray, boundary: np.ndarray, walls: np.ndarray, camera: Camera, tetrahedra: np.ndarray | None = None
+) -> Section:
+    """The exact section (render.section) of the rest body that opens it towards camera: by the mid-plane of its
+    bounding box normal to the world axis closest to the direction from the target to the eye, the eye's side
+    removed (tetrahedra None: the surface clipped, no cut faces)."""
+    plane = plane_facing(rest, camera.eye - np.asarray(camera.target))
+    return section_of(rest, boundary, walls, tetrahedra, *plane)
 
 
 def shaded_triangles(
@@ -285,9 +286,12 @@ class FrameRenderer3D:
         self.width, self.height = width, height
         rest, camera = track.positions[0], camera or FRAME_CAMERA
         cut = section and bool(track.chambers)
-        plane = plane_facing(rest, camera.eye - np.asarray(camera.target)) if cut else (0, np.inf, 1.0)
         walls = np.concatenate(track.chambers) if track.chambers else np.zeros((0, 3), np.int64)
-        self.section: Section = section_of(rest, track.boundary, walls, track.tetrahedra if cut else None, *plane)
+        self.section: Section = (
+            open_section(rest, track.boundary, walls, camera, track.tetrahedra)
+            if cut
+            else section_of(rest, track.boundary, walls, None, 0, np.inf, 1.0)  # a plane at infinity: all kept
+        )
         self.trace_px = int(TRACE_SHARE * width) if trace and track.trace else 0
         self.key = self._place_key(self._key(cut), width - self.trace_px - MARGIN_PX)
         lines = max((len(c) for c in track.captions or [()]), default=0) + bool(track.title)

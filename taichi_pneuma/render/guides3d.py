@@ -8,7 +8,8 @@ rigid obstacles (a box, or a plane as a square) with their edges.
   (the centre of the body's bounding box), F / distance pixels per world unit (render.camera), in the bottom-right;
 - the ghost: the pixels the whole rest body covers (rasterised once), tinted GHOST_FILL where the frame shows the
   background and its outline (covered pixels with an uncovered 4-neighbour) GHOST_EDGE;
-- obstacles: opaque shaded faces in the 3D scene (so the body hides them and they hide it where they should) and
+- obstacles (obstacle_geometry: a box as its box, a plane as a square, other shapes not drawn): opaque shaded
+  faces in the 3D scene (so the body hides them and they hide it where they should) and
   their edges as thin quads facing the eye (segment_triangles), nudged towards it so they win over their faces.
 """
 
@@ -25,8 +26,8 @@ AXIS_PX = 26
 AXIS_COLORS = ((0.8, 0.15, 0.1), (0.1, 0.55, 0.15), (0.1, 0.3, 0.85))
 GHOST_FILL, GHOST_EDGE = (0.93, 0.93, 0.93), (0.55, 0.55, 0.55)
 INK = (0.15, 0.15, 0.15)
-BOX_TRIANGLES = ((0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1))
-BOX_TRIANGLES += ((2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3))
+BOX_TRIANGLES = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1)]  # outward
+BOX_TRIANGLES += [(2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]
 BOX_EDGES = ((0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7))
 
 
@@ -113,8 +114,8 @@ def draw_axes(view: np.ndarray, camera: Camera) -> tuple[list[Label], tuple[floa
     for k in range(3):
         step = np.array([basis[0][k], -basis[1][k]]) * AXIS_PX
         draw.line([*origin, *(origin + step)], fill=tuple(_rgb8(AXIS_COLORS[k]).tolist()), width=2)
-        tip = origin + step * (1 + 9 / max(np.linalg.norm(step), 1e-9))
-        labels.append(Label("xyz"[k], *tip, "mm", AXIS_COLORS[k]))
+        tip = origin + step * (1 + 9 / max(float(np.linalg.norm(step)), 1e-9))
+        labels.append(Label("xyz"[k], float(tip[0]), float(tip[1]), "mm", AXIS_COLORS[k]))
     view[:] = np.asarray(picture)
     side = AXIS_PX + 16
     return labels, (origin[0] - side, origin[1] - side, origin[0] + side, origin[1] + side)
