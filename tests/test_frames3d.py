@@ -136,7 +136,8 @@ def test_every_step_lies_inside_the_view(finger):  # noqa: F811
 @pytest.mark.parametrize("size", [(480, 320), (640, 360), (960, 540)])
 def test_labels_and_guides_keep_apart_inside_the_frame(finger, size):  # noqa: F811
     """In frames small and large, with a colour bar, a trace panel and the whole key: no two label boxes or
-    guides (axes, scale bar) overlap, all lie inside the frame, and none reaches into the trace panel."""
+    guides (axes, scale bar) overlap, all lie inside the frame, none reaches into the trace panel, and no node of
+    any step lies under a guide."""
     track = dataclasses.replace(finger, pinned=np.arange(10), length_unit=" mm")
     renderer = FrameRenderer3D(track, *size, backend="numpy")
     _, labels, guides = renderer.compose(3)
@@ -149,6 +150,12 @@ def test_labels_and_guides_keep_apart_inside_the_frame(finger, size):  # noqa: F
         assert all(apart(guide, box) for label, box in boxes.items() if label.text not in own), guide
     for left, top, right, bottom in [*boxes.values(), *guides]:
         assert 0 <= left and right <= size[0] - renderer.trace_px and 0 <= top and bottom <= size[1]
+    pixels, _ = renderer.camera.project(finger.positions.reshape(-1, 3), renderer.canvas.width, renderer.canvas.height)
+    pixels[:, 1] += renderer.header_px
+    for left, top, right, bottom in guides:  # in the corners the body leaves free
+        assert not np.any(
+            (pixels[:, 0] > left) & (pixels[:, 0] < right) & (pixels[:, 1] > top) & (pixels[:, 1] < bottom)
+        )
 
 
 def apart(a, b) -> bool:

@@ -315,6 +315,7 @@ class FrameRenderer3D:
         self.ground = None if track.ground is None else self._ground_quad(track.ground)
         drawn = self.section.points(rest)[np.concatenate([self.section.surface, self.section.cut])]  # the rest section
         self.ghost = guides3d.ghost_mask(drawn, self.camera, *view_size) if guides else None
+        self.corners = guides3d.quiet_corners(track.positions, self.camera, *view_size, track.length_unit)
         self._trace = TracePanel(track.trace, self.frames, self.trace_px, height) if self.trace_px else None
 
     def _key(self, cut: bool) -> list[tuple[str, tuple]]:
@@ -392,8 +393,8 @@ class FrameRenderer3D:
         if self.guides:
             assert self.ghost is not None
             guides3d.draw_ghost(view, *self.ghost, BACKGROUND)
-            axes = guides3d.draw_axes(view, self.camera)
-            bar = guides3d.draw_scale_bar(view, self.camera, self.track.length_unit)
+            axes = guides3d.draw_axes(view, self.camera, self.corners[0])
+            bar = guides3d.draw_scale_bar(view, self.camera, self.track.length_unit, self.corners[1])
             for texts, (left, upper, right, lower) in (axes[:2], bar[:2]):
                 labels += [Label(t.text, t.x, t.y + top, t.anchor, t.color) for t in texts]
                 boxes.append((left, upper + top, right, lower + top))

@@ -1,16 +1,17 @@
 """What a 3D frame draws besides the body, to be read: the x-y-z axes, a scale bar, the rest shape's ghost, and
 rigid obstacles (a box, or a plane as a square) with their edges.
 
-- axes: a triad in the view's bottom-left corner, each world axis e drawn as the segment (e . r, -(e . u)) AXIS_PX
-  long from one point (r, u the camera's right and up: its direction as the camera sees it, its length shortened
-  by how much it points at the eye);
+- axes: a triad in the view's bottom-left corner (top-left where fewer of the body's nodes lie: quiet_corners),
+  each world axis e drawn as the segment (e . r, -(e . u)) AXIS_PX long from one point (r, u the camera's right
+  and up: its direction as the camera sees it, shortened by how much it points at the eye);
 - the scale bar: the round length scalebar.scale_bar picks for the view's width at the depth of the camera's target
-  (the centre of the body's bounding box), F / distance pixels per world unit (render.camera), in the bottom-right;
-- the ghost: the pixels the whole rest body covers (rasterised once), tinted GHOST_FILL where the frame shows the
-  background and its outline (covered pixels with an uncovered 4-neighbour) GHOST_EDGE;
+  (the centre of the body's bounding box), F / distance pixels per world unit (render.camera), in the bottom-right
+  (or top-right, as the axes);
+- the ghost: the pixels the rest body (cut as the frames are) covers (rasterised once), tinted GHOST_FILL where
+  the frame shows the background, and its outline (covered pixels with an uncovered 4-neighbour) GHOST_EDGE;
 - obstacles (obstacle_geometry: a box as its box, a plane as a square, other shapes not drawn): opaque shaded
-  faces in the 3D scene (so the body hides them and they hide it where they should) and
-  their edges as thin quads facing the eye (segment_triangles), nudged towards it so they win over their faces.
+  faces in the 3D scene (so the body hides them and they hide it where they should) and their edges as thin
+  quads facing the eye (segment_triangles), nudged towards it so they win over their faces.
 """
 
 from __future__ import annotations
@@ -100,13 +101,15 @@ def draw_ghost(view: np.ndarray, covered: np.ndarray, outline: np.ndarray, backg
     view[free & outline] = _rgb8(GHOST_EDGE)
 
 
-def draw_axes(view: np.ndarray, camera: Camera) -> tuple[list[Label], tuple[float, float, float, float]]:
-    """Draw the triad into view (h, w, 3) uint8 in place; its axis labels and the box (left, top, right, bottom)
-    it covers."""
+def draw_axes(
+    view: np.ndarray, camera: Camera, top: bool = False
+) -> tuple[list[Label], tuple[float, float, float, float]]:
+    """Draw the triad into view (h, w, 3) uint8 in place, in its bottom-left corner (top: top-left); its axis
+    labels and the box (left, top, right, bottom) it covers."""
     from PIL import Image, ImageDraw
 
-    h = view.shape[0]
-    origin = np.array([MARGIN_PX + AXIS_PX + 6, h - MARGIN_PX - AXIS_PX - 6], float)
+    h, inset = view.shape[0], MARGIN_PX + AXIS_PX + 6
+    origin = np.array([inset, inset if top else h - inset], float)
     basis = camera.basis()
     picture = Image.fromarray(view)
     draw = ImageDraw.Draw(picture)
@@ -122,14 +125,14 @@ def draw_axes(view: np.ndarray, camera: Camera) -> tuple[list[Label], tuple[floa
 
 
 def draw_scale_bar(
-    view: np.ndarray, camera: Camera, unit: str
+    view: np.ndarray, camera: Camera, unit: str, top: bool = False
 ) -> tuple[list[Label], tuple[float, float, float, float], float]:
-    """Draw the scale bar into view (h, w, 3) uint8 in place; its label, the box it covers and its length in
-    world units."""
+    """Draw the scale bar into view (h, w, 3) uint8 in place, in its bottom-right corner (top: top-right); its
+    label, the box it covers and its length in world units."""
     h, w = view.shape[:2]
     per_unit = camera.focal(h) / camera.distance  # pixels per world unit at the target's depth
     length, text = scale_bar(w / per_unit, unit)
-    right, row = w - MARGIN_PX - 4, h - MARGIN_PX - 4
+    right, row = w - MARGIN_PX - 4, MARGIN_PX + 24 if top else h - MARGIN_PX - 4
     left = right - length * per_unit
     ink = _rgb8(INK)
     x0, x1 = int(round(left)), int(round(right))
@@ -138,6 +141,23 @@ def draw_scale_bar(
     view[row - 5 : row + 2, x1 - 1 : x1 + 1] = ink
     label = Label(text, (left + right) / 2, row - 7, "md")
     return [label], (left - 1, row - 24, right + 1, row + 2), length
+
+
+def quiet_corners(points: np.ndarray, camera: Camera, width: int, height: int, unit: str) -> tuple[bool, bool]:
+    """Whether the axes and the scale bar go top (True) or bottom: where their box holds fewer of the points
+    (every step's nodes) seen by camera in a (width, height) view (bottom on a tie)."""
+    pixels, _ = camera.project(points.reshape(-1, 3), width, height)
+    scratch = np.zeros((height, width, 3), np.uint8)
+
+    def crowd(box) -> int:
+        left, upper, right, lower = box
+        x, y = pixels[:, 0], pixels[:, 1]
+        return int(np.count_nonzero((x >= left) & (x <= right) & (y >= upper) & (y <= lower)))
+
+    return (
+        crowd(draw_axes(scratch, camera, True)[1]) < crowd(draw_axes(scratch, camera)[1]),
+        crowd(draw_scale_bar(scratch, camera, unit, True)[1]) < crowd(draw_scale_bar(scratch, camera, unit)[1]),
+    )
 
 
 def _rgb8(color) -> np.ndarray:
