@@ -325,7 +325,8 @@ class FrameRenderer3D:
             s = self.section
             side = f"{'+' if s.sign > 0 else '-'}{AXES[s.axis]}"
             value = tick_label(s.value) + self.track.length_unit
-            key.append((f"section {AXES[s.axis]} = {value}: the {side} half cut away", guides3d.INK))
+            shown = "the chamber" if len(self.track.chambers) == 1 else "the chambers"
+            key.append((f"section {AXES[s.axis]} = {value}: the {side} half cut away to show {shown}", guides3d.INK))
         if len(self.track.pinned):
             key.append(("clamped face", CLAMP))
         if self.track.obstacles:
