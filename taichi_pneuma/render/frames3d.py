@@ -413,16 +413,27 @@ class FrameRenderer3D:
 
     @staticmethod
     def _place_key(key: list[tuple[str, tuple]], limit: float) -> list[tuple[Label, float, int]]:
-        """The key's pieces side by side, a piece that would pass pixel column limit starting a new line: (label
-        at x and row 0, its x, its line)."""
+        """The key's pieces side by side, a piece that does not fit on the line going to the next, and one longer than
+        a line wrapped at words, so that none passes pixel column limit: (label, its x, its line)."""
+
+        def width(text: str) -> float:
+            box = label_box(Label(text, 0.0, 0.0))
+            return box[2] - box[0]
+
         placed, x, row = [], float(MARGIN_PX), 0
         for text, color in key:
-            label = Label(text, x, 0.0, "la", color)
-            width = label_box(label)[2] - x
-            if x > MARGIN_PX and x + width > limit:
-                x, row = float(MARGIN_PX), row + 1
-            placed.append((Label(text, x, 0.0, "la", color), x, row))
-            x += width + 16
+            words = text.split(" ")
+            while words:
+                if x > MARGIN_PX and x + width(" ".join(words)) > limit:  # the rest of the piece to the next line
+                    x, row = float(MARGIN_PX), row + 1
+                take = len(words)
+                while take > 1 and x + width(" ".join(words[:take])) > limit:
+                    take -= 1
+                chunk, words = " ".join(words[:take]), words[take:]
+                placed.append((Label(chunk, x, 0.0, "la", color), x, row))
+                x += width(chunk) + 16
+                if words:
+                    x, row = float(MARGIN_PX), row + 1
         return placed
 
     def _header(self, i: int) -> list[Label]:
