@@ -37,7 +37,7 @@ from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.live.interactive3d import Slider, explore_3d
 from taichi_pneuma.render.camera import Camera
 from taichi_pneuma.render.colours import BACKGROUND
-from taichi_pneuma.render.frames3d import FrameRenderer3D, Track3D, open_view, section_faces, shaded_triangles
+from taichi_pneuma.render.frames3d import FrameRenderer3D, Track3D, open_section, open_view, shaded_triangles
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the sibling scripts (solid.py's Meshed)
 
@@ -94,7 +94,7 @@ def live(frames: int, peak: float = 900.0, idle: int = 30, order: int = 1) -> li
     built, boundary, walls = live_scene(peak=peak, order=order)
     mesh = built.mesh
     camera = Camera().fitted(mesh.vertices, 960, 640, margin=0.2)
-    faces = boundary[section_faces(mesh.vertices, boundary, camera)]
+    cut = open_section(mesh.vertices, boundary, walls, camera)
     command = np.full(len(built.chambers), peak)
     built.set_commands(command)
     reference, _ = NewtonSolver(built.model, NewtonOptions()).solve(np.zeros_like(mesh.vertices))
@@ -126,7 +126,11 @@ def live(frames: int, peak: float = 900.0, idle: int = 30, order: int = 1) -> li
                 start, cpu = time.perf_counter(), time.process_time()
                 taken = step(np.full(len(built.chambers), peak * min(max(k, 0.01), frames) / frames))
                 middle = time.perf_counter()
-                view.render(*shaded_triangles(mesh.vertices + state.u, faces, walls, camera), camera, BACKGROUND)
+                view.render(
+                    *shaded_triangles(cut.points(mesh.vertices + state.u), cut.surface, cut.walls, camera),
+                    camera,
+                    BACKGROUND,
+                )
                 if 1 <= k <= frames:
                     solve_s.append(middle - start)
                     draw_s.append(time.perf_counter() - middle)

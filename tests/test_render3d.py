@@ -15,8 +15,9 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.live import interactive3d
 from taichi_pneuma.live.interactive3d import Slider, commands_from, dragged, explore_3d
 from taichi_pneuma.render.camera import MAX_ELEVATION, Camera
-from taichi_pneuma.render.frames3d import CHAMBER, FrameRenderer3D, Track3D, open_view, render_video_3d
-from taichi_pneuma.render.surface import AMBIENT, BACK_FACE, NumpyView, rasterise, shade_faces
+from taichi_pneuma.render.frames3d import CHAMBER, FrameRenderer3D, Track3D, body_colormap, open_view, render_video_3d
+from taichi_pneuma.render.surface import AMBIENT, BACK_FACE, SPECULAR, NumpyView, rasterise, shade_faces
+from taichi_pneuma.render.text import LINE_PX
 
 CUBE = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
 
@@ -146,11 +147,13 @@ def test_colours_are_interpolated_perspective_correctly():
     assert np.allclose(image[r, c], [0.5, 0.02, 0.48], atol=0.03)
 
 
-def test_shading_is_brightest_facing_the_light_and_darker_from_behind():
+def test_shading_lights_a_face_towards_the_eye_and_darkens_its_back():
     camera = Camera(azimuth=0, elevation=0, distance=5.0)
     towards = np.array([[[-1.0, -1, 0], [1, -1, 0], [0, 1, 0]]])  # normal +z, towards the eye
-    front, back = shade_faces(towards, camera)[0], shade_faces(towards[:, ::-1], camera)[0]
+    (front,), (highlight,) = shade_faces(towards, camera)
+    (back,), (no_highlight,) = shade_faces(towards[:, ::-1], camera)
     assert AMBIENT < front <= 1 and back == pytest.approx(BACK_FACE * front)
+    assert 0 < highlight <= SPECULAR and no_highlight == 0
 
 
 def ggui_or_skip(width, height):
@@ -188,8 +191,8 @@ def test_frames_show_the_chambers_through_the_section_and_never_crop_the_body(fi
         return np.count_nonzero((v[..., 2] > v[..., 0] + 40.0) & (v[..., 2] > v[..., 1] + 20.0))
 
     plain = dataclasses.replace(finger, color=None)  # light green: no blue in the body
-    cut = FrameRenderer3D(plain, 640, 360, backend="numpy", trace=False)
-    whole = FrameRenderer3D(plain, 640, 360, backend="numpy", trace=False, section=False)
+    cut = FrameRenderer3D(plain, 640, 360, backend="numpy", trace=False, guides=False)  # no blue z axis
+    whole = FrameRenderer3D(plain, 640, 360, backend="numpy", trace=False, section=False, guides=False)
     for i in range(cut.frames):
         view = view_of(cut, cut.frame(i))
         assert chamber_blue(view) > 500 and chamber_blue(view_of(whole, whole.frame(i))) == 0
@@ -199,24 +202,25 @@ def test_frames_show_the_chambers_through_the_section_and_never_crop_the_body(fi
 
 def test_colour_field_and_colour_bar(finger):
     """Coloured per node on one scale for all steps: the rest state is all the colour map's low end (|u| = 0);
-    a bent state shows high values; the colour bar spans the map."""
-    from taichi_pneuma.render.colours import colormap
-
+    a bent state shows high values; the colour bar spans the map (lightened as the body's)."""
     renderer = FrameRenderer3D(finger, 640, 360, backend="numpy", trace=False)
     lo, hi = renderer.range
     assert lo == 0.0 and hi == pytest.approx(finger.color.max())
     (rest, rest_colors), (bent, bent_colors) = (renderer.triangles(i) for i in (0, 3))
-    low, high = colormap(np.array([lo, hi]), lo, hi)
-    n_body = len(renderer.kept)
-    unshaded = rest_colors / shade_faces(rest, renderer.camera)[:, None, None]
-    assert np.allclose(unshaded[:n_body], low) and np.allclose(unshaded[n_body:], CHAMBER)
-    unshaded = bent_colors[:n_body] / shade_faces(bent, renderer.camera)[:n_body, None, None]
-    assert np.any(np.all(np.isclose(unshaded, high, atol=0.02), axis=-1))  # the yellow end reached
+    low, high = body_colormap(np.array([lo, hi]), lo, hi)
+    n_body, n_walls = len(renderer.section.surface), len(renderer.section.walls)
+
+    def unshaded(corners, colors):
+        factor, highlight = shade_faces(corners, renderer.camera)
+        return (colors - highlight[:, None, None]) / factor[:, None, None]
+
+    assert np.allclose(unshaded(rest, rest_colors)[:n_body], low)
+    assert np.allclose(unshaded(rest, rest_colors)[n_body : n_body + n_walls], CHAMBER)
+    assert np.any(np.all(np.isclose(unshaded(bent, bent_colors)[:n_body], high, atol=0.02), axis=-1))  # the top
     image = renderer.frame(3)
     x0 = renderer.canvas.width + 8
-    strip = image[renderer.header_px + 20 : renderer.height - 20, x0 + 7]
-    assert np.allclose(strip[0] / 255, colormap(np.array([hi]), lo, hi)[0], atol=0.03)
-    assert np.allclose(strip[-1] / 255, low, atol=0.03)
+    strip = image[renderer.header_px + LINE_PX + 6 : renderer.height - 18, x0 + 7]
+    assert np.allclose(strip[0] / 255, high, atol=0.03) and np.allclose(strip[-1] / 255, low, atol=0.03)
 
 
 def test_header_and_trace_cursor(finger):

@@ -264,15 +264,16 @@ def projected_box(renderer, positions):
 @pytest.mark.parametrize("view", ["numpy", "ggui"])
 def test_frames_of_a_3d_run_show_the_body_where_it_is(tiny_run, view):
     """Both views draw each step's body inside the projection of its nodes, covering most of that box's
-    width and height, with the chamber's blue seen through the section."""
+    width and height, with the chamber's blue seen through the section (no guides: the ghost and axes lie
+    outside the body)."""
     track = Track3D.from_result(tiny_run, "stretch")
     try:
-        renderer = FrameRenderer3D(track, 480, 320, backend=view, trace=False, log=lambda _: None)
+        renderer = FrameRenderer3D(track, 480, 320, backend=view, trace=False, log=lambda _: None, guides=False)
     except PneumaInputError as exc:
         pytest.skip(str(exc))
     try:
         for i in (0, len(track.positions) - 1):
-            image = renderer.frame(i)
+            image = renderer.compose(i)[0]  # the shapes, without the text
             drawn = body_pixels(renderer, image)
             rows, columns = np.nonzero(drawn)
             lo, hi = projected_box(renderer, track.positions[i])

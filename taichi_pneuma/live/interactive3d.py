@@ -19,7 +19,7 @@ from ..backend import ti
 from ..errors import require, require_finite
 from ..render.camera import Camera
 from ..render.colours import BACKGROUND
-from ..render.frames3d import section_faces, shaded_triangles
+from ..render.frames3d import open_section, shaded_triangles
 from ..render.ggui3d import GGUIView
 
 DRAG_DEGREES = (360.0, 180.0)  # (azimuth, elevation) turned by a drag across the whole window
@@ -84,7 +84,7 @@ def explore_3d(
     window, gui = view.window, view.window.get_gui()
     camera = (camera or Camera()).fitted(rest, width, height, margin=0.2)
     walls = np.concatenate(chambers) if len(chambers) else np.zeros((0, 3), np.int64)
-    faces = boundary[section_faces(rest, boundary, camera)] if section and len(chambers) else boundary
+    cut = open_section(rest, boundary, walls, camera) if section and len(chambers) else None  # the surface clipped
     shown = np.array([s.value for s in sliders], dtype=float)
     x, caption = solve(shown)
     solves, frames, seconds, last = 1, 0, 0.0, None
@@ -108,7 +108,10 @@ def explore_3d(
                 camera = dragged(camera, last, cursor)
             last = cursor if pressed and not in_panel(cursor, len(sliders), height) else None
             camera = camera.orbit(spin, 0.0)
-            view.draw(*shaded_triangles(x, faces, walls, camera), camera, BACKGROUND)
+            if cut is None:
+                view.draw(*shaded_triangles(x, boundary, walls, camera), camera, BACKGROUND)
+            else:
+                view.draw(*shaded_triangles(cut.points(x), cut.surface, cut.walls, camera), camera, BACKGROUND)
             window.show()
             if frames:
                 seconds += time.perf_counter() - start

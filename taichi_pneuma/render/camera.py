@@ -79,16 +79,17 @@ class Camera:
         elevation = float(np.clip(self.elevation + d_elevation, -MAX_ELEVATION, MAX_ELEVATION))
         return replace(self, azimuth=(self.azimuth + d_azimuth) % 360.0, elevation=elevation)
 
-    def fitted(self, points: np.ndarray, width: int, height: int, margin: float = 0.06) -> Camera:
+    def fitted(self, points: np.ndarray, width: int, height: int, margin: float | tuple[float, float] = 0.06) -> Camera:
         """This camera's direction, aimed at the centre of the points' bounding box and moved just far enough
-        that every corner of the box projects inside the frame, `margin` of it left free at each side."""
+        that every corner of the box projects inside the frame, `margin` of it left free at each side (one
+        fraction, or (left and right, top and bottom))."""
         lo, hi = np.min(points.reshape(-1, 3), axis=0), np.max(points.reshape(-1, 3), axis=0)
         target = (lo + hi) / 2
         aimed = replace(self, target=tuple(target), distance=1.0)
         corners = np.array(np.meshgrid(*zip(lo, hi), indexing="ij")).reshape(3, -1).T - target
         c = corners @ aimed.basis().T  # relative to the target: depth at distance d is c_z + d
         focal = self.focal(height)
-        half = np.array([width, height]) / 2 * (1 - 2 * margin)
+        half = np.array([width, height]) / 2 * (1 - 2 * np.asarray(margin, float))
         needed = np.max(np.abs(c[:, :2]) * focal / half - c[:, 2:3])
         nearest = np.max(-c[:, 2]) + 1e-3 * np.ptp(corners)  # every corner in front of the eye
         return replace(aimed, distance=float(max(needed, nearest)))

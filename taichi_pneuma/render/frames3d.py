@@ -1,25 +1,30 @@
-"""Offscreen frames of a 3D ramp: the deforming body's surface seen by one fixed camera, with its
-chambers shown through a section, a colour field, a header and a trace panel.
+"""Offscreen frames of a 3D ramp: the deforming body's surface seen by one fixed camera, cut open by an exact
+section to show its chambers, shaded to show its shape, with the axes, a scale bar, the clamp, obstacles, the rest
+shape's ghost, a colour bar, a header and a trace panel.
 
 A frame is laid out as
 
-    header (title, then the step's caption lines)   |           |
-    3D view                                         | colour bar | trace panel
+    header (title, the step's caption lines, the key: what the section cuts, what the colours mark)  |
+    3D view (axes bottom-left, scale bar bottom-right)   | colour bar |  trace panel
 
-- the 3D view: the body's outer surface (light green, or coloured per face or per node by a field on
-  one viridis scale for all steps) and the chamber walls (blue), flat-shaded (render.surface), seen by
-  a camera (render.camera) fitted once to every state of the ramp, so the body never leaves the frame
-  and the view does not jump. The section removes the outer faces on the camera's side of the mid-plane
-  of the rest body normal to the world axis closest to the viewing direction (chosen once, at rest, so
-  no face pops in or out), which opens the body and shows the chambers whole inside it; the inside of
-  the far wall is drawn darker (surface.BACK_FACE). An optional ground plane y = ground is drawn grey.
-- the colour bar: the field's scale with numbered ticks (matplotlib's tick choice);
+- the 3D view: the body's outer surface (light green, or coloured per face or per node by a field on one scale for
+  all steps, the colour map lightened by LIFT so shading reads on its dark end) and the chamber walls (blue),
+  flat-shaded under a key light and a highlight (render.surface), seen by a camera (render.camera) fitted once
+  to every state of the ramp, so the body never leaves the frame and the view does not jump. The section
+  (render.section) cuts the body exactly by the mid-plane of the rest body normal to the world axis closest to
+  the viewing direction (chosen once, at rest) and removes the camera's side: the surface is clipped at the
+  plane and the cut face of every tetrahedron it crosses is drawn flat in that tetrahedron's colour, with holes
+  where the chambers are (the inside of the far wall drawn darker, surface.BACK_FACE). The clamped faces (all
+  corners pinned) are drawn CLAMP; a ground plane y = ground grey; a box or plane obstacle as an opaque shaded
+  box or square with dark edges; the rest body's silhouette as a grey ghost behind (render.guides3d).
+- the colour bar: the field's scale with numbered ticks, its quantity and unit as one label above it;
 - the trace panel: up to two series against the step, the first on the left axis and the second on the
   right (e.g. chamber volume / rest volume and pressure), drawn once by matplotlib; a cursor marks the
   current step.
 
 Two views draw the same shaded triangles: GGUI's 3D scene (render.ggui3d) where Vulkan works and the
-NumPy z-buffer rasteriser (render.surface) everywhere; 'auto' takes GGUI and falls back to NumPy.
+NumPy z-buffer rasteriser (render.surface) everywhere; 'auto' takes GGUI and falls back to NumPy. The ghost,
+axes, scale bar and text are drawn onto the view's image after, the same on both.
 The renderer knows nothing of meshes or solvers: it takes positions (steps, n, 3), triangles and values.
 """
 
@@ -33,11 +38,14 @@ import numpy as np
 from ..errors import PneumaInputError, require, shape_of
 from ..fem.fields import ElementFields
 from ..io.units import LENGTH, PRESSURE
+from . import guides3d
 from .camera import Camera
-from .colours import BACKGROUND, COLORBAR_PX, colormap
+from .colours import BACKGROUND, COLORBAR_PX, OBSTACLE_FILL, colormap
+from .section import AXES, Section, plane_facing, section_of
 from .surface import NumpyView, shade_faces
-from .text import LINE_PX, MARGIN_PX, Label, draw_labels
-from .ticks import colorbar_ticks
+from .text import LINE_PX, MARGIN_PX, Label, draw_labels, label_box
+from .ticks import colorbar_ticks, tick_label
+from .trace3d import TracePanel
 
 if TYPE_CHECKING:
     from .ggui3d import GGUIView
@@ -47,17 +55,28 @@ VIEWS = ("auto", "numpy", "ggui")
 VIEW_OF_RENDERER = {"auto": "auto", "ggui": "ggui", "gui": "numpy", "pillow": "numpy"}
 BODY = (0.72, 0.89, 0.66)
 CHAMBER = (0.3, 0.5, 0.95)
+CLAMP = (0.85, 0.2, 0.35)
 GROUND = (0.78, 0.76, 0.72)
+LIFT = 0.35  # a field's colour: (1 - LIFT) map + LIFT white
 TRACE_SHARE = 0.36  # of the frame's width
-TRACE_COLORS = ("#1f3fe0", "#d62718")
+EDGE_PX = 1.5  # an obstacle's edges
+FRAME_CAMERA = Camera(azimuth=-35.0)  # from the clamped end's side (scenes clamp the left end): the clamp in view
+
+
+def body_colormap(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """The 3D body's colour of values on the scale lo..hi: the colour map lightened by LIFT."""
+    return (1 - LIFT) * colormap(values, lo, hi) + LIFT
 
 
 @dataclass(frozen=True, eq=False)
 class Track3D:
     """One 3D ramp to draw: positions (steps, n, 3), the outer surface's triangles (b, 3) and each chamber's
     wall triangles (any orientation); color: a value per boundary face (steps, b) or per node (steps, n),
-    named color_label; title; captions: the header lines under the title, one tuple per step; trace: up
-    to two (label, values (steps,) or (steps, k)) series; ground: the height y of a ground plane."""
+    named color_label (quantity and unit); tetrahedra: the linear tetrahedra (m, 4) (the section draws their
+    cut faces; none: only the surface is clipped) and cell_color their values (steps, m) (the cut faces' colour);
+    title; captions: the header lines under the title, one tuple per step; trace: up to two (label, values (steps,)
+    or (steps, k)) series; ground: the height y of a ground plane; pinned: the clamped nodes; obstacles: per obstacle
+    its triangles (steps, t, 3, 3) and edges (steps, e, 2, 3); length_unit: the scale bar's unit suffix."""
 
     positions: np.ndarray
     boundary: np.ndarray
@@ -68,6 +87,11 @@ class Track3D:
     captions: tuple[tuple[str, ...], ...] | None = None
     trace: tuple[tuple[str, np.ndarray], ...] = ()
     ground: float | None = None
+    tetrahedra: np.ndarray | None = None
+    cell_color: np.ndarray | None = None
+    pinned: tuple | np.ndarray = ()
+    obstacles: tuple[tuple[np.ndarray, np.ndarray], ...] = ()
+    length_unit: str = ""
 
     def __post_init__(self):
         steps = shape_of(self.positions)
@@ -90,6 +114,11 @@ class Track3D:
                 f"color must be (steps, boundary faces) = {(steps, len(self.boundary))} or (steps, nodes) = "
                 f"{(steps, n)}, not {np.shape(self.color)}",
             )
+        if self.cell_color is not None:
+            require(
+                self.tetrahedra is not None and np.shape(self.cell_color) == (steps, len(self.tetrahedra)),
+                "cell_color must be (steps, tetrahedra)",
+            )
         require(self.captions is None or len(self.captions) == steps, f"captions must give {steps} steps")
         require(len(self.trace) <= 2, f"trace: {len(self.trace)} series given, at most 2 (left and right axis)")
         for label, values in self.trace:
@@ -98,9 +127,9 @@ class Track3D:
     @classmethod
     def from_result(cls, result, color: str = "none") -> Track3D:
         """The track of a 3D run (a solve.result.Result): its outer surface and chamber walls (a quadratic
-        facet drawn as its four linear triangles), coloured per face by a COLOR_FIELDS field of the tetrahedron
-        under it ('none': plain), captions of the chambers' volume ratios and pressures and the tip, the
-        volume ratio and pressure traced, and the scene's ground."""
+        facet drawn as its four linear triangles) and tetrahedra (their corners), coloured by a COLOR_FIELDS
+        field of each tetrahedron ('none': plain), captions of the chambers' volume ratios and pressures and the
+        tip with their units, the volume ratio and pressure traced, the scene's ground, clamp and obstacles."""
         from . import COLOR_FIELDS
 
         require(
@@ -108,41 +137,54 @@ class Track3D:
         )
         mesh, history, units = result.mesh, result.history, result.scene.units
         outer, walls, under = surface_triangles(mesh)
-        values, label = None, ""
+        values, cells, label = None, None, ""
         if color != "none":
-            label, key = COLOR_FIELDS[color]
+            name, key = COLOR_FIELDS[color]
+            label = f"{name} [-]"  # both fields are ratios of lengths or volumes
             fields = ElementFields(mesh.vertices, mesh.elements)
-            values = np.array([fields.at(x)[key][under] for x in result.positions])
-        steps = len(result.positions)
-        names = result.chamber_names
-        captions = tuple(
-            (
-                f"step {i}/{steps - 1}   volume "
-                + ", ".join(f"x{r:.2f}" for r in result.area_ratio[i])
-                + "   p = "
-                + ", ".join(f"{p:.4g}" for p in result.pressure[i])
-                + units.suffix(PRESSURE),
-                f"tip dy = {history['tip_dy'][i]:+.4f}   dz = {history['tip_dz'][i]:+.4f}{units.suffix(LENGTH)}"
-                f"   bend {history['tip_rotation'][i]:+.1f} deg",
-            )
-            for i in range(steps)
-        )
-        trace = (("volume / rest volume", result.area_ratio), (f"pressure{units.suffix(PRESSURE)}", result.pressure))
+            cells = np.array([fields.at(x)[key] for x in result.positions])
+            values = cells[:, under]
+        captions = step_captions(result.area_ratio, result.pressure, history, units)
+        pressure = units.suffix(PRESSURE)
+        trace = (("volume / rest volume", result.area_ratio), (f"pressure{pressure}", result.pressure))
         return cls(
             result.positions,
             outer,
             walls,
             values,
             label,
-            f"{result.scene.name}: " + ", ".join(names),
+            f"{result.scene.name}: " + ", ".join(result.chamber_names),
             captions,
             trace,
             result.ground_height,
+            mesh.elements[:, :4],
+            cells,
+            np.asarray(mesh.pinned, np.int64),
+            guides3d.obstacle_geometry(result),
+            units.suffix(LENGTH),
         )
 
     @property
     def per_node(self) -> bool:
         return self.color is not None and np.shape(self.color)[1] == len(self.positions[0]) != len(self.boundary)
+
+
+def step_captions(area_ratio: np.ndarray, pressure: np.ndarray, history: dict, units) -> tuple[tuple[str, ...], ...]:
+    """Each step's header lines: the chambers' volume ratios (steps, chambers) and pressures, the tip's dy and dz
+    (history's tip_dy, tip_dz) and bend (tip_rotation), every value with its unit (units: io.units.Units)."""
+    length, p = units.suffix(LENGTH), units.suffix(PRESSURE)
+    steps = len(area_ratio)
+    return tuple(
+        (
+            f"step {i}/{steps - 1}   volume "
+            + ", ".join(f"x{r:.2f}" for r in area_ratio[i])
+            + "   p = "
+            + ", ".join(f"{v:.4g}{p}" for v in pressure[i]),
+            f"tip dy = {history['tip_dy'][i]:+.3g}{length}   dz = {history['tip_dz'][i]:+.3g}{length}"
+            f"   bend {history['tip_rotation'][i]:+.1f} deg",
+        )
+        for i in range(steps)
+    )
 
 
 def surface_triangles(mesh) -> tuple[np.ndarray, tuple[np.ndarray, ...], np.ndarray]:
@@ -190,13 +232,14 @@ def open_view(backend: str, width: int, height: int, show: bool = False, log=pri
     return view
 
 
-def section_faces(rest: np.ndarray, faces: np.ndarray, camera: Camera) -> np.ndarray:
-    """Which faces to keep: those whose rest centroid lies on the far side of the mid-plane of the rest
-    bounding box normal to the world axis closest to the direction from the target to the eye."""
-    towards_eye = camera.eye - np.asarray(camera.target)
-    axis = int(np.argmax(np.abs(towards_eye)))
-    middle = (rest[:, axis].min() + rest[:, axis].max()) / 2
-    return np.sign(towards_eye[axis]) * (rest[faces].mean(axis=1)[:, axis] - middle) <= 0
+def open_section(
+    rest: np.ndarray, boundary: np.ndarray, walls: np.ndarray, camera: Camera, tetrahedra: np.ndarray | None = None
+) -> Section:
+    """The exact section (render.section) of the rest body that opens it towards camera: by the mid-plane of its
+    bounding box normal to the world axis closest to the direction from the target to the eye, the eye's side
+    removed (tetrahedra None: the surface clipped, no cut faces)."""
+    plane = plane_facing(rest, camera.eye - np.asarray(camera.target))
+    return section_of(rest, boundary, walls, tetrahedra, *plane)
 
 
 def shaded_triangles(
@@ -209,16 +252,22 @@ def shaded_triangles(
     parts = [(x[faces], body), (x[walls], np.broadcast_to(CHAMBER, (len(walls), 3, 3)))]
     if ground is not None:
         parts.append((ground, np.broadcast_to(GROUND, (len(ground), 3, 3))))
-    corners = np.concatenate([p for p, _ in parts])
-    colors = np.concatenate([c for _, c in parts]) * shade_faces(corners, camera)[:, None, None]
-    return corners, colors
+    return shade(np.concatenate([p for p, _ in parts]), np.concatenate([c for _, c in parts]), camera)
+
+
+def shade(corners: np.ndarray, colors: np.ndarray, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
+    """The triangles (f, 3, 3) and their corner colours (f, 3, 3) shaded for camera: base shade + highlight
+    (surface.shade_faces), clipped to 1."""
+    factor, highlight = shade_faces(corners, camera)
+    return corners, np.minimum(colors * factor[:, None, None] + highlight[:, None, None], 1.0)
 
 
 class FrameRenderer3D:
     """Draws frame i of a Track3D (module docstring) on a view (`backend`, or the given `view`).
 
-    camera: its direction and field of view (default Camera()); it is aimed and fitted to every state.
-    section: open the body to show the chambers; trace: draw the trace panel (if the track has series)."""
+    camera: its direction and field of view (default FRAME_CAMERA); it is aimed and fitted to every state.
+    section: cut the body open to show the chambers; trace: draw the trace panel (if the track has series);
+    guides: draw the ghost, axes and scale bar."""
 
     def __init__(
         self,
@@ -231,11 +280,22 @@ class FrameRenderer3D:
         trace: bool = True,
         log=print,
         view=None,
+        guides: bool = True,
     ):
-        self.track, self.frames = track, len(track.positions)
+        self.track, self.frames, self.guides = track, len(track.positions), guides
         self.width, self.height = width, height
-        self.header_px = MARGIN_PX + LINE_PX * (1 + max((len(c) for c in track.captions or [()]), default=0))
+        rest, camera = track.positions[0], camera or FRAME_CAMERA
+        cut = section and bool(track.chambers)
+        walls = np.concatenate(track.chambers) if track.chambers else np.zeros((0, 3), np.int64)
+        self.section: Section = (
+            open_section(rest, track.boundary, walls, camera, track.tetrahedra)
+            if cut
+            else section_of(rest, track.boundary, walls, None, 0, np.inf, 1.0)  # a plane at infinity: all kept
+        )
         self.trace_px = int(TRACE_SHARE * width) if trace and track.trace else 0
+        self.key = self._place_key(self._key(cut), width - self.trace_px - MARGIN_PX)
+        lines = max((len(c) for c in track.captions or [()]), default=0) + bool(track.title)
+        self.header_px = MARGIN_PX + LINE_PX * (lines + max((row + 1 for _, _, row in self.key), default=0))
         self.bar_px = COLORBAR_PX if track.color is not None else 0
         view_size = (width - self.trace_px - self.bar_px, height - self.header_px)
         self.canvas = view or open_view(backend, *view_size, log=log)
@@ -243,21 +303,37 @@ class FrameRenderer3D:
             (self.canvas.width, self.canvas.height) == view_size,
             f"the view is {self.canvas.width}x{self.canvas.height}, the layout needs {view_size[0]}x{view_size[1]}",
         )
-        self.camera = (camera or Camera()).fitted(track.positions, *view_size)
-        rest = track.positions[0]
-        keep = (
-            section_faces(rest, track.boundary, self.camera)
-            if section and track.chambers
-            else np.ones(len(track.boundary), bool)
-        )
-        self.kept = np.flatnonzero(keep)
-        self.walls = np.concatenate(track.chambers) if track.chambers else np.zeros((0, 3), np.int64)
+        margin = (0.05, max(0.06, (LINE_PX + 12) / view_size[1]))  # room for the scale bar and colour bar label
+        self.camera = camera.fitted(track.positions, *view_size, margin=margin)
+        pinned = np.zeros(len(rest), bool)
+        pinned[np.asarray(track.pinned, np.int64)] = True
+        self.clamped = pinned[track.boundary[self.section.surface_of]].all(axis=1)
         self.range: tuple[float, float] | None = None
         if track.color is not None:
-            values = track.color if track.per_node else track.color[:, self.kept]
+            values = track.cell_color if track.cell_color is not None else track.color
             self.range = (float(values.min()), float(values.max()))
         self.ground = None if track.ground is None else self._ground_quad(track.ground)
+        drawn = self.section.points(rest)[np.concatenate([self.section.surface, self.section.cut])]  # the rest section
+        self.ghost = guides3d.ghost_mask(drawn, self.camera, *view_size) if guides else None
+        self.corners = guides3d.quiet_corners(track.positions, self.camera, *view_size, track.length_unit)
         self._trace = TracePanel(track.trace, self.frames, self.trace_px, height) if self.trace_px else None
+
+    def _key(self, cut: bool) -> list[tuple[str, tuple]]:
+        """The header's key: what the section cuts away and what the colours mark, as (text, colour) pieces."""
+        key = []
+        if cut:
+            s = self.section
+            side = f"{'+' if s.sign > 0 else '-'}{AXES[s.axis]}"
+            value = tick_label(s.value) + self.track.length_unit
+            shown = "the chamber" if len(self.track.chambers) == 1 else "the chambers"
+            key.append((f"section {AXES[s.axis]} = {value}: the {side} half cut away to show {shown}", guides3d.INK))
+        if len(self.track.pinned):
+            key.append(("clamped face", CLAMP))
+        if self.track.obstacles:
+            key.append(("obstacle", guides3d.INK))
+        if self.guides and self.frames > 1:
+            key.append(("rest shape", guides3d.GHOST_EDGE))
+        return key
 
     def _ground_quad(self, y: float) -> np.ndarray:
         """Two triangles of the plane y = ground under the whole ramp, half its extent again each side."""
@@ -268,45 +344,115 @@ class FrameRenderer3D:
         a, b, c, d = [x0, y, z0], [x1, y, z0], [x1, y, z1], [x0, y, z1]
         return np.array([[a, c, b], [a, d, c]], dtype=float)
 
-    def triangles(self, i: int) -> tuple[np.ndarray, np.ndarray]:
-        """Step i's world triangles (f, 3, 3) and their shaded corner colours (f, 3, 3)."""
-        track = self.track
-        faces = track.boundary[self.kept]
-        body = None
+    def body_colors(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """Step i's unshaded corner colours (k, 3, 3) of the clipped surface and of the cut faces."""
+        track, s = self.track, self.section
+        surface = np.broadcast_to(BODY, (len(s.surface), 3, 3)).copy()
+        cut = np.broadcast_to(BODY, (len(s.cut), 3, 3)).copy()
         if track.color is not None:
             assert self.range is not None  # (set for a coloured track)
             if track.per_node:
-                body = colormap(track.color[i][faces].ravel(), *self.range).reshape(-1, 3, 3)
+                nodal = s.values(track.color[i])
+                surface = body_colormap(nodal[s.surface].ravel(), *self.range).reshape(-1, 3, 3)
+                cut = body_colormap(nodal[s.cut].ravel(), *self.range).reshape(-1, 3, 3)
             else:
-                body = np.repeat(colormap(track.color[i][self.kept], *self.range)[:, None], 3, axis=1)
-        return shaded_triangles(track.positions[i], faces, self.walls, self.camera, body, self.ground)
+                surface[:] = body_colormap(track.color[i][s.surface_of], *self.range)[:, None]
+                if track.cell_color is not None:
+                    cut[:] = body_colormap(track.cell_color[i][s.cut_of], *self.range)[:, None]
+        surface[self.clamped] = CLAMP
+        return surface, cut
 
-    def frame(self, i: int) -> np.ndarray:
-        """Frame i as an (height, width, 3) uint8 image, text included."""
+    def triangles(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """Step i's world triangles (f, 3, 3) and their shaded corner colours (f, 3, 3): the clipped surface,
+        the cut faces, the chamber walls, the ground, the obstacles, then the obstacles' edges (unshaded)."""
+        s = self.section
+        points = s.points(self.track.positions[i])
+        surface, cut = self.body_colors(i)
+        parts = [(points[s.surface], surface), (points[s.cut], cut)]
+        parts.append((points[s.walls], np.broadcast_to(CHAMBER, (len(s.walls), 3, 3))))
+        if self.ground is not None:
+            parts.append((self.ground, np.broadcast_to(GROUND, (len(self.ground), 3, 3))))
+        for triangles, _ in self.track.obstacles:
+            parts.append((triangles[i], np.broadcast_to(OBSTACLE_FILL, triangles[i].shape)))
+        corners, colors = shade(
+            np.concatenate([p for p, _ in parts]), np.concatenate([c for _, c in parts]), self.camera
+        )
+        for _, edges in self.track.obstacles:
+            lines = guides3d.segment_triangles(edges[i], self.camera, EDGE_PX, self.canvas.height)
+            corners = np.concatenate([corners, lines])
+            colors = np.concatenate([colors, np.broadcast_to(guides3d.INK, lines.shape)])
+        return corners, colors
+
+    def compose(self, i: int) -> tuple[np.ndarray, list[Label], list[tuple[float, float, float, float]]]:
+        """Frame i without its text: the image (height, width, 3) uint8, its labels, and the boxes (left, top,
+        right, bottom) of the drawn guides (axes, scale bar) in frame pixels."""
         require(0 <= i < self.frames, f"frame {i} is outside 0..{self.frames - 1}")
         image = np.full((self.height, self.width, 3), _rgb8(BACKGROUND), dtype=np.uint8)
-        view_w = self.width - self.trace_px - self.bar_px
-        image[self.header_px :, :view_w] = _rgb8(self.canvas.render(*self.triangles(i), self.camera, BACKGROUND))
-        labels = [
-            Label(line, MARGIN_PX, MARGIN_PX / 2 + LINE_PX * k)
-            for k, line in enumerate(
-                ([self.track.title] if self.track.title else [])
-                + list(self.track.captions[i] if self.track.captions else ())
-            )
-        ]
+        view_w, top = self.width - self.trace_px - self.bar_px, self.header_px
+        view = _rgb8(self.canvas.render(*self.triangles(i), self.camera, BACKGROUND))
+        labels, boxes = self._header(i), []
+        if self.guides:
+            assert self.ghost is not None
+            guides3d.draw_ghost(view, *self.ghost, BACKGROUND)
+            axes = guides3d.draw_axes(view, self.camera, self.corners[0])
+            bar = guides3d.draw_scale_bar(view, self.camera, self.track.length_unit, self.corners[1])
+            for texts, (left, upper, right, lower) in (axes[:2], bar[:2]):
+                labels += [Label(t.text, t.x, t.y + top, t.anchor, t.color) for t in texts]
+                boxes.append((left, upper + top, right, lower + top))
+        image[top:, :view_w] = view
         if self.range is not None:
             labels += self._colorbar(image, view_w, *self.range)
         if self._trace is not None:
             image[:, self.width - self.trace_px :] = self._trace.frame(i)
+        return image, labels, boxes
+
+    def frame(self, i: int) -> np.ndarray:
+        """Frame i as an (height, width, 3) uint8 image, text included."""
+        image, labels, _ = self.compose(i)
         return draw_labels(image, labels)
 
+    @staticmethod
+    def _place_key(key: list[tuple[str, tuple]], limit: float) -> list[tuple[Label, float, int]]:
+        """The key's pieces side by side, a piece that does not fit on the line going to the next, and one longer than
+        a line wrapped at words, so that none passes pixel column limit: (label, its x, its line)."""
+
+        def width(text: str) -> float:
+            box = label_box(Label(text, 0.0, 0.0))
+            return box[2] - box[0]
+
+        placed, x, row = [], float(MARGIN_PX), 0
+        for text, color in key:
+            words = text.split(" ")
+            while words:
+                if x > MARGIN_PX and x + width(" ".join(words)) > limit:  # the rest of the piece to the next line
+                    x, row = float(MARGIN_PX), row + 1
+                take = len(words)
+                while take > 1 and x + width(" ".join(words[:take])) > limit:
+                    take -= 1
+                chunk, words = " ".join(words[:take]), words[take:]
+                placed.append((Label(chunk, x, 0.0, "la", color), x, row))
+                x += width(chunk) + 16
+                if words:
+                    x, row = float(MARGIN_PX), row + 1
+        return placed
+
+    def _header(self, i: int) -> list[Label]:
+        """The title, step i's captions and the key, a line each (the key's pieces side by side)."""
+        captions = list(self.track.captions[i] if self.track.captions else ())
+        lines = ([self.track.title] if self.track.title else []) + captions
+        labels = [Label(line, MARGIN_PX, MARGIN_PX / 2 + LINE_PX * k) for k, line in enumerate(lines)]
+        for label, x, row in self.key:
+            labels.append(Label(label.text, x, MARGIN_PX / 2 + LINE_PX * (len(lines) + row), "la", label.color))
+        return labels
+
     def _colorbar(self, image: np.ndarray, x0: int, lo: float, hi: float) -> list[Label]:
-        """A vertical colour strip (14 px) with numbered ticks over the colour range lo..hi, drawn into image."""
-        top, bottom = self.header_px + LINE_PX, self.height - MARGIN_PX - 8
+        """A vertical colour strip (14 px) with numbered ticks over the colour range lo..hi, drawn into image,
+        its quantity above it, right-aligned with the colour bar's column."""
+        top, bottom = self.header_px + LINE_PX + 6, self.height - MARGIN_PX - 8
         left = x0 + 8
         t = (bottom - np.arange(top, bottom)) / (bottom - top)
-        image[top:bottom, left : left + 14] = _rgb8(colormap(lo + (hi - lo) * t, lo, hi))[:, None]
-        labels = [Label(self.track.color_label or "colour", left - 4, self.header_px)]
+        image[top:bottom, left : left + 14] = _rgb8(body_colormap(lo + (hi - lo) * t, lo, hi))[:, None]
+        labels = [Label(self.track.color_label or "colour", x0 + self.bar_px - 4, self.header_px + 2, "ra")]
         for row, figure in colorbar_ticks(lo, hi, top, bottom):
             y = int(round(row))
             image[max(y - 1, 0) : y + 1, left + 14 : left + 19] = 90
@@ -317,37 +463,6 @@ class FrameRenderer3D:
 def _rgb8(colors) -> np.ndarray:
     """Colours in [0, 1] (any shape ending in 3) as uint8."""
     return (np.asarray(colors) * 255 + 0.5).astype(np.uint8)
-
-
-class TracePanel:
-    """The series of a track against the step, drawn once by matplotlib onto a (height, width) image;
-    frame(i) adds the cursor at step i."""
-
-    def __init__(self, trace, steps: int, width: int, height: int):
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-
-        figure = Figure(figsize=(width / 100, height / 100), dpi=100)
-        canvas = FigureCanvasAgg(figure)
-        axes = figure.add_axes((0.2, 0.14, 0.6, 0.72))
-        step = np.arange(steps)
-        for k, ((label, values), color) in enumerate(zip(trace, TRACE_COLORS)):
-            ax = axes if k == 0 else axes.twinx()
-            ax.plot(step, np.reshape(values, (steps, -1)), color=color, marker="o", markersize=2.5, lw=1.5)
-            ax.set_ylabel(label, color=color)
-            ax.tick_params(axis="y", colors=color)
-        axes.set_xlabel("step")
-        axes.set_xlim(0, max(steps - 1, 1))
-        canvas.draw()
-        self.image = np.asarray(canvas.buffer_rgba())[:, :, :3].copy()
-        box = axes.get_window_extent()
-        self.columns = [int(round(c)) for c in axes.transData.transform(np.column_stack([step, step * 0]))[:, 0]]
-        self.rows = (int(round(height - box.y1)), int(round(height - box.y0)))
-
-    def frame(self, i: int) -> np.ndarray:
-        image = self.image.copy()
-        image[self.rows[0] : self.rows[1], self.columns[i]] = (60, 60, 60)
-        return image
 
 
 def render_video_3d(

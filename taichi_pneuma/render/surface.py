@@ -12,10 +12,15 @@ b_k is linear in x, so b_k >= 0 bounds the row's columns from one side, and all 
 their pixels are enumerated at once (ragged arrays, no loop over triangles). Cost: proportional to the
 covered pixels, times the overdraw.
 
-Shading (shade_faces) is flat, two-sided Lambert under a headlight: a face's colour is scaled by
-AMBIENT + (1 - AMBIENT) |n . l|, l the direction from the face to a light just above and left of the
-eye; a face seen from its back (n pointing away from the eye: the inside of the body through a
-section) is darkened by BACK_FACE. The GGUI renderer draws the same shaded colours.
+Shading (shade_faces) is flat, two-sided, under a key light fixed to the camera (beside the eye, a little right
+of and above it, so the faces towards the eye, the top and the sides of a box differ clearly) plus a small
+highlight: with n the face's unit normal turned towards the eye, l the direction to the light and h the unit
+half-way vector of l and the direction to the eye v,
+
+    colour = base (AMBIENT + DIFFUSE max(n . l, 0)) + SPECULAR max(n . h, 0)^SHININESS   (white highlight)
+
+and a face seen from its back (its normal pointing away from the eye: the inside of the body through a section)
+has its shade scaled by BACK_FACE. The GGUI renderer draws the same shaded colours.
 """
 
 from __future__ import annotations
@@ -24,21 +29,28 @@ import numpy as np
 
 from .camera import Camera
 
-AMBIENT = 0.35
-BACK_FACE = 0.6
-LIGHT_OFFSET = (-0.4, 0.6, 0.0)  # the light's direction from the eye, in camera (right, up, forward) units
+AMBIENT, DIFFUSE = 0.38, 0.62  # shade = AMBIENT + DIFFUSE max(n . l, 0): in [AMBIENT, 1]
+SPECULAR, SHININESS = 0.18, 24.0  # the highlight, added white
+BACK_FACE = 0.75
+LIGHT = (0.35, 0.15, -1.0)  # the direction to the key light in camera (right, up, forward) units: by the eye
 
 
-def shade_faces(corners: np.ndarray, camera: Camera) -> np.ndarray:
-    """The shading factor per triangle (f,) of world corners (f, 3, 3), for `camera` (module docstring)."""
+def shade_faces(corners: np.ndarray, camera: Camera) -> tuple[np.ndarray, np.ndarray]:
+    """(shade (f,), highlight (f,)) of world triangles (f, 3, 3) for `camera` (module docstring): a face's colour
+    is base * shade + highlight."""
     normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
-    centre = corners.mean(axis=1)
-    light = camera.eye + np.asarray(LIGHT_OFFSET) @ camera.basis() * camera.distance - centre
-    light /= np.linalg.norm(light, axis=1, keepdims=True)
-    lambert = AMBIENT + (1 - AMBIENT) * np.abs(np.sum(normal * light, axis=1))
-    facing = np.sum(normal * (camera.eye - centre), axis=1) >= 0
-    return lambert * np.where(facing, 1.0, BACK_FACE)
+    view = camera.eye - corners.mean(axis=1)
+    view /= np.maximum(np.linalg.norm(view, axis=1, keepdims=True), 1e-300)
+    facing = np.sum(normal * view, axis=1) >= 0
+    normal = np.where(facing[:, None], normal, -normal)
+    light = np.asarray(LIGHT) @ camera.basis()
+    light /= np.linalg.norm(light)
+    half = light + view
+    half /= np.maximum(np.linalg.norm(half, axis=1, keepdims=True), 1e-300)
+    shade = (AMBIENT + DIFFUSE * np.maximum(normal @ light, 0.0)) * np.where(facing, 1.0, BACK_FACE)
+    highlight = np.where(facing, SPECULAR * np.maximum(np.sum(normal * half, axis=1), 0.0) ** SHININESS, 0.0)
+    return shade, highlight
 
 
 def rasterise(
