@@ -196,7 +196,7 @@ class FrameRenderer:
         below the header band."""
         centre, extent = (lo + hi) / 2, np.maximum(hi - lo, 1e-12)
         panel_px = np.array([(self.panels[0][1] - self.panels[0][0]) * self.width, self.height])
-        usable = panel_px - 2 * MARGIN_PX - np.array([0, self.header_px])
+        usable = np.maximum(panel_px - 2 * MARGIN_PX - np.array([0, self.header_px]), 1.0)  # (a tiny frame: 1 px)
         self._scale = float(np.min(usable / extent))  # pixels per world unit
         self._centre, self._offset_px = centre, np.array([0.0, -self.header_px / 2])
 
