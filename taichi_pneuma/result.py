@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 from dataclasses import fields
 from pathlib import Path
@@ -18,6 +19,11 @@ from .signals import holding
 from .solve.records import Run
 
 ELEMENTS = {2: "triangles", 3: "tetrahedra"}  # the summary's element count, by dimension
+
+
+def scene_sha256(*scenes) -> str:
+    """The SHA-256 (hex) of the scenes' TOML as run (Scene.to_toml(), concatenated): a summary's scene_sha256."""
+    return hashlib.sha256("".join(scene.to_toml() for scene in scenes).encode()).hexdigest()
 
 
 class Result(Run):
@@ -41,6 +47,7 @@ class Result(Run):
         iterations, seconds = self.history["iterations"][1:], self.history["seconds"][1:]
         return {
             "scene": self.scene.name,
+            "scene_sha256": scene_sha256(self.scene),
             "terms": self.built.model.term_names(),
             "vertices": self.mesh.n_vertices,
             ELEMENTS[self.mesh.dim]: self.mesh.n_elements,

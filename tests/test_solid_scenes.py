@@ -243,10 +243,11 @@ def test_pneunet_from_the_command_line_curls_towards_its_layer(tmp_path):
         ]
     )
     assert code == 0
-    states = np.load(tmp_path / "pneunet_3d_states.npz")
+    (stem,) = [p.name[: -len("_summary.json")] for p in tmp_path.glob("pneunet_3d_*_summary.json")]  # the hash
+    states = np.load(tmp_path / f"{stem}_states.npz")
     tip_dy = (states["positions"][:, states["tip"], 1] - states["rest"][states["tip"], 1]).mean(axis=1)
     assert tip_dy[3] < -0.05 and abs(tip_dy[-1]) < 1e-6
-    summary = json.loads((tmp_path / "pneunet_3d_summary.json").read_text())
+    summary = json.loads((tmp_path / f"{stem}_summary.json").read_text())
     assert summary["tetrahedra"] > 0 and summary["all_converged"]
 
 

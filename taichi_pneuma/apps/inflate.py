@@ -9,7 +9,9 @@ the tip deflection and rotation and the peak chamber pressure; writes the per-st
 the states (npz), a summary (JSON), the scene as run (TOML) and the ParaView files (a VTU per step as
 it is solved, indexed by a PVD) under --out, and, unless --no-video, a plot of the history (PNG), a
 video of the run (body coloured by --color beside its area/pressure trace) and a PNG of its most
-deformed frame.
+deformed frame. The files are named by the scene (inflate_cy+0.15 for the reference beam's flags) and what
+the run changed of it (cli.result_stem: '_order2_E2e4', or the scene's hash when that is long; '_high' for
+a --quality), so a different run never overwrites them and a re-run of the same one replaces only its own.
 --set KEY=VALUE changes any dotted scene-file key. --interactive instead opens a window with a slider
 for the commanded area (a 3D scene: a slider per chamber, and the camera turned by dragging the mouse).
 A 3D scene's video shows the body in 3D, opened by a section to show its chambers (docs/3d.md).
@@ -42,9 +44,9 @@ from .cli import (
     build,
     exit_code,
     newton_options,
-    quality_stem,
     render_report,
     rendering_flags,
+    result_stem,
     scene_of_flags,
     solve,
 )
@@ -91,7 +93,7 @@ def run(args: argparse.Namespace) -> dict:
 
     scene = scene_of_flags(args)
     # a scene's name is a plain file name (Scene checks it): every result file lands inside --out
-    stem = (scene.name if args.scene else f"inflate_cy{args.cy:+.2f}") + quality_stem(args)
+    stem = result_stem(scene.name if args.scene else f"inflate_cy{args.cy:+.2f}", args, scene)
     size = rendering_flags(args)
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
     if args.interactive:

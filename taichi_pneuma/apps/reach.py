@@ -49,7 +49,7 @@ from .cli import (
     check_flags,
     exit_code,
     newton_options,
-    quality_stem,
+    result_stem,
     render_report,
     rendering_flags,
     scene_for,
@@ -198,10 +198,10 @@ def run(args: argparse.Namespace) -> dict:
     check_flags(args)
     if args.scene:
         scene = apply_set(load_scene(args.scene), args.set)
-        stem = f"reach_{scene.name}{quality_stem(args)}"
+        stem = result_stem(f"reach_{scene.name}", args, scene)
     else:
         scene = apply_set(scene_for(args, args.cy), args.set)
-        stem = f"reach_cy{args.cy:+.2f}{quality_stem(args)}"
+        stem = result_stem(f"reach_cy{args.cy:+.2f}", args, scene)
     scene = with_bounds(scene, args.bounds)
     lo, hi = command_bounds(scene)
     targets = targets_of(args, scene, required=not args.interactive)
