@@ -26,6 +26,15 @@ def scene_sha256(*scenes) -> str:
     return hashlib.sha256("".join(scene.to_toml() for scene in scenes).encode()).hexdigest()
 
 
+def tip_place(scene) -> str:
+    """Where the tip displacement is measured, in words: 'the right edge' (the tip's side; in 3D 'face'), or
+    'the tip (box [x0, y0, x1, y1])' for a [tip] box."""
+    tip = scene.geometry.tip
+    if tip.box is not None:
+        return f"the tip (box [{', '.join(f'{v:g}' for v in tip.box)}])"
+    return f"the {tip.side} {'edge' if scene.dim == 2 else 'face'}"
+
+
 class Result(Run):
     """A run (solve.records.Run: the built scene, its steps and positions, the figures read off them) with what
     is made from it: the summary, the history CSV and states npz, ParaView files, a video, a plot. One type for
@@ -63,6 +72,7 @@ class Result(Run):
                 }
                 for name, c in final.chambers.items()
             },
+            "tip_at": tip_place(self.scene),
             "tip_deflection": self.tip_deflection,
             **{c: float(v) for c, v in zip(TIP_COLUMNS[2:], final.tip[2:])},
             "tip_rotation_deg": final.tip_rotation,

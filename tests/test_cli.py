@@ -78,7 +78,7 @@ def test_short_run_writes_history_states_and_summary(tmp_path, capsys):
     assert not [p for p in os.listdir(out) if "partial" in p]
 
 
-def test_unconverged_ramp_stops_with_one_line_and_keeps_the_steps_done(tmp_path, capsys):
+def test_unconverged_ramp_stops_with_one_line_and_writes_the_steps_done(tmp_path, capsys):
     out = tmp_path / "out"
     assert (
         main(["--steps", "2", "--max-iterations", "5", "--max-cuts", "0", "--no-video", "--quiet", "--out", str(out)])
@@ -89,7 +89,9 @@ def test_unconverged_ramp_stops_with_one_line_and_keeps_the_steps_done(tmp_path,
     assert "residual" in errors[0]
     states = np.load(out / "inflate_cy+0.15_steps2_states.npz")
     assert states["positions"].shape[0] == 1  # the rest state, the one step that converged
-    assert not (out / "inflate_cy+0.15_steps2_summary.json").exists()
+    summary = json.loads((out / "inflate_cy+0.15_steps2_summary.json").read_text())
+    assert summary["steps"] == 1 and summary["stopped"]["step"] == 1 and summary["stopped"]["reason"] == "no equilibrium"
+    assert (out / "inflate_cy+0.15_steps2_scene.toml").exists()
 
 
 def test_quality_presets_set_mesh_and_tolerance_unless_overridden(tmp_path, capsys):
