@@ -69,7 +69,9 @@ def test_short_run_writes_history_states_and_summary(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "vertices" in printed and "tip deflection" in printed and "peak chamber pressure" in printed
     summary = json.loads((out / "inflate_cy+0.15_growth1.5_steps4_max_area0.01_summary.json").read_text())
-    history = np.genfromtxt(out / "inflate_cy+0.15_growth1.5_steps4_max_area0.01_history.csv", delimiter=",", names=True)
+    history = np.genfromtxt(
+        out / "inflate_cy+0.15_growth1.5_steps4_max_area0.01_history.csv", delimiter=",", names=True
+    )
     states = np.load(out / "inflate_cy+0.15_growth1.5_steps4_max_area0.01_states.npz")
     assert len(history) == 4 and states["positions"].shape == (4, summary["vertices"], 2)
     assert summary["all_converged"] and summary["chambers"]["main"]["area_ratio"] == pytest.approx(1.5, abs=0.01)
@@ -90,7 +92,9 @@ def test_unconverged_ramp_stops_with_one_line_and_writes_the_steps_done(tmp_path
     states = np.load(out / "inflate_cy+0.15_steps2_states.npz")
     assert states["positions"].shape[0] == 1  # the rest state, the one step that converged
     summary = json.loads((out / "inflate_cy+0.15_steps2_summary.json").read_text())
-    assert summary["steps"] == 1 and summary["stopped"]["step"] == 1 and summary["stopped"]["reason"] == "no equilibrium"
+    assert (
+        summary["steps"] == 1 and summary["stopped"]["step"] == 1 and summary["stopped"]["reason"] == "no equilibrium"
+    )
     assert (out / "inflate_cy+0.15_steps2_scene.toml").exists()
 
 
@@ -98,13 +102,13 @@ def test_quality_presets_set_mesh_and_tolerance_unless_overridden(tmp_path, caps
     from taichi_pneuma.apps.cli import QUALITY
     from taichi_pneuma.fem.planar import BeamGeometry
 
-    for flags, max_area in (
-        (["--quality", "draft"], QUALITY["draft"][0]),
-        (["--quality", "draft", "--max-area", "0.01"], 0.01),
+    for flags, max_area, stem in (
+        (["--quality", "draft"], QUALITY["draft"][0], "inflate_cy+0.15_growth1.2_steps3_draft"),  # named by the preset
+        (["--quality", "draft", "--max-area", "0.01"], 0.01, "inflate_cy+0.15_growth1.2_steps3_max_area0.01_draft"),
     ):
         out = tmp_path / str(max_area)
         assert main([*flags, "--steps", "3", "--growth", "1.2", "--no-video", "--quiet", "--out", str(out)]) == 0
-        summary = json.loads((out / f"inflate_cy+0.15_growth1.2_steps3{'' if max_area == QUALITY['draft'][0] else '_max_area0.01'}_draft_summary.json").read_text())  # named by the preset
+        summary = json.loads((out / f"{stem}_summary.json").read_text())
         assert summary["vertices"] == BeamGeometry(cy=0.15, max_area=max_area).mesh().n_vertices
         assert summary["max_residual"] <= QUALITY["draft"][2]
 

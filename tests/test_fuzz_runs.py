@@ -241,7 +241,8 @@ def test_runs_of_one_scene_at_once_never_interleave(tmp_path):
     ]
     outcomes = [(p.wait(timeout=300), p.stderr.read()) for p in procs]
     assert all(
-        code == 0 or (code == 2 and "another run is writing the results named 'inflate_cy+0.15_steps30_max_area0.02'" in err)
+        code == 0
+        or (code == 2 and "another run is writing the results named 'inflate_cy+0.15_steps30_max_area0.02'" in err)
         for code, err in outcomes
     ), outcomes
     assert any(code == 0 for code, _ in outcomes)

@@ -104,7 +104,9 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     """The reference-beam, ramp, solver and output flags shared by the apps (all but the chamber height)."""
     p.add_argument("--cx", type=float, default=BEAM_DEFAULTS["cx"], help="chamber centre along the beam")
     p.add_argument("--growth", type=float, default=BEAM_DEFAULTS["growth"], help="final commanded area / rest area")
-    p.add_argument("--steps", type=int, default=BEAM_DEFAULTS["steps"], help="commanded areas in the ramp, rest included")
+    p.add_argument(
+        "--steps", type=int, default=BEAM_DEFAULTS["steps"], help="commanded areas in the ramp, rest included"
+    )
     p.add_argument("--E", type=float, default=BEAM_DEFAULTS["E"], help="Young's modulus")
     p.add_argument("--nu", type=float, default=BEAM_DEFAULTS["nu"], help="Poisson's ratio, in (-1, 0.5)")
     p.add_argument("--k", type=float, default=BEAM_DEFAULTS["k"], help="chamber stiffness (area control penalty)")

@@ -49,9 +49,9 @@ from .cli import (
     check_flags,
     exit_code,
     newton_options,
-    result_stem,
     render_report,
     rendering_flags,
+    result_stem,
     scene_for,
 )
 

@@ -62,9 +62,7 @@ def run(args: argparse.Namespace) -> dict:
         return run_placements(args, scenes, stem, stems, size, out)
 
 
-def run_placements(
-    args: argparse.Namespace, scenes, stem: str, stems: list[str], size: tuple[int, int], out
-) -> dict:
+def run_placements(args: argparse.Namespace, scenes, stem: str, stems: list[str], size: tuple[int, int], out) -> dict:
     from ..render.paraview import VtkSeries
     from ..solve.simulate import RampInterrupted, RampStopped
 
