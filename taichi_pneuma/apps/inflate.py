@@ -17,9 +17,12 @@ for the commanded area (a 3D scene: a slider per chamber, and the camera turned 
 A 3D scene's video shows the body in 3D, opened by a section to show its chambers (docs/3d.md).
 
 Before any work, a run past the resource limits (estimated triangles, increments, frame pixels; see
-limits.py) is refused in one line naming the flag that raises the limit. Ctrl-C (or SIGTERM, SIGHUP) during
-the ramp stops it within a Newton iteration, saves the increments done (summary marked interrupted) and exits
-130 (143, 129); one after the last increment is solved waits until every result file is written, then exits so.
+limits.py) is refused in one line naming the flag that raises the limit. A ramp that finds no equilibrium
+past some step writes every file, pictures included, up to its last equilibrium (the summary's "stopped" says
+where); a scene whose ramp is meant to end at a limit point (schedule.ends_at_limit_point: balloon_pressure's
+pressure peak) then exits 0 with a line saying so, any other prints its error line and exits 1. Ctrl-C (or
+SIGTERM, SIGHUP) during the ramp stops it within a Newton iteration, saves the increments done (summary marked
+interrupted; no pictures: rendering can take minutes) and exits 130 (143, 129); one after the last increment is solved waits until every result file is written, then exits so.
 """
 
 from __future__ import annotations
