@@ -22,7 +22,8 @@ past some step writes every file, pictures included, up to its last equilibrium 
 where); a scene whose ramp is meant to end at a limit point (schedule.ends_at_limit_point: balloon_pressure's
 pressure peak) then exits 0 with a line saying so, any other prints its error line and exits 1. Ctrl-C (or
 SIGTERM, SIGHUP) during the ramp stops it within a Newton iteration, saves the increments done (summary marked
-interrupted; no pictures: rendering can take minutes) and exits 130 (143, 129); one after the last increment is solved waits until every result file is written, then exits so.
+interrupted; no pictures: rendering can take minutes) and exits 130 (143, 129); one after the last increment
+is solved waits until every result file is written, then exits so.
 """
 
 from __future__ import annotations
