@@ -14,11 +14,12 @@ commands found and a summary line starting with `reached:`; an unreachable targe
 `unreachable: ...` (the closest pose, the chambers at a bound) and exits with 1, its files still
 written. Writes under --out the video (the target marker and the tip's path), its last frame,
 the per-frame history CSV (commands, tip, target, error), the states and a summary JSON.
---design cy --tip-dy D instead finds the chamber height cy at which the reference ramp ends at tip
-deflection D (writes design_cy_tip_dy<D>_summary.json, with what the flags changed). --output COLUMN
---value V instead follows the scene's own schedule to where a history column (tip_rotation: the bending
-angle, tip_twist, tip_dx, blocked_force, a contact force, ...) equals V (control/outputs.py), prints `reached:` with the commands there (or `unreachable:` with the closest step, exit 1)
-and writes <scene>_output_<COLUMN><V>_summary.json (with what the flags changed of the scene, cli.result_stem).
+--design cy --tip-dy D instead finds the chamber height cy at which the reference ramp ends at tip deflection D
+(writes design_cy_tip_dy<D>_summary.json, with what the flags changed). --output COLUMN --value V instead follows
+the scene's own schedule to where a history column (tip_rotation: the bending angle, tip_twist, tip_dx,
+blocked_force, a contact force, ...) equals V (control/outputs.py), prints `reached:` with the commands there (or
+`unreachable:` with the closest step, exit 1) and writes <scene>_output_<COLUMN><V>_summary.json (with what the
+flags changed of the scene, cli.result_stem).
 """
 
 from __future__ import annotations
