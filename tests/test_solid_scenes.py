@@ -330,12 +330,13 @@ def test_3d_video_from_the_command_line(tmp_path):
         ]
     )
     assert code == 0
-    frames = list(iio.imiter(tmp_path / "beam_3d_ellipsoid.mp4"))
+    (stem,) = [p.name[: -len(".mp4")] for p in tmp_path.glob("beam_3d_ellipsoid_*.mp4")]  # named by its hash
+    frames = list(iio.imiter(tmp_path / f"{stem}.mp4"))
     assert len(frames) == 3 and frames[0].shape == (240, 480, 3)
-    png = iio.imread(tmp_path / "beam_3d_ellipsoid.png").astype(float)
+    png = iio.imread(tmp_path / f"{stem}.png").astype(float)
     blue = (png[..., 2] > png[..., 0] + 40) & (png[..., 2] > png[..., 1] + 20)
     assert np.count_nonzero(blue) > 100
-    summary = json.loads((tmp_path / "beam_3d_ellipsoid_summary.json").read_text())
+    summary = json.loads((tmp_path / f"{stem}_summary.json").read_text())
     assert summary["renderer"] == "NumPy z-buffer rasteriser" and summary["video_frames"] == 3
 
 

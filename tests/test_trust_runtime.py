@@ -242,7 +242,7 @@ def test_the_largest_stretch_allowed_is_a_scene_key(tmp_path, capsys):
         == 0
     )
     assert not [line for line in capsys.readouterr().err.splitlines() if line.startswith("warning:")]
-    assert json.loads((out / "ring_summary.json").read_text())["max_stretch_limit"] == 50
+    assert json.loads((out / "ring_schedule.max_stretch50_summary.json").read_text())["max_stretch_limit"] == 50
     assert main(["--scene", ring_scene(tmp_path), "--set", "schedule.max_stretch=0.5", "--out", str(out)]) == 2
     assert "max_stretch = 0.5 must be > 1" in capsys.readouterr().err
 
