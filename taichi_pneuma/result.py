@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 from dataclasses import fields
 from pathlib import Path
@@ -18,6 +19,20 @@ from .signals import holding
 from .solve.records import Run
 
 ELEMENTS = {2: "triangles", 3: "tetrahedra"}  # the summary's element count, by dimension
+
+
+def scene_sha256(*scenes) -> str:
+    """The SHA-256 (hex) of the scenes' TOML as run (Scene.to_toml(), concatenated): a summary's scene_sha256."""
+    return hashlib.sha256("".join(scene.to_toml() for scene in scenes).encode()).hexdigest()
+
+
+def tip_place(scene) -> str:
+    """Where the tip displacement is measured, in words: 'the right edge' (the tip's side; in 3D 'face'), or
+    'the tip (box [x0, y0, x1, y1])' for a [tip] box."""
+    tip = scene.geometry.tip
+    if tip.box is not None:
+        return f"the tip (box [{', '.join(f'{v:g}' for v in tip.box)}])"
+    return f"the {tip.side} {'edge' if scene.dim == 2 else 'face'}"
 
 
 class Result(Run):
@@ -50,6 +65,7 @@ class Result(Run):
         iterations, seconds = self.history["iterations"][1:], self.history["seconds"][1:]
         return {
             "scene": self.scene.name,
+            "scene_sha256": scene_sha256(self.scene),
             "terms": self.built.model.term_names(),
             "vertices": self.mesh.n_vertices,
             ELEMENTS[self.mesh.dim]: self.mesh.n_elements,
@@ -65,6 +81,7 @@ class Result(Run):
                 }
                 for name, c in final.chambers.items()
             },
+            "tip_at": tip_place(self.scene),
             "tip_deflection": self.tip_deflection,
             **{c: float(v) for c, v in zip(TIP_COLUMNS[2:], final.tip[2:])},
             "tip_rotation_deg": final.tip_rotation,

@@ -3,9 +3,10 @@ driven by volume control, a syringe and a pressure regulator (taichi_pneuma/scen
 
 Volume control finds the peak, the drop and the rise after it; the syringe passes the peak as a sequence of
 stable equilibria (its Hessian positive definite where pressure control's is not) on the same curve; pressure
-control stops at the peak with one error line and exit code 1."""
+control stops at the peak, as the scene declares (schedule.ends_at_limit_point), with exit code 0."""
 
 import io
+import json
 import re
 from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
@@ -82,11 +83,12 @@ def test_the_syringe_passes_the_peak_through_stable_equilibria_on_the_same_curve
         np.linalg.cholesky(sparse.toarray())
 
 
-def test_pressure_control_stops_at_the_peak_with_one_error_line(runs, tmp_path):
-    """Through the command line: exit 1, one line naming the pressure and the last one reached, which is the
-    peak of volume control's curve (to 1%); the steps done are saved."""
-    err = io.StringIO()
-    with redirect_stderr(err), redirect_stdout(io.StringIO()):
+def test_pressure_control_stops_at_the_peak_as_planned(runs, tmp_path):
+    """Through the command line: exit 0, no error, one line naming the pressure and the last one reached, which is
+    the peak of volume control's curve (to 1%); the steps done are saved, the summary says where it stopped and
+    that the tip is the box at the dent's apex."""
+    err, printed = io.StringIO(), io.StringIO()
+    with redirect_stderr(err), redirect_stdout(printed):
         code = main(
             [
                 "--scene",
@@ -101,15 +103,18 @@ def test_pressure_control_stops_at_the_peak_with_one_error_line(runs, tmp_path):
                 "20",
             ]
         )
-    lines = err.getvalue().strip().splitlines()
-    assert code == 1 and len(lines) == 1
+    lines = [line for line in printed.getvalue().splitlines() if line.startswith("stopped at the limit point")]
+    assert code == 0 and "error" not in err.getvalue() and len(lines) == 1
     match = re.fullmatch(
-        r"error: step \d+: no equilibrium at pressure ([0-9.]+) \(last equilibrium at pressure "
-        r"([0-9.]+)\) after 3 cuts; residual .*",
+        r"stopped at the limit point, as the scene plans \(schedule.ends_at_limit_point\): step (\d+): no "
+        r"equilibrium at pressure ([0-9.]+) \(last equilibrium at pressure ([0-9.]+)\) after 3 cuts; residual .*",
         lines[0],
     )
     assert match
     peak = runs("volume").pressure[:, 0][limit_point(runs("volume").pressure[:, 0])]
-    assert float(match[2]) == pytest.approx(peak, rel=1e-2) and float(match[1]) > float(match[2])
+    assert float(match[3]) == pytest.approx(peak, rel=1e-2) and float(match[2]) > float(match[3])
     history = np.genfromtxt(tmp_path / "balloon_pressure_history.csv", delimiter=",", names=True, deletechars="")
-    assert history["main.pressure"].max() <= float(match[2])
+    assert history["main.pressure"].max() <= float(match[3]) and len(history) == int(match[1])
+    summary = json.loads((tmp_path / "balloon_pressure_summary.json").read_text())
+    assert summary["stopped"] == {"step": int(match[1]), "reason": "limit point", "message": lines[0].split(": ", 1)[1]}
+    assert summary["steps"] == int(match[1]) and summary["tip_at"] == "the tip (box [-0.5, 0.5, 0.5, 2])"

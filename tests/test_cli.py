@@ -68,9 +68,11 @@ def test_short_run_writes_history_states_and_summary(tmp_path, capsys):
     )
     printed = capsys.readouterr().out
     assert "vertices" in printed and "tip deflection" in printed and "peak chamber pressure" in printed
-    summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
-    history = np.genfromtxt(out / "inflate_cy+0.15_history.csv", delimiter=",", names=True)
-    states = np.load(out / "inflate_cy+0.15_states.npz")
+    summary = json.loads((out / "inflate_cy+0.15_growth1.5_steps4_max_area0.01_summary.json").read_text())
+    history = np.genfromtxt(
+        out / "inflate_cy+0.15_growth1.5_steps4_max_area0.01_history.csv", delimiter=",", names=True
+    )
+    states = np.load(out / "inflate_cy+0.15_growth1.5_steps4_max_area0.01_states.npz")
     assert len(history) == 4 and states["positions"].shape == (4, summary["vertices"], 2)
     assert summary["all_converged"] and summary["chambers"]["main"]["area_ratio"] == pytest.approx(1.5, abs=0.01)
     tip = states["positions"][-1][states["tip"]] - states["rest"][states["tip"]]
@@ -78,7 +80,7 @@ def test_short_run_writes_history_states_and_summary(tmp_path, capsys):
     assert not [p for p in os.listdir(out) if "partial" in p]
 
 
-def test_unconverged_ramp_stops_with_one_line_and_keeps_the_steps_done(tmp_path, capsys):
+def test_unconverged_ramp_stops_with_one_line_and_writes_the_steps_done(tmp_path, capsys):
     out = tmp_path / "out"
     assert (
         main(["--steps", "2", "--max-iterations", "5", "--max-cuts", "0", "--no-video", "--quiet", "--out", str(out)])
@@ -87,22 +89,26 @@ def test_unconverged_ramp_stops_with_one_line_and_keeps_the_steps_done(tmp_path,
     errors = [l for l in capsys.readouterr().err.splitlines() if l.strip()]
     assert len(errors) == 1 and errors[0].startswith("error: step 1: no equilibrium at commanded area")
     assert "residual" in errors[0]
-    states = np.load(out / "inflate_cy+0.15_states.npz")
+    states = np.load(out / "inflate_cy+0.15_steps2_states.npz")
     assert states["positions"].shape[0] == 1  # the rest state, the one step that converged
-    assert not (out / "inflate_cy+0.15_summary.json").exists()
+    summary = json.loads((out / "inflate_cy+0.15_steps2_summary.json").read_text())
+    assert (
+        summary["steps"] == 1 and summary["stopped"]["step"] == 1 and summary["stopped"]["reason"] == "no equilibrium"
+    )
+    assert (out / "inflate_cy+0.15_steps2_scene.toml").exists()
 
 
 def test_quality_presets_set_mesh_and_tolerance_unless_overridden(tmp_path, capsys):
     from taichi_pneuma.apps.cli import QUALITY
     from taichi_pneuma.fem.planar import BeamGeometry
 
-    for flags, max_area in (
-        (["--quality", "draft"], QUALITY["draft"][0]),
-        (["--quality", "draft", "--max-area", "0.01"], 0.01),
+    for flags, max_area, stem in (
+        (["--quality", "draft"], QUALITY["draft"][0], "inflate_cy+0.15_growth1.2_steps3_draft"),  # named by the preset
+        (["--quality", "draft", "--max-area", "0.01"], 0.01, "inflate_cy+0.15_growth1.2_steps3_max_area0.01_draft"),
     ):
         out = tmp_path / str(max_area)
         assert main([*flags, "--steps", "3", "--growth", "1.2", "--no-video", "--quiet", "--out", str(out)]) == 0
-        summary = json.loads((out / "inflate_cy+0.15_draft_summary.json").read_text())  # named by the preset
+        summary = json.loads((out / f"{stem}_summary.json").read_text())
         assert summary["vertices"] == BeamGeometry(cy=0.15, max_area=max_area).mesh().n_vertices
         assert summary["max_residual"] <= QUALITY["draft"][2]
 
@@ -110,8 +116,8 @@ def test_quality_presets_set_mesh_and_tolerance_unless_overridden(tmp_path, caps
 def test_a_quality_preset_writes_its_own_files_beside_the_default_run(tmp_path, capsys):
     flags = ["--steps", "2", "--growth", "1.2", "--max-area", "0.02", "--no-video", "--quiet", "--out", str(tmp_path)]
     assert main(flags) == 0 and main([*flags, "--quality", "high"]) == 0
-    default = json.loads((tmp_path / "inflate_cy+0.15_summary.json").read_text())
-    high = json.loads((tmp_path / "inflate_cy+0.15_high_summary.json").read_text())
+    default = json.loads((tmp_path / "inflate_cy+0.15_growth1.2_steps2_max_area0.02_summary.json").read_text())
+    high = json.loads((tmp_path / "inflate_cy+0.15_growth1.2_steps2_max_area0.02_high_summary.json").read_text())
     assert default["element_order"] == 1 and high["element_order"] == 2  # neither run overwrote the other
 
 
@@ -145,12 +151,13 @@ def test_set_changes_the_run(tmp_path, capsys):
     ):
         out = tmp_path / name
         assert main([*flags, *extra, "--out", str(out)]) == 0
-        summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
+        (path,) = out.glob("inflate_cy+0.15_*_summary.json")  # the --set run's: named by its scene's hash
+        summary = json.loads(path.read_text())
         tips[name], ratio = summary["tip_deflection"], summary["chambers"]["main"]["area_ratio"]
     assert tips["default"] < -0.1 and tips["set"] > 0.1 and ratio == pytest.approx(3.0, abs=0.01)
     from taichi_pneuma.scene.scenefile import load_scene
 
-    scene = load_scene(tmp_path / "set" / "inflate_cy+0.15_scene.toml")
+    scene = load_scene(tmp_path / "set" / path.name.replace("_summary.json", "_scene.toml"))
     assert scene.geometry.chambers[0][1].center == (0.0, -0.15) and scene.controls[0].schedule.keyframes == ((3, 3.0),)
 
 

@@ -174,7 +174,7 @@ def test_bench_writes_to_a_scratch_directory_by_default():
 
 def test_set_takes_short_names(tmp_path):
     assert inflate.main([*COARSE, "--no-video", "--set", "E=2e4", "--set", "cy=-0.1", "--out", str(tmp_path)]) == 0
-    scene = tp.load_scene(tmp_path / "inflate_cy+0.15_scene.toml")
+    scene = tp.load_scene(tmp_path / "inflate_cy+0.15_growth2_steps3_max_area0.01_E2e4_cy-0.1_scene.toml")
     assert scene.material.youngs_modulus == 2e4 and scene.geometry.chambers[0][1].center[1] == -0.1
 
 
@@ -208,11 +208,11 @@ def test_no_video_writes_no_picture_and_everything_else(tmp_path):
     written = sorted(p.name for p in tmp_path.iterdir())
     assert not [n for n in written if n.endswith((".png", ".mp4", ".gif"))]  # as --help and the README say
     assert {
-        "inflate_cy+0.15_history.csv",
-        "inflate_cy+0.15_states.npz",
-        "inflate_cy+0.15_summary.json",
-        "inflate_cy+0.15_scene.toml",
-        "inflate_cy+0.15.pvd",
+        "inflate_cy+0.15_growth2_steps3_max_area0.01_history.csv",
+        "inflate_cy+0.15_growth2_steps3_max_area0.01_states.npz",
+        "inflate_cy+0.15_growth2_steps3_max_area0.01_summary.json",
+        "inflate_cy+0.15_growth2_steps3_max_area0.01_scene.toml",
+        "inflate_cy+0.15_growth2_steps3_max_area0.01.pvd",
     } <= set(written)
 
 
@@ -235,7 +235,7 @@ def test_reach_has_no_bar_in_a_piped_log_and_follows_color(tmp_path, capsys):
         printed = capsys.readouterr()
         assert code == 0, printed.err
         assert "\r" not in printed.out + printed.err and "reaching" not in printed.out + printed.err
-        pngs.append(iio.imread(out / "reach_cy+0.15.png"))
+        pngs.append(iio.imread(out / "reach_cy+0.15_max_area0.01.png"))
     assert not np.array_equal(*pngs)
 
 

@@ -184,7 +184,7 @@ def run_and_signal(out: Path, signum: int, delay: float) -> tuple[int, str]:
 def consistent(out: Path) -> None:
     """The files a run left: a summary, history and states that agree, a PVD listing VTU files that exist,
     no private folder left."""
-    stem = "inflate_cy+0.15"
+    stem = "inflate_cy+0.15_steps60_max_area0.02"
     assert not [p for p in out.rglob("*.partial")], "a private folder was left"
     if (out / f"{stem}_summary.json").exists():
         steps = json.loads((out / f"{stem}_summary.json").read_text())["steps"]
@@ -241,10 +241,11 @@ def test_runs_of_one_scene_at_once_never_interleave(tmp_path):
     ]
     outcomes = [(p.wait(timeout=300), p.stderr.read()) for p in procs]
     assert all(
-        code == 0 or (code == 2 and "another run is writing the results named 'inflate_cy+0.15'" in err)
+        code == 0
+        or (code == 2 and "another run is writing the results named 'inflate_cy+0.15_steps30_max_area0.02'" in err)
         for code, err in outcomes
     ), outcomes
     assert any(code == 0 for code, _ in outcomes)
     consistent(tmp_path)
-    summary = json.loads((tmp_path / "inflate_cy+0.15_summary.json").read_text())
-    assert summary["steps"] == 30 and len(os.listdir(tmp_path / "inflate_cy+0.15_vtk")) == 30
+    summary = json.loads((tmp_path / "inflate_cy+0.15_steps30_max_area0.02_summary.json").read_text())
+    assert summary["steps"] == 30 and len(os.listdir(tmp_path / "inflate_cy+0.15_steps30_max_area0.02_vtk")) == 30

@@ -305,7 +305,8 @@ def test_a_huge_time_step_is_the_quasistatic_limit_not_an_overflow(tmp_path, cap
         )
         == 0
     )
-    dynamic = json.loads((tmp_path / "out" / "reference_beam_summary.json").read_text())["tip_deflection"]
+    (path,) = (tmp_path / "out").glob("reference_beam_*_summary.json")  # named by the scene's hash
+    dynamic = json.loads(path.read_text())["tip_deflection"]
     assert run_inflate(tmp_path, scene_file(tmp_path), out="static") == 0
     static = json.loads((tmp_path / "static" / "reference_beam_summary.json").read_text())["tip_deflection"]
     assert dynamic == pytest.approx(static, rel=1e-6)
@@ -483,9 +484,9 @@ def test_sigterm_and_sighup_stop_a_ramp_like_ctrl_c_and_keep_the_steps_done(tmp_
     assert code == 128 + signum and "Traceback" not in stderr, stderr
     errors = [line for line in stderr.splitlines() if line.startswith("error:")]
     assert len(errors) == 1 and errors[0].endswith(f"of 399 ({name})")
-    summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
+    summary = json.loads((out / "inflate_cy+0.15_steps400_max_area0.02_summary.json").read_text())
     assert summary["interrupted"] is True and 4 <= summary["steps"] < 400
-    assert len(np.load(out / "inflate_cy+0.15_states.npz")["positions"]) == summary["steps"]
+    assert len(np.load(out / "inflate_cy+0.15_steps400_max_area0.02_states.npz")["positions"]) == summary["steps"]
 
 
 def test_a_signal_while_results_are_saved_waits_for_them(tmp_path, monkeypatch):
@@ -518,7 +519,7 @@ def test_steer_saves_the_ramps_done_on_ctrl_c(tmp_path):
     out = tmp_path / "out"
     code, stderr = signalled_at_step_3("steer", 200, out, signal.SIGINT)
     assert code == 130 and "Traceback" not in stderr, stderr
-    summary = json.loads((out / "steer_summary.json").read_text())
+    summary = json.loads((out / "steer_steps200_max_area0.02_summary.json").read_text())
     assert summary["interrupted"] is True and list(summary["steps"]) == ["+0.15"] and summary["steps"]["+0.15"] >= 4
 
 

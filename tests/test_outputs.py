@@ -64,6 +64,6 @@ def test_reach_output_on_the_command_line(tmp_path):
     )
     assert done.returncode == 0, done.stderr
     assert "reached: tip_rotation = -2 at step" in done.stdout
-    assert (tmp_path / "reference_cy+0.15_output_summary.json").exists()
+    assert (tmp_path / "reference_cy+0.15_output_tip_rotation-2_steps4_max_area0.02_summary.json").exists()
     missing = subprocess.run([*command, "--output", "tip_rotation", "--out", str(tmp_path)], capture_output=True)
     assert missing.returncode == 2 and b"--output COLUMN and --value V go together" in missing.stderr

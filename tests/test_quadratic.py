@@ -171,7 +171,7 @@ def test_order_flag_quality_preset_and_scene_key(tmp_path, capsys):
     for flags in (["--order", "2", "--max-area", "0.02"], ["--quality", "high", "--max-area", "0.02"]):
         out = tmp_path / flags[1]
         assert main([*flags, "--steps", "3", "--growth", "1.2", "--no-video", "--quiet", "--out", str(out)]) == 0
-        stem = "inflate_cy+0.15" + ("_high" if "high" in flags else "")  # a preset names its files
+        stem = "inflate_cy+0.15_growth1.2_steps3_max_area0.02" + ("_high" if "high" in flags else "_order2")
         summary = json.loads((out / f"{stem}_summary.json").read_text())
         assert summary["element_order"] == 2 and summary["all_converged"]
         assert summary["vertices"] == BeamGeometry(cy=0.15, max_area=0.02, order=2).mesh().n_vertices

@@ -203,7 +203,7 @@ COARSE_RAMP = ["--max-area", "0.01", "--growth", "2", "--steps", "3", "--quiet"]
 def test_design_finds_the_chamber_height_for_a_tip_deflection(tmp_path, capsys):
     assert main(["--design", "cy", "--tip-dy", "-0.05", *COARSE_RAMP, "--out", str(tmp_path)]) == 0
     assert capsys.readouterr().out.splitlines()[-1].startswith("reached: cy = +0.")
-    summary = json.loads((tmp_path / "design_cy_summary.json").read_text())
+    summary = json.loads((tmp_path / "design_cy_tip_dy-0.05_growth2_steps3_max_area0.01_summary.json").read_text())
     assert summary["found"] and 0 < summary["cy"] < 0.179 and summary["evaluations"] == len(summary["history"])
     ramp = run_schedule(reference_scene(cy=summary["cy"], growth=2.0, steps=3, max_area=0.01).build())
     assert ramp.tip_deflection == pytest.approx(summary["tip_dy"], abs=1e-9)  # an independent ramp at that cy

@@ -126,7 +126,7 @@ def test_no_video_initialises_no_renderer_and_draws_no_picture(tmp_path, monkeyp
     monkeypatch.setattr(render_frames, "open_canvas", refuse)
     assert inflate.main([*COARSE, "--no-video", "--out", str(tmp_path)]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == [
-        f"inflate_cy+0.15{end}"
+        f"inflate_cy+0.15_growth2_steps3_max_area0.01{end}"
         for end in (".pvd", "_history.csv", "_scene.toml", "_states.npz", "_summary.json", "_vtk")
     ]
 
@@ -155,12 +155,12 @@ def test_inflate_renders_with_ti_gui_by_default_and_refuses_ggui_without_vulkan(
     assert proc.returncode == 0, proc.stderr
     name = "ti.GUI (software)" if has_gui() else "Pillow (software)"
     assert f"renderer: {name}" in proc.stdout
-    video = tmp_path / "inflate_cy+0.15.mp4"
+    video = tmp_path / "inflate_cy+0.15_growth2_steps3_max_area0.01.mp4"
     assert imageio_ffmpeg.count_frames_and_secs(str(video))[0] == 3
     assert iio.imread(video, index=0).shape == (160, 320, 3)
-    summary = json.loads((tmp_path / "inflate_cy+0.15_summary.json").read_text())
+    summary = json.loads((tmp_path / "inflate_cy+0.15_growth2_steps3_max_area0.01_summary.json").read_text())
     assert summary["renderer"] == name and summary["video_frames"] == 3
-    assert iio.imread(tmp_path / "inflate_cy+0.15.png").shape == (160, 320, 3)
+    assert iio.imread(tmp_path / "inflate_cy+0.15_growth2_steps3_max_area0.01.png").shape == (160, 320, 3)
     refused = run("--renderer", "ggui")
     errors = [line for line in refused.stderr.splitlines() if line.startswith("error:")]
     assert (
@@ -175,11 +175,11 @@ def test_steer_plays_three_panels_in_one_video(tmp_path, capsys):
     assert steer.main([*flags, "--renderer", SOFTWARE, "--size", "384x128", "--out", str(tmp_path)]) == 0
     printed = capsys.readouterr().out
     assert all(f"cy = {cy}" in printed for cy in ("+0.15", "+0.00", "-0.15"))
-    summary = json.loads((tmp_path / "steer_summary.json").read_text())
+    summary = json.loads((tmp_path / "steer_growth1.5_steps4_max_area0.01_summary.json").read_text())
     tips = summary["tip_deflection"]
     assert tips["+0.15"] == pytest.approx(-tips["-0.15"], rel=0.15)  # near mirror images (the meshes differ)
-    assert imageio_ffmpeg.count_frames_and_secs(str(tmp_path / "steer.mp4"))[0] == 4
-    assert iio.imread(tmp_path / "steer.png").shape == (128, 384, 3)
+    assert imageio_ffmpeg.count_frames_and_secs(str(tmp_path / "steer_growth1.5_steps4_max_area0.01.mp4"))[0] == 4
+    assert iio.imread(tmp_path / "steer_growth1.5_steps4_max_area0.01.png").shape == (128, 384, 3)
 
 
 @pytest.mark.parametrize(

@@ -305,6 +305,7 @@ def covering_scenes() -> list[Scene]:
         regions=(Region((-1.75, -0.4, 1.75, -0.3), Material(5e4, 0.4)),),
         effects=(Gravity(1.0), Ground(-1.0), SelfContact(), Dynamics(1.0, 0.01)),
         targets=(Target((3.0, -0.5), 5.0),),
+        ends_at_limit_point=True,
         layers=(Layer("sheet", 1e6, 0.3, 0.01, side="bottom"),),
         obstacles=(
             Obstacle("floor", obstacles.Plane((0.0, -2.0), (0.0, 1.0)), 0.01, 1e3),

@@ -243,10 +243,11 @@ def test_pneunet_from_the_command_line_curls_towards_its_layer(tmp_path):
         ]
     )
     assert code == 0
-    states = np.load(tmp_path / "pneunet_3d_states.npz")
+    (stem,) = [p.name[: -len("_summary.json")] for p in tmp_path.glob("pneunet_3d_*_summary.json")]  # the hash
+    states = np.load(tmp_path / f"{stem}_states.npz")
     tip_dy = (states["positions"][:, states["tip"], 1] - states["rest"][states["tip"], 1]).mean(axis=1)
     assert tip_dy[3] < -0.05 and abs(tip_dy[-1]) < 1e-6
-    summary = json.loads((tmp_path / "pneunet_3d_summary.json").read_text())
+    summary = json.loads((tmp_path / f"{stem}_summary.json").read_text())
     assert summary["tetrahedra"] > 0 and summary["all_converged"]
 
 
@@ -330,12 +331,13 @@ def test_3d_video_from_the_command_line(tmp_path):
         ]
     )
     assert code == 0
-    frames = list(iio.imiter(tmp_path / "beam_3d_ellipsoid.mp4"))
+    (stem,) = [p.name[: -len(".mp4")] for p in tmp_path.glob("beam_3d_ellipsoid_*.mp4")]  # named by its hash
+    frames = list(iio.imiter(tmp_path / f"{stem}.mp4"))
     assert len(frames) == 3 and frames[0].shape == (240, 480, 3)
-    png = iio.imread(tmp_path / "beam_3d_ellipsoid.png").astype(float)
+    png = iio.imread(tmp_path / f"{stem}.png").astype(float)
     blue = (png[..., 2] > png[..., 0] + 40) & (png[..., 2] > png[..., 1] + 20)
     assert np.count_nonzero(blue) > 100
-    summary = json.loads((tmp_path / "beam_3d_ellipsoid_summary.json").read_text())
+    summary = json.loads((tmp_path / f"{stem}_summary.json").read_text())
     assert summary["renderer"] == "NumPy z-buffer rasteriser" and summary["video_frames"] == 3
 
 

@@ -15,7 +15,7 @@ import pytest
 from solid_meshes import extruded_beam, lzma_vtu, moved_up
 
 ENV = {**os.environ, "PYTHONUNBUFFERED": "1"}
-STEM = "inflate_cy+0.15"
+STEM = "inflate_cy+0.15_steps4_max_area0.02"
 CHEAP = ["--steps", "4", "--max-area", "0.02"]
 
 

@@ -250,18 +250,18 @@ def test_ctrl_c_during_a_ramp_keeps_the_steps_done_and_exits_130(tmp_path):
     when, step = re.search(r"interrupted (after|during) step (\d+) of 399", errors[0]).groups()
     done = int(step) - (when == "during")
     assert 3 <= done < 399 and "saved the" in stdout
-    summary = json.loads((out / "inflate_cy+0.15_summary.json").read_text())
-    history = np.genfromtxt(out / "inflate_cy+0.15_history.csv", delimiter=",", names=True)
-    states = np.load(out / "inflate_cy+0.15_states.npz")
+    summary = json.loads((out / "inflate_cy+0.15_steps400_max_area0.01_summary.json").read_text())
+    history = np.genfromtxt(out / "inflate_cy+0.15_steps400_max_area0.01_history.csv", delimiter=",", names=True)
+    states = np.load(out / "inflate_cy+0.15_steps400_max_area0.01_states.npz")
     assert summary["interrupted"] is True and summary["steps"] == done + 1
     assert len(history) == done + 1 and states["positions"].shape[0] == done + 1
     assert history["step"][-1] == done and summary["all_converged"]
     assert sorted(os.listdir(out)) == [
-        "inflate_cy+0.15.pvd",
-        "inflate_cy+0.15_history.csv",
-        "inflate_cy+0.15_states.npz",
-        "inflate_cy+0.15_summary.json",
-        "inflate_cy+0.15_vtk",
+        "inflate_cy+0.15_steps400_max_area0.01.pvd",
+        "inflate_cy+0.15_steps400_max_area0.01_history.csv",
+        "inflate_cy+0.15_steps400_max_area0.01_states.npz",
+        "inflate_cy+0.15_steps400_max_area0.01_summary.json",
+        "inflate_cy+0.15_steps400_max_area0.01_vtk",
     ]
-    assert len(os.listdir(out / "inflate_cy+0.15_vtk")) == done + 1  # the VTU of every step done
-    assert (out / "inflate_cy+0.15.pvd").read_text().count("<DataSet ") == done + 1
+    assert len(os.listdir(out / "inflate_cy+0.15_steps400_max_area0.01_vtk")) == done + 1  # the VTU of every step done
+    assert (out / "inflate_cy+0.15_steps400_max_area0.01.pvd").read_text().count("<DataSet ") == done + 1

@@ -101,11 +101,13 @@ def test_a_failed_run_leaves_its_finished_steps_readable(tmp_path):
         )
         == 1
     )
-    entries = read_pvd(out / "inflate_cy+0.15.pvd")
+    entries = read_pvd(out / "inflate_cy+0.15_steps2_max_area0.01.pvd")
     assert [t for t, _ in entries] == [0.0]  # the rest state converged, step 1 did not
     grid = meshio.read(entries[0][1])
     assert np.all(grid.point_data["displacement"] == 0) and grid.field_data["converged"][0] == 1
-    assert sorted(p.name for p in (out / "inflate_cy+0.15_vtk").iterdir()) == ["inflate_cy+0.15_0000.vtu"]
+    assert sorted(p.name for p in (out / "inflate_cy+0.15_steps2_max_area0.01_vtk").iterdir()) == [
+        "inflate_cy+0.15_steps2_max_area0.01_0000.vtu"
+    ]
 
 
 def test_contact_scenes_write_the_contact_force(tmp_path):

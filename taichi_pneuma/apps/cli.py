@@ -45,6 +45,9 @@ QUALITY_ERROR = {
 }
 MEASURE = {2: "area", 3: "volume"}  # what a chamber encloses, by dimension
 MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_iterations, simulate.MAX_CUTS)
+# the reference-beam flags' defaults (those of scene.build.reference_scene; tests/test_cli.py checks they agree)
+BEAM_DEFAULTS = {"cx": 0.0, "growth": 3.5, "steps": 36, "E": 1e4, "nu": 0.45, "k": 1e5}
+MAX_SUFFIX = 40  # a readable stem suffix longer than this is replaced by the scene's hash
 
 
 def app_parser(prog: str, doc: str) -> argparse.ArgumentParser:
@@ -72,14 +75,41 @@ def quality_stem(args: argparse.Namespace) -> str:
     return "" if args.quality == "default" else f"_{args.quality}"
 
 
+def result_stem(base: str, args: argparse.Namespace, *scenes) -> str:
+    """The stem of a run's result files: base (a scene's name, or the reference beam's 'inflate_cy+0.15'), then
+    what the run changed of that scene, so that a different run never overwrites its files and a re-run of the
+    same one replaces only its own: the reference-beam flags that differ from their defaults (without --scene:
+    '_order2', '_E20000'; --max-area and --order against the --quality preset) and every --set as given
+    ('_E2e4_nu0.49'), made a valid stem (output.reduce_to_stem); past MAX_SUFFIX characters instead '_' and the
+    first 8 hex digits of scene_sha256 of the scenes as run; then quality_stem."""
+    from ..io.output import reduce_to_stem
+    from ..result import scene_sha256
+
+    parts = []
+    if not getattr(args, "scene", None):
+        parts += [f"{k}{getattr(args, k):g}" for k, v in BEAM_DEFAULTS.items() if getattr(args, k) != v]
+        preset_area, preset_order, _ = QUALITY[args.quality]
+        parts += [f"max_area{args.max_area:g}"] if args.max_area != preset_area else []
+        parts += [f"order{args.order}"] if args.order != preset_order else []
+    for text in args.set:
+        key, _, value = text.partition("=")
+        parts.append(key.strip() + value.strip())
+    suffix = reduce_to_stem("_".join(parts)) if parts else ""
+    if len(suffix) > MAX_SUFFIX:
+        suffix = scene_sha256(*scenes)[:8]
+    return base + (f"_{suffix}" if suffix else "") + quality_stem(args)
+
+
 def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     """The reference-beam, ramp, solver and output flags shared by the apps (all but the chamber height)."""
-    p.add_argument("--cx", type=float, default=0.0, help="chamber centre along the beam")
-    p.add_argument("--growth", type=float, default=3.5, help="final commanded area / rest area")
-    p.add_argument("--steps", type=int, default=36, help="commanded areas in the ramp, rest included")
-    p.add_argument("--E", type=float, default=1e4, help="Young's modulus")
-    p.add_argument("--nu", type=float, default=0.45, help="Poisson's ratio, in (-1, 0.5)")
-    p.add_argument("--k", type=float, default=1e5, help="chamber stiffness (area control penalty)")
+    p.add_argument("--cx", type=float, default=BEAM_DEFAULTS["cx"], help="chamber centre along the beam")
+    p.add_argument("--growth", type=float, default=BEAM_DEFAULTS["growth"], help="final commanded area / rest area")
+    p.add_argument(
+        "--steps", type=int, default=BEAM_DEFAULTS["steps"], help="commanded areas in the ramp, rest included"
+    )
+    p.add_argument("--E", type=float, default=BEAM_DEFAULTS["E"], help="Young's modulus")
+    p.add_argument("--nu", type=float, default=BEAM_DEFAULTS["nu"], help="Poisson's ratio, in (-1, 0.5)")
+    p.add_argument("--k", type=float, default=BEAM_DEFAULTS["k"], help="chamber stiffness (area control penalty)")
     p.add_argument(
         "--quality",
         default="default",

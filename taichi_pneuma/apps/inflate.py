@@ -9,15 +9,21 @@ the tip deflection and rotation and the peak chamber pressure; writes the per-st
 the states (npz), a summary (JSON), the scene as run (TOML) and the ParaView files (a VTU per step as
 it is solved, indexed by a PVD) under --out, and, unless --no-video, a plot of the history (PNG), a
 video of the run (body coloured by --color beside its area/pressure trace) and a PNG of its most
-deformed frame.
+deformed frame. The files are named by the scene (inflate_cy+0.15 for the reference beam's flags) and what
+the run changed of it (cli.result_stem: '_order2_E2e4', or the scene's hash when that is long; '_high' for
+a --quality), so a different run never overwrites them and a re-run of the same one replaces only its own.
 --set KEY=VALUE changes any dotted scene-file key. --interactive instead opens a window with a slider
 for the commanded area (a 3D scene: a slider per chamber, and the camera turned by dragging the mouse).
 A 3D scene's video shows the body in 3D, opened by a section to show its chambers (docs/3d.md).
 
 Before any work, a run past the resource limits (estimated triangles, increments, frame pixels; see
-limits.py) is refused in one line naming the flag that raises the limit. Ctrl-C (or SIGTERM, SIGHUP) during
-the ramp stops it within a Newton iteration, saves the increments done (summary marked interrupted) and exits
-130 (143, 129); one after the last increment is solved waits until every result file is written, then exits so.
+limits.py) is refused in one line naming the flag that raises the limit. A ramp that finds no equilibrium
+past some step writes every file, pictures included, up to its last equilibrium (the summary's "stopped" says
+where); a scene whose ramp is meant to end at a limit point (schedule.ends_at_limit_point: balloon_pressure's
+pressure peak) then exits 0 with a line saying so, any other prints its error line and exits 1. Ctrl-C (or
+SIGTERM, SIGHUP) during the ramp stops it within a Newton iteration, saves the increments done (summary marked
+interrupted; no pictures: rendering can take minutes) and exits 130 (143, 129); one after the last increment
+is solved waits until every result file is written, then exits so.
 """
 
 from __future__ import annotations
@@ -42,9 +48,9 @@ from .cli import (
     build,
     exit_code,
     newton_options,
-    quality_stem,
     render_report,
     rendering_flags,
+    result_stem,
     scene_of_flags,
     solve,
 )
@@ -52,8 +58,8 @@ from .cli import (
 if TYPE_CHECKING:
     from ..result import Result
 
-# by dimension: the tip the deflection is measured at, its rotation in the last step's line and over the run
-TIP_WORDS = {2: ("right edge", "tip rotation", "rotation"), 3: ("right face", "bend angle", "bend angle")}
+# by dimension: the tip's rotation in the last step's line and over the run
+TURN_WORDS = {2: ("tip rotation", "rotation"), 3: ("bend angle", "bend angle")}
 
 
 def parser() -> argparse.ArgumentParser:
@@ -91,7 +97,7 @@ def run(args: argparse.Namespace) -> dict:
 
     scene = scene_of_flags(args)
     # a scene's name is a plain file name (Scene checks it): every result file lands inside --out
-    stem = (scene.name if args.scene else f"inflate_cy{args.cy:+.2f}") + quality_stem(args)
+    stem = result_stem(scene.name if args.scene else f"inflate_cy{args.cy:+.2f}", args, scene)
     size = rendering_flags(args)
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
     if args.interactive:
@@ -127,20 +133,43 @@ def run_scene(args: argparse.Namespace, scene, stem: str, size: tuple[int, int],
 
 
 def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, int], out, vtk) -> dict:
+    """Solve the ramp, report it and write every result file. A ramp with no equilibrium past some step reports and
+    writes the steps done, pictures included: a scene whose ramp ends at a limit point (schedule.ends_at_limit_point)
+    then returns as done, any other re-raises (exit 1). A ramp stopped by a signal writes its data but no pictures
+    (rendering a 3D video takes seconds to minutes: whoever pressed Ctrl-C wants the run to end now)."""
     from ..solve.simulate import RampInterrupted, RampStopped
 
-    scene = built.scene
     try:
-        result = solve(args, built, vtk=vtk)
+        return report_and_save(args, solve(args, built, vtk=vtk), stem, size, out, vtk)
     except RampStopped as stopped:
         done = cast("Result", stopped.result)  # (solve's: tp.simulate made it a Result)
-        if done.steps:  # none when the rest state itself has no equilibrium
+        if not done.steps:  # the rest state itself has no equilibrium
+            raise
+        if isinstance(stopped, RampInterrupted):
             written = done.save_history(out, stem) + [vtk.pvd]
-            if isinstance(stopped, RampInterrupted):
-                written.append(save_json(out / f"{stem}_summary.json", done.summary(interrupted=True)))
+            written.append(save_json(out / f"{stem}_summary.json", done.summary(interrupted=True)))
             print(f"saved the {len(done.steps)} steps done in " + ", ".join(str(p) for p in written))
-        raise
+            raise
+        planned = built.scene.ends_at_limit_point
+        if planned:  # the step, the pressure with no equilibrium and the last equilibrium's (simulate.settle's words)
+            print(f"stopped at the limit point, as the scene plans (schedule.ends_at_limit_point): {stopped}")
+        reason = "limit point" if planned else "no equilibrium"
+        stop = {"step": len(done.steps), "reason": reason, "message": str(stopped)}
+        summary = report_and_save(args, done, stem, size, out, vtk, stop)
+        if not planned:
+            raise
+        return summary
+
+
+def report_and_save(
+    args: argparse.Namespace, result: Result, stem: str, size: tuple[int, int], out, vtk, stopped: dict | None = None
+) -> dict:
+    """Print the run's figures and write its files and pictures; stopped: the step with no equilibrium and why (the
+    summary's "stopped"), for a ramp that ended before its last increment."""
+    scene = result.scene
     final, summary = result.steps[-1], result.summary()
+    if stopped is not None:
+        summary["stopped"] = stopped
     area, length, pressure = (scene.units.suffix(d) for d in (AREA, LENGTH, PRESSURE))
     force, moment = (scene.units.suffix(in_dimension(d, result.mesh.dim)) for d in (FORCE, MOMENT))
     measure = scene.units.suffix(MEASURES[result.mesh.dim])
@@ -157,10 +186,10 @@ def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, 
             f"(x{c.area_ratio:.2f}), pressure {c.pressure:.1f}{pressure}; over the run "
             f"{span(f'{name}.area_ratio', 'x{:.2f}')}, pressure {span(f'{name}.pressure', '{:.1f}' + pressure)}"
         )
-    side, turn, turn_over_run = TIP_WORDS[result.mesh.dim]
+    turn, turn_over_run = TURN_WORDS[result.mesh.dim]
     beyond_y = "".join(f"tip dz {dz:+.4f}{length}; " for dz in final.tip[2:])
     print(
-        f"tip deflection (mean y displacement of the {side if scene.geometry.tip.box is None else 'tip'}): "
+        f"tip deflection (mean y displacement of {summary['tip_at']}): "
         f"{result.tip_deflection:+.4f}{length}; {beyond_y}{turn} {final.tip_rotation:+.1f} deg"
         + ("" if final.tip_twist is None else f"; twist about x {final.tip_twist:+.1f} deg")
     )
@@ -186,7 +215,7 @@ def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, 
         f"all converged: {summary['all_converged']}; run {result.seconds:.2f} s"
     )
     # results saved before rendering: a Ctrl-C there loses none
-    written = result.save(out, stem, vtk=False, plot=not args.no_video) + [vtk.pvd]
+    written = result.save(out, stem, vtk=False, plot=not args.no_video, extra=summary) + [vtk.pvd]
     if not args.no_video:
         done = result.video(
             args.video or out / f"{stem}.mp4",

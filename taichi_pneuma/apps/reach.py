@@ -14,11 +14,12 @@ commands found and a summary line starting with `reached:`; an unreachable targe
 `unreachable: ...` (the closest pose, the chambers at a bound) and exits with 1, its files still
 written. Writes under --out the video (the target marker and the tip's path), its last frame,
 the per-frame history CSV (commands, tip, target, error), the states and a summary JSON.
---design cy --tip-dy D instead finds the chamber height cy at which the reference ramp ends at tip
-deflection D. --output COLUMN --value V instead follows the scene's own schedule to where a history column
-(tip_rotation: the bending angle, tip_twist, tip_dx, blocked_force, a contact force, ...) equals V
-(control/outputs.py), prints `reached:` with the commands there (or `unreachable:` with the closest step, exit 1)
-and writes <scene>_output_summary.json.
+--design cy --tip-dy D instead finds the chamber height cy at which the reference ramp ends at tip deflection D
+(writes design_cy_tip_dy<D>_summary.json, with what the flags changed). --output COLUMN --value V instead follows
+the scene's own schedule to where a history column (tip_rotation: the bending angle, tip_twist, tip_dx,
+blocked_force, a contact force, ...) equals V (control/outputs.py), prints `reached:` with the commands there (or
+`unreachable:` with the closest step, exit 1) and writes <scene>_output_<COLUMN><V>_summary.json (with what the
+flags changed of the scene, cli.result_stem).
 """
 
 from __future__ import annotations
@@ -49,9 +50,9 @@ from .cli import (
     check_flags,
     exit_code,
     newton_options,
-    quality_stem,
     render_report,
     rendering_flags,
+    result_stem,
     scene_for,
 )
 
@@ -198,10 +199,10 @@ def run(args: argparse.Namespace) -> dict:
     check_flags(args)
     if args.scene:
         scene = apply_set(load_scene(args.scene), args.set)
-        stem = f"reach_{scene.name}{quality_stem(args)}"
+        stem = result_stem(f"reach_{scene.name}", args, scene)
     else:
         scene = apply_set(scene_for(args, args.cy), args.set)
-        stem = f"reach_cy{args.cy:+.2f}{quality_stem(args)}"
+        stem = result_stem(f"reach_cy{args.cy:+.2f}", args, scene)
     scene = with_bounds(scene, args.bounds)
     lo, hi = command_bounds(scene)
     targets = targets_of(args, scene, required=not args.interactive)
@@ -352,6 +353,7 @@ def run_output(args: argparse.Namespace) -> dict:
     """--output COLUMN --value V: the commands along the scene's schedule at which the column equals V."""
     from ..api import load_scene
     from ..control.outputs import reach_output
+    from ..result import scene_sha256
 
     require(args.output is not None and args.value is not None, "--output COLUMN and --value V go together")
     wanted = require_finite("--value", args.value)
@@ -378,7 +380,10 @@ def run_output(args: argparse.Namespace) -> dict:
         "seconds": result.seconds,
         "all_converged": result.found and result.run.converged,  # exit 1 when not reached
     }
-    path = save_json(out / f"{scene.name}_output_summary.json", summary)
+    summary["scene_sha256"] = scene_sha256(scene)
+    # named by the output and value sought and what the run changed of the scene: no other run overwrites it
+    stem = result_stem(f"{scene.name}_output_{args.output}{wanted:g}", args, scene)
+    path = save_json(out / f"{stem}_summary.json", summary)
     print(f"wrote {path}")
     if result.found:
         print(f"reached: {args.output} = {result.value:.6g} at step {result.step:.4f} of the schedule: {commands}")
@@ -403,7 +408,7 @@ def run_design(args: argparse.Namespace) -> dict:
         not args.scene and args.tip is None and args.targets is None and not args.interactive,
         "--design cy works on the reference beam of the flags (no --scene, --tip, --targets, --interactive)",
     )
-    apply_set(scene_for(args, 0.0), args.set)  # validates the reference-beam flags and --set
+    centred = apply_set(scene_for(args, 0.0), args.set)  # validates the reference-beam flags and --set
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     beam = BeamGeometry()
@@ -436,7 +441,8 @@ def run_design(args: argparse.Namespace) -> dict:
         "history": [{"cy": c, "tip_dy": m} for c, m in result.evaluations],
         "all_converged": result.found,
     }
-    path = save_json(out / "design_cy_summary.json", summary)
+    # named by the deflection sought and what the flags changed of the reference beam: no other run overwrites it
+    path = save_json(out / f"{result_stem(f'design_cy_tip_dy{wanted:g}', args, centred)}_summary.json", summary)
     print(f"evaluations: {len(result.evaluations)} ramps (a new mesh each) in {result.seconds:.1f} s; wrote {path}")
     if result.found:
         print(

@@ -3,10 +3,11 @@
     pneuma-steer                                 (or python -m taichi_pneuma.apps.steer)
 
 Solves the three ramps (cy = +0.15, 0, -0.15), prints their tip deflections and what each tip did (its
-caption: "chamber high (cy = +0.15): tip up to +0.26 (step 9), then down to -0.28 (step 35)", read off the
-run's tip history), writes each ramp's ParaView files (steer_cy+0.15.pvd, ...) and, unless --no-video, plays
-them side by side in one video (all panels in one frame of reference, bodies coloured by --color on one scale,
-each under its caption) with a PNG of the last frame. steer_summary.json has the captions and tip histories.
+caption: "chamber high (cy = +0.15): tip up to +0.27 (step 10), then down to -0.28 (step 35)", read off the
+run's tip history), writes each ramp's ParaView files (steer_cy+0.15.pvd, ...; a run whose flags or --set change
+the scenes adds them to the names, cli.result_stem) and, unless --no-video, plays them side by side in one video
+(all panels in one frame of reference, bodies coloured by --color on one scale, each under its caption) with a PNG
+of the last frame. steer_summary.json has the captions and tip histories.
 A ramp stopped (Ctrl-C, SIGTERM, SIGHUP, or no equilibrium) still writes steer_summary.json with the
 steps each ramp did (interrupted: true for a signal).
 """
@@ -31,6 +32,7 @@ from .cli import (
     exit_code,
     render_report,
     rendering_flags,
+    result_stem,
     scene_for,
     solve,
 )
@@ -79,14 +81,15 @@ def run(args: argparse.Namespace) -> dict:
     size = rendering_flags(args)
     out = prepare_directory(args.out)
     runtime.init(args.arch)
-    stems = [f"steer_cy{cy:+.2f}" for cy, _ in PLACEMENTS]
+    stems = [result_stem(f"steer_cy{cy:+.2f}", args, scene) for (cy, _), scene in zip(PLACEMENTS, scenes)]
+    stem = result_stem("steer", args, *scenes)  # the video, its PNG and the summary
     # no other run writes these files meanwhile; a signal between two ramps stops the next at its start, one after
     # the last increment waits for the files (signals.holding, signals.stopping)
-    with lock_stems(out, "steer", *stems), holding():
-        return run_placements(args, scenes, stems, size, out)
+    with lock_stems(out, stem, *stems), holding():
+        return run_placements(args, scenes, stem, stems, size, out)
 
 
-def run_placements(args: argparse.Namespace, scenes, stems: list[str], size: tuple[int, int], out) -> dict:
+def run_placements(args: argparse.Namespace, scenes, stem: str, stems: list[str], size: tuple[int, int], out) -> dict:
     from ..render.paraview import VtkSeries
     from ..solve.simulate import RampInterrupted, RampStopped
 
@@ -99,7 +102,7 @@ def run_placements(args: argparse.Namespace, scenes, stems: list[str], size: tup
         except RampStopped as stopped:  # the ramps done, and the steps of this one, are kept
             done = {f"{c:+.2f}": r for (c, _), r in zip(PLACEMENTS, solved + [stopped.result]) if r.steps}
             path = save_json(
-                out / "steer_summary.json",
+                out / f"{stem}_summary.json",
                 {
                     "tip_deflection": {k: r.tip_deflection for k, r in done.items()},
                     "steps": {k: len(r.steps) for k, r in done.items()},
@@ -127,8 +130,8 @@ def run_placements(args: argparse.Namespace, scenes, stems: list[str], size: tup
 
         export = render_video(
             solved,
-            args.video or out / "steer.mp4",
-            out / "steer.png",
+            args.video or out / f"{stem}.mp4",
+            out / f"{stem}.png",
             size,
             args.fps,
             args.color,
@@ -147,7 +150,8 @@ def run_placements(args: argparse.Namespace, scenes, stems: list[str], size: tup
             solve_seconds_per_step=seconds_per_step,
         )
         written += [export.video, export.png]
-    written.append(save_json(out / "steer_summary.json", summary))
+    summary["scene_sha256"] = {f"{cy:+.2f}": r.summary()["scene_sha256"] for (cy, _), r in zip(PLACEMENTS, solved)}
+    written.append(save_json(out / f"{stem}_summary.json", summary))
     print("wrote " + ", ".join(str(p) for p in written))
     return summary
 

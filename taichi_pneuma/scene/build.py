@@ -122,6 +122,7 @@ class Scene:
     fibers: tuple = ()  # terms.fibers.Fiber: embedded tension-only cords
     layers: tuple = ()  # terms.sheets.Layer: strain-limiting sheets bonded to faces of the body
     obstacles: tuple = ()  # terms.obstacles.Obstacle: rigid obstacles the body's boundary touches
+    ends_at_limit_point: bool = False  # the ramp is meant to stop at a limit point (schedule.ends_at_limit_point)
 
     def __post_init__(self):
         self.resolve_defaults()

@@ -358,6 +358,7 @@ def scene_table(scene_class) -> Table:
             fibers=v["fibers"],
             layers=v["layers"],
             obstacles=v["obstacles"],
+            ends_at_limit_point=v["schedule"]["ends_at_limit_point"],
         )
 
     def clamp_parts(scene):
@@ -475,8 +476,19 @@ def scene_table(scene_class) -> Table:
                         MAX_STRETCH,
                         "a run whose largest principal stretch passes it warns (once, at the first step past it)",
                     ),
+                    "ends_at_limit_point": Key(
+                        bool,
+                        False,
+                        "the ramp is meant to end at a limit point (a pressure peak under pressure control): a run "
+                        "that finds no equilibrium past some step stops there as planned (exit 0), its results up "
+                        "to the last equilibrium written",
+                    ),
                 },
-                parts=lambda s: {"increments": s.increments, "max_stretch": s.max_stretch},
+                parts=lambda s: {
+                    "increments": s.increments,
+                    "max_stretch": s.max_stretch,
+                    "ends_at_limit_point": s.ends_at_limit_point,
+                },
             ),
             "effects": Named(EFFECTS, "the effects the scene adds, by name"),
             "targets": Tables(TARGET, "poses for inverse control, in order"),

@@ -1,0 +1,41 @@
+"""Running a shipped scene through `pneuma-inflate --scene NAME` and checking what it wrote (test_shipped_runs.py
+for the 2D scenes, test_shipped_runs_3d.py for the 3D ones: two files, so the two test workers share them)."""
+
+import json
+
+import imageio.v3 as iio
+import imageio_ffmpeg
+from renderers import SOFTWARE
+
+import taichi_pneuma as tp
+from taichi_pneuma.apps.inflate import main
+from taichi_pneuma.scene.shipped import shipped
+
+DIMENSIONS = {name: tp.load_scene(name).dim for name in shipped()}
+SIZE = {2: (192, 96), 3: (384, 192)}  # a 3D frame's views need 64x64 each
+
+
+def runs_and_writes_its_pictures(name: str, flags: list[str], out, capsys) -> None:
+    """The shipped scene `name` with flags exits 0 and writes its frame PNG (of --size), plot PNG and video (a frame
+    per step); its summary has every step converged, each chamber's term, fibres where it has them and a contact
+    entry per obstacle, all the ramp's steps or, declared (schedule.ends_at_limit_point), a stop at its limit point."""
+    scene = tp.load_scene(name)
+    width, height = SIZE[scene.dim]
+    code = main(
+        ["--scene", name, *flags, "--renderer", SOFTWARE, "--size", f"{width}x{height}", "--quiet", "--out", str(out)]
+    )
+    printed = capsys.readouterr()
+    assert code == 0, printed.err
+    (path,) = out.glob(f"{name}*_summary.json")  # a run with --set names them in its stem
+    summary, stem = json.loads(path.read_text()), path.name[: -len("_summary.json")]
+    assert summary["all_converged"] and summary["steps"] >= 2
+    if scene.ends_at_limit_point:  # balloon_pressure: it ends at its pressure peak, short of its last increment
+        assert summary["stopped"]["reason"] == "limit point" and "stopped at the limit point" in printed.out
+    else:
+        assert "stopped" not in summary and summary["steps"] == scene.increments + 1
+    chambers = {f"chamber:{chamber}" for chamber, _ in scene.geometry.chambers}
+    assert chambers <= set(summary["terms"]) and ("fibers" in summary["terms"]) == bool(scene.fibers)
+    assert len(summary["contact"]) >= len(scene.obstacles)
+    assert imageio_ffmpeg.count_frames_and_secs(str(out / f"{stem}.mp4"))[0] == summary["steps"]
+    assert iio.imread(out / f"{stem}.png").shape == (height, width, 3)
+    assert iio.imread(out / f"{stem}_plot.png").ndim == 3

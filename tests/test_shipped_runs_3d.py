@@ -1,0 +1,26 @@
+"""Every shipped 3D scene runs through `pneuma-inflate --scene NAME` on a coarser mesh (COARSER: its gmsh lengths
+about doubled, quadratic tetrahedra made linear; beam_3d's mesh file is its own), with its ramp, chambers, fibres,
+layers and obstacles as shipped, exits 0 and writes its pictures (shipped_runs.py)."""
+
+import pytest
+from shipped_runs import DIMENSIONS, runs_and_writes_its_pictures
+
+
+def mesh(size: float, near: float, distance: float, order: int | None = None) -> list[str]:
+    """The --set flags of a 3D body's gmsh lengths (and element order)."""
+    keys = {"size": size, "near_chambers": near, "distance": distance, **({} if order is None else {"order": order})}
+    return [flag for key, value in keys.items() for flag in ("--set", f"mesh.{key}={value}")]
+
+
+COARSER = {
+    "beam_3d_ellipsoid": mesh(0.4, 0.2, 0.4, order=1),
+    "blocked_force_3d": mesh(12, 6, 6),
+    "fiber_bending_3d": mesh(12, 6, 6),
+    "fiber_twist_3d": mesh(6, 4, 4, order=1),
+    "pneunet_3d": mesh(0.5, 0.5, 0.5, order=1),
+}
+
+
+@pytest.mark.parametrize("name", [name for name, dim in DIMENSIONS.items() if dim == 3])
+def test_every_shipped_3d_scene_exits_0_and_writes_its_pictures(name, tmp_path, capsys):
+    runs_and_writes_its_pictures(name, COARSER.get(name, []), tmp_path, capsys)
