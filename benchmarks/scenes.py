@@ -57,6 +57,11 @@ def run(name: str, scratch: Path) -> dict:
     return {"scene": name, "exit": done.returncode, "process_seconds": seconds, "summary": summary, "errors": errors}
 
 
+def shown(value: float) -> str:
+    """A tip figure: 4 significant digits, round-off (below 1e-9) as 0 (a ramp back at rest)."""
+    return f"{value if abs(value) > 1e-9 else 0.0:+.4g}"
+
+
 def row(record: dict) -> str:
     s = record["summary"]
     if s is None:
@@ -64,20 +69,17 @@ def row(record: dict) -> str:
     dim, elements = (3, s["tetrahedra"]) if "tetrahedra" in s else (2, s["triangles"])
     kind = ("quadratic " if s["element_order"] == 2 else "") + ("tetrahedra" if dim == 3 else "triangles")
     unit = "" if s["units"] is None else f" {s['units']['length']}"
-    figure = f"tip dy {s['tip_deflection']:+.4g}{unit} at {s['tip_at']}, bending angle {s['tip_rotation_deg']:+.1f} deg"
+    figure = f"tip dy {shown(s['tip_deflection'])}{unit} at {s['tip_at']}, bending angle {s['tip_rotation_deg']:+.1f} deg"
     peak = max((s["extremes"]["tip_dy"][k] for k in ("min", "max")), key=abs)
     step = s["extremes"]["tip_dy"]["min_step" if peak == s["extremes"]["tip_dy"]["min"] else "max_step"]
     if step != s["steps"] - 1:  # a ramp that returns (pneunet_finger, pneunet_3d): its peak too
         turn = s["extremes"]["tip_rotation"]
         angle = max((turn[k] for k in ("min", "max")), key=abs)
-        figure += f"; peak tip dy {peak:+.4g}{unit} (step {step}), peak bending angle {angle:+.1f} deg"
+        figure += f"; peak tip dy {shown(peak)}{unit} (step {step}), peak bending angle {angle:+.1f} deg"
     if "tip_twist_deg" in s:  # 3D: the twist about the body's axis (fiber_twist_3d's figure)
         figure += f", twist {s['tip_twist_deg']:+.1f} deg"
-    if "blocked_force" in s:  # a force: pressure x area in 3D (the summary's units give 2D's force per depth)
-        force = (
-            "" if s["units"] is None else f" {s['units']['pressure']} {s['units']['area' if dim == 3 else 'length']}"
-        )
-        figure += f", blocked force {s['blocked_force']:.4g}{force}"
+    if "blocked_force" in s:  # a force (per unit depth in 2D)
+        figure += f", blocked force {s['blocked_force']:.4g}{'' if s['units'] is None else ' ' + s['units']['force']}"
     stopped = s.get("stopped")
     if stopped:  # the pressure with no equilibrium and the last equilibrium's (simulate.settle's words)
         where = re.search(r"no equilibrium at (.*?) after", stopped["message"])

@@ -61,6 +61,12 @@ RESULTS_PAGES = {
         ("benchmarks/scaling.py", "scaling"),
         "python benchmarks/scaling.py --out benchmarks/results",
     ),
+    "scenes": (
+        "scenes",
+        "Every shipped scene as shipped: its exit status, increments, Newton iterations and headline figures",
+        ("benchmarks/scenes.py", None),
+        "python benchmarks/scenes.py",
+    ),
     "bench_solid": (
         "performance",
         "3D: the cost of a Newton iteration on tetrahedra",
@@ -304,7 +310,7 @@ def docstring_of(path: str, function: str | None) -> str:
 
 
 def results_pages() -> dict[str, str]:
-    pages = {"performance": [], "accuracy": [], "stability": []}
+    pages: dict[str, list[str]] = {"performance": [], "accuracy": [], "stability": [], "scenes": []}
     for path in sorted(RESULTS.glob("*.md")):
         page, title, (source, function), command = RESULTS_PAGES.get(
             path.stem, ("performance", path.stem, (None, None), "the script named in its JSON")

@@ -116,7 +116,7 @@ class Result(Run):
             "solve_seconds_per_step": float(seconds.mean()) if len(seconds) else 0.0,
             "steps": len(self.steps),
             "interrupted": interrupted,
-            "units": self.scene.units.summary(),
+            "units": self.scene.units.summary(self.mesh.dim),
         }
 
     def obstacle_positions(self) -> np.ndarray:

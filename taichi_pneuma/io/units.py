@@ -170,11 +170,13 @@ class Units:
         length, pressure, _ = EXPONENTS[dimension][dim - 2]
         return self.metre**length * self.pascal**pressure
 
-    def summary(self) -> dict | None:
-        """The summary JSON's "units" entry: the system and each dimension's unit (None when unitless)."""
+    def summary(self, dim: int = 2) -> dict | None:
+        """The summary JSON's "units" entry for a body of dimension dim: the system and each dimension's unit
+        (a force is per unit depth in 2D, a force in 3D); None when unitless."""
         if self.name is None:
             return None
-        return {"system": self.name, **{d: self.symbol(d) for d in (LENGTH, AREA, PRESSURE, FORCE, ANGLE, TIME)}}
+        symbols = {d: self.symbol(d) for d in (LENGTH, AREA, PRESSURE, FORCE, ANGLE, TIME)}
+        return {"system": self.name, **symbols, FORCE: self.symbol(in_dimension(FORCE, dim))}
 
 
 UNITLESS = Units()
