@@ -8,11 +8,12 @@ import imageio_ffmpeg
 from renderers import SOFTWARE
 
 import taichi_pneuma as tp
+from taichi_pneuma.apps.cli import MIN_FRAME_3D
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.scene.shipped import shipped
 
 DIMENSIONS = {name: tp.load_scene(name).dim for name in shipped()}
-SIZE = {2: (192, 96), 3: (384, 192)}  # a 3D frame's views need 64x64 each
+SIZE = {2: (192, 96), 3: MIN_FRAME_3D}  # the smallest 3D frame the apps take
 
 
 def runs_and_writes_its_pictures(name: str, flags: list[str], out, capsys) -> None:

@@ -185,3 +185,10 @@ def test_step_lines_are_whole_lines_when_output_is_not_a_terminal(tmp_path, caps
     steps = [line for line in captured.out.splitlines() if line.startswith("  step")]
     assert [line.split()[1] for line in steps] == ["0/3", "1/3", "2/3", "3/3"]
     assert all(line.rstrip().endswith(tuple("0123456789")) for line in steps)  # each ends with its residual
+
+
+def test_a_3d_frame_too_small_for_its_layout_is_refused_before_the_solve(tmp_path, capsys):
+    """beam_3d at 320x160 (its view would be 68x14 pixels): exit 2 naming the smallest size, no result file."""
+    assert main(["--scene", "beam_3d", "--size", "320x160", "--out", str(tmp_path / "out")]) == 2
+    assert "at least 384x192" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

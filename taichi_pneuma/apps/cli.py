@@ -200,8 +200,12 @@ def add_video_arguments(p: argparse.ArgumentParser, size: str) -> None:
     )
 
 
-def rendering_flags(args: argparse.Namespace) -> tuple[int, int]:
-    """Check the rendering flags before any work, and create the directory of --video (so a path in a new
+MIN_FRAME_3D = (384, 192)  # the smallest 3D frame tests/test_shipped_runs_3d.py draws every shipped 3D scene in
+
+
+def rendering_flags(args: argparse.Namespace, dim: int = 2) -> tuple[int, int]:
+    """Check the rendering flags before any work (a 3D scene's frame at least MIN_FRAME_3D: its header, colour bar
+    and trace panel beside a view of 64 x 64 pixels), and create the directory of --video (so a path in a new
     directory works, and one that cannot be written fails now, not after the solve); return --size
     'WIDTHxHEIGHT' as (width, height)."""
     from pathlib import Path
@@ -212,6 +216,12 @@ def rendering_flags(args: argparse.Namespace) -> tuple[int, int]:
     check_video(args.video or "default.mp4", args.fps)  # type: ignore[arg-type]
     width, height = frame_size(args.size, "--size")
     limits.check_frame(width, height, args.max_frame_pixels)
+    if dim == 3 and not args.no_video:
+        require(
+            width >= MIN_FRAME_3D[0] and height >= MIN_FRAME_3D[1],
+            f"--size {width}x{height} is too small for a 3D scene's frame: use at least "
+            f"{MIN_FRAME_3D[0]}x{MIN_FRAME_3D[1]} (its header, colour bar and trace panel beside the 3D view)",
+        )
     if args.video and not args.no_video:
         prepare_directory(Path(args.video).parent)
     return width, height

@@ -98,7 +98,7 @@ def run(args: argparse.Namespace) -> dict:
     scene = scene_of_flags(args)
     # a scene's name is a plain file name (Scene checks it): every result file lands inside --out
     stem = result_stem(scene.name if args.scene else f"inflate_cy{args.cy:+.2f}", args, scene)
-    size = rendering_flags(args)
+    size = rendering_flags(args, scene.geometry.dim)
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
     if args.interactive:
         require(
@@ -183,8 +183,8 @@ def report_and_save(
     for name, c in final.chambers.items():
         print(
             f"{name}: {MEASURE[result.mesh.dim]} {c.area / c.area_ratio:.3f} -> {c.area:.3f}{measure} "
-            f"(x{c.area_ratio:.2f}), pressure {c.pressure:.1f}{pressure}; over the run "
-            f"{span(f'{name}.area_ratio', 'x{:.2f}')}, pressure {span(f'{name}.pressure', '{:.1f}' + pressure)}"
+            f"(x{c.area_ratio:.2f}), pressure {c.pressure:.4g}{pressure}; over the run "
+            f"{span(f'{name}.area_ratio', 'x{:.2f}')}, pressure {span(f'{name}.pressure', '{:.4g}' + pressure)}"
         )
     turn, turn_over_run = TURN_WORDS[result.mesh.dim]
     beyond_y = "".join(f"tip dz {dz:+.4f}{length}; " for dz in final.tip[2:])
@@ -195,7 +195,7 @@ def report_and_save(
     )
     tip = [f"{column[4:]} {span(column, '{:+.4f}' + length)}" for column in TIP_COLUMNS[: result.mesh.dim]]
     print(f"tip over the run: {', '.join(tip)}; {turn_over_run} {span('tip_rotation', '{:+.1f}')} deg")
-    print(f"peak chamber pressure |p|: {result.peak_pressure:.1f}{pressure}")
+    print(f"peak chamber pressure |p|: {result.peak_pressure:.4g}{pressure}")
     print(
         f"largest principal stretch: {summary['max_stretch']:.2f} (step {summary['max_stretch_step']}; a run past "
         f"max_stretch = {summary['max_stretch_limit']:g} warns)"

@@ -207,7 +207,7 @@ def run(args: argparse.Namespace) -> dict:
     lo, hi = command_bounds(scene)
     targets = targets_of(args, scene, required=not args.interactive)
     options = ReachOptions(args.tip_tol, args.angle_tol, restarts=args.restarts)
-    size = rendering_flags(args)
+    size = rendering_flags(args, scene.dim)
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
     if args.interactive:
         require(scene.dim == 2, "--interactive reach works on 2D scenes (drag a target in the plane)")
