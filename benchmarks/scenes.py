@@ -69,7 +69,8 @@ def row(record: dict) -> str:
     dim, elements = (3, s["tetrahedra"]) if "tetrahedra" in s else (2, s["triangles"])
     kind = ("quadratic " if s["element_order"] == 2 else "") + ("tetrahedra" if dim == 3 else "triangles")
     unit = "" if s["units"] is None else f" {s['units']['length']}"
-    figure = f"tip dy {shown(s['tip_deflection'])}{unit} at {s['tip_at']}, bending angle {s['tip_rotation_deg']:+.1f} deg"
+    figure = f"tip dy {shown(s['tip_deflection'])}{unit} at {s['tip_at']}"
+    figure += f", bending angle {s['tip_rotation_deg']:+.1f} deg"
     peak = max((s["extremes"]["tip_dy"][k] for k in ("min", "max")), key=abs)
     step = s["extremes"]["tip_dy"]["min_step" if peak == s["extremes"]["tip_dy"]["min"] else "max_step"]
     if step != s["steps"] - 1:  # a ramp that returns (pneunet_finger, pneunet_3d): its peak too

@@ -262,4 +262,4 @@ def test_an_out_and_back_schedule_reports_the_curl_it_reached(tmp_path, capsys):
     assert dy["min"] == history["tip_dy"].min() < -2
     assert summary["extremes"]["c3.pressure"] == {"min": 0.0, "min_step": 0, "max": 900.0, "max_step": 10}
     assert f"rotation {rotation['min']:+.1f} (step {rotation['min_step']})" in printed
-    assert "c3: area 0.194 -> 0.194 (x1.00), pressure 0.0; over the run" in printed
+    assert "c3: area 0.194 -> 0.194 (x1.00), pressure 0; over the run" in printed

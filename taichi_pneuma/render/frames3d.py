@@ -43,7 +43,7 @@ from .camera import Camera
 from .colours import BACKGROUND, COLORBAR_PX, OBSTACLE_FILL, colormap
 from .section import AXES, Section, plane_facing, section_of
 from .surface import NumpyView, shade_faces
-from .text import LINE_PX, MARGIN_PX, Label, draw_labels, label_box
+from .text import LINE_PX, MARGIN_PX, Label, draw_labels
 from .ticks import colorbar_ticks, tick_label
 from .trace3d import TracePanel
 
@@ -59,6 +59,7 @@ CLAMP = (0.85, 0.2, 0.35)
 GROUND = (0.78, 0.76, 0.72)
 LIFT = 0.35  # a field's colour: (1 - LIFT) map + LIFT white
 TRACE_SHARE = 0.36  # of the frame's width
+MIN_VIEW_PX = 64  # the smallest 3D view (open_view); a smaller frame drops its trace panel, then its key line
 EDGE_PX = 1.5  # an obstacle's edges
 FRAME_CAMERA = Camera(azimuth=-35.0)  # from the clamped end's side (scenes clamp the left end): the clamp in view
 
@@ -211,7 +212,10 @@ def open_view(backend: str, width: int, height: int, show: bool = False, log=pri
     """A 3D view on `backend` ('numpy', 'ggui', or 'auto': GGUI when Vulkan is available, else NumPy),
     saying through log() which one (and why it fell back)."""
     require(backend in VIEWS, f"renderer = {backend!r} is not one of {', '.join(VIEWS)}")
-    require(width >= 64 and height >= 64, f"view size {width}x{height} must be at least 64x64")
+    require(
+        width >= MIN_VIEW_PX and height >= MIN_VIEW_PX,
+        f"view size {width}x{height} must be at least {MIN_VIEW_PX}x{MIN_VIEW_PX}",
+    )
     view: NumpyView | GGUIView
     if backend == "numpy":
         view = NumpyView(width, height)
@@ -292,11 +296,15 @@ class FrameRenderer3D:
             if cut
             else section_of(rest, track.boundary, walls, None, 0, np.inf, 1.0)  # a plane at infinity: all kept
         )
+        self.bar_px = COLORBAR_PX if track.color is not None else 0
         self.trace_px = int(TRACE_SHARE * width) if trace and track.trace else 0
-        self.key = self._place_key(self._key(cut), width - self.trace_px - MARGIN_PX)
+        if width - self.trace_px - self.bar_px < MIN_VIEW_PX:  # a narrow frame keeps the view, not the trace
+            self.trace_px = 0
+        self.key = guides3d.place_key(self._key(cut), width - self.trace_px - MARGIN_PX)
         lines = max((len(c) for c in track.captions or [()]), default=0) + bool(track.title)
         self.header_px = MARGIN_PX + LINE_PX * (lines + max((row + 1 for _, _, row in self.key), default=0))
-        self.bar_px = COLORBAR_PX if track.color is not None else 0
+        if height - self.header_px < MIN_VIEW_PX:  # a low frame keeps the view, not the key line
+            self.key, self.header_px = [], MARGIN_PX + LINE_PX * lines
         view_size = (width - self.trace_px - self.bar_px, height - self.header_px)
         self.canvas = view or open_view(backend, *view_size, log=log)
         require(
@@ -410,31 +418,6 @@ class FrameRenderer3D:
         """Frame i as an (height, width, 3) uint8 image, text included."""
         image, labels, _ = self.compose(i)
         return draw_labels(image, labels)
-
-    @staticmethod
-    def _place_key(key: list[tuple[str, tuple]], limit: float) -> list[tuple[Label, float, int]]:
-        """The key's pieces side by side, a piece that does not fit on the line going to the next, and one longer than
-        a line wrapped at words, so that none passes pixel column limit: (label, its x, its line)."""
-
-        def width(text: str) -> float:
-            box = label_box(Label(text, 0.0, 0.0))
-            return box[2] - box[0]
-
-        placed, x, row = [], float(MARGIN_PX), 0
-        for text, color in key:
-            words = text.split(" ")
-            while words:
-                if x > MARGIN_PX and x + width(" ".join(words)) > limit:  # the rest of the piece to the next line
-                    x, row = float(MARGIN_PX), row + 1
-                take = len(words)
-                while take > 1 and x + width(" ".join(words[:take])) > limit:
-                    take -= 1
-                chunk, words = " ".join(words[:take]), words[take:]
-                placed.append((Label(chunk, x, 0.0, "la", color), x, row))
-                x += width(chunk) + 16
-                if words:
-                    x, row = float(MARGIN_PX), row + 1
-        return placed
 
     def _header(self, i: int) -> list[Label]:
         """The title, step i's captions and the key, a line each (the key's pieces side by side)."""

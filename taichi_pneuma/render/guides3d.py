@@ -21,7 +21,7 @@ import numpy as np
 from .camera import Camera
 from .scalebar import scale_bar
 from .surface import rasterise
-from .text import MARGIN_PX, Label
+from .text import MARGIN_PX, Label, label_box
 
 AXIS_PX = 26
 AXIS_COLORS = ((0.8, 0.15, 0.1), (0.1, 0.55, 0.15), (0.1, 0.3, 0.85))
@@ -162,3 +162,28 @@ def quiet_corners(points: np.ndarray, camera: Camera, width: int, height: int, u
 
 def _rgb8(color) -> np.ndarray:
     return (np.asarray(color) * 255 + 0.5).astype(np.uint8)
+
+
+def place_key(key: list[tuple[str, tuple]], limit: float) -> list[tuple[Label, float, int]]:
+    """The key's pieces side by side, a piece that does not fit on the line going to the next, and one longer than
+    a line wrapped at words, so that none passes pixel column limit: (label, its x, its line)."""
+
+    def width(text: str) -> float:
+        box = label_box(Label(text, 0.0, 0.0))
+        return box[2] - box[0]
+
+    placed, x, row = [], float(MARGIN_PX), 0
+    for text, color in key:
+        words = text.split(" ")
+        while words:
+            if x > MARGIN_PX and x + width(" ".join(words)) > limit:  # the rest of the piece to the next line
+                x, row = float(MARGIN_PX), row + 1
+            take = len(words)
+            while take > 1 and x + width(" ".join(words[:take])) > limit:
+                take -= 1
+            chunk, words = " ".join(words[:take]), words[take:]
+            placed.append((Label(chunk, x, 0.0, "la", color), x, row))
+            x += width(chunk) + 16
+            if words:
+                x, row = float(MARGIN_PX), row + 1
+    return placed
