@@ -16,6 +16,7 @@ from taichi_pneuma.live import interactive3d
 from taichi_pneuma.live.interactive3d import Slider, commands_from, dragged, explore_3d
 from taichi_pneuma.render.camera import MAX_ELEVATION, Camera
 from taichi_pneuma.render.frames3d import CHAMBER, FrameRenderer3D, Track3D, body_colormap, open_view, render_video_3d
+from taichi_pneuma.render.ggui3d import BLANK_RETRIES
 from taichi_pneuma.render.surface import AMBIENT, BACK_FACE, SPECULAR, NumpyView, rasterise, shade_faces
 from taichi_pneuma.render.text import LINE_PX
 
@@ -177,6 +178,25 @@ def test_ggui_scene_draws_what_the_rasteriser_draws(finger):
     assert np.count_nonzero(drawn_a ^ drawn_b) < 0.01 * np.count_nonzero(drawn_a)
     both = drawn_a & drawn_b
     assert np.median(np.abs(a[both] - b[both])) < 2 / 255 and np.mean(np.abs(a[both] - b[both]) > 0.05) < 0.03
+
+
+def test_a_frame_ggui_gives_back_blank_is_drawn_again_then_by_the_rasteriser(finger, monkeypatch):
+    """GGUI handing back only background (seen under load) for a frame with the body in view: drawn again, and
+    after the retries by the NumPy rasteriser, counted; never a picture without its body."""
+    renderer = FrameRenderer3D(finger, 640, 400, backend="numpy", trace=False)
+    corners, colors = renderer.triangles(2)
+    expected = renderer.canvas.render(corners, colors, renderer.camera, (1, 1, 1))
+    ggui = ggui_or_skip(renderer.canvas.width, renderer.canvas.height)
+    reads = []
+    blank = np.ones((ggui.width, ggui.height, 4), np.float32)  # (GGUI's buffer is column-major: rotated back)
+    monkeypatch.setattr(ggui.window, "get_image_buffer_as_numpy", lambda: reads.append(1) or blank)
+    try:
+        image = ggui.render(corners, colors, renderer.camera, (1, 1, 1))
+        empty = ggui.render(corners[:0], colors[:0], renderer.camera, (1, 1, 1))  # nothing in view: blank is right
+    finally:
+        ggui.close()
+    assert len(reads) == 1 + BLANK_RETRIES + 1 and ggui.blank_frames == 1
+    assert np.array_equal(image, expected) and np.all(empty == 1.0)
 
 
 def view_of(renderer, image):

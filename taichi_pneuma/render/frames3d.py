@@ -483,4 +483,6 @@ def render_video_3d(
     try:
         return export(renderer, Path(video), None if png is None else Path(png), fps, quiet, png_frame)
     finally:
+        if getattr(renderer.canvas, "blank_frames", 0):
+            log(f"GGUI gave back {renderer.canvas.blank_frames} frame(s) blank: the NumPy rasteriser drew them")
         renderer.canvas.close()

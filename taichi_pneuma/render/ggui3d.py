@@ -15,6 +15,9 @@ import numpy as np
 from .. import runtime
 from ..backend import ti
 from .camera import Camera
+from .surface import NumpyView
+
+BLANK_RETRIES = 2  # draws again of a frame that came back blank before the NumPy rasteriser draws it
 
 
 class GGUIView:
@@ -30,6 +33,7 @@ class GGUIView:
         self.scene = self.window.get_scene()
         self.camera = ti.ui.Camera()
         self._fields: dict[tuple[str, int], ti.Field] = {}
+        self.blank_frames = 0  # frames GGUI gave back blank, drawn by the NumPy rasteriser instead (render)
 
     def _field(self, name: str, values: np.ndarray):
         """A float32 3-vector field holding values (k, 3), reused while k stays the same."""
@@ -63,11 +67,21 @@ class GGUIView:
         self.canvas.scene(self.scene)
 
     def render(self, corners: np.ndarray, colors: np.ndarray, camera: Camera, background) -> np.ndarray:
-        """The (height, width, 3) float image of the triangles (draw(), then read back)."""
-        self.draw(corners, colors, camera, background)
-        image = np.rot90(self.window.get_image_buffer_as_numpy()[:, :, :3]).astype(float)
-        ti.set_logging_level(ti.WARN)
-        return np.clip(image, 0.0, 1.0)
+        """The (height, width, 3) float image of the triangles (draw(), then read back). Under load lavapipe has
+        been seen to hand back a frame of background only, the triangles missing: a frame with triangles in view
+        that comes back blank is drawn again (up to BLANK_RETRIES times), then by the NumPy rasteriser, so that a
+        picture never silently lacks the body."""
+        pixels, depth = camera.project(corners.reshape(-1, 3), self.width, self.height)
+        inside = (depth > 0) & np.all((pixels >= 0) & (pixels < (self.width, self.height)), axis=-1)
+        visible = bool(inside.any())  # a triangle corner in view: the frame cannot be background only
+        for _ in range(1 + BLANK_RETRIES):
+            self.draw(corners, colors, camera, background)
+            image = np.clip(np.rot90(self.window.get_image_buffer_as_numpy()[:, :, :3]).astype(float), 0.0, 1.0)
+            ti.set_logging_level(ti.WARN)
+            if not visible or np.abs(image - np.asarray(background, float)).max() > 1.5 / 255:
+                return image
+        self.blank_frames += 1
+        return NumpyView(self.width, self.height).render(corners, colors, camera, background)
 
     def close(self) -> None:
         """Destroy the window now (GGUI allows one live window per process)."""
