@@ -176,9 +176,11 @@ def report_and_save(
     extremes = summary["extremes"]
 
     def span(column: str, text: str) -> str:
-        """A column's range over the run: 'min (step i) to max (step j)', each value formatted by text."""
+        """A column's range over the run: 'min (step i) to max (step j)', each value formatted by text (round-off,
+        under 1e-9 of the range's larger end, as 0)."""
         e = extremes[column]
-        return f"{text.format(e['min'])} (step {e['min_step']}) to {text.format(e['max'])} (step {e['max_step']})"
+        lo, hi = (0.0 if abs(v) <= 1e-9 * max(abs(e["min"]), abs(e["max"])) else v for v in (e["min"], e["max"]))
+        return f"{text.format(lo)} (step {e['min_step']}) to {text.format(hi)} (step {e['max_step']})"
 
     for name, c in final.chambers.items():
         print(
