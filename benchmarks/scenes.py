@@ -34,18 +34,9 @@ def run(name: str, scratch: Path) -> dict:
     """One shipped scene through the command line: its exit status, wall time and summary (None without one)."""
     out = scratch / name
     start = time.perf_counter()
+    command = [sys.executable, "-m", "taichi_pneuma.apps.inflate", "--scene", name, "--no-video", "--quiet"]
     done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "taichi_pneuma.apps.inflate",
-            "--scene",
-            name,
-            "--no-video",
-            "--quiet",
-            "--out",
-            str(out),
-        ],
+        [*command, "--out", str(out)],
         capture_output=True,
         text=True,
         check=False,
