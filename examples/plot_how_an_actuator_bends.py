@@ -41,7 +41,7 @@ ax.annotate(
     arrowprops={"arrowstyle": "->"},
 )
 ax.axhline(0.0, color="0.7", lw=0.8)
-ax.set(xlabel="chamber area / rest area", ylabel="tip deflection (mean y displacement of the right edge)")
+ax.set(xlabel="chamber area / rest area", ylabel="tip deflection dy (the right edge's mean)")
 ax.legend()
 
 # %%
