@@ -139,6 +139,12 @@ RESULTS_PAGES = {
         ("benchmarks/accuracy_3d.py", None),
         "python benchmarks/accuracy_3d.py",
     ),
+    "pneunet_vs_fiber": (
+        "accuracy",
+        "A PneuNet against the fibre-reinforced actuator: same length, silicone, sheet and ramp",
+        ("benchmarks/pneunet_vs_fiber.py", None),
+        "python benchmarks/pneunet_vs_fiber.py",
+    ),
     "actuators": (
         "accuracy",
         "The shipped 3D actuators: bending angle, blocked force and twist against pressure, mesh convergence",
