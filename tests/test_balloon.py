@@ -118,3 +118,19 @@ def test_pressure_control_stops_at_the_peak_as_planned(runs, tmp_path):
     summary = json.loads((tmp_path / "balloon_pressure_summary.json").read_text())
     assert summary["stopped"] == {"step": int(match[1]), "reason": "limit point", "message": lines[0].split(": ", 1)[1]}
     assert summary["steps"] == int(match[1]) and summary["tip_at"] == "the tip (box [-0.5, 0.5, 0.5, 2])"
+
+
+def test_a_declared_limit_point_is_not_taken_for_a_ramp_that_fails_before_it_softens(tmp_path):
+    """balloon_pressure with one Newton iteration per increment and no cut-back fails far below its peak, its
+    compliance dV/dp barely changed: that is no limit point, so it is refused as any failed ramp (exit 1), saying
+    why, with the steps done written."""
+    err, printed = io.StringIO(), io.StringIO()
+    with redirect_stderr(err), redirect_stdout(printed):
+        code = main(
+            ["--scene", "balloon_pressure", "--out", str(tmp_path), "--no-video", "--quiet"]
+            + ["--max-iterations", "2", "--max-cuts", "0"]
+        )
+    assert code == 1 and "no equilibrium" in err.getvalue()
+    assert "not a limit point" in printed.getvalue() and "stopped at the limit point" not in printed.getvalue()
+    summary = json.loads((tmp_path / "balloon_pressure_summary.json").read_text())
+    assert summary["stopped"]["reason"] == "no equilibrium"

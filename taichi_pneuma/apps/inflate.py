@@ -33,6 +33,8 @@ import os
 import sys
 from typing import TYPE_CHECKING, cast
 
+import numpy as np
+
 from .. import runtime
 from ..errors import require
 from ..fem.tip import COLUMNS as TIP_COLUMNS
@@ -150,7 +152,13 @@ def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, 
             written.append(save_json(out / f"{stem}_summary.json", done.summary(interrupted=True)))
             print(f"saved the {len(done.steps)} steps done in " + ", ".join(str(p) for p in written))
             raise
-        planned = built.scene.ends_at_limit_point
+        planned = built.scene.ends_at_limit_point and softened(done)
+        if built.scene.ends_at_limit_point and not planned:
+            print(
+                f"the scene declares that its ramp ends at a limit point, but no chamber softened before the stop "
+                f"(its compliance d measure / d pressure did not reach {SOFTENING:g} times its first): not a limit "
+                f"point"
+            )
         if planned:  # the step, the pressure with no equilibrium and the last equilibrium's (simulate.settle's words)
             print(f"stopped at the limit point, as the scene plans (schedule.ends_at_limit_point): {stopped}")
         reason = "limit point" if planned else "no equilibrium"
@@ -159,6 +167,23 @@ def solve_and_save(args: argparse.Namespace, built, stem: str, size: tuple[int, 
         if not planned:
             raise
         return summary
+
+
+SOFTENING = 3.0  # a limit point's sign: the last secant compliance dV/dp this many times the first, or more
+
+
+def softened(result: Result) -> bool:
+    """Whether the run softened towards its stop as a structure does at a limit point, where dV/dp -> infinity:
+    for some chamber, the secant compliance (V_k - V_(k-1)) / (p_k - p_(k-1)) of the last increment done is at least
+    SOFTENING times that of the first (two increments at least; increments with no pressure change skipped)."""
+    measure, pressure = np.asarray(result.area), np.asarray(result.pressure)
+    for v, p in zip(measure.T, pressure.T):
+        dv, dp = np.diff(v), np.diff(p)
+        moving = np.abs(dp) > 1e-12 * max(np.abs(p).max(), 1e-300)
+        compliance = dv[moving] / dp[moving]
+        if len(compliance) >= 2 and compliance[0] > 0 and compliance[-1] >= SOFTENING * compliance[0]:
+            return True
+    return False
 
 
 def report_and_save(
