@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import re
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -142,6 +143,16 @@ def test_the_scale_bar_is_a_round_length_in_the_scenes_unit_where_no_step_is(are
     )  # drawn, not background
     assert abs(np.count_nonzero(row) - (ends[1, 0] - ends[0, 0])) <= 3
     assert label in [text.text for text in renderer.draw(0)]
+
+
+def test_chambers_at_one_pressure_over_the_run_show_it_once_in_the_header(area_run):
+    """Three chambers at one pressure all run: 'p = 75.2 kPa (all 3)'; once one differs at any step, each its own."""
+    track = curled_track(area_run.mesh, (" mm", " mm^2", " kPa"))
+    ramp = np.linspace(0, 75.2, len(track.states))[:, None]
+    shared = replace(track, pressure=np.hstack([ramp] * 3), area_ratio=np.ones((len(ramp), 3)), area=None)
+    assert shared.header(5)[1].startswith("p = 75.2 kPa (all 3)   tip dy")
+    apart = replace(shared, pressure=np.hstack([ramp, ramp, ramp * (1 + 1e-6 * (ramp > 30))]))
+    assert apart.header(5)[1].startswith("p = 75.2, 75.2, 75.2 kPa   tip dy")
 
 
 def test_a_header_with_units_says_them_and_the_rest_shape_is_a_ghost(area_run):

@@ -115,13 +115,19 @@ class Track:
 
     def header(self, i: int) -> list[str]:
         """The lines above the body at step i (a title may have several, split at newlines). In a scene with
-        units the areas, pressures and the tip's deflection say their unit; without, areas are area ratios."""
+        units the areas, pressures and the tip's deflection say their unit; without, areas are area ratios.
+        Chambers at one pressure over the whole run show it once ("p = 900.0 (all 6)")."""
         length, area, pressure = self.units
         if area and self.area is not None:
             areas = ", ".join(f"{a:.4g}" for a in self.area[i]) + area
         else:
             areas = ", ".join(f"x{r:.2f}" for r in self.area_ratio[i])
-        pressures = ", ".join(f"{p:.1f}" for p in self.pressure[i]) + pressure
+        shared = len(self.pressure[i]) > 1 and np.allclose(self.pressure, self.pressure[:, :1], rtol=1e-9, atol=0)
+        pressures = (  # chambers at one pressure over the whole run (a PneuNet's): it once
+            f"{self.pressure[i, 0]:.1f}{pressure} (all {len(self.pressure[i])})"
+            if shared
+            else ", ".join(f"{p:.1f}" for p in self.pressure[i]) + pressure
+        )
         tip = f"{self.tip_dy[i]:+.4g}{length}" if length else f"{self.tip_dy[i]:+.4f}"
         return (self.title.split("\n") if self.title else []) + [
             f"step {i}/{len(self.states) - 1}   area {areas}",
