@@ -15,8 +15,9 @@ A frame is laid out as
   the viewing direction (chosen once, at rest) and removes the camera's side: the surface is clipped at the
   plane and the cut face of every tetrahedron it crosses is drawn flat in that tetrahedron's colour, with holes
   where the chambers are (the inside of the far wall drawn darker, surface.BACK_FACE). The clamped faces (all
-  corners pinned) are drawn CLAMP; a ground plane y = ground grey; a box or plane obstacle as an opaque shaded
-  box or square with dark edges; the rest body's silhouette as a grey ghost behind (render.guides3d).
+  corners pinned) are drawn CLAMP; a ground plane y = ground grey; each obstacle opaque and shaded (a box or a
+  plane's square with dark edges; a sphere, cylinder or capsule as its surface); the rest body's silhouette as a
+  grey ghost behind (render.guides3d).
 - the colour bar: the field's scale with numbered ticks, its quantity and unit as one label above it;
 - the trace panel: up to two series against the step, the first on the left axis and the second on the
   right (e.g. chamber volume / rest volume and pressure), drawn once by matplotlib; a cursor marks the

@@ -1,5 +1,5 @@
 """What a 3D frame draws besides the body, to be read: the x-y-z axes, a scale bar, the rest shape's ghost, and
-rigid obstacles (a box, or a plane as a square) with their edges.
+rigid obstacles (a box, a plane as a square, a sphere, cylinder or capsule as a surface of revolution).
 
 - axes: a triad in the view's bottom-left corner (top-left where fewer of the body's nodes lie: quiet_corners),
   each world axis e drawn as the segment (e . r, -(e . u)) AXIS_PX long from one point (r, u the camera's right
@@ -9,9 +9,10 @@ rigid obstacles (a box, or a plane as a square) with their edges.
   (or top-right, as the axes);
 - the ghost: the pixels the rest body (cut as the frames are) covers (rasterised once), tinted GHOST_FILL where
   the frame shows the background, and its outline (covered pixels with an uncovered 4-neighbour) GHOST_EDGE;
-- obstacles (obstacle_geometry: a box as its box, a plane as a square, other shapes not drawn): opaque shaded
-  faces in the 3D scene (so the body hides them and they hide it where they should) and their edges as thin
-  quads facing the eye (segment_triangles), nudged towards it so they win over their faces.
+- obstacles (obstacle_geometry: a box as its box, a plane as a square, a sphere, cylinder or capsule as its profile
+  revolved about its axis, revolved()): opaque shaded faces in the 3D scene (so the body hides them and they hide it
+  where they should) and the edges of boxes and squares as thin quads facing the eye (segment_triangles), nudged
+  towards it so they win over their faces.
 """
 
 from __future__ import annotations
@@ -48,10 +49,47 @@ def square(point, normal, half: float) -> tuple[np.ndarray, np.ndarray]:
     return c[np.array([[0, 1, 2], [0, 2, 3]])], c[np.array([[0, 1], [1, 2], [2, 3], [3, 0]])]
 
 
+SEGMENTS = 32  # around a surface of revolution
+NO_EDGES = np.zeros((0, 2, 3))
+
+
+def revolved(center, axis, profile: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The surface swept by profile (k, 2): points (a, r) at a along the unit axis and r from it, from one pole
+    (r = 0) to the other, turned SEGMENTS times about the axis through center: triangles (f, 3, 3), no edges."""
+    a = np.asarray(axis, float)
+    u = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
+    u /= np.linalg.norm(u)
+    v = np.cross(a, u)
+    turn = np.linspace(0.0, 2 * np.pi, SEGMENTS + 1)
+    rings = (
+        np.asarray(center, float)
+        + profile[:, None, :1] * a
+        + profile[:, None, 1:] * (np.cos(turn)[None, :, None] * u + np.sin(turn)[None, :, None] * v)
+    )  # (k, SEGMENTS + 1, 3)
+    p, q = rings[:-1, :-1], rings[:-1, 1:]  # each quad between two rings and two turns: two triangles
+    r, s = rings[1:, 1:], rings[1:, :-1]
+    triangles = np.concatenate([np.stack([p, q, r], axis=2), np.stack([p, r, s], axis=2)]).reshape(-1, 3, 3)
+    area = 0.5 * np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]), axis=1)
+    return triangles[area > 0], NO_EDGES  # (the poles' quads have a side of length 0)
+
+
+def profile(shape) -> np.ndarray:
+    """A sphere's, cylinder's or capsule's (a, r) profile from pole to pole (obstacle_shapes' shapes): a half circle;
+    the flat caps and the side; a quarter circle, the side and a quarter circle."""
+    from ..terms.obstacle_shapes import Capsule, Sphere
+
+    radius, half = shape.radius, 0.0 if isinstance(shape, Sphere) else 0.5 * shape.length
+    quarter = np.linspace(0.0, np.pi / 2, SEGMENTS // 4 + 1)
+    if isinstance(shape, Sphere | Capsule):
+        cap = np.stack([-half - radius * np.cos(quarter), radius * np.sin(quarter)], axis=1)
+        return np.concatenate([cap, cap[::-1] * (-1, 1)])
+    return np.array([[-half, 0.0], [-half, radius], [half, radius], [half, 0.0]])
+
+
 def obstacle_geometry(result) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
-    """Each box or plane obstacle of a 3D run as triangles (steps, t, 3, 3) and edges (steps, e, 2, 3) at each
-    step (a plane: the square about its point as wide as the body is long); other shapes are not drawn."""
-    from ..terms.obstacle_shapes import Box, Plane
+    """Each obstacle of a 3D run as triangles (steps, t, 3, 3) and edges (steps, e, 2, 3) at each step (a plane: the
+    square about its point as wide as the body is long; a sphere, cylinder or capsule: revolved(), no edges)."""
+    from ..terms.obstacle_shapes import Box, Cylinder, Plane, Sphere, axis_vector
 
     reach = float(np.ptp(result.mesh.vertices, axis=0).max())
     drawn = []
@@ -61,8 +99,11 @@ def obstacle_geometry(result) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
             triangles, edges = box(p[:3] - p[3:6], p[:3] + p[3:6])
         elif isinstance(o.shape, Plane):
             triangles, edges = square(o.shape.point, o.shape.normal, reach)
+        elif isinstance(o.shape, Sphere):
+            triangles, edges = revolved(o.shape.center, (1.0, 0.0, 0.0), profile(o.shape))
         else:
-            continue
+            assert isinstance(o.shape, Cylinder), o.shape  # (and a Capsule: a Cylinder's subclass)
+            triangles, edges = revolved(o.shape.center, axis_vector(o.shape.axis), profile(o.shape))
         offsets = np.array([o.offset(s.step) for s in result.steps])[:, None, None]
         drawn.append((triangles + offsets, edges + offsets))
     return tuple(drawn)
