@@ -17,7 +17,7 @@ import numpy as np
 
 from taichi_pneuma import runtime
 from taichi_pneuma.control.inverse import Reacher, command_bounds
-from taichi_pneuma.live.interactive import fixed_view, follow_mouse
+from taichi_pneuma.realtime.interactive import fixed_view, follow_mouse
 from taichi_pneuma.render.canvases import GGUICanvas, GUICanvas
 from taichi_pneuma.render.frames import FrameRenderer, Track
 from taichi_pneuma.scene.scenefile import load_scene

@@ -6,6 +6,7 @@
     result = tp.simulate(scene, progress=True)        # a progress bar while it solves
     print(result.tip_deflection, result.tip_rotation, result.history["tip_dy"])
     result.save("out"); result.video("out/run.mp4"); result.plot()
+    view = tp.live("pneunet_finger")                  # in Jupyter: the scene live, sliders and all (the [web] extra)
 
 Taichi is initialised on the CPU by the first simulate() unless tp.init("cuda"), ... chose a backend.
 The names below are imported on first use, so `import taichi_pneuma` (and every app's --help) starts
@@ -31,6 +32,7 @@ _EXPORTS = {
     "Result": ".api",
     "Scene": ".scene",
     "init": ".runtime",
+    "live": ".realtime.web",
     "load_scene": ".api",
     "reference_scene": ".scene",
     "simulate": ".api",
@@ -43,6 +45,7 @@ __all__ = [
     "Scene",
     "__version__",
     "init",
+    "live",
     "load_scene",
     "reference_scene",
     "simulate",
@@ -51,6 +54,7 @@ __all__ = [
 if TYPE_CHECKING:
     from .api import Result, load_scene, simulate
     from .errors import PneumaInputError
+    from .realtime.web import live
     from .runtime import init
     from .scene.build import Scene, reference_scene
     from .solve.simulate import RampFailed, RampInterrupted

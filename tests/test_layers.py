@@ -23,7 +23,7 @@ LAYERS = (
     ("render",),
     ("result",),
     ("control",),
-    ("live",),
+    ("realtime",),
     ("api", "__init__"),
     ("study",),
     ("apps",),

@@ -225,7 +225,7 @@ def test_live_drag_resolves_on_every_move_and_sliders_command_directly(
 ):
     """Under Xvfb, in a real ti.GUI window; the canvas's mouse query is scripted (the button held at two
     target positions, then released) and on the last frame the 'top' slider returns a value the user set."""
-    from taichi_pneuma.live.interactive import fixed_view, follow_mouse
+    from taichi_pneuma.realtime.interactive import fixed_view, follow_mouse
     from taichi_pneuma.render.canvases import GUICanvas
 
     size = (480, 192)

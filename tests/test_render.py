@@ -253,7 +253,7 @@ def xvfb_display(monkeypatch):
 
 @needs_window
 def test_interactive_window_resolves_when_the_slider_moves(xvfb_display, monkeypatch, capsys):
-    from taichi_pneuma.live.interactive import explore
+    from taichi_pneuma.realtime.interactive import explore
 
     moves = iter([1.0, 1.0, 1.3, 1.3, 1.6])  # the slider's values on successive frames
     monkeypatch.setattr(canvases.GUICanvas, "slider", lambda self, label, value, low, high: next(moves))

@@ -12,8 +12,8 @@ from test_render import xvfb_display  # noqa: F401  (the virtual display fixture
 
 from taichi_pneuma.backend import has_ggui
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.live import interactive3d
-from taichi_pneuma.live.interactive3d import Slider, commands_from, dragged, explore_3d
+from taichi_pneuma.realtime import interactive3d
+from taichi_pneuma.realtime.interactive3d import Slider, commands_from, dragged, explore_3d
 from taichi_pneuma.render.camera import MAX_ELEVATION, Camera
 from taichi_pneuma.render.frames3d import CHAMBER, FrameRenderer3D, Track3D, body_colormap, open_view, render_video_3d
 from taichi_pneuma.render.ggui3d import BLANK_RETRIES

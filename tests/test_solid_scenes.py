@@ -354,8 +354,8 @@ def test_interactive_3d_scene_resolves_per_chamber_slider(xvfb_display, monkeypa
     toward the equilibrium at the slider's command, which a held slider reaches (all_converged)."""
     import taichi as ti
 
-    from taichi_pneuma.live import interactive3d
-    from taichi_pneuma.live.interactive import chamber_sliders, explore_solid
+    from taichi_pneuma.realtime import interactive3d
+    from taichi_pneuma.realtime.interactive import chamber_sliders, explore_solid
 
     try:
         ti.ui.check_ggui_availability()

@@ -114,11 +114,11 @@ def run(args: argparse.Namespace) -> dict:
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     if args.interactive and scene.geometry.dim == 3:
-        from ..live.interactive import explore_solid
+        from ..realtime.interactive import explore_solid
 
         return explore_solid(scene, size, newton_options(args), budget=budget(args))
     if args.interactive:
-        from ..live.interactive import explore
+        from ..realtime.interactive import explore
 
         return explore(scene, args.growth, size, args.renderer, newton_options(args), budget=budget(args))
     with lock_stems(out, stem):  # no other run writes these files meanwhile

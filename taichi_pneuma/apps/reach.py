@@ -218,7 +218,7 @@ def run(args: argparse.Namespace) -> dict:
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     if args.interactive:
-        from ..live.interactive import follow_mouse
+        from ..realtime.interactive import follow_mouse
 
         return follow_mouse(
             scene,

@@ -217,7 +217,8 @@ class LiveEquilibrium:
     def __init__(self, built, options: NewtonOptions | None = None):
         self.built, self.solver = built, NewtonSolver(built.model, options or NewtonOptions(tol=LIVE_TOL))
         self.u = np.zeros_like(built.mesh.vertices)
-        self.commands, self.residual, self.stuck, self.reuse = None, math.inf, False, False
+        self.commands: np.ndarray | None = None  # the commands the state is (converging to) the equilibrium at
+        self.residual, self.stuck, self.reuse = math.inf, False, False
         self.contraction = math.inf  # the last step's residual over its start's
         self.iterations = 0  # Newton steps taken since the commands last moved
 
@@ -225,11 +226,18 @@ class LiveEquilibrium:
     def converged(self) -> bool:
         return self.residual <= self.solver.options.tol
 
+    def hold(self, commands: np.ndarray, u: np.ndarray, residual: float) -> None:
+        """Take an equilibrium found elsewhere (an inverse-control reach) as the state at `commands`; the next
+        step takes a fresh Hessian."""
+        self.commands, self.u, self.residual = np.array(commands, dtype=float), u, residual
+        self.built.set_commands(self.commands)
+        self.iterations, self.stuck, self.reuse, self.contraction = 0, False, False, math.inf
+
     def frame(self, commands: np.ndarray) -> bool:
         """One frame's step at the commands; whether the state changed."""
         moved = self.commands is None or not np.array_equal(commands, self.commands)
         if moved:
-            self.commands = np.array(commands, dtype=float)  # type: ignore[assignment]
+            self.commands = np.array(commands, dtype=float)
             self.built.set_commands(self.commands)
             self.stuck, self.iterations = False, 0
         elif self.converged or self.stuck:

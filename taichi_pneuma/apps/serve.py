@@ -1,0 +1,81 @@
+"""The live simulator in a browser: serve one scene's body, live, to a web page, on this machine only.
+
+    pneuma-serve --scene pneunet_finger          (or python -m taichi_pneuma.apps.serve; needs the [web] extra)
+
+Builds the scene (a shipped scene's name or a scene file; without --scene the reference beam of the flags), then
+serves a page (live/web.py) with a slider per chamber command, play/pause of the scene's schedule, a gizmo to drag
+a target for the tip (inverse control), a field to colour the body by, the step's figures and frame rate, and a
+button that writes the equilibria reached so far to --out (<stem>_history.csv, _states.npz, _summary.json, ...,
+as pneuma-inflate writes a ramp). It listens on 127.0.0.1 and prints the page's URL with its token: open it in a
+browser here, or from another machine through an SSH tunnel (ssh -L PORT:localhost:PORT this-machine, then the
+same URL). Ctrl-C stops it; --seconds stops it after that long.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from .. import runtime
+from ..errors import require
+from ..io.output import prepare_directory
+from .cli import add_ramp_arguments, app_parser, budget, exit_code, newton_options, result_stem, scene_of_flags
+
+
+def parser() -> argparse.ArgumentParser:
+    p = app_parser("pneuma-serve", __doc__)
+    p.add_argument("--scene", help="a scene file (TOML) or the name of a shipped scene; default the reference beam")
+    p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="KEY=VALUE", help="change a dotted scene-file key (repeatable)"
+    )
+    p.add_argument("--port", type=int, default=8080, help="the port to listen on (0: a free one; taken: the next)")
+    p.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="the address to listen on; another than 127.0.0.1 opens the page (with its token) to the network",
+    )
+    p.add_argument("--field", default="max_stretch", help="the field the body is first coloured by")
+    p.add_argument("--seconds", type=float, default=None, help="stop after this many seconds (default: Ctrl-C)")
+    add_ramp_arguments(p)
+    return p
+
+
+def run(args: argparse.Namespace) -> dict:
+    try:
+        import viser  # noqa: F401
+    except ImportError:
+        require(False, 'pneuma-serve needs the web extra: pip install "taichi-pneuma[web]"')
+    from ..realtime.session import FIELDS, LiveSession
+    from ..realtime.web import WebView
+
+    require(args.field in FIELDS, f"--field {args.field!r} is not one of {', '.join(FIELDS)}")
+    require(0 <= args.port <= 65535, f"--port {args.port} is not one of 0 .. 65535")
+    require(args.seconds is None or args.seconds > 0, f"--seconds {args.seconds} must be > 0")
+    scene = scene_of_flags(args)
+    stem = result_stem(scene.name if args.scene else f"inflate_cy{args.cy:+.2f}", args, scene) + "_live"
+    out = prepare_directory(args.out)
+    runtime.init(args.arch)
+    session = LiveSession(scene, budget(args), None if args.tol is None else newton_options(args))
+    view = WebView(session, out, stem, args.host, args.port, args.field)
+    if args.host not in ("127.0.0.1", "localhost"):
+        print(f"warning: listening on {args.host}: anyone who can reach it and has the URL can steer this scene")
+    print(f"scene {scene.name}: {session.mesh.n_vertices} nodes; the live page (keep its token private):")
+    print(f"  {view.url}", flush=True)
+    print(f"from another machine: ssh -L {view.port}:localhost:{view.port} <this machine>, then the same URL")
+    ends = None if args.seconds is None else time.monotonic() + args.seconds
+    try:
+        view.run(until=None if ends is None else lambda: time.monotonic() >= ends)
+    finally:
+        view.stop()
+    print(f"served {view.frames} frames; the states kept: {len(session.steps)}")
+    return {"all_converged": True}
+
+
+def main(argv: list[str] | None = None) -> int:
+    return exit_code(run, parser().parse_args(argv))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

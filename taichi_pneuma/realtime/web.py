@@ -1,0 +1,310 @@
+"""The live simulator in a browser: a viser page (viser: a web viewer of three.js scenes with GUI controls, served
+from Python over a websocket) showing a LiveSession's body as it converges, with its controls.
+
+The page has a slider per chamber command, a "play the schedule" box, a field to colour the body by, a gizmo to
+drag a target for the tip (inverse control: the chambers follow), the step's figures (tip, rotation, pressures,
+Newton iterations, residual, frames per second) and a button that saves the equilibria kept so far like
+Result.save; the view turns and zooms with the mouse (2D bodies lie in the z = 0 plane, seen from +z).
+
+A thread runs the session: each frame it applies what the page asked (under a lock the page's callbacks take
+briefly), takes one step (LiveSession.advance) and publishes the body as a glTF mesh with a colour per node.
+Publishing only queues a message; viser keeps, per scene node, only the newest message not yet sent to a
+client, so a slow client skips frames and never holds the solver back.
+
+Safe by default: the server listens on 127.0.0.1 only; a websocket connection is refused unless its URL carries
+the page's token (secrets.token_urlsafe, printed in the URL as Jupyter prints its own), so another user of the
+machine cannot watch or steer the scene; the page serves the one scene it was started with and takes no uploads.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import html
+import math
+import secrets
+import threading
+import time
+from collections import deque
+from typing import cast
+from urllib.parse import parse_qs, quote, urlsplit
+
+import numpy as np
+
+from ..errors import require
+from ..io.units import LENGTH, PRESSURE
+from ..render.colours import FACE, colormap
+from .session import FIELDS, LiveSession
+
+FPS_WINDOW = 2.0  # seconds of frames the frame rate is measured over
+IDLE_SECONDS = 0.02  # the loop's pause when nothing changed (a settled state)
+RED = (200, 40, 40)
+
+
+def page_url(host: str, port: int, token: str) -> str:
+    """The page's address: viser's client, told to open its websocket at the same address with the token."""
+    socket = f"ws://{host}:{port}/?token={token}"
+    return f"http://{host}:{port}/?websocket={quote(socket, safe=':/')}"
+
+
+def token_of(path: str) -> str:
+    """The token in a websocket request's path ('/?token=...'), '' if none."""
+    return parse_qs(urlsplit(path).query).get("token", [""])[0]
+
+
+class WebView:
+    """A LiveSession served as a page (see the module docstring); start() runs it, stop() ends it.
+
+    out, stem: where the save button writes (out/<stem>_*); host, port: where the server listens (port 0: a free
+    one); field: the FIELDS key the body is first coloured by; token: the URL's token (a fresh random one by
+    default)."""
+
+    def __init__(
+        self,
+        session: LiveSession,
+        out="out",
+        stem: str | None = None,
+        host: str = "127.0.0.1",
+        port: int = 8080,
+        field: str = "max_stretch",
+        token: str | None = None,
+    ):
+        import viser
+
+        require(field in FIELDS, f"field {field!r} is not one of {', '.join(FIELDS)}")
+        require(0 <= port <= 65535, f"port {port} is not one of 0 .. 65535")
+        self.session, self.out, self.stem = session, out, stem or session.scene.name
+        self.field, self.token, self.host = field, token or secrets.token_urlsafe(16), host
+        self.lock, self.stopping = threading.Lock(), threading.Event()
+        self.frames, self.fps, self.published = 0, 0.0, 0
+        self.height = 560  # a notebook's iframe height (pixels)
+        self.task: asyncio.Task | None = None  # the notebook's frame task (live)
+        self._times: deque[float] = deque()
+        self._range: tuple[float, float] | None = None  # the colour scale, widened as the field grows
+        self._redraw, self._save_asked = True, False  # what the page asked that the next frame does
+        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self._gate_connections()
+        self.server.scene.set_up_direction("+y")
+        self._controls()
+        self._place_camera()
+
+    @property
+    def port(self) -> int:
+        return self.server.get_port()
+
+    @property
+    def url(self) -> str:
+        return page_url(
+            "127.0.0.1" if self.host in ("127.0.0.1", "localhost", "0.0.0.0") else self.host, self.port, self.token
+        )
+
+    def _gate_connections(self) -> None:
+        """Refuse a websocket whose URL lacks the token: closed (policy violation) before any message is sent."""
+        sockets = self.server._websock_server  # viser's websocket server: its raw connections carry the request
+
+        async def gate(client) -> None:
+            connection = sockets._live_connections[client.client_id]  # registered before the connect callbacks
+            path = connection.request.path if connection.request is not None else ""
+            if not secrets.compare_digest(token_of(path), self.token):
+                await connection.close(1008, "this page needs the URL with its token")
+
+        sockets.on_client_connect(gate)
+
+    def _controls(self) -> None:
+        """The page's panel: sliders, play, field, figures, save; the clamp's nodes and the target's gizmo."""
+        gui, session, scene = self.server.gui, self.session, self.server.scene
+        mesh = session.mesh
+        gui.add_markdown(f"**{session.scene.name}**: {mesh.n_vertices} nodes, {mesh.n_elements} elements")
+        self.sliders = []
+        with gui.add_folder("chambers"):
+            for j, s in enumerate(session.sliders):
+                slider = gui.add_slider(
+                    s.name, min=s.low, max=s.high, step=(s.high - s.low) / 400, initial_value=s.value
+                )
+                slider.on_update(self._slider_moved(j))
+                self.sliders.append(slider)
+        self.play = gui.add_checkbox("play the schedule", initial_value=False)
+        self.play.on_update(lambda event: self._locked(session.play, event.target.value))
+        self.field_menu = gui.add_dropdown("colour by", tuple(FIELDS), initial_value=self.field)
+        self.field_menu.on_update(lambda event: self._set_field(event.target.value))
+        self.figures = gui.add_markdown("starting ...")
+        save = gui.add_button("save state")
+        save.on_click(lambda _: self._locked(setattr, self, "_save_asked", True))
+        self.saved = gui.add_markdown("")
+        rest = self._points(mesh.vertices)
+        scene.add_point_cloud("/clamp", rest[mesh.pinned], colors=RED, point_size=0.004 * self._extent())
+        tip = rest[mesh.tip].mean(axis=0)
+        self.target = scene.add_transform_controls(
+            "/target",
+            scale=0.15 * self._extent(),
+            disable_rotations=True,
+            active_axes=(True, True, mesh.dim == 3),
+            position=tip,
+        )
+        self.target.on_update(lambda event: self._locked(session.aim, event.target.position))
+
+    def _extent(self) -> float:
+        rest = self.session.mesh.vertices
+        return float(np.ptp(rest, axis=0).max())
+
+    def _place_camera(self) -> None:
+        """Look at the rest body from +z (and, in 3D, from above and the side), far enough to see it whole."""
+        rest = self._points(self.session.mesh.vertices)
+        centre, extent = (rest.min(axis=0) + rest.max(axis=0)) / 2, self._extent()
+        direction = np.array([0.0, 0.0, 1.0]) if self.session.mesh.dim == 2 else np.array([0.5, 0.6, 1.0])
+        camera = self.server.initial_camera
+        camera.look_at = tuple(centre)
+        camera.position = tuple(centre + 1.1 * extent * direction / np.linalg.norm(direction))
+
+    def _points(self, positions: np.ndarray) -> np.ndarray:
+        """Positions as 3D points (a 2D body in the z = 0 plane)."""
+        return positions if positions.shape[1] == 3 else np.column_stack([positions, np.zeros(len(positions))])
+
+    def _locked(self, action, *args) -> None:
+        with self.lock:
+            action(*args)
+
+    def _slider_moved(self, index: int):
+        """The callback of chamber `index`'s slider: a value the user set (not the session's own update of the
+        slider, which equals the command) becomes the command."""
+
+        def moved(event) -> None:
+            with self.lock:
+                value = event.target.value
+                if not math.isclose(value, self.session.commands[index], rel_tol=0, abs_tol=1e-9):
+                    self.session.command(index, value)
+
+        return moved
+
+    def _set_field(self, name: str) -> None:
+        with self.lock:
+            self.field, self._range, self._redraw = name, None, True
+
+    def _save(self) -> None:
+        """Write the kept equilibria (Result.save) and say so on the page; bad state is said there, not raised."""
+        from ..errors import PneumaInputError
+
+        try:
+            paths = self.session.save(self.out, self.stem)
+            self.saved.content = f"saved {len(self.session.steps)} states: " + ", ".join(p.name for p in paths)
+        except PneumaInputError as exc:
+            self.saved.content = f"not saved: {exc}"
+
+    def colours(self) -> np.ndarray:
+        """RGB (n, 3) uint8 per node: the field on the colour map over the range it has spanned (FACE for none)."""
+        values = self.session.field(self.field)
+        if values is None:
+            return np.tile((np.array(FACE) * 255).astype(np.uint8), (self.session.mesh.n_vertices, 1))
+        lo, hi = float(values.min()), float(values.max())
+        if self._range is not None:
+            lo, hi = min(lo, self._range[0]), max(hi, self._range[1])
+        self._range = (lo, hi)
+        return (colormap(values, lo, hi) * 255).astype(np.uint8)
+
+    def _publish(self) -> None:
+        """Send the body at the state shown, coloured (a glTF binary with per-node colours; the newest wins)."""
+        import trimesh
+
+        points, colours = self._points(self.session.positions()), self.colours()
+        body = trimesh.Trimesh(points, self.session.triangles, vertex_colors=colours, process=False)
+        self.server.scene.add_glb("/body", cast(bytes, body.export(file_type="glb")))
+        self.published += 1
+
+    def caption(self) -> str:
+        """The figures of the state shown, as the page's markdown."""
+        figures, units = self.session.figures(), self.session.scene.units
+        length, pressure = units.suffix(LENGTH), units.suffix(PRESSURE)
+        tip = ", ".join(f"d{axis} {value:+.4g}" for axis, value in zip("xyz", figures["tip"]))
+        chambers = ", ".join(
+            f"{name} {c:.4g} (p {p:.4g}{pressure})"
+            for name, c, p in zip(self.session.names, figures["commands"], figures["pressures"])
+        )
+        lines = [
+            f"tip {tip}{length}, rotation {figures['rotation']:+.2f} deg",
+            f"commands: {chambers}",
+            f"Newton {figures['iterations']} it, residual {figures['residual']:.1e} ({figures['state']})",
+            f"{self.fps:.1f} frames/s",
+        ]
+        if figures["playing"] or figures["schedule_step"]:
+            lines.append(
+                f"schedule step {figures['schedule_step']:g} of {self.session.scene.schedule.increments}"
+                + (" (playing)" if figures["playing"] else "")
+            )
+        if figures["reach_error"] is not None:
+            lines.append(f"last reach: {figures['reach_error']:.3g}{length} from its target")
+        return "  \n".join(lines)
+
+    def step(self) -> bool:
+        """One frame: the session's step, then (if the state changed) the body and figures published."""
+        with self.lock:
+            changed = self.session.advance()
+            commands, playing = self.session.commands.copy(), self.session.playing
+            redraw, save, self._redraw, self._save_asked = self._redraw or changed, self._save_asked, False, False
+        if save:
+            self._save()
+        if redraw:
+            self._publish()
+            now = time.perf_counter()
+            self._times.append(now)
+            while now - self._times[0] > FPS_WINDOW:
+                self._times.popleft()
+            self.fps = (len(self._times) - 1) / (now - self._times[0]) if len(self._times) > 1 else 0.0
+        for slider, value in zip(self.sliders, commands):
+            if not math.isclose(slider.value, value, rel_tol=0, abs_tol=1e-9):
+                slider.value = float(value)  # type: ignore[misc]  # (viser's setter takes more types than it gives)
+        if self.play.value != playing:
+            self.play.value = playing  # type: ignore[misc]
+        caption = self.caption()
+        if caption != self.figures.content:
+            self.figures.content = caption
+        self.frames += 1
+        return changed
+
+    def _repr_html_(self) -> str:
+        """The page in an iframe: how a notebook shows the view (tp.live)."""
+        return (
+            f'<iframe src="{html.escape(self.url)}" width="100%" height="{self.height}" '
+            'style="border: 1px solid #ddd"></iframe>'
+        )
+
+    def run(self, until=None) -> None:
+        """Run frames on this thread (Taichi compiles and launches kernels on the main thread only) until stop()
+        is called, or until() returns True; a settled state waits IDLE_SECONDS between frames."""
+        while not self.stopping.is_set() and not (until is not None and until()):
+            if not self.step():
+                self.stopping.wait(IDLE_SECONDS)
+
+    async def run_async(self) -> None:
+        """run() as a task of the running event loop (a Jupyter kernel's, on its main thread): a frame, then the
+        loop's other work (the notebook's cells) before the next."""
+        import asyncio
+
+        while not self.stopping.is_set():
+            await asyncio.sleep(0 if self.step() else IDLE_SECONDS)
+
+    def stop(self) -> None:
+        """End run() (from another thread, a signal handler or a callback) and close the server."""
+        self.stopping.set()
+        self.server.stop()
+
+
+def live(scene, out="out", port: int = 0, field: str = "max_stretch", height: int = 560) -> WebView:
+    """The live page of a scene (a Scene, a shipped scene's name or a scene file) in a Jupyter notebook, served
+    from this process: shown as the cell's output (an iframe of the page), its frames run as a task of the
+    kernel's event loop between cells (the kernel's main thread, where Taichi runs). view.stop() ends it.
+    Outside a running event loop (a script), use pneuma-serve or WebView(...).run()."""
+    import asyncio
+
+    from ..runtime import ensure_initialised
+    from ..scene import scenefile
+    from ..scene.shipped import find
+
+    try:
+        loop = asyncio.get_running_loop()
+    except RuntimeError:
+        require(False, "tp.live needs a running event loop (a Jupyter kernel); in a script run pneuma-serve")
+    ensure_initialised()
+    scene = scene if not isinstance(scene, str) else scenefile.load_scene(find(scene))
+    view = WebView(LiveSession(scene), out, port=port, field=field)
+    view.height = height
+    view.task = loop.create_task(view.run_async())
+    return view
