@@ -57,7 +57,7 @@ def run(args: argparse.Namespace) -> dict:
     stem = result_stem(scene.name if args.scene else f"inflate_cy{args.cy:+.2f}", args, scene) + "_live"
     out = prepare_directory(args.out)
     runtime.init(args.arch)
-    session = LiveSession(scene, budget(args), None if args.tol is None else newton_options(args))
+    session = LiveSession(scene, budget(args), newton_options(args))
     view = WebView(session, out, stem, args.host, args.port, args.field)
     if args.host not in ("127.0.0.1", "localhost"):
         print(f"warning: listening on {args.host}: anyone who can reach it and has the URL can steer this scene")

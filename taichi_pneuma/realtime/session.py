@@ -53,6 +53,7 @@ class LiveSession:
         self.commands = np.array([s.value for s in self.sliders], dtype=float)
         self.triangles = mesh.display_triangles()
         self.playing, self.schedule_step = False, 0.0
+        self.driven = 0  # how often the session set the commands itself (playing, reaching): a view's sliders follow
         self._fields = ElementFields(mesh.vertices, mesh.elements)
         self._material = scene.element_material(mesh)
         self._counts = np.bincount(mesh.elements.ravel(), minlength=mesh.n_vertices).astype(float)
@@ -98,6 +99,7 @@ class LiveSession:
             self.schedule_step = min(self.schedule_step + PLAY_INCREMENT, self.scene.schedule.increments)
             self.playing = self.schedule_step < self.scene.schedule.increments
             self.commands = self.scene.schedule.commands(self.schedule_step)
+            self.driven += 1
         changed = live.frame(self.commands)
         self._keep()
         return changed
@@ -122,6 +124,7 @@ class LiveSession:
         result = reacher.reach(Target(tuple(point)))
         self.reached = float(result.error)
         self.commands = np.array(result.pose.commands, dtype=float)
+        self.driven += 1
         self.equilibrium.hold(self.commands, result.pose.u, result.pose.residual)
         self._keep()
         return True

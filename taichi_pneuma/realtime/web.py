@@ -81,6 +81,7 @@ class WebView:
         self._times: deque[float] = deque()
         self._range: tuple[float, float] | None = None  # the colour scale, widened as the field grows
         self._redraw, self._save_asked = True, False  # what the page asked that the next frame does
+        self._driven = 0  # the session's count of commands it set itself, as the sliders show them
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self._gate_connections()
         self.server.scene.set_up_direction("+y")
@@ -118,7 +119,7 @@ class WebView:
         with gui.add_folder("chambers"):
             for j, s in enumerate(session.sliders):
                 slider = gui.add_slider(
-                    s.name, min=s.low, max=s.high, step=(s.high - s.low) / 400, initial_value=s.value
+                    s.name, min=s.low, max=s.high, step=(s.high - s.low) / 200, initial_value=s.value
                 )
                 slider.on_update(self._slider_moved(j))
                 self.sliders.append(slider)
@@ -237,7 +238,7 @@ class WebView:
         """One frame: the session's step, then (if the state changed) the body and figures published."""
         with self.lock:
             changed = self.session.advance()
-            commands, playing = self.session.commands.copy(), self.session.playing
+            commands, playing, driven = self.session.commands.copy(), self.session.playing, self.session.driven
             redraw, save, self._redraw, self._save_asked = self._redraw or changed, self._save_asked, False, False
         if save:
             self._save()
@@ -248,8 +249,9 @@ class WebView:
             while now - self._times[0] > FPS_WINDOW:
                 self._times.popleft()
             self.fps = (len(self._times) - 1) / (now - self._times[0]) if len(self._times) > 1 else 0.0
-        for slider, value in zip(self.sliders, commands):
-            if not math.isclose(slider.value, value, rel_tol=0, abs_tol=1e-9):
+        if driven != self._driven:  # the session set the commands (playing, reaching): the sliders show them
+            self._driven = driven
+            for slider, value in zip(self.sliders, commands):
                 slider.value = float(value)  # type: ignore[misc]  # (viser's setter takes more types than it gives)
         if self.play.value != playing:
             self.play.value = playing  # type: ignore[misc]

@@ -1,0 +1,193 @@
+"""The live page in a real browser (realtime/web.py, pneuma-serve): headless Chromium (the distribution's chromium
+and chromedriver, driven by Selenium) loads the page of the 2D reference beam, moves the chamber's slider, and the
+tip figure, the drawn frame and the frame rate change; a websocket without the page's token is refused before any
+message, a client that never reads does not stall the solver, and the server is not reachable from the network.
+
+    python tests/test_web.py DIR      the same browser session, its screenshot written to DIR/live_page.png (docs)
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import re
+import shutil
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+viser = pytest.importorskip("viser")
+
+CHROMIUM, CHROMEDRIVER = "/usr/bin/chromium", "/usr/bin/chromedriver"  # Debian's chromium, chromium-driver
+if not (Path(CHROMIUM).exists() and Path(CHROMEDRIVER).exists()):
+    if os.environ.get("CI"):  # .ci/run installs them: their absence there is a failure, not a skip
+        raise RuntimeError(f"{CHROMIUM} and {CHROMEDRIVER} are missing (apt-get install chromium chromium-driver)")
+    pytest.skip("no chromium and chromedriver here", allow_module_level=True)
+
+
+def chromium(width=1200, height=720):
+    """A headless Chromium with WebGL in software (SwiftShader), as a machine without a GPU has it."""
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = CHROMIUM
+    for flag in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage", "--use-angle=swiftshader",
+                 "--enable-unsafe-swiftshader", f"--window-size={width},{height}"):  # fmt: skip
+        options.add_argument(flag)
+    return webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
+
+
+def view_of(scene_name="reference_beam", out="out"):
+    import taichi_pneuma as tp
+    from taichi_pneuma.realtime.session import LiveSession
+    from taichi_pneuma.realtime.web import WebView
+
+    tp.init("cpu")
+    return WebView(LiveSession(tp.load_scene(scene_name)), out, port=0)
+
+
+def browse(view, screenshot: Path | None = None, timeout=90.0) -> dict:
+    """Load the page, wait for the figures, move the first slider 30 steps right, wait for the new equilibrium;
+    the solver runs on this (the main) thread meanwhile. Returns the captions and canvas images before and after."""
+    from PIL import Image
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    seen: dict = {}
+
+    def caption(driver) -> str:
+        found = driver.find_elements(By.XPATH, "//p[contains(., 'frames/s')]")
+        return found[0].text if found else ""
+
+    def wait(driver, done) -> str:
+        ends = time.monotonic() + timeout
+        while time.monotonic() < ends:
+            text = caption(driver)
+            if done(text):
+                return text
+            time.sleep(0.2)
+        raise AssertionError(f"the page's figures never showed it: {caption(driver)!r}")
+
+    def canvas(driver):
+        largest = max(driver.find_elements(By.TAG_NAME, "canvas"), key=lambda c: c.size["width"] * c.size["height"])
+        return np.asarray(Image.open(io.BytesIO(largest.screenshot_as_png)).convert("RGB"), dtype=float)
+
+    def session():
+        driver = chromium()
+        try:
+            driver.get(view.url)
+            seen["before"] = wait(driver, lambda text: "equilibrium" in text)
+            time.sleep(1.0)  # the first frame drawn
+            seen["canvas_before"] = canvas(driver)
+            slider = driver.find_elements(By.CSS_SELECTOR, "[role=slider]")[0]
+            slider.click()
+            for _ in range(30):
+                slider.send_keys(Keys.ARROW_RIGHT)
+            moved = lambda text: "(equilibrium)" in text and "main 1 " not in text  # noqa: E731
+            seen["after"] = wait(driver, moved)
+            time.sleep(2.0)  # the last keys' equilibrium
+            seen["after"] = wait(driver, moved)
+            seen["canvas_after"] = canvas(driver)
+            if screenshot is not None:
+                driver.save_screenshot(str(screenshot))
+        except BaseException as exc:
+            seen["error"] = exc
+        finally:
+            driver.quit()
+
+    thread = threading.Thread(target=session)
+    thread.start()
+    view.run(until=lambda: not thread.is_alive())
+    if "error" in seen:
+        raise seen["error"]
+    return seen
+
+
+@pytest.fixture(scope="module")
+def view(tmp_path_factory):
+    view = view_of(out=tmp_path_factory.mktemp("out"))
+    yield view
+    view.stop()
+
+
+def test_moving_a_slider_in_the_browser_changes_the_tip_figure_the_drawn_frame_and_reports_the_frame_rate(view):
+    seen = browse(view)
+    tip = lambda text: float(re.search(r"dy ([-+][0-9.e-]+)", text).group(1))  # noqa: E731
+    assert tip(seen["before"]) == 0.0
+    # the slider's steps of 1/200 of its range (1 .. 3.5) command a larger area ratio: the chamber above the neutral
+    # axis lifts the tip first (the reference beam's tip rises before it curls down)
+    ratio = float(re.search(r"main ([0-9.]+)", seen["after"]).group(1))
+    assert ratio > 1.05 and tip(seen["after"]) > 0.01
+    assert float(re.search(r"([0-9.]+) frames/s", seen["after"]).group(1)) > 0
+    changed = np.abs(seen["canvas_after"] - seen["canvas_before"]).max(axis=2) > 30
+    assert changed.mean() > 0.005, f"{changed.mean():.4f} of the canvas changed"
+    # the state the page shows is the session's: the browser drove the same solver
+    assert view.session.commands[0] == pytest.approx(ratio, abs=1e-3)
+
+
+def test_a_websocket_without_the_pages_token_is_refused_and_one_with_it_is_served(view):
+    from websockets.exceptions import ConnectionClosed
+    from websockets.sync.client import connect
+
+    protocol = [f"viser-v{viser.__version__}"]
+    with connect(f"ws://127.0.0.1:{view.port}/", subprotocols=protocol) as ws:
+        with pytest.raises(ConnectionClosed) as closed:
+            ws.recv(timeout=30)
+        assert closed.value.rcvd is not None and closed.value.rcvd.code == 1008
+    with connect(f"ws://127.0.0.1:{view.port}/?token={view.token}", subprotocols=protocol) as ws:
+        assert len(ws.recv(timeout=30)) > 0
+
+
+def test_a_client_that_never_reads_does_not_stall_the_solver(view):
+    from websockets.sync.client import connect
+
+    with connect(f"ws://127.0.0.1:{view.port}/?token={view.token}", subprotocols=[f"viser-v{viser.__version__}"]):
+        published = view.published
+        for k in range(80):  # a slider dragged back and forth: each frame publishes the body (~200 KB)
+            view.session.command(0, 1.0 + 0.5 * (k % 2))
+            view.step()
+        assert view.published - published == 80
+
+
+def test_the_server_listens_on_the_loopback_address_only(view):
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.connect(("10.255.255.255", 1))  # no packet sent: it picks the interface a route would use
+        address = probe.getsockname()[0]
+    if address.startswith("127."):
+        pytest.skip("no address but the loopback here")
+    with pytest.raises(OSError):
+        socket.create_connection((address, view.port), timeout=5).close()
+
+
+def test_pneuma_serve_prints_the_url_with_its_token_and_refuses_a_bad_field(tmp_path):
+    run = lambda *flags: subprocess.run(  # noqa: E731
+        [sys.executable, "-m", "taichi_pneuma.apps.serve", "--scene", "pneunet_finger", "--port", "0", *flags],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=120,
+    )
+    served = run("--seconds", "3", "--out", "out")
+    assert served.returncode == 0, served.stderr
+    assert re.search(r"http://127\.0\.0\.1:\d+/\?websocket=ws://127\.0\.0\.1:\d+/%3Ftoken%3D[\w-]{20,}", served.stdout)
+    bad = run("--field", "strain")
+    assert bad.returncode == 2 and bad.stderr.strip().count("\n") == 0
+    assert "--field 'strain' is not one of none, max_stretch" in bad.stderr
+
+
+if __name__ == "__main__":
+    out = Path(sys.argv[1])
+    out.mkdir(parents=True, exist_ok=True)
+    live = view_of(out=out)
+    try:
+        browse(live, screenshot=out / "live_page.png")
+    finally:
+        live.stop()
+    shutil.rmtree(out / "__pycache__", ignore_errors=True)
