@@ -25,7 +25,8 @@ Measured over --seconds after --warmup seconds, --repeat times per candidate and
       newer one overtook);
   client MB/s and KB/frame: bytes of those messages (viser: the body's payload; trame: every websocket message,
       scene descriptions included) per second and per counted frame;
-  page rAF/s: requestAnimationFrame callbacks per second (the page's draw loop; viser's three.js canvas draws in it).
+  page rAF/s: requestAnimationFrame callbacks per second (the page's draw loop; viser's three.js canvas draws in it);
+  page draws/s: frames the page drew, counted as the tasks in which a WebGL context's clear() was called.
 The install sizes are not measured here (a fresh venv each, numpy first, then the candidate: see INSTALL_MB).
 Writes web_viewers.md and .json (machine, date). Two shared cores: numbers are noisy, every run is listed.
 """
@@ -58,7 +59,15 @@ VIRIDIS = np.array([[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [
 
 # Injected before the page's own scripts: counts the body's updates that reach the page (see the module docstring).
 COUNTER_JS = """
-window.__wb = {frames: 0, bytes: 0, raf: 0};
+window.__wb = {frames: 0, bytes: 0, raf: 0, draws: 0};
+let drawing = false;
+for (const gl of [WebGLRenderingContext, WebGL2RenderingContext]) {
+  const clear = gl.prototype.clear;
+  gl.prototype.clear = function (mask) {
+    if (!drawing) { drawing = true; window.__wb.draws++; setTimeout(() => { drawing = false; }, 0); }
+    return clear.call(this, mask);
+  };
+}
 const pointsBytes = %d;
 function payload(v) {
   if (v && v.byteLength !== undefined) return v.byteLength;
@@ -213,6 +222,7 @@ def watch(driver, published: list[float], args) -> dict:
         "client_mb_per_s": mb / span,
         "kb_per_frame": 1e3 * mb / frames if frames else None,
         "page_raf_per_s": (after["raf"] - before["raf"]) / span,
+        "page_draws_per_s": (after["draws"] - before["draws"]) / span,
     }
 
 
@@ -354,15 +364,16 @@ def report(record: dict) -> str:
         f"{record['warmup']:g} s. Every run listed (a shared 2-core machine: noisy).",
         "",
         "| candidate | mesh | triangles | publish ms/frame | published/s | client frames/s | client MB/s "
-        "| KB/frame | page rAF/s |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| KB/frame | page rAF/s | page draws/s |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in record["runs"]:
         ms = f"{r['publish_ms']:.1f}" if r["publish_ms"] is not None else "-"
         kb = f"{r['kb_per_frame']:.0f}" if r["kb_per_frame"] is not None else "-"
         lines.append(
             f"| {r['candidate']} | {r['mesh']} | {r['triangles']} | {ms} | {r['published_per_s']:.1f} "
-            f"| {r['client_fps']:.1f} | {r['client_mb_per_s']:.2f} | {kb} | {r['page_raf_per_s']:.1f} |"
+            f"| {r['client_fps']:.1f} | {r['client_mb_per_s']:.2f} | {kb} "
+            f"| {r['page_raf_per_s']:.1f} | {r['page_draws_per_s']:.1f} |"
         )
     lines += ["", "Install size (MB; fresh venv, `pip install numpy`, then the candidate, `du -sm` difference):", ""]
     lines += [f"- {name}: {mb}" for name, mb in record["install_mb"].items()]
