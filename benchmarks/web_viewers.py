@@ -357,8 +357,6 @@ def licence(package: str) -> str:
 def report(record: dict) -> str:
     """The results page: the runs table, install sizes, licences, Jupyter support, the command."""
     lines = [
-        "# Live web view: viser against trame",
-        "",
         f"Machine: {record['machine']}; {record['date']}. One headless Chromium (SwiftShader WebGL) per run; "
         f"{record['fps_offered']:g} frames/s offered, measured over {record['seconds']:g} s after "
         f"{record['warmup']:g} s. Every run listed (a shared 2-core machine: noisy).",

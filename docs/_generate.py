@@ -139,6 +139,12 @@ RESULTS_PAGES = {
         ("benchmarks/accuracy_3d.py", None),
         "python benchmarks/accuracy_3d.py",
     ),
+    "web_viewers": (
+        "performance",
+        "The live page's library: viser against trame, a coloured mesh sent to headless Chromium",
+        ("benchmarks/web_viewers.py", None),
+        "python -m benchmarks.web_viewers --trame-python PATH/TO/TRAME-VENV/bin/python",
+    ),
     "pneunet_vs_fiber": (
         "accuracy",
         "A PneuNet against the fibre-reinforced actuator: same length, silicone, sheet and ramp",

@@ -33,6 +33,8 @@ PICTURES = {
     "scene_beam_3d.png": ("pneuma-inflate --scene beam_3d", "out/beam_3d.png"),
     "scene_balloon_syringe.png": ("pneuma-inflate --scene balloon_syringe", "out/balloon_syringe.png"),
     "balloon_curves.png": ("python examples/balloon_curves.py out", "out/balloon_curves.png"),
+    # the live page in headless Chromium, the browser test's own session (tests/test_web.py, run as a script)
+    "live_page.png": ("python tests/test_web.py out", "out/live_page.png"),
 }
 
 
