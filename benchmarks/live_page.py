@@ -167,25 +167,28 @@ def report(record: dict) -> str:
     lines = [
         "# The live page against the native windows: frames per second while a slider is dragged",
         "",
-        f"Machine: {record['machine']}; {record['date']}. Command (repository root):",
+        f"Machine: {record['machine']}; {record['date']}; load average (1 min) {record['load'][0]:.1f} before,"
+        f" {record['load'][1]:.1f} after. Command (repository root):",
         "",
         f"    {record['command']}",
         "",
-        "Each row: the mean of the runs (each run's value in brackets). See benchmarks/live_page.py's docstring for",
+        "Each row: the mean of the runs (runs: each run's value). See benchmarks/live_page.py's docstring for",
         "what each view times.",
         "",
-        "| scene | nodes | view | frames/s | runs | share in advance | ms per advance |",
-        "|---|---:|---|---:|---|---:|---:|",
+        "| scene | nodes | view | frames/s | runs | share in advance | ms per advance | page received/s |",
+        "|---|---:|---|---:|---|---:|---:|---:|",
     ]
     for row in record["rows"]:
         runs = row["runs"]
         fps = [r["fps"] for r in runs if r.get("fps")]
         share = [r["advance_share"] for r in runs if "advance_share" in r]
         ms = [r["ms_per_advance"] for r in runs if "ms_per_advance" in r]
+        got = [r["browser_received_fps"] for r in runs if "browser_received_fps" in r]
         lines.append(
             f"| {row['scene']} | {row['nodes']} | {row['view']} | {np.mean(fps):.2f} | "
             + ", ".join(f"{v:.2f}" for v in fps)
-            + f" | {f'{np.mean(share):.0%}' if share else '-'} | {f'{np.mean(ms):.0f}' if ms else '-'} |"
+            + f" | {f'{np.mean(share):.0%}' if share else '-'} | {f'{np.mean(ms):.0f}' if ms else '-'}"
+            + f" | {f'{np.mean(got):.2f}' if got else '-'} |"
         )
     return "\n".join(lines) + "\n"
 
@@ -207,7 +210,7 @@ def main() -> None:
     from taichi_pneuma.realtime.interactive import chamber_sliders
 
     runtime.init("cpu")
-    rows = []
+    rows, load = [], os.getloadavg()[0]
     for name in args.scenes.split(","):
         scene = tp.load_scene(name)
         sliders = chamber_sliders(scene)
@@ -232,6 +235,7 @@ def main() -> None:
         "machine": f"{platform.machine()}, {os.cpu_count()} CPUs (shared), {platform.python_version()}",
         "date": date.today().isoformat(),
         "command": "xvfb-run -a python benchmarks/live_page.py " + " ".join(os.sys.argv[1:]),
+        "load": [load, os.getloadavg()[0]],
         "rows": rows,
     }
     text = report(record)
