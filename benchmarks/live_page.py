@@ -1,16 +1,19 @@
 """Frames per second of the live page (realtime/web.py) against the native windows, while a slider is dragged.
 
     xvfb-run -a python benchmarks/live_page.py [--frames 120] [--warmup 10] [--frames-3d 30] [--warmup-3d 3]
-        [--views page,browser,native] [--out benchmarks/results]   (repository root on PYTHONPATH, project venv)
+        [--views page,reader,browser,native] [--out benchmarks/results]   (repository root on PYTHONPATH, project venv)
 
-Scenes: the 2D reference beam (tp.load_scene("reference_beam"), one area-controlled chamber) and the coarse 3D
-PneuNet (tp.load_scene("pneunet_3d"), P2 tetrahedra, six pressure chambers, all six driven together). The drag is
-scripted: every chamber's command moves by one step per frame from its slider's low end to its high end and back
-(a triangle wave over warm-up + measured frames); the warm-up frames are its first ones and are not timed.
+Scenes: the 2D reference beam (tp.load_scene("reference_beam"), one area-controlled chamber), the coarse 3D PneuNet
+(render3d.live_scene: 840 nodes, linear tetrahedra, the scene the native window's 22 frames/s were measured on) and
+the shipped 3D PneuNet (tp.load_scene("pneunet_3d"), P2 tetrahedra); the PneuNets' six chambers driven together.
+The drag is scripted: every chamber's command moves by one step per frame from its slider's low end to its high end
+and back (a triangle wave over warm-up + measured frames); the warm-up frames are its first ones and are not timed.
 Views:
   page: WebView(LiveSession(scene), out=tmpdir, port=0) with no browser; per frame session.command(j, value) for
       each chamber, then view.step() (one Newton step, LiveSession.advance, then the body published as a coloured
       GLB and the figures updated); frames/s = frames / wall time; the share in advance is timed around it;
+  reader: the same with one websocket client (the page's token) that reads every message and draws nothing, on a
+      thread: the server's load when the browser is on another machine;
   browser: the same with one headless Chromium (Selenium 4, SwiftShader WebGL, 1200 x 720) on view.url, opened
       in a thread and given BROWSER_WAIT seconds to connect before the frames; the page's received body updates
       are counted by web_viewers.COUNTER_JS (messages from viser's decoding worker carrying a GLB);
@@ -36,7 +39,21 @@ from pathlib import Path
 import numpy as np
 
 BROWSER_WAIT = 8.0  # seconds the browser is given to load the page and connect before the frames
-SCENES = {"reference_beam": "2D reference beam", "pneunet_3d": "coarse 3D PneuNet"}
+# the scenes: the 2D reference beam; the coarse PneuNet of the native window's measurement (render3d.live_scene:
+# gmsh at edge 0.3, linear tetrahedra, 840 nodes, one material, six chambers to 900 Pa); the shipped pneunet_3d
+# (quadratic tetrahedra, 13,573 nodes)
+SCENES = {"reference_beam": "2D reference beam", "coarse_pneunet": "coarse 3D PneuNet", "pneunet_3d": "3D PneuNet"}
+
+
+def scene_named(name: str):
+    """A scene of SCENES by name."""
+    if name == "coarse_pneunet":
+        from render3d import live_scene  # benchmarks/ (this script's directory) is on sys.path
+
+        return live_scene()[0].scene
+    import taichi_pneuma as tp
+
+    return tp.load_scene(name)
 
 
 def drag(low: np.ndarray, high: np.ndarray, warmup: int, frames: int) -> np.ndarray:
@@ -48,8 +65,32 @@ def drag(low: np.ndarray, high: np.ndarray, warmup: int, frames: int) -> np.ndar
     return low + np.outer(share, high - low)
 
 
-def page_run(scene, path: np.ndarray, warmup: int, browser: bool) -> dict:
-    """The live page's loop (and one browser on it, if asked): frames/s over the path after the warm-up."""
+def reading_client(view) -> tuple:
+    """A websocket client of the page (with its token) that reads every message and draws nothing, on a thread: the
+    load a browser on another machine puts on the server. Returns (connection, [messages read])."""
+    import viser
+    from websockets.sync.client import connect
+
+    socket = connect(
+        f"ws://127.0.0.1:{view.port}/?token={view.token}", subprotocols=[f"viser-v{viser.__version__}"], max_size=None
+    )
+    read = [0]
+
+    def loop() -> None:
+        try:
+            while True:
+                socket.recv()
+                read[0] += 1
+        except Exception:  # the connection closed at the end
+            pass
+
+    threading.Thread(target=loop, daemon=True).start()
+    return socket, read
+
+
+def page_run(scene, path: np.ndarray, warmup: int, client: str = "") -> dict:
+    """The live page's loop with no client, a reading one ('reader') or one headless Chromium ('browser'):
+    frames/s over the path after the warm-up."""
     from taichi_pneuma.realtime.session import LiveSession
     from taichi_pneuma.realtime.web import WebView
 
@@ -65,15 +106,18 @@ def page_run(scene, path: np.ndarray, warmup: int, browser: bool) -> dict:
     session.advance = timed  # type: ignore[method-assign]
     with tempfile.TemporaryDirectory() as out:
         view = WebView(session, out=out, port=0)
-        driver, counts = None, {}
+        driver, counts, reader = None, {}, None
         try:
-            if browser:
+            if client == "browser":
                 driver = open_browser(view.url)
+            if client == "reader":
+                reader = reading_client(view)
+                time.sleep(1.0)  # the scene's first messages read
             for k, commands in enumerate(path):
                 if k == warmup:
                     in_advance.clear()
                     published, start = view.published, time.perf_counter()
-                    received = page_counter(driver)
+                    received = page_counter(driver) if reader is None else reader[1][0]
                 for j, value in enumerate(commands):
                     session.command(j, float(value))
                 view.step()
@@ -81,7 +125,12 @@ def page_run(scene, path: np.ndarray, warmup: int, browser: bool) -> dict:
             if driver is not None:
                 time.sleep(0.5)  # the last queued messages reach the page
                 counts = {"clients": len(view.server.get_clients()), "received": page_counter(driver) - received}
+            if reader is not None:
+                time.sleep(0.5)
+                counts = {"clients": len(view.server.get_clients()), "received": reader[1][0] - received}
         finally:
+            if reader is not None:
+                reader[0].close()
             if driver is not None:
                 driver.quit()
             view.stop()
@@ -165,15 +214,15 @@ def native_2d(scene, path: np.ndarray, warmup: int, growth: float) -> dict:
 def report(record: dict) -> str:
     """The Markdown table of a record."""
     lines = [
-        "# The live page against the native windows: frames per second while a slider is dragged",
-        "",
         f"Machine: {record['machine']}; {record['date']}; load average (1 min) {record['load'][0]:.1f} before,"
         f" {record['load'][1]:.1f} after. Command (repository root):",
         "",
         f"    {record['command']}",
         "",
         "Each row: the mean of the runs (runs: each run's value). See benchmarks/live_page.py's docstring for",
-        "what each view times.",
+        "what each view times. Page received/s: with Chromium, the body updates that reached the page; with the",
+        "reading client, the websocket messages it read (viser sends a frame's messages together, or several frames'",
+        "when the client lags).",
         "",
         "| scene | nodes | view | frames/s | runs | share in advance | ms per advance | page received/s |",
         "|---|---:|---|---:|---|---:|---:|---:|",
@@ -199,36 +248,40 @@ def main() -> None:
     p.add_argument("--warmup", type=int, default=10)
     p.add_argument("--frames-3d", type=int, default=30)
     p.add_argument("--warmup-3d", type=int, default=3)
-    p.add_argument("--views", default="page,browser,native")
+    p.add_argument("--views", default="page,reader,browser,native")
     p.add_argument("--scenes", default=",".join(SCENES))
     p.add_argument("--repeat", type=int, default=1)
     p.add_argument("--out", default=None, help="write live_page.md and .json here")
     args = p.parse_args()
 
-    import taichi_pneuma as tp
     from taichi_pneuma import runtime
     from taichi_pneuma.realtime.interactive import chamber_sliders
 
     runtime.init("cpu")
     rows, load = [], os.getloadavg()[0]
     for name in args.scenes.split(","):
-        scene = tp.load_scene(name)
+        scene = scene_named(name)
         sliders = chamber_sliders(scene)
         low, high = np.array([s.low for s in sliders]), np.array([s.high for s in sliders])
-        three_d = name == "pneunet_3d"
+        mesh = scene.build().mesh
+        three_d = mesh.dim == 3
         warmup, frames = (args.warmup_3d, args.frames_3d) if three_d else (args.warmup, args.frames)
         path = drag(low, high, warmup, frames)
-        nodes = scene.build().mesh.n_vertices
+        nodes = mesh.n_vertices
         for view in args.views.split(","):
             runs = []
             for _ in range(args.repeat):
                 if view == "native":
                     run = native_3d(scene, path, warmup) if three_d else native_2d(scene, path, warmup, float(high[0]))
                 else:
-                    run = page_run(scene, path, warmup, browser=view == "browser")
+                    run = page_run(scene, path, warmup, client="" if view == "page" else view)
                 print(name, view, json.dumps(run), flush=True)
                 runs.append(run)
-            label = {"page": "live page, no browser", "browser": "live page + headless Chromium"}.get(view, "")
+            label = {
+                "page": "live page, no client",
+                "reader": "live page + a client reading every frame",
+                "browser": "live page + headless Chromium on the same cores",
+            }.get(view, "")
             label = label or ("native GGUI window (explore_solid)" if three_d else "native ti.GUI window (explore)")
             rows.append({"scene": name, "nodes": nodes, "view": label, "key": view, "runs": runs})
     record = {

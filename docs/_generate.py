@@ -145,6 +145,12 @@ RESULTS_PAGES = {
         ("benchmarks/web_viewers.py", None),
         "python -m benchmarks.web_viewers --trame-python PATH/TO/TRAME-VENV/bin/python",
     ),
+    "live_page": (
+        "performance",
+        "The live page against the native windows: frames per second while a slider is dragged",
+        ("benchmarks/live_page.py", None),
+        "xvfb-run -a python benchmarks/live_page.py --repeat 2 --out benchmarks/results",
+    ),
     "pneunet_vs_fiber": (
         "accuracy",
         "A PneuNet against the fibre-reinforced actuator: same length, silicone, sheet and ramp",

@@ -6,8 +6,10 @@ drag a target for the tip (inverse control: the chambers follow), the step's fig
 Newton iterations, residual, frames per second) and a button that saves the equilibria kept so far like
 Result.save; the view turns and zooms with the mouse (2D bodies lie in the z = 0 plane, seen from +z).
 
-A thread runs the session: each frame it applies what the page asked (under a lock the page's callbacks take
-briefly), takes one step (LiveSession.advance) and publishes the body as a glTF mesh with a colour per node.
+The caller's thread runs the session (run(), or run_async() on a notebook kernel's event loop: Taichi launches
+kernels from the main thread only); viser's own threads serve the page, and its callbacks only record what the
+page asked, under a lock. Each frame (step) applies it, takes one step (LiveSession.advance) and publishes the body
+as a glTF mesh with a colour per node.
 Publishing only queues a message; viser keeps, per scene node, only the newest message not yet sent to a
 client, so a slow client skips frames and never holds the solver back.
 
@@ -32,7 +34,7 @@ import numpy as np
 
 from ..errors import require
 from ..io.units import LENGTH, PRESSURE
-from ..render.colours import FACE, colormap
+from ..render.colours import COLORMAP, FACE, colormap
 from .session import FIELDS, LiveSession
 
 FPS_WINDOW = 2.0  # seconds of frames the frame rate is measured over
@@ -52,7 +54,7 @@ def token_of(path: str) -> str:
 
 
 class WebView:
-    """A LiveSession served as a page (see the module docstring); start() runs it, stop() ends it.
+    """A LiveSession served as a page (see the module docstring); run() or run_async() runs it, stop() ends it.
 
     out, stem: where the save button writes (out/<stem>_*); host, port: where the server listens (port 0: a free
     one); field: the FIELDS key the body is first coloured by; token: the URL's token (a fresh random one by
@@ -148,13 +150,15 @@ class WebView:
         return float(np.ptp(rest, axis=0).max())
 
     def _place_camera(self) -> None:
-        """Look at the rest body from +z (and, in 3D, from above and the side), far enough to see it whole."""
+        """Look at the rest body from +z (and, in 3D, from above and the side), far enough to see it whole beside
+        the panel."""
         rest = self._points(self.session.mesh.vertices)
         centre, extent = (rest.min(axis=0) + rest.max(axis=0)) / 2, self._extent()
         direction = np.array([0.0, 0.0, 1.0]) if self.session.mesh.dim == 2 else np.array([0.5, 0.6, 1.0])
+        aim = centre + np.array([0.2 * extent, 0.0, 0.0])  # the body left of the panel (top right)
         camera = self.server.initial_camera
-        camera.look_at = tuple(centre)
-        camera.position = tuple(centre + 1.1 * extent * direction / np.linalg.norm(direction))
+        camera.look_at = tuple(aim)
+        camera.position = tuple(aim + 0.8 * extent * direction / np.linalg.norm(direction))
 
     def _points(self, positions: np.ndarray) -> np.ndarray:
         """Positions as 3D points (a 2D body in the z = 0 plane)."""
@@ -191,22 +195,30 @@ class WebView:
             self.saved.content = f"not saved: {exc}"
 
     def colours(self) -> np.ndarray:
-        """RGB (n, 3) uint8 per node: the field on the colour map over the range it has spanned (FACE for none)."""
+        """RGBA (n, 4) uint8 per node: the field on the colour map over the range it has spanned; FACE for none."""
         values = self.session.field(self.field)
         if values is None:
-            return np.tile((np.array(FACE) * 255).astype(np.uint8), (self.session.mesh.n_vertices, 1))
-        lo, hi = float(values.min()), float(values.max())
-        if self._range is not None:
-            lo, hi = min(lo, self._range[0]), max(hi, self._range[1])
-        self._range = (lo, hi)
-        return (colormap(values, lo, hi) * 255).astype(np.uint8)
+            rgb = np.tile(np.array(FACE), (self.session.mesh.n_vertices, 1))
+        else:
+            lo, hi = float(values.min()), float(values.max())
+            if self._range is not None:
+                lo, hi = min(lo, self._range[0]), max(hi, self._range[1])
+            self._range = (lo, hi)
+            rgb = colormap(values, lo, hi)
+        return (np.column_stack([rgb, np.ones(len(rgb))]) * 255).round().astype(np.uint8)
 
     def _publish(self) -> None:
         """Send the body at the state shown, coloured (a glTF binary with per-node colours; the newest wins)."""
         import trimesh
+        from trimesh.visual import TextureVisuals
+        from trimesh.visual.material import PBRMaterial
 
-        points, colours = self._points(self.session.positions()), self.colours()
-        body = trimesh.Trimesh(points, self.session.triangles, vertex_colors=colours, process=False)
+        # a rubber's material: not metallic (glTF's default, dark without an environment), seen from both sides
+        visual = TextureVisuals(material=PBRMaterial(metallicFactor=0.0, roughnessFactor=0.8, doubleSided=True))
+        visual.vertex_attributes["color"] = self.colours()
+        body = trimesh.Trimesh(
+            self._points(self.session.positions()), self.session.triangles, visual=visual, process=False
+        )
         self.server.scene.add_glb("/body", cast(bytes, body.export(file_type="glb")))
         self.published += 1
 
@@ -230,6 +242,10 @@ class WebView:
                 f"schedule step {figures['schedule_step']:g} of {self.session.scene.schedule.increments}"
                 + (" (playing)" if figures["playing"] else "")
             )
+        if self._range is not None:
+            label, unit = FIELDS[self.field]
+            suffix = {"pressure": pressure, "length": length}.get(unit or "", "")
+            lines.append(f"colour ({COLORMAP}): {label} {self._range[0]:.4g} .. {self._range[1]:.4g}{suffix}")
         if figures["reach_error"] is not None:
             lines.append(f"last reach: {figures['reach_error']:.3g}{length} from its target")
         return "  \n".join(lines)
