@@ -7,9 +7,10 @@ Newton iterations, residual, frames per second) and a button that saves the equi
 Result.save; the view turns and zooms with the mouse (2D bodies lie in the z = 0 plane, seen from +z).
 
 The caller's thread runs the session (run(), or run_async() on a notebook kernel's event loop: Taichi launches
-kernels from the main thread only); viser's own threads serve the page, and its callbacks only record what the
-page asked, under a lock. Each frame (step) applies it, takes one step (LiveSession.advance) and publishes the body
-as a glTF mesh with a colour per node.
+kernels from the main thread only); viser's own threads serve the page and keep its controls' values, in the
+order the page's messages came. Each frame (step) reads the controls, hands what changed to the session, takes one
+step (LiveSession.advance) and publishes the body as a glTF mesh with a colour per node; only this thread touches
+the session, and a control moved during a long step is read, at its latest value, at the next frame.
 Publishing only queues a message; viser keeps, per scene node, only the newest message not yet sent to a
 client, so a slow client skips frames and never holds the solver back.
 
@@ -22,7 +23,6 @@ from __future__ import annotations
 
 import asyncio
 import html
-import math
 import secrets
 import threading
 import time
@@ -76,13 +76,13 @@ class WebView:
         require(0 <= port <= 65535, f"port {port} is not one of 0 .. 65535")
         self.session, self.out, self.stem = session, out, stem or session.scene.name
         self.field, self.token, self.host = field, token or secrets.token_urlsafe(16), host
-        self.lock, self.stopping = threading.Lock(), threading.Event()
+        self.stopping, self._asked = threading.Event(), threading.Event()  # stop(); the save button pressed
         self.frames, self.fps, self.published = 0, 0.0, 0
         self.height = 560  # a notebook's iframe height (pixels)
         self.task: asyncio.Task | None = None  # the notebook's frame task (live)
         self._times: deque[float] = deque()
         self._range: tuple[float, float] | None = None  # the colour scale, widened as the field grows
-        self._redraw, self._save_asked = True, False  # what the page asked that the next frame does
+        self._redraw = True  # the body to publish at the next frame whether the state changed or not
         self._driven = 0  # the session's count of commands it set itself, as the sliders show them
         self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self._gate_connections()
@@ -117,21 +117,16 @@ class WebView:
         gui, session, scene = self.server.gui, self.session, self.server.scene
         mesh = session.mesh
         gui.add_markdown(f"**{session.scene.name}**: {mesh.n_vertices} nodes, {mesh.n_elements} elements")
-        self.sliders = []
         with gui.add_folder("chambers"):
-            for j, s in enumerate(session.sliders):
-                slider = gui.add_slider(
-                    s.name, min=s.low, max=s.high, step=(s.high - s.low) / 200, initial_value=s.value
-                )
-                slider.on_update(self._slider_moved(j))
-                self.sliders.append(slider)
+            self.sliders = [
+                gui.add_slider(s.name, min=s.low, max=s.high, step=(s.high - s.low) / 200, initial_value=s.value)
+                for s in session.sliders
+            ]
         self.play = gui.add_checkbox("play the schedule", initial_value=False)
-        self.play.on_update(lambda event: self._locked(session.play, event.target.value))
         self.field_menu = gui.add_dropdown("colour by", tuple(FIELDS), initial_value=self.field)
-        self.field_menu.on_update(lambda event: self._set_field(event.target.value))
         self.figures = gui.add_markdown("starting ...")
         save = gui.add_button("save state")
-        save.on_click(lambda _: self._locked(setattr, self, "_save_asked", True))
+        save.on_click(lambda _: self._asked.set())
         self.saved = gui.add_markdown("")
         rest = self._points(mesh.vertices)
         scene.add_point_cloud("/clamp", rest[mesh.pinned], colors=RED, point_size=0.004 * self._extent())
@@ -143,7 +138,47 @@ class WebView:
             active_axes=(True, True, mesh.dim == 3),
             position=tip,
         )
-        self.target.on_update(lambda event: self._locked(session.aim, event.target.position))
+        # what the controls showed at the last frame: a control that differs now was moved on the page
+        self._shown = self._controls_now()
+
+    def _controls_now(self) -> tuple:
+        """The values of the page's controls (viser sets them in the order the page's messages came)."""
+        sliders = tuple(float(s.value) for s in self.sliders)
+        return sliders, bool(self.play.value), str(self.field_menu.value), tuple(self.target.position)
+
+    def _read_page(self) -> None:
+        """Hand what the page changed since the last frame to the session: a slider's command, play or pause, the
+        field, a dragged target; the save button's press."""
+        now, session = self._controls_now(), self.session
+        (sliders, playing, field, target), (shown_sliders, shown_playing, shown_field, shown_target) = now, self._shown
+        for j, (value, shown) in enumerate(zip(sliders, shown_sliders)):
+            if value != shown:
+                session.command(j, value)
+        if playing != shown_playing:
+            session.play(playing)
+        if field != shown_field:
+            self.field, self._range, self._redraw = field, None, True
+        if target != shown_target:
+            session.aim(target)
+        self._shown = now
+        if self._asked.is_set():
+            self._asked.clear()
+            self._save()
+
+    def _show_session(self) -> None:
+        """Set the controls the session moved itself (the sliders while playing or after a reach; play at the
+        schedule's end) to its values, and remember them as shown."""
+        session, (sliders, playing, field, target) = self.session, self._shown
+        if session.driven != self._driven:
+            self._driven = session.driven
+            for slider, value in zip(self.sliders, session.commands):
+                slider.value = float(value)  # type: ignore[misc]  # (viser's setter takes more types than it gives)
+            sliders = tuple(float(s.value) for s in self.sliders)  # as the handles hold them (viser may round)
+        if playing != session.playing:
+            self.play.value = session.playing  # type: ignore[misc]
+            playing = bool(self.play.value)
+        # only what was set here counts as shown: a control the page moved meanwhile still differs, for the next frame
+        self._shown = (sliders, playing, field, target)
 
     def _extent(self) -> float:
         rest = self.session.mesh.vertices
@@ -163,26 +198,6 @@ class WebView:
     def _points(self, positions: np.ndarray) -> np.ndarray:
         """Positions as 3D points (a 2D body in the z = 0 plane)."""
         return positions if positions.shape[1] == 3 else np.column_stack([positions, np.zeros(len(positions))])
-
-    def _locked(self, action, *args) -> None:
-        with self.lock:
-            action(*args)
-
-    def _slider_moved(self, index: int):
-        """The callback of chamber `index`'s slider: a value the user set (not the session's own update of the
-        slider, which equals the command) becomes the command."""
-
-        def moved(event) -> None:
-            with self.lock:
-                value = event.target.value
-                if not math.isclose(value, self.session.commands[index], rel_tol=0, abs_tol=1e-9):
-                    self.session.command(index, value)
-
-        return moved
-
-    def _set_field(self, name: str) -> None:
-        with self.lock:
-            self.field, self._range, self._redraw = name, None, True
 
     def _save(self) -> None:
         """Write the kept equilibria (Result.save) and say so on the page; bad state is said there, not raised."""
@@ -251,26 +266,19 @@ class WebView:
         return "  \n".join(lines)
 
     def step(self) -> bool:
-        """One frame: the session's step, then (if the state changed) the body and figures published."""
-        with self.lock:
-            changed = self.session.advance()
-            commands, playing, driven = self.session.commands.copy(), self.session.playing, self.session.driven
-            redraw, save, self._redraw, self._save_asked = self._redraw or changed, self._save_asked, False, False
-        if save:
-            self._save()
-        if redraw:
+        """One frame: what the page asked handed to the session, the session's step, then (if the state changed or
+        the field did) the body published; the controls the session moved and the figures shown."""
+        self._read_page()
+        changed = self.session.advance()
+        if changed or self._redraw:
+            self._redraw = False
             self._publish()
             now = time.perf_counter()
             self._times.append(now)
             while now - self._times[0] > FPS_WINDOW:
                 self._times.popleft()
             self.fps = (len(self._times) - 1) / (now - self._times[0]) if len(self._times) > 1 else 0.0
-        if driven != self._driven:  # the session set the commands (playing, reaching): the sliders show them
-            self._driven = driven
-            for slider, value in zip(self.sliders, commands):
-                slider.value = float(value)  # type: ignore[misc]  # (viser's setter takes more types than it gives)
-        if self.play.value != playing:
-            self.play.value = playing  # type: ignore[misc]
+        self._show_session()
         caption = self.caption()
         if caption != self.figures.content:
             self.figures.content = caption
@@ -294,8 +302,6 @@ class WebView:
     async def run_async(self) -> None:
         """run() as a task of the running event loop (a Jupyter kernel's, on its main thread): a frame, then the
         loop's other work (the notebook's cells) before the next."""
-        import asyncio
-
         while not self.stopping.is_set():
             await asyncio.sleep(0 if self.step() else IDLE_SECONDS)
 
@@ -310,8 +316,6 @@ def live(scene, out="out", port: int = 0, field: str = "max_stretch", height: in
     from this process: shown as the cell's output (an iframe of the page), its frames run as a task of the
     kernel's event loop between cells (the kernel's main thread, where Taichi runs). view.stop() ends it.
     Outside a running event loop (a script), use pneuma-serve or WebView(...).run()."""
-    import asyncio
-
     from ..runtime import ensure_initialised
     from ..scene import scenefile
     from ..scene.shipped import find
