@@ -22,7 +22,9 @@ machine cannot watch or steer the scene; the page serves the one scene it was st
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import html
+import io
 import secrets
 import threading
 import time
@@ -84,8 +86,11 @@ class WebView:
         self._range: tuple[float, float] | None = None  # the colour scale, widened as the field grows
         self._redraw = True  # the body to publish at the next frame whether the state changed or not
         self._driven = 0  # the session's count of commands it set itself, as the sliders show them
-        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        with contextlib.redirect_stdout(io.StringIO()):  # viser's banner: its address without the token
+            self.server = viser.ViserServer(host=host, port=port, verbose=False)
         self._gate_connections()
+        # no share button: viser's relay would put the page on the internet (and its websocket lacks the token)
+        self.server.gui.configure_theme(show_share_button=False)
         self.server.scene.set_up_direction("+y")
         self._controls()
         self._place_camera()
@@ -308,7 +313,8 @@ class WebView:
     def stop(self) -> None:
         """End run() (from another thread, a signal handler or a callback) and close the server."""
         self.stopping.set()
-        self.server.stop()
+        with contextlib.redirect_stdout(io.StringIO()):  # viser's "Server stopped"
+            self.server.stop()
 
 
 def live(scene, out="out", port: int = 0, field: str = "max_stretch", height: int = 560) -> WebView:
