@@ -30,7 +30,7 @@ from pathlib import Path
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 RESULTS = ROOT / "benchmarks" / "results"
-APPS = ("inflate", "steer", "reach", "sweep", "bench")
+APPS = ("inflate", "steer", "reach", "sweep", "bench", "serve")
 SCENE_KEYS = {2: "guide/scene_keys_2d.md", 3: "guide/scene_keys_3d.md"}  # under docs/, committed
 REGENERATE = "python docs/_generate.py"
 
