@@ -167,6 +167,23 @@ def test_the_pages_controls_reach_the_session_and_the_session_moves_the_sliders_
         view.stop()
 
 
+def test_the_page_draws_the_obstacles_and_moves_them_with_their_offset(tmp_path):
+    """gripper_2d's cylinder is an outline in the z = 0 plane, its radius's circle about its centre; a node that
+    follows its obstacle's offset (a moving obstacle's, as a schedule plays)."""
+    view = view_of("gripper_2d", out=tmp_path)
+    try:
+        (node,) = view._obstacles
+        cylinder = view.session.scene.obstacles[0].shape
+        ends = np.asarray(node.points).reshape(-1, 3)
+        assert np.allclose(ends[:, 2], 0.0)
+        assert np.allclose(np.linalg.norm(ends[:, :2] - np.asarray(cylinder.center[:2]), axis=1), cylinder.radius)
+        view.session.built.obstacles[0].set_offset([1.5, -0.5])
+        view.step()
+        assert np.allclose(node.position, [1.5, -0.5, 0.0])
+    finally:
+        view.stop()
+
+
 def test_a_websocket_without_the_pages_token_is_refused_and_one_with_it_is_served(view):
     from websockets.exceptions import ConnectionClosed
     from websockets.sync.client import connect

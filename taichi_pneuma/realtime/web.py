@@ -36,7 +36,7 @@ import numpy as np
 
 from ..errors import require
 from ..io.units import LENGTH, PRESSURE
-from ..render.colours import COLORMAP, FACE, colormap
+from ..render.colours import COLORMAP, FACE, OBSTACLE, OBSTACLE_FILL, colormap
 from .session import FIELDS, LiveSession
 
 FPS_WINDOW = 2.0  # seconds of frames the frame rate is measured over
@@ -135,6 +135,7 @@ class WebView:
         self.saved = gui.add_markdown("")
         rest = self._points(mesh.vertices)
         scene.add_point_cloud("/clamp", rest[mesh.pinned], colors=RED, point_size=0.004 * self._extent())
+        self._surroundings(rest)
         tip = rest[mesh.tip].mean(axis=0)
         self.target = scene.add_transform_controls(
             "/target",
@@ -145,6 +146,49 @@ class WebView:
         )
         # what the controls showed at the last frame: a control that differs now was moved on the page
         self._shown = self._controls_now()
+
+    def _surroundings(self, rest: np.ndarray) -> None:
+        """The ground and the rigid obstacles where they are placed: in 2D their outlines in the z = 0 plane, in 3D
+        their surfaces (render/guides3d.py), each a node the frames move by its obstacle's offset."""
+        from ..render.guides3d import obstacle_triangles, square
+
+        scene, spec, extent = self.server.scene, self.session.scene, self._extent()
+        fill, edge = ((np.array(colour) * 255).round().astype(np.uint8) for colour in (OBSTACLE_FILL, OBSTACLE))
+        lo, hi = rest.min(axis=0), rest.max(axis=0)
+        ground = next((e.ground_height for e in spec.effects if e.ground_height is not None), None)
+        if ground is not None and self.session.mesh.dim == 2:
+            ends = np.array([[[lo[0] - extent, ground, 0.0], [hi[0] + extent, ground, 0.0]]])
+            scene.add_line_segments("/ground", ends, colors=edge, thickness=3.0)
+        elif ground is not None:
+            triangles, _ = square(((lo[0] + hi[0]) / 2, ground, (lo[2] + hi[2]) / 2), (0.0, 1.0, 0.0), extent)
+            self._add_triangles("/ground", triangles, fill)
+        self._obstacles = []
+        for obstacle in spec.obstacles:
+            name = f"/obstacles/{obstacle.name}"
+            if self.session.mesh.dim == 2:
+                points, closed = obstacle.shape.outline(2 * extent)
+                ring = np.column_stack([points, np.zeros(len(points))])
+                segments = np.stack([ring, np.roll(ring, -1, axis=0)], axis=1)[: len(ring) if closed else 1]
+                self._obstacles.append(scene.add_line_segments(name, segments, colors=edge, thickness=2.5))
+            else:
+                triangles, edges = obstacle_triangles(obstacle, extent)
+                self._obstacles.append(self._add_triangles(name, triangles, fill))
+                if len(edges):
+                    scene.add_line_segments(f"{name}/edges", edges, colors=edge, thickness=1.5)
+
+    def _add_triangles(self, name: str, triangles: np.ndarray, colour: np.ndarray):
+        """Triangles (t, 3, 3) as one flat-shaded mesh node, seen from both sides."""
+        faces = np.arange(3 * len(triangles)).reshape(-1, 3)
+        return self.server.scene.add_mesh_simple(
+            name, triangles.reshape(-1, 3), faces, color=colour, flat_shading=True, side="double"
+        )
+
+    def _move_obstacles(self) -> None:
+        """Each obstacle's node at its obstacle's offset now (a moving obstacle's, as the schedule plays)."""
+        for node, term in zip(self._obstacles, self.session.built.obstacles):
+            offset = np.asarray(term.offset, dtype=float)
+            if not np.array_equal(node.position, offset):
+                node.position = offset
 
     def _controls_now(self) -> tuple:
         """The values of the page's controls (viser sets them in the order the page's messages came)."""
@@ -284,6 +328,7 @@ class WebView:
                 self._times.popleft()
             self.fps = (len(self._times) - 1) / (now - self._times[0]) if len(self._times) > 1 else 0.0
         self._show_session()
+        self._move_obstacles()
         caption = self.caption()
         if caption != self.figures.content:
             self.figures.content = caption

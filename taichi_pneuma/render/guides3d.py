@@ -86,24 +86,30 @@ def profile(shape) -> np.ndarray:
     return np.array([[-half, 0.0], [-half, radius], [half, radius], [half, 0.0]])
 
 
-def obstacle_geometry(result) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
-    """Each obstacle of a 3D run as triangles (steps, t, 3, 3) and edges (steps, e, 2, 3) at each step (a plane: the
-    square about its point as wide as the body is long; a sphere, cylinder or capsule: revolved(), no edges)."""
+def obstacle_triangles(obstacle, reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """A 3D obstacle where it is placed as triangles (t, 3, 3) and edges (e, 2, 3): a box its faces and edges; a
+    plane the square about its point of half-side reach; a sphere, cylinder or capsule revolved(), no edges."""
     from ..terms.obstacle_shapes import Box, Cylinder, Plane, Sphere, axis_vector
 
+    shape = obstacle.shape
+    if isinstance(shape, Box):
+        p = shape.parameters()
+        return box(p[:3] - p[3:6], p[:3] + p[3:6])
+    if isinstance(shape, Plane):
+        return square(shape.point, shape.normal, reach)
+    if isinstance(shape, Sphere):
+        return revolved(shape.center, (1.0, 0.0, 0.0), profile(shape))
+    assert isinstance(shape, Cylinder), shape  # (and a Capsule: a Cylinder's subclass)
+    return revolved(shape.center, axis_vector(shape.axis), profile(shape))
+
+
+def obstacle_geometry(result) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+    """Each obstacle of a 3D run as triangles (steps, t, 3, 3) and edges (steps, e, 2, 3) at each step
+    (obstacle_triangles, a plane's square as wide as the body is long, moved by the obstacle's offset)."""
     reach = float(np.ptp(result.mesh.vertices, axis=0).max())
     drawn = []
     for o in result.scene.obstacles:
-        if isinstance(o.shape, Box):
-            p = o.shape.parameters()
-            triangles, edges = box(p[:3] - p[3:6], p[:3] + p[3:6])
-        elif isinstance(o.shape, Plane):
-            triangles, edges = square(o.shape.point, o.shape.normal, reach)
-        elif isinstance(o.shape, Sphere):
-            triangles, edges = revolved(o.shape.center, (1.0, 0.0, 0.0), profile(o.shape))
-        else:
-            assert isinstance(o.shape, Cylinder), o.shape  # (and a Capsule: a Cylinder's subclass)
-            triangles, edges = revolved(o.shape.center, axis_vector(o.shape.axis), profile(o.shape))
+        triangles, edges = obstacle_triangles(o, reach)
         offsets = np.array([o.offset(s.step) for s in result.steps])[:, None, None]
         drawn.append((triangles + offsets, edges + offsets))
     return tuple(drawn)
