@@ -150,17 +150,9 @@ def page_run(scene, path: np.ndarray, warmup: int, client: str = "") -> dict:
 
 def open_browser(url: str):
     """A headless Chromium with the frame counter, opening url in a thread; BROWSER_WAIT seconds to connect."""
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
+    from benchmarks.web_viewers import counting_chromium
 
-    from benchmarks.web_viewers import CHROME_ARGS, COUNTER_JS
-
-    options = webdriver.ChromeOptions()
-    options.binary_location = "/usr/bin/chromium"
-    for arg in (*CHROME_ARGS, "--disable-dev-shm-usage", "--window-size=1200,720"):
-        options.add_argument(arg)
-    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
-    driver.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": COUNTER_JS % 0})
+    driver = counting_chromium(0, "--disable-dev-shm-usage", "--window-size=1200,720")
     opener = threading.Thread(target=driver.get, args=(url,), daemon=True)
     opener.start()
     time.sleep(BROWSER_WAIT)

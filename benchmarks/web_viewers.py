@@ -189,17 +189,23 @@ def colours(field: np.ndarray, top: float) -> np.ndarray:
     return np.c_[rgb, np.full(len(field), 255)].astype(np.uint8)
 
 
-def open_page(url: str, points_bytes: int):
-    """A headless Chromium on url with COUNTER_JS in place before the page's scripts."""
+def counting_chromium(points_bytes: int, *args: str):
+    """A headless Chromium (CHROME_ARGS, then args) with COUNTER_JS in place before any page's scripts."""
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
     options = webdriver.ChromeOptions()
     options.binary_location = "/usr/bin/chromium"
-    for arg in (*CHROME_ARGS, "--window-size=1000,700"):
+    for arg in (*CHROME_ARGS, *args):
         options.add_argument(arg)
     driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
     driver.execute_cdp_cmd("Page.addScriptToEvaluateOnNewDocument", {"source": COUNTER_JS % points_bytes})
+    return driver
+
+
+def open_page(url: str, points_bytes: int):
+    """counting_chromium on url."""
+    driver = counting_chromium(points_bytes, "--window-size=1000,700")
     driver.get(url)
     return driver
 

@@ -243,10 +243,9 @@ def check_flags(args: argparse.Namespace) -> None:
         require_finite(f"--{name.replace('_', '-')}", getattr(args, name))
     newton_options(args)  # validates --tol and --max-iterations
     require(args.max_cuts >= 0, f"--max-cuts = {args.max_cuts!r} must be >= 0")
-    for name in ("max_triangles", "max_increments", "max_frame_pixels")[
-        : 3 if hasattr(args, "max_frame_pixels") else 2
-    ]:
-        require(getattr(args, name) >= 1, f"--{name.replace('_', '-')} = {getattr(args, name)!r} must be >= 1")
+    for name in ("max_triangles", "max_increments", "max_frame_pixels"):
+        if hasattr(args, name):  # (an app without video, pneuma-serve, has no --max-frame-pixels)
+            require(getattr(args, name) >= 1, f"--{name.replace('_', '-')} = {getattr(args, name)!r} must be >= 1")
     from ..scene.schedule import area_ramp
 
     area_ramp(args.growth, args.steps)  # validates growth and steps before any work

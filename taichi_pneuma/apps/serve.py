@@ -3,7 +3,7 @@
     pneuma-serve --scene pneunet_finger          (or python -m taichi_pneuma.apps.serve; needs the [web] extra)
 
 Builds the scene (a shipped scene's name or a scene file; without --scene the reference beam of the flags), then
-serves a page (live/web.py) with a slider per chamber command, play/pause of the scene's schedule, a gizmo to drag
+serves a page (realtime/web.py) with a slider per chamber command, play/pause of the scene's schedule, a gizmo to drag
 a target for the tip (inverse control), a field to colour the body by, the step's figures and frame rate, and a
 button that writes the equilibria reached so far to --out (<stem>_history.csv, _states.npz, _summary.json, ...,
 as pneuma-inflate writes a ramp). It listens on 127.0.0.1 and prints the page's URL with its token: open it in a

@@ -226,6 +226,12 @@ class LiveEquilibrium:
     def converged(self) -> bool:
         return self.residual <= self.solver.options.tol
 
+    @property
+    def state(self) -> str:
+        """In words: 'equilibrium' (converged), 'stuck' (the line search refused a fresh Hessian's step) or
+        'converging'."""
+        return "equilibrium" if self.converged else "stuck" if self.stuck else "converging"
+
     def hold(self, commands: np.ndarray, u: np.ndarray, residual: float) -> None:
         """Take an equilibrium found elsewhere (an inverse-control reach) as the state at `commands`; the next
         step takes a fresh Hessian."""
@@ -278,11 +284,10 @@ def explore_solid(
         live.frame(commands)
         volumes = ", ".join(f"x{c.area() / c.rest_area:.2f}" for c in built.chambers)
         tip = live.u[mesh.tip].mean(axis=0)
-        state = "equilibrium" if live.converged else "stuck" if live.stuck else "converging"
         return mesh.vertices + live.u, [
             f"volume {volumes}",
             f"tip dy {tip[1]:+.4f} dz {tip[2]:+.4f}",
-            f"residual {live.residual:.1e} ({state}, {live.iterations} Newton it)",
+            f"residual {live.residual:.1e} ({live.state}, {live.iterations} Newton it)",
         ]
 
     summary = explore_3d(

@@ -184,7 +184,7 @@ class LiveSession:
             "pressures": np.array([c.pressure() for c in self.built.chambers]),
             "iterations": live.iterations,
             "residual": float(live.residual),
-            "state": "equilibrium" if live.converged else "stuck" if live.stuck else "converging",
+            "state": live.state,
             "schedule_step": self.schedule_step,
             "playing": self.playing,
             "reach_error": self.reached,
