@@ -119,7 +119,8 @@ class ReachOptions:
 @dataclass
 class Pose:
     """An equilibrium: the commands, the displacements (n, d), the tip point (d,) (scene coordinates) and
-    rotation (degrees, about z in 3D), and the forward solve that found it (Newton iterations, residual, seconds)."""
+    rotation (degrees, about z in 3D; continued from the pose it was solved from, fem/tip.py), and the forward
+    solve that found it (Newton iterations, residual, seconds)."""
 
     commands: np.ndarray
     u: np.ndarray
@@ -248,13 +249,15 @@ class Reacher:
         self.length = body_length(built)
         self.forward_solves = self.newton_iterations = 0
         rest = built.scene.schedule.rest_commands
-        self.pose, self._previous = self._pose(rest, np.zeros_like(built.mesh.vertices)), None
+        self.pose, self._previous = self._pose(rest, np.zeros_like(built.mesh.vertices), 0.0), None
         self._factored: Pose | None = None  # the pose whose exact Hessian the solver's factor is
         self.settle((self.lo + self.hi) / 2 if start is None else start)
 
-    def _pose(self, commands: np.ndarray, u: np.ndarray) -> Pose:
+    def _pose(self, commands: np.ndarray, u: np.ndarray, near: float) -> Pose:
+        """The pose of the equilibrium u at commands, its rotation continued from `near`, that of the pose it was
+        solved from (fem/tip.py: the whole turn from rest)."""
         mesh = self.built.mesh
-        rotation = tip_measures(mesh, u)[1]
+        rotation = tip_measures(mesh, u, near)[1]
         return Pose(np.array(commands, float), u, (mesh.vertices[mesh.tip] + u[mesh.tip]).mean(axis=0), rotation)
 
     def settle(self, commands: np.ndarray, tangent: np.ndarray | None = None) -> Pose:
@@ -279,7 +282,7 @@ class Reacher:
         self.newton_iterations += iterations
         self._previous = previous
         self.pose = dataclasses.replace(
-            self._pose(commands, u),
+            self._pose(commands, u, self.pose.rotation),
             iterations=iterations,
             residual=records[-1].residual,
             seconds=time.perf_counter() - start,
