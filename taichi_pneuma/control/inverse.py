@@ -8,10 +8,12 @@ the chamber commands q (area ratios or pressures), minimise over q
               w_z (z(q) - t_z) / L),
 
 with (x, y, z) the tip point and theta its rotation (about z) at the equilibrium of q and L the body
-length; the z row only for an (x, y, z) target on a 3D body, the theta row only when it is targeted. The
-regulariser (rho, default 1e-4, towards the rest commands s_ref) acts only when the chambers
-outnumber the targeted quantities: redundant chambers then take the least actuation that reaches
-the target; with no redundancy it is off, so a reachable target is met exactly.
+length. theta is the whole turn from rest, each equilibrium's continued from that of the one it was solved
+from (fem/tip.py): theta_t = -200 asks for a clockwise curl past half a turn, which +160 is not. The z row
+only for an (x, y, z) target on a 3D body, the theta row only when it is targeted. The regulariser
+(rho, default 1e-4, towards the rest commands s_ref) acts only when the chambers outnumber the targeted
+quantities: redundant chambers then take the least actuation that reaches the target; with no redundancy it
+is off, so a reachable target is met exactly.
 
 Each iteration linearises f with the sensitivity J = df/ds (sensitivity.py: exact Hessian, direct
 method) and takes the bounded least-squares step (SciPy's lsq_linear, BVLS: exact at the bounds)
@@ -295,7 +297,7 @@ class Reacher:
         error = tip_error(target, pose)
         if target.angle is None:
             return error, None
-        return error, abs((pose.rotation - target.angle + 180.0) % 360.0 - 180.0)
+        return error, abs(pose.rotation - target.angle)
 
     def reach(self, target: Target) -> ReachResult:
         """Find the commands whose equilibrium puts the tip at `target` (see the module docstring).
