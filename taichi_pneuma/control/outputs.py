@@ -16,7 +16,8 @@ Only a measure of the state can be a target: every history column but the solver
 iterations, residual, converged, cuts, substeps, seconds), which count the solve and take no value in between.
 The value m found at brentq's root is compared with D: the target is reached when |m - D| <= RTOL * max(|m(k) -
 m(k - 1)|, |D|), a thousandth of the column's change over the crossing step (or of D); a column that jumps over D
-inside the step (a snap-through, a contact closing) is not reached there, and the value found is reported with it.
+inside the step (a snap-through, a contact closing) is not reached there, and the value found is reported with it;
+so is one whose re-solved step k does not cross D (the nearer end's value).
 """
 
 from __future__ import annotations
@@ -57,13 +58,14 @@ class OutputReach:
 
     def summary_line(self) -> str:
         """'reached: <column> = <value> at step <s> ...' or 'unreachable: ...': not crossed (the closest step), or
-        jumped over inside a step (the value found there)."""
+        crossed by a step but not taken inside it (the value found there)."""
         if self.found:
             return f"reached: {self.column} = {self.value:.6g} at step {self.step:.4f} of the schedule"
         if self.evaluations:
             return (
-                f"unreachable: {self.column} = {self.wanted:.6g} is jumped over inside step {len(self.run.steps) - 1} "
-                f"of the schedule: {self.value:.6g} at step {self.step:.4f}, not within {RTOL:g} of the step's change"
+                f"unreachable: {self.column} = {self.wanted:.6g} is not taken inside step {len(self.run.steps) - 1} of "
+                f"the schedule, which crosses it: {self.value:.6g} found at step {self.step:.4f}, not within {RTOL:g} "
+                f"of the step's change (the column jumps there, or the step re-solved does not cross it)"
             )
         return (
             f"unreachable: {self.column} = {self.wanted:.6g} is not crossed by the schedule; closest {self.value:.6g} "
@@ -139,10 +141,14 @@ def reach_output(
         evaluations.append((s, float(record.row()[column])))
         return evaluations[-1][1] - wanted
 
-    if values[k] == wanted:
-        step = float(k)
+    if values[k] == wanted or values[k - 1] == wanted:
+        step = float(k if values[k] == wanted else k - 1)
     else:
-        step = float(brentq(measure, k - 1, k, xtol=xtol)) if values[k - 1] != wanted else float(k - 1)
+        ends = measure(k - 1), measure(k)  # re-solved from step k - 1: they need not bracket D as the ramp's did
+        if ends[0] * ends[1] > 0:
+            step = float(k - 1 if abs(ends[0]) < abs(ends[1]) else k)  # the nearer end, checked below
+        else:
+            step = float(brentq(measure, k - 1, k, xtol=xtol))
     value = wanted + measure(step)
     return OutputReach(
         column,
