@@ -131,8 +131,8 @@ def test_reach_output_finds_an_angle_past_a_whole_turn(finger_file):
     again = tp.simulate(
         scene.with_values(
             {
-                **{f"chambers[{i}].keyframes": [[12, float(c)]] for i, c in enumerate(result.commands)},
-                "schedule.increments": 12,
+                **{f"chambers[{i}].keyframes": [[6, float(c)]] for i, c in enumerate(result.commands)},
+                "schedule.increments": 6,
             }
         )
     )
@@ -164,11 +164,13 @@ def test_a_column_that_jumps_over_the_value_inside_a_step_is_not_reached(monkeyp
 
 
 def test_a_column_never_enters_a_file_name_unreduced(tmp_path, capsys):
-    """A chamber's name goes into its columns; the summary of a reach for one stays inside --out."""
+    """A chamber's name goes into its columns; the summary of a reach for one stays inside --out, even where --out
+    holds a folder named as the column's first part (0141107 wrote a/b/escaped.area_ratio1.5_summary.json)."""
     scene = tp.reference_scene(max_area=0.02, chamber_points=32, steps=4)
     text = scene.to_toml().replace('name = "main"', 'name = "x/../../escaped"')
     (tmp_path / "odd.toml").write_text(text)
     out = tmp_path / "a" / "b" / "out"
+    (out / f"{scene.name}_output_x").mkdir(parents=True)
     column = "x/../../escaped.area_ratio"
     command = ["--scene", str(tmp_path / "odd.toml"), "--output", column, "--value", "1.5", "--out", str(out)]
     assert reach.main(command) == 0
