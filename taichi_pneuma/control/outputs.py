@@ -153,7 +153,7 @@ def reach_output(
     return OutputReach(
         column,
         wanted,
-        abs(value - wanted) <= RTOL * max(abs(values[k] - values[k - 1]), abs(wanted)),
+        bool(abs(value - wanted) <= RTOL * max(abs(values[k] - values[k - 1]), abs(wanted))),
         value,
         step,
         schedule.commands(step),
