@@ -182,7 +182,8 @@ class Run:
 
     @property
     def tip_rotation(self) -> float:
-        """Rotation of the tip vertices at the last step, in degrees (counter-clockwise positive)."""
+        """Rotation of the tip vertices at the last step, in degrees (counter-clockwise positive), the whole turn
+        from rest (-375 for a finger curled clockwise past a whole turn; fem/tip.py)."""
         return self.steps[-1].tip_rotation
 
     @property
