@@ -17,7 +17,6 @@ import math
 import numpy as np
 
 COLUMNS = ("tip_dx", "tip_dy", "tip_dz")  # the history's names of the tip displacement's components, by axis
-ANGLES = ("tip_rotation", "tip_twist")  # the history's angle columns, each continued from the step before
 
 
 def continued(angle: float, near: float) -> float:
