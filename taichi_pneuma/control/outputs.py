@@ -42,9 +42,8 @@ class OutputReach:
     """column, wanted: what was asked; found: whether the ramp crossed it and the value found there is within RTOL
     of it (module docstring); value: the column at the result (the closest step's when not crossed, the one found
     inside the crossing step when jumped over); step: the (fractional) step of the schedule at which it is reached
-    (or that value is); commands:
-    the chambers' commands there; run: the ramp's steps up to the crossing (all of them when not found);
-    evaluations: the brentq evaluations (step, value); seconds: the wall time."""
+    (or that value is); commands: the chambers' commands there; run: the ramp's steps up to the crossing (all of
+    them when not crossed); evaluations: the brentq evaluations (step, value); seconds: the wall time."""
 
     column: str
     wanted: float
