@@ -51,7 +51,7 @@ def test_a_value_the_schedule_never_reaches_is_reported_with_the_closest_step():
     rotations = list(result.run.history["tip_rotation"])
     assert not result.found and len(rotations) == 3  # the whole ramp, never at 45 degrees
     assert result.value == max(rotations) and result.step == rotations.index(max(rotations))
-    with pytest.raises(PneumaInputError, match="output 'tip_twist' is not a history column of this scene: one of"):
+    with pytest.raises(PneumaInputError, match="output 'tip_twist' is not a measure of this scene's state"):
         reach_output(scene.build(), "tip_twist", 1.0)
 
 

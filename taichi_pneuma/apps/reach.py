@@ -4,7 +4,7 @@
     pneuma-reach --scene beam_3d --tip 1.769 -0.179 0.006 --no-video    (a 3D body: X Y Z)
     pneuma-reach --scene pneunet_finger --targets pneunet_finger_targets.csv   (or a scene's [[targets]])
     pneuma-reach --design cy --tip-dy -0.2
-    pneuma-reach --scene gripper_2d --output object.magnitude --value 20     (any history column)
+    pneuma-reach --scene gripper_2d --output object.magnitude --value 20     (any measure of the state)
 
 X Y is where the tip point (the mean of the tip vertices, as in inflate's tip deflection) should be,
 in scene coordinates (X Y Z on a 3D body; X Y alone leaves z free); --angle DEG adds the tip rotation
@@ -16,10 +16,12 @@ written. Writes under --out the video (the target marker and the tip's path), it
 the per-frame history CSV (commands, tip, target, error), the states and a summary JSON.
 --design cy --tip-dy D instead finds the chamber height cy at which the reference ramp ends at tip deflection D
 (writes design_cy_tip_dy<D>_summary.json, with what the flags changed). --output COLUMN --value V instead follows
-the scene's own schedule to where a history column (tip_rotation: the bending angle, tip_twist, tip_dx,
-blocked_force, a contact force, ...) equals V (control/outputs.py), prints `reached:` with the commands there (or
-`unreachable:` with the closest step, exit 1) and writes <scene>_output_<COLUMN><V>_summary.json (with what the
-flags changed of the scene, cli.result_stem).
+the scene's own schedule to where a history column that measures the state (tip_rotation: the bending angle, the
+whole turn from rest, tip_twist, tip_dx, blocked_force, a contact force, ...; not the solver's step, iterations,
+residual, ...) equals V (control/outputs.py), prints `reached:` with the commands there (or `unreachable:` with the
+closest step, or the value found where the column jumps over V inside a step, exit 1) and writes
+<scene>_output_<COLUMN><V>_summary.json (COLUMN made a plain file name, with what the flags changed of the scene,
+cli.result_stem).
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ from typing import TYPE_CHECKING
 
 from .. import runtime
 from ..errors import PneumaInputError, parse_number, require, require_finite
-from ..io.output import lock_stems, prepare_directory, save_json
+from ..io.output import lock_stems, prepare_directory, reduce_to_stem, save_json
 from ..signals import holding
 
 if TYPE_CHECKING:
@@ -113,8 +115,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--output",
         metavar="COLUMN",
-        help="instead of a tip target: the history column (tip_rotation, blocked_force, ...) to bring to --value "
-        "along the scene's schedule",
+        help="instead of a tip target: the history column measuring the state (tip_rotation, blocked_force, ...; "
+        "not step, iterations, residual, ...) to bring to --value along the scene's schedule",
     )
     p.add_argument("--value", type=float, help="with --output: the value the column should take")
     add_ramp_arguments(p)
@@ -382,17 +384,12 @@ def run_output(args: argparse.Namespace) -> dict:
     }
     summary["scene_sha256"] = scene_sha256(scene)
     # named by the output and value sought and what the run changed of the scene: no other run overwrites it
-    stem = result_stem(f"{scene.name}_output_{args.output}{wanted:g}", args, scene)
-    path = save_json(out / f"{stem}_summary.json", summary)
+    # (the column made a plain file name: a chamber's or an obstacle's name in it may hold any character)
+    stem = result_stem(f"{scene.name}_output_{reduce_to_stem(args.output)}{wanted:g}", args, scene)
+    with lock_stems(out, stem):  # no other run writes this file meanwhile
+        path = save_json(out / f"{stem}_summary.json", summary)
     print(f"wrote {path}")
-    if result.found:
-        print(f"reached: {args.output} = {result.value:.6g} at step {result.step:.4f} of the schedule: {commands}")
-    else:
-        print(
-            f"unreachable: {args.output} = {wanted:.6g} is not crossed by the schedule; closest {result.value:.6g} "
-            f"at step {result.step:g}: {commands}",
-            file=sys.stderr,
-        )
+    print(f"{result.summary_line()}: {commands}", file=sys.stdout if result.found else sys.stderr)
     return summary
 
 

@@ -8,10 +8,12 @@ the chamber commands q (area ratios or pressures), minimise over q
               w_z (z(q) - t_z) / L),
 
 with (x, y, z) the tip point and theta its rotation (about z) at the equilibrium of q and L the body
-length; the z row only for an (x, y, z) target on a 3D body, the theta row only when it is targeted. The
-regulariser (rho, default 1e-4, towards the rest commands s_ref) acts only when the chambers
-outnumber the targeted quantities: redundant chambers then take the least actuation that reaches
-the target; with no redundancy it is off, so a reachable target is met exactly.
+length. theta is the whole turn from rest, each equilibrium's continued from that of the one it was solved
+from (fem/tip.py): theta_t = -200 asks for a clockwise curl past half a turn, which +160 is not. The z row
+only for an (x, y, z) target on a 3D body, the theta row only when it is targeted. The regulariser
+(rho, default 1e-4, towards the rest commands s_ref) acts only when the chambers outnumber the targeted
+quantities: redundant chambers then take the least actuation that reaches the target; with no redundancy it
+is off, so a reachable target is met exactly.
 
 Each iteration linearises f with the sensitivity J = df/ds (sensitivity.py: exact Hessian, direct
 method) and takes the bounded least-squares step (SciPy's lsq_linear, BVLS: exact at the bounds)
@@ -119,7 +121,8 @@ class ReachOptions:
 @dataclass
 class Pose:
     """An equilibrium: the commands, the displacements (n, d), the tip point (d,) (scene coordinates) and
-    rotation (degrees, about z in 3D), and the forward solve that found it (Newton iterations, residual, seconds)."""
+    rotation (degrees, about z in 3D; continued from the pose it was solved from, fem/tip.py), and the forward
+    solve that found it (Newton iterations, residual, seconds)."""
 
     commands: np.ndarray
     u: np.ndarray
@@ -248,13 +251,15 @@ class Reacher:
         self.length = body_length(built)
         self.forward_solves = self.newton_iterations = 0
         rest = built.scene.schedule.rest_commands
-        self.pose, self._previous = self._pose(rest, np.zeros_like(built.mesh.vertices)), None
+        self.pose, self._previous = self._pose(rest, np.zeros_like(built.mesh.vertices), 0.0), None
         self._factored: Pose | None = None  # the pose whose exact Hessian the solver's factor is
         self.settle((self.lo + self.hi) / 2 if start is None else start)
 
-    def _pose(self, commands: np.ndarray, u: np.ndarray) -> Pose:
+    def _pose(self, commands: np.ndarray, u: np.ndarray, near: float) -> Pose:
+        """The pose of the equilibrium u at commands, its rotation continued from `near`, that of the pose it was
+        solved from (fem/tip.py: the whole turn from rest)."""
         mesh = self.built.mesh
-        rotation = tip_measures(mesh, u)[1]
+        rotation = tip_measures(mesh, u, near)[1]
         return Pose(np.array(commands, float), u, (mesh.vertices[mesh.tip] + u[mesh.tip]).mean(axis=0), rotation)
 
     def settle(self, commands: np.ndarray, tangent: np.ndarray | None = None) -> Pose:
@@ -279,7 +284,7 @@ class Reacher:
         self.newton_iterations += iterations
         self._previous = previous
         self.pose = dataclasses.replace(
-            self._pose(commands, u),
+            self._pose(commands, u, self.pose.rotation),
             iterations=iterations,
             residual=records[-1].residual,
             seconds=time.perf_counter() - start,
@@ -292,7 +297,7 @@ class Reacher:
         error = tip_error(target, pose)
         if target.angle is None:
             return error, None
-        return error, abs((pose.rotation - target.angle + 180.0) % 360.0 - 180.0)
+        return error, abs(pose.rotation - target.angle)
 
     def reach(self, target: Target) -> ReachResult:
         """Find the commands whose equilibrium puts the tip at `target` (see the module docstring).

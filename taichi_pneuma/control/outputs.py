@@ -6,10 +6,18 @@ The schedule's commands c(s) (piecewise linear in the step s, solve.simulate's r
 column m measured after every step. At the first step k where m(k) - D changes sign (or is zero), the root of
 m(c(s)) = D for s in [k - 1, k] is found by SciPy's brentq, each evaluation one equilibrium solved from the state
 of step k - 1 (simulate.settle, with its cut-backs): the state a ramp would reach at c(s), to the Newton tolerance,
-and m read off it as the ramp reads it (simulate.step_record). A column the ramp never brings to D is reported with
-the step that came closest; the ramp then runs whole. A quasistatic state depends on its path only through what
-remembers it (none of the elastic, pressure, fibre, sheet or frictionless contact terms do), so the root is the
-equilibrium of the scene at those commands.
+and m read off it as the ramp reads it (simulate.step_record, an angle continued from step k - 1's: the whole turn
+from rest, fem/tip.py). A column the ramp never brings to D is reported with the step that came closest; the ramp
+then runs whole. A quasistatic state depends on its path only through what remembers it (none of the elastic,
+pressure, fibre, sheet or frictionless contact terms do), so the root is the equilibrium of the scene at those
+commands.
+
+Only a measure of the state can be a target: every history column but the solver's (records.SOLVER_COLUMNS: step,
+iterations, residual, converged, cuts, substeps, seconds), which count the solve and take no value in between.
+The value m found at brentq's root is compared with D: the target is reached when |m - D| <= RTOL * max(|m(k) -
+m(k - 1)|, |D|), a thousandth of the column's change over the crossing step (or of D); a column that jumps over D
+inside the step (a snap-through, a contact closing) is not reached there, and the value found is reported with it;
+so is one whose re-solved step k does not cross D (the nearer end's value).
 """
 
 from __future__ import annotations
@@ -25,16 +33,17 @@ from ..errors import require, require_finite
 from ..fem.fields import ElementFields
 from ..scene.build import BuiltScene
 from ..solve.newton import NewtonOptions, NewtonSolver
-from ..solve.records import Run
+from ..solve.records import SOLVER_COLUMNS, Run
 from ..solve.simulate import RampInterrupted, run_schedule, settle, step_record
 
 
 @dataclass
 class OutputReach:
-    """column, wanted: what was asked; found: whether the ramp crossed it; value: the column at the result (the
-    closest step's when not found); step: the (fractional) step of the schedule at which it is reached; commands:
-    the chambers' commands there; run: the ramp's steps up to the crossing (all of them when not found);
-    evaluations: the brentq evaluations (step, value); seconds: the wall time."""
+    """column, wanted: what was asked; found: whether the ramp crossed it and the value found there is within RTOL
+    of it (module docstring); value: the column at the result (the closest step's when not crossed, the one found
+    inside the crossing step when jumped over); step: the (fractional) step of the schedule at which it is reached
+    (or that value is); commands: the chambers' commands there; run: the ramp's steps up to the crossing (all of
+    them when not crossed); evaluations: the brentq evaluations (step, value); seconds: the wall time."""
 
     column: str
     wanted: float
@@ -45,6 +54,25 @@ class OutputReach:
     run: Run
     evaluations: list[tuple[float, float]]
     seconds: float
+
+    def summary_line(self) -> str:
+        """'reached: <column> = <value> at step <s> ...' or 'unreachable: ...': not crossed (the closest step), or
+        crossed by a step but not taken inside it (the value found there)."""
+        if self.found:
+            return f"reached: {self.column} = {self.value:.6g} at step {self.step:.4f} of the schedule"
+        if self.evaluations:
+            return (
+                f"unreachable: {self.column} = {self.wanted:.6g} is not taken inside step {len(self.run.steps) - 1} of "
+                f"the schedule, which crosses it: {self.value:.6g} found at step {self.step:.4f}, not within {RTOL:g} "
+                f"of the step's change (the column jumps there, or the step re-solved does not cross it)"
+            )
+        return (
+            f"unreachable: {self.column} = {self.wanted:.6g} is not crossed by the schedule; closest {self.value:.6g} "
+            f"at step {self.step:g}"
+        )
+
+
+RTOL = 1e-3  # the value found is within RTOL of the column's change over the crossing step (module docstring)
 
 
 def crossing(values: np.ndarray, wanted: float) -> int | None:
@@ -60,7 +88,7 @@ def reach_output(
     built: BuiltScene, column: str, wanted: float, options: NewtonOptions | None = None, xtol: float = 1e-6
 ) -> OutputReach:
     """The commands along built's schedule at which history column `column` equals `wanted` (module docstring);
-    a column the scene's history does not have is refused, naming the ones it has."""
+    a column the scene's history does not have, or one of the solver's, is refused, naming the ones it can be."""
     started = time.perf_counter()
     wanted = require_finite(column, wanted)
     schedule = built.scene.schedule
@@ -68,9 +96,11 @@ def reach_output(
 
     def watch(step, positions, forces) -> None:
         row = step.row()
+        measures = sorted(name for name in row if name not in SOLVER_COLUMNS)
         require(
-            column in row,
-            f"output {column!r} is not a history column of this scene: one of {', '.join(sorted(row))}",
+            column in measures,
+            f"output {column!r} is not a measure of this scene's state (the solver's {', '.join(SOLVER_COLUMNS)} take "
+            f"no value between steps): one of {', '.join(measures)}",
         )
         seen.append(float(row[column]))
 
@@ -96,7 +126,7 @@ def reach_output(
             [],
             time.perf_counter() - started,
         )
-    u0, c0 = run.displacements[k - 1], schedule.commands(k - 1)
+    u0, c0, before = run.displacements[k - 1], schedule.commands(k - 1), run.steps[k - 1]
     solver = NewtonSolver(built.model, options)
     stretches = ElementFields(built.mesh.vertices, built.mesh.elements)
     evaluations: list[tuple[float, float]] = []
@@ -106,19 +136,23 @@ def reach_output(
         u, _, _, records, cuts = settle(built, solver, c0, u0, commands)
         built.set_commands(commands)
         built.model.set_displacements(u)
-        record, _ = step_record(built, k, commands, u, records, cuts, math.nan, stretches)
+        record, _ = step_record(built, k, commands, u, records, cuts, math.nan, stretches, before)
         evaluations.append((s, float(record.row()[column])))
         return evaluations[-1][1] - wanted
 
-    if values[k] == wanted:
-        step = float(k)
+    if values[k] == wanted or values[k - 1] == wanted:
+        step = float(k if values[k] == wanted else k - 1)
     else:
-        step = float(brentq(measure, k - 1, k, xtol=xtol)) if values[k - 1] != wanted else float(k - 1)
+        ends = measure(k - 1), measure(k)  # re-solved from step k - 1: they need not bracket D as the ramp's did
+        if ends[0] * ends[1] > 0:
+            step = float(k - 1 if abs(ends[0]) < abs(ends[1]) else k)  # the nearer end, checked below
+        else:
+            step = float(brentq(measure, k - 1, k, xtol=xtol))
     value = wanted + measure(step)
     return OutputReach(
         column,
         wanted,
-        True,
+        bool(abs(value - wanted) <= RTOL * max(abs(values[k] - values[k - 1]), abs(wanted))),
         value,
         step,
         schedule.commands(step),

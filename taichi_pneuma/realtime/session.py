@@ -147,6 +147,7 @@ class LiveSession:
             0,
             time.perf_counter() - self._started,
             self._fields,
+            self.steps[-1] if self.steps else None,
         )
         self.steps.append(step)
         self._positions.append(self.mesh.vertices + live.u)
@@ -172,11 +173,12 @@ class LiveSession:
     def figures(self) -> dict:
         """The state's figures: tip (its mean displacement, d values) and rotation (degrees), per chamber the
         command and pressure, the Newton iterations since the commands last moved, the residual and whether it
-        is an equilibrium, the schedule's step and whether it plays, the last reach's distance to its target."""
+        is an equilibrium, the schedule's step and whether it plays, the last reach's distance to its target. The
+        rotation is continued from the last state kept (fem/tip.py: the whole turn from rest)."""
         from ..fem.tip import tip_measures
 
         live = self.equilibrium
-        tip, rotation = tip_measures(self.mesh, live.u)
+        tip, rotation = tip_measures(self.mesh, live.u, self.steps[-1].tip_rotation if self.steps else 0.0)
         return {
             "tip": np.asarray(tip, dtype=float),
             "rotation": float(rotation),

@@ -14,6 +14,10 @@ from ..fem.fields import element_fields
 from ..fem.tip import COLUMNS as TIP_COLUMNS
 from ..scene.build import BuiltScene, Scene
 
+# the history columns that count the solve, not measure the state it found: a ramp's step, its Newton iterations,
+# residual, convergence, cut-backs, sub-increments and seconds (each an integer, a flag or a figure of the solver's)
+SOLVER_COLUMNS = ("step", "iterations", "residual", "converged", "cuts", "substeps", "seconds")
+
 
 @dataclass
 class ChamberRecord:
@@ -32,16 +36,17 @@ class StepRecord:
     """One increment of the schedule, as measured after its solve.
 
     tip: the mean displacement of the tip nodes (d,) (fem/tip.py); tip_rotation: their rigid rotation in
-    degrees (counter-clockwise positive, least squares; in 3D the bend angle, about z); contact: per contact
+    degrees (counter-clockwise positive, least squares; in 3D the bend angle, about z), the whole turn from rest
+    (continued from the step before: -250 past half a turn, not +110); contact: per contact
     term (by its name: ground, self_contact, each obstacle's) the total force it exerts on the body (fx, fy) and the
     sum of its per-node force magnitudes, and in 3D (contact_fz) that force's z component; clamp: the clamp's
     reaction on the body, its force and its moment about the pinned nodes' rest centroid (simulate.clamp_reaction:
     fx, fy, mz; in 3D fx, fy, fz, mx, my, mz), empty without a clamp; extra:
     further columns by name, last in the row (a reach's target and tip error, inverse.frames); max_stretch: the
     largest principal stretch at any quadrature point (ElementFields.largest_stretch); tip_twist: in 3D the tip's
-    twist about x in degrees (fem/tip.py tip_twist), else None; blocked_force: in a scene with obstacles the
-    magnitude of the total force between the body and all of them (the force an actuator exerts on the objects it
-    is held against), else None.
+    twist about x in degrees (fem/tip.py tip_twist, the whole turn from rest as tip_rotation is), else None;
+    blocked_force: in a scene with obstacles the magnitude of the total force between the body and all of them (the
+    force an actuator exerts on the objects it is held against), else None.
     """
 
     step: int
@@ -177,7 +182,8 @@ class Run:
 
     @property
     def tip_rotation(self) -> float:
-        """Rotation of the tip vertices at the last step, in degrees (counter-clockwise positive)."""
+        """Rotation of the tip vertices at the last step, in degrees (counter-clockwise positive), the whole turn
+        from rest (-375 for a finger curled clockwise past a whole turn; fem/tip.py)."""
         return self.steps[-1].tip_rotation
 
     @property

@@ -184,11 +184,15 @@ def step_record(
     cuts: int,
     seconds: float,
     stretches: ElementFields,
+    previous: StepRecord | None = None,
 ) -> tuple[StepRecord, np.ndarray]:
     """What a run records of the equilibrium u at `commands` (the model holding it), reached by the Newton solves
     `records` with `cuts` cut-backs in `seconds`: its StepRecord (chambers, tip, contact forces by term, the clamp's
-    reaction, the largest stretch) and the summed contact force per node (n, d)."""
+    reaction, the largest stretch) and the summed contact force per node (n, d). Its angles (tip rotation, twist)
+    are continued from those of `previous`, the record of the state it was solved from (none: rest, 0 degrees):
+    the whole turn from rest (fem/tip.py)."""
     mesh = built.mesh
+    rotation, twist = (0.0, 0.0) if previous is None else (previous.tip_rotation, previous.tip_twist or 0.0)
     contact, contact_fz, vertex_forces = {}, {}, np.zeros_like(u)
     on_obstacles = np.zeros(mesh.dim)
     for term in built.contact_terms():
@@ -204,7 +208,7 @@ def step_record(
     record = StepRecord(
         step,
         chamber_records(built, commands),
-        *tip_measures(mesh, u),
+        *tip_measures(mesh, u, rotation),
         sum(r.iterations for r in records),
         final.residual,
         final.converged,
@@ -216,7 +220,7 @@ def step_record(
         max_stretch=stretches.largest_stretch(mesh.vertices + u),
         contact_fz=contact_fz,
         clamp=clamp_reaction(built),
-        tip_twist=tip_twist_of(mesh, u),
+        tip_twist=tip_twist_of(mesh, u, twist),
         blocked_force=float(np.linalg.norm(on_obstacles)) if built.obstacles else None,
     )
     return record, vertex_forces
@@ -286,7 +290,9 @@ def run_schedule(
         for record in records:
             newton["chord_steps"] += record.chord_steps
             newton["phase_seconds"].update(record.phase_seconds)
-        step, vertex_forces = step_record(built, i, target, u, records, cuts, time.perf_counter() - start, stretches)
+        step, vertex_forces = step_record(
+            built, i, target, u, records, cuts, time.perf_counter() - start, stretches, steps[-1] if steps else None
+        )
         steps.append(step)
         states.append(mesh.vertices + u)
         forces.append(vertex_forces)
