@@ -171,7 +171,7 @@ name = "post"
 shape = "sphere"
 center = [1.8, -0.45]
 radius = 0.2
-dhat = 0.02
+dhat = 0.05
 stiffness = 10.0
 """
 
