@@ -47,7 +47,7 @@ from .obstacle_shapes import BOX, CAPSULE, PLANE, SPHERE, Shape, vector
 PARAMETERS = 8  # position (3: a point or centre), vector (3: normal, half-size or axis), radius, half-length
 STEP_CAP = 4.0  # max_step's conservative advancement stops past this step fraction (inf)
 ADVANCES = 100  # and after this many advances (the bound reached, short of the contact)
-REACH = 10.0  # a keyframe offset is at most this many times the body's size long
+REACH = 10.0  # a keyframe offset's components are at most this many times the body's size
 MAX_SWEEPS = 1000  # sub-steps of one increment's obstacle motion, at most (Obstacle.terms refuses more)
 GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 SEARCH = 48  # lowest's trisections: the bracket shrinks to GOLDEN^48 ~ 1e-10 of the facet
@@ -494,7 +494,7 @@ class Obstacle:
     def terms(self, config, mesh, lumped_area, budget) -> list:
         """Its contact term on the body's outer boundary nodes, its overlap check on the body's surface pieces
         (surface_pieces). Refused: a 3D scene's point or vector of 2 numbers; a 2D scene's keyframe with a z
-        offset; an offset longer than REACH times the body's size (the diagonal of its bounding box); a motion
+        offset; an offset component beyond REACH times the body's size (the diagonal of its bounding box); a motion
         per increment of more than MAX_SWEEPS sweeps (BuiltScene.sweeps; the sweep: half the smaller of dhat
         and the median length of the surface pieces' sides); an obstacle overlapping the rest body (overlap)."""
         flat = [key for key in self.shape.vectors if len(getattr(self.shape, key)) == 2]
@@ -512,9 +512,9 @@ class Obstacle:
                 f"scene's obstacle moves in its plane: give [dx, dy]",
             )
             require(
-                float(np.linalg.norm(v)) <= REACH * size,
-                f"obstacle {self.name!r}: keyframes offset {list(offset)!r} at step {step:g} must be at most "
-                f"{REACH:g} times the body's size ({REACH * size:.4g}) long",
+                float(np.max(np.abs(v))) <= REACH * size,
+                f"obstacle {self.name!r}: keyframes offset {list(offset)!r} at step {step:g} must lie within "
+                f"+-{REACH * size:.4g} in each component ({REACH:g} times the body's size)",
             )
         pieces = surface_pieces(mesh)
         x = mesh.vertices[pieces]
