@@ -15,8 +15,8 @@ from test_obstacles import beam, beam_text
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.materials import Material
-from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.scene.scenefile import read_scene
+from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 from taichi_pneuma.terms.obstacle_shapes import Box, Sphere
 from taichi_pneuma.terms.obstacles import Obstacle
@@ -24,15 +24,14 @@ from taichi_pneuma.terms.obstacles import Obstacle
 SAMPLES = 24  # points along each side of a boundary facet
 
 
-def box_distance(points: np.ndarray, centre, size) -> np.ndarray:
-    """The signed distance of an axis-aligned box (no z extent for 2 numbers of size) at points (k, d)."""
+def distance(points: np.ndarray, shape, centre) -> np.ndarray:
+    """The signed distance at points (k, d) of a Box (no z extent for a size of 2 numbers) or a Sphere moved to
+    centre: |max(q, 0)| + min(max_k q_k, 0), q = |x - c| - size / 2, or |x - c| - R."""
     d = points.shape[1]
-    q = np.abs(points - np.asarray(centre[:d])) - 0.5 * np.asarray((*size, np.inf)[:d])
+    if isinstance(shape, Sphere):
+        return np.linalg.norm(points - np.asarray(centre[:d]), axis=1) - shape.radius
+    q = np.abs(points - np.asarray(centre[:d])) - 0.5 * np.asarray((*shape.size, np.inf)[:d])
     return np.linalg.norm(np.maximum(q, 0.0), axis=1) + np.minimum(q.max(axis=1), 0.0)
-
-
-def sphere_distance(points: np.ndarray, centre, radius) -> np.ndarray:
-    return np.linalg.norm(points - np.asarray(centre[: points.shape[1]]), axis=1) - radius
 
 
 def surface_points(mesh, x: np.ndarray) -> np.ndarray:
@@ -59,9 +58,9 @@ def inside_an_element(mesh, x: np.ndarray, point) -> bool:
     return bool(np.any((weights >= 0).all(axis=1) & (weights.sum(axis=1) <= 1)))
 
 
-def overlaps(mesh, x: np.ndarray, distance, centre) -> bool:
-    """Whether the obstacle (its signed distance function, its centre) overlaps the body at positions x."""
-    return bool(distance(surface_points(mesh, x)).min() <= 0) or inside_an_element(mesh, x, centre)
+def overlaps(mesh, x: np.ndarray, shape, centre) -> bool:
+    """Whether the obstacle's shape moved to centre overlaps the body at positions x."""
+    return bool(distance(surface_points(mesh, x), shape, centre).min() <= 0) or inside_an_element(mesh, x, centre)
 
 
 def kept_states(built):
@@ -88,7 +87,7 @@ def test_a_plate_moved_through_the_tip_in_one_step_never_ends_inside_the_2d_body
     spec = built.scene.obstacles[0]
     for step, x in zip(run.steps, run.positions):
         centre = np.add(spec.shape.center, spec.offset(step.step)[:2])
-        assert not overlaps(built.mesh, x, lambda p: box_distance(p, centre, spec.shape.size), centre)
+        assert not overlaps(built.mesh, x, spec.shape, centre)
     assert failure is None or "obstacle 'plate' overlaps the body" in failure
     assert failure is not None or run.steps[-1].step == 2
 
@@ -103,7 +102,7 @@ def test_a_plate_moved_through_the_tip_in_one_step_never_ends_inside_the_3d_body
     run, failure = kept_states(built)
     for step, x in zip(run.steps, run.positions):
         centre = np.add((1.5, 0.75, 0.0), plate.offset(step.step))
-        assert not overlaps(built.mesh, x, lambda p: box_distance(p, centre, size), centre)
+        assert not overlaps(built.mesh, x, plate.shape, centre)
     assert failure is None or "obstacle 'plate' overlaps the body" in failure
 
 
@@ -118,7 +117,7 @@ def test_a_resting_and_a_moving_obstacle_stay_clear_of_the_body_at_every_equilib
         spec = built.scene.obstacles[0]
         for step, x in zip(run.steps, run.positions):
             centre = np.add(spec.shape.center, spec.offset(step.step)[:2])
-            assert not overlaps(built.mesh, x, lambda p: sphere_distance(p, centre, 0.2), centre)
+            assert not overlaps(built.mesh, x, spec.shape, centre)
         assert abs(run.history["post.fy"][-1]) > 0
 
 
@@ -130,7 +129,9 @@ def tip_gap(mesh) -> tuple[float, float]:
 
 
 def pebble(centre, radius) -> str:
-    return f'[[obstacles]]\nname = "pebble"\nshape = "sphere"\ncenter = {[float(c) for c in centre]}\nradius = {float(radius)}\n'
+    """A sphere's [[obstacles]] table."""
+    centre = [float(c) for c in centre]
+    return f'[[obstacles]]\nname = "pebble"\nshape = "sphere"\ncenter = {centre}\nradius = {float(radius)}\n'
 
 
 def test_a_disc_inside_the_body_or_cutting_its_tip_between_the_nodes_is_refused_at_rest():
@@ -139,24 +140,26 @@ def test_a_disc_inside_the_body_or_cutting_its_tip_between_the_nodes_is_refused_
     mesh = read_scene(beam(""), "bare").build().mesh
     y, gap = tip_gap(mesh)
     radius = 0.3 * gap
-    for centre, where in (((1.5, 0.0), "it lies inside the body"), ((2.0 + 0.5 * radius, y), "surface reaches")):
-        disc = (1.5, 0.0, 0.01) if where.startswith("it") else (*centre, radius)
-        assert sphere_distance(mesh.vertices, disc[:2], disc[2]).min() > 0  # clear of every node
-        assert overlaps(mesh, mesh.vertices, lambda p: sphere_distance(p, disc[:2], disc[2]), disc[:2])
+    for disc, where in (
+        (Sphere((1.5, 0.0), 0.01), "it lies inside"),
+        (Sphere((2.0 + radius / 2, y), radius), "reaches"),
+    ):
+        assert distance(mesh.vertices, disc, disc.center).min() > 0  # clear of every node
+        assert overlaps(mesh, mesh.vertices, disc, disc.center)
         with pytest.raises(PneumaInputError, match=f"obstacle 'pebble' overlaps the body: .*{where}.* at rest"):
-            read_scene(beam(pebble(disc[:2], disc[2])), "pebble").build()
+            read_scene(beam(pebble(disc.center, disc.radius)), "pebble").build()
 
 
 def test_a_ball_inside_the_3d_body_or_cutting_its_end_between_the_nodes_is_refused_at_rest():
     """The 3D form, on the box body (nodes every 0.5 along x, 0.2 along y and z; its end face x = 1.75)."""
     mesh = box_with_cavity()
     schedule = ChamberSchedule("pressure", ((1, 0.0),))
-    for centre, radius, where in (((1.5, 0.1, 0.1), 0.05, "it lies inside"), ((1.78, 0.1, 0.1), 0.06, "reaches")):
-        assert sphere_distance(mesh.vertices, centre, radius).min() > 0
-        assert overlaps(mesh, mesh.vertices, lambda p: sphere_distance(p, centre, radius), centre)
-        ball = Obstacle("ball", Sphere(centre, radius), 0.01, 10.0)
+    for ball, where in ((Sphere((1.5, 0.1, 0.1), 0.05), "it lies inside"), (Sphere((1.78, 0.1, 0.1), 0.06), "reaches")):
+        assert distance(mesh.vertices, ball, ball.center).min() > 0
+        assert overlaps(mesh, mesh.vertices, ball, ball.center)
+        obstacle = Obstacle("ball", ball, 0.01, 10.0)
         with pytest.raises(PneumaInputError, match=f"obstacle 'ball' overlaps the body: .*{where}"):
-            scene_of(mesh, (schedule,), 1, Material(1e4, 0.3), obstacles=(ball,)).build()
+            scene_of(mesh, (schedule,), 1, Material(1e4, 0.3), obstacles=(obstacle,)).build()
 
 
 FAR = pebble((1.85, 0.5), 0.05)
@@ -165,7 +168,10 @@ FAR = pebble((1.85, 0.5), 0.05)
 @pytest.mark.parametrize(
     ("table", "message"),
     [
-        (FAR + "keyframes = [[1, [0.0, 1e308]]]", r"keyframes offset \[0.0, 1e\+308\] at step 1 must lie within \+-20.22 in each component"),
+        (
+            FAR + "keyframes = [[1, [0.0, 1e308]]]",
+            r"keyframes offset \[0.0, 1e\+308\] at step 1 must lie within \+-20.22 in each component",
+        ),
         (FAR + "keyframes = [[1, [0.0, 0.0, 0.3]]]", r"moves it along z; a 2D scene's obstacle moves in its plane"),
         (FAR + "keyframes = [[1, [0.0, -15.0]]]", r"moves 15 in one increment: at most 1000 sweeps of 0.005"),
         (FAR.replace('"pebble"', '"x/../../escaped"'), r"obstacle name = 'x/../../escaped' must be 1 to 100 letters"),
@@ -190,4 +196,3 @@ def test_an_obstacle_named_as_a_path_exits_2_and_writes_nothing(tmp_path, capsys
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error:") and "x/../../escaped" in lines[0]
     assert sorted(p.name for p in tmp_path.rglob("*")) == ["scene.toml"]
-

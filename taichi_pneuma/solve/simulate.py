@@ -180,7 +180,9 @@ def settle(
             if overlap is not None:
                 built.set_commands(reached)
                 found = f"the equilibrium found is none: {overlap}"
-            raise NoEquilibrium(f"no equilibrium at {describe_commands(built, commands, reached)} after {cuts} cuts; {found}")
+            raise NoEquilibrium(
+                f"no equilibrium at {describe_commands(built, commands, reached)} after {cuts} cuts; {found}"
+            )
 
 
 def step_record(

@@ -281,7 +281,7 @@ class ObstacleContact(Term):
         name: str,
         dhat: float,
         stiffness: float,
-        pieces: np.ndarray = np.zeros((0, 3), dtype=np.int32),
+        pieces: np.ndarray | None = None,
         sweep: float = math.inf,
     ):
         """pieces: the body's surface as straight pieces (surface_pieces), which overlap() tests; sweep: the
@@ -292,7 +292,7 @@ class ObstacleContact(Term):
         self.placed = shape.parameters()
         self.parameters = self.placed.copy()
         self.verts = int32s(vertices)
-        self.pieces = int32s(pieces)
+        self.pieces = int32s(np.zeros((0, 3)) if pieces is None else pieces)
         self._rows, self._cols = block_pattern(np.asarray(vertices)[:, None], config.dim)
 
     @property
@@ -356,11 +356,16 @@ class ObstacleContact(Term):
         )
         return math.inf if bound >= HUGE else float(bound)  # Taichi's inf comes back as the largest double
 
+    @property
+    def moved(self) -> str:
+        """', at its offset [dx, dy, dz]' where it has moved from its placed position, else ''."""
+        return f", at its offset {np.round(self.offset, 6).tolist()}" if np.any(self.offset) else ""
+
     def fault(self) -> str | None:
         nearest = self.nearest()
         if nearest > 0:
             return None
-        moved = f", at its offset {np.round(self.offset, 6).tolist()}" if np.any(self.offset) else ""
+        moved = self.moved
         return (
             f"{self.name!r} overlaps the body (a boundary node {-nearest:.3g} inside it{moved}): "
             f"it {'moved' if moved else 'reached'} too far for the body to give way"
@@ -383,7 +388,10 @@ class ObstacleContact(Term):
         m, x = self.reach()
         where = ", ".join(f"{v:.4g}" for v in x[:d])
         if m <= 0:
-            return f"obstacle {self.name!r} overlaps the body: the body's surface reaches {-m:.3g} into it at ({where})"
+            return (
+                f"obstacle {self.name!r} overlaps the body: the body's surface reaches {-m:.3g} into it at ({where})"
+                f"{self.moved}"
+            )
         if self.kind == PLANE:
             return None
         centre = self.parameters[:3].copy()
@@ -392,7 +400,9 @@ class ObstacleContact(Term):
         inside_obstacle = obstacle_energy(centre[None], at, int32s([0]), self.kind, self.parameters, 1.0, 1.0)[1] < 0
         if inside_obstacle and winding(self.config.rest + self.config.u, self.pieces, centre[:d]) > 0.5:
             where = ", ".join(f"{v:.4g}" for v in centre[:d])
-            return f"obstacle {self.name!r} overlaps the body: it lies inside the body (its centre ({where}))"
+            return (
+                f"obstacle {self.name!r} overlaps the body: it lies inside the body (its centre ({where})){self.moved}"
+            )
         return None
 
 
@@ -516,10 +526,11 @@ class Obstacle:
                 f"obstacle {self.name!r}: keyframes offset {list(offset)!r} at step {step:g} must lie within "
                 f"+-{REACH * size:.4g} in each component ({REACH:g} times the body's size)",
             )
+        dhat, stiffness = float(self.dhat), float(self.stiffness)  # type: ignore[arg-type]  # the scene's: set
         pieces = surface_pieces(mesh)
         x = mesh.vertices[pieces]
         sides = np.linalg.norm(x - np.roll(x, 1, axis=1), axis=2)
-        sweep = 0.5 * min(float(self.dhat), float(np.median(sides[sides > 0])))  # type: ignore[arg-type]
+        sweep = 0.5 * min(dhat, float(np.median(sides[sides > 0])))
         motion = self.increment_motion()
         require(
             motion <= MAX_SWEEPS * sweep,
@@ -527,9 +538,7 @@ class Obstacle:
             f"(half the smaller of its dhat and the body's median surface edge), {MAX_SWEEPS * sweep:.4g}, are "
             f"allowed; spread its keyframes over more steps",
         )
-        term = ObstacleContact(
-            config, mesh.boundary, self.shape, self.name, self.dhat, self.stiffness, pieces, sweep  # type: ignore[arg-type]
-        )
+        term = ObstacleContact(config, mesh.boundary, self.shape, self.name, dhat, stiffness, pieces, sweep)
         overlap = term.overlap()
         require(overlap is None, f"{overlap} at rest: place it clear of the body")
         return [term]
