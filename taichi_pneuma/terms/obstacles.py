@@ -29,6 +29,12 @@ past 1); exact for the plane (d / -(dx . n)).
 
 The shape's kind is a runtime integer and its parameters a small float array (PARAMETERS), so the kernels compile
 once whatever the scene. A moving obstacle's translation from its placed position is set by set_offset.
+
+overlap(): the barrier holds the nodes only, so whether the obstacle overlaps the body is checked geometrically:
+the least d over every straight piece of the body's surface (obstacle_reach: a nested golden-section search, d
+being convex), and whether the obstacle's centre lies inside the body (winding). A run checks it at every
+equilibrium and sweeps a moving obstacle's motion in sub-steps of at most its sweep (BuiltScene.sweeps,
+solve/simulate.py settle); Obstacle.terms refuses a rest scene that overlaps (docs/theory/contact.md).
 """
 
 import math
