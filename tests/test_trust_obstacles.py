@@ -106,6 +106,23 @@ def test_a_plate_moved_through_the_tip_in_one_step_never_ends_inside_the_3d_body
     assert failure is None or "obstacle 'plate' overlaps the body" in failure
 
 
+def test_a_plate_moved_across_the_whole_tip_in_one_step_does_not_jump_over_it():
+    """A plate 0.6 wide over the tip (x from 1.7 to 2.3) moved in one step from 0.09 above the beam's top to 0.19
+    below its bottom: both ends clear of the body, so only its motion can tell that it passed through the tip
+    (0141107 kept step 1 with the tip above it). Swept, it pushes the tip down ahead of it or the ramp stops: no
+    kept state has a point of the body under the plate's x-range above its bottom face."""
+    table = plate_2d("[[1, [0.0, -0.6]]]").replace("[1.85, 0.3]", "[2.0, 0.25]").replace("[0.2, 0.02]", "[0.6, 0.02]")
+    built = read_scene(beam(table, gravity=False, increments=1), "across").build()
+    run, failure = kept_states(built)
+    spec = built.scene.obstacles[0]
+    for step, x in zip(run.steps, run.positions):
+        bottom = spec.shape.center[1] + spec.offset(step.step)[1] - 0.01
+        under = surface_points(built.mesh, x)
+        under = under[np.abs(under[:, 0] - 2.0) < 0.3]
+        assert len(under) and under[:, 1].max() < bottom
+    assert failure is None or "obstacle 'plate' overlaps the body" in failure
+
+
 def test_a_resting_and_a_moving_obstacle_stay_clear_of_the_body_at_every_equilibrium():
     """The sagging beam on a disc (its weight partly on it) and a disc rising 0.15 under the tip over 3 steps: every
     converged state has each disc clear of every point of the body's surface, pressed on it (a contact force)."""
