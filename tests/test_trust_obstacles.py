@@ -167,6 +167,13 @@ def test_a_disc_inside_the_body_or_cutting_its_tip_between_the_nodes_is_refused_
             read_scene(beam(pebble(disc.center, disc.radius)), "pebble").build()
 
 
+def test_an_obstacle_keyframed_into_the_body_at_step_0_is_refused_at_rest():
+    """A keyframe at step 0 places the obstacle before the first solve: the rest check takes it there."""
+    table = pebble((1.5, 0.6), 0.05) + "keyframes = [[0, [0.0, -0.6]], [1, [0.0, 0.0]]]\n"
+    with pytest.raises(PneumaInputError, match=r"it lies inside the body .*at its offset \[0.0, -0.6, 0.0\] at rest"):
+        read_scene(beam(table), "placed").build()
+
+
 def test_a_ball_inside_the_3d_body_or_cutting_its_end_between_the_nodes_is_refused_at_rest():
     """The 3D form, on the box body (nodes every 0.5 along x, 0.2 along y and z; its end face x = 1.75)."""
     mesh = box_with_cavity()

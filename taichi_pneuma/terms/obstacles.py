@@ -545,6 +545,7 @@ class Obstacle:
             f"allowed; spread its keyframes over more steps",
         )
         term = ObstacleContact(config, mesh.boundary, self.shape, self.name, dhat, stiffness, pieces, sweep)
+        term.set_offset(self.offset(0.0))  # where it is at step 0 (a keyframe at step 0 moves it there)
         overlap = term.overlap()
         require(overlap is None, f"{overlap} at rest: place it clear of the body")
         return [term]
