@@ -56,7 +56,7 @@ ADVANCES = 100  # and after this many advances (the bound reached, short of the 
 REACH = 10.0  # a keyframe offset's components are at most this many times the body's size
 MAX_SWEEPS = 1000  # sub-steps of one increment's obstacle motion, at most (Obstacle.terms refuses more)
 GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
-SEARCH = 48  # lowest's trisections: the bracket shrinks to GOLDEN^48 ~ 1e-10 of the facet
+SEARCH = 48  # lowest's golden-section steps: the bracket shrinks to GOLDEN^48 ~ 1e-10 of the piece
 
 
 @ti.func
@@ -293,7 +293,7 @@ class ObstacleContact(Term):
         """pieces: the body's surface as straight pieces (surface_pieces), which overlap() tests; sweep: the
         farthest it moves between two equilibria (the sub-steps of a run: BuiltScene.sweeps)."""
         self.config = config
-        self.name, self.kind, self.shape = name, int(shape.kind), shape
+        self.name, self.kind = name, int(shape.kind)
         self.dhat, self.kappa, self.sweep = float(dhat), float(stiffness), float(sweep)
         self.placed = shape.parameters()
         self.parameters = self.placed.copy()
@@ -402,8 +402,8 @@ class ObstacleContact(Term):
             return None
         centre = self.parameters[:3].copy()
         centre[d:] = 0.0  # a 2D scene's cross-section at z = 0: its point nearest the centre
-        at = np.zeros((1, 3))
-        inside_obstacle = obstacle_energy(centre[None], at, int32s([0]), self.kind, self.parameters, 1.0, 1.0)[1] < 0
+        alone = (centre[None], np.zeros((1, 3)), int32s([0]))  # the centre as the one vertex of obstacle_energy
+        inside_obstacle = obstacle_energy(*alone, self.kind, self.parameters, 1.0, 1.0)[1] < 0  # d(c) < 0
         if inside_obstacle and winding(self.config.rest + self.config.u, self.pieces, centre[:d]) > 0.5:
             where = ", ".join(f"{v:.4g}" for v in centre[:d])
             return (
@@ -490,22 +490,23 @@ class Obstacle:
     def last_step(self) -> int:
         return int(self.keyframes[-1][0]) if self.keyframes else 0
 
-    def offset(self, step: float) -> np.ndarray:
-        """The translation (3,) at a (possibly fractional) step: linear between the keyframes, 0 at step 0."""
+    def frames(self) -> tuple[np.ndarray, np.ndarray]:
+        """(steps (k,), translations (k, 3)): its keyframes after (0, 0) at step 0, unless one is at step 0."""
         steps = [0.0] + [float(s) for s, _ in self.keyframes]
         values = [(0.0, 0.0, 0.0)] + [vector("keyframes offset", list(v)) for _, v in self.keyframes]
         if len(steps) > 1 and steps[1] == 0.0:
             steps, values = steps[1:], values[1:]
-        return np.array([np.interp(step, steps, column) for column in np.transpose(values)])
+        return np.array(steps), np.array(values)
+
+    def offset(self, step: float) -> np.ndarray:
+        """The translation (3,) at a (possibly fractional) step: linear between the keyframes, 0 at step 0."""
+        steps, values = self.frames()
+        return np.array([np.interp(step, steps, column) for column in values.T])
 
     def increment_motion(self) -> float:
-        """The farthest it moves in one increment: the largest |v_k+1 - v_k| / (s_k+1 - s_k) over its keyframes
-        (from 0 at step 0)."""
-        steps = np.array([0.0] + [float(s) for s, _ in self.keyframes])
-        values = np.array([(0.0, 0.0, 0.0)] + [vector("keyframes offset", list(v)) for _, v in self.keyframes])
-        spans = np.diff(steps)
-        moves = np.linalg.norm(np.diff(values, axis=0), axis=1)
-        return float(np.max(moves[spans > 0] / spans[spans > 0], initial=0.0))
+        """The farthest it moves in one increment: the largest |v_k+1 - v_k| / (s_k+1 - s_k) over its frames."""
+        steps, values = self.frames()
+        return float(np.max(np.linalg.norm(np.diff(values, axis=0), axis=1) / np.diff(steps), initial=0.0))
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
         """Its contact term on the body's outer boundary nodes, its overlap check on the body's surface pieces
