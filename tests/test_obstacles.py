@@ -136,6 +136,11 @@ def test_max_step_stops_a_node_just_before_the_surface(shape, start, direction, 
 def beam(obstacles: str, gravity: bool = True, increments: int = 2) -> dict:
     """A clamped 2 x 0.3 cantilever (x from 0 to 2) with a closed pressure chamber at 50, sagging under gravity
     (rho g L^4 / (E h^2) ~ 0.26 at the tip), with the given [[obstacles]] TOML."""
+    return tomllib.loads(beam_text(obstacles, gravity, increments))
+
+
+def beam_text(obstacles: str, gravity: bool = True, increments: int = 2) -> str:
+    """beam's scene file."""
     weight = "[effects.gravity]\ndensity = 1.0\n" if gravity else ""
     text = f"""
 [body]
@@ -162,7 +167,7 @@ keyframes = [[{increments}, 50.0]]
 increments = {increments}
 {obstacles}
 """
-    return tomllib.loads(text)
+    return text
 
 
 POST = """
@@ -171,7 +176,7 @@ name = "post"
 shape = "sphere"
 center = [1.8, -0.45]
 radius = 0.2
-dhat = 0.02
+dhat = 0.05
 stiffness = 10.0
 """
 

@@ -13,6 +13,7 @@ contact term last; a moving one's translation rides in the commands vector after
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -333,15 +334,36 @@ class BuiltScene:
         the obstacles' (their names)."""
         return [t for terms in self.effects.values() for t in terms if t.reports_contact] + list(self.obstacles)
 
-    def set_commands(self, commands: np.ndarray) -> None:
-        """The chambers' commands, then (Schedule.commands) each moving obstacle's translation; a vector of the
-        chambers' commands alone leaves the obstacles where they are."""
-        for chamber, command in zip(self.chambers, commands):
-            chamber.set_command(command)
+    def moving_offsets(self, commands: np.ndarray) -> list:
+        """(term, translation (3,)) of each moving obstacle at the commands (Schedule.commands: the chambers'
+        commands, then 3 per moving obstacle); none for a vector of the chambers' commands alone."""
         offsets = np.asarray(commands[len(self.chambers) :], dtype=float).reshape(-1, 3)
         moving = [term for term, spec in zip(self.obstacles, self.scene.obstacles) if spec.moving]
-        for term, offset in zip(moving, offsets):
+        return list(zip(moving, offsets))
+
+    def set_commands(self, commands: np.ndarray) -> None:
+        """The chambers' commands, then each moving obstacle's translation; a vector of the chambers' commands alone
+        leaves the obstacles where they are."""
+        for chamber, command in zip(self.chambers, commands):
+            chamber.set_command(command)
+        for term, offset in self.moving_offsets(commands):
             term.set_offset(offset)
+
+    def sweeps(self, start: np.ndarray, end: np.ndarray) -> int:
+        """Into how many equal parts the change of commands from start to end is cut so that no obstacle moves
+        farther than its sweep in one (n = max over the moving obstacles of ceil(|t_end - t_start| / sweep), at
+        least 1): a part of the body shorter along the motion than the sweep is all an obstacle can pass between
+        two equilibria without overlapping it at one of them (Obstacle.terms bounds n by MAX_SWEEPS)."""
+        moves = [
+            np.linalg.norm(b - a) / term.sweep
+            for (term, a), (_, b) in zip(self.moving_offsets(start), self.moving_offsets(end))
+        ]
+        return max([1, *(math.ceil(move) for move in moves)])
+
+    def obstacle_overlap(self) -> str | None:
+        """The first obstacle that overlaps the body in its current state, in words (ObstacleContact.overlap), or
+        None."""
+        return next((fault for fault in (term.overlap() for term in self.obstacles) if fault is not None), None)
 
 
 def reference_scene(

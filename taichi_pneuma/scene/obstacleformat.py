@@ -55,11 +55,20 @@ OBSTACLE_SHAPES = Variant(
 )
 OBSTACLE = Table(
     {
-        "name": Key(str, doc="distinct, not a chamber's (it heads the history's <name>.fx, ... columns)"),
+        "name": Key(
+            str,
+            doc="distinct, not a chamber's; a plain name (letters, digits, _ + - .) not starting with = + - @ (it "
+            "heads the history's <name>.fx, ... columns)",
+        ),
         "shape": OBSTACLE_SHAPES,
         "dhat": Key(float, None, "the contact barrier's threshold distance", unit=LENGTH, scaled=False, si=0.01),
         "stiffness": Key(float, None, "the barrier's stiffness", unit=NODAL_STIFFNESS, scaled=False, si=1e3),
-        "keyframes": Key(tuple, None, "[[step, [dx, dy, dz]], ...]: its translation, linear between steps"),
+        "keyframes": Key(
+            tuple,
+            None,
+            "[[step, [dx, dy, dz]], ...]: its translation, linear between steps (2D: [dx, dy]), each component "
+            "within 10 times the body's size; swept in sub-steps of at most half its dhat",
+        ),
     },
     make=lambda v: Obstacle(v["name"], v["shape"], v["dhat"], v["stiffness"], v["keyframes"] or ()),
     parts=lambda o: {

@@ -131,17 +131,20 @@ def settle(
 ):
     """Solve the equilibrium at commands `target`, starting from the equilibrium u at commands `reached`.
 
-    A Newton solve that does not converge is cut back: the remaining change of all chamber commands is
-    halved and the smaller sub-increment solved from the last equilibrium, at most max_cuts times.
+    The change of commands is first cut into built.sweeps equal parts, so that no obstacle moves farther than its
+    sweep between two equilibria, each solved in turn. A Newton solve that does not converge, or converges to a
+    state in which an obstacle overlaps the body (BuiltScene.obstacle_overlap: the barrier holds the surface's
+    nodes, not the sides between them), is cut back: the remaining change of all chamber commands is halved and
+    the smaller sub-increment solved from the last equilibrium, at most max_cuts times.
     previous: the equilibrium (commands, u) before (reached, u), for the predictor, or None.
     Returns (u, commands reached, previous, the SolveRecords, cuts); raises NoEquilibrium naming the
-    commands and the residual when the cuts run out, or naming the fault when a converged state is no physical
-    one (state_fault: the ramp and reach refuse it), Stopped when stop() (asked before every Newton
+    commands and the residual (or the overlap) when the cuts run out, or naming the fault when a converged state is
+    no physical one (state_fault: the ramp and reach refuse it), Stopped when stop() (asked before every Newton
     iteration, so between cuts too) returns True.
     """
     records: list[SolveRecord] = []
     origin = reached
-    done, fraction, cuts = 0.0, 1.0, 0
+    done, fraction, cuts = 0.0, 1.0 / built.sweeps(origin, target), 0
     while True:
         trial = min(1.0, done + fraction)
         commands = origin + trial * (target - origin)
@@ -153,6 +156,7 @@ def settle(
         if record.stopped:
             built.model.set_displacements(u)
             raise Stopped
+        overlap = None
         if record.converged:
             built.model.set_displacements(u_trial)
             fault = state_fault(built, commands)
@@ -160,18 +164,24 @@ def settle(
                 built.set_commands(reached)
                 built.model.set_displacements(u)
                 raise NoEquilibrium(fault)
-            previous = (reached, u)
-            u, done, reached = u_trial, trial, commands
-            if trial == 1.0:
-                return u, reached, previous, records, cuts
-        elif cuts < max_cuts:
+            overlap = built.obstacle_overlap()  # the barrier holds the nodes only: a smaller motion may help
+            if overlap is None:
+                previous = (reached, u)
+                u, done, reached = u_trial, trial, commands
+                if trial == 1.0:
+                    return u, reached, previous, records, cuts
+                continue
+        if cuts < max_cuts:
             cuts += 1
             fraction /= 2
         else:
             built.model.set_displacements(u)
+            found = f"residual {record.residual:.2e} ({record.message})"
+            if overlap is not None:
+                built.set_commands(reached)
+                found = f"the equilibrium found is none: {overlap}"
             raise NoEquilibrium(
-                f"no equilibrium at {describe_commands(built, commands, reached)} after {cuts} cuts; "
-                f"residual {record.residual:.2e} ({record.message})"
+                f"no equilibrium at {describe_commands(built, commands, reached)} after {cuts} cuts; {found}"
             )
 
 

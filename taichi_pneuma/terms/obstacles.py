@@ -29,6 +29,12 @@ past 1); exact for the plane (d / -(dx . n)).
 
 The shape's kind is a runtime integer and its parameters a small float array (PARAMETERS), so the kernels compile
 once whatever the scene. A moving obstacle's translation from its placed position is set by set_offset.
+
+overlap(): the barrier holds the nodes only, so whether the obstacle overlaps the body is checked geometrically:
+the least d over every straight piece of the body's surface (obstacle_reach: a nested golden-section search, d
+being convex), and whether the obstacle's centre lies inside the body (winding). A run checks it at every
+equilibrium and sweeps a moving obstacle's motion in sub-steps of at most its sweep (BuiltScene.sweeps,
+solve/simulate.py settle); Obstacle.terms refuses a rest scene that overlaps (docs/theory/contact.md).
 """
 
 import math
@@ -38,14 +44,19 @@ import numpy as np
 
 from ..backend import kernel, ti
 from ..errors import require, require_finite, shape_of
+from ..io.output import MAX_NAME, STEM, check_heading
 from ..io.units import LENGTH, NODAL_STIFFNESS, si_default
-from .base import HUGE, Indices, Nodal, Scalars, Table, Term, block_pattern, int32s
+from .base import HUGE, Indices, Nodal, Scalars, Table, Term, Triples, block_pattern, int32s
 from .contact import barrier
 from .obstacle_shapes import BOX, CAPSULE, PLANE, SPHERE, Shape, vector
 
 PARAMETERS = 8  # position (3: a point or centre), vector (3: normal, half-size or axis), radius, half-length
 STEP_CAP = 4.0  # max_step's conservative advancement stops past this step fraction (inf)
 ADVANCES = 100  # and after this many advances (the bound reached, short of the contact)
+REACH = 10.0  # a keyframe offset's components are at most this many times the body's size
+MAX_SWEEPS = 1000  # sub-steps of one increment's obstacle motion, at most (Obstacle.terms refuses more)
+GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+SEARCH = 48  # lowest's golden-section steps: the bracket shrinks to GOLDEN^48 ~ 1e-10 of the piece
 
 
 @ti.func
@@ -201,18 +212,93 @@ def obstacle_step(rest: Nodal, u: Nodal, dx: Nodal, verts: Indices, kind: ti.i32
     return bound
 
 
+@ti.func
+def lowest(a, e, f, kind, p: ti.template(), depth: ti.template()):
+    """(m, x): the least value m found of a convex g over t in [0, 1] and the point x where, by SEARCH golden-section
+    steps (g(t1) <= g(t2), t1 < t2, keeps [lo, t2], else [t1, hi]: a minimiser stays in the bracket), then the ends
+    and the bracket's middle: g(t) = d(a + t e) at depth 0; at depth 1 the least d over the segment from a + t e to
+    a + t (e + f), convex too (a convex d minimised over the parallel slices of a triangle). One call site of g, so
+    that the nested search compiles to one copy of each level."""
+    lo, hi, g1 = 0.0, 1.0, 0.0
+    best, where = ti.math.inf, a
+    for step in range(2 * SEARCH + 3):
+        t = 0.5 * (lo + hi)
+        if step < 2 * SEARCH:
+            t = hi - GOLDEN * (hi - lo) if step % 2 == 0 else lo + GOLDEN * (hi - lo)
+        elif step < 2 * SEARCH + 2:
+            t = float(step - 2 * SEARCH)
+        g, x = profile(a, e, f, t, kind, p, depth)
+        if g < best:
+            best, where = g, x
+        if step < 2 * SEARCH:
+            if step % 2 == 0:
+                g1 = g
+            elif g1 <= g:
+                hi = t
+            else:
+                lo = hi - GOLDEN * (hi - lo)
+    return best, where
+
+
+@ti.func
+def profile(a, e, f, t, kind, p: ti.template(), depth: ti.template()):
+    """lowest's g(t) and the point where it is taken."""
+    x = a + t * e
+    value = 0.0
+    if ti.static(depth == 0):
+        value = signed_distance(x, kind, p)[0]
+    else:
+        value, x = lowest(x, t * f, f * 0.0, kind, p, depth - 1)
+    return value, x
+
+
+@kernel
+def obstacle_reach(rest: Nodal, u: Nodal, facets: Triples, kind: ti.i32, p: Scalars, out: Table):
+    """out[k] = (m, x, y, z): the least signed distance m over facet k (a triangle a b c; a segment when c = b) and a
+    point where it is taken; a facet whose corners all lie farther from the obstacle than its longest side (d is
+    1-Lipschitz: no point of it can reach the obstacle) is not searched, m then its nearest corner's distance."""
+    for k in range(facets.shape[0]):
+        a = point_of(rest, u, facets[k][0])
+        b = point_of(rest, u, facets[k][1])
+        c = point_of(rest, u, facets[k][2])
+        m, x = ti.math.inf, a
+        for y in range(3):
+            corner = point_of(rest, u, facets[k][y])
+            dy = signed_distance(corner, kind, p)[0]
+            if dy < m:
+                m, x = dy, corner
+        if m < ti.max((b - a).norm(), (c - b).norm(), (a - c).norm()):
+            m, x = lowest(a, b - a, c - b, kind, p, 1)
+        out[k, 0] = m
+        for i in ti.static(range(3)):
+            out[k, 1 + i] = x[i]
+
+
 class ObstacleContact(Term):
     """Barriers keeping the given vertices outside a rigid obstacle (a Shape), which set_offset translates."""
 
     reports_contact = True
 
-    def __init__(self, config, vertices: np.ndarray, shape: Shape, name: str, dhat: float, stiffness: float):
+    def __init__(
+        self,
+        config,
+        vertices: np.ndarray,
+        shape: Shape,
+        name: str,
+        dhat: float,
+        stiffness: float,
+        pieces: np.ndarray | None = None,
+        sweep: float = math.inf,
+    ):
+        """pieces: the body's surface as straight pieces (surface_pieces), which overlap() tests; sweep: the
+        farthest it moves between two equilibria (the sub-steps of a run: BuiltScene.sweeps)."""
         self.config = config
         self.name, self.kind = name, int(shape.kind)
-        self.dhat, self.kappa = float(dhat), float(stiffness)
+        self.dhat, self.kappa, self.sweep = float(dhat), float(stiffness), float(sweep)
         self.placed = shape.parameters()
         self.parameters = self.placed.copy()
         self.verts = int32s(vertices)
+        self.pieces = int32s(np.zeros((0, 3)) if pieces is None else pieces)
         self._rows, self._cols = block_pattern(np.asarray(vertices)[:, None], config.dim)
 
     @property
@@ -276,15 +362,81 @@ class ObstacleContact(Term):
         )
         return math.inf if bound >= HUGE else float(bound)  # Taichi's inf comes back as the largest double
 
+    @property
+    def moved(self) -> str:
+        """', at its offset [dx, dy, dz]' where it has moved from its placed position, else ''."""
+        return f", at its offset {np.round(self.offset, 6).tolist()}" if np.any(self.offset) else ""
+
     def fault(self) -> str | None:
         nearest = self.nearest()
         if nearest > 0:
             return None
-        moved = f", at its offset {np.round(self.offset, 6).tolist()}" if np.any(self.offset) else ""
+        moved = self.moved
         return (
             f"{self.name!r} overlaps the body (a boundary node {-nearest:.3g} inside it{moved}): "
             f"it {'moved' if moved else 'reached'} too far for the body to give way"
         )
+
+    def reach(self) -> tuple[float, np.ndarray]:
+        """(m, x): the least signed distance m of the obstacle over the body's surface pieces (obstacle_reach: each
+        straight segment or triangle searched, not only its corners) and a point x (3,) where it is taken."""
+        out = np.empty((len(self.pieces), 4))
+        obstacle_reach(self.config.rest, self.config.u, self.pieces, self.kind, self.parameters, out)
+        k = int(np.argmin(out[:, 0]))
+        return float(out[k, 0]), out[k, 1:]
+
+    def overlap(self) -> str | None:
+        """Where the obstacle overlaps the body in its current state, in words, or None. It does where m <= 0 (reach:
+        a piece of the surface touches or enters it), or where its centre c, inside it (d(c) < 0; a plane has
+        none), lies inside the body: winding(c) = 1 (the obstacle wholly inside the body, its surface crossing no
+        piece). A bounded convex obstacle meets the body's interior only so (its interior is connected)."""
+        d = self.config.dim
+        m, x = self.reach()
+        where = ", ".join(f"{v:.4g}" for v in x[:d])
+        if m <= 0:
+            return (
+                f"obstacle {self.name!r} overlaps the body: the body's surface reaches {-m:.3g} into it at ({where})"
+                f"{self.moved}"
+            )
+        if self.kind == PLANE:
+            return None
+        centre = self.parameters[:3].copy()
+        centre[d:] = 0.0  # a 2D scene's cross-section at z = 0: its point nearest the centre
+        alone = (centre[None], np.zeros((1, 3)), int32s([0]))  # the centre as the one vertex of obstacle_energy
+        inside_obstacle = obstacle_energy(*alone, self.kind, self.parameters, 1.0, 1.0)[1] < 0  # d(c) < 0
+        if inside_obstacle and winding(self.config.rest + self.config.u, self.pieces, centre[:d]) > 0.5:
+            where = ", ".join(f"{v:.4g}" for v in centre[:d])
+            return (
+                f"obstacle {self.name!r} overlaps the body: it lies inside the body (its centre ({where})){self.moved}"
+            )
+        return None
+
+
+def surface_pieces(mesh) -> np.ndarray:
+    """The body's boundary (mesh.surface: the outer one and the chamber walls, oriented outward from the body) as
+    straight pieces (f, 3) of node indices: in 3D triangles (a quadratic facet split at its midside nodes into
+    four), in 2D segments (a, b) as (a, b, b) (a quadratic edge split at its middle node into two)."""
+    surface = mesh.surface
+    if mesh.dim == 3:
+        return (mesh.family.facet_family or mesh.family).split_cells(surface)
+    ends = [(0, 1)] if surface.shape[1] == 2 else [(0, 2), (2, 1)]  # a quadratic edge: (corner, corner, middle)
+    return np.vstack([surface[:, [i, j, j]] for i, j in ends])
+
+
+def winding(x: np.ndarray, pieces: np.ndarray, q: np.ndarray) -> float:
+    """The winding number about the point q (d,) of the closed surface of the pieces (surface_pieces) at positions x
+    (n, d): 1 inside the body, 0 outside it or in a chamber's cavity. 2D: the sum of the angles
+    atan2(r_a x r_b, r_a . r_b) / 2 pi that the segments (a, b) subtend (r = x - q); 3D: the sum of the solid angles
+    2 atan2(r_a . (r_b x r_c), |r_a||r_b||r_c| + (r_a . r_b)|r_c| + (r_b . r_c)|r_a| + (r_c . r_a)|r_b|) / 4 pi
+    of the triangles (Van Oosterom and Strackee)."""
+    ra, rb, rc = (x[pieces[:, k]] - q for k in range(3))
+    if x.shape[1] == 2:
+        cross = ra[:, 0] * rb[:, 1] - ra[:, 1] * rb[:, 0]
+        return float(np.arctan2(cross, np.sum(ra * rb, axis=1)).sum() / (2 * np.pi))
+    la, lb, lc = (np.linalg.norm(r, axis=1) for r in (ra, rb, rc))
+    ab, bc, ca = (np.sum(p * r, axis=1) for p, r in ((ra, rb), (rb, rc), (rc, ra)))
+    below = la * lb * lc + ab * lc + bc * la + ca * lb
+    return float(2 * np.arctan2(np.sum(ra * np.cross(rb, rc), axis=1), below).sum() / (4 * np.pi))
 
 
 @dataclass(frozen=True)
@@ -301,9 +453,11 @@ class Obstacle:
     keyframes: tuple = field(default=())
 
     def __post_init__(self):
+        check_heading("obstacle name", self.name)  # a chamber's rule: it heads CSV columns
         require(
-            isinstance(self.name, str) and self.name != "" and self.name[0] not in "=+-@",
-            f"obstacle name = {self.name!r} must be a non-empty string not starting with = + - @",
+            isinstance(self.name, str) and len(self.name) <= MAX_NAME and STEM.fullmatch(self.name) is not None,
+            f"obstacle name = {self.name!r} must be 1 to {MAX_NAME} letters, digits and _ + - . (not starting with "
+            f"'.'): a plain name",
         )
         require(isinstance(self.shape, Shape), f"obstacle {self.name!r}: shape = {self.shape!r} is not a shape")
         for key in ("dhat", "stiffness"):
@@ -336,29 +490,63 @@ class Obstacle:
     def last_step(self) -> int:
         return int(self.keyframes[-1][0]) if self.keyframes else 0
 
-    def offset(self, step: float) -> np.ndarray:
-        """The translation (3,) at a (possibly fractional) step: linear between the keyframes, 0 at step 0."""
+    def frames(self) -> tuple[np.ndarray, np.ndarray]:
+        """(steps (k,), translations (k, 3)): its keyframes after (0, 0) at step 0, unless one is at step 0."""
         steps = [0.0] + [float(s) for s, _ in self.keyframes]
         values = [(0.0, 0.0, 0.0)] + [vector("keyframes offset", list(v)) for _, v in self.keyframes]
         if len(steps) > 1 and steps[1] == 0.0:
             steps, values = steps[1:], values[1:]
-        return np.array([np.interp(step, steps, column) for column in np.transpose(values)])
+        return np.array(steps), np.array(values)
+
+    def offset(self, step: float) -> np.ndarray:
+        """The translation (3,) at a (possibly fractional) step: linear between the keyframes, 0 at step 0."""
+        steps, values = self.frames()
+        return np.array([np.interp(step, steps, column) for column in values.T])
+
+    def increment_motion(self) -> float:
+        """The farthest it moves in one increment: the largest |v_k+1 - v_k| / (s_k+1 - s_k) over its frames."""
+        steps, values = self.frames()
+        return float(np.max(np.linalg.norm(np.diff(values, axis=0), axis=1) / np.diff(steps), initial=0.0))
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
-        """Its contact term on the body's outer boundary; refused when it overlaps the rest body (a node at d <= 0)
-        or a 3D scene gives a point or vector with 2 numbers."""
+        """Its contact term on the body's outer boundary nodes, its overlap check on the body's surface pieces
+        (surface_pieces). Refused: a 3D scene's point or vector of 2 numbers; a 2D scene's keyframe with a z
+        offset; an offset component beyond REACH times the body's size (the diagonal of its bounding box); a motion
+        per increment of more than MAX_SWEEPS sweeps (BuiltScene.sweeps; the sweep: half the smaller of dhat
+        and the median length of the surface pieces' sides); an obstacle overlapping the rest body (overlap)."""
         flat = [key for key in self.shape.vectors if len(getattr(self.shape, key)) == 2]
         flat += ["keyframes"] if any(len(v) == 2 for _, v in self.keyframes) else []
         require(
             mesh.dim == 2 or not flat,
             f"obstacle {self.name!r}: {flat[0] if flat else ''} has 2 numbers; a 3D scene gives [x, y, z]",
         )
-        term = ObstacleContact(config, mesh.boundary, self.shape, self.name, self.dhat, self.stiffness)  # type: ignore[arg-type]
-        every = ObstacleContact(config, np.arange(mesh.n_vertices), self.shape, self.name, 1.0, 1.0)
-        nearest = every.nearest()  # a node inside it, on the boundary or (an obstacle within the body) not
+        size = float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
+        for step, offset in self.keyframes:
+            v = np.array(vector("keyframes offset", list(offset)))
+            require(
+                mesh.dim == 3 or v[2] == 0.0,
+                f"obstacle {self.name!r}: keyframes offset {list(offset)!r} at step {step:g} moves it along z; a 2D "
+                f"scene's obstacle moves in its plane: give [dx, dy]",
+            )
+            require(
+                float(np.max(np.abs(v))) <= REACH * size,
+                f"obstacle {self.name!r}: keyframes offset {list(offset)!r} at step {step:g} must lie within "
+                f"+-{REACH * size:.4g} in each component ({REACH:g} times the body's size)",
+            )
+        dhat, stiffness = float(self.dhat), float(self.stiffness)  # type: ignore[arg-type]  # the scene's: set
+        pieces = surface_pieces(mesh)
+        x = mesh.vertices[pieces]
+        sides = np.linalg.norm(x - np.roll(x, 1, axis=1), axis=2)
+        sweep = 0.5 * min(dhat, float(np.median(sides[sides > 0])))
+        motion = self.increment_motion()
         require(
-            nearest > 0,
-            f"obstacle {self.name!r} overlaps the body at rest (a node {-nearest:.3g} inside it): "
-            f"place it clear of the body",
+            motion <= MAX_SWEEPS * sweep,
+            f"obstacle {self.name!r} moves {motion:.4g} in one increment: at most {MAX_SWEEPS} sweeps of {sweep:.3g} "
+            f"(half the smaller of its dhat and the body's median surface edge), {MAX_SWEEPS * sweep:.4g}, are "
+            f"allowed; spread its keyframes over more steps",
         )
+        term = ObstacleContact(config, mesh.boundary, self.shape, self.name, dhat, stiffness, pieces, sweep)
+        term.set_offset(self.offset(0.0))  # where it is at step 0 (a keyframe at step 0 moves it there)
+        overlap = term.overlap()
+        require(overlap is None, f"{overlap} at rest: place it clear of the body")
         return [term]
