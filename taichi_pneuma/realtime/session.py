@@ -12,9 +12,10 @@ save() writes them like Result.save.
 
 Where no equilibrium is found at the commands (the Newton options' max_iterations steps since they last moved
 without converging, or a step the line search refuses even with a fresh Hessian: past a pressure control's limit
-point), the state goes back to the last equilibrium and the figures say "no equilibrium at this command"; the
-session waits there until the commands move, then starts from that equilibrium (at its own commands, it is shown
-at once).
+point), the state goes back to the last equilibrium and, as a ramp cuts an increment, solves half way there
+(MAX_CUTS times at most for one command, so a command costs at most (2 MAX_CUTS + 1) max_iterations frames); past
+that, the state stays the last equilibrium and the figures say "no equilibrium at this command". The session
+waits there until the commands move, then starts from that equilibrium (at its own commands, it is shown at once).
 
 A field shown on the body is per node: the mean over the elements that hold the node of each element's value
 (fem/fields.py: the largest principal stretch, det F, the von Mises stress of the mean Cauchy stress), or the
@@ -35,7 +36,7 @@ from ..result import Result
 from ..scene.build import Scene
 from ..scene.targets import Target
 from ..solve.newton import NewtonOptions, SolveRecord
-from ..solve.simulate import step_record
+from ..solve.simulate import MAX_CUTS, step_record
 from .interactive import LIVE_TOL, LiveEquilibrium, chamber_sliders
 
 NO_EQUILIBRIUM = "no equilibrium at this command"  # the state's words where none was found
@@ -73,6 +74,9 @@ class LiveSession:
         self._started = time.perf_counter()
         self.failed: np.ndarray | None = None  # the commands no equilibrium was found at (the state: the last one)
         self._last: tuple | None = None  # the last equilibrium: its commands, displacements and residual
+        self._goal = self.commands.copy()  # the commands the solving below is for
+        self._solving = self.commands.copy()  # the commands solved at now: the goal's, or a cut back toward it
+        self._cuts = 0  # the cut-backs taken for the goal
 
     @property
     def names(self) -> list[str]:
@@ -106,34 +110,47 @@ class LiveSession:
 
     def advance(self) -> bool:
         """One frame: a pending target reached, else the schedule moved on (playing, settled) and one Newton step
-        toward the equilibrium at the commands; an equilibrium settled at new commands is kept, and where none is
-        found the last one is shown (the module docstring). Whether the state changed."""
+        toward the equilibrium at the commands (or at a cut-back command on the way: _cut); an equilibrium settled
+        at new commands is kept, and where none is found the last one is shown (the module docstring). Whether the
+        state changed."""
         if self._target is not None:
             return self._reach(self._target)
         live = self.equilibrium
         if self.failed is not None and np.array_equal(self.failed, self.commands):
             return False
-        self.failed = None
-        if self.playing and live.commands is not None and live.converged:
+        if self.playing and self._at_commands() and live.converged:
             self.schedule_step = min(self.schedule_step + PLAY_INCREMENT, self.scene.schedule.increments)
             self.playing = self.schedule_step < self.scene.schedule.increments
             self.commands = self.scene.schedule.commands(self.schedule_step)
             self.driven += 1
-        changed = live.frame(self.commands)
+        if self.failed is not None or not np.array_equal(self._goal, self.commands):  # the commands moved
+            self.failed, self._goal, self._solving, self._cuts = None, self.commands.copy(), self.commands.copy(), 0
+        changed = live.frame(self._solving)
         if live.converged:
             self._last = (np.array(live.commands), live.u.copy(), live.residual)
+            self._solving = self.commands.copy()  # a cut-back command reached: on to the commands
         elif live.stuck or live.iterations >= live.solver.options.max_iterations:
-            self._give_up()
-            return True
+            return self._cut()
         self._keep()
         return changed
 
-    def _give_up(self) -> None:
-        """No equilibrium at the commands: remember them, stop playing, show the last equilibrium again."""
-        self.failed, self.playing = self.commands.copy(), False
+    def _at_commands(self) -> bool:
+        """Whether the state is (converging to) the one at the commands, not at a cut-back command."""
+        return self.equilibrium.commands is not None and np.array_equal(self.equilibrium.commands, self.commands)
+
+    def _cut(self) -> bool:
+        """No equilibrium found where solving: back to the last equilibrium, and from there half way (as a ramp
+        cuts an increment, MAX_CUTS times for one command at most); past that, none at the commands: the state
+        stays the last equilibrium and playing stops."""
         if self._last is not None:
             commands, u, residual = self._last
             self.equilibrium.hold(commands, u.copy(), residual)
+            if self._cuts < MAX_CUTS and not np.array_equal(commands, self._solving):
+                self._cuts += 1
+                self._solving = commands + (self._solving - commands) / 2
+                return True
+        self.failed, self.playing = self.commands.copy(), False
+        return True
 
     def _reach(self, point: np.ndarray) -> bool:
         """Reach for the target from the state shown (the reacher settled at the commands on screen first; where
@@ -166,7 +183,7 @@ class LiveSession:
     def _keep(self) -> None:
         """Keep the state if it is an equilibrium at commands not kept last."""
         live = self.equilibrium
-        if live.commands is None or not live.converged:
+        if live.commands is None or not live.converged or not self._at_commands():
             return
         if self._kept_at is not None and np.array_equal(self._kept_at, live.commands):
             return
