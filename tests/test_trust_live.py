@@ -52,9 +52,7 @@ def pack(message: dict) -> bytes:
 def frame(payload: bytes, opcode: int = 2) -> bytes:
     """One masked websocket frame (a client's) holding payload."""
     n = len(payload)
-    head = bytes([0x80 | opcode]) + (
-        bytes([0x80 | n]) if n < 126 else bytes([0x80 | 126]) + n.to_bytes(2, "big")
-    )
+    head = bytes([0x80 | opcode]) + (bytes([0x80 | n]) if n < 126 else bytes([0x80 | 126]) + n.to_bytes(2, "big"))
     mask = os.urandom(4)
     return head + mask + bytes(b ^ mask[i % 4] for i, b in enumerate(payload))
 
@@ -79,7 +77,12 @@ def slider_message(view, index, value) -> dict:
 
 
 def target_message(position) -> dict:
-    return {"type": "TransformControlsUpdateMessage", "name": "/target", "wxyz": [1.0, 0.0, 0.0, 0.0], "position": position}
+    return {
+        "type": "TransformControlsUpdateMessage",
+        "name": "/target",
+        "wxyz": [1.0, 0.0, 0.0, 0.0],
+        "position": position,
+    }
 
 
 @pytest.mark.parametrize("token", ["", "wrong", "TOKEN+x"], ids=["none", "wrong", "longer"])
@@ -118,11 +121,11 @@ def test_a_message_larger_than_the_bound_closes_its_connection_and_the_server_gr
 
     before = rss()
     array = b"\xdd" + (10**7).to_bytes(4, "big") + b"\xc0" * 10**7  # msgpack: 10 MB, ten million nils
-    with connect(f"ws://127.0.0.1:{view.port}/?token={view.token}", subprotocols=[PROTOCOL], close_timeout=1) as ws:
-        with pytest.raises(ConnectionClosed) as closed:
-            ws.send(array)
-            while True:
-                ws.recv(timeout=30)
+    url = f"ws://127.0.0.1:{view.port}/?token={view.token}"
+    with connect(url, subprotocols=[PROTOCOL], close_timeout=1) as ws, pytest.raises(ConnectionClosed) as closed:
+        ws.send(array)
+        while True:
+            ws.recv(timeout=30)
     assert closed.value.rcvd is not None and closed.value.rcvd.code == 1009  # message too big
     settle_frames(view, 0.5)
     assert rss() - before < GROWTH_BOUND
@@ -131,16 +134,25 @@ def test_a_message_larger_than_the_bound_closes_its_connection_and_the_server_gr
 
 BAD = {
     "menu value outside its options": lambda v: {
-        "type": "GuiUpdateMessage", "uuid": v.field_menu._impl.uuid, "updates": {"value": "garbage"}},
+        "type": "GuiUpdateMessage",
+        "uuid": v.field_menu._impl.uuid,
+        "updates": {"value": "garbage"},
+    },
     "menu value unhashable": lambda v: {
-        "type": "GuiUpdateMessage", "uuid": v.field_menu._impl.uuid, "updates": {"value": ["det_F"]}},
+        "type": "GuiUpdateMessage",
+        "uuid": v.field_menu._impl.uuid,
+        "updates": {"value": ["det_F"]},
+    },
     "slider NaN": lambda v: slider_message(v, 0, math.nan),
     "slider infinite": lambda v: slider_message(v, 1, math.inf),
     "slider past its range": lambda v: slider_message(v, 2, 1e9),
     "slider a string": lambda v: slider_message(v, 3, "450"),
     "box not a bool": lambda v: {"type": "GuiUpdateMessage", "uuid": v.play._impl.uuid, "updates": {"value": 1}},
     "slider's range changed": lambda v: {
-        "type": "GuiUpdateMessage", "uuid": v.sliders[0]._impl.uuid, "updates": {"max": 1e9}},
+        "type": "GuiUpdateMessage",
+        "uuid": v.sliders[0]._impl.uuid,
+        "updates": {"max": 1e9},
+    },
     "unknown control": lambda v: {"type": "GuiUpdateMessage", "uuid": "nope", "updates": {"value": 1.0}},
     "target NaN": lambda v: target_message([math.nan, 1.0, 0.0]),
     "target infinite": lambda v: target_message([0.0, -math.inf, 0.0]),
@@ -148,15 +160,34 @@ BAD = {
     "target of two numbers": lambda v: target_message([1.0, 0.0]),
     "another node moved": lambda v: {**target_message([1.0, 0.0, 0.0]), "name": "/clamp"},
     "camera NaN": lambda v: {
-        "type": "ViewerCameraMessage", "wxyz": [1, 0, 0, 0], "position": [0, 0, math.nan], "fov": 1.0, "near": 0.1,
-        "far": 10.0, "image_height": 10, "image_width": 10, "look_at": [0, 0, 0], "up_direction": [0, 1, 0]},
+        "type": "ViewerCameraMessage",
+        "wxyz": [1, 0, 0, 0],
+        "position": [0, 0, math.nan],
+        "fov": 1.0,
+        "near": 0.1,
+        "far": 10.0,
+        "image_height": 10,
+        "image_width": 10,
+        "look_at": [0, 0, 0],
+        "up_direction": [0, 1, 0],
+    },
     "camera missing fields": lambda v: {"type": "ViewerCameraMessage", "wxyz": [1, 0, 0, 0]},
     "an upload": lambda v: {
-        "type": "FileTransferStartUpload", "source_component_uuid": v.save._impl.uuid, "transfer_uuid": "t",
-        "filename": "x.bin", "mime_type": "application/octet-stream", "part_count": 10**6, "size_bytes": 10**9},
+        "type": "FileTransferStartUpload",
+        "source_component_uuid": v.sliders[0]._impl.uuid,
+        "transfer_uuid": "t",
+        "filename": "x.bin",
+        "mime_type": "application/octet-stream",
+        "part_count": 10**6,
+        "size_bytes": 10**9,
+    },
     "an upload's part": lambda v: {
-        "type": "FileTransferPart", "source_component_uuid": v.save._impl.uuid, "transfer_uuid": "t", "part": 0,
-        "content": b"\0" * 60000},
+        "type": "FileTransferPart",
+        "source_component_uuid": v.sliders[0]._impl.uuid,
+        "transfer_uuid": "t",
+        "part": 0,
+        "content": b"\0" * 60000,
+    },
     "a share link": lambda v: {"type": "ShareUrlRequest"},
     "an unknown type": lambda v: {"type": "NoSuchMessage"},
     "no type": lambda v: {"uuid": "x"},

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import errno
 import html
 import io
 import math
@@ -99,6 +100,26 @@ def check_host(host: str) -> None:
                 ) from None
 
 
+def common_port(host: str, port: int) -> int:
+    """The port to ask for: port, but for port 0 on every address (host ''), one free for IPv4 and IPv6 alike
+    (asked for 0, the OS gives each its own, and the URL names one); 0 where this machine has no IPv6."""
+    if port != 0 or host != "":
+        return port
+    for _ in range(100):
+        with socket.socket(socket.AF_INET) as v4:
+            v4.bind(("", 0))
+            candidate = v4.getsockname()[1]
+            try:
+                with socket.socket(socket.AF_INET6) as v6:
+                    v6.setsockopt(socket.IPPROTO_IPV6, socket.IPV6_V6ONLY, 1)
+                    v6.bind(("::", candidate))
+                    return candidate
+            except OSError as exc:
+                if exc.errno != errno.EADDRINUSE:  # no IPv6 here: IPv4 alone
+                    return 0
+    return 0
+
+
 def iframe_height(height) -> int:
     """A notebook iframe's height: an integer number of pixels in HEIGHTS."""
     require(
@@ -147,7 +168,9 @@ class WebView:
         self._driven = 0  # the session's count of commands it set itself, as the sliders show them
         self._inputs: dict = {}  # per control's uuid, the check of a value the page sends for it (_controls)
         with contextlib.redirect_stdout(io.StringIO()), guarded_serve(self.token, self.refusal):
-            self.server = viser.ViserServer(host=host, port=port, verbose=False)  # (its banner: without the token)
+            self.server = viser.ViserServer(
+                host=host, port=common_port(host, port), verbose=False
+            )  # (its banner: without the token)
         # no share button: viser's relay would put the page on the internet (and its websocket lacks the token)
         self.server.gui.configure_theme(show_share_button=False)
         self.server.scene.set_up_direction("+y")
