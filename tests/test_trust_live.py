@@ -111,6 +111,20 @@ def test_a_websocket_without_the_token_is_refused_in_its_upgrade_though_its_fram
     assert state(view) == before
 
 
+def test_a_request_that_is_not_http_is_logged_in_one_line_without_a_traceback(view, caplog, capfd):
+    caplog.set_level(logging.INFO)
+    with socket.create_connection(("127.0.0.1", view.port), timeout=10) as client:
+        client.sendall(b"GARBAGE\r\n\r\n")
+        assert client.recv(4096) == b""  # closed, unanswered
+    ends = time.monotonic() + 10
+    while not any("handshake" in r.getMessage() for r in caplog.records) and time.monotonic() < ends:
+        time.sleep(0.05)
+    logged = [r for r in caplog.records if "handshake" in r.getMessage()]
+    assert len(logged) == 1 and "\n" not in logged[0].getMessage() and logged[0].exc_info is None
+    assert "did not receive a valid HTTP request" in logged[0].getMessage()
+    assert "Traceback" not in capfd.readouterr().err
+
+
 def test_a_message_larger_than_the_bound_closes_its_connection_and_the_server_grows_less_than_40_mb(view):
     from websockets.exceptions import ConnectionClosed
     from websockets.sync.client import connect
@@ -185,7 +199,7 @@ BAD = {
         "type": "FileTransferPart",
         "source_component_uuid": v.sliders[0]._impl.uuid,
         "transfer_uuid": "t",
-        "part": 0,
+        "part_index": 0,
         "content": b"\0" * 60000,
     },
     "a share link": lambda v: {"type": "ShareUrlRequest"},

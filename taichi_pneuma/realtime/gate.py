@@ -2,7 +2,8 @@
 websocket is accepted (a request without it, or with another, is answered 403 and no frame of it is ever read);
 a message larger than MAX_MESSAGE bytes closes its connection (1009) before it is buffered whole; and each
 message is handed to viser only once a check (the page's, realtime/web.py) has passed it, a refused one logged
-in one line (no traceback) and dropped, the connection going on.
+in one line (no traceback) and dropped, the connection going on. What the websockets library logs of a connection
+(a request that is not HTTP, a handler's error) is one line too: the exception's type and message.
 
 viser (1.1) starts its server with websockets.asyncio.server.serve inside ViserServer(), with its own
 process_request (the page's files) and a 50 MB max_size, and has no parameter for either: guarded_serve wraps
@@ -26,8 +27,26 @@ from websockets.datastructures import Headers
 from websockets.http11 import Request, Response
 from websockets.typing import Data
 
+from ..errors import quoted
+
 MAX_MESSAGE = 64 * 1024  # bytes a page's message may have (its largest, a camera pose, has about 300)
 log = logging.getLogger("taichi_pneuma.live")
+
+
+class OneLine(logging.Filter):
+    """A record with an exception, in one line: its message, then the exception's type and message (no
+    traceback)."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.exc_info and record.exc_info[1] is not None:
+            exc = record.exc_info[1]
+            record.msg, record.args = f"live page: {record.getMessage()}: {type(exc).__name__}: {quoted(exc)}", None
+            record.exc_info, record.exc_text = None, None
+        return True
+
+
+connections_log = logging.getLogger("taichi_pneuma.live.connections")  # the websockets library's, for viser's server
+connections_log.addFilter(OneLine())
 _serve_lock = threading.Lock()  # one ViserServer started at a time through the wrapped serve
 
 
@@ -50,7 +69,8 @@ class GuardedConnection(ws_server.ServerConnection):
             reason = self.refusal(message)
             if reason is None:
                 return message
-            log.warning("live page: refused a message from %s: %s", self.remote_address, reason)
+            host, port = self.remote_address[:2]
+            log.warning("live page: refused a message from %s port %s: %s", host, port, reason)
 
 
 def upgrade_gate(token: str, files: Callable | None) -> Callable:
@@ -71,8 +91,8 @@ def upgrade_gate(token: str, files: Callable | None) -> Callable:
 @contextlib.contextmanager
 def guarded_serve(token: str, refusal: Callable[[Data], str | None]):
     """While the block runs, viser's call of websockets.asyncio.server.serve gets upgrade_gate(token, its own
-    process_request), max_size MAX_MESSAGE and GuardedConnection(refusal) connections; other callers get serve
-    as it is. Raises RuntimeError if the block ends without viser's call."""
+    process_request), max_size MAX_MESSAGE, GuardedConnection(refusal) connections and connections_log; other
+    callers get serve as it is. Raises RuntimeError if the block ends without viser's call."""
     serve = ws_server.serve
     called = threading.Event()
 
@@ -83,6 +103,7 @@ def guarded_serve(token: str, refusal: Callable[[Data], str | None]):
         kwargs["process_request"] = upgrade_gate(token, kwargs.get("process_request"))
         kwargs["max_size"] = MAX_MESSAGE
         kwargs["create_connection"] = functools.partial(GuardedConnection, refusal=refusal)
+        kwargs["logger"] = connections_log
         return serve(handler, *args, **kwargs)
 
     with _serve_lock:
