@@ -167,6 +167,7 @@ BAD = {
         "uuid": v.sliders[0]._impl.uuid,
         "updates": {"max": 1e9},
     },
+    "control named by a list": lambda v: {"type": "GuiUpdateMessage", "uuid": [1], "updates": {"value": 1.0}},
     "unknown control": lambda v: {"type": "GuiUpdateMessage", "uuid": "nope", "updates": {"value": 1.0}},
     "target NaN": lambda v: target_message([math.nan, 1.0, 0.0]),
     "target infinite": lambda v: target_message([0.0, -math.inf, 0.0]),
@@ -209,7 +210,7 @@ BAD = {
 }
 
 
-@pytest.mark.parametrize("attack", list(BAD) + ["not msgpack", "a text frame"])
+@pytest.mark.parametrize("attack", list(BAD) + ["not msgpack", "nested too deep", "a text frame"])
 def test_a_bad_message_with_the_token_is_refused_in_one_log_line_and_the_session_goes_on(view, caplog, capfd, attack):
     """Each bad message is logged once, in one line without a traceback, changes nothing the session holds, and
     the same connection's next message (a slider moved) is still taken."""
@@ -223,7 +224,8 @@ def test_a_bad_message_with_the_token_is_refused_in_one_log_line_and_the_session
         if attack == "a text frame":
             ws.send("{}")
         else:
-            ws.send(b"\xc1\xff\x00" if attack == "not msgpack" else pack(BAD[attack](view)))
+            raw = {"not msgpack": b"\xc1\xff\x00", "nested too deep": b"\x91" * 60000 + b"\xc0"}
+            ws.send(raw[attack] if attack in raw else pack(BAD[attack](view)))
         ws.send(pack(slider_message(view, 4, moved)))
         ends = time.monotonic() + 20
         while view.sliders[4].value != moved and time.monotonic() < ends:

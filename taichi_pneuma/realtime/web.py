@@ -168,9 +168,8 @@ class WebView:
         self._driven = 0  # the session's count of commands it set itself, as the sliders show them
         self._inputs: dict = {}  # per control's uuid, the check of a value the page sends for it (_controls)
         with contextlib.redirect_stdout(io.StringIO()), guarded_serve(self.token, self.refusal):
-            self.server = viser.ViserServer(
-                host=host, port=common_port(host, port), verbose=False
-            )  # (its banner: without the token)
+            # (viser's banner, redirected: its address without the token)
+            self.server = viser.ViserServer(host=host, port=common_port(host, port), verbose=False)
         # no share button: viser's relay would put the page on the internet (and its websocket lacks the token)
         self.server.gui.configure_theme(show_share_button=False)
         self.server.scene.set_up_direction("+y")
@@ -198,16 +197,19 @@ class WebView:
         """Why a message from the page is refused, None if it is not: it must be msgpack (binary) of a dict whose
         type is one of PAGE_MESSAGES, a control's value one it can hold (a slider's a finite number in its range,
         the box's a bool, the menu's one of its options, the button's True), the target's position finite and
-        within TARGET_ROOM body extents, the camera's numbers finite, and viser must decode it."""
+        within TARGET_ROOM body extents, the camera's numbers finite, and viser must decode it; none is taken
+        before the controls are made."""
         import msgspec
         from viser import _messages
 
+        if not self._inputs:
+            return "the page's controls are not made yet"
         if not isinstance(message, bytes):
             return "a text message (the page sends binary ones)"
         try:
             decoded = msgspec.msgpack.decode(message)
-        except msgspec.DecodeError:
-            return f"not msgpack ({len(message)} bytes)"
+        except (msgspec.DecodeError, RecursionError) as exc:
+            return f"not msgpack ({len(message)} bytes: {type(exc).__name__})"
         kind = decoded.get("type") if isinstance(decoded, dict) else None
         if kind not in PAGE_MESSAGES:
             return f"a message of type {quoted(kind)}: this page takes only {', '.join(PAGE_MESSAGES)}"
@@ -223,10 +225,11 @@ class WebView:
     def _value_refusal(self, kind: str, message: dict) -> str | None:
         """refusal's check of one of PAGE_MESSAGES' values."""
         if kind == "GuiUpdateMessage":
-            check = self._inputs.get(message.get("uuid"))
+            uuid = message.get("uuid")
+            check = self._inputs.get(uuid) if isinstance(uuid, str) else None
             updates = message.get("updates")
             if check is None:
-                return f"uuid {quoted(message.get('uuid'))} is none of this page's controls"
+                return f"uuid {quoted(uuid)} is none of this page's controls"
             if not isinstance(updates, dict) or list(updates) != ["value"]:
                 return f"updates {quoted(updates)} must set the control's value only"
             return check(updates["value"])
