@@ -61,7 +61,10 @@ def run(args: argparse.Namespace) -> dict:
     session = LiveSession(scene, budget(args), newton_options(args))
     view = WebView(session, out, stem, args.host, args.port, args.field)
     if args.host not in ("127.0.0.1", "localhost", "::1"):
-        print(f"warning: listening on {args.host}: anyone who can reach it and has the URL can steer this scene")
+        where = {"": "every address", "0.0.0.0": "every IPv4 address", "::": "every IPv6 address"}.get(args.host)
+        print(
+            f"warning: listening on {where or args.host}: anyone who can reach it and has the URL can steer this scene"
+        )
     print(f"scene {scene.name}: {session.mesh.n_vertices} nodes; the live page (keep its token private):")
     print(f"  {view.url}", flush=True)
     print(f"from another machine: ssh -L {view.port}:localhost:{view.port} <this machine>, then the same URL")
