@@ -48,19 +48,23 @@ def run(args: argparse.Namespace) -> dict:
     except ImportError:
         require(False, 'pneuma-serve needs the web extra: pip install "taichi-pneuma[web]"')
     from ..realtime.session import FIELDS, LiveSession
-    from ..realtime.web import WebView
+    from ..realtime.web import WebView, check_host
 
     require(args.field in FIELDS, f"--field {args.field!r} is not one of {', '.join(FIELDS)}")
     require(0 <= args.port <= 65535, f"--port {args.port} is not one of 0 .. 65535")
     require(args.seconds is None or args.seconds > 0, f"--seconds {args.seconds} must be > 0")
+    check_host(args.host)
     scene = scene_of_flags(args)
     stem = result_stem(scene.name if args.scene else f"inflate_cy{args.cy:+.2f}", args, scene) + "_live"
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     session = LiveSession(scene, budget(args), newton_options(args))
     view = WebView(session, out, stem, args.host, args.port, args.field)
-    if args.host not in ("127.0.0.1", "localhost"):
-        print(f"warning: listening on {args.host}: anyone who can reach it and has the URL can steer this scene")
+    if args.host not in ("127.0.0.1", "localhost", "::1"):
+        where = {"": "every address", "0.0.0.0": "every IPv4 address", "::": "every IPv6 address"}.get(args.host)
+        print(
+            f"warning: listening on {where or args.host}: anyone who can reach it and has the URL can steer this scene"
+        )
     print(f"scene {scene.name}: {session.mesh.n_vertices} nodes; the live page (keep its token private):")
     print(f"  {view.url}", flush=True)
     print(f"from another machine: ssh -L {view.port}:localhost:{view.port} <this machine>, then the same URL")

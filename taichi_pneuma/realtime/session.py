@@ -10,6 +10,13 @@ target for the tip is reached by inverse control (control/inverse.py: Reacher.re
 commands it finds become the sliders'. Each settled equilibrium at new commands is kept, as a ramp's step is, and
 save() writes them like Result.save.
 
+Where no equilibrium is found at the commands (the Newton options' max_iterations steps since they last moved
+without converging, or a step the line search refuses even with a fresh Hessian: past a pressure control's limit
+point), the state goes back to the last equilibrium and, as a ramp cuts an increment, solves half way there
+(MAX_CUTS times at most for one command, so a command costs at most (2 MAX_CUTS + 1) max_iterations frames); past
+that, the state stays the last equilibrium and the figures say "no equilibrium at this command". The session
+waits there until the commands move, then starts from that equilibrium (at its own commands, it is shown at once).
+
 A field shown on the body is per node: the mean over the elements that hold the node of each element's value
 (fem/fields.py: the largest principal stretch, det F, the von Mises stress of the mean Cauchy stress), or the
 displacement's length.
@@ -22,16 +29,17 @@ import time
 import numpy as np
 
 from ..control.inverse import Reacher, ReachOptions
-from ..errors import require
+from ..errors import require, require_finite
 from ..fem.fields import ElementFields
 from ..limits import Budget
 from ..result import Result
 from ..scene.build import Scene
 from ..scene.targets import Target
 from ..solve.newton import NewtonOptions, SolveRecord
-from ..solve.simulate import step_record
+from ..solve.simulate import MAX_CUTS, step_record
 from .interactive import LIVE_TOL, LiveEquilibrium, chamber_sliders
 
+NO_EQUILIBRIUM = "no equilibrium at this command"  # the state's words where none was found
 PLAY_INCREMENT = 0.25  # the schedule's step advanced per settled frame while playing (a quarter increment)
 FIELDS = {  # the fields a live view colours the body by: label and unit kind (None: a ratio)
     "none": ("", None),
@@ -64,16 +72,23 @@ class LiveSession:
         self._kept_at: np.ndarray | None = None  # the commands of the last one kept
         self._positions: list[np.ndarray] = []
         self._started = time.perf_counter()
+        self.failed: np.ndarray | None = None  # the commands no equilibrium was found at (the state: the last one)
+        self._last: tuple | None = None  # the last equilibrium: its commands, displacements and residual
+        self._goal = self.commands.copy()  # the commands the solving below is for
+        self._solving = self.commands.copy()  # the commands solved at now: the goal's, or a cut back toward it
+        self._cuts = 0  # the cut-backs taken for the goal
 
     @property
     def names(self) -> list[str]:
         return [s.name for s in self.sliders]
 
     def command(self, index: int, value: float) -> None:
-        """Set chamber `index`'s command (clipped to its slider's range); stops the schedule playing."""
+        """Set chamber `index`'s command (a finite number, clipped to its slider's range); stops the schedule
+        playing."""
         require(0 <= index < len(self.sliders), f"chamber index {index} is not one of 0 .. {len(self.sliders) - 1}")
         slider = self.sliders[index]
-        self.commands[index] = min(max(float(value), slider.low), slider.high)
+        value = require_finite(f"chamber {slider.name}'s command", value)
+        self.commands[index] = min(max(value, slider.low), slider.high)
         self.playing = False
 
     def play(self, on: bool) -> None:
@@ -83,30 +98,66 @@ class LiveSession:
         self.playing = bool(on)
 
     def aim(self, point) -> None:
-        """Ask for the tip at `point` (scene coordinates, 2 or 3 values); the next frame reaches for it."""
-        self._target = np.asarray(point, dtype=float)[: self.mesh.dim]
+        """Ask for the tip at `point` (scene coordinates: 2 or 3 finite numbers, the first d taken); the next frame
+        reaches for it."""
+        require(
+            isinstance(point, (list, tuple, np.ndarray)) and self.mesh.dim <= len(point) <= 3,
+            f"target {point!r} is not {self.mesh.dim} or 3 coordinates",
+        )
+        coordinates = [require_finite(f"target coordinate {axis}", v) for axis, v in zip("xyz", point)]
+        self._target = np.array(coordinates[: self.mesh.dim])
         self.playing = False
 
     def advance(self) -> bool:
         """One frame: a pending target reached, else the schedule moved on (playing, settled) and one Newton step
-        toward the equilibrium at the commands; an equilibrium settled at new commands is kept. Whether the state
-        changed."""
+        toward the equilibrium at the commands (or at a cut-back command on the way: _cut); an equilibrium settled
+        at new commands is kept, and where none is found the last one is shown (the module docstring). Whether the
+        state changed."""
         if self._target is not None:
             return self._reach(self._target)
         live = self.equilibrium
-        settled = live.commands is not None and (live.converged or live.stuck)
-        if self.playing and settled:
+        if self.failed is not None and np.array_equal(self.failed, self.commands):
+            return False
+        if self.playing and self._at_commands() and live.converged:
             self.schedule_step = min(self.schedule_step + PLAY_INCREMENT, self.scene.schedule.increments)
             self.playing = self.schedule_step < self.scene.schedule.increments
             self.commands = self.scene.schedule.commands(self.schedule_step)
             self.driven += 1
-        changed = live.frame(self.commands)
+        if self.failed is not None or not np.array_equal(self._goal, self.commands):  # the commands moved
+            self.failed, self._goal, self._solving, self._cuts = None, self.commands.copy(), self.commands.copy(), 0
+        changed = live.frame(self._solving)
+        if live.converged:
+            self._last = (np.array(live.commands), live.u.copy(), live.residual)
+            self._solving = self.commands.copy()  # a cut-back command reached: on to the commands
+        elif live.stuck or live.iterations >= live.solver.options.max_iterations:
+            return self._cut()
         self._keep()
         return changed
 
+    def _at_commands(self) -> bool:
+        """Whether the state is (converging to) the one at the commands, not at a cut-back command."""
+        return self.equilibrium.commands is not None and np.array_equal(self.equilibrium.commands, self.commands)
+
+    def _cut(self) -> bool:
+        """No equilibrium found where solving: back to the last equilibrium, and from there half way (as a ramp
+        cuts an increment, MAX_CUTS times for one command at most); past that, none at the commands: the state
+        stays the last equilibrium and playing stops."""
+        if self._last is not None:
+            commands, u, residual = self._last
+            self.equilibrium.hold(commands, u.copy(), residual)
+            if self._cuts < MAX_CUTS and not np.array_equal(commands, self._solving):
+                self._cuts += 1
+                self._solving = commands + (self._solving - commands) / 2
+                return True
+        self.failed, self.playing = self.commands.copy(), False
+        return True
+
     def _reach(self, point: np.ndarray) -> bool:
-        """Reach for the target from the state shown (the reacher settled at the commands on screen first)."""
+        """Reach for the target from the state shown (the reacher settled at the commands on screen first; where
+        none was found there, at the last equilibrium's)."""
         self._target = None
+        if self.failed is not None and self.equilibrium.commands is not None:
+            self.commands, self.failed = np.array(self.equilibrium.commands), None
         if self._reacher is None:
             bounds = (np.array([s.low for s in self.sliders]), np.array([s.high for s in self.sliders]))
             self._reacher = Reacher(
@@ -132,7 +183,7 @@ class LiveSession:
     def _keep(self) -> None:
         """Keep the state if it is an equilibrium at commands not kept last."""
         live = self.equilibrium
-        if live.commands is None or not live.converged:
+        if live.commands is None or not live.converged or not self._at_commands():
             return
         if self._kept_at is not None and np.array_equal(self._kept_at, live.commands):
             return
@@ -186,7 +237,7 @@ class LiveSession:
             "pressures": np.array([c.pressure() for c in self.built.chambers]),
             "iterations": live.iterations,
             "residual": float(live.residual),
-            "state": live.state,
+            "state": NO_EQUILIBRIUM if self.failed is not None else live.state,
             "schedule_step": self.schedule_step,
             "playing": self.playing,
             "reach_error": self.reached,

@@ -14,45 +14,124 @@ the session, and a control moved during a long step is read, at its latest value
 Publishing only queues a message; viser keeps, per scene node, only the newest message not yet sent to a
 client, so a slow client skips frames and never holds the solver back.
 
-Safe by default: the server listens on 127.0.0.1 only; a websocket connection is refused unless its URL carries
-the page's token (secrets.token_urlsafe, printed in the URL as Jupyter prints its own), so another user of the
-machine cannot watch or steer the scene; the page serves the one scene it was started with and takes no uploads.
+Safe by default: the server listens on 127.0.0.1 only; a websocket's HTTP upgrade is refused (403, before any
+frame is read) unless its URL carries the page's token (secrets.token_urlsafe, printed in the URL as Jupyter prints
+its own), so another user of the machine cannot watch or steer the scene (realtime/gate.py). A message is at most
+gate.MAX_MESSAGE bytes, and one is handed on only if it is one this page's client sends with values the page's
+controls hold (refusal): a bad one is logged in one line and dropped, the session going on. The page serves the one
+scene it was started with and takes no uploads.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import errno
 import html
 import io
+import math
 import secrets
+import socket
 import threading
 import time
 from collections import deque
 from typing import cast
-from urllib.parse import parse_qs, quote, urlsplit
+from urllib.parse import quote
 
 import numpy as np
 
-from ..errors import require
+from ..errors import PneumaInputError, quoted, require
 from ..io.units import LENGTH, PRESSURE
 from ..render.colours import COLORMAP, FACE, OBSTACLE, OBSTACLE_FILL, colormap
+from .gate import guarded_serve
 from .session import FIELDS, LiveSession
 
 FPS_WINDOW = 2.0  # seconds of frames the frame rate is measured over
 IDLE_SECONDS = 0.02  # the loop's pause when nothing changed (a settled state)
 RED = (200, 40, 40)
+HEIGHTS = (100, 4000)  # the notebook iframe's heights allowed (pixels)
+SLIDER_SLACK = 1e-6  # a slider's value is taken this fraction of its range outside it (the client's rounding)
+TARGET_ROOM = 10.0  # a target for the tip is taken within this many body extents of the rest body
+# the messages viser's client sends for this page's controls (sliders, box, menu, button, the target's gizmo, the
+# camera); the others (uploads, share links, forms, clicks, renders, commands) are for controls it does not have
+PAGE_MESSAGES = (
+    "GuiUpdateMessage",
+    "TransformControlsUpdateMessage",
+    "TransformControlsDragStartMessage",
+    "TransformControlsDragEndMessage",
+    "ViewerCameraMessage",
+)
+
+
+def url_host(host: str) -> str:
+    """The host as a URL names it: 127.0.0.1 for the loopback names and every IPv4 address (''/0.0.0.0: this
+    machine's browser reaches it there), [::1] for every IPv6 address ('::'), an IPv6 address in brackets."""
+    if host in ("", "0.0.0.0", "localhost"):
+        return "127.0.0.1"
+    if host == "::":
+        return "[::1]"
+    return f"[{host}]" if ":" in host else host
 
 
 def page_url(host: str, port: int, token: str) -> str:
     """The page's address: viser's client, told to open its websocket at the same address with the token."""
-    socket = f"ws://{host}:{port}/?token={token}"
-    return f"http://{host}:{port}/?websocket={quote(socket, safe=':/')}"
+    where = f"{url_host(host)}:{port}"
+    socket = f"ws://{where}/?token={token}"
+    return f"http://{where}/?websocket={quote(socket, safe=':/[]')}"
 
 
-def token_of(path: str) -> str:
-    """The token in a websocket request's path ('/?token=...'), '' if none."""
-    return parse_qs(urlsplit(path).query).get("token", [""])[0]
+def check_host(host: str) -> None:
+    """Refuse a host that does not resolve, or whose addresses this machine cannot listen on (each bound to a
+    free port and let go), naming it; '' is every address, as for the server."""
+    try:
+        addresses = socket.getaddrinfo(host or None, 0, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
+    except (socket.gaierror, UnicodeError) as exc:
+        raise PneumaInputError(
+            f"host {quoted(host)} does not resolve ({exc}); give an address of this machine"
+        ) from None
+    for family, kind, proto, _, address in addresses:
+        with socket.socket(family, kind, proto) as probe:
+            try:
+                probe.bind(address)
+            except OSError as exc:
+                raise PneumaInputError(
+                    f"host {quoted(host)} ({address[0]}) is not an address this machine can listen on "
+                    f"({exc.strerror}); give one of its own, e.g. 127.0.0.1"
+                ) from None
+
+
+def common_port(host: str, port: int) -> int:
+    """The port to ask for: port, but for port 0 on every address (host ''), one free for IPv4 and IPv6 alike
+    (asked for 0, the OS gives each its own, and the URL names one); 0 where this machine has no IPv6."""
+    if port != 0 or host != "":
+        return port
+    for _ in range(100):
+        with socket.socket(socket.AF_INET) as v4:
+            v4.bind(("", 0))
+            candidate = v4.getsockname()[1]
+            try:
+                with socket.socket(socket.AF_INET6) as v6:
+                    v6.setsockopt(socket.IPPROTO_IPV6, socket.IPV6_V6ONLY, 1)
+                    v6.bind(("::", candidate))
+                    return candidate
+            except OSError as exc:
+                if exc.errno != errno.EADDRINUSE:  # no IPv6 here: IPv4 alone
+                    return 0
+    return 0
+
+
+def iframe_height(height) -> int:
+    """A notebook iframe's height: an integer number of pixels in HEIGHTS."""
+    require(
+        isinstance(height, int) and not isinstance(height, bool) and HEIGHTS[0] <= height <= HEIGHTS[1],
+        f"height {quoted(height)} is not an integer number of pixels in {HEIGHTS[0]} .. {HEIGHTS[1]}",
+    )
+    return height
+
+
+def finite(value) -> bool:
+    """Whether value is a finite number (an int or a float, not a bool)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
 class WebView:
@@ -76,19 +155,21 @@ class WebView:
 
         require(field in FIELDS, f"field {field!r} is not one of {', '.join(FIELDS)}")
         require(0 <= port <= 65535, f"port {port} is not one of 0 .. 65535")
+        check_host(host)
         self.session, self.out, self.stem = session, out, stem or session.scene.name
         self.field, self.token, self.host = field, token or secrets.token_urlsafe(16), host
         self.stopping, self._asked = threading.Event(), threading.Event()  # stop(); the save button pressed
         self.frames, self.fps, self.published = 0, 0.0, 0
-        self.height = 560  # a notebook's iframe height (pixels)
+        self._height = 560  # a notebook's iframe height (pixels)
         self.task: asyncio.Task | None = None  # the notebook's frame task (live)
         self._times: deque[float] = deque()
         self._range: tuple[float, float] | None = None  # the colour scale, widened as the field grows
         self._redraw = True  # the body to publish at the next frame whether the state changed or not
         self._driven = 0  # the session's count of commands it set itself, as the sliders show them
-        with contextlib.redirect_stdout(io.StringIO()):  # viser's banner: its address without the token
-            self.server = viser.ViserServer(host=host, port=port, verbose=False)
-        self._gate_connections()
+        self._inputs: dict = {}  # per control's uuid, the check of a value the page sends for it (_controls)
+        with contextlib.redirect_stdout(io.StringIO()), guarded_serve(self.token, self.refusal):
+            # (viser's banner, redirected: its address without the token)
+            self.server = viser.ViserServer(host=host, port=common_port(host, port), verbose=False)
         # no share button: viser's relay would put the page on the internet (and its websocket lacks the token)
         self.server.gui.configure_theme(show_share_button=False)
         self.server.scene.set_up_direction("+y")
@@ -101,21 +182,96 @@ class WebView:
 
     @property
     def url(self) -> str:
-        return page_url(
-            "127.0.0.1" if self.host in ("127.0.0.1", "localhost", "0.0.0.0") else self.host, self.port, self.token
+        return page_url(self.host, self.port, self.token)
+
+    @property
+    def height(self) -> int:
+        """The notebook iframe's height (pixels; iframe_height checks a new one)."""
+        return self._height
+
+    @height.setter
+    def height(self, value) -> None:
+        self._height = iframe_height(value)
+
+    def refusal(self, message) -> str | None:
+        """Why a message from the page is refused, None if it is not: it must be msgpack (binary) of a dict whose
+        type is one of PAGE_MESSAGES, a control's value one it can hold (a slider's a finite number in its range,
+        the box's a bool, the menu's one of its options, the button's True), the target's position finite and
+        within TARGET_ROOM body extents, the camera's numbers finite, and viser must decode it; none is taken
+        before the controls are made."""
+        import msgspec
+        from viser import _messages
+
+        if not self._inputs:
+            return "the page's controls are not made yet"
+        if not isinstance(message, bytes):
+            return "a text message (the page sends binary ones)"
+        try:
+            decoded = msgspec.msgpack.decode(message)
+        except (msgspec.DecodeError, RecursionError) as exc:
+            return f"not msgpack ({len(message)} bytes: {type(exc).__name__})"
+        kind = decoded.get("type") if isinstance(decoded, dict) else None
+        if kind not in PAGE_MESSAGES:
+            return f"a message of type {quoted(kind)}: this page takes only {', '.join(PAGE_MESSAGES)}"
+        reason = self._value_refusal(kind, decoded)
+        if reason is not None:
+            return f"{kind}: {reason}"
+        try:
+            _messages.Message.deserialize(message)
+        except Exception as exc:  # viser's decoding of a message (any error: the message is malformed)
+            return f"{kind}: malformed ({type(exc).__name__}: {quoted(exc)})"
+        return None
+
+    def _value_refusal(self, kind: str, message: dict) -> str | None:
+        """refusal's check of one of PAGE_MESSAGES' values."""
+        if kind == "GuiUpdateMessage":
+            uuid = message.get("uuid")
+            check = self._inputs.get(uuid) if isinstance(uuid, str) else None
+            updates = message.get("updates")
+            if check is None:
+                return f"uuid {quoted(uuid)} is none of this page's controls"
+            if not isinstance(updates, dict) or list(updates) != ["value"]:
+                return f"updates {quoted(updates)} must set the control's value only"
+            return check(updates["value"])
+        if kind == "ViewerCameraMessage":
+            numbers = [x for k, v in message.items() if k != "type" for x in (v if isinstance(v, list) else [v])]
+            return None if all(finite(x) for x in numbers) else "its numbers must be finite"
+        if message.get("name") != self.target.name:
+            return f"name {quoted(message.get('name'))} is not the target's ({self.target.name})"
+        if kind == "TransformControlsUpdateMessage":
+            position, wxyz = message.get("position"), message.get("wxyz")
+            if not (isinstance(wxyz, list) and len(wxyz) == 4 and all(finite(x) for x in wxyz)):
+                return f"wxyz {quoted(wxyz)} is not 4 finite numbers"
+            if not (isinstance(position, list) and len(position) == 3 and all(finite(x) for x in position)):
+                return f"position {quoted(position)} is not 3 finite numbers"
+            rest = self._points(self.session.mesh.vertices)
+            room = TARGET_ROOM * self._extent()
+            if np.any(np.array(position) < rest.min(axis=0) - room) or np.any(
+                np.array(position) > rest.max(axis=0) + room
+            ):
+                return f"position {quoted(position)} is more than {TARGET_ROOM:g} body extents from the body"
+        return None
+
+    def _input_checks(self) -> None:
+        """Each control's check of a value the page sends for it (by the control's uuid): why it is refused, None
+        if it is not. A slider's range is widened by SLIDER_SLACK of it for the client's rounding (the session
+        clips)."""
+
+        def slider(low, high):
+            slack = SLIDER_SLACK * (high - low)
+            return lambda v: (
+                None
+                if finite(v) and low - slack <= v <= high + slack
+                else f"slider value {quoted(v)} is not a finite number in {low:g} .. {high:g}"
+            )
+
+        checks = {s._impl.uuid: slider(s.min, s.max) for s in self.sliders}
+        checks[self.play._impl.uuid] = lambda v: None if isinstance(v, bool) else f"box value {quoted(v)} is not a bool"
+        checks[self.field_menu._impl.uuid] = lambda v: (
+            None if isinstance(v, str) and v in FIELDS else f"menu value {quoted(v)} is not one of {', '.join(FIELDS)}"
         )
-
-    def _gate_connections(self) -> None:
-        """Refuse a websocket whose URL lacks the token: closed (policy violation) before any message is sent."""
-        sockets = self.server._websock_server  # viser's websocket server: its raw connections carry the request
-
-        async def gate(client) -> None:
-            connection = sockets._live_connections[client.client_id]  # registered before the connect callbacks
-            path = connection.request.path if connection.request is not None else ""
-            if not secrets.compare_digest(token_of(path), self.token):
-                await connection.close(1008, "this page needs the URL with its token")
-
-        sockets.on_client_connect(gate)
+        checks[self.save._impl.uuid] = lambda v: None if v is True else f"button value {quoted(v)} is not true"
+        self._inputs = checks
 
     def _controls(self) -> None:
         """The page's panel: sliders, play, field, figures, save; the clamp's nodes and the target's gizmo."""
@@ -130,8 +286,8 @@ class WebView:
         self.play = gui.add_checkbox("play the schedule", initial_value=False)
         self.field_menu = gui.add_dropdown("colour by", tuple(FIELDS), initial_value=self.field)
         self.figures = gui.add_markdown("starting ...")
-        save = gui.add_button("save state")
-        save.on_click(lambda _: self._asked.set())
+        self.save = gui.add_button("save state")
+        self.save.on_click(lambda _: self._asked.set())
         self.saved = gui.add_markdown("")
         rest = self._points(mesh.vertices)
         scene.add_point_cloud("/clamp", rest[mesh.pinned], colors=RED, point_size=0.004 * self._extent())
@@ -146,6 +302,7 @@ class WebView:
         )
         # what the controls showed at the last frame: a control that differs now was moved on the page
         self._shown = self._controls_now()
+        self._input_checks()
 
     def _surroundings(self, rest: np.ndarray) -> None:
         """The ground and the rigid obstacles where they are placed: in 2D their outlines in the z = 0 plane, in 3D
@@ -250,8 +407,6 @@ class WebView:
 
     def _save(self) -> None:
         """Write the kept equilibria (Result.save) and say so on the page; bad state is said there, not raised."""
-        from ..errors import PneumaInputError
-
         try:
             paths = self.session.save(self.out, self.stem)
             self.saved.content = f"saved {len(self.session.steps)} states: " + ", ".join(p.name for p in paths)
@@ -371,6 +526,7 @@ def live(scene, out="out", port: int = 0, field: str = "max_stretch", height: in
     from ..scene import scenefile
     from ..scene.shipped import find
 
+    iframe_height(height)
     try:
         loop = asyncio.get_running_loop()
     except RuntimeError:
