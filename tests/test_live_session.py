@@ -7,7 +7,7 @@ import pytest
 
 import taichi_pneuma as tp
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.realtime.session import LiveSession
+from taichi_pneuma.realtime.session import NO_EQUILIBRIUM, LiveSession
 
 SCENE = "pneunet_finger"  # 641 nodes, six pressure chambers, a schedule out to 900 and back over 18 increments
 
@@ -103,3 +103,31 @@ def test_saving_writes_the_kept_equilibria_as_a_ramps_files(scene, tmp_path):
     assert states["positions"].shape == (2, session.mesh.n_vertices, 2)
     assert states["pressure"][1, 2] == pytest.approx(450.0) and states["pressure"][0, 2] == pytest.approx(0.0)
     assert np.allclose(states["positions"][-1], session.positions())
+
+
+def test_a_live_state_whose_chamber_wall_crosses_itself_is_never_shown_or_kept_as_an_equilibrium():
+    """The reference chamber commanded to 0.05 of its area: Newton converges to a wall through itself (an exact
+    equilibrium of the discrete energy, no physical state), which a ramp refuses (test_trust_runtime). Live, the
+    same state is no equilibrium either: it is never kept, the session cuts back toward the command and, past its
+    cuts, says there is none at that command and shows the last equilibrium, a simple wall part of the way closed.
+    Commanded so before any frame, the way back is the body at rest."""
+    from test_trust_runtime import crosses
+
+    scene = tp.reference_scene(growth=0.05, steps=6, max_area=0.005)
+    for first in (0.5, None):
+        session = LiveSession(scene)
+        rest = session.commands[0]
+        if first is not None:
+            session.command(0, first * rest)
+            settle(session)
+        session.command(0, 0.05 * rest)
+        for _ in range(600):
+            session.advance()
+            if session.figures()["state"] == NO_EQUILIBRIUM:
+                break
+        assert session.figures()["state"] == NO_EQUILIBRIUM, session.figures()
+        loop = session.built.chambers[0].loop_vertices
+        assert not crosses(session.positions()[loop])  # the state shown: the last equilibrium
+        assert not any(crosses(positions[loop]) for positions in session._positions)
+        assert session.figures()["pressures"][0] > 0  # suction: the state shown is part of the way closed
+        assert len(session.steps) == (first is not None)  # the equilibrium at 0.5 kept; none at the failed command

@@ -18,6 +18,7 @@ from ..render.canvases import open_canvas
 from ..render.frames import FrameRenderer, Track
 from ..scene.build import Scene
 from ..solve.newton import CHORD_MAX_CONTRACTION, NewtonOptions, NewtonSolver
+from ..solve.simulate import state_fault
 
 # Newton tolerance of live forward solves: with the tangent predictor one Newton iteration reaches it
 # (the default 1e-6 often takes two); it moves the tip by ~1e-6 of the body length, far below the 1e-3 target tolerance.
@@ -212,24 +213,31 @@ class LiveEquilibrium:
     full Newton step, one per frame until the residual |g| / force scale is within the Newton tolerance, so the
     state a resting slider settles to is the equilibrium a full Newton solve finds at those commands. The line
     search never lets a tetrahedron invert (terms' max_step). A step the line search refuses leaves the state as
-    it was and the next frame takes a fresh Hessian; where even that fails, the loop waits for the commands to move."""
+    it was and the next frame takes a fresh Hessian; where even that fails, the loop waits for the commands to move.
+    A state within the tolerance is an equilibrium only if it is a physical one, as a ramp's is (simulate.settle):
+    no chamber wall through itself, no element inverted (state_fault), no obstacle overlapping the body
+    (BuiltScene.obstacle_overlap); otherwise `fault` says why, and the loop waits for the commands to move."""
 
     def __init__(self, built, options: NewtonOptions | None = None):
         self.built, self.solver = built, NewtonSolver(built.model, options or NewtonOptions(tol=LIVE_TOL))
         self.u = np.zeros_like(built.mesh.vertices)
         self.commands: np.ndarray | None = None  # the commands the state is (converging to) the equilibrium at
         self.residual, self.stuck, self.reuse = math.inf, False, False
+        self.fault: str | None = None  # why the state within the tolerance is no physical one, or None
         self.contraction = math.inf  # the last step's residual over its start's
         self.iterations = 0  # Newton steps taken since the commands last moved
 
     @property
     def converged(self) -> bool:
-        return self.residual <= self.solver.options.tol
+        """Whether the state is an equilibrium at the commands: within the tolerance, and a physical state."""
+        return self.residual <= self.solver.options.tol and self.fault is None
 
     @property
     def state(self) -> str:
-        """In words: 'equilibrium' (converged), 'stuck' (the line search refused a fresh Hessian's step) or
-        'converging'."""
+        """In words: 'equilibrium' (converged), 'no physical state: ...' (within the tolerance, but `fault`), 'stuck'
+        (the line search refused a fresh Hessian's step) or 'converging'."""
+        if self.fault is not None:
+            return f"no physical state: {self.fault}"
         return "equilibrium" if self.converged else "stuck" if self.stuck else "converging"
 
     def hold(self, commands: np.ndarray, u: np.ndarray, residual: float) -> None:
@@ -238,6 +246,7 @@ class LiveEquilibrium:
         self.commands, self.u, self.residual = np.array(commands, dtype=float), u, residual
         self.built.set_commands(self.commands)
         self.iterations, self.stuck, self.reuse, self.contraction = 0, False, False, math.inf
+        self.fault = None
 
     def frame(self, commands: np.ndarray) -> bool:
         """One frame's step at the commands; whether the state changed."""
@@ -245,8 +254,8 @@ class LiveEquilibrium:
         if moved:
             self.commands = np.array(commands, dtype=float)
             self.built.set_commands(self.commands)
-            self.stuck, self.iterations = False, 0
-        elif self.converged or self.stuck:
+            self.stuck, self.iterations, self.fault = False, 0, None
+        elif self.residual <= self.solver.options.tol or self.stuck:
             return False
         reuse = self.reuse and (moved or self.contraction <= CHORD_MAX_CONTRACTION)
         u, record = self.solver.solve(self.u, max_iterations=1, reuse_factor=reuse)
@@ -257,6 +266,9 @@ class LiveEquilibrium:
         elif not record.converged:  # the line search refused the step
             self.stuck = not reuse
         self.reuse = bool(record.iterations)
+        if self.residual <= self.solver.options.tol:
+            self.built.model.set_displacements(self.u)
+            self.fault = state_fault(self.built, self.commands) or self.built.obstacle_overlap()
         return bool(record.iterations)
 
 

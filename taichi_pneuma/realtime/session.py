@@ -11,11 +11,12 @@ commands it finds become the sliders'. Each settled equilibrium at new commands 
 save() writes them like Result.save.
 
 Where no equilibrium is found at the commands (the Newton options' max_iterations steps since they last moved
-without converging, or a step the line search refuses even with a fresh Hessian: past a pressure control's limit
-point), the state goes back to the last equilibrium and, as a ramp cuts an increment, solves half way there
-(MAX_CUTS times at most for one command, so a command costs at most (2 MAX_CUTS + 1) max_iterations frames); past
-that, the state stays the last equilibrium and the figures say "no equilibrium at this command". The session
-waits there until the commands move, then starts from that equilibrium (at its own commands, it is shown at once).
+without converging, a step the line search refuses even with a fresh Hessian: past a pressure control's limit point,
+or a state within the tolerance that is no physical one: LiveEquilibrium.fault), the state goes back to the last
+equilibrium and, as a ramp cuts an increment, solves half way there (MAX_CUTS times at most for one command, so a
+command costs at most (2 MAX_CUTS + 1) max_iterations frames); past that, the state stays the last equilibrium and
+the figures say "no equilibrium at this command". The session waits there until the commands move, then starts from
+that equilibrium (at its own commands, it is shown at once).
 
 A field shown on the body is per node: the mean over the elements that hold the node of each element's value
 (fem/fields.py: the largest principal stretch, det F, the von Mises stress of the mean Cauchy stress), or the
@@ -24,6 +25,7 @@ displacement's length.
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -129,7 +131,7 @@ class LiveSession:
         if live.converged:
             self._last = (np.array(live.commands), live.u.copy(), live.residual)
             self._solving = self.commands.copy()  # a cut-back command reached: on to the commands
-        elif live.stuck or live.iterations >= live.solver.options.max_iterations:
+        elif live.stuck or live.fault is not None or live.iterations >= live.solver.options.max_iterations:
             return self._cut()
         self._keep()
         return changed
@@ -141,7 +143,14 @@ class LiveSession:
     def _cut(self) -> bool:
         """No equilibrium found where solving: back to the last equilibrium, and from there half way (as a ramp
         cuts an increment, MAX_CUTS times for one command at most); past that, none at the commands: the state
-        stays the last equilibrium and playing stops."""
+        stays the last equilibrium and playing stops. Before any equilibrium was found (commands set before the first
+        frames settled), the way back is to the undeformed body at the schedule's first commands, where a ramp
+        starts."""
+        start = self.scene.schedule.commands(0)
+        if self._last is None and not np.array_equal(self._solving, start):
+            self.equilibrium.hold(start, np.zeros_like(self.equilibrium.u), math.inf)
+            self._solving = np.array(start, dtype=float)
+            return True
         if self._last is not None:
             commands, u, residual = self._last
             self.equilibrium.hold(commands, u.copy(), residual)
