@@ -93,3 +93,54 @@ def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
     lam, _ = _coordinates(inverse, corners[:, 0], norms, points, best[:, None])
     weights = np.clip(lam[:, 0], 0.0, None)
     return simplices[best].astype(np.int64), weights / weights.sum(axis=1, keepdims=True)
+
+
+def boundary_facets(mesh) -> np.ndarray:
+    """The facets (f, d) of the linear pieces that belong to one piece only: the boundary of the body the embedded
+    points live in (its outer surface and every chamber's wall), as the pieces have it."""
+    simplices = pieces(mesh)
+    d = mesh.dim
+    faces = np.vstack([np.delete(simplices, i, axis=1) for i in range(d + 1)])
+    _, first, counts = np.unique(np.sort(faces, axis=1), axis=0, return_index=True, return_counts=True)
+    return faces[first[counts == 1]]
+
+
+def first_crossing(mesh, starts: np.ndarray, ends: np.ndarray) -> tuple[int, np.ndarray] | None:
+    """The first segment (its index and the crossing point) from starts[s] to ends[s] (s, d) that passes through
+    the body's boundary (boundary_facets): one end more than TOLERANCE times the body's bounding-box diagonal on
+    either side of a facet's line or plane (signed distances h_p > tol > -tol > h_q), and the point where it meets
+    that plane, x = p + h_p / (h_p - h_q) (q - p), within the facet (its barycentric coordinates in the facet's
+    corners >= -1e-9). A segment between two points of the body that does so leaves the body there (through a
+    chamber's wall or the outer surface); one that only touches the boundary, or runs along it, does not count.
+    None: no segment crosses. Candidates: the facets whose circumscribing ball around their centroid meets the
+    segment's around its midpoint (a k-d tree of the facets' centroids)."""
+    from scipy.spatial import cKDTree  # imported here, as in embed
+
+    d = mesh.dim
+    facets = mesh.vertices[boundary_facets(mesh)]  # (f, d, d): corners
+    centroid = facets.mean(axis=1)
+    reach = float(np.linalg.norm(facets - centroid[:, None], axis=2).max())
+    middle, half = (starts + ends) / 2, np.linalg.norm(ends - starts, axis=1) / 2
+    near = cKDTree(centroid).query_ball_point(middle, half + reach)
+    segment = np.repeat(np.arange(len(starts)), [len(n) for n in near])
+    if not len(segment):
+        return None
+    facet = np.concatenate(near).astype(np.int64)
+    corners = facets[facet]
+    frame = corners[:, 1:] - corners[:, :1]  # (c, d - 1, d)
+    normal = np.column_stack([-frame[:, 0, 1], frame[:, 0, 0]]) if d == 2 else np.cross(frame[:, 0], frame[:, 1])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    p, q = starts[segment], ends[segment]
+    hp = np.einsum("ci,ci->c", normal, p - corners[:, 0])
+    hq = np.einsum("ci,ci->c", normal, q - corners[:, 0])
+    tol = TOLERANCE * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
+    through = ((hp > tol) & (hq < -tol)) | ((hp < -tol) & (hq > tol))
+    x = p + (hp / np.where(through, hp - hq, 1.0))[:, None] * (q - p)
+    gram = np.einsum("cid,cjd->cij", frame, frame)
+    lam = np.linalg.solve(gram, np.einsum("cid,cd->ci", frame, x - corners[:, 0])[..., None])[..., 0]
+    inside = through & np.all(lam >= -1e-9, axis=1) & (lam.sum(axis=1) <= 1 + 1e-9)
+    if not inside.any():
+        return None
+    hit = np.flatnonzero(inside)
+    pick = hit[np.argmin(segment[hit])]
+    return int(segment[pick]), x[pick]
