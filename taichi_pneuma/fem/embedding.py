@@ -112,7 +112,8 @@ def first_crossing(mesh, starts: np.ndarray, ends: np.ndarray) -> tuple[int, np.
     that plane, x = p + h_p / (h_p - h_q) (q - p), within the facet (its barycentric coordinates in the facet's
     corners >= -1e-9). A segment between two points of the body that does so leaves the body there (through a
     chamber's wall or the outer surface); one that only touches the boundary, or runs along it, does not count.
-    None: no segment crosses. Candidates: the facets whose circumscribing ball around their centroid meets the
+    Where the first segment crosses more than once, its crossing nearest its start; None: no segment crosses.
+    Candidates: the facets whose circumscribing ball around their centroid meets the
     segment's around its midpoint (a k-d tree of the facets' centroids)."""
     from scipy.spatial import cKDTree  # imported here, as in embed
 
@@ -135,12 +136,13 @@ def first_crossing(mesh, starts: np.ndarray, ends: np.ndarray) -> tuple[int, np.
     hq = np.einsum("ci,ci->c", normal, q - corners[:, 0])
     tol = TOLERANCE * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
     through = ((hp > tol) & (hq < -tol)) | ((hp < -tol) & (hq > tol))
-    x = p + (hp / np.where(through, hp - hq, 1.0))[:, None] * (q - p)
+    t = hp / np.where(through, hp - hq, 1.0)
+    x = p + t[:, None] * (q - p)
     gram = np.einsum("cid,cjd->cij", frame, frame)
     lam = np.linalg.solve(gram, np.einsum("cid,cd->ci", frame, x - corners[:, 0])[..., None])[..., 0]
     inside = through & np.all(lam >= -1e-9, axis=1) & (lam.sum(axis=1) <= 1 + 1e-9)
     if not inside.any():
         return None
     hit = np.flatnonzero(inside)
-    pick = hit[np.argmin(segment[hit])]
+    pick = hit[np.lexsort((t[hit], segment[hit]))[0]]
     return int(segment[pick]), x[pick]
