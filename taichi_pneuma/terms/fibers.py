@@ -201,7 +201,7 @@ class Fiber:
     """An embedded fibre ([[fibers]]): its curve (path, a fem/fiber_paths.py layout), Young's modulus E, its
     cross-section as exactly one of area (in 2D: per unit depth, a length) and diameter (3D; A = pi diameter^2 /
     4), the sample spacing of its curve (None: half the mean edge length of the mesh's elements), and an optional
-    name for messages."""
+    name for messages, held to a chamber name's rule (output.check_heading)."""
 
     path: Layout
     E: float
