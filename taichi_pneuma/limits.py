@@ -82,7 +82,6 @@ class Budget:
         worth = pairs * BYTES_PER_PAIR / BYTES_PER_TRIANGLE
         require(limit is None or worth <= limit, refusal(f"{what} would hold {pairs} point-edge pairs", worth, limit))
 
-
     def check_entries(self, entries: int, what: str) -> None:
         """Refuse a term about to allocate `entries` Hessian entries (a fibre's cord segments' blocks) past the
         budget's memory, BYTES_PER_FIBER_ENTRY each."""

@@ -66,7 +66,9 @@ def test_a_hundred_million_tiny_rings_are_refused_before_a_point_is_made():
     rings = Fiber(Rings((-1.5, -0.2, 0.0), 1e-6, 10**8, 1e-9, "x"), 1e3, diameter=1e-3, name="rings")
     tracemalloc.start()
     try:
-        with pytest.raises(PneumaInputError, match=r"fiber 'rings': spacing .* would sample it at 3e\+08 points; at mo"):
+        with pytest.raises(
+            PneumaInputError, match=r"fiber 'rings': spacing .* would sample it at 3e\+08 points; at mo"
+        ):
             rings.terms(Configuration(mesh.vertices), mesh, None, limits.Budget())
         assert tracemalloc.get_traced_memory()[1] < 10**7  # refused before sampling
     finally:
@@ -125,7 +127,9 @@ def test_a_fibre_whose_segment_crosses_the_cavity_between_two_samples_is_refused
     passed (both samples in the rubber); its segment leaves the rubber at x = -0.75."""
     mesh = box_with_cavity()
     config = Configuration(mesh.vertices)
-    with pytest.raises(PneumaInputError, match=r"fiber 'cord': its segment .* leaves the body at \[-0\.75, 0\.1, 0\.0\]"):
+    with pytest.raises(
+        PneumaInputError, match=r"fiber 'cord': its segment .* leaves the body at \[-0\.75, 0\.1, 0\.0\]"
+    ):
         box_fiber((-1.5, 0.1, 0.0), (1.5, 0.1, 0.0), 3.0).terms(config, mesh, None, limits.Budget())
     # a cord beside the cavity, and one along the body's outer face, stay in the rubber
     for y in (-0.1, -0.4):
@@ -137,7 +141,7 @@ def test_a_2d_cord_across_the_chamber_is_refused_in_one_line_and_nothing_is_writ
     """The reference beam's chamber spans x in [-0.85, 0.85] at y = 0.15; the cord's two samples lie beyond it."""
     fiber = (
         '\n[[fibers]]\nname = "cord"\nE = 1e5\narea = 0.001\nspacing = 3.0\n'
-        "path = { layout = \"line\", start = [-1.2, 0.15], end = [1.2, 0.15] }\n"
+        'path = { layout = "line", start = [-1.2, 0.15], end = [1.2, 0.15] }\n'
     )
     path = reference_with(tmp_path, ("[schedule]", fiber + "[schedule]"))
     out = tmp_path / "out"
@@ -150,11 +154,17 @@ def test_a_2d_cord_across_the_chamber_is_refused_in_one_line_and_nothing_is_writ
 # --- fibre names ----------------------------------------------------------------------------------------------------
 
 
+FIBER_TABLE = (
+    "[[fibers]]\nname = {name}\nE = 1e5\narea = 1e-5\n"
+    'path = {{ layout = "line", start = [-1.6, {y}], end = [1.6, {y}] }}\n'
+)
+
+
 @pytest.mark.parametrize("name", ["x/../../escaped", "\tthread", "=1+2", "@sum", "-x", "+x", "\rx", "thread"])
 def test_a_fibre_name_is_refused_exactly_where_a_chamber_name_is(tmp_path, name):
-    fiber = '\n[[fibers]]\nname = NAME\nE = 1e5\narea = 0.001\npath = { layout = "line", start = [-1.6, -0.3], end = [1.6, -0.3] }\n'
     quoted = '"' + name.replace("\t", "\\t").replace("\r", "\\r") + '"'
-    as_fiber = reference_with(tmp_path, ("[schedule]", fiber.replace("NAME", quoted) + "[schedule]"), file_name="f.toml")
+    fiber = FIBER_TABLE.format(name=quoted, y=-0.3)
+    as_fiber = reference_with(tmp_path, ("[schedule]", fiber + "[schedule]"), file_name="f.toml")
     as_chamber = reference_with(tmp_path, ('name = "main"', f"name = {quoted}"), file_name="c.toml")
 
     def refusal(path: Path) -> str | None:
@@ -172,18 +182,19 @@ def test_a_fibre_name_is_refused_exactly_where_a_chamber_name_is(tmp_path, name)
 
 # --- how many fibres and obstacles a scene may hold -----------------------------------------------------------------
 
-FIBER_TABLE = '[[fibers]]\nname = "f{k}"\nE = 1e5\narea = 1e-5\npath = {{ layout = "line", start = [-1.6, {y}], end = [1.6, {y}] }}\n'
 OBSTACLE_TABLE = '[[obstacles]]\nname = "o{k}"\nshape = "sphere"\ncenter = [{x}, -2.0]\nradius = 0.01\n'
 
 
 def crowded(tmp_path, fibers: int, obstacles: int) -> Path:
-    tables = [FIBER_TABLE.format(k=k, y=-0.35 + 0.001 * k) for k in range(fibers)]
+    tables = [FIBER_TABLE.format(name=f'"f{k}"', y=-0.35 + 0.001 * k) for k in range(fibers)]
     tables += [OBSTACLE_TABLE.format(k=k, x=-1.7 + 0.03 * k) for k in range(obstacles)]
     return reference_with(tmp_path, ("[schedule]", "\n".join(tables) + "\n[schedule]"))
 
 
 @pytest.mark.parametrize("table, flag", [("fibers", "--max-fibers"), ("obstacles", "--max-obstacles")])
-def test_a_scene_past_the_fibre_or_obstacle_cap_is_refused_before_meshing_naming_its_flag(tmp_path, capsys, table, flag):
+def test_a_scene_past_the_fibre_or_obstacle_cap_is_refused_before_meshing_naming_its_flag(
+    tmp_path, capsys, table, flag
+):
     counts = {"fibers": 0, "obstacles": 0, table: 101}
     path = crowded(tmp_path, **counts)
     out = tmp_path / "out"
@@ -286,9 +297,7 @@ def first_line(capsys) -> str:
     return next(line for line in capsys.readouterr().out.splitlines() if line.startswith("scene "))
 
 
-@pytest.mark.parametrize(
-    "nu, order, warns", [(0.4999, 1, True), (0.49, 1, True), (0.45, 1, False), (0.4999, 2, False)]
-)
+@pytest.mark.parametrize("nu, order, warns", [(0.4999, 1, True), (0.49, 1, True), (0.45, 1, False), (0.4999, 2, False)])
 def test_linear_elements_near_incompressibility_warn_in_the_runs_first_line(tmp_path, capsys, nu, order, warns):
     path = reference_with(tmp_path, ("nu = 0.45", f"nu = {nu}"), ("[mesh]", f"[mesh]\norder = {order}"))
     assert main(["--scene", str(path), "--out", str(tmp_path / "out"), *QUICK]) == 0
@@ -308,7 +317,8 @@ def test_an_isochoric_law_whose_bulk_modulus_is_fifty_times_its_shear_modulus_wa
         material = IsochoricMaterial("neo_hookean", C10=1e3, bulk_modulus=K)
         note = locking_note(scene_of(mesh, [pressure], 1, material), mesh)
         assert ("linear tetrahedra lock at nu = 0.4901" in note) == warns, note
-    nodal = scene_of(mesh, [pressure], 1, IsochoricMaterial("neo_hookean", C10=1e3, bulk_modulus=1e6), volumetric="nodal")
+    nodal = scene_of(
+        mesh, [pressure], 1, IsochoricMaterial("neo_hookean", C10=1e3, bulk_modulus=1e6), volumetric="nodal"
+    )
     assert locking_note(nodal, mesh) == ""
     assert locking_note(scene_of(mesh, [pressure], 1, Material(1e4, 0.495)), mesh) != ""
-

@@ -164,9 +164,7 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--max-increments", type=int, default=limits.MAX_INCREMENTS, help="refuse a schedule of more increments"
     )
-    p.add_argument(
-        "--max-fibers", type=int, default=limits.MAX_FIBERS, help="refuse a scene of more [[fibers]] tables"
-    )
+    p.add_argument("--max-fibers", type=int, default=limits.MAX_FIBERS, help="refuse a scene of more [[fibers]] tables")
     p.add_argument(
         "--max-obstacles", type=int, default=limits.MAX_OBSTACLES, help="refuse a scene of more [[obstacles]] tables"
     )
@@ -325,7 +323,7 @@ def locking_note(scene, mesh) -> str:
     return (
         f"; warning: linear {ELEMENTS[mesh.dim]} lock at nu = {ratios.max():.6g} (>= {LOCKING_POISSON:g}): they "
         f"barely change volume, so chambers inflate too little; use quadratic elements ([mesh] order = 2, "
-        f"--order 2), or volumetric = \"nodal\" with an isochoric law"
+        f'--order 2), or volumetric = "nodal" with an isochoric law'
     )
 
 

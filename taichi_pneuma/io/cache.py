@@ -165,7 +165,7 @@ def load(kind: str, entry: Key | None, check, max_bytes: int) -> dict[str, np.nd
     told = [arrays.pop(name, None) for name in (KEY, INPUTS, HASH)]
     if any(t is None or t.shape != () or t.dtype.kind != "U" for t in told):
         return None
-    stored_key, inputs, stored_hash = (str(t) for t in told)  # type: ignore[union-attr]
+    stored_key, inputs, stored_hash = (str(t) for t in told)
     if stored_key != entry or inputs != entry.text or stored_hash != content_hash(inputs, arrays):
         return None
     try:
