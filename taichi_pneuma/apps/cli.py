@@ -321,9 +321,9 @@ def locking_note(scene, mesh) -> str:
     if mesh.order != 1 or scene.volumetric != "element" or ratios is None or ratios.max() < LOCKING_POISSON:
         return ""
     return (
-        f"; warning: linear {ELEMENTS[mesh.dim]} lock at nu = {ratios.max():.6g} (>= {LOCKING_POISSON:g}): they "
-        f"barely change volume, so chambers inflate too little; use quadratic elements ([mesh] order = 2, "
-        f'--order 2), or volumetric = "nodal" with an isochoric law'
+        f"; warning: linear {ELEMENTS[mesh.dim]} lock at nu = {ratios.max():.4g} (>= {LOCKING_POISSON:g}): too "
+        f"stiff in volume change, their chambers inflate too little (or need too much pressure); use quadratic "
+        f'elements ([mesh] order = 2, --order 2), or volumetric = "nodal" with an isochoric law'
     )
 
 
