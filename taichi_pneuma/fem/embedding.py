@@ -24,6 +24,7 @@ from ..errors import require
 
 TOLERANCE = 1e-9  # of the body's bounding-box diagonal
 FIRST_CANDIDATES = 8
+CHUNK = 1024  # fibre segments first_crossing tests at once: their candidate pairs' arrays stay small
 TET_P2_SPLIT = (
     (0, 4, 6, 7),
     (4, 1, 5, 8),
@@ -113,36 +114,47 @@ def first_crossing(mesh, starts: np.ndarray, ends: np.ndarray) -> tuple[int, np.
     corners >= -1e-9). A segment between two points of the body that does so leaves the body there (through a
     chamber's wall or the outer surface); one that only touches the boundary, or runs along it, does not count.
     Where the first segment crosses more than once, its crossing nearest its start; None: no segment crosses.
-    Candidates: the facets whose circumscribing ball around their centroid meets the
-    segment's around its midpoint (a k-d tree of the facets' centroids)."""
+    Candidates: the facets whose ball about their centroid through their corners meets the segment's ball about
+    its midpoint (a k-d tree of the facets' centroids), CHUNK segments at a time."""
     from scipy.spatial import cKDTree  # imported here, as in embed
 
-    d = mesh.dim
-    facets = mesh.vertices[boundary_facets(mesh)]  # (f, d, d): corners
-    centroid = facets.mean(axis=1)
-    reach = float(np.linalg.norm(facets - centroid[:, None], axis=2).max())
-    middle, half = (starts + ends) / 2, np.linalg.norm(ends - starts, axis=1) / 2
-    near = cKDTree(centroid).query_ball_point(middle, half + reach)
-    segment = np.repeat(np.arange(len(starts)), [len(n) for n in near])
-    if not len(segment):
-        return None
-    facet = np.concatenate(near).astype(np.int64)
-    corners = facets[facet]
+    corners = mesh.vertices[boundary_facets(mesh)]  # (f, d, d)
+    centroid = corners.mean(axis=1)
+    radius = np.linalg.norm(corners - centroid[:, None], axis=2).max(axis=1)
+    tree = cKDTree(centroid)
+    tol = TOLERANCE * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
+    for first in range(0, len(starts), CHUNK):
+        p, q = starts[first : first + CHUNK], ends[first : first + CHUNK]
+        middle, half = (p + q) / 2, np.linalg.norm(q - p, axis=1) / 2
+        near = tree.query_ball_point(middle, half + radius.max())
+        segment = np.repeat(np.arange(len(p)), [len(n) for n in near])
+        facet = np.concatenate(near).astype(np.int64) if len(segment) else segment
+        close = np.linalg.norm(centroid[facet] - middle[segment], axis=1) <= half[segment] + radius[facet]
+        facet, segment = facet[close], segment[close]
+        found = _crossing(corners[facet], p[segment], q[segment], segment, tol)
+        if found is not None:
+            k, x = found
+            return first + k, x
+    return None
+
+
+def _crossing(corners, p, q, segment, tol: float) -> tuple[int, np.ndarray] | None:
+    """Of the pairs (facet corners (c, d, d), segment number segment[c] from p to q (c, d)), the crossing
+    (first_crossing's test) of the lowest segment number, nearest that segment's start: (that number, the crossing
+    point); None if no pair crosses."""
+    d = p.shape[1]
     frame = corners[:, 1:] - corners[:, :1]  # (c, d - 1, d)
     normal = np.column_stack([-frame[:, 0, 1], frame[:, 0, 0]]) if d == 2 else np.cross(frame[:, 0], frame[:, 1])
     normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    p, q = starts[segment], ends[segment]
     hp = np.einsum("ci,ci->c", normal, p - corners[:, 0])
     hq = np.einsum("ci,ci->c", normal, q - corners[:, 0])
-    tol = TOLERANCE * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
     through = ((hp > tol) & (hq < -tol)) | ((hp < -tol) & (hq > tol))
     t = hp / np.where(through, hp - hq, 1.0)
     x = p + t[:, None] * (q - p)
     gram = np.einsum("cid,cjd->cij", frame, frame)
     lam = np.linalg.solve(gram, np.einsum("cid,cd->ci", frame, x - corners[:, 0])[..., None])[..., 0]
-    inside = through & np.all(lam >= -1e-9, axis=1) & (lam.sum(axis=1) <= 1 + 1e-9)
-    if not inside.any():
+    inside = np.flatnonzero(through & np.all(lam >= -1e-9, axis=1) & (lam.sum(axis=1) <= 1 + 1e-9))
+    if not len(inside):
         return None
-    hit = np.flatnonzero(inside)
-    pick = hit[np.lexsort((t[hit], segment[hit]))[0]]
+    pick = inside[np.lexsort((t[inside], segment[inside]))[0]]
     return int(segment[pick]), x[pick]
