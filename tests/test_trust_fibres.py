@@ -141,6 +141,9 @@ def test_a_fibre_whose_segment_crosses_the_cavity_between_two_samples_is_refused
         match=r"from \[0\.0, -0\.05, 0\.0\] to \[0\.0, 0\.25, 0\.0\] leaves the body at \[0\.0, 0\.0, 0",
     ):
         zigzag.terms(config, mesh, None, limits.Budget())
+    # from the cavity's floor to its ceiling: both ends on its wall, the segment across the air
+    with pytest.raises(PneumaInputError, match=r"runs outside the body at its middle \[0\.0, 0\.1, 0\.0\]"):
+        box_fiber((0.0, 0.0, 0.0), (0.0, 0.2, 0.0), 1.0).terms(config, mesh, None, limits.Budget())
     # a cord beside the cavity, and one along the body's outer face, stay in the rubber
     for y in (-0.1, -0.4):
         (term,) = box_fiber((-1.5, y, 0.0), (1.5, y, 0.0), 3.0).terms(config, mesh, None, limits.Budget())

@@ -54,18 +54,15 @@ def _coordinates(inverse, origin, gradient_norms, points, candidates) -> tuple[n
     return lam, np.max(-lam / gradient_norms[candidates], axis=2)
 
 
-def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
-    """(nodes (P, d + 1) int64, weights (P, d + 1) float64): each point (P, d) as the barycentric weights of the
-    corners of a linear piece of the mesh that contains it; a point outside the body is a PneumaInputError naming
-    `what`, the point and the body's bounding box."""
-    points = np.asarray(points, dtype=float).reshape(-1, mesh.dim)
+def _search(mesh, points: np.ndarray) -> tuple:
+    """For points (P, d): (the pieces, their corners, T^-1, |grad lambda_i|, the nearest piece of each point, its
+    distance outside it, the tolerance): the k-d tree search of the module docstring."""
     simplices = pieces(mesh)
     corners = mesh.vertices[simplices]  # (s, d + 1, d)
     inverse = np.linalg.inv(np.swapaxes(corners[:, 1:] - corners[:, :1], 1, 2))  # (s, d, d): T^-1
     gradients = np.concatenate([-inverse.sum(axis=1, keepdims=True), inverse], axis=1)  # grad lambda_i, (s, d+1, d)
     norms = np.linalg.norm(gradients, axis=2)
-    low, high = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
-    tolerance = TOLERANCE * float(np.linalg.norm(high - low))
+    tolerance = TOLERANCE * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
     from scipy.spatial import cKDTree  # imported here: a scene without fibres does not load it
 
     tree = cKDTree(corners.mean(axis=1))
@@ -84,6 +81,22 @@ def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
         if k == len(simplices):
             break
         todo, k = todo[outside[todo] > tolerance], 4 * k
+    return simplices, corners, inverse, norms, best, outside, tolerance
+
+
+def inside(mesh, points) -> np.ndarray:
+    """Whether each point (P, d) lies in the body (on its boundary included; a chamber's cavity is outside)."""
+    *_, outside, tolerance = _search(mesh, np.asarray(points, dtype=float).reshape(-1, mesh.dim))
+    return outside <= tolerance
+
+
+def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """(nodes (P, d + 1) int64, weights (P, d + 1) float64): each point (P, d) as the barycentric weights of the
+    corners of a linear piece of the mesh that contains it; a point outside the body is a PneumaInputError naming
+    `what`, the point and the body's bounding box."""
+    points = np.asarray(points, dtype=float).reshape(-1, mesh.dim)
+    simplices, corners, inverse, norms, best, outside, tolerance = _search(mesh, points)
+    low, high = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
     bad = np.flatnonzero(outside > tolerance)
     require(
         len(bad) == 0,

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..backend import kernel, ti
 from ..errors import PneumaInputError, require, require_finite
-from ..fem.embedding import embed, first_crossing
+from ..fem.embedding import embed, first_crossing, inside
 from ..fem.fiber_paths import LAYOUTS, PLANAR, Layout
 from ..io.output import check_heading
 from .base import Indices, Nodal, Scalars, Table, Term, block_pattern, int32s
@@ -245,7 +245,8 @@ class Fiber:
         """One Cords term of this fibre's segments, embedded in the mesh. Refused before any point is made past
         MAX_FIBER_POINTS sample points (counted exactly, Layout.size), or past the budget (limits.Budget) by the
         memory of their Hessian blocks (check_entries); and after embedding, where a point lies outside the body
-        or a segment between two points passes through its boundary (a chamber: embedding.first_crossing)."""
+        or a segment between two points passes through its boundary (a chamber: embedding.first_crossing) or,
+        running from boundary to boundary, has its middle outside (a cord across a chamber from wall to wall)."""
         d = mesh.dim
         require(
             d == 3 or self.path.planar,
@@ -272,15 +273,20 @@ class Fiber:
         )
         nodes, weights = embed(mesh, np.vstack(curves), self.what)
         at_rest = np.einsum("pi,pid->pd", weights, mesh.vertices[nodes])
-        crossing = first_crossing(mesh, at_rest[segments[:, 0]], at_rest[segments[:, 1]])
+        first, second = at_rest[segments[:, 0]], at_rest[segments[:, 1]]
+        crossing = first_crossing(mesh, first, second)
+        how = "leaves the body at"
+        if crossing is None:  # both ends on the boundary (a chamber's wall, say): the segment's middle tells
+            middles = (first + second) / 2
+            out = np.flatnonzero(~inside(mesh, middles))
+            crossing, how = (int(out[0]), middles[out[0]]) if len(out) else None, "runs outside the body at its middle"
         if crossing is not None:
             s, x = crossing
-            a, b = (at_rest[segments[s, k]] for k in (0, 1))
+            ends = " to ".join(str([round(float(v), 6) for v in end[s]]) for end in (first, second))
             raise PneumaInputError(
-                f"{self.what}: its segment from {[round(float(v), 6) for v in a]} to "
-                f"{[round(float(v), 6) for v in b]} leaves the body at {[round(float(v), 6) for v in x]} (through a "
-                f"chamber or out of the body between two of its sample points; spacing {spacing:.6g}): give a smaller "
-                f"spacing or move the fiber"
+                f"{self.what}: its segment from {ends} {how} {[round(float(v), 6) for v in x]} (through a chamber or "
+                f"out of the body between two of its sample points; spacing {spacing:.6g}): give a smaller spacing or "
+                f"move the fiber"
             )
         rest_length = np.linalg.norm(at_rest[segments[:, 1]] - at_rest[segments[:, 0]], axis=1)
         kept = rest_length > 1e-12 * float(np.ptp(mesh.vertices, axis=0).max())
