@@ -36,9 +36,12 @@ BYTES_PER_TETRAHEDRON = 12_000  # measured, see the module docstring
 # concatenated copy, FixedPattern's int64 keys and np.unique's sorted copy, order and inverse. 96: that, rounded up.
 BYTES_PER_FIBER_ENTRY = 96
 # fibres and obstacles a scene may hold (--max-fibers, --max-obstacles): each is a term of its own, with its own
-# kernel launches every Newton iteration (docs/performance.md, "The resource limits")
+# kernel launches every Newton iteration. Each cap is the count that makes the shipped fiber_bending_3d (6,756 linear
+# tetrahedra, ~0.4 s a Newton iteration) run about twice as long: 100 more fibres took it from 0.35-0.45 to 0.81 s an
+# iteration; obstacles cost ~1.0 ms each an iteration (100: 0.44 s, 1000: 1.42 s), so ~440 double it
+# (docs/performance.md, "The resource limits")
 MAX_FIBERS = 100
-MAX_OBSTACLES = 100
+MAX_OBSTACLES = 400
 
 
 def refusal(what: str, triangles: float, limit: int | None) -> str:

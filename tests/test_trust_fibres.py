@@ -195,36 +195,40 @@ def test_a_fibre_name_is_refused_exactly_where_a_chamber_name_is(tmp_path, name)
 
 # --- how many fibres and obstacles a scene may hold -----------------------------------------------------------------
 
-OBSTACLE_TABLE = '[[obstacles]]\nname = "o{k}"\nshape = "sphere"\ncenter = [{x}, -2.0]\nradius = 0.01\n'
+OBSTACLE_TABLE = '[[obstacles]]\nname = "o{k}"\nshape = "sphere"\ncenter = [{x}, -2.0]\nradius = 0.001\n'
 
 
 def crowded(tmp_path, fibers: int, obstacles: int) -> Path:
     tables = [FIBER_TABLE.format(name=f'"f{k}"', y=-0.35 + 0.001 * k) for k in range(fibers)]
-    tables += [OBSTACLE_TABLE.format(k=k, x=-1.7 + 0.03 * k) for k in range(obstacles)]
+    tables += [OBSTACLE_TABLE.format(k=k, x=-1.7 + 0.008 * k) for k in range(obstacles)]
     return reference_with(tmp_path, ("[schedule]", "\n".join(tables) + "\n[schedule]"))
 
 
-@pytest.mark.parametrize("table, flag", [("fibers", "--max-fibers"), ("obstacles", "--max-obstacles")])
+@pytest.mark.parametrize("table, flag, limit", [("fibers", "--max-fibers", 100), ("obstacles", "--max-obstacles", 400)])
 def test_a_scene_past_the_fibre_or_obstacle_cap_is_refused_before_meshing_naming_its_flag(
-    tmp_path, capsys, table, flag
+    tmp_path, capsys, table, flag, limit
 ):
-    counts = {"fibers": 0, "obstacles": 0, table: 101}
+    counts = {"fibers": 0, "obstacles": 0, table: limit + 1}
     path = crowded(tmp_path, **counts)
     out = tmp_path / "out"
     assert main(["--scene", str(path), "--out", str(out), *QUICK]) == 2
-    assert error_line(capsys) == f"error: the scene has 101 [[{table}]] tables; the limit is 100 ({flag} raises it)"
+    assert (
+        error_line(capsys)
+        == f"error: the scene has {limit + 1} [[{table}]] tables; the limit is {limit} ({flag} raises it)"
+    )
     assert not files_under(out)
     scene = load_scene(path)
-    with pytest.raises(PneumaInputError, match=f"the limit is 100 \\({flag}"):
+    with pytest.raises(PneumaInputError, match=f"the limit is {limit} \\({flag}"):
         sizing.check_scene(scene)
-    sizing.check_scene(scene, **{f"max_{table}": 101})  # raised by its flag's value
+    sizing.check_scene(scene, **{f"max_{table}": limit + 1})  # raised by its flag's value
 
 
 @pytest.mark.parametrize("app", [inflate, reach, steer, sweep, serve])
 def test_every_app_that_builds_scenes_takes_both_caps(app):
     parser = app.parser()
     assert {"--max-fibers", "--max-obstacles"} <= set(parser._option_string_actions)
-    assert parser.get_default("max_fibers") == limits.MAX_FIBERS and parser.get_default("max_obstacles") == 100
+    assert parser.get_default("max_fibers") == limits.MAX_FIBERS
+    assert parser.get_default("max_obstacles") == limits.MAX_OBSTACLES
 
 
 def test_each_run_of_a_study_keeps_to_the_caps_it_was_given(tmp_path):
