@@ -19,8 +19,7 @@ from taichi_pneuma import limits, runtime
 from taichi_pneuma.apps import inflate, reach, serve, steer, sweep
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem import sizing
-from taichi_pneuma.fem.embedding import CHUNK
+from taichi_pneuma.fem import embedding, sizing
 from taichi_pneuma.fem.fiber_paths import Crossed, Helix, Line, Polyline, Rings
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes, Solid, mesh_solid
 from taichi_pneuma.fem.solids import Box, Ellipsoid
@@ -135,7 +134,7 @@ def test_a_fibre_whose_segment_crosses_the_cavity_between_two_samples_is_refused
     # past the first CHUNK segments: 111 passes along the box's bottom (10 segments each), then across the cavity floor
     passes = [(1.5 * (-1) ** (k + 1), -0.2, 0.0) for k in range(112)]
     zigzag = Fiber(Polyline((*passes, (0.0, -0.05, 0.0), (0.0, 0.25, 0.0))), 1e3, diameter=0.01, spacing=0.3, name="z")
-    assert zigzag.path.size(0.3)[1] - 1 > CHUNK + 2
+    assert zigzag.path.size(0.3)[1] - 1 > embedding.CHUNK + 2
     with pytest.raises(
         PneumaInputError,
         match=r"from \[0\.0, -0\.05, 0\.0\] to \[0\.0, 0\.25, 0\.0\] leaves the body at \[0\.0, 0\.0, 0",
