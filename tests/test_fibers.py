@@ -251,7 +251,7 @@ def test_a_fiber_sampled_past_the_budget_or_the_cap_is_refused():
     config = Configuration(box_with_cavity().vertices)
     with pytest.raises(
         PneumaInputError,
-        match=r"fiber 'x''s 340 cord segments would hold 195840 Hessian entries: .*the limit is 100 tri",
+        match=r"fiber 'x' \(340 cord segments\) would hold 195840 Hessian entries: .*the limit is 100 tri",
     ):
         Fiber(line, 1e3, area=0.01, spacing=0.01, name="x").terms(config, box_with_cavity(), None, Budget(100))
     with pytest.raises(

@@ -264,7 +264,7 @@ class Fiber:
             f"are allowed (give a larger spacing, or fewer rings or strands)",
         )
         segments_made = points if self.path.closed else points - count
-        budget.check_entries(segments_made * (2 * (d + 1) * d) ** 2, f"{self.what}'s {segments_made} cord segments")
+        budget.check_entries(segments_made * (2 * (d + 1) * d) ** 2, f"{self.what} ({segments_made} cord segments)")
         curves = self.path.curves(spacing)
         starts = np.cumsum([0] + [len(c) for c in curves])
         segments = np.vstack(
