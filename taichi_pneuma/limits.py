@@ -3,11 +3,12 @@ estimate, the limit and the command-line flag that raises it; before any work wh
 (fem/sizing.py estimates a scene's mesh), and by a budget the mesher and the terms keep to where it cannot.
 
 This module holds the limits, the measured costs they are counted in (BYTES_PER_TRIANGLE, BYTES_PER_TETRAHEDRON,
-BYTES_PER_PAIR, READ_BYTES...: where each figure comes from is on the performance page, docs/performance.md,
-"The resource limits"), the budget (Budget: element_cap() for a mesher, check_mesh() and check_pairs() for what
-was made; passed explicitly, Scene.build(budget) -> mesh(budget), terms(..., budget)) and the plain checks of counts
-(increments, frame pixels) and of a file reader's memory (memory_bound, read_allowance). Budget() (library use
-that sets none) caps nothing.
+BYTES_PER_PAIR, BYTES_PER_FIBER_ENTRY, READ_BYTES...: where each figure comes from is on the performance page,
+docs/performance.md, "The resource limits"), the budget (Budget: element_cap() for a mesher, check_mesh(),
+check_pairs() and check_entries() for what was made or is about to be; passed explicitly, Scene.build(budget) ->
+mesh(budget), terms(..., budget)) and the plain checks of counts (increments, fibres, obstacles, frame pixels:
+check_count) and of a file reader's memory (memory_bound, read_allowance). Budget() (library use that sets none)
+caps nothing.
 """
 
 from __future__ import annotations
@@ -28,6 +29,19 @@ READ_BYTES = 256_000_000  # memory a mesh file's reader may take, beyond READ_BY
 READ_BYTES_PER_FILE_BYTE = 16  # meshio's gmsh 2.2 reader peaks at 7.2 bytes per file byte (a 10.9 MB file: 78 MB)
 MAX_RUNS = 100_000  # runs of one design study (apps/sweep.py --max-runs)
 BYTES_PER_TETRAHEDRON = 12_000  # measured, see the module docstring
+# A fibre's Hessian entry (a cord segment's dense 2 (d + 1) d block, 576 entries in 3D): the peak the solver reaches
+# on one, measured with tracemalloc over Fiber.terms, the Newton solver's FixedPattern of the model's pattern and one
+# assembled matrix (crossed braids of 4, 16 and 64 strands on a 200-node box: 82.9, 81.8 and 81.3 bytes an entry;
+# the resident size grew by 81 bytes an entry from 4 to 64 strands): the term's int64 rows and columns, the model's
+# concatenated copy, FixedPattern's int64 keys and np.unique's sorted copy, order and inverse. 96: that, rounded up.
+BYTES_PER_FIBER_ENTRY = 96
+# fibres and obstacles a scene may hold (--max-fibers, --max-obstacles): each is a term of its own, with its own
+# kernel launches every Newton iteration. Each cap is the count that makes the shipped fiber_bending_3d (6,756 linear
+# tetrahedra, ~0.4 s a Newton iteration) run about twice as long: 100 more fibres took it from 0.35-0.45 to 0.81 s an
+# iteration; obstacles cost ~1.0 ms each an iteration (100: 0.44 s, 1000: 1.42 s), so ~440 double it
+# (docs/performance.md, "The resource limits")
+MAX_FIBERS = 100
+MAX_OBSTACLES = 400
 
 
 def refusal(what: str, triangles: float, limit: int | None) -> str:
@@ -71,16 +85,28 @@ class Budget:
         worth = pairs * BYTES_PER_PAIR / BYTES_PER_TRIANGLE
         require(limit is None or worth <= limit, refusal(f"{what} would hold {pairs} point-edge pairs", worth, limit))
 
+    def check_entries(self, entries: int, what: str) -> None:
+        """Refuse a term about to allocate `entries` Hessian entries (a fibre's cord segments' blocks) past the
+        budget's memory, BYTES_PER_FIBER_ENTRY each."""
+        limit = self.triangles
+        worth = entries * BYTES_PER_FIBER_ENTRY / BYTES_PER_TRIANGLE
+        require(limit is None or worth <= limit, refusal(f"{what} would hold {entries} Hessian entries", worth, limit))
+
 
 def wall_pairs(points: list[int]) -> int:
     """Point-edge pairs of closed walls of these node counts: each node with each edge not incident to it."""
     return sum(k * (k - 2) for k in points)
 
 
+def check_count(count: int, what: str, limit: int, raised_by: str, holder: str = "the scene") -> None:
+    """Refuse `holder` having more than `limit` of `what` (raised_by: what raises the limit, named in the message)."""
+    shown = count if count < 10**12 else f"about 10^{len(str(count)) - 1}"  # not 401 digits
+    require(count <= limit, f"{holder} has {shown} {what}; the limit is {limit} ({raised_by} raises it)")
+
+
 def check_increments(increments: int, limit: int = MAX_INCREMENTS, raised_by: str = "--max-increments") -> None:
-    """Refuse a schedule of more than `limit` increments (raised_by: what raises the limit, named in the message)."""
-    count = increments if increments < 10**12 else f"about 10^{len(str(increments)) - 1}"  # not 401 digits
-    require(increments <= limit, f"the schedule has {count} increments; the limit is {limit} ({raised_by} raises it)")
+    """Refuse a schedule of more than `limit` increments."""
+    check_count(increments, "increments", limit, raised_by, "the schedule")
 
 
 def check_frame(

@@ -216,7 +216,7 @@ def test_a_helix_lies_at_its_radius_advances_a_pitch_per_turn_and_turns_by_its_h
     assert np.allclose(along, sense * (angle - angle[0]) / (2 * np.pi) * pitch, rtol=0, atol=1e-12)
     assert math.degrees(angle[0]) == pytest.approx(30.0)
     steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
-    assert steps.max() <= 0.01 and steps.sum() == pytest.approx(helix.length, rel=1e-3)  # chords of its arcs
+    assert steps.max() <= 0.01 and steps.sum() == pytest.approx(helix.helix_length, rel=1e-3)  # chords of its arcs
 
 
 def test_a_helix_by_winding_angle_is_the_helix_of_its_pitch():
@@ -249,11 +249,14 @@ def test_bad_fiber_keys_are_refused_naming_them(make, message):
 def test_a_fiber_sampled_past_the_budget_or_the_cap_is_refused():
     line = Line((-1.7, -0.3, 0.0), (1.7, -0.3, 0.0))
     config = Configuration(box_with_cavity().vertices)
-    with pytest.raises(PneumaInputError, match=r"fiber 'x' would hold 340 cord segments: .*the limit is 100 triangles"):
+    with pytest.raises(
+        PneumaInputError,
+        match=r"fiber 'x' \(340 cord segments\) would hold 195840 Hessian entries: .*the limit is 100 tri",
+    ):
         Fiber(line, 1e3, area=0.01, spacing=0.01, name="x").terms(config, box_with_cavity(), None, Budget(100))
     with pytest.raises(
         PneumaInputError,
-        match=r"spacing 1e-05 would sample its length 3.4 at 3.4e\+05 points; at most 100000 are allowed",
+        match=r"spacing 1e-05 would sample it at 3.4e\+05 points; at most 100000 are allowed",
     ):
         Fiber(line, 1e3, area=0.01, spacing=1e-5, name="x").terms(config, box_with_cavity(), None, Budget())
 

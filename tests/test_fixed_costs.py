@@ -142,8 +142,8 @@ def test_the_cache_folder_follows_the_environment(tmp_path, monkeypatch):
     for off in ("", "off", "OFF"):
         monkeypatch.setenv(cache.VARIABLE, off)
         assert cache.directory() is None
-        cache.store("test", "0" * 64, {"a": np.zeros(3)})
-        assert cache.load("test", "0" * 64, lambda arrays: True, 10**6) is None
+        cache.store("test", cache.key("test"), {"a": np.zeros(3)})
+        assert cache.load("test", cache.key("test"), lambda arrays: True, 10**6) is None
     assert not any(tmp_path.rglob("*.npz"))
 
 

@@ -48,6 +48,10 @@ MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_ite
 # the reference-beam flags' defaults (those of scene.build.reference_scene; tests/test_cli.py checks they agree)
 BEAM_DEFAULTS = {"cx": 0.0, "growth": 3.5, "steps": 36, "E": 1e4, "nu": 0.45, "k": 1e5}
 MAX_SUFFIX = 40  # a readable stem suffix longer than this is replaced by the scene's hash
+# Linear elements lock (too stiff in volume change) from this small-strain Poisson's ratio on: there locking costs a
+# chamber's growth 20 % on linear tetrahedra (5 % on triangles) beyond their error at nu = 0.3, 29 % (12 %) at 0.4999
+# (docs/3d.md, "The locking warning"); the run's first line says so (locking_note)
+LOCKING_POISSON = 0.49
 
 
 def app_parser(prog: str, doc: str) -> argparse.ArgumentParser:
@@ -161,6 +165,10 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--max-increments", type=int, default=limits.MAX_INCREMENTS, help="refuse a schedule of more increments"
     )
+    p.add_argument("--max-fibers", type=int, default=limits.MAX_FIBERS, help="refuse a scene of more [[fibers]] tables")
+    p.add_argument(
+        "--max-obstacles", type=int, default=limits.MAX_OBSTACLES, help="refuse a scene of more [[obstacles]] tables"
+    )
     p.add_argument("--out", default="out", help="directory for the result files")
     p.add_argument("--arch", default="cpu", choices=sorted(runtime.ARCHES), help="Taichi backend")
     p.add_argument("--quiet", action="store_true", help="no per-step lines, no progress bars")
@@ -243,7 +251,7 @@ def check_flags(args: argparse.Namespace) -> None:
         require_finite(f"--{name.replace('_', '-')}", getattr(args, name))
     newton_options(args)  # validates --tol and --max-iterations
     require(args.max_cuts >= 0, f"--max-cuts = {args.max_cuts!r} must be >= 0")
-    for name in ("max_triangles", "max_increments", "max_frame_pixels"):
+    for name in ("max_triangles", "max_increments", "max_fibers", "max_obstacles", "max_frame_pixels"):
         if hasattr(args, name):  # (an app without video, pneuma-serve, has no --max-frame-pixels)
             require(getattr(args, name) >= 1, f"--{name.replace('_', '-')} = {getattr(args, name)!r} must be >= 1")
     from ..scene.schedule import area_ramp
@@ -267,8 +275,14 @@ def scene_for(args: argparse.Namespace, cy: float):
         args.max_area,
         order=args.order,
     )
-    sizing.check_scene(scene, args.max_triangles, args.max_increments)
+    check_scene(scene, args)
     return scene
+
+
+def check_scene(scene, args: argparse.Namespace) -> None:
+    """Refuse a scene past the limits of the flags (sizing.check_scene): --max-triangles, --max-increments,
+    --max-fibers, --max-obstacles."""
+    sizing.check_scene(scene, args.max_triangles, args.max_increments, args.max_fibers, args.max_obstacles)
 
 
 def with_quality_3d(scene, args: argparse.Namespace):
@@ -294,6 +308,27 @@ def preset_note(scene, args: argparse.Namespace | None) -> str:
     return f"; --quality {args.quality}: tip within {QUALITY_ERROR[scene.dim][args.quality]:g} % of converged on {on}"
 
 
+def locking_note(scene, mesh) -> str:
+    """'; warning: ...' naming the fix where the scene's elements are known to lock, else '': linear elements
+    (order 1: plane-strain triangles, tetrahedra) whose volumetric part is evaluated per element (volumetric =
+    "element") in a material whose small-strain Poisson's ratio (Law.poisson_ratio; for the isochoric laws
+    (3 K - 2 mu0) / (2 (3 K + mu0)), so K / mu0 >= 49.7) reaches LOCKING_POISSON somewhere in the body (to 1e-9:
+    a K made from nu = 0.49, as the presets', gives nu back to round-off)."""
+    import numpy as np
+
+    from ..result import ELEMENTS
+
+    law, rows = scene.law_parameters()
+    ratios = law.poisson_ratio(np.vstack(rows))
+    if mesh.order != 1 or scene.volumetric != "element" or ratios is None or ratios.max() < LOCKING_POISSON - 1e-9:
+        return ""
+    return (
+        f"; warning: linear {ELEMENTS[mesh.dim]} lock at nu = {ratios.max():.4g} (>= {LOCKING_POISSON:g}): too "
+        f"stiff in volume change, their chambers inflate too little (or need too much pressure); use quadratic "
+        f'elements ([mesh] order = 2, --order 2), or volumetric = "nodal" with an isochoric law'
+    )
+
+
 def scene_of_flags(args: argparse.Namespace):
     """The validated scene of the flags: --scene (or the reference beam of the flags, its chamber at --cy)
     with every --set applied, then checked against the resource limits (which --set may have raised)."""
@@ -304,7 +339,7 @@ def scene_of_flags(args: argparse.Namespace):
         scene = apply_set(with_quality_3d(load_scene(args.scene), args), args.set)
     else:
         scene = apply_set(scene_for(args, args.cy), args.set)
-    sizing.check_scene(scene, args.max_triangles, args.max_increments)
+    check_scene(scene, args)
     return scene
 
 
@@ -326,7 +361,7 @@ def build(scene, args: argparse.Namespace):
     print(
         f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
         f"{mesh.n_elements} {kind}; {describe_supports(mesh, scene.effects)}; "
-        f"terms: {', '.join(built.model.term_names())}{preset_note(scene, args)}"
+        f"terms: {', '.join(built.model.term_names())}{preset_note(scene, args)}{locking_note(scene, mesh)}"
     )
     for chamber in built.chambers:
         control = MEASURE[mesh.dim] if chamber.kind.name == "area" else chamber.kind.name  # "volume" in 3D

@@ -20,7 +20,16 @@ import time
 from .. import runtime
 from ..errors import require
 from ..io.output import prepare_directory
-from .cli import add_ramp_arguments, app_parser, budget, exit_code, newton_options, result_stem, scene_of_flags
+from .cli import (
+    add_ramp_arguments,
+    app_parser,
+    budget,
+    exit_code,
+    locking_note,
+    newton_options,
+    result_stem,
+    scene_of_flags,
+)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -65,7 +74,8 @@ def run(args: argparse.Namespace) -> dict:
         print(
             f"warning: listening on {where or args.host}: anyone who can reach it and has the URL can steer this scene"
         )
-    print(f"scene {scene.name}: {session.mesh.n_vertices} nodes; the live page (keep its token private):")
+    note = locking_note(scene, session.mesh)
+    print(f"scene {scene.name}: {session.mesh.n_vertices} nodes{note}; the live page (keep its token private):")
     print(f"  {view.url}", flush=True)
     print(f"from another machine: ssh -L {view.port}:localhost:{view.port} <this machine>, then the same URL")
     ends = None if args.seconds is None else time.monotonic() + args.seconds

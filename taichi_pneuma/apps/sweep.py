@@ -111,7 +111,14 @@ def run(args: argparse.Namespace) -> dict:
     base = scene_of_flags(args)
     executor = LocalPool(args.workers) if args.ray is None else RayCluster(args.ray or None, args.workers)
     options = RunOptions(
-        args.tol, args.max_iterations, args.max_cuts, args.max_triangles, args.max_increments, args.arch
+        args.tol,
+        args.max_iterations,
+        args.max_cuts,
+        args.max_triangles,
+        args.max_increments,
+        args.max_fibers,
+        args.max_obstacles,
+        args.arch,
     )
     out = prepare_directory(args.out)
     with lock_stem(out, check_stem(args.name)):  # from reading the rows done to writing the last: this run's

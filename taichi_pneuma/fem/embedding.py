@@ -24,6 +24,7 @@ from ..errors import require
 
 TOLERANCE = 1e-9  # of the body's bounding-box diagonal
 FIRST_CANDIDATES = 8
+CHUNK = 1024  # fibre segments first_crossing tests at once: their candidate pairs' arrays stay small
 TET_P2_SPLIT = (
     (0, 4, 6, 7),
     (4, 1, 5, 8),
@@ -53,18 +54,15 @@ def _coordinates(inverse, origin, gradient_norms, points, candidates) -> tuple[n
     return lam, np.max(-lam / gradient_norms[candidates], axis=2)
 
 
-def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
-    """(nodes (P, d + 1) int64, weights (P, d + 1) float64): each point (P, d) as the barycentric weights of the
-    corners of a linear piece of the mesh that contains it; a point outside the body is a PneumaInputError naming
-    `what`, the point and the body's bounding box."""
-    points = np.asarray(points, dtype=float).reshape(-1, mesh.dim)
+def _search(mesh, points: np.ndarray) -> tuple:
+    """For points (P, d): (the pieces, their corners, T^-1, |grad lambda_i|, the nearest piece of each point, its
+    distance outside it, the tolerance): the k-d tree search of the module docstring."""
     simplices = pieces(mesh)
     corners = mesh.vertices[simplices]  # (s, d + 1, d)
     inverse = np.linalg.inv(np.swapaxes(corners[:, 1:] - corners[:, :1], 1, 2))  # (s, d, d): T^-1
     gradients = np.concatenate([-inverse.sum(axis=1, keepdims=True), inverse], axis=1)  # grad lambda_i, (s, d+1, d)
     norms = np.linalg.norm(gradients, axis=2)
-    low, high = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
-    tolerance = TOLERANCE * float(np.linalg.norm(high - low))
+    tolerance = TOLERANCE * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
     from scipy.spatial import cKDTree  # imported here: a scene without fibres does not load it
 
     tree = cKDTree(corners.mean(axis=1))
@@ -83,6 +81,22 @@ def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
         if k == len(simplices):
             break
         todo, k = todo[outside[todo] > tolerance], 4 * k
+    return simplices, corners, inverse, norms, best, outside, tolerance
+
+
+def inside(mesh, points) -> np.ndarray:
+    """Whether each point (P, d) lies in the body (on its boundary included; a chamber's cavity is outside)."""
+    *_, outside, tolerance = _search(mesh, np.asarray(points, dtype=float).reshape(-1, mesh.dim))
+    return outside <= tolerance
+
+
+def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """(nodes (P, d + 1) int64, weights (P, d + 1) float64): each point (P, d) as the barycentric weights of the
+    corners of a linear piece of the mesh that contains it; a point outside the body is a PneumaInputError naming
+    `what`, the point and the body's bounding box."""
+    points = np.asarray(points, dtype=float).reshape(-1, mesh.dim)
+    simplices, corners, inverse, norms, best, outside, tolerance = _search(mesh, points)
+    low, high = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
     bad = np.flatnonzero(outside > tolerance)
     require(
         len(bad) == 0,
@@ -93,3 +107,67 @@ def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
     lam, _ = _coordinates(inverse, corners[:, 0], norms, points, best[:, None])
     weights = np.clip(lam[:, 0], 0.0, None)
     return simplices[best].astype(np.int64), weights / weights.sum(axis=1, keepdims=True)
+
+
+def boundary_facets(mesh) -> np.ndarray:
+    """The facets (f, d) of the linear pieces that belong to one piece only: the boundary of the body the embedded
+    points live in (its outer surface and every chamber's wall), as the pieces have it."""
+    simplices = pieces(mesh)
+    d = mesh.dim
+    faces = np.vstack([np.delete(simplices, i, axis=1) for i in range(d + 1)])
+    _, first, counts = np.unique(np.sort(faces, axis=1), axis=0, return_index=True, return_counts=True)
+    return faces[first[counts == 1]]
+
+
+def first_crossing(mesh, starts: np.ndarray, ends: np.ndarray) -> tuple[int, np.ndarray] | None:
+    """The first segment (its index and the crossing point) from starts[s] to ends[s] (s, d) that passes through
+    the body's boundary (boundary_facets): one end more than TOLERANCE times the body's bounding-box diagonal on
+    either side of a facet's line or plane (signed distances h_p > tol > -tol > h_q), and the point where it meets
+    that plane, x = p + h_p / (h_p - h_q) (q - p), within the facet (its barycentric coordinates in the facet's
+    corners >= -1e-9). A segment between two points of the body that does so leaves the body there (through a
+    chamber's wall or the outer surface); one that only touches the boundary, or runs along it, does not count.
+    Where the first segment crosses more than once, its crossing nearest its start; None: no segment crosses.
+    Candidates: the facets whose ball about their centroid through their corners meets the segment's ball about
+    its midpoint (a k-d tree of the facets' centroids), CHUNK segments at a time."""
+    from scipy.spatial import cKDTree  # imported here, as in embed
+
+    corners = mesh.vertices[boundary_facets(mesh)]  # (f, d, d)
+    centroid = corners.mean(axis=1)
+    radius = np.linalg.norm(corners - centroid[:, None], axis=2).max(axis=1)
+    tree = cKDTree(centroid)
+    tol = TOLERANCE * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
+    for first in range(0, len(starts), CHUNK):
+        p, q = starts[first : first + CHUNK], ends[first : first + CHUNK]
+        middle, half = (p + q) / 2, np.linalg.norm(q - p, axis=1) / 2
+        near = tree.query_ball_point(middle, half + radius.max())
+        segment = np.repeat(np.arange(len(p)), [len(n) for n in near])
+        facet = np.concatenate(near).astype(np.int64) if len(segment) else segment
+        close = np.linalg.norm(centroid[facet] - middle[segment], axis=1) <= half[segment] + radius[facet]
+        facet, segment = facet[close], segment[close]
+        found = _crossing(corners[facet], p[segment], q[segment], segment, tol)
+        if found is not None:
+            k, x = found
+            return first + k, x
+    return None
+
+
+def _crossing(corners, p, q, segment, tol: float) -> tuple[int, np.ndarray] | None:
+    """Of the pairs (facet corners (c, d, d), segment number segment[c] from p to q (c, d)), the crossing
+    (first_crossing's test) of the lowest segment number, nearest that segment's start: (that number, the crossing
+    point); None if no pair crosses."""
+    d = p.shape[1]
+    frame = corners[:, 1:] - corners[:, :1]  # (c, d - 1, d)
+    normal = np.column_stack([-frame[:, 0, 1], frame[:, 0, 0]]) if d == 2 else np.cross(frame[:, 0], frame[:, 1])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    hp = np.einsum("ci,ci->c", normal, p - corners[:, 0])
+    hq = np.einsum("ci,ci->c", normal, q - corners[:, 0])
+    through = ((hp > tol) & (hq < -tol)) | ((hp < -tol) & (hq > tol))
+    t = hp / np.where(through, hp - hq, 1.0)
+    x = p + t[:, None] * (q - p)
+    gram = np.einsum("cid,cjd->cij", frame, frame)
+    lam = np.linalg.solve(gram, np.einsum("cid,cd->ci", frame, x - corners[:, 0])[..., None])[..., 0]
+    inside = np.flatnonzero(through & np.all(lam >= -1e-9, axis=1) & (lam.sum(axis=1) <= 1 + 1e-9))
+    if not len(inside):
+        return None
+    pick = inside[np.lexsort((t[inside], segment[inside]))[0]]
+    return int(segment[pick]), x[pick]

@@ -1,8 +1,9 @@
 """The curves an embedded fibre follows (a [[fibers]] table's `path`, chosen by its `layout` key): each a frozen
 dataclass whose fields are its keys, checked on construction, with curves(spacing), a list of polylines (k, d)
 sampling its curves with segments no longer than spacing (a closed curve's last point is not repeated: `closed`
-says it joins its first), sample(spacing), all of them stacked, and length, their total length (what a spacing's
-sample count is told from before sampling). axis is 'z' when not given.
+says it joins its first), sample(spacing), all of them stacked, and size(spacing), the (curves, points) that
+curves(spacing) makes, counted exactly without sampling (what the caps are checked on before any point is made).
+axis is 'z' when not given.
 
     line      start, end: a straight cord (2D or 3D)
     polyline  points, at least 2: a cord through them (2D or 3D)
@@ -61,16 +62,27 @@ def _positive(name: str, value) -> float:
     return v
 
 
-def sampled(corners: np.ndarray, spacing: float, closed: bool = False) -> np.ndarray:
-    """The polyline through corners (k, d) with each side cut into equal pieces no longer than spacing (closed:
-    the side from the last corner back to the first too, whose end is not repeated)."""
+def ceiling(x: float) -> int:
+    """ceil(x), x capped at 2^62 (a count past every cap; an infinite quotient of finite numbers, 1e300 / 1e-300,
+    has no ceiling)."""
+    return math.ceil(min(x, 2.0**62))
+
+
+def pieces(corners: np.ndarray, spacing: float, closed: bool = False) -> list[int]:
+    """How many equal pieces no longer than spacing each side of the polyline through corners is cut into:
+    max(1, ceil(|b - a| / spacing)) (closed: the side from the last corner back to the first too)."""
     ends = np.vstack([corners, corners[:1]]) if closed else corners
-    pieces = [
-        a + np.outer(np.arange(n) / n, b - a)
-        for a, b in zip(ends[:-1], ends[1:])
-        for n in [max(1, math.ceil(float(np.linalg.norm(b - a)) / spacing))]
-    ]
-    return np.vstack(pieces if closed else [*pieces, ends[-1:]])
+    return [max(1, ceiling(float(np.linalg.norm(b - a)) / spacing)) for a, b in zip(ends[:-1], ends[1:])]
+
+
+def sampled(corners: np.ndarray, spacing: float, closed: bool = False) -> np.ndarray:
+    """The polyline through corners (k, d) with each side cut into its pieces(corners, spacing, closed) (closed:
+    the side from the last corner back to the first too, whose end is not repeated): sum(pieces) points, one more
+    if open."""
+    ends = np.vstack([corners, corners[:1]]) if closed else corners
+    cuts = pieces(corners, spacing, closed)
+    parts = [a + np.outer(np.arange(n) / n, b - a) for a, b, n in zip(ends[:-1], ends[1:], cuts)]
+    return np.vstack(parts if closed else [*parts, ends[-1:]])
 
 
 class Layout:
@@ -83,9 +95,8 @@ class Layout:
     def curves(self, spacing: float) -> list[np.ndarray]:
         raise NotImplementedError
 
-    @property
-    def length(self) -> float:
-        """The curves' total length."""
+    def size(self, spacing: float) -> tuple[int, int]:
+        """(curves, points) of curves(spacing), counted without sampling."""
         raise NotImplementedError
 
     def sample(self, spacing: float) -> np.ndarray:
@@ -116,9 +127,8 @@ class Line(Layout):
     def curves(self, spacing: float) -> list[np.ndarray]:
         return [sampled(np.array([self.start, self.end], dtype=float), spacing)]
 
-    @property
-    def length(self) -> float:
-        return float(np.linalg.norm(np.subtract(self.end, self.start)))
+    def size(self, spacing: float) -> tuple[int, int]:
+        return 1, sum(pieces(np.array([self.start, self.end], dtype=float), spacing)) + 1
 
 
 @dataclass(frozen=True)
@@ -144,9 +154,8 @@ class Polyline(Layout):
     def curves(self, spacing: float) -> list[np.ndarray]:
         return [sampled(np.array(self.points, dtype=float), spacing)]
 
-    @property
-    def length(self) -> float:
-        return float(np.linalg.norm(np.diff(np.array(self.points, dtype=float), axis=0), axis=1).sum())
+    def size(self, spacing: float) -> tuple[int, int]:
+        return 1, sum(pieces(np.array(self.points, dtype=float), spacing)) + 1
 
 
 def _frame(center, axis: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -184,16 +193,19 @@ class Rings(Layout):
         )
         _positive("spacing", self.spacing)
 
+    def ring_points(self, spacing: float) -> int:
+        """The points of each ring: max(3, ceil(2 pi radius / spacing)), a triangle at the least."""
+        return max(3, ceiling(2 * math.pi * self.radius / spacing))
+
     def curves(self, spacing: float) -> list[np.ndarray]:
         c, e1, e2, ea = _frame(self.center, self.axis)
-        n = max(3, math.ceil(2 * math.pi * self.radius / spacing))
+        n = self.ring_points(spacing)
         theta = 2 * math.pi * np.arange(n) / n
         circle = self.radius * (np.outer(np.cos(theta), e1) + np.outer(np.sin(theta), e2))
         return [c + k * self.spacing * ea + circle for k in range(self.count)]
 
-    @property
-    def length(self) -> float:
-        return self.count * 2 * math.pi * self.radius
+    def size(self, spacing: float) -> tuple[int, int]:
+        return self.count, self.count * self.ring_points(spacing)
 
 
 @dataclass(frozen=True)
@@ -276,6 +288,10 @@ class Spiral(Layout):
         """Its turns: turns, or extent / advance (its axial extent over the advance per turn)."""
         return self.turns if self.turns is not None else self.extent / self.advance  # type: ignore[operator]
 
+    def helix_points(self, spacing: float) -> int:
+        """The points of each helix: max(2, ceil(helix_length / spacing)) + 1."""
+        return max(2, ceiling(self.helix_length / spacing)) + 1
+
     def helices(self, sense: int, spacing: float) -> list[np.ndarray]:
         """The strands of handedness sense (+1 right, -1 left), their phases 360 / strands degrees apart."""
         return [self.helix(sense, spacing, self.phase + 360 * k / self.strands) for k in range(self.strands)]
@@ -284,7 +300,7 @@ class Spiral(Layout):
         """The helix of handedness sense (+1 right, -1 left) starting at phase (degrees), sampled no coarser than
         spacing."""
         c, e1, e2, ea = _frame(self.center, self.axis)
-        t = np.linspace(0.0, self.count, max(2, math.ceil(self.helix_length / spacing)) + 1)
+        t = np.linspace(0.0, self.count, self.helix_points(spacing))
         if self.flat is not None:
             arc = (phase / 360 + sense * t) * self.perimeter
             return c + self.section(arc) + np.outer(self.advance * t, ea)
@@ -311,9 +327,8 @@ class Helix(Spiral):
     def curves(self, spacing: float) -> list[np.ndarray]:
         return self.helices(1 if self.handedness == "right" else -1, spacing)
 
-    @property
-    def length(self) -> float:
-        return self.strands * self.helix_length
+    def size(self, spacing: float) -> tuple[int, int]:
+        return self.strands, self.strands * self.helix_points(spacing)
 
 
 @dataclass(frozen=True)
@@ -323,9 +338,8 @@ class Crossed(Spiral):
     def curves(self, spacing: float) -> list[np.ndarray]:
         return self.helices(1, spacing) + self.helices(-1, spacing)
 
-    @property
-    def length(self) -> float:
-        return 2 * self.strands * self.helix_length
+    def size(self, spacing: float) -> tuple[int, int]:
+        return 2 * self.strands, 2 * self.strands * self.helix_points(spacing)
 
 
 LAYOUTS: dict[str, type[Layout]] = {

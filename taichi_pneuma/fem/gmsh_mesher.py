@@ -42,7 +42,8 @@ Meshes are cached on disk (io/cache.py: the user's cache folder, PNEUMA_CACHE_DI
 the arrays of mesh_solid, and the rubber's volume and the walls' area that estimate_tets needs, each keyed by
 everything that decides them: the solid's shapes and their parameters, the sizes, the surface meshers, gmsh's
 version and this mesher's source (the files of MESHER_SOURCES). A hit runs no gmsh at all and returns the very
-arrays gmsh made; the limits are checked on it as on a fresh mesh. A cached file is checked before use (shapes,
+arrays gmsh made; the limits are checked on it as on a fresh mesh. A cached file is checked before use (a regular
+file; its key's inputs, as text, those of this call; its content hash that of its arrays: io/cache.py; then shapes,
 dtypes, indices in range, positive tetrahedra) and a bad one is meshed afresh and replaced.
 """
 
@@ -379,7 +380,7 @@ def _mesher_version() -> str | None:
     return f"gmsh {version}, mesher {sources.hexdigest()}"
 
 
-def _cache_key(kind: str, *parts) -> str | None:
+def _cache_key(kind: str, *parts) -> cache.Key | None:
     """The cache entry of the parts (None when the cache is off, without gmsh, or for a part with no exact text)."""
     version = None if cache.directory() is None else _mesher_version()
     return None if version is None else cache.key(kind, version, *parts)

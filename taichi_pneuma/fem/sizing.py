@@ -20,9 +20,17 @@ from ..errors import require
 from .polygons import signed_area
 
 
-def check_scene(scene, max_triangles: int = limits.MAX_TRIANGLES, max_increments: int = limits.MAX_INCREMENTS) -> None:
-    """Refuse (PneumaInputError) a scene whose estimated mesh (its terms' pairs included) or increment count
-    is past the limits."""
+def check_scene(
+    scene,
+    max_triangles: int = limits.MAX_TRIANGLES,
+    max_increments: int = limits.MAX_INCREMENTS,
+    max_fibers: int = limits.MAX_FIBERS,
+    max_obstacles: int = limits.MAX_OBSTACLES,
+) -> None:
+    """Refuse (PneumaInputError) a scene whose fibre or obstacle count, estimated mesh (its terms' pairs included) or
+    increment count is past the limits."""
+    limits.check_count(len(scene.fibers), "[[fibers]] tables", max_fibers, "--max-fibers")
+    limits.check_count(len(scene.obstacles), "[[obstacles]] tables", max_obstacles, "--max-obstacles")
     geometry = scene.geometry
     if geometry.dim == 3:
         check_solid(scene, max_triangles)

@@ -8,11 +8,20 @@ Linux and the BSDs, ~/Library/Caches/taichi-pneuma on macOS, %LOCALAPPDATA%\\tai
 An entry is one .npz file named by its key: the SHA-256 of a canonical text of everything the result depends
 on (key()), which names dataclasses by their module and class and writes floats exactly (repr), arrays by dtype,
 shape and a hash of their bytes; a value of any other type makes the result uncacheable (key() is None), never
-a key that two different inputs could share. The file also holds its key, and is written whole or not at all
-(output.write_atomic), uncompressed. Reading never trusts a file: one that does not load (corrupt, truncated,
-compressed beyond its size bound, pickled objects), that holds another key, or whose arrays the caller's check
-refuses (shapes, dtypes, indices in range) counts as a miss, and the fresh result is written over it. A cache
-that cannot be written (read-only, disk full) is skipped silently: it only ever saves time.
+a key that two different inputs could share. The file also holds its key, that canonical text (the key's inputs)
+and a content hash: the SHA-256 of the text and of every array's name, dtype, shape and bytes (content_hash). It is
+written whole or not at all (output.write_atomic), uncompressed.
+
+Reading never trusts a file. It is opened only if it is a regular file (not blocking: a FIFO, a device or a
+folder at an entry's name is a miss, never a hang) of at most its size bound, and read whole into memory before
+it is parsed. One that does not load (corrupt, truncated, compressed beyond its size bound, pickled objects),
+that holds another key, inputs other than this call's (re-checked as text, not only by their hash), a content
+hash that its arrays do not reproduce, or arrays the caller's check refuses (shapes, dtypes, indices in range)
+counts as a miss, and the fresh result is written over it. So an entry copied under another entry's name, its
+arrays swapped for another valid result's or altered is meshed afresh. The hash is not a signature: whoever can
+write the cache folder can write a consistent wrong entry, as they could replace the program; a folder others can
+write is not a cache to use (PNEUMA_CACHE_DIR=off). A cache that cannot be written (read-only, disk full) is
+skipped silently: it only ever saves time.
 """
 
 from __future__ import annotations
@@ -20,7 +29,9 @@ from __future__ import annotations
 import dataclasses
 import enum
 import hashlib
+import io
 import os
+import stat
 import sys
 import zipfile
 from pathlib import Path
@@ -34,6 +45,10 @@ VARIABLE = "PNEUMA_CACHE_DIR"
 OFF = ("", "off")
 APP = "taichi-pneuma"
 KEY = "__key__"  # the array holding the entry's key
+INPUTS = "__inputs__"  # ... the canonical text of its inputs
+HASH = "__sha256__"  # ... and its content hash
+OVERHEAD = 2**16  # bytes of an entry beyond its arrays and its inputs' text: the zip's and the arrays' headers
+NONBLOCKING = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0) | getattr(os, "O_CLOEXEC", 0)
 
 
 def directory() -> Path | None:
@@ -79,13 +94,34 @@ def canonical(value) -> str:
     raise Uncacheable(f"no exact text for a {kind.__qualname__}")
 
 
-def key(*parts) -> str | None:
-    """The SHA-256 (hex) of the parts' canonical text; None if a part has none (the result is then not cached)."""
+class Key(str):
+    """An entry's name, the SHA-256 (hex) of `text`, the canonical text of its inputs, which it carries."""
+
+    text: str
+
+    def __new__(cls, text: str) -> Key:
+        name = super().__new__(cls, hashlib.sha256(text.encode()).hexdigest())
+        name.text = text
+        return name
+
+
+def key(*parts) -> Key | None:
+    """The Key of the parts' canonical text; None if a part has none (the result is then not cached)."""
     try:
-        text = canonical(parts)
+        return Key(canonical(parts))
     except Uncacheable:
         return None
-    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def content_hash(text: str, arrays: dict[str, np.ndarray]) -> str:
+    """The SHA-256 (hex) of the inputs' text, then of each array in the order of their names: its name, dtype,
+    shape and bytes (C order)."""
+    digest = hashlib.sha256(text.encode())
+    for name in sorted(arrays):
+        data = np.ascontiguousarray(arrays[name])
+        digest.update(f"\0{name}\0{data.dtype.str}\0{data.shape}\0".encode())
+        digest.update(data.tobytes())
+    return digest.hexdigest()
 
 
 def path_of(kind: str, entry: str) -> Path | None:
@@ -93,22 +129,44 @@ def path_of(kind: str, entry: str) -> Path | None:
     return None if folder is None else folder / f"{kind}-{entry}.npz"
 
 
-def load(kind: str, entry: str | None, check, max_bytes: int) -> dict[str, np.ndarray] | None:
-    """The arrays of the entry if the cache holds it, loads cleanly within max_bytes (uncompressed, no pickles),
-    holds this key and check(arrays) is true; else None (a miss)."""
-    path = None if entry is None else path_of(kind, entry)
-    if path is None:
-        return None
+def read_regular(path: Path, max_bytes: int) -> bytes | None:
+    """The bytes of path if it is a regular file of at most max_bytes, opened without blocking (a FIFO's open
+    would wait for a writer) and checked on the open descriptor; else None."""
     try:
-        with zipfile.ZipFile(path) as archive:
-            if sum(info.file_size for info in archive.infolist()) > max_bytes:
-                return None
-        with np.load(path, allow_pickle=False) as stored:
-            arrays = {name: stored[name] for name in stored.files}
-    except Exception:  # missing, unreadable, not an npz, a pickled object, a truncated member: a miss
+        fd = os.open(path, NONBLOCKING)
+    except OSError:
         return None
-    stored_key = arrays.pop(KEY, None)
-    if stored_key is None or stored_key.shape != () or str(stored_key) != entry:
+    with os.fdopen(fd, "rb") as f:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode) or info.st_size > max_bytes:
+            return None
+        return f.read(max_bytes + 1)
+
+
+def load(kind: str, entry: Key | None, check, max_bytes: int) -> dict[str, np.ndarray] | None:
+    """The arrays of the entry if the cache holds it as a regular file, it loads cleanly within max_bytes of arrays
+    (uncompressed, no pickles), holds this key and these inputs, its content hash is that of its arrays and
+    check(arrays) is true; else None (a miss)."""
+    path = None if entry is None else path_of(kind, entry)
+    if path is None or entry is None:
+        return None
+    bound = max_bytes + 4 * len(entry.text) + OVERHEAD  # NumPy stores text as UTF-32
+    try:
+        data = read_regular(path, bound)
+        if data is None:
+            return None
+        with zipfile.ZipFile(io.BytesIO(data)) as archive:
+            if sum(info.file_size for info in archive.infolist()) > bound:
+                return None
+        with np.load(io.BytesIO(data), allow_pickle=False) as stored:
+            arrays = {name: stored[name] for name in stored.files}
+    except Exception:  # unreadable, not an npz, a pickled object, a truncated member: a miss
+        return None
+    told = [arrays.pop(name, None) for name in (KEY, INPUTS, HASH)]
+    if any(t is None or t.shape != () or t.dtype.kind != "U" for t in told):
+        return None
+    stored_key, inputs, stored_hash = (str(t) for t in told)
+    if stored_key != entry or inputs != entry.text or stored_hash != content_hash(inputs, arrays):
         return None
     try:
         return arrays if check(arrays) else None
@@ -116,16 +174,18 @@ def load(kind: str, entry: str | None, check, max_bytes: int) -> dict[str, np.nd
         return None
 
 
-def store(kind: str, entry: str | None, arrays: dict[str, np.ndarray]) -> None:
-    """Write the entry (atomically); do nothing if the cache is off or cannot be written."""
+def store(kind: str, entry: Key | None, arrays: dict[str, np.ndarray]) -> None:
+    """Write the entry (atomically), with its key, its inputs' text and its content hash; do nothing if the cache
+    is off or cannot be written."""
     path = None if entry is None else path_of(kind, entry)
-    if path is None:
+    if path is None or entry is None:
         return
+    told = {KEY: np.array(str(entry)), INPUTS: np.array(entry.text), HASH: np.array(content_hash(entry.text, arrays))}
 
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as f:
             # NumPy's stubs take any keyword for savez's allow_pickle
-            np.savez(f, **arrays, **{KEY: np.array(entry)})  # type: ignore[arg-type]
+            np.savez(f, **arrays, **told)  # type: ignore[arg-type]
 
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -120,6 +120,12 @@ class IsochoricPolynomial(Law):
         return 2.0 * (parameters[:, 0] + parameters[:, 1]) + parameters[:, 4]
 
     @staticmethod
+    def poisson_ratio(parameters) -> np.ndarray:
+        """(3 K - 2 mu0) / (2 (3 K + mu0)), mu0 = 2 (C10 + C01): the inverse of bulk_modulus."""
+        mu0, K = 2.0 * (parameters[:, 0] + parameters[:, 1]), parameters[:, 4]
+        return (3.0 * K - 2.0 * mu0) / (2.0 * (3.0 * K + mu0))
+
+    @staticmethod
     @ti.func
     def energy(F, p):
         I1, I2, J = isochoric_invariants(F)

@@ -55,6 +55,12 @@ class Law:
         """A stiffness scale per element (m,), for the solver's round-off floors."""
         raise NotImplementedError
 
+    @staticmethod
+    def poisson_ratio(parameters: np.ndarray) -> np.ndarray | None:
+        """The small-strain Poisson's ratio per parameter vector (m,), how near incompressible each is (what tells
+        whether linear elements lock); None where the law does not tell it."""
+        return None
+
 
 LAWS: dict[str, type[Law]] = {}
 

@@ -91,6 +91,13 @@ class StableNeoHookean(Law):
         return parameters[:, 0] + parameters[:, 1]
 
     @staticmethod
+    def poisson_ratio(parameters) -> np.ndarray:
+        """lam / (2 (lam + mu)): the energy's small-strain Lame parameters are (mu, lam) (its mu (1 - J) cancels
+        the stress mu F at rest)."""
+        mu, lam = parameters[:, 0], parameters[:, 1]
+        return lam / (2.0 * (lam + mu))
+
+    @staticmethod
     @ti.func
     def energy(F, p):
         mu, lam = p[0], p[1]

@@ -27,7 +27,7 @@ BOX = "[x0, y0, x1, y1]"
 FIBER = record(
     Fiber,
     "an embedded fibre: a tension-only elastic cord that follows the body",
-    name=Key(str, None, "names it in messages"),
+    name=Key(str, None, "names it in messages; not starting with = + - @, a tab or a carriage return (as a chamber's)"),
     path=Table(
         {
             "layout": Variant(

@@ -33,6 +33,8 @@ class RunOptions:
     max_cuts: int = MAX_CUTS
     max_triangles: int = limits.MAX_TRIANGLES
     max_increments: int = limits.MAX_INCREMENTS
+    max_fibers: int = limits.MAX_FIBERS
+    max_obstacles: int = limits.MAX_OBSTACLES
     arch: str = "cpu"
 
 
@@ -84,7 +86,8 @@ def run_task(task: Task) -> dict:
         base = read_scene(tomllib.loads(task.scene), "scene")
         names = base.chamber_names
         scene = base.with_values(task.values)
-        sizing.check_scene(scene, task.options.max_triangles, task.options.max_increments)
+        o = task.options
+        sizing.check_scene(scene, o.max_triangles, o.max_increments, o.max_fibers, o.max_obstacles)
         options = task.options
         row.update(
             measures(

@@ -32,15 +32,14 @@ from typing import TypeAlias
 import numpy as np
 
 from ..backend import kernel, ti
-from ..errors import require, require_finite
-from ..fem.embedding import embed
+from ..errors import PneumaInputError, require, require_finite
+from ..fem.embedding import embed, first_crossing, inside
 from ..fem.fiber_paths import LAYOUTS, PLANAR, Layout
-from ..limits import BYTES_PER_TRIANGLE, refusal
+from ..io.output import check_heading
 from .base import Indices, Nodal, Scalars, Table, Term, block_pattern, int32s
 
 Pairs: TypeAlias = ti.types.ndarray(dtype=ti.i32, ndim=2)  # (P, d + 1) embedding nodes, or (s, 2) segment points
 MAX_FIBER_POINTS = 100_000  # sample points of one fibre: each segment's Hessian block is up to 24 x 24
-BYTES_PER_ENTRY = 24  # a Hessian entry: its value and its row and column indices
 
 
 @ti.func
@@ -202,7 +201,7 @@ class Fiber:
     """An embedded fibre ([[fibers]]): its curve (path, a fem/fiber_paths.py layout), Young's modulus E, its
     cross-section as exactly one of area (in 2D: per unit depth, a length) and diameter (3D; A = pi diameter^2 /
     4), the sample spacing of its curve (None: half the mean edge length of the mesh's elements), and an optional
-    name for messages."""
+    name for messages, held to a chamber name's rule (output.check_heading)."""
 
     path: Layout
     E: float
@@ -221,6 +220,8 @@ class Fiber:
         _positive("area", self.area)
         _positive("diameter", self.diameter)
         _positive("spacing", self.spacing)
+        if self.name is not None:
+            check_heading("fiber name", self.name)
 
     @property
     def layout(self) -> str:
@@ -241,8 +242,11 @@ class Fiber:
         return self.area if self.diameter is None else math.pi * self.diameter**2 / 4  # type: ignore[return-value]
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
-        """One Cords term of this fibre's segments, embedded in the mesh; refused past MAX_FIBER_POINTS sample points,
-        or past the budget (limits.Budget) by the memory of their Hessian blocks."""
+        """One Cords term of this fibre's segments, embedded in the mesh. Refused before any point is made past
+        MAX_FIBER_POINTS sample points (counted exactly, Layout.size), or past the budget (limits.Budget) by the
+        memory of their Hessian blocks (check_entries); and after embedding, where a point lies outside the body
+        or a segment between two points passes through its boundary (a chamber: embedding.first_crossing) or,
+        running from boundary to boundary, has its middle outside (a cord across a chamber from wall to wall)."""
         d = mesh.dim
         require(
             d == 3 or self.path.planar,
@@ -253,24 +257,37 @@ class Fiber:
         corners = mesh.vertices[mesh.elements[:, : d + 1]]
         edges = [np.linalg.norm(corners[:, i] - corners[:, j], axis=1) for i in range(d + 1) for j in range(i)]
         spacing = self.spacing or 0.5 * float(np.mean(edges))
+        count, points = self.path.size(spacing)
         require(
-            self.path.length / spacing <= MAX_FIBER_POINTS,
-            f"{self.what}: spacing {spacing:.6g} would sample its length {self.path.length:.6g} at "
-            f"{self.path.length / spacing:.3g} points; at most {MAX_FIBER_POINTS} are allowed (give a larger spacing)",
+            points <= MAX_FIBER_POINTS,
+            f"{self.what}: spacing {spacing:.6g} would sample it at {points:.3g} points; at most {MAX_FIBER_POINTS} "
+            f"are allowed (give a larger spacing, or fewer rings or strands)",
         )
+        segments_made = points if self.path.closed else points - count
+        budget.check_entries(segments_made * (2 * (d + 1) * d) ** 2, f"{self.what} ({segments_made} cord segments)")
         curves = self.path.curves(spacing)
         starts = np.cumsum([0] + [len(c) for c in curves])
         segments = np.vstack(
             [np.column_stack([np.arange(s, e - 1), np.arange(s + 1, e)]) for s, e in zip(starts[:-1], starts[1:])]
             + ([np.column_stack([starts[1:] - 1, starts[:-1]])] if self.path.closed else [])
         )
-        worth = len(segments) * (2 * (d + 1) * d) ** 2 * BYTES_PER_ENTRY / BYTES_PER_TRIANGLE
-        require(
-            budget.triangles is None or worth <= budget.triangles,
-            refusal(f"{self.what} would hold {len(segments)} cord segments", worth, budget.triangles),
-        )
         nodes, weights = embed(mesh, np.vstack(curves), self.what)
         at_rest = np.einsum("pi,pid->pd", weights, mesh.vertices[nodes])
+        first, second = at_rest[segments[:, 0]], at_rest[segments[:, 1]]
+        crossing = first_crossing(mesh, first, second)
+        how = "leaves the body at"
+        if crossing is None:  # both ends on the boundary (a chamber's wall, say): the segment's middle tells
+            middles = (first + second) / 2
+            out = np.flatnonzero(~inside(mesh, middles))
+            crossing, how = (int(out[0]), middles[out[0]]) if len(out) else None, "runs outside the body at its middle"
+        if crossing is not None:
+            s, x = crossing
+            ends = " to ".join(str([round(float(v), 6) for v in end[s]]) for end in (first, second))
+            raise PneumaInputError(
+                f"{self.what}: its segment from {ends} {how} {[round(float(v), 6) for v in x]} (through a chamber or "
+                f"out of the body between two of its sample points; spacing {spacing:.6g}): give a smaller spacing or "
+                f"move the fiber"
+            )
         rest_length = np.linalg.norm(at_rest[segments[:, 1]] - at_rest[segments[:, 0]], axis=1)
         kept = rest_length > 1e-12 * float(np.ptp(mesh.vertices, axis=0).max())
         stiffness = np.full(int(kept.sum()), self.E * area)
