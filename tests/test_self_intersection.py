@@ -161,7 +161,11 @@ def test_a_body_curled_until_its_ends_pass_through_each_other_is_no_equilibrium(
     built.model.set_displacements(u)
     assert built.elastic.min_determinant() > 0
     fault, refused = built.surface_crossing(), state_fault(built, commands)
-    assert fault is not None and refused is not None and (dim == 3 or refused.endswith(f": {fault} (a surface through itself is not physical)"))
+    assert (
+        fault is not None
+        and refused is not None
+        and (dim == 3 or refused.endswith(f": {fault} (a surface through itself is not physical)"))
+    )
     crossing = surface_crossing(rest + u, built.surface_pieces)
     first, second = (list(dict.fromkeys(built.surface_pieces[k].tolist())) for k in crossing[:2])  # (a, b, b): a, b
     kind = "segment" if dim == 2 else "triangle"

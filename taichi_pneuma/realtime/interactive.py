@@ -267,6 +267,7 @@ class LiveEquilibrium:
             self.stuck = not reuse
         self.reuse = bool(record.iterations)
         if self.residual <= self.solver.options.tol:
+            assert self.commands is not None  # set by the first call, whose commands always count as moved
             self.built.model.set_displacements(self.u)
             self.fault = state_fault(self.built, self.commands) or self.built.obstacle_overlap()
         return bool(record.iterations)

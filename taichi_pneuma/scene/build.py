@@ -383,7 +383,11 @@ class BuiltScene:
         def named(row: int) -> str:
             nodes = list(dict.fromkeys(int(v) for v in self.surface_pieces[row]))  # a 2D (a, b, b): a, b
             part = next(
-                (f"the wall of chamber {c.chamber_name!r}" for c in self.chambers if np.isin(nodes, c.loop_vertices).all()),
+                (
+                    f"the wall of chamber {c.chamber_name!r}"
+                    for c in self.chambers
+                    if np.isin(nodes, c.loop_vertices).all()
+                ),
                 "the outer surface",
             )
             return f"{kind} (nodes {', '.join(map(str, nodes))}) of {part}"

@@ -115,12 +115,14 @@ def state_fault(built: BuiltScene, commands: np.ndarray) -> str | None:
     if crossing is None:
         return None
     at = ", ".join(
-        (f"chamber {chamber.chamber_name!r} " if len(built.chambers) > 1 else "") + f"{chamber.kind.quantity} {command:.4g}"
+        (f"chamber {chamber.chamber_name!r} " if len(built.chambers) > 1 else "")
+        + f"{chamber.kind.quantity} {command:.4g}"
         for chamber, command in zip(built.chambers, commands)
     )
+    note = "" if built.mesh.dim == 2 else "; 3D has no self-contact"
     return (
-        f"the body's surface passes through itself{' at ' + at if at else ''}: {crossing} (a surface through itself is not physical"
-        f"{'' if built.mesh.dim == 2 else '; 3D has no self-contact'})"
+        f"the body's surface passes through itself{' at ' + at if at else ''}: {crossing} (a surface through itself "
+        f"is not physical{note})"
     )
 
 
