@@ -238,8 +238,9 @@ SHIPPED_3D = [name for name in shipped() if tp.load_scene(name).dim == 3]
 @pytest.mark.slow
 @pytest.mark.parametrize("name", SHIPPED_3D)
 def test_every_shipped_3d_scene_s_surface_stays_clear_of_itself_at_rest_and_its_first_steps(taichi_cpu, name):
-    """Each shipped 3D scene at draft quality: the rest state and the first two increments' equilibria have no
-    two surface pieces that cross (the run would stop naming them; here checked on each state directly)."""
+    """Each shipped 3D scene on its default mesh: the rest state and the first two increments' equilibria have no
+    two surface pieces that cross (the run would stop naming them; here checked on each state directly). Their
+    whole ramps, on coarser meshes, run through the same check in test_shipped_runs_3d.py."""
     built = tp.load_scene(name).build()
     rest = built.mesh.vertices
     assert surface_crossing(rest, built.surface_pieces) is None

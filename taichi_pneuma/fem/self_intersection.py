@@ -88,8 +88,11 @@ def box_pairs(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     a = np.repeat(np.arange(len(key)), after)
     b = a + 1 + np.arange(len(a)) - np.repeat(np.cumsum(after) - after, after)
     i, j = owner[a], owner[b]
-    keep = np.all(cells[a] == np.maximum(first[i], first[j]), axis=1)
-    keep &= np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
+    keep = np.ones(len(a), dtype=bool)
+    for axis in range(d):  # column by column: gathers of contiguous 1D arrays
+        low, high = np.ascontiguousarray(lo[:, axis]), np.ascontiguousarray(hi[:, axis])
+        start, cell = np.ascontiguousarray(first[:, axis]), np.ascontiguousarray(cells[:, axis])
+        keep &= (low[i] <= high[j]) & (low[j] <= high[i]) & (cell[a] == np.maximum(start[i], start[j]))
     return i[keep], j[keep]
 
 
@@ -171,8 +174,14 @@ def surface_crossing(x: np.ndarray, pieces: np.ndarray) -> Crossing | None:
     or None: box_pairs on their boxes, then the narrow phase on the candidates."""
     corners = x[pieces]  # (f, 3, d)
     i, j = box_pairs(corners.min(axis=1), corners.max(axis=1))
-    apart = ~np.any(pieces[i][:, :, None] == pieces[j][:, None, :], axis=(1, 2))
-    i, j = i[apart], j[apart]
+    nodes = [np.ascontiguousarray(pieces[:, k]) for k in range(3)]
+    ends = [column[j] for column in nodes]
+    shared = np.zeros(len(i), dtype=bool)
+    for column in nodes:
+        start = column[i]
+        for end in ends:
+            shared |= start == end
+    i, j = i[~shared], j[~shared]
     if x.shape[1] == 2:
         cross, point = segments_cross(corners[i, :2], corners[j, :2])
     else:
