@@ -108,11 +108,13 @@ def test_a_segment_pair_crosses_as_worked_out_by_hand(case):
 @pytest.mark.parametrize("dim", [2, 3])
 def test_the_grid_finds_the_same_overlapping_boxes_as_every_pair(dim):
     """A soup of 600 boxes, their sides the squares of uniform numbers in [0, 0.6] (many small, a few up to 0.36)
-    and ten of them 1.5 longer on every axis (each over many cells), against all 179 700 pairs."""
+    and ten of them 1.5 longer on every axis (each over many cells), one 20 longer still (over all the others: the
+    cells grow to 1/32 of it), against all 179 700 pairs."""
     rng = np.random.default_rng(dim)
     lo = rng.uniform(0.0, 4.0 if dim == 2 else 1.5, (600, dim))
     hi = lo + rng.uniform(0.0, 0.6, (600, dim)) ** 2
     hi[:10] += 1.5
+    hi[0] += 20.0
     i, j = np.triu_indices(600, 1)
     every = {(a, b) for a, b, o in zip(i, j, np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)) if o}
     found = list(zip(*box_pairs(lo, hi)))

@@ -6,10 +6,10 @@ quadratic edge split at its middle node into two. Two pieces that share a node a
 counted; any other two must not cross.
 
 Broad phase. Each piece's axis-aligned box [lo, hi] is entered in every cell of a uniform grid of side h (the
-median of the boxes' largest sides) that it covers; two pieces are candidates where they share a cell and their
-boxes overlap, each pair counted once, in the lowest cell both boxes cover (the cell max(first_i, first_j), the
-componentwise largest of the two boxes' first cells). On a surface a cell holds a few pieces, so the work grows
-like the number of pieces, not its square.
+median of the boxes' largest sides, or 1/SPAN of the largest where that is more) that it covers; two pieces are
+candidates where they share a cell and their boxes overlap, each pair counted once, in the lowest cell both boxes
+cover (the cell max(first_i, first_j), the componentwise largest of the two boxes' first cells). On a surface a
+cell holds a few pieces, so the work grows like the number of pieces, not its square.
 
 Narrow phase, with a touching tolerance e = TOUCH times the longer of the two pieces' longest sides:
 
@@ -38,6 +38,7 @@ from typing import NamedTuple
 import numpy as np
 
 TOUCH = 1e-6  # two pieces closer than this times their longest side touch; only deeper ones cross
+SPAN = 32  # the grid's cell side is at least the largest box's side / SPAN: no box covers more than (SPAN + 1)^d
 
 
 class Crossing(NamedTuple):
@@ -63,7 +64,8 @@ def box_pairs(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(i, j), i < j: every pair of the boxes [lo_k, hi_k] (n, d) that overlap (lo_i <= hi_j and lo_j <= hi_i on
     every axis), by the uniform grid of the module docstring."""
     n, d = lo.shape
-    size = float(np.median(np.max(hi - lo, axis=1))) if n else 0.0
+    sides = np.max(hi - lo, axis=1)
+    size = max(float(np.median(sides)), float(np.max(sides)) / SPAN) if n else 0.0
     size = size if size > 0 else 1.0  # boxes of no extent (points): any cell side sorts them
     origin = lo.min(axis=0) if n else np.zeros(d)
     first = np.floor((lo - origin) / size).astype(np.int64)
