@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -22,6 +23,7 @@ from .. import runtime
 from ..errors import require, require_finite
 from ..fem.mesh import Mesh
 from ..fem.planar import BeamGeometry, Geometry
+from ..fem.self_intersection import surface_crossing, surface_pieces
 from ..fem.supports import in_box, require_box, require_held
 from ..io.keys import dotted
 from ..io.output import check_stem
@@ -359,6 +361,39 @@ class BuiltScene:
             for (term, a), (_, b) in zip(self.moving_offsets(start), self.moving_offsets(end))
         ]
         return max([1, *(math.ceil(move) for move in moves)])
+
+    @cached_property
+    def surface_pieces(self) -> np.ndarray:
+        """The body's surface as straight pieces (fem/self_intersection.py surface_pieces)."""
+        return surface_pieces(self.mesh)
+
+    def surface_crossing(self) -> str | None:
+        """Where the body's surface passes through itself in the model's current state, in words (the first two
+        pieces that share no node and cross: fem/self_intersection.py surface_crossing), or None. Each piece is
+        named by its nodes and by the part of the surface it lies on: a chamber's wall (every node of it on the
+        wall) or the outer surface."""
+        config = self.model.config
+        x = config.rest + config.u
+        crossing = surface_crossing(x, self.surface_pieces)
+        if crossing is None:
+            return None
+        dim = self.mesh.dim
+        kind = "segment" if dim == 2 else "triangle"
+
+        def named(row: int) -> str:
+            nodes = list(dict.fromkeys(int(v) for v in self.surface_pieces[row]))  # a 2D (a, b, b): a, b
+            part = next(
+                (
+                    f"the wall of chamber {c.chamber_name!r}"
+                    for c in self.chambers
+                    if np.isin(nodes, c.loop_vertices).all()
+                ),
+                "the outer surface",
+            )
+            return f"{kind} (nodes {', '.join(map(str, nodes))}) of {part}"
+
+        where = ", ".join(f"{v:.4g}" for v in crossing.point[:dim])
+        return f"{named(crossing.first)} and {named(crossing.second)} cross near ({where})"
 
     def obstacle_overlap(self) -> str | None:
         """The first obstacle that overlaps the body in its current state, in words (ObstacleContact.overlap), or

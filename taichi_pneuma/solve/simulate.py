@@ -96,9 +96,11 @@ def describe_commands(built: BuiltScene, commands: np.ndarray, reached: np.ndarr
 
 def state_fault(built: BuiltScene, commands: np.ndarray) -> str | None:
     """What makes the model's current equilibrium (at `commands`) no physical state, in words, or None: a chamber
-    wall that crosses or folds through itself or turns inside out (Chamber.wall_fault), or an element whose det F is
-    not positive. Such a state can be an exact equilibrium of the discrete energy (the area penalty does not
-    care how the wall encloses its area), so only this check tells it apart."""
+    wall that crosses or folds through itself or turns inside out (Chamber.wall_fault), an element whose det F is
+    not positive, or two pieces of the body's surface (outer surface and chamber walls alike, 2D and 3D) that share
+    no node and cross (BuiltScene.surface_crossing: walls pressed through each other with no element inverted,
+    which 3D, having no self-contact, does not prevent). Such a state can be an exact equilibrium of the discrete
+    energy (the area penalty does not care how the wall encloses its area), so only this check tells it apart."""
     for chamber, command in zip(built.chambers, commands):
         fault = chamber.wall_fault()
         if fault is not None:
@@ -107,7 +109,21 @@ def state_fault(built: BuiltScene, commands: np.ndarray) -> str | None:
                 f"cannot take its chamber that far (a wall through itself is not physical)"
             )
     min_det = built.elastic.min_determinant()
-    return None if min_det > 0 else f"an element turned inside out (min det F = {min_det:.3g})"
+    if not min_det > 0:
+        return f"an element turned inside out (min det F = {min_det:.3g})"
+    crossing = built.surface_crossing()
+    if crossing is None:
+        return None
+    at = ", ".join(
+        (f"chamber {chamber.chamber_name!r} " if len(built.chambers) > 1 else "")
+        + f"{chamber.kind.quantity} {command:.4g}"
+        for chamber, command in zip(built.chambers, commands)
+    )
+    note = "" if built.mesh.dim == 2 else "; 3D has no self-contact"
+    return (
+        f"the body's surface passes through itself{' at ' + at if at else ''}: {crossing} (a surface through itself "
+        f"is not physical{note})"
+    )
 
 
 class NoEquilibrium(RuntimeError):

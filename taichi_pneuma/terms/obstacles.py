@@ -44,6 +44,7 @@ import numpy as np
 
 from ..backend import kernel, ti
 from ..errors import require, require_finite, shape_of
+from ..fem.self_intersection import surface_pieces
 from ..io.output import MAX_NAME, STEM, check_heading
 from ..io.units import LENGTH, NODAL_STIFFNESS, si_default
 from .base import HUGE, Indices, Nodal, Scalars, Table, Term, Triples, block_pattern, int32s
@@ -410,17 +411,6 @@ class ObstacleContact(Term):
                 f"obstacle {self.name!r} overlaps the body: it lies inside the body (its centre ({where})){self.moved}"
             )
         return None
-
-
-def surface_pieces(mesh) -> np.ndarray:
-    """The body's boundary (mesh.surface: the outer one and the chamber walls, oriented outward from the body) as
-    straight pieces (f, 3) of node indices: in 3D triangles (a quadratic facet split at its midside nodes into
-    four), in 2D segments (a, b) as (a, b, b) (a quadratic edge split at its middle node into two)."""
-    surface = mesh.surface
-    if mesh.dim == 3:
-        return (mesh.family.facet_family or mesh.family).split_cells(surface)
-    ends = [(0, 1)] if surface.shape[1] == 2 else [(0, 2), (2, 1)]  # a quadratic edge: (corner, corner, middle)
-    return np.vstack([surface[:, [i, j, j]] for i, j in ends])
 
 
 def winding(x: np.ndarray, pieces: np.ndarray, q: np.ndarray) -> float:
