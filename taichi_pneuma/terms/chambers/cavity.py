@@ -182,21 +182,13 @@ class VolumeForm:
         return volume, gradient
 
     def fault(self, u: np.ndarray) -> str | None:
-        """What is wrong with the wall at displacements u (n, 3), in words, or None: a triangle flipped (the normal
-        (x1 - x0) x (x2 - x0) of its corners turned against its rest normal, n . n_rest <= 0: the wall folded
-        through itself there), or the enclosed volume not positive (turned inside out). Surfaces that pass
-        through each other without a flip are not looked for."""
-
-        def normals(x):
-            corners = x[self.nodes][self.faces[:, :3]]
-            return np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-
-        flipped = np.flatnonzero(np.einsum("fi,fi->f", normals(self.rest), normals(self.rest + u)) <= 0)
-        if len(flipped):
-            return (
-                f"wall folded through itself ({len(flipped)} of its {len(self.faces)} triangles flipped, "
-                f"the first triangle {flipped[0]})"
-            )
+        """What is wrong with the wall at displacements u (n, 3), in words, or None: the enclosed volume not positive
+        (turned inside out). A wall folded through itself is no wall fault of its own: a wall triangle of a
+        tetrahedron with deformation gradient F = R U has the normal n = det F F^-T n0 (Nanson), so its angle to
+        the rest normal carried by the element's rotation, n . R n0 = det F n0 . U^-1 n0, turns negative exactly
+        where det F does (an inverted element: state_fault), and a fold that inverts none makes the surface cross
+        itself (BuiltScene.surface_crossing). A triangle turned from its rest normal by the body's rotation, as a
+        bending actuator's chamber is past 90 degrees, is no fold."""
         volume = self.measure_and_gradient(u)[0]
         return None if volume > 0 else f"wall turned inside out (enclosed volume {volume:.4g})"
 

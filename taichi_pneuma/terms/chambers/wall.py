@@ -204,7 +204,7 @@ class Chamber(Term):
 
     def wall_fault(self) -> str | None:
         """What makes the wall in the model's current state no chamber wall any more, in words (form.fault:
-        crossing itself or turned inside out in 2D, triangles flipped in 3D), or None."""
+        crossing itself or turned inside out in 2D, turned inside out in 3D), or None."""
         return self.form.fault(self.config.u)
 
     def pressure(self) -> float:
