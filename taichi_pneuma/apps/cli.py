@@ -339,11 +339,15 @@ def with_quality(scene, args: argparse.Namespace):
     if sizes.distance is not None:
         values["mesh.distance"] = significant(bulk * sizes.distance)
     scene = scene.with_values(values)
-    ratio = "uniform" if near is None else f"x{close / sizes.near:.3g}"
+    scenes = f"{sizes.near:g}{length}"
+    near_chambers = (
+        f"uniform (the scene's: {scenes} near the chambers)"
+        if near is None
+        else f"{close:g}{length} near the chambers (x{close / sizes.near:.3g} the scene's {scenes})"
+    )
     said = (
         f"tetrahedra of {size:g}{length} (x{size / sizes.size:.3g} the scene's {sizes.size:g}{length}), "
-        f"{close:g}{length} near the chambers ({ratio} the scene's {sizes.near:g}{length}), {ORDER_WORDS[order]} "
-        f"(the scene's: {ORDER_WORDS[geometry.order]})"
+        f"{near_chambers}, {ORDER_WORDS[order]} (the scene's: {ORDER_WORDS[geometry.order]})"
     )
     return scene, f"quality {quality}: {said}{tol}"
 
