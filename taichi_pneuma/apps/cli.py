@@ -33,7 +33,7 @@ QUALITY_TOL = {"draft": 1e-4, "default": 1e-6, "high": 1e-6, "accurate": 1e-9}  
 # error is near the chambers' thin walls), whose [mesh] (0.2, 0.1 near the chamber, quadratic) they turn into the
 # measured (0.3, 0.3, linear), (0.3, 0.15), (0.3, 0.1) and (0.2, 0.08). A mesh file's tetrahedra are its own: there
 # a preset sets only the order.
-QUALITY_3D = {
+QUALITY_3D: dict[str, tuple[float, float | None, int | None]] = {
     "draft": (1.5, None, 1),
     "default": (1.5, 1.5, None),
     "high": (1.5, 1.0, 2),
@@ -150,7 +150,9 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
         + ". 3D, where --quality is given (without it the scene keeps its [mesh]), the scene's tetrahedron size "
         "and grading distance times, and near the chambers: "
         + "; ".join(
-            f"{k} x{h:g}, " + ("uniform" if near is None else f"x{near:g}") + f", {ORDER_WORDS.get(o, 'its order')}"
+            f"{k} x{h:g}, "
+            + ("uniform" if near is None else f"x{near:g}")
+            + f", {'its order' if o is None else ORDER_WORDS[o]}"
             for k, (h, near, o) in QUALITY_3D.items()
         )
         + " (a mesh file keeps its tetrahedra and takes the order). Newton tolerance "
@@ -323,8 +325,8 @@ def with_quality(scene, args: argparse.Namespace):
         return scene, (f"quality {quality}: {said}{tol}" if given else "")
     if not given:
         return scene, ""
-    bulk, near, order = QUALITY_3D[quality]
-    order = order or geometry.order
+    bulk, near, preset_order = QUALITY_3D[quality]
+    order = geometry.order if preset_order is None else preset_order
     if not hasattr(geometry, "sizes"):
         if order != geometry.order:
             scene = scene.with_values({"mesh.order": order})
@@ -353,13 +355,13 @@ def with_quality(scene, args: argparse.Namespace):
 
 
 def preset_note(scene, args: argparse.Namespace | None) -> str:
-    """What the run's --quality preset is measured to cost in accuracy on the reference beams ('' where no preset
-    decides its mesh: a scene file's own [mesh], a mesh file): the reference beam's flags, a 2D scene file or a 3D
-    body from shapes with --quality."""
+    """What the run's --quality preset is measured to cost in accuracy ('' where no preset decides its mesh: a
+    scene file's own [mesh], a mesh file): the reference beam's flags, or a 3D body from shapes with --quality (a 2D
+    scene file's rung of planar_preset's ladder need not be the reference beam's of the same name: no note)."""
     if args is None or not hasattr(args, "quality"):
         return ""
-    remeshed = getattr(args, "quality_given", False) and (scene.dim == 2 or hasattr(scene.geometry, "sizes"))
-    if getattr(args, "scene", None) and not remeshed:
+    from_shapes = getattr(args, "quality_given", False) and scene.dim == 3 and hasattr(scene.geometry, "sizes")
+    if getattr(args, "scene", None) and not from_shapes:
         return ""
     on = "the reference beam" if scene.dim == 2 else "beam_3d_ellipsoid"
     return f"; --quality {args.quality}: tip within {QUALITY_ERROR[scene.dim][args.quality]:g} % of converged on {on}"
