@@ -63,8 +63,8 @@ def planar_preset(quality: str, max_area: float, order: int) -> tuple[float, int
 # the reference beam's presets: (max triangle area, element order, Newton tolerance); the flags' beam takes them
 QUALITY = {q: (*planar_preset(q, *REFERENCE_MESH), tol) for q, tol in QUALITY_TOL.items()}
 # each preset's measured tip error against the converged tip, on the reference beam (2D, nu = 0.45: docs/accuracy.md)
-# and on beam_3d_ellipsoid (3D: docs/3d.md; pneunet_3d's peak tip: 5.1 % and 2.2 % at default and high;
-# pneuma-bench --sections presets_3d measures both): the run's first line
+# and on beam_3d_ellipsoid (3D: docs/3d.md; pneunet_3d's peak tip: 6.5 % and 3.6 % at default and high, its presets
+# being factors on its own mesh; pneuma-bench --sections presets_3d measures both): the scene line of a run
 QUALITY_ERROR = {
     2: {"draft": 28.4, "default": 8.0, "high": 0.64, "accurate": 0.07},
     3: {"draft": 26, "default": 1.8, "high": 0.7, "accurate": 0.2},
