@@ -53,11 +53,11 @@ def planar_preset(quality: str, max_area: float, order: int) -> tuple[float, int
     (P1, r A), (P1, A), (P2, r A), (P2, A), (P2, A / r), (P2, A / r^2) (r = AREA_STEP: each rung has about as many
     nodes as the one below it or more, and is more accurate) holds a linear scene on rung 1, a quadratic one on rung
     3; the preset is the rung QUALITY_STEPS[quality] above it: draft one below, default the scene as written, high
-    one above, accurate two. On the reference beam (0.0012, P1): (0.005, P1), (0.0012, P1), (0.005, P2),
-    (0.0012, P2), the accuracy study's presets."""
+    one above, accurate two (a rung at A keeps the scene's area as it is written). On the reference beam (0.0012, P1):
+    (0.005, P1), (0.0012, P1), (0.005, P2), (0.0012, P2), the accuracy study's presets."""
     rung = (1 if order == 1 else 3) + QUALITY_STEPS[quality]
-    factor = AREA_STEP ** (1 - rung % 2) if rung <= 3 else AREA_STEP ** (3 - rung)
-    return significant(max_area * factor), 1 if rung <= 1 else 2
+    exponent = 1 - rung % 2 if rung <= 3 else 3 - rung
+    return (significant(max_area * AREA_STEP**exponent) if exponent else max_area), 1 if rung <= 1 else 2
 
 
 # the reference beam's presets: (max triangle area, element order, Newton tolerance); the flags' beam takes them
