@@ -31,14 +31,16 @@ QUALITY_TOL = {"draft": 1e-4, "default": 1e-6, "high": 1e-6, "accurate": 1e-9}  
 # distance, factor on its edge length near the chambers (None: uniform at the new edge length), element order (None:
 # the scene's own)), read off beam_3d_ellipsoid's tip against mesh size and grading (docs/3d.md, "3D presets": the
 # error is near the chambers' thin walls), whose [mesh] (0.2, 0.1 near the chamber, quadratic) they turn into the
-# measured (0.3, 0.3, linear), (0.3, 0.15), (0.3, 0.1) and (0.2, 0.08). A mesh file's tetrahedra are its own: there
-# a preset sets only the order.
+# measured (0.3, 0.3, linear), (0.3, 0.15), (0.3, 0.1) and (0.2, 0.08). A linear scene stays linear above draft:
+# fiber_bending_3d's high made quadratic (13k nodes) found no equilibrium at 38 kPa (Newton stalled at 3.5e-6).
 QUALITY_3D: dict[str, tuple[float, float | None, int | None]] = {
     "draft": (1.5, None, 1),
     "default": (1.5, 1.5, None),
-    "high": (1.5, 1.0, 2),
-    "accurate": (1.0, 0.8, 2),
+    "high": (1.5, 1.0, None),
+    "accurate": (1.0, 0.8, None),
 }
+# A mesh file's order at each preset: its tetrahedra cannot be remeshed, so high and accurate make them quadratic.
+MESH_FILE_ORDER = {"draft": 1, "default": None, "high": 2, "accurate": 2}
 ORDER_WORDS = {1: "linear", 2: "quadratic"}
 SIGNIFICANT = 12  # digits a preset's size keeps: the reference beams' presets come out as their exact decimals
 
@@ -155,7 +157,7 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
             + f", {'its order' if o is None else ORDER_WORDS[o]}"
             for k, (h, near, o) in QUALITY_3D.items()
         )
-        + " (a mesh file keeps its tetrahedra and takes the order). Newton tolerance "
+        + " (a mesh file keeps its tetrahedra: linear at draft, quadratic at high and accurate). Newton tolerance "
         + ", ".join(f"{k} {t:g}" for k, t in QUALITY_TOL.items())
         + ". A quality other than the default adds _QUALITY to the result file names",
     )
@@ -308,7 +310,7 @@ def with_quality(scene, args: argparse.Namespace):
     this scene ('' where nothing was asked: --quality not given). A 2D scene: planar_preset's max area and order (the
     default: the scene as written). A 3D body from shapes, where --quality was given: QUALITY_3D's factors on its
     edge lengths and grading distance, and its order. A mesh file, where --quality was given: its own tetrahedra
-    (they cannot be remeshed), in QUALITY_3D's order."""
+    (they cannot be remeshed), in MESH_FILE_ORDER's order."""
     quality, given = args.quality, getattr(args, "quality_given", False)
     tol = f"; Newton tolerance {args.tol:g}"
     geometry, units = scene.geometry, scene.units
@@ -325,15 +327,16 @@ def with_quality(scene, args: argparse.Namespace):
         return scene, (f"quality {quality}: {said}{tol}" if given else "")
     if not given:
         return scene, ""
-    bulk, near, preset_order = QUALITY_3D[quality]
-    order = geometry.order if preset_order is None else preset_order
     if not hasattr(geometry, "sizes"):
+        order = MESH_FILE_ORDER[quality] or geometry.order
         if order != geometry.order:
             scene = scene.with_values({"mesh.order": order})
         return scene, (
             f"quality {quality}: the mesh file's own tetrahedra (a mesh file cannot be remeshed), "
             f"{ORDER_WORDS[order]} (the scene's: {ORDER_WORDS[geometry.order]}){tol}"
         )
+    bulk, near, preset_order = QUALITY_3D[quality]
+    order = preset_order or geometry.order
     sizes, length = geometry.sizes, units.suffix(LENGTH)
     size = significant(bulk * sizes.size)
     close = size if near is None else significant(near * sizes.near)
