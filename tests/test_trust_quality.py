@@ -37,9 +37,9 @@ def sizes(s):
 
 def test_draft_on_fiber_bending_3d_is_its_own_mesh_coarsened_not_millimetres_of_0_3(capsys):
     """fiber_bending_3d.toml meshes at 4 mm, 2 mm near the chamber, grading over 2 mm, linear: draft is 1.5 times
-    its edge length, uniform, linear (0141107: 0.3 mm, 2,494,522 tetrahedra, refused)."""
+    its edge length, uniform (grading over that length), linear (0141107: 0.3 mm, 2,494,522 tetrahedra, refused)."""
     draft = scene("--scene", "fiber_bending_3d", "--quality", "draft")
-    assert sizes(draft) == (6.0, 6.0, 3.0, 1)
+    assert sizes(draft) == (6.0, 6.0, 6.0, 1)
     assert 500 < mesh_of(draft).n_elements < 6756  # the scene as written has 6756 tetrahedra (its description)
     assert capsys.readouterr().out.startswith(
         "quality draft: tetrahedra of 6 mm (x1.5 the scene's 4 mm), uniform (the scene's: 2 mm near the chambers), "

@@ -27,12 +27,14 @@ QUALITY_STEPS = {"draft": -1, "default": 0, "high": 1, "accurate": 2}
 AREA_STEP = 0.005 / 0.0012  # the ladder's area ratio: the reference beam's draft max area over its own
 REFERENCE_MESH = (0.0012, 1)  # the reference beam's (max area, order)
 QUALITY_TOL = {"draft": 1e-4, "default": 1e-6, "high": 1e-6, "accurate": 1e-9}  # the Newton tolerance
-# The 3D presets of a body meshed from shapes: (factor on the scene's tetrahedron edge length and its grading
-# distance, factor on its edge length near the chambers (None: uniform at the new edge length), element order (None:
-# the scene's own)), read off beam_3d_ellipsoid's tip against mesh size and grading (docs/3d.md, "3D presets": the
-# error is near the chambers' thin walls), whose [mesh] (0.2, 0.1 near the chamber, quadratic) they turn into the
-# measured (0.3, 0.3, linear), (0.3, 0.15), (0.3, 0.1) and (0.2, 0.08). A linear scene stays linear above draft:
-# fiber_bending_3d's high made quadratic (13k nodes) found no equilibrium at 38 kPa (Newton stalled at 3.5e-6).
+# The 3D presets of a body meshed from shapes: (factor on the scene's tetrahedron edge length, which is also the
+# new grading distance, factor on its edge length near the chambers (None: uniform at the new edge length), element
+# order (None: the scene's own)), read off beam_3d_ellipsoid's tip against mesh size and grading (docs/3d.md, "3D
+# presets": the error is near the chambers' thin walls), whose [mesh] (0.2, 0.1 near the chamber, quadratic) they
+# turn into the measured (0.3, 0.3, linear), (0.3, 0.15), (0.3, 0.1) and (0.2, 0.08). A linear scene stays linear
+# above draft:
+# fiber_bending_3d's high made quadratic (13k nodes) found no equilibrium at 38 kPa (Newton stalled at 3.5e-6); and
+# the grading runs over the new edge length (over 1.5 times the scene's 2 mm, its high found none at 98 kPa).
 QUALITY_3D: dict[str, tuple[float, float | None, int | None]] = {
     "draft": (1.5, None, 1),
     "default": (1.5, 1.5, None),
@@ -150,7 +152,7 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
         "beam's: "
         + ", ".join(f"{k} max area {a:g} order {o}" for k, (a, o, _) in QUALITY.items())
         + ". 3D, where --quality is given (without it the scene keeps its [mesh]), the scene's tetrahedron size "
-        "and grading distance times, and near the chambers: "
+        "(also the grading distance) times, and near the chambers: "
         + "; ".join(
             f"{k} x{h:g}, "
             + ("uniform" if near is None else f"x{near:g}")
@@ -309,8 +311,8 @@ def with_quality(scene, args: argparse.Namespace):
     """The scene file's scene with its --quality preset applied, and the line that says what the preset means for
     this scene ('' where nothing was asked: --quality not given). A 2D scene: planar_preset's max area and order (the
     default: the scene as written). A 3D body from shapes, where --quality was given: QUALITY_3D's factors on its
-    edge lengths and grading distance, and its order. A mesh file, where --quality was given: its own tetrahedra
-    (they cannot be remeshed), in MESH_FILE_ORDER's order."""
+    edge lengths (the grading distance: the new edge length), and its order. A mesh file, where --quality was given:
+    its own tetrahedra (they cannot be remeshed), in MESH_FILE_ORDER's order."""
     quality, given = args.quality, getattr(args, "quality_given", False)
     tol = f"; Newton tolerance {args.tol:g}"
     geometry, units = scene.geometry, scene.units
@@ -340,10 +342,9 @@ def with_quality(scene, args: argparse.Namespace):
     sizes, length = geometry.sizes, units.suffix(LENGTH)
     size = significant(bulk * sizes.size)
     close = size if near is None else significant(near * sizes.near)
-    values = {"mesh.size": size, "mesh.near_chambers": close, "mesh.order": order}
-    if sizes.distance is not None:
-        values["mesh.distance"] = significant(bulk * sizes.distance)
-    scene = scene.with_values(values)
+    scene = scene.with_values(
+        {"mesh.size": size, "mesh.near_chambers": close, "mesh.distance": size, "mesh.order": order}
+    )
     scenes = f"{sizes.near:g}{length}"
     near_chambers = (
         f"uniform (the scene's: {scenes} near the chambers)"
