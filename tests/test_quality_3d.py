@@ -1,9 +1,10 @@
-"""--quality on 3D scene files: given, it remeshes a body from shapes at the 3D preset's size and order; not given,
-the scene keeps its own [mesh]; a mesh file's tetrahedra are never remeshed."""
+"""--quality on 3D scene files: given, it remeshes a body from shapes at the 3D preset's factors on the scene's own
+sizes and its order; not given, the scene keeps its own [mesh]; a mesh file's tetrahedra are never remeshed (the
+preset sets their order)."""
 
 import pytest
 
-from taichi_pneuma.apps.cli import QUALITY_3D, scene_of_flags
+from taichi_pneuma.apps.cli import scene_of_flags
 from taichi_pneuma.apps.inflate import parser
 
 
@@ -11,11 +12,18 @@ def scene(*flags):
     return scene_of_flags(parser().parse_args(list(flags)))
 
 
-@pytest.mark.parametrize("quality", list(QUALITY_3D))
-def test_a_given_quality_remeshes_a_body_from_shapes(quality):
-    size, near, order, _ = QUALITY_3D[quality]
-    geometry = scene("--scene", "beam_3d_ellipsoid", "--quality", quality).geometry
-    assert (geometry.sizes.size, geometry.sizes.near, geometry.order) == (size, near or size, order)
+@pytest.mark.parametrize(
+    "quality, sizes",
+    [  # pneunet_3d.toml's [mesh]: 0.3, 0.12 near the chambers, distance 0.3, quadratic
+        ("draft", (0.45, 0.45, 0.45, 1)),
+        ("default", (0.45, 0.18, 0.45, 2)),
+        ("high", (0.45, 0.12, 0.45, 2)),
+        ("accurate", (0.3, 0.096, 0.3, 2)),
+    ],
+)
+def test_a_given_quality_remeshes_a_body_from_shapes_relative_to_its_own_sizes(quality, sizes):
+    geometry = scene("--scene", "pneunet_3d", "--quality", quality).geometry
+    assert (geometry.sizes.size, geometry.sizes.near, geometry.sizes.distance, geometry.order) == sizes
 
 
 def test_without_quality_the_scene_keeps_its_mesh_and_set_overrides_the_preset():
@@ -24,8 +32,9 @@ def test_without_quality_the_scene_keeps_its_mesh_and_set_overrides_the_preset()
     assert scene("--scene", "pneunet_3d", "--quality", "draft", "--set", "mesh.size=0.25").geometry.sizes.size == 0.25
 
 
-def test_a_mesh_file_keeps_its_tetrahedra():
-    assert scene("--scene", "beam_3d", "--quality", "accurate").geometry.order == 1
+def test_a_mesh_file_keeps_its_tetrahedra_in_the_presets_order():
+    own, accurate = scene("--scene", "beam_3d").geometry, scene("--scene", "beam_3d", "--quality", "accurate").geometry
+    assert (accurate.body, accurate.order, own.order) == (own.body, 2, 1)
 
 
 def test_the_first_line_names_the_preset_and_its_measured_error_where_a_preset_made_the_mesh():

@@ -7,8 +7,8 @@ ones (pneuma-bench: minutes; --design: a root-finder over 10-16 ramps, tested in
 not run (SKIP); every other command is an app of the package, run through its console script's
 entry point (pyproject's [project.scripts]; `python -m taichi_pneuma.apps.X` is the same main) with
 `--quality draft --steps 8` appended (a coarser mesh, a looser tolerance and 7 increments for the
-reference beam; a scene file keeps its mesh and schedule: this test checks the commands, the
-figures are tested elsewhere), and a sweep with `--workers 1` (one worker process to start, not
+reference beam; a scene file its draft mesh, coarser than its own, and its own schedule: this test
+checks the commands, the figures are tested elsewhere), and a sweep with `--workers 1` (one worker process to start, not
 one per core), and must exit 0.
 """
 

@@ -55,6 +55,7 @@ from .cli import (
     render_report,
     rendering_flags,
     result_stem,
+    scene_file,
     scene_for,
 )
 
@@ -189,7 +190,6 @@ def reach_record(reacher, result) -> dict:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from ..api import load_scene
     from ..control.inverse import ReachOptions, command_bounds
 
     if args.design:
@@ -200,7 +200,7 @@ def run(args: argparse.Namespace) -> dict:
     explicit_tol = args.tol is not None  # live mode keeps interactive.LIVE_TOL unless --tol is given
     check_flags(args)
     if args.scene:
-        scene = apply_set(load_scene(args.scene), args.set)
+        scene = scene_file(args)
         stem = result_stem(f"reach_{scene.name}", args, scene)
     else:
         scene = apply_set(scene_for(args, args.cy), args.set)
@@ -353,7 +353,6 @@ def save_reaches(args: argparse.Namespace, reacher, results: list, stem: str, si
 
 def run_output(args: argparse.Namespace) -> dict:
     """--output COLUMN --value V: the commands along the scene's schedule at which the column equals V."""
-    from ..api import load_scene
     from ..control.outputs import reach_output
     from ..result import scene_sha256
 
@@ -364,7 +363,7 @@ def run_output(args: argparse.Namespace) -> dict:
         "--output works along the scene's schedule (no --tip, --targets, --interactive)",
     )
     check_flags(args)
-    scene = apply_set(load_scene(args.scene) if args.scene else scene_for(args, args.cy), args.set)
+    scene = scene_file(args) if args.scene else apply_set(scene_for(args, args.cy), args.set)
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     built = build(scene, args)
