@@ -15,6 +15,14 @@ def no_mesh_cache():
         yield
 
 
+@pytest.fixture
+def cache_dir(tmp_path, monkeypatch):
+    """The mesh cache on, in a folder of the test's own (tests/test_fixed_costs.py, tests/test_trust_fibres.py)."""
+    folder = tmp_path / "cache"
+    monkeypatch.setenv(cache.VARIABLE, str(folder))
+    return folder
+
+
 @pytest.fixture(scope="session", autouse=True)
 def taichi_cpu():
     runtime.init("cpu")

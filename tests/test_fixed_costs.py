@@ -54,13 +54,6 @@ def test_a_2d_run_without_video_loads_no_module_it_does_not_use(tmp_path):
     assert "taichi_pneuma.solve.simulate" in loaded  # it did run
 
 
-@pytest.fixture
-def cache_dir(tmp_path, monkeypatch):
-    folder = tmp_path / "cache"
-    monkeypatch.setenv(cache.VARIABLE, str(folder))
-    return folder
-
-
 def counting_gmsh(monkeypatch) -> list:
     """Count gmsh sessions (each mesh or estimate made afresh opens one)."""
     calls, session = [], gmsh_mesher._session

@@ -40,7 +40,7 @@ FLAGS = [
     "--no-video",
     "--quiet",
     "--max-triangles",
-    "3000",
+    "8000",  # blocked_force_3d's cheap fibre: 468 cord segments, 0.026 GB of Hessian, 6.5e3 triangles' worth
     "--max-increments",
     "20",
     "--max-iterations",
@@ -90,12 +90,16 @@ def cheap(scene: dict) -> dict:
     if body["shape"] == "mesh":  # a mesh file's body: a small one instead
         body["file"], scene["mesh"] = str(SMALL_MESH), {}
     elif body["shape"] in (*SOLIDS, "extrusion", "pneunet"):  # a 3D body from shapes: coarse tetrahedra
-        # in millimetres, 8 mm and 4 near the chambers: a fibre wound inside a 2 mm wall must stay inside its facets
-        # (and fibres sampled every 4 mm: their cord segments' Hessian blocks within FLAGS' memory budget)
+        # in millimetres, 4 mm: a fibre wound at mid-wall of a 2 mm wall must stay inside the facets, sample points
+        # and the segments between them (8 mm facets cut 1 mm into the 8 mm radius); fibres sampled every 2 mm (a
+        # 4 mm chord cuts the chamber's corner where a winding turns from the base to the arch), wound half as often
+        # at twice the pitch: their cord segments' Hessian blocks within FLAGS' memory budget
         millimetres = scene.get("units") == "mm-kPa"
-        scene["mesh"] = {"size": 8.0, "near_chambers": 4.0} if millimetres else {"size": 0.5}
+        scene["mesh"] = {"size": 4.0, "near_chambers": 4.0} if millimetres else {"size": 0.5}
         for fiber in scene.get("fibers", []) if millimetres else []:
-            fiber["spacing"] = 4.0
+            fiber["spacing"] = 2.0
+            if "pitch" in fiber["path"]:
+                fiber["path"]["pitch"], fiber["path"]["turns"] = 2 * fiber["path"]["pitch"], fiber["path"]["turns"] / 2
     else:
         corners = [
             np.array(r["center"]) + np.array(r["size"]) * sign / 2

@@ -243,13 +243,6 @@ SMALL = Solid(SOLID.body, (("c", Ellipsoid((0.0, 0.0, 0.0), (0.2, 0.1, 0.1))),))
 SIZES = MeshSizes(0.3, near_chambers=0.15)
 
 
-@pytest.fixture
-def cache_dir(tmp_path, monkeypatch):
-    folder = tmp_path / "cache"
-    monkeypatch.setenv(cache.VARIABLE, str(folder))
-    return folder
-
-
 def rest_volume(mesh) -> float:
     """The chamber's volume, 1/6 sum over its wall of x0 . (x1 x x2)."""
     x = mesh.vertices[mesh.chambers["c"]]
