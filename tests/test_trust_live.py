@@ -26,7 +26,7 @@ msgspec = pytest.importorskip("msgspec")
 
 import taichi_pneuma as tp  # noqa: E402
 from taichi_pneuma.errors import PneumaInputError  # noqa: E402
-from taichi_pneuma.realtime.gate import MAX_MESSAGE  # noqa: E402
+from taichi_pneuma.realtime.gate import MAX_CONNECTIONS, MAX_MESSAGE, MAX_REFUSED  # noqa: E402
 from taichi_pneuma.realtime.session import NO_EQUILIBRIUM, LiveSession  # noqa: E402
 from taichi_pneuma.realtime.web import WebView, live, page_url  # noqa: E402
 from taichi_pneuma.solve.newton import NewtonOptions  # noqa: E402
@@ -239,6 +239,53 @@ def test_a_bad_message_with_the_token_is_refused_in_one_log_line_and_the_session
     commands = list(before[0])
     commands[4] = moved
     assert state(view) == (tuple(commands), *before[1:])
+
+
+def test_a_client_that_keeps_sending_refused_messages_is_closed_and_logs_a_bounded_number_of_lines(view, caplog):
+    """MAX_REFUSED bad messages in a row (a menu value off its list), then more: the connection is closed (1008)
+    after the MAX_REFUSED-th, so the log holds MAX_REFUSED refusals and one closing line, however many were sent."""
+    from websockets.exceptions import ConnectionClosed
+    from websockets.sync.client import connect
+
+    caplog.set_level(logging.WARNING, logger="taichi_pneuma.live")
+    bad = pack({"type": "GuiUpdateMessage", "uuid": view.field_menu._impl.uuid, "updates": {"value": "garbage"}})
+    url = f"ws://127.0.0.1:{view.port}/?token={view.token}"
+    with connect(url, subprotocols=[PROTOCOL], close_timeout=0.1) as ws, pytest.raises(ConnectionClosed) as closed:
+        for _ in range(10 * MAX_REFUSED):
+            ws.send(bad)
+            time.sleep(0.005)
+        while True:  # viser's own messages come first; the close ends the loop
+            ws.recv(timeout=10)
+    assert closed.value.rcvd is not None and closed.value.rcvd.code == 1008
+    lines = [r.getMessage() for r in caplog.records]
+    assert sum("refused a message" in line for line in lines) == MAX_REFUSED
+    assert sum("closed the connection" in line for line in lines) == 1
+
+
+def test_past_the_open_pages_bound_an_upgrade_is_answered_503_and_a_closed_page_makes_room(view):
+    """MAX_CONNECTIONS websockets with the token open at once: one more is refused in its upgrade (503); once one
+    closes, a new one is taken."""
+    from websockets.exceptions import InvalidStatus
+    from websockets.sync.client import connect
+
+    url = f"ws://127.0.0.1:{view.port}/?token={view.token}"
+    pages = [connect(url, subprotocols=[PROTOCOL], close_timeout=0.1) for _ in range(MAX_CONNECTIONS)]
+    try:
+        with pytest.raises(InvalidStatus) as refused:
+            connect(url, subprotocols=[PROTOCOL], close_timeout=0.1)
+        assert refused.value.response.status_code == 503
+        pages.pop().close()
+        ends = time.monotonic() + 10
+        while True:
+            try:
+                pages.append(connect(url, subprotocols=[PROTOCOL], close_timeout=0.1))
+                break
+            except InvalidStatus:
+                assert time.monotonic() < ends, "a closed page made no room"
+                time.sleep(0.05)
+    finally:
+        for page in pages:
+            page.close()
 
 
 def test_session_commands_and_targets_must_be_finite(view):

@@ -1,8 +1,9 @@
 """The live page's guard on viser's websocket server: the token checked in the HTTP upgrade request, before the
-websocket is accepted (a request without it, or with another, is answered 403 and no frame of it is ever read);
-a message larger than MAX_MESSAGE bytes closes its connection (1009) before it is buffered whole; and each
-message is handed to viser only once a check (the page's, realtime/web.py) has passed it, a refused one logged
-in one line (no traceback) and dropped, the connection going on. What the websockets library logs of a connection
+websocket is accepted (a request without it, or with another, is answered 403 and no frame of it is ever read); a
+message larger than MAX_MESSAGE bytes closes its connection (1009) before it is buffered whole; and each message is
+handed to viser only once a check (the page's, realtime/web.py) has passed it, a refused one logged in one line (no
+traceback) and dropped, the connection going on (MAX_REFUSED refused close it, so a client cannot flood the log); at
+most MAX_CONNECTIONS websockets are open at once (503 past that). What the websockets library logs of a connection
 (a request that is not HTTP, a handler's error) is one line too: the exception's type and message.
 
 viser (1.1) starts its server with websockets.asyncio.server.serve inside ViserServer(), with its own
@@ -30,6 +31,8 @@ from websockets.typing import Data
 from ..errors import quoted
 
 MAX_MESSAGE = 64 * 1024  # bytes a page's message may have (its largest, a camera pose, has about 300)
+MAX_CONNECTIONS = 8  # open websockets with the token at once (each a browser tab): one more is answered 503
+MAX_REFUSED = 10  # messages refused on one connection before it is closed (1008): the log stays bounded
 log = logging.getLogger("taichi_pneuma.live")
 
 
@@ -57,13 +60,15 @@ def token_of(path: str) -> str:
 
 class GuardedConnection(ws_server.ServerConnection):
     """A websocket connection whose recv() returns only the messages refusal(message) passes (returns None
-    for); a refused one is logged in one line with refusal's reason and skipped."""
+    for); a refused one is logged in one line with refusal's reason and skipped, and MAX_REFUSED of them in a row
+    close the connection (1008)."""
 
     def __init__(self, *args, refusal: Callable[[Data], str | None], **kwargs):
         super().__init__(*args, **kwargs)
         self.refusal = refusal
 
     async def recv(self, decode: bool | None = None) -> Data:  # type: ignore[override]
+        refused = 0
         while True:
             message = await super().recv(decode)
             reason = self.refusal(message)
@@ -71,19 +76,35 @@ class GuardedConnection(ws_server.ServerConnection):
                 return message
             host, port = self.remote_address[:2]
             log.warning("live page: refused a message from %s port %s: %s", host, port, reason)
+            refused += 1
+            if refused >= MAX_REFUSED:
+                log.warning(
+                    "live page: closed the connection from %s port %s: %d messages refused", host, port, refused
+                )
+                await self.close(1008, "too many refused messages")
 
 
 def upgrade_gate(token: str, files: Callable | None) -> Callable:
     """A process_request: viser's file server (files) answers what it serves; any request it would let through
-    to the websocket upgrade is refused (403) unless its URL carries `token`."""
+    to the websocket upgrade is refused (403) unless its URL carries `token`, and (503) while MAX_CONNECTIONS
+    websockets are open."""
 
     def gate(connection: ws_server.ServerConnection, request: Request) -> Response | None:
         answer = files(connection, request) if files is not None else None
         if answer is not None:
             return answer
-        if secrets.compare_digest(token_of(request.path), token):
-            return None
-        return Response(http.HTTPStatus.FORBIDDEN, "Forbidden", Headers(), b"this page needs the URL with its token\n")
+        if not secrets.compare_digest(token_of(request.path), token):
+            return Response(
+                http.HTTPStatus.FORBIDDEN, "Forbidden", Headers(), b"this page needs the URL with its token\n"
+            )
+        if len(connection.server.connections) >= MAX_CONNECTIONS:
+            return Response(
+                http.HTTPStatus.SERVICE_UNAVAILABLE,
+                "Service Unavailable",
+                Headers(),
+                f"{MAX_CONNECTIONS} pages are open on this scene already: close one\n".encode(),
+            )
+        return None
 
     return gate
 
