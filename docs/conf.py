@@ -60,7 +60,9 @@ napoleon_google_docstring = True
 napoleon_numpy_docstring = False
 nitpicky = True
 # no inventory of other projects is fetched (the build runs offline): their types are named, not linked
-nitpick_ignore_regex = [(r"py:.*", r"(matplotlib|numpy|np|scipy|taichi|ti|concurrent|argparse|pathlib|os|ray)\..*")]
+nitpick_ignore_regex = [
+    (r"py:.*", r"(matplotlib|numpy|np|scipy|taichi|ti|concurrent|argparse|pathlib|os|ray|logging|websockets)\..*")
+]
 
 sphinx_gallery_conf = {
     "examples_dirs": "../examples",
