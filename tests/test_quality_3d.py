@@ -48,7 +48,12 @@ def test_the_first_line_names_the_preset_and_its_measured_error_where_a_preset_m
         note("--cy", "0.15") == f"; --quality default: tip within {QUALITY_ERROR[2]['default']:g} % of converged "
         "on the reference beam"
     )
-    assert "--quality high: tip within" in note("--scene", "pneunet_3d", "--quality", "high")
+    high = QUALITY_ERROR[3]["high"]
+    measured = note("--scene", "beam_3d_ellipsoid", "--quality", "high")
+    assert measured == f"; --quality high: tip within {high:g} % of converged"
+    assert note("--scene", "pneunet_3d", "--quality", "high") == (
+        f"; --quality high: not measured on this scene (on beam_3d_ellipsoid: tip within {high:g} %)"
+    )
     assert note("--scene", "pneunet_3d") == ""  # the scene's own [mesh]
     assert note("--scene", "beam_3d", "--quality", "high") == ""  # a mesh file's tetrahedra
     assert note("--scene", "pneunet_finger") == ""

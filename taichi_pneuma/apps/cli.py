@@ -381,8 +381,12 @@ def preset_note(scene, args: argparse.Namespace | None) -> str:
     from_shapes = getattr(args, "quality_given", False) and scene.dim == 3 and hasattr(scene.geometry, "sizes")
     if getattr(args, "scene", None) and not from_shapes:
         return ""
-    on = "the reference beam" if scene.dim == 2 else "beam_3d_ellipsoid"
-    return f"; --quality {args.quality}: tip within {QUALITY_ERROR[scene.dim][args.quality]:g} % of converged on {on}"
+    error = QUALITY_ERROR[scene.dim][args.quality]
+    if scene.dim == 2:
+        return f"; --quality {args.quality}: tip within {error:g} % of converged on the reference beam"
+    if scene.name == "beam_3d_ellipsoid":
+        return f"; --quality {args.quality}: tip within {error:g} % of converged"
+    return f"; --quality {args.quality}: not measured on this scene (on beam_3d_ellipsoid: tip within {error:g} %)"
 
 
 def locking_note(scene, mesh) -> str:
