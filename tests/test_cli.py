@@ -99,7 +99,7 @@ def test_unconverged_ramp_stops_with_one_line_and_writes_the_steps_done(tmp_path
 
 
 def test_quality_presets_set_mesh_and_tolerance_unless_overridden(tmp_path, capsys):
-    from taichi_pneuma.apps.cli import QUALITY
+    from taichi_pneuma.apps.quality import QUALITY
     from taichi_pneuma.fem.planar import BeamGeometry
 
     for flags, max_area, stem in (
@@ -126,13 +126,13 @@ def test_command_line_defaults_are_the_solvers_and_the_reference_scenes():
     library's own defaults."""
     import inspect
 
-    from taichi_pneuma.apps import cli, inflate
+    from taichi_pneuma.apps import cli, inflate, quality
     from taichi_pneuma.fem.planar import BeamGeometry
     from taichi_pneuma.scene.build import reference_scene
     from taichi_pneuma.solve.newton import NewtonOptions
     from taichi_pneuma.solve.simulate import MAX_CUTS
 
-    assert cli.QUALITY["default"] == (BeamGeometry.max_area, 1, NewtonOptions.tol)
+    assert quality.QUALITY["default"] == (BeamGeometry.max_area, 1, NewtonOptions.tol)
     assert (cli.MAX_ITERATIONS, cli.MAX_CUTS) == (NewtonOptions.max_iterations, MAX_CUTS)
     flags = vars(inflate.parser().parse_args([]))
     defaults = inspect.signature(reference_scene).parameters

@@ -162,8 +162,8 @@ def test_convergence_order_under_uniform_refinement():
 def test_order_flag_quality_preset_and_scene_key(tmp_path, capsys):
     import json
 
-    from taichi_pneuma.apps.cli import QUALITY
     from taichi_pneuma.apps.inflate import main
+    from taichi_pneuma.apps.quality import QUALITY
     from taichi_pneuma.errors import PneumaInputError
     from taichi_pneuma.fem.planar import BeamGeometry
     from taichi_pneuma.scene.scenefile import load_scene

@@ -38,7 +38,7 @@ def test_a_mesh_file_keeps_its_tetrahedra_in_the_presets_order():
 
 
 def test_the_first_line_names_the_preset_and_its_measured_error_where_a_preset_made_the_mesh():
-    from taichi_pneuma.apps.cli import QUALITY_ERROR, preset_note
+    from taichi_pneuma.apps.quality import QUALITY_ERROR, preset_note
 
     def note(*flags):
         args = parser().parse_args(list(flags))

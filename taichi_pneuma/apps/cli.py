@@ -16,63 +16,10 @@ import sys
 from .. import __version__, environment, limits, runtime, signals
 from ..errors import PneumaInputError, require, require_finite
 from ..fem import sizing
-from ..io.units import AREA, LENGTH, MEASURES, PRESSURE
+from ..io.units import LENGTH, MEASURES, PRESSURE
 from ..render import COLOR_FIELDS, RENDERERS
+from .quality import AREA_STEP, ORDER_WORDS, QUALITY, QUALITY_3D, QUALITY_TOL, preset_note, with_quality
 
-# --quality presets, relative to the scene's own [mesh], so that a scene in any units (or none) has a coarser, faster
-# draft and a finer high of itself; on the reference beams they are the meshes the accuracy studies measured.
-# 2D: the rungs a preset lies above the scene's own on planar_preset's ladder, and the reference beam's mesh (its
-# presets are QUALITY below; tests/test_cli.py checks the beam's defaults agree).
-QUALITY_STEPS = {"draft": -1, "default": 0, "high": 1, "accurate": 2}
-AREA_STEP = 0.005 / 0.0012  # the ladder's area ratio: the reference beam's draft max area over its own
-REFERENCE_MESH = (0.0012, 1)  # the reference beam's (max area, order)
-QUALITY_TOL = {"draft": 1e-4, "default": 1e-6, "high": 1e-6, "accurate": 1e-9}  # the Newton tolerance
-# The 3D presets of a body meshed from shapes: (factor on the scene's tetrahedron edge length, which is also the
-# new grading distance, factor on its edge length near the chambers (None: uniform at the new edge length), element
-# order (None: the scene's own)), read off beam_3d_ellipsoid's tip against mesh size and grading (docs/3d.md, "3D
-# presets": the error is near the chambers' thin walls), whose [mesh] (0.2, 0.1 near the chamber, quadratic) they
-# turn into the measured (0.3, 0.3, linear), (0.3, 0.15), (0.3, 0.1) and (0.2, 0.08). A linear scene stays linear
-# above draft:
-# fiber_bending_3d's high made quadratic (13k nodes) found no equilibrium at 38 kPa (Newton stalled at 3.5e-6); and
-# the grading runs over the new edge length (over 1.5 times the scene's 2 mm, its high found none at 98 kPa).
-QUALITY_3D: dict[str, tuple[float, float | None, int | None]] = {
-    "draft": (1.5, None, 1),
-    "default": (1.5, 1.5, None),
-    "high": (1.5, 1.0, None),
-    "accurate": (1.0, 0.8, None),
-}
-# A mesh file's order at each preset: its tetrahedra cannot be remeshed, so high and accurate make them quadratic.
-MESH_FILE_ORDER = {"draft": 1, "default": None, "high": 2, "accurate": 2}
-ORDER_WORDS = {1: "linear", 2: "quadratic"}
-SIGNIFICANT = 12  # digits a preset's size keeps: the reference beams' presets come out as their exact decimals
-
-
-def significant(x: float) -> float:
-    """x rounded to SIGNIFICANT digits (0.0012 * (0.005 / 0.0012) is 0.005, not 0.005000000000000001)."""
-    return float(f"{x:.{SIGNIFICANT}g}")
-
-
-def planar_preset(quality: str, max_area: float, order: int) -> tuple[float, int]:
-    """A 2D preset's (max area, order) for a scene meshed at (max area A, order o). The ladder of meshes
-    (P1, r A), (P1, A), (P2, r A), (P2, A), (P2, A / r), (P2, A / r^2) (r = AREA_STEP: each rung has about as many
-    nodes as the one below it or more, and is more accurate) holds a linear scene on rung 1, a quadratic one on rung
-    3; the preset is the rung QUALITY_STEPS[quality] above it: draft one below, default the scene as written, high
-    one above, accurate two (a rung at A keeps the scene's area as it is written). On the reference beam (0.0012, P1):
-    (0.005, P1), (0.0012, P1), (0.005, P2), (0.0012, P2), the accuracy study's presets."""
-    rung = (1 if order == 1 else 3) + QUALITY_STEPS[quality]
-    exponent = 1 - rung % 2 if rung <= 3 else 3 - rung
-    return (significant(max_area * AREA_STEP**exponent) if exponent else max_area), 1 if rung <= 1 else 2
-
-
-# the reference beam's presets: (max triangle area, element order, Newton tolerance); the flags' beam takes them
-QUALITY = {q: (*planar_preset(q, *REFERENCE_MESH), tol) for q, tol in QUALITY_TOL.items()}
-# each preset's measured tip error against the converged tip, on the reference beam (2D, nu = 0.45: docs/accuracy.md)
-# and on beam_3d_ellipsoid (3D: docs/3d.md; pneunet_3d's peak tip: 6.5 % and 3.6 % at default and high, its presets
-# being factors on its own mesh; pneuma-bench --sections presets_3d measures both): the scene line of a run
-QUALITY_ERROR = {
-    2: {"draft": 28.4, "default": 8.0, "high": 0.64, "accurate": 0.07},
-    3: {"draft": 26, "default": 1.8, "high": 0.7, "accurate": 0.2},
-}
 MEASURE = {2: "area", 3: "volume"}  # what a chamber encloses, by dimension
 MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_iterations, simulate.MAX_CUTS)
 # the reference-beam flags' defaults (those of scene.build.reference_scene; tests/test_cli.py checks they agree)
@@ -319,74 +266,6 @@ def check_scene(scene, args: argparse.Namespace) -> None:
     """Refuse a scene past the limits of the flags (sizing.check_scene): --max-triangles, --max-increments,
     --max-fibers, --max-obstacles."""
     sizing.check_scene(scene, args.max_triangles, args.max_increments, args.max_fibers, args.max_obstacles)
-
-
-def with_quality(scene, args: argparse.Namespace):
-    """The scene file's scene with its --quality preset applied, and the line that says what the preset means for
-    this scene ('' where nothing was asked: --quality not given). A 2D scene: planar_preset's max area and order (the
-    default: the scene as written). A 3D body from shapes, where --quality was given: QUALITY_3D's factors on its
-    edge lengths (the grading distance: the new edge length), and its order. A mesh file, where --quality was given:
-    its own tetrahedra (they cannot be remeshed), in MESH_FILE_ORDER's order."""
-    quality, given = args.quality, getattr(args, "quality_given", False)
-    tol = f"; Newton tolerance {args.tol:g}"
-    geometry, units = scene.geometry, scene.units
-    if scene.dim == 2:
-        own = (geometry.max_area, geometry.order)
-        max_area, order = planar_preset(quality, *own)
-        area = units.suffix(AREA)
-        if (max_area, order) != own:
-            scene = scene.with_values({"mesh.max_area": max_area, "mesh.order": order})
-        said = (
-            f"max area {max_area:g}{area} (x{max_area / own[0]:.3g} the scene's {own[0]:g}{area}), "
-            f"{ORDER_WORDS[order]} triangles (the scene's: {ORDER_WORDS[own[1]]})"
-        )
-        return scene, (f"quality {quality}: {said}{tol}" if given else "")
-    if not given:
-        return scene, ""
-    if not hasattr(geometry, "sizes"):
-        order = MESH_FILE_ORDER[quality] or geometry.order
-        if order != geometry.order:
-            scene = scene.with_values({"mesh.order": order})
-        return scene, (
-            f"quality {quality}: the mesh file's own tetrahedra (a mesh file cannot be remeshed), "
-            f"{ORDER_WORDS[order]} (the scene's: {ORDER_WORDS[geometry.order]}){tol}"
-        )
-    bulk, near, preset_order = QUALITY_3D[quality]
-    order = preset_order or geometry.order
-    sizes, length = geometry.sizes, units.suffix(LENGTH)
-    size = significant(bulk * sizes.size)
-    close = size if near is None else significant(near * sizes.near)
-    scene = scene.with_values(
-        {"mesh.size": size, "mesh.near_chambers": close, "mesh.distance": size, "mesh.order": order}
-    )
-    scenes = f"{sizes.near:g}{length}"
-    near_chambers = (
-        f"uniform (the scene's: {scenes} near the chambers)"
-        if near is None
-        else f"{close:g}{length} near the chambers (x{close / sizes.near:.3g} the scene's {scenes})"
-    )
-    said = (
-        f"tetrahedra of {size:g}{length} (x{size / sizes.size:.3g} the scene's {sizes.size:g}{length}), "
-        f"{near_chambers}, {ORDER_WORDS[order]} (the scene's: {ORDER_WORDS[geometry.order]})"
-    )
-    return scene, f"quality {quality}: {said}{tol}"
-
-
-def preset_note(scene, args: argparse.Namespace | None) -> str:
-    """What the run's --quality preset is measured to cost in accuracy ('' where no preset decides its mesh: a
-    scene file's own [mesh], a mesh file): the reference beam's flags, or a 3D body from shapes with --quality (a 2D
-    scene file's rung of planar_preset's ladder need not be the reference beam's of the same name: no note)."""
-    if args is None or not hasattr(args, "quality"):
-        return ""
-    from_shapes = getattr(args, "quality_given", False) and scene.dim == 3 and hasattr(scene.geometry, "sizes")
-    if getattr(args, "scene", None) and not from_shapes:
-        return ""
-    error = QUALITY_ERROR[scene.dim][args.quality]
-    if scene.dim == 2:
-        return f"; --quality {args.quality}: tip within {error:g} % of converged on the reference beam"
-    if scene.name == "beam_3d_ellipsoid":
-        return f"; --quality {args.quality}: tip within {error:g} % of converged"
-    return f"; --quality {args.quality}: not measured on this scene (on beam_3d_ellipsoid: tip within {error:g} %)"
 
 
 def locking_note(scene, mesh) -> str:
