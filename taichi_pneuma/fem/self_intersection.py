@@ -193,3 +193,19 @@ def surface_crossing(x: np.ndarray, pieces: np.ndarray) -> Crossing | None:
         return None
     first = hits[np.lexsort((j[hits], i[hits]))[0]]
     return Crossing(int(i[first]), int(j[first]), point[first])
+
+
+def winding(x: np.ndarray, pieces: np.ndarray, q: np.ndarray) -> float:
+    """The winding number about the point q (d,) of the closed surface of the pieces (surface_pieces) at positions x
+    (n, d): 1 inside the body, 0 outside it or in a chamber's cavity. 2D: the sum of the angles
+    atan2(r_a x r_b, r_a . r_b) / 2 pi that the segments (a, b) subtend (r = x - q); 3D: the sum of the solid angles
+    2 atan2(r_a . (r_b x r_c), |r_a||r_b||r_c| + (r_a . r_b)|r_c| + (r_b . r_c)|r_a| + (r_c . r_a)|r_b|) / 4 pi
+    of the triangles (Van Oosterom and Strackee)."""
+    ra, rb, rc = (x[pieces[:, k]] - q for k in range(3))
+    if x.shape[1] == 2:
+        cross = ra[:, 0] * rb[:, 1] - ra[:, 1] * rb[:, 0]
+        return float(np.arctan2(cross, np.sum(ra * rb, axis=1)).sum() / (2 * np.pi))
+    la, lb, lc = (np.linalg.norm(r, axis=1) for r in (ra, rb, rc))
+    ab, bc, ca = (np.sum(p * r, axis=1) for p, r in ((ra, rb), (rb, rc), (rc, ra)))
+    below = la * lb * lc + ab * lc + bc * la + ca * lb
+    return float(2 * np.arctan2(np.sum(ra * np.cross(rb, rc), axis=1), below).sum() / (4 * np.pi))

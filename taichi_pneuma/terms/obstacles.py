@@ -1,18 +1,9 @@
 """Rigid obstacles: frictionless contact of the body's outer boundary nodes with a shape given by its signed distance.
 
-Each shape is a signed distance d(x) in 3D, positive outside (a 2D scene evaluates it at x = (x, y, 0), so a
-sphere is a circle there, a cylinder or capsule along z a circle, one along x or y a rectangle or a stadium):
-
-    plane     d = (x - p) . n                                    (the body on the normal's side)
-    sphere    d = |x - c| - R
-    box       q = |x - c| - h (h the half-size): d = |max(q, 0)| outside, max_k q_k inside
-    cylinder  t = (x - c) . a, w = (x - c) - t a, q = (|w| - R, |t| - L/2): the box distance of q (flat caps)
-    capsule   d = |x - c - clamp(t, -L/2, L/2) a| - R
-
-Each is an exact Euclidean distance outside, so 1-Lipschitz. The energy is that of the ground (terms/contact.py):
-E = sum_i b(d_i) over the boundary nodes, the log barrier b of threshold dhat and stiffness kappa; gradient
-b'(d_i) n_i (n = grad d, the unit normal); Hessian per node b''(d) n n^T (PSD, always) plus, when not psd_only,
-b'(d) Hess d. Hess d is exact wherever the closest feature of the shape is
+Each shape is a signed distance d(x) (terms/obstacle_distance.py), 1-Lipschitz. The energy is that of the ground
+(terms/contact.py): E = sum_i b(d_i) over the boundary nodes, the log barrier b of threshold dhat and stiffness
+kappa; gradient b'(d_i) n_i (n = grad d, the unit normal); Hessian per node b''(d) n n^T (PSD, always) plus, when
+not psd_only, b'(d) Hess d. Hess d is exact wherever the closest feature of the shape is
 
     a plane (a face, a cap, the plane itself)      0
     a point (a box corner, a sphere's or an end's centre)     (I - n n^T) / r
@@ -31,8 +22,8 @@ The shape's kind is a runtime integer and its parameters a small float array (PA
 once whatever the scene. A moving obstacle's translation from its placed position is set by set_offset.
 
 overlap(): the barrier holds the nodes only, so whether the obstacle overlaps the body is checked geometrically:
-the least d over every straight piece of the body's surface (obstacle_reach: a nested golden-section search, d
-being convex), and whether the obstacle's centre lies inside the body (winding). A run checks it at every
+the least d over every straight piece of the body's surface (obstacle_distance.obstacle_reach), and whether the
+obstacle's centre lies inside the body (fem/self_intersection.py winding). A run checks it at every
 equilibrium and sweeps a moving obstacle's motion in sub-steps of at most its sweep (BuiltScene.sweeps,
 solve/simulate.py settle); Obstacle.terms refuses a rest scene that overlaps (docs/theory/contact.md).
 """
@@ -44,97 +35,18 @@ import numpy as np
 
 from ..backend import kernel, ti
 from ..errors import require, require_finite, shape_of
-from ..fem.self_intersection import surface_pieces
+from ..fem.self_intersection import surface_pieces, winding
 from ..io.output import MAX_NAME, STEM, check_heading
 from ..io.units import LENGTH, NODAL_STIFFNESS, si_default
-from .base import HUGE, Indices, Nodal, Scalars, Table, Term, Triples, block_pattern, int32s
+from .base import HUGE, Indices, Nodal, Scalars, Table, Term, block_pattern, int32s
 from .contact import barrier
-from .obstacle_shapes import BOX, CAPSULE, PLANE, SPHERE, Shape, vector
+from .obstacle_distance import obstacle_reach, point_of, row3, signed_distance
+from .obstacle_shapes import PLANE, Shape, vector
 
-PARAMETERS = 8  # position (3: a point or centre), vector (3: normal, half-size or axis), radius, half-length
 STEP_CAP = 4.0  # max_step's conservative advancement stops past this step fraction (inf)
 ADVANCES = 100  # and after this many advances (the bound reached, short of the contact)
 REACH = 10.0  # a keyframe offset's components are at most this many times the body's size
 MAX_SWEEPS = 1000  # sub-steps of one increment's obstacle motion, at most (Obstacle.terms refuses more)
-GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
-SEARCH = 48  # lowest's golden-section steps: the bracket shrinks to GOLDEN^48 ~ 1e-10 of the piece
-
-
-@ti.func
-def row3(a: ti.template(), v):
-    """Row v of (n, d) nodal data as a 3-vector (z = 0 in 2D)."""
-    x = ti.Vector([0.0, 0.0, 0.0])
-    for k in ti.static(range(3)):
-        if k < a.shape[1]:
-            x[k] = a[v, k]
-    return x
-
-
-@ti.func
-def point_of(rest: ti.template(), u: ti.template(), v):
-    """x_v = X_v + u_v as a 3-vector."""
-    return row3(rest, v) + row3(u, v)
-
-
-@ti.func
-def signed_distance(x, kind, p: ti.template()):
-    """(d, n, r, s, t) at x: the signed distance, its gradient n, and its Hessian as (I - n n^T - s t t^T) / r
-    (r = 0: none, a flat feature)."""
-    c = ti.Vector([p[0], p[1], p[2]])
-    v = ti.Vector([p[3], p[4], p[5]])
-    radius, half = p[6], p[7]
-    y = x - c
-    d, r, s = 0.0, 0.0, 0.0
-    n = ti.Vector([0.0, 0.0, 0.0])
-    t = ti.Vector([0.0, 0.0, 0.0])
-    if kind == PLANE:
-        d, n = y.dot(v), v
-    elif kind == SPHERE:
-        rho = y.norm()
-        d, n, r = rho - radius, y / rho, rho
-    elif kind == BOX:
-        q = ti.abs(y) - v
-        if q.max() > 0:
-            w = ti.Vector([0.0, 0.0, 0.0])
-            count = 0
-            for k in ti.static(range(3)):
-                if q[k] > 0:
-                    w[k] = ti.math.sign(y[k]) * q[k]
-                    count += 1
-                else:
-                    t[k] = 1.0  # the edge's direction, when two components are out
-            d = w.norm()
-            n = w / d
-            if count >= 2:
-                r = d
-                s = ti.select(count == 2, 1.0, 0.0)
-        else:
-            d = q.max()
-            for k in ti.static(range(3)):
-                if q[k] == d and n.norm_sqr() == 0:
-                    n[k] = ti.math.sign(y[k])
-    else:
-        along = y.dot(v)
-        if kind == CAPSULE:
-            w = y - ti.math.clamp(along, -half, half) * v
-            rho = w.norm()
-            d, n, r = rho - radius, w / rho, rho
-            if ti.abs(along) < half:
-                s, t = 1.0, v
-        else:  # CYLINDER
-            w = y - along * v
-            rho = w.norm()
-            radial, axial = rho - radius, ti.abs(along) - half
-            cap = ti.math.sign(along) * v
-            if radial > 0 and axial > 0:  # the rim: a circle
-                out = radial * (w / rho) + axial * cap
-                d = out.norm()
-                n, r, s, t = out / d, d, radius / rho, v.cross(w / rho)
-            elif radial > axial:  # the side (or inside, nearer the side): the axis line
-                d, n, r, s, t = radial, w / rho, rho, 1.0, v
-            else:  # a cap (or inside, nearer a cap)
-                d, n = axial, cap
-    return d, n, r, s, t
 
 
 @kernel
@@ -211,68 +123,6 @@ def obstacle_step(rest: Nodal, u: Nodal, dx: Nodal, verts: Indices, kind: ti.i32
                 if t <= STEP_CAP:
                     ti.atomic_min(bound, ti.max(t, 0.0))
     return bound
-
-
-@ti.func
-def lowest(a, e, f, kind, p: ti.template(), depth: ti.template()):
-    """(m, x): the least value m found of a convex g over t in [0, 1] and the point x where, by SEARCH golden-section
-    steps (g(t1) <= g(t2), t1 < t2, keeps [lo, t2], else [t1, hi]: a minimiser stays in the bracket), then the ends
-    and the bracket's middle: g(t) = d(a + t e) at depth 0; at depth 1 the least d over the segment from a + t e to
-    a + t (e + f), convex too (a convex d minimised over the parallel slices of a triangle). One call site of g, so
-    that the nested search compiles to one copy of each level."""
-    lo, hi, g1 = 0.0, 1.0, 0.0
-    best, where = ti.math.inf, a
-    for step in range(2 * SEARCH + 3):
-        t = 0.5 * (lo + hi)
-        if step < 2 * SEARCH:
-            t = hi - GOLDEN * (hi - lo) if step % 2 == 0 else lo + GOLDEN * (hi - lo)
-        elif step < 2 * SEARCH + 2:
-            t = float(step - 2 * SEARCH)
-        g, x = profile(a, e, f, t, kind, p, depth)
-        if g < best:
-            best, where = g, x
-        if step < 2 * SEARCH:
-            if step % 2 == 0:
-                g1 = g
-            elif g1 <= g:
-                hi = t
-            else:
-                lo = hi - GOLDEN * (hi - lo)
-    return best, where
-
-
-@ti.func
-def profile(a, e, f, t, kind, p: ti.template(), depth: ti.template()):
-    """lowest's g(t) and the point where it is taken."""
-    x = a + t * e
-    value = 0.0
-    if ti.static(depth == 0):
-        value = signed_distance(x, kind, p)[0]
-    else:
-        value, x = lowest(x, t * f, f * 0.0, kind, p, depth - 1)
-    return value, x
-
-
-@kernel
-def obstacle_reach(rest: Nodal, u: Nodal, facets: Triples, kind: ti.i32, p: Scalars, out: Table):
-    """out[k] = (m, x, y, z): the least signed distance m over facet k (a triangle a b c; a segment when c = b) and a
-    point where it is taken; a facet whose corners all lie farther from the obstacle than its longest side (d is
-    1-Lipschitz: no point of it can reach the obstacle) is not searched, m then its nearest corner's distance."""
-    for k in range(facets.shape[0]):
-        a = point_of(rest, u, facets[k][0])
-        b = point_of(rest, u, facets[k][1])
-        c = point_of(rest, u, facets[k][2])
-        m, x = ti.math.inf, a
-        for y in range(3):
-            corner = point_of(rest, u, facets[k][y])
-            dy = signed_distance(corner, kind, p)[0]
-            if dy < m:
-                m, x = dy, corner
-        if m < ti.max((b - a).norm(), (c - b).norm(), (a - c).norm()):
-            m, x = lowest(a, b - a, c - b, kind, p, 1)
-        out[k, 0] = m
-        for i in ti.static(range(3)):
-            out[k, 1 + i] = x[i]
 
 
 class ObstacleContact(Term):
@@ -411,22 +261,6 @@ class ObstacleContact(Term):
                 f"obstacle {self.name!r} overlaps the body: it lies inside the body (its centre ({where})){self.moved}"
             )
         return None
-
-
-def winding(x: np.ndarray, pieces: np.ndarray, q: np.ndarray) -> float:
-    """The winding number about the point q (d,) of the closed surface of the pieces (surface_pieces) at positions x
-    (n, d): 1 inside the body, 0 outside it or in a chamber's cavity. 2D: the sum of the angles
-    atan2(r_a x r_b, r_a . r_b) / 2 pi that the segments (a, b) subtend (r = x - q); 3D: the sum of the solid angles
-    2 atan2(r_a . (r_b x r_c), |r_a||r_b||r_c| + (r_a . r_b)|r_c| + (r_b . r_c)|r_a| + (r_c . r_a)|r_b|) / 4 pi
-    of the triangles (Van Oosterom and Strackee)."""
-    ra, rb, rc = (x[pieces[:, k]] - q for k in range(3))
-    if x.shape[1] == 2:
-        cross = ra[:, 0] * rb[:, 1] - ra[:, 1] * rb[:, 0]
-        return float(np.arctan2(cross, np.sum(ra * rb, axis=1)).sum() / (2 * np.pi))
-    la, lb, lc = (np.linalg.norm(r, axis=1) for r in (ra, rb, rc))
-    ab, bc, ca = (np.sum(p * r, axis=1) for p, r in ((ra, rb), (rb, rc), (rc, ra)))
-    below = la * lb * lc + ab * lc + bc * la + ca * lb
-    return float(2 * np.arctan2(np.sum(ra * np.cross(rb, rc), axis=1), below).sum() / (4 * np.pi))
 
 
 @dataclass(frozen=True)
