@@ -26,9 +26,10 @@ msgspec = pytest.importorskip("msgspec")
 
 import taichi_pneuma as tp  # noqa: E402
 from taichi_pneuma.errors import PneumaInputError  # noqa: E402
+from taichi_pneuma.realtime.address import page_url  # noqa: E402
 from taichi_pneuma.realtime.gate import MAX_CONNECTIONS, MAX_MESSAGE, MAX_REFUSED  # noqa: E402
 from taichi_pneuma.realtime.session import NO_EQUILIBRIUM, LiveSession  # noqa: E402
-from taichi_pneuma.realtime.web import WebView, live, page_url  # noqa: E402
+from taichi_pneuma.realtime.web import WebView, live  # noqa: E402
 from taichi_pneuma.solve.newton import NewtonOptions  # noqa: E402
 
 PROTOCOL = f"viser-v{viser.__version__}"

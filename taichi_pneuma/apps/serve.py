@@ -56,8 +56,9 @@ def run(args: argparse.Namespace) -> dict:
         import viser  # noqa: F401
     except ImportError:
         require(False, 'pneuma-serve needs the web extra: pip install "taichi-pneuma[web]"')
+    from ..realtime.address import check_host
     from ..realtime.session import FIELDS, LiveSession
-    from ..realtime.web import WebView, check_host
+    from ..realtime.web import WebView
 
     require(args.field in FIELDS, f"--field {args.field!r} is not one of {', '.join(FIELDS)}")
     require(0 <= args.port <= 65535, f"--port {args.port} is not one of 0 .. 65535")
