@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import require
+from .self_intersection import surface_pieces
 
 TOLERANCE = 1e-9  # of the body's bounding-box diagonal
 FIRST_CANDIDATES = 8
@@ -109,29 +110,20 @@ def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
     return simplices[best].astype(np.int64), weights / weights.sum(axis=1, keepdims=True)
 
 
-def boundary_facets(mesh) -> np.ndarray:
-    """The facets (f, d) of the linear pieces that belong to one piece only: the boundary of the body the embedded
-    points live in (its outer surface and every chamber's wall), as the pieces have it."""
-    simplices = pieces(mesh)
-    d = mesh.dim
-    faces = np.vstack([np.delete(simplices, i, axis=1) for i in range(d + 1)])
-    _, first, counts = np.unique(np.sort(faces, axis=1), axis=0, return_index=True, return_counts=True)
-    return faces[first[counts == 1]]
-
-
 def first_crossing(mesh, starts: np.ndarray, ends: np.ndarray) -> tuple[int, np.ndarray] | None:
-    """The first segment (its index and the crossing point) from starts[s] to ends[s] (s, d) that passes through
-    the body's boundary (boundary_facets): one end more than TOLERANCE times the body's bounding-box diagonal on
-    either side of a facet's line or plane (signed distances h_p > tol > -tol > h_q), and the point where it meets
-    that plane, x = p + h_p / (h_p - h_q) (q - p), within the facet (its barycentric coordinates in the facet's
-    corners >= -1e-9). A segment between two points of the body that does so leaves the body there (through a
-    chamber's wall or the outer surface); one that only touches the boundary, or runs along it, does not count.
-    Where the first segment crosses more than once, its crossing nearest its start; None: no segment crosses.
-    Candidates: the facets whose ball about their centroid through their corners meets the segment's ball about
-    its midpoint (a k-d tree of the facets' centroids), CHUNK segments at a time."""
+    """The first segment (its index and the crossing point) from starts[s] to ends[s] (s, d) that passes through the
+    body's boundary (self_intersection.surface_pieces, its outer surface and every chamber's wall in straight
+    pieces): one end more than TOLERANCE times the body's bounding-box diagonal on either side of a facet's line or
+    plane (signed distances h_p > tol > -tol > h_q), and the point where it meets that plane, x = p + h_p / (h_p -
+    h_q) (q - p), within the facet (its barycentric coordinates in the facet's corners >= -1e-9). A segment between
+    two points of the body that does so leaves the body there (through a chamber's wall or the outer surface); one
+    that only touches the boundary, or runs along it, does not count. Where the first segment crosses more than
+    once, its crossing nearest its start; None: no segment crosses. Candidates: the facets whose ball about their
+    centroid through their corners meets the segment's ball about its midpoint (a k-d tree of the facets'
+    centroids), CHUNK segments at a time."""
     from scipy.spatial import cKDTree  # imported here, as in embed
 
-    corners = mesh.vertices[boundary_facets(mesh)]  # (f, d, d)
+    corners = mesh.vertices[surface_pieces(mesh)[:, : mesh.dim]]  # (f, d, d): a 2D piece (a, b, b) as (a, b)
     centroid = corners.mean(axis=1)
     radius = np.linalg.norm(corners - centroid[:, None], axis=2).max(axis=1)
     tree = cKDTree(centroid)
