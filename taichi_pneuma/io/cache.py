@@ -31,7 +31,6 @@ import enum
 import hashlib
 import io
 import os
-import stat
 import sys
 import zipfile
 from pathlib import Path
@@ -39,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import PneumaInputError
-from .output import write_atomic
+from .output import read_input, write_atomic
 
 VARIABLE = "PNEUMA_CACHE_DIR"
 OFF = ("", "off")
@@ -48,7 +47,6 @@ KEY = "__key__"  # the array holding the entry's key
 INPUTS = "__inputs__"  # ... the canonical text of its inputs
 HASH = "__sha256__"  # ... and its content hash
 OVERHEAD = 2**16  # bytes of an entry beyond its arrays and its inputs' text: the zip's and the arrays' headers
-NONBLOCKING = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0) | getattr(os, "O_CLOEXEC", 0)
 
 
 def directory() -> Path | None:
@@ -129,20 +127,6 @@ def path_of(kind: str, entry: str) -> Path | None:
     return None if folder is None else folder / f"{kind}-{entry}.npz"
 
 
-def read_regular(path: Path, max_bytes: int) -> bytes | None:
-    """The bytes of path if it is a regular file of at most max_bytes, opened without blocking (a FIFO's open
-    would wait for a writer) and checked on the open descriptor; else None."""
-    try:
-        fd = os.open(path, NONBLOCKING)
-    except OSError:
-        return None
-    with os.fdopen(fd, "rb") as f:
-        info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode) or info.st_size > max_bytes:
-            return None
-        return f.read(max_bytes + 1)
-
-
 def load(kind: str, entry: Key | None, check, max_bytes: int) -> dict[str, np.ndarray] | None:
     """The arrays of the entry if the cache holds it as a regular file, it loads cleanly within max_bytes of arrays
     (uncompressed, no pickles), holds this key and these inputs, its content hash is that of its arrays and
@@ -152,15 +136,13 @@ def load(kind: str, entry: Key | None, check, max_bytes: int) -> dict[str, np.nd
         return None
     bound = max_bytes + 4 * len(entry.text) + OVERHEAD  # NumPy stores text as UTF-32
     try:
-        data = read_regular(path, bound)
-        if data is None:
-            return None
+        data = read_input(path, bound, "cache entry")  # a regular file, opened without blocking, read within bound
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
             if sum(info.file_size for info in archive.infolist()) > bound:
                 return None
         with np.load(io.BytesIO(data), allow_pickle=False) as stored:
             arrays = {name: stored[name] for name in stored.files}
-    except Exception:  # unreadable, not an npz, a pickled object, a truncated member: a miss
+    except Exception:  # not a regular file, too large, unreadable, not an npz, pickled, truncated: a miss
         return None
     told = [arrays.pop(name, None) for name in (KEY, INPUTS, HASH)]
     if any(t is None or t.shape != () or t.dtype.kind != "U" for t in told):
