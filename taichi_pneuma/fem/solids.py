@@ -8,9 +8,10 @@ z the depth (a 2D shape in the x-y plane is extruded along z). Shapes are axis-a
   i.e. the inner box (size - 2 radius) swept by a ball of that radius;
 - Ellipsoid(center, semi_axes): sum ((x_i - c_i) / a_i)^2 <= 1;
 - Cylinder(center, radius, length, axis): a circular cylinder along axis 'x', 'y' or 'z';
-- HalfCylinder(center, radius, length, axis, base): the half of that cylinder (axis 'x' or 'z') above the plane
-  y = center y, on a box of height `base` below it as wide as the diameter: a flat bottom face and a round top, the
-  section of a fibre-reinforced bending actuator's body (a base) and of its chamber (none);
+- HalfCylinder(center, radius, length, axis, base, fillet): the half of that cylinder (axis 'x' or 'z') above the
+  plane y = center y, on a box of height `base` below it as wide as the diameter: a flat bottom face and a round
+  top, the section of a fibre-reinforced bending actuator's body (a base) and of its chamber (none, its edges
+  rounded at `fillet` as a moulded chamber's are);
 - Extrusion(profile, depth, z): a 2D shape of the scene format (fem.shapes: Rectangle, Ellipse,
   RoundedRectangle, Polygon, RectangleUnion) swept along z from z - depth / 2 to z + depth / 2.
   Rectangles, ellipses and rounded rectangles are built from their exact curves (the 2D shape's
@@ -129,13 +130,17 @@ class Cylinder:
 class HalfCylinder:
     """The half y >= center y of the circular cylinder of `radius` and `length` along `axis` ('x' or 'z', normal to
     y) centred on center, standing on a box of height `base` (>= 0) below the plane y = center y, of the cylinder's
-    diameter and length: its flat face lies in the plane y = center y - base, its round side above."""
+    diameter and length: its flat face lies in the plane y = center y - base, its round side above. fillet > 0
+    (with no base) rounds its edges (where the flat face meets the round side and the end caps) to that radius,
+    as a moulded chamber's are: a sharp edge of a pressurised chamber is a stress singularity whose elements
+    fold first."""
 
     center: tuple[float, float, float]
     radius: float
     length: float
     axis: str = "x"
     base: float = 0.0
+    fillet: float = 0.0
 
     def __post_init__(self):
         _vector("center", self.center)
@@ -146,13 +151,27 @@ class HalfCylinder:
             f"axis = {self.axis!r} is not one of x, z (a half cylinder's flat face is normal to y)",
         )
         require(require_finite("base", self.base) >= 0, f"base = {self.base!r} must be >= 0")
+        largest = min(self.radius, self.length) / 2
+        require(
+            0 <= require_finite("fillet", self.fillet) < largest,
+            f"fillet = {self.fillet!r} must lie in [0, {largest:g}) (half the smaller of radius and length)",
+        )
+        require(
+            self.fillet == 0 or self.base == 0,
+            f"fillet = {self.fillet!r} takes base = 0, not {self.base!r} (the base's sides meet the round one smoothly)",
+        )
 
     def build(self, occ) -> int:
+        before = set(occ.getEntities(1))
         cylinder = Cylinder(self.center, self.radius, self.length, self.axis).build(occ)
         reach = 2 * (self.radius + self.length)  # a box over everything above the flat face
         corner = np.subtract(self.center, reach / 2) * [1, 0, 1] + [0, self.center[1], 0]
         upper = occ.addBox(*corner, reach, reach, reach)
         (kept, *_), _ = occ.intersect([(3, cylinder)], [(3, upper)])
+        if self.fillet > 0:
+            edges = sorted(tag for _, tag in set(occ.getEntities(1)) - before)
+            ((_, volume),) = occ.fillet([kept[1]], edges, [self.fillet])
+            return volume
         if self.base == 0:
             return kept[1]
         along = np.eye(3)[AXES.index(self.axis)]

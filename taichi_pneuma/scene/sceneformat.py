@@ -120,6 +120,7 @@ SOLIDS = {  # the 3D shapes bodies and chambers share (fem/solids.py); with extr
         length=Key(float, unit=LENGTH),
         axis=Key(str, "x", "its axis", ("x", "z")),
         base=Key(float, 0.0, "the height of a box under the flat face, as wide as the diameter", unit=LENGTH),
+        fillet=Key(float, 0.0, "the radius its edges are rounded to (0: sharp; with no base)", unit=LENGTH),
     ),
     "ellipsoid": record(
         Ellipsoid,

@@ -9,10 +9,10 @@ so every kernel runs over elements and their quadrature points, whatever the ele
 per triangle or tetrahedron, F constant; P2: three or four). The nodal force is W_q P(F_q) G_qa, and the
 Hessian block of nodes (a, b) is
 
-    W_q sum_jl G_qa,j M_(ij)(kl) G_qb,l,   M = sum_s lambda_s v_s v_s^T over the eigenpairs of d2psi/dF2;
+    W_q sum_jl G_qa,j M_(ij)(kl) G_qb,l,   M = d2psi/dF2 = sum_s lambda_s v_s v_s^T over its eigenpairs;
 
 the projected Hessian clamps the negative lambda_s to zero at each quadrature point, which equals the
-exact one wherever d2psi/dF2 is already PSD. The law supplies psi, P
+exact one wherever d2psi/dF2 is already PSD (only it takes the eigenpairs). The law supplies psi, P, d2psi/dF2
 and the eigenpairs (materials/law.py), on F embedded in 3 x 3 (plane strain: F_33 = 1).
 
 The kernels take the law and the dimension d as template arguments and the element's node and point
@@ -28,7 +28,7 @@ import numpy as np
 from ..backend import ti
 from ..fem.elements import FAMILIES, family_of
 from ..fem.fields import ElementFields
-from ..materials.law import element_parameters, embedded, stress_eigensystem
+from ..materials.law import element_parameters, embedded, in_plane, stress_eigensystem
 from ..materials.neo_hookean import cofactor
 from .base import Nodal, Table, Term, block_pattern, int32s, smallest_positive_cubic_root, smallest_positive_root
 
@@ -133,9 +133,9 @@ def elastic_hessian(
     out: Table,
 ):
     """out[e] = the dk x dk block of element e, row-major: for nodes a <= b the d x d block (and its transpose at
-    b, a) sum_q (D_qa^T M_q D_qb), (D_qa^T M D_qb)_ik = sum_jl G_qa,j M_(ij)(kl) G_qb,l, with M_q = W_q sum_s
-    lambda_qs v_qs v_qs^T (eigenvalues clamped to >= 0 if project): M once per point, then T_b = M D_qb per
-    node, then one d x d product per node pair."""
+    b, a) sum_q (D_qa^T M_q D_qb), (D_qa^T M D_qb)_ik = sum_jl G_qa,j M_(ij)(kl) G_qb,l, with M_q = W_q
+    d2psi/dF2, or if project W_q sum_s max(lambda_qs, 0) v_qs v_qs^T over its eigenpairs (the exact Hessian takes
+    no eigensystem): M once per point, then T_b = M D_qb per node, then one d x d product per node pair."""
     for e in range(nodes.shape[0]):
         k = nodes.shape[1]
         n = d * k
@@ -143,15 +143,15 @@ def elastic_hessian(
             out[e, i] = 0.0
         for q in range(weights.shape[1]):
             F = embedded(deformation_gradient(rest, u, nodes, grads, e, q, d), d)
-            lambdas, vectors = stress_eigensystem(law, F, element_parameters(law, parameters, e), d)
+            p = element_parameters(law, parameters, e)
+            M = weights[e, q] * in_plane(law.stress_derivative(F, p), d)
             if project:
-                lambdas = ti.max(lambdas, 0.0)
-            M = ti.Matrix.zero(ti.f64, d * d, d * d)
-            for r, c in ti.ndrange(d * d, d * d):
-                entry = 0.0
-                for s in range(d * d):
-                    entry += lambdas[s] * vectors[s, r] * vectors[s, c]
-                M[r, c] = weights[e, q] * entry
+                lambdas, vectors = stress_eigensystem(law, F, p, d)
+                for r, c in ti.ndrange(d * d, d * d):
+                    entry = 0.0
+                    for s in range(d * d):
+                        entry += ti.max(lambdas[s], 0.0) * vectors[s, r] * vectors[s, c]
+                    M[r, c] = weights[e, q] * entry
             T = ti.Matrix.zero(ti.f64, d * d, d * ti.static(MAX_NODES[d]))  # T[(i, j), (b, kk)] = (M D_qb)
             for r, b, kk in ti.ndrange(d * d, k, d):
                 entry = 0.0

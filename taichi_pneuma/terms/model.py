@@ -80,9 +80,13 @@ class EnergyModel:
         patterns = [t.hessian_pattern() for t in self.terms]
         return np.concatenate([p[0] for p in patterns]), np.concatenate([p[1] for p in patterns])
 
-    def hessian_parts(self, psd_only: bool = False) -> list[np.ndarray]:
-        """The terms' Hessian values, in the pattern's order (FixedPattern.matrix sums them without concatenating)."""
-        return [t.hessian_values(psd_only) for t in self.terms]
+    def hessian_parts(self, psd_only: bool = False, reuse: list[np.ndarray] | None = None) -> list[np.ndarray]:
+        """The terms' Hessian values, in the pattern's order (FixedPattern.matrix sums them without concatenating).
+        reuse: the parts of an earlier call at the same u and psd_only, of which only the kinked terms' are computed
+        again (their branches may have been chosen since: choose_branches)."""
+        if reuse is None:
+            return [t.hessian_values(psd_only) for t in self.terms]
+        return [t.hessian_values(psd_only) if t.kinked else part for t, part in zip(self.terms, reuse, strict=True)]
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
         return np.concatenate(self.hessian_parts(psd_only))
