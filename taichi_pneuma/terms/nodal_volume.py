@@ -63,7 +63,7 @@ from .elastic import (
 PerNode: TypeAlias = ti.types.ndarray(dtype=ti.f64, ndim=3)  # (m, k, j) float64: j values per node of each element
 
 # the element order each grouping takes, and what to use instead on the other order
-ORDERS = {
+GROUPINGS = {
     "nodal": (1, "linear elements (order = 1)", "for quadratic ones use volumetric = 'mixed'"),
     "mixed": (
         2,
@@ -144,9 +144,9 @@ def star_structure(nodes: np.ndarray, n: int):
 
 
 def require_volumetric(volumetric: str, law, order: int) -> None:
-    """Refuse (PneumaInputError) volumetric = "nodal" or "mixed" on elements of the other order (ORDERS) or under a
+    """Refuse (PneumaInputError) volumetric = "nodal" or "mixed" on elements of the other order (GROUPINGS) or under a
     law without a volumetric part."""
-    takes, elements, instead = ORDERS[volumetric]
+    takes, elements, instead = GROUPINGS[volumetric]
     require(order == takes, f"volumetric = {volumetric!r} takes {elements}, not order {order}: {instead}")
     require(
         hasattr(law, "volumetric"),
@@ -160,7 +160,7 @@ class PatchVolumeElasticity(Elasticity):
     """The elastic energy of a mesh with the law's volumetric part on the volume ratios of patches (module
     docstring), each element in the patches of its row of patches() with an equal share; otherwise as Elasticity
     (its max_step, fault and min_determinant are the quadrature points'). A subclass names its grouping
-    (volumetric, a key of ORDERS), its patches and how the patches' rank-1 parts enter the Hessian."""
+    (volumetric, a key of GROUPINGS), its patches and how the patches' rank-1 parts enter the Hessian."""
 
     volumetric = ""
 
