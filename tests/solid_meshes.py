@@ -44,6 +44,10 @@ class MeshOf:
     dim = 3
 
     @property
+    def order(self) -> int:
+        return self.ready.order
+
+    @property
     def chambers(self):
         return tuple((name, None) for name in self.names)
 

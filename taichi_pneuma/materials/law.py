@@ -7,8 +7,8 @@ of a 3 x 3 deformation gradient F and a small per-element parameter vector p:
     stress_derivative(F, p) = d2psi/dF2 (9 x 9 over vec(F) = (F00, F01, F02, F10, ..., F22)),
     volumetric(J, p) = (U, U', U'') of the law's volumetric part U(J), the one whose modulus grows without
                        bound as nu -> 1/2, where psi - U(J) is isochoric and grows without bound as J -> 0 (a
-                       barrier against inverted elements): optional, for linear elements that do not lock
-                       (volumetric_split, terms/nodal_volume.py).
+                       barrier against inverted elements): optional, for elements that do not lock
+                       (volumetric_split, terms/nodal_volume.py: nodal volumes, one pressure per element).
 
 Plane strain (d = 2) is the 3D law at F = [[F2, 0], [0, 1]]: the energy and the in-plane block of P are
 those of the 2D body, and its d2psi/dF2 is the in-plane 4 x 4 block of the 3D one; the out-of-plane
@@ -78,7 +78,7 @@ def volumetric_split(law: type[Law]) -> type[Law]:
         psi_s(F) = psi(F) - U(J) + pbar J,   P_s = P - (U'(J) - pbar) cof F,
         d2psi_s/dF2 = d2psi/dF2 - U''(J) cof F cof F^T - (U'(J) - pbar) d2J/dF2,
 
-    the element part of the nodally averaged volumetric energy (terms/nodal_volume.py): at pbar = 0 the energy
+    the element part of the patch-averaged volumetric energy (terms/nodal_volume.py): at pbar = 0 the energy
     psi - U(J), at the averaged pressure its forces and Hessian. One class per law (so its kernels compile once);
     its eigenpairs come from the Jacobi iteration."""
     n = len(law.parameter_names)

@@ -35,7 +35,7 @@ from ..terms.base import Term
 from ..terms.chambers import Chamber, ChamberKind
 from ..terms.effects import Effect
 from ..terms.model import EnergyModel
-from ..terms.nodal_volume import require_nodal
+from ..terms.nodal_volume import require_volumetric
 from . import sceneformat
 from .schedule import MAX_STRETCH, ChamberSchedule, Schedule, area_ramp
 
@@ -100,9 +100,10 @@ class Scene:
     system its numbers are in (io/units.py; unitless by default), into which presets are converted; max_stretch: the
     largest principal stretch a run may reach before it warns that it has left the material model's range
     (MAX_STRETCH by default); volumetric: where the law's volumetric part U(J) is evaluated, "element" (at each
-    quadrature point) or "nodal" (on the nodes' patch volume ratios, for linear elements and the isochoric laws:
-    they then do not lock as nu -> 1/2; terms/nodal_volume.py); fibers: embedded tension-only cords (terms/fibers.py
-    Fiber), each adding its term after the effects'.
+    quadrature point), "nodal" (on the nodes' patch volume ratios, for linear elements and the isochoric laws:
+    they then do not lock as nu -> 1/2; terms/nodal_volume.py) or "mixed" (on each element's volume ratio, one
+    pressure per element: the P2/P0 element, for quadratic elements and the isochoric laws); fibers: embedded
+    tension-only cords (terms/fibers.py Fiber), each adding its term after the effects'.
 
     A parameter with a unit left None in it or in its parts (units.si_default: a chamber kind's atmosphere, the
     material's E, gravity's g, the clamp stiffness, ...) is set on construction to its SI default converted into
@@ -152,8 +153,8 @@ class Scene:
         require(not clash, f"obstacle name {clash[0] if clash else ''!r} is a chamber's, an effect's or the clamp's")
         _ = self.schedule  # validates the increments against the keyframes
         law, _ = self.law_parameters()  # resolves the presets, checks that the body has one law
-        if self.volumetric == "nodal":
-            require_nodal(law, getattr(self.geometry, "order", 1))
+        if self.volumetric != "element":
+            require_volumetric(self.volumetric, law, getattr(self.geometry, "order", 1))
 
     def resolve_defaults(self) -> None:
         """Set every default left None (units.si_default) of the scene, its geometry, its material and regions,

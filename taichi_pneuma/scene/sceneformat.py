@@ -432,8 +432,11 @@ def scene_table(scene_class) -> Table:
                         "element",
                         "where the law's volumetric part U(J) is evaluated: element "
                         "(each quadrature point), nodal (on each node's patch volume "
-                        "ratio; order 1 and law = neo_hookean, mooney_rivlin, yeoh or "
-                        "a preset: linear elements that do not lock as nu -> 1/2)",
+                        "ratio; order 1: linear elements that do not lock as nu -> 1/2) "
+                        "or mixed (on each element's volume ratio, one pressure per "
+                        "element; order 2: the P2/P0 'hybrid' element, nearer the "
+                        "incompressible answer than element as nu -> 1/2); nodal and "
+                        "mixed take law = neo_hookean, mooney_rivlin, yeoh or a preset",
                         tuple(VOLUMETRIC),
                     ),
                 },

@@ -18,16 +18,17 @@ from .base import Term, vertex_dofs
 from .chambers import AreaChamber, PressureChamber
 from .constraints import Clamp, NormalClamp
 from .elastic import Elasticity
-from .nodal_volume import NodalVolumeElasticity
+from .nodal_volume import MixedElasticity, NodalVolumeElasticity
 
 # where the elastic term evaluates the law's volumetric part (Scene.volumetric, the scene file's mesh.volumetric)
-VOLUMETRIC = {"element": Elasticity, "nodal": NodalVolumeElasticity}
+VOLUMETRIC = {"element": Elasticity, "nodal": NodalVolumeElasticity, "mixed": MixedElasticity}
 
 __all__ = [
     "VOLUMETRIC",
     "AreaChamber",
     "Clamp",
     "Elasticity",
+    "MixedElasticity",
     "NodalVolumeElasticity",
     "NormalClamp",
     "PressureChamber",

@@ -1,34 +1,42 @@
-"""Linear triangles and tetrahedra that do not lock: the volumetric energy on nodal volume ratios (the average
-nodal pressure element of Bonet and Burton 1998, also called nodally averaged F-bar).
+"""Simplices that do not lock: the law's volumetric part on the volume ratios of patches of quadrature points, as
+an energy of the displacements. Two groupings: each node's patch of linear elements ("nodal": the average nodal
+pressure element of Bonet and Burton 1998, also called nodally averaged F-bar) and each quadratic element's own
+points ("mixed": the mean-dilatation, Hu-Washizu element with a constant pressure and dilatation per element,
+condensed per element: P2/P0, the "hybrid" element of rubber analysis; Simo, Taylor and Pister 1985).
 
 A nearly incompressible law psi(F) = psi_s(F) + U(J) (materials/law.py: volumetric, U's modulus growing without
-bound as nu -> 1/2, psi_s isochoric) on linear simplices locks: one J per element cannot stay near 1 under a
-bending field. Here U takes the ratio of current to rest volume of each node's patch of elements instead,
+bound as nu -> 1/2, psi_s isochoric) locks where too few J can stay near 1 under a bending field: one J per linear
+element, and the four (three) points of a quadratic one hold more constraints than its nodes can meet. Here U takes
+the ratio of current to rest volume of each patch P instead. Every element e (rest volume V_e = sum_q W_eq, current
+v_e = sum_q W_eq det F_eq) lies in s patches P(e, 1..s) with the share 1/s of its volume in each (nodal: its s = d + 1
+nodes; mixed: s = 1, itself):
 
-    E = sum_e V_e psi_s(F_e) + sum_e sum_(a in e) s_e U_e(J_a),   s_e = V_e / (d + 1),
-    J_a = v_a / V_a,   v_a = sum_(e at a) v_e / (d + 1),   V_a = sum_(e at a) s_e,   v_e = V_e det F_e,
+    E = sum_e sum_q W_eq psi_s(F_eq) + sum_e sum_(P of e) s_e U_e(J_P),   s_e = V_e / s,
+    J_P = v_P / V_P,   v_P = sum_(e in P) v_e / s,   V_P = sum_(e in P) s_e,
 
-with U_e the volumetric part of element e's parameters (one material: the sum is sum_a V_a U(J_a)). It is an
-energy of the displacements like any other, so Newton's gradient and Hessian are its exact derivatives: with
-the nodal pressure p_a = sum_(e at a) s_e U_e'(J_a) / V_a and the elements' mean of their nodes' pressures
-pbar_e = mean_(a in e) p_a,
+with U_e the volumetric part of element e's parameters (one material: the sum is sum_P V_P U(J_P); mixed: sum_e V_e
+U_e(Theta_e), Theta_e = v_e / V_e). It is an energy of the displacements like any other, so Newton's gradient and
+Hessian are its exact derivatives: with the patch pressure p_P = sum_(e in P) s_e U_e'(J_P) / V_P and the mean of an
+element's patches' pressures pbar_e = mean_(P of e) p_P (mixed: pbar_e = U_e'(Theta_e), at all its points),
 
-    dE/dx = sum_e V_e [dpsi_s/dF_e + pbar_e cof F_e] : dF_e/dx,
-    d2E/dx2 = sum_e V_e dF_e/dx^T [d2psi_s/dF2 + pbar_e d2J/dF2] dF_e/dx + sum_a C_a / V_a^2 g_a g_a^T,
+    dE/dx = sum_e sum_q W_eq [dpsi_s/dF_eq + pbar_e cof F_eq] : dF_eq/dx,
+    d2E/dx2 = sum_e sum_q W_eq dF_eq/dx^T [d2psi_s/dF2 + pbar_e d2J/dF2] dF_eq/dx + sum_P C_P / V_P^2 g_P g_P^T,
 
-where C_a = sum_(e at a) s_e U_e''(J_a) and g_a = dv_a/dx, whose entry at node b is
-g_ab = sum_(e at a and b) V_e cof F_e G_eb / (d + 1). The element part is the elastic term's kernels on the law
-without U plus the pressure's work pbar J (volumetric_split), so it is projected per element as any law is; the
-nodal part is a rank-1 matrix per node, PSD wherever C_a >= 0 (U convex), and the projected Hessian clamps C_a at
-0. It couples every two nodes of a node's patch (two rings apart): its blocks (b, c) are found once per mesh,
-with the triplets (a, ab, ac) that add C_a / V_a^2 g_ab g_ac^T into them.
+where C_P = sum_(e in P) s_e U_e''(J_P) and g_P = dv_P/dx = sum_(e in P) g_e / s, g_e = dv_e/dx, whose entry at node
+b is g_eb = sum_q W_eq cof F_eq G_eqb. The element part is the elastic term's kernels on the law without U plus the
+pressure's work pbar J (volumetric_split), so it is projected per point as any law is; the patch part is a rank-1
+matrix per patch, PSD wherever C_P >= 0 (U convex), and the projected Hessian clamps C_P at 0. A node's patch
+couples every two nodes of it (two rings apart): its blocks (b, c) are found once per mesh, with the triplets
+(a, ab, ac) that add C_a / V_a^2 g_ab g_ac^T into them. An element's patch is the element: U_e''(Theta_e) / V_e g_e
+g_e^T adds into the element's own block, and the pattern is the plain element one.
 
-A homogeneous deformation has J_a = det F at every node, so the element reproduces it exactly (the patch test);
-at nu -> 1/2 the constraint is one per node instead of one per element, which linear simplices can satisfy
-without locking. An element's own volume is then held by psi_s alone: the isochoric laws' psi_s grows without
-bound as J -> 0 (Ibar1 = J^(-2/3) I1), a barrier Newton's steps never cross. The stable neo-Hookean law has no
-such part (its psi - lam/2 (J - 1)^2 is finite through J = 0), and on the beam of benchmarks/accuracy_3d.py its
-elements turned inside out at nu = 0.45 and 0.499: it names no volumetric part, and nodal volumes refuse it.
+A homogeneous deformation has J_P = det F in every patch, so the element reproduces it exactly (the patch test);
+at nu -> 1/2 the constraint is one per node (linear) or one per element (quadratic: a large mesh of quadratic
+tetrahedra has about 12 freedoms per element, against 4 constraints at its points, 1 here), which they meet without
+locking. A point's own volume is then held by psi_s alone: the isochoric laws' psi_s grows without bound as J -> 0
+(Ibar1 = J^(-2/3) I1), a barrier Newton's steps never cross. The stable neo-Hookean law has no such part (its
+psi - lam/2 (J - 1)^2 is finite through J = 0), and on the beam of benchmarks/accuracy_3d.py its elements turned
+inside out at nu = 0.45 and 0.499: it names no volumetric part, and patch volumes refuse it.
 """
 
 from typing import TypeAlias
@@ -39,7 +47,7 @@ from ..backend import ti
 from ..errors import require
 from ..materials.invariants import cofactor
 from ..materials.law import element_parameters, embedded, volumetric_split
-from .base import Nodal, Scalars, Table, block_pattern, vertex_dofs
+from .base import Nodal, Scalars, Table, block_pattern, int32s, vertex_dofs
 from .elastic import (
     Elasticity,
     Gradients,
@@ -54,6 +62,17 @@ from .elastic import (
 
 PerNode: TypeAlias = ti.types.ndarray(dtype=ti.f64, ndim=3)  # (m, k, j) float64: j values per node of each element
 
+# the element order each grouping takes, and what to use instead on the other order
+GROUPINGS = {
+    "nodal": (1, "linear elements (order = 1)", "for quadratic ones use volumetric = 'mixed'"),
+    "mixed": (
+        2,
+        "quadratic elements (order = 2)",
+        "a linear element has one J already, so it would be volumetric = 'element'; for linear elements that do not "
+        "lock use volumetric = 'nodal'",
+    ),
+}
+
 
 @ti.kernel
 def volume_gradients(
@@ -66,28 +85,33 @@ def volume_gradients(
     volumes: Scalars,
     out: PerNode,
 ):
-    """volumes[e] = v_e = V_e det F_e and out[e, b] = dv_e/dx_b = V_e cof F_e G_eb of each linear element."""
+    """volumes[e] = v_e = sum_q W_eq det F_eq and out[e, b] = dv_e/dx_b = sum_q W_eq cof F_eq G_eqb."""
     for e in range(nodes.shape[0]):
-        F = embedded(deformation_gradient(rest, u, nodes, grads, e, 0, d), d)
-        C = weights[e, 0] * cofactor(F)
-        volumes[e] = weights[e, 0] * F.determinant()
+        volumes[e] = 0.0
         for b in range(nodes.shape[1]):
             for i in ti.static(range(d)):
-                entry = 0.0
-                for j in ti.static(range(d)):
-                    entry += C[i, j] * grads[e, 0, b, j]
-                out[e, b, i] = entry
+                out[e, b, i] = 0.0
+        for q in range(weights.shape[1]):
+            F = embedded(deformation_gradient(rest, u, nodes, grads, e, q, d), d)
+            C = weights[e, q] * cofactor(F)
+            volumes[e] += weights[e, q] * F.determinant()
+            for b in range(nodes.shape[1]):
+                for i in ti.static(range(d)):
+                    entry = 0.0
+                    for j in ti.static(range(d)):
+                        entry += C[i, j] * grads[e, q, b, j]
+                    out[e, b, i] += entry
 
 
 @ti.kernel
-def nodal_volumetric(
-    law: ti.template(), nodes: Nodes, weights: Weights, parameters: Parameters, ratios: Scalars, out: PerNode
+def patch_volumetric(
+    law: ti.template(), patches: Nodes, shares: Scalars, parameters: Parameters, ratios: Scalars, out: PerNode
 ):
-    """out[e, a] = s_e (U_e, U_e', U_e'') at J_a = ratios[node a], s_e = V_e / (number of nodes)."""
-    for e, a in ti.ndrange(nodes.shape[0], nodes.shape[1]):
-        U = law.volumetric(ratios[nodes[e, a]], element_parameters(law, parameters, e))
+    """out[e, j] = s_e (U_e, U_e', U_e'') at J_P = ratios[P], P = patches[e, j] (the j-th patch of element e)."""
+    for e, j in ti.ndrange(patches.shape[0], patches.shape[1]):
+        U = law.volumetric(ratios[patches[e, j]], element_parameters(law, parameters, e))
         for i in ti.static(range(3)):
-            out[e, a, i] = weights[e, 0] / nodes.shape[1] * U[i]
+            out[e, j, i] = shares[e] * U[i]
 
 
 @ti.kernel
@@ -119,54 +143,63 @@ def star_structure(nodes: np.ndarray, n: int):
     return pair_of.reshape(*nodes.shape, -1), triplets, np.column_stack([blocks // n, blocks % n])
 
 
-def require_nodal(law, order: int) -> None:
-    """Refuse (PneumaInputError) nodal volumes on elements of order 2 or under a law without a volumetric part."""
-    require(order == 1, f"volumetric = 'nodal' takes linear elements (order = 1), not order {order}")
+def require_volumetric(volumetric: str, law, order: int) -> None:
+    """Refuse (PneumaInputError) volumetric = "nodal" or "mixed" on elements of the other order (GROUPINGS) or under a
+    law without a volumetric part."""
+    takes, elements, instead = GROUPINGS[volumetric]
+    require(order == takes, f"volumetric = {volumetric!r} takes {elements}, not order {order}: {instead}")
     require(
         hasattr(law, "volumetric"),
-        f"volumetric = 'nodal' takes a law split into an isochoric part and a volumetric one (law = neo_hookean, "
-        f"mooney_rivlin, yeoh or a preset), not {law.name!r} (E and nu): its elements, left with no volume "
-        f"stiffness of their own, turn inside out",
+        f"volumetric = {volumetric!r} takes a law split into an isochoric part and a volumetric one (law = "
+        f"neo_hookean, mooney_rivlin, yeoh or a preset), not {law.name!r} (E and nu): its elements, left with no "
+        f"volume stiffness of their own, turn inside out",
     )
 
 
-class NodalVolumeElasticity(Elasticity):
-    """The elastic energy of a mesh of linear triangles or tetrahedra with the law's volumetric part on nodal volume
-    ratios (module docstring); otherwise as Elasticity (its max_step, fault and min_determinant are the
-    elements')."""
+class PatchVolumeElasticity(Elasticity):
+    """The elastic energy of a mesh with the law's volumetric part on the volume ratios of patches (module
+    docstring), each element in the patches of its row of patches() with an equal share; otherwise as Elasticity
+    (its max_step, fault and min_determinant are the quadrature points'). A subclass names its grouping
+    (volumetric, a key of GROUPINGS), its patches and how the patches' rank-1 parts enter the Hessian."""
+
+    volumetric = ""
 
     def __init__(self, config, elements: np.ndarray, law, parameters: np.ndarray):
         super().__init__(config, elements, law, parameters)
-        require_nodal(law, self.family.order)
+        require_volumetric(self.volumetric, law, self.family.order)
         self.split = volumetric_split(law)
-        n, k = len(config.rest), self.nodes.shape[1]
-        self.share = self.weights[:, 0] / k
-        self.rest_volumes = np.bincount(self.nodes.ravel(), np.repeat(self.share, k), minlength=n)
-        self.pair_of, self.triplets, blocks = star_structure(self.nodes, n)
-        self.n_pairs = int(self.pair_of.max()) + 1
-        d = self.dim
-        star_rows = np.repeat(vertex_dofs(blocks[:, 0], d).reshape(-1, d), d, axis=1).ravel()
-        star_cols = np.tile(vertex_dofs(blocks[:, 1], d).reshape(-1, d), (1, d)).ravel()
-        rows, cols = block_pattern(self.nodes, d)
-        self._rows, self._cols = np.concatenate([rows, star_rows]), np.concatenate([cols, star_cols])
-        self.n_blocks = len(blocks)
+        self.patches = int32s(self.patches_of())
+        s = self.patches.shape[1]
+        self.share = np.ascontiguousarray(self.weights.sum(axis=1) / s)
+        self.rest_volumes = np.bincount(self.patches.ravel(), np.repeat(self.share, s))
+
+    def patches_of(self) -> np.ndarray:
+        """(m, s): the patches of each element."""
+        raise NotImplementedError
+
+    def patch_hessian(self, coefficients: np.ndarray, gradients: np.ndarray, elements: np.ndarray) -> np.ndarray:
+        """The Hessian's values (hessian_pattern's order) from the element blocks (m, (d k)^2) and the patches'
+        rank-1 parts coefficients[P] g_P g_P^T (C_P / V_P^2), from the elements' g_e (m, k, d)."""
+        raise NotImplementedError
 
     def _volumes(self):
-        """(v_e (m,), dv_e/dx_b (m, k, d), J_a (n,))."""
+        """(dv_e/dx_b (m, k, d), J_P)."""
         volumes = np.empty(len(self.nodes))
         gradients = np.empty((*self.nodes.shape, self.dim))
         volume_gradients(
             self.dim, self.config.rest, self.config.u, self.nodes, self.grads, self.weights, volumes, gradients
         )
-        k = self.nodes.shape[1]
-        nodal = np.bincount(self.nodes.ravel(), np.repeat(volumes / k, k), minlength=len(self.rest_volumes))
-        return volumes, gradients, nodal / self.rest_volumes
+        s = self.patches.shape[1]
+        current = np.bincount(self.patches.ravel(), np.repeat(volumes / s, s), minlength=len(self.rest_volumes))
+        return gradients, current / self.rest_volumes
 
-    def _nodal(self, ratios):
-        """Per node: (energy sum, c_a = sum s_e U_e'(J_a), C_a = sum s_e U_e''(J_a)) as one (3, n) array."""
-        out = np.empty((*self.nodes.shape, 3))
-        nodal_volumetric(self.law, self.nodes, self.weights, self.parameters, ratios, out)
-        return np.array([np.bincount(self.nodes.ravel(), out[..., i].ravel(), minlength=len(ratios)) for i in range(3)])
+    def _sums(self, ratios):
+        """Per patch: (energy sum, c_P = sum s_e U_e'(J_P), C_P = sum s_e U_e''(J_P)) as one (3, P) array."""
+        out = np.empty((*self.patches.shape, 3))
+        patch_volumetric(self.law, self.patches, self.share, self.parameters, ratios, out)
+        return np.array(
+            [np.bincount(self.patches.ravel(), out[..., i].ravel(), minlength=len(ratios)) for i in range(3)]
+        )
 
     def _split_arguments(self, pressures):
         """The elastic kernels' arguments for the law without U plus the element pressures' work (pbar_e)."""
@@ -174,26 +207,53 @@ class NodalVolumeElasticity(Elasticity):
         return (self.split, self.dim, self.config.rest, self.config.u, self.nodes, self.grads, self.weights, parameters)
 
     def _pressures(self, ratios):
-        """pbar_e, the mean over element e's nodes of p_a = c_a / V_a, and the nodal sums."""
-        sums = self._nodal(ratios)
-        return (sums[1] / self.rest_volumes)[self.nodes].mean(axis=1), sums
+        """pbar_e, the mean over element e's patches of p_P = c_P / V_P, and the patch sums."""
+        sums = self._sums(ratios)
+        return (sums[1] / self.rest_volumes)[self.patches].mean(axis=1), sums
 
     def energy(self) -> float:
-        sums = self._nodal(self._volumes()[2])
+        sums = self._sums(self._volumes()[1])
         return elastic_energy(*self._split_arguments(np.zeros(len(self.nodes))))[0] + float(sums[0].sum())
 
     def gradient(self) -> np.ndarray:
         out = np.empty_like(self.config.rest)
-        pressures, _ = self._pressures(self._volumes()[2])
+        pressures, _ = self._pressures(self._volumes()[1])
         elastic_gradient(*self._split_arguments(pressures), out)
         return out
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
-        _, gradients, ratios = self._volumes()
+        gradients, ratios = self._volumes()
         pressures, sums = self._pressures(ratios)
         n = self.dim * self.nodes.shape[1]
         elements = np.empty((len(self.nodes), n * n))
         elastic_hessian(*self._split_arguments(pressures), int(psd_only), elements)
+        coefficients = sums[2] / self.rest_volumes**2
+        if psd_only:
+            coefficients = np.maximum(coefficients, 0.0)
+        return self.patch_hessian(coefficients, gradients, elements)
+
+
+class NodalVolumeElasticity(PatchVolumeElasticity):
+    """Linear triangles or tetrahedra with the law's volumetric part on nodal volume ratios (module docstring): the
+    patches are the nodes, the rank-1 parts extra blocks between the nodes two rings apart."""
+
+    volumetric = "nodal"
+
+    def __init__(self, config, elements: np.ndarray, law, parameters: np.ndarray):
+        super().__init__(config, elements, law, parameters)
+        n, d = len(config.rest), self.dim
+        self.pair_of, self.triplets, blocks = star_structure(self.nodes, n)
+        self.n_pairs = int(self.pair_of.max()) + 1
+        star_rows = np.repeat(vertex_dofs(blocks[:, 0], d).reshape(-1, d), d, axis=1).ravel()
+        star_cols = np.tile(vertex_dofs(blocks[:, 1], d).reshape(-1, d), (1, d)).ravel()
+        rows, cols = block_pattern(self.nodes, d)
+        self._rows, self._cols = np.concatenate([rows, star_rows]), np.concatenate([cols, star_cols])
+        self.n_blocks = len(blocks)
+
+    def patches_of(self) -> np.ndarray:
+        return self.nodes
+
+    def patch_hessian(self, coefficients, gradients, elements):
         k = self.nodes.shape[1]
         contributions = np.broadcast_to(gradients[:, None, :, :] / k, (len(self.nodes), k, k, self.dim))
         g = np.column_stack(
@@ -202,9 +262,23 @@ class NodalVolumeElasticity(Elasticity):
                 for i in range(self.dim)
             ]
         )
-        coefficients = sums[2] / self.rest_volumes**2
-        if psd_only:
-            coefficients = np.maximum(coefficients, 0.0)
         star = np.empty((self.n_blocks, self.dim * self.dim))
         star_hessian(self.dim, coefficients, np.ascontiguousarray(g), self.triplets, star)
         return np.concatenate([elements.ravel(), star.ravel()])
+
+
+class MixedElasticity(PatchVolumeElasticity):
+    """Quadratic triangles or tetrahedra with one pressure and dilatation per element (P2/P0, condensed: module
+    docstring): each element is its own patch, its rank-1 part U_e''(Theta_e) / V_e g_e g_e^T added into its own
+    block."""
+
+    volumetric = "mixed"
+
+    def patches_of(self) -> np.ndarray:
+        return np.arange(len(self.nodes))[:, None]
+
+    def patch_hessian(self, coefficients, gradients, elements):
+        g = gradients.reshape(len(self.nodes), -1)  # entry d b + i: node b, component i, as the blocks' rows
+        blocks = elements.reshape(len(g), g.shape[1], g.shape[1])
+        blocks += coefficients[:, None, None] * g[:, :, None] * g[:, None, :]
+        return elements.ravel()
