@@ -158,7 +158,7 @@ class HalfCylinder:
         )
         require(
             self.fillet == 0 or self.base == 0,
-            f"fillet = {self.fillet!r} takes base = 0, not {self.base!r} (the base's sides meet the round side smoothly)",
+            f"fillet = {self.fillet!r} takes base = 0, not {self.base!r} (a base's sides meet the round side smoothly)",
         )
 
     def build(self, occ) -> int:
