@@ -1,12 +1,16 @@
-"""The shipped 3D actuator scenes' accuracy and time: the bending angle (tip_rotation) of fiber_bending_3d and the
-blocked force of blocked_force_3d against pressure at four mesh resolutions of linear tetrahedra and on the coarsest
-with quadratic ones, the twist (tip_twist) of fiber_twist_3d at three of each, each run's wall and CPU time (on a
-shared machine: the CPU time is the steadier figure), and the mesh convergence: the relative change of the final
-bending angle, blocked force and twist between the two finest meshes of each order.
+"""The shipped 3D actuator scenes' converged references, and what each discretisation costs to approach them: the
+bending angle (tip_rotation) of fiber_bending_3d, the blocked force of blocked_force_3d and the twist (tip_twist) of
+fiber_twist_3d against pressure, on meshes refined by one factor, of linear tetrahedra (P1), quadratic ones (P2)
+and quadratic ones with one pressure per element (P2/P0: mesh.volumetric = "mixed"); each run's wall and CPU time
+(on a shared machine: the CPU time is the steadier figure) and Newton iterations.
 
 Each mesh is the shipped scene's with its three gmsh lengths (size, near_chambers, distance) scaled by one factor
-(PLANS: 1.5 coarser, 1 the shipped sizes, then finer) and the order given (1 or 2, whatever the scene's own); the
-ramps are the shipped ones.
+(PLANS: 1.5 coarser, 1 the shipped sizes, then finer); the ramps are the shipped ones. The reference of a scene is
+found by Richardson extrapolation of each discretisation refined on three meshes or more: with the mesh size
+h = (number of tetrahedra)^(-1/3) and the final value f(h) = f0 + C h^p on the three finest, the observed order p
+and the extrapolated f0; its uncertainty is the grid convergence index's, 1.25 |f0 - f(finest)| (Roache). The
+reference is the mean of the quadratic discretisations' f0 (P2, P2/P0), its uncertainty the larger of theirs and
+half their spread; P1's extrapolation is shown beside it.
 
     python benchmarks/actuators.py [--cases fiber_bending_3d ...] [--out benchmarks/results]
     python benchmarks/actuators.py --report a.json b.json ...    (one report of runs made apart)
@@ -24,27 +28,33 @@ import time
 from datetime import date
 from pathlib import Path
 
+import numpy as np
+from scipy.optimize import brentq
+
 from taichi_pneuma import api, runtime
 from taichi_pneuma.io.output import prepare_directory, save_json, save_text
 from taichi_pneuma.solve.simulate import RampStopped
 
 SCENES = Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes"
-# (order, mesh scale) per case: the lengths of the shipped mesh times the scale
+# (elements, mesh scale) per case: P1, P2 or P2/P0 on the lengths of the shipped mesh times the scale
 PLANS = {
-    "fiber_bending_3d": [(1, 1.5), (1, 1.0), (1, 0.75), (1, 0.6), (2, 1.5)],
-    "blocked_force_3d": [(1, 1.5), (1, 1.0), (1, 0.75), (1, 0.6), (2, 1.5)],
-    "fiber_twist_3d": [(1, 1.0), (1, 0.75), (1, 0.6), (2, 1.5), (2, 1.0), (2, 0.75)],
+    name: [("P1", 1.0), ("P1", 0.75), ("P1", 0.6), ("P2", 1.5), ("P2", 1.0), ("P2", 0.75)]
+    + [("P2/P0", 1.5), ("P2/P0", 1.0), ("P2/P0", 0.75)]
+    for name in ("fiber_bending_3d", "blocked_force_3d", "fiber_twist_3d")
 }
+ELEMENTS = {"P1": (1, "element"), "P2": (2, "element"), "P2/P0": (2, "mixed")}  # mesh.order, mesh.volumetric
 MEASURES = {"fiber_bending_3d": "tip_rotation", "blocked_force_3d": "blocked_force", "fiber_twist_3d": "tip_twist"}
 LENGTHS = ("size", "near_chambers", "distance")
 
 
-def run(name: str, order: int, scale: float) -> dict:
-    """One ramp of the named scene on its mesh scaled by scale, of the given order: its measure per increment."""
+def run(name: str, elements: str, scale: float) -> dict:
+    """One ramp of the named scene on its mesh scaled by scale, of these elements (ELEMENTS): its measure per
+    increment."""
     scene = api.load_scene(SCENES / f"{name}.toml")
     mesh = scene.geometry.sizes  # type: ignore[attr-defined]
     values = {f"mesh.{key}": getattr(mesh, key) * scale for key in LENGTHS}
-    scene = scene.with_values({**values, "mesh.order": order})
+    order, volumetric = ELEMENTS[elements]
+    scene = scene.with_values({**values, "mesh.order": order, "mesh.volumetric": volumetric})
     start, cpu = time.perf_counter(), time.process_time()
     try:
         result, stopped = api.simulate(scene), None
@@ -54,7 +64,7 @@ def run(name: str, order: int, scale: float) -> dict:
     history = result.history
     return {
         "case": name,
-        "order": order,
+        "elements": elements,
         "scale": scale,
         "tetrahedra": int(result.mesh.n_elements),
         "nodes": int(result.mesh.n_vertices),
@@ -65,6 +75,44 @@ def run(name: str, order: int, scale: float) -> dict:
         "iterations": int(sum(s.iterations for s in result.solves)),
         "converged": bool(result.converged),
         "stopped": stopped,
+    }
+
+
+def extrapolated(runs: list[dict]) -> dict | None:
+    """Richardson extrapolation of the final values of the three finest runs (module docstring): {"order" p,
+    "value" f0, "uncertainty" 1.25 |f0 - f(finest)|}, or None where they do not converge monotonically."""
+    done = sorted((r for r in runs if not r.get("stopped")), key=lambda r: r["tetrahedra"])[-3:]
+    if len(done) < 3:
+        return None
+    h = np.array([r["tetrahedra"] ** (-1 / 3) for r in done])  # coarse to fine
+    f = np.array([r["value"][-1] for r in done])
+    if (f[1] - f[0]) * (f[2] - f[1]) <= 0:  # oscillating or stalled: no order to observe
+        return None
+
+    def mismatch(p):
+        return (f[0] - f[1]) / (f[1] - f[2]) - (h[0] ** p - h[1] ** p) / (h[1] ** p - h[2] ** p)
+
+    try:
+        p = brentq(mismatch, 0.2, 8.0)
+    except ValueError:  # no order in range fits
+        return None
+    c = (f[1] - f[2]) / (h[1] ** p - h[2] ** p)
+    f0 = f[2] - c * h[2] ** p
+    return {"order": p, "value": f0, "uncertainty": 1.25 * abs(f0 - f[2])}
+
+
+def reference(rows: list[dict]) -> dict | None:
+    """The scene's reference from its discretisations' extrapolations (module docstring), each one's given."""
+    each = {e: extrapolated([r for r in rows if r["elements"] == e]) for e in ("P2", "P2/P0")}
+    found = {e: x for e, x in each.items() if x is not None}
+    if not found:
+        return None
+    values = [x["value"] for x in found.values()]
+    spread = (max(values) - min(values)) / 2
+    return {
+        "value": float(np.mean(values)),
+        "uncertainty": max(spread, *(x["uncertainty"] for x in found.values())),
+        "by_elements": found,
     }
 
 
@@ -84,21 +132,35 @@ def report(records: list[dict], machine: str, day: str) -> str:
             done = r["value"][1:] + [float("nan")] * (len(pressures) - len(r["value"]))
             values = " | ".join("stopped" if v != v else f"{v:.4g}" for v in done)
             lines.append(
-                f"| P{r['order']} | {r['scale']:g} | {r['tetrahedra']} | {r['nodes']} | {values} | "
+                f"| {r['elements']} | {r['scale']:g} | {r['tetrahedra']} | {r['nodes']} | {values} | "
                 f"{r['seconds']:.1f} | {r['cpu_seconds']:.1f} | {r['iterations']} |"
             )
-        for order in (1, 2):
-            done = sorted((r for r in rows if r["order"] == order and not r.get("stopped")), key=lambda r: -r["scale"])
-            if len(done) >= 2:
-                coarse, fine = done[-2], done[-1]
-                changes = [abs(f / c - 1) for c, f in zip(coarse["value"][1:], fine["value"][1:])]
-                lines += [
-                    "",
-                    f"P{order}: final {measure} {fine['value'][-1]:.4g} at mesh scale {fine['scale']:g}, "
-                    f"{coarse['value'][-1]:.4g} at {coarse['scale']:g}: a relative change of {changes[-1]:.1%} between "
-                    f"the two finest meshes (at most {max(changes):.1%} over the ramp).",
-                ]
-        lines += [f"P{r['order']} at mesh scale {r['scale']:g}: {r['stopped']}" for r in rows if r.get("stopped")]
+        found = reference(rows)
+        lines.append("")
+        if found is None:
+            lines.append("No discretisation converged monotonically on three meshes: no reference.")
+        else:
+            for elements, x in {
+                "P1": extrapolated([r for r in rows if r["elements"] == "P1"]),
+                **found["by_elements"],
+            }.items():
+                if x is None:
+                    continue
+                lines.append(
+                    f"- {elements}: extrapolated final {measure} {x['value']:.4g} +- {x['uncertainty']:.2g} "
+                    f"(observed order {x['order']:.2f})"
+                )
+            lines.append(
+                f"- reference: **{found['value']:.4g} +- {found['uncertainty']:.2g}** "
+                f"({found['uncertainty'] / abs(found['value']):.1%})"
+            )
+            lines += [
+                f"- {r['elements']} at mesh scale {r['scale']:g}: {r['value'][-1] / found['value'] - 1:+.1%} "
+                f"in {r['seconds']:.1f} s"
+                for r in rows
+                if not r.get("stopped")
+            ]
+        lines += [f"{r['elements']} at mesh scale {r['scale']:g}: {r['stopped']}" for r in rows if r.get("stopped")]
         lines.append("")
     return "\n".join(lines)
 
@@ -120,11 +182,11 @@ def main() -> None:
     machine = f"{platform.node()}, {platform.machine()}, {os.cpu_count()} CPUs"
     records: list[dict] = []
     for name in args.cases:
-        for order, scale in PLANS[name]:
-            record = run(name, order, scale)
+        for elements, scale in PLANS[name]:
+            record = run(name, elements, scale)
             records.append(record)
             print(
-                f"{name} P{order} scale {scale:g}: {record['tetrahedra']} tetrahedra, {record['nodes']} nodes, "
+                f"{name} {elements} scale {scale:g}: {record['tetrahedra']} tetrahedra, {record['nodes']} nodes, "
                 f"final {MEASURES[name]} {record['value'][-1]:.4g}, {record['seconds']:.1f} s "
                 f"({record['cpu_seconds']:.1f} s CPU), {record['iterations']} Newton iterations",
                 flush=True,
