@@ -82,7 +82,7 @@ def fd_hessian(term: Membrane, h: float = 1e-6) -> np.ndarray:
 def test_membrane_gradient_and_exact_hessian_match_finite_differences(d, scale):
     rest, cells = patch(d)
     config = Configuration(rest)
-    term = Membrane(config, cells, T, E, NU)
+    term = Membrane(config, cells, T, E, NU, wrinkles=False)
     config.u[:] = (scale - 1) * rest + 0.05 * np.random.default_rng(1).standard_normal(rest.shape)
     g = term.gradient().ravel()
     assert np.linalg.norm(g - fd_gradient(term)) < 1e-6 * np.linalg.norm(g)
@@ -100,7 +100,7 @@ def test_membrane_gradient_and_exact_hessian_match_finite_differences(d, scale):
 def test_a_tilted_square_under_equibiaxial_stretch_stores_t_A0_times_the_closed_form_density(stretch):
     rest, cells = patch(3)
     config = Configuration(rest)
-    term = Membrane(config, cells, T, E, NU)
+    term = Membrane(config, cells, T, E, NU, wrinkles=False)  # SVK: compressed, it stores energy too
     config.u[:] = (stretch - 1) * (rest - rest[0])  # x = X0 + lambda (X - X0): in plane
     g = (stretch**2 - 1) / 2
     assert term.energy() == pytest.approx(T * 1.0 * (LAM / 2 * (2 * g) ** 2 + MU * 2 * g**2), rel=1e-12)
@@ -130,6 +130,104 @@ def test_a_stretched_chain_of_segments_stores_t_L0_E_plane_g_squared_over_two_an
     assert term.energy() == pytest.approx(T * 1.0 * E_PLANE * g**2 / 2, rel=1e-12)
     along = rest[-1] / np.linalg.norm(rest[-1])
     np.testing.assert_allclose(term.gradient()[-1], T * E_PLANE * g * stretch * along, rtol=1e-12)
+
+
+def principal_strains(term: Membrane) -> np.ndarray:
+    """(f, m) the principal Green strains g1 >= ... of each cell (the kernels' G, in NumPy)."""
+    x = term.config.rest + term.config.u
+    m = term.dim - 1
+    edges = np.stack([x[term.cells[:, a + 1]] - x[term.cells[:, 0]] for a in range(m)], axis=-1)  # (f, d, m)
+    F = edges @ term.inverse.reshape(-1, m, m)
+    G = 0.5 * (np.swapaxes(F, 1, 2) @ F - np.eye(m))
+    return np.linalg.eigvalsh(G)[:, ::-1]
+
+
+def regimes(term: Membrane) -> set[str]:
+    """The regimes of the relaxed energy the cells are in: taut (S2 = lam tr G + 2 mu g2 >= 0), wrinkled (not taut,
+    g1 > 0), slack (g1 <= 0)."""
+    g = principal_strains(term)
+    taut = LAM * g.sum(axis=1) + 2 * MU * g[:, -1] >= 0 if term.dim == 3 else g[:, 0] >= 0
+    return {"taut" if t else "wrinkled" if g1 > 0 else "slack" for t, g1 in zip(taut, g[:, 0], strict=True)}
+
+
+def in_plane(stretches: tuple[float, float]) -> np.ndarray:
+    """The displacement of the tilted square (patch(3)) under x = X0 + diag(stretches) (X - X0) in its plane."""
+    return (SQUARE[:, :2] * (np.array(stretches) - 1)) @ ROTATION[:, :2].T
+
+
+WRINKLING_STATES = {  # in the square's plane (3D) or along the chain (2D); 2D has no wrinkled regime
+    "taut": ({"taut"}, lambda d, rest: 0.2 * rest if d == 2 else in_plane((1.2, 1.2))),
+    "wrinkled": ({"wrinkled"}, lambda d, rest: in_plane((1.2, 0.85))),
+    "slack": ({"slack"}, lambda d, rest: -0.2 * rest if d == 2 else in_plane((0.8, 0.8))),
+    "random": (None, lambda d, rest: 0.12 * np.random.default_rng(0).standard_normal(rest.shape)),  # every regime
+}
+
+
+@pytest.mark.parametrize(
+    ("d", "state"),
+    [(3, "taut"), (3, "wrinkled"), (3, "slack"), (3, "random"), (2, "taut"), (2, "slack"), (2, "random")],
+)
+def test_the_wrinkling_membrane_gradient_and_exact_hessian_match_finite_differences_and_are_psd(d, state):
+    """The relaxed energy is convex in G with S >= 0: its exact Hessian is symmetric and PSD in every regime, so the
+    PSD projection changes nothing."""
+    rest, cells = patch(d, seed=2)
+    config = Configuration(rest)
+    term = Membrane(config, cells, T, E, NU)
+    expected, displacement = WRINKLING_STATES[state]
+    config.u[:] = displacement(d, rest)
+    assert regimes(term) == (expected or {"taut", "slack", "wrinkled"} - ({"wrinkled"} if d == 2 else set()))
+    g = term.gradient().ravel()
+    scale = np.linalg.norm(g) or 1.0
+    assert np.linalg.norm(g - fd_gradient(term)) < 1e-6 * scale
+    hessian, numeric = dense_hessian(term, False), fd_hessian(term)
+    size = np.linalg.norm(numeric) or 1.0
+    assert np.linalg.norm(hessian - numeric) < 1e-6 * size
+    np.testing.assert_allclose(hessian, hessian.T, atol=1e-12 * size)
+    assert np.linalg.eigvalsh(hessian).min() >= -1e-10 * np.abs(hessian).max()
+    np.testing.assert_allclose(dense_hessian(term, True), hessian, atol=1e-9 * np.abs(hessian).max())
+    if state == "slack":
+        assert term.energy() == 0.0 and not g.any() and not hessian.any()
+
+
+@pytest.mark.parametrize("lateral", [1 - NU * 0.105, 0.95, 0.8, 0.5])  # g2 = -nu g (the edge of the regime) and below
+def test_a_wrinkled_sheet_stretched_uniaxially_stores_t_A0_E_g_squared_over_two_whatever_its_lateral_compression(
+    lateral,
+):
+    """x = (lambda X, s Y) on the unit square with g2 = (s^2 - 1) / 2 <= -nu g: wrinkled, psi = E/2 g^2 with
+    g = (lambda^2 - 1) / 2, S = E g e1 e1^T, and the right edge carries t lambda E g * width along the stretch."""
+    rest, cells = patch(3)
+    config = Configuration(rest)
+    term = Membrane(config, cells, T, E, NU)
+    stretch = 1.1
+    g = (stretch**2 - 1) / 2
+    lateral = lateral if lateral != 1 - NU * 0.105 else math.sqrt(1 - 2 * NU * g)  # exactly g2 = -nu g
+    config.u[:] = in_plane((stretch, lateral))
+    assert term.energy() == pytest.approx(T * 1.0 * E / 2 * g**2, rel=1e-12)
+    force = term.gradient()[SQUARE[:, 0] == 1.0].sum(axis=0)
+    np.testing.assert_allclose(force, T * stretch * E * g * ROTATION[:, 0], rtol=1e-12, atol=1e-9)
+    if lateral == math.sqrt(1 - 2 * NU * g):  # the energy is continuous (C1) into the taut regime
+        assert Membrane(config, cells, T, E, NU, wrinkles=False).energy() == pytest.approx(term.energy(), rel=1e-9)
+
+
+def test_a_wrinkling_sheet_compressed_equibiaxially_stores_nothing_and_stretched_is_the_svk_membrane():
+    rest, cells = patch(3)
+    config = Configuration(rest)
+    relaxed, svk = Membrane(config, cells, T, E, NU), Membrane(config, cells, T, E, NU, wrinkles=False)
+    config.u[:] = in_plane((0.9, 0.9))
+    assert relaxed.energy() == 0.0 and not relaxed.gradient().any() and not relaxed.hessian_values().any()
+    assert svk.energy() > 0
+    config.u[:] = in_plane((1.1, 1.1))
+    g = (1.1**2 - 1) / 2
+    assert relaxed.energy() == svk.energy() == pytest.approx(T * (LAM / 2 * (2 * g) ** 2 + MU * 2 * g**2), rel=1e-12)
+    np.testing.assert_array_equal(relaxed.gradient(), svk.gradient())
+    np.testing.assert_array_equal(relaxed.hessian_values(), svk.hessian_values())
+    chain, segments = patch(2, seed=4)  # 2D: tension-only
+    config = Configuration(chain)
+    term = Membrane(config, segments, T, E, NU)
+    config.u[:] = -0.1 * chain
+    assert term.energy() == 0.0 and not term.gradient().any()
+    config.u[:] = 0.1 * chain
+    assert term.energy() == pytest.approx(T * E_PLANE * ((1.1**2 - 1) / 2) ** 2 / 2, rel=1e-12)
 
 
 def cell_measures(term: Membrane) -> float:
@@ -168,11 +266,20 @@ def test_a_3d_layer_covers_the_bottom_face_or_the_outer_surface_in_triangles(ord
 def test_a_scene_with_layers_reads_back_equal_from_its_scene_file():
     scene = dataclasses.replace(
         tp.reference_scene(max_area=0.05),
-        layers=(Layer("sheet", 1e6, 0.3, 0.01, side="bottom"), Layer("patch", 2e5, 0.0, 0.005, box=(-1, -0.4, 1, 0))),
+        layers=(
+            Layer("sheet", 1e6, 0.3, 0.01, side="bottom"),
+            Layer("patch", 2e5, 0.0, 0.005, box=(-1, -0.4, 1, 0), wrinkles=False),
+        ),
     )
     text = scene.to_toml()
-    assert "[[layers]]" in text
+    assert "[[layers]]" in text and "wrinkles = false" in text
     assert read_scene(tomllib.loads(text), "other") == scene
+    data = tomllib.loads(text)
+    del data["layers"][0]["wrinkles"]  # the default: the sheet wrinkles
+    assert read_scene(data, "other").layers[0].wrinkles is True
+    data["layers"][1]["wrinkles"] = "no"
+    with pytest.raises(PneumaInputError, match=r"layers\[1\]\.wrinkles = 'no' must be of type bool \(true or false\)"):
+        read_scene(data, "other")
 
 
 @pytest.mark.parametrize(
@@ -183,6 +290,7 @@ def test_a_scene_with_layers_reads_back_equal_from_its_scene_file():
         ({"thickness": -1.0}, "thickness = -1.0 must be > 0"),
         ({"side": "up"}, "side = 'up' is not one of"),
         ({"side": None}, "give exactly one of 'side' and 'box'"),
+        ({"wrinkles": 1}, "wrinkles = 1 must be true or false"),
     ],
 )
 def test_a_bad_layer_is_refused_naming_the_key(keys, message):
@@ -232,7 +340,8 @@ def tip_deflection(d: int, h: float | None, sheet: bool = True) -> float:
     model.add(Gravity(config, masses, 1e-3))
     if h is None and sheet:
         facets = boundary_facets(family_of(cells, d), cells)
-        model.add(Membrane(config, facets[(vertices[facets, 1] == 0.0).all(axis=1)], 1.0, SHEET, 0.3))
+        bottom = facets[(vertices[facets, 1] == 0.0).all(axis=1)]
+        model.add(Membrane(config, bottom, 1.0, SHEET, 0.3, wrinkles=False))  # compressed, as the meshed layer
     u, record = NewtonSolver(model).solve(np.zeros_like(vertices))
     assert record.converged
     return float(u[vertices[:, 0] == LENGTH, 1].mean())
@@ -240,7 +349,9 @@ def tip_deflection(d: int, h: float | None, sheet: bool = True) -> float:
 
 @pytest.mark.parametrize("d", [2, 3])
 def test_a_meshed_layer_of_the_same_membrane_stiffness_converges_to_the_sheet_as_it_thins(d):
-    """The meshed layer differs from the sheet by its own offset below the bottom (h/2) and bending: O(h)."""
+    """The meshed layer differs from the sheet by its own offset below the bottom (h/2) and bending: O(h). The
+    bottom of the hanging cantilever is in compression, which the meshed layer carries: the sheet is the SVK
+    membrane (wrinkles = False; a wrinkling one goes slack and the beam deflects as without it)."""
     sheet = tip_deflection(d, None)
     assert abs(sheet) < 0.7 * abs(tip_deflection(d, None, sheet=False))  # the sheet stiffens the beam markedly
     meshed = np.array([tip_deflection(d, h) for h in (0.04, 0.02, 0.01, 0.005)])
@@ -258,8 +369,11 @@ def test_membrane_kernels_compile_once_per_dimension_whatever_the_cells_or_the_s
 
     def evaluate(d, scale):
         rest, cells = patch(d, seed=int(10 * scale))
-        term = Membrane(Configuration(scale * rest), np.vstack([cells, cells[::-1]]), scale * T, scale * E, NU / scale)
-        term.energy(), term.gradient(), term.hessian_values(), term.hessian_values(True)
+        for wrinkles in (True, False):
+            term = Membrane(
+                Configuration(scale * rest), np.vstack([cells, cells[::-1]]), scale * T, scale * E, NU / scale, wrinkles
+            )
+            term.energy(), term.gradient(), term.hessian_values(), term.hessian_values(True)
 
     evaluate(2, 1.0), evaluate(3, 1.0)
     before = count()

@@ -13,6 +13,7 @@ side = "bottom"                # or box = [...]: the face the sheet is bonded to
 E = 6.5e6
 nu = 0.2
 thickness = 0.1
+wrinkles = true                # false: the sheet carries compression (and buckles)
 """
 
 from ..fem.fiber_paths import LAYOUTS, PLANAR
@@ -57,4 +58,11 @@ LAYER = record(
     E=Key(float, doc="the sheet's Young's modulus", unit=PRESSURE),
     nu=Key(float, doc="the sheet's Poisson's ratio, in [0, 0.5)"),
     thickness=Key(float, doc="the sheet's thickness", unit=LENGTH),
+    wrinkles=Key(
+        bool,
+        True,
+        "true: the sheet wrinkles (2D: goes slack) instead of carrying compression (tension-field theory's relaxed "
+        "membrane); false: the Saint Venant-Kirchhoff membrane, which buckles",
+        (True, False),
+    ),
 )

@@ -102,7 +102,7 @@ class Key:
             kind = list if self.type is tuple else self.type
             require(
                 isinstance(value, kind) and not (kind is int and isinstance(value, bool)),
-                f"{full} = {value!r} must be of type {kind.__name__}",
+                f"{full} = {value!r} must be of type {kind.__name__}" + (" (true or false)" if kind is bool else ""),
             )
         require(
             not self.allowed or value in self.allowed,

@@ -46,7 +46,9 @@ def linear_pieces(mesh: Mesh, facets: np.ndarray) -> np.ndarray:
 class Layer:
     """A sheet of thickness t (a length), Young's modulus E (a pressure) and Poisson's ratio nu in [0, 0.5) bonded
     to a face of the body: `side` (a side of its bounding box) or `box` ([x0, y0, x1, y1], in 3D [x0, y0, z0, x1,
-    y1, z1]: the boundary facets whose nodes all lie in it); name: names it in messages."""
+    y1, z1]: the boundary facets whose nodes all lie in it); name: names it in messages. wrinkles: the sheet
+    wrinkles (in 2D: goes slack) instead of carrying compression, tension-field theory's relaxed membrane (True,
+    the default), or it is the plain Saint Venant-Kirchhoff membrane, which buckles (False; terms/membrane.py)."""
 
     name: str
     E: float = field(metadata=unit(PRESSURE))
@@ -54,6 +56,7 @@ class Layer:
     thickness: float = field(metadata=unit(LENGTH))
     side: str | None = None
     box: tuple | None = None
+    wrinkles: bool = True
 
     def __post_init__(self):
         require(isinstance(self.name, str) and self.name.strip(), f"layer name = {self.name!r} must not be empty")
@@ -62,6 +65,10 @@ class Layer:
         require(
             require_finite("thickness", self.thickness) > 0,
             f"layer {self.name!r}: thickness = {self.thickness!r} must be > 0",
+        )
+        require(
+            isinstance(self.wrinkles, bool),
+            f"layer {self.name!r}: wrinkles = {self.wrinkles!r} must be true or false",
         )
         _ = self.face  # validates side and box
 
@@ -86,4 +93,6 @@ class Layer:
         return facets
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
-        return [Membrane(config, linear_pieces(mesh, self.facets(mesh)), self.thickness, self.E, self.nu)]
+        return [
+            Membrane(config, linear_pieces(mesh, self.facets(mesh)), self.thickness, self.E, self.nu, self.wrinkles)
+        ]
