@@ -396,11 +396,13 @@ def shaped_scenes(core: Scene) -> list[Scene]:
         ("f", Extrusion(RoundedRectangle((0.8, 0.0), (0.2, 0.2), 0.05), 0.2, 0.05)),
         ("g", Extrusion(Polygon(((1.1, -0.1), (1.3, -0.1), (1.2, 0.1))), 0.2)),
         ("h", HalfCylinder((1.5, 0.0, 0.0), 0.1, 0.2, "x", base=0.05)),
+        ("i", HalfCylinder((1.5, 0.2, 0.0), 0.1, 0.2, "x", fillet=0.02)),
     )
     bodies = [
         Box((0.0, 0.0, 0.0), (3.5, 0.8, 0.8)),
         RoundedBox((0.0, 0.0, 0.0), (3.5, 0.8, 0.8), 0.1),
         Cylinder((0.0, 0.0, 0.0), 0.4, 3.5, "x"),
+        HalfCylinder((0.0, -0.4, 0.0), 0.8, 3.5, "x", fillet=0.1),
         Ellipsoid((0.0, 0.0, 0.0), (1.75, 0.4, 0.4)),
         Extrusion(Rectangle((0.0, 0.0), (3.5, 0.8)), 0.8),
         Extrusion(Polygon(((-1.75, -0.4), (1.75, -0.4), (0.0, 0.9))), 0.8),
