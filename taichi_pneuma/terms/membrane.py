@@ -277,4 +277,4 @@ class Membrane(Term):
         n = self.dim * self.dim
         out = np.empty((len(self.cells), n * n))
         membrane_hessian(*self._arguments(), out)
-        return (projected(out.reshape(-1, n, n)) if psd_only else out).ravel()
+        return (projected(out.reshape(-1, n, n)) if psd_only and not self.wrinkles else out).ravel()  # PSD if wrinkles
