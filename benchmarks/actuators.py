@@ -8,7 +8,8 @@ Each mesh is the shipped scene's with its three gmsh lengths (size, near_chamber
 (PLANS: 1.5 coarser, 1 the shipped sizes, then finer); the ramps are the shipped ones. The reference of a scene is
 found by Richardson extrapolation of each discretisation refined on three meshes or more: with the mesh size
 h = (number of tetrahedra)^(-1/3) and the final value f(h) = f0 + C h^p on the three finest, the observed order p
-and the extrapolated f0; its uncertainty is the grid convergence index's, 1.25 |f0 - f(finest)| (Roache). The
+and the extrapolated f0; its uncertainty is the grid convergence index's, 1.25 |f0 - f(finest)| (Roache). Where the
+three oscillate, the mean of the two finest, its uncertainty the largest distance of the three from it. The
 reference is the mean of the quadratic discretisations' f0 (P2, P2/P0), its uncertainty the larger of theirs and
 half their spread; P1's extrapolation is shown beside it.
 
@@ -80,14 +81,16 @@ def run(name: str, elements: str, scale: float) -> dict:
 
 def extrapolated(runs: list[dict]) -> dict | None:
     """Richardson extrapolation of the final values of the three finest runs (module docstring): {"order" p,
-    "value" f0, "uncertainty" 1.25 |f0 - f(finest)|}, or None where they do not converge monotonically."""
+    "value" f0, "uncertainty" 1.25 |f0 - f(finest)|}; where they oscillate, the mean of the two finest and the
+    largest distance of the three from it (order None); None with fewer than three runs or no order in range."""
     done = sorted((r for r in runs if not r.get("stopped")), key=lambda r: r["tetrahedra"])[-3:]
     if len(done) < 3:
         return None
     h = np.array([r["tetrahedra"] ** (-1 / 3) for r in done])  # coarse to fine
     f = np.array([r["value"][-1] for r in done])
-    if (f[1] - f[0]) * (f[2] - f[1]) <= 0:  # oscillating or stalled: no order to observe
-        return None
+    if (f[1] - f[0]) * (f[2] - f[1]) <= 0:  # oscillating: no order to observe; the band of the three finest
+        middle = (f[1] + f[2]) / 2
+        return {"order": None, "value": middle, "uncertainty": float(np.abs(f - middle).max())}
 
     def mismatch(p):
         return (f[0] - f[1]) / (f[1] - f[2]) - (h[0] ** p - h[1] ** p) / (h[1] ** p - h[2] ** p)
@@ -146,10 +149,9 @@ def report(records: list[dict], machine: str, day: str) -> str:
             }.items():
                 if x is None:
                     continue
-                lines.append(
-                    f"- {elements}: extrapolated final {measure} {x['value']:.4g} +- {x['uncertainty']:.2g} "
-                    f"(observed order {x['order']:.2f})"
-                )
+                how = "oscillating: the two finest meshes' mean" if x["order"] is None else "extrapolated"
+                order = "" if x["order"] is None else f" (observed order {x['order']:.2f})"
+                lines.append(f"- {elements}: {how} final {measure} {x['value']:.4g} +- {x['uncertainty']:.2g}{order}")
             lines.append(
                 f"- reference: **{found['value']:.4g} +- {found['uncertainty']:.2g}** "
                 f"({found['uncertainty'] / abs(found['value']):.1%})"
