@@ -220,3 +220,24 @@ def test_patch_volumes_compile_once(volumetric):
         scene = scene_of(mesh, [schedule], 1, material, volumetric=volumetric)
         assert tp.simulate(scene).converged
     assert compiled_instances() == before
+
+
+@pytest.mark.parametrize("law", ["yeoh", "mooney_rivlin"])
+def test_the_exact_hessian_of_quadratic_tetrahedra_is_d2psi_dF2_itself(law):
+    """The exact Hessian takes d2psi/dF2 as the law gives it, no eigensystem (terms/elastic.py; the projected one
+    alone takes the eigenpairs, Jacobi's for these laws): against central differences of the forces on curved
+    quadratic tetrahedra, and against the projected one, which differs only where an eigenvalue is negative."""
+    mesh = shell_octant(2, 1, order=2, curved=True)
+    model, term = term_of(mesh, law, 0.49, Elasticity)
+    rng = np.random.default_rng(3)
+    u = 0.05 * rng.standard_normal(mesh.vertices.shape)
+    v, h = rng.standard_normal(u.size), 1e-6
+    model.set_displacements(u)
+    H, projected = hessian(term, u.size), hessian(term, u.size, psd_only=True)
+
+    def forces(s):
+        model.set_displacements(u.ravel() + s * v)
+        return term.gradient().ravel()
+
+    assert np.abs((forces(h) - forces(-h)) / (2 * h) - H @ v).max() < 1e-7 * np.abs(H @ v).max()
+    assert np.linalg.eigvalsh(H).min() < 0 <= np.linalg.eigvalsh(projected).min() + 1e-12 * np.abs(projected).max()

@@ -50,7 +50,7 @@ def test_the_first_line_names_the_preset_and_its_measured_error_where_a_preset_m
     )
     high = QUALITY_ERROR[3]["high"]
     measured = note("--scene", "beam_3d_ellipsoid", "--quality", "high")
-    assert measured == f"; --quality high: tip within {high:g} % of converged"
+    assert measured == f"; --quality high: tip within {high:g} % of converged (-0.1974)"
     assert note("--scene", "pneunet_3d", "--quality", "high") == (
         f"; --quality high: not measured on this scene (on beam_3d_ellipsoid: tip within {high:g} %)"
     )

@@ -64,6 +64,23 @@ QUALITY_ERROR = {
 }
 
 
+# The shipped 3D scenes' converged references: (the history column measured, its peak over the shipped ramp, its
+# uncertainty), from quadratic meshes refined towards it (beam_3d_ellipsoid and pneunet_3d: docs/3d.md; the
+# actuators: benchmarks/actuators.py, docs/actuators.md "Converged references"), and each preset's measured error
+# against it ("as written": the scene's own [mesh]; pneuma-bench --sections presets_3d, docs/3d.md "3D presets").
+ACTUATORS_3D = ("fiber_bending_3d", "blocked_force_3d", "fiber_twist_3d")
+CONVERGED_3D = {
+    "beam_3d_ellipsoid": ("tip_dy", -0.1974, 0.0005),
+    "pneunet_3d": ("tip_dy", -1.100, 0.01),
+    "fiber_bending_3d": ("tip_rotation", -156.0, 1.0),
+    "blocked_force_3d": ("blocked_force", 774.7, 10.0),
+    "fiber_twist_3d": ("tip_twist", -57.0, 1.0),
+}
+MEASURED_ERROR_3D: dict[str, dict[str, float]] = {
+    "beam_3d_ellipsoid": dict(QUALITY_ERROR[3]),
+}
+
+
 def with_quality(scene, args: argparse.Namespace):
     """The scene file's scene with its --quality preset applied, and the line that says what the preset means for
     this scene ('' where nothing was asked: --quality not given). A 2D scene: planar_preset's max area and order (the
@@ -116,17 +133,28 @@ def with_quality(scene, args: argparse.Namespace):
 
 
 def preset_note(scene, args: argparse.Namespace | None) -> str:
-    """What the run's --quality preset is measured to cost in accuracy ('' where no preset decides its mesh: a
-    scene file's own [mesh], a mesh file): the reference beam's flags, or a 3D body from shapes with --quality (a 2D
-    scene file's rung of planar_preset's ladder need not be the reference beam's of the same name: no note)."""
+    """What the run's mesh is measured to cost in accuracy ('' where it was not measured: a mesh file, a scene file
+    of other lengths): the reference beam's flags' preset, or a shipped 3D scene's preset or own [mesh] (MEASURED_
+    ERROR_3D against CONVERGED_3D; another 3D body from shapes with --quality: the beam's figure, said to be the
+    beam's)."""
     if args is None or not hasattr(args, "quality"):
         return ""
-    from_shapes = getattr(args, "quality_given", False) and scene.dim == 3 and hasattr(scene.geometry, "sizes")
-    if getattr(args, "scene", None) and not from_shapes:
-        return ""
-    error = QUALITY_ERROR[scene.dim][args.quality]
+    given = getattr(args, "quality_given", False)
+    from_shapes = scene.dim == 3 and hasattr(scene.geometry, "sizes")
     if scene.dim == 2:
+        if getattr(args, "scene", None):  # a scene file's rung need not be the reference beam's of the same name
+            return ""
+        error = QUALITY_ERROR[2][args.quality]
         return f"; --quality {args.quality}: tip within {error:g} % of converged on the reference beam"
-    if scene.name == "beam_3d_ellipsoid":
-        return f"; --quality {args.quality}: tip within {error:g} % of converged"
-    return f"; --quality {args.quality}: not measured on this scene (on beam_3d_ellipsoid: tip within {error:g} %)"
+    if not from_shapes:
+        return ""
+    preset = args.quality if given else "as written"
+    measured = MEASURED_ERROR_3D.get(scene.name, {})
+    what = f"--quality {args.quality}" if given else "mesh as written"
+    if preset in measured:
+        column, value, _ = CONVERGED_3D[scene.name]
+        measure = "tip" if column == "tip_dy" else column
+        return f"; {what}: {measure} within {measured[preset]:g} % of converged ({value:g})"
+    if not given:
+        return ""
+    return f"; {what}: not measured on this scene (on beam_3d_ellipsoid: tip within {QUALITY_ERROR[3][preset]:g} %)"
