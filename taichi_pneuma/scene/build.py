@@ -35,7 +35,7 @@ from ..terms.base import Term
 from ..terms.chambers import Chamber, ChamberKind
 from ..terms.effects import Effect
 from ..terms.model import EnergyModel
-from ..terms.nodal_volume import require_volumetric
+from ..terms.nodal_volume import grouping_for, require_volumetric
 from . import sceneformat
 from .schedule import MAX_STRETCH, ChamberSchedule, Schedule, area_ramp
 
@@ -153,8 +153,9 @@ class Scene:
         require(not clash, f"obstacle name {clash[0] if clash else ''!r} is a chamber's, an effect's or the clamp's")
         _ = self.schedule  # validates the increments against the keyframes
         law, _ = self.law_parameters()  # resolves the presets, checks that the body has one law
-        if self.volumetric != "element":
-            require_volumetric(self.volumetric, law, getattr(self.geometry, "order", 1))
+        grouping = grouping_for(self.volumetric, getattr(self.geometry, "order", 1))
+        if grouping != "element":
+            require_volumetric(grouping, law, getattr(self.geometry, "order", 1))
 
     def resolve_defaults(self) -> None:
         """Set every default left None (units.si_default) of the scene, its geometry, its material and regions,
@@ -269,7 +270,9 @@ class Scene:
             energy_resolution=1e-12 * modulus * mesh.measure,
         )
         config = model.config
-        elastic = model.add(VOLUMETRIC[self.volumetric](config, mesh.elements, law, parameters))
+        elastic = model.add(
+            VOLUMETRIC[grouping_for(self.volumetric, mesh.order)](config, mesh.elements, law, parameters)
+        )
         chambers = [
             model.add(control.term(config, loop, name, mesh.order, origin))
             for control, loop, origin, name in zip(self.controls, mesh.chambers, mesh.wall_origins, self.chamber_names)

@@ -435,7 +435,8 @@ def scene_table(scene_class) -> Table:
                         "ratio; order 1: linear elements that do not lock as nu -> 1/2) "
                         "or mixed (on each element's volume ratio, one pressure per "
                         "element; order 2: the P2/P0 'hybrid' element, nearer the "
-                        "incompressible answer than element as nu -> 1/2); nodal and "
+                        "incompressible answer than element as nu -> 1/2; on linear "
+                        "elements it is element); nodal and "
                         "mixed take law = neo_hookean, mooney_rivlin, yeoh or a preset",
                         tuple(VOLUMETRIC),
                     ),

@@ -143,6 +143,13 @@ def star_structure(nodes: np.ndarray, n: int):
     return pair_of.reshape(*nodes.shape, -1), triplets, np.column_stack([blocks // n, blocks % n])
 
 
+def grouping_for(volumetric: str, order: int) -> str:
+    """The grouping a scene's volumetric takes on elements of this order: "mixed" on linear elements is "element"
+    (one J per element already: the same energy), so that a preset or a flag that makes a mixed scene's elements
+    linear runs it; any other as it is."""
+    return "element" if volumetric == "mixed" and order == 1 else volumetric
+
+
 def require_volumetric(volumetric: str, law, order: int) -> None:
     """Refuse (PneumaInputError) volumetric = "nodal" or "mixed" on elements of the other order (GROUPINGS) or under a
     law without a volumetric part."""
