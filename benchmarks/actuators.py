@@ -9,7 +9,8 @@ Each mesh is the shipped scene's with its three gmsh lengths (size, near_chamber
 found by Richardson extrapolation of each discretisation refined on three meshes or more: with the mesh size
 h = (number of tetrahedra)^(-1/3) and the final value f(h) = f0 + C h^p on the three finest, the observed order p
 and the extrapolated f0; its uncertainty is the grid convergence index's, 1.25 |f0 - f(finest)| (Roache). Where the
-three oscillate, the mean of the two finest, its uncertainty the largest distance of the three from it. The
+three oscillate, the mean of the two finest, its uncertainty the largest distance of the three from it; where they
+converge faster than any order up to 8 fits, the finest value, its uncertainty the last change. The
 reference is the mean of the quadratic discretisations' f0 (P2, P2/P0), its uncertainty the larger of theirs and
 half their spread; P1's extrapolation is shown beside it.
 
@@ -82,7 +83,8 @@ def run(name: str, elements: str, scale: float) -> dict:
 def extrapolated(runs: list[dict]) -> dict | None:
     """Richardson extrapolation of the final values of the three finest runs (module docstring): {"order" p,
     "value" f0, "uncertainty" 1.25 |f0 - f(finest)|}; where they oscillate, the mean of the two finest and the
-    largest distance of the three from it (order None); None with fewer than three runs or no order in range."""
+    largest distance of the three from it, and where no order in (0.2, 8) fits, the finest value and its last change
+    (order None both); None with fewer than three runs."""
     done = sorted((r for r in runs if not r.get("stopped")), key=lambda r: r["tetrahedra"])[-3:]
     if len(done) < 3:
         return None
@@ -97,8 +99,8 @@ def extrapolated(runs: list[dict]) -> dict | None:
 
     try:
         p = brentq(mismatch, 0.2, 8.0)
-    except ValueError:  # no order in range fits
-        return None
+    except ValueError:  # faster than order 8 (or slower than 0.2): the finest value, the last change its uncertainty
+        return {"order": None, "value": f[2], "uncertainty": abs(f[2] - f[1])}
     c = (f[1] - f[2]) / (h[1] ** p - h[2] ** p)
     f0 = f[2] - c * h[2] ** p
     return {"order": p, "value": f0, "uncertainty": 1.25 * abs(f0 - f[2])}
@@ -149,7 +151,7 @@ def report(records: list[dict], machine: str, day: str) -> str:
             }.items():
                 if x is None:
                     continue
-                how = "oscillating: the two finest meshes' mean" if x["order"] is None else "extrapolated"
+                how = "extrapolated" if x["order"] is not None else "the two finest meshes' mean or the finest's"
                 order = "" if x["order"] is None else f" (observed order {x['order']:.2f})"
                 lines.append(f"- {elements}: {how} final {measure} {x['value']:.4g} +- {x['uncertainty']:.2g}{order}")
             lines.append(

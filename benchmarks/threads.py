@@ -10,7 +10,7 @@ on a 2-core machine is every core). The machine and the load average before each
 machine a run beside another job can take half as long again, which is what a ratio of medians measured in
 one alternated run sees through.
 
-    python benchmarks/threads.py [--cases beam_high,fiber_p2] [--repeats 3] [--out benchmarks/results]
+    python benchmarks/threads.py [--cases beam_high,fiber_bending_3d] [--repeats 3] [--out benchmarks/results]
 
 Writes threads.md and threads.json (machine, date) under --out; one progress line per run.
 """
@@ -31,18 +31,7 @@ PHASES = ("hessian", "assemble", "factorize", "solve", "gradient", "line_search"
 # name: the pneuma-inflate arguments of the case
 CASES = {
     "beam_high": ["--scene", "beam_3d_ellipsoid", "--quality", "high"],
-    "fiber_p2": [
-        "--scene",
-        "fiber_bending_3d",
-        "--set",
-        "mesh.order=2",
-        "--set",
-        "mesh.size=6",
-        "--set",
-        "mesh.near_chambers=3",
-        "--set",
-        "mesh.distance=3",
-    ],
+    "fiber_bending_3d": ["--scene", "fiber_bending_3d"],
 }
 
 
