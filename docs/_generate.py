@@ -159,9 +159,15 @@ RESULTS_PAGES = {
     ),
     "actuators": (
         "accuracy",
-        "The shipped 3D actuators: bending angle, blocked force and twist against pressure, mesh convergence",
+        "The shipped 3D actuators: bending angle, blocked force and twist against pressure, converged references",
         ("benchmarks/actuators.py", None),
         "python benchmarks/actuators.py",
+    ),
+    "threads": (
+        "performance",
+        "What the second core buys, per phase",
+        ("benchmarks/threads.py", None),
+        "python benchmarks/threads.py",
     ),
     "skfem_3d": (
         "performance",

@@ -7,11 +7,11 @@ chamber, a crossed pair of aramid threads wound around it (``[[fibers]]``, a cro
 keep it from ballooning, and a paper sheet on its flat bottom (``[[layers]]``) that keeps that face from stretching.
 Pressurised, it lengthens everywhere but along the sheet, and bends towards it. ``blocked_force_3d`` holds the same
 actuator against a plate under its tip (``[[obstacles]]``): the force it presses with is its blocked force.
-``fiber_twist_3d`` winds a tube with a single helix, and it twists. Here on coarser meshes, for speed: the actuator's
-tetrahedra twice the shipped size (it bends 49 degrees at 120 kPa there, 56 on the shipped mesh; quadratic
-tetrahedra bend it further, benchmarks/results/actuators.md, and the coarse mesh presses with 11 % less blocked force
-than the shipped one's 729 mN), the twisting tube on linear tetrahedra 1.5 times the shipped size (which twist about
-a third too little: its scene ships quadratic ones).
+``fiber_twist_3d`` winds a tube with a single helix, and it twists. Here on coarse linear meshes, for speed, which
+lock in this nearly incompressible rubber: the actuator on linear tetrahedra of 8 mm (4 mm near the chamber) bends
+91 degrees at 120 kPa where its converged bend is 154 (the scene ships quadratic tetrahedra: 154.5) and presses
+with 731 mN where the converged blocked force is 874 mN (benchmarks/results/actuators.md), the twisting tube on
+linear tetrahedra 1.5 times the shipped size twists about a third too little (its scene ships quadratic ones).
 """
 
 import matplotlib.pyplot as plt
@@ -20,7 +20,7 @@ import numpy as np
 import taichi_pneuma as tp
 from taichi_pneuma.render.drawing import draw_surface
 
-COARSE = {"mesh.size": 8.0, "mesh.near_chambers": 4.0, "mesh.distance": 4.0}  # twice the shipped sizes
+COARSE = {"mesh.order": 1, "mesh.size": 8.0, "mesh.near_chambers": 4.0, "mesh.distance": 4.0}  # linear, coarse
 bending = tp.simulate(tp.load_scene("fiber_bending_3d").with_values(COARSE))
 blocked = tp.simulate(tp.load_scene("blocked_force_3d").with_values(COARSE))
 LINEAR = {"mesh.order": 1, "mesh.size": 4.5, "mesh.near_chambers": 3.0, "mesh.distance": 3.0}  # 1.5 times

@@ -158,6 +158,7 @@ center = [0.0, 0.0, 0.0]
 radius = 0.4
 length = 3.5
 base = 0.1
+fillet = 0.0
 [mesh]
 size = 0.2
 [[chambers]]
@@ -167,6 +168,7 @@ center = [0.0, 0.1, 0.0]
 radius = 0.2
 length = 3.0
 base = 0.0
+fillet = 0.0
 control = "pressure"
 keyframes = [[2, 100.0]]
 [schedule]
