@@ -23,9 +23,7 @@ once whatever the scene. A moving obstacle's translation from its placed positio
 
 overlap(): the barrier holds the nodes only, so whether the obstacle overlaps the body is checked geometrically:
 the least d over every straight piece of the body's surface (obstacle_distance.obstacle_reach), and whether the
-obstacle's centre lies inside the body (fem/self_intersection.py winding). The barrier resolves contact to dhat, so
-a piece reaching less than OVERLAP_RESOLUTION dhat into the obstacle (as a facet does across a sharp edge of it,
-pressed between two held nodes) is within that resolution, not an overlap. A run checks it at every
+obstacle's centre lies inside the body (fem/self_intersection.py winding). A run checks it at every
 equilibrium and sweeps a moving obstacle's motion in sub-steps of at most its sweep (BuiltScene.sweeps,
 solve/simulate.py settle); Obstacle.terms refuses a rest scene that overlaps (docs/theory/contact.md).
 """
@@ -49,7 +47,6 @@ STEP_CAP = 4.0  # max_step's conservative advancement stops past this step fract
 ADVANCES = 100  # and after this many advances (the bound reached, short of the contact)
 REACH = 10.0  # a keyframe offset's components are at most this many times the body's size
 MAX_SWEEPS = 1000  # sub-steps of one increment's obstacle motion, at most (Obstacle.terms refuses more)
-OVERLAP_RESOLUTION = 0.1  # a surface piece reaching less than this times dhat into an obstacle is in contact with it
 
 
 @kernel
@@ -240,18 +237,17 @@ class ObstacleContact(Term):
         return float(out[k, 0]), out[k, 1:]
 
     def overlap(self) -> str | None:
-        """Where the obstacle overlaps the body in its current state, in words, or None. It does where m <= -r (reach:
-        a piece of the surface enters it deeper than the barrier's resolution r = OVERLAP_RESOLUTION dhat), or where
-        its centre c, inside it (d(c) < 0; a plane has none), lies inside the body: winding(c) = 1 (the obstacle
-        wholly inside the body, its surface crossing no piece). A bounded convex obstacle meets the body's interior
-        only so (its interior is connected)."""
+        """Where the obstacle overlaps the body in its current state, in words, or None. It does where m <= 0 (reach:
+        a piece of the surface touches or enters it), or where its centre c, inside it (d(c) < 0; a plane has
+        none), lies inside the body: winding(c) = 1 (the obstacle wholly inside the body, its surface crossing no
+        piece). A bounded convex obstacle meets the body's interior only so (its interior is connected)."""
         d = self.config.dim
         m, x = self.reach()
         where = ", ".join(f"{v:.4g}" for v in x[:d])
-        if m <= -OVERLAP_RESOLUTION * self.dhat:
+        if m <= 0:
             return (
-                f"obstacle {self.name!r} overlaps the body: the body's surface reaches {-m:.3g} into it at ({where}), "
-                f"more than {OVERLAP_RESOLUTION:g} of its dhat{self.moved}"
+                f"obstacle {self.name!r} overlaps the body: the body's surface reaches {-m:.3g} into it at ({where})"
+                f"{self.moved}"
             )
         if self.kind == PLANE:
             return None
