@@ -38,7 +38,7 @@ def test_a_mesh_file_keeps_its_tetrahedra_in_the_presets_order():
 
 
 def test_the_first_line_names_the_preset_and_its_measured_error_where_a_preset_made_the_mesh():
-    from taichi_pneuma.apps.quality import QUALITY_ERROR, preset_note
+    from taichi_pneuma.apps.quality import MEASURED_ERROR_3D, QUALITY_ERROR, preset_note
 
     def note(*flags):
         args = parser().parse_args(list(flags))
@@ -55,5 +55,12 @@ def test_the_first_line_names_the_preset_and_its_measured_error_where_a_preset_m
         f"; --quality high: not measured on this scene (on beam_3d_ellipsoid: tip within {high:g} %)"
     )
     assert note("--scene", "pneunet_3d") == ""  # the scene's own [mesh]
+    bending = MEASURED_ERROR_3D["fiber_bending_3d"]
+    assert note("--scene", "fiber_bending_3d") == (
+        f"; mesh as written: tip_rotation within {bending['as written']:g} % of converged (-154.1)"
+    )
+    assert note("--scene", "fiber_bending_3d", "--quality", "high") == (
+        f"; --quality high: tip_rotation within {bending['high']:g} % of converged (-154.1)"
+    )
     assert note("--scene", "beam_3d", "--quality", "high") == ""  # a mesh file's tetrahedra
     assert note("--scene", "pneunet_finger") == ""
