@@ -90,8 +90,8 @@ def report(records: list[dict], machine: str, day: str) -> str:
             "`pneuma-inflate --scene NAME --no-video`, one process each.",
             "",
             "Increments: the solves after the rest state that found an equilibrium; solve s: the ramp's wall time "
-            "(summary wall_seconds, without start-up and meshing), on a machine shared with other jobs (load about 5 "
-            "on its 2 CPUs): an upper bound.",
+            "(summary wall_seconds, without start-up and meshing), on a machine shared with other jobs: an upper "
+            "bound.",
             "",
             "| scene | dim | mesh | exit | increments | Newton it | cuts | solve s | headline |",
             "|---|---|---|---|---|---|---|---|---|",
