@@ -293,8 +293,14 @@ def presets_3d() -> tuple[str, dict]:
                 start = time.perf_counter()
                 proc = subprocess.run(command, capture_output=True, text=True)
                 whole = time.perf_counter() - start
-                require(proc.returncode == 0, f"{' '.join(command[1:])} failed: {proc.stderr[-300:]}")
-                summary = json.loads(next(Path(out).glob("*_summary.json")).read_text())
+                written = next(Path(out).glob("*_summary.json"), None) if proc.returncode == 0 else None
+                summary = None if written is None else json.loads(written.read_text())
+            if summary is None:  # a preset that finds no equilibrium is a row of the table, not the end of it
+                stopped = (proc.stderr.strip().splitlines() or [f"exit {proc.returncode}"])[-1]
+                data.append({"scene": name, "quality": quality, "whole_s": whole, "stopped": stopped})
+                print(f"  presets_3d: {name} {quality}: {stopped}", file=sys.stderr, flush=True)
+                rows.append([name, quality, *[""] * (len(phases) + 5), f"{whole:.1f}", "", stopped])
+                continue
             extremes = summary["extremes"][column]
             peak = extremes["min"] if abs(extremes["min"]) >= abs(extremes["max"]) else extremes["max"]
             error = abs(peak / converged - 1)
