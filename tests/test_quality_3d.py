@@ -2,6 +2,8 @@
 sizes and its order; not given, the scene keeps its own [mesh]; a mesh file's tetrahedra are never remeshed (the
 preset sets their order)."""
 
+import dataclasses
+
 import pytest
 
 from taichi_pneuma.apps.cli import scene_of_flags
@@ -40,9 +42,10 @@ def test_a_mesh_file_keeps_its_tetrahedra_in_the_presets_order():
 def test_the_first_line_names_the_preset_and_its_measured_error_where_a_preset_made_the_mesh():
     from taichi_pneuma.apps.quality import MEASURED_ERROR_3D, QUALITY_ERROR, preset_note
 
-    def note(*flags):
+    def note(*flags, name=None):
         args = parser().parse_args(list(flags))
-        return preset_note(scene_of_flags(args), args)
+        scene = scene_of_flags(args)
+        return preset_note(scene if name is None else dataclasses.replace(scene, name=name), args)
 
     assert (
         note("--cy", "0.15") == f"; --quality default: tip within {QUALITY_ERROR[2]['default']:g} % of converged "
@@ -51,10 +54,15 @@ def test_the_first_line_names_the_preset_and_its_measured_error_where_a_preset_m
     high = QUALITY_ERROR[3]["high"]
     measured = note("--scene", "beam_3d_ellipsoid", "--quality", "high")
     assert measured == f"; --quality high: tip within {high:g} % of converged (-0.1974)"
-    assert note("--scene", "pneunet_3d", "--quality", "high") == (
+    assert note("--scene", "pneunet_3d", "--quality", "high", name="my_finger") == (
         f"; --quality high: not measured on this scene (on beam_3d_ellipsoid: tip within {high:g} %)"
     )
-    assert note("--scene", "pneunet_3d") == ""  # the scene's own [mesh]
+    assert note("--scene", "pneunet_3d", name="my_finger") == ""  # its own [mesh], not measured
+    pneunet = MEASURED_ERROR_3D["pneunet_3d"]["high"]
+    assert (
+        note("--scene", "pneunet_3d", "--quality", "high")
+        == f"; --quality high: tip within {pneunet:g} % of converged (-1.1)"
+    )
     bending = MEASURED_ERROR_3D["fiber_bending_3d"]
     assert note("--scene", "fiber_bending_3d") == (
         f"; mesh as written: tip_rotation within {bending['as written']:g} % of converged (-154.1)"
