@@ -195,7 +195,11 @@ def settle(
             found = f"residual {record.residual:.2e} ({record.message})"
             if overlap is not None:
                 built.set_commands(reached)
-                found = f"the equilibrium found is none: {overlap}"
+                found = (
+                    f"the equilibrium found is none: {overlap} (the contact holds the body's nodes only: smaller "
+                    f"elements where the body presses on the obstacle's edges or corners, or a blunter obstacle, let "
+                    f"the nodes hold it)"
+                )
             raise NoEquilibrium(
                 f"no equilibrium at {describe_commands(built, commands, reached)} after {cuts} cuts; {found}"
             )
