@@ -144,7 +144,7 @@ def elastic_hessian(
         for q in range(weights.shape[1]):
             F = embedded(deformation_gradient(rest, u, nodes, grads, e, q, d), d)
             p = element_parameters(law, parameters, e)
-            M = weights[e, q] * in_plane(law.stress_derivative(F, p), d)
+            M = ti.Matrix.zero(ti.f64, d * d, d * d)
             if project:
                 lambdas, vectors = stress_eigensystem(law, F, p, d)
                 for r, c in ti.ndrange(d * d, d * d):
@@ -152,6 +152,8 @@ def elastic_hessian(
                     for s in range(d * d):
                         entry += ti.max(lambdas[s], 0.0) * vectors[s, r] * vectors[s, c]
                     M[r, c] = weights[e, q] * entry
+            else:
+                M = weights[e, q] * in_plane(law.stress_derivative(F, p), d)
             T = ti.Matrix.zero(ti.f64, d * d, d * ti.static(MAX_NODES[d]))  # T[(i, j), (b, kk)] = (M D_qb)
             for r, b, kk in ti.ndrange(d * d, k, d):
                 entry = 0.0
