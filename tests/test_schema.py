@@ -418,7 +418,7 @@ def shaped_scenes(core: Scene) -> list[Scene]:
     one = [dataclasses.replace(core, geometry=SolidGeometry(body, chambers[:1], MeshSizes(0.2))) for body in bodies[1:]]
     pneunet = dataclasses.replace(
         core,
-        geometry=SolidGeometry(PneuNet(), (("c1", MeshSurface("c1")),), MeshSizes(0.2)),
+        geometry=SolidGeometry(PneuNet(), (("c1", MeshSurface("c1")),), MeshSizes(0.2, through_wall=1.5)),
         regions=(Region(None, Material(5e4, 0.45), "layer"),),
     )
     return [every, *one, pneunet, fibered(one[0])]

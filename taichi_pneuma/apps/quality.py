@@ -119,15 +119,20 @@ def with_quality(scene, args: argparse.Namespace):
     order = preset_order or geometry.order
     sizes, length = geometry.sizes, units.suffix(LENGTH)
     size = significant(bulk * sizes.size)
-    close = size if near is None else significant(near * sizes.near)
-    scene = scene.with_values(
-        {"mesh.size": size, "mesh.near_chambers": close, "mesh.distance": size, "mesh.order": order}
-    )
-    scenes = f"{sizes.near:g}{length}"
+    own_near = geometry.mesh_sizes.near
+    close = size if near is None else significant(near * own_near)
+    values = {"mesh.size": size, "mesh.distance": size, "mesh.order": order}
+    scenes = f"{own_near:g}{length}"
+    if sizes.through_wall is None:
+        values["mesh.near_chambers"] = close
+    else:  # the scene's edges through its thinnest wall, scaled alike
+        values["mesh.through_wall"] = significant(geometry.wall / close)
+        scenes += f" ({sizes.through_wall:g} through its thinnest wall, {geometry.wall:g}{length})"
+    scene = scene.with_values(values)
     near_chambers = (
         f"uniform (the scene's: {scenes} near the chambers)"
         if near is None
-        else f"{close:g}{length} near the chambers (x{close / sizes.near:.3g} the scene's {scenes})"
+        else f"{close:g}{length} near the chambers (x{close / own_near:.3g} the scene's {scenes})"
     )
     said = (
         f"tetrahedra of {size:g}{length} (x{size / sizes.size:.3g} the scene's {sizes.size:g}{length}), "

@@ -60,6 +60,7 @@ import numpy as np
 
 from ..errors import PneumaInputError, require, require_distinct, require_finite
 from ..io import cache
+from .wall_thickness import nearest_triangles, wall_points
 
 MAX_TETS = 200_000
 MAX_SHAPES = 64
@@ -82,6 +83,11 @@ OPTIONS = (
 # (MeshAdapt loops on a small ellipsoid in a coarse mesh until gmsh crashes.)
 SURFACE_MESHERS = ((6, 0), (5, 12))
 MAX_SAMPLING = 200  # points per direction on a wall surface for its distance field
+WALL_SAMPLING = 1 / 50  # thinnest_wall's surface mesh: edges at most this fraction of the body's diagonal
+REFINED = 16  # ... and the wall points nearest the other boundaries on it, measured again on the exact surfaces
+ALTERNATIONS = 5000  # at most so many projections to and fro between the two surfaces, to their nearest points,
+CONVERGED = 1e-12  # until the distance falls by less than this fraction (a ball near a plane: by R / (R + d) each)
+WALL_DIGITS = 10  # significant digits of the measured thickness: a 2 mm wall is 2, not 1.999999999999999
 # a tetrahedron's four faces (corners in its local numbering), each oriented outward for a positive tetrahedron
 TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
 MESHER_SOURCES = (
@@ -90,6 +96,7 @@ MESHER_SOURCES = (
     "pneunet.py",
     "shapes.py",
     "polygons.py",
+    "wall_thickness.py",
 )  # the code a cached mesh depends on
 CACHE_BYTES_PER_TET = 256  # a cached mesh's arrays take about 50 bytes per tetrahedron: a larger file is not read
 
@@ -97,21 +104,31 @@ CACHE_BYTES_PER_TET = 256  # a cached mesh's arrays take about 50 bytes per tetr
 @dataclass(frozen=True)
 class MeshSizes:
     """Target tetrahedron edge length: `size` in the bulk, `near_chambers` (default size; at most size) within
-    that distance of the chamber walls, growing linearly to `size` over `distance` (default 2 size) beyond."""
+    that distance of the chamber walls, growing linearly to `size` over `distance` (default 2 size) beyond. Or,
+    instead of near_chambers, `through_wall`: that many edges through the thinnest wall, near_chambers = t /
+    through_wall with t the solid's thinnest_wall (for_wall makes the sizes that mesh it)."""
 
     size: float
     near_chambers: float | None = None
     distance: float | None = None
+    through_wall: float | None = None
 
     def __post_init__(self):
         require(require_finite("size", self.size) > 0, f"size = {self.size!r} must be > 0")
-        if self.near_chambers is not None:
-            require(
-                require_finite("near_chambers", self.near_chambers) > 0,
-                f"near_chambers = {self.near_chambers!r} must be > 0",
-            )
-        if self.distance is not None:
-            require(require_finite("distance", self.distance) > 0, f"distance = {self.distance!r} must be > 0")
+        for name in ("near_chambers", "distance", "through_wall"):
+            value = getattr(self, name)
+            require(value is None or require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
+        require(
+            self.near_chambers is None or self.through_wall is None,
+            f"near_chambers = {self.near_chambers!r} and through_wall = {self.through_wall!r}: give one of them (the "
+            "edge length near the chambers, or the edges through the thinnest wall that set it)",
+        )
+
+    def for_wall(self, thickness: float) -> MeshSizes:
+        """The sizes with near_chambers = thickness / through_wall (these sizes if through_wall is not given)."""
+        if self.through_wall is None:
+            return self
+        return MeshSizes(self.size, thickness / self.through_wall, self.distance)
 
     @property
     def near(self) -> float:
@@ -269,6 +286,80 @@ def estimate_tets(solid: Solid, sizes: MeshSizes) -> float:
         pieces = _Pieces(gmsh, solid)
     cache.store("gmsh-measures", entry, {"measures": np.array([pieces.volume, pieces.wall_area])})
     return _estimate(pieces.volume, pieces.wall_area, sizes)
+
+
+def thinnest_wall(solid: Solid) -> float:
+    """The thinnest rubber around any of the solid's chambers: the least distance from a chamber's wall to the
+    boundaries of the body it does not touch (fem/wall_thickness.py), found on a surface mesh of triangles at most
+    WALL_SAMPLING of the body's diagonal long, and made exact from the REFINED nearest points on by OpenCASCADE's
+    projections to and fro between the two surfaces (ALTERNATIONS; where each falls inside the surface's trimmed
+    face): the triangles' chords lie off a curved surface by h^2 / (8 R), and the nearest points are seldom corners
+    of the triangles. Cached like the solid's measures."""
+    entry = _cache_key("wall", solid)
+    cached = cache.load("gmsh-wall", entry, _valid_wall, 4096)
+    if cached is not None:
+        return float(cached["thinnest"][0])
+    with _session() as gmsh:
+        pieces = _Pieces(gmsh, solid)
+        model = gmsh.model
+        box = np.reshape(model.getBoundingBox(-1, -1), (2, 3))
+        gmsh.option.setNumber("Mesh.MeshSizeMax", WALL_SAMPLING * float(np.linalg.norm(box[1] - box[0])))
+        gmsh.option.setNumber("Mesh.Algorithm", 5)  # Delaunay: Frontal-Delaunay leaves B-spline surfaces bare
+        model.mesh.generate(2)
+        node_tags, coords, _ = model.mesh.getNodes()
+        position = np.empty(int(node_tags.max()) + 1, dtype=np.int64)
+        position[node_tags.astype(np.int64)] = np.arange(len(node_tags))
+        points = coords.reshape(-1, 3)
+
+        def triangles(surface: int) -> np.ndarray:
+            return points[position[_elements(gmsh, 2, [surface], 2, 3)]].reshape(-1, 3, 3)
+
+        def curves(surfaces) -> set[int]:
+            return {abs(t) for _, t in model.getBoundary([(2, s) for s in surfaces], False, False)}
+
+        def closest(surface: int, point: np.ndarray) -> np.ndarray | None:
+            projected, uv = model.getClosestPoint(2, surface, point)
+            return np.asarray(projected) if model.isInside(2, surface, uv, parametric=True) else None
+
+        def exact(point: np.ndarray, wall: int, other: int, measured: float) -> float:
+            """The distance of the nearest points of the two surfaces from point on, by alternating projections
+            (the measured one where a projection falls outside a surface's trimmed face)."""
+            distance = measured
+            for _ in range(ALTERNATIONS):
+                across = closest(other, point)
+                back = None if across is None else closest(wall, across)
+                if back is None:
+                    return measured
+                point, last, distance = back, distance, float(np.linalg.norm(back - across))
+                if last - distance <= CONVERGED * distance:
+                    break
+            return distance
+
+        faces, thinnest = _faces(gmsh, pieces.rubber), float("inf")
+        for walls in pieces.walls.values():
+            rim = curves(walls)
+            apart = [s for s in sorted(faces - set(walls)) if not curves([s]) & rim]
+            if not apart:
+                continue
+            blocks, own = [triangles(s) for s in apart], [triangles(s) for s in walls]
+            owner = np.repeat(apart, [len(b) for b in blocks])
+            wall = np.concatenate(own)
+            on = np.repeat(walls, [len(b) for b in own])
+            samples = wall_points(wall)
+            distances, nearest = nearest_triangles(samples, np.concatenate(blocks))
+            for i in np.argsort(distances)[:REFINED]:
+                surfaces = int(on[i // 3 if i < 3 * len(wall) else i - 3 * len(wall)]), int(owner[nearest[i]])
+                thinnest = min(thinnest, exact(samples[i], *surfaces, float(distances[i])))
+    require(np.isfinite(thinnest), "no chamber has a boundary of the body apart from its wall to measure to")
+    thinnest = float(f"{thinnest:.{WALL_DIGITS}g}")
+    cache.store("gmsh-wall", entry, {"thinnest": np.array([thinnest])})
+    return thinnest
+
+
+def _valid_wall(arrays: dict) -> bool:
+    """A cached wall thickness: one finite positive double."""
+    value = arrays["thinnest"]
+    return value.dtype == np.float64 and value.shape == (1,) and bool(np.isfinite(value[0]) and value[0] > 0)
 
 
 def _estimate(volume: float, wall_area: float, sizes: MeshSizes) -> float:

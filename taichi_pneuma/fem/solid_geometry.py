@@ -30,12 +30,13 @@ refuses a mesh past it.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 from ..errors import require, require_distinct
 from ..io.output import check_heading
 from ..limits import Budget
 from .body import Body
-from .gmsh_mesher import MAX_TETS, MeshSizes, Solid, estimate_tets, mesh_solid
+from .gmsh_mesher import MAX_TETS, MeshSizes, Solid, estimate_tets, mesh_solid, thinnest_wall
 from .mesh import Mesh
 from .meshfile import MeshSurface
 from .pneunet import PneuNet
@@ -109,18 +110,30 @@ class SolidGeometry(Body):
             return self.body.solid()
         return Solid(self.body, tuple(self.chambers))
 
+    @cached_property
+    def wall(self) -> float:
+        """The thinnest rubber around the chambers (gmsh_mesher.thinnest_wall)."""
+        return thinnest_wall(self.solid())
+
+    @cached_property
+    def mesh_sizes(self) -> MeshSizes:
+        """The sizes gmsh meshes at: the scene's, with mesh.through_wall made an edge length near the chambers (the
+        thinnest wall over it)."""
+        return self.sizes if self.sizes.through_wall is None else self.sizes.for_wall(self.wall)
+
     def estimate_sizes(self) -> MeshSizes:
-        """The sizes the count is estimated at: the scene's, but for a PneuNet whose walls (its thinnest rubber, t)
+        """The sizes the count is estimated at: mesh_sizes, but for a PneuNet whose walls (its thinnest rubber, t)
         are thinner than its edge length, edges of THIN_WALL t counted within `size` of the chambers: gmsh
         meshes a thin wall with edges about its thickness (module docstring)."""
-        near = THIN_WALL * self.body.thinnest if isinstance(self.body, PneuNet) else self.sizes.near
-        if near >= self.sizes.near:
-            return self.sizes
-        return MeshSizes(self.sizes.size, near, self.sizes.size)
+        sizes = self.mesh_sizes
+        near = THIN_WALL * self.body.thinnest if isinstance(self.body, PneuNet) else sizes.near
+        if near >= sizes.near:
+            return sizes
+        return MeshSizes(sizes.size, near, sizes.size)
 
     def size_estimate(self) -> tuple[int, int]:
         """(tetrahedra, nodes) estimated before meshing (module docstring)."""
-        graded = isinstance(self.body, PneuNet) and self.sizes.near < self.sizes.size
+        graded = isinstance(self.body, PneuNet) and self.mesh_sizes.near < self.sizes.size
         tets = int(round(estimate_tets(self.solid(), self.estimate_sizes()) * (GRADED_THIN_WALL if graded else 1)))
         nodes = tets / TETS_PER_NODE + (EDGES_PER_TET * tets if self.family.edges else 0)
         return tets, int(round(nodes))
@@ -130,7 +143,7 @@ class SolidGeometry(Body):
         weight = self.family.weight
         cap = budget.element_cap(weight)
         solid = self.solid()
-        meshed = mesh_solid(solid, self.sizes, MAX_TETS if cap is None else cap)
+        meshed = mesh_solid(solid, self.mesh_sizes, MAX_TETS if cap is None else cap)
         budget.check_mesh(len(meshed.tets), weight, "gmsh")
         walls = {
             name: meshed.chambers[shape.group if isinstance(shape, MeshSurface) else name]

@@ -35,6 +35,7 @@ from .targets import MAX_TARGETS, Target
 
 PAIR, BOX, TRIPLE = "[x, y]", "[x0, y0, x1, y1]", "[x, y, z]"
 CLAMP_STIFFNESS = 1e9  # the [clamp] stiffness key's default, in SI (Pa, 2D; Pa m, 3D)
+MESH_SIZES = ("size", "near_chambers", "distance", "through_wall")  # the [mesh] keys of gmsh_mesher.MeshSizes, in order
 POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3", unit=LENGTH))
 PLANAR_BODIES = {
     "rectangle": record(
@@ -313,7 +314,7 @@ def scene_table(scene_class) -> Table:
         )
         (material, regions), (clamp, clamp_stiffness) = v["material"], v["clamp"]
         chambers, mesh = tuple((name, shape) for name, shape, _ in v["chambers"]), v["mesh"]
-        sized = [k for k in ("size", "near_chambers", "distance") if mesh[k] is not None]
+        sized = [k for k in MESH_SIZES if mesh[k] is not None]
         planar = ["max_area"] if mesh["max_area"] is not None else []
         if is_solid_shape(v["body"]):
             require(
@@ -324,7 +325,7 @@ def scene_table(scene_class) -> Table:
                 mesh["size"] is not None,
                 "missing key 'mesh.size': a 3D body from shapes needs the tetrahedra's edge length",
             )
-            sizes = build("mesh", lambda: MeshSizes(mesh["size"], mesh["near_chambers"], mesh["distance"]))
+            sizes = build("mesh", lambda: MeshSizes(*(mesh[k] for k in MESH_SIZES)))
             geometry = SolidGeometry(v["body"], chambers, sizes, mesh["order"], clamp, v["tip"], v["rollers"])
         elif isinstance(v["body"], MeshBody):
             require(
@@ -383,7 +384,7 @@ def scene_table(scene_class) -> Table:
         return {
             "max_area": getattr(geometry, "max_area", None),
             "order": geometry.order,
-            **{k: getattr(sizes, k, None) for k in ("size", "near_chambers", "distance")},
+            **{k: getattr(sizes, k, None) for k in MESH_SIZES},
             "volumetric": None if scene.volumetric == "element" else scene.volumetric,
         }  # default: not written
 
@@ -418,6 +419,13 @@ def scene_table(scene_class) -> Table:
                         None,
                         "over which the edge length grows from near_chambers back to size (3D shapes; none: 2 size)",
                         unit=LENGTH,
+                    ),
+                    "through_wall": Key(
+                        float,
+                        None,
+                        "edges through the thinnest rubber around the chambers, instead of near_chambers: "
+                        "near_chambers = that wall's thickness / through_wall (3D shapes; the thickness measured on "
+                        "the geometry)",
                     ),
                     "order": Key(
                         int,
