@@ -181,6 +181,12 @@ RESULTS_PAGES = {
         ("benchmarks/skfem_3d.py", None),
         "python benchmarks/skfem_3d.py --coarse",
     ),
+    "ngsolve_3d": (
+        "performance",
+        "3D against NGSolve per Newton iteration, on the same meshes",
+        ("benchmarks/ngsolve_3d.py", None),
+        "python benchmarks/ngsolve_3d.py --repeats 1",
+    ),
     "amg_options": (
         "performance",
         "3D: multigrid options for quadratic tetrahedra",
