@@ -41,11 +41,12 @@ solve: only the kinked terms' are computed again). A sweep whose Hessian differs
 of at most MAX_UPDATE_RANK (a few segments changed branch) solves with the held factorisation and that difference
 by the Woodbury identity (solve/branch_update.py; NewtonOptions.sweep_updates), any other a factorisation: the same
 direction, to round-off, at a fraction of the cost (on the shipped bending actuator about half of the sweeps change
-at most 3 segments). The energy, gradient and
-residual stay the exact ones. A model with a kinked term takes no chord steps: a factorisation of another iterate's
-branches is a poor model (the fibre-reinforced actuator: 20-40% more iterations and time with them; taken only where
-the active set at u and at u + d is the factorisation's, they still cost iterations, and a ramp to 30 kPa found no
-equilibrium past 8.6 kPa).
+at most 3 segments: benchmarks/fibers.py). The energy, gradient and residual stay the exact ones. A model with a
+kinked term takes no chord steps: a factorisation of another iterate's branches is a poor model (the fibre-reinforced
+actuator: 20-40% more iterations and time with them). Taken only where every piece is on the factorisation's branch
+at u and at u + d, they still cost iterations (35 to 40 for its first 2 kPa), and its ramp in 2 increments to 30 kPa
+then found no equilibrium past 8.6 kPa; starting each direction on the branches at the last step's full length
+(u + (1 - alpha) d) instead of those at u made more sweeps, not fewer.
 
 The step u <- u + alpha d (u: displacements) starts at alpha = min(1, 0.9 max_step), the terms'
 safe bound (no triangle inverts), and halves until the Armijo condition
