@@ -8,12 +8,15 @@ Cases, each one ramp of the scene's mesh in this process (its kernels compiled f
 - "with cords, sweeps refactorised" (NewtonOptions(sweep_updates=False): every branch sweep a new factorisation, as
   before solve/branch_update.py) and "with cords" on that ramp and on 2 increments to 30 kPa: old against new.
 
-Per case: Newton iterations, chord steps (a held factorisation reused: a cheap iteration; the model without cords
-takes them, the one with cords does not: solve/newton.py), factorisations (branch sweeps' included), the Newton
-phases' seconds (hessian, assemble, factorize, solve, gradient, line_search), seconds per iteration and per
-factorisation, and the largest distance of the final nodes from those of the case it is compared with (old and
-new: the same equilibrium to the solver's tolerance). The machine is shared: the load average before each case is
-recorded, and a case's seconds vary by a quarter with it; the counts do not.
+First, one factorisation of the rest state's projected Hessian with and without the cords (the same solver, the cords'
+fill-in alone), and a solve with 1 and with 10 right-hand sides (what a sweep's low-rank update costs instead),
+alternated, median of FACTOR_REPEATS each. Then per case: Newton iterations, chord steps (a held factorisation
+reused: a cheap iteration; the model without cords takes them, the one with cords does not: solve/newton.py),
+factorisations (branch sweeps' included), the Newton phases' seconds (hessian, assemble, factorize, solve, gradient,
+line_search), seconds per iteration and per factorisation, and the largest distance of the final nodes from those of
+the case it is compared with (old and new: the same equilibrium to the solver's tolerance). The machine is shared:
+the load average before each case and the process's CPU seconds over it are recorded beside the wall time; a case's
+wall seconds vary by a quarter with the load, the counts do not.
 
     python benchmarks/fibers.py [--only with_cords_4kpa,...] [--out benchmarks/results]
 
@@ -29,6 +32,7 @@ import time
 
 import numpy as np
 
+FACTOR_REPEATS = 5
 PHASES = ("hessian", "assemble", "factorize", "solve", "gradient", "line_search")
 SHORT = {"chambers[0].keyframes": [[0, 0.0], [2, 4.0]], "schedule.increments": 2}
 LONG = {"chambers[0].keyframes": [[0, 0.0], [2, 30.0]], "schedule.increments": 2}
@@ -42,6 +46,38 @@ CASES = {
 }
 
 
+def factorisations() -> dict:
+    """Median seconds of one factorisation with and without the cords, and of solves with 1 and 10 right-hand sides
+    with the cords' factor, alternated."""
+    import statistics
+
+    import taichi_pneuma as tp
+    from taichi_pneuma.limits import Budget
+    from taichi_pneuma.solve.newton import NewtonSolver
+
+    solvers = {}
+    for name, overrides in (("with_cords", {}), ("without_cords", {"fibers": []})):
+        solver = NewtonSolver(tp.load_scene("fiber_bending_3d").with_values(overrides).build(Budget()).model)
+        solvers[name] = (solver, solver.pattern.matrix(solver.model.hessian_parts(True)))
+    times: dict = {}
+    rng = np.random.default_rng(0)
+    for _ in range(FACTOR_REPEATS):
+        for name, (solver, matrix) in solvers.items():
+            start = time.perf_counter()
+            solver.backend.factorize(matrix)
+            times.setdefault(f"factorize_{name}_s", []).append(time.perf_counter() - start)
+            if name == "with_cords":
+                for k in (1, 10):
+                    rhs = rng.standard_normal((matrix.shape[0], k))
+                    start = time.perf_counter()
+                    solver.backend.solve(rhs)
+                    times.setdefault(f"solve_{k}_rhs_s", []).append(time.perf_counter() - start)
+    record: dict = {key: statistics.median(values) for key, values in times.items()}
+    record["backend"] = solvers["with_cords"][0].backend.name
+    record["nnz"] = {name: int(matrix.nnz) for name, (_, matrix) in solvers.items()}
+    return record
+
+
 def run_case(overrides: dict, sweep_updates: bool) -> tuple[dict, np.ndarray]:
     """One ramp: its counts, phases and seconds, and the final node positions."""
     import taichi_pneuma as tp
@@ -53,9 +89,9 @@ def run_case(overrides: dict, sweep_updates: bool) -> tuple[dict, np.ndarray]:
     model = built.model
     model.energy(), model.gradient(), model.hessian_parts(True), model.hessian_parts(False)  # compile the kernels
     load = os.getloadavg()[0]
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     run = run_schedule(built, options=NewtonOptions(sweep_updates=sweep_updates))
-    seconds = time.perf_counter() - start
+    seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
     phases = {p: float(run.newton["phase_seconds"].get(p, 0.0)) for p in PHASES}
     iterations = sum(step.iterations for step in run.steps)
     newton = sum(phases.values())
@@ -69,6 +105,7 @@ def run_case(overrides: dict, sweep_updates: bool) -> tuple[dict, np.ndarray]:
         "phase_seconds": phases,
         "newton_s": newton,
         "ramp_s": seconds,
+        "ramp_cpu_s": cpu,
         "ms_per_iteration": 1e3 * newton / iterations,
         "ms_per_factorization": 1e3 * phases["factorize"] / run.newton["factorizations"],
         "factorizations_per_iteration": run.newton["factorizations"] / iterations,
@@ -78,11 +115,19 @@ def run_case(overrides: dict, sweep_updates: bool) -> tuple[dict, np.ndarray]:
     return record, run.positions[-1]
 
 
-def report(records: dict, machine: str) -> str:
+def report(factor: dict, records: dict, machine: str) -> str:
     from taichi_pneuma.apps.bench import markdown
 
     lines = [
         f"Machine: {machine}. fiber_bending_3d's mesh ({records[next(iter(records))]['dofs']} DOFs), one run each.",
+        "",
+        f"One factorisation ({factor['backend']}, the projected Hessian at rest, median of {FACTOR_REPEATS}, "
+        f"alternated): {1e3 * factor['factorize_with_cords_s']:.0f} ms with the cords "
+        f"({factor['nnz']['with_cords']} nonzeros), {1e3 * factor['factorize_without_cords_s']:.0f} ms without them "
+        f"({factor['nnz']['without_cords']}): "
+        f"{factor['factorize_with_cords_s'] / factor['factorize_without_cords_s']:.2f}x, the cords' fill-in. A solve "
+        f"with the cords' factor: {1e3 * factor['solve_1_rhs_s']:.0f} ms with 1 right-hand side, "
+        f"{1e3 * factor['solve_10_rhs_s']:.0f} ms with 10 (a sweep's update of rank 9).",
         "",
     ]
     header = [
@@ -90,7 +135,7 @@ def report(records: dict, machine: str) -> str:
         "iterations (per increment)",
         "chord steps",
         "factorisations (per iteration)",
-        "Newton s",
+        "Newton s (ramp CPU s)",
         "ms / iteration",
         "ms / factorisation",
         *(f"{p} s" for p in PHASES),
@@ -105,7 +150,7 @@ def report(records: dict, machine: str) -> str:
                 f"{r['iterations']} ({', '.join(map(str, r['per_increment']))}; {r['cuts']} cuts)",
                 r["chord_steps"],
                 f"{r['factorizations']} ({r['factorizations_per_iteration']:.2f})",
-                f"{r['newton_s']:.1f}",
+                f"{r['newton_s']:.1f} ({r['ramp_cpu_s']:.1f})",
                 f"{r['ms_per_iteration']:.0f}",
                 f"{r['ms_per_factorization']:.0f}",
                 *(f"{r['phase_seconds'][p]:.2f}" for p in PHASES),
@@ -144,6 +189,8 @@ def main() -> None:
 
     runtime.ensure_initialised()
     out = prepare_directory(args.out)
+    factor = factorisations()
+    print(f"factorisations: {factor}", file=sys.stderr, flush=True)
     records: dict = {}
     positions: dict = {}
     for name in args.only.split(","):
@@ -153,9 +200,9 @@ def main() -> None:
             moved = positions[name] - positions[against]
             records[name]["moved"] = float(np.abs(moved).max())
         print(f"{name}: {records[name]}", file=sys.stderr, flush=True)
-    save_json(out / "fibers.json", {"machine": machine(), "records": records})
-    save_text(out / "fibers.md", report(records, machine()))
-    print(report(records, machine()))
+    save_json(out / "fibers.json", {"machine": machine(), "factorisations": factor, "records": records})
+    save_text(out / "fibers.md", report(factor, records, machine()))
+    print(report(factor, records, machine()))
 
 
 if __name__ == "__main__":
