@@ -218,7 +218,8 @@ class NewtonSolver:
         """Newton direction d = -H^-1 g (to the relative residual rtol where the backend is iterative) and the
         slope g.d (nan when every backend fails); indefinite: see _backends. Where kinked terms' pieces change
         branch between u and u + d, d is solved again with H and g of the branches at u + d (BRANCH_SWEEPS), by a
-        low-rank update of the last factorisation where its rank is at most MAX_UPDATE_RANK."""
+        low-rank update of the last factorisation where its rank is at most MAX_UPDATE_RANK (a direct backend's: CG
+        preconditioned by multigrid gains nothing from it)."""
         with clock("hessian"):
             factored = self.model.hessian_parts(psd_only)
         d = self._solve(-g, factored, psd_only, clock, indefinite, rtol)
@@ -230,7 +231,7 @@ class NewtonSolver:
                 low_rank = self.model.low_rank()
                 update = (
                     branch_update(self.kinked_patterns, factored, values, MAX_UPDATE_RANK)
-                    if self.options.sweep_updates
+                    if self.options.sweep_updates and self.factored_by.name != "amg"
                     else None
                 )
             rhs = -g - self.model.branch_shift()
