@@ -39,10 +39,17 @@ the step stretches it far, the line search halves, and the active set thrashes (
 iterations and 2 cut-backs for one increment). So d is solved again, up to BRANCH_SWEEPS times, with H and g of the
 branches each piece is on at u + d (g shifted by the gradient difference, Term.branch_shift: a slack cord taut at
 u + d enters with its two-sided force k (l - L0) < 0 and stiffness k n n^T), until no piece changes branch: a
-primal-dual active-set / semismooth Newton step on the model (each sweep a factorisation, with the smooth terms'
-Hessian values of the first solve: only the kinked terms' are computed again). The energy, gradient and
-residual stay the exact ones. A model with a kinked term takes no chord steps: a factorisation of another iterate's
-branches is a poor model (the fibre-reinforced actuator: 20-40% more iterations and time with them).
+primal-dual active-set / semismooth Newton step on the model (with the smooth terms' Hessian values of the first
+solve: only the kinked terms' are computed again). A sweep whose Hessian differs from the factorised one by a rank
+of at most MAX_UPDATE_RANK (a few segments changed branch) solves with the held factorisation and that difference
+by the Woodbury identity (solve/branch_update.py; NewtonOptions.sweep_updates), any other a factorisation: the same
+direction, to round-off, at a fraction of the cost (on the shipped bending actuator about half of the sweeps change
+at most 3 segments: benchmarks/fibers.py). The energy, gradient and residual stay the exact ones. A model with a
+kinked term takes no chord steps: a factorisation of another iterate's branches is a poor model (the fibre-reinforced
+actuator: 20-40% more iterations and time with them). Taken only where every piece is on the factorisation's branch
+at u and at u + d, they still cost iterations (35 to 40 for its first 2 kPa), and its ramp in 2 increments to 30 kPa
+then found no equilibrium past 8.6 kPa; starting each direction on the branches at the last step's full length
+(u + (1 - alpha) d) instead of those at u made more sweeps, not fewer.
 
 The step u <- u + alpha d (u: displacements) starts at alpha = min(1, 0.9 max_step), the terms'
 safe bound (no triangle inverts), and halves until the Armijo condition
@@ -69,6 +76,7 @@ import numpy as np
 
 from ..errors import require, require_finite
 from ..terms.model import EnergyModel
+from .branch_update import branch_update
 from .linsolve import (
     BACKENDS,
     FactorizationError,
@@ -85,6 +93,7 @@ STEP_SAFETY = 0.9
 FORCING_MAX = 0.01  # forcing_term's largest eta
 CHORD_MAX_CONTRACTION = 0.5  # a chord step contracting the residual less than this is followed by a fresh Hessian
 BRANCH_SWEEPS = 4  # direction re-solves on the branches at u + d of kinked terms (the module docstring)
+MAX_UPDATE_RANK = 9  # ... by a low-rank update of the held factorisation up to this rank (3 cord segments in 3D)
 CHORD_MAX_NEEDED = 3  # ... and so is one after which more than this many would be needed to reach tol
 
 
@@ -126,6 +135,7 @@ class SolveRecord:
     exact_factor: bool = False  # the backend holds the exact Hessian of an iterate of this solve
     chord_steps: int = 0  # iterations that solved with a factorisation already held (no new Hessian)
     chord_rejected: int = 0  # chord steps tried and given up for a fresh Hessian (their full step not a decrease)
+    factorizations: int = 0  # factorisations tried (branch sweeps' and refused ones included)
     stopped: bool = False  # the caller's stop() ended the solve
     phase_seconds: dict[str, float] = field(default_factory=dict)
     seconds: float = 0.0
@@ -142,6 +152,7 @@ class NewtonOptions:
     max_iterations: int = 40
     linear_solver: str = "auto"
     chord_steps: bool | None = None  # reuse a held factorisation (the module docstring); None: in 3D only
+    sweep_updates: bool = True  # branch sweeps of low rank by the held factorisation (the module docstring)
 
     def __post_init__(self):
         require(require_finite("tol", self.tol) > 0, f"tol = {self.tol!r} must be > 0")
@@ -180,6 +191,8 @@ class NewtonSolver:
         )
         self.factored_by, self.factored = self.backend, False  # the backend holding the last factorisation
         self.factored_exact = False  # ... and whether it is of an exact Hessian
+        self.factorizations = 0  # factorisations tried by this solver
+        self.kinked_patterns = [t.hessian_pattern() if t.kinked else None for t in model.terms]
         self.chord = (
             model.config.dim == 3 and not model.kinked if self.options.chord_steps is None else self.options.chord_steps
         )
@@ -208,33 +221,50 @@ class NewtonSolver:
     ) -> tuple[np.ndarray, float]:
         """Newton direction d = -H^-1 g (to the relative residual rtol where the backend is iterative) and the
         slope g.d (nan when every backend fails); indefinite: see _backends. Where kinked terms' pieces change
-        branch between u and u + d, d is solved again with H and g of the branches at u + d (BRANCH_SWEEPS)."""
-        d, parts = self._solve(-g, psd_only, clock, indefinite, rtol)
+        branch between u and u + d, d is solved again with H and g of the branches at u + d (BRANCH_SWEEPS), by a
+        low-rank update of the last factorisation where its rank is at most MAX_UPDATE_RANK (a direct backend's: CG
+        preconditioned by multigrid gains nothing from it)."""
+        with clock("hessian"):
+            factored = self.model.hessian_parts(psd_only)
+        d = self._solve(-g, factored, psd_only, clock, indefinite, rtol)
         for _ in range(BRANCH_SWEEPS):
             if not np.isfinite(d[0]) or not self.model.choose_branches(d):
                 break
-            d, parts = self._solve(-g - self.model.branch_shift(), psd_only, clock, indefinite, rtol, parts)
+            with clock("hessian"):
+                values = self.model.hessian_parts(psd_only, factored)
+                low_rank = self.model.low_rank()
+                update = (
+                    branch_update(self.kinked_patterns, factored, values, MAX_UPDATE_RANK)
+                    if self.options.sweep_updates and self.factored_by.name != "amg"
+                    else None
+                )
+            rhs = -g - self.model.branch_shift()
+            if update is None:
+                d, factored = self._solve(rhs, values, psd_only, clock, indefinite, rtol), values
+            else:
+                with clock("solve"):
+                    d = solve_low_rank_updated(self.factored_by, rhs, low_rank + update, rtol)
         self.model.choose_branches(None)
         return d, float(g @ d)
 
     def _solve(
         self,
         rhs: np.ndarray,
+        values: list[np.ndarray],
         psd_only: bool,
         clock: PhaseClock,
         indefinite: bool,
         rtol: float | None,
-        reuse: list[np.ndarray] | None = None,
-    ) -> tuple[np.ndarray, list[np.ndarray]]:
-        """(H^-1 rhs with a fresh Hessian (nan where every backend fails), the terms' Hessian parts); reuse: the parts
-        of a solve at the same u, of which only the kinked terms' are computed again (a branch sweep)."""
+    ) -> np.ndarray:
+        """H^-1 rhs with a fresh factorisation of the Hessian of the terms' parts `values` (nan where every backend
+        fails)."""
         with clock("hessian"):
-            values = self.model.hessian_parts(psd_only, reuse)
             low_rank = self.model.low_rank()
         with clock("assemble"):
             matrix = self.pattern.matrix(values)
         for backend in self._backends(psd_only, indefinite):
             try:
+                self.factorizations += 1
                 with clock("factorize"):
                     backend.factorize(matrix)
                 with clock("solve"):
@@ -244,9 +274,9 @@ class NewtonSolver:
                 self.cg_failed |= psd_only and backend.name == "amg"
                 continue
         else:
-            return rhs * math.nan, values
+            return rhs * math.nan
         self.factored_by, self.factored, self.factored_exact = backend, True, not psd_only
-        return d, values
+        return d
 
     def _reused_direction(self, g: np.ndarray, clock: PhaseClock, rtol: float) -> tuple[np.ndarray, float]:
         """d = -H_old^-1 g with the factorisation the backend holds (a chord step) and the slope g.d; nan where
@@ -284,6 +314,7 @@ class NewtonSolver:
         u = np.array(u0, dtype=np.float64).ravel()
         record = SolveRecord()
         clock = PhaseClock(record.phase_seconds)
+        factorizations = self.factorizations
         with clock("line_search"):
             energy = self._energy_at(u)
         chord = False  # the last step was a chord step
@@ -347,6 +378,7 @@ class NewtonSolver:
             record.chord_steps += chord
             record.step_sizes.append(alpha)
             full = full if chord else alpha == 1.0
+        record.factorizations = self.factorizations - factorizations
         record.seconds = time.perf_counter() - start
         return u.reshape(model.config.u.shape), record
 

@@ -291,7 +291,12 @@ def run_schedule(
     forces: list[np.ndarray] = []  # contact forces on the vertices
     reached = schedule.rest_commands
     previous = None  # (commands, u) of the equilibrium before the last one, for the predictor
-    newton = {"linear_solver": solver.backend.name, "chord_steps": 0, "phase_seconds": collections.Counter()}
+    newton = {
+        "linear_solver": solver.backend.name,
+        "chord_steps": 0,
+        "factorizations": 0,
+        "phase_seconds": collections.Counter(),
+    }
 
     def partial():
         return Run(
@@ -319,6 +324,7 @@ def run_schedule(
             term.advance(u)
         for record in records:
             newton["chord_steps"] += record.chord_steps
+            newton["factorizations"] += record.factorizations
             newton["phase_seconds"].update(record.phase_seconds)
         step, vertex_forces = step_record(
             built, i, target, u, records, cuts, time.perf_counter() - start, stretches, steps[-1] if steps else None
