@@ -17,12 +17,25 @@ det F < 0) comes from the same iteration on C = F^T F = V diag(sigma^2) V^T (eig
 v_3 flipped to make det V = 1): u_1 = F v_1 / |F v_1|, u_2 the unit part of F v_2 normal to u_1,
 u_3 = u_1 x u_2, and sigma_i = u_i . F v_i (signed). Unlike Taichi's own ti.svd (a fixed number of
 approximate rotations: |U S V^T - F| up to 4e-10 |F| in float64) it is exact to round-off.
+
+For an isotropic law (psi(R F Q^T) = psi(F) for rotations R, Q) the SVD gives the 9 x 9 d2psi/dF2's eigenvectors
+without iterating (isotropic_eigensystem; Smith et al. 2019, "Analytic eigensystems for isotropic distortion
+energies"): in the frame of U and V the Hessian at diag(sigma) keeps each pair {e_ij, e_ji} (i != j) apart from the
+rest (reflections diag(+-1) on both sides fix diag(sigma)) and is symmetric in the two (psi(F^T) = psi(F)), so
+
+    twist_k = (u_i v_j^T - u_j v_i^T) / sqrt 2,   flip_k = (u_i v_j^T + u_j v_i^T) / sqrt 2    ((i, j, k) cyclic)
+
+are eigenvectors, for repeated singular values too; the other three lie in the span of D_i = u_i v_i^T, the
+eigenvectors of the 3 x 3 A_ij = D_i : M : D_j. Each eigenvalue is its vector's Rayleigh quotient q . M q (exact
+for an eigenvector), so any isotropic law's M serves: 9 matrix-vector products and a 3 x 3 Jacobi instead of the
+9 x 9 one.
 """
 
 from ..backend import ti
 
 EPSILON = 1e-15
 MAX_SWEEPS = 50
+SQRT_HALF = 0.7071067811865476
 
 
 @ti.func
@@ -105,3 +118,28 @@ def rotation_variant_svd(F):
     u3 = u1.cross(u2)
     U = ti.Matrix.cols([u1, u2, u3])
     return U, ti.Vector([u1.dot(F @ v1), u2.dot(w), u3.dot(F @ v3)]), V
+
+
+@ti.func
+def isotropic_eigensystem(M, F):
+    """Eigenvalues (9) and unit eigenvectors (rows of a 9 x 9 matrix, over vec(F) row by row) of the d2psi/dF2 M of
+    an isotropic law at the 3 x 3 F: twists, flips, then scalings (module docstring)."""
+    U, _, V = rotation_variant_svd(F)
+    values = ti.Vector.zero(ti.f64, 9)
+    vectors = ti.Matrix.zero(ti.f64, 9, 9)
+    D = ti.Matrix.zero(ti.f64, 3, 9)
+    for k in ti.static(range(3)):
+        i, j = (k + 1) % 3, (k + 2) % 3
+        for a, b in ti.static(ti.ndrange(3, 3)):
+            vectors[k, 3 * a + b] = SQRT_HALF * (U[a, i] * V[b, j] - U[a, j] * V[b, i])
+            vectors[3 + k, 3 * a + b] = SQRT_HALF * (U[a, i] * V[b, j] + U[a, j] * V[b, i])
+            D[k, 3 * a + b] = U[a, k] * V[b, k]
+    for m in ti.static(range(6)):
+        q = ti.Vector([vectors[m, c] for c in ti.static(range(9))], dt=ti.f64)
+        values[m] = q.dot(M @ q)
+    scalings, rows = symmetric_eigensystem(D @ M @ D.transpose())
+    for m in ti.static(range(3)):
+        values[6 + m] = scalings[m]
+        for c in ti.static(range(9)):
+            vectors[6 + m, c] = rows[m, 0] * D[0, c] + rows[m, 1] * D[1, c] + rows[m, 2] * D[2, c]
+    return values, vectors

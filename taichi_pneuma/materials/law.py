@@ -16,7 +16,8 @@ entries of P give the stress that holds the thickness fixed. So a 2D kernel embe
 3 x 3 one and calls the same functions as a 3D kernel would.
 
 The projected-Newton Hessian needs the eigenpairs of d2psi/dF2 restricted to the d x d block. A law
-may give them in closed form (eigensystem(F, p, d) for the d in analytic_dims, its fast path); for any
+may give them in closed form (eigensystem(F, p, d) for the d in analytic_dims, its fast path); in 3D an
+isotropic law's come from F's SVD and its stress_derivative (materials.eigen.isotropic_eigensystem); for any
 other d they come from materials.eigen's Jacobi iteration on stress_derivative. Either way
 stress_eigensystem() returns d^2 eigenvalues and unit eigenvectors (rows).
 
@@ -29,7 +30,7 @@ import functools
 import numpy as np
 
 from ..backend import ti
-from .eigen import symmetric_eigensystem
+from .eigen import isotropic_eigensystem, symmetric_eigensystem
 from .invariants import cofactor, determinant_hessian, flat
 
 
@@ -38,12 +39,15 @@ class Law:
     template argument: each kernel compiles once per law and dimension.
 
     name: its registry key; parameter_names: the entries of its per-element parameter vector;
-    analytic_dims: the dimensions d in which eigensystem() gives the eigenpairs of d2psi/dF2 in closed form.
+    analytic_dims: the dimensions d in which eigensystem() gives the eigenpairs of d2psi/dF2 in closed form;
+    isotropic: psi(R F Q^T) = psi(F) for rotations R, Q, so that in 3D F's SVD gives the eigenvectors
+    (eigen.isotropic_eigensystem).
     """
 
     name = "law"
     parameter_names: tuple[str, ...] = ()
     analytic_dims: tuple[int, ...] = ()
+    isotropic = True
 
     @staticmethod
     def parameters(youngs_modulus: np.ndarray, poisson_ratio: np.ndarray) -> np.ndarray:
@@ -80,7 +84,7 @@ def volumetric_split(law: type[Law]) -> type[Law]:
 
     the element part of the patch-averaged volumetric energy (terms/nodal_volume.py): at pbar = 0 the energy
     psi - U(J), at the averaged pressure its forces and Hessian. One class per law (so its kernels compile once);
-    its eigenpairs come from the Jacobi iteration."""
+    its eigenpairs (3D) from its SVD, as it is isotropic too."""
     n = len(law.parameter_names)
 
     @ti.func
@@ -139,9 +143,12 @@ def in_plane(M, d: ti.template()):
 @ti.func
 def stress_eigensystem(law: ti.template(), F, p, d: ti.template()):
     """Eigenvalues (d^2) and unit eigenvectors (rows, d^2 x d^2) of d2psi/dF2 on the leading d x d block of
-    the 3 x 3 F: the law's closed form where it has one, else the Jacobi iteration."""
+    the 3 x 3 F: the law's closed form where it has one, else in 3D an isotropic law's from F's SVD
+    (eigen.isotropic_eigensystem), else the Jacobi iteration."""
     if ti.static(d in law.analytic_dims):
         return law.eigensystem(F, p, d)
+    elif ti.static(d == 3 and law.isotropic):
+        return isotropic_eigensystem(law.stress_derivative(F, p), F)
     else:
         return symmetric_eigensystem(in_plane(law.stress_derivative(F, p), d))
 

@@ -47,12 +47,10 @@ import numpy as np
 from ..backend import ti
 from ..errors import require, require_finite
 from ..io.units import PRESSURE, si_default
-from .eigen import rotation_variant_svd, symmetric_eigensystem
+from .eigen import SQRT_HALF, rotation_variant_svd, symmetric_eigensystem
 from .invariants import cofactor, determinant_hessian, flat
 from .law import Law, register
 from .registry import POISSON_RATIO, MaterialForm, MaterialKey, register_form, selector_names
-
-SQRT_HALF = 0.7071067811865476
 
 
 def lame_parameters(youngs_modulus, poisson_ratio):
