@@ -34,6 +34,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from taichi_pneuma import api, runtime
+from taichi_pneuma.apps.quality import mesh_values
 from taichi_pneuma.io.output import prepare_directory, save_json, save_text
 from taichi_pneuma.solve.simulate import RampStopped
 
@@ -46,15 +47,14 @@ PLANS = {
 }
 ELEMENTS = {"P1": (1, "element"), "P2": (2, "element"), "P2/P0": (2, "mixed")}  # mesh.order, mesh.volumetric
 MEASURES = {"fiber_bending_3d": "tip_rotation", "blocked_force_3d": "blocked_force", "fiber_twist_3d": "tip_twist"}
-LENGTHS = ("size", "near_chambers", "distance")
 
 
 def run(name: str, elements: str, scale: float) -> dict:
     """One ramp of the named scene on its mesh scaled by scale, of these elements (ELEMENTS): its measure per
     increment."""
     scene = api.load_scene(SCENES / f"{name}.toml")
-    mesh = scene.geometry.sizes  # type: ignore[attr-defined]
-    values = {f"mesh.{key}": getattr(mesh, key) * scale for key in LENGTHS}
+    mesh = scene.geometry.mesh_sizes  # type: ignore[attr-defined]
+    values = mesh_values(scene.geometry, mesh.size * scale, mesh.near * scale, mesh.grading * scale)
     order, volumetric = ELEMENTS[elements]
     scene = scene.with_values({**values, "mesh.order": order, "mesh.volumetric": volumetric})
     start, cpu = time.perf_counter(), time.process_time()

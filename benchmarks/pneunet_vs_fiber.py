@@ -51,6 +51,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from taichi_pneuma import api, runtime  # noqa: E402
+from taichi_pneuma.apps.quality import mesh_values  # noqa: E402
 from taichi_pneuma.io.output import prepare_directory, save_json, save_text  # noqa: E402
 from taichi_pneuma.render.drawing import draw_surface  # noqa: E402
 from taichi_pneuma.result import Result  # noqa: E402
@@ -115,7 +116,6 @@ PLANS = {
 }
 COARSE = {case: [("P1", 1.5), ("P1", 1.0)] for case in PLANS}
 ELEMENTS = {"P1": (1, "element"), "P2/P0": (2, "mixed")}  # mesh.order, mesh.volumetric
-LENGTHS = ("size", "near_chambers", "distance")
 COLUMNS = ("tip_rotation", "tip_dx", "max_stretch")
 WORDS = {"P1": "linear tetrahedra", "P2/P0": "quadratic tetrahedra, one pressure per element"}
 LABELS = {"fiber_bending_3d": "fibre-reinforced (fiber_bending_3d)", "pneunet": "PneuNet (12 chambers)"}
@@ -127,9 +127,9 @@ def scene_of(case: str, elements: str, scale: float):
         scene = read_scene(tomllib.loads(PNEUNET), "pneunet_vs_fiber")
     else:
         scene = api.load_scene(SCENES / f"{case}.toml")
-    mesh = scene.geometry.sizes  # type: ignore[attr-defined]
+    mesh = scene.geometry.mesh_sizes  # type: ignore[attr-defined]
     order, volumetric = ELEMENTS[elements]
-    lengths = {f"mesh.{key}": getattr(mesh, key) * scale for key in LENGTHS}
+    lengths = mesh_values(scene.geometry, mesh.size * scale, mesh.near * scale, mesh.grading * scale)
     return scene.with_values({**lengths, "mesh.order": order, "mesh.volumetric": volumetric})
 
 

@@ -121,14 +121,10 @@ def with_quality(scene, args: argparse.Namespace):
     size = significant(bulk * sizes.size)
     own_near = geometry.mesh_sizes.near
     close = size if near is None else significant(near * own_near)
-    values = {"mesh.size": size, "mesh.distance": size, "mesh.order": order}
     scenes = f"{own_near:g}{length}"
-    if sizes.through_wall is None:
-        values["mesh.near_chambers"] = close
-    else:  # the scene's edges through its thinnest wall, scaled alike
-        values["mesh.through_wall"] = significant(geometry.wall / close)
+    if sizes.through_wall is not None:
         scenes += f" ({sizes.through_wall:g} through its thinnest wall, {geometry.wall:g}{length})"
-    scene = scene.with_values(values)
+    scene = scene.with_values({**mesh_values(geometry, size, close, size), "mesh.order": order})
     near_chambers = (
         f"uniform (the scene's: {scenes} near the chambers)"
         if near is None
@@ -139,6 +135,15 @@ def with_quality(scene, args: argparse.Namespace):
         f"{near_chambers}, {ORDER_WORDS[order]} (the scene's: {ORDER_WORDS[geometry.order]})"
     )
     return scene, f"quality {quality}: {said}{tol}"
+
+
+def mesh_values(geometry, size: float, near: float, distance: float) -> dict:
+    """The [mesh] values (dotted keys) that mesh a body from shapes at these lengths: near as near_chambers, or, for
+    a scene sized through its walls, as the edges through its thinnest wall (through_wall = wall / near)."""
+    values = {"mesh.size": size, "mesh.distance": distance}
+    if geometry.sizes.through_wall is None:
+        return {**values, "mesh.near_chambers": near}
+    return {**values, "mesh.through_wall": significant(geometry.wall / near)}
 
 
 def preset_note(scene, args: argparse.Namespace | None) -> str:
