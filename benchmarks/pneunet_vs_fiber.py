@@ -16,8 +16,8 @@ the same 0.1 mm paper sheet ([[layers]], side = "bottom") on the base's bottom f
 is not used (layer = 0). The chambers are sealed from each other and pressurised together (a real PneuNet joins them
 by a channel; a common pressure is the same load).
 
-Both are clamped at their left end, meshed alike (the shipped fibre actuator's gmsh lengths: 4 mm in the bulk, 3 mm
-within 3 mm of the chambers, times a mesh scale) and ramped alike: 8 increments of 15 kPa to 120 kPa, or to where a
+Both are clamped at their left end, meshed alike (PNEUNET's gmsh lengths: 4 mm in the bulk, 3 mm within 3 mm of the
+chambers, times a mesh scale) and ramped alike: 8 increments of 15 kPa to 120 kPa, or to where a
 ramp stops. Linear tetrahedra (P1) lock in this nearly incompressible rubber: the fibre actuator's converge about a
 quarter short (benchmarks/results/actuators.md), and the PneuNet's, all of whose rubber is 2 mm walls, lock far more,
 so both are run on quadratic tetrahedra with one pressure per element (P2/P0, mesh.volumetric = "mixed", as
@@ -127,7 +127,7 @@ def scene_of(case: str, elements: str, scale: float):
         scene = read_scene(tomllib.loads(PNEUNET), "pneunet_vs_fiber")
     else:
         scene = api.load_scene(SCENES / f"{case}.toml")
-    mesh = scene.geometry.mesh_sizes  # type: ignore[attr-defined]
+    mesh = read_scene(tomllib.loads(PNEUNET), "pneunet_vs_fiber").geometry.sizes  # type: ignore[attr-defined]
     order, volumetric = ELEMENTS[elements]
     lengths = mesh_values(scene.geometry, mesh.size * scale, mesh.near * scale, mesh.grading * scale)
     return scene.with_values({**lengths, "mesh.order": order, "mesh.volumetric": volumetric})

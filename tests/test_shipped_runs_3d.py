@@ -15,7 +15,7 @@ def mesh(size: float, near: float, distance: float, order: int | None = None) ->
 COARSER = {
     "beam_3d_ellipsoid": mesh(0.4, 0.2, 0.4, order=1),
     "blocked_force_3d": mesh(12, 6, 6, order=1),
-    "fiber_bending_3d": mesh(12, 6, 6, order=1),
+    "fiber_bending_3d": mesh(12, 6, 6, order=1),  # near_chambers replaces the scene's through_wall
     "fiber_twist_3d": mesh(6, 4, 4, order=1),
     "pneunet_3d": mesh(0.5, 0.5, 0.5, order=1),
 }

@@ -32,18 +32,19 @@ def mesh_of(s):
 def sizes(s):
     """A 3D body's (edge length, near the chambers, grading distance, order)."""
     g = s.geometry
-    return (g.sizes.size, g.sizes.near, g.sizes.distance, g.order)
+    return (g.sizes.size, g.mesh_sizes.near, g.sizes.distance, g.order)
 
 
 def test_draft_on_fiber_bending_3d_is_its_own_mesh_coarsened_not_millimetres_of_0_3(capsys):
-    """fiber_bending_3d.toml meshes at 4 mm, 3 mm near the chamber, grading over 3 mm, quadratic: draft is 1.5 times
-    its edge length, uniform (grading over that length), linear (0141107: 0.3 mm, 2,494,522 tetrahedra, refused)."""
+    """fiber_bending_3d.toml meshes at 5 mm, 4 mm near the chamber (half an edge through its 2 mm walls), grading
+    over 4 mm, quadratic: draft is 1.5 times its edge length, uniform (grading over that length), linear (0141107:
+    0.3 mm, 2,494,522 tetrahedra, refused)."""
     draft = scene("--scene", "fiber_bending_3d", "--quality", "draft")
-    assert sizes(draft) == (6.0, 6.0, 6.0, 1)
-    assert 500 < mesh_of(draft).n_elements < 3586  # the scene as written has 3586 tetrahedra (its description)
+    assert sizes(draft) == (7.5, 7.5, 7.5, 1)
+    assert 300 < mesh_of(draft).n_elements < mesh_of(scene("--scene", "fiber_bending_3d")).n_elements
     assert capsys.readouterr().out.startswith(
-        "quality draft: tetrahedra of 6 mm (x1.5 the scene's 4 mm), uniform (the scene's: 3 mm near the chambers), "
-        "linear (the scene's: quadratic); Newton tolerance 0.0001\n"
+        "quality draft: tetrahedra of 7.5 mm (x1.5 the scene's 5 mm), uniform (the scene's: 4 mm (0.5 through its "
+        "thinnest wall, 2 mm) near the chambers), linear (the scene's: quadratic); Newton tolerance 0.0001\n"
     )
 
 
@@ -146,7 +147,7 @@ def test_a_mesh_file_keeps_its_tetrahedra_and_takes_the_presets_order(capsys):
 
 
 def test_without_quality_a_scene_is_as_written_and_set_still_overrides_the_preset(capsys):
-    assert sizes(scene("--scene", "fiber_bending_3d")) == (4.0, 3.0, 3.0, 2)
+    assert sizes(scene("--scene", "fiber_bending_3d")) == (5.0, pytest.approx(4.0, rel=1e-9), 4.0, 2)
     assert scene("--scene", "pneunet_mm_kpa").geometry.max_area == 2.0
     assert capsys.readouterr().out == ""  # nothing asked, nothing said
     s = scene("--scene", "pneunet_mm_kpa", "--quality", "draft", "--set", "mesh.max_area=3")

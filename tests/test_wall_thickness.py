@@ -99,6 +99,11 @@ def test_through_wall_makes_the_edge_length_near_the_chambers_the_wall_over_it()
 
 
 def test_through_wall_and_near_chambers_are_one_or_the_other():
+    """A scene file gives one of them; setting one (--set, with_values) replaces the other."""
+    scene = read_scene(actuator(through_wall=0.5), "a").with_values({"mesh.near_chambers": 3.0})
+    assert (scene.geometry.sizes.near_chambers, scene.geometry.sizes.through_wall) == (3.0, None)
+    back = scene.with_values({"mesh.through_wall": 1.0}).geometry
+    assert (back.sizes.near_chambers, back.mesh_sizes.near) == (None, pytest.approx(2.0, rel=1e-9))
     with pytest.raises(PneumaInputError, match=r"near_chambers = 3.0 and through_wall = 1.0: give one of them"):
         read_scene(actuator(near_chambers=3.0, through_wall=1.0), "a")
     with pytest.raises(PneumaInputError, match=r"through_wall = -1.0 must be > 0"):
@@ -110,11 +115,12 @@ def test_through_wall_and_near_chambers_are_one_or_the_other():
     [  # (size, edges through the 2 mm wall, order) from the scene's 4 mm, 0.5 through the wall (4 mm near it)
         ("draft", (6.0, 2 / 6, 1)),  # uniform at 1.5 times the size: 6 mm through a 2 mm wall is 1/3 of an edge
         ("default", (6.0, 0.5 / 1.5, 2)),
-        ("high", (6.0, 0.5, 2)),
-        ("accurate", (4.0, 0.5 / 0.8, 2)),
+        ("high", (4.0, 0.5 / 0.75, 2)),  # the walls' presets: finer through the wall, the bulk the scene's
+        ("accurate", (4.0, 0.5 * 2, 2)),
     ],
 )
 def test_a_quality_preset_scales_the_edges_through_the_wall(tmp_path, quality, expected):
+    """A body sized through its walls takes the walls' presets (apps/quality.py QUALITY_WALL)."""
     from taichi_pneuma.apps.cli import scene_of_flags
     from taichi_pneuma.apps.inflate import parser
     from taichi_pneuma.io.tomltext import dumps

@@ -18,7 +18,16 @@ from ..errors import PneumaInputError, require, require_finite
 from ..fem import sizing
 from ..io.units import LENGTH, MEASURES, PRESSURE
 from ..render import COLOR_FIELDS, RENDERERS
-from .quality import AREA_STEP, ORDER_WORDS, QUALITY, QUALITY_3D, QUALITY_TOL, preset_note, with_quality
+from .quality import (
+    AREA_STEP,
+    ORDER_WORDS,
+    QUALITY,
+    QUALITY_3D,
+    QUALITY_TOL,
+    QUALITY_WALL,
+    preset_note,
+    with_quality,
+)
 
 MEASURE = {2: "area", 3: "volume"}  # what a chamber encloses, by dimension
 MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_iterations, simulate.MAX_CUTS)
@@ -81,6 +90,15 @@ def result_stem(base: str, args: argparse.Namespace, *scenes) -> str:
     return base + (f"_{suffix}" if suffix else "") + quality_stem(args)
 
 
+def factors(table: dict) -> str:
+    """A 3D preset table's (bulk, near, order) per quality in words, for --quality's help."""
+    words = {
+        k: ("uniform" if near is None else f"x{near:.3g}", ORDER_WORDS[o] if o else "its order")
+        for k, (_, near, o) in table.items()
+    }
+    return "; ".join(f"{k} x{table[k][0]:.3g}, {near}, {order}" for k, (near, order) in words.items())
+
+
 def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
     """The reference-beam, ramp, solver and output flags shared by the apps (all but the chamber height)."""
     p.add_argument("--cx", type=float, default=BEAM_DEFAULTS["cx"], help="chamber centre along the beam")
@@ -104,12 +122,9 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
         + ", ".join(f"{k} max area {a:g} order {o}" for k, (a, o, _) in QUALITY.items())
         + ". 3D, where --quality is given (without it the scene keeps its [mesh]), the scene's tetrahedron size "
         "(also the grading distance) times, and near the chambers: "
-        + "; ".join(
-            f"{k} x{h:g}, "
-            + ("uniform" if near is None else f"x{near:g}")
-            + f", {'its order' if o is None else ORDER_WORDS[o]}"
-            for k, (h, near, o) in QUALITY_3D.items()
-        )
+        + factors(QUALITY_3D)
+        + "; a body sized through its walls (mesh.through_wall): "
+        + factors(QUALITY_WALL)
         + " (a mesh file keeps its tetrahedra: linear at draft, quadratic at high and accurate). Newton tolerance "
         + ", ".join(f"{k} {t:g}" for k, t in QUALITY_TOL.items())
         + ". A quality other than the default adds _QUALITY to the result file names",

@@ -1,7 +1,8 @@
 """The --quality presets, relative to the scene's own [mesh], so that a scene in any units (or none) has a coarser,
 faster draft and a finer high of itself (on the reference beams, the meshes the accuracy studies measured): the
-ladders and factors (QUALITY, QUALITY_3D, MESH_FILE_ORDER), a scene with its preset applied and the line that says
-what the preset means for it (with_quality), and the preset's measured error where it was measured (preset_note).
+ladders and factors (QUALITY, QUALITY_3D, QUALITY_WALL, MESH_FILE_ORDER), a scene with its preset applied and the
+line that says what the preset means for it (with_quality), and the preset's measured error where it was measured
+(preset_note).
 """
 
 from __future__ import annotations
@@ -29,6 +30,17 @@ QUALITY_3D: dict[str, tuple[float, float | None, int | None]] = {
     "default": (1.5, 1.5, None),
     "high": (1.5, 1.0, None),
     "accurate": (1.0, 0.8, None),
+}
+# ... and those of a body sized through its walls (mesh.through_wall), where the edges through the wall decide the
+# accuracy and the bulk matters little: the near factor divides the edges through the wall (default 2/3 of the
+# scene's, high 4/3 of them, accurate twice), the bulk stays the scene's above default. Read off the actuators'
+# meshes (docs/actuators.md "Converged references", 2026-12-07): fiber_bending_3d (5 mm, 4 near the chamber:
+# 1.5 %) at default 3.1 %, high 0.23 %; fiber_twist_3d (3 mm, 2 near it: 1.6 %) at default 7.7 %, high 0.13 %.
+QUALITY_WALL: dict[str, tuple[float, float | None, int | None]] = {
+    "draft": (1.5, None, 1),
+    "default": (1.5, 1.5, None),
+    "high": (1.0, 0.75, None),
+    "accurate": (1.0, 0.5, None),
 }
 # A mesh file's order at each preset: its tetrahedra cannot be remeshed, so high and accurate make them quadratic.
 MESH_FILE_ORDER = {"draft": 1, "default": None, "high": 2, "accurate": 2}
@@ -88,9 +100,10 @@ MEASURED_ERROR_3D: dict[str, dict[str, float]] = {
 def with_quality(scene, args: argparse.Namespace):
     """The scene file's scene with its --quality preset applied, and the line that says what the preset means for
     this scene ('' where nothing was asked: --quality not given). A 2D scene: planar_preset's max area and order (the
-    default: the scene as written). A 3D body from shapes, where --quality was given: QUALITY_3D's factors on its
-    edge lengths (the grading distance: the new edge length), and its order. A mesh file, where --quality was given:
-    its own tetrahedra (they cannot be remeshed), in MESH_FILE_ORDER's order."""
+    default: the scene as written). A 3D body from shapes, where --quality was given: QUALITY_3D's factors
+    (QUALITY_WALL's for a body sized through its walls) on its edge lengths (the grading distance: the new edge
+    length), and its order. A mesh file, where --quality was given: its own tetrahedra (they cannot be remeshed), in
+    MESH_FILE_ORDER's order."""
     quality, given = args.quality, getattr(args, "quality_given", False)
     tol = f"; Newton tolerance {args.tol:g}"
     geometry, units = scene.geometry, scene.units
@@ -115,7 +128,7 @@ def with_quality(scene, args: argparse.Namespace):
             f"quality {quality}: the mesh file's own tetrahedra (a mesh file cannot be remeshed), "
             f"{ORDER_WORDS[order]} (the scene's: {ORDER_WORDS[geometry.order]}){tol}"
         )
-    bulk, near, preset_order = QUALITY_3D[quality]
+    bulk, near, preset_order = (QUALITY_3D if geometry.sizes.through_wall is None else QUALITY_WALL)[quality]
     order = preset_order or geometry.order
     sizes, length = geometry.sizes, units.suffix(LENGTH)
     size = significant(bulk * sizes.size)

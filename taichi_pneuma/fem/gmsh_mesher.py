@@ -87,7 +87,7 @@ WALL_SAMPLING = 1 / 50  # thinnest_wall's surface mesh: edges at most this fract
 REFINED = 16  # ... and the wall points nearest the other boundaries on it, measured again on the exact surfaces
 ALTERNATIONS = 5000  # at most so many projections to and fro between the two surfaces, to their nearest points,
 CONVERGED = 1e-12  # until the distance falls by less than this fraction (a ball near a plane: by R / (R + d) each)
-WALL_DIGITS = 10  # significant digits of the measured thickness: a 2 mm wall is 2, not 1.999999999999999
+WALL_DIGITS = 10  # significant digits of a measured thickness and the size from it: 2 mm, not 1.999999999999999
 # a tetrahedron's four faces (corners in its local numbering), each oriented outward for a positive tetrahedron
 TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
 MESHER_SOURCES = (
@@ -125,10 +125,11 @@ class MeshSizes:
         )
 
     def for_wall(self, thickness: float) -> MeshSizes:
-        """The sizes with near_chambers = thickness / through_wall (these sizes if through_wall is not given)."""
+        """The sizes with near_chambers = thickness / through_wall, to WALL_DIGITS (these sizes if through_wall is not
+        given)."""
         if self.through_wall is None:
             return self
-        return MeshSizes(self.size, thickness / self.through_wall, self.distance)
+        return MeshSizes(self.size, float(f"{thickness / self.through_wall:.{WALL_DIGITS}g}"), self.distance)
 
     @property
     def near(self) -> float:

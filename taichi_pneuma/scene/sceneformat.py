@@ -36,6 +36,8 @@ from .targets import MAX_TARGETS, Target
 PAIR, BOX, TRIPLE = "[x, y]", "[x0, y0, x1, y1]", "[x, y, z]"
 CLAMP_STIFFNESS = 1e9  # the [clamp] stiffness key's default, in SI (Pa, 2D; Pa m, 3D)
 MESH_SIZES = ("size", "near_chambers", "distance", "through_wall")  # the [mesh] keys of gmsh_mesher.MeshSizes, in order
+# two ways to give the edge length near the chambers: setting one (--set, with_values) drops the other
+REPLACED = {"mesh.near_chambers": "mesh.through_wall", "mesh.through_wall": "mesh.near_chambers"}
 POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3", unit=LENGTH))
 PLANAR_BODIES = {
     "rectangle": record(
@@ -560,7 +562,7 @@ def to_toml(scene) -> str:
 
 def with_values(scene, values: dict):
     """A copy of scene with the dotted keys of `values` set, validated like a scene file."""
-    return edited(scene_table(type(scene)), scene, values)  # type: ignore[arg-type]  # a class is hashable
+    return edited(scene_table(type(scene)), scene, values, REPLACED)  # type: ignore[arg-type]  # a class is hashable
 
 
 def key_reference(scene_class) -> list[KeyInfo]:

@@ -372,13 +372,18 @@ def default_text(default) -> str:
 # --- editing by dotted keys ---
 
 
-def edited(root: Table, obj, values: dict):
+def edited(root: Table, obj, values: dict, replaced: dict | None = None):
     """A copy of obj with the dotted keys of `values` set in its data, read back (validated) through root;
     a bad key or value raises one PneumaInputError naming the key. A value that switches a Variant's tag
     (chambers[0].control = "pressure"), or one of a table's tags (material.law, material.preset), first drops the
     old kind's keys (switched), then every value is set: a key of the old kind set in the same edit is kept,
-    and refused if the new kind lacks it."""
+    and refused if the new kind lacks it. replaced: a top-level table's key -> the key of the same table that it
+    replaces (two ways to give one thing), dropped where the first is set and the second is not."""
     data = root.write_table(obj)
+    for key, other in (replaced or {}).items():
+        if key in values and other not in values:
+            table, _, name = other.partition(".")
+            data.get(table, {}).pop(name, None)
     for key, value in values.items():
         switched(root, data, parse_key(key), plain(value))
     for key, value in values.items():
