@@ -187,6 +187,12 @@ RESULTS_PAGES = {
         ("benchmarks/ngsolve_3d.py", None),
         "python benchmarks/ngsolve_3d.py --repeats 1",
     ),
+    "fibers": (
+        "performance",
+        "What tension-only fibres cost per Newton iteration, and branch sweeps by low-rank updates",
+        ("benchmarks/fibers.py", None),
+        "python benchmarks/fibers.py",
+    ),
     "amg_options": (
         "performance",
         "3D: multigrid options for quadratic tetrahedra",

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 from solid_meshes import box_with_cavity, scene_of
-from test_fibers import CASES, cords
+from test_fibers import CASES, perturbed
 
 from taichi_pneuma import runtime
 from taichi_pneuma.fem.fiber_paths import Crossed
@@ -29,11 +29,7 @@ def dense(pattern, values, n: int) -> np.ndarray:
 
 @pytest.mark.parametrize("case", CASES)
 def test_the_update_is_the_hessian_difference_of_the_segments_that_change_branch(case):
-    mesh, fiber = CASES[case]
-    config, term = cords(mesh, fiber)
-    rng = np.random.default_rng(2)
-    config.u[:] = rng.normal(0.0, 0.01, config.u.shape) + 0.005 * mesh.vertices
-    dx = rng.normal(0.0, 0.01, config.u.shape)
+    mesh, config, term, dx = perturbed(case)
     pattern, n = term.hessian_pattern(), config.u.size
     base = term.hessian_values()
     changed = term.choose_branches(dx)

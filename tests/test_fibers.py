@@ -64,6 +64,16 @@ CASES = {
 }
 
 
+def perturbed(case: str):
+    """The case's (mesh, config, cord term) at a random state with some segments taut and some slack, and a random
+    step dx from it (seeded)."""
+    mesh, fiber = CASES[case]
+    config, term = cords(mesh, fiber)
+    rng = np.random.default_rng(2)
+    config.u[:] = rng.normal(0.0, 0.01, config.u.shape) + 0.005 * mesh.vertices
+    return mesh, config, term, rng.normal(0.0, 0.01, config.u.shape)
+
+
 @pytest.mark.parametrize("case", CASES)
 def test_cord_gradient_and_hessian_match_finite_differences(case):
     mesh, fiber = CASES[case]
@@ -106,11 +116,8 @@ def segment_vectors(term) -> list[np.ndarray]:
 
 @pytest.mark.parametrize("case", CASES)
 def test_on_the_branches_at_u_plus_dx_a_cord_is_two_sided_where_taut_there_and_absent_where_slack(case):
-    mesh, fiber = CASES[case]
-    config, term = cords(mesh, fiber)
-    rng = np.random.default_rng(2)
-    config.u[:] = rng.normal(0.0, 0.01, config.u.shape) + 0.005 * mesh.vertices
-    dx = rng.normal(0.0, 0.01, config.u.shape)
+    mesh, config, term, dx = perturbed(case)
+    fiber = CASES[case][1]
     now = np.array([np.linalg.norm(r) for r in segment_vectors(term)]) > term.rest_length
     u0 = config.u.copy()
     config.u[:] = u0 + dx

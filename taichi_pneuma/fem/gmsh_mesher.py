@@ -60,7 +60,6 @@ import numpy as np
 
 from ..errors import PneumaInputError, require, require_distinct, require_finite
 from ..io import cache
-from .wall_thickness import nearest_triangles, wall_points
 
 MAX_TETS = 200_000
 MAX_SHAPES = 64
@@ -296,6 +295,8 @@ def thinnest_wall(solid: Solid) -> float:
     projections to and fro between the two surfaces (ALTERNATIONS; where each falls inside the surface's trimmed
     face): the triangles' chords lie off a curved surface by h^2 / (8 R), and the nearest points are seldom corners
     of the triangles. Cached like the solid's measures."""
+    from .wall_thickness import nearest_triangles, wall_points  # here: scipy.spatial, which a 2D run does not load
+
     entry = _cache_key("wall", solid)
     cached = cache.load("gmsh-wall", entry, _valid_wall, 4096)
     if cached is not None:
