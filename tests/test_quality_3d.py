@@ -70,5 +70,6 @@ def test_the_first_line_names_the_preset_and_its_measured_error_where_a_preset_m
     assert note("--scene", "fiber_bending_3d", "--quality", "high") == (
         f"; --quality high: tip_rotation within {bending['high']:g} % of converged (-154.1)"
     )
+    assert note("--scene", "fiber_bending_3d", "--set", "mesh.near_chambers=3") == ""  # no longer the one measured
     assert note("--scene", "beam_3d", "--quality", "high") == ""  # a mesh file's tetrahedra
     assert note("--scene", "pneunet_finger") == ""

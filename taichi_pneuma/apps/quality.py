@@ -161,10 +161,10 @@ def mesh_values(geometry, size: float, near: float, distance: float) -> dict:
 
 def preset_note(scene, args: argparse.Namespace | None) -> str:
     """What the run's mesh is measured to cost in accuracy ('' where it was not measured: a mesh file, a scene file
-    of other lengths): the reference beam's flags' preset, or a shipped 3D scene's preset or own [mesh] (MEASURED_
-    ERROR_3D against CONVERGED_3D; another 3D body from shapes with --quality: the beam's figure, said to be the
-    beam's)."""
-    if args is None or not hasattr(args, "quality"):
+    of other lengths, a scene --set changed): the reference beam's flags' preset, or a shipped 3D scene's preset or
+    own [mesh] (MEASURED_ERROR_3D against CONVERGED_3D; another 3D body from shapes with --quality: the beam's figure,
+    said to be the beam's)."""
+    if args is None or not hasattr(args, "quality") or getattr(args, "set", None):
         return ""
     given = getattr(args, "quality_given", False)
     from_shapes = scene.dim == 3 and hasattr(scene.geometry, "sizes")
