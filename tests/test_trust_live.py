@@ -235,7 +235,8 @@ def test_a_bad_message_with_the_token_is_refused_in_one_log_line_and_the_session
     refusals = [r for r in caplog.records if "refused a message" in r.getMessage()]
     assert len(refusals) == 1, [r.getMessage() for r in caplog.records]
     assert "\n" not in refusals[0].getMessage() and refusals[0].exc_info is None
-    assert all(r.exc_info is None for r in caplog.records)
+    # the server's records (this test's own client may log its closing handshake cut short on a loaded machine)
+    assert all(r.exc_info is None for r in caplog.records if r.name != "websockets.client")
     assert "Traceback" not in capfd.readouterr().err
     commands = list(before[0])
     commands[4] = moved
