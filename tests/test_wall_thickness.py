@@ -1,4 +1,4 @@
-"""The thinnest rubber around the chambers (fem/wall_thickness.py, gmsh_mesher.thinnest_wall) against the distances
+"""The thinnest rubber around the chambers (fem/wall_thickness.py, wall_thickness.thinnest_wall) against the distances
 the shapes give by hand, and mesh.through_wall, the mesh size it sets."""
 
 import tomllib
@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.fem.gmsh_mesher import Solid, thinnest_wall
+from taichi_pneuma.fem.gmsh_mesher import Solid
 from taichi_pneuma.fem.pneunet import PneuNet
 from taichi_pneuma.fem.solids import Box, Cylinder, Ellipsoid, HalfCylinder
-from taichi_pneuma.fem.wall_thickness import point_triangle_distances
+from taichi_pneuma.fem.wall_thickness import point_triangle_distances, thinnest_wall
 from taichi_pneuma.scene.scenefile import read_scene
 
 gmsh = pytest.importorskip("gmsh", reason="gmsh is not installed (pip install 'taichi-pneuma[3d]')")

@@ -82,10 +82,6 @@ OPTIONS = (
 # (MeshAdapt loops on a small ellipsoid in a coarse mesh until gmsh crashes.)
 SURFACE_MESHERS = ((6, 0), (5, 12))
 MAX_SAMPLING = 200  # points per direction on a wall surface for its distance field
-WALL_SAMPLING = 1 / 50  # thinnest_wall's surface mesh: edges at most this fraction of the body's diagonal
-REFINED = 16  # ... and the wall points nearest the other boundaries on it, measured again on the exact surfaces
-ALTERNATIONS = 5000  # at most so many projections to and fro between the two surfaces, to their nearest points,
-CONVERGED = 1e-12  # until the distance falls by less than this fraction (a ball near a plane: by R / (R + d) each)
 WALL_DIGITS = 10  # significant digits of a measured thickness and the size from it: 2 mm, not 1.999999999999999
 # a tetrahedron's four faces (corners in its local numbering), each oriented outward for a positive tetrahedron
 TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
@@ -286,82 +282,6 @@ def estimate_tets(solid: Solid, sizes: MeshSizes) -> float:
         pieces = _Pieces(gmsh, solid)
     cache.store("gmsh-measures", entry, {"measures": np.array([pieces.volume, pieces.wall_area])})
     return _estimate(pieces.volume, pieces.wall_area, sizes)
-
-
-def thinnest_wall(solid: Solid) -> float:
-    """The thinnest rubber around any of the solid's chambers: the least distance from a chamber's wall to the
-    boundaries of the body it does not touch (fem/wall_thickness.py), found on a surface mesh of triangles at most
-    WALL_SAMPLING of the body's diagonal long, and made exact from the REFINED nearest points on by OpenCASCADE's
-    projections to and fro between the two surfaces (ALTERNATIONS; where each falls inside the surface's trimmed
-    face): the triangles' chords lie off a curved surface by h^2 / (8 R), and the nearest points are seldom corners
-    of the triangles. Cached like the solid's measures."""
-    from .wall_thickness import nearest_triangles, wall_points  # here: scipy.spatial, which a 2D run does not load
-
-    entry = _cache_key("wall", solid)
-    cached = cache.load("gmsh-wall", entry, _valid_wall, 4096)
-    if cached is not None:
-        return float(cached["thinnest"][0])
-    with _session() as gmsh:
-        pieces = _Pieces(gmsh, solid)
-        model = gmsh.model
-        box = np.reshape(model.getBoundingBox(-1, -1), (2, 3))
-        gmsh.option.setNumber("Mesh.MeshSizeMax", WALL_SAMPLING * float(np.linalg.norm(box[1] - box[0])))
-        gmsh.option.setNumber("Mesh.Algorithm", 5)  # Delaunay: Frontal-Delaunay leaves B-spline surfaces bare
-        model.mesh.generate(2)
-        node_tags, coords, _ = model.mesh.getNodes()
-        position = np.empty(int(node_tags.max()) + 1, dtype=np.int64)
-        position[node_tags.astype(np.int64)] = np.arange(len(node_tags))
-        points = coords.reshape(-1, 3)
-
-        def triangles(surface: int) -> np.ndarray:
-            return points[position[_elements(gmsh, 2, [surface], 2, 3)]].reshape(-1, 3, 3)
-
-        def curves(surfaces) -> set[int]:
-            return {abs(t) for _, t in model.getBoundary([(2, s) for s in surfaces], False, False)}
-
-        def closest(surface: int, point: np.ndarray) -> np.ndarray | None:
-            projected, uv = model.getClosestPoint(2, surface, point)
-            return np.asarray(projected) if model.isInside(2, surface, uv, parametric=True) else None
-
-        def exact(point: np.ndarray, wall: int, other: int, measured: float) -> float:
-            """The distance of the nearest points of the two surfaces from point on, by alternating projections
-            (the measured one where a projection falls outside a surface's trimmed face)."""
-            distance = measured
-            for _ in range(ALTERNATIONS):
-                across = closest(other, point)
-                back = None if across is None else closest(wall, across)
-                if back is None:
-                    return measured
-                point, last, distance = back, distance, float(np.linalg.norm(back - across))
-                if last - distance <= CONVERGED * distance:
-                    break
-            return distance
-
-        faces, thinnest = _faces(gmsh, pieces.rubber), float("inf")
-        for walls in pieces.walls.values():
-            rim = curves(walls)
-            apart = [s for s in sorted(faces - set(walls)) if not curves([s]) & rim]
-            if not apart:
-                continue
-            blocks, own = [triangles(s) for s in apart], [triangles(s) for s in walls]
-            owner = np.repeat(apart, [len(b) for b in blocks])
-            wall = np.concatenate(own)
-            on = np.repeat(walls, [len(b) for b in own])
-            samples = wall_points(wall)
-            distances, nearest = nearest_triangles(samples, np.concatenate(blocks))
-            for i in np.argsort(distances)[:REFINED]:
-                surfaces = int(on[i // 3 if i < 3 * len(wall) else i - 3 * len(wall)]), int(owner[nearest[i]])
-                thinnest = min(thinnest, exact(samples[i], *surfaces, float(distances[i])))
-    require(np.isfinite(thinnest), "no chamber has a boundary of the body apart from its wall to measure to")
-    thinnest = float(f"{thinnest:.{WALL_DIGITS}g}")
-    cache.store("gmsh-wall", entry, {"thinnest": np.array([thinnest])})
-    return thinnest
-
-
-def _valid_wall(arrays: dict) -> bool:
-    """A cached wall thickness: one finite positive double."""
-    value = arrays["thinnest"]
-    return value.dtype == np.float64 and value.shape == (1,) and bool(np.isfinite(value[0]) and value[0] > 0)
 
 
 def _estimate(volume: float, wall_area: float, sizes: MeshSizes) -> float:

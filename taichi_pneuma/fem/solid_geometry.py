@@ -36,12 +36,13 @@ from ..errors import require, require_distinct
 from ..io.output import check_heading
 from ..limits import Budget
 from .body import Body
-from .gmsh_mesher import MAX_TETS, MeshSizes, Solid, estimate_tets, mesh_solid, thinnest_wall
+from .gmsh_mesher import MAX_TETS, MeshSizes, Solid, estimate_tets, mesh_solid
 from .mesh import Mesh
 from .meshfile import MeshSurface
 from .pneunet import PneuNet
 from .supports import PointSet
 from .tetmesh import check_order, tet_mesh
+from .wall_thickness import thinnest_wall
 
 TETS_PER_NODE = 5
 EDGES_PER_TET = 1.2  # a tetrahedral mesh has about 1.2 edges per tetrahedron (Euler: E ~ V + T)
@@ -112,7 +113,7 @@ class SolidGeometry(Body):
 
     @cached_property
     def wall(self) -> float:
-        """The thinnest rubber around the chambers (gmsh_mesher.thinnest_wall)."""
+        """The thinnest rubber around the chambers (wall_thickness.thinnest_wall)."""
         return thinnest_wall(self.solid())
 
     @cached_property
