@@ -120,10 +120,8 @@ class MeshSizes:
         )
 
     def for_wall(self, thickness: float) -> MeshSizes:
-        """The sizes with near_chambers = thickness / through_wall, to WALL_DIGITS (these sizes if through_wall is not
-        given)."""
-        if self.through_wall is None:
-            return self
+        """The sizes with near_chambers = thickness / through_wall (given), to WALL_DIGITS."""
+        assert self.through_wall is not None  # sizes that give near_chambers mesh as they are
         return MeshSizes(self.size, float(f"{thickness / self.through_wall:.{WALL_DIGITS}g}"), self.distance)
 
     @property
@@ -481,7 +479,6 @@ def _elements(gmsh, dim: int, entities, kind: int, corners: int) -> np.ndarray:
 def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
     """The mesh's arrays: nodes renumbered 0..n-1 (those of tetrahedra only), tetrahedra oriented, faces
     matched to the tetrahedra's boundary faces for their orientation."""
-    mesh = gmsh.model.mesh
     blocks = {
         k: _elements(gmsh, 3, [v for v, r in pieces.rubber.items() if r == k], 4, 4)
         for k in range(len(solid.regions) + 1)
@@ -493,12 +490,10 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
         "gmsh left a part of the body without tetrahedra",
     )
     _check_count(len(tags), max_tets)
-    node_tags, coords, _ = mesh.getNodes()
+    position, points = node_points(gmsh)
     used, tets = np.unique(tags, return_inverse=True)
     tets = tets.reshape(-1, 4)
-    position = np.empty(int(node_tags.max()) + 1, dtype=np.int64)
-    position[node_tags.astype(np.int64)] = np.arange(len(node_tags))
-    vertices = coords.reshape(-1, 3)[position[used]]
+    vertices = points[position[used]]
     tets = positively_oriented(vertices, tets)
     faces = tets[:, TET_FACES].reshape(-1, 3)
     keys = face_keys(faces, len(vertices))
@@ -520,6 +515,14 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
     return SolidMesh(
         vertices, tets, chambers, boundary, regions.astype(np.int64), tuple(name for name, _ in solid.regions)
     )
+
+
+def node_points(gmsh) -> tuple[np.ndarray, np.ndarray]:
+    """gmsh's nodes: position[tag] = the row of node `tag` in points (n, 3)."""
+    node_tags, coords, _ = gmsh.model.mesh.getNodes()
+    position = np.empty(int(node_tags.max()) + 1, dtype=np.int64)
+    position[node_tags.astype(np.int64)] = np.arange(len(node_tags))
+    return position, coords.reshape(-1, 3)
 
 
 def positively_oriented(vertices: np.ndarray, tets: np.ndarray) -> np.ndarray:

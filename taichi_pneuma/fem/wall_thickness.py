@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import require
 from ..io import cache
-from .gmsh_mesher import WALL_DIGITS, Solid, _cache_key, _elements, _faces, _Pieces, _session
+from .gmsh_mesher import WALL_DIGITS, Solid, _cache_key, _elements, _faces, _Pieces, _session, node_points
 
 CANDIDATES = 12  # triangles of the others tested exactly per wall point, the nearest by centroid
 WALL_SAMPLING = 1 / 50  # thinnest_wall's surface mesh: edges at most this fraction of the body's diagonal
@@ -88,10 +88,7 @@ def thinnest_wall(solid: Solid) -> float:
         gmsh.option.setNumber("Mesh.MeshSizeMax", WALL_SAMPLING * float(np.linalg.norm(box[1] - box[0])))
         gmsh.option.setNumber("Mesh.Algorithm", 5)  # Delaunay: Frontal-Delaunay leaves B-spline surfaces bare
         model.mesh.generate(2)
-        node_tags, coords, _ = model.mesh.getNodes()
-        position = np.empty(int(node_tags.max()) + 1, dtype=np.int64)
-        position[node_tags.astype(np.int64)] = np.arange(len(node_tags))
-        points = coords.reshape(-1, 3)
+        position, points = node_points(gmsh)
 
         def triangles(surface: int) -> np.ndarray:
             return points[position[_elements(gmsh, 2, [surface], 2, 3)]].reshape(-1, 3, 3)
