@@ -30,31 +30,54 @@ def installed(module: str) -> bool:
 
 
 class FixedPattern:
-    """The CSR structure of a sum of triplets whose (row, col) never change.
+    """The CSR structure of a sum of triplets whose (row, col) never change, plus extra triplets whose (row, col)
+    may change from one matrix to the next (a contact term's active pairs: Term.dynamic).
 
-    matrix(values) sums duplicate entries into the precomputed CSR data array: values is the triplets' values, or
-    the list of them per term in the pattern's order (no concatenated copy), each summed with one bincount (or,
-    shorter than the data array, np.add.at).
+    matrix(values, extra) sums duplicate entries into the precomputed CSR data array: values is the fixed
+    triplets' values, or the list of them per term in the pattern's order (no concatenated copy), each summed with
+    one bincount (or, shorter than the data array, np.add.at); extra is (rows, cols, values) of the changing ones.
+    The structure only grows: an extra entry not in it is inserted (the fixed triplets' slots shifted past it) and
+    kept, so a backend re-analyses the pattern (new index arrays) only when the contact pairs reach new nodes.
     """
 
     def __init__(self, rows: np.ndarray, cols: np.ndarray, n: int):
         keys = np.asarray(rows, dtype=np.int64) * n + np.asarray(cols, dtype=np.int64)
-        unique, self._slot = np.unique(keys, return_inverse=True)
-        self._indices = (unique % n).astype(np.int32)
-        self._indptr = np.searchsorted(unique // n, np.arange(n + 1)).astype(np.int32)
+        self._keys, self._slot = np.unique(keys, return_inverse=True)
         self.n = n
-        self.nnz = len(unique)
+        self._structure()
 
-    def matrix(self, values: np.ndarray | list[np.ndarray]) -> sp.csr_matrix:
+    def _structure(self) -> None:
+        """The CSR index arrays of the sorted unique keys row n + col."""
+        n = self.n
+        self._indices = (self._keys % n).astype(np.int32)
+        self._indptr = np.searchsorted(self._keys // n, np.arange(n + 1)).astype(np.int32)
+        self.nnz = len(self._keys)
+
+    def _extra_slots(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """The data slots of the extra triplets, inserting the keys the structure lacks (sorted insertion: each old
+        key k moves up by the number of new keys below it)."""
+        keys = np.asarray(rows, dtype=np.int64) * self.n + np.asarray(cols, dtype=np.int64)
+        slots = np.searchsorted(self._keys, keys)
+        missing = (slots == self.nnz) | (self._keys[np.minimum(slots, self.nnz - 1)] != keys)
+        if np.any(missing):
+            new = np.unique(keys[missing])
+            shift = np.searchsorted(new, self._keys)
+            self._slot = (self._slot + shift[self._slot]) if len(self._slot) else self._slot
+            self._keys = np.insert(self._keys, np.searchsorted(self._keys, new), new)
+            self._structure()
+            slots = np.searchsorted(self._keys, keys)
+        return slots
+
+    def matrix(self, values: np.ndarray | list[np.ndarray], extra: tuple | None = None) -> sp.csr_matrix:
+        changing = [] if extra is None else [(self._extra_slots(extra[0], extra[1]), extra[2])]  # may move _slot
+        fixed = [values] if isinstance(values, np.ndarray) else values
+        ends = np.cumsum([len(part) for part in fixed], dtype=np.int64)
         data = np.zeros(self.nnz)
-        start = 0
-        for part in [values] if isinstance(values, np.ndarray) else values:
-            slots = self._slot[start : start + len(part)]
+        for slots, part in [(self._slot[end - len(part) : end], part) for part, end in zip(fixed, ends)] + changing:
             if len(part) > self.nnz:
                 data += np.bincount(slots, weights=part, minlength=self.nnz)
             else:
                 np.add.at(data, slots, part)
-            start += len(part)
         return sp.csr_matrix((data, self._indices, self._indptr), shape=(self.n, self.n))
 
 

@@ -261,7 +261,7 @@ class NewtonSolver:
         with clock("hessian"):
             low_rank = self.model.low_rank()
         with clock("assemble"):
-            matrix = self.pattern.matrix(values)
+            matrix = self.model.assemble(self.pattern, values)
         for backend in self._backends(psd_only, indefinite):
             try:
                 self.factorizations += 1

@@ -87,7 +87,7 @@ def solve_exact(
     if not factorised:
         if pattern is None:
             pattern = FixedPattern(*model.hessian_pattern(), model.n_dofs)
-        matrix = pattern.matrix(model.hessian_values(psd_only=False))
+        matrix = model.assemble(pattern, model.hessian_parts(psd_only=False))
         try:
             backend.factorize(matrix)
         except FactorizationError:

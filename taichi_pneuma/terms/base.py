@@ -149,11 +149,14 @@ class Term:
     data as NumPy arrays, and evaluates itself by calling module-level kernels on them.
     reports_contact: whether -gradient() is a contact force the history reports.
     kinked: whether the term is piecewise smooth (see choose_branches).
+    dynamic: whether its Hessian's pattern follows the state (a contact term's active pairs): hessian_pattern() is
+    then that of its last hessian_values() call, and the model's fixed pattern leaves it out (EnergyModel.assemble).
     """
 
     name = "term"
     reports_contact = False
     kinked = False  # piecewise smooth: choose_branches may move pieces to other branches
+    dynamic = False  # its Hessian's pattern changes with the state
 
     def energy(self) -> float:
         """The term's energy at config.u (every term has one)."""

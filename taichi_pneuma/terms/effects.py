@@ -17,8 +17,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import require, require_finite
+from ..fem.self_intersection import surface_pieces
 from ..fem.supports import PointSet
-from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, TIME, si_default, unit
+from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, PRESSURE, TIME, si_default, unit
 from ..limits import wall_pairs
 from .contact import SelfContact as SelfContactTerm
 from .gravity import Gravity as GravityTerm
@@ -145,6 +146,38 @@ class SelfContact(Effect):
 
 
 @dataclass(frozen=True)
+class SurfaceContact(Effect):
+    """Contact of the body's whole surface with itself, 2D and 3D (terms/surface_contact.py): IPC barriers of
+    threshold dhat (default: DHAT_FRACTION of the body's bounding-box diagonal) and stiffness kappa (a pressure)
+    between any two pieces of the surface that share no node: chamber walls against each other and themselves, the
+    outer surface against itself."""
+
+    dhat: float | None = field(default=None, metadata=unit(LENGTH))
+    stiffness: float | None = si_default(1e5, PRESSURE)
+    name = "surface_contact"
+    contact = True
+
+    DHAT_FRACTION = 1e-3
+
+    def __post_init__(self):
+        _positive("dhat", self.dhat)
+        _positive("stiffness", self.stiffness)
+
+    def terms(self, config, mesh, lumped_area, budget) -> list:
+        from .surface_contact import SurfaceContact as SurfaceContactTerm  # ipctk: imported where it is used
+
+        dhat = self.dhat or self.DHAT_FRACTION * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
+        term = SurfaceContactTerm(config, surface_pieces(mesh), dhat, self.stiffness)  # type: ignore[arg-type]
+        nearest = term.min_distance()
+        require(
+            nearest == np.inf,
+            f"surface_contact: dhat = {dhat:.4g} must be less than the smallest distance at rest between two pieces "
+            f"of the body's surface that share no node ({nearest:.4g}): give a smaller dhat",
+        )
+        return [term]
+
+
+@dataclass(frozen=True)
 class Dynamics(Effect):
     """Motion instead of quasistatics: inertia of the lumped masses (density rho), backward Euler with
     time step dt, one time step per schedule increment."""
@@ -171,4 +204,4 @@ class Dynamics(Effect):
         return [Inertia(config, self.density * lumped_area, self.dt)]
 
 
-EFFECTS = {cls.name: cls for cls in (Gravity, Ground, SelfContact, Dynamics)}
+EFFECTS = {cls.name: cls for cls in (Gravity, Ground, SelfContact, SurfaceContact, Dynamics)}

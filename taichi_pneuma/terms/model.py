@@ -77,8 +77,20 @@ class EnergyModel:
         return next((fault for fault in (t.fault() for t in self.terms) if fault is not None), None)
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
-        patterns = [t.hessian_pattern() for t in self.terms]
+        """The fixed (row, col) of the Hessian's triplets: every term's but the dynamic ones' (Term.dynamic)."""
+        patterns = [t.hessian_pattern() for t in self.terms if not t.dynamic]
         return np.concatenate([p[0] for p in patterns]), np.concatenate([p[1] for p in patterns])
+
+    def assemble(self, pattern, parts: list[np.ndarray]):
+        """The sparse Hessian of the terms' parts (hessian_parts, just computed): pattern (solve/linsolve.py
+        FixedPattern of hessian_pattern()) sums the fixed terms' parts, and the dynamic terms' triplets, on the
+        pattern of their last hessian_values(), as its extra ones."""
+        dynamic = [(t.hessian_pattern(), part) for t, part in zip(self.terms, parts, strict=True) if t.dynamic]
+        fixed = [part for t, part in zip(self.terms, parts, strict=True) if not t.dynamic]
+        if not dynamic:
+            return pattern.matrix(fixed)
+        rows, cols, values = (np.concatenate(column) for column in zip(*((r, c, v) for (r, c), v in dynamic)))
+        return pattern.matrix(fixed, (rows, cols, values))
 
     def hessian_parts(self, psd_only: bool = False, reuse: list[np.ndarray] | None = None) -> list[np.ndarray]:
         """The terms' Hessian values, in the pattern's order (FixedPattern.matrix sums them without concatenating).

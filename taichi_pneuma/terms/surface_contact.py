@@ -1,0 +1,147 @@
+"""Contact of the body's surface with itself, 2D and 3D: IPC barriers between any two of its pieces that share no
+node, by the IPC Toolkit (ipctk, Zachary Ferguson et al.; the [3d] extra).
+
+The surface is the body's boundary as straight pieces (fem/self_intersection.py surface_pieces: the outer surface and
+every chamber wall; a quadratic facet split at its midside nodes): triangles and their edges in 3D, segments in 2D.
+The contact pairs are the point-triangle and edge-edge pairs in 3D, point-segment in 2D, of pieces that share no
+node and lie closer than dhat; ipctk finds them by a broad phase (a bounding-volume hierarchy, LBVH) at every state
+the solver evaluates, so the cost grows with the surface, not its square. Their distances d_k give the energy
+
+    E = kappa sum_k w_k b(d_k^2) / dhat^3,   b(s) = -(s - dhat^2)^2 ln(s / dhat^2)  for s < dhat^2, else 0,
+
+ipctk's barrier on squared distances scaled by 1 / dhat^3 ("physical": b / dhat^3 is a length, of order dhat), w_k
+the pair's share of the surface (area weighting: half the incident facets' areas at a vertex, in 3D; half the
+incident segments' lengths in 2D). So kappa is a pressure: the contact pressure at gap d is about kappa |b'|
+(4.3 kappa at d = dhat / 2), and the energy converges as the mesh is refined. The barrier is C2 at dhat and
+infinite as d -> 0: the energy forbids touching. Its gradient and Hessian are ipctk's; the PSD one projects each
+pair's Hessian onto its non-negative eigenvalues (ipctk's PSDProjectionMethod.CLAMP).
+
+max_step(dx) is ipctk's continuous collision check (Tight Inclusion CCD) along the straight path from x to x + dx,
+which keeps every pair's distance positive over the step; the solver steps at most 0.9 of it.
+
+The pairs change with the state, and so does the Hessian's pattern (Term.dynamic): hessian_pattern() is that of
+the last hessian_values(). Every quantity is computed once per state (the displacements compared with the last).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import PneumaInputError
+from .base import Term, vertex_dofs
+
+
+def ipctk_module():
+    """The ipctk module, or PneumaInputError saying how to install it."""
+    try:
+        import ipctk
+    except ImportError:  # pragma: no cover - the [3d] extra installs it where it has wheels
+        raise PneumaInputError(
+            "surface_contact needs the IPC Toolkit: pip install 'taichi-pneuma[3d]' (ipctk has wheels for Linux "
+            "x86_64, macOS and Windows)"
+        ) from None
+    return ipctk
+
+
+def fortran(array: np.ndarray, dtype=np.float64) -> np.ndarray:
+    """A column-major copy (ipctk reads its matrices so)."""
+    return np.asfortranarray(array, dtype=dtype)
+
+
+class SurfaceContact(Term):
+    """IPC barriers (threshold dhat, stiffness kappa, a pressure) between the pieces of the body's surface that
+    share no node (module docstring)."""
+
+    name = "surface_contact"
+    reports_contact = True
+    dynamic = True
+
+    def __init__(self, config, pieces: np.ndarray, dhat: float, stiffness: float):
+        """pieces: the surface as straight pieces (surface_pieces: triangles (f, 3); in 2D segments as (a, b, b))."""
+        ipctk = ipctk_module()
+        self._ipctk = ipctk
+        self.config = config
+        self.dhat, self.kappa = float(dhat), float(stiffness)
+        n, d = config.rest.shape
+        pieces = np.asarray(pieces, dtype=np.int32)
+        if d == 3:
+            faces = pieces
+            edges = ipctk.edges(fortran(faces, np.int32))
+        else:
+            faces = np.zeros((0, 3), dtype=np.int32)
+            edges = np.unique(np.sort(pieces[:, :2], axis=1), axis=0)
+        include = np.zeros(n, dtype=bool)
+        include[pieces.ravel()] = True
+        self.mesh = ipctk.CollisionMesh(
+            include.tolist(), [False] * n, fortran(config.rest), fortran(edges, np.int32), fortran(faces, np.int32)
+        )
+        self.mesh.init_area_jacobians()
+        self.surface = np.flatnonzero(include)  # the collision mesh's vertices, in its order
+        self.potential = ipctk.BarrierPotential(self.dhat, self.kappa, True)
+        self.broad_phase = ipctk.LBVH()
+        self._state: np.ndarray | None = None
+        self._rows = self._cols = np.zeros(0, dtype=np.int64)
+
+    def _positions(self, u: np.ndarray) -> np.ndarray:
+        """The collision mesh's vertex positions (m, d) at displacements u (n, d)."""
+        return fortran(self.config.rest[self.surface] + u[self.surface])
+
+    def _collisions(self):
+        """The contact pairs at the current state (built once per state)."""
+        u = self.config.u
+        if self._state is None or not np.array_equal(self._state, u):
+            self._state = u.copy()
+            self._x = self._positions(u)
+            self.collisions = self._ipctk.NormalCollisions()
+            self.collisions.use_area_weighting = True
+            self.collisions.build(self.mesh, self._x, self.dhat, broad_phase=self.broad_phase)
+        return self.collisions
+
+    def pairs(self) -> int:
+        """The number of contact pairs (closer than dhat) at the current state."""
+        return len(self._collisions())
+
+    def min_distance(self) -> float:
+        """The smallest distance between two pieces that share no node, among those closer than dhat (inf if none)."""
+        collisions = self._collisions()
+        return math.sqrt(collisions.compute_minimum_distance(self.mesh, self._x)) if len(collisions) else math.inf
+
+    def energy(self) -> float:
+        collisions = self._collisions()
+        if len(collisions) and not collisions.compute_minimum_distance(self.mesh, self._x) > 0:
+            return math.inf
+        return float(self.potential(collisions, self.mesh, self._x))
+
+    def gradient(self) -> np.ndarray:
+        collisions = self._collisions()
+        gradient = np.zeros_like(self.config.u)
+        if len(collisions):
+            flat = self.potential.gradient(collisions, self.mesh, self._x)
+            gradient[self.surface] = flat.reshape(-1, self.config.dim)
+        return gradient
+
+    def hessian_values(self, psd_only: bool = False) -> np.ndarray:
+        collisions = self._collisions()
+        project = self._ipctk.PSDProjectionMethod
+        hessian = self.potential.hessian(
+            collisions, self.mesh, self._x, project.CLAMP if psd_only else project.NONE
+        ).tocoo()
+        dofs = vertex_dofs(self.surface, self.config.dim)  # the collision mesh's DOFs -> the body's
+        self._rows, self._cols = dofs[hessian.row], dofs[hessian.col]
+        return hessian.data
+
+    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._rows, self._cols
+
+    def max_step(self, dx: np.ndarray) -> float:
+        self._collisions()
+        end = self._positions(self.config.u + dx)
+        step = self._ipctk.compute_collision_free_stepsize(self.mesh, self._x, end, broad_phase=self.broad_phase)
+        return math.inf if step >= 1.0 else float(step)
+
+    def fault(self) -> str | None:
+        if self.energy() < math.inf:
+            return None
+        return "two pieces of the body's surface touch (surface_contact's barrier is infinite there)"

@@ -1,0 +1,109 @@
+"""Surface contact (terms/surface_contact.py, ipctk's IPC barriers between pieces of the body's surface): its
+derivatives against finite differences, its PSD Hessian, its continuous collision step bound, and whole runs in
+which walls press on each other without crossing (fem/self_intersection.py surface_crossing, written independently
+of ipctk, checks every state)."""
+
+import numpy as np
+import pytest
+
+import taichi_pneuma as tp
+from taichi_pneuma.fem.self_intersection import surface_crossing
+from taichi_pneuma.terms.model import Configuration
+
+ipctk = pytest.importorskip("ipctk")
+from taichi_pneuma.terms.surface_contact import SurfaceContact  # noqa: E402
+
+DHAT = 0.1
+
+
+def facing_pieces(dim: int):
+    """Two pieces 0.05 apart (half of DHAT) that share no node: triangles in 3D (a corner of one above the face of
+    the other, an edge of each crossing the other's above it), segments in 2D (a point above the other's middle);
+    as (rest (n, d), pieces (2, 3))."""
+    if dim == 3:
+        rest = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.3, 0.3, 0.05], [0.2, 0.9, 0.8], [0.9, 0.1, 0.6]])
+        return rest.astype(float), np.array([[0, 1, 2], [3, 4, 5]])
+    rest = np.array([[0.0, 0.0], [1.0, 0.0], [0.5, 0.05], [0.6, 0.9]])
+    return rest, np.array([[0, 1, 1], [2, 3, 3]])
+
+
+def term_at(dim: int, seed: int = 0):
+    rest, pieces = facing_pieces(dim)
+    config = Configuration(rest)
+    term = SurfaceContact(config, pieces, DHAT, 10.0)
+    u = 0.01 * np.random.default_rng(seed).standard_normal(rest.shape)
+    config.u[:] = u
+    return config, term, u
+
+
+def at(config, term, u, what):
+    config.u[:] = u
+    return what()
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_gradient_and_hessian_match_finite_differences(dim):
+    config, term, u = term_at(dim)
+    assert term.pairs() > 0 and 0 < term.min_distance() < DHAT  # the barrier is active
+    g = term.gradient().ravel()
+    values = term.hessian_values()
+    rows, cols = term.hessian_pattern()
+    hessian = np.zeros((u.size, u.size))
+    np.add.at(hessian, (rows, cols), values)
+    h = 1e-6
+    g_fd, h_fd = np.zeros(u.size), np.zeros((u.size, u.size))
+    for i in range(u.size):
+        step = np.zeros(u.size)
+        step[i] = h
+        plus, minus = ((u.ravel() + s * step).reshape(u.shape) for s in (1, -1))
+        g_fd[i] = (at(config, term, plus, term.energy) - at(config, term, minus, term.energy)) / (2 * h)
+        h_fd[:, i] = (at(config, term, plus, term.gradient) - at(config, term, minus, term.gradient)).ravel() / (2 * h)
+    assert np.linalg.norm(g) > 0
+    assert np.linalg.norm(g - g_fd) <= 1e-6 * np.linalg.norm(g)
+    assert np.linalg.norm(hessian - h_fd) <= 1e-5 * np.linalg.norm(hessian)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_psd_hessian_has_no_negative_eigenvalue(dim):
+    config, term, u = term_at(dim, seed=1)
+    values = term.hessian_values(psd_only=True)
+    rows, cols = term.hessian_pattern()
+    hessian = np.zeros((u.size, u.size))
+    np.add.at(hessian, (rows, cols), values)
+    eigenvalues = np.linalg.eigvalsh(hessian)
+    assert eigenvalues.max() > 0 and eigenvalues.min() >= -1e-9 * eigenvalues.max()
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_step_bound_stops_short_of_the_crossing(dim):
+    """Pushing the upper piece straight through the lower one: the bound lies before the crossing (which a step of
+    0.05 / 0.2 = 0.25 of dx reaches) and the state at the bound is apart, by the independent crossing test."""
+    rest, pieces = facing_pieces(dim)
+    config = Configuration(rest)
+    term = SurfaceContact(config, pieces, DHAT, 10.0)
+    dx = np.zeros_like(rest)
+    upper = np.unique(pieces[1])
+    dx[upper, dim - 1] = -0.2
+    bound = term.max_step(dx)
+    assert 0 < bound < 0.25
+    assert surface_crossing(rest + bound * dx, pieces) is None
+    assert surface_crossing(rest + 0.5 * dx, pieces) is not None  # the test would see a crossing
+
+
+def test_a_finger_curling_onto_itself_never_crosses_itself():
+    """The shipped finger_curl: with surface contact it curls past a full turn, its base pressing on its tip, and no
+    two pieces of its surface cross at any step (the crossing test, not ipctk, says so); the same scene without
+    contact stops where they cross. The contact forces are internal: they press the two sides apart and sum to 0."""
+    scene = tp.load_scene("finger_curl")
+    result = tp.simulate(scene)
+    assert len(result.steps) == scene.increments + 1
+    pieces = result.built.surface_pieces
+    assert all(surface_crossing(x, pieces) is None for x in result.positions)
+    history = result.history
+    assert history["tip_rotation"][-1] < -360.0 + 30.0  # past eleven twelfths of a turn
+    pressing = history["surface_contact.magnitude"]
+    assert pressing[0] == 0.0 and pressing[-1] > 0.0
+    forces = result.contact_forces[-1]
+    assert np.abs(forces.sum(axis=0)).max() <= 1e-9 * np.abs(forces).sum()
+    with pytest.raises(tp.RampFailed, match="passes through itself"):
+        tp.simulate(scene.with_values({"effects": {}}))
