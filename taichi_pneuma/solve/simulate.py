@@ -229,7 +229,7 @@ def step_record(
         f = -term.gradient()
         vertex_forces += f
         total = f.sum(axis=0)
-        if any(term is obstacle for obstacle in built.obstacles):
+        if any(term is obstacle for obstacle in (*built.obstacles, *built.frictions)):
             on_obstacles += total
         contact[term.name] = (float(total[0]), float(total[1]), float(np.linalg.norm(f, axis=1).sum()))
         if mesh.dim == 3:
