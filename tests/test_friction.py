@@ -3,11 +3,16 @@ eps) and sliding (slip > eps) regimes, 2D and 3D; a block on an inclined plane t
 and slides above it; a frictionless scene building no friction term; bad keys refused."""
 
 import math
+import tomllib
 
 import numpy as np
 import pytest
 from test_obstacles import assembled, contact, finite_differences
 
+from taichi_pneuma.scene import build
+from taichi_pneuma.scene.scenefile import read_scene
+from taichi_pneuma.solve.newton import NewtonOptions
+from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 from taichi_pneuma.terms.friction import ObstacleFriction, frictional
 from taichi_pneuma.terms.obstacle_shapes import Plane, Sphere
 
@@ -74,3 +79,97 @@ def test_no_friction_no_term():
     pair = frictional(term, 0.4, None)
     assert pair[0] is term and pair[1].eps == pytest.approx(term.dhat / 10) and pair[1].name == "o.friction"
     assert math.isfinite(pair[1].energy())
+
+
+MU, DHAT, SLIP = 0.5, 0.01, 0.002
+
+
+def incline(ratio: float, dim: int, increments: int = 3):
+    """(scene, t, n): a 0.4 x 0.2 block (0.2 deep in 3D; E = 1e4, density 1, g = 9.81, an empty chamber in it, as a
+    scene has one) on the plane through the origin tilted by theta = atan(ratio mu) (unit tangent t up the slope,
+    normal n), its bottom 0.3 dhat from it (the rest state's lagged normal forces hold it at step 0; from step 1 on
+    they are the weight's)."""
+    theta = math.atan(ratio * MU)
+    t, n = np.array([math.cos(theta), math.sin(theta)]), np.array([-math.sin(theta), math.cos(theta)])
+    w, h, gap = 0.4, 0.2, 0.3 * DHAT
+    corners = [(gap * n + a * t + b * n).tolist() for a, b in ((-w / 2, 0), (w / 2, 0), (w / 2, h), (-w / 2, h))]
+    points = ", ".join(f"[{x!r}, {y!r}]" for x, y in corners)
+    c, n_ = ((gap + h / 2) * n).tolist(), n.tolist()
+    z = ", 0.0" if dim == 3 else ""
+    if dim == 2:
+        body = f'shape = "polygon"\npoints = [{points}]\n[mesh]\nmax_area = 0.004'
+        hole = f'shape = "ellipse"\ncenter = [{c[0]!r}, {c[1]!r}]\nsemi_axes = [0.04, 0.03]\npoints = 12'
+    else:
+        profile = f'{{ shape = "polygon", points = [{points}] }}'
+        body = f'shape = "extrusion"\ndepth = 0.2\nprofile = {profile}\n[mesh]\nsize = 0.08'
+        hole = f'shape = "ellipsoid"\ncenter = [{c[0]!r}, {c[1]!r}, 0.0]\nsemi_axes = [0.04, 0.04, 0.04]'
+    text = f"""
+[body]
+{body}
+[material]
+E = 1e4
+nu = 0.3
+[[chambers]]
+name = "hole"
+{hole}
+control = "pressure"
+keyframes = [[{increments}, 0.0]]
+[effects.gravity]
+density = 1.0
+[[obstacles]]
+name = "slope"
+shape = "plane"
+point = [0.0, 0.0{z}]
+normal = [{n_[0]!r}, {n_[1]!r}{z}]
+dhat = {DHAT}
+stiffness = 1e3
+friction = {MU}
+friction_slip = {SLIP}
+[schedule]
+increments = {increments}
+"""
+    return read_scene(tomllib.loads(text), "incline"), t, n
+
+
+def run_incline(ratio, dim, monkeypatch):
+    """The incline's run (max_cuts 1; in 3D without chord steps: a held factorisation of the singular Hessian of a
+    sliding free body makes CHOLMOD raise instead of failing the step). The build's support check counts no
+    obstacle as a support (a free body on one is refused): lifted here, friction holding the block."""
+    monkeypatch.setattr(build, "require_held", lambda *args: None)
+    scene, t, n = incline(ratio, dim)
+    built = scene.build()
+    options = NewtonOptions(chord_steps=False) if dim == 3 else None
+    return built, t, n, lambda: run_schedule(built, options=options, max_cuts=1)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_block_on_a_slope_below_the_friction_angle_sticks(dim, monkeypatch):
+    """tan(theta) = 0.8 mu: every increment finds equilibrium; the friction force balances the weight's component
+    along the slope, W sin(theta), and the normal force W cos(theta) (to the solver's tolerance); the block creeps
+    by the slip y at which the smoothed friction carries it, mu N f1(y) = W sin(theta): y = (1 - sqrt(1 - 0.8)) eps
+    = 0.553 eps per increment (quasistatic friction acts on each increment's displacement)."""
+    built, t, n, run = run_incline(0.8, dim, monkeypatch)
+    result = run()
+    theta = math.atan(0.8 * MU)
+    weight = 9.81 * built.mesh.measure
+    history = {key: np.array([step.row()[key] for step in result.steps]) for key in result.steps[0].row()}
+    assert history["converged"].all() and len(result.steps) == 4
+    friction = np.stack([history["slope.friction.fx"], history["slope.friction.fy"]], axis=1)
+    normal = np.stack([history["slope.fx"], history["slope.fy"]], axis=1)
+    assert friction @ t == pytest.approx(weight * math.sin(theta), rel=1e-4)
+    assert friction @ n == pytest.approx(0.0, abs=1e-9 * weight)
+    assert normal @ n == pytest.approx(weight * math.cos(theta), rel=1e-4)
+    creep = np.diff((result.positions - result.positions[0]).mean(axis=1)[:, :2] @ t)
+    assert creep[1:] / SLIP == pytest.approx(-(1 - math.sqrt(0.2)), rel=1e-3)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_block_on_a_slope_past_the_friction_angle_slides(dim, monkeypatch):
+    """tan(theta) = 1.25 mu: held at step 0 by the rest state's larger lagged normal forces, the block finds no
+    equilibrium at step 1, its friction at mu N = mu W cos(theta) < W sin(theta): the ramp stops, naming the slide."""
+    built, _, _, run = run_incline(1.25, dim, monkeypatch)
+    with pytest.raises(RampFailed, match=r"step 1: .*\(the body slides on 'slope'") as failure:
+        run()
+    assert len(failure.value.result.steps) == 1
+    weight = 9.81 * built.mesh.measure
+    assert f"mu N = {MU * weight * math.cos(math.atan(1.25 * MU)):.4g}" in str(failure.value)

@@ -169,6 +169,20 @@ class ObstacleFriction(Term):
         """The exact Hessian, PSD as it is (the module's docstring): psd_only changes nothing."""
         return self._derivatives()[1]
 
+    def fault(self) -> str | None:
+        """Where every node it holds (lambda > 0) slides (its friction force at mu lambda: |u_T| >= eps), that the
+        body slides on the obstacle: a load along it beyond mu N has no quasistatic equilibrium."""
+        held = self.lagged[:, 0] > 0
+        force = np.linalg.norm(self.gradient()[self.contact.verts[held]], axis=1)
+        limit = self.mu * self.lagged[held, 0]
+        if not held.any() or not np.all(force >= (1 - 1e-9) * limit):
+            return None
+        return (
+            f"the body slides on {self.contact.name!r}: every node in contact slips more than friction_slip = "
+            f"{self.eps:.3g} in the increment, its friction at its limit mu N = {limit.sum():.4g}; a load along it "
+            f"beyond that has no equilibrium (quasistatic friction holds or slides)"
+        )
+
 
 def frictional(contact, mu: float, slip: float | None) -> list:
     """The terms of a contact with friction coefficient mu: the contact alone where mu = 0 (no friction term at all),
