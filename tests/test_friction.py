@@ -4,19 +4,21 @@ and slides above it; a frictionless scene building no friction term; bad keys re
 
 import math
 import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
 from test_obstacles import assembled, contact, finite_differences
 
 from taichi_pneuma.scene import build
-from taichi_pneuma.scene.scenefile import read_scene
+from taichi_pneuma.scene.scenefile import load_scene, read_scene
 from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 from taichi_pneuma.terms.friction import ObstacleFriction, frictional
 from taichi_pneuma.terms.obstacle_shapes import Plane, Sphere
 
 EPS = 0.01
+SCENES = Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes"
 SHAPES = {  # by dimension: a 2D scene's shape in its plane (a normal with no z)
     "plane": lambda dim: Plane((0.0, 0.0, 0.0)[:dim], (1.0, 2.0, 0.5)[:dim]),
     "sphere": lambda dim: Sphere((0.0, 0.0, 0.0)[:dim], 1.0),
@@ -173,3 +175,40 @@ def test_a_block_on_a_slope_past_the_friction_angle_slides(dim, monkeypatch):
     assert len(failure.value.result.steps) == 1
     weight = 9.81 * built.mesh.measure
     assert f"mu N = {MU * weight * math.cos(math.atan(1.25 * MU)):.4g}" in str(failure.value)
+
+
+def gripper(pull: float) -> tuple:
+    """gripper_2d_friction (mu = 0.8; dhat 0.5 mm, so eps = 0.05 mm) on a coarse linear mesh, its cylinder pulled
+    down `pull` mm over steps 12 to 20 after the fingers close: (history columns, steps of the pull)."""
+    scene = load_scene(SCENES / "gripper_2d_friction.toml").with_values(
+        {"mesh.max_area": 4.0, "mesh.order": 1, "obstacles[0].keyframes": [[12, [0.0, 0.0]], [20, [0.0, -pull]]]}
+    )
+    run = run_schedule(scene.build())
+    assert all(step.converged for step in run.steps) and len(run.steps) == 21
+    return {key: np.array([step.row()[key] for step in run.steps]) for key in run.steps[0].row()}, slice(13, 21)
+
+
+def test_a_gripper_pulled_fast_slides_at_mu_times_its_grip():
+    """The cylinder pulled 0.5 mm a step (10 eps): every contact node slides, so the friction on the fingers is mu
+    times the normal force lagged from the step before (exactly, to round-off), within 10 % of mu times the step's
+    own after the first step of the pull; it drags the fingers down (friction.fy < 0)."""
+    history, pull = gripper(4.0)
+    friction, normal = history["object.friction.magnitude"], history["object.magnitude"]
+    assert normal[12] > 10.0  # the fingers hold it (kPa mm = N/m)
+    assert friction[pull] == pytest.approx(0.8 * normal[12:20], rel=1e-9)
+    later = slice(14, 21)  # the first step of the pull presses the cylinder onto the fingertips: N rises 25 %
+    assert np.all(np.abs(friction[later] - 0.8 * normal[later]) <= 0.1 * 0.8 * normal[later])
+    assert np.all(history["object.friction.fy"][pull] < -0.9 * friction[pull])
+
+
+def test_a_gripper_pulled_slowly_holds_below_mu_times_its_grip():
+    """The cylinder pulled 0.01 mm a step (0.2 eps): below the kinetic limit, the friction is the smoothed static
+    branch, mu N f1(y) with y the slip of the step; the fingers, softer than the friction's spring (2 mu N / eps),
+    barely follow, so y is about the pull per step and the friction settles at mu N f1(0.2 eps) = 0.36 mu N (within
+    10 %): quasistatic friction acts on each increment's slip, holding a slow pull with less than mu N."""
+    history, pull = gripper(0.08)
+    friction, normal = history["object.friction.magnitude"], history["object.magnitude"]
+    f1 = 2 * 0.2 - 0.2**2
+    assert np.all(friction[pull] < 0.5 * 0.8 * normal[12:20])
+    assert friction[17:21] == pytest.approx(f1 * 0.8 * normal[16:20], rel=0.1)
+    assert np.all(history["object.friction.fy"][pull] < 0)
