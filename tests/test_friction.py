@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from test_obstacles import assembled, contact, finite_differences
 
+from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.scene import build
 from taichi_pneuma.scene.scenefile import load_scene, read_scene
 from taichi_pneuma.solve.newton import NewtonOptions
@@ -212,3 +213,28 @@ def test_a_gripper_pulled_slowly_holds_below_mu_times_its_grip():
     assert np.all(friction[pull] < 0.5 * 0.8 * normal[12:20])
     assert friction[17:21] == pytest.approx(f1 * 0.8 * normal[16:20], rel=0.1)
     assert np.all(history["object.friction.fy"][pull] < 0)
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "message"),
+    [
+        ("friction", -0.1, r"friction = -0.1 must be >= 0 \(0: frictionless\)"),
+        ("friction", "high", "friction = 'high' must be a number"),
+        ("friction_slip", 0.0, r"friction_slip = 0.0 must be > 0 \(a length"),
+    ],
+)
+def test_bad_friction_is_refused_naming_it(key, value, message):
+    data = tomllib.loads(incline(0.8, 2)[0].to_toml())
+    data["obstacles"][0][key] = value
+    with pytest.raises(PneumaInputError, match=message):
+        read_scene(data, "bad")
+
+
+def test_a_friction_scene_reads_back_from_its_toml_and_a_frictionless_one_has_no_friction(monkeypatch):
+    monkeypatch.setattr(build, "require_held", lambda *args: None)  # as run_incline
+    scene, _, _ = incline(0.8, 3)
+    assert read_scene(tomllib.loads(scene.to_toml()), "incline") == scene
+    frictionless = scene.with_value("obstacles[0].friction", 0.0)
+    assert "friction = " not in frictionless.to_toml()
+    assert [t.name for t in frictionless.build().contact_terms()] == ["slope"]
+    assert [t.name for t in scene.build().contact_terms()] == ["slope", "slope.friction"]

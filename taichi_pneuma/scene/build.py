@@ -149,6 +149,8 @@ class Scene:
         require(len(set(kinds)) == len(kinds), f"effects {kinds!r} name one effect twice")
         names = [o.name for o in self.obstacles]
         require(len(set(names)) == len(names), f"obstacle names {names!r} must be distinct")
+        frictions = [f"{o.name}.friction" for o in self.obstacles if o.friction]  # heads its friction's columns
+        require(not set(frictions) & set(names), f"obstacle names {names!r}: one is another's '<name>.friction'")
         clash = sorted(set(names) & {*self.chamber_names, "clamp", *kinds})
         require(not clash, f"obstacle name {clash[0] if clash else ''!r} is a chamber's, an effect's or the clamp's")
         _ = self.schedule  # validates the increments against the keyframes

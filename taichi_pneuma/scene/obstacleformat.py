@@ -60,7 +60,7 @@ OBSTACLE = Table(
         "name": Key(
             str,
             doc="distinct, not a chamber's; a plain name (letters, digits, _ + - .) not starting with = + - @ (it "
-            "heads the history's <name>.fx, ... columns)",
+            "heads the history's <name>.fx, ... columns, and with friction <name>.friction.fx, ...)",
         ),
         "shape": OBSTACLE_SHAPES,
         "dhat": Key(float, None, "the contact barrier's threshold distance", unit=LENGTH, scaled=False, si=0.01),
