@@ -238,3 +238,42 @@ def test_a_friction_scene_reads_back_from_its_toml_and_a_frictionless_one_has_no
     assert "friction = " not in frictionless.to_toml()
     assert [t.name for t in frictionless.build().contact_terms()] == ["slope"]
     assert [t.name for t in scene.build().contact_terms()] == ["slope", "slope.friction"]
+
+
+def test_a_ground_with_friction_holds_a_free_block_and_its_weight():
+    """A free block on the ground under gravity: refused frictionless (the sliding is free), built with friction (the
+    support check counts static friction), and at rest on it, the ground's friction column beside its normal one."""
+    text = """
+[body]
+shape = "rectangle"
+center = [0.0, 0.1]
+size = [0.4, 0.2]
+[mesh]
+max_area = 0.004
+[material]
+E = 1e4
+nu = 0.3
+[[chambers]]
+name = "hole"
+shape = "ellipse"
+center = [0.0, 0.1]
+semi_axes = [0.04, 0.03]
+points = 12
+control = "pressure"
+keyframes = [[1, 0.0]]
+[effects.gravity]
+density = 1.0
+[effects.ground]
+height = -0.003
+friction = 0.5
+[schedule]
+increments = 1
+"""
+    data = tomllib.loads(text)
+    run = run_schedule(read_scene(data, "block").build())
+    row = run.steps[-1].row()
+    assert row["ground.fy"] == pytest.approx(9.81 * 0.4 * 0.2 - 9.81 * math.pi * 0.04 * 0.03, rel=0.02)
+    assert row["ground.friction.fx"] == pytest.approx(0.0, abs=1e-9)
+    data["effects"]["ground"]["friction"] = 0.0
+    with pytest.raises(PneumaInputError, match="leave free: translation along x"):
+        read_scene(data, "block").build()
