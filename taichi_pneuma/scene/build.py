@@ -149,6 +149,8 @@ class Scene:
         require(len(set(kinds)) == len(kinds), f"effects {kinds!r} name one effect twice")
         names = [o.name for o in self.obstacles]
         require(len(set(names)) == len(names), f"obstacle names {names!r} must be distinct")
+        frictions = [f"{o.name}.friction" for o in self.obstacles if o.friction]  # heads its friction's columns
+        require(not set(frictions) & set(names), f"obstacle names {names!r}: one is another's '<name>.friction'")
         clash = sorted(set(names) & {*self.chamber_names, "clamp", *kinds})
         require(not clash, f"obstacle name {clash[0] if clash else ''!r} is a chamber's, an effect's or the clamp's")
         _ = self.schedule  # validates the increments against the keyframes
@@ -289,10 +291,9 @@ class Scene:
         for spec in (*self.fibers, *self.layers):
             for term in spec.terms(config, mesh, lumped_area, budget):
                 model.add(term)
-        obstacles = [
-            model.add(term) for spec in self.obstacles for term in spec.terms(config, mesh, lumped_area, budget)
-        ]
-        return BuiltScene(self, mesh, model, elastic, chambers, effects, obstacles)  # type: ignore[arg-type]
+        obstacles = [[model.add(t) for t in spec.terms(config, mesh, lumped_area, budget)] for spec in self.obstacles]
+        contacts, frictions = [terms[0] for terms in obstacles], [t for terms in obstacles for t in terms[1:]]
+        return BuiltScene(self, mesh, model, elastic, chambers, effects, contacts, frictions)  # type: ignore[arg-type]
 
 
 def support_rows(mesh: Mesh, effects) -> list:
@@ -320,7 +321,7 @@ def describe_supports(mesh: Mesh, effects) -> str:
 @dataclass
 class BuiltScene:
     """A meshed scene: its EnergyModel, and handles on the terms a run drives or reports (obstacles: the
-    obstacles' contact terms, in the scene's order)."""
+    obstacles' contact terms, in the scene's order; frictions: the friction terms of those with friction > 0)."""
 
     scene: Scene
     mesh: Mesh
@@ -329,6 +330,7 @@ class BuiltScene:
     chambers: list[Chamber]
     effects: dict[str, list[Term]]
     obstacles: list = field(default_factory=list)
+    frictions: list = field(default_factory=list)
 
     @property
     def clamp(self) -> Term | None:
@@ -336,9 +338,10 @@ class BuiltScene:
         return next((t for t in self.model.terms if isinstance(t, Clamp)), None)
 
     def contact_terms(self) -> list[Term]:
-        """Every term that reports a contact force, each under its name: the effects' (ground, self_contact), then
-        the obstacles' (their names)."""
-        return [t for terms in self.effects.values() for t in terms if t.reports_contact] + list(self.obstacles)
+        """Every term that reports a contact force, each under its name: the effects' (ground, self_contact, and
+        ground.friction), then the obstacles' (their names), then their friction terms ('<name>.friction')."""
+        effects = [t for terms in self.effects.values() for t in terms if t.reports_contact]
+        return effects + list(self.obstacles) + list(self.frictions)
 
     def moving_offsets(self, commands: np.ndarray) -> list:
         """(term, translation (3,)) of each moving obstacle at the commands (Schedule.commands: the chambers'

@@ -8,6 +8,8 @@ radius = 0.3
 dhat = 0.01                    # the barrier's threshold and stiffness, as [effects.ground]'s
 stiffness = 1e3
 keyframes = [[10, [0.0, 0.2, 0.0]]]   # its translation by step (none: static)
+friction = 0.5                 # Coulomb coefficient (0, the default: frictionless)
+friction_slip = 0.001          # the slip over which static friction reaches mu N (none: dhat / 10)
 """
 
 from ..io.units import LENGTH, NODAL_STIFFNESS
@@ -58,7 +60,7 @@ OBSTACLE = Table(
         "name": Key(
             str,
             doc="distinct, not a chamber's; a plain name (letters, digits, _ + - .) not starting with = + - @ (it "
-            "heads the history's <name>.fx, ... columns)",
+            "heads the history's <name>.fx, ... columns, and with friction <name>.friction.fx, ...)",
         ),
         "shape": OBSTACLE_SHAPES,
         "dhat": Key(float, None, "the contact barrier's threshold distance", unit=LENGTH, scaled=False, si=0.01),
@@ -69,14 +71,25 @@ OBSTACLE = Table(
             "[[step, [dx, dy, dz]], ...]: its translation, linear between steps (2D: [dx, dy]), each component "
             "within 10 times the body's size; swept in sub-steps of at most half its dhat",
         ),
+        "friction": Key(float, 0.0, "the Coulomb friction coefficient mu between it and the body (0: frictionless)"),
+        "friction_slip": Key(
+            float,
+            None,
+            "the tangential slip over which static friction rises to mu times the normal force (none: dhat / 10)",
+            unit=LENGTH,
+        ),
     },
-    make=lambda v: Obstacle(v["name"], v["shape"], v["dhat"], v["stiffness"], v["keyframes"] or ()),
+    make=lambda v: Obstacle(
+        v["name"], v["shape"], v["dhat"], v["stiffness"], v["keyframes"] or (), v["friction"], v["friction_slip"]
+    ),
     parts=lambda o: {
         "name": o.name,
         "shape": o.shape,
         "dhat": o.dhat,
         "stiffness": o.stiffness,
         "keyframes": o.keyframes or None,
+        "friction": o.friction or None,
+        "friction_slip": o.friction_slip,
     },
     cls=Obstacle,
 )

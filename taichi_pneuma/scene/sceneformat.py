@@ -509,7 +509,9 @@ def scene_table(scene_class) -> Table:
             "targets": Tables(TARGET, "poses for inverse control, in order"),
             "fibers": Tables(FIBER, "embedded fibres (tension-only cords), each a term of the energy"),
             "layers": Tables(LAYER, "strain-limiting sheets, each bonded to a face of the body"),
-            "obstacles": Tables(OBSTACLE, "rigid obstacles the body's outer boundary cannot cross (frictionless)"),
+            "obstacles": Tables(
+                OBSTACLE, "rigid obstacles the body's outer boundary cannot cross (with friction optional)"
+            ),
         },
         make=make_scene,
         parts=lambda s: {

@@ -229,7 +229,7 @@ def step_record(
         f = -term.gradient()
         vertex_forces += f
         total = f.sum(axis=0)
-        if any(term is obstacle for obstacle in built.obstacles):
+        if any(term is obstacle for obstacle in (*built.obstacles, *built.frictions)):
             on_obstacles += total
         contact[term.name] = (float(total[0]), float(total[1]), float(np.linalg.norm(f, axis=1).sum()))
         if mesh.dim == 3:
@@ -320,8 +320,6 @@ def run_schedule(
             raise RampInterrupted(f"interrupted during step {i} of {schedule.increments}", partial()) from None
         built.set_commands(target)
         built.model.set_displacements(u)
-        for term in built.model.terms:
-            term.advance(u)
         for record in records:
             newton["chord_steps"] += record.chord_steps
             newton["factorizations"] += record.factorizations
@@ -329,6 +327,8 @@ def run_schedule(
         step, vertex_forces = step_record(
             built, i, target, u, records, cuts, time.perf_counter() - start, stretches, steps[-1] if steps else None
         )
+        for term in built.model.terms:  # after the record: friction's force is that of the increment's slip
+            term.advance(u)
         steps.append(step)
         states.append(mesh.vertices + u)
         forces.append(vertex_forces)

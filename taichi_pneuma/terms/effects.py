@@ -22,10 +22,11 @@ from ..fem.supports import PointSet
 from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, PRESSURE, TIME, si_default, unit
 from ..limits import wall_pairs
 from .contact import SelfContact as SelfContactTerm
+from .friction import frictional
 from .gravity import Gravity as GravityTerm
 from .inertia import Inertia
 from .obstacle_shapes import Plane
-from .obstacles import ObstacleContact
+from .obstacles import ObstacleContact, check_friction
 
 
 class Effect:
@@ -78,11 +79,14 @@ class Gravity(Effect):
 @dataclass(frozen=True)
 class Ground(Effect):
     """Ground contact: a log barrier (threshold dhat, stiffness kappa) keeps the body's outer boundary above the line
-    (in 3D the plane) y = height."""
+    (in 3D the plane) y = height; with friction mu > 0, Coulomb friction too, smoothed over the slip friction_slip
+    (None: dhat / 10) (terms/friction.py)."""
 
     height: float = field(metadata=unit(LENGTH))
     dhat: float | None = si_default(0.01, LENGTH, scaled=False)
     stiffness: float | None = si_default(1e3, NODAL_STIFFNESS, scaled=False)
+    friction: float = 0.0
+    friction_slip: float | None = field(default=None, metadata=unit(LENGTH))
     name = "ground"
     contact = True
     support = True
@@ -95,15 +99,17 @@ class Ground(Effect):
         require_finite("height", self.height)
         _positive("dhat", self.dhat)
         _positive("stiffness", self.stiffness)
+        check_friction(self.friction, self.friction_slip)
 
     def holds(self, mesh, effects) -> list:
         """A one-sided contact holds a body only where a load presses it on: with gravity, the normal (y)
         displacement of the nodes of the body's bottom (where it comes to rest on a level ground; so the
-        vertical translation and the tilts, not whether the body would topple); without gravity, nothing. The
-        barrier has no friction: it never holds a motion along the ground."""
+        vertical translation and the tilts, not whether the body would topple), and with friction their motion
+        along the ground too (static friction); without gravity, nothing."""
         if not any(effect.name == Gravity.name for effect in effects):
             return []
-        return [(PointSet("bottom").select(mesh.vertices, "ground"), np.diag(np.eye(mesh.dim)[1]))]
+        held = np.eye(mesh.dim) if self.friction > 0 else np.diag(np.eye(mesh.dim)[1])
+        return [(PointSet("bottom").select(mesh.vertices, "ground"), held)]
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
         lowest = float(mesh.vertices[mesh.boundary, 1].min())
@@ -111,7 +117,8 @@ class Ground(Effect):
             lowest > self.height, f"ground height = {self.height!r} must lie below the body (lowest point {lowest:.6g})"
         )
         ground = Plane((0.0, self.height, 0.0), (0.0, 1.0, 0.0))  # the body on its +y side
-        return [ObstacleContact(config, mesh.boundary, ground, "ground", self.dhat, self.stiffness)]  # type: ignore[arg-type]
+        contact = ObstacleContact(config, mesh.boundary, ground, "ground", self.dhat, self.stiffness)  # type: ignore[arg-type]
+        return frictional(contact, self.friction, self.friction_slip)
 
 
 @dataclass(frozen=True)

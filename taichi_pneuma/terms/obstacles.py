@@ -1,4 +1,5 @@
-"""Rigid obstacles: frictionless contact of the body's outer boundary nodes with a shape given by its signed distance.
+"""Rigid obstacles: contact of the body's outer boundary nodes with a shape given by its signed distance (with
+friction > 0, Coulomb friction too: terms/friction.py).
 
 Each shape is a signed distance d(x) (terms/obstacle_distance.py), 1-Lipschitz. The energy is that of the ground
 (terms/contact.py): E = sum_i b(d_i) over the boundary nodes, the log barrier b of threshold dhat and stiffness
@@ -37,9 +38,10 @@ from ..backend import kernel, ti
 from ..errors import require, require_finite, shape_of
 from ..fem.self_intersection import surface_pieces, winding
 from ..io.output import MAX_NAME, STEM, check_heading
-from ..io.units import LENGTH, NODAL_STIFFNESS, si_default
+from ..io.units import LENGTH, NODAL_STIFFNESS, si_default, unit
 from .base import HUGE, Indices, Nodal, Scalars, Table, Term, block_pattern, int32s
 from .contact import barrier
+from .friction import frictional
 from .obstacle_distance import obstacle_reach, point_of, row3, signed_distance
 from .obstacle_shapes import PLANE, Shape, vector
 
@@ -263,18 +265,32 @@ class ObstacleContact(Term):
         return None
 
 
+def check_friction(friction, slip) -> None:
+    """Refuse a friction coefficient that is not >= 0 or a friction_slip (None: its default) that is not > 0."""
+    require(require_finite("friction", friction) >= 0, f"friction = {friction!r} must be >= 0 (0: frictionless)")
+    require(
+        slip is None or require_finite("friction_slip", slip) > 0,
+        f"friction_slip = {slip!r} must be > 0 (a length: the slip over which static friction reaches mu N)",
+    )
+
+
 @dataclass(frozen=True)
 class Obstacle:
     """A rigid obstacle ([[obstacles]]): its name (heads its history columns), shape (a Shape), the barrier's
     threshold dhat and stiffness (as [effects.ground]'s), and keyframes ((step, [dx, dy(, dz)]), ...): its
     translation from its placed position, piecewise linear over the schedule's steps from 0 at step 0 and held
-    after the last (as a chamber's commands, scene/schedule.py); none: a static obstacle."""
+    after the last (as a chamber's commands, scene/schedule.py); none: a static obstacle; friction: the Coulomb
+    coefficient mu (0: frictionless, no friction term) and friction_slip the slip eps over which static friction
+    rises to mu times the normal force (None: dhat / 10, a length in the scene's units like dhat) (terms/friction.py,
+    check_friction)."""
 
     name: str
     shape: Shape
     dhat: float | None = si_default(0.01, LENGTH, scaled=False)
     stiffness: float | None = si_default(1e3, NODAL_STIFFNESS, scaled=False)
     keyframes: tuple = field(default=())
+    friction: float = 0.0
+    friction_slip: float | None = field(default=None, metadata=unit(LENGTH))
 
     def __post_init__(self):
         check_heading("obstacle name", self.name)  # a chamber's rule: it heads CSV columns
@@ -287,6 +303,7 @@ class Obstacle:
         for key in ("dhat", "stiffness"):
             value = getattr(self, key)
             require(value is None or require_finite(key, value) > 0, f"{key} = {value!r} must be > 0")
+        check_friction(self.friction, self.friction_slip)
         frames = self.keyframes
         require(
             isinstance(frames, (tuple, list))
@@ -333,11 +350,12 @@ class Obstacle:
         return float(np.max(np.linalg.norm(np.diff(values, axis=0), axis=1) / np.diff(steps), initial=0.0))
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
-        """Its contact term on the body's outer boundary nodes, its overlap check on the body's surface pieces
-        (surface_pieces). Refused: a 3D scene's point or vector of 2 numbers; a 2D scene's keyframe with a z
-        offset; an offset component beyond REACH times the body's size (the diagonal of its bounding box); a motion
-        per increment of more than MAX_SWEEPS sweeps (BuiltScene.sweeps; the sweep: half the smaller of dhat
-        and the median length of the surface pieces' sides); an obstacle overlapping the rest body (overlap)."""
+        """Its contact term on the body's outer boundary nodes (then, with friction > 0, its friction term:
+        friction.frictional), its overlap check on the body's surface pieces (surface_pieces). Refused: a 3D scene's
+        point or vector of 2 numbers; a 2D scene's keyframe with a z offset; an offset component beyond REACH times
+        the body's size (the diagonal of its bounding box); a motion per increment of more than MAX_SWEEPS sweeps
+        (BuiltScene.sweeps; the sweep: half the smaller of dhat and the median length of the surface pieces' sides);
+        an obstacle overlapping the rest body (overlap)."""
         flat = [key for key in self.shape.vectors if len(getattr(self.shape, key)) == 2]
         flat += ["keyframes"] if any(len(v) == 2 for _, v in self.keyframes) else []
         require(
@@ -373,4 +391,4 @@ class Obstacle:
         term.set_offset(self.offset(0.0))  # where it is at step 0 (a keyframe at step 0 moves it there)
         overlap = term.overlap()
         require(overlap is None, f"{overlap} at rest: place it clear of the body")
-        return [term]
+        return frictional(term, self.friction, self.friction_slip)
