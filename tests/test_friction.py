@@ -13,7 +13,6 @@ from test_obstacles import assembled, contact, finite_differences
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.scene import build
 from taichi_pneuma.scene.scenefile import load_scene, read_scene
-from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 from taichi_pneuma.terms.friction import ObstacleFriction, frictional
 from taichi_pneuma.terms.obstacle_shapes import Plane, Sphere
@@ -135,14 +134,12 @@ increments = {increments}
 
 
 def run_incline(ratio, dim, monkeypatch):
-    """The incline's run (max_cuts 1; in 3D without chord steps: a held factorisation of the singular Hessian of a
-    sliding free body makes CHOLMOD raise instead of failing the step). The build's support check counts no
-    obstacle as a support (a free body on one is refused): lifted here, friction holding the block."""
+    """The incline's run (max_cuts 1). The build's support check counts no obstacle as a support (a free body on
+    one is refused): lifted here, friction holding the block."""
     monkeypatch.setattr(build, "require_held", lambda *args: None)
     scene, t, n = incline(ratio, dim)
     built = scene.build()
-    options = NewtonOptions(chord_steps=False) if dim == 3 else None
-    return built, t, n, lambda: run_schedule(built, options=options, max_cuts=1)
+    return built, t, n, lambda: run_schedule(built, max_cuts=1)
 
 
 @pytest.mark.parametrize("dim", [2, 3])

@@ -209,7 +209,10 @@ class CholmodCholesky:
         from cvxopt import cholmod
 
         x = cvxopt.matrix(np.asarray(rhs, dtype=np.float64))
-        cholmod.solve(self._symbolic, x)
+        try:
+            cholmod.solve(self._symbolic, x)
+        except ArithmeticError as exc:  # a factor of a singular matrix (a free body sliding)
+            raise FactorizationError(f"CHOLMOD: the solve failed ({exc})") from None
         return np.array(x).reshape(rhs.shape)
 
 

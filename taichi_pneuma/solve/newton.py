@@ -284,7 +284,10 @@ class NewtonSolver:
         if not self.factored:
             return g * math.nan, math.nan
         with clock("solve"):
-            d = solve_low_rank_updated(self.factored_by, -g, self.model.low_rank(), rtol)
+            try:
+                d = solve_low_rank_updated(self.factored_by, -g, self.model.low_rank(), rtol)
+            except FactorizationError:  # the held factor is of a singular matrix: a fresh Hessian instead
+                return g * math.nan, math.nan
         return d, float(g @ d)
 
     def _chord_pays(self, record: SolveRecord, chord_last: bool) -> bool:
