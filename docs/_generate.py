@@ -193,6 +193,12 @@ RESULTS_PAGES = {
         ("benchmarks/fibers.py", None),
         "python benchmarks/fibers.py",
     ),
+    "contact": (
+        "performance",
+        "What surface contact costs: ipctk against this project's Taichi kernels, and a 3D ramp with and without it",
+        ("benchmarks/contact.py", None),
+        "python benchmarks/contact.py",
+    ),
     "amg_options": (
         "performance",
         "3D: multigrid options for quadratic tetrahedra",

@@ -5,11 +5,13 @@ import json
 
 import imageio.v3 as iio
 import imageio_ffmpeg
+import numpy as np
 from renderers import SOFTWARE
 
 import taichi_pneuma as tp
 from taichi_pneuma.apps.cli import MIN_FRAME_3D
 from taichi_pneuma.apps.inflate import main
+from taichi_pneuma.fem.self_intersection import surface_crossing
 from taichi_pneuma.scene.shipped import shipped
 
 DIMENSIONS = {name: tp.load_scene(name).dim for name in shipped()}
@@ -19,7 +21,9 @@ SIZE = {2: (192, 96), 3: MIN_FRAME_3D}  # the smallest 3D frame the apps take
 def runs_and_writes_its_pictures(name: str, flags: list[str], out, capsys) -> None:
     """The shipped scene `name` with flags exits 0 and writes its frame PNG (of --size), plot PNG and video (a frame
     per step); its summary has every step converged, each chamber's term, fibres where it has them and a contact
-    entry per obstacle, all the ramp's steps or, declared (schedule.ends_at_limit_point), a stop at its limit point."""
+    entry per obstacle, all the ramp's steps or, declared (schedule.ends_at_limit_point), a stop at its limit point;
+    and at every saved step (its states npz), no two pieces of the body's surface cross and no obstacle overlaps the
+    body (apart_at_every_step)."""
     scene = tp.load_scene(name)
     width, height = SIZE[scene.dim]
     code = main(
@@ -37,6 +41,22 @@ def runs_and_writes_its_pictures(name: str, flags: list[str], out, capsys) -> No
     chambers = {f"chamber:{chamber}" for chamber, _ in scene.geometry.chambers}
     assert chambers <= set(summary["terms"]) and ("fibers" in summary["terms"]) == bool(scene.fibers)
     assert len(summary["contact"]) >= len(scene.obstacles)
+    apart_at_every_step(scene, np.load(out / f"{stem}_states.npz")["positions"])
     assert imageio_ffmpeg.count_frames_and_secs(str(out / f"{stem}.mp4"))[0] == summary["steps"]
     assert iio.imread(out / f"{stem}.png").shape == (height, width, 3)
     assert iio.imread(out / f"{stem}_plot.png").ndim == 3
+
+
+def apart_at_every_step(scene, positions: np.ndarray) -> None:
+    """The geometric check at every step k of a run's node positions (steps, n, d): no two pieces of the body's
+    surface that share no node cross (surface_crossing), and each obstacle, where its keyframes put it at step k,
+    overlaps no piece of the surface nor lies inside the body (ObstacleContact.overlap)."""
+    built = scene.build()
+    rest = built.model.config.rest
+    for k, x in enumerate(positions):
+        crossing = surface_crossing(x, built.surface_pieces)
+        assert crossing is None, f"step {k}: pieces {crossing.first} and {crossing.second} cross"
+        built.model.set_displacements(x - rest)
+        for term, spec in zip(built.obstacles, scene.obstacles, strict=True):
+            term.set_offset(spec.offset(float(k)))
+            assert term.overlap() is None, f"step {k}: {term.overlap()}"
