@@ -157,10 +157,13 @@ class SurfaceContact(Effect):
     """Contact of the body's whole surface with itself, 2D and 3D (terms/surface_contact.py): IPC barriers of
     threshold dhat (default: DHAT_FRACTION of the body's bounding-box diagonal) and stiffness kappa (a pressure)
     between any two pieces of the surface that share no node: chamber walls against each other and themselves, the
-    outer surface against itself."""
+    outer surface against itself; with friction mu > 0, Coulomb friction between them too, smoothed over the slip
+    friction_slip (None: dhat / 10)."""
 
     dhat: float | None = field(default=None, metadata=unit(LENGTH))
     stiffness: float | None = si_default(1e5, PRESSURE)
+    friction: float = 0.0
+    friction_slip: float | None = field(default=None, metadata=unit(LENGTH))
     name = "surface_contact"
     contact = True
 
@@ -169,9 +172,11 @@ class SurfaceContact(Effect):
     def __post_init__(self):
         _positive("dhat", self.dhat)
         _positive("stiffness", self.stiffness)
+        check_friction(self.friction, self.friction_slip)
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
         from .surface_contact import SurfaceContact as SurfaceContactTerm  # ipctk: imported where it is used
+        from .surface_contact import SurfaceFriction
 
         dhat = self.dhat or self.DHAT_FRACTION * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
         term = SurfaceContactTerm(config, surface_pieces(mesh), dhat, self.stiffness)  # type: ignore[arg-type]
@@ -181,7 +186,9 @@ class SurfaceContact(Effect):
             f"surface_contact: dhat = {dhat:.4g} must be less than the smallest distance at rest between two pieces "
             f"of the body's surface that share no node ({nearest:.4g}): give a smaller dhat",
         )
-        return [term]
+        if self.friction == 0:
+            return [term]
+        return [term, SurfaceFriction(term, self.friction, self.friction_slip or dhat / 10)]
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,14 @@ which keeps every pair's distance positive over the step; the solver steps at mo
 
 The pairs change with the state, and so does the Hessian's pattern (Term.dynamic): hessian_pattern() is that of
 the last hessian_values(). Every quantity is computed once per state (the displacements compared with the last).
+
+Friction between the surface's pieces (SurfaceFriction, mu > 0): IPC's smoothed lagged Coulomb friction, ipctk's
+FrictionPotential, as terms/friction.py's against obstacles. At the last equilibrium x^0 (advance) the pairs within
+dhat, their normal force magnitudes lambda_k (the barrier's) and their tangent bases T_k are lagged; over an
+increment each pair's relative slip u_k = T_k^T (Gamma_k (x - x^0)) (Gamma_k the pair's relative-motion map at its
+lagged closest points) gives the energy D = sum_k mu lambda_k f0(|u_k|), f0 IPC's (f0' = f1, f1(y) = 2 y / eps -
+y^2 / eps^2 below the slip eps, 1 above): static friction a stiff spring up to mu lambda, kinetic friction mu lambda
+against the slip.
 """
 
 from __future__ import annotations
@@ -145,3 +153,55 @@ class SurfaceContact(Term):
         if self.energy() < math.inf:
             return None
         return "two pieces of the body's surface touch (surface_contact's barrier is infinite there)"
+
+
+class SurfaceFriction(Term):
+    """Smoothed Coulomb friction (coefficient mu, slip eps) between the pieces of the body's surface, lagged at the
+    last equilibrium (module docstring); named 'surface_contact.friction', beside the contact's force."""
+
+    name = "surface_contact.friction"
+    reports_contact = True
+    dynamic = True
+
+    def __init__(self, contact: SurfaceContact, mu: float, eps: float):
+        self.contact, self.config = contact, contact.config
+        self.mu = float(mu)
+        self.potential = contact._ipctk.FrictionPotential(float(eps))
+        self._rows = self._cols = np.zeros(0, dtype=np.int64)
+        self.advance(self.config.u)
+
+    def advance(self, u: np.ndarray) -> None:
+        """Lag the pairs, their normal forces and tangent bases at u, for the next increment."""
+        contact = self.contact
+        self.start = contact._positions(u)
+        normal = contact._ipctk.NormalCollisions()
+        normal.use_area_weighting = True
+        normal.build(contact.mesh, self.start, contact.dhat, broad_phase=contact.broad_phase)
+        self.pairs = contact._ipctk.TangentialCollisions()
+        self.pairs.build(contact.mesh, self.start, normal, contact.potential, self.mu)
+
+    def _slip(self) -> np.ndarray:
+        """The surface's displacement since the lag (m, d), as ipctk's 'velocities'."""
+        return fortran(self.contact._positions(self.config.u) - self.start)
+
+    def energy(self) -> float:
+        return float(self.potential(self.pairs, self.contact.mesh, self._slip())) if len(self.pairs) else 0.0
+
+    def gradient(self) -> np.ndarray:
+        gradient = np.zeros_like(self.config.u)
+        if len(self.pairs):
+            flat = self.potential.gradient(self.pairs, self.contact.mesh, self._slip())
+            gradient[self.contact.surface] = flat.reshape(-1, self.config.dim)
+        return gradient
+
+    def hessian_values(self, psd_only: bool = False) -> np.ndarray:
+        project = self.contact._ipctk.PSDProjectionMethod
+        hessian = self.potential.hessian(
+            self.pairs, self.contact.mesh, self._slip(), project.CLAMP if psd_only else project.NONE
+        ).tocoo()
+        dofs = vertex_dofs(self.contact.surface, self.config.dim)
+        self._rows, self._cols = dofs[hessian.row], dofs[hessian.col]
+        return hessian.data
+
+    def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._rows, self._cols
