@@ -41,28 +41,6 @@ def at(config, term, u, what):
     return what()
 
 
-@pytest.mark.parametrize("dim", [2, 3])
-def test_gradient_and_hessian_match_finite_differences(dim):
-    config, term, u = term_at(dim)
-    assert term.pairs() > 0 and 0 < term.min_distance() < DHAT  # the barrier is active
-    g = term.gradient().ravel()
-    values = term.hessian_values()
-    rows, cols = term.hessian_pattern()
-    hessian = np.zeros((u.size, u.size))
-    np.add.at(hessian, (rows, cols), values)
-    h = 1e-6
-    g_fd, h_fd = np.zeros(u.size), np.zeros((u.size, u.size))
-    for i in range(u.size):
-        step = np.zeros(u.size)
-        step[i] = h
-        plus, minus = ((u.ravel() + s * step).reshape(u.shape) for s in (1, -1))
-        g_fd[i] = (at(config, term, plus, term.energy) - at(config, term, minus, term.energy)) / (2 * h)
-        h_fd[:, i] = (at(config, term, plus, term.gradient) - at(config, term, minus, term.gradient)).ravel() / (2 * h)
-    assert np.linalg.norm(g) > 0
-    assert np.linalg.norm(g - g_fd) <= 1e-6 * np.linalg.norm(g)
-    assert np.linalg.norm(hessian - h_fd) <= 1e-5 * np.linalg.norm(hessian)
-
-
 def assembled(term, u: np.ndarray, psd_only: bool = False) -> np.ndarray:
     """The term's Hessian (u.size, u.size) at its state, dense."""
     values = term.hessian_values(psd_only)
@@ -87,6 +65,13 @@ def derivatives_match(config, term, u: np.ndarray) -> None:
     assert np.linalg.norm(g - g_fd) <= 1e-6 * np.linalg.norm(g)
     # (+ a floor under round-off for a Hessian that vanishes: 2D kinetic friction's, f1 constant along the slip)
     assert np.linalg.norm(hessian - h_fd) <= 1e-5 * np.linalg.norm(hessian) + 1e-6 * np.linalg.norm(g)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_gradient_and_hessian_match_finite_differences(dim):
+    config, term, u = term_at(dim)
+    assert term.pairs() > 0 and 0 < term.min_distance() < DHAT  # the barrier is active
+    derivatives_match(config, term, u)
 
 
 @pytest.mark.parametrize("slip", [0.3, 3.0], ids=["sticking", "sliding"])
@@ -115,11 +100,7 @@ def test_friction_between_pieces_matches_finite_differences(dim, slip):
 @pytest.mark.parametrize("dim", [2, 3])
 def test_psd_hessian_has_no_negative_eigenvalue(dim):
     config, term, u = term_at(dim, seed=1)
-    values = term.hessian_values(psd_only=True)
-    rows, cols = term.hessian_pattern()
-    hessian = np.zeros((u.size, u.size))
-    np.add.at(hessian, (rows, cols), values)
-    eigenvalues = np.linalg.eigvalsh(hessian)
+    eigenvalues = np.linalg.eigvalsh(assembled(term, u, psd_only=True))
     assert eigenvalues.max() > 0 and eigenvalues.min() >= -1e-9 * eigenvalues.max()
 
 
