@@ -121,9 +121,16 @@ class Result(Run):
 
     def obstacle_positions(self) -> np.ndarray:
         """(steps, obstacles, 3): each obstacle's placed point (a plane's point, the other shapes' centre) moved by
-        its keyframes' translation at each step (a 2D scene's z is 0)."""
+        its keyframes' translation at each step, and a held object's by its height (its '<name>.dy' column) (a 2D
+        scene's z is 0)."""
         return np.array(
-            [[o.shape.parameters()[:3] + o.offset(step.step) for o in self.scene.obstacles] for step in self.steps]
+            [
+                [
+                    o.shape.parameters()[:3] + o.offset(step.step) + (0.0, step.extra.get(f"{o.name}.dy", 0.0), 0.0)
+                    for o in self.scene.obstacles
+                ]
+                for step in self.steps
+            ]
         ).reshape(len(self.steps), len(self.scene.obstacles), 3)
 
     def history_csv(self) -> str:

@@ -7,10 +7,14 @@ curls towards the layer (down, -y). Along x, from the left (clamped) end:
     end | chamber | gap | chamber | ... | chamber | end          length = 2 end + n chamber_length + (n - 1) gap
 
 and from the bottom up: layer (region 'layer'), base, chamber_height, wall; across z: wall,
-chamber_width, wall. The block is centred on the origin. The chambers are named c1 .. cn from the left
-and sealed from each other (a real PneuNet joins them by a thin air channel; here they are commanded
-together by giving them the same schedule). The defaults extrude the 2D pneunet_finger scene: a 4 x 0.8
-block, six 0.4 x 0.5 chambers with 0.1 gaps, a 0.15 layer, here 0.76 deep.
+chamber_width, wall. With slit > 0 the middle of each gap is cut away, slit wide, from the top down to the chambers'
+floor and through the whole width (a fast PneuNet's: each chamber its own walls, (gap - slit) / 2 thick on the slit's
+side, so that inflated chambers bulge into the slits and press on each other; they need surface contact).
+
+The block is centred on the origin. The chambers are named c1 .. cn from the left and sealed from each other (a real
+PneuNet joins them by a thin air channel; here they are commanded together by giving them the same schedule). The
+defaults extrude the 2D pneunet_finger scene: a 4 x 0.8 block, six 0.4 x 0.5 chambers with 0.1 gaps, a 0.15 layer,
+here 0.76 deep.
 
 The dataclass fields are the keys of the scene file's [body] table with shape = "pneunet".
 """
@@ -22,7 +26,7 @@ from dataclasses import dataclass, field
 from ..errors import require, require_finite
 from ..io.units import LENGTH, unit
 from .gmsh_mesher import MAX_SHAPES, Solid
-from .solids import Box, RoundedBox
+from .solids import Box, Cut, RoundedBox
 
 LAYER = "layer"
 # the defaults are the unitless pneunet_3d finger (4 long): a scene with units gives every length it uses
@@ -43,6 +47,7 @@ class PneuNet:
     end: float = field(default=0.55, metadata=LENGTH_DEFAULT)
     base: float = field(default=0.07, metadata=LENGTH_DEFAULT)
     layer: float = field(default=0.15, metadata=LENGTH_DEFAULT)
+    slit: float = field(default=0.0, metadata=LENGTH_DEFAULT)
 
     def __post_init__(self):
         require(
@@ -52,13 +57,18 @@ class PneuNet:
         for name in ("chamber_length", "chamber_height", "chamber_width", "gap", "wall", "end", "base"):
             value = getattr(self, name)
             require(require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
-        for name in ("radius", "layer"):
+        for name in ("radius", "layer", "slit"):
             value = getattr(self, name)
             require(require_finite(name, value) >= 0, f"{name} = {value!r} must be >= 0")
         shortest = min(self.chamber_length, self.chamber_height, self.chamber_width)
         require(
             self.radius < shortest / 2,
             f"radius = {self.radius!r} must be < {shortest / 2:g} (half the chamber's shortest side)",
+        )
+
+        require(
+            self.slit < self.gap,
+            f"slit = {self.slit!r} must be < gap = {self.gap!r} (each chamber keeps a wall on either side of it)",
         )
 
     @property
@@ -73,8 +83,9 @@ class PneuNet:
 
     @property
     def thinnest(self) -> float:
-        """The thinnest rubber: the wall above and beside the chambers, or the gap between them."""
-        return min(self.wall, self.gap)
+        """The thinnest rubber: the wall above and beside the chambers, or the gap between them (with a slit, a
+        chamber's wall beside it)."""
+        return min(self.wall, (self.gap - self.slit) / 2 if self.slit else self.gap)
 
     def solid(self) -> Solid:
         """The block, its chambers c1 .. cn and, if layer > 0, the region 'layer' (the bottom slab)."""
@@ -89,4 +100,19 @@ class PneuNet:
         regions = (
             ((LAYER, Box((0.0, (self.layer - height) / 2, 0.0), (length, self.layer, width))),) if self.layer else ()
         )
-        return Solid(Box((0.0, 0.0, 0.0), self.size), tuple(chambers), regions)
+        block = Box((0.0, 0.0, 0.0), self.size)
+        if not self.slit:
+            return Solid(block, tuple(chambers), regions)
+        floor, top = -height / 2 + self.layer + self.base, height / 2 + self.wall  # past the top: no coplanar faces
+        slits = tuple(
+            Box(
+                (
+                    -length / 2 + self.end + (i + 1) * self.chamber_length + i * self.gap + self.gap / 2,
+                    (floor + top) / 2,
+                    0.0,
+                ),
+                (self.slit, top - floor, width + 2 * self.wall),
+            )
+            for i in range(self.chambers - 1)
+        )
+        return Solid(Cut(block, slits), tuple(chambers), regions)

@@ -12,6 +12,7 @@ z the depth (a 2D shape in the x-y plane is extruded along z). Shapes are axis-a
   plane y = center y, on a box of height `base` below it as wide as the diameter: a flat bottom face and a round
   top, the section of a fibre-reinforced bending actuator's body (a base) and of its chamber (none, its edges
   rounded at `fillet` as a moulded chamber's are);
+- Cut(shape, tools): a shape less other shapes (a block with slots cut into it);
 - Extrusion(profile, depth, z): a 2D shape of the scene format (fem.shapes: Rectangle, Ellipse,
   RoundedRectangle, Polygon, RectangleUnion) swept along z from z - depth / 2 to z + depth / 2.
   Rectangles, ellipses and rounded rectangles are built from their exact curves (the 2D shape's
@@ -24,6 +25,7 @@ volume's tag; gmsh itself is only imported by fem.gmsh_mesher, which calls these
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -87,6 +89,21 @@ class RoundedBox:
         edges = sorted(tag for _, tag in set(occ.getEntities(1)) - before)
         ((_, volume),) = occ.fillet([box], edges, [self.radius])
         return volume
+
+
+@dataclass(frozen=True)
+class Cut:
+    """shape less the union of the tools (each a shape of this module): one volume, which the tools must not split."""
+
+    shape: Any
+    tools: tuple
+
+    def build(self, occ) -> int:
+        body = self.shape.build(occ)
+        tools = [(3, tool.build(occ)) for tool in self.tools]
+        cut, _ = occ.cut([(3, body)], tools)
+        require(len(cut) == 1, f"the cut leaves {len(cut)} volumes: its tools must not split the shape")
+        return cut[0][1]
 
 
 @dataclass(frozen=True)

@@ -236,4 +236,5 @@ def history_dimensions(scene, contacts=(), dim: int = 2) -> dict[str, str]:
         dimensions.update({f"{name}.{part}": force for part in ("fx", "fy", "fz", "magnitude")})
     dimensions.update({f"clamp.f{axis}": force for axis in "xyz"}, blocked_force=force)
     dimensions.update({f"clamp.m{axis}": moment for axis in "xyz"})
+    dimensions.update({f"{o.name}.dy": LENGTH for o in scene.obstacles if o.weight is not None})  # held objects
     return dimensions

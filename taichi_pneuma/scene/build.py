@@ -292,7 +292,8 @@ class Scene:
             for term in spec.terms(config, mesh, lumped_area, budget):
                 model.add(term)
         obstacles = [[model.add(t) for t in spec.terms(config, mesh, lumped_area, budget)] for spec in self.obstacles]
-        contacts, frictions = [terms[0] for terms in obstacles], [t for terms in obstacles for t in terms[1:]]
+        contacts = [terms[0] for terms in obstacles]
+        frictions = [t for terms in obstacles for t in terms[1:] if t.reports_contact]  # not a held object's weight
         return BuiltScene(self, mesh, model, elastic, chambers, effects, contacts, frictions)  # type: ignore[arg-type]
 
 

@@ -10,9 +10,11 @@ stiffness = 1e3
 keyframes = [[10, [0.0, 0.2, 0.0]]]   # its translation by step (none: static)
 friction = 0.5                 # Coulomb coefficient (0, the default: frictionless)
 friction_slip = 0.001          # the slip over which static friction reaches mu N (none: dhat / 10)
+weight = 2.0                   # from step `release` on, free to move along y under this load along -y
+release = 12
 """
 
-from ..io.units import LENGTH, NODAL_STIFFNESS
+from ..io.units import FORCE, LENGTH, NODAL_STIFFNESS
 from ..terms.obstacle_shapes import AXES, SHAPES, Box, Capsule, Cylinder, Plane, Sphere
 from ..terms.obstacles import Obstacle
 from .schema import Key, Table, Variant, record
@@ -78,9 +80,25 @@ OBSTACLE = Table(
             "the tangential slip over which static friction rises to mu times the normal force (none: dhat / 10)",
             unit=LENGTH,
         ),
+        "weight": Key(
+            float,
+            None,
+            "a load W along -y (its weight): from step `release` on the obstacle is free to move along y, held by its "
+            "contact and friction with the body alone (none: it stays where it is placed)",
+            unit=FORCE,
+        ),
+        "release": Key(int, 0, "the step from which an obstacle with a weight is free"),
     },
     make=lambda v: Obstacle(
-        v["name"], v["shape"], v["dhat"], v["stiffness"], v["keyframes"] or (), v["friction"], v["friction_slip"]
+        v["name"],
+        v["shape"],
+        v["dhat"],
+        v["stiffness"],
+        v["keyframes"] or (),
+        v["friction"],
+        v["friction_slip"],
+        v["weight"],
+        v["release"],
     ),
     parts=lambda o: {
         "name": o.name,
@@ -90,6 +108,8 @@ OBSTACLE = Table(
         "keyframes": o.keyframes or None,
         "friction": o.friction or None,
         "friction_slip": o.friction_slip,
+        "weight": o.weight,
+        "release": o.release or None,
     },
     cls=Obstacle,
 )

@@ -119,7 +119,8 @@ def state_fault(built: BuiltScene, commands: np.ndarray) -> str | None:
         + f"{chamber.kind.quantity} {command:.4g}"
         for chamber, command in zip(built.chambers, commands)
     )
-    note = "" if built.mesh.dim == 2 else "; 3D has no self-contact"
+    covered = any(term.name == "surface_contact" for term in built.model.terms)
+    note = "" if covered else "; [effects.surface_contact] keeps the surface from passing through itself"
     return (
         f"the body's surface passes through itself{' at ' + at if at else ''}: {crossing} (a surface through itself "
         f"is not physical{note})"
@@ -192,7 +193,9 @@ def settle(
             fraction /= 2
         else:
             built.model.set_displacements(u)
-            found = f"residual {record.residual:.2e} ({record.message})"
+            fault = built.model.fault()  # a cause the terms keep over the increment (a held object that slipped)
+            cause = f": {fault}" if fault is not None and fault not in record.message else ""
+            found = f"residual {record.residual:.2e} ({record.message}{cause})"
             if overlap is not None:
                 built.set_commands(reached)
                 found = (
@@ -252,6 +255,7 @@ def step_record(
         clamp=clamp_reaction(built),
         tip_twist=tip_twist_of(mesh, u, twist),
         blocked_force=float(np.linalg.norm(on_obstacles)) if built.obstacles else None,
+        extra={name: value for term in built.model.terms for name, value in term.columns().items()},
     )
     return record, vertex_forces
 

@@ -196,5 +196,13 @@ class Term:
         material law that is unstable there), else None; asked when a Newton solve breaks down."""
         return None
 
+    def columns(self) -> dict[str, float]:
+        """History columns of its own, by name, at the current state (none by default)."""
+        return {}
+
+    def follow(self) -> None:
+        """Called when the model's displacements are set, before any term is evaluated at them (a term whose state
+        follows the body's, as a held object's height, updates it here)."""
+
     def advance(self, u: np.ndarray) -> None:
         """Called with the displacements that end each increment; time-dependent terms update their state."""

@@ -58,6 +58,8 @@ class EnergyModel:
 
     def set_displacements(self, u: np.ndarray) -> None:
         self.config.u[:] = np.reshape(u, self.config.u.shape)
+        for t in self.terms:
+            t.follow()
 
     def energy(self) -> float:
         return float(sum(t.energy() for t in self.terms))

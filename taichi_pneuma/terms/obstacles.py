@@ -38,10 +38,11 @@ from ..backend import kernel, ti
 from ..errors import require, require_finite, shape_of
 from ..fem.self_intersection import surface_pieces, winding
 from ..io.output import MAX_NAME, STEM, check_heading
-from ..io.units import LENGTH, NODAL_STIFFNESS, si_default, unit
+from ..io.units import FORCE, LENGTH, NODAL_STIFFNESS, si_default, unit
 from .base import HUGE, Indices, Nodal, Scalars, Table, Term, block_pattern, int32s
 from .contact import barrier
 from .friction import frictional
+from .held_object import HeldObject
 from .obstacle_distance import obstacle_reach, point_of, row3, signed_distance
 from .obstacle_shapes import PLANE, Shape, vector
 
@@ -291,6 +292,8 @@ class Obstacle:
     keyframes: tuple = field(default=())
     friction: float = 0.0
     friction_slip: float | None = field(default=None, metadata=unit(LENGTH))
+    weight: float | None = field(default=None, metadata=unit(FORCE))
+    release: int = 0
 
     def __post_init__(self):
         check_heading("obstacle name", self.name)  # a chamber's rule: it heads CSV columns
@@ -304,6 +307,18 @@ class Obstacle:
             value = getattr(self, key)
             require(value is None or require_finite(key, value) > 0, f"{key} = {value!r} must be > 0")
         check_friction(self.friction, self.friction_slip)
+        require(
+            self.weight is None or require_finite("weight", self.weight) > 0,
+            f"obstacle {self.name!r}: weight = {self.weight!r} must be > 0 (none: it stays where it is placed)",
+        )
+        require(
+            isinstance(self.release, int) and not isinstance(self.release, bool) and self.release >= 0,
+            f"obstacle {self.name!r}: release = {self.release!r} must be a whole number of steps >= 0",
+        )
+        require(
+            self.weight is None or not self.keyframes,
+            f"obstacle {self.name!r}: an obstacle with a weight has no keyframes (it moves as the grip lets it)",
+        )
         frames = self.keyframes
         require(
             isinstance(frames, (tuple, list))
@@ -391,4 +406,8 @@ class Obstacle:
         term.set_offset(self.offset(0.0))  # where it is at step 0 (a keyframe at step 0 moves it there)
         overlap = term.overlap()
         require(overlap is None, f"{overlap} at rest: place it clear of the body")
-        return frictional(term, self.friction, self.friction_slip)
+        terms = frictional(term, self.friction, self.friction_slip)
+        if self.weight is None:
+            return terms
+        friction = terms[1] if len(terms) > 1 else None
+        return [*terms, HeldObject(term, friction, self.weight, self.release)]
