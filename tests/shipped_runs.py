@@ -41,22 +41,32 @@ def runs_and_writes_its_pictures(name: str, flags: list[str], out, capsys) -> No
     chambers = {f"chamber:{chamber}" for chamber, _ in scene.geometry.chambers}
     assert chambers <= set(summary["terms"]) and ("fibers" in summary["terms"]) == bool(scene.fibers)
     assert len(summary["contact"]) >= len(scene.obstacles)
-    apart_at_every_step(scene, np.load(out / f"{stem}_states.npz")["positions"])
+    apart_at_every_step(scene, np.load(out / f"{stem}_states.npz")["positions"], out / f"{stem}_history.csv")
     assert imageio_ffmpeg.count_frames_and_secs(str(out / f"{stem}.mp4"))[0] == summary["steps"]
     assert iio.imread(out / f"{stem}.png").shape == (height, width, 3)
     assert iio.imread(out / f"{stem}_plot.png").ndim == 3
 
 
-def apart_at_every_step(scene, positions: np.ndarray) -> None:
+def apart_at_every_step(scene, positions: np.ndarray, history) -> None:
     """The geometric check at every step k of a run's node positions (steps, n, d): no two pieces of the body's
-    surface that share no node cross (surface_crossing), and each obstacle, where its keyframes put it at step k,
-    overlaps no piece of the surface nor lies inside the body (ObstacleContact.overlap)."""
+    surface that share no node cross (surface_crossing), and each obstacle, where its keyframes (a held object: its
+    height, the history's '<name>.dy') put it at step k, overlaps no piece of the surface nor lies inside the body
+    (ObstacleContact.overlap)."""
     built = scene.build()
     rest = built.model.config.rest
+    lines = history.read_text().splitlines()
+    names = [column.split(" ")[0] for column in lines[0].split(",")]
+    rows = [line.split(",") for line in lines[1:]]
+    heights = {
+        o.name: [float(row[names.index(f"{o.name}.dy")]) for row in rows]
+        for o in scene.obstacles
+        if f"{o.name}.dy" in names
+    }
     for k, x in enumerate(positions):
         crossing = surface_crossing(x, built.surface_pieces)
         assert crossing is None, f"step {k}: pieces {crossing.first} and {crossing.second} cross"
         built.model.set_displacements(x - rest)
         for term, spec in zip(built.obstacles, scene.obstacles, strict=True):
-            term.set_offset(spec.offset(float(k)))
+            height = heights[spec.name][k] if spec.name in heights else 0.0
+            term.set_offset(spec.offset(float(k)) + np.array([0.0, height, 0.0]))
             assert term.overlap() is None, f"step {k}: {term.overlap()}"
