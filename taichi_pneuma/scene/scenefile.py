@@ -21,8 +21,9 @@
                  (syringe_volume, dead_volume, atmosphere, gamma) | ..., with that kind's parameters;
                  keyframes = [[step, value], ...]; bounds = [min, max] (inverse control)
     [schedule]   increments
-    [effects.gravity] density, g      [effects.ground] height, dhat, stiffness
-    [effects.self_contact] dhat, stiffness
+    [effects.gravity] density, g      [effects.ground] height, dhat, stiffness, friction, friction_slip
+    [effects.self_contact] dhat, stiffness (2D chamber walls)
+    [effects.surface_contact] dhat, stiffness, friction, friction_slip (the whole surface, 2D and 3D)
     [effects.dynamics] density, dt
     [[targets]]  tip = [x, y], angle (degrees, optional), weights = [w_x, w_y, w_angle]  (inverse control, in order)
 
