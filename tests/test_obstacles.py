@@ -282,7 +282,7 @@ def test_inverse_control_refuses_a_moving_obstacle():
 def test_the_force_and_moment_columns_carry_their_units():
     """mm-kPa: a 2D force is per unit depth (kPa mm = N/m), its moment kPa mm^2; in 3D a force is kPa mm^2 (mN)
     and a moment kPa mm^3."""
-    units, scene = UNITS["mm-kPa"], SimpleNamespace(chamber_names=[], controls=[])
+    units, scene = UNITS["mm-kPa"], SimpleNamespace(chamber_names=[], controls=[], obstacles=())
     for dim, force, turning in ((2, "kPa mm", "kPa mm^2"), (3, "kPa mm^2", "kPa mm^3")):
         dimensions = history_dimensions(scene, ["post"], dim)
         assert units.label("post.fy", dimensions["post.fy"]) == f"post.fy [{force}]"

@@ -31,7 +31,7 @@ from taichi_pneuma.scene.sceneformat import scene_data
 from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.terms.chambers import KINDS, AreaControl, PressureControl
-from taichi_pneuma.terms.effects import EFFECTS, Dynamics, Effect, Gravity, Ground, SelfContact
+from taichi_pneuma.terms.effects import EFFECTS, Dynamics, Effect, Gravity, Ground, SelfContact, SurfaceContact
 from taichi_pneuma.terms.sheets import Layer
 
 PACKAGE = Path(__file__).resolve().parent.parent / "taichi_pneuma"
@@ -303,14 +303,20 @@ def covering_scenes() -> list[Scene]:
         increments=4,
         controls=(ChamberControl(area, bounds=(0.5, 3.0)), ChamberControl(pressure), ChamberControl(area)),
         regions=(Region((-1.75, -0.4, 1.75, -0.3), Material(5e4, 0.4)),),
-        effects=(Gravity(1.0), Ground(-1.0), SelfContact(), Dynamics(1.0, 0.01)),
+        effects=(
+            Gravity(1.0),
+            Ground(-1.0, friction=0.5, friction_slip=0.001),
+            SelfContact(),
+            SurfaceContact(0.002, 1e4, 0.3, 1e-4),
+            Dynamics(1.0, 0.01),
+        ),
         targets=(Target((3.0, -0.5), 5.0),),
         ends_at_limit_point=True,
         layers=(Layer("sheet", 1e6, 0.3, 0.01, side="bottom"),),
         obstacles=(
             Obstacle("floor", obstacles.Plane((0.0, -2.0), (0.0, 1.0)), 0.01, 1e3),
             Obstacle("block", obstacles.Box((3.0, 0.0), (0.5, 0.5)), 0.01, 1e3, ((2, (0.0, 0.1, 0.0)),)),
-            Obstacle("ball", obstacles.Sphere((3.0, -1.0, 0.0), 0.2), 0.02, 1e2),
+            Obstacle("ball", obstacles.Sphere((3.0, -1.0, 0.0), 0.2), 0.02, 1e2, (), 0.5, 0.002, 2.0, 3),
             Obstacle("post", obstacles.Cylinder((3.0, 1.0), 0.2, 1.0), 0.01, 1e3),
             Obstacle("bar", obstacles.Capsule((0.0, 1.5), 0.1, 1.0, "x"), 0.01, 1e3),
         ),
