@@ -21,8 +21,8 @@ COARSER = {
 }
 
 
-# gripper_3d as shipped (about 90 s): coarser, a fingertip's face between two nodes enters the ball before the grip holds
-# it (the ball is touched at the nodes only)
+# gripper_3d as shipped (about 90 s): coarser, a fingertip's face between two nodes enters the ball before the grip
+# holds it (the ball is touched at the nodes only)
 SLOW = {"gripper_3d"}
 
 
