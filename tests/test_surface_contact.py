@@ -121,7 +121,7 @@ def test_step_bound_stops_short_of_the_crossing(dim):
 
 
 def test_a_finger_curling_onto_itself_never_crosses_itself():
-    """The shipped finger_curl: with surface contact it curls past a full turn, its base pressing on its tip, and no
+    """The shipped finger_curl: with surface contact it curls 336 degrees, its base pressing on its tip, and no
     two pieces of its surface cross at any step (the crossing test, not ipctk, says so); the same scene without
     contact stops where they cross. The contact forces are internal: they press the two sides apart and sum to 0."""
     scene = tp.load_scene("finger_curl")
@@ -130,9 +130,9 @@ def test_a_finger_curling_onto_itself_never_crosses_itself():
     pieces = result.built.surface_pieces
     assert all(surface_crossing(x, pieces) is None for x in result.positions)
     history = result.history
-    assert history["tip_rotation"][-1] < -360.0 + 30.0  # past eleven twelfths of a turn
+    assert history["tip_rotation"][-1] < -330.0
     pressing = history["surface_contact.magnitude"]
-    assert pressing[0] == 0.0 and pressing[-1] > 0.0
+    assert pressing[0] == 0.0 and np.all(pressing[-3:] > 0.0) and np.all(np.diff(pressing[-3:]) > 0)
     forces = result.contact_forces[-1]
     assert np.abs(forces.sum(axis=0)).max() <= 1e-9 * np.abs(forces).sum()
     with pytest.raises(tp.RampFailed, match="passes through itself"):
