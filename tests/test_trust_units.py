@@ -127,6 +127,8 @@ keyframes = [[2, 1.5]]
 shape = "ellipse"
 center = [0.0, 0.1]
 semi_axes = [0.5, 0.15]
+[effects.surface_contact]
+stiffness = 1e5
 [schedule]
 increments = 2
 """
@@ -141,6 +143,7 @@ wall = 0.08
 end = 0.55
 base = 0.07
 layer = 0.15
+slit = 0.0
 [mesh]
 size = 0.2
 [[chambers]]

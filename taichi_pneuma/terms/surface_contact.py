@@ -69,7 +69,7 @@ class SurfaceContact(Term):
     def __init__(self, config, pieces: np.ndarray, dhat: float, stiffness: float):
         """pieces: the surface as straight pieces (surface_pieces: triangles (f, 3); in 2D segments as (a, b, b))."""
         ipctk = ipctk_module()
-        self._ipctk = ipctk
+        self.ipctk = ipctk
         self.config = config
         self.dhat, self.kappa = float(dhat), float(stiffness)
         n, d = config.rest.shape
@@ -85,14 +85,13 @@ class SurfaceContact(Term):
         self.mesh = ipctk.CollisionMesh(
             include.tolist(), [False] * n, fortran(config.rest), fortran(edges, np.int32), fortran(faces, np.int32)
         )
-        self.mesh.init_area_jacobians()
         self.surface = np.flatnonzero(include)  # the collision mesh's vertices, in its order
         self.potential = ipctk.BarrierPotential(self.dhat, self.kappa, True)
         self.broad_phase = ipctk.LBVH()
         self._state: np.ndarray | None = None
         self._rows = self._cols = np.zeros(0, dtype=np.int64)
 
-    def _positions(self, u: np.ndarray) -> np.ndarray:
+    def positions(self, u: np.ndarray) -> np.ndarray:
         """The collision mesh's vertex positions (m, d) at displacements u (n, d)."""
         return fortran(self.config.rest[self.surface] + u[self.surface])
 
@@ -101,8 +100,8 @@ class SurfaceContact(Term):
         u = self.config.u
         if self._state is None or not np.array_equal(self._state, u):
             self._state = u.copy()
-            self._x = self._positions(u)
-            self.collisions = self._ipctk.NormalCollisions()
+            self._x = self.positions(u)
+            self.collisions = self.ipctk.NormalCollisions()
             self.collisions.use_area_weighting = True
             self.collisions.build(self.mesh, self._x, self.dhat, broad_phase=self.broad_phase)
         return self.collisions
@@ -132,7 +131,7 @@ class SurfaceContact(Term):
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
         collisions = self._collisions()
-        project = self._ipctk.PSDProjectionMethod
+        project = self.ipctk.PSDProjectionMethod
         hessian = self.potential.hessian(
             collisions, self.mesh, self._x, project.CLAMP if psd_only else project.NONE
         ).tocoo()
@@ -145,8 +144,8 @@ class SurfaceContact(Term):
 
     def max_step(self, dx: np.ndarray) -> float:
         self._collisions()
-        end = self._positions(self.config.u + dx)
-        step = self._ipctk.compute_collision_free_stepsize(self.mesh, self._x, end, broad_phase=self.broad_phase)
+        end = self.positions(self.config.u + dx)
+        step = self.ipctk.compute_collision_free_stepsize(self.mesh, self._x, end, broad_phase=self.broad_phase)
         return math.inf if step >= 1.0 else float(step)
 
     def fault(self) -> str | None:
@@ -166,23 +165,23 @@ class SurfaceFriction(Term):
     def __init__(self, contact: SurfaceContact, mu: float, eps: float):
         self.contact, self.config = contact, contact.config
         self.mu = float(mu)
-        self.potential = contact._ipctk.FrictionPotential(float(eps))
+        self.potential = contact.ipctk.FrictionPotential(float(eps))
         self._rows = self._cols = np.zeros(0, dtype=np.int64)
         self.advance(self.config.u)
 
     def advance(self, u: np.ndarray) -> None:
         """Lag the pairs, their normal forces and tangent bases at u, for the next increment."""
         contact = self.contact
-        self.start = contact._positions(u)
-        normal = contact._ipctk.NormalCollisions()
+        self.start = contact.positions(u)
+        normal = contact.ipctk.NormalCollisions()
         normal.use_area_weighting = True
         normal.build(contact.mesh, self.start, contact.dhat, broad_phase=contact.broad_phase)
-        self.pairs = contact._ipctk.TangentialCollisions()
+        self.pairs = contact.ipctk.TangentialCollisions()
         self.pairs.build(contact.mesh, self.start, normal, contact.potential, self.mu)
 
     def _slip(self) -> np.ndarray:
         """The surface's displacement since the lag (m, d), as ipctk's 'velocities'."""
-        return fortran(self.contact._positions(self.config.u) - self.start)
+        return fortran(self.contact.positions(self.config.u) - self.start)
 
     def energy(self) -> float:
         return float(self.potential(self.pairs, self.contact.mesh, self._slip())) if len(self.pairs) else 0.0
@@ -195,7 +194,7 @@ class SurfaceFriction(Term):
         return gradient
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
-        project = self.contact._ipctk.PSDProjectionMethod
+        project = self.contact.ipctk.PSDProjectionMethod
         hessian = self.potential.hessian(
             self.pairs, self.contact.mesh, self._slip(), project.CLAMP if psd_only else project.NONE
         ).tocoo()
