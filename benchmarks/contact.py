@@ -137,8 +137,13 @@ def report(records: dict, machine: str) -> str:
             markdown(
                 ["case", "Newton iterations", "ramp s", "Newton s", "tip dy at 900 Pa"],
                 [
-                    [name, r[name]["iterations"], f"{r[name]['ramp_s']:.1f}", f"{r[name]['newton_s']:.1f}",
-                     f"{r[name]['tip']:.5f}"]
+                    [
+                        name,
+                        r[name]["iterations"],
+                        f"{r[name]['ramp_s']:.1f}",
+                        f"{r[name]['newton_s']:.1f}",
+                        f"{r[name]['tip']:.5f}",
+                    ]
                     for name in ("without", "with")
                 ],
             ),
