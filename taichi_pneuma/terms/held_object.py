@@ -1,7 +1,7 @@
 """An obstacle the body holds: after its release step the obstacle is free to move along y under a load W along -y
 (its weight), held only by its contact with the body and the friction there.
 
-Its height o (its offset along y from where it was released) is not a degree of freedom of the model: for the body's
+Its height o (its offset along y from where it was placed) is not a degree of freedom of the model: for the body's
 state x it takes the height that minimises the energy of its contact and friction terms with the load's potential,
 
     o*(x) = argmin_o  phi(x, o),   phi = E_c(x, o) + E_f(x, o) + W o,
