@@ -79,8 +79,9 @@ class HeldObject(Term):
             return
         if not math.isfinite(self._phi()):
             self._set_height(self.settled)
-        if math.isfinite(self._phi()):
-            self.inner_solve()
+            if not math.isfinite(self._phi()):  # inside at both: the contact's energy is infinite, the state refused
+                return
+        self.inner_solve()
 
     def _height(self) -> float:
         return float(self.contact.offset[self.axis])
