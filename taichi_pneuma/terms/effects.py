@@ -22,7 +22,7 @@ from ..fem.supports import PointSet
 from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, PRESSURE, TIME, si_default, unit
 from ..limits import wall_pairs
 from .contact import SelfContact as SelfContactTerm
-from .friction import frictional
+from .friction import frictional, slip_length
 from .gravity import Gravity as GravityTerm
 from .inertia import Inertia
 from .obstacle_shapes import Plane
@@ -188,7 +188,7 @@ class SurfaceContact(Effect):
         )
         if self.friction == 0:
             return [term]
-        return [term, SurfaceFriction(term, self.friction, self.friction_slip or dhat / 10)]
+        return [term, SurfaceFriction(term, self.friction, slip_length(self.friction_slip, dhat))]
 
 
 @dataclass(frozen=True)

@@ -189,4 +189,10 @@ def frictional(contact, mu: float, slip: float | None) -> list:
     else with its ObstacleFriction of slip eps (None: dhat / 10)."""
     if mu == 0:
         return [contact]
-    return [contact, ObstacleFriction(contact, mu, contact.dhat / 10 if slip is None else slip)]
+    return [contact, ObstacleFriction(contact, mu, slip_length(slip, contact.dhat))]
+
+
+def slip_length(slip: float | None, dhat: float) -> float:
+    """The slip eps over which static friction rises to mu N: the one given, or (None) a tenth of the contact's
+    dhat."""
+    return dhat / 10 if slip is None else slip
