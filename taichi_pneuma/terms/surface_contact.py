@@ -58,6 +58,20 @@ def fortran(array: np.ndarray, dtype=np.float64) -> np.ndarray:
     return np.asfortranarray(array, dtype=dtype)
 
 
+def on_body(config, surface: np.ndarray, flat: np.ndarray) -> np.ndarray:
+    """A gradient over the collision mesh's vertices (flat, surface's order) as one over the body's nodes (n, d)."""
+    gradient = np.zeros_like(config.u)
+    gradient[surface] = flat.reshape(-1, config.dim)
+    return gradient
+
+
+def triplets(surface: np.ndarray, dim: int, hessian) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(rows, cols, values) on the body's DOFs of a Hessian (sparse) over the collision mesh's DOFs."""
+    coo = hessian.tocoo()
+    dofs = vertex_dofs(surface, dim)
+    return dofs[coo.row], dofs[coo.col], coo.data
+
+
 class SurfaceContact(Term):
     """IPC barriers (threshold dhat, stiffness kappa, a pressure) between the pieces of the body's surface that
     share no node (module docstring)."""
@@ -95,15 +109,20 @@ class SurfaceContact(Term):
         """The collision mesh's vertex positions (m, d) at displacements u (n, d)."""
         return fortran(self.config.rest[self.surface] + u[self.surface])
 
+    def pairs_at(self, x: np.ndarray):
+        """The contact pairs (area-weighted) at the collision mesh's positions x."""
+        collisions = self.ipctk.NormalCollisions()
+        collisions.use_area_weighting = True
+        collisions.build(self.mesh, x, self.dhat, broad_phase=self.broad_phase)
+        return collisions
+
     def _collisions(self):
         """The contact pairs at the current state (built once per state)."""
         u = self.config.u
         if self._state is None or not np.array_equal(self._state, u):
             self._state = u.copy()
             self._x = self.positions(u)
-            self.collisions = self.ipctk.NormalCollisions()
-            self.collisions.use_area_weighting = True
-            self.collisions.build(self.mesh, self._x, self.dhat, broad_phase=self.broad_phase)
+            self.collisions = self.pairs_at(self._x)
         return self.collisions
 
     def pairs(self) -> int:
@@ -116,28 +135,19 @@ class SurfaceContact(Term):
         return math.sqrt(collisions.compute_minimum_distance(self.mesh, self._x)) if len(collisions) else math.inf
 
     def energy(self) -> float:
-        collisions = self._collisions()
-        if len(collisions) and not collisions.compute_minimum_distance(self.mesh, self._x) > 0:
+        if not self.min_distance() > 0:
             return math.inf
-        return float(self.potential(collisions, self.mesh, self._x))
+        return float(self.potential(self.collisions, self.mesh, self._x))
 
     def gradient(self) -> np.ndarray:
         collisions = self._collisions()
-        gradient = np.zeros_like(self.config.u)
-        if len(collisions):
-            flat = self.potential.gradient(collisions, self.mesh, self._x)
-            gradient[self.surface] = flat.reshape(-1, self.config.dim)
-        return gradient
+        return on_body(self.config, self.surface, self.potential.gradient(collisions, self.mesh, self._x))
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
-        collisions = self._collisions()
-        project = self.ipctk.PSDProjectionMethod
-        hessian = self.potential.hessian(
-            collisions, self.mesh, self._x, project.CLAMP if psd_only else project.NONE
-        ).tocoo()
-        dofs = vertex_dofs(self.surface, self.config.dim)  # the collision mesh's DOFs -> the body's
-        self._rows, self._cols = dofs[hessian.row], dofs[hessian.col]
-        return hessian.data
+        project = self.ipctk.PSDProjectionMethod.CLAMP if psd_only else self.ipctk.PSDProjectionMethod.NONE
+        hessian = self.potential.hessian(self._collisions(), self.mesh, self._x, project)
+        self._rows, self._cols, values = triplets(self.surface, self.config.dim, hessian)
+        return values
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         return self._rows, self._cols
@@ -173,11 +183,8 @@ class SurfaceFriction(Term):
         """Lag the pairs, their normal forces and tangent bases at u, for the next increment."""
         contact = self.contact
         self.start = contact.positions(u)
-        normal = contact.ipctk.NormalCollisions()
-        normal.use_area_weighting = True
-        normal.build(contact.mesh, self.start, contact.dhat, broad_phase=contact.broad_phase)
         self.pairs = contact.ipctk.TangentialCollisions()
-        self.pairs.build(contact.mesh, self.start, normal, contact.potential, self.mu)
+        self.pairs.build(contact.mesh, self.start, contact.pairs_at(self.start), contact.potential, self.mu)
 
     def _slip(self) -> np.ndarray:
         """The surface's displacement since the lag (m, d), as ipctk's 'velocities'."""
@@ -187,20 +194,15 @@ class SurfaceFriction(Term):
         return float(self.potential(self.pairs, self.contact.mesh, self._slip())) if len(self.pairs) else 0.0
 
     def gradient(self) -> np.ndarray:
-        gradient = np.zeros_like(self.config.u)
-        if len(self.pairs):
-            flat = self.potential.gradient(self.pairs, self.contact.mesh, self._slip())
-            gradient[self.contact.surface] = flat.reshape(-1, self.config.dim)
-        return gradient
+        flat = self.potential.gradient(self.pairs, self.contact.mesh, self._slip())
+        return on_body(self.config, self.contact.surface, flat)
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
-        project = self.contact.ipctk.PSDProjectionMethod
-        hessian = self.potential.hessian(
-            self.pairs, self.contact.mesh, self._slip(), project.CLAMP if psd_only else project.NONE
-        ).tocoo()
-        dofs = vertex_dofs(self.contact.surface, self.config.dim)
-        self._rows, self._cols = dofs[hessian.row], dofs[hessian.col]
-        return hessian.data
+        methods = self.contact.ipctk.PSDProjectionMethod
+        project = methods.CLAMP if psd_only else methods.NONE
+        hessian = self.potential.hessian(self.pairs, self.contact.mesh, self._slip(), project)
+        self._rows, self._cols, values = triplets(self.contact.surface, self.config.dim, hessian)
+        return values
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         return self._rows, self._cols
