@@ -192,7 +192,7 @@ def test_the_clamp_reaction_balances_the_contact_the_pressure_and_the_weight():
     run = Result.of(run_schedule(built))
     mesh, tol = built.mesh, NewtonOptions().tol
     centre = mesh.vertices[mesh.pinned].mean(axis=0)
-    loads = [t for t in built.model.terms if t.name not in ("post", "clamp") and t is not built.elastic]
+    loads = [t for t in built.model.terms if t.reported_as not in ("post", "clamp") and t is not built.elastic]
     assert sorted(t.name for t in loads) == ["chamber:main", "gravity"]
     history = run.history
     for i, step in enumerate(run.steps):
@@ -201,7 +201,7 @@ def test_the_clamp_reaction_balances_the_contact_the_pressure_and_the_weight():
         forces = [-t.gradient() for t in loads]
         arm = run.positions[i] - centre
         obstacle = np.array([history["post.fx"][i], history["post.fy"][i]])
-        post = -built.obstacles[0].gradient()
+        post = -sum(t.gradient() for t in built.model.terms if t.reported_as == "post")  # nodes and edges
         assert obstacle == pytest.approx(post.sum(axis=0), abs=1e-12)
         total = sum(f.sum(axis=0) for f in forces) + obstacle + [history["clamp.fx"][i], history["clamp.fy"][i]]
         turning = sum(moment(arm, f) for f in forces) + moment(arm, post) + history["clamp.mz"][i]
@@ -264,13 +264,51 @@ def test_bad_obstacles_are_refused_naming_them(table, message):
 
 
 def test_an_obstacle_moved_through_the_body_ends_the_ramp_naming_it():
-    """A disc raised 0.3 in one step (its top 0.2 into the beam's rest position) still overlaps the body when the
+    """A disc raised 0.6 in one step (its top 0.5 into the beam's rest position) still overlaps the body when the
     one cut-back allowed halves the motion: RampFailed names it, its residual not finite."""
-    raised = POST + "keyframes = [[1, [0.0, 0.3, 0.0]]]\n"
+    raised = POST + "keyframes = [[1, [0.0, 0.6, 0.0]]]\n"
     built = read_scene(beam(raised, increments=1), "raised").build()
-    with pytest.raises(RampFailed, match="after 1 cuts; residual nan .'post' overlaps the body") as failure:
+    with pytest.raises(
+        RampFailed, match="after 1 cuts; residual nan .a side or face of the body's surface touches 'post'"
+    ) as failure:
         run_schedule(built, max_cuts=1)
     assert len(failure.value.result.steps) == 1  # the rest state
+
+
+def test_a_disc_smaller_than_an_edge_pressed_between_two_nodes_stays_out_of_the_face():
+    """A disc of radius 0.02, a fifth of the beam's bottom edges, raised 0.08 under the middle of one of them (its
+    top 0.02 below it at rest) over 4 steps: every step converges with the disc clear of every piece of the surface
+    (overlap, written apart from the barriers), the face pushed up by it and the disc still under that edge; its
+    force is carried by the edge barrier (the nodes are too far from it to hold it)."""
+    mesh = read_scene(beam("", gravity=False), "probe").build().mesh
+    x = mesh.vertices
+    bottom = [(a, b) for a, b in mesh.surface if abs(x[a, 1] + 0.15) < 1e-9 and abs(x[b, 1] + 0.15) < 1e-9]
+    a, b = min(bottom, key=lambda e: abs(x[e[0], 0] + x[e[1], 0] - 3.0))  # the bottom edge nearest x = 1.5
+    middle = 0.5 * (x[a, 0] + x[b, 0])
+    assert np.linalg.norm(x[a] - x[b]) > 0.1  # five times the radius
+    disc = f"""
+[[obstacles]]
+name = "post"
+shape = "sphere"
+center = [{middle}, -0.19]
+radius = 0.02
+dhat = 0.005
+stiffness = 10.0
+keyframes = [[4, [0.0, 0.08]]]
+"""
+    built = read_scene(beam(disc, gravity=False, increments=4), "probe").build()
+    run = Result.of(run_schedule(built))
+    assert len(run.steps) == 5 and all(step.converged for step in run.steps)
+    for i in range(5):
+        built.model.set_displacements(run.displacements[i])
+        built.set_commands(built.scene.schedule.commands(i))
+        assert built.obstacle_overlap() is None
+    edges = next(t for t in built.model.terms if t.name == "post.edges")
+    assert run.history["post.fy"][-1] > 0  # it pushes the face up
+    assert -edges.gradient()[:, 1].sum() > 0.9 * run.history["post.fy"][-1]  # through the edge barrier
+    assert built.obstacles[0].nearest() > 0.01  # its nodes stay farther than 2 dhat
+    ends = run.positions[-1][[a, b], 0] - middle
+    assert ends.min() < -0.04 and ends.max() > 0.04  # the edge's nodes still two radii or more either side
 
 
 def test_inverse_control_refuses_a_moving_obstacle():

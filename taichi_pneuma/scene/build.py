@@ -293,8 +293,8 @@ class Scene:
                 model.add(term)
         obstacles = [[model.add(t) for t in spec.terms(config, mesh, lumped_area, budget)] for spec in self.obstacles]
         contacts = [terms[0] for terms in obstacles]
-        frictions = [t for terms in obstacles for t in terms[1:] if t.reports_contact]  # not a held object's weight
-        return BuiltScene(self, mesh, model, elastic, chambers, effects, contacts, frictions)  # type: ignore[arg-type]
+        parts = [t for terms in obstacles for t in terms[1:] if t.reports_contact]  # not a held object's weight
+        return BuiltScene(self, mesh, model, elastic, chambers, effects, contacts, parts)  # type: ignore[arg-type]
 
 
 def support_rows(mesh: Mesh, effects) -> list:
@@ -322,7 +322,9 @@ def describe_supports(mesh: Mesh, effects) -> str:
 @dataclass
 class BuiltScene:
     """A meshed scene: its EnergyModel, and handles on the terms a run drives or reports (obstacles: the
-    obstacles' contact terms, in the scene's order; frictions: the friction terms of those with friction > 0)."""
+    obstacles' contact terms on the body's nodes, in the scene's order; obstacle_parts: their other terms that exert a
+    force, the barriers on the body's sides and faces ('<name>.edges', reported with the nodes') and the friction
+    terms of those with friction > 0)."""
 
     scene: Scene
     mesh: Mesh
@@ -331,7 +333,7 @@ class BuiltScene:
     chambers: list[Chamber]
     effects: dict[str, list[Term]]
     obstacles: list = field(default_factory=list)
-    frictions: list = field(default_factory=list)
+    obstacle_parts: list = field(default_factory=list)
 
     @property
     def clamp(self) -> Term | None:
@@ -339,10 +341,11 @@ class BuiltScene:
         return next((t for t in self.model.terms if isinstance(t, Clamp)), None)
 
     def contact_terms(self) -> list[Term]:
-        """Every term that reports a contact force, each under its name: the effects' (ground, self_contact, and
-        ground.friction), then the obstacles' (their names), then their friction terms ('<name>.friction')."""
+        """Every term that reports a contact force, each under its reported_as: the effects' (ground, self_contact,
+        and ground.friction), then the obstacles' (their names), then their parts (the edges' under the obstacle's
+        name, the friction terms' as '<name>.friction')."""
         effects = [t for terms in self.effects.values() for t in terms if t.reports_contact]
-        return effects + list(self.obstacles) + list(self.frictions)
+        return effects + list(self.obstacles) + list(self.obstacle_parts)
 
     def moving_offsets(self, commands: np.ndarray) -> list:
         """(term, translation (3,)) of each moving obstacle at the commands (Schedule.commands: the chambers'

@@ -228,15 +228,18 @@ def step_record(
     rotation, twist = (0.0, 0.0) if previous is None else (previous.tip_rotation, previous.tip_twist or 0.0)
     contact, contact_fz, vertex_forces = {}, {}, np.zeros_like(u)
     on_obstacles = np.zeros(mesh.dim)
+    by_name: dict[str, np.ndarray] = {}  # the nodal forces of the terms reported under each name (Term.reported_as)
     for term in built.contact_terms():
         f = -term.gradient()
         vertex_forces += f
+        if any(term is obstacle for obstacle in (*built.obstacles, *built.obstacle_parts)):
+            on_obstacles += f.sum(axis=0)
+        by_name[term.reported_as] = by_name.get(term.reported_as, 0.0) + f
+    for name, f in by_name.items():
         total = f.sum(axis=0)
-        if any(term is obstacle for obstacle in (*built.obstacles, *built.frictions)):
-            on_obstacles += total
-        contact[term.name] = (float(total[0]), float(total[1]), float(np.linalg.norm(f, axis=1).sum()))
+        contact[name] = (float(total[0]), float(total[1]), float(np.linalg.norm(f, axis=1).sum()))
         if mesh.dim == 3:
-            contact_fz[term.name] = float(total[2])
+            contact_fz[name] = float(total[2])
     final = records[-1]
     record = StepRecord(
         step,

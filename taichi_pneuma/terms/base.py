@@ -147,7 +147,8 @@ class Term:
 
     A term holds the model's Configuration (config.rest, config.u: (n, d) NumPy arrays) and its own
     data as NumPy arrays, and evaluates itself by calling module-level kernels on them.
-    reports_contact: whether -gradient() is a contact force the history reports.
+    reports_contact: whether -gradient() is a contact force the history reports, under reported_as (its name, or
+    the name of the term it is a part of: an obstacle's edge barrier is reported with its node barrier).
     kinked: whether the term is piecewise smooth (see choose_branches).
     dynamic: whether its Hessian's pattern follows the state (a contact term's active pairs): hessian_pattern() is
     then that of its last hessian_values() call, and the model's fixed pattern leaves it out (EnergyModel.assemble).
@@ -157,6 +158,11 @@ class Term:
     reports_contact = False
     kinked = False  # piecewise smooth: choose_branches may move pieces to other branches
     dynamic = False  # its Hessian's pattern changes with the state
+
+    @property
+    def reported_as(self) -> str:
+        """The history's name for its contact force (reports_contact)."""
+        return self.name
 
     def energy(self) -> float:
         """The term's energy at config.u (every term has one)."""

@@ -2,7 +2,8 @@
 (Li et al. 2020, "Incremental Potential Contact", sec. 5), quasistatic.
 
 For each node k of the obstacle's contact term (terms/obstacles.py ObstacleContact) the lagged state holds its
-normal force lambda_k = -b'(d_k) (the barrier's force, terms/contact.py, 0 beyond dhat), its unit normal n_k
+normal force lambda_k = -b'(d_k) (the barrier's force, terms/contact.py, 0 beyond dhat; where the obstacle has an
+edge barrier, terms/obstacle_edges.py, the magnitude of the two barriers' force on the node), its unit normal n_k
 (the gradient of the shape's signed distance) and its position x_k^0, all taken at the last equilibrium (advance,
 called with the displacements that end each increment; at construction, the rest state). The slip of the increment
 is the node's tangential displacement relative to the obstacle,
@@ -132,9 +133,11 @@ class ObstacleFriction(Term):
 
     reports_contact = True
 
-    def __init__(self, contact, mu: float, eps: float):
-        """contact: the obstacle's ObstacleContact (its nodes, shape, barrier and offset, read live)."""
-        self.config, self.contact = contact.config, contact
+    def __init__(self, contact, mu: float, eps: float, edges: list | None = None):
+        """contact: the obstacle's ObstacleContact (its nodes, shape, barrier and offset, read live); edges: its
+        barrier on the sides and faces of the body (terms/obstacle_edges.py), if any, whose normal force joins the
+        nodes' lambda."""
+        self.config, self.contact, self.edges = contact.config, contact, list(edges or [])
         self.name = f"{contact.name}.friction"
         self.mu, self.eps = float(mu), float(eps)
         self.lagged = np.zeros((len(contact.verts), LAGGED))
@@ -145,6 +148,12 @@ class ObstacleFriction(Term):
         """Lag lambda, n and x at u (the obstacle where it is now) for the next increment."""
         c = self.contact
         friction_lag(self.config.rest, u, c.verts, c.kind, c.parameters, c.dhat, c.kappa, self.lagged)
+        if self.edges:  # lambda_k: the whole contact force on the node, its barrier's and the edges' part
+            kept = self.config.u.copy()
+            self.config.u[:] = u
+            push = sum(term.gradient() for term in (c, *self.edges))[c.verts]
+            self.config.u[:] = kept
+            self.lagged[:, 0] = np.linalg.norm(push, axis=1)
         self.origin = c.offset.copy()
 
     def _arguments(self) -> tuple:
@@ -184,12 +193,12 @@ class ObstacleFriction(Term):
         )
 
 
-def frictional(contact, mu: float, slip: float | None) -> list:
+def frictional(contact, mu: float, slip: float | None, edges: list | None = None) -> list:
     """The terms of a contact with friction coefficient mu: the contact alone where mu = 0 (no friction term at all),
-    else with its ObstacleFriction of slip eps (None: dhat / 10)."""
+    else with its ObstacleFriction of slip eps (None: dhat / 10) on the normal force of the contact and its edges."""
     if mu == 0:
         return [contact]
-    return [contact, ObstacleFriction(contact, mu, slip_length(slip, contact.dhat))]
+    return [contact, ObstacleFriction(contact, mu, slip_length(slip, contact.dhat), edges)]
 
 
 def slip_length(slip: float | None, dhat: float) -> float:

@@ -2,17 +2,19 @@
 (its weight), held only by its contact with the body and the friction there.
 
 Its height o (its offset along y from where it was placed) is not a degree of freedom of the model: for the body's
-state x it takes the height that minimises the energy of its contact and friction terms with the load's potential,
+state x it takes the height that minimises the energy of its contact terms (the nodes' and the edges') and
+friction term with the load's potential,
 
     o*(x) = argmin_o  phi(x, o),   phi = E_c(x, o) + E_f(x, o) + W o,
 
 found by Newton's method on o alone (inner_solve; each term depends on x_k - o e_y only, so dphi/do = W - sum_k
-g_k . e_y and d2phi/do2 = sum_k e_y^T H_k e_y, with g_k and H_k the terms' gradient and Hessian block at node k),
-its steps kept short of the contact (the contact term's step bound along the relative motion). The model's energy
-is then E(x) = min_o phi(x, o) plus the body's own: by the envelope theorem its gradient is the contact and friction
-terms' (at o*), and its Hessian theirs less the rank-1 Schur complement of the eliminated height,
+g_k . e_y and d2phi/do2 = e^T H e, with g_k the terms' gradient at node k, H their Hessian and e the motion of every
+node by 1 along y), its steps kept short of the contact (the contact terms' step bounds along the relative
+motion). The model's energy is then E(x) = min_o phi(x, o) plus the body's own: by the envelope theorem its
+gradient is the contact and friction terms' (at o*), and its Hessian theirs less the rank-1 Schur complement of the
+eliminated height,
 
-    H = H_xx - u u^T / h,   u = d2phi/dx do = -(H_k e_y)_k,   h = d2phi/do2,
+    H = H_xx - u u^T / h,   u = d2phi/dx do = -H e,   h = d2phi/do2,
 
 given as a low-rank part (low_rank: (dofs, u, -1 / h)), with the terms' exact or PSD blocks as the solver asks. A
 grip whose friction cannot carry W has no minimum: phi falls without bound as the object slides down. The object
@@ -27,7 +29,7 @@ import math
 
 import numpy as np
 
-from .base import Term, vertex_dofs
+from .base import Term
 
 INNER_ITERATIONS = 50
 INNER_TOLERANCE = 1e-10  # |dphi/do| against W (and the contact forces' sum)
@@ -40,8 +42,9 @@ class HeldObject(Term):
 
     reports_contact = False
 
-    def __init__(self, contact, friction, weight: float, release: int):
-        self.contact, self.friction = contact, friction
+    def __init__(self, contact, friction, weight: float, release: int, edges: list | None = None):
+        """edges: the obstacle's barrier on the sides and faces of the body (terms/obstacle_edges.py), if any."""
+        self.contact, self.friction, self.edges = contact, friction, list(edges or [])
         self.config = contact.config
         self.name = f"{contact.name}.weight"
         self.weight, self.release = float(weight), int(release)
@@ -59,7 +62,7 @@ class HeldObject(Term):
 
     @property
     def terms(self) -> list:
-        return [t for t in (self.contact, self.friction) if t is not None]
+        return [t for t in (self.contact, *self.edges, self.friction) if t is not None]
 
     def advance(self, u: np.ndarray) -> None:
         self.step += 1
@@ -99,11 +102,18 @@ class HeldObject(Term):
         along = np.sum([t.gradient()[:, self.axis] for t in self.terms], axis=0)
         return self.weight - float(along.sum()), self.weight + float(np.abs(along).sum())
 
-    def _blocks(self, psd_only: bool) -> tuple[np.ndarray, np.ndarray]:
-        """(column y of each contact node's d x d block (m, d), their dofs): the terms' blocks at the nodes."""
+    def _column(self, psd_only: bool) -> tuple[np.ndarray, np.ndarray]:
+        """(dofs, H e): the terms' Hessians (of this flavour) times e, the unit motion of every node along y, on the
+        dofs where it is not zero."""
         d = self.config.dim
-        blocks = np.sum([t.hessian_values(psd_only).reshape(-1, d, d) for t in self.terms], axis=0)
-        return blocks[:, :, self.axis], vertex_dofs(self.contact.verts, d)
+        column = np.zeros(self.config.u.size)
+        for term in self.terms:
+            values = term.hessian_values(psd_only)
+            rows, cols = term.hessian_pattern()
+            along = cols % d == self.axis
+            column += np.bincount(rows[along], values[along], minlength=column.size)
+        dofs = np.flatnonzero(column)
+        return dofs, column[dofs]
 
     def inner_solve(self) -> None:
         """Move the object to o*(x) (module docstring): Newton on o, each step kept short of the contact and
@@ -117,8 +127,8 @@ class HeldObject(Term):
             if abs(slope) <= INNER_TOLERANCE * scale:
                 self.slipped = False
                 return
-            columns, _ = self._blocks(False)
-            curvature = float(columns[:, self.axis].sum())
+            dofs, column = self._column(False)
+            curvature = float(column[dofs % self.config.dim == self.axis].sum())
             step = -slope / curvature if curvature > 0 else -math.copysign(reach, slope)
             step = max(-reach, min(reach, step))  # no farther than a slip in one Newton step
             here, phi = self._height(), self._phi()
@@ -142,11 +152,11 @@ class HeldObject(Term):
             self._set_height(start)
 
     def _step_bound(self, step: float) -> float:
-        """The largest fraction of a height change `step` before a contact node reaches the object (its nodes
-        moving by -step along y relative to it)."""
+        """The largest fraction of a height change `step` before the body reaches the object (the body moving by
+        -step along y relative to it): its nodes, and the sides and faces of its surface."""
         dx = np.zeros_like(self.config.u)
-        dx[self.contact.verts, self.axis] = -step
-        return self.contact.max_step(dx)
+        dx[:, self.axis] = -step
+        return min(term.max_step(dx) for term in (self.contact, *self.edges))
 
     def energy(self) -> float:
         self.follow()
@@ -164,10 +174,10 @@ class HeldObject(Term):
         self.follow()
         self._low_rank = []
         if self.free:
-            columns, dofs = self._blocks(psd_only)
-            curvature = float(columns[:, self.axis].sum())
+            dofs, column = self._column(psd_only)
+            curvature = float(column[dofs % self.config.dim == self.axis].sum())
             if curvature > 0:
-                self._low_rank = [(dofs, -columns.ravel(), -1.0 / curvature)]
+                self._low_rank = [(dofs, -column, -1.0 / curvature)]
         return np.zeros(0)
 
     def columns(self) -> dict[str, float]:

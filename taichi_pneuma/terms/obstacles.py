@@ -30,6 +30,7 @@ solve/simulate.py settle); Obstacle.terms refuses a rest scene that overlaps (do
 """
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -44,6 +45,7 @@ from .contact import barrier
 from .friction import frictional
 from .held_object import HeldObject
 from .obstacle_distance import obstacle_reach, point_of, row3, signed_distance
+from .obstacle_edges import ObstacleEdges, ipctk_or_none
 from .obstacle_shapes import PLANE, Shape, vector
 
 STEP_CAP = 4.0  # max_step's conservative advancement stops past this step fraction (inf)
@@ -365,8 +367,9 @@ class Obstacle:
         return float(np.max(np.linalg.norm(np.diff(values, axis=0), axis=1) / np.diff(steps), initial=0.0))
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
-        """Its contact term on the body's outer boundary nodes (then, with friction > 0, its friction term:
-        friction.frictional), its overlap check on the body's surface pieces (surface_pieces). Refused: a 3D scene's
+        """Its contact term on the body's outer boundary nodes, then the barrier on the sides and faces of the body's
+        surface (obstacle_edges), then, with friction > 0, its friction term (friction.frictional) and, with a weight,
+        its HeldObject; its overlap check on the body's surface pieces (surface_pieces). Refused: a 3D scene's
         point or vector of 2 numbers; a 2D scene's keyframe with a z offset; an offset component beyond REACH times
         the body's size (the diagonal of its bounding box); a motion per increment of more than MAX_SWEEPS sweeps
         (BuiltScene.sweeps; the sweep: half the smaller of dhat and the median length of the surface pieces' sides);
@@ -406,8 +409,26 @@ class Obstacle:
         term.set_offset(self.offset(0.0))  # where it is at step 0 (a keyframe at step 0 moves it there)
         overlap = term.overlap()
         require(overlap is None, f"{overlap} at rest: place it clear of the body")
-        terms = frictional(term, self.friction, self.friction_slip)
+        edges = obstacle_edges(term, pieces)
+        terms = frictional(term, self.friction, self.friction_slip, edges)
         if self.weight is None:
-            return terms
+            return [term, *edges, *terms[1:]]
         friction = terms[1] if len(terms) > 1 else None
-        return [*terms, HeldObject(term, friction, self.weight, self.release)]
+        return [term, *edges, *terms[1:], HeldObject(term, friction, self.weight, self.release, edges)]
+
+
+def obstacle_edges(contact: ObstacleContact, pieces: np.ndarray) -> list:
+    """[ObstacleEdges]: the barrier between the obstacle's features and the body's surface pieces (their sides and
+    faces, terms/obstacle_edges.py) where its shape has a feature set; [] for a plane, a 3D cylinder, or a 3D body
+    where the IPC Toolkit is not installed (its nodes then hold the contact alone, with a warning)."""
+    if not ObstacleEdges.needed(contact.kind, contact.config.dim):
+        return []
+    ipctk = ipctk_or_none() if contact.config.dim == 3 else None
+    if contact.config.dim == 3 and ipctk is None:  # pragma: no cover - the [3d] extra installs it where it can
+        warnings.warn(
+            f"obstacle {contact.name!r}: the IPC Toolkit (ipctk, the [3d] extra) is not installed, so only the "
+            f"body's nodes are kept out of it (a state in which a face enters it is still refused)",
+            stacklevel=2,
+        )
+        return []
+    return [ObstacleEdges(contact, pieces, ipctk)]
