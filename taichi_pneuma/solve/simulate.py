@@ -150,8 +150,8 @@ def settle(
 
     The change of commands is first cut into built.sweeps equal parts, so that no obstacle moves farther than its
     sweep between two equilibria, each solved in turn. A Newton solve that does not converge, or converges to a
-    state in which an obstacle overlaps the body (BuiltScene.obstacle_overlap: the barrier holds the surface's
-    nodes, not the sides between them), is cut back: the remaining change of all chamber commands is halved and
+    state in which an obstacle overlaps the body (BuiltScene.obstacle_overlap: checked apart from the barriers), is
+    cut back: the remaining change of all chamber commands is halved and
     the smaller sub-increment solved from the last equilibrium, at most max_cuts times.
     previous: the equilibrium (commands, u) before (reached, u), for the predictor, or None.
     Returns (u, commands reached, previous, the SolveRecords, cuts); raises NoEquilibrium naming the
@@ -181,7 +181,7 @@ def settle(
                 built.set_commands(reached)
                 built.model.set_displacements(u)
                 raise NoEquilibrium(fault)
-            overlap = built.obstacle_overlap()  # the barrier holds the nodes only: a smaller motion may help
+            overlap = built.obstacle_overlap()  # checked apart from the barriers: a smaller motion may help
             if overlap is None:
                 previous = (reached, u)
                 u, done, reached = u_trial, trial, commands
@@ -199,9 +199,9 @@ def settle(
             if overlap is not None:
                 built.set_commands(reached)
                 found = (
-                    f"the equilibrium found is none: {overlap} (the contact holds the body's nodes only: smaller "
-                    f"elements where the body presses on the obstacle's edges or corners, or a blunter obstacle, let "
-                    f"the nodes hold it)"
+                    f"the equilibrium found is none: {overlap} (a 3D cylinder's contact holds the body's nodes only, "
+                    f"and any obstacle moved too far in one increment can pass them: smaller elements where the body "
+                    f"presses on it, or a smaller motion per increment, let the barriers hold it)"
                 )
             raise NoEquilibrium(
                 f"no equilibrium at {describe_commands(built, commands, reached)} after {cuts} cuts; {found}"

@@ -117,6 +117,7 @@ class ObstacleEdges(Term):
         self.ipctk = ipctk
         self.pieces = int32s(pieces)
         self._key: tuple | None = None
+        self._state: list = []
         self._rows = self._cols = np.zeros(0, dtype=np.int64)
 
     @staticmethod
