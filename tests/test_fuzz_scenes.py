@@ -126,7 +126,8 @@ MESH_FILES = [MESHES.name, "x" * 5000, str(SPARSE_MESH), str(lzma_vtu(Path(MESHE
 # balloon_syringe driven otherwise: one of the three is enough; beam_3d_ellipsoid is beam_3d's body from shapes
 # (pneunet_3d fuzzes the 3D shapes and gmsh); fiber_bending_3d is blocked_force_3d without its plate (and its cheap
 # ramp, bending freely, costs four times as much); gripper_2d_friction and gripper_2d_lift are gripper_2d's body (their
-# ramps past the cheap one's steps); finger_curl's growth to 5.2 times in three increments finds no equilibrium
+# ramps past the cheap one's steps); finger_curl's growth to 5.2 times in three increments finds no equilibrium;
+# pneunet_fast_3d is pneunet_3d's generator with a slit
 SAME_BODY = {
     "balloon_volume",
     "balloon_pressure",
@@ -135,6 +136,7 @@ SAME_BODY = {
     "gripper_2d_friction",
     "gripper_2d_lift",
     "finger_curl",
+    "pneunet_fast_3d",
 }
 BASES = {
     path.stem: cheap(tomllib.loads(path.read_text()))

@@ -20,6 +20,7 @@ COARSER = {
     "fiber_twist_3d": mesh(6, 4, 4, order=1),
     "gripper_3d": ["--set", "mesh.size=8"],
     "pneunet_3d": mesh(0.5, 0.5, 0.5, order=1),
+    "pneunet_fast_3d": mesh(0.5, 0.5, 0.5, order=1),
 }
 
 
