@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from test_terms import dense_hessian, fd_gradient, fd_hessian, random_state
 
+import taichi_pneuma as tp
 from taichi_pneuma.control.inverse import Reacher, ReachOptions, body_length, command_bounds
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.tip import tip_measures, tip_outputs
@@ -285,6 +286,8 @@ def test_the_apps_ask_the_kind():
         describe_commands(area, np.array([2.0]), np.array([1.5]))
         == f"commanded area {2 * area.chambers[0].rest_area:.6g} (2 x rest)"
     )
+    assert area.chambers[0].quantity == "area ratio"  # in messages; a 3D chamber's is its volume's
+    assert tp.load_scene("beam_3d").build().chambers[0].quantity == "volume ratio"
 
 
 @pytest.mark.parametrize(

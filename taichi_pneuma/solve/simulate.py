@@ -105,7 +105,7 @@ def state_fault(built: BuiltScene, commands: np.ndarray) -> str | None:
         fault = chamber.wall_fault()
         if fault is not None:
             return (
-                f"chamber {chamber.chamber_name!r} {fault} at {chamber.kind.quantity} {command:.4g}: the body "
+                f"chamber {chamber.chamber_name!r} {fault} at {chamber.quantity} {command:.4g}: the body "
                 f"cannot take its chamber that far (a wall through itself is not physical)"
             )
     min_det = built.elastic.min_determinant()
@@ -116,7 +116,7 @@ def state_fault(built: BuiltScene, commands: np.ndarray) -> str | None:
         return None
     at = ", ".join(
         (f"chamber {chamber.chamber_name!r} " if len(built.chambers) > 1 else "")
-        + f"{chamber.kind.quantity} {command:.4g}"
+        + f"{chamber.quantity} {command:.4g}"
         for chamber, command in zip(built.chambers, commands)
     )
     covered = any(term.name == "surface_contact" for term in built.model.terms)

@@ -218,7 +218,13 @@ class Chamber(Term):
         """The load stiffness -p d2A (nothing with psd_only)."""
         return np.zeros(len(self.form.rows)) if psd_only else -self.pressure() * self.form.hessian()
 
+    @property
+    def quantity(self) -> str:
+        """What its command is, in words: its kind's quantity, an area ratio being a volume ratio in 3D."""
+        quantity = self.kind.quantity
+        return quantity.replace("area", "volume") if self.config.dim == 3 else quantity
+
     def describe(self, command: float, reached: float) -> str:
         """A command of a failed solve in words, with the last command that reached an equilibrium."""
-        quantity = self.kind.quantity
+        quantity = self.quantity
         return f"{quantity} {command:.6g} (last equilibrium at {quantity} {reached:.6g})"
