@@ -12,7 +12,7 @@ import pytest
 from taichi_pneuma import runtime
 from taichi_pneuma.control.inverse import Reacher
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.io.units import MOMENT, UNITS, history_dimensions
+from taichi_pneuma.io.units import FORCE_3D, MOMENT, UNITS, history_dimensions
 from taichi_pneuma.result import Result
 from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.solve.newton import NewtonOptions
@@ -318,15 +318,18 @@ def test_inverse_control_refuses_a_moving_obstacle():
 
 
 def test_the_force_and_moment_columns_carry_their_units():
-    """mm-kPa: a 2D force is per unit depth (kPa mm = N/m), its moment kPa mm^2; in 3D a force is kPa mm^2 (mN)
-    and a moment kPa mm^3."""
+    """mm-kPa: a 2D force is per unit depth (kPa mm = N/m), its moment kPa mm^2; in 3D a force is kPa mm^2, named
+    mN, and a moment kPa mm^3 = mN mm; in mm-MPa and m-Pa a 3D force is N."""
     units, scene = UNITS["mm-kPa"], SimpleNamespace(chamber_names=[], controls=[], obstacles=())
-    for dim, force, turning in ((2, "kPa mm", "kPa mm^2"), (3, "kPa mm^2", "kPa mm^3")):
+    for dim, force, turning in ((2, "kPa mm", "kPa mm^2"), (3, "mN", "mN mm")):
         dimensions = history_dimensions(scene, ["post"], dim)
         assert units.label("post.fy", dimensions["post.fy"]) == f"post.fy [{force}]"
         assert units.label("clamp.fx", dimensions["clamp.fx"]) == f"clamp.fx [{force}]"
         assert units.label("clamp.mz", dimensions["clamp.mz"]) == f"clamp.mz [{turning}]"
     assert units.factor(MOMENT, 2) == pytest.approx(1e-3)  # 1 kPa mm^2 = 1e3 Pa x 1e-6 m^2 (N m per m)
+    assert units.factor(FORCE_3D, 3) == pytest.approx(1e-3)  # 1 kPa mm^2 = 1e3 Pa x 1e-6 m^2 = 1 mN
+    assert UNITS["mm-MPa"].factor(FORCE_3D, 3) == UNITS["m-Pa"].factor(FORCE_3D, 3) == pytest.approx(1.0)  # N
+    assert [UNITS[name].symbol(FORCE_3D) for name in ("mm-MPa", "m-Pa")] == ["N", "N"]
 
 
 def test_the_obstacle_kernels_compile_once_for_every_shape_and_dimension():

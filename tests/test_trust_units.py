@@ -508,3 +508,26 @@ def test_every_api_default_with_a_unit_is_the_scene_files_default():
                 ), row.key
                 found += 1
     assert found >= 10
+
+
+def test_a_3d_force_in_mm_kpa_is_in_mn_on_the_plot_in_the_csv_and_in_the_summary():
+    """blocked_force_3d (mm-kPa) on a coarse linear mesh, two steps to 30 kPa: kPa mm^2 is mN, and the blocked-force
+    axis, the plate's CSV columns and the summary's force unit all say so."""
+    from taichi_pneuma.render.plots import history_panels
+
+    scene = tp.load_scene("blocked_force_3d").with_values(
+        {
+            "mesh.size": 12,
+            "mesh.near_chambers": 6,
+            "mesh.distance": 6,
+            "mesh.order": 1,
+            "schedule.increments": 2,
+            "chambers[0].keyframes": [[0, 0.0], [2, 30.0]],
+        }
+    )
+    result = tp.simulate(scene)
+    assert result.history["blocked_force"][-1] > 0
+    assert history_panels(result)[-1].y_label == "blocked force [mN]"
+    header = result.history_csv().splitlines()[0].split(",")
+    assert {"plate.fy [mN]", "clamp.fy [mN]", "clamp.mz [mN mm]", "blocked_force [mN]"} <= set(header)
+    assert result.summary()["units"]["force"] == "mN"

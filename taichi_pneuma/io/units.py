@@ -128,13 +128,15 @@ def si_text(dimension: str) -> str:
 
 @dataclass(frozen=True)
 class Units:
-    """A system of units: its name (None: unitless), the length and pressure units' symbols and sizes in SI."""
+    """A system of units: its name (None: unitless), the length and pressure units' symbols and sizes in SI, and
+    the name of the force unit they make in 3D (pressure x length^2: kPa mm^2 = mN)."""
 
     name: str | None = None
     length: str = ""
     pressure: str = ""
     metre: float = 1.0  # the length unit, in m
     pascal: float = 1.0  # the pressure unit, in Pa
+    force: str = ""  # pressure x length^2, by its name
 
     def symbol(self, dimension: str) -> str:
         """The unit of a dimension (LENGTH, AREA, PRESSURE, FORCE per unit depth, ANGLE, TIME) in this system;
@@ -150,8 +152,8 @@ class Units:
             TIME: "s",
             VOLUME: f"{self.length}^3",
             MOMENT: f"{self.pressure} {self.length}^2",
-            FORCE_3D: f"{self.pressure} {self.length}^2",
-            MOMENT_3D: f"{self.pressure} {self.length}^3",
+            FORCE_3D: self.force,
+            MOMENT_3D: f"{self.force} {self.length}",
         }[dimension]
 
     def label(self, name: str, dimension: str) -> str:
@@ -183,9 +185,9 @@ UNITLESS = Units()
 UNITS = {
     u.name: u
     for u in (
-        Units("mm-kPa", "mm", "kPa", 1e-3, 1e3),
-        Units("mm-MPa", "mm", "MPa", 1e-3, 1e6),
-        Units("m-Pa", "m", "Pa", 1.0, 1.0),
+        Units("mm-kPa", "mm", "kPa", 1e-3, 1e3, "mN"),
+        Units("mm-MPa", "mm", "MPa", 1e-3, 1e6, "N"),
+        Units("m-Pa", "m", "Pa", 1.0, 1.0, "N"),
     )
 }
 

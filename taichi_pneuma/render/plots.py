@@ -166,7 +166,12 @@ def history_panels(result) -> list[Panel]:
     ]
     if "blocked_force" in history:
         panels.append(
-            Panel("force on the obstacles", xr_label, units.label("blocked force", FORCE), one("blocked_force"))
+            Panel(
+                "force on the obstacles",
+                xr_label,
+                units.label("blocked force", in_dimension(FORCE, result.mesh.dim)),
+                one("blocked_force"),
+            )
         )
     return [p for p in panels if p.curves]
 

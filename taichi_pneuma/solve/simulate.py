@@ -115,8 +115,7 @@ def state_fault(built: BuiltScene, commands: np.ndarray) -> str | None:
     if crossing is None:
         return None
     at = ", ".join(
-        (f"chamber {chamber.chamber_name!r} " if len(built.chambers) > 1 else "")
-        + f"{chamber.quantity} {command:.4g}"
+        (f"chamber {chamber.chamber_name!r} " if len(built.chambers) > 1 else "") + f"{chamber.quantity} {command:.4g}"
         for chamber, command in zip(built.chambers, commands)
     )
     covered = any(term.name == "surface_contact" for term in built.model.terms)
