@@ -86,15 +86,18 @@ def test_unconverged_ramp_stops_with_one_line_and_writes_the_steps_done(tmp_path
         main(["--steps", "2", "--max-iterations", "5", "--max-cuts", "0", "--no-video", "--quiet", "--out", str(out)])
         == 1
     )
-    errors = [l for l in capsys.readouterr().err.splitlines() if l.strip()]
+    printed = capsys.readouterr()
+    errors = [l for l in printed.err.splitlines() if l.strip()]
     assert len(errors) == 1 and errors[0].startswith("error: step 1: no equilibrium at commanded area")
     assert "residual" in errors[0]
+    assert "all converged: False (stopped at step 1: no equilibrium)" in printed.out  # not True for a failed run
     states = np.load(out / "inflate_cy+0.15_steps2_states.npz")
     assert states["positions"].shape[0] == 1  # the rest state, the one step that converged
     summary = json.loads((out / "inflate_cy+0.15_steps2_summary.json").read_text())
     assert (
         summary["steps"] == 1 and summary["stopped"]["step"] == 1 and summary["stopped"]["reason"] == "no equilibrium"
     )
+    assert summary["all_converged"] is False
     assert (out / "inflate_cy+0.15_steps2_scene.toml").exists()
 
 

@@ -88,6 +88,15 @@ def test_too_few_cuts_fail_clearly_and_keep_the_steps_done():
         assert len(failure.result.steps) == 1 and failure.result.positions.shape == (1, built.mesh.n_vertices, 2)
 
 
+def test_cut_backs_stop_once_the_residual_stalls_near_the_tolerance_and_say_what_to_try():
+    """A tolerance below the residual's round-off floor (about 1.6e-10 here, 16 times the 1e-11 asked): every solve
+    ends near it whatever the increment, so the cuts stop after 3 (not the 8 allowed), saying so and what to try."""
+    built = reference_scene(cy=0.15, steps=2).build()
+    with pytest.raises(RampFailed, match=r"after 3 cuts; residual .*stalled at .* times the tolerance") as failure:
+        run_schedule(built, options=NewtonOptions(tol=1e-11))
+    assert "try a looser --tol, more --max-iterations, a finer mesh or quadratic elements" in str(failure.value)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("k", [1e8, 1e3])
 def test_chamber_stiffness_extremes(k):

@@ -193,8 +193,9 @@ def report_and_save(
     summary's "stopped"), for a ramp that ended before its last increment."""
     scene = result.scene
     final, summary = result.steps[-1], result.summary()
-    if stopped is not None:
+    if stopped is not None:  # the steps done all converged, but the run did not reach its end
         summary["stopped"] = stopped
+        summary["all_converged"] = summary["all_converged"] and stopped["reason"] == "limit point"
     area, length, pressure = (scene.units.suffix(d) for d in (AREA, LENGTH, PRESSURE))
     force, moment = (scene.units.suffix(in_dimension(d, result.mesh.dim)) for d in (FORCE, MOMENT))
     measure = scene.units.suffix(MEASURES[result.mesh.dim])
@@ -239,7 +240,9 @@ def report_and_save(
     print(
         f"Newton: {summary['newton_iterations_total']} iterations over {summary['steps'] - 1} solves "
         f"(max {summary['newton_iterations_max']}, {summary['increment_cuts']} increment cuts), "
-        f"all converged: {summary['all_converged']}; run {result.seconds:.2f} s"
+        f"all converged: {summary['all_converged']}"
+        + ("" if stopped is None else f" (stopped at step {stopped['step']}: {stopped['reason']})")
+        + f"; run {result.seconds:.2f} s"
     )
     # results saved before rendering: a Ctrl-C there loses none
     written = result.save(out, stem, vtk=False, plot=not args.no_video, extra=summary) + [vtk.pvd]

@@ -15,6 +15,8 @@ from .newton import NewtonOptions, NewtonSolver, SolveRecord
 from .records import ChamberRecord, Run, StepRecord
 
 MAX_CUTS = 8
+STALLED_CUTS = 3  # cuts whose solves all stop near the tolerance, no nearer one after another: cutting stops
+NEAR_TOLERANCE = 100.0  # "near": a residual below this many times the tolerance
 
 
 def predict(built: BuiltScene, previous, current, commands: np.ndarray) -> np.ndarray:
@@ -187,7 +189,7 @@ def settle(
                 if trial == 1.0:
                     return u, reached, previous, records, cuts
                 continue
-        if cuts < max_cuts:
+        if cuts < max_cuts and not stalled(records, solver.options.tol):
             cuts += 1
             fraction /= 2
         else:
@@ -195,6 +197,12 @@ def settle(
             fault = built.model.fault()  # a cause the terms keep over the increment (a held object that slipped)
             cause = f": {fault}" if fault is not None and fault not in record.message else ""
             found = f"residual {record.residual:.2e} ({record.message}{cause})"
+            if stalled(records, solver.options.tol):
+                found += (
+                    f"; the residual stalled at {record.residual / solver.options.tol:.3g} times the tolerance over "
+                    f"the last {STALLED_CUTS} cuts, so smaller increments do not help: try a looser --tol, more "
+                    f"--max-iterations, a finer mesh or quadratic elements (order 2)"
+                )
             if overlap is not None:
                 built.set_commands(reached)
                 found = (
@@ -205,6 +213,18 @@ def settle(
             raise NoEquilibrium(
                 f"no equilibrium at {describe_commands(built, commands, reached)} after {cuts} cuts; {found}"
             )
+
+
+def stalled(records: list[SolveRecord], tol: float) -> bool:
+    """Whether cutting the increment has stopped helping: the last STALLED_CUTS + 1 solves (the increment and its
+    cuts) all failed with a finite residual below NEAR_TOLERANCE tol, none of them below half the smallest before
+    it (the Newton iterations end at a floor near the tolerance, as round-off or a kink makes them, whatever the
+    increment's size)."""
+    last = records[-(STALLED_CUTS + 1) :]
+    if len(last) <= STALLED_CUTS or any(r.converged or not r.residual < NEAR_TOLERANCE * tol for r in last):
+        return False
+    residuals = [r.residual for r in last]
+    return all(r >= 0.5 * min(residuals[:k]) for k, r in enumerate(residuals) if k)
 
 
 def step_record(
