@@ -1,6 +1,7 @@
 """Inverse control of a history column along the scene's schedule (control/outputs.py, pneuma-reach --output): the
 commands it finds, ramped to by a fresh run from rest, give the wanted value."""
 
+import json
 import subprocess
 import sys
 import tomllib
@@ -67,3 +68,23 @@ def test_reach_output_on_the_command_line(tmp_path):
     assert (tmp_path / "reference_cy+0.15_output_tip_rotation-2_steps4_max_area0.02_summary.json").exists()
     missing = subprocess.run([*command, "--output", "tip_rotation", "--out", str(tmp_path)], capture_output=True)
     assert missing.returncode == 2 and b"--output COLUMN and --value V go together" in missing.stderr
+
+
+def test_a_ramp_that_stops_short_reports_how_far_the_column_came_and_writes_its_summary(tmp_path):
+    """pneuma-reach --output prints a line per step (the column's value on it); where the ramp finds no equilibrium
+    (2 Newton iterations, no cuts) before the column reaches the value, it exits 1 with one line naming the closest
+    value, its step and commands and why the ramp stopped, and writes the summary saying so."""
+    command = [sys.executable, "-m", "taichi_pneuma.apps.reach", "--max-area", "0.02", "--steps", "4"]
+    flags = ["--output", "tip_rotation", "--value", "-20", "--max-iterations", "2", "--max-cuts", "0"]
+    done = subprocess.run([*command, *flags, "--out", str(tmp_path), "--no-video"], capture_output=True, text=True)
+    assert done.returncode == 1 and "Traceback" not in done.stderr
+    steps = [line for line in done.stdout.splitlines() if line.lstrip().startswith("step")]
+    assert steps and all("tip_rotation = " in line for line in steps)
+    (line,) = [line for line in done.stderr.splitlines() if line.strip()]
+    assert line.startswith("unreachable: the ramp stopped before tip_rotation reached -20; the closest it came is ")
+    assert "no equilibrium" in line and ": main " in line  # why, and the commands at the closest step
+    summary = json.loads(next(tmp_path.glob("*_summary.json")).read_text())
+    assert summary["found"] is False and summary["all_converged"] is False and "no equilibrium" in summary["failure"]
+    assert summary["step"] == len(steps) - 1 and summary["value"] == pytest.approx(
+        float(steps[-1].rsplit("tip_rotation = ", 1)[1]), rel=1e-5
+    )

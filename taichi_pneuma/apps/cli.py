@@ -357,6 +357,20 @@ def build(scene, args: argparse.Namespace):
     return built
 
 
+def step_line(step, increments: int, units) -> str:
+    """The line printed after each step of a ramp: its chambers, the tip, the Newton iterations, cuts, residual."""
+    chambers = "  ".join(
+        f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}{units.suffix(PRESSURE)}"
+        for name, c in step.chambers.items()
+    )
+    tip = f"{step.tip_dy:+.4f}{units.suffix(LENGTH)}"
+    return (
+        f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {tip} "
+        f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  {step.cuts} cuts  "
+        f"residual {step.residual:.1e}"
+    )
+
+
 def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
     """Run the scene's schedule, printing a line per step, with a progress bar on a terminal only (the
     lines go through the bar, tqdm.write; piped or logged output gets the lines alone), and one `warning:`
@@ -388,16 +402,7 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
                 file=sys.stderr,
             )
         if not args.quiet:
-            chambers = "  ".join(
-                f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}{units.suffix(PRESSURE)}"
-                for name, c in step.chambers.items()
-            )
-            tip = f"{step.tip_dy:+.4f}{units.suffix(LENGTH)}"
-            tqdm.write(
-                f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {tip} "
-                f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  {step.cuts} cuts  "
-                f"residual {step.residual:.1e}"
-            )
+            tqdm.write(step_line(step, increments, units))
 
     with bar, signals.stopping() as interrupted:
         try:

@@ -57,6 +57,7 @@ from .cli import (
     result_stem,
     scene_file,
     scene_for,
+    step_line,
 )
 
 # ReachOptions' defaults (control/inverse.py; tests/test_reach.py checks they agree)
@@ -367,7 +368,13 @@ def run_output(args: argparse.Namespace) -> dict:
     out = prepare_directory(args.out)
     runtime.init(args.arch)
     built = build(scene, args)
-    result = reach_output(built, args.output, wanted, newton_options(args))
+    increments = built.scene.increments
+
+    def progress(step, positions, forces) -> None:
+        if not args.quiet:
+            print(f"{step_line(step, increments, scene.units)}  {args.output} = {step.row()[args.output]:.6g}")
+
+    result = reach_output(built, args.output, wanted, newton_options(args), progress=progress, max_cuts=args.max_cuts)
     commands = ", ".join(f"{name} {c:.6g}" for name, c in zip(scene.chamber_names, result.commands))
     summary = {
         "scene": scene.name,
@@ -381,6 +388,8 @@ def run_output(args: argparse.Namespace) -> dict:
         "seconds": result.seconds,
         "all_converged": result.found and result.run.converged,  # exit 1 when not reached
     }
+    if result.failure is not None:
+        summary["failure"] = result.failure
     summary["scene_sha256"] = scene_sha256(scene)
     # named by the output and value sought and what the run changed of the scene: no other run overwrites it
     # (the column made a plain file name: a chamber's or an obstacle's name in it may hold any character)

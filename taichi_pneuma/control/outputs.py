@@ -34,7 +34,7 @@ from ..fem.fields import ElementFields
 from ..scene.build import BuiltScene
 from ..solve.newton import NewtonOptions, NewtonSolver
 from ..solve.records import SOLVER_COLUMNS, Run
-from ..solve.simulate import RampInterrupted, run_schedule, settle, step_record
+from ..solve.simulate import MAX_CUTS, RampFailed, RampInterrupted, run_schedule, settle, step_record
 
 
 @dataclass
@@ -43,7 +43,8 @@ class OutputReach:
     of it (module docstring); value: the column at the result (the closest step's when not crossed, the one found
     inside the crossing step when jumped over); step: the (fractional) step of the schedule at which it is reached
     (or that value is); commands: the chambers' commands there; run: the ramp's steps up to the crossing (all of
-    them when not crossed); evaluations: the brentq evaluations (step, value); seconds: the wall time."""
+    them when not crossed); evaluations: the brentq evaluations (step, value); seconds: the wall time; failure: why
+    the ramp stopped before its end without crossing the value (its last increment had no equilibrium), or None."""
 
     column: str
     wanted: float
@@ -54,6 +55,7 @@ class OutputReach:
     run: Run
     evaluations: list[tuple[float, float]]
     seconds: float
+    failure: str | None = None
 
     def summary_line(self) -> str:
         """'reached: <column> = <value> at step <s> ...' or 'unreachable: ...': not crossed (the closest step), or
@@ -65,6 +67,11 @@ class OutputReach:
                 f"unreachable: {self.column} = {self.wanted:.6g} is not taken inside step {len(self.run.steps) - 1} of "
                 f"the schedule, which crosses it: {self.value:.6g} found at step {self.step:.4f}, not within {RTOL:g} "
                 f"of the step's change (the column jumps there, or the step re-solved does not cross it)"
+            )
+        if self.failure is not None:
+            return (
+                f"unreachable: the ramp stopped before {self.column} reached {self.wanted:.6g}; the closest it came "
+                f"is {self.value:.6g} at step {self.step:g} ({self.failure})"
             )
         return (
             f"unreachable: {self.column} = {self.wanted:.6g} is not crossed by the schedule; closest {self.value:.6g} "
@@ -85,10 +92,19 @@ def crossing(values: np.ndarray, wanted: float) -> int | None:
 
 
 def reach_output(
-    built: BuiltScene, column: str, wanted: float, options: NewtonOptions | None = None, xtol: float = 1e-6
+    built: BuiltScene,
+    column: str,
+    wanted: float,
+    options: NewtonOptions | None = None,
+    xtol: float = 1e-6,
+    progress=None,
+    max_cuts: int = MAX_CUTS,
 ) -> OutputReach:
     """The commands along built's schedule at which history column `column` equals `wanted` (module docstring);
-    a column the scene's history does not have, or one of the solver's, is refused, naming the ones it can be."""
+    a column the scene's history does not have, or one of the solver's, is refused, naming the ones it can be.
+    progress(step_record, positions, contact_force), if given, is called after each step of the ramp; max_cuts: the
+    cut-backs allowed per increment (simulate.settle). A ramp that stops (no equilibrium) before the column crosses
+    the value is not found: the closest step done, with why."""
     started = time.perf_counter()
     wanted = require_finite(column, wanted)
     schedule = built.scene.schedule
@@ -103,14 +119,21 @@ def reach_output(
             f"no value between steps): one of {', '.join(measures)}",
         )
         seen.append(float(row[column]))
+        if progress is not None:
+            progress(step, positions, forces)
 
     def crossed() -> bool:
         return crossing(np.array(seen), wanted) is not None
 
+    failure = None
     try:
-        run = run_schedule(built, options=options, progress=watch, stop=crossed)
+        run = run_schedule(built, options=options, progress=watch, stop=crossed, max_cuts=max_cuts)
     except RampInterrupted as stopped:
         run = stopped.result
+    except RampFailed as failed:  # no equilibrium past some step: what it reached is the answer
+        if not failed.result.steps:  # not even at rest
+            raise
+        run, failure = failed.result, str(failed)
     values = run.history[column]
     k = crossing(values, wanted)
     if k is None:
@@ -125,6 +148,7 @@ def reach_output(
             run,
             [],
             time.perf_counter() - started,
+            failure,
         )
     u0, c0, before = run.displacements[k - 1], schedule.commands(k - 1), run.steps[k - 1]
     solver = NewtonSolver(built.model, options)
