@@ -195,3 +195,19 @@ def test_a_3d_frame_too_small_for_its_layout_is_refused_before_the_solve(tmp_pat
     assert main(["--scene", "beam_3d", "--size", "320x160", "--out", str(tmp_path / "out")]) == 2
     assert "at least 384x192" in capsys.readouterr().err
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+@pytest.mark.parametrize("app", ["inflate", "reach", "sweep"])
+def test_list_scenes_prints_every_shipped_scene_a_line_each_and_exits_0(app, capsys):
+    """--list-scenes on every app: one line per shipped scene file, its name first, then its description's first
+    sentence (at most 100 characters)."""
+    import importlib
+
+    from taichi_pneuma.scene.shipped import shipped
+
+    with pytest.raises(SystemExit) as done:
+        importlib.import_module(f"taichi_pneuma.apps.{app}").main(["--list-scenes"])
+    assert done.value.code == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split()[0] for line in lines] == shipped() and len(lines) >= 20
+    assert all(20 < len(line) <= 121 for line in lines)

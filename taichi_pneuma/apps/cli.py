@@ -49,7 +49,22 @@ def app_parser(prog: str, doc: str) -> argparse.ArgumentParser:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    p.add_argument("--list-scenes", action=ListScenes, help="list the shipped scenes, a line each, and exit")
     return p
+
+
+class ListScenes(argparse.Action):
+    """--list-scenes: print every shipped scene with the first sentence of its description (scene/shipped.py), then
+    exit 0, as --version does."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from ..scene.shipped import listing
+
+        print(listing())
+        parser.exit()
 
 
 class GivenQuality(argparse.Action):

@@ -68,9 +68,7 @@ def parser() -> argparse.ArgumentParser:
     p = app_parser("pneuma-inflate", __doc__)
     p.add_argument(
         "--scene",
-        help="a scene file (TOML) or the name of a shipped scene (bidirectional, "
-        "finger_on_ground, pneunet_finger, reference_beam; 3D: beam_3d, beam_3d_ellipsoid, "
-        "pneunet_3d); the reference-beam flags "
+        help="a scene file (TOML) or the name of a shipped scene (--list-scenes lists them); the reference-beam flags "
         "(--cy --cx --growth --steps --E --nu --k --max-area --order) are then ignored",
     )
     p.add_argument("--cy", type=float, default=0.15, help="chamber centre height (above the neutral axis curls down)")

@@ -9,6 +9,8 @@ wheel.
 from __future__ import annotations
 
 import os
+import re
+import tomllib
 from pathlib import Path
 
 from ..errors import PneumaInputError, quoted
@@ -19,6 +21,19 @@ SHIPPED = Path(__file__).resolve().parent.parent / "scenes"
 def shipped(suffix: str = ".toml") -> list[str]:
     """The names of the shipped files with this suffix, without it."""
     return sorted(p.stem for p in SHIPPED.glob(f"*{suffix}"))
+
+
+def listing(width: int = 100) -> str:
+    """Every shipped scene, a line each: its name and the first sentence of its description, cut at a word to at
+    most `width` characters ('...' where cut)."""
+    rows = []
+    for name in shipped():
+        text = " ".join(str(tomllib.loads((SHIPPED / f"{name}.toml").read_text()).get("description", "")).split())
+        first = re.split(r"(?<! al)\. ", text)[0].rstrip(".")
+        if len(first) > width:
+            first = first[: width - 3].rsplit(" ", 1)[0].rstrip(",;:") + "..."
+        rows.append(f"{name:<20} {first}")
+    return "\n".join(rows)
 
 
 def find(name: str | os.PathLike, suffix: str = ".toml", what: str = "scene file") -> Path:
