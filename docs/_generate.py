@@ -8,8 +8,8 @@ from what they describe. At build time (docs/conf.py):
 - api/<package>.md and api/index.md: an automodule directive per module of each subpackage (pkgutil's walk),
   so that a new module is in the reference without an edit here.
 
-Committed (readable in the repository; `python docs/_generate.py` writes them again, tests/test_docs_generated.py
-checks they are current):
+Committed (readable in the repository, where the pages that include them are read too; `python docs/_generate.py`
+writes them again, tests/test_docs_generated.py checks they are current): the _generated/ pieces above, and
 
 - guide/scene_keys_2d.md and guide/scene_keys_3d.md: every key of the scene file, from
   scene/scenefile.key_reference() (the format's one declaration, scene/sceneformat.py), the 3D body and chamber
@@ -23,9 +23,11 @@ from __future__ import annotations
 
 import ast
 import importlib
+import os
 import pkgutil
 import re
 from pathlib import Path
+from unittest import mock
 
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
@@ -33,6 +35,8 @@ RESULTS = ROOT / "benchmarks" / "results"
 APPS = ("inflate", "steer", "reach", "sweep", "bench", "serve")
 SCENE_KEYS = {2: "guide/scene_keys_2d.md", 3: "guide/scene_keys_3d.md"}  # under docs/, committed
 REGENERATE = "python docs/_generate.py"
+GENERATED = DOCS / "_generated"  # the pieces other pages include (committed)
+HELP_WIDTH = 120  # the columns argparse formats an app's usage in (COLUMNS), the same on every machine
 
 # results table stem -> (page, title, (module file, function or None: the docstring that says what it measures),
 #                         the command that writes it again)
@@ -250,7 +254,9 @@ def app_page(name: str) -> str:
     import argparse
 
     parser = importlib.import_module(f"taichi_pneuma.apps.{name}").parser()
-    formatter = parser._get_formatter()
+    with mock.patch.dict(os.environ, {"COLUMNS": str(HELP_WIDTH)}):
+        formatter = parser._get_formatter()
+        usage = parser.format_usage().strip()
     rows = []
     for action in parser._actions:
         if isinstance(action, argparse._HelpAction) or not action.option_strings:
@@ -264,17 +270,23 @@ def app_page(name: str) -> str:
         help_text = formatter._expand_help(action) if action.help else ""
         help_text = re.sub(r"\s*\(default: .*\)$", "", help_text)
         rows.append([f"`{flag}`", default, help_text])
-    usage = parser.format_usage().strip()
     return f"```text\n{usage}\n```\n\n{parser.description}\n\n" + table(["flag", "default", "what it does"], rows)
 
 
+def committed_pages() -> dict[Path, str]:
+    """The committed generated pages (SCENE_KEYS and the _generated/ pieces) by path, with their text now."""
+    pages = {DOCS / name: scene_keys_page(dim) for dim, name in SCENE_KEYS.items()}
+    pages.update({GENERATED / f"app_{name}.md": app_page(name) for name in APPS})
+    pages.update({GENERATED / f"results_{page}.md": text for page, text in results_pages().items()})
+    return pages
+
+
 def write_committed() -> list[Path]:
-    """Write the committed generated pages (SCENE_KEYS); return their paths."""
-    paths = []
-    for dim, name in SCENE_KEYS.items():
-        write_if_changed(DOCS / name, scene_keys_page(dim))
-        paths.append(DOCS / name)
-    return paths
+    """Write the committed generated pages (committed_pages); return their paths."""
+    GENERATED.mkdir(exist_ok=True)
+    for path, text in committed_pages().items():
+        write_if_changed(path, text)
+    return list(committed_pages())
 
 
 def key_dimensions(keys: list) -> list[int]:

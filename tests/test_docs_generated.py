@@ -1,5 +1,6 @@
-"""The generated pages committed under docs/ (the scene-key tables, readable in the repository) are what
-docs/_generate.py makes of the code now: a key added to the scene format without running the generator fails here."""
+"""The generated pages committed under docs/ (the scene-key tables, the apps' flag tables and the benchmark result
+tables in docs/_generated/, readable in the repository) are what docs/_generate.py makes of the code and the tracked
+results now: a key or a flag added without running the generator fails here."""
 
 import importlib
 import sys
@@ -20,6 +21,14 @@ def test_each_committed_scene_key_table_is_what_the_generator_writes_now(dim):
     assert path.read_text() == generate.scene_keys_page(dim), (
         f"docs/{generate.SCENE_KEYS[dim]} is out of date: run `{generate.REGENERATE}` and commit it"
     )
+
+
+def test_each_committed_generated_piece_is_what_the_generator_writes_now():
+    pages = generate.committed_pages()
+    pieces = [path for path in pages if path.parent == generate.GENERATED]
+    assert len(pieces) == len(generate.APPS) + 4  # an app page each, four results pages
+    stale = [path.name for path in pieces if not path.exists() or path.read_text() != pages[path]]
+    assert not stale, f"docs/_generated/{', '.join(stale)} out of date: run `{generate.REGENERATE}` and commit them"
 
 
 def test_the_two_tables_list_every_key_once_the_3d_shapes_in_the_second():
