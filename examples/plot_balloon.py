@@ -12,6 +12,7 @@ there, keeping the steps it did. Here each ramp takes 12 increments instead of t
 import matplotlib.pyplot as plt
 
 import taichi_pneuma as tp
+from taichi_pneuma.render.drawing import show
 
 fig, ax = plt.subplots(figsize=(6, 4), layout="constrained")
 DRIVES = {"balloon_volume": 1.75, "balloon_syringe": 58.0, "balloon_pressure": 0.036}  # each scene's final command
@@ -26,4 +27,4 @@ for (name, final), style in zip(DRIVES.items(), ("-", "--", "o")):
     print(f"{name}: {len(result.steps)} steps, peak pressure {result.peak_pressure:.2f}")
 ax.set(xlabel="chamber area (volume per unit depth, mm^2)", ylabel="pressure (kPa)", title="one wall, three drives")
 ax.legend()
-plt.show()
+show("plot_balloon")

@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import taichi_pneuma as tp
-from taichi_pneuma.render.drawing import draw_surface
+from taichi_pneuma.render.drawing import draw_surface, show
 
 scene = tp.load_scene("beam_3d").with_values({"schedule.increments": 5, "chambers[0].keyframes": [[5, 2.0]]})
 result = tp.simulate(scene)
@@ -27,4 +27,4 @@ for i, step in enumerate((0, -1)):
     draw_surface(ax, result.positions[step], outer)
     ax.view_init(elev=20, azim=-60)
     ax.set_title("rest" if step == 0 else f"volume x{result.area_ratio[-1, 0]:.2f}: tip {result.tip_deflection:+.3f}")
-plt.show()
+show("plot_beam_3d")

@@ -18,7 +18,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import taichi_pneuma as tp
-from taichi_pneuma.render.drawing import draw_surface
+from taichi_pneuma.render.drawing import draw_surface, show
 
 COARSE = {"mesh.order": 1, "mesh.size": 8.0, "mesh.near_chambers": 4.0, "mesh.distance": 4.0}  # linear, coarse
 bending = tp.simulate(tp.load_scene("fiber_bending_3d").with_values(COARSE))
@@ -49,4 +49,4 @@ force.plot(blocked.pressure[:, 0], blocked.history["blocked_force"], "o-")
 force.set(xlabel="pressure p [kPa]", ylabel="blocked force [mN]", title="blocked_force_3d")
 for ax in (angle, force):
     ax.grid(alpha=0.3)
-plt.show()
+show("plot_fiber_bending")

@@ -12,7 +12,7 @@ Its history reports the cylinder's contact force at every step: the grip force a
 import matplotlib.pyplot as plt
 
 import taichi_pneuma as tp
-from taichi_pneuma.render.drawing import draw_obstacles, draw_result
+from taichi_pneuma.render.drawing import draw_obstacles, draw_result, show
 
 result = tp.simulate(tp.load_scene("gripper_2d"))
 pressure = result.pressure[:, 0]
@@ -30,4 +30,4 @@ body.set_title(f"p = {pressure[-1]:.0f} kPa")
 curve.plot(pressure, grip, "o-")
 curve.set(xlabel="pressure p [kPa]", ylabel="grip force per finger [kPa mm = N/m]", title="grip force")
 curve.grid(alpha=0.3)
-plt.show()
+show("plot_gripper")

@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import taichi_pneuma as tp
-from taichi_pneuma.render.drawing import draw_result
+from taichi_pneuma.render.drawing import draw_result, show
 
 # %%
 # Where the chamber sits
@@ -125,7 +125,7 @@ for label, E in (("stiff layer (5 x E)", 5e4), ("no layer (uniform E)", 1e4)):
 bend.set(xlabel="pressure", ylabel="bending angle (deg)")
 extend.set(xlabel="pressure", ylabel="tip extension dx")
 bend.legend()
-plt.show()
+show("plot_how_an_actuator_bends")
 
 # %%
 # The stiff layer holds the bottom back: the chambers' growth goes into bending instead of lengthening the

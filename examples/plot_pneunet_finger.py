@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import taichi_pneuma as tp
-from taichi_pneuma.render.drawing import draw_result
+from taichi_pneuma.render.drawing import draw_result, show
 
 scene = tp.load_scene("pneunet_finger")  # a scene shipped with the package, by name
 result = tp.simulate(scene)
@@ -30,4 +30,4 @@ ax.set_title(f"step {peak}: every chamber at p = {result.pressure[peak].max():.0
 fig, ax = plt.subplots(figsize=(6, 3), layout="constrained")
 ax.plot(np.arange(len(result.steps)), result.history["tip_rotation"], "o-")
 ax.set(xlabel="step", ylabel="tip rotation (deg)")
-plt.show()
+show("plot_pneunet_finger")

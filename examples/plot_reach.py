@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt
 
 import taichi_pneuma as tp
 from taichi_pneuma.control.inverse import Reacher
-from taichi_pneuma.render.drawing import draw_body
+from taichi_pneuma.render.drawing import draw_body, show
 
 tp.init("cpu")
 scene = tp.load_scene("bidirectional")
@@ -31,4 +31,4 @@ for ax, result in zip(axes, reached):
     ax.plot(*result.pose.tip, "o", ms=9, mfc="none", color="tab:orange", label="tip reached")
     ax.set_title(f"area ratios: {commands}; tip error {result.error:.1e}")
 axes[0].legend(loc="upper left")
-plt.show()
+show("plot_reach")

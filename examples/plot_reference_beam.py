@@ -13,7 +13,7 @@ import tempfile
 import matplotlib.pyplot as plt
 
 import taichi_pneuma as tp
-from taichi_pneuma.render.drawing import draw_result
+from taichi_pneuma.render.drawing import draw_result, show
 
 scene = tp.reference_scene(cy=0.15, steps=9, max_area=0.005)
 result = tp.simulate(scene)
@@ -36,4 +36,4 @@ with tempfile.TemporaryDirectory() as out:
 fig, ax = plt.subplots(figsize=(10, 7), layout="constrained")
 ax.imshow(plot)
 ax.set_axis_off()
-plt.show()
+show("plot_reference_beam")

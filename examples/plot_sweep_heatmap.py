@@ -15,6 +15,7 @@ import tempfile
 import matplotlib.pyplot as plt
 
 import taichi_pneuma as tp
+from taichi_pneuma.render.drawing import show
 from taichi_pneuma.study import LocalPool, Sweep, parse_vary
 
 if __name__ == "__main__":  # the workers are spawned processes, which import this file without running it
@@ -28,4 +29,4 @@ if __name__ == "__main__":  # the workers are spawned processes, which import th
     fig, ax = plt.subplots(figsize=(6, 4.5), layout="constrained")
     ax.imshow(image)
     ax.set_axis_off()
-    plt.show()
+    show("plot_sweep_heatmap")

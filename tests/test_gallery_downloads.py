@@ -1,7 +1,8 @@
 """Each gallery script runs on its own, as a reader who downloads it from the site runs it: the file alone in an empty
 folder, `python plot_x.py` there, with nothing of the repository on the path but the package (examples/ is not: a
-helper beside the scripts would be missing from the download). It must finish without a traceback and write
-nothing outside its folder: nothing beside it, and its temporary files (TMPDIR) removed."""
+helper beside the scripts would be missing from the download). It must finish without a traceback, write its
+figure there as PNG (no display: Agg) and nothing outside its folder: nothing beside it, and its temporary files
+(TMPDIR) removed."""
 
 import importlib.util
 import os
@@ -42,4 +43,7 @@ def test_a_downloaded_gallery_script_runs_alone_in_an_empty_folder(script, tmp_p
     assert run.returncode == 0, output[-3000:]
     assert "Traceback" not in output, output[-3000:]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["download", "tmp"]
+    pictures = sorted(p.name for p in folder.iterdir() if p.name != script.name)
+    assert pictures and pictures[0] == f"{script.stem}.png" and all(p.endswith(".png") for p in pictures), pictures
+    assert f"wrote {script.stem}.png" in run.stdout
     assert list(scratch.iterdir()) == [], "temporary files left behind"

@@ -1,12 +1,17 @@
 """Matplotlib pictures of a Result, for notebooks, scripts and the gallery: a 2D body coloured per element
 (draw_body, draw_result), a 2D scene's rigid obstacles (draw_obstacles), a 3D body's surface shaded by its
-normals (draw_surface). Each draws onto the matplotlib axes it is given, so it composes with other plots.
+normals (draw_surface). Each draws onto the matplotlib axes it is given, so it composes with other plots. show()
+ends a script: a window where there is a display, PNG files in the current folder where there is none.
 
 The apps draw the same states with the project's own renderer (videos and PNGs, frames.py and frames3d.py);
 these few functions keep a script that plots a run to its subject. They read a Result's attributes
 (positions, mesh, fields, scene, steps) and import nothing above this layer.
 """
 
+import sys
+from pathlib import Path
+
+import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
@@ -57,3 +62,21 @@ def draw_surface(ax, positions, faces, color=(0.55, 0.7, 0.9)):
     ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]), xlabel="x", ylabel="z", zlabel="y")
     ax.set_box_aspect(hi - lo)
     ax.set_axis_off()
+
+
+OFF_SCREEN = {"agg", "cairo", "pdf", "pgf", "ps", "svg", "template"}  # matplotlib's backends that draw no window
+
+
+def show(name: str) -> list[Path]:
+    """plt.show() where matplotlib draws in a window (or a notebook); where it draws off screen (a non-interactive
+    backend, as MPLBACKEND=Agg or no display gives), save every open figure in the current folder as name.png
+    (name_2.png, ... after the first), say so, and return their paths. Inside a docs build (sphinx-gallery, which
+    collects the figures itself) it only calls plt.show()."""
+    if "sphinx_gallery" in sys.modules or matplotlib.get_backend().lower() not in OFF_SCREEN:
+        plt.show()
+        return []
+    paths = [Path(f"{name}.png" if k == 0 else f"{name}_{k + 1}.png") for k in range(len(plt.get_fignums()))]
+    for number, path in zip(plt.get_fignums(), paths):
+        plt.figure(number).savefig(path)
+    print("wrote " + ", ".join(str(path) for path in paths))
+    return paths
