@@ -211,3 +211,17 @@ def test_list_scenes_prints_every_shipped_scene_a_line_each_and_exits_0(app, cap
     lines = capsys.readouterr().out.splitlines()
     assert [line.split()[0] for line in lines] == shipped() and len(lines) >= 20
     assert all(20 < len(line) <= 121 for line in lines)
+
+
+def test_a_preset_driven_past_the_strains_it_was_fitted_to_warns_once(tmp_path, capsys):
+    """pneunet_mm_kpa in Dragon Skin 10 (fitted to 0-200 % strain, a stretch of 3) to 40 kPa in 4 steps: its largest
+    stretch passes 3 on the way (3.9 at the end), and one warning line names the step, the preset and its range."""
+    flags = ["--scene", "pneunet_mm_kpa", "--set", "material.preset=dragon_skin_10", "--set", "schedule.increments=4"]
+    flags += [f for i in range(6) for f in ("--set", f"chambers[{i}].keyframes=[[4, 40.0]]")]
+    assert main([*flags, "--no-video", "--quiet", "--out", str(tmp_path)]) == 0
+    warnings = [line for line in capsys.readouterr().err.splitlines() if "fitted to" in line]
+    summary = json.loads(next(tmp_path.glob("*_summary.json")).read_text())
+    assert summary["max_stretch"] > 3.0 and len(warnings) == 1
+    assert (
+        "past 3 (engineering strain 200 %), the largest in the data preset 'dragon_skin_10' was fitted" in warnings[0]
+    )

@@ -389,7 +389,8 @@ def step_line(step, increments: int, units) -> str:
 def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
     """Run the scene's schedule, printing a line per step, with a progress bar on a terminal only (the
     lines go through the bar, tqdm.write; piped or logged output gets the lines alone), and one `warning:`
-    line (also with --quiet) at the first step whose largest principal stretch passes the scene's max_stretch;
+    line (also with --quiet) at the first step whose largest principal stretch passes the scene's max_stretch, and
+    one at the first past the range of data a material preset of the scene was fitted to (Scene.fitted_stretch);
     write each step's VTU as it is solved if vtk is given. Returns an api.Result.
 
     Raises RampFailed when an increment fails after its cuts, RampInterrupted (its .signum the signal)
@@ -403,6 +404,8 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
     increments, units, limit = built.scene.increments, built.scene.units, built.scene.max_stretch
     bar = tqdm(total=increments + 1, desc=label, unit="step", disable=True if args.quiet else None, leave=False)
     past: list[int] = []  # the step that first passed the scene's max_stretch
+    fit = built.scene.fitted_stretch()  # (stretch, preset): the range of a preset's data
+    extrapolated: list[int] = []  # the step that first passed it
 
     def progress(step, positions, contact_force):
         if vtk is not None:
@@ -414,6 +417,14 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
                 f"warning: step {step.step}: the largest principal stretch {step.max_stretch:.2f} is past "
                 f"max_stretch = {limit:g} (schedule.max_stretch): the material model is not meant for it, its "
                 f"results from here on are extrapolated",
+                file=sys.stderr,
+            )
+        if fit is not None and step.max_stretch > fit[0] and not extrapolated:
+            extrapolated.append(step.step)
+            tqdm.write(
+                f"warning: step {step.step}: the largest principal stretch {step.max_stretch:.2f} is past "
+                f"{fit[0]:g} (engineering strain {100 * (fit[0] - 1):.0f} %), the largest in the data preset "
+                f"{fit[1]!r} was fitted to: its stresses are extrapolated from here on (docs/materials.md)",
                 file=sys.stderr,
             )
         if not args.quiet:

@@ -44,6 +44,7 @@ class Preset:
     source: str
     valid: str
     data_sheet: str
+    fitted_stretch: float | None = None  # the largest uniaxial stretch of the data it was fitted to (None: not stated)
 
 
 MPA, KPA = 1e6, 1e3
@@ -54,6 +55,7 @@ PRESETS = {
         "[M] data, Yeoh fit (this project)",
         "uniaxial tension, engineering strain 0-200 % (rms error 0.44 kPa)",
         "[S] Shore 00-30; 100 % modulus 10 psi (69 kPa); tensile strength 200 psi (1.38 MPa); elongation 900 %",
+        3.0,  # engineering strain 200 %
     ),
     "ecoflex_00_50": Preset(
         "Ecoflex 00-50 (Smooth-On)",
@@ -61,6 +63,7 @@ PRESETS = {
         "[M] data, Yeoh fit (this project)",
         "uniaxial tension, engineering strain 0-200 % (rms error 0.65 kPa)",
         "[S] Shore 00-50; 100 % modulus 12 psi (83 kPa); tensile strength 315 psi (2.17 MPa); elongation 980 %",
+        3.0,  # engineering strain 200 %
     ),
     "dragon_skin_10": Preset(
         "Dragon Skin 10 Medium (Smooth-On)",
@@ -68,6 +71,7 @@ PRESETS = {
         "[M] data, Yeoh fit (this project)",
         "uniaxial tension, engineering strain 0-200 % (rms error 3.9 kPa)",
         "[S] Shore 10A; 100 % modulus 22 psi (152 kPa); tensile strength 475 psi (3.28 MPa); elongation 1000 %",
+        3.0,  # engineering strain 200 %
     ),
     "dragon_skin_30": Preset(
         "Dragon Skin 30 (Smooth-On)",
@@ -75,6 +79,7 @@ PRESETS = {
         "[M] data, Yeoh fit (this project)",
         "uniaxial tension, engineering strain 0-200 % (rms error 13 kPa)",
         "[S] Shore 30A; 100 % modulus 86 psi (593 kPa); tensile strength 500 psi (3.45 MPa); elongation 364 %",
+        3.0,  # engineering strain 200 %
     ),
     "elastosil_m4601": Preset(
         "Elastosil M 4601 A/B (Wacker)",
@@ -116,6 +121,11 @@ class PresetMaterial(MaterialForm):
     @classmethod
     def refusal(cls, extra: list[str], values: dict) -> str:
         return f"preset = {values['preset']!r} gives the law and its coefficients: drop {', '.join(extra)}"
+
+    @property
+    def fitted_stretch(self) -> float | None:
+        """The largest stretch of the data the preset was fitted to (Preset.fitted_stretch; None: not stated)."""
+        return PRESETS[self.preset].fitted_stretch
 
     def resolved(self, pascal: float | None) -> IsochoricMaterial:
         """The preset's material in a pressure unit of `pascal` Pa (None: the scene is unitless, which a preset

@@ -29,7 +29,7 @@ from ..io.keys import dotted
 from ..io.output import check_stem
 from ..io.units import NODAL_STIFFNESS, UNITLESS, Units, defaults, resolved, si_default
 from ..limits import Budget
-from ..materials import Material, MaterialForm
+from ..materials import Material, MaterialForm, PresetMaterial
 from ..terms import VOLUMETRIC, Clamp, Elasticity, NormalClamp
 from ..terms.base import Term
 from ..terms.chambers import Chamber, ChamberKind
@@ -200,6 +200,16 @@ class Scene:
         of io/keys.py: "cy", "E", "nu", "k", ...), validated like a scene file; a bad key or value raises
         PneumaInputError naming the key."""
         return self.with_values({key: value})
+
+    def fitted_stretch(self) -> tuple[float, str] | None:
+        """(the smallest stretch, the preset) of the presets its material and regions name that state the range of
+        data they were fitted to (materials/presets.py): past it their stresses are extrapolated; None if none."""
+        fits = [
+            (form.fitted_stretch, form.preset)
+            for form in (self.material, *(region.material for region in self.regions))
+            if isinstance(form, PresetMaterial) and form.fitted_stretch is not None
+        ]
+        return min(fits) if fits else None
 
     def with_values(self, values: dict) -> Scene:
         """A copy with several dotted keys (or short names) changed at once (validated once, after all are set)."""
