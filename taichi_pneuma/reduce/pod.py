@@ -23,11 +23,13 @@ def pod_basis(
     u, sigma, _ = np.linalg.svd(np.asarray(displacements, dtype=np.float64).T, full_matrices=False)
     cumulative = np.cumsum(sigma**2) / np.sum(sigma**2)
     nonzero = int(np.sum(sigma > sigma[0] * 1e-13))
-    if energy is not None:
-        require(0 < energy < 1, f"--energy = {energy!r} must lie in (0, 1)")
-        modes = min(int(np.searchsorted(cumulative, energy)) + 1, nonzero)
+    if modes is None:
+        require(energy is not None and 0 < energy < 1, f"--energy = {energy!r} must lie in (0, 1)")
+        count = min(int(np.searchsorted(cumulative, float(energy))) + 1, nonzero)  # type: ignore[arg-type]
+    else:
+        count = modes
     require(
-        1 <= modes <= nonzero,
-        f"--modes = {modes!r} must lie in [1, {nonzero}]: the snapshots span {nonzero} independent displacements",
+        1 <= count <= nonzero,
+        f"--modes = {count!r} must lie in [1, {nonzero}]: the snapshots span {nonzero} independent displacements",
     )
-    return np.ascontiguousarray(u[:, :modes]), sigma, float(cumulative[modes - 1])
+    return np.ascontiguousarray(u[:, :count]), sigma, float(cumulative[count - 1])
