@@ -10,7 +10,10 @@ it exactly). Each snapshot's block is scaled by its own force |V^T f(u_s)| so th
 (the rest state, with no force, is left out). The greedy active-set method of Lawson and Hanson, stopped at the
 tolerance, gives a sparse w: add the element whose column has the largest positive correlation with the residual,
 G_e^T (b - G w), solve the non-negative least squares problem on the elements taken (scipy.optimize.nnls), drop
-those it gives weight zero, and repeat. The residual decreases strictly, so at most m elements are ever taken.
+those it gives weight zero, and repeat. The residual decreases strictly, so at most m elements are ever taken. As each
+solve starts afresh, the elements are added in batches that grow with the set (the len(taken) / BATCH most correlated
+at once): a few more elements than one at a time, at a fraction of the time (pneunet_finger, 36 modes, 83 snapshots:
+97 s one at a time).
 
 The per-element forces f_e come from the same kernel as the whole term's (elastic_gradient), called on a mesh whose
 elements share no node: element e's node a is node k e + a of a copy of the nodes, so nothing is summed.
@@ -25,6 +28,8 @@ from scipy.optimize import nnls
 
 from ..terms.base import int32s, vertex_dofs
 from ..terms.elastic import Elasticity, elastic_gradient
+
+BATCH = 10  # sparse_nnls takes the len(taken) // BATCH most correlated elements at once (at least one)
 
 
 def element_forces(elastic: Elasticity, u: np.ndarray) -> np.ndarray:
@@ -70,10 +75,11 @@ def sparse_nnls(G: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
     while np.linalg.norm(residual) > target and len(taken) < G.shape[1]:
         correlation = G.T @ residual
         correlation[taken] = -np.inf
-        best = int(np.argmax(correlation))
-        if not correlation[best] > 0:
+        best = np.argsort(correlation)[::-1][: max(1, len(taken) // BATCH)]
+        best = best[correlation[best] > 0]
+        if not len(best):
             break
-        taken.append(best)
+        taken += best.tolist()
         values, _ = nnls(G[:, taken], b)
         w[:] = 0.0
         w[taken] = values

@@ -65,8 +65,9 @@ class SampledElasticity:
         m, n = self.element_basis.shape[:2]
         out = np.empty((m, n * n))
         elastic_hessian(*self._arguments(), int(psd_only), out)
-        blocks = out.reshape(m, n, n)
-        return np.einsum("eai,eaj->ij", self.element_basis, np.einsum("eab,ebj->eaj", blocks, self.element_basis))
+        product = out.reshape(m, n, n) @ self.element_basis  # H_e V_e (m, n, r)
+        r = self.basis.shape[1]
+        return self.element_basis.reshape(m * n, r).T @ product.reshape(m * n, r)
 
     def max_step(self, dq: np.ndarray) -> float:
         """Largest step fraction along V dq that keeps det F > 0 in the sampled elements."""
@@ -125,14 +126,18 @@ class ReducedModel:
         return np.sum(parts, axis=0), scale
 
     def hessian(self, psd_only: bool = False) -> np.ndarray:
-        """H_r (r, r), the terms' rank-one parts included (dense: r is small)."""
+        """H_r (r, r), the terms' rank-one parts included (dense: r is small). Each other term's sparse Hessian is
+        projected on the rows of V at the DOFs it touches only."""
         H = self.elastic.hessian(psd_only)
-        n = self.model.n_dofs
         for term in self.others:
             values = term.hessian_values(psd_only)  # first: a dynamic term's pattern is that of its last values
-            rows, cols = term.hessian_pattern()
             if len(values):
-                H += self.basis.T @ (sp.csr_matrix((values, (rows, cols)), shape=(n, n)) @ self.basis)
+                rows, cols = term.hessian_pattern()
+                touched, local = np.unique(np.concatenate([rows, cols]), return_inverse=True)
+                n = len(touched)
+                block = sp.csr_matrix((values, (local[: len(rows)], local[len(rows) :])), shape=(n, n))
+                V = self.basis[touched]
+                H += V.T @ (block @ V)
         for dofs, vector, c in (part for t in self.others for part in t.low_rank()):
             a = self.basis[dofs].T @ vector
             H += c * np.outer(a, a)
