@@ -75,6 +75,13 @@ class SampledElasticity:
         return inversion_step(self.dim, self.rest, self.u, dx, self.nodes, self.grads)
 
 
+def local_pattern(term) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(the DOFs a term's Hessian touches, its rows and columns numbered among them)."""
+    rows, cols = term.hessian_pattern()
+    touched, local = np.unique(np.concatenate([rows, cols]), return_inverse=True)
+    return touched, local[: len(rows)], local[len(rows) :]
+
+
 class ReducedModel:
     """The reduced energy of a built scene (the module docstring) on the basis V (N, r), with the elements E and
     weights w of its elastic term. training: the commands (S, c) of the equilibria it was trained on and their
@@ -100,6 +107,7 @@ class ReducedModel:
         self.weights = np.asarray(weights, dtype=np.float64)
         self.elastic = SampledElasticity(built.elastic, self.basis, self.elements, self.weights)
         self.others = [t for t in self.model.terms if t is not built.elastic]
+        self._patterns = {t: local_pattern(t) for t in self.others if not t.dynamic}  # fixed: found once
         self.training = training
 
     @property
@@ -132,10 +140,8 @@ class ReducedModel:
         for term in self.others:
             values = term.hessian_values(psd_only)  # first: a dynamic term's pattern is that of its last values
             if len(values):
-                rows, cols = term.hessian_pattern()
-                touched, local = np.unique(np.concatenate([rows, cols]), return_inverse=True)
-                n = len(touched)
-                block = sp.csr_matrix((values, (local[: len(rows)], local[len(rows) :])), shape=(n, n))
+                touched, rows, cols = self._patterns.get(term) or local_pattern(term)
+                block = sp.csr_matrix((values, (rows, cols)), shape=(len(touched), len(touched)))
                 V = self.basis[touched]
                 H += V.T @ (block @ V)
         for dofs, vector, c in (part for t in self.others for part in t.low_rank()):
