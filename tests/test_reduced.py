@@ -133,3 +133,24 @@ def test_a_changed_scene_refuses_an_old_reduced_model(trained, tmp_path):
     changed = coarse_scene(**{"material.E": 2e4}).build()
     with pytest.raises(PneumaInputError, match="was trained for another scene"):
         load_reduced(path, changed)
+
+
+def test_pneuma_reduce_trains_validates_and_saves(tmp_path, capsys):
+    from taichi_pneuma.apps.reduce import main
+
+    sets = [f"--set={key}={value}" for key, value in COARSE.items()]
+    assert main(["--scene", "reference_beam", *sets, "--modes", "4", "--samples", "3", "--held-out", "2",
+                 "--out", str(tmp_path)]) == 0  # fmt: skip
+    printed = capsys.readouterr().out
+    assert "basis: 4 modes keep" in printed and "time per equilibrium" in printed
+    (saved,) = tmp_path.glob("*_reduced.npz")
+    built = coarse_scene().build()
+    assert load_reduced(saved, built).n_modes == 4
+
+
+def test_pneuma_reduce_refuses_bad_flags_in_one_line(tmp_path, capsys):
+    from taichi_pneuma.apps.reduce import main
+
+    assert main(["--scene", "reference_beam", "--modes", "0", "--out", str(tmp_path)]) == 2
+    assert capsys.readouterr().err == "error: --modes = 0 must be >= 1\n"
+    assert not any(tmp_path.iterdir())
