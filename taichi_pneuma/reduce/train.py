@@ -52,10 +52,12 @@ def train(
     seed: int = 0,
     options: NewtonOptions | None = None,
     ecsw_tol: float = ECSW_TOL,
+    snapshots: Snapshots | None = None,
 ) -> Training:
     """Train a reduced model of the built scene (the module docstring) with `modes` modes or those keeping the energy
-    fraction `energy`, on the schedule and `samples` hypercube points (seed: the hypercube's)."""
-    snapshots = solve_snapshots(built, samples, seed, options)
+    fraction `energy`, on the schedule and `samples` hypercube points (seed: the hypercube's), or on the snapshots
+    given (then samples and seed are not used)."""
+    snapshots = snapshots or solve_snapshots(built, samples, seed, options)
     started = time.perf_counter()
     basis, sigma, kept = pod_basis(snapshots.displacements, modes, energy)
     pod_seconds = time.perf_counter() - started
