@@ -30,13 +30,19 @@ from pathlib import Path
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 RESULTS = ROOT / "benchmarks" / "results"
-APPS = ("inflate", "steer", "reach", "sweep", "bench", "serve")
+APPS = ("inflate", "steer", "reach", "sweep", "bench", "serve", "reduce")
 SCENE_KEYS = {2: "guide/scene_keys_2d.md", 3: "guide/scene_keys_3d.md"}  # under docs/, committed
 REGENERATE = "python docs/_generate.py"
 
 # results table stem -> (page, title, (module file, function or None: the docstring that says what it measures),
 #                         the command that writes it again)
 RESULTS_PAGES = {
+    "reduced": (
+        "performance",
+        "A reduced-order model (POD + ECSW) against the full model",
+        ("benchmarks/reduced.py", None),
+        "python benchmarks/reduced.py --full-3d",
+    ),
     "bench_startup": (
         "performance",
         "Start-up: kernels compile once; rendering against solving",
