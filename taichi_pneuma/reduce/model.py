@@ -75,6 +75,15 @@ class SampledElasticity:
         return inversion_step(self.dim, self.rest, self.u, dx, self.nodes, self.grads)
 
 
+def require_elementwise(built: BuiltScene) -> None:
+    """Refuse (one line) a scene whose elastic term is not a sum over elements: ECSW samples elements."""
+    require(
+        type(built.elastic) is Elasticity,
+        f"scene {built.scene.name!r}: a reduced model hyper-reduces element-wise elasticity only (mesh."
+        f"volumetric = 'element'); its volumetric = {built.scene.volumetric!r} couples the elements",
+    )
+
+
 def local_pattern(term) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(the DOFs a term's Hessian touches, its rows and columns numbered among them)."""
     rows, cols = term.hessian_pattern()
@@ -95,11 +104,7 @@ class ReducedModel:
         weights: np.ndarray,
         training: tuple[np.ndarray, np.ndarray] | None = None,
     ):
-        require(
-            type(built.elastic) is Elasticity,
-            f"scene {built.scene.name!r}: a reduced model hyper-reduces element-wise elasticity only (mesh."
-            f"volumetric = 'element'); its volumetric = {built.scene.volumetric!r} couples the elements",
-        )
+        require_elementwise(built)
         self.built = built
         self.model = built.model
         self.basis = np.ascontiguousarray(basis, dtype=np.float64)

@@ -23,7 +23,7 @@ from ..scene.build import BuiltScene
 from ..solve.newton import NewtonOptions, NewtonSolver
 from ..solve.simulate import settle
 from .ecsw import Sampling, ecsw
-from .model import ReducedModel
+from .model import ReducedModel, require_elementwise
 from .pod import pod_basis
 from .snapshots import Snapshots, command_box, hypercube, nearest, solve_snapshots
 from .solve import equilibrium, indicator
@@ -57,6 +57,7 @@ def train(
     """Train a reduced model of the built scene (the module docstring) with `modes` modes or those keeping the energy
     fraction `energy`, on the schedule and `samples` hypercube points (seed: the hypercube's), or on the snapshots
     given (then samples and seed are not used)."""
+    require_elementwise(built)  # before the full solves
     snapshots = snapshots or solve_snapshots(built, samples, seed, options)
     started = time.perf_counter()
     basis, sigma, kept = pod_basis(snapshots.displacements, modes, energy)
