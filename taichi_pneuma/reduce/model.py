@@ -21,6 +21,7 @@ import scipy.sparse as sp
 
 from ..errors import require
 from ..scene.build import BuiltScene
+from ..solve.linsolve import FixedPattern
 from ..terms.base import int32s, vertex_dofs
 from ..terms.elastic import Elasticity, elastic_energy, elastic_gradient, elastic_hessian, inversion_step
 
@@ -84,11 +85,14 @@ def require_elementwise(built: BuiltScene) -> None:
     )
 
 
-def local_pattern(term) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(the DOFs a term's Hessian touches, its rows and columns numbered among them)."""
-    rows, cols = term.hessian_pattern()
+def fixed_pattern(terms: list) -> tuple[np.ndarray, FixedPattern]:
+    """(the DOFs the terms' Hessians touch, the pattern of their triplets numbered among them), for terms whose
+    Hessian pattern is fixed."""
+    patterns = [t.hessian_pattern() for t in terms]
+    rows = np.concatenate([np.zeros(0, dtype=np.int64), *(r for r, _ in patterns)])
+    cols = np.concatenate([np.zeros(0, dtype=np.int64), *(c for _, c in patterns)])
     touched, local = np.unique(np.concatenate([rows, cols]), return_inverse=True)
-    return touched, local[: len(rows)], local[len(rows) :]
+    return touched, FixedPattern(local[: len(rows)], local[len(rows) :], len(touched))
 
 
 class ReducedModel:
@@ -112,7 +116,8 @@ class ReducedModel:
         self.weights = np.asarray(weights, dtype=np.float64)
         self.elastic = SampledElasticity(built.elastic, self.basis, self.elements, self.weights)
         self.others = [t for t in self.model.terms if t is not built.elastic]
-        self._patterns = {t: local_pattern(t) for t in self.others if not t.dynamic}  # fixed: found once
+        self._fixed_terms = [t for t in self.others if not t.dynamic and len(t.hessian_pattern()[0])]
+        self._fixed = fixed_pattern(self._fixed_terms)  # found once
         self.training = training
 
     @property
@@ -139,20 +144,29 @@ class ReducedModel:
         return np.sum(parts, axis=0), scale
 
     def hessian(self, psd_only: bool = False) -> np.ndarray:
-        """H_r (r, r), the terms' rank-one parts included (dense: r is small). Each other term's sparse Hessian is
-        projected on the rows of V at the DOFs it touches only."""
+        """H_r (r, r), the terms' rank-one parts included (dense: r is small). The other terms' sparse Hessians are
+        projected on the rows of V at the DOFs they touch only: the fixed terms' summed on their pattern, found once
+        (solve/linsolve.py FixedPattern), a dynamic term's (a contact's) on the pattern of its last values."""
         H = self.elastic.hessian(psd_only)
+        touched, pattern = self._fixed
+        if len(touched):
+            H += self._projected(touched, pattern.matrix([t.hessian_values(psd_only) for t in self._fixed_terms]))
         for term in self.others:
-            values = term.hessian_values(psd_only)  # first: a dynamic term's pattern is that of its last values
-            if len(values):
-                touched, rows, cols = self._patterns.get(term) or local_pattern(term)
-                block = sp.csr_matrix((values, (rows, cols)), shape=(len(touched), len(touched)))
-                V = self.basis[touched]
-                H += V.T @ (block @ V)
+            if term.dynamic:
+                values = term.hessian_values(psd_only)  # first: its pattern is that of its last values
+                rows, cols = term.hessian_pattern()
+                touched, local = np.unique(np.concatenate([rows, cols]), return_inverse=True)
+                n = len(touched)
+                H += self._projected(touched, sp.csr_matrix((values, (local[: len(rows)], local[len(rows) :])), (n, n)))
         for dofs, vector, c in (part for t in self.others for part in t.low_rank()):
             a = self.basis[dofs].T @ vector
             H += c * np.outer(a, a)
         return H
+
+    def _projected(self, touched: np.ndarray, block: sp.csr_matrix) -> np.ndarray:
+        """V_T^T B V_T for a sparse block B on the DOFs `touched` (V_T: those rows of V)."""
+        V = self.basis[touched]
+        return V.T @ (block @ V)
 
     def max_step(self, dq: np.ndarray) -> float:
         """Largest safe step fraction along dq: the sampled elements' and every other term's bound along V dq."""
