@@ -154,3 +154,12 @@ def test_pneuma_reduce_refuses_bad_flags_in_one_line(tmp_path, capsys):
     assert main(["--scene", "reference_beam", "--modes", "0", "--out", str(tmp_path)]) == 2
     assert capsys.readouterr().err == "error: --modes = 0 must be >= 1\n"
     assert not any(tmp_path.iterdir())
+
+
+def test_elasticity_that_couples_the_elements_is_refused_before_any_solve(monkeypatch):
+    import taichi_pneuma.reduce.train as training
+
+    monkeypatch.setattr(training, "solve_snapshots", lambda *args: pytest.fail("solved before refusing"))
+    nodal = {"mesh.volumetric": "nodal", "material.law": "neo_hookean", "material.C10": 1700.0, "material.K": 3e4}
+    with pytest.raises(PneumaInputError, match="volumetric = 'nodal' couples the elements"):
+        training.train(coarse_scene(**nodal).build(), modes=2)
