@@ -32,7 +32,7 @@ from unittest import mock
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 RESULTS = ROOT / "benchmarks" / "results"
-APPS = ("inflate", "steer", "reach", "sweep", "bench", "serve")
+APPS = ("inflate", "steer", "reach", "sweep", "bench", "serve", "reduce")
 SCENE_KEYS = {2: "guide/scene_keys_2d.md", 3: "guide/scene_keys_3d.md"}  # under docs/, committed
 REGENERATE = "python docs/_generate.py"
 GENERATED = DOCS / "_generated"  # the pieces other pages include (committed)
@@ -41,6 +41,12 @@ HELP_WIDTH = 120  # the columns argparse formats an app's usage in (COLUMNS), th
 # results table stem -> (page, title, (module file, function or None: the docstring that says what it measures),
 #                         the command that writes it again)
 RESULTS_PAGES = {
+    "reduced": (
+        "performance",
+        "A reduced-order model (POD + ECSW) against the full model",
+        ("benchmarks/reduced.py", None),
+        "python benchmarks/reduced.py --full-3d",
+    ),
     "bench_startup": (
         "performance",
         "Start-up: kernels compile once; rendering against solving",

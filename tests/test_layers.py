@@ -22,7 +22,7 @@ LAYERS = (
     ("solve",),
     ("render",),
     ("result",),
-    ("control",),
+    ("control", "reduce"),
     ("realtime",),
     ("api", "__init__"),
     ("study",),

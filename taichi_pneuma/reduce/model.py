@@ -1,0 +1,174 @@
+"""The reduced model: displacements u = V q on a basis V (N, r) with V^T V = I, and the energy
+
+    E_r(q) = sum_{e in E} w_e E_e(V q) + sum_t E_t(V q),
+
+its elastic part hyper-reduced to the sampled elements E with weights w (ecsw.py), every other term (chambers,
+clamp, rollers, effects) evaluated whole on the full field V q and projected. Its gradient and Hessian are
+
+    g_r = V^T g(V q),   H_r = V^T H(V q) V   (+ c (V^T a)(V^T a)^T for every rank-one part c a a^T),
+
+the elastic part of each from the sampled elements alone: sum_e w_e V_e^T f_e and sum_e w_e V_e^T H_e V_e, with the
+same kernels as the full term's (terms/elastic.py), called on arrays of the sampled elements only: their nodes
+(numbered afresh), rest gradients, quadrature weights times w_e, and parameters. With V = I and w = 1 it is the full
+model. The other terms still cost what they cost in the full model (each works on the full u); in 2D and in the
+shipped 3D scenes they are small next to the elastic term.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import require
+from ..scene.build import BuiltScene
+from ..solve.linsolve import FixedPattern
+from ..terms.base import int32s, vertex_dofs
+from ..terms.elastic import Elasticity, elastic_energy, elastic_gradient, elastic_hessian, inversion_step
+
+
+class SampledElasticity:
+    """sum_{e in E} w_e E_e(V q): the elastic term on its sampled elements (the module docstring)."""
+
+    def __init__(self, elastic: Elasticity, basis: np.ndarray, elements: np.ndarray, weights: np.ndarray):
+        nodes = elastic.nodes[elements]
+        self.vertices, local = np.unique(nodes, return_inverse=True)
+        self.law, self.dim = elastic.law, elastic.dim
+        self.nodes = int32s(local.reshape(nodes.shape))
+        self.rest = np.ascontiguousarray(elastic.config.rest[self.vertices])
+        self.grads = np.ascontiguousarray(elastic.grads[elements])
+        self.weights = np.ascontiguousarray(elastic.weights[elements] * np.asarray(weights)[:, None])
+        self.parameters = np.ascontiguousarray(elastic.parameters[elements])
+        self.basis = np.ascontiguousarray(basis[vertex_dofs(self.vertices, self.dim)])  # (n_E d, r)
+        m, k = self.nodes.shape
+        self.element_basis = self.basis[vertex_dofs(self.nodes.ravel(), self.dim)].reshape(m, k * self.dim, -1)
+        self.u = np.zeros_like(self.rest)
+
+    def set_coordinates(self, q: np.ndarray) -> None:
+        self.u[:] = (self.basis @ q).reshape(self.u.shape)
+
+    def _arguments(self):
+        return self.law, self.dim, self.rest, self.u, self.nodes, self.grads, self.weights, self.parameters
+
+    def energy(self) -> float:
+        return elastic_energy(*self._arguments())[0]
+
+    def min_determinant(self) -> float:
+        return elastic_energy(*self._arguments())[1]
+
+    def gradient(self) -> np.ndarray:
+        """sum_e w_e V_e^T f_e (r,)."""
+        out = np.empty_like(self.rest)
+        elastic_gradient(*self._arguments(), out)
+        return self.basis.T @ out.ravel()
+
+    def hessian(self, psd_only: bool) -> np.ndarray:
+        """sum_e w_e V_e^T H_e V_e (r, r): H_e exact, or projected to PSD per quadrature point."""
+        m, n = self.element_basis.shape[:2]
+        out = np.empty((m, n * n))
+        elastic_hessian(*self._arguments(), int(psd_only), out)
+        product = out.reshape(m, n, n) @ self.element_basis  # H_e V_e (m, n, r)
+        r = self.basis.shape[1]
+        return self.element_basis.reshape(m * n, r).T @ product.reshape(m * n, r)
+
+    def max_step(self, dq: np.ndarray) -> float:
+        """Largest step fraction along V dq that keeps det F > 0 in the sampled elements."""
+        dx = np.ascontiguousarray((self.basis @ dq).reshape(self.u.shape))
+        return inversion_step(self.dim, self.rest, self.u, dx, self.nodes, self.grads)
+
+
+def require_elementwise(built: BuiltScene) -> None:
+    """Refuse (one line) a scene whose elastic term is not a sum over elements: ECSW samples elements."""
+    require(
+        type(built.elastic) is Elasticity,
+        f"scene {built.scene.name!r}: a reduced model hyper-reduces element-wise elasticity only (mesh."
+        f"volumetric = 'element'); its volumetric = {built.scene.volumetric!r} couples the elements",
+    )
+
+
+def fixed_pattern(terms: list) -> tuple[np.ndarray, FixedPattern]:
+    """(the DOFs the terms' Hessians touch, the pattern of their triplets numbered among them), for terms whose
+    Hessian pattern is fixed."""
+    patterns = [t.hessian_pattern() for t in terms]
+    rows = np.concatenate([np.zeros(0, dtype=np.int64), *(r for r, _ in patterns)])
+    cols = np.concatenate([np.zeros(0, dtype=np.int64), *(c for _, c in patterns)])
+    touched, local = np.unique(np.concatenate([rows, cols]), return_inverse=True)
+    return touched, FixedPattern(local[: len(rows)], local[len(rows) :], len(touched))
+
+
+class ReducedModel:
+    """The reduced energy of a built scene (the module docstring) on the basis V (N, r), with the elements E and
+    weights w of its elastic term. training: the commands (S, c) of the equilibria it was trained on and their
+    coordinates q_s = V^T u_s (S, r), from which solves start (solve.py), or None."""
+
+    def __init__(
+        self,
+        built: BuiltScene,
+        basis: np.ndarray,
+        elements: np.ndarray,
+        weights: np.ndarray,
+        training: tuple[np.ndarray, np.ndarray] | None = None,
+    ):
+        require_elementwise(built)
+        self.built = built
+        self.model = built.model
+        self.basis = np.ascontiguousarray(basis, dtype=np.float64)
+        self.elements = np.asarray(elements, dtype=np.int64)
+        self.weights = np.asarray(weights, dtype=np.float64)
+        self.elastic = SampledElasticity(built.elastic, self.basis, self.elements, self.weights)
+        self.others = [t for t in self.model.terms if t is not built.elastic]
+        self._fixed_terms = [t for t in self.others if not t.dynamic and len(t.hessian_pattern()[0])]
+        self._fixed = fixed_pattern(self._fixed_terms)  # found once
+        self.training = training
+
+    @property
+    def n_modes(self) -> int:
+        return self.basis.shape[1]
+
+    def displacements(self, q: np.ndarray) -> np.ndarray:
+        """u = V q as (n, d)."""
+        return (self.basis @ q).reshape(self.model.config.u.shape)
+
+    def set_coordinates(self, q: np.ndarray) -> None:
+        """Put the model at q: the sampled elements at V q, and the full model (the other terms) at V q."""
+        self.elastic.set_coordinates(q)
+        self.model.set_displacements(self.displacements(q))
+
+    def energy(self) -> float:
+        return self.elastic.energy() + float(sum(t.energy() for t in self.others))
+
+    def gradient(self) -> tuple[np.ndarray, float]:
+        """(g_r (r,), its force scale): the scale is the sum of the parts' norms, at least the model's force_floor
+        (as EnergyModel.gradient)."""
+        parts = [self.elastic.gradient()] + [self.basis.T @ t.gradient().ravel() for t in self.others]
+        scale = max(sum(float(np.linalg.norm(p)) for p in parts), self.model.force_floor)
+        return np.sum(parts, axis=0), scale
+
+    def hessian(self, psd_only: bool = False) -> np.ndarray:
+        """H_r (r, r), the terms' rank-one parts included (dense: r is small). The other terms' sparse Hessians are
+        projected on the rows of V at the DOFs they touch only: the fixed terms' summed on their pattern, found once
+        (solve/linsolve.py FixedPattern), a dynamic term's (a contact's) on the pattern of its last values."""
+        H = self.elastic.hessian(psd_only)
+        touched, pattern = self._fixed
+        if len(touched):
+            H += self._projected(touched, pattern.matrix([t.hessian_values(psd_only) for t in self._fixed_terms]))
+        for term in self.others:
+            if term.dynamic:
+                values = term.hessian_values(psd_only)  # first: its pattern is that of its last values
+                rows, cols = term.hessian_pattern()
+                touched, local = np.unique(np.concatenate([rows, cols]), return_inverse=True)
+                n = len(touched)
+                H += self._projected(touched, sp.csr_matrix((values, (local[: len(rows)], local[len(rows) :])), (n, n)))
+        for dofs, vector, c in (part for t in self.others for part in t.low_rank()):
+            a = self.basis[dofs].T @ vector
+            H += c * np.outer(a, a)
+        return H
+
+    def _projected(self, touched: np.ndarray, block: sp.csr_matrix) -> np.ndarray:
+        """V_T^T B V_T for a sparse block B on the DOFs `touched` (V_T: those rows of V)."""
+        V = self.basis[touched]
+        return V.T @ (block @ V)
+
+    def max_step(self, dq: np.ndarray) -> float:
+        """Largest safe step fraction along dq: the sampled elements' and every other term's bound along V dq."""
+        dx = self.displacements(dq)
+        return min([self.elastic.max_step(dq), *(t.max_step(dx) for t in self.others)])
