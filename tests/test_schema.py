@@ -558,3 +558,26 @@ def test_scene_reaches_no_module_that_imports_it_back():
                 reached.add(module)
                 todo.append(module)
     assert "taichi_pneuma.scene.sceneformat" in reached and "taichi_pneuma.scene.build" not in reached
+
+
+def test_setting_one_of_two_exclusive_keys_replaces_the_other_and_none_unsets_a_key():
+    """fiber_bending_3d's helix gives its pitch: setting its angle replaces the pitch (and back); a region given by
+    a group takes a box instead; None unsets a key (its pitch alone: the helix then has neither, one clear error);
+    setting both of a pair in one edit is refused as the file would be."""
+    scene = tp.load_scene("fiber_bending_3d")
+    path = scene.fibers[0].path
+    assert path.pitch == 4.0 and path.angle is None
+    angled = scene.with_values({"fibers[0].path.angle": 80})
+    assert (angled.fibers[0].path.pitch, angled.fibers[0].path.angle) == (None, 80)
+    back = angled.with_values({"fibers[0].path.pitch": 5.0})
+    assert (back.fibers[0].path.pitch, back.fibers[0].path.angle) == (5.0, None)
+    swapped = scene.with_values({"fibers[0].path.pitch": None, "fibers[0].path.angle": 70})
+    assert (swapped.fibers[0].path.pitch, swapped.fibers[0].path.angle) == (None, 70)
+    with pytest.raises(tp.PneumaInputError, match="pitch = None, angle = None: give exactly one of pitch and angle"):
+        scene.with_values({"fibers[0].path.pitch": None})
+    with pytest.raises(tp.PneumaInputError, match="give exactly one of pitch and angle"):
+        scene.with_values({"fibers[0].path.pitch": 5.0, "fibers[0].path.angle": 70})
+    layered = tp.load_scene("pneunet_3d")
+    assert layered.regions[0].group == "layer"
+    boxed = layered.with_values({"material.regions[0].box": [0.0, 0.0, -1.0, 4.0, 0.15, 1.0]})
+    assert boxed.regions[0].group is None and boxed.regions[0].box == (0.0, 0.0, -1.0, 4.0, 0.15, 1.0)

@@ -36,8 +36,15 @@ from .targets import MAX_TARGETS, Target
 PAIR, BOX, TRIPLE = "[x, y]", "[x0, y0, x1, y1]", "[x, y, z]"
 CLAMP_STIFFNESS = 1e9  # the [clamp] stiffness key's default, in SI (Pa, 2D; Pa m, 3D)
 MESH_SIZES = ("size", "near_chambers", "distance", "through_wall")  # the [mesh] keys of gmsh_mesher.MeshSizes, in order
-# two ways to give the edge length near the chambers: setting one (--set, with_values) drops the other
-REPLACED = {"mesh.near_chambers": "mesh.through_wall", "mesh.through_wall": "mesh.near_chambers"}
+# keys that exclude a sibling (two ways to give one thing; the pattern's [] any index): setting one (--set, --vary,
+# with_values) drops the other where it is not set too
+EXCLUSIVE = (
+    ("mesh", "near_chambers", "through_wall"),  # the edge length near the chambers
+    ("fibers[].path", "pitch", "angle"),  # a helix's pitch or its angle
+    ("fibers[].path", "turns", "extent"),  # a helix's length in turns or along its axis
+    ("material.regions[]", "box", "group"),  # a region's elements
+)
+REPLACED = {f"{table}.{a}": b for table, one, other in EXCLUSIVE for a, b in ((one, other), (other, one))}
 POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3", unit=LENGTH))
 PLANAR_BODIES = {
     "rectangle": record(

@@ -377,13 +377,15 @@ def edited(root: Table, obj, values: dict, replaced: dict | None = None):
     a bad key or value raises one PneumaInputError naming the key. A value that switches a Variant's tag
     (chambers[0].control = "pressure"), or one of a table's tags (material.law, material.preset), first drops the
     old kind's keys (switched), then every value is set: a key of the old kind set in the same edit is kept,
-    and refused if the new kind lacks it. replaced: a top-level table's key -> the key of the same table that it
-    replaces (two ways to give one thing), dropped where the first is set and the second is not."""
+    and refused if the new kind lacks it. A value None unsets its key (its default, or nothing). replaced: a key's
+    pattern (indices as []) -> the name of its sibling that it replaces (two ways to give one thing), dropped where
+    the key is set and the sibling is not."""
     data = root.write_table(obj)
-    for key, other in (replaced or {}).items():
-        if key in values and other not in values:
-            table, _, name = other.partition(".")
-            data.get(table, {}).pop(name, None)
+    for key in values:
+        other = (replaced or {}).get(re.sub(r"\[\d+\]", "[]", key))
+        sibling = f"{key.rpartition('.')[0]}.{other}" if other else None
+        if sibling is not None and sibling not in values:
+            set_key(data, sibling, None)
     for key, value in values.items():
         switched(root, data, parse_key(key), plain(value))
     for key, value in values.items():
@@ -462,7 +464,8 @@ def parse_key(key: str) -> list:
 
 
 def set_key(data: dict, key: str, value) -> None:
-    """Set a dotted key in nested data; missing tables on the way are created (e.g. a new effect)."""
+    """Set a dotted key in nested data; missing tables on the way are created (e.g. a new effect); None unsets it
+    (a key of a table: removed, if there)."""
     parts = parse_key(key)
     node, path = data, ""
     for i, part in enumerate(parts):
@@ -476,7 +479,9 @@ def set_key(data: dict, key: str, value) -> None:
             if not last and part not in node:
                 node[part] = {}
             path += f".{part}" if path else part
-        if last:
+        if last and value is None and isinstance(node, dict):
+            node.pop(part, None)
+        elif last:
             node[part] = value
         else:
             node = node[part]
