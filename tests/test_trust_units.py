@@ -527,7 +527,11 @@ def test_a_3d_force_in_mm_kpa_is_in_mn_on_the_plot_in_the_csv_and_in_the_summary
     )
     result = tp.simulate(scene)
     assert result.history["blocked_force"][-1] > 0
-    assert history_panels(result)[-1].y_label == "blocked force [mN]"
+    panel = history_panels(result)[-1]
+    assert panel.y_label == "force [mN]"
+    curves = {label: y for label, _, y, _ in panel.curves}  # the net force and the plate's own (here the same)
+    assert list(curves) == ["net (blocked force)", "plate: sum of |f|"]
+    assert curves["plate: sum of |f|"][-1] == pytest.approx(result.history["plate.magnitude"][-1])
     header = result.history_csv().splitlines()[0].split(",")
     assert {"plate.fy [mN]", "clamp.fy [mN]", "clamp.mz [mN mm]", "blocked_force [mN]"} <= set(header)
     assert result.summary()["units"]["force"] == "mN"

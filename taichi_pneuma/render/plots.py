@@ -5,8 +5,10 @@ Candidate panels, in this order:
     pressure against area ratio              each chamber's curve p(A / A_rest)
     chamber area ratio against the command   left out where it is the command (y = x) or the first panel again
     chamber pressure against the command     (the command is the other of area ratio and pressure)
-    tip deflection, bending angle (and twist in 3D), axial extension, blocked force (with obstacles):
-        the actuator's responses, against the pressure p of the chamber that drives the run, else the step
+    tip deflection, bending angle (and twist in 3D), axial extension, the forces on the obstacles (with
+        obstacles: the net force, blocked_force, and each obstacle's contact force, the sum of the nodes' |f|,
+        a gripper's grip): the actuator's responses, against the pressure p of the chamber that drives the run,
+        else the step
 
 "The command" is the chambers' commanded value (area ratio, pressure, displaced volume, ...) when every
 chamber gets the same command at every step (command_axis); otherwise the step. A chamber's curve of its own
@@ -110,6 +112,9 @@ def response_axis(result) -> tuple[np.ndarray, str]:
     return p, result.scene.units.label("pressure p" + which, PRESSURE)
 
 
+OBSTACLE_COLOURS = ("tab:blue", "tab:green", "tab:red", "tab:purple", "tab:brown")  # each obstacle's force curve
+
+
 def history_panels(result) -> list[Panel]:
     """The panels of the module docstring that have something to draw for this run."""
     units, kinds, history, names = (
@@ -164,15 +169,13 @@ def history_panels(result) -> list[Panel]:
             one("tip_dx"),
         ),
     ]
-    if "blocked_force" in history:
-        panels.append(
-            Panel(
-                "force on the obstacles",
-                xr_label,
-                units.label("blocked force", in_dimension(FORCE, result.mesh.dim)),
-                one("blocked_force"),
-            )
-        )
+    if "blocked_force" in history:  # the net force, and each obstacle's contact force (a gripper's grip)
+        curves = one("blocked_force", "net (blocked force)")
+        for k, obstacle in enumerate(result.scene.obstacles):
+            name = f"{obstacle.name}.magnitude"
+            curves += one(name, f"{obstacle.name}: sum of |f|", OBSTACLE_COLOURS[k % len(OBSTACLE_COLOURS)])
+        force = units.label("force", in_dimension(FORCE, result.mesh.dim))
+        panels.append(Panel("force on the obstacles", xr_label, force, curves))
     return [p for p in panels if p.curves]
 
 
