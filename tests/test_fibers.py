@@ -189,13 +189,28 @@ def test_the_quadratic_tetrahedron_splits_into_eight_positive_eighths():
 
 @pytest.mark.parametrize(
     "point, where",
-    [((0.0, 0.1, 0.0), "in the chamber"), ((2.0, 0.0, 0.0), "past the right face"), ((0.0, 0.4 + 1e-6, 0.0), "above")],
+    [((0.0, 0.1, 0.0), "in the chamber"), ((2.0, 0.0, 0.0), "past the right face"), ((0.0, 0.6, 0.0), "above")],
 )
 def test_a_fiber_point_outside_the_body_is_refused_naming_the_fiber(point, where):
+    """In the chamber's middle, 0.25 and 0.2 outside the box: more than a quarter of its pieces' least height (0.1
+    to 0.14) from them, so not snapped."""
     mesh = box_with_cavity()
     fiber = Fiber(Line((-1.0, -0.2, 0.0), point), 1e3, area=0.01, name="weft")
     with pytest.raises(PneumaInputError, match=r"fiber 'weft': .*outside the body.*bounding box is \[-1.75, -0.4"):
         cords(mesh, fiber)
+
+
+def test_points_just_outside_the_mesh_snap_onto_it_within_a_quarter_of_its_piece():
+    """1e-6 and 0.02 above the box's top face (its pieces' least height 0.1 or more): each embedded on a piece of the
+    top, moved straight down onto the face; 0.2 above is refused."""
+    mesh = box_with_cavity()
+    points = np.array([[0.1, 0.4 + 1e-6, 0.05], [-0.6, 0.42, 0.1]])
+    nodes, weights = embed(mesh, points, "thread")
+    assert np.all(weights >= 0) and np.allclose(weights.sum(axis=1), 1.0)
+    placed = np.einsum("pi,pid->pd", weights, mesh.vertices[nodes])
+    assert np.allclose(placed[:, 1], 0.4) and np.allclose(placed[:, [0, 2]], points[:, [0, 2]], atol=1e-12)
+    with pytest.raises(PneumaInputError, match=r"thread: 1 of its 1 points lie outside the body"):
+        embed(mesh, [[0.0, 0.6, 0.0]], "thread")
 
 
 def test_a_3d_layout_in_a_2d_body_is_refused():

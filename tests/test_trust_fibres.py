@@ -15,6 +15,7 @@ import pytest
 from solid_meshes import box_with_cavity, scene_of
 from test_untrusted_input import QUICK, error_line, files_under, reference_with
 
+import taichi_pneuma as tp
 from taichi_pneuma import limits, runtime
 from taichi_pneuma.apps import inflate, reach, serve, steer, sweep
 from taichi_pneuma.apps.inflate import main
@@ -331,3 +332,20 @@ def test_an_isochoric_law_whose_bulk_modulus_is_fifty_times_its_shear_modulus_wa
     )
     assert locking_note(nodal, mesh) == ""
     assert locking_note(scene_of(mesh, [pressure], 1, Material(1e4, 0.495)), mesh) != ""
+
+
+def test_a_thread_on_the_round_outer_wall_is_snapped_onto_the_faceted_surface_not_refused():
+    """fiber_bending_3d's thread moved from mid-wall (radius 7) onto the outer wall (radius 8, the body's own): the
+    mesh's straight facets lie inside the round wall (by up to h^2 / 8R), so most of its points fall just outside
+    them. Each is snapped onto the surface: every embedded point lies on the body's pieces (weights >= 0), within
+    the facets' sagitta (0.5 mm here) inside radius 8, none outside it; radius 9 is still refused."""
+    scene = tp.load_scene("fiber_bending_3d")
+    built = scene.with_values({"fibers[0].path.radius": 8.0}).build()
+    (cords,) = [t for t in built.model.terms if t.name == "fibers"]
+    assert np.all(cords.weights >= 0)
+    points = np.einsum("pi,pid->pd", cords.weights, built.mesh.vertices[cords.nodes])
+    round_part = points[:, 1] > 2.0 + 1e-6  # the half above the flat face (y = 2 there: the path's centre)
+    radius = np.hypot(points[round_part, 1] - 2.0, points[round_part, 2])
+    assert radius.max() <= 8.0 + 1e-9 and radius.min() >= 7.5
+    with pytest.raises(PneumaInputError, match=r"fiber 'thread': .* points lie outside the body"):
+        scene.with_values({"fibers[0].path.radius": 9.0}).build()

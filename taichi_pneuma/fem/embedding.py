@@ -9,11 +9,16 @@ inner octahedron cut along its diagonal from the middle of edge 20 (node 6) to t
 
 Location: the pieces' centroids in a k-d tree; for each point the barycentric coordinates
 lambda = [1 - sum(T^-1 (p - X_0)), T^-1 (p - X_0)], T = [X_1 - X_0, ..., X_d - X_0], in its k nearest pieces
-(k doubled for the points not yet found, up to every piece). Each piece's distance outside is
+(k four times larger for the points not yet found, up to MAX_CANDIDATES; CHUNK points at a time, so that the
+arrays stay small whatever the number of points). Each piece's distance outside is
 max_i(-lambda_i / |grad lambda_i|) (lambda_i over the height of corner i, exact for one violated facet); a point
-whose nearest piece is farther out than TOLERANCE times the body's bounding-box diagonal lies outside the body (a
-chamber's cavity is outside it too) and is refused; a point on the boundary is inside. The chosen piece's
-coordinates are clipped to >= 0 and renormalised (a move of at most that tolerance).
+within TOLERANCE times the body's bounding-box diagonal of its nearest piece is inside (on the boundary included).
+
+embed() also takes a point just outside the mesh, as a point on a curved surface lies outside the straight-sided
+pieces that approximate it (a thread on a round outer wall: the sagitta of a facet of side h on a radius R is
+h^2 / 8R). It is moved onto the nearest point of the body's surface (its straight pieces) where that is at most SNAP
+times that piece's shortest side away; farther out, it lies outside the body (a chamber's cavity is outside it too)
+and is refused.
 """
 
 from __future__ import annotations
@@ -24,7 +29,9 @@ from ..errors import require
 from .self_intersection import surface_pieces
 
 TOLERANCE = 1e-9  # of the body's bounding-box diagonal
+SNAP = 0.25  # embed() snaps a point this close to the surface, in its nearest surface piece's shortest side
 FIRST_CANDIDATES = 8
+MAX_CANDIDATES = 512  # pieces searched per point at most (the nearest by centroid)
 CHUNK = 1024  # fibre segments first_crossing tests at once: their candidate pairs' arrays stay small
 TET_P2_SPLIT = (
     (0, 4, 6, 7),
@@ -69,36 +76,96 @@ def _search(mesh, points: np.ndarray) -> tuple:
     tree = cKDTree(corners.mean(axis=1))
     best = np.zeros(len(points), dtype=np.int64)
     outside = np.full(len(points), np.inf)
-    todo, k = np.arange(len(points)), FIRST_CANDIDATES
-    while len(todo):
-        k = min(k, len(simplices))
-        _, near = tree.query(points[todo], k=k)
-        near = near.reshape(len(todo), k)
-        _, distance = _coordinates(inverse, corners[:, 0], norms, points[todo], near)
-        pick = np.argmin(distance, axis=1)
-        better = distance[np.arange(len(todo)), pick] < outside[todo]
-        best[todo[better]] = near[better, pick[better]]
-        outside[todo[better]] = distance[better, pick[better]]
-        if k == len(simplices):
-            break
-        todo, k = todo[outside[todo] > tolerance], 4 * k
+    most = min(MAX_CANDIDATES, len(simplices))
+    for start in range(0, len(points), CHUNK):
+        todo, k = np.arange(start, min(start + CHUNK, len(points))), FIRST_CANDIDATES
+        while len(todo):
+            k = min(k, most)
+            _, near = tree.query(points[todo], k=k)
+            near = near.reshape(len(todo), k)
+            _, distance = _coordinates(inverse, corners[:, 0], norms, points[todo], near)
+            pick = np.argmin(distance, axis=1)
+            better = distance[np.arange(len(todo)), pick] < outside[todo]
+            best[todo[better]] = near[better, pick[better]]
+            outside[todo[better]] = distance[better, pick[better]]
+            if k == most:
+                break
+            todo, k = todo[outside[todo] > tolerance], 4 * k
     return simplices, corners, inverse, norms, best, outside, tolerance
 
 
-def inside(mesh, points) -> np.ndarray:
-    """Whether each point (P, d) lies in the body (on its boundary included; a chamber's cavity is outside)."""
-    *_, outside, tolerance = _search(mesh, np.asarray(points, dtype=float).reshape(-1, mesh.dim))
-    return outside <= tolerance
+def nearest_on_segments(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The point of segment ab nearest p, row by row (k, d)."""
+    e = b - a
+    t = np.clip(np.sum((p - a) * e, axis=1) / np.maximum(np.sum(e * e, axis=1), 1e-300), 0.0, 1.0)
+    return a + t[:, None] * e
+
+
+def nearest_on_triangles(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """The point of triangle abc nearest p, row by row (k, 3): p's foot on the triangle's plane where it lies inside
+    the triangle (barycentric coordinates >= 0), else the nearest point of its three sides."""
+    u, v, w = b - a, c - a, p - a
+    uu, uv, vv, wu, wv = (np.sum(x * y, axis=1) for x, y in ((u, u), (u, v), (v, v), (w, u), (w, v)))
+    denominator = np.maximum(uu * vv - uv * uv, 1e-300)
+    s, t = (vv * wu - uv * wv) / denominator, (uu * wv - uv * wu) / denominator
+    foot = a + s[:, None] * u + t[:, None] * v
+    sides = np.stack([nearest_on_segments(p, x, y) for x, y in ((a, b), (b, c), (c, a))], axis=1)
+    side = sides[np.arange(len(p)), np.argmin(np.linalg.norm(sides - p[:, None], axis=2), axis=1)]
+    return np.where(((s >= 0) & (t >= 0) & (s + t <= 1))[:, None], foot, side)
+
+
+def onto_surface(mesh, points: np.ndarray, candidates: int = 16) -> tuple[np.ndarray, np.ndarray]:
+    """(feet (P, d), reach (P,)): each point's nearest point on the body's surface (its straight pieces,
+    self_intersection.surface_pieces; among the `candidates` nearest by centroid) and SNAP times that piece's
+    shortest side, the farthest a point is snapped onto it."""
+    from scipy.spatial import cKDTree
+
+    facets = surface_pieces(mesh)
+    corners = mesh.vertices[facets]  # (f, 3, d); a 2D segment as (a, b, b)
+    k = min(candidates, len(facets))
+    _, near = cKDTree(corners.mean(axis=1)).query(points, k=k)
+    near = near.reshape(len(points), k)
+    p = np.repeat(points, k, axis=0)
+    a, b, c = (corners[near.ravel(), i] for i in range(3))
+    feet = (nearest_on_segments(p, a, b) if mesh.dim == 2 else nearest_on_triangles(p, a, b, c)).reshape(
+        len(points), k, -1
+    )
+    pick = np.argmin(np.linalg.norm(feet - points[:, None], axis=2), axis=1)
+    rows = np.arange(len(points))
+    sides = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
+    shortest = np.where(sides > 0, sides, np.inf).min(axis=1)
+    return feet[rows, pick], SNAP * shortest[near[rows, pick]]
+
+
+def inside(mesh, points, snapping: bool = False) -> np.ndarray:
+    """Whether each point (P, d) lies in the body (on its boundary included; a chamber's cavity is outside); with
+    snapping, or within the reach of its nearest point on the surface that embed() snaps it by (onto_surface)."""
+    points = np.asarray(points, dtype=float).reshape(-1, mesh.dim)
+    *_, outside, tolerance = _search(mesh, points)
+    found = outside <= tolerance
+    if snapping and not found.all():
+        feet, reach = onto_surface(mesh, points[~found])
+        found[~found] = np.linalg.norm(feet - points[~found], axis=1) <= reach
+    return found
 
 
 def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
     """(nodes (P, d + 1) int64, weights (P, d + 1) float64): each point (P, d) as the barycentric weights of the
-    corners of a linear piece of the mesh that contains it; a point outside the body is a PneumaInputError naming
-    `what`, the point and the body's bounding box."""
+    corners of a linear piece of the mesh that contains it, after a point just outside is snapped onto the surface
+    (onto_surface: the module docstring); a point farther outside the body is a PneumaInputError naming `what`, the
+    point and the body's bounding box."""
     points = np.asarray(points, dtype=float).reshape(-1, mesh.dim)
     simplices, corners, inverse, norms, best, outside, tolerance = _search(mesh, points)
     low, high = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
-    bad = np.flatnonzero(outside > tolerance)
+    out = np.flatnonzero(outside > tolerance)
+    bad = out
+    if len(out):  # snapped onto the surface where near it, then found again
+        feet, reach = onto_surface(mesh, points[out])
+        near = np.linalg.norm(feet - points[out], axis=1) <= reach
+        moved = points.copy()
+        moved[out[near]] = feet[near]
+        *_, best, outside, _ = _search(mesh, moved)
+        bad, points = np.flatnonzero(outside > tolerance), moved
     require(
         len(bad) == 0,
         f"{what}: {len(bad)} of its {len(points)} points lie outside the body (or in a chamber), the first "

@@ -278,7 +278,7 @@ class Fiber:
         how = "leaves the body at"
         if crossing is None:  # both ends on the boundary (a chamber's wall, say): the segment's middle tells
             middles = (first + second) / 2
-            out = np.flatnonzero(~inside(mesh, middles))
+            out = np.flatnonzero(~inside(mesh, middles, snapping=True))  # as near the surface as embed() allows
             crossing, how = (int(out[0]), middles[out[0]]) if len(out) else None, "runs outside the body at its middle"
         if crossing is not None:
             s, x = crossing
