@@ -1,6 +1,7 @@
 """ParaView files beside the body: the fibres, sheets and obstacles as parts of the PVD, read back with meshio and
 checked against the terms' own data computed here; and the PVD's timestep rule."""
 
+import dataclasses
 import xml.etree.ElementTree as ET
 
 import meshio
@@ -106,6 +107,18 @@ def test_the_2d_obstacle_outline_follows_its_keyframes(gripper):
         x = current(grid)
         assert np.linalg.norm(x - centre, axis=1) == pytest.approx(16.0, rel=1e-12)
         assert np.all(x[:, 2] == 0) and np.all(grid.cell_data["obstacle"][0] == 0)
+
+
+def test_a_held_objects_height_moves_its_outline_as_in_the_npz(gripper, tmp_path):
+    """A held object's height (the history's '<name>.dy') moves its outline as it moves obstacle_positions."""
+    result, _ = gripper
+    steps = [dataclasses.replace(s, extra={**s.extra, "object.dy": -0.25 * s.step}) for s in result.steps]
+    held = dataclasses.replace(result, steps=steps)
+    files = read_pvd(VtkSeries(tmp_path, "h", result.built).write_all(held))
+    for (_, paths), centre in zip(files.items(), held.obstacle_positions()[:, 0]):
+        x = current(meshio.read(paths["obstacles"]))
+        assert np.linalg.norm(x - centre, axis=1) == pytest.approx(16.0, rel=1e-12)
+    assert centre[1] == 30.0 - 3.0 - 0.75
 
 
 def test_fibres_are_lines_at_their_embedded_points_with_their_tension(tmp_path):
