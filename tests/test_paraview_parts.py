@@ -9,13 +9,12 @@ import numpy as np
 import pytest
 
 import taichi_pneuma as tp
+from taichi_pneuma.fem.fiber_paths import Line
 from taichi_pneuma.render.obstacle_surfaces import surface
 from taichi_pneuma.render.paraview import VtkSeries, pressure_timesteps
-from taichi_pneuma.terms.fibers import Cords
+from taichi_pneuma.terms.fibers import Cords, Fiber
 from taichi_pneuma.terms.membrane import Membrane
 from taichi_pneuma.terms.obstacle_shapes import Box, Capsule, Cylinder, Plane, Sphere
-
-PARTS = ("body", "fibers", "sheets", "obstacles")
 
 
 def read_pvd(path):
@@ -151,6 +150,23 @@ def test_fibres_are_lines_at_their_embedded_points_with_their_tension(tmp_path):
         sheets = meshio.read(files["sheets"])
         check_sheet_triangles(sheets, terms(result, Membrane), positions, scene.layers[0].E)
     assert tension.max() > 0 and np.count_nonzero(tension == 0) > 0  # some cords taut, some slack
+
+
+def test_2d_fibres_are_lines_in_the_plane_with_the_terms_tension(tmp_path):
+    """2D: a fibre below the reference beam's axis, its lines at z = 0, tension (per unit depth; the scene has no
+    units: bare names) the term's."""
+    fiber = Fiber(Line((-1.7, -0.3), (1.7, -0.3)), 1e5, area=0.01)
+    result = tp.simulate(dataclasses.replace(tp.reference_scene(max_area=0.05, steps=3), fibers=(fiber,)))
+    steps = read_pvd(VtkSeries(tmp_path, "r", result.built).write_all(result))
+    assert list(steps) == [0.0, 1.0, 2.0]  # an area ratio drives it: the step
+    (cords,) = terms(result, Cords)
+    for (_, files), positions in zip(steps.items(), result.positions):
+        grid = meshio.read(files["fibers"])
+        x = grid.points + grid.point_data["displacement"]
+        assert np.all(x[:, 2] == 0)
+        assert np.allclose(x[:, :2], np.einsum("pi,pid->pd", cords.weights, positions[cords.nodes]), atol=1e-12)
+        assert np.array_equal(grid.cell_data["tension"][0], cords.tension(positions - result.mesh.vertices))
+    assert grid.cell_data["tension"][0].max() > 0
 
 
 def check_sheet_triangles(grid, membranes, positions, E):
