@@ -29,7 +29,7 @@ index in the cell field chamber, -1 on the tetrahedra, and NaN in the other cell
 - field data: the step's history row (per chamber <name>.command/.area/.area_ratio/.pressure, tip_dx,
   tip_dy, tip_rotation, solver figures), one value each.
 In a scene with units every array's name carries its unit (io/units.py): "displacement [mm]",
-"stress [kPa]", "main.pressure [kPa]", "tension [N]".
+"stress [kPa]", "main.pressure [kPa]", a 3D fibre's "tension [mN]".
 The text of each file: io/vtk.py.
 """
 

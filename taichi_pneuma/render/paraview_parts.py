@@ -103,8 +103,9 @@ class Sheets(Part):
 
 
 class Obstacles(Part):
-    """Every obstacle's surface or outline, one dataset; a plane's patch (outline) reaches twice the body's size
-    beyond the body's centre (its point)."""
+    """Every obstacle's surface or outline, one dataset. A plane reaches twice the body's largest extent: in 3D
+    its patch's half-size, about the point of the plane nearest the body's centre; in 2D its segment's half-length,
+    about its point."""
 
     name = "obstacles"
 
