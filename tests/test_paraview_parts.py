@@ -95,6 +95,21 @@ def test_sheet_segments_carry_their_stress(gripper):
     assert np.abs(stress).max() > 100  # the sheet is stretched: kPa
 
 
+def test_an_earlier_runs_part_files_are_removed_when_a_series_starts(gripper, tmp_path):
+    result, _ = gripper
+    folder = tmp_path / "g_vtk"
+    folder.mkdir()
+    for name in ("g_0007.vtu", "g_sheets_0007.vtu", "g_obstacles_0007.vtu", "g_fibers_0007.vtu", "other_0007.vtu"):
+        (folder / name).write_text("old")
+    VtkSeries(tmp_path, "g", result.built).write(result.steps[0], result.positions[0])
+    assert sorted(p.name for p in folder.iterdir()) == [
+        "g_0000.vtu",
+        "g_obstacles_0000.vtu",
+        "g_sheets_0000.vtu",
+        "other_0007.vtu",
+    ]
+
+
 def test_the_2d_obstacle_outline_follows_its_keyframes(gripper):
     result, steps = gripper
     for (_, files), step in zip(steps.items(), result.steps):
