@@ -8,6 +8,7 @@ from __future__ import annotations
 import base64
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Protocol
 from xml.sax.saxutils import quoteattr
 
@@ -39,6 +40,16 @@ class CellFamily(Protocol):
 
     @property
     def vtk_cell(self) -> int: ...
+
+
+@dataclass(frozen=True)
+class VtkCell:
+    """A VTK cell type by its number, for the cells that are no element family's: the parts beside the body."""
+
+    vtk_cell: int
+
+
+LINE, POLY_LINE, TRIANGLE, POLYGON = (VtkCell(n) for n in (3, 4, 5, 7))  # a polyline and a polygon: any node count
 
 
 def vtu_text(
@@ -78,9 +89,13 @@ def vtu_text(
     )
 
 
-def pvd_text(entries: list[tuple[float, str]]) -> str:
-    """A PVD collection of (timestep, relative file name) entries."""
-    rows = "".join(f'    <DataSet timestep="{t!r}" part="0" file={quoteattr(name)}/>\n' for t, name in entries)
+def pvd_text(entries: Sequence[tuple[float, int, str, str]]) -> str:
+    """A PVD collection of (timestep, part, name, relative file name) entries: the files of one timestep with parts
+    0, 1, ... are read as the blocks of one multiblock dataset, each named by its name attribute."""
+    rows = "".join(
+        f'    <DataSet timestep="{t!r}" part="{part}" name={quoteattr(name)} file={quoteattr(file)}/>\n'
+        for t, part, name, file in entries
+    )
     return (
         f'<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n{rows}'
         f"  </Collection>\n</VTKFile>\n"

@@ -165,12 +165,24 @@ class Cords(Term):
     def gradient(self) -> np.ndarray:
         return self._gradient(self._own)
 
+    def points(self, x: np.ndarray) -> np.ndarray:
+        """The embedded points' values (P, d) of nodal values x (n, d): their positions of the nodes' positions,
+        their displacements of the nodes' displacements."""
+        return np.einsum("pi,pid->pd", self.weights, x[self.nodes])
+
+    def lengths(self, u: np.ndarray) -> np.ndarray:
+        """Each segment's current length l at displacements u (rest and displacement parts summed apart)."""
+        rest, moved = self.points(self.config.rest), self.points(u)
+        first, second = self.segments.T
+        return np.linalg.norm((rest[second] - rest[first]) + (moved[second] - moved[first]), axis=1)
+
+    def tension(self, u: np.ndarray) -> np.ndarray:
+        """Each segment's axial force at displacements u: E A (l / L0 - 1) where taut (l > L0), 0 where slack."""
+        return self.stiffness * np.maximum(self.lengths(u) / self.rest_length - 1.0, 0.0)
+
     def _taut(self, u: np.ndarray) -> np.ndarray:
         """Whether each segment is taut (l > L0) at displacements u."""
-        rest, moved = (np.einsum("pi,pid->pd", self.weights, x[self.nodes]) for x in (self.config.rest, u))
-        first, second = self.segments.T
-        r = (rest[second] - rest[first]) + (moved[second] - moved[first])
-        return np.linalg.norm(r, axis=1) > self.rest_length
+        return self.lengths(u) > self.rest_length
 
     def choose_branches(self, dx: np.ndarray | None) -> int:
         """Taut or slack as at u + dx; the count of segments whose branch changes."""

@@ -215,6 +215,39 @@ def membrane_hessian(
                 out[c, n * (d * a + i) + d * b + k] = W * h
 
 
+@ti.kernel
+def membrane_stress(
+    d: ti.template(),
+    rest: Nodal,
+    u: Nodal,
+    cells: Cells,
+    inverse: Table,
+    lam: ti.f64,
+    mu: ti.f64,
+    wrinkles: ti.i32,
+    stress: Table,
+    stretch: Scalars,
+):
+    """stress[c] = the cell's Cauchy stress F S F^T / J (J = sqrt(det F^T F), its area ratio in 3D, its stretch in
+    2D; the thickness taken unchanged) as a row-major 3 x 3 (zero past d), stretch[c] = its largest principal
+    stretch sqrt(1 + 2 g1)."""
+    for c in range(cells.shape[0]):
+        m = ti.static(d - 1)
+        F, _shapes = strain_state(rest, u, cells, inverse, c, d)
+        _psi, S, _tangent, _n, _p = membrane_law(F, lam, mu, wrinkles, m)
+        C = F.transpose() @ F
+        J = ti.sqrt(C[0, 0])
+        if ti.static(m == 2):
+            J = ti.sqrt(C[0, 0] * C[1, 1] - C[0, 1] * C[1, 0])
+        g1, _g2, _nn, _pp = principal(0.5 * (C - ti.Matrix.identity(ti.f64, m)), m)
+        sigma = F @ S @ F.transpose() / J
+        for i, j in ti.static(ti.ndrange(3, 3)):
+            stress[c, 3 * i + j] = 0.0
+            if ti.static(i < d and j < d):
+                stress[c, 3 * i + j] = sigma[i, j]
+        stretch[c] = ti.sqrt(1.0 + 2.0 * g1)
+
+
 def rest_shapes(rest: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(D = Dm^-1 flattened (f, m^2), the rest measures A0 (3D) or L0 (2D) (f,)) of cells (f, d) of the rest
     positions, Dm in each cell's own orthonormal tangent basis (module docstring)."""
@@ -272,6 +305,17 @@ class Membrane(Term):
 
     def hessian_pattern(self) -> tuple[np.ndarray, np.ndarray]:
         return self._rows, self._cols
+
+    def stress(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(the Cauchy stress (f, 3, 3) of each cell at displacements u, F S F^T / J: the force per current length
+        of the sheet over its rest thickness, zero past d; the largest principal stretch (f,)) (membrane_stress)."""
+        stress, stretch = np.empty((len(self.cells), 9)), np.empty(len(self.cells))
+        c = self.config
+        u = np.ascontiguousarray(u, dtype=np.float64)
+        membrane_stress(
+            self.dim, c.rest, u, self.cells, self.inverse, self.lam, self.mu, int(self.wrinkles), stress, stretch
+        )
+        return stress.reshape(-1, 3, 3), stretch
 
     def hessian_values(self, psd_only: bool = False) -> np.ndarray:
         n = self.dim * self.dim
