@@ -188,14 +188,21 @@ class Result(Run):
     def save(
         self, directory, stem: str | None = None, vtk: bool = True, extra: dict | None = None, plot: bool = True
     ) -> list[Path]:
-        """Write the result files under directory, named <stem>_* (default: the scene's name): history CSV,
+        """Write the result files under directory, named <stem>_* (default: the scene's name, or, where the folder
+        holds another scene's files of that name (its <name>_scene.toml differs), the name and the first 8 hex
+        digits of this scene's scene_sha256: a changed scene never overwrites another's results): history CSV,
         states npz, the plot PNG (unless plot is False), the scene TOML, the summary JSON (with `extra`
         merged in) and, unless vtk is False, the ParaView files <stem>.pvd + <stem>_vtk/*.vtu. Returns the
         paths written. They are written under the stem's lock (output.lock_stem: another process writing
         the same stem there is refused), and a signal meanwhile waits for them (signals.holding)."""
         from .render.paraview import VtkSeries
 
-        out, stem = prepare_directory(directory), stem or self.scene.name
+        out = prepare_directory(directory)
+        if stem is None:
+            stem, text = self.scene.name, self.scene.to_toml()
+            other = out / f"{stem}_scene.toml"
+            if other.is_file() and other.read_text() != text:
+                stem = f"{stem}_{scene_sha256(self.scene)[:8]}"
         with holding(), lock_stem(out, stem):  # a signal meanwhile waits for the files; no other run writes them
             written = self.save_history(out, stem)
             if vtk:

@@ -141,3 +141,19 @@ def test_plots_are_against_the_command_when_all_chambers_share_it(name, label):
     x, x_label = command_axis(command, [c.kind.quantity for c in scene.controls])
     assert x_label == label
     assert np.array_equal(x, np.arange(scene.increments + 1) if label == "step" else command[:, 0])
+
+
+def test_two_api_runs_of_changed_scenes_saved_in_one_folder_keep_both_results(tmp_path):
+    """Result.save's default stem is the scene's name, unless the folder holds another scene's files of that name:
+    then the name and 8 hex digits of the scene's hash. Saving the same scene again replaces its own files."""
+    from taichi_pneuma.result import scene_sha256
+
+    base = tp.reference_scene(cy=0.15, steps=2, max_area=0.02)
+    first = tp.simulate(base)
+    second = tp.simulate(base.with_values({"material.E": 2e4}))
+    names = [p.name for p in first.save(tmp_path, vtk=False, plot=False)]
+    assert names[-2:] == [f"{base.name}_scene.toml", f"{base.name}_summary.json"]
+    other = [p.name for p in second.save(tmp_path, vtk=False, plot=False)]
+    assert other[-1] == f"{base.name}_{scene_sha256(second.scene)[:8]}_summary.json"
+    assert [p.name for p in first.save(tmp_path, vtk=False, plot=False)] == names
+    assert (tmp_path / f"{base.name}_summary.json").exists() and len(list(tmp_path.glob("*_summary.json"))) == 2
