@@ -171,6 +171,19 @@ def test_the_pages_controls_reach_the_session_and_the_session_moves_the_sliders_
         view.stop()
 
 
+def test_a_body_at_rest_is_one_colour_and_the_scale_keeps_a_minimum_width(tmp_path):
+    """At rest the stretch is 1 to round-off: the body is drawn in one colour (the scale at least 1e-3 of the field
+    wide, not its round-off spread over the whole map)."""
+    view = view_of("pneunet_finger", out=tmp_path)
+    try:
+        colours = view.colours()
+        lo, hi = view._range
+        assert np.ptp(colours[:, :3].astype(int), axis=0).max() <= 2  # of 255: one colour, to the map's rounding
+        assert hi - lo >= 0.99e-3 * max(abs(lo), abs(hi))
+    finally:
+        view.stop()
+
+
 def test_the_page_draws_the_obstacles_and_moves_them_with_their_offset(tmp_path):
     """gripper_2d's cylinder is an outline in the z = 0 plane, its radius's circle about its centre; a node that
     follows its obstacle's offset (a moving obstacle's, as a schedule plays)."""

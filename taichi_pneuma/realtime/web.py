@@ -48,6 +48,7 @@ FPS_WINDOW = 2.0  # seconds of frames the frame rate is measured over
 IDLE_SECONDS = 0.02  # the loop's pause when nothing changed (a settled state)
 RED = (200, 40, 40)
 HEIGHTS = (100, 4000)  # the notebook iframe's heights allowed (pixels)
+MIN_RANGE = 1e-3  # the colour scale spans at least this fraction of the field's size
 SLIDER_SLACK = 1e-6  # a slider's value is taken this fraction of its range outside it (the client's rounding)
 TARGET_ROOM = 10.0  # a target for the tip is taken within this many body extents of the rest body
 # the messages viser's client sends for this page's controls (sliders, box, menu, button, the target's gizmo, the
@@ -355,7 +356,9 @@ class WebView:
             self.saved.content = f"not saved: {exc}"
 
     def colours(self) -> np.ndarray:
-        """RGBA (n, 4) uint8 per node: the field on the colour map over the range it has spanned; FACE for none."""
+        """RGBA (n, 4) uint8 per node: the field on the colour map over the range it has spanned, at least
+        MIN_RANGE of its size wide (1 where the field is 0: a body at rest is one colour, not its round-off spread
+        over the whole map); FACE for none."""
         values = self.session.field(self.field)
         if values is None:
             rgb = np.tile(np.array(FACE), (self.session.mesh.n_vertices, 1))
@@ -363,7 +366,10 @@ class WebView:
             lo, hi = float(values.min()), float(values.max())
             if self._range is not None:
                 lo, hi = min(lo, self._range[0]), max(hi, self._range[1])
-            self._range = (lo, hi)
+            size = max(abs(lo), abs(hi))
+            widen = max(0.0, (MIN_RANGE * size if size > 0 else 1.0) - (hi - lo)) / 2
+            self._range = (lo - widen, hi + widen)
+            lo, hi = self._range
             rgb = colormap(values, lo, hi)
         return (np.column_stack([rgb, np.ones(len(rgb))]) * 255).round().astype(np.uint8)
 
