@@ -66,6 +66,9 @@ def test_roller_selects_a_line_or_a_box():
     assert Roller((1.0, 0.0), box=(0.5, -1, 1.5, 2)).select(vertices).tolist() == [1, 3]
     with pytest.raises(PneumaInputError, match="holds no mesh vertex"):
         Roller((1.0, 0.0), (5.0, 0.0)).select(vertices)
+    # a plane through the body between its nodes: the message says why and what to do instead
+    with pytest.raises(PneumaInputError, match="its plane cuts through the body, where the mesher puts nodes only by"):
+        Roller((1.0, 0.0), (0.5, 0.0)).select(vertices)
 
 
 @pytest.mark.parametrize(

@@ -181,6 +181,14 @@ class Roller:
         else:
             chosen = in_box(vertices, self.box, what)
         nodes = np.flatnonzero(chosen)
+        if self.point is not None and not len(nodes):
+            side = (vertices - np.asarray(self.point, dtype=np.float64)) @ self.unit_normal
+            require(
+                not (side.min() < 0 < side.max()),
+                f"{what} holds no mesh vertex: its plane cuts through the body, where the mesher puts nodes only by "
+                f"chance; model the part on one side of it, with the roller on the cut face (a half model: "
+                f"docs/3d.md), or put the roller on a face of the body",
+            )
         require(len(nodes) > 0, f"{what} holds no mesh vertex")
         return nodes
 
