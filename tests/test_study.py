@@ -102,6 +102,8 @@ def test_the_plot_shows_the_rows_tip_deflections():
     assert np.allclose(mesh[0], [-0.1, 0.1, 0.2]) and np.allclose(mesh[1, :2], [-0.2, 0.2])
     assert mesh.mask[1, 2]  # the failed run has no colour, and is marked
     assert list(zip(*heat.axes[0].lines[-1].get_data())) == [(0.2, 2)]
+    assert list(heat.axes[0].get_xticks()) == [-0.1, 0.1, 0.2] and list(heat.axes[0].get_yticks()) == [1, 2]
+    assert [t.get_text() for t in heat.axes[0].get_xticklabels()] == ["-0.1", "0.1", "0.2"]  # on the grid's values
 
 
 # --- bad input -----------------------------------------------------------------------------------

@@ -26,6 +26,9 @@ def _positions(values: list) -> tuple[np.ndarray, list | None]:
     return np.array([cells.index(cell(v)) for v in values], dtype=float), [shown(first[c]) for c in cells]
 
 
+GRID_TICKS = 12  # a heat map's numeric axis with at most this many grid values is ticked at them
+
+
 def _edges(centres: np.ndarray) -> np.ndarray:
     """Cell edges around sorted cell centres (midpoints; one centre gets a cell of its own size)."""
     if len(centres) == 1:
@@ -86,6 +89,9 @@ def study_figure(rows: list[dict], keys: list[str], sampled: bool = False, label
             grid = np.full((len(ys), len(xs)), np.nan)
             grid[np.searchsorted(ys, y[:n]), np.searchsorted(xs, x[:n])] = tip
             image = ax.pcolormesh(_edges(xs), _edges(ys), np.ma.masked_invalid(grid), **colours)
+            for values, labelled, ticks in ((xs, xl, ax.set_xticks), (ys, yl, ax.set_yticks)):
+                if not labelled and len(values) <= GRID_TICKS:  # a numeric axis: its ticks on the grid's values
+                    ticks(values, [f"{v:g}" for v in values])
             if grid.size <= 64:
                 for (i, j), value in np.ndenumerate(grid):
                     if np.isfinite(value):
