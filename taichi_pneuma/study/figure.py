@@ -89,9 +89,9 @@ def study_figure(rows: list[dict], keys: list[str], sampled: bool = False, label
             grid = np.full((len(ys), len(xs)), np.nan)
             grid[np.searchsorted(ys, y[:n]), np.searchsorted(xs, x[:n])] = tip
             image = ax.pcolormesh(_edges(xs), _edges(ys), np.ma.masked_invalid(grid), **colours)
-            for values, labelled, ticks in ((xs, xl, ax.set_xticks), (ys, yl, ax.set_yticks)):
+            for values, labelled, set_ticks in ((xs, xl, ax.set_xticks), (ys, yl, ax.set_yticks)):
                 if not labelled and len(values) <= GRID_TICKS:  # a numeric axis: its ticks on the grid's values
-                    ticks(values, [f"{v:g}" for v in values])
+                    set_ticks(values, [f"{v:g}" for v in values])
             if grid.size <= 64:
                 for (i, j), value in np.ndenumerate(grid):
                     if np.isfinite(value):
