@@ -325,3 +325,17 @@ def test_interactive_window_resolves_on_slider_moves_and_spins(xvfb_display, fin
     assert calls == [[0.0], [0.0], [0.0], [0.5], [0.5], [1.0]]  # solve: every frame, at the commands on screen
     assert summary["solves"] == 3 and summary["frames"] == 5
     assert summary["azimuth"] == pytest.approx(30.0 + 25.0)
+
+
+def test_an_offscreen_ggui_view_leaves_no_imgui_ini_in_the_current_folder(tmp_path, monkeypatch):
+    """imgui writes its settings (imgui.ini) into the current folder when a window closes: an offscreen view
+    removes it, and keeps one that was there before."""
+    monkeypatch.chdir(tmp_path)
+    view = ggui_or_skip(64, 64)
+    view.render(np.array([[[-1.0, -1, 0], [1, -1, 0], [0, 1, 0]]]), np.ones((1, 3, 3)), Camera(), (1, 1, 1))
+    view.close()
+    assert not (tmp_path / "imgui.ini").exists()
+    (tmp_path / "imgui.ini").write_text("[Window][mine]\n")
+    view = ggui_or_skip(64, 64)
+    view.close()
+    assert (tmp_path / "imgui.ini").exists()  # the user's own, not removed (imgui may rewrite it)

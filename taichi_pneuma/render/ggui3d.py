@@ -9,6 +9,7 @@ field of view) and the same colours as the NumPy rasteriser, pixel for pixel up 
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 
@@ -17,6 +18,7 @@ from ..backend import ti
 from .camera import Camera
 from .surface import NumpyView
 
+IMGUI_INI = Path("imgui.ini")  # where imgui (GGUI's widgets) saves its settings: the current folder
 BLANK_RETRIES = 2  # draws again of a frame that came back blank before the NumPy rasteriser draws it
 
 
@@ -28,6 +30,8 @@ class GGUIView:
     def __init__(self, width: int, height: int, show: bool = False, title: str = "taichi-pneuma 3D"):
         runtime.ensure_initialised()
         self.width, self.height = width, height
+        # imgui saves its window settings into the current folder when a window closes: an offscreen one leaves none
+        self._imgui_ini = None if show or IMGUI_INI.exists() else IMGUI_INI.resolve()
         self.window = ti.ui.Window(title, (width, height), show_window=show, vsync=False)
         self.canvas = self.window.get_canvas()
         self.scene = self.window.get_scene()
@@ -84,5 +88,8 @@ class GGUIView:
         return NumpyView(self.width, self.height).render(corners, colors, camera, background)
 
     def close(self) -> None:
-        """Destroy the window now (GGUI allows one live window per process)."""
+        """Destroy the window now (GGUI allows one live window per process), and the imgui.ini it wrote into the
+        current folder if it was offscreen and the file was not there before."""
         self.window.destroy()
+        if self._imgui_ini is not None:
+            self._imgui_ini.unlink(missing_ok=True)
