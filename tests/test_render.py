@@ -358,3 +358,12 @@ def test_quadratic_elements_are_coloured_by_their_own_value():
     middle = result.positions[2][built.mesh.triangles[:, 3:]].mean(axis=1)
     close = np.all(np.abs(pixels_at(renderer, image, middle) - expected) < 20, axis=1)
     assert close.mean() > 0.6
+
+
+def test_a_printed_zero_is_never_signed():
+    """'p = -0.0' on a frame or a progress line: a value that rounds to zero prints unsigned, padded ones keeping
+    their width; other negatives keep their sign."""
+    from taichi_pneuma.render.text import number
+
+    assert [number(v, ".1f") for v in (-0.0, -0.01, -0.06, 0.04)] == ["0.0", "0.0", "-0.1", "0.0"]
+    assert number(-1e-13, "8.2f") == "    0.00" and number(-2.5, "8.2f") == "   -2.50"

@@ -18,6 +18,7 @@ from ..errors import PneumaInputError, require, require_finite
 from ..fem import sizing
 from ..io.units import LENGTH, MEASURES, PRESSURE
 from ..render import COLOR_FIELDS, RENDERERS
+from ..render.text import number
 from .quality import (
     AREA_STEP,
     ORDER_WORDS,
@@ -375,7 +376,7 @@ def build(scene, args: argparse.Namespace):
 def step_line(step, increments: int, units) -> str:
     """The line printed after each step of a ramp: its chambers, the tip, the Newton iterations, cuts, residual."""
     chambers = "  ".join(
-        f"{name}: x{c.area_ratio:5.3f} p = {c.pressure:8.2f}{units.suffix(PRESSURE)}"
+        f"{name}: x{c.area_ratio:5.3f} p = {number(c.pressure, '8.2f')}{units.suffix(PRESSURE)}"
         for name, c in step.chambers.items()
     )
     tip = f"{step.tip_dy:+.4f}{units.suffix(LENGTH)}"

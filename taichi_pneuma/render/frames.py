@@ -39,7 +39,7 @@ from .colours import (
     colormap,
 )
 from .scalebar import emptiest, scale_bar
-from .text import LINE_PX, MARGIN_PX, Label, draw_labels, label_box
+from .text import LINE_PX, MARGIN_PX, Label, draw_labels, label_box, number
 from .ticks import colorbar_ticks, nice_ticks, tick_label
 from .view2d import chamber_triangles, mesh_edges, view_bounds
 
@@ -124,9 +124,9 @@ class Track:
             areas = ", ".join(f"x{r:.2f}" for r in self.area_ratio[i])
         shared = len(self.pressure[i]) > 1 and np.allclose(self.pressure, self.pressure[:, :1], rtol=1e-9, atol=0)
         pressures = (  # chambers at one pressure over the whole run (a PneuNet's): it once
-            f"{self.pressure[i, 0]:.1f}{pressure} (all {len(self.pressure[i])})"
+            f"{number(self.pressure[i, 0], '.1f')}{pressure} (all {len(self.pressure[i])})"
             if shared
-            else ", ".join(f"{p:.1f}" for p in self.pressure[i]) + pressure
+            else ", ".join(number(p, ".1f") for p in self.pressure[i]) + pressure
         )
         tip = f"{self.tip_dy[i]:+.4g}{length}" if length else f"{self.tip_dy[i]:+.4f}"
         return (self.title.split("\n") if self.title else []) + [

@@ -15,6 +15,15 @@ FONT_PX, LINE_PX = 13, 17  # the font size and a line of text's height
 MARGIN_PX = 10  # the margin text and panels keep from the frame's edges
 
 
+def number(value: float, spec: str) -> str:
+    """value formatted by spec, a zero never signed ('-0.0' from -0.0 or -0.01 at '.1f' reads '0.0'; a padded one
+    keeps its width)."""
+    text = f"{value:{spec}}"
+    if text.lstrip().startswith("-") and float(text) == 0:
+        return text.replace("-", " " if text.startswith(" ") else "", 1)
+    return text
+
+
 @dataclass(frozen=True)
 class Label:
     """A line of text at pixel (x, y) (origin top-left); anchor as Pillow's: 'la' left-ascender, 'rm'
