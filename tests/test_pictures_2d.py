@@ -153,6 +153,13 @@ def test_chambers_at_one_pressure_over_the_run_show_it_once_in_the_header(area_r
     assert shared.header(5)[1].startswith("p = 75.2 kPa (all 3)   tip dy")
     apart = replace(shared, pressure=np.hstack([ramp, ramp, ramp * (1 + 1e-6 * (ramp > 30))]))
     assert apart.header(5)[1].startswith("p = 75.2, 75.2, 75.2 kPa   tip dy")
+    ten = replace(  # ten chambers: ranges, so that the line stays short of the trace panel
+        apart,
+        pressure=np.hstack([ramp * (1 + 0.01 * k) for k in range(10)]),
+        area_ratio=np.hstack([1 + ramp / 100 * (1 + 0.01 * k) for k in range(10)]),
+    )
+    step, pressures = ten.header(5)
+    assert step == "step 5/5   area x1.75 .. x1.82 (10)" and pressures.startswith("p = 75.2 .. 82.0 kPa (10)   tip")
 
 
 def test_a_header_with_units_says_them_and_the_rest_shape_is_a_ghost(area_run):

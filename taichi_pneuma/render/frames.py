@@ -44,6 +44,7 @@ from .ticks import colorbar_ticks, nice_ticks, tick_label
 from .view2d import chamber_triangles, mesh_edges, view_bounds
 
 HEADER_LINES = 3  # title (if any), step and area, pressure and tip: the band above the body, title or not
+HEADER_CHAMBERS = 4  # more chambers than this show their areas (and differing pressures) as a range in the header
 # the trace panel: the plot box's margins (pixels: left, top, right, bottom) and the smallest box worth
 # drawing (a smaller --size leaves the panel out); room per tick label along x and y
 TRACE_MARGINS_PX = (58, MARGIN_PX + 3 * LINE_PX + 8, 58, 2 * LINE_PX + 12)
@@ -116,16 +117,26 @@ class Track:
     def header(self, i: int) -> list[str]:
         """The lines above the body at step i (a title may have several, split at newlines). In a scene with
         units the areas, pressures and the tip's deflection say their unit; without, areas are area ratios.
-        Chambers at one pressure over the whole run show it once ("p = 900.0 (all 6)")."""
+        Chambers at one pressure over the whole run show it once ("p = 900.0 (all 6)"); more than HEADER_CHAMBERS
+        chambers show their areas as a range ("x1.02 .. x1.31 (10)"), and their pressures too where they differ,
+        so that the line stays clear of the trace panel."""
         length, area, pressure = self.units
+        many = len(self.area_ratio[i]) > HEADER_CHAMBERS
         if area and self.area is not None:
-            areas = ", ".join(f"{a:.4g}" for a in self.area[i]) + area
+            values, text, unit = self.area[i], "{:.4g}", area
         else:
-            areas = ", ".join(f"x{r:.2f}" for r in self.area_ratio[i])
+            values, text, unit = self.area_ratio[i], "x{:.2f}", ""
+        if many:
+            areas = f"{text.format(values.min())} .. {text.format(values.max())}{unit} ({len(values)})"
+        else:
+            areas = ", ".join(text.format(v) for v in values) + unit
         shared = len(self.pressure[i]) > 1 and np.allclose(self.pressure, self.pressure[:, :1], rtol=1e-9, atol=0)
         pressures = (  # chambers at one pressure over the whole run (a PneuNet's): it once
             f"{number(self.pressure[i, 0], '.1f')}{pressure} (all {len(self.pressure[i])})"
             if shared
+            else f"{number(self.pressure[i].min(), '.1f')} .. {number(self.pressure[i].max(), '.1f')}{pressure} "
+            f"({len(self.pressure[i])})"
+            if many
             else ", ".join(number(p, ".1f") for p in self.pressure[i]) + pressure
         )
         tip = f"{self.tip_dy[i]:+.4g}{length}" if length else f"{self.tip_dy[i]:+.4f}"
