@@ -113,26 +113,30 @@ class ReducedReacher(Reacher):
 
     def reach(self, target: Target) -> ReachResult:
         """The reduced search for `target`, then the full polish (the module docstring). The result is the full
-        model's: its pose, errors and counts the polish's, its path the reduced search's then the polish's, its
-        `reduced` the ReducedPhase. The reduced pose stays current, so the next reach searches from it."""
+        model's: its pose, errors and counts the polish's (its full solves, the first at the reduced optimum), its
+        path the reduced search's then the polish's, its `reduced` the ReducedPhase. The reduced pose stays
+        current, so the next reach searches from it."""
         started = time.perf_counter()
         found = super().reach(target)
         found.seconds = time.perf_counter() - started
         assert found.pose.coordinates is not None
         check = indicator(self.reduced, found.pose.commands, found.pose.coordinates)
-        started = time.perf_counter()
+        started, solves, iterations = time.perf_counter(), 0, 0
         if self.polisher is None:
             polish = dataclasses.replace(self.options, restarts=0)
             self.polisher = Reacher(
                 self.built, (self.lo, self.hi), polish, self.newton_options, self.max_cuts, first=found.pose
             )
         else:
+            solves, iterations = self.polisher.forward_solves, self.polisher.newton_iterations
             self.polisher.start_from(found.pose)
         polished = self.polisher.reach(target)
         polish_seconds = time.perf_counter() - started
         n = len(found.path)
         return dataclasses.replace(
             polished,
+            forward_solves=self.polisher.forward_solves - solves,  # the full solve at the reduced optimum included
+            newton_iterations=self.polisher.newton_iterations - iterations,
             seconds=found.seconds + polish_seconds,
             path=found.path + polished.path,
             jumps=found.jumps + [n] + [n + j for j in polished.jumps],
