@@ -229,7 +229,8 @@ class Reacher:
     poor place to linearise, as with no pressure a chamber's first effect on the tip is often the
     opposite of its later one (the reference beam's tip first lifts, then curls down). first: instead, a pose
     whose displacements are the first guess at its commands (start_from: Newton there, no continuation from rest),
-    e.g. a reduced model's pose, u = V q."""
+    e.g. a reduced model's pose, u = V q. solver: a NewtonSolver of built.model to use instead of a new one of the
+    options `newton` (its symbolic analysis shared)."""
 
     def __init__(
         self,
@@ -240,6 +241,7 @@ class Reacher:
         max_cuts: int = MAX_CUTS,
         start=None,
         first: Pose | None = None,
+        solver: NewtonSolver | None = None,
     ):
         moving = [o.name for o in built.scene.obstacles if o.moving]
         require(
@@ -248,7 +250,7 @@ class Reacher:
             f"only, so a scene's obstacles must be static there (drop its keyframes)",
         )
         self.built, self.options, self.max_cuts = built, options or ReachOptions(), max_cuts
-        self.solver = NewtonSolver(built.model, newton)
+        self.solver = solver or NewtonSolver(built.model, newton)
         self.names = [c.chamber_name for c in built.chambers]
         self.units = [c.kind.quantity for c in built.chambers]
         lo, hi = bounds if bounds is not None else command_bounds(built.scene)

@@ -60,7 +60,7 @@ class ReducedPhase:
 class ReducedReacher(Reacher):
     """A Reacher whose search runs on the reduced model and whose answers are polished by the full Reacher (the
     module docstring). bounds, options, newton (the full Newton's options), max_cuts, start: as Reacher's; the
-    reduced model's poses carry their coordinates q."""
+    reduced model's poses carry their coordinates q. Its full Newton solver is the polish's."""
 
     def __init__(
         self,
@@ -71,7 +71,7 @@ class ReducedReacher(Reacher):
         max_cuts: int = MAX_CUTS,
         start=None,
     ):
-        self.reduced, self.newton_options = model, newton
+        self.reduced = model
         self.polisher: Reacher | None = None  # the full Reacher, made at the first polish
         super().__init__(model.built, bounds, options, newton, max_cuts, start)
 
@@ -125,7 +125,7 @@ class ReducedReacher(Reacher):
         if self.polisher is None:
             polish = dataclasses.replace(self.options, restarts=0)
             self.polisher = Reacher(
-                self.built, (self.lo, self.hi), polish, self.newton_options, self.max_cuts, first=found.pose
+                self.built, (self.lo, self.hi), polish, max_cuts=self.max_cuts, first=found.pose, solver=self.solver
             )
         else:
             solves, iterations = self.polisher.forward_solves, self.polisher.newton_iterations
