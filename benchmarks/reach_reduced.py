@@ -5,12 +5,13 @@ whether the two answers agree.
 Per case: a reduced model trained once (its time reported apart, not in the ratio: it is made once per scene), then
 in one process, kernels compiled, each Reacher made (its first equilibrium at the box centre solved, as pneuma-reach
 does) and the targets followed in order, each from the pose the last one reached. The time of each is that of the
-Reacher's making and of all its reaches, the least of REPEAT runs of each (the two alternating: the machine is
-shared and loaded). The targets: pneunet_finger's shipped trajectory (pneunet_finger_targets.csv); on pneunet_3d
-(a coarse mesh) the tip points of the full model at 3 Latin hypercube commands (seed 2) in the training box. The
-answers: the largest distance between the two final tip points over the targets, as a fraction of the body
-length (the Reachers' tolerance is 1e-3 of it), and the largest command difference as a fraction of the box. BLAS on
-one thread, as in benchmarks/reduced.py.
+Reacher's making and of all its reaches, the least of 3 runs of each (the two alternating: the machine is shared and
+loaded; one run on the unreachable target). The targets: pneunet_finger's shipped trajectory
+(pneunet_finger_targets.csv); on pneunet_3d (a coarse mesh) the tip points of the full model at 3 Latin hypercube
+commands (seed 2) in the training box, and the unreachable tip (1.9, -0.9) (z free), where the full Reacher
+restarts. The answers: the largest distance between the two final tip points over the targets, as a fraction of the
+body length (the Reachers' tolerance is 1e-3 of it), and the largest command difference as a fraction of the box.
+BLAS on one thread, as in benchmarks/reduced.py.
 
     python benchmarks/reach_reduced.py [--3d] [--out benchmarks/results]
 
@@ -30,16 +31,20 @@ from pathlib import Path
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before NumPy loads (it is imported inside the functions)
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-# name: (scene, overrides, hypercube samples, POD energy kept, targets: a shipped CSV or a count of hypercube tips)
-REPEAT = 3
-CASES = {"pneunet_finger": ("pneunet_finger", {}, 64, 1 - 1e-8, "pneunet_finger_targets.csv")}
+# name: (scene, overrides, hypercube samples, POD energy kept, targets: a shipped CSV, a count of hypercube tips or
+# the tip points themselves, runs of each Reacher)
+COARSE_3D = {"mesh.size": 0.4, "mesh.near_chambers": 0.2}
+CASES = {"pneunet_finger": ("pneunet_finger", {}, 64, 1 - 1e-8, "pneunet_finger_targets.csv", 3)}
 CASES_3D = {
-    "pneunet_3d_coarse": ("pneunet_3d", {"mesh.size": 0.4, "mesh.near_chambers": 0.2}, 24, 1 - 1e-8, 3),
+    "pneunet_3d_coarse": ("pneunet_3d", COARSE_3D, 24, 1 - 1e-8, 3, 3),
+    "pneunet_3d_coarse, unreachable": ("pneunet_3d", COARSE_3D, 24, 1 - 1e-8, ((1.9, -0.9),), 1),
 }
+TRAINED: dict = {}  # (scene, overrides, samples, energy) -> (built, model, training seconds): a model per scene
 
 
 def targets_for(built, model, targets):
-    """The shipped CSV's targets, or the full model's tip points at `targets` hypercube commands (seed 2)."""
+    """The shipped CSV's targets, the full model's tip points at `targets` hypercube commands (seed 2), or the tip
+    points given."""
     from taichi_pneuma.control.inverse import Reacher
     from taichi_pneuma.reduce.snapshots import hypercube
     from taichi_pneuma.scene.shipped import find
@@ -47,6 +52,8 @@ def targets_for(built, model, targets):
 
     if isinstance(targets, str):
         return read_targets_csv(find(targets, ".csv", "targets file"))
+    if isinstance(targets, tuple):
+        return [Target(tip, None, (1.0, 1.0, 1.0)) for tip in targets]
     low, high = model.training[0].min(axis=0), model.training[0].max(axis=0)
     reacher = Reacher(built, start=(low + high) / 2)
     return [Target(tuple(reacher.settle(c).tip), None, (1.0, 1.0, 1.0)) for c in hypercube(low, high, targets, 2)]
@@ -60,7 +67,7 @@ def timed_follow(make, targets):
     return reacher, results, made, time.perf_counter() - started
 
 
-def run_case(scene_name: str, overrides: dict, samples: int, energy: float, targets) -> dict:
+def run_case(scene_name: str, overrides: dict, samples: int, energy: float, targets, repeat: int) -> dict:
     import numpy as np
 
     import taichi_pneuma as tp
@@ -69,14 +76,16 @@ def run_case(scene_name: str, overrides: dict, samples: int, energy: float, targ
     from taichi_pneuma.reduce.train import train
 
     load = os.getloadavg()[0]
-    built = tp.load_scene(scene_name).with_values(overrides).build()
-    started = time.perf_counter()
-    model = train(built, energy=energy, samples=samples).model
-    train_seconds = time.perf_counter() - started
+    key = (scene_name, tuple(overrides.items()), samples, energy)
+    if key not in TRAINED:
+        built = tp.load_scene(scene_name).with_values(overrides).build()
+        started = time.perf_counter()
+        TRAINED[key] = built, train(built, energy=energy, samples=samples).model, time.perf_counter() - started
+    built, model, train_seconds = TRAINED[key]
     wanted = targets_for(built, model, targets)
     runs = [
         (timed_follow(lambda: Reacher(built), wanted), timed_follow(lambda: ReducedReacher(model), wanted))
-        for _ in range(REPEAT)
+        for _ in range(repeat)
     ]
     full, full_results, full_made, full_seconds = min((run[0] for run in runs), key=lambda r: r[3])
     reduced, reduced_results, reduced_made, reduced_seconds = min((run[1] for run in runs), key=lambda r: r[3])

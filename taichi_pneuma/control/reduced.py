@@ -116,9 +116,7 @@ class ReducedReacher(Reacher):
         model's: its pose, errors and counts the polish's (its full solves, the first at the reduced optimum), its
         path the reduced search's then the polish's, its `reduced` the ReducedPhase. The reduced pose stays
         current, so the next reach searches from it."""
-        started = time.perf_counter()
         found = super().reach(target)
-        found.seconds = time.perf_counter() - started
         assert found.pose.coordinates is not None
         check = indicator(self.reduced, found.pose.commands, found.pose.coordinates)
         started, solves, iterations = time.perf_counter(), 0, 0
