@@ -80,6 +80,19 @@ def test_reach_with_a_reduced_model_prints_its_phase_and_records_it(files, train
     assert summary["reduced"]["indicator_residual"] > 0 and summary["reduced"]["outside_training"] == []
 
 
+def test_a_trajectory_on_a_reduced_model_reaches_every_target(files, trained, capsys, tmp_path):
+    scene, model = files
+    tips = [full_tip(trained.model.built, ratio) for ratio in (1.6, 2.3)]
+    (tmp_path / "targets.csv").write_text("x,y\n" + "".join(f"{x:.6f},{y:.6f}\n" for x, y in tips))
+    flags = ["--targets", str(tmp_path / "targets.csv"), "--reduced", model, "--no-video", "--out", str(tmp_path)]
+    assert main(["--scene", scene, *flags]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[-1].startswith("reached: all 2 targets in order")
+    assert sum(line.strip().startswith("reduced: ") for line in out) == 2
+    summary = json.loads(next(tmp_path.glob("*_summary.json")).read_text())
+    assert all("reduced" in reach for reach in summary["reaches"])
+
+
 def test_commands_outside_the_training_box_are_named_and_still_polished(files, trained, capsys, tmp_path):
     scene, model = files
     built = trained.model.built
