@@ -118,3 +118,11 @@ def test_reduced_with_output_is_refused_with_one_line(files, capsys, tmp_path):
     assert main([*flags, *QUIET]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ["error: --reduced works with --tip and --targets (not --output, --design or --interactive)"]
+
+
+def test_a_missing_model_file_is_one_error_line(files, capsys, tmp_path):
+    scene, _ = files
+    flags = ["--scene", scene, "--tip", "1.9", "-0.1", "--reduced", str(tmp_path / "none.npz"), "--out", str(tmp_path)]
+    assert main([*flags, *QUIET]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: reduced model ") and "cannot be read" in err[0]
