@@ -47,6 +47,12 @@ RESULTS_PAGES = {
         ("benchmarks/reduced.py", None),
         "python benchmarks/reduced.py --full-3d",
     ),
+    "reach_reduced": (
+        "performance",
+        "Inverse control on a reduced model (pneuma-reach --reduced) against the full Reacher",
+        ("benchmarks/reach_reduced.py", None),
+        "python benchmarks/reach_reduced.py --3d",
+    ),
     "bench_startup": (
         "performance",
         "Start-up: kernels compile once; rendering against solving",

@@ -5,6 +5,7 @@
     pneuma-reach --scene pneunet_finger --targets pneunet_finger_targets.csv   (or a scene's [[targets]])
     pneuma-reach --design cy --tip-dy -0.2
     pneuma-reach --scene gripper_2d --output object.magnitude --value 20     (any measure of the state)
+    pneuma-reach --scene pneunet_finger --targets pneunet_finger_targets.csv --reduced out/pneunet_finger_reduced.npz
 
 X Y is where the tip point (the mean of the tip vertices, as in inflate's tip deflection) should be,
 in scene coordinates (X Y Z on a 3D body; X Y alone leaves z free); --angle DEG adds the tip rotation
@@ -22,6 +23,11 @@ residual, ...) equals V (control/outputs.py), prints `reached:` with the command
 closest step, or the value found where the column jumps over V inside a step, exit 1) and writes
 <scene>_output_<COLUMN><V>_summary.json (COLUMN made a plain file name, with what the flags changed of the scene,
 cli.result_stem).
+--reduced MODEL.npz (a model pneuma-reduce trained for this scene; with --tip or --targets) searches on the reduced
+model, then polishes each answer with a few full Newton solves and Gauss-Newton steps (control/reduced.py): the
+answer is the full model's. Per target it prints a `reduced:` line: the reduced search's tip error and seconds, the
+indicator (the full residual of the reduced state; the commands outside the training box, where the model is
+extrapolated) and the polish's seconds.
 """
 
 from __future__ import annotations
@@ -121,6 +127,11 @@ def parser() -> argparse.ArgumentParser:
         "not step, iterations, residual, ...) to bring to --value along the scene's schedule",
     )
     p.add_argument("--value", type=float, help="with --output: the value the column should take")
+    p.add_argument(
+        "--reduced",
+        metavar="MODEL.npz",
+        help="search on this reduced model (pneuma-reduce, trained for this scene), then polish with the full model",
+    )
     add_ramp_arguments(p)
     add_video_arguments(p, "960x384")
     p.add_argument(
@@ -187,12 +198,33 @@ def reach_record(reacher, result) -> dict:
         "forward_solves": result.forward_solves,
         "newton_iterations": result.newton_iterations,
         "seconds": result.seconds,
+        **({} if result.reduced is None else {"reduced": reduced_record(reacher, result.reduced)}),
+    }
+
+
+def reduced_record(reacher, phase) -> dict:
+    """The reduced search of one reach (control/reduced.py ReducedPhase) for the summary JSON."""
+    return {
+        "commands": dict(zip(reacher.names, phase.result.pose.commands.tolist())),
+        "tip_error": phase.result.error,
+        "reduced_solves": phase.result.forward_solves,
+        "seconds": phase.seconds,
+        "polish_seconds": phase.polish_seconds,
+        "indicator_residual": phase.indicator.residual,
+        "outside_training": [
+            {"chamber": reacher.names[i], "value": v, "range": [lo, hi]} for i, v, lo, hi in phase.indicator.outside
+        ],
     }
 
 
 def run(args: argparse.Namespace) -> dict:
     from ..control.inverse import ReachOptions, command_bounds
 
+    if args.reduced is not None:
+        require(
+            not args.design and args.output is None and args.value is None and not args.interactive,
+            "--reduced works with --tip and --targets (not --output, --design or --interactive)",
+        )
     if args.design:
         return run_design(args)
     if args.output is not None or args.value is not None:
@@ -206,6 +238,7 @@ def run(args: argparse.Namespace) -> dict:
     else:
         scene = apply_set(scene_for(args, args.cy), args.set)
         stem = result_stem(f"reach_cy{args.cy:+.2f}", args, scene)
+    trained = scene  # a reduced model is checked against the scene without --bounds: they do not change it
     scene = with_bounds(scene, args.bounds)
     lo, hi = command_bounds(scene)
     targets = targets_of(args, scene, required=not args.interactive)
@@ -234,7 +267,7 @@ def run(args: argparse.Namespace) -> dict:
             budget=budget(args),
         )
     with lock_stems(out, stem):  # no other run writes these files meanwhile
-        return reach_targets(args, scene, stem, targets, (lo, hi), options, size, out)
+        return reach_targets(args, trained if args.reduced else scene, stem, targets, (lo, hi), options, size, out)
 
 
 def reach_targets(
@@ -250,10 +283,18 @@ def reach_targets(
     from tqdm import tqdm
 
     from ..control.inverse import Reacher
+    from ..control.reduced import ReducedReacher
+    from ..reduce.store import load_reduced
 
     (lo, hi), built = bounds, build(scene, args)
     start = time.perf_counter()
-    reacher = Reacher(built, (lo, hi), options, newton_options(args), args.max_cuts)
+    if args.reduced is not None:
+        model = load_reduced(args.reduced, built)
+        print(f"reduced model {args.reduced}: {model.n_modes} modes, {len(model.elements)} elements sampled")
+        start = time.perf_counter()
+        reacher: Reacher = ReducedReacher(model, (lo, hi), options, newton_options(args), args.max_cuts)
+    else:
+        reacher = Reacher(built, (lo, hi), options, newton_options(args), args.max_cuts)
     print(
         "bounds: "
         + ", ".join(f"{n} {a:g} .. {b:g}" for n, a, b in zip(reacher.names, lo, hi))
@@ -280,6 +321,8 @@ def reach_targets(
                 f"{describe(reacher, result.pose.commands)}; tip error {result.error:.3g}; "
                 f"{result.forward_solves} forward solves, {result.seconds:.2f} s"
             )
+            if result.reduced is not None:
+                bar.write("    " + result.reduced.summary_line(reacher.names))
 
     with bar:
         results = reacher.follow(targets, progress)

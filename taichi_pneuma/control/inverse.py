@@ -41,6 +41,7 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import lsq_linear
@@ -56,6 +57,9 @@ from ..solve.newton import NewtonOptions, NewtonSolver
 from ..solve.records import StepRecord
 from ..solve.sensitivity import sensitivity
 from ..solve.simulate import MAX_CUTS, NoEquilibrium, chamber_records, settle
+
+if TYPE_CHECKING:
+    from .reduced import ReducedPhase
 
 ARMIJO = 1e-4
 
@@ -122,7 +126,8 @@ class ReachOptions:
 class Pose:
     """An equilibrium: the commands, the displacements (n, d), the tip point (d,) (scene coordinates) and
     rotation (degrees, about z in 3D; continued from the pose it was solved from, fem/tip.py), and the forward
-    solve that found it (Newton iterations, residual, seconds)."""
+    solve that found it (Newton iterations, residual, seconds); coordinates: q with u = V q on a reduced model
+    (control/reduced.py), else None."""
 
     commands: np.ndarray
     u: np.ndarray
@@ -131,6 +136,7 @@ class Pose:
     iterations: int = 0
     residual: float = 0.0
     seconds: float = 0.0
+    coordinates: np.ndarray | None = None
 
 
 @dataclass
@@ -150,6 +156,7 @@ class ReachResult:
     seconds: float
     path: list[Pose] = field(default_factory=list)
     jumps: list[int] = field(default_factory=list)
+    reduced: ReducedPhase | None = None  # the reduced search before the full model's polish (control/reduced.py)
 
     def summary_line(self) -> str:
         """One line: 'reached: ...' or 'unreachable: closest tip error ...; chamber ... at its max ...'."""
@@ -220,7 +227,10 @@ class Reacher:
     bounds: (lo, hi) arrays per chamber (default command_bounds). start: the commands of the first
     equilibrium (clipped to the bounds), by default the centre of the box lo..hi: the rest state is a
     poor place to linearise, as with no pressure a chamber's first effect on the tip is often the
-    opposite of its later one (the reference beam's tip first lifts, then curls down)."""
+    opposite of its later one (the reference beam's tip first lifts, then curls down). first: instead, a pose
+    whose displacements are the first guess at its commands (start_from: Newton there, no continuation from rest),
+    e.g. a reduced model's pose, u = V q. solver: a NewtonSolver of built.model to use instead of a new one of the
+    options `newton` (its symbolic analysis shared)."""
 
     def __init__(
         self,
@@ -230,6 +240,8 @@ class Reacher:
         newton: NewtonOptions | None = None,
         max_cuts: int = MAX_CUTS,
         start=None,
+        first: Pose | None = None,
+        solver: NewtonSolver | None = None,
     ):
         moving = [o.name for o in built.scene.obstacles if o.moving]
         require(
@@ -238,7 +250,7 @@ class Reacher:
             f"only, so a scene's obstacles must be static there (drop its keyframes)",
         )
         self.built, self.options, self.max_cuts = built, options or ReachOptions(), max_cuts
-        self.solver = NewtonSolver(built.model, newton)
+        self.solver = solver or NewtonSolver(built.model, newton)
         self.names = [c.chamber_name for c in built.chambers]
         self.units = [c.kind.quantity for c in built.chambers]
         lo, hi = bounds if bounds is not None else command_bounds(built.scene)
@@ -253,7 +265,10 @@ class Reacher:
         rest = built.scene.schedule.rest_commands
         self.pose, self._previous = self._pose(rest, np.zeros_like(built.mesh.vertices), 0.0), None
         self._factored: Pose | None = None  # the pose whose exact Hessian the solver's factor is
-        self.settle((self.lo + self.hi) / 2 if start is None else start)
+        if first is None:
+            self.settle((self.lo + self.hi) / 2 if start is None else start)
+        else:
+            self.start_from(first)
 
     def _pose(self, commands: np.ndarray, u: np.ndarray, near: float) -> Pose:
         """The pose of the equilibrium u at commands, its rotation continued from `near`, that of the pose it was
@@ -292,6 +307,32 @@ class Reacher:
         # Newton's last factor: the exact Hessian within one Newton step of this equilibrium
         self._factored = self.pose if records[-1].iterations and records[-1].exact_factor else None
         return self.pose
+
+    def start_from(self, first: Pose) -> Pose:
+        """The equilibrium at first.commands (clipped to the bounds) by Newton from the displacements first.u at
+        those commands, its rotation continued from first.rotation; where that finds none, by settle from the
+        current pose. It becomes current."""
+        current = self.pose, self._previous
+        commands = np.clip(first.commands, self.lo, self.hi)
+        self.pose = Pose(commands, np.asarray(first.u, float), first.tip, first.rotation)
+        self._previous = None
+        try:
+            return self.settle(commands)
+        except NoEquilibrium:
+            self.pose, self._previous = current
+            return self.settle(commands)
+
+    def _sensitivity(self) -> tuple[np.ndarray, np.ndarray]:
+        """(the tip Jacobian (3 or 4, m) at the current pose, the tangent settle takes: du/dq (n, d, m))."""
+        sens = sensitivity(
+            self.built,
+            self.pose.commands,
+            self.pose.u,
+            self.solver.pattern,
+            self.solver.backend,
+            factorised=self.options.reuse_factor and self._factored is self.pose,
+        )
+        return sens.tip, sens.displacements
 
     def _errors(self, target: Target, pose: Pose) -> tuple[float, float | None]:
         error = tip_error(target, pose)
@@ -369,15 +410,8 @@ class Reacher:
             if goal.done(self.pose):
                 return True, iteration
             f, s, phi = goal.value(self.pose)
-            sens = sensitivity(
-                self.built,
-                self.pose.commands,
-                self.pose.u,
-                self.solver.pattern,
-                self.solver.backend,
-                factorised=self.options.reuse_factor and self._factored is self.pose,
-            )
-            jac = goal.scale[:, None] * sens.tip[goal.rows] * goal.span
+            tip, tangent = self._sensitivity()
+            jac = goal.scale[:, None] * tip[goal.rows] * goal.span
             a = np.vstack([jac, goal.rho * np.eye(len(s))])
             b = np.concatenate([-f, -goal.rho * (s - goal.s_ref)])
             ds = lsq_linear(a, b, bounds=(-s, 1.0 - s), method="bvls").x
@@ -387,7 +421,7 @@ class Reacher:
                 predicted = phi - float(np.sum((a @ ds - b) ** 2))
                 current = self.pose, self._previous
                 try:
-                    trial = self.settle(self.lo + np.clip(s + ds, 0.0, 1.0) * goal.span, sens.displacements)
+                    trial = self.settle(self.lo + np.clip(s + ds, 0.0, 1.0) * goal.span, tangent)
                     decrease = phi - goal.value(trial)[2]
                     if decrease >= ARMIJO * predicted:
                         break

@@ -13,6 +13,14 @@ start is halved, at most max_cuts times. A solve starts from the training equili
 The indicator of a reduced state q at commands c: the full model's residual |g(V q)| / force scale (what the
 reduction leaves unbalanced, on the same scale as the full Newton's tolerance), and whether c lies in the box of
 the training commands (outside it the basis is extrapolated).
+
+The sensitivity of a reduced equilibrium to the commands c: differentiating g_r(q(c), c) = V^T r(V q, c) = 0,
+
+    H_r dq/dc = -V^T dr/dc,     du/dc = V dq/dc,
+
+with H_r the exact reduced Hessian (never the PSD-projected one: that is no derivative of g_r) and -dr/dc the
+chambers' command forces on the full field V q (solve/sensitivity.py command_forces): the chambers are not
+hyper-reduced, so their command derivative projects exactly. The tip Jacobian follows from du/dc as the full one does.
 """
 
 from __future__ import annotations
@@ -25,6 +33,7 @@ import numpy as np
 import scipy.linalg
 
 from ..solve.newton import ARMIJO_C1, MAX_HALVINGS, STEP_SAFETY
+from ..solve.sensitivity import command_forces, tip_jacobian
 from ..solve.simulate import MAX_CUTS, NoEquilibrium
 from .model import ReducedModel
 from .snapshots import nearest
@@ -174,3 +183,28 @@ def indicator(model: ReducedModel, commands: np.ndarray, q: np.ndarray) -> Indic
             if c < lo - slack[i] or c > hi + slack[i]:
                 outside.append((i, float(c), float(lo), float(hi)))
     return Indicator(float(np.linalg.norm(g)) / scale, outside)
+
+
+@dataclass
+class ReducedSensitivity:
+    """dq/dc (r, m), du/dc = V dq/dc (n, d, m) and the tip Jacobian (3 or 4, m: solve/sensitivity.py) of a reduced
+    equilibrium."""
+
+    coordinates: np.ndarray
+    displacements: np.ndarray
+    tip: np.ndarray
+
+
+def sensitivity(model: ReducedModel, commands: np.ndarray, q: np.ndarray) -> ReducedSensitivity:
+    """The sensitivity of the reduced equilibrium q at `commands` (the module docstring): one Cholesky (else LU)
+    factorisation of the dense H_r; the model is left at q and those commands."""
+    model.built.set_commands(commands)
+    model.set_coordinates(q)
+    rhs = model.basis.T @ command_forces(model.built)
+    H = model.hessian(psd_only=False)
+    try:
+        dq = scipy.linalg.cho_solve(scipy.linalg.cho_factor(H), rhs)
+    except (np.linalg.LinAlgError, ValueError):
+        dq = scipy.linalg.solve(H, rhs)
+    du = (model.basis @ dq).reshape(*model.model.config.u.shape, -1)
+    return ReducedSensitivity(dq, du, tip_jacobian(model.built, model.displacements(q), du))

@@ -110,11 +110,17 @@ def sensitivity(
     built.set_commands(commands)
     built.model.set_displacements(u)
     du, name = solve_exact(built, command_forces(built), pattern, backend, factorised)
+    du = du.reshape(-1, built.mesh.dim, len(built.chambers))
+    return Sensitivity(du, tip_jacobian(built, u, du), name)
+
+
+def tip_jacobian(built: BuiltScene, u: np.ndarray, du: np.ndarray) -> np.ndarray:
+    """d(tip dx, tip dy, tip rotation in degrees[, tip dz])/dq (3 or 4, m) from du/dq (n, d, m) at the displacements u
+    (the module docstring: the mean of the tip vertices' rows, and the rotation's gradient)."""
     mesh = built.mesh
-    du = du.reshape(-1, mesh.dim, len(built.chambers))
     tip_du = du[mesh.tip]  # (k, d, m)
     rest_tip = mesh.vertices[mesh.tip, :2]
     rotation = tip_rotation_gradient(rest_tip, rest_tip + np.reshape(u, (-1, mesh.dim))[mesh.tip, :2])
     d_theta = np.einsum("kd,kdm->m", rotation, tip_du[:, :2])
     mean = tip_du.mean(axis=0)
-    return Sensitivity(du, np.vstack([mean[:2], math.degrees(1.0) * d_theta, mean[2:]]), name)
+    return np.vstack([mean[:2], math.degrees(1.0) * d_theta, mean[2:]])
