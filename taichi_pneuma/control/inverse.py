@@ -41,7 +41,7 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 from scipy.optimize import lsq_linear
@@ -57,9 +57,6 @@ from ..solve.newton import NewtonOptions, NewtonSolver
 from ..solve.records import StepRecord
 from ..solve.sensitivity import sensitivity
 from ..solve.simulate import MAX_CUTS, NoEquilibrium, chamber_records, settle
-
-if TYPE_CHECKING:
-    from .reduced import ReducedPhase
 
 ARMIJO = 1e-4
 
@@ -156,7 +153,7 @@ class ReachResult:
     seconds: float
     path: list[Pose] = field(default_factory=list)
     jumps: list[int] = field(default_factory=list)
-    reduced: ReducedPhase | None = None  # the reduced search before the full model's polish (control/reduced.py)
+    reduced: Any = None  # a control/reduced.py ReducedPhase: the reduced search before the full model's polish
 
     def summary_line(self) -> str:
         """One line: 'reached: ...' or 'unreachable: closest tip error ...; chamber ... at its max ...'."""
