@@ -16,9 +16,9 @@ import sys
 from .. import __version__, environment, limits, runtime, signals
 from ..errors import PneumaInputError, require, require_finite
 from ..fem import sizing
-from ..io.units import LENGTH, MEASURES, PRESSURE
+from ..io.units import MEASURES
 from ..render import COLOR_FIELDS, RENDERERS
-from ..render.text import number
+from .progress import step_line
 from .quality import (
     AREA_STEP,
     ORDER_WORDS,
@@ -371,20 +371,6 @@ def build(scene, args: argparse.Namespace):
             f"rest {MEASURE[mesh.dim]} {chamber.rest_area:.3f}{scene.units.suffix(MEASURES[mesh.dim])}"
         )
     return built
-
-
-def step_line(step, increments: int, units) -> str:
-    """The line printed after each step of a ramp: its chambers, the tip, the Newton iterations, cuts, residual."""
-    chambers = "  ".join(
-        f"{name}: x{c.area_ratio:5.3f} p = {number(c.pressure, '8.2f')}{units.suffix(PRESSURE)}"
-        for name, c in step.chambers.items()
-    )
-    tip = f"{step.tip_dy:+.4f}{units.suffix(LENGTH)}"
-    return (
-        f"  step {step.step:3d}/{increments}  {chambers}  tip dy = {tip} "
-        f"rot = {step.tip_rotation:+6.1f} deg  {step.iterations:2d} Newton it  {step.cuts} cuts  "
-        f"residual {step.residual:.1e}"
-    )
 
 
 def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):

@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING
 
 from .. import runtime
 from ..errors import PneumaInputError, parse_number, require, require_finite
-from ..io.output import lock_stems, prepare_directory, reduce_to_stem, save_json
+from ..io.output import lock_stems, prepare_directory, save_json
 from ..signals import holding
 
 if TYPE_CHECKING:
@@ -63,7 +63,6 @@ from .cli import (
     result_stem,
     scene_file,
     scene_for,
-    step_line,
 )
 
 # ReachOptions' defaults (control/inverse.py; tests/test_reach.py checks they agree)
@@ -228,6 +227,8 @@ def run(args: argparse.Namespace) -> dict:
     if args.design:
         return run_design(args)
     if args.output is not None or args.value is not None:
+        from .reach_output import run_output
+
         return run_output(args)
     require(args.tip_dy is None, "--tip-dy needs --design cy")
     explicit_tol = args.tol is not None  # live mode keeps interactive.LIVE_TOL unless --tol is given
@@ -392,55 +393,6 @@ def save_reaches(args: argparse.Namespace, reacher, results: list, stem: str, si
         k, first = unreached[0]
         where = "" if len(results) == 1 else f"target {k} of {len(results)} ({len(unreached)} unreachable): "
         print(where + first.summary_line(), file=sys.stderr)
-    return summary
-
-
-def run_output(args: argparse.Namespace) -> dict:
-    """--output COLUMN --value V: the commands along the scene's schedule at which the column equals V."""
-    from ..control.outputs import reach_output
-    from ..result import scene_sha256
-
-    require(args.output is not None and args.value is not None, "--output COLUMN and --value V go together")
-    wanted = require_finite("--value", args.value)
-    require(
-        args.tip is None and args.targets is None and not args.interactive,
-        "--output works along the scene's schedule (no --tip, --targets, --interactive)",
-    )
-    check_flags(args)
-    scene = scene_file(args) if args.scene else apply_set(scene_for(args, args.cy), args.set)
-    out = prepare_directory(args.out)
-    runtime.init(args.arch)
-    built = build(scene, args)
-    increments = built.scene.increments
-
-    def progress(step, positions, forces) -> None:
-        if not args.quiet:
-            print(f"{step_line(step, increments, scene.units)}  {args.output} = {step.row()[args.output]:.6g}")
-
-    result = reach_output(built, args.output, wanted, newton_options(args), progress=progress, max_cuts=args.max_cuts)
-    commands = ", ".join(f"{name} {c:.6g}" for name, c in zip(scene.chamber_names, result.commands))
-    summary = {
-        "scene": scene.name,
-        "output": args.output,
-        "wanted": wanted,
-        "found": result.found,
-        "value": result.value,
-        "step": result.step,
-        "commands": dict(zip(scene.chamber_names, map(float, result.commands))),
-        "evaluations": len(result.evaluations),
-        "seconds": result.seconds,
-        "all_converged": result.found and result.run.converged,  # exit 1 when not reached
-    }
-    if result.failure is not None:
-        summary["failure"] = result.failure
-    summary["scene_sha256"] = scene_sha256(scene)
-    # named by the output and value sought and what the run changed of the scene: no other run overwrites it
-    # (the column made a plain file name: a chamber's or an obstacle's name in it may hold any character)
-    stem = result_stem(f"{scene.name}_output_{reduce_to_stem(args.output)}{wanted:g}", args, scene)
-    with lock_stems(out, stem):  # no other run writes this file meanwhile
-        path = save_json(out / f"{stem}_summary.json", summary)
-    print(f"wrote {path}")
-    print(f"{result.summary_line()}: {commands}", file=sys.stdout if result.found else sys.stderr)
     return summary
 
 

@@ -123,8 +123,7 @@ class ReachOptions:
 class Pose:
     """An equilibrium: the commands, the displacements (n, d), the tip point (d,) (scene coordinates) and
     rotation (degrees, about z in 3D; continued from the pose it was solved from, fem/tip.py), and the forward
-    solve that found it (Newton iterations, residual, seconds); coordinates: q with u = V q on a reduced model
-    (control/reduced.py), else None."""
+    solve that found it (Newton iterations, residual, seconds); coordinates: q, u = V q, on a reduced model."""
 
     commands: np.ndarray
     u: np.ndarray
@@ -306,9 +305,8 @@ class Reacher:
         return self.pose
 
     def start_from(self, first: Pose) -> Pose:
-        """The equilibrium at first.commands (clipped to the bounds) by Newton from the displacements first.u at
-        those commands, its rotation continued from first.rotation; where that finds none, by settle from the
-        current pose. It becomes current."""
+        """The equilibrium at first.commands (clipped to the bounds) by Newton from first.u, its rotation continued
+        from first.rotation (where that finds none, by settle from the current pose); it becomes current."""
         current = self.pose, self._previous
         commands = np.clip(first.commands, self.lo, self.hi)
         self.pose = Pose(commands, np.asarray(first.u, float), first.tip, first.rotation)
