@@ -210,7 +210,8 @@ class Result(Run):
             if plot:
                 from .render.plots import save_history_png  # matplotlib: 0.6 s of imports a run without a plot skips
 
-                written.append(write_atomic(out / f"{stem}_plot.png", lambda tmp: save_history_png(self, tmp)))
+                # titled by the stem, which names what the run changed of the scene
+                written.append(write_atomic(out / f"{stem}_plot.png", lambda tmp: save_history_png(self, tmp, stem)))
             written.append(save_text(out / f"{stem}_scene.toml", self.scene.to_toml()))
             written.append(save_json(out / f"{stem}_summary.json", {**self.summary(), **(extra or {})}))
         return written

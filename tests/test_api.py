@@ -157,3 +157,17 @@ def test_two_api_runs_of_changed_scenes_saved_in_one_folder_keep_both_results(tm
     assert other[-1] == f"{base.name}_{scene_sha256(second.scene)[:8]}_summary.json"
     assert [p.name for p in first.save(tmp_path, vtk=False, plot=False)] == names
     assert (tmp_path / f"{base.name}_summary.json").exists() and len(list(tmp_path.glob("*_summary.json"))) == 2
+
+
+def test_a_saved_plot_is_titled_by_its_files_stem(tmp_path, monkeypatch):
+    """The history plot Result.save writes is titled by the stem its files take (what the run changed of the scene:
+    the apps' --set suffix, or the hash where another scene's files are there), not the bare scene name."""
+    from taichi_pneuma.render import plots
+
+    titles = []
+    drawn = plots.history_figure
+    monkeypatch.setattr(plots, "history_figure", lambda result, title=None: titles.append(title) or drawn(result))
+    result = tp.simulate(tp.reference_scene(cy=0.15, steps=2, max_area=0.02))
+    result.save(tmp_path, "reference_E2e4", vtk=False)
+    assert titles == ["reference_E2e4"] and (tmp_path / "reference_E2e4_plot.png").stat().st_size > 0
+    assert drawn(result, title="x")._suptitle.get_text() == "x"

@@ -179,9 +179,10 @@ def history_panels(result) -> list[Panel]:
     return [p for p in panels if p.curves]
 
 
-def history_figure(result, figure=None):
+def history_figure(result, figure=None, title: str | None = None):
     """Draw the history of an api.Result on `figure` (by default a new NotebookFigure sized to the panels): one
-    axes per panel of history_panels, in a grid of up to three columns (two for four panels)."""
+    axes per panel of history_panels, in a grid of up to three columns (two for four panels), under `title` (by
+    default the scene's name; a saved figure's, its files' stem, which names what the run changed)."""
     panels = history_panels(result)
     n = max(len(panels), 1)
     cols = 2 if n == 4 else min(n, 3)
@@ -206,7 +207,7 @@ def history_figure(result, figure=None):
         ax.grid(True, alpha=0.3)
         if any(label for label, *_ in panel.curves):
             ax.legend(fontsize="small")
-    fig.suptitle(short(result.scene.name, 80))
+    fig.suptitle(short(title or result.scene.name, 80))
     return fig
 
 
@@ -216,9 +217,10 @@ def short(text: str, most: int = 24) -> str:
     return text if len(text) <= most else text[: most - 3] + "..."
 
 
-def save_history_png(result, path) -> None:
-    """Write the history figure to path (PNG). A name's character without a glyph in the font is drawn as
-    a box; matplotlib says so each time, but the figure is still whole, so it is not passed on as a warning."""
+def save_history_png(result, path, title: str | None = None) -> None:
+    """Write the history figure (under title: history_figure) to path (PNG). A name's character without a glyph in
+    the font is drawn as a box; matplotlib says so each time, but the figure is still whole, so it is not passed on
+    as a warning."""
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="Glyph .* missing from font")
-        history_figure(result).savefig(path, dpi=100, format="png")
+        history_figure(result, title=title).savefig(path, dpi=100, format="png")
