@@ -184,6 +184,24 @@ def test_a_body_at_rest_is_one_colour_and_the_scale_keeps_a_minimum_width(tmp_pa
         view.stop()
 
 
+def test_a_2d_bodys_chambers_are_filled_on_the_page_at_their_walls_positions(tmp_path):
+    """The chambers are holes in a 2D body's triangles: the page fills them (as the videos do), a mesh whose
+    corners are the chamber walls' nodes where the session has them, moved as they inflate."""
+    view = view_of("pneunet_finger", out=tmp_path)
+    try:
+        view.sliders[0].value = 600.0
+        for _ in range(10):
+            view.step()
+        mesh, positions = view.session.mesh, view.session.positions()
+        corners = np.asarray(view.chambers.vertices).reshape(-1, 3)
+        walls = positions[np.concatenate(mesh.chambers)]
+        assert np.allclose(corners[:, 2], 0.0) and len(corners) == 3 * len(view._chamber_faces)
+        assert np.abs(corners[:, None, :2] - walls[None]).sum(axis=2).min(axis=1).max() < 1e-6  # on the walls (float32)
+        assert not np.allclose(walls, mesh.vertices[np.concatenate(mesh.chambers)])  # moved: the chamber inflated
+    finally:
+        view.stop()
+
+
 def test_the_page_draws_the_obstacles_and_moves_them_with_their_offset(tmp_path):
     """gripper_2d's cylinder is an outline in the z = 0 plane, its radius's circle about its centre; a node that
     follows its obstacle's offset (a moving obstacle's, as a schedule plays)."""

@@ -39,7 +39,8 @@ import numpy as np
 
 from ..errors import PneumaInputError, quoted, require
 from ..io.units import LENGTH, PRESSURE
-from ..render.colours import COLORMAP, FACE, OBSTACLE, OBSTACLE_FILL, colormap
+from ..render.colours import CHAMBER_FILL, COLORMAP, FACE, OBSTACLE, OBSTACLE_FILL, colormap
+from ..render.view2d import chamber_triangles
 from .address import check_host, common_port, page_url
 from .gate import guarded_serve
 from .session import FIELDS, LiveSession
@@ -109,6 +110,9 @@ class WebView:
         self._redraw = True  # the body to publish at the next frame whether the state changed or not
         self._driven = 0  # the session's count of commands it set itself, as the sliders show them
         self._inputs: dict = {}  # per control's uuid, the check of a value the page sends for it (_controls)
+        mesh = session.mesh  # a 2D body's chambers are holes in its triangles: filled as the videos fill them
+        self._chamber_faces = chamber_triangles(mesh) if mesh.dim == 2 and len(mesh.chambers) else None
+        self.chambers = None  # their node, once published
         with contextlib.redirect_stdout(io.StringIO()), guarded_serve(self.token, self.refusal):
             # (viser's banner, redirected: its address without the token)
             self.server = viser.ViserServer(host=host, port=common_port(host, port), verbose=False)
@@ -386,6 +390,9 @@ class WebView:
             self._points(self.session.positions()), self.session.triangles, visual=visual, process=False
         )
         self.server.scene.add_glb("/body", cast(bytes, body.export(file_type="glb")))
+        if self._chamber_faces is not None:  # 2D: each chamber's inside filled, as the videos draw it
+            fill = (np.array(CHAMBER_FILL) * 255).round().astype(np.uint8)
+            self.chambers = self._add_triangles("/chambers", body.vertices[self._chamber_faces], fill)
         self.published += 1
 
     def caption(self) -> str:
