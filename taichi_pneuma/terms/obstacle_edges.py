@@ -118,6 +118,7 @@ class ObstacleEdges(Term):
         self.pieces = int32s(pieces)
         self._key: tuple | None = None
         self._state: list = []
+        self._derived: tuple | None = None  # _barriers(True) at the state of _key
         self._rows = self._cols = np.zeros(0, dtype=np.int64)
 
     @staticmethod
@@ -169,7 +170,7 @@ class ObstacleEdges(Term):
                 distance = getattr(self.ipctk, f"{which}_distance")
                 s = np.array([distance(*f, *x[n]) for f, n in zip(held, nodes)])
                 groups.append((nodes, held, s))
-        self._key, self._state = (u.copy(), p.copy()), groups
+        self._key, self._state, self._derived = (u.copy(), p.copy()), groups, None
         return groups
 
     def _point_segment(self, x: np.ndarray, points: np.ndarray, nodes: np.ndarray):
@@ -203,10 +204,14 @@ class ObstacleEdges(Term):
 
     def _barriers(self, derivatives: bool) -> tuple[list, float]:
         """(per kind of pair (nodes, d, b, b', b'', grad s, Hess s) of its pairs within dhat (no derivatives
-        unless asked), the least g = d - R over all)."""
+        unless asked), the least g = d - R over all); with derivatives, computed once per state (the gradient and
+        the Hessian share them)."""
+        groups = self._pairs()
+        if derivatives and self._derived is not None:
+            return self._derived
         radius, dhat, kappa = self.feature_set()[2], self.contact.dhat, self.contact.kappa
         out, least = [], math.inf
-        for nodes, held, s in self._pairs():
+        for nodes, held, s in groups:
             d = np.sqrt(np.maximum(s, 0.0))
             gap = d - radius
             least = min(least, float(gap.min(initial=math.inf)))
@@ -215,6 +220,8 @@ class ObstacleEdges(Term):
             barriers(np.ascontiguousarray(np.maximum(gap[active], 1e-300)), dhat, kappa, values)
             parts = self._derivatives(nodes[active], held[active]) if derivatives else (None, None)
             out.append((nodes[active], d[active], *values.T, *parts))
+        if derivatives:
+            self._derived = (out, least)
         return out, least
 
     def min_gap(self) -> float:
