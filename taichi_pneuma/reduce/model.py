@@ -2,28 +2,29 @@
 
     E_r(q) = sum_{e in E} w_e E_e(V q) + sum_t E_t(V q),
 
-its elastic part hyper-reduced to the sampled elements E with weights w (ecsw.py), every other term (chambers,
-clamp, rollers, effects) evaluated whole on the full field V q and projected. Its gradient and Hessian are
+its elastic part hyper-reduced to the sampled elements E with weights w (ecsw.py), the chambers and the quadratic
+terms (clamp, rollers, gravity) exact in q (exact.py: a chamber's measure is a polynomial in q), every other term
+(fibres, sheets, contact, effects) evaluated whole on the full field V q and projected. Its gradient and Hessian are
 
     g_r = V^T g(V q),   H_r = V^T H(V q) V   (+ c (V^T a)(V^T a)^T for every rank-one part c a a^T),
 
 the elastic part of each from the sampled elements alone: sum_e w_e V_e^T f_e and sum_e w_e V_e^T H_e V_e, with the
 same kernels as the full term's (terms/elastic.py), called on arrays of the sampled elements only: their nodes
 (numbered afresh), rest gradients, quadrature weights times w_e, and parameters. With V = I and w = 1 it is the full
-model. The other terms still cost what they cost in the full model (each works on the full u); in 2D and in the
-shipped 3D scenes they are small next to the elastic term.
+model. A scene with no term of the last kind never touches the full field in a solve: the full model is put at V q
+only for an output (full_state).
 """
 
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import require
 from ..scene.build import BuiltScene
 from ..solve.linsolve import FixedPattern
 from ..terms.base import int32s, vertex_dofs
 from ..terms.elastic import Elasticity, elastic_energy, elastic_gradient, elastic_hessian, inversion_step
+from .exact import ProjectedQuadratic, ReducedChamber, projected
 
 
 class SampledElasticity:
@@ -98,7 +99,9 @@ def fixed_pattern(terms: list) -> tuple[np.ndarray, FixedPattern]:
 class ReducedModel:
     """The reduced energy of a built scene (the module docstring) on the basis V (N, r), with the elements E and
     weights w of its elastic term. training: the commands (S, c) of the equilibria it was trained on and their
-    coordinates q_s = V^T u_s (S, r), from which solves start (solve.py), or None."""
+    coordinates q_s = V^T u_s (S, r), from which solves start (solve.py), or None. chambers: the reduced chambers,
+    in the order of built.chambers; exact: they and the projected quadratic terms; whole: the terms evaluated on
+    the full field."""
 
     def __init__(
         self,
@@ -115,8 +118,13 @@ class ReducedModel:
         self.elements = np.asarray(elements, dtype=np.int64)
         self.weights = np.asarray(weights, dtype=np.float64)
         self.elastic = SampledElasticity(built.elastic, self.basis, self.elements, self.weights)
-        self.others = [t for t in self.model.terms if t is not built.elastic]
-        self._fixed_terms = [t for t in self.others if not t.dynamic and len(t.hessian_pattern()[0])]
+        others = [t for t in self.model.terms if t is not built.elastic]
+        self.chambers = [ReducedChamber(c, self.basis) for c in built.chambers]
+        chamber_terms = {id(c) for c in built.chambers}
+        quadratic = [ProjectedQuadratic(t, self.basis, self.model) for t in others if t.quadratic]
+        self.exact: list[ReducedChamber | ProjectedQuadratic] = [*self.chambers, *quadratic]
+        self.whole = [t for t in others if id(t) not in chamber_terms and not t.quadratic]
+        self._fixed_terms = [t for t in self.whole if not t.dynamic and len(t.hessian_pattern()[0])]
         self._fixed = fixed_pattern(self._fixed_terms)  # found once
         self.training = training
 
@@ -129,46 +137,65 @@ class ReducedModel:
         return (self.basis @ q).reshape(self.model.config.u.shape)
 
     def set_coordinates(self, q: np.ndarray) -> None:
-        """Put the model at q: the sampled elements at V q, and the full model (the other terms) at V q."""
+        """Put the model at q: the sampled elements and the exact terms at q, the full model at V q where a term is
+        evaluated whole."""
         self.elastic.set_coordinates(q)
-        self.model.set_displacements(self.displacements(q))
+        for part in self.exact:
+            part.set_coordinates(q)
+        if self.whole:
+            self.model.set_displacements(self.displacements(q))
+
+    def full_state(self, q: np.ndarray) -> np.ndarray:
+        """Put the full model (every term) at V q, for an output; return V q (n, d)."""
+        u = self.displacements(q)
+        self.model.set_displacements(u)
+        return u
 
     def energy(self) -> float:
-        return self.elastic.energy() + float(sum(t.energy() for t in self.others))
+        parts = [t.energy() for t in self.exact] + [t.energy() for t in self.whole]
+        return self.elastic.energy() + float(sum(parts))
 
     def gradient(self) -> tuple[np.ndarray, float]:
         """(g_r (r,), its force scale): the scale is the sum of the parts' norms, at least the model's force_floor
         (as EnergyModel.gradient)."""
-        parts = [self.elastic.gradient()] + [self.basis.T @ t.gradient().ravel() for t in self.others]
+        parts = [self.elastic.gradient()] + [t.gradient() for t in self.exact]
+        parts += [self.basis.T @ t.gradient().ravel() for t in self.whole]
         scale = max(sum(float(np.linalg.norm(p)) for p in parts), self.model.force_floor)
         return np.sum(parts, axis=0), scale
 
     def hessian(self, psd_only: bool = False) -> np.ndarray:
-        """H_r (r, r), the terms' rank-one parts included (dense: r is small). The other terms' sparse Hessians are
+        """H_r (r, r), the terms' rank-one parts included (dense: r is small). The whole terms' sparse Hessians are
         projected on the rows of V at the DOFs they touch only: the fixed terms' summed on their pattern, found once
         (solve/linsolve.py FixedPattern), a dynamic term's (a contact's) on the pattern of its last values."""
         H = self.elastic.hessian(psd_only)
+        for part in self.exact:
+            H += part.hessian(psd_only)
         touched, pattern = self._fixed
         if len(touched):
-            H += self._projected(touched, pattern.matrix([t.hessian_values(psd_only) for t in self._fixed_terms]))
-        for term in self.others:
+            V = self.basis[touched]
+            H += V.T @ (pattern.matrix([t.hessian_values(psd_only) for t in self._fixed_terms]) @ V)
+        for term in self.whole:
             if term.dynamic:
                 values = term.hessian_values(psd_only)  # first: its pattern is that of its last values
-                rows, cols = term.hessian_pattern()
-                touched, local = np.unique(np.concatenate([rows, cols]), return_inverse=True)
-                n = len(touched)
-                H += self._projected(touched, sp.csr_matrix((values, (local[: len(rows)], local[len(rows) :])), (n, n)))
-        for dofs, vector, c in (part for t in self.others for part in t.low_rank()):
+                H += projected(self.basis, *term.hessian_pattern(), values)
+        for dofs, vector, c in (part for t in self.whole for part in t.low_rank()):
             a = self.basis[dofs].T @ vector
             H += c * np.outer(a, a)
         return H
 
-    def _projected(self, touched: np.ndarray, block: sp.csr_matrix) -> np.ndarray:
-        """V_T^T B V_T for a sparse block B on the DOFs `touched` (V_T: those rows of V)."""
-        V = self.basis[touched]
-        return V.T @ (block @ V)
-
     def max_step(self, dq: np.ndarray) -> float:
-        """Largest safe step fraction along dq: the sampled elements' and every other term's bound along V dq."""
-        dx = self.displacements(dq)
-        return min([self.elastic.max_step(dq), *(t.max_step(dx) for t in self.others)])
+        """Largest safe step fraction along dq: the sampled elements', the exact terms' and every whole term's bound
+        along V dq."""
+        bounds = [self.elastic.max_step(dq), *(t.max_step(dq) for t in self.exact)]
+        if self.whole:
+            dx = self.displacements(dq)
+            bounds += [t.max_step(dx) for t in self.whole]
+        return min(bounds)
+
+    def command_forces(self) -> np.ndarray:
+        """-dr_r/dc (r, m): column j chamber j's reduced command force (exact.ReducedChamber.command_force)."""
+        return (
+            np.column_stack([c.command_force() for c in self.chambers])
+            if self.chambers
+            else np.zeros((self.n_modes, 0))
+        )

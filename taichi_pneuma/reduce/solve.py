@@ -18,9 +18,9 @@ The sensitivity of a reduced equilibrium to the commands c: differentiating g_r(
 
     H_r dq/dc = -V^T dr/dc,     du/dc = V dq/dc,
 
-with H_r the exact reduced Hessian (never the PSD-projected one: that is no derivative of g_r) and -dr/dc the
-chambers' command forces on the full field V q (solve/sensitivity.py command_forces): the chambers are not
-hyper-reduced, so their command derivative projects exactly. The tip Jacobian follows from du/dc as the full one does.
+with H_r the exact reduced Hessian (never the PSD-projected one: that is no derivative of g_r) and -V^T dr/dc the
+chambers' reduced command forces s(A) dA/dq (exact.py: exact in q, so the derivative of g_r itself). The tip
+Jacobian follows from du/dc as the full one does.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ import numpy as np
 import scipy.linalg
 
 from ..solve.newton import ARMIJO_C1, MAX_HALVINGS, STEP_SAFETY
-from ..solve.sensitivity import command_forces, tip_jacobian
+from ..solve.sensitivity import tip_jacobian
 from ..solve.simulate import MAX_CUTS, NoEquilibrium
 from .model import ReducedModel
 from .snapshots import nearest
@@ -200,7 +200,7 @@ def sensitivity(model: ReducedModel, commands: np.ndarray, q: np.ndarray) -> Red
     factorisation of the dense H_r; the model is left at q and those commands."""
     model.built.set_commands(commands)
     model.set_coordinates(q)
-    rhs = model.basis.T @ command_forces(model.built)
+    rhs = model.command_forces()
     H = model.hessian(psd_only=False)
     try:
         dq = scipy.linalg.cho_solve(scipy.linalg.cho_factor(H), rhs)

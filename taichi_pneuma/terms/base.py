@@ -152,12 +152,15 @@ class Term:
     kinked: whether the term is piecewise smooth (see choose_branches).
     dynamic: whether its Hessian's pattern follows the state (a contact term's active pairs): hessian_pattern() is
     then that of its last hessian_values() call, and the model's fixed pattern leaves it out (EnergyModel.assemble).
+    quadratic: whether its energy is a polynomial of degree <= 2 in u, the same at every command (a clamp, a roller,
+    gravity): a reduced model projects it once (reduce/exact.py).
     """
 
     name = "term"
     reports_contact = False
     kinked = False  # piecewise smooth: choose_branches may move pieces to other branches
     dynamic = False  # its Hessian's pattern changes with the state
+    quadratic = False  # E(u) = E(0) + g(0).u + 1/2 u^T K u, K constant, whatever the commands
 
     @property
     def reported_as(self) -> str:

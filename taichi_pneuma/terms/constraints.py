@@ -17,6 +17,8 @@ from .base import Term
 class NodalPenalty(Term):
     """Springs of stiffness K on the components P u_i of the displacements of the given nodes."""
 
+    quadratic = True
+
     def __init__(self, config, nodes: np.ndarray, projector: np.ndarray, stiffness: float, name: str):
         self.config = config
         self.name = name

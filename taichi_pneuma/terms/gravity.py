@@ -15,6 +15,7 @@ class Gravity(Term):
     """Weight of lumped vertex masses m_i under gravitational acceleration g along -y."""
 
     name = "gravity"
+    quadratic = True
 
     def __init__(self, config, masses: np.ndarray, g: float):
         self.config = config

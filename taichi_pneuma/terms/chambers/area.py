@@ -64,15 +64,15 @@ class AreaChamber(Chamber):
         """p = k (A* - A): positive when the chamber pushes its walls outward."""
         return self.k * (self.target_area - area)
 
-    def energy(self) -> float:
-        return 0.5 * self.k * (self.area() - self.target_area) ** 2
+    def energy_at(self, area: float) -> float:
+        return 0.5 * self.k * (area - self.target_area) ** 2
 
-    def low_rank(self) -> list[tuple[np.ndarray, np.ndarray, float]]:
-        return [(self.dofs, self.area_and_gradient()[1].ravel(), self.k)]
+    def stiffness_at(self, area: float) -> float:
+        return self.k
 
-    def command_force(self) -> np.ndarray:
-        """-dr/d(ratio) = k A_rest dA/dx on the wall DOFs."""
-        return self.k * self.rest_area * self.area_and_gradient()[1].ravel()
+    def command_scale_at(self, area: float) -> float:
+        """-dr/d(ratio) = k A_rest dA/dx."""
+        return self.k * self.rest_area
 
     def describe(self, command: float, reached: float) -> str:
         return f"commanded area {command * self.rest_area:.6g} ({command:.4g} x rest)"

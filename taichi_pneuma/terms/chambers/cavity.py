@@ -192,8 +192,10 @@ class VolumeForm:
         volume = self.measure_and_gradient(u)[0]
         return None if volume > 0 else f"wall turned inside out (enclosed volume {volume:.4g})"
 
-    def hessian(self) -> np.ndarray:
+    def hessian(self, u: np.ndarray | None = None) -> np.ndarray:
+        """d2V/dx2 on the pattern (rows, cols), at the model's displacements or at u (n, 3)."""
         k = self.faces.shape[1]
         out = np.empty((len(self.faces), 9 * k * k))
-        wall_volume_hessian(self.rest, self.config.u, *self._data(), out)
+        u = self.config.u if u is None else np.ascontiguousarray(u, dtype=np.float64)
+        wall_volume_hessian(self.rest, u, *self._data(), out)
         return out.ravel()

@@ -78,8 +78,7 @@ class ClosedGasChamber(Chamber):
     def pressure_at(self, area: float) -> float:
         return self.absolute_pressure(area) - self.kind.atmosphere
 
-    def energy(self) -> float:
-        area = self.area()
+    def energy_at(self, area: float) -> float:
         gas, p_atm, gamma = area + self.outside, self.kind.atmosphere, self.kind.gamma
         if gas <= 0:
             return math.inf
@@ -87,21 +86,27 @@ class ClosedGasChamber(Chamber):
             return -p_atm * self.air * math.log(gas) + p_atm * area
         return p_atm * self.air**gamma * gas ** (1 - gamma) / (gamma - 1) + p_atm * area
 
-    def low_rank(self) -> list[tuple[np.ndarray, np.ndarray, float]]:
-        area, gradient = self.area_and_gradient()
-        return [(self.dofs, gradient.ravel(), self.kind.gamma * self.absolute_pressure(area) / (area + self.outside))]
+    def stiffness_at(self, area: float) -> float:
+        """-dp/dA = gamma p_abs / G."""
+        return self.kind.gamma * self.absolute_pressure(area) / (area + self.outside)
 
-    def command_force(self) -> np.ndarray:
-        """-dr/dq = gamma p_abs / V_atm dA/dx on the wall DOFs (more air in the same gas volume)."""
-        area, gradient = self.area_and_gradient()
-        return self.kind.gamma * self.absolute_pressure(area) / self.air * gradient.ravel()
+    def command_scale_at(self, area: float) -> float:
+        """-dr/dq = gamma p_abs / V_atm dA/dx (more air in the same gas volume)."""
+        return self.kind.gamma * self.absolute_pressure(area) / self.air
 
     def max_step(self, dx: np.ndarray) -> float:
         """Largest step fraction t along dx that keeps the gas volume positive: A(u + t dx) is a polynomial of
-        degree d (the dimension: an area is quadratic, a volume cubic in the positions), so G(t) is interpolated
-        through t = 0 .. d and its smallest positive real root returned (inf if none)."""
+        degree d (the dimension: an area is quadratic, a volume cubic in the positions), so it is interpolated
+        through t = 0 .. d (step_within)."""
         t = np.arange(self.config.dim + 1.0)
-        gas = [self.area_and_gradient(self.config.u + s * dx)[0] + self.outside for s in t]
-        roots = np.polynomial.polynomial.polyroots(np.polynomial.polynomial.polyfit(t, gas, len(t) - 1))
+        measures = [self.area_and_gradient(self.config.u + s * dx)[0] for s in t]
+        return self.step_within(np.polynomial.polynomial.polyfit(t, measures, len(t) - 1))
+
+    def step_within(self, measure: np.ndarray) -> float:
+        """The smallest positive real root of the gas volume G(t) = A(t) + c, A(t) the polynomial of coefficients
+        `measure` (lowest first) in the step fraction t (inf if none)."""
+        gas = np.array(measure, dtype=np.float64)
+        gas[0] += self.outside
+        roots = np.polynomial.polynomial.polyroots(gas)
         ahead = roots.real[(np.abs(roots.imag) <= 1e-9 * np.abs(roots)) & (roots.real > 0)]
         return float(ahead.min()) if len(ahead) else math.inf

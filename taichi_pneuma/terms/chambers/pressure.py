@@ -57,9 +57,9 @@ class PressureChamber(Chamber):
     def pressure(self) -> float:
         return self.prescribed
 
-    def energy(self) -> float:
-        return -self.prescribed * self.area()
+    def energy_at(self, area: float) -> float:
+        return -self.prescribed * area
 
-    def command_force(self) -> np.ndarray:
-        """-dr/dp = dA/dx on the wall DOFs."""
-        return self.area_and_gradient()[1].ravel()
+    def command_scale_at(self, area: float) -> float:
+        """-dr/dp = dA/dx."""
+        return 1.0

@@ -20,8 +20,6 @@ small dead volume passes the peak like volume control and a large one snaps like
 
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from ...errors import require, require_finite
 from ...io.units import AREA, unit
 from .closed_gas import ClosedGas, ClosedGasChamber
@@ -69,7 +67,6 @@ class SyringeChamber(ClosedGasChamber):
         tube_and_barrel = self.kind.dead_volume + self.kind.syringe_volume
         self.air, self.outside = self.rest_area + tube_and_barrel, tube_and_barrel - float(displaced)
 
-    def command_force(self) -> np.ndarray:
-        """-dr/d(dV) = gamma p_abs / G dA/dx on the wall DOFs (the same air in a smaller gas volume)."""
-        area, gradient = self.area_and_gradient()
-        return self.kind.gamma * self.absolute_pressure(area) / (area + self.outside) * gradient.ravel()
+    def command_scale_at(self, area: float) -> float:
+        """-dr/d(dV) = gamma p_abs / G dA/dx (the same air in a smaller gas volume)."""
+        return self.stiffness_at(area)

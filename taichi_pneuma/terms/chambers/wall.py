@@ -34,6 +34,7 @@ so it is returned as sparse triplets unless the solver asks for the PSD Hessian 
 PSD elastic and clamp Hessians keep projected Newton a descent method).
 """
 
+import math
 from typing import TypeAlias
 
 import numpy as np
@@ -129,7 +130,8 @@ class AreaForm:
         u = self.config.u if u is None else np.ascontiguousarray(u, dtype=np.float64)
         return wall_area(self.rest, u, self.loop, self.pairs, self.weights, gradient), gradient
 
-    def hessian(self) -> np.ndarray:
+    def hessian(self, u: np.ndarray | None = None) -> np.ndarray:
+        """d2A/dx2 on the pattern (rows, cols): constant, the same at every u."""
         return self._hessian
 
     def fault(self, u: np.ndarray) -> str | None:
@@ -182,9 +184,37 @@ class Chamber(Term):
         """The pressure p(A) the kind gives at enclosed measure A."""
         raise NotImplementedError
 
-    def command_force(self) -> np.ndarray:
-        """-dr/dq on the wall's DOFs (self.dofs): the derivative of the equilibrium residual by the command."""
+    def energy_at(self, area: float) -> float:
+        """The kind's energy psi(A) at enclosed measure A (with dpsi/dA = -p(A))."""
         raise NotImplementedError
+
+    def stiffness_at(self, area: float) -> float:
+        """-dp/dA at enclosed measure A: the weight c of the rank-one part c dA dA^T of the Hessian (0: none)."""
+        return 0.0
+
+    def command_scale_at(self, area: float) -> float:
+        """s(A) with -dr/dq = s dA/dx: the residual's derivative by the command, a multiple of the wall's normal."""
+        raise NotImplementedError
+
+    def step_within(self, measure: np.ndarray) -> float:
+        """The largest step fraction t the kind allows, the measure along the step being the polynomial A(t) of
+        coefficients `measure` (lowest first): none but the gas kinds' bound it (inf)."""
+        return math.inf
+
+    def energy(self) -> float:
+        return self.energy_at(self.area())
+
+    def low_rank(self) -> list[tuple[np.ndarray, np.ndarray, float]]:
+        """The rank-one part -p'(A) dA dA^T, where the kind's pressure depends on A."""
+        area, gradient = self.area_and_gradient()
+        stiffness = self.stiffness_at(area)
+        return [(self.dofs, gradient.ravel(), stiffness)] if stiffness else []
+
+    def command_force(self) -> np.ndarray:
+        """-dr/dq = s(A) dA/dx on the wall's DOFs (self.dofs): the derivative of the equilibrium residual by the
+        command."""
+        area, gradient = self.area_and_gradient()
+        return self.command_scale_at(area) * gradient.ravel()
 
     def area_and_gradient(self, u: np.ndarray | None = None) -> tuple[float, np.ndarray]:
         """A(x) and dA/dx on the wall nodes, (k, d) in the order of loop_vertices, at the model's displacements
