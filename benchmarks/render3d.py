@@ -88,7 +88,7 @@ def live(frames: int, peak: float = 900.0, idle: int = 30, order: int = 1) -> li
     every slider move (warm-started); "one step" is the window's LiveEquilibrium (one Newton step per frame, the
     previous factorisation reused while the slider moves), followed by idle frames (at most `idle`) until it
     converges at the last command; its distance from the full solve there is recorded."""
-    from taichi_pneuma.realtime.interactive import LIVE_TOL, LiveEquilibrium
+    from taichi_pneuma.realtime.equilibrium import LIVE_TOL, LiveEquilibrium
     from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 
     built, boundary, walls = live_scene(peak=peak, order=order)
@@ -167,7 +167,7 @@ def live_window(frames: int, peak: float = 900.0) -> dict:
     """The interactive window (explore_3d, needs a display) on the coarse PneuNet with the live solve
     (LiveEquilibrium): the six chambers' pressure moved 0 -> peak over `frames` frames (scripted, not the
     slider), then held for as many frames; its frames per second."""
-    from taichi_pneuma.realtime.interactive import LiveEquilibrium
+    from taichi_pneuma.realtime.equilibrium import LiveEquilibrium
 
     built, boundary, walls = live_scene(peak=peak)
     state, ramp = LiveEquilibrium(built), iter(np.linspace(0.0, peak, frames + 1))

@@ -1,11 +1,11 @@
-"""The 3D live window's solve (realtime/interactive.py LiveEquilibrium): one Newton step per frame, the previous
+"""The 3D live window's solve (realtime/equilibrium.py LiveEquilibrium): one Newton step per frame, the previous
 frame's factorisation reused while a slider moves. A slider that comes to rest settles to the equilibrium a
 full Newton solve finds at its final commands, and no frame on the way inverts a tetrahedron."""
 
 import numpy as np
 import pytest
 
-from taichi_pneuma.realtime.interactive import LiveEquilibrium
+from taichi_pneuma.realtime.equilibrium import LiveEquilibrium
 from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from tests.solid_meshes import box_with_cavity, scene_of

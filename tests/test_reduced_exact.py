@@ -1,17 +1,21 @@
 """The chambers and quadratic terms of a reduced model, exact in its coordinates (taichi_pneuma/reduce/exact.py),
 against the full terms evaluated at u = V q, on an arbitrary orthonormal basis: a quadratic 3D box with a closed
 cavity (its volume a cubic in u), each chamber kind, and the quarter shell whose cavity is closed by symmetry
-planes (an open wall)."""
+planes (an open wall); and the elastic term restricted to sampled elements (Elasticity.restricted), with one
+pressure per element too."""
 
 import numpy as np
 import pytest
 from solid_meshes import box_with_cavity, scene_of, shell_octant
 
+from taichi_pneuma.materials import IsochoricMaterial, IsochoricPolynomial
 from taichi_pneuma.reduce.exact import ReducedChamber, projected
 from taichi_pneuma.reduce.model import ReducedModel
 from taichi_pneuma.scene.build import Material
 from taichi_pneuma.scene.schedule import ChamberSchedule
+from taichi_pneuma.terms import VOLUMETRIC
 from taichi_pneuma.terms.chambers.syringe import Syringe
+from taichi_pneuma.terms.model import EnergyModel
 
 MODES = 6
 COMMANDS = {"pressure": 800.0, "area": 1.4, "closed_gas": 0.3, "syringe": 0.2}
@@ -116,3 +120,35 @@ def test_the_reduced_models_energy_gradient_and_hessian_agree_with_finite_differ
     H = model.hessian()
     assert (e_plus - e_minus) / (2 * h) == pytest.approx(g @ direction, rel=1e-6)
     assert np.linalg.norm((g_plus - g_minus) / (2 * h) - H @ direction) <= 1e-6 * np.linalg.norm(H @ direction)
+
+
+@pytest.mark.parametrize("volumetric", ["element", "mixed"])
+def test_the_restricted_elastic_term_is_the_weighted_sum_of_its_elements(volumetric):
+    """Elasticity.restricted, what ECSW samples and the reduced model evaluates: on a quadratic shell of a
+    nearly incompressible Yeoh rubber (with one pressure per element too), the term on all elements is the full
+    term, weighted it is the weighted sum of the one-element terms, and its elements apart give each element's own
+    forces, which sum to the full gradient."""
+    mesh = shell_octant(2, 1, 2)
+    m = mesh.n_elements
+    parameters = np.tile(IsochoricMaterial("yeoh", 1.0, C20=0.2, poisson_ratio=0.49).row(), (m, 1))
+    model = EnergyModel(mesh.vertices, 1.0, 1e-12)
+    term = model.add(VOLUMETRIC[volumetric](model.config, mesh.elements, IsochoricPolynomial, parameters))
+    rng = np.random.default_rng(2)
+    model.set_displacements(0.03 * rng.standard_normal(mesh.vertices.shape))
+
+    def at_state(restricted):
+        restricted.config.u[:] = model.config.u[restricted.vertices]
+        return restricted
+
+    whole = at_state(term.restricted(np.arange(m), np.ones(m)))
+    assert whole.energy() == pytest.approx(term.energy(), rel=1e-12)
+    assert np.allclose(
+        whole.gradient(), term.gradient()[whole.vertices], rtol=0, atol=1e-12 * np.abs(term.gradient()).max()
+    )
+    weights = 0.5 + rng.random(m)
+    singles = [at_state(term.restricted(np.array([e]), np.ones(1))).energy() for e in range(m)]
+    assert at_state(term.restricted(np.arange(m), weights)).energy() == pytest.approx(weights @ singles, rel=1e-12)
+    apart = at_state(term.restricted(np.arange(m), np.ones(m), apart=True))
+    summed = np.zeros_like(model.config.u)
+    np.add.at(summed, apart.vertices, apart.gradient())
+    assert np.allclose(summed, term.gradient(), rtol=0, atol=1e-12 * np.abs(term.gradient()).max())

@@ -89,6 +89,12 @@ def parser() -> argparse.ArgumentParser:
         help="open a window (needs a display) with a slider for the commanded area (3D: one per chamber, "
         "the view turned by dragging); re-solves live",
     )
+    p.add_argument(
+        "--reduced",
+        metavar="MODEL.npz",
+        help="with --interactive on a 3D scene: solve on this reduced model of the scene (pneuma-reduce) inside its "
+        "training range (outside: the full)",
+    )
     return p
 
 
@@ -100,6 +106,10 @@ def run(args: argparse.Namespace) -> dict:
     stem = result_stem(scene.name if args.scene else f"inflate_cy{args.cy:+.2f}", args, scene)
     size = rendering_flags(args, scene.geometry.dim)
     require(not (args.interactive and args.no_video), "--interactive and --no-video exclude each other")
+    require(
+        args.reduced is None or (args.interactive and scene.geometry.dim == 3),
+        f"--reduced {args.reduced} needs --interactive on a 3D scene (the live page: pneuma-serve --reduced)",
+    )
     if args.interactive:
         require(
             bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")),
@@ -114,7 +124,7 @@ def run(args: argparse.Namespace) -> dict:
     if args.interactive and scene.geometry.dim == 3:
         from ..realtime.interactive import explore_solid
 
-        return explore_solid(scene, size, newton_options(args), budget=budget(args))
+        return explore_solid(scene, size, newton_options(args), budget=budget(args), reduced=args.reduced)
     if args.interactive:
         from ..realtime.interactive import explore
 

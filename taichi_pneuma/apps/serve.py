@@ -47,6 +47,11 @@ def parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--field", default="max_stretch", help="the field the body is first coloured by")
     p.add_argument("--seconds", type=float, default=None, help="stop after this many seconds (default: Ctrl-C)")
+    p.add_argument(
+        "--reduced",
+        metavar="MODEL.npz",
+        help="solve on this reduced model of the scene (pneuma-reduce) inside its training range (outside: the full)",
+    )
     add_ramp_arguments(p)
     return p
 
@@ -68,7 +73,7 @@ def run(args: argparse.Namespace) -> dict:
     stem = result_stem(scene.name if args.scene else f"inflate_cy{args.cy:+.2f}", args, scene) + "_live"
     out = prepare_directory(args.out)
     runtime.init(args.arch)
-    session = LiveSession(scene, budget(args), newton_options(args))
+    session = LiveSession(scene, budget(args), newton_options(args), args.reduced)
     view = WebView(session, out, stem, args.host, args.port, args.field)
     if args.host not in ("127.0.0.1", "localhost", "::1"):
         where = {"": "every address", "0.0.0.0": "every IPv4 address", "::": "every IPv6 address"}.get(args.host)
@@ -76,6 +81,10 @@ def run(args: argparse.Namespace) -> dict:
             f"warning: listening on {where or args.host}: anyone who can reach it and has the URL can steer this scene"
         )
     note = locking_note(scene, session.mesh)
+    if session.reduced is not None:
+        model = session.reduced
+        elements = f"{len(model.elements)} of {session.mesh.n_elements} elements"
+        print(f"reduced model {args.reduced}: {model.n_modes} modes, {elements}, solved live inside its training range")
     print(f"scene {scene.name}: {session.mesh.n_vertices} nodes{note}; the live page (keep its token private):")
     print(f"  {view.url}", flush=True)
     print(f"from another machine: ssh -L {view.port}:localhost:{view.port} <this machine>, then the same URL")

@@ -13,7 +13,8 @@ for the target) the full model is solved at c_r by Newton from the reconstructed
 and the full Reacher polishes the commands from there (no restarts: a few Gauss-Newton iterations) to its own
 tolerance, so the answer is the full model's. The reduced phase is judged by the indicator at c_r (reduce/solve.py
 indicator: the full residual of V q, and the commands outside the training box, where the reduced model is
-extrapolated and the polish has more to do).
+extrapolated and the polish has more to do). Without the polish (polish=False: a live view's dragged target, where
+a frame cannot wait for the full model) the answer is the reduced model's.
 """
 
 from __future__ import annotations
@@ -60,7 +61,8 @@ class ReducedPhase:
 class ReducedReacher(Reacher):
     """A Reacher whose search runs on the reduced model and whose answers are polished by the full Reacher (the
     module docstring). bounds, options, newton (the full Newton's options), max_cuts, start: as Reacher's; the
-    reduced model's poses carry their coordinates q. Its full Newton solver is the polish's."""
+    reduced model's poses carry their coordinates q. Its full Newton solver is the polish's; polish=False leaves
+    the answer the reduced search's."""
 
     def __init__(
         self,
@@ -70,8 +72,9 @@ class ReducedReacher(Reacher):
         newton: NewtonOptions | None = None,
         max_cuts: int = MAX_CUTS,
         start=None,
+        polish: bool = True,
     ):
-        self.reduced = model
+        self.reduced, self.polish = model, polish
         self.polisher: Reacher | None = None  # the full Reacher, made at the first polish
         super().__init__(model.built, bounds, options, newton, max_cuts, start)
 
@@ -117,6 +120,8 @@ class ReducedReacher(Reacher):
         path the reduced search's then the polish's, its `reduced` the ReducedPhase. The reduced pose stays
         current, so the next reach searches from it."""
         found = super().reach(target)
+        if not self.polish:
+            return found
         assert found.pose.coordinates is not None
         check = indicator(self.reduced, found.pose.commands, found.pose.coordinates)
         started, solves, iterations = time.perf_counter(), 0, 0

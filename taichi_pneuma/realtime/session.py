@@ -31,15 +31,19 @@ import time
 import numpy as np
 
 from ..control.inverse import Reacher, ReachOptions
+from ..control.reduced import ReducedReacher
 from ..errors import require, require_finite
 from ..fem.fields import ElementFields
 from ..limits import Budget
+from ..reduce.store import load_reduced
 from ..result import Result
 from ..scene.build import Scene
 from ..scene.targets import Target
 from ..solve.newton import NewtonOptions, SolveRecord
 from ..solve.simulate import MAX_CUTS, step_record
-from .interactive import LIVE_TOL, LiveEquilibrium, chamber_sliders
+from .equilibrium import LIVE_TOL, LiveEquilibrium
+from .interactive import chamber_sliders
+from .reduced import ReducedOrFull
 
 NO_EQUILIBRIUM = "no equilibrium at this command"  # the state's words where none was found
 PLAY_INCREMENT = 0.25  # the schedule's step advanced per settled frame while playing (a quarter increment)
@@ -55,10 +59,14 @@ FIELDS = {  # the fields a live view colours the body by: label and unit kind (N
 class LiveSession:
     """One scene built (in the budget) and held live: set commands, play, reach; advance() once per frame."""
 
-    def __init__(self, scene: Scene, budget: Budget = Budget(), newton: NewtonOptions | None = None):
+    def __init__(self, scene: Scene, budget: Budget = Budget(), newton: NewtonOptions | None = None, reduced=None):
         self.scene, self.built = scene, scene.build(budget)
         mesh = self.mesh = self.built.mesh
-        self.equilibrium = LiveEquilibrium(self.built, newton or NewtonOptions(tol=LIVE_TOL))
+        options = newton or NewtonOptions(tol=LIVE_TOL)
+        self.reduced = None if reduced is None else load_reduced(reduced, self.built)
+        self.equilibrium: LiveEquilibrium | ReducedOrFull = (
+            LiveEquilibrium(self.built, options) if self.reduced is None else ReducedOrFull(self.reduced, options)
+        )
         self.sliders = chamber_sliders(scene)
         self.commands = np.array([s.value for s in self.sliders], dtype=float)
         self.triangles = mesh.display_triangles()
@@ -131,7 +139,7 @@ class LiveSession:
         if live.converged:
             self._last = (np.array(live.commands), live.u.copy(), live.residual)
             self._solving = self.commands.copy()  # a cut-back command reached: on to the commands
-        elif live.stuck or live.fault is not None or live.iterations >= live.solver.options.max_iterations:
+        elif live.stuck or live.fault is not None or live.iterations >= live.options.max_iterations:
             return self._cut()
         self._keep()
         return changed
@@ -169,12 +177,13 @@ class LiveSession:
             self.commands, self.failed = np.array(self.equilibrium.commands), None
         if self._reacher is None:
             bounds = (np.array([s.low for s in self.sliders]), np.array([s.high for s in self.sliders]))
-            self._reacher = Reacher(
-                self.built,
-                bounds,
-                ReachOptions(restarts=0, reuse_factor=True),
-                self.equilibrium.solver.options,
-                start=self.commands,
+            options = ReachOptions(restarts=0, reuse_factor=True)
+            self._reacher = (
+                Reacher(self.built, bounds, options, self.equilibrium.options, start=self.commands)
+                if self.reduced is None
+                else ReducedReacher(
+                    self.reduced, bounds, options, self.equilibrium.options, start=self.commands, polish=False
+                )
             )
         reacher = self._reacher
         if not np.array_equal(reacher.pose.commands, self.commands) or not np.array_equal(
@@ -243,13 +252,14 @@ class LiveSession:
             "tip": np.asarray(tip, dtype=float),
             "rotation": float(rotation),
             "commands": self.commands.copy(),
-            "pressures": np.array([c.pressure() for c in self.built.chambers]),
+            "pressures": live.pressures(),
             "iterations": live.iterations,
             "residual": float(live.residual),
             "state": NO_EQUILIBRIUM if self.failed is not None else live.state,
             "schedule_step": self.schedule_step,
             "playing": self.playing,
             "reach_error": self.reached,
+            "model": live.model_line if isinstance(live, ReducedOrFull) else None,
         }
 
     def result(self) -> Result:

@@ -410,6 +410,8 @@ class WebView:
             f"Newton {figures['iterations']} it, residual {figures['residual']:.1e} ({figures['state']})",
             f"{self.fps:.1f} frames/s",
         ]
+        if figures["model"] is not None:
+            lines.insert(3, figures["model"])
         if figures["playing"] or figures["schedule_step"]:
             lines.append(
                 f"schedule step {figures['schedule_step']:g} of {self.session.scene.schedule.increments}"
@@ -471,10 +473,11 @@ class WebView:
             self.server.stop()
 
 
-def live(scene, out="out", port: int = 0, field: str = "max_stretch", height: int = 560) -> WebView:
+def live(scene, out="out", port: int = 0, field: str = "max_stretch", height: int = 560, reduced=None) -> WebView:
     """The live page of a scene (a Scene, a shipped scene's name or a scene file) in a Jupyter notebook, served
     from this process: shown as the cell's output (an iframe of the page), its frames run as a task of the
     kernel's event loop between cells (the kernel's main thread, where Taichi runs). view.stop() ends it.
+    reduced: the file of a reduced model of the scene (pneuma-reduce), solved live inside its training range.
     Outside a running event loop (a script), use pneuma-serve or WebView(...).run()."""
     from ..runtime import ensure_initialised
     from ..scene import scenefile
@@ -487,7 +490,7 @@ def live(scene, out="out", port: int = 0, field: str = "max_stretch", height: in
         require(False, "tp.live needs a running event loop (a Jupyter kernel); in a script run pneuma-serve")
     ensure_initialised()
     scene = scene if not isinstance(scene, str) else scenefile.load_scene(find(scene))
-    view = WebView(LiveSession(scene), out, port=port, field=field)
+    view = WebView(LiveSession(scene, reduced=reduced), out, port=port, field=field)
     view.height = height
     view.task = loop.create_task(view.run_async())
     return view

@@ -15,8 +15,8 @@ solve starts afresh, the elements are added in batches that grow with the set (t
 at once): a few more elements than one at a time, at a fraction of the time (pneunet_finger, 36 modes, 83 snapshots:
 97 s one at a time).
 
-The per-element forces f_e come from the same kernel as the whole term's (elastic_gradient), called on a mesh whose
-elements share no node: element e's node a is node k e + a of a copy of the nodes, so nothing is summed.
+The per-element forces f_e come from the whole term's own class and kernels, on a mesh whose elements share no node
+(Elasticity.restricted, apart): element e's node a is node k e + a of a copy of the nodes, so nothing is summed.
 """
 
 from __future__ import annotations
@@ -26,22 +26,18 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import nnls
 
-from ..terms.base import int32s, vertex_dofs
-from ..terms.elastic import Elasticity, elastic_gradient
+from ..terms.base import vertex_dofs
+from ..terms.elastic import Elasticity
 
 BATCH = 10  # sparse_nnls takes the len(taken) // BATCH most correlated elements at once (at least one)
 
 
-def element_forces(elastic: Elasticity, u: np.ndarray) -> np.ndarray:
-    """f_e(u) (m, k d): every element's nodal forces dE_e/dx at displacements u (n, d), its DOFs interleaved."""
-    m, k = elastic.nodes.shape
-    d = elastic.dim
-    rest = np.ascontiguousarray(elastic.config.rest[elastic.nodes].reshape(m * k, d))
-    apart = np.ascontiguousarray(np.asarray(u).reshape(-1, d)[elastic.nodes].reshape(m * k, d))
-    nodes = int32s(np.arange(m * k).reshape(m, k))
-    out = np.empty_like(rest)
-    elastic_gradient(elastic.law, d, rest, apart, nodes, elastic.grads, elastic.weights, elastic.parameters, out)
-    return out.reshape(m, k * d)
+def element_forces(apart: Elasticity, u: np.ndarray) -> np.ndarray:
+    """f_e(u) (m, k d): every element's nodal forces dE_e/dx at displacements u (n, d), its DOFs interleaved, from
+    the term restricted to all its elements apart (Elasticity.restricted: nothing summed)."""
+    apart.config.u[:] = np.asarray(u).reshape(-1, apart.dim)[apart.vertices]
+    m, k = apart.nodes.shape
+    return apart.gradient().reshape(m, k * apart.dim)
 
 
 def element_basis(elastic: Elasticity, basis: np.ndarray) -> np.ndarray:
@@ -53,7 +49,9 @@ def element_basis(elastic: Elasticity, basis: np.ndarray) -> np.ndarray:
 def projected_forces(elastic: Elasticity, basis: np.ndarray, displacements: np.ndarray) -> np.ndarray:
     """C (S, r, m): c_se = V_e^T f_e(u_s) for the snapshots displacements (S, n d), unscaled."""
     ve = element_basis(elastic, basis)
-    return np.stack([np.einsum("ekr,ek->re", ve, element_forces(elastic, u)) for u in displacements])
+    m = len(elastic.nodes)
+    apart = elastic.restricted(np.arange(m), np.ones(m), apart=True)
+    return np.stack([np.einsum("ekr,ek->re", ve, element_forces(apart, u)) for u in displacements])
 
 
 @dataclass

@@ -8,9 +8,9 @@ terms (clamp, rollers, gravity) exact in q (exact.py: a chamber's measure is a p
 
     g_r = V^T g(V q),   H_r = V^T H(V q) V   (+ c (V^T a)(V^T a)^T for every rank-one part c a a^T),
 
-the elastic part of each from the sampled elements alone: sum_e w_e V_e^T f_e and sum_e w_e V_e^T H_e V_e, with the
-same kernels as the full term's (terms/elastic.py), called on arrays of the sampled elements only: their nodes
-(numbered afresh), rest gradients, quadrature weights times w_e, and parameters. With V = I and w = 1 it is the full
+the elastic part of each from the sampled elements alone: sum_e w_e V_e^T f_e and sum_e w_e V_e^T H_e V_e, by the
+full term's own class and kernels (terms/elastic.py) on the sampled elements only: their nodes (numbered afresh),
+quadrature weights times w_e, and parameters (Elasticity.restricted). With V = I and w = 1 it is the full
 model. A scene with no term of the last kind never touches the full field in a solve: the full model is put at V q
 only for an output (full_state).
 """
@@ -22,67 +22,55 @@ import numpy as np
 from ..errors import require
 from ..scene.build import BuiltScene
 from ..solve.linsolve import FixedPattern
-from ..terms.base import int32s, vertex_dofs
-from ..terms.elastic import Elasticity, elastic_energy, elastic_gradient, elastic_hessian, inversion_step
+from ..terms.base import vertex_dofs
+from ..terms.elastic import Elasticity
 from .exact import ProjectedQuadratic, ReducedChamber, projected
 
 
 class SampledElasticity:
-    """sum_{e in E} w_e E_e(V q): the elastic term on its sampled elements (the module docstring)."""
+    """sum_{e in E} w_e E_e(V q): the elastic term restricted to its sampled elements, their energies weighted
+    (Elasticity.restricted; one pressure per element, volumetric = "mixed", restricts alike), on the rows of V at
+    their nodes (the module docstring)."""
 
     def __init__(self, elastic: Elasticity, basis: np.ndarray, elements: np.ndarray, weights: np.ndarray):
-        nodes = elastic.nodes[elements]
-        self.vertices, local = np.unique(nodes, return_inverse=True)
-        self.law, self.dim = elastic.law, elastic.dim
-        self.nodes = int32s(local.reshape(nodes.shape))
-        self.rest = np.ascontiguousarray(elastic.config.rest[self.vertices])
-        self.grads = np.ascontiguousarray(elastic.grads[elements])
-        self.weights = np.ascontiguousarray(elastic.weights[elements] * np.asarray(weights)[:, None])
-        self.parameters = np.ascontiguousarray(elastic.parameters[elements])
+        self.term = elastic.restricted(elements, weights)
+        self.vertices, self.dim = self.term.vertices, elastic.dim
         self.basis = np.ascontiguousarray(basis[vertex_dofs(self.vertices, self.dim)])  # (n_E d, r)
-        m, k = self.nodes.shape
-        self.element_basis = self.basis[vertex_dofs(self.nodes.ravel(), self.dim)].reshape(m, k * self.dim, -1)
-        self.u = np.zeros_like(self.rest)
+        m, k = self.term.nodes.shape
+        self.element_basis = self.basis[vertex_dofs(self.term.nodes.ravel(), self.dim)].reshape(m, k * self.dim, -1)
+        self.u = self.term.config.u
 
     def set_coordinates(self, q: np.ndarray) -> None:
         self.u[:] = (self.basis @ q).reshape(self.u.shape)
 
-    def _arguments(self):
-        return self.law, self.dim, self.rest, self.u, self.nodes, self.grads, self.weights, self.parameters
-
     def energy(self) -> float:
-        return elastic_energy(*self._arguments())[0]
+        return self.term.energy()
 
     def min_determinant(self) -> float:
-        return elastic_energy(*self._arguments())[1]
+        return self.term.min_determinant()
 
     def gradient(self) -> np.ndarray:
         """sum_e w_e V_e^T f_e (r,)."""
-        out = np.empty_like(self.rest)
-        elastic_gradient(*self._arguments(), out)
-        return self.basis.T @ out.ravel()
+        return self.basis.T @ self.term.gradient().ravel()
 
     def hessian(self, psd_only: bool) -> np.ndarray:
         """sum_e w_e V_e^T H_e V_e (r, r): H_e exact, or projected to PSD per quadrature point."""
-        m, n = self.element_basis.shape[:2]
-        out = np.empty((m, n * n))
-        elastic_hessian(*self._arguments(), int(psd_only), out)
-        product = out.reshape(m, n, n) @ self.element_basis  # H_e V_e (m, n, r)
-        r = self.basis.shape[1]
+        m, n, r = self.element_basis.shape
+        blocks = self.term.hessian_values(psd_only).reshape(m, n, n)
+        product = blocks @ self.element_basis  # H_e V_e (m, n, r)
         return self.element_basis.reshape(m * n, r).T @ product.reshape(m * n, r)
 
     def max_step(self, dq: np.ndarray) -> float:
         """Largest step fraction along V dq that keeps det F > 0 in the sampled elements."""
-        dx = np.ascontiguousarray((self.basis @ dq).reshape(self.u.shape))
-        return inversion_step(self.dim, self.rest, self.u, dx, self.nodes, self.grads)
+        return self.term.max_step((self.basis @ dq).reshape(self.u.shape))
 
 
 def require_elementwise(built: BuiltScene) -> None:
     """Refuse (one line) a scene whose elastic term is not a sum over elements: ECSW samples elements."""
     require(
-        type(built.elastic) is Elasticity,
+        built.elastic.elementwise,
         f"scene {built.scene.name!r}: a reduced model hyper-reduces element-wise elasticity only (mesh."
-        f"volumetric = 'element'); its volumetric = {built.scene.volumetric!r} couples the elements",
+        f"volumetric = 'element' or 'mixed'); its volumetric = {built.scene.volumetric!r} couples the elements",
     )
 
 

@@ -176,9 +176,17 @@ class PatchVolumeElasticity(Elasticity):
         require_volumetric(self.volumetric, law, self.family.order)
         self.split = volumetric_split(law)
         self.patches = int32s(self.patches_of())
+        self._patch_volumes()
+
+    def _patch_volumes(self) -> None:
+        """Each element's share s_e of its volume in each of its patches, and the patches' rest volumes V_P."""
         s = self.patches.shape[1]
         self.share = np.ascontiguousarray(self.weights.sum(axis=1) / s)
         self.rest_volumes = np.bincount(self.patches.ravel(), np.repeat(self.share, s))
+
+    def scale_elements(self, scale: np.ndarray) -> None:
+        super().scale_elements(scale)
+        self._patch_volumes()
 
     def patches_of(self) -> np.ndarray:
         """(m, s): the patches of each element."""
@@ -245,6 +253,7 @@ class NodalVolumeElasticity(PatchVolumeElasticity):
     patches are the nodes, the rank-1 parts extra blocks between the nodes two rings apart."""
 
     volumetric = "nodal"
+    elementwise = False  # a node's patch couples its elements
 
     def __init__(self, config, elements: np.ndarray, law, parameters: np.ndarray):
         super().__init__(config, elements, law, parameters)
