@@ -88,13 +88,13 @@ def reading_client(view) -> tuple:
     return socket, read
 
 
-def page_run(scene, path: np.ndarray, warmup: int, client: str = "") -> dict:
+def page_run(scene, path: np.ndarray, warmup: int, client: str = "", reduced=None) -> dict:
     """The live page's loop with no client, a reading one ('reader') or one headless Chromium ('browser'):
-    frames/s over the path after the warm-up."""
+    frames/s over the path after the warm-up. reduced: a reduced model's file (LiveSession's)."""
     from taichi_pneuma.realtime.session import LiveSession
     from taichi_pneuma.realtime.web import WebView
 
-    session = LiveSession(scene)
+    session = LiveSession(scene, reduced=reduced)
     advance, in_advance = session.advance, []
 
     def timed() -> bool:
@@ -165,9 +165,9 @@ def page_counter(driver) -> int:
     return int(driver.execute_script("return window.__wb.frames")) if driver is not None else 0
 
 
-def native_3d(scene, path: np.ndarray, warmup: int) -> dict:
+def native_3d(scene, path: np.ndarray, warmup: int, reduced=None) -> dict:
     """explore_solid with the sliders' values scripted; its own fps over the frames after the first (the
-    warm-up frames included: explore_3d times every frame but the first)."""
+    warm-up frames included: explore_3d times every frame but the first). reduced: a reduced model's file."""
     from taichi_pneuma.realtime import interactive3d
     from taichi_pneuma.realtime.interactive import explore_solid
 
@@ -176,7 +176,7 @@ def native_3d(scene, path: np.ndarray, warmup: int) -> dict:
     interactive3d.commands_from = lambda sliders, shown, values: next(rows, None)  # type: ignore[assignment]
     try:
         start = time.perf_counter()
-        summary = explore_solid(scene, (960, 640), max_frames=len(path))
+        summary = explore_solid(scene, (960, 640), max_frames=len(path), reduced=reduced)
         seconds = time.perf_counter() - start
     finally:
         interactive3d.commands_from = real

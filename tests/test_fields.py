@@ -4,7 +4,7 @@ hand formulas and against the elastic term's own gradient."""
 import numpy as np
 import pytest
 
-from taichi_pneuma.fem.fields import cauchy_stress, element_fields, max_stretch, von_mises
+from taichi_pneuma.fem.fields import cauchy_stress, determinants, element_fields, max_stretch, von_mises
 from taichi_pneuma.materials import StableNeoHookean, lame_parameters
 from taichi_pneuma.scene.build import reference_scene
 
@@ -78,3 +78,27 @@ def test_stress_matches_the_elastic_terms_gradient_under_a_homogeneous_deformati
     J = np.linalg.det(F)
     assert fields["det_F"] == pytest.approx(J, rel=1e-12) and len(fields["det_F"]) == built.mesh.n_triangles
     assert J * sigma @ np.linalg.inv(F).T == pytest.approx(measured, rel=1e-8)
+
+
+def test_the_3d_largest_stretch_is_the_largest_singular_value():
+    """The closed form (the trigonometric eigenvalue of F^T F) against LAPACK's SVD: general F, near the identity,
+    rotations, repeated stretches (a double and a triple eigenvalue) and a flattened F."""
+    rng = np.random.default_rng(3)
+    rotations = np.linalg.qr(rng.standard_normal((200, 3, 3)))[0]
+    F = np.concatenate(
+        [
+            rng.standard_normal((2000, 3, 3)),
+            np.eye(3) + 1e-9 * rng.standard_normal((200, 3, 3)),
+            rotations,
+            rotations @ np.diag([2.0, 2.0, 0.5]),
+            1.7 * rotations,
+            rotations @ np.diag([3.0, 1e-6, 1e-6]),
+        ]
+    )
+    assert max_stretch(F) == pytest.approx(np.linalg.svd(F, compute_uv=False)[:, 0], rel=1e-12)
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_determinants_are_lapacks(d):
+    F = np.random.default_rng(4).standard_normal((500, d, d))
+    assert determinants(F) == pytest.approx(np.linalg.det(F), rel=1e-12, abs=1e-14)

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 import taichi_pneuma as tp
+from taichi_pneuma.realtime.session import LiveSession
 from taichi_pneuma.reduce.solve import equilibrium
 from taichi_pneuma.reduce.store import save_reduced
 from taichi_pneuma.reduce.train import train
-from taichi_pneuma.realtime.session import LiveSession
 from taichi_pneuma.solve.newton import NewtonOptions, NewtonSolver
 from taichi_pneuma.solve.simulate import settle as settle_full
 

@@ -26,6 +26,8 @@ import numpy as np
 from ..materials import cauchy_stresses
 from .elements import family_of
 
+NEAR_REPEATED = 1e-6  # 1 - |r| below which max_stretch asks LAPACK (the closed form's error: 1e-16 / sqrt(1 - |r|))
+
 
 class ElementFields:
     """The fields of one mesh at any positions: the quadrature (rest shape-function gradients G (m, nq, k, d)
@@ -37,7 +39,7 @@ class ElementFields:
 
     def deformation_gradients(self, positions: np.ndarray) -> np.ndarray:
         """F (m, nq, d, d) at the quadrature points, from the current node positions (n, d)."""
-        return np.einsum("mai,mqaj->mqij", positions[self.elements], self.gradients)
+        return np.swapaxes(positions[self.elements], 1, 2)[:, None] @ self.gradients  # (m, 1, d, k) @ (m, nq, k, d)
 
     def largest_stretch(self, positions: np.ndarray) -> float:
         """The largest principal stretch at any quadrature point (of any element) at the node positions (n, d)."""
@@ -55,21 +57,46 @@ class ElementFields:
             / weights.sum(axis=1).reshape(-1, *([1] * (values.ndim - 1)))
         )
         flat = F.reshape(m * nq, *F.shape[2:])
-        fields = {"det_F": mean(np.linalg.det(flat)), "max_stretch": mean(max_stretch(flat))}
+        fields = {"det_F": mean(determinants(flat)), "max_stretch": mean(max_stretch(flat))}
         if law is not None:
             fields["stress"] = mean(cauchy_stress(flat, law, np.repeat(parameters, nq, axis=0)))
             fields["von_mises"] = von_mises(fields["stress"])
         return fields
 
 
+def determinants(F: np.ndarray) -> np.ndarray:
+    """det F of each F (N, d, d), d = 2 or 3, by cofactors (a tenth of the time of LU per matrix)."""
+    if F.shape[1] == 2:
+        return F[:, 0, 0] * F[:, 1, 1] - F[:, 0, 1] * F[:, 1, 0]
+    return (
+        F[:, 0, 0] * (F[:, 1, 1] * F[:, 2, 2] - F[:, 1, 2] * F[:, 2, 1])
+        - F[:, 0, 1] * (F[:, 1, 0] * F[:, 2, 2] - F[:, 1, 2] * F[:, 2, 0])
+        + F[:, 0, 2] * (F[:, 1, 0] * F[:, 2, 1] - F[:, 1, 1] * F[:, 2, 0])
+    )
+
+
 def max_stretch(F: np.ndarray) -> np.ndarray:
-    """Largest principal stretch of each F (N, d, d): its largest singular value. For d = 2 in closed form (7x
-    faster than NumPy's batched SVD): sqrt of the larger eigenvalue of C = F^T F,
-    (C00 + C11) / 2 + sqrt(((C00 - C11) / 2)^2 + C01^2) (no cancellation near F = I)."""
-    if F.shape[1] != 2:
-        return np.linalg.norm(F, ord=2, axis=(1, 2))
+    """Largest principal stretch of each F (N, d, d): its largest singular value, sqrt of the largest eigenvalue of
+    C = F^T F, in closed form (NumPy's batched SVD is 7 times slower in 2D, 20 times in 3D). In 2D:
+    (C00 + C11) / 2 + sqrt(((C00 - C11) / 2)^2 + C01^2) (no cancellation near F = I). In 3D, the trigonometric
+    form of the symmetric eigenproblem (Smith 1961): with q = tr C / 3, p^2 = (|C - q I|_F^2) / 6 and
+    r = det((C - q I) / p) / 2 in [-1, 1], lambda_max = q + 2 p cos(arccos(r) / 3) (q where p = 0: C = q I). Its
+    relative error is about 1e-16 / sqrt(1 - |r|), so where two eigenvalues nearly coincide (1 - |r| below
+    NEAR_REPEATED: an equibiaxial stretch) they come from LAPACK's eigvalsh instead."""
     C = np.swapaxes(F, 1, 2) @ F
-    return np.sqrt(0.5 * (C[:, 0, 0] + C[:, 1, 1]) + np.hypot(0.5 * (C[:, 0, 0] - C[:, 1, 1]), C[:, 0, 1]))
+    if F.shape[1] == 2:
+        return np.sqrt(0.5 * (C[:, 0, 0] + C[:, 1, 1]) + np.hypot(0.5 * (C[:, 0, 0] - C[:, 1, 1]), C[:, 0, 1]))
+    q = (C[:, 0, 0] + C[:, 1, 1] + C[:, 2, 2]) / 3
+    a, b, c = C[:, 0, 0] - q, C[:, 1, 1] - q, C[:, 2, 2] - q  # the diagonal of C - q I
+    d, e, f = C[:, 0, 1], C[:, 0, 2], C[:, 1, 2]
+    p = np.sqrt((a * a + b * b + c * c + 2 * (d * d + e * e + f * f)) / 6)
+    scale = np.where(p > 0, p, 1.0) ** 3
+    determinant = a * (b * c - f * f) - d * (d * c - f * e) + e * (d * f - b * e)
+    r = np.clip(determinant / scale / 2, -1.0, 1.0)
+    largest = q + 2 * p * np.cos(np.arccos(r) / 3)
+    near = (np.abs(r) > 1 - NEAR_REPEATED) & (p > 0)  # arccos loses half the digits there: LAPACK's eigvalsh
+    largest[near] = np.linalg.eigvalsh(C[near])[:, -1]
+    return np.sqrt(np.maximum(largest, 0.0))
 
 
 def cauchy_stress(F: np.ndarray, law, parameters: np.ndarray) -> np.ndarray:
