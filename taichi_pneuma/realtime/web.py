@@ -27,7 +27,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import html
-import io
 import math
 import secrets
 import threading
@@ -77,6 +76,21 @@ def finite(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
+@contextlib.contextmanager
+def quiet_viser():
+    """viser's own lines (its banner, "Server stopped") silenced while in the block: viser prints them with rich's
+    console, which in a notebook kernel shows them in the cell's output through IPython's display, past sys.stdout;
+    verbose=False only silences its connection lines. rich's console drops all it is given while quiet."""
+    import rich
+
+    console = rich.get_console()
+    quiet, console.quiet = console.quiet, True
+    try:
+        yield
+    finally:
+        console.quiet = quiet
+
+
 class WebView:
     """A LiveSession served as a page (see the module docstring); run() or run_async() runs it, stop() ends it.
 
@@ -113,8 +127,7 @@ class WebView:
         mesh = session.mesh  # a 2D body's chambers are holes in its triangles: filled as the videos fill them
         self._chamber_faces = chamber_triangles(mesh) if mesh.dim == 2 and len(mesh.chambers) else None
         self.chambers = None  # their node, once published
-        with contextlib.redirect_stdout(io.StringIO()), guarded_serve(self.token, self.refusal):
-            # (viser's banner, redirected: its address without the token)
+        with quiet_viser(), guarded_serve(self.token, self.refusal):  # (viser's banner: its address, no token)
             self.server = viser.ViserServer(host=host, port=common_port(host, port), verbose=False)
         # no share button: viser's relay would put the page on the internet (and its websocket lacks the token)
         self.server.gui.configure_theme(show_share_button=False)
@@ -467,7 +480,7 @@ class WebView:
     def stop(self) -> None:
         """End run() (from another thread, a signal handler or a callback) and close the server."""
         self.stopping.set()
-        with contextlib.redirect_stdout(io.StringIO()):  # viser's "Server stopped"
+        with quiet_viser():  # viser's "Server stopped"
             self.server.stop()
 
 
@@ -490,4 +503,5 @@ def live(scene, out="out", port: int = 0, field: str = "max_stretch", height: in
     view = WebView(LiveSession(scene), out, port=port, field=field)
     view.height = height
     view.task = loop.create_task(view.run_async())
+    print(f"the live page (keep its token private): {view.url}")
     return view
