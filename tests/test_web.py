@@ -184,6 +184,75 @@ def test_a_body_at_rest_is_one_colour_and_the_scale_keeps_a_minimum_width(tmp_pa
         view.stop()
 
 
+def test_the_colour_bar_spans_the_colour_map_from_the_ranges_low_end_to_its_high_end():
+    """The bar's gradient runs from viridis's first colour (#440154, matplotlib's published table) at 0% to its last
+    (#fde725) at 100%, the range's ends printed under it in the field's unit."""
+    from taichi_pneuma.realtime.pageparts import colour_bar
+
+    bar = colour_bar("von Mises stress", 0.25, 37.5, " kPa")
+    stops = re.findall(r"(#[0-9a-f]{6}) ([0-9.]+)%", bar)
+    assert stops[0] == ("#440154", "0") and stops[-1] == ("#fde725", "100")
+    assert [float(p) for _, p in stops] == sorted(float(p) for _, p in stops)
+    assert re.findall(r"<span>([^<]*)</span>", bar) == ["0.25 kPa", "37.5 kPa"]
+    assert bar.startswith('<div style="font-size: 0.85em; padding: 0 0.75em">von Mises stress (viridis)')
+
+
+def bar_range(view) -> tuple[float, float, str]:
+    """The range the page's colour bar shows, and its unit."""
+    (lo, unit), (hi, _) = re.findall(r"<span>([-+0-9.e]+)(.*?)</span>", view.bar.content)
+    return float(lo), float(hi), unit
+
+
+def test_the_colour_bar_follows_the_field_and_its_range(tmp_path):
+    """Inflated, the bar's range covers the max stretch the body has (over 1: the chamber stretches its walls);
+    coloured by the von Mises stress of a settled state, the bar is relabelled and spans that field's values now, in
+    the scene's pressure unit (kPa); by the displacement, in mm; by none, it is gone."""
+    view = view_of("pneunet_mm_kpa", out=tmp_path)
+    try:
+        assert view.bar.content == ""  # (before the first frame: no range yet)
+        view.sliders[0].value = view.sliders[0].max / 2
+        for _ in range(100):
+            view.step()
+            if view.session.equilibrium.converged and view.session.commands[0] > 0:
+                break
+        lo, hi, unit = bar_range(view)
+        stretch = view.session.field("max_stretch")
+        assert "max stretch" in view.bar.content and unit == ""
+        assert lo <= stretch.min() * (1 + 1e-3) and hi >= stretch.max() * (1 - 1e-3) and hi > 1.01  # (4 digits)
+        assert view.session.equilibrium.converged
+        view.field_menu.value = "von_mises"
+        view.step()
+        lo, hi, unit = bar_range(view)
+        stress = view.session.field("von_mises")
+        assert "von Mises stress" in view.bar.content and unit == " kPa"
+        assert hi == pytest.approx(stress.max(), rel=1e-3) and lo == pytest.approx(stress.min(), rel=1e-3)
+        view.field_menu.value = "displacement"
+        view.step()
+        lo, hi, unit = bar_range(view)
+        tip = np.linalg.norm(view.session.figures()["tip"])  # the tip's mean displacement: within the range
+        assert "displacement" in view.bar.content and unit == " mm" and lo < tip < hi
+        view.field_menu.value = "none"
+        view.step()
+        assert view.bar.content == ""
+    finally:
+        view.stop()
+
+
+def test_starting_and_stopping_the_page_shows_nothing_of_visers(capfd, monkeypatch):
+    """viser prints its banner (and "Server stopped") with rich's console, which in a notebook kernel displays it as
+    the cell's output: with the console made a Jupyter one here, nothing is displayed, nor printed."""
+    import rich
+    import rich.jupyter
+
+    shown = []
+    monkeypatch.setattr(rich.get_console(), "is_jupyter", True)
+    monkeypatch.setattr(rich.jupyter, "display", lambda segments, text: shown.append(text))
+    view_of("pneunet_finger").stop()
+    out, err = capfd.readouterr()
+    assert shown == [] and [line for line in out.splitlines() if not line.startswith("[Taichi]")] == []
+    assert "viser" not in err
+
+
 def test_a_2d_bodys_chambers_are_filled_on_the_page_at_their_walls_positions(tmp_path):
     """The chambers are holes in a 2D body's triangles: the page fills them (as the videos do), a mesh whose
     corners are the chamber walls' nodes where the session has them, moved as they inflate."""

@@ -25,9 +25,7 @@ scene it was started with and takes no uploads.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import html
-import math
 import secrets
 import threading
 import time
@@ -38,16 +36,16 @@ import numpy as np
 
 from ..errors import PneumaInputError, quoted, require
 from ..io.units import LENGTH, PRESSURE
-from ..render.colours import CHAMBER_FILL, COLORMAP, FACE, OBSTACLE, OBSTACLE_FILL, colormap
+from ..render.colours import CHAMBER_FILL, FACE, OBSTACLE, OBSTACLE_FILL, colormap
 from ..render.view2d import chamber_triangles
 from .address import check_host, common_port, page_url
 from .gate import guarded_serve
+from .pageparts import colour_bar, finite, iframe_height, quiet_viser
 from .session import FIELDS, LiveSession
 
 FPS_WINDOW = 2.0  # seconds of frames the frame rate is measured over
 IDLE_SECONDS = 0.02  # the loop's pause when nothing changed (a settled state)
 RED = (200, 40, 40)
-HEIGHTS = (100, 4000)  # the notebook iframe's heights allowed (pixels)
 MIN_RANGE = 1e-3  # the colour scale spans at least this fraction of the field's size
 SLIDER_SLACK = 1e-6  # a slider's value is taken this fraction of its range outside it (the client's rounding)
 TARGET_ROOM = 10.0  # a target for the tip is taken within this many body extents of the rest body
@@ -60,35 +58,6 @@ PAGE_MESSAGES = (
     "TransformControlsDragEndMessage",
     "ViewerCameraMessage",
 )
-
-
-def iframe_height(height) -> int:
-    """A notebook iframe's height: an integer number of pixels in HEIGHTS."""
-    require(
-        isinstance(height, int) and not isinstance(height, bool) and HEIGHTS[0] <= height <= HEIGHTS[1],
-        f"height {quoted(height)} is not an integer number of pixels in {HEIGHTS[0]} .. {HEIGHTS[1]}",
-    )
-    return height
-
-
-def finite(value) -> bool:
-    """Whether value is a finite number (an int or a float, not a bool)."""
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-
-
-@contextlib.contextmanager
-def quiet_viser():
-    """viser's own lines (its banner, "Server stopped") silenced while in the block: viser prints them with rich's
-    console, which in a notebook kernel shows them in the cell's output through IPython's display, past sys.stdout;
-    verbose=False only silences its connection lines. rich's console drops all it is given while quiet."""
-    import rich
-
-    console = rich.get_console()
-    quiet, console.quiet = console.quiet, True
-    try:
-        yield
-    finally:
-        console.quiet = quiet
 
 
 class WebView:
@@ -245,6 +214,7 @@ class WebView:
         self.play = gui.add_checkbox("play the schedule", initial_value=False)
         self.field_menu = gui.add_dropdown("colour by", tuple(FIELDS), initial_value=self.field)
         self.figures = gui.add_markdown("starting ...")
+        self.bar = gui.add_html("")
         self.save = gui.add_button("save state")
         self.save.on_click(lambda _: self._asked.set())
         self.saved = gui.add_markdown("")
@@ -428,13 +398,17 @@ class WebView:
                 f"schedule step {figures['schedule_step']:g} of {self.session.scene.schedule.increments}"
                 + (" (playing)" if figures["playing"] else "")
             )
-        if self._range is not None:
-            label, unit = FIELDS[self.field]
-            suffix = {"pressure": pressure, "length": length}.get(unit or "", "")
-            lines.append(f"colour ({COLORMAP}): {label} {self._range[0]:.4g} .. {self._range[1]:.4g}{suffix}")
         if figures["reach_error"] is not None:
             lines.append(f"last reach: {figures['reach_error']:.3g}{length} from its target")
         return "  \n".join(lines)
+
+    def legend(self) -> str:
+        """The colour bar of the field the body is coloured by, over its range now (colour_bar); "" for none."""
+        if self._range is None:  # (none: the body in one colour, no range)
+            return ""
+        label, unit = FIELDS[self.field]
+        suffix = self.session.scene.units.suffix({"pressure": PRESSURE, "length": LENGTH}[unit]) if unit else ""
+        return colour_bar(label, *self._range, suffix)
 
     def step(self) -> bool:
         """One frame: what the page asked handed to the session, the session's step, then (if the state changed or
@@ -454,6 +428,9 @@ class WebView:
         caption = self.caption()
         if caption != self.figures.content:
             self.figures.content = caption
+        legend = self.legend()
+        if legend != self.bar.content:
+            self.bar.content = legend
         self.frames += 1
         return changed
 
