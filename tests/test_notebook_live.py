@@ -1,6 +1,7 @@
 """tp.live in a notebook: a Jupyter kernel (ipykernel, driven by nbclient) runs the cells; the cell that calls
-tp.live shows the page's iframe with its token, and prints only its URL (no viser banner), and the live frames run between cells on the kernel's main thread:
-a chamber commanded from a later cell is settled by the time the next cell looks, the tip moved."""
+tp.live shows the page's iframe with its token and prints only its URL (no viser banner), and the live frames run
+between cells on the kernel's main thread: a chamber commanded from a later cell is settled by the time the next
+cell looks, the tip moved."""
 
 import re
 

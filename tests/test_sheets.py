@@ -19,8 +19,8 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.elements import boundary_facets, family_of
 from taichi_pneuma.materials.neo_hookean import StableNeoHookean
 from taichi_pneuma.scene.scenefile import read_scene
-from taichi_pneuma.scene.shipped import find
 from taichi_pneuma.scene.schedule import area_ramp
+from taichi_pneuma.scene.shipped import find
 from taichi_pneuma.solve.newton import NewtonSolver
 from taichi_pneuma.terms import Clamp, Elasticity, membrane
 from taichi_pneuma.terms.gravity import Gravity

@@ -3,8 +3,9 @@ from Python over a websocket) showing a LiveSession's body as it converges, with
 
 The page has a slider per chamber command, a "play the schedule" box, a field to colour the body by, a gizmo to
 drag a target for the tip (inverse control: the chambers follow), the step's figures (tip, rotation, pressures,
-Newton iterations, residual, frames per second) and a button that saves the equilibria kept so far like
-Result.save; the view turns and zooms with the mouse (2D bodies lie in the z = 0 plane, seen from +z).
+Newton iterations, residual, the frames per second served and those the browser drew), a colour bar and a button
+that saves the equilibria kept so far like Result.save; the view turns and zooms with the mouse (2D bodies lie in
+the z = 0 plane, seen from +z).
 
 The caller's thread runs the session (run(), or run_async() on a notebook kernel's event loop: Taichi launches
 kernels from the main thread only); viser's own threads serve the page and keep its controls' values, in the
@@ -40,7 +41,7 @@ from ..render.colours import CHAMBER_FILL, FACE, OBSTACLE, OBSTACLE_FILL, colorm
 from ..render.view2d import chamber_triangles
 from .address import check_host, common_port, page_url
 from .gate import guarded_serve
-from .pageparts import colour_bar, finite, iframe_height, quiet_viser
+from .pageparts import DrawnRates, colour_bar, finite, iframe_height, quiet_viser
 from .session import FIELDS, LiveSession
 
 FPS_WINDOW = 2.0  # seconds of frames the frame rate is measured over
@@ -57,6 +58,7 @@ PAGE_MESSAGES = (
     "TransformControlsDragStartMessage",
     "TransformControlsDragEndMessage",
     "ViewerCameraMessage",
+    "LocalStorageGetItemResponseMessage",  # the frames/s the browser drew (pageparts.DrawnRates)
 )
 
 
@@ -103,6 +105,7 @@ class WebView:
         self.server.scene.set_up_direction("+y")
         self._controls()
         self._place_camera()
+        self.drawn = DrawnRates(self.server, FPS_WINDOW, self.stopping)
 
     @property
     def port(self) -> int:
@@ -125,7 +128,8 @@ class WebView:
         """Why a message from the page is refused, None if it is not: it must be msgpack (binary) of a dict whose
         type is one of PAGE_MESSAGES, a control's value one it can hold (a slider's a finite number in its range,
         the box's a bool, the menu's one of its options, the button's True), the target's position finite and
-        within TARGET_ROOM body extents, the camera's numbers finite, and viser must decode it; none is taken
+        within TARGET_ROOM body extents, the camera's numbers finite, a drawn frame rate a number (DrawnRates),
+        and viser must decode it; none is taken
         before the controls are made."""
         import msgspec
         from viser import _messages
@@ -161,6 +165,8 @@ class WebView:
             if not isinstance(updates, dict) or list(updates) != ["value"]:
                 return f"updates {quoted(updates)} must set the control's value only"
             return check(updates["value"])
+        if kind == "LocalStorageGetItemResponseMessage":
+            return DrawnRates.refusal(message)
         if kind == "ViewerCameraMessage":
             numbers = [x for k, v in message.items() if k != "type" for x in (v if isinstance(v, list) else [v])]
             return None if all(finite(x) for x in numbers) else "its numbers must be finite"
@@ -391,7 +397,7 @@ class WebView:
             f"tip {tip}{length}, rotation {figures['rotation']:+.2f} deg",
             f"commands: {chambers}",
             f"Newton {figures['iterations']} it, residual {figures['residual']:.1e} ({figures['state']})",
-            f"{self.fps:.1f} frames/s",
+            "; ".join(filter(None, (f"{self.fps:.1f} frames/s served", self.drawn.text()))),
         ]
         if figures["playing"] or figures["schedule_step"]:
             lines.append(
