@@ -129,8 +129,7 @@ class WebView:
         type is one of PAGE_MESSAGES, a control's value one it can hold (a slider's a finite number in its range,
         the box's a bool, the menu's one of its options, the button's True), the target's position finite and
         within TARGET_ROOM body extents, the camera's numbers finite, a drawn frame rate a number (DrawnRates),
-        and viser must decode it; none is taken
-        before the controls are made."""
+        and viser must decode it; none is taken before the controls are made."""
         import msgspec
         from viser import _messages
 
