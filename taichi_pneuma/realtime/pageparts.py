@@ -41,7 +41,8 @@ def finite(value) -> bool:
 def quiet_viser():
     """viser's own lines (its banner, "Server stopped") silenced while in the block: viser prints them with rich's
     console, which in a notebook kernel shows them in the cell's output through IPython's display, past sys.stdout;
-    verbose=False only silences its connection lines. rich's console drops all it is given while quiet."""
+    verbose=False only silences its connection lines. rich's console drops all it is given while quiet (any
+    thread's, for the moment the block lasts: the server's start or stop)."""
     import rich
 
     console = rich.get_console()
