@@ -1,6 +1,9 @@
 """tp.live in a notebook: a Jupyter kernel (ipykernel, driven by nbclient) runs the cells; the cell that calls
-tp.live shows the page's iframe with its token, and the live frames run between cells on the kernel's main thread:
-a chamber commanded from a later cell is settled by the time the next cell looks, the tip moved."""
+tp.live shows the page's iframe with its token and prints only its URL (no viser banner), and the live frames run
+between cells on the kernel's main thread: a chamber commanded from a later cell is settled by the time the next
+cell looks, the tip moved."""
+
+import re
 
 import pytest
 
@@ -26,8 +29,17 @@ def test_the_notebook_widget_shows_the_page_and_solves_between_cells(tmp_path):
         nbformat.v4.new_code_cell(source) for source in CELLS
     ]
     nbclient.NotebookClient(notebook, timeout=120, kernel_name="python3").execute()
-    shown = notebook.cells[1].outputs[-1]["data"]["text/html"]
-    assert "<iframe" in shown and "websocket=ws://127.0.0.1:" in shown and "token%3D" in shown
+    *printed, shown = notebook.cells[1].outputs
+    html = shown["data"]["text/html"]
+    assert "<iframe" in html and "websocket=ws://127.0.0.1:" in html and "token%3D" in html
+    # before the iframe, only lines printed to stdout: Taichi's start and the page's URL with its token, the one
+    # the iframe loads (no viser banner: rich shows it as display data in a kernel, without the token)
+    assert all(output["output_type"] == "stream" and output["name"] == "stdout" for output in printed), printed
+    lines = "".join(output["text"] for output in printed).splitlines()
+    url = re.search(r'src="([^"]+)"', html)[1].replace("&amp;", "&")
+    assert [line for line in lines if not line.startswith("[Taichi]")] == [
+        f"the live page (keep its token private): {url}"
+    ]
     words = notebook.cells[3].outputs[-1]["text"].split()
     frames, rest, tip, state = int(words[1]), float(words[3]), float(words[4]), words[5]
     assert frames > 1 and state == "equilibrium"

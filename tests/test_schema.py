@@ -329,7 +329,10 @@ def covering_scenes() -> list[Scene]:
             clamp=PointSet(None, BOX),
             tip=PointSet(None, BOX),
         ),
-        layers=(Layer("patch", 2e5, 0.0, 0.005, box=(-1.75, -0.4, 1.75, -0.3)),),
+        layers=(
+            Layer("patch", 2e5, 0.0, 0.005, box=(-1.75, -0.4, 1.75, -0.3)),
+            Layer("paper", None, None, 0.005, side="top", preset="paper"),
+        ),
     )
     polygon = dataclasses.replace(
         core,

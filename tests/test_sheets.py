@@ -20,6 +20,7 @@ from taichi_pneuma.fem.elements import boundary_facets, family_of
 from taichi_pneuma.materials.neo_hookean import StableNeoHookean
 from taichi_pneuma.scene.scenefile import read_scene
 from taichi_pneuma.scene.schedule import area_ramp
+from taichi_pneuma.scene.shipped import find
 from taichi_pneuma.solve.newton import NewtonSolver
 from taichi_pneuma.terms import Clamp, Elasticity, membrane
 from taichi_pneuma.terms.gravity import Gravity
@@ -283,10 +284,54 @@ def test_a_scene_with_layers_reads_back_equal_from_its_scene_file():
         read_scene(data, "other")
 
 
+def membranes(scene) -> list[Membrane]:
+    return [t for t in scene.build().model.terms if isinstance(t, Membrane)]
+
+
+def test_a_layer_with_a_preset_has_its_published_moduli_in_the_scenes_units():
+    """[[layers]] preset = "paper": the sheet's E and nu are those presets.py states for paper ([P]: E = 6.5 GPa,
+    nu = 0.2), in kPa in a mm-kPa scene, so its membrane is that of E = 6.5e6, nu = 0.2; "dragon_skin_10" (Yeoh,
+    C10 = 25 kPa, the silicones' default nu = 0.49): E = 2 mu0 (1 + nu), mu0 = 2 C10, or with nu = 0.3 given, the
+    preset's Poisson's ratio replaced (as a region's is). The scene file writes the preset, not E, and reads back."""
+    data = tomllib.loads(find("pneunet_mm_kpa").read_text())
+    data["layers"] = [{"name": "sheet", "side": "bottom", "thickness": 0.1, "preset": "paper"}]
+    scene = read_scene(data, "layered")
+    (sheet,) = membranes(scene)
+    E, nu = 6.5e6, 0.2  # kPa
+    assert sheet.mu == pytest.approx(E / (2 * (1 + nu)), rel=1e-12)
+    assert sheet.lam == pytest.approx(E * nu / (1 - nu**2), rel=1e-12)
+    text = scene.to_toml()
+    assert 'preset = "paper"' in text and read_scene(tomllib.loads(text), "layered") == scene
+    # E and preset exclude each other: setting one (--set, with_values) drops the other
+    given = scene.with_values({"layers[0].E": 6.5e6, "layers[0].nu": 0.2})
+    assert given.layers[0].preset is None
+    assert given.with_values({"layers[0].preset": "paper", "layers[0].nu": None}) == scene  # (a nu kept replaces its)
+    (same,) = membranes(given)
+    assert (same.mu, same.lam) == pytest.approx((sheet.mu, sheet.lam), rel=1e-12)
+    for given, nu in ((None, 0.49), (0.3, 0.3)):
+        layer = dataclasses.replace(scene.layers[0], preset="dragon_skin_10", nu=given)
+        (sheet,) = membranes(dataclasses.replace(scene, layers=(layer,)))
+        E = 2 * (2 * 25.0) * (1 + nu)  # kPa
+        assert sheet.mu == pytest.approx(E / (2 * (1 + nu)), rel=1e-12)
+        assert sheet.lam == pytest.approx(E * nu / (1 - nu**2), rel=1e-12)
+
+
+def test_a_layer_preset_needs_the_scenes_units_and_no_E():
+    unitless = dataclasses.replace(
+        tp.reference_scene(max_area=0.05), layers=(Layer("sheet", None, None, 0.01, side="bottom", preset="paper"),)
+    )
+    with pytest.raises(PneumaInputError, match="preset = 'paper' needs the scene's units"):
+        unitless.build()
+
+
 @pytest.mark.parametrize(
     ("keys", "message"),
     [
         ({"nu": 0.5}, r"nu = 0.5 must be in \[0, 0.5\)"),
+        ({"E": None}, r"layer 's': give E and nu, or a preset \(E = None, nu = 0.3\)"),
+        ({"preset": "paper"}, r"layer 's': preset = 'paper' gives E \(and nu\): drop E = 200000.0"),
+        ({"preset": "cardboard", "E": None}, "preset = 'cardboard' is not one of ecoflex_00_30"),
+        ({"preset": "paper", "E": None, "nu": 0.5}, r"nu = 0.5 must lie in \(-1, 0.5\)"),
         ({"E": 0.0}, "E = 0.0 must be > 0"),
         ({"thickness": -1.0}, "thickness = -1.0 must be > 0"),
         ({"side": "up"}, "side = 'up' is not one of"),

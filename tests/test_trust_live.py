@@ -73,6 +73,11 @@ def settle_frames(view, seconds=1.0) -> None:
         time.sleep(0.02)
 
 
+def drawn_message(value) -> dict:
+    """The page's answer to the server's request for the frames/s its browser drew (pageparts.DrawnRates)."""
+    return {"type": "LocalStorageGetItemResponseMessage", "value": value, "error": None, "request_uuid": "r"}
+
+
 def slider_message(view, index, value) -> dict:
     return {"type": "GuiUpdateMessage", "uuid": view.sliders[index]._impl.uuid, "updates": {"value": value}}
 
@@ -204,6 +209,11 @@ BAD = {
         "part_index": 0,
         "content": b"\0" * 60000,
     },
+    "a drawn rate not a number": lambda v: drawn_message("fast"),
+    "a drawn rate NaN": lambda v: drawn_message("nan"),
+    "a drawn rate below 0": lambda v: drawn_message("-1"),
+    "a drawn rate too long": lambda v: drawn_message("1" * 33),
+    "a drawn rate's error too long": lambda v: {**drawn_message(None), "error": "x" * 201},
     "a share link": lambda v: {"type": "ShareUrlRequest"},
     "an unknown type": lambda v: {"type": "NoSuchMessage"},
     "no type": lambda v: {"uuid": "x"},

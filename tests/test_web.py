@@ -1,6 +1,7 @@
 """The live page in a real browser (realtime/web.py, pneuma-serve): headless Chromium (the distribution's chromium
 and chromedriver, driven by Selenium) loads the page of the 2D reference beam, moves the chamber's slider, and the
-tip figure, the drawn frame and the frame rate change; a websocket without the page's token is refused in its HTTP
+tip figure and the drawn frame change and the page reports the frames per second served and those the browser
+drew; the colour bar follows the field and its range; a websocket without the page's token is refused in its HTTP
 upgrade, a client that never reads does not stall the solver, and the server is not reachable from the network.
 
     python tests/test_web.py DIR      the same browser session, its screenshot written to DIR/live_page.png (docs)
@@ -120,7 +121,7 @@ def view(tmp_path_factory):
     view.stop()
 
 
-def test_moving_a_slider_in_the_browser_changes_the_tip_figure_the_drawn_frame_and_reports_the_frame_rate(view, caplog):
+def test_moving_a_slider_in_the_browser_changes_the_tip_the_drawn_frame_and_reports_both_frame_rates(view, caplog):
     caplog.set_level(logging.WARNING, logger="taichi_pneuma.live")
     seen = browse(view)
     # every message the browser sent (slider, camera, ...) passed the page's checks (realtime/web.py refusal)
@@ -131,7 +132,10 @@ def test_moving_a_slider_in_the_browser_changes_the_tip_figure_the_drawn_frame_a
     # axis lifts the tip first (the reference beam's tip rises before it curls down)
     ratio = float(re.search(r"main ([0-9.]+)", seen["after"]).group(1))
     assert ratio > 1.05 and tip(seen["after"]) > 0.01
-    assert float(re.search(r"([0-9.]+) frames/s", seen["after"]).group(1)) > 0
+    # the server's rate and the browser's own (the frames it drew, counted in the page and read back), both > 0
+    served = float(re.search(r"([0-9.]+) frames/s served", seen["after"]).group(1))
+    drawn = float(re.search(r"the browser drew ([0-9.]+) frames/s", seen["after"]).group(1))
+    assert served > 0 and drawn > 0, seen["after"]
     changed = np.abs(seen["canvas_after"] - seen["canvas_before"]).max(axis=2) > 30
     assert changed.mean() > 0.005, f"{changed.mean():.4f} of the canvas changed"
     # the state the page shows is the session's: the browser drove the same solver
@@ -182,6 +186,75 @@ def test_a_body_at_rest_is_one_colour_and_the_scale_keeps_a_minimum_width(tmp_pa
         assert hi - lo >= 0.99e-3 * max(abs(lo), abs(hi))
     finally:
         view.stop()
+
+
+def test_the_colour_bar_spans_the_colour_map_from_the_ranges_low_end_to_its_high_end():
+    """The bar's gradient runs from viridis's first colour (#440154, matplotlib's published table) at 0% to its last
+    (#fde725) at 100%, the range's ends printed under it in the field's unit."""
+    from taichi_pneuma.realtime.pageparts import colour_bar
+
+    bar = colour_bar("von Mises stress", 0.25, 37.5, " kPa")
+    stops = re.findall(r"(#[0-9a-f]{6}) ([0-9.]+)%", bar)
+    assert stops[0] == ("#440154", "0") and stops[-1] == ("#fde725", "100")
+    assert [float(p) for _, p in stops] == sorted(float(p) for _, p in stops)
+    assert re.findall(r"<span>([^<]*)</span>", bar) == ["0.25 kPa", "37.5 kPa"]
+    assert bar.startswith('<div style="font-size: 0.85em; padding: 0 0.75em">von Mises stress (viridis)')
+
+
+def bar_range(view) -> tuple[float, float, str]:
+    """The range the page's colour bar shows, and its unit."""
+    (lo, unit), (hi, _) = re.findall(r"<span>([-+0-9.e]+)(.*?)</span>", view.bar.content)
+    return float(lo), float(hi), unit
+
+
+def test_the_colour_bar_follows_the_field_and_its_range(tmp_path):
+    """Inflated, the bar's range covers the max stretch the body has (over 1: the chamber stretches its walls);
+    coloured by the von Mises stress of a settled state, the bar is relabelled and spans that field's values now, in
+    the scene's pressure unit (kPa); by the displacement, in mm; by none, it is gone."""
+    view = view_of("pneunet_mm_kpa", out=tmp_path)
+    try:
+        assert view.bar.content == ""  # (before the first frame: no range yet)
+        view.sliders[0].value = view.sliders[0].max / 2
+        for _ in range(100):
+            view.step()
+            if view.session.equilibrium.converged and view.session.commands[0] > 0:
+                break
+        lo, hi, unit = bar_range(view)
+        stretch = view.session.field("max_stretch")
+        assert "max stretch" in view.bar.content and unit == ""
+        assert lo <= stretch.min() * (1 + 1e-3) and hi >= stretch.max() * (1 - 1e-3) and hi > 1.01  # (4 digits)
+        assert view.session.equilibrium.converged
+        view.field_menu.value = "von_mises"
+        view.step()
+        lo, hi, unit = bar_range(view)
+        stress = view.session.field("von_mises")
+        assert "von Mises stress" in view.bar.content and unit == " kPa"
+        assert hi == pytest.approx(stress.max(), rel=1e-3) and lo == pytest.approx(stress.min(), rel=1e-3)
+        view.field_menu.value = "displacement"
+        view.step()
+        lo, hi, unit = bar_range(view)
+        tip = np.linalg.norm(view.session.figures()["tip"])  # the tip's mean displacement: within the range
+        assert "displacement" in view.bar.content and unit == " mm" and lo < tip < hi
+        view.field_menu.value = "none"
+        view.step()
+        assert view.bar.content == ""
+    finally:
+        view.stop()
+
+
+def test_starting_and_stopping_the_page_shows_nothing_of_visers(capfd, monkeypatch):
+    """viser prints its banner (and "Server stopped") with rich's console, which in a notebook kernel displays it as
+    the cell's output: with the console made a Jupyter one here, nothing is displayed, nor printed."""
+    import rich
+    import rich.jupyter
+
+    shown = []
+    monkeypatch.setattr(rich.get_console(), "is_jupyter", True)
+    monkeypatch.setattr(rich.jupyter, "display", lambda segments, text: shown.append(text))
+    view_of("pneunet_finger").stop()
+    out, err = capfd.readouterr()
+    assert shown == [] and [line for line in out.splitlines() if not line.startswith("[Taichi]")] == []
+    assert "viser" not in err
 
 
 def test_a_2d_bodys_chambers_are_filled_on_the_page_at_their_walls_positions(tmp_path):

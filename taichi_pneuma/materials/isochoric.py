@@ -120,6 +120,12 @@ class IsochoricPolynomial(Law):
         return 2.0 * (parameters[:, 0] + parameters[:, 1]) + parameters[:, 4]
 
     @staticmethod
+    def youngs_modulus(parameters) -> np.ndarray:
+        """2 mu0 (1 + nu), mu0 = 2 (C10 + C01), nu = poisson_ratio: the small-strain E, the inverse of parameters."""
+        mu0 = 2.0 * (parameters[:, 0] + parameters[:, 1])
+        return 2.0 * mu0 * (1.0 + IsochoricPolynomial.poisson_ratio(parameters))
+
+    @staticmethod
     def poisson_ratio(parameters) -> np.ndarray:
         """(3 K - 2 mu0) / (2 (3 K + mu0)), mu0 = 2 (C10 + C01): the inverse of bulk_modulus."""
         mu0, K = 2.0 * (parameters[:, 0] + parameters[:, 1]), parameters[:, 4]

@@ -3,8 +3,9 @@ from Python over a websocket) showing a LiveSession's body as it converges, with
 
 The page has a slider per chamber command, a "play the schedule" box, a field to colour the body by, a gizmo to
 drag a target for the tip (inverse control: the chambers follow), the step's figures (tip, rotation, pressures,
-Newton iterations, residual, frames per second) and a button that saves the equilibria kept so far like
-Result.save; the view turns and zooms with the mouse (2D bodies lie in the z = 0 plane, seen from +z).
+Newton iterations, residual, the frames per second served and those the browser drew), a colour bar and a button
+that saves the equilibria kept so far like Result.save; the view turns and zooms with the mouse (2D bodies lie in
+the z = 0 plane, seen from +z).
 
 The caller's thread runs the session (run(), or run_async() on a notebook kernel's event loop: Taichi launches
 kernels from the main thread only); viser's own threads serve the page and keep its controls' values, in the
@@ -25,10 +26,7 @@ scene it was started with and takes no uploads.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import html
-import io
-import math
 import secrets
 import threading
 import time
@@ -39,16 +37,16 @@ import numpy as np
 
 from ..errors import PneumaInputError, quoted, require
 from ..io.units import LENGTH, PRESSURE
-from ..render.colours import CHAMBER_FILL, COLORMAP, FACE, OBSTACLE, OBSTACLE_FILL, colormap
+from ..render.colours import CHAMBER_FILL, FACE, OBSTACLE, OBSTACLE_FILL, colormap
 from ..render.view2d import chamber_triangles
 from .address import check_host, common_port, page_url
 from .gate import guarded_serve
+from .pageparts import DrawnRates, colour_bar, finite, iframe_height, quiet_viser
 from .session import FIELDS, LiveSession
 
 FPS_WINDOW = 2.0  # seconds of frames the frame rate is measured over
 IDLE_SECONDS = 0.02  # the loop's pause when nothing changed (a settled state)
 RED = (200, 40, 40)
-HEIGHTS = (100, 4000)  # the notebook iframe's heights allowed (pixels)
 MIN_RANGE = 1e-3  # the colour scale spans at least this fraction of the field's size
 SLIDER_SLACK = 1e-6  # a slider's value is taken this fraction of its range outside it (the client's rounding)
 TARGET_ROOM = 10.0  # a target for the tip is taken within this many body extents of the rest body
@@ -60,21 +58,8 @@ PAGE_MESSAGES = (
     "TransformControlsDragStartMessage",
     "TransformControlsDragEndMessage",
     "ViewerCameraMessage",
+    "LocalStorageGetItemResponseMessage",  # the frames/s the browser drew (pageparts.DrawnRates)
 )
-
-
-def iframe_height(height) -> int:
-    """A notebook iframe's height: an integer number of pixels in HEIGHTS."""
-    require(
-        isinstance(height, int) and not isinstance(height, bool) and HEIGHTS[0] <= height <= HEIGHTS[1],
-        f"height {quoted(height)} is not an integer number of pixels in {HEIGHTS[0]} .. {HEIGHTS[1]}",
-    )
-    return height
-
-
-def finite(value) -> bool:
-    """Whether value is a finite number (an int or a float, not a bool)."""
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
 class WebView:
@@ -113,14 +98,14 @@ class WebView:
         mesh = session.mesh  # a 2D body's chambers are holes in its triangles: filled as the videos fill them
         self._chamber_faces = chamber_triangles(mesh) if mesh.dim == 2 and len(mesh.chambers) else None
         self.chambers = None  # their node, once published
-        with contextlib.redirect_stdout(io.StringIO()), guarded_serve(self.token, self.refusal):
-            # (viser's banner, redirected: its address without the token)
+        with quiet_viser(), guarded_serve(self.token, self.refusal):  # (viser's banner: its address, no token)
             self.server = viser.ViserServer(host=host, port=common_port(host, port), verbose=False)
         # no share button: viser's relay would put the page on the internet (and its websocket lacks the token)
         self.server.gui.configure_theme(show_share_button=False)
         self.server.scene.set_up_direction("+y")
         self._controls()
         self._place_camera()
+        self.drawn = DrawnRates(self.server, FPS_WINDOW, self.stopping)
 
     @property
     def port(self) -> int:
@@ -143,8 +128,8 @@ class WebView:
         """Why a message from the page is refused, None if it is not: it must be msgpack (binary) of a dict whose
         type is one of PAGE_MESSAGES, a control's value one it can hold (a slider's a finite number in its range,
         the box's a bool, the menu's one of its options, the button's True), the target's position finite and
-        within TARGET_ROOM body extents, the camera's numbers finite, and viser must decode it; none is taken
-        before the controls are made."""
+        within TARGET_ROOM body extents, the camera's numbers finite, a drawn frame rate a number (DrawnRates),
+        and viser must decode it; none is taken before the controls are made."""
         import msgspec
         from viser import _messages
 
@@ -179,6 +164,8 @@ class WebView:
             if not isinstance(updates, dict) or list(updates) != ["value"]:
                 return f"updates {quoted(updates)} must set the control's value only"
             return check(updates["value"])
+        if kind == "LocalStorageGetItemResponseMessage":
+            return DrawnRates.refusal(message)
         if kind == "ViewerCameraMessage":
             numbers = [x for k, v in message.items() if k != "type" for x in (v if isinstance(v, list) else [v])]
             return None if all(finite(x) for x in numbers) else "its numbers must be finite"
@@ -232,6 +219,7 @@ class WebView:
         self.play = gui.add_checkbox("play the schedule", initial_value=False)
         self.field_menu = gui.add_dropdown("colour by", tuple(FIELDS), initial_value=self.field)
         self.figures = gui.add_markdown("starting ...")
+        self.bar = gui.add_html("")
         self.save = gui.add_button("save state")
         self.save.on_click(lambda _: self._asked.set())
         self.saved = gui.add_markdown("")
@@ -408,7 +396,7 @@ class WebView:
             f"tip {tip}{length}, rotation {figures['rotation']:+.2f} deg",
             f"commands: {chambers}",
             f"Newton {figures['iterations']} it, residual {figures['residual']:.1e} ({figures['state']})",
-            f"{self.fps:.1f} frames/s",
+            "; ".join(filter(None, (f"{self.fps:.1f} frames/s served", self.drawn.text()))),
         ]
         if figures["model"] is not None:
             lines.insert(3, figures["model"])
@@ -417,13 +405,17 @@ class WebView:
                 f"schedule step {figures['schedule_step']:g} of {self.session.scene.schedule.increments}"
                 + (" (playing)" if figures["playing"] else "")
             )
-        if self._range is not None:
-            label, unit = FIELDS[self.field]
-            suffix = {"pressure": pressure, "length": length}.get(unit or "", "")
-            lines.append(f"colour ({COLORMAP}): {label} {self._range[0]:.4g} .. {self._range[1]:.4g}{suffix}")
         if figures["reach_error"] is not None:
             lines.append(f"last reach: {figures['reach_error']:.3g}{length} from its target")
         return "  \n".join(lines)
+
+    def legend(self) -> str:
+        """The colour bar of the field the body is coloured by, over its range now (colour_bar); "" for none."""
+        if self._range is None:  # (none: the body in one colour, no range)
+            return ""
+        label, unit = FIELDS[self.field]
+        suffix = self.session.scene.units.suffix({"pressure": PRESSURE, "length": LENGTH}[unit]) if unit else ""
+        return colour_bar(label, *self._range, suffix)
 
     def step(self) -> bool:
         """One frame: what the page asked handed to the session, the session's step, then (if the state changed or
@@ -443,6 +435,9 @@ class WebView:
         caption = self.caption()
         if caption != self.figures.content:
             self.figures.content = caption
+        legend = self.legend()
+        if legend != self.bar.content:
+            self.bar.content = legend
         self.frames += 1
         return changed
 
@@ -469,7 +464,7 @@ class WebView:
     def stop(self) -> None:
         """End run() (from another thread, a signal handler or a callback) and close the server."""
         self.stopping.set()
-        with contextlib.redirect_stdout(io.StringIO()):  # viser's "Server stopped"
+        with quiet_viser():  # viser's "Server stopped"
             self.server.stop()
 
 
@@ -493,4 +488,5 @@ def live(scene, out="out", port: int = 0, field: str = "max_stretch", height: in
     view = WebView(LiveSession(scene, reduced=reduced), out, port=port, field=field)
     view.height = height
     view.task = loop.create_task(view.run_async())
+    print(f"the live page (keep its token private): {view.url}")
     return view

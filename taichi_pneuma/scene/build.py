@@ -298,7 +298,7 @@ class Scene:
             effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area, budget)]
             for effect in self.effects
         }
-        for spec in (*self.fibers, *self.layers):
+        for spec in (*self.fibers, *(layer.in_units(self.units) for layer in self.layers)):
             for term in spec.terms(config, mesh, lumped_area, budget):
                 model.add(term)
         obstacles = [[model.add(t) for t in spec.terms(config, mesh, lumped_area, budget)] for spec in self.obstacles]

@@ -14,11 +14,14 @@ E = 6.5e6
 nu = 0.2
 thickness = 0.1
 wrinkles = true                # false: the sheet carries compression (and buckles)
+
+(or preset = "paper" instead of E and nu: the preset's small-strain E and nu, in the scene's units)
 """
 
 from ..fem.fiber_paths import LAYOUTS, PLANAR
 from ..fem.supports import SIDES
 from ..io.units import LENGTH, PRESSURE, SECTION
+from ..materials.presets import PRESETS
 from ..terms.fibers import Fiber
 from ..terms.sheets import Layer
 from .schema import Key, Table, Variant, record
@@ -55,8 +58,15 @@ LAYER = record(
     box=Key(
         tuple, None, f"{BOX} ([x0, y0, z0, x1, y1, z1] in 3D): the boundary facets in it (instead of side)", unit=LENGTH
     ),
-    E=Key(float, doc="the sheet's Young's modulus", unit=PRESSURE),
-    nu=Key(float, doc="the sheet's Poisson's ratio, in [0, 0.5)"),
+    E=Key(float, None, "the sheet's Young's modulus (give E and nu, or a preset)", unit=PRESSURE),
+    nu=Key(float, None, "the sheet's Poisson's ratio, in [0, 0.5) (with a preset: replaces the preset's)"),
+    preset=Key(
+        str,
+        None,
+        "a material preset instead of E and nu (docs/materials.md): its small-strain E = 2 mu0 (1 + nu) and nu, in "
+        "the scene's units, as a region's preset is converted",
+        tuple(PRESETS),
+    ),
     thickness=Key(float, doc="the sheet's thickness", unit=LENGTH),
     wrinkles=Key(
         bool,

@@ -43,6 +43,7 @@ EXCLUSIVE = (
     ("fibers[].path", "pitch", "angle"),  # a helix's pitch or its angle
     ("fibers[].path", "turns", "extent"),  # a helix's length in turns or along its axis
     ("material.regions[]", "box", "group"),  # a region's elements
+    ("layers[]", "E", "preset"),  # a sheet's modulus, or a preset's
 )
 REPLACED = {f"{table}.{a}": b for table, one, other in EXCLUSIVE for a, b in ((one, other), (other, one))}
 POLYGON = record(Polygon, "a simple polygon", points=Key(tuple, doc="[[x, y], ...], at least 3", unit=LENGTH))

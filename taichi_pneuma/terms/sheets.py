@@ -11,7 +11,7 @@ segments), so the sheet follows every node.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -19,6 +19,8 @@ from ..errors import require, require_finite
 from ..fem.mesh import Mesh
 from ..fem.supports import PointSet
 from ..io.units import LENGTH, PRESSURE, unit
+from ..materials.isochoric import IsochoricPolynomial
+from ..materials.presets import PresetMaterial
 from .membrane import Membrane
 
 
@@ -48,20 +50,37 @@ class Layer:
     to a face of the body: `side` (a side of its bounding box) or `box` ([x0, y0, x1, y1], in 3D [x0, y0, z0, x1,
     y1, z1]: the boundary facets whose nodes all lie in it); name: names it in messages. wrinkles: the sheet
     wrinkles (in 2D: goes slack) instead of carrying compression, tension-field theory's relaxed membrane (True,
-    the default), or it is the plain Saint Venant-Kirchhoff membrane, which buckles (False; terms/membrane.py)."""
+    the default), or it is the plain Saint Venant-Kirchhoff membrane, which buckles (False; terms/membrane.py).
+
+    preset: a material preset (materials/presets.py) instead of E and nu: the sheet's E and nu are the preset's
+    small-strain ones, E = 2 mu0 (1 + nu) with mu0 = 2 (C10 + C01) and nu its Poisson's ratio (a given nu replaces
+    it, as a region's does), converted into the scene's units as a region's preset is (in_units)."""
 
     name: str
-    E: float = field(metadata=unit(PRESSURE))
-    nu: float
+    E: float | None = field(metadata=unit(PRESSURE))
+    nu: float | None
     thickness: float = field(metadata=unit(LENGTH))
     side: str | None = None
     box: tuple | None = None
     wrinkles: bool = True
+    preset: str | None = None
 
     def __post_init__(self):
         require(isinstance(self.name, str) and self.name.strip(), f"layer name = {self.name!r} must not be empty")
-        require(require_finite("E", self.E) > 0, f"layer {self.name!r}: E = {self.E!r} must be > 0")
-        require(0 <= require_finite("nu", self.nu) < 0.5, f"layer {self.name!r}: nu = {self.nu!r} must be in [0, 0.5)")
+        if self.preset is not None:
+            require(
+                self.E is None, f"layer {self.name!r}: preset = {self.preset!r} gives E (and nu): drop E = {self.E!r}"
+            )
+            self._preset_material().resolved(1.0)  # validates the preset's name and a given nu
+        else:
+            require(
+                self.E is not None and self.nu is not None,
+                f"layer {self.name!r}: give E and nu, or a preset (E = {self.E!r}, nu = {self.nu!r})",
+            )
+            require(require_finite("E", self.E) > 0, f"layer {self.name!r}: E = {self.E!r} must be > 0")
+        if self.nu is not None:
+            nu = require_finite("nu", self.nu)
+            require(0 <= nu < 0.5, f"layer {self.name!r}: nu = {self.nu!r} must be in [0, 0.5)")
         require(
             require_finite("thickness", self.thickness) > 0,
             f"layer {self.name!r}: thickness = {self.thickness!r} must be > 0",
@@ -71,6 +90,22 @@ class Layer:
             f"layer {self.name!r}: wrinkles = {self.wrinkles!r} must be true or false",
         )
         _ = self.face  # validates side and box
+
+    def _preset_material(self) -> PresetMaterial:
+        assert self.preset is not None
+        return PresetMaterial(self.preset, poisson_ratio=self.nu)
+
+    def in_units(self, units) -> Layer:
+        """This layer with E and nu in the scene's units (io/units.py Units): a preset's small-strain moduli from its
+        parameters in those units (PresetMaterial.law_parameters, as a region's preset is resolved), the layer
+        itself without a preset."""
+        if self.preset is None:
+            return self
+        _, row = self._preset_material().law_parameters(units)
+        E, nu = (
+            float(f(row[None])[0]) for f in (IsochoricPolynomial.youngs_modulus, IsochoricPolynomial.poisson_ratio)
+        )
+        return replace(self, E=E, nu=nu, preset=None)
 
     @property
     def face(self) -> PointSet:
@@ -93,6 +128,9 @@ class Layer:
         return facets
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
+        """The sheet's membrane (E and nu given: a preset's are in_units's, which Scene.build calls)."""
+        require(self.preset is None, f"layer {self.name!r}: preset = {self.preset!r} needs in_units(units) first")
+        assert self.E is not None and self.nu is not None  # (__post_init__: given without a preset)
         return [
             Membrane(config, linear_pieces(mesh, self.facets(mesh)), self.thickness, self.E, self.nu, self.wrinkles)
         ]
