@@ -102,3 +102,18 @@ def test_a_model_of_another_scene_is_refused_by_the_page_and_the_window_flags(tr
     assert inflate.main(["--scene", "reference_beam", "--reduced", str(path), "--out", str(tmp_path)]) == 2
     error = capsys.readouterr().err.strip()
     assert error == f"error: --reduced {path} needs --interactive on a 3D scene (the live page: pneuma-serve --reduced)"
+
+
+def test_the_page_names_the_model_that_solves(trained, tmp_path):
+    pytest.importorskip("viser")
+    from taichi_pneuma.realtime.web import WebView
+
+    scene, _, path = trained
+    view = WebView(LiveSession(scene, reduced=path), tmp_path, port=0)
+    try:
+        for _ in range(30):
+            view.step()
+        assert "reduced model (8 modes, " in view.caption()
+        assert "full residual " in view.caption()
+    finally:
+        view.stop()
