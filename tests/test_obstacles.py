@@ -12,9 +12,10 @@ import pytest
 from taichi_pneuma import runtime
 from taichi_pneuma.control.inverse import Reacher
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.io.units import FORCE_3D, MOMENT, UNITS, history_dimensions
+from taichi_pneuma.io.units import FORCE_3D, MOMENT, UNITS
 from taichi_pneuma.result import Result
 from taichi_pneuma.scene.scenefile import read_scene
+from taichi_pneuma.solve.columns import history_dimensions
 from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 from taichi_pneuma.terms.model import Configuration

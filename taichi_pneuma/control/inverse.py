@@ -49,6 +49,7 @@ from scipy.stats import qmc
 
 from ..errors import require, require_finite
 from ..fem.fields import ElementFields
+from ..fem.tip import COLUMNS as TIP_COLUMNS
 from ..fem.tip import tip_measures
 from ..result import Result
 from ..scene.build import BuiltScene, Scene
@@ -477,21 +478,24 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
             }
             if mesh.dim == 3:
                 extra.update(target_z=target.tip[2] if len(target.tip) == 3 else math.nan, tip_z=pose.tip[2])
+            measures = {
+                **{column: float(value) for column, value in zip(TIP_COLUMNS, pose.tip - rest_tip)},
+                "tip_rotation": pose.rotation,
+                "min_det": built.elastic.min_determinant(),
+                "max_stretch": stretches.largest_stretch(mesh.vertices + pose.u),
+            }
             steps.append(
                 StepRecord(
-                    len(steps),
-                    chamber_records(built, pose.commands),
-                    pose.tip - rest_tip,
-                    pose.rotation,
-                    pose.iterations,
-                    pose.residual,
-                    True,
-                    0,
-                    1,
-                    built.elastic.min_determinant(),
-                    pose.seconds,
+                    step=len(steps),
+                    chambers=chamber_records(built, pose.commands),
+                    measures=measures,
+                    iterations=pose.iterations,
+                    residual=pose.residual,
+                    converged=True,
+                    cuts=0,
+                    substeps=1,
+                    seconds=pose.seconds,
                     extra=extra,
-                    max_stretch=stretches.largest_stretch(mesh.vertices + pose.u),
                 )
             )
             states.append(mesh.vertices + pose.u)

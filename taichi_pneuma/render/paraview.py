@@ -42,8 +42,9 @@ import numpy as np
 
 from ..fem.fields import ElementFields
 from ..io.output import Subfolder, held_private_folder, save_text, write_atomic
-from ..io.units import FORCE, LENGTH, PRESSURE, history_dimensions, in_dimension
+from ..io.units import FORCE, LENGTH, PRESSURE, in_dimension
 from ..io.vtk import pad3, pvd_text, vtu_text
+from ..solve.columns import history_dimensions
 from .paraview_parts import SYMMETRIC_TENSOR, parts
 
 
