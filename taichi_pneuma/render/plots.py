@@ -34,7 +34,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..io.units import ANGLE, FORCE, LENGTH, PRESSURE, in_dimension
-from ..solve.columns import COLUMNS
+from ..solve import columns
 
 
 def command_axis(command: np.ndarray, quantities: list[str]) -> tuple[np.ndarray, str]:
@@ -159,7 +159,7 @@ def history_panels(result) -> list[Panel]:
     for key, title, y_label, dimension in RESPONSES:
         drawn = [
             (c.label, xr, history[c.name], RESPONSE_COLOURS[k % len(RESPONSE_COLOURS)])
-            for k, c in enumerate(c for c in COLUMNS if c.panel == key)
+            for k, c in enumerate(c for c in columns.COLUMNS if c.panel == key)
             if c.name in history and not constant(history[c.name])
         ]
         if drawn[1:]:  # the columns after the panel's first, named in its title

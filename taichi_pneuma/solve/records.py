@@ -13,7 +13,8 @@ import numpy as np
 from ..fem.fields import element_fields
 from ..fem.tip import COLUMNS as TIP_COLUMNS
 from ..scene.build import BuiltScene, Scene
-from .columns import AFTER_CHAMBERS, AFTER_CONTACT, AFTER_SOLVER, COLUMNS
+from . import columns
+from .columns import AFTER_CHAMBERS, AFTER_CONTACT, AFTER_SOLVER
 
 # the history columns that count the solve, not measure the state it found: a ramp's step, its Newton iterations,
 # residual, convergence, cut-backs, sub-increments and seconds (each an integer, a flag or a figure of the solver's)
@@ -90,7 +91,7 @@ class StepRecord:
 
     def _measured(self, after: str) -> dict[str, float]:
         """The measured columns that stand after `after` in the row (columns.Column.after), in COLUMNS' order."""
-        return {c.name: self.measures[c.name] for c in COLUMNS if c.after == after and c.name in self.measures}
+        return {c.name: self.measures[c.name] for c in columns.COLUMNS if c.after == after and c.name in self.measures}
 
     def row(self) -> dict[str, float]:
         """Flat columns: step, <chamber>.<field> for each chamber, the measured columns after the chambers (tip_dx,
@@ -227,16 +228,15 @@ class Run:
     def extremes(self) -> dict[str, dict]:
         """The range over the run of each measured column that has extremes (columns.COLUMNS: tip_dx, tip_dy, in 3D
         tip_dz, tip_rotation, in 3D tip_twist, with obstacles blocked_force) and of each chamber's (<chamber>.area,
-        .area_ratio, .pressure), by
-        history column: {"min": value, "min_step": the first step at it, "max": ..., "max_step": ...}. A schedule
-        that goes out and back ends near rest; its extremes keep what it reached."""
+        .area_ratio, .pressure), by history column: {"min": value, "min_step": the first step at it, "max": ...,
+        "max_step": ...}. A schedule that goes out and back ends near rest; its extremes keep what it reached."""
         history = self.history
-        columns = [
-            *(column.name for column in COLUMNS if column.extremes and column.name in history),
+        names = [
+            *(column.name for column in columns.COLUMNS if column.extremes and column.name in history),
             *(f"{name}.{key}" for name in self.chamber_names for key in ("area", "area_ratio", "pressure")),
         ]
         extremes = {}
-        for column in columns:
+        for column in names:
             values = history[column]
             low, high = int(np.argmin(values)), int(np.argmax(values))
             extremes[column] = {
