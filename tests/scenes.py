@@ -3,6 +3,8 @@ triangle area 0.01), the mesh many tests use, so Taichi's kernel cache and the m
 
 import taichi_pneuma as tp
 
+SMALL_FLAGS = ["--max-area", "0.01", "--growth", "2", "--steps", "3", "--quiet"]  # small_scene's, for the apps
+
 
 def small_scene(cy: float = 0.15):
     """The reference beam with its chamber at height cy, ramped to twice its area in 3 steps on a coarse mesh."""
