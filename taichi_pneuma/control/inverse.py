@@ -48,7 +48,6 @@ from scipy.optimize import lsq_linear
 from scipy.stats import qmc
 
 from ..errors import require, require_finite
-from ..fem.fields import ElementFields
 from ..fem.tip import COLUMNS as TIP_COLUMNS
 from ..fem.tip import tip_measures
 from ..result import Result
@@ -459,7 +458,7 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
     steps: list[StepRecord] = []
     states: list[np.ndarray] = []
     descent = 0
-    stretches = ElementFields(mesh.vertices, mesh.elements)
+    stretches = mesh.fields
     for k, result in enumerate(results):
         target = result.target
         for j, pose in enumerate(result.path[1 if k else 0 :], start=1 if k else 0):

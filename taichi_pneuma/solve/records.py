@@ -10,7 +10,6 @@ from functools import cached_property
 
 import numpy as np
 
-from ..fem.fields import element_fields
 from ..fem.tip import COLUMNS as TIP_COLUMNS
 from ..scene.build import BuiltScene, Scene
 from . import columns
@@ -221,9 +220,7 @@ class Run:
 
     def fields(self, step: int = -1) -> dict[str, np.ndarray]:
         """Per element at a step: det_F, max_stretch, stress (Cauchy, (m, 3, 3)), von_mises (fields.py)."""
-        return element_fields(
-            self.mesh.vertices, self.positions[step], self.mesh.elements, *self.scene.element_material(self.mesh)
-        )
+        return self.mesh.fields.at(self.positions[step], *self.scene.element_material(self.mesh))
 
     def extremes(self) -> dict[str, dict]:
         """The range over the run of each measured column that has extremes (columns.COLUMNS: tip_dx, tip_dy, in 3D

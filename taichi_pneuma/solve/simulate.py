@@ -303,7 +303,7 @@ def run_schedule(
     mesh = built.mesh
     contact_terms = built.contact_terms()
     u = np.zeros_like(mesh.vertices)
-    stretches = ElementFields(mesh.vertices, mesh.elements)
+    stretches = mesh.fields
     steps: list[StepRecord] = []
     states: list[np.ndarray] = []  # positions
     solves: list[SolveRecord] = []  # each step's last Newton solve
