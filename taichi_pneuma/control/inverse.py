@@ -458,7 +458,6 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
     steps: list[StepRecord] = []
     states: list[np.ndarray] = []
     descent = 0
-    stretches = mesh.fields
     for k, result in enumerate(results):
         target = result.target
         for j, pose in enumerate(result.path[1 if k else 0 :], start=1 if k else 0):
@@ -477,12 +476,9 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
             }
             if mesh.dim == 3:
                 extra.update(target_z=target.tip[2] if len(target.tip) == 3 else math.nan, tip_z=pose.tip[2])
-            measures = {
-                **{column: float(value) for column, value in zip(TIP_COLUMNS, pose.tip - rest_tip)},
-                "tip_rotation": pose.rotation,
-                "min_det": built.elastic.min_determinant(),
-                "max_stretch": stretches.largest_stretch(mesh.vertices + pose.u),
-            }
+            measures = dict(zip(TIP_COLUMNS, map(float, pose.tip - rest_tip)), tip_rotation=pose.rotation)
+            stretch = mesh.fields.largest_stretch(mesh.vertices + pose.u)
+            measures.update(min_det=built.elastic.min_determinant(), max_stretch=stretch)
             steps.append(
                 StepRecord(
                     step=len(steps),
