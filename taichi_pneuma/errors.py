@@ -44,6 +44,14 @@ def require_finite(name: str, value: float) -> float:
     return v
 
 
+def require_positive(name: str, value, allow_none: bool = False) -> None:
+    """Raise naming the value unless it is a finite number (require_finite) > 0; with allow_none, None passes too
+    (a default the Scene resolves later, units.si_default)."""
+    if value is None and allow_none:
+        return
+    require(require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
+
+
 def parse_number(name: str, text: str) -> float:
     """Text (a command-line or CSV field) as a float; whether it is finite and in range is the caller's check."""
     try:

@@ -14,8 +14,8 @@ import numpy as np
 from . import limits
 from .fem.tip import COLUMNS as TIP_COLUMNS
 from .io.output import lock_stem, prepare_directory, save_json, save_npz, save_text, write_atomic
-from .io.units import history_dimensions
 from .signals import holding
+from .solve.columns import history_dimensions
 from .solve.records import Run
 
 ELEMENTS = {2: "triangles", 3: "tetrahedra"}  # the summary's element count, by dimension

@@ -9,6 +9,7 @@ from pathlib import Path
 import imageio_ffmpeg
 import numpy as np
 import pytest
+from scenes import small_run
 
 import taichi_pneuma as tp
 from taichi_pneuma.render.plots import command_axis
@@ -22,7 +23,7 @@ SCENES = sorted((ROOT / "taichi_pneuma" / "scenes").glob("*.toml"))
 @pytest.fixture(scope="module")
 def small():
     """A short coarse reference ramp (the mesh other tests use, so Taichi's kernel cache serves it)."""
-    return tp.simulate(tp.reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.01))
+    return small_run()
 
 
 @pytest.mark.parametrize("path", SCENES, ids=lambda p: p.stem)

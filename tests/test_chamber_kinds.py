@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_terms import dense_hessian, fd_gradient, fd_hessian, random_state
+from fd import dense_hessian, fd_gradient, fd_hessian, random_state
 
 import taichi_pneuma as tp
 from taichi_pneuma.control.inverse import Reacher, ReachOptions, body_length, command_bounds

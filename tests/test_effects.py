@@ -3,7 +3,8 @@ derivatives, step bounds that stop before contact is crossed, and exactly the te
 
 import numpy as np
 import pytest
-from test_terms import assert_gradient_matches_finite_differences, dense_hessian, fd_hessian
+from fd import dense_hessian, fd_hessian
+from test_terms import assert_gradient_matches_finite_differences
 
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Rectangle

@@ -18,6 +18,7 @@ import imageio_ffmpeg
 import numpy as np
 import pytest
 from renderers import SOFTWARE
+from scenes import SMALL_FLAGS, small_run
 
 import taichi_pneuma as tp
 from taichi_pneuma.apps import bench, inflate, reach, serve, steer, sweep
@@ -28,12 +29,11 @@ from taichi_pneuma.scene.shipped import SHIPPED
 from taichi_pneuma.study import parse_vary, study_figure
 
 ROOT = Path(__file__).resolve().parent.parent
-COARSE = ["--max-area", "0.01", "--growth", "2", "--steps", "3", "--quiet"]
 
 
 @pytest.fixture(scope="module")
 def small():
-    return tp.simulate(tp.reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.01))
+    return small_run()
 
 
 # --- the API ---------------------------------------------------------------------------------------
@@ -173,7 +173,7 @@ def test_bench_writes_to_a_scratch_directory_by_default():
 
 
 def test_set_takes_short_names(tmp_path):
-    assert inflate.main([*COARSE, "--no-video", "--set", "E=2e4", "--set", "cy=-0.1", "--out", str(tmp_path)]) == 0
+    assert inflate.main([*SMALL_FLAGS, "--no-video", "--set", "E=2e4", "--set", "cy=-0.1", "--out", str(tmp_path)]) == 0
     scene = tp.load_scene(tmp_path / "inflate_cy+0.15_growth2_steps3_max_area0.01_E2e4_cy-0.1_scene.toml")
     assert scene.material.youngs_modulus == 2e4 and scene.geometry.chambers[0][1].center[1] == -0.1
 
@@ -182,7 +182,7 @@ def test_video_in_a_new_directory_is_made_and_an_unwritable_one_fails_before_sol
     assert (
         inflate.main(
             [
-                *COARSE,
+                *SMALL_FLAGS,
                 "--size",
                 "320x160",
                 "--video",
@@ -197,14 +197,14 @@ def test_video_in_a_new_directory_is_made_and_an_unwritable_one_fails_before_sol
     blocker = tmp_path / "file"
     blocker.write_text("not a directory")
     capsys.readouterr()
-    assert inflate.main([*COARSE, "--video", str(blocker / "v.mp4"), "--out", str(tmp_path / "out2")]) == 2
+    assert inflate.main([*SMALL_FLAGS, "--video", str(blocker / "v.mp4"), "--out", str(tmp_path / "out2")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "not writable" in err[0]
     assert not list((tmp_path / "out2").glob("*_history.csv"))  # nothing was solved
 
 
 def test_no_video_writes_no_picture_and_everything_else(tmp_path):
-    assert inflate.main([*COARSE, "--no-video", "--out", str(tmp_path)]) == 0
+    assert inflate.main([*SMALL_FLAGS, "--no-video", "--out", str(tmp_path)]) == 0
     written = sorted(p.name for p in tmp_path.iterdir())
     assert not [n for n in written if n.endswith((".png", ".mp4", ".gif"))]  # as --help and the README say
     assert {

@@ -8,7 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_obstacles import assembled, contact, finite_differences
+from fd import term_derivatives, term_hessian
+from test_obstacles import contact
 
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.scene import build
@@ -47,16 +48,16 @@ def test_friction_gradient_and_hessian_match_finite_differences(name, dim, slip)
     along = direction - np.sum(direction * n, axis=1, keepdims=True) * n
     u = slip * along / np.linalg.norm(along, axis=1, keepdims=True) + 0.5 * slip * n  # the normal part is free
     term.config.u[:] = u
-    g_fd, h_fd = finite_differences(term, u)
+    g_fd, h_fd = term_derivatives(term, u)
     g = term.gradient().ravel()
     assert np.linalg.norm(g) > 0.1
     assert np.linalg.norm(g - g_fd) <= 1e-6 * np.linalg.norm(g)
-    hessian, scale = assembled(term), np.linalg.norm(g) / slip  # scale: the size of mu lambda f1(y) / y
+    hessian, scale = term_hessian(term), np.linalg.norm(g) / slip  # scale: the size of mu lambda f1(y) / y
     assert np.linalg.norm(hessian - h_fd) <= 1e-5 * scale
     assert np.linalg.eigvalsh(hessian).min() >= -1e-12 * scale
     if dim == 2 and slip > EPS:  # a 1D tangent: kinetic friction, a constant force, has no stiffness
         assert np.linalg.norm(hessian) <= 1e-12 * scale
-    assert np.array_equal(assembled(term, psd_only=True), hessian)
+    assert np.array_equal(term_hessian(term, psd_only=True), hessian)
     lam, force = term.lagged[:, 0], -term.gradient()
     assert np.abs(np.sum(force * n, axis=1)) == pytest.approx(0.0, abs=1e-12)  # tangential
     if slip > EPS:

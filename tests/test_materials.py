@@ -5,8 +5,8 @@ and quadratic), the plane-strain embedding, and the generic (Jacobi) eigensystem
 
 import numpy as np
 import pytest
+from fd import dense_hessian, fd_gradient, fd_hessian
 from solid_meshes import shell_octant
-from test_terms import dense_hessian, fd_gradient, fd_hessian
 
 from taichi_pneuma.backend import ti
 from taichi_pneuma.materials import LAWS, Law, StableNeoHookean, lame_parameters, register

@@ -8,20 +8,20 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from fd import term_derivatives, term_hessian
 
 from taichi_pneuma import runtime
 from taichi_pneuma.control.inverse import Reacher
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.io.units import FORCE_3D, MOMENT, UNITS, history_dimensions
+from taichi_pneuma.io.units import FORCE_3D, MOMENT, UNITS
 from taichi_pneuma.result import Result
 from taichi_pneuma.scene.scenefile import read_scene
+from taichi_pneuma.solve.columns import history_dimensions
 from taichi_pneuma.solve.newton import NewtonOptions
 from taichi_pneuma.solve.simulate import RampFailed, run_schedule
 from taichi_pneuma.terms.model import Configuration
 from taichi_pneuma.terms.obstacle_shapes import Box, Capsule, Cylinder, Plane, Sphere
 from taichi_pneuma.terms.obstacles import ObstacleContact
-
-H = 1e-6
 
 
 def contact(points, shape, dhat=0.5, stiffness=10.0):
@@ -71,29 +71,6 @@ NEAR = {
 }
 
 
-def finite_differences(term, u):
-    """The central-difference gradient of the energy and Hessian (from the gradient) at u."""
-    n = u.size
-    g, columns = np.zeros(n), []
-    for i in range(n):
-        step = np.zeros(n)
-        step[i] = H
-        term.config.u[:] = (u.ravel() + step).reshape(u.shape)
-        e_plus, g_plus = term.energy(), term.gradient().ravel()
-        term.config.u[:] = (u.ravel() - step).reshape(u.shape)
-        g[i] = (e_plus - term.energy()) / (2 * H)
-        columns.append((g_plus - term.gradient().ravel()) / (2 * H))
-    term.config.u[:] = u
-    return g, np.array(columns).T
-
-
-def assembled(term, psd_only=False):
-    n = term.config.u.size
-    matrix = np.zeros((n, n))
-    np.add.at(matrix, term.hessian_pattern(), term.hessian_values(psd_only))
-    return matrix
-
-
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("name", list(SHAPES))
 def test_gradient_and_exact_hessian_match_finite_differences(name, dim):
@@ -105,13 +82,13 @@ def test_gradient_and_exact_hessian_match_finite_differences(name, dim):
     term = contact(points, SHAPES[name])
     u = 0.01 * np.random.default_rng(1).standard_normal(points.shape)
     term.config.u[:] = u
-    g_fd, h_fd = finite_differences(term, u)
+    g_fd, h_fd = term_derivatives(term, u)
     g = term.gradient().ravel()
     assert np.linalg.norm(g) > 1.0  # the contact is active
     assert np.linalg.norm(g - g_fd) <= 1e-6 * np.linalg.norm(g)
-    hessian = assembled(term)
+    hessian = term_hessian(term)
     assert np.linalg.norm(hessian - h_fd) <= 1e-5 * np.linalg.norm(hessian)
-    assert np.linalg.eigvalsh(assembled(term, psd_only=True)).min() >= -1e-9 * np.linalg.norm(hessian)
+    assert np.linalg.eigvalsh(term_hessian(term, psd_only=True)).min() >= -1e-9 * np.linalg.norm(hessian)
 
 
 @pytest.mark.parametrize(

@@ -11,6 +11,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from renderers import SOFTWARE
+from scenes import small_run
 
 import taichi_pneuma as tp
 from taichi_pneuma.apps import steer
@@ -23,7 +24,7 @@ from taichi_pneuma.render.view2d import view_bounds
 @pytest.fixture(scope="module")
 def area_run():
     """A short coarse reference ramp under area control (the mesh other tests use: Taichi's kernel cache)."""
-    return tp.simulate(tp.reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.01))
+    return small_run()
 
 
 @pytest.fixture(scope="module")

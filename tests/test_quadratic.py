@@ -6,14 +6,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fd import dense_hessian, fd_hessian, random_state
 from renderers import SOFTWARE
-from test_terms import (
-    assert_gradient_matches_finite_differences,
-    assert_max_step_stops_before_inversion,
-    dense_hessian,
-    fd_hessian,
-    random_state,
-)
+from test_terms import assert_gradient_matches_finite_differences, assert_max_step_stops_before_inversion
 
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Rectangle

@@ -10,6 +10,7 @@ import imageio_ffmpeg
 import numpy as np
 import pytest
 from renderers import SOFTWARE, needs_window
+from scenes import SMALL_FLAGS, small_scene
 from test_inverse import SCENES, forward
 from test_render import xvfb_display  # noqa: F401 (a fixture)
 
@@ -197,21 +198,18 @@ def test_bad_input_from_the_shell_has_no_traceback(tmp_path):
     assert proc.returncode == 2 and errors == ["error: target tip = inf must be a finite number"]
 
 
-COARSE_RAMP = ["--max-area", "0.01", "--growth", "2", "--steps", "3", "--quiet"]
-
-
 def test_design_finds_the_chamber_height_for_a_tip_deflection(tmp_path, capsys):
-    assert main(["--design", "cy", "--tip-dy", "-0.05", *COARSE_RAMP, "--out", str(tmp_path)]) == 0
+    assert main(["--design", "cy", "--tip-dy", "-0.05", *SMALL_FLAGS, "--out", str(tmp_path)]) == 0
     assert capsys.readouterr().out.splitlines()[-1].startswith("reached: cy = +0.")
     summary = json.loads((tmp_path / "design_cy_tip_dy-0.05_growth2_steps3_max_area0.01_summary.json").read_text())
     assert summary["found"] and 0 < summary["cy"] < 0.179 and summary["evaluations"] == len(summary["history"])
-    ramp = run_schedule(reference_scene(cy=summary["cy"], growth=2.0, steps=3, max_area=0.01).build())
+    ramp = run_schedule(small_scene(summary["cy"]).build())
     assert ramp.tip_deflection == pytest.approx(summary["tip_dy"], abs=1e-9)  # an independent ramp at that cy
     assert abs(ramp.tip_deflection + 0.05) <= 2e-3
 
 
 def test_design_out_of_range_is_unreachable(tmp_path, capsys):
-    assert main(["--design", "cy", "--tip-dy", "-5", *COARSE_RAMP, "--out", str(tmp_path)]) == 1
+    assert main(["--design", "cy", "--tip-dy", "-5", *SMALL_FLAGS, "--out", str(tmp_path)]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("unreachable: tip dy -5 lies outside what cy in [")
 

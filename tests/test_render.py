@@ -11,6 +11,7 @@ import imageio_ffmpeg
 import numpy as np
 import pytest
 from renderers import SOFTWARE, needs_window
+from scenes import SMALL_FLAGS, small_scene
 
 from taichi_pneuma.apps import inflate, steer
 from taichi_pneuma.backend import has_gui
@@ -24,12 +25,10 @@ from taichi_pneuma.render.video import write_video
 from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.solve.simulate import run_schedule
 
-COARSE = ["--max-area", "0.01", "--growth", "2", "--steps", "3", "--quiet"]
-
 
 @pytest.fixture(scope="module")
 def ramp():
-    built = reference_scene(cy=0.15, growth=2.0, steps=3, max_area=0.01).build()
+    built = small_scene().build()
     return built.mesh, run_schedule(built)
 
 
@@ -124,7 +123,7 @@ def test_no_video_initialises_no_renderer_and_draws_no_picture(tmp_path, monkeyp
         raise AssertionError("a renderer was initialised")
 
     monkeypatch.setattr(render_frames, "open_canvas", refuse)
-    assert inflate.main([*COARSE, "--no-video", "--out", str(tmp_path)]) == 0
+    assert inflate.main([*SMALL_FLAGS, "--no-video", "--out", str(tmp_path)]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         f"inflate_cy+0.15_growth2_steps3_max_area0.01{end}"
         for end in (".pvd", "_history.csv", "_scene.toml", "_states.npz", "_summary.json", "_vtk")
@@ -140,7 +139,7 @@ def test_inflate_renders_with_ti_gui_by_default_and_refuses_ggui_without_vulkan(
             sys.executable,
             "-m",
             "taichi_pneuma.apps.inflate",
-            *COARSE,
+            *SMALL_FLAGS,
             "--size",
             "320x160",
             "--out",
@@ -192,14 +191,14 @@ def test_steer_plays_three_panels_in_one_video(tmp_path, capsys):
     ],
 )
 def test_bad_rendering_flags_exit_2(tmp_path, capsys, flags, word):
-    assert inflate.main([*COARSE, *flags, "--out", str(tmp_path)]) == 2
+    assert inflate.main([*SMALL_FLAGS, *flags, "--out", str(tmp_path)]) == 2
     assert word in capsys.readouterr().err
 
 
 def test_interactive_without_display_is_one_clear_error(tmp_path, capsys, monkeypatch):
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
-    assert inflate.main([*COARSE, "--interactive", "--out", str(tmp_path)]) == 2
+    assert inflate.main([*SMALL_FLAGS, "--interactive", "--out", str(tmp_path)]) == 2
     assert "--interactive needs a display" in capsys.readouterr().err
 
 
@@ -209,7 +208,7 @@ def test_without_taichi_gui_a_live_window_or_taichi_renderer_is_one_clear_error(
     monkeypatch.setattr(canvases, "has_gui", lambda: False)
     monkeypatch.setattr(canvases, "has_ggui", lambda: False)
     monkeypatch.setenv("DISPLAY", ":0")
-    assert inflate.main([*COARSE, "--interactive", "--out", str(tmp_path)]) == 2
+    assert inflate.main([*SMALL_FLAGS, "--interactive", "--out", str(tmp_path)]) == 2
     assert "a live window needs Taichi's GUI (ti.GUI or GGUI), which" in capsys.readouterr().err
     for backend in ("gui", "ggui"):
         with pytest.raises(PneumaInputError, match=f"renderer = '{backend}' needs Taichi's GUI .* --renderer pillow"):

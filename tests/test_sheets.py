@@ -10,7 +10,7 @@ from itertools import permutations
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
+from fd import term_derivatives, term_hessian
 from solid_meshes import box_with_cavity, scene_of
 
 import taichi_pneuma as tp
@@ -48,36 +48,6 @@ def patch(d: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     )
 
 
-def dense_hessian(term: Membrane, psd_only: bool) -> np.ndarray:
-    n = term.config.u.size
-    rows, cols = term.hessian_pattern()
-    return sp.coo_matrix((term.hessian_values(psd_only), (rows, cols)), shape=(n, n)).toarray()
-
-
-def fd_gradient(term: Membrane, h: float = 1e-6) -> np.ndarray:
-    u, out = term.config.u, np.zeros(term.config.u.size)
-    for j in range(u.size):
-        u.flat[j] += h
-        plus = term.energy()
-        u.flat[j] -= 2 * h
-        minus = term.energy()
-        u.flat[j] += h
-        out[j] = (plus - minus) / (2 * h)
-    return out
-
-
-def fd_hessian(term: Membrane, h: float = 1e-6) -> np.ndarray:
-    u, out = term.config.u, np.zeros((term.config.u.size,) * 2)
-    for j in range(u.size):
-        u.flat[j] += h
-        plus = term.gradient().ravel()
-        u.flat[j] -= 2 * h
-        minus = term.gradient().ravel()
-        u.flat[j] += h
-        out[:, j] = (plus - minus) / (2 * h)
-    return out
-
-
 @pytest.mark.parametrize("d", [2, 3])
 @pytest.mark.parametrize("scale", [0.7, 1.3])  # compressed, stretched
 def test_membrane_gradient_and_exact_hessian_match_finite_differences(d, scale):
@@ -86,15 +56,16 @@ def test_membrane_gradient_and_exact_hessian_match_finite_differences(d, scale):
     term = Membrane(config, cells, T, E, NU, wrinkles=False)
     config.u[:] = (scale - 1) * rest + 0.05 * np.random.default_rng(1).standard_normal(rest.shape)
     g = term.gradient().ravel()
-    assert np.linalg.norm(g - fd_gradient(term)) < 1e-6 * np.linalg.norm(g)
-    hessian, numeric = dense_hessian(term, False), fd_hessian(term)
+    g_fd, numeric = term_derivatives(term, config.u.copy())
+    assert np.linalg.norm(g - g_fd) < 1e-6 * np.linalg.norm(g)
+    hessian = term_hessian(term)
     assert np.linalg.norm(hessian - numeric) < 1e-6 * np.linalg.norm(numeric)
     values = term.hessian_values(True).reshape(len(cells), d * d, d * d)
     assert np.linalg.eigvalsh(values).min() > -1e-9 * np.abs(values).max()  # every projected block is PSD
     if scale < 1:  # compressed: the exact Hessian is indefinite, the projected one is not
         assert np.linalg.eigvalsh(hessian).min() < -1e-3 * np.abs(hessian).max()
     else:  # stretched along every direction: no block is projected
-        np.testing.assert_allclose(dense_hessian(term, True), hessian, atol=1e-9 * np.abs(hessian).max())
+        np.testing.assert_allclose(term_hessian(term, psd_only=True), hessian, atol=1e-9 * np.abs(hessian).max())
 
 
 @pytest.mark.parametrize("stretch", [0.9, 1.2])
@@ -179,8 +150,9 @@ def test_the_wrinkling_membrane_gradient_and_exact_hessian_match_finite_differen
     assert regimes(term) == (expected or {"taut", "slack", "wrinkled"} - ({"wrinkled"} if d == 2 else set()))
     g = term.gradient().ravel()
     scale = np.linalg.norm(g) or 1.0
-    assert np.linalg.norm(g - fd_gradient(term)) < 1e-6 * scale
-    hessian, numeric = dense_hessian(term, False), fd_hessian(term)
+    g_fd, numeric = term_derivatives(term, config.u.copy())
+    assert np.linalg.norm(g - g_fd) < 1e-6 * scale
+    hessian = term_hessian(term)
     size = np.linalg.norm(numeric) or 1.0
     assert np.linalg.norm(hessian - numeric) < 1e-6 * size
     np.testing.assert_allclose(hessian, hessian.T, atol=1e-12 * size)

@@ -3,8 +3,8 @@ independent computations, the patch test, the inversion bound, ground contact un
 
 import numpy as np
 import pytest
+from fd import dense_hessian, fd_gradient, fd_hessian
 from solid_meshes import PLANES, Z_ROLLERS, extruded_beam, scene_of, shell_octant
-from test_terms import dense_hessian, fd_gradient, fd_hessian
 
 import taichi_pneuma as tp
 from taichi_pneuma.errors import PneumaInputError

@@ -3,11 +3,10 @@
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from fd import dense_hessian, fd_gradient, fd_hessian, random_state
 
 from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.solve.linsolve import FixedPattern, make_backend, solve_low_rank_updated
-
-H = 1e-6
 
 
 @pytest.fixture(scope="module")
@@ -16,50 +15,6 @@ def coarse():
     built = reference_scene(cy=0.15, chamber_points=32, max_area=0.02).build()
     built.set_commands([1.5])
     return built
-
-
-def random_state(built, scale=0.02, seed=0):
-    rng = np.random.default_rng(seed)
-    return scale * rng.standard_normal(built.mesh.vertices.shape)
-
-
-def dense_hessian(n, parts, psd_only):
-    """Dense matrix of the given terms' sparse triplets plus their rank-1 parts."""
-    hessian = np.zeros((n, n))
-    for term in parts:
-        rows, cols = term.hessian_pattern()
-        hessian += sp.coo_matrix((term.hessian_values(psd_only), (rows, cols)), shape=(n, n)).toarray()
-        for dofs, u, c in term.low_rank():
-            v = np.zeros(n)
-            v[dofs] = u
-            hessian += c * np.outer(v, v)
-    return hessian
-
-
-def fd_gradient(model, term, u):
-    n = u.size
-    g = np.zeros(n)
-    for i in range(n):
-        step = np.zeros(n)
-        step[i] = H
-        model.set_displacements(u.ravel() + step)
-        e_plus = term.energy()
-        model.set_displacements(u.ravel() - step)
-        g[i] = (e_plus - term.energy()) / (2 * H)
-    return g
-
-
-def fd_hessian(model, terms, u):
-    n = u.size
-    columns = []
-    for i in range(n):
-        step = np.zeros(n)
-        step[i] = H
-        model.set_displacements(u.ravel() + step)
-        g_plus = sum(t.gradient().ravel() for t in terms)
-        model.set_displacements(u.ravel() - step)
-        columns.append((g_plus - sum(t.gradient().ravel() for t in terms)) / (2 * H))
-    return np.array(columns).T
 
 
 @pytest.mark.parametrize("index", [0, 1, 2], ids=["elastic", "chamber", "clamp"])

@@ -48,7 +48,7 @@ from scipy.optimize import lsq_linear
 from scipy.stats import qmc
 
 from ..errors import require, require_finite
-from ..fem.fields import ElementFields
+from ..fem.tip import COLUMNS as TIP_COLUMNS
 from ..fem.tip import tip_measures
 from ..result import Result
 from ..scene.build import BuiltScene, Scene
@@ -458,7 +458,6 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
     steps: list[StepRecord] = []
     states: list[np.ndarray] = []
     descent = 0
-    stretches = ElementFields(mesh.vertices, mesh.elements)
     for k, result in enumerate(results):
         target = result.target
         for j, pose in enumerate(result.path[1 if k else 0 :], start=1 if k else 0):
@@ -477,21 +476,21 @@ def frames(reacher: Reacher, results: list[ReachResult]) -> Result:
             }
             if mesh.dim == 3:
                 extra.update(target_z=target.tip[2] if len(target.tip) == 3 else math.nan, tip_z=pose.tip[2])
+            measures = dict(zip(TIP_COLUMNS, map(float, pose.tip - rest_tip)), tip_rotation=pose.rotation)
+            stretch = mesh.fields.largest_stretch(mesh.vertices + pose.u)
+            measures.update(min_det=built.elastic.min_determinant(), max_stretch=stretch)
             steps.append(
                 StepRecord(
-                    len(steps),
-                    chamber_records(built, pose.commands),
-                    pose.tip - rest_tip,
-                    pose.rotation,
-                    pose.iterations,
-                    pose.residual,
-                    True,
-                    0,
-                    1,
-                    built.elastic.min_determinant(),
-                    pose.seconds,
+                    step=len(steps),
+                    chambers=chamber_records(built, pose.commands),
+                    measures=measures,
+                    iterations=pose.iterations,
+                    residual=pose.residual,
+                    converged=True,
+                    cuts=0,
+                    substeps=1,
+                    seconds=pose.seconds,
                     extra=extra,
-                    max_stretch=stretches.largest_stretch(mesh.vertices + pose.u),
                 )
             )
             states.append(mesh.vertices + pose.u)

@@ -30,7 +30,6 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..errors import require, require_finite
-from ..fem.fields import ElementFields
 from ..scene.build import BuiltScene
 from ..solve.newton import NewtonOptions, NewtonSolver
 from ..solve.records import SOLVER_COLUMNS, Run
@@ -152,7 +151,7 @@ def reach_output(
         )
     u0, c0, before = run.displacements[k - 1], schedule.commands(k - 1), run.steps[k - 1]
     solver = NewtonSolver(built.model, options)
-    stretches = ElementFields(built.mesh.vertices, built.mesh.elements)
+    stretches = built.mesh.fields
     evaluations: list[tuple[float, float]] = []
 
     def measure(s: float) -> float:

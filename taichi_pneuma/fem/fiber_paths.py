@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import require, require_finite, shape_of
+from ..errors import require, require_finite, require_positive, shape_of
 from ..io.units import LENGTH, unit
 
 AXES = ("x", "y", "z")
@@ -54,12 +54,6 @@ def _point(name: str, value) -> np.ndarray:
     """value as 2 or 3 finite numbers, or a PneumaInputError naming it."""
     require(shape_of(value) in ((2,), (3,)), f"{name} = {value!r} must be a point [x, y] or [x, y, z]")
     return np.array([require_finite(name, v) for v in value])
-
-
-def _positive(name: str, value) -> float:
-    v = require_finite(name, value)
-    require(v > 0, f"{name} = {value!r} must be > 0")
-    return v
 
 
 def ceiling(x: float) -> int:
@@ -186,12 +180,12 @@ class Rings(Layout):
 
     def __post_init__(self):
         _check_axis_center(self.center, self.axis)
-        _positive("radius", self.radius)
+        require_positive("radius", self.radius)
         require(
             isinstance(self.count, int) and not isinstance(self.count, bool) and self.count >= 1,
             f"count = {self.count!r} must be a whole number >= 1",
         )
-        _positive("spacing", self.spacing)
+        require_positive("spacing", self.spacing)
 
     def ring_points(self, spacing: float) -> int:
         """The points of each ring: max(3, ceil(2 pi radius / spacing)), a triangle at the least."""
@@ -226,12 +220,14 @@ class Spiral(Layout):
 
     def __post_init__(self):
         _check_axis_center(self.center, self.axis)
-        _positive("radius", self.radius)
+        require_positive("radius", self.radius)
         require(
             (self.turns is None) != (self.extent is None),
             f"turns = {self.turns!r}, extent = {self.extent!r}: give exactly one of turns and extent",
         )
-        _positive("turns" if self.extent is None else "extent", self.turns if self.extent is None else self.extent)
+        require_positive(
+            "turns" if self.extent is None else "extent", self.turns if self.extent is None else self.extent
+        )
         require(
             isinstance(self.strands, int) and not isinstance(self.strands, bool) and 1 <= self.strands <= MAX_STRANDS,
             f"strands = {self.strands!r} must be a whole number from 1 to {MAX_STRANDS}",
@@ -241,7 +237,7 @@ class Spiral(Layout):
             f"pitch = {self.pitch!r}, angle = {self.angle!r}: give exactly one of pitch and angle",
         )
         if self.pitch is not None:
-            _positive("pitch", self.pitch)
+            require_positive("pitch", self.pitch)
         else:
             a = require_finite("angle", self.angle)
             require(0 < a < 90, f"angle = {self.angle!r} must lie in (0, 90) degrees (from the axis)")

@@ -9,6 +9,7 @@ set of facets, and only a 3D source has named volume groups.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -77,6 +78,14 @@ class Mesh:
     @property
     def n_elements(self) -> int:
         return len(self.elements)
+
+    @cached_property
+    def fields(self):
+        """The mesh's per-element fields (fields.ElementFields: det F, the largest stretch, stress at any positions),
+        made once: their quadrature over the rest elements is shared by everything that reads the mesh's fields."""
+        from .fields import ElementFields  # NumPy and Taichi's laws: a mesh alone does not load them
+
+        return ElementFields(self.vertices, self.elements)
 
     triangles = property(lambda self: self.elements, doc="a 2D mesh's elements, its triangles")
     n_triangles = n_elements

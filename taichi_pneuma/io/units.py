@@ -191,24 +191,6 @@ UNITS = {
     )
 }
 
-# Dimensions of the history columns that are not per chamber or per contact (those are set by history_dimensions)
-FIXED_COLUMNS = {
-    "tip_dx": LENGTH,
-    "tip_dy": LENGTH,
-    "tip_dz": LENGTH,
-    "tip_rotation": ANGLE,
-    "tip_twist": ANGLE,
-    "seconds": TIME,
-    "target_x": LENGTH,
-    "target_y": LENGTH,
-    "target_z": LENGTH,
-    "target_angle": ANGLE,
-    "tip_x": LENGTH,
-    "tip_y": LENGTH,
-    "tip_z": LENGTH,
-    "tip_error": LENGTH,
-}
-
 
 def in_dimension(dimension: str, dim: int) -> str:
     """A quantity's dimension in a body of dimension dim: AREA (a chamber's measure, or a volume of air per unit
@@ -217,26 +199,3 @@ def in_dimension(dimension: str, dim: int) -> str:
     if dim == 3:
         return {AREA: VOLUME, FORCE: FORCE_3D, MOMENT: MOMENT_3D}.get(dimension, dimension)
     return dimension
-
-
-def history_dimensions(scene, contacts=(), dim: int = 2) -> dict[str, str]:
-    """The dimension of every history column (simulate.StepRecord.row) with one, for a scene (its chambers'
-    commands have their kinds' dimensions; a chamber's measure is a volume in 3D), the names of its contact
-    terms (their fx, fy, fz, magnitude) and the body's dimension dim; the clamp's reaction (clamp.fx, ...: forces;
-    clamp.mx, .my, .mz: moments)."""
-    dimensions = dict(FIXED_COLUMNS)
-    for name, control in zip(scene.chamber_names, scene.controls):
-        dimensions.update(
-            {
-                f"{name}.command": in_dimension(control.kind.dimension, dim),
-                f"{name}.area": MEASURES[dim],
-                f"{name}.pressure": PRESSURE,
-            }
-        )
-    force, moment = in_dimension(FORCE, dim), in_dimension(MOMENT, dim)
-    for name in contacts:
-        dimensions.update({f"{name}.{part}": force for part in ("fx", "fy", "fz", "magnitude")})
-    dimensions.update({f"clamp.f{axis}": force for axis in "xyz"}, blocked_force=force)
-    dimensions.update({f"clamp.m{axis}": moment for axis in "xyz"})
-    dimensions.update({f"{o.name}.dy": LENGTH for o in scene.obstacles if o.weight is not None})  # held objects
-    return dimensions

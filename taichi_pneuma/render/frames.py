@@ -12,7 +12,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import require
-from ..fem.fields import ElementFields
 from ..fem.mesh import Mesh
 from ..io.units import AREA, LENGTH, PRESSURE
 from . import COLOR_FIELDS
@@ -88,7 +87,7 @@ class Track:
         values, label = None, ""
         if color != "none":
             label, key = COLOR_FIELDS[color]
-            fields = ElementFields(mesh.vertices, mesh.triangles)
+            fields = mesh.fields
             values = np.array([fields.at(x)[key] for x in result.positions])
         targets = np.column_stack([history["target_x"], history["target_y"]]) if "target_x" in history else None
         return cls(

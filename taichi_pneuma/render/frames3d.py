@@ -37,7 +37,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import PneumaInputError, require, shape_of
-from ..fem.fields import ElementFields
 from ..io.units import LENGTH, PRESSURE
 from . import guides3d
 from .camera import Camera
@@ -143,7 +142,7 @@ class Track3D:
         if color != "none":
             name, key = COLOR_FIELDS[color]
             label = f"{name} [-]"  # both fields are ratios of lengths or volumes
-            fields = ElementFields(mesh.vertices, mesh.elements)
+            fields = mesh.fields
             cells = np.array([fields.at(x)[key] for x in result.positions])
             values = cells[:, under]
         captions = step_captions(result.area_ratio, result.pressure, history, units)

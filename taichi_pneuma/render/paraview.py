@@ -40,10 +40,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fem.fields import ElementFields
 from ..io.output import Subfolder, held_private_folder, save_text, write_atomic
-from ..io.units import FORCE, LENGTH, PRESSURE, history_dimensions, in_dimension
+from ..io.units import FORCE, LENGTH, PRESSURE, in_dimension
 from ..io.vtk import pad3, pvd_text, vtu_text
+from ..solve.columns import history_dimensions
 from .paraview_parts import SYMMETRIC_TENSOR, parts
 
 
@@ -75,7 +75,7 @@ class VtkSeries:
         self._scratch = held_private_folder(self, self.directory, f"{stem}_vtk")  # every step's VTU and PVD
         self.scene = built.scene
         self.material = built.elastic.law, built.elastic.parameters
-        self.fields = ElementFields(mesh.vertices, mesh.elements)
+        self.fields = mesh.fields
         self.points = pad3(mesh.vertices)
         self.cells = [(mesh.family, mesh.elements)]
         walls = mesh.family.facet_family  # a 3D mesh's chamber walls are facets; a 2D one's are node loops

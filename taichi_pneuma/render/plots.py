@@ -7,15 +7,17 @@ Candidate panels, in this order:
     chamber pressure against the command     (the command is the other of area ratio and pressure)
     tip deflection, bending angle (and twist in 3D), axial extension, the forces on the obstacles (with
         obstacles: the net force, blocked_force, and each obstacle's contact force, the sum of the nodes' |f|,
-        a gripper's grip): the actuator's responses, against the pressure p of the chamber that drives the run,
-        else the step
+        a gripper's grip): the actuator's responses (RESPONSES, each drawing the history columns that name it
+        as their panel in the registry solve/columns.py COLUMNS; a panel of several columns names the others in
+        its title), against the pressure p of the chamber that drives the run, else the step
 
 "The command" is the chambers' commanded value (area ratio, pressure, displaced volume, ...) when every
 chamber gets the same command at every step (command_axis); otherwise the step. A chamber's curve of its own
 commanded quantity is not drawn (it is the schedule, not a response); a curve constant over the run (a twist of
 zero, a chamber at rest) is not drawn, and a panel left without curves is left out. Chambers whose curves are
 identical (a PneuNet's chambers on one supply) are one curve, "all 6 chambers"; otherwise each chamber has its own
-colour (the same in every panel) and a legend entry with its name. The run is "driven by one chamber" when the
+colour (the same in every panel) and a legend entry with its name; a response panel has a legend when it draws
+more than one curve. The run is "driven by one chamber" when the
 chambers whose command varies all have the same pressure history (one chamber, or chambers on one supply); the
 responses are then drawn against that pressure. The grid has as many axes as panels. In a scene with units every
 axis with a dimension says its unit ("pressure p [kPa]").
@@ -32,6 +34,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..io.units import ANGLE, FORCE, LENGTH, PRESSURE, in_dimension
+from ..solve import columns
 
 
 def command_axis(command: np.ndarray, quantities: list[str]) -> tuple[np.ndarray, str]:
@@ -113,6 +116,14 @@ def response_axis(result) -> tuple[np.ndarray, str]:
 
 
 OBSTACLE_COLOURS = ("tab:blue", "tab:green", "tab:red", "tab:purple", "tab:brown")  # each obstacle's force curve
+RESPONSE_COLOURS = ("k", "tab:orange", "tab:cyan", "tab:olive")  # a response panel's columns, in COLUMNS' order
+# the response panels (module docstring) by the key of columns.Column.panel: title, y label and its dimension
+RESPONSES = (
+    ("deflection", "tip deflection (mean y displacement of the tip)", "tip deflection dy", LENGTH),
+    ("bending", "bending angle (tip rotation)", "angle", ANGLE),
+    ("extension", "axial extension (mean x displacement of the tip)", "extension dx", LENGTH),
+    ("obstacles", "force on the obstacles", "force", FORCE),
+)
 
 
 def history_panels(result) -> list[Panel]:
@@ -145,37 +156,22 @@ def history_panels(result) -> list[Panel]:
             keep = [q != quantity for q in quantities]  # a chamber's own command is the schedule, not a response
             panels.append(Panel(title, x_label, y_label, chamber_curves(names, x, values, keep)))
     xr, xr_label = response_axis(result)
-    twist = "tip_twist" in history and not constant(history["tip_twist"])
-    one = lambda key, label="", colour="k": [] if constant(history[key]) else [(label, xr, history[key], colour)]
-    bending = one("tip_rotation", "bending angle" if twist else "")
-    bending += one("tip_twist", "twist about x", "tab:orange") if twist else []
-    panels += [
-        Panel(
-            "tip deflection (mean y displacement of the tip)",
-            xr_label,
-            units.label("tip deflection dy", LENGTH),
-            one("tip_dy"),
-        ),
-        Panel(
-            "bending angle (tip rotation)" + (" and twist" if len(bending) > 1 else ""),
-            xr_label,
-            units.label("angle", ANGLE),
-            bending,
-        ),
-        Panel(
-            "axial extension (mean x displacement of the tip)",
-            xr_label,
-            units.label("extension dx", LENGTH),
-            one("tip_dx"),
-        ),
-    ]
-    if "blocked_force" in history:  # the net force, and each obstacle's contact force (a gripper's grip)
-        curves = one("blocked_force", "net (blocked force)")
-        for k, obstacle in enumerate(result.scene.obstacles):
-            name = f"{obstacle.name}.magnitude"
-            curves += one(name, f"{obstacle.name}: sum of |f|", OBSTACLE_COLOURS[k % len(OBSTACLE_COLOURS)])
-        force = units.label("force", in_dimension(FORCE, result.mesh.dim))
-        panels.append(Panel("force on the obstacles", xr_label, force, curves))
+    for key, title, y_label, dimension in RESPONSES:
+        drawn = [
+            (c.label, xr, history[c.name], RESPONSE_COLOURS[k % len(RESPONSE_COLOURS)])
+            for k, c in enumerate(c for c in columns.COLUMNS if c.panel == key)
+            if c.name in history and not constant(history[c.name])
+        ]
+        if drawn[1:]:  # the columns after the panel's first, named in its title
+            title += " and " + ", ".join(label for label, *_ in drawn[1:])
+        if key == "obstacles":  # each obstacle's contact force (a gripper's grip)
+            for k, obstacle in enumerate(result.scene.obstacles):
+                name = f"{obstacle.name}.magnitude"
+                if not constant(history[name]):
+                    colour = OBSTACLE_COLOURS[k % len(OBSTACLE_COLOURS)]
+                    drawn.append((f"{obstacle.name}: sum of |f|", xr, history[name], colour))
+        curves = [(label if drawn[1:] else "", *curve) for label, *curve in drawn]  # a legend for several curves
+        panels.append(Panel(title, xr_label, units.label(y_label, in_dimension(dimension, result.mesh.dim)), curves))
     return [p for p in panels if p.curves]
 
 

@@ -10,9 +10,10 @@ from functools import cached_property
 
 import numpy as np
 
-from ..fem.fields import element_fields
 from ..fem.tip import COLUMNS as TIP_COLUMNS
 from ..scene.build import BuiltScene, Scene
+from . import columns
+from .columns import AFTER_CHAMBERS, AFTER_CONTACT, AFTER_SOLVER
 
 # the history columns that count the solve, not measure the state it found: a ramp's step, its Newton iterations,
 # residual, convergence, cut-backs, sub-increments and seconds (each an integer, a flag or a figure of the solver's)
@@ -33,55 +34,69 @@ class ChamberRecord:
 
 @dataclass
 class StepRecord:
-    """One increment of the schedule, as measured after its solve.
+    """One increment of the schedule, as measured after its solve, constructed by keyword.
 
-    tip: the mean displacement of the tip nodes (d,) (fem/tip.py); tip_rotation: their rigid rotation in
-    degrees (counter-clockwise positive, least squares; in 3D the bend angle, about z), the whole turn from rest
-    (continued from the step before: -250 past half a turn, not +110); contact: per contact
-    term (by its name: ground, self_contact, each obstacle's) the total force it exerts on the body (fx, fy) and the
-    sum of its per-node force magnitudes, and in 3D (contact_fz) that force's z component; clamp: the clamp's
-    reaction on the body, its force and its moment about the pinned nodes' rest centroid (simulate.clamp_reaction:
-    fx, fy, mz; in 3D fx, fy, fz, mx, my, mz), empty without a clamp; extra:
-    further columns by name, last in the row (a reach's target and tip error, inverse.frames); max_stretch: the
-    largest principal stretch at any quadrature point (ElementFields.largest_stretch); tip_twist: in 3D the tip's
-    twist about x in degrees (fem/tip.py tip_twist, the whole turn from rest as tip_rotation is), else None;
-    blocked_force: in a scene with obstacles the magnitude of the total force between the body and all of them (the
-    force an actuator exerts on the objects it is held against), else None.
+    chambers: each chamber's ChamberRecord, by name; measures: the value of each column of the registry
+    (columns.COLUMNS) the step has, by name (tip_dx, tip_dy (, tip_dz): the mean displacement of the tip nodes;
+    tip_rotation: their rigid rotation in degrees, counter-clockwise positive, the whole turn from rest; in 3D
+    tip_twist; with obstacles blocked_force; min_det; max_stretch; read also as the properties below); the solver's
+    figures (SOLVER_COLUMNS); contact: per contact term (by its name: ground, self_contact, each obstacle's) the
+    total force it exerts on the body (fx, fy) and the sum of its per-node force magnitudes, and in 3D (contact_fz)
+    that force's z component; clamp: the clamp's reaction on the body, its force and its moment about the pinned
+    nodes' rest centroid (simulate.clamp_reaction: fx, fy, mz; in 3D fx, fy, fz, mx, my, mz), empty without a
+    clamp; extra: further columns by name, last in the row (a reach's target and tip error, inverse.frames).
     """
 
     step: int
     chambers: dict[str, ChamberRecord]
-    tip: np.ndarray
-    tip_rotation: float
+    measures: dict[str, float]
     iterations: int
     residual: float
     converged: bool
     cuts: int
     substeps: int
-    min_det: float
     seconds: float
     contact: dict[str, tuple[float, float, float]] = field(default_factory=dict)
-    extra: dict[str, float] = field(default_factory=dict)
-    max_stretch: float = math.nan
     contact_fz: dict[str, float] = field(default_factory=dict)
     clamp: dict[str, float] = field(default_factory=dict)
-    tip_twist: float | None = None
-    blocked_force: float | None = None
+    extra: dict[str, float] = field(default_factory=dict)
 
     @property
-    def tip_dx(self) -> float:
-        """The tip's mean x displacement."""
-        return float(self.tip[0])
+    def tip(self) -> np.ndarray:
+        """The tip's mean displacement (d,) (fem/tip.py)."""
+        return np.array([self.measures[column] for column in TIP_COLUMNS if column in self.measures])
 
-    @property
-    def tip_dy(self) -> float:
-        """The tip's mean y displacement (the deflection of a beam along x)."""
-        return float(self.tip[1])
+    tip_dx = property(lambda self: self.measures["tip_dx"], doc="The tip's mean x displacement.")
+    tip_dy = property(
+        lambda self: self.measures["tip_dy"], doc="The tip's mean y displacement (the deflection of a beam along x)."
+    )
+    tip_rotation = property(
+        lambda self: self.measures["tip_rotation"],
+        doc="The tip's rigid rotation in degrees, the whole turn from rest (fem/tip.py).",
+    )
+    tip_twist = property(
+        lambda self: self.measures.get("tip_twist"),
+        doc="In 3D the tip's twist about x in degrees, the whole turn from rest (fem/tip.py), else None.",
+    )
+    blocked_force = property(
+        lambda self: self.measures.get("blocked_force"),
+        doc="With obstacles, the magnitude of the total force between the body and all of them, else None.",
+    )
+    min_det = property(lambda self: self.measures.get("min_det", math.nan), doc="The smallest det F of any element.")
+    max_stretch = property(
+        lambda self: self.measures.get("max_stretch", math.nan),
+        doc="The largest principal stretch at any quadrature point (ElementFields.largest_stretch).",
+    )
+
+    def _measured(self, after: str) -> dict[str, float]:
+        """The measured columns that stand after `after` in the row (columns.Column.after), in COLUMNS' order."""
+        return {c.name: self.measures[c.name] for c in columns.COLUMNS if c.after == after and c.name in self.measures}
 
     def row(self) -> dict[str, float]:
-        """Flat columns: step, <chamber>.<field> for each chamber, tip_dx, tip_dy (and tip_dz in 3D),
-        tip_rotation (and tip_twist in 3D), <contact>.fx/.fy(/.fz)/.magnitude, blocked_force (with obstacles),
-        clamp.fx/.fy(/.fz)/(.mx/.my/).mz, solver figures, the extra columns."""
+        """Flat columns: step, <chamber>.<field> for each chamber, the measured columns after the chambers (tip_dx,
+        tip_dy, ...), <contact>.fx/.fy(/.fz)/.magnitude, those after the contact (blocked_force),
+        clamp.fx/.fy(/.fz)/(.mx/.my/).mz, the solver's figures with the measured columns after them (min_det,
+        max_stretch) before its seconds, the extra columns."""
         row: dict[str, float] = {"step": self.step}
         for name, c in self.chambers.items():
             row.update(
@@ -92,17 +107,13 @@ class StepRecord:
                     f"{name}.pressure": c.pressure,
                 }
             )
-        row.update({column: float(value) for column, value in zip(TIP_COLUMNS, self.tip)})
-        row["tip_rotation"] = self.tip_rotation
-        if self.tip_twist is not None:
-            row["tip_twist"] = self.tip_twist
+        row.update(self._measured(AFTER_CHAMBERS))
         for name, (fx, fy, magnitude) in self.contact.items():
             row.update({f"{name}.fx": fx, f"{name}.fy": fy})
             if name in self.contact_fz:
                 row[f"{name}.fz"] = self.contact_fz[name]
             row[f"{name}.magnitude"] = magnitude
-        if self.blocked_force is not None:
-            row["blocked_force"] = self.blocked_force
+        row.update(self._measured(AFTER_CONTACT))
         row.update({f"clamp.{key}": value for key, value in self.clamp.items()})
         row.update(
             {
@@ -111,11 +122,10 @@ class StepRecord:
                 "converged": self.converged,
                 "cuts": self.cuts,
                 "substeps": self.substeps,
-                "min_det": self.min_det,
-                "max_stretch": self.max_stretch,
-                "seconds": self.seconds,
             }
         )
+        row.update(self._measured(AFTER_SOLVER))
+        row["seconds"] = self.seconds
         row.update(self.extra)
         return row
 
@@ -210,24 +220,20 @@ class Run:
 
     def fields(self, step: int = -1) -> dict[str, np.ndarray]:
         """Per element at a step: det_F, max_stretch, stress (Cauchy, (m, 3, 3)), von_mises (fields.py)."""
-        return element_fields(
-            self.mesh.vertices, self.positions[step], self.mesh.elements, *self.scene.element_material(self.mesh)
-        )
+        return self.mesh.fields.at(self.positions[step], *self.scene.element_material(self.mesh))
 
     def extremes(self) -> dict[str, dict]:
-        """The range over the run of the tip's measures (tip_dx, tip_dy, in 3D tip_dz, tip_rotation, in 3D tip_twist),
-        of the blocked force (with obstacles) and of each chamber's (<chamber>.area, .area_ratio, .pressure), by
-        history column: {"min": value, "min_step": the first step at it, "max": ..., "max_step": ...}. A schedule
-        that goes out and back ends near rest; its extremes keep what it reached."""
+        """The range over the run of each measured column that has extremes (columns.COLUMNS: tip_dx, tip_dy, in 3D
+        tip_dz, tip_rotation, in 3D tip_twist, with obstacles blocked_force) and of each chamber's (<chamber>.area,
+        .area_ratio, .pressure), by history column: {"min": value, "min_step": the first step at it, "max": ...,
+        "max_step": ...}. A schedule that goes out and back ends near rest; its extremes keep what it reached."""
         history = self.history
-        columns = [
-            *TIP_COLUMNS[: self.mesh.dim],
-            "tip_rotation",
-            *(column for column in ("tip_twist", "blocked_force") if column in history),
+        names = [
+            *(column.name for column in columns.COLUMNS if column.extremes and column.name in history),
             *(f"{name}.{key}" for name in self.chamber_names for key in ("area", "area_ratio", "pressure")),
         ]
         extremes = {}
-        for column in columns:
+        for column in names:
             values = history[column]
             low, high = int(np.argmin(values)), int(np.argmax(values))
             extremes[column] = {

@@ -8,9 +8,9 @@ import time
 import numpy as np
 
 from ..fem.fields import ElementFields
-from ..fem.tip import tip_measures, tip_twist_of
 from ..scene.build import BuiltScene
 from ..scene.schedule import Schedule
+from .columns import StepState
 from .newton import NewtonOptions, NewtonSolver, SolveRecord
 from .records import ChamberRecord, Run, StepRecord
 
@@ -244,15 +244,12 @@ def step_record(
     are continued from those of `previous`, the record of the state it was solved from (none: rest, 0 degrees):
     the whole turn from rest (fem/tip.py)."""
     mesh = built.mesh
-    rotation, twist = (0.0, 0.0) if previous is None else (previous.tip_rotation, previous.tip_twist or 0.0)
+    near = (0.0, 0.0) if previous is None else (previous.tip_rotation, previous.tip_twist or 0.0)
+    state = StepState(built, u, stretches, near)
     contact, contact_fz, vertex_forces = {}, {}, np.zeros_like(u)
-    on_obstacles = np.zeros(mesh.dim)
     by_name: dict[str, np.ndarray] = {}  # the nodal forces of the terms reported under each name (Term.reported_as)
-    for term in built.contact_terms():
-        f = -term.gradient()
+    for term, f in state.contact_forces:
         vertex_forces += f
-        if any(term is obstacle for obstacle in (*built.obstacles, *built.obstacle_parts)):
-            on_obstacles += f.sum(axis=0)
         by_name[term.reported_as] = by_name.get(term.reported_as, 0.0) + f
     for name, f in by_name.items():
         total = f.sum(axis=0)
@@ -261,22 +258,18 @@ def step_record(
             contact_fz[name] = float(total[2])
     final = records[-1]
     record = StepRecord(
-        step,
-        chamber_records(built, commands),
-        *tip_measures(mesh, u, rotation),
-        sum(r.iterations for r in records),
-        final.residual,
-        final.converged,
-        cuts,
-        len(records) - cuts,
-        built.elastic.min_determinant(),
-        seconds,
-        contact,
-        max_stretch=stretches.largest_stretch(mesh.vertices + u),
+        step=step,
+        chambers=chamber_records(built, commands),
+        measures=state.measure(),
+        iterations=sum(r.iterations for r in records),
+        residual=final.residual,
+        converged=final.converged,
+        cuts=cuts,
+        substeps=len(records) - cuts,
+        seconds=seconds,
+        contact=contact,
         contact_fz=contact_fz,
         clamp=clamp_reaction(built),
-        tip_twist=tip_twist_of(mesh, u, twist),
-        blocked_force=float(np.linalg.norm(on_obstacles)) if built.obstacles else None,
         extra={name: value for term in built.model.terms for name, value in term.columns().items()},
     )
     return record, vertex_forces
@@ -310,7 +303,7 @@ def run_schedule(
     mesh = built.mesh
     contact_terms = built.contact_terms()
     u = np.zeros_like(mesh.vertices)
-    stretches = ElementFields(mesh.vertices, mesh.elements)
+    stretches = mesh.fields
     steps: list[StepRecord] = []
     states: list[np.ndarray] = []  # positions
     solves: list[SolveRecord] = []  # each step's last Newton solve

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import require, require_finite
+from ..errors import require, require_finite, require_positive
 from ..fem.self_intersection import surface_pieces
 from ..fem.supports import PointSet
 from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, PRESSURE, TIME, si_default, unit
@@ -55,11 +55,6 @@ class Effect:
         return 0
 
 
-def _positive(name: str, value: float | None) -> None:
-    """Refuse a value that is not > 0 (None: a default the Scene resolves, units.si_default)."""
-    require(value is None or require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
-
-
 @dataclass(frozen=True)
 class Gravity(Effect):
     """Body weight: density rho (mass per unit area in 2D, per unit volume in 3D) under acceleration g along -y."""
@@ -69,8 +64,8 @@ class Gravity(Effect):
     name = "gravity"
 
     def __post_init__(self):
-        _positive("density", self.density)
-        _positive("g", self.g)
+        require_positive("density", self.density)
+        require_positive("g", self.g, allow_none=True)
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
         return [GravityTerm(config, self.density * lumped_area, self.g)]  # type: ignore[arg-type]
@@ -97,8 +92,8 @@ class Ground(Effect):
 
     def __post_init__(self):
         require_finite("height", self.height)
-        _positive("dhat", self.dhat)
-        _positive("stiffness", self.stiffness)
+        require_positive("dhat", self.dhat, allow_none=True)
+        require_positive("stiffness", self.stiffness, allow_none=True)
         check_friction(self.friction, self.friction_slip)
 
     def holds(self, mesh, effects) -> list:
@@ -131,8 +126,8 @@ class SelfContact(Effect):
     contact = True
 
     def __post_init__(self):
-        _positive("dhat", self.dhat)
-        _positive("stiffness", self.stiffness)
+        require_positive("dhat", self.dhat, allow_none=True)
+        require_positive("stiffness", self.stiffness, allow_none=True)
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
         require(
@@ -170,8 +165,8 @@ class SurfaceContact(Effect):
     DHAT_FRACTION = 1e-3
 
     def __post_init__(self):
-        _positive("dhat", self.dhat)
-        _positive("stiffness", self.stiffness)
+        require_positive("dhat", self.dhat, allow_none=True)
+        require_positive("stiffness", self.stiffness, allow_none=True)
         check_friction(self.friction, self.friction_slip)
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
@@ -201,8 +196,8 @@ class Dynamics(Effect):
     name = "dynamics"
 
     def __post_init__(self):
-        _positive("density", self.density)
-        _positive("dt", self.dt)
+        require_positive("density", self.density)
+        require_positive("dt", self.dt)
 
     def holds(self, mesh, effects) -> list:
         """Inertia holds every motion (its Hessian, the lumped masses / dt^2, is positive definite): a free body

@@ -32,7 +32,7 @@ from typing import TypeAlias
 import numpy as np
 
 from ..backend import kernel, ti
-from ..errors import PneumaInputError, require, require_finite
+from ..errors import PneumaInputError, require, require_positive
 from ..fem.embedding import embed, first_crossing, inside
 from ..fem.fiber_paths import LAYOUTS, PLANAR, Layout
 from ..io.output import check_heading
@@ -204,10 +204,6 @@ class Cords(Term):
         return out.ravel()
 
 
-def _positive(name: str, value) -> None:
-    require(value is None or require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
-
-
 @dataclass(frozen=True)
 class Fiber:
     """An embedded fibre ([[fibers]]): its curve (path, a fem/fiber_paths.py layout), Young's modulus E, its
@@ -224,14 +220,14 @@ class Fiber:
 
     def __post_init__(self):
         require(isinstance(self.path, Layout), f"path = {self.path!r} must be a fibre layout ({', '.join(LAYOUTS)})")
-        _positive("E", self.E)
+        require_positive("E", self.E)
         require(
             (self.area is None) != (self.diameter is None),
             f"area = {self.area!r}, diameter = {self.diameter!r}: give exactly one of area and diameter",
         )
-        _positive("area", self.area)
-        _positive("diameter", self.diameter)
-        _positive("spacing", self.spacing)
+        require_positive("area", self.area, allow_none=True)
+        require_positive("diameter", self.diameter, allow_none=True)
+        require_positive("spacing", self.spacing, allow_none=True)
         if self.name is not None:
             check_heading("fiber name", self.name)
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import require, require_finite
+from ..errors import require, require_finite, require_positive
 
 PLANE, SPHERE, BOX, CYLINDER, CAPSULE = range(5)  # the kernels' shape kinds
 AXES = ("x", "y", "z")
@@ -22,11 +22,6 @@ def vector(name: str, value, length: int | None = None) -> tuple[float, ...]:
     )
     values = [require_finite(name, v) for v in value]
     return (*values, 0.0)[:3]
-
-
-def positive(name: str, value) -> float:
-    require(require_finite(name, value) > 0, f"{name} = {value!r} must be > 0")
-    return float(value)
 
 
 def axis_vector(axis: str) -> tuple[float, float, float]:
@@ -99,7 +94,7 @@ class Sphere(Shape):
 
     def __post_init__(self):
         vector("center", self.center)
-        positive("radius", self.radius)
+        require_positive("radius", self.radius)
 
     def parameters(self) -> np.ndarray:
         return np.array([*vector("center", self.center), 0.0, 0.0, 0.0, self.radius, 0.0])
@@ -119,10 +114,8 @@ class Box(Shape):
 
     def __post_init__(self):
         vector("center", self.center)
-        require(
-            all(positive("size", s) for s in vector("size", self.size)[: len(self.size)]),
-            f"size = {self.size!r} must be > 0",
-        )
+        for s in vector("size", self.size)[: len(self.size)]:
+            require_positive("size", s)
 
     def parameters(self) -> np.ndarray:
         half = [0.5 * s for s in self.size] + [1e300]  # a 2D box has no z extent
@@ -145,8 +138,8 @@ class Cylinder(Shape):
 
     def __post_init__(self):
         vector("center", self.center)
-        positive("radius", self.radius)
-        positive("length", self.length)
+        require_positive("radius", self.radius)
+        require_positive("length", self.length)
         axis_vector(self.axis)
 
     def parameters(self) -> np.ndarray:
