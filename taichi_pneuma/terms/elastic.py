@@ -222,15 +222,16 @@ class Elasticity(Term):
         E = sum_e scale_e E_e, on a configuration of its own holding those elements' nodes alone, numbered afresh
         (apart: a copy of the nodes per element, so that no two elements share one and gradient() holds each
         element's own forces). Its `vertices` are the original numbers of its nodes. For an elementwise term."""
-        from .model import Configuration
-
         nodes = self.nodes[elements]
         if apart:
             vertices, local = nodes.ravel(), np.arange(nodes.size)
         else:
             vertices, local = np.unique(nodes, return_inverse=True)
         term = type(self)(
-            Configuration(self.config.rest[vertices]), local.reshape(nodes.shape), self.law, self.parameters[elements]
+            type(self.config)(self.config.rest[vertices]),
+            local.reshape(nodes.shape),
+            self.law,
+            self.parameters[elements],
         )
         term.scale_elements(np.asarray(scale, dtype=np.float64))
         term.vertices = vertices
