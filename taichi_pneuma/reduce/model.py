@@ -39,19 +39,37 @@ class SampledElasticity:
         m, k = self.term.nodes.shape
         self.element_basis = self.basis[vertex_dofs(self.term.nodes.ravel(), self.dim)].reshape(m, k * self.dim, -1)
         self.u = self.term.config.u
+        self._q: np.ndarray | None = None  # the coordinates set last, and the energy and gradient there (None: not yet)
+        self._energy: float | None = None
+        self._gradient: np.ndarray | None = None
 
     def set_coordinates(self, q: np.ndarray) -> None:
+        """The sampled elements at V q; their energy and gradient kept while q stays (a live frame starts where the
+        last one ended)."""
+        if self._q is not None and np.array_equal(q, self._q):
+            return
+        self._q = np.array(q, dtype=np.float64)
         self.u[:] = (self.basis @ q).reshape(self.u.shape)
+        self._energy = self._gradient = None
+
+    def set_displacements(self, u: np.ndarray) -> None:
+        """The sampled elements at the full field's displacements u (n, d), in the basis or not."""
+        self._q, self._energy, self._gradient = None, None, None
+        self.u[:] = np.asarray(u).reshape(-1, self.dim)[self.vertices]
 
     def energy(self) -> float:
-        return self.term.energy()
+        if self._energy is None:
+            self._energy = self.term.energy()
+        return self._energy
 
     def min_determinant(self) -> float:
         return self.term.min_determinant()
 
     def gradient(self) -> np.ndarray:
         """sum_e w_e V_e^T f_e (r,)."""
-        return self.basis.T @ self.term.gradient().ravel()
+        if self._gradient is None:
+            self._gradient = self.basis.T @ self.term.gradient().ravel()
+        return self._gradient
 
     def hessian(self, psd_only: bool) -> np.ndarray:
         """sum_e w_e V_e^T H_e V_e (r, r): H_e exact, or projected to PSD per quadrature point."""
