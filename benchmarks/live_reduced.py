@@ -113,9 +113,8 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     (out / "live_reduced.json").write_text(json.dumps(record, indent=2) + "\n")
     lines = [
-        "# The live views: reduced model against full model",
-        "",
-        f"{record['date']}, {machine}. `xvfb-run -a python benchmarks/live_reduced.py` (see its docstring).",
+        f"Machine: {machine}, {record['date']}. Written by benchmarks/live_reduced.py (its docstring says what is "
+        "measured).",
         "",
         "| scene | nodes | modes | elements sampled | training s | tip error max, % length | angle error max, deg "
         "| view | full frames/s | reduced frames/s | ratio |",

@@ -47,6 +47,12 @@ RESULTS_PAGES = {
         ("benchmarks/reduced.py", None),
         "python benchmarks/reduced.py --full-3d",
     ),
+    "live_reduced": (
+        "performance",
+        "The live views on a reduced model against the full model",
+        ("benchmarks/live_reduced.py", None),
+        "xvfb-run -a python benchmarks/live_reduced.py",
+    ),
     "reach_reduced": (
         "performance",
         "Inverse control on a reduced model (pneuma-reach --reduced) against the full Reacher",
