@@ -6,6 +6,7 @@ round-off O(eps |f| / h); h = H = 1e-6 balances the two for the O(1) states the 
 """
 
 import numpy as np
+import pytest
 import scipy.sparse as sp
 
 H = 1e-6
@@ -78,3 +79,18 @@ def random_state(built, scale: float = 0.02, seed: int = 0) -> np.ndarray:
     """Random displacements (n, d) of a built scene's nodes, normal with standard deviation `scale` (seeded)."""
     rng = np.random.default_rng(seed)
     return scale * rng.standard_normal(built.mesh.vertices.shape)
+
+
+def check_reduced_derivatives(model, q: np.ndarray, direction: np.ndarray, h: float) -> None:
+    """A reduced model's (reduce/model.py) E_r, g_r and H_r at coordinates q agree with central differences of E_r
+    and g_r along `direction`, step h, to 1e-6."""
+
+    def at(x):
+        model.set_coordinates(x)
+        return model.energy(), model.gradient()[0]
+
+    (e_plus, g_plus), (e_minus, g_minus) = at(q + h * direction), at(q - h * direction)
+    _, g = at(q)
+    H = model.hessian()
+    assert (e_plus - e_minus) / (2 * h) == pytest.approx(g @ direction, rel=1e-6)
+    assert np.linalg.norm((g_plus - g_minus) / (2 * h) - H @ direction) <= 1e-6 * np.linalg.norm(H @ direction)

@@ -5,6 +5,7 @@ ramp and 6 Latin hypercube points."""
 
 import numpy as np
 import pytest
+from fd import check_reduced_derivatives
 
 import taichi_pneuma as tp
 from taichi_pneuma.errors import PneumaInputError
@@ -103,15 +104,7 @@ def test_the_reduced_gradient_and_hessian_are_those_of_the_reduced_energy(traine
     direction *= 1e-3 * np.linalg.norm(q) / np.linalg.norm(direction)
     h = 1e-3
 
-    def at(x):
-        model.set_coordinates(x)
-        return model.energy(), model.gradient()[0]
-
-    (e_plus, g_plus), (e_minus, g_minus) = at(q + h * direction), at(q - h * direction)
-    _, g = at(q)
-    H = model.hessian()
-    assert (e_plus - e_minus) / (2 * h) == pytest.approx(g @ direction, rel=1e-6)
-    assert np.linalg.norm((g_plus - g_minus) / (2 * h) - H @ direction) <= 1e-6 * np.linalg.norm(H @ direction)
+    check_reduced_derivatives(model, q, direction, h)
 
 
 def test_the_indicator_flags_commands_outside_the_training_range(trained):

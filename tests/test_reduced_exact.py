@@ -6,6 +6,7 @@ pressure per element too."""
 
 import numpy as np
 import pytest
+from fd import check_reduced_derivatives
 from solid_meshes import box_with_cavity, scene_of, shell_octant
 
 from taichi_pneuma.materials import IsochoricMaterial, IsochoricPolynomial
@@ -111,15 +112,7 @@ def test_the_reduced_models_energy_gradient_and_hessian_agree_with_finite_differ
     direction = np.random.default_rng(9).standard_normal(MODES)
     h = 1e-4 * np.linalg.norm(q) / np.linalg.norm(direction)
 
-    def at(x):
-        model.set_coordinates(x)
-        return model.energy(), model.gradient()[0]
-
-    (e_plus, g_plus), (e_minus, g_minus) = at(q + h * direction), at(q - h * direction)
-    _, g = at(q)
-    H = model.hessian()
-    assert (e_plus - e_minus) / (2 * h) == pytest.approx(g @ direction, rel=1e-6)
-    assert np.linalg.norm((g_plus - g_minus) / (2 * h) - H @ direction) <= 1e-6 * np.linalg.norm(H @ direction)
+    check_reduced_derivatives(model, q, direction, h)
 
 
 @pytest.mark.parametrize("volumetric", ["element", "mixed"])

@@ -26,7 +26,16 @@ import numpy as np
 from .. import runtime
 from ..errors import require
 from ..io.output import lock_stem, prepare_directory, save_json
-from .cli import add_ramp_arguments, app_parser, build, exit_code, newton_options, result_stem, scene_of_flags
+from .cli import (
+    add_executor_arguments,
+    add_ramp_arguments,
+    app_parser,
+    build,
+    exit_code,
+    newton_options,
+    result_stem,
+    scene_of_flags,
+)
 
 
 def parser() -> argparse.ArgumentParser:
@@ -50,22 +59,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--ecsw-tol", type=float, default=1e-4, help="relative tolerance of the ECSW fit of the projected forces"
     )
-    p.add_argument(
-        "--workers",
-        type=int,
-        default=None,
-        help="solve the hypercube points on this many worker processes (with --ray and no address: the local Ray's "
-        "CPUs); default: in this process",
-    )
-    p.add_argument(
-        "--ray",
-        nargs="?",
-        const="",
-        default=None,
-        metavar="ADDRESS",
-        help="solve the hypercube points as Ray tasks (pip install 'taichi-pneuma[ray]'): a local Ray without "
-        "ADDRESS, else the cluster whose head is at ADDRESS (HOST:PORT, auto, ray://HOST:PORT)",
-    )
+    add_executor_arguments(p, "the hypercube points", "in this process")
     add_ramp_arguments(p)
     return p
 

@@ -27,7 +27,7 @@ import sys
 from .. import limits
 from ..io.keys import SHORT_KEYS
 from ..io.output import check_stem, lock_stem, prepare_directory
-from .cli import add_ramp_arguments, app_parser, exit_code, scene_of_flags
+from .cli import add_executor_arguments, add_ramp_arguments, app_parser, exit_code, scene_of_flags
 
 
 def parser() -> argparse.ArgumentParser:
@@ -52,22 +52,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--seed", type=int, default=0, help="seed of the Latin hypercube (the same seed plans the same runs)"
     )
-    p.add_argument(
-        "--workers",
-        type=int,
-        default=None,
-        help="worker processes (default: every core); with --ray and no address, the local Ray's CPUs",
-    )
-    p.add_argument(
-        "--ray",
-        nargs="?",
-        const="",
-        default=None,
-        metavar="ADDRESS",
-        help="run the tasks on Ray (pip install 'taichi-pneuma[ray]'): a local Ray started for the "
-        "study without ADDRESS, else the cluster whose head is at ADDRESS (HOST:PORT, auto, "
-        "ray://HOST:PORT)",
-    )
+    add_executor_arguments(p, "the runs", "every core")
     p.add_argument("--name", default="sweep", help="the result files are <out>/<name>.csv, .json and .png")
     p.add_argument("--retry-failed", action="store_true", help="run again the runs recorded with an error")
     p.add_argument("--max-runs", type=int, default=limits.MAX_RUNS, help="refuse a study of more runs")
