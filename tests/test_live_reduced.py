@@ -117,3 +117,23 @@ def test_the_page_names_the_model_that_solves(trained, tmp_path):
         assert "full residual " in view.caption()
     finally:
         view.stop()
+
+
+def test_a_dragged_slider_takes_chord_steps_and_still_settles_at_the_reduced_equilibrium(trained):
+    """While the command moves every frame, a frame reuses the last exact reduced Hessian's factor (no Hessian
+    evaluated); once it rests, the state is the reduced equilibrium there."""
+    scene, model, path = trained
+    session = LiveSession(scene, reduced=path)
+    settle(session)
+    reduced = session.equilibrium.reduced
+    calls = []
+    hessian = reduced.model.hessian
+    reduced.model.hessian = lambda psd_only=False: calls.append(psd_only) or hessian(psd_only)
+    for value in np.linspace(1.2, 2.0, 12):
+        session.command(0, float(value))
+        session.advance()
+    assert len(calls) < 6  # 12 frames, most of them chord steps
+    settle(session)
+    expected = model.displacements(equilibrium(model, np.array([2.0])).q)
+    length = np.ptp(session.mesh.vertices[:, 0])
+    assert np.allclose(session.equilibrium.u, expected, atol=1e-5 * length)

@@ -4,6 +4,9 @@ an accurate mesh runs live; and where the commands leave the range the model was
 ReducedLiveEquilibrium takes, per frame, one reduced Newton step (reduce/solve.py newton, one iteration: the exact
 reduced Hessian, else the PSD-projected one; the line search keeps every sampled element uninverted) toward the
 reduced equilibrium at the commands, from the state on screen, until |g_r| / force scale is within the tolerance.
+As LiveEquilibrium does, a step reuses the last exact Hessian's factor (a chord step: no Hessian evaluated) while
+the commands move, and while they rest as long as each step contracts the residual by CHORD_MAX_CONTRACTION or
+better; a chord step the line search refuses is taken again with a fresh Hessian.
 Once it settles there, the full model is put at u = V q and asked what the reduced solve cannot say (each once per
 equilibrium: they cost a full evaluation): whether it is a physical state (state_fault, obstacle_overlap, as
 LiveEquilibrium asks) and how far it is from the full model's own equilibrium (reduce/solve.py indicator: the full
@@ -23,7 +26,7 @@ import numpy as np
 
 from ..reduce.model import ReducedModel
 from ..reduce.solve import Indicator, indicator, newton
-from ..solve.newton import NewtonOptions
+from ..solve.newton import CHORD_MAX_CONTRACTION, NewtonOptions
 from ..solve.simulate import state_fault
 from .equilibrium import LIVE_TOL, LiveEquilibrium
 
@@ -40,6 +43,8 @@ class ReducedLiveEquilibrium:
         self.residual, self.stuck, self.iterations = math.inf, False, 0
         self.fault: str | None = None
         self.check: Indicator | None = None
+        self._factor: tuple | None = None  # the Cholesky factor of the last exact reduced Hessian (chord steps)
+        self.contraction = math.inf  # the last step's residual over its start's
 
     @property
     def converged(self) -> bool:
@@ -86,13 +91,15 @@ class ReducedLiveEquilibrium:
             self.stuck, self.iterations, self.fault, self.check = False, 0, None, None
         elif self.residual <= self.options.tol or self.stuck:
             return False
-        record = newton(self.model, self.q, self.options.tol, max_iterations=1)
-        self.residual = record.residual
+        reuse = self._factor if moved or self.contraction <= CHORD_MAX_CONTRACTION else None
+        record = newton(self.model, self.q, self.options.tol, max_iterations=1, held=reuse)
+        self.residual, self._factor = record.residual, record.factor
+        self.contraction = record.residuals[-1] / record.residuals[0] if record.iterations else math.inf
         if record.iterations:
             self.q, self.iterations = record.q, self.iterations + 1
             self.u = self.model.displacements(self.q)
-        elif not record.converged:  # the line search refused the step
-            self.stuck = True
+        elif not record.converged:  # the line search refused the step: a chord one is retried with a fresh Hessian
+            self.stuck, self._factor = reuse is None, None
         if self.residual <= self.options.tol:
             self._settled()
         return bool(record.iterations)

@@ -42,7 +42,7 @@ from .snapshots import nearest
 @dataclass
 class ReducedSolve:
     """What one reduced solve did: q reached, converged, Newton iterations (all cut-backs), cuts, residual |g_r| /
-    scale, seconds, and why it stopped."""
+    scale, seconds, why it stopped, and the Hessian factor of its last step."""
 
     q: np.ndarray
     converged: bool = False
@@ -51,29 +51,39 @@ class ReducedSolve:
     residuals: list[float] = field(default_factory=list)
     seconds: float = 0.0
     message: str = ""
+    factor: tuple | None = None  # the Cholesky factor of the exact H_r of the last step (None: none exact)
 
     @property
     def residual(self) -> float:
         return self.residuals[-1] if self.residuals else math.nan
 
 
-def direction(model: ReducedModel, g: np.ndarray) -> np.ndarray:
-    """d = -H_r^-1 g_r (the module docstring: exact, else PSD-projected, else eigenvalue-clamped)."""
+def direction(model: ReducedModel, g: np.ndarray, held=None) -> tuple[np.ndarray, tuple | None]:
+    """d = -H_r^-1 g_r (the module docstring: exact, else PSD-projected, else eigenvalue-clamped), and the Cholesky
+    factor of the exact H_r it used (None: not the exact one). held: such a factor from an earlier state, used
+    instead where it gives a descent direction (a chord step: no Hessian evaluated)."""
+    if held is not None:
+        d = scipy.linalg.cho_solve(held, -g)
+        if g @ d < 0:
+            return d, held
     for psd_only in (False, True):
         H = model.hessian(psd_only)
         try:
-            d = scipy.linalg.cho_solve(scipy.linalg.cho_factor(H), -g)
+            factor = scipy.linalg.cho_factor(H)
+            d = scipy.linalg.cho_solve(factor, -g)
         except (np.linalg.LinAlgError, ValueError):
             continue
         if g @ d < 0:
-            return d
+            return d, None if psd_only else factor
     values, vectors = np.linalg.eigh(H)
     values = np.maximum(values, 1e-12 * max(float(np.abs(values).max()), 1e-300))
-    return -vectors @ ((vectors.T @ g) / values)
+    return -vectors @ ((vectors.T @ g) / values), None
 
 
-def newton(model: ReducedModel, q0: np.ndarray, tol: float = 1e-8, max_iterations: int = 40) -> ReducedSolve:
-    """Minimise the reduced energy at the commands the model holds, from q0; the model is left at the q returned."""
+def newton(model: ReducedModel, q0: np.ndarray, tol: float = 1e-8, max_iterations: int = 40, held=None) -> ReducedSolve:
+    """Minimise the reduced energy at the commands the model holds, from q0; the model is left at the q returned.
+    held: the Cholesky factor of an earlier exact H_r, for a chord first step (direction); the record's factor is
+    the last one used."""
     start = time.perf_counter()
     q = np.array(q0, dtype=np.float64)
     record = ReducedSolve(q)
@@ -91,7 +101,7 @@ def newton(model: ReducedModel, q0: np.ndarray, tol: float = 1e-8, max_iteration
         if record.iterations >= max_iterations:
             record.message = f"no convergence in {max_iterations} iterations"
             break
-        d = direction(model, g)
+        d, record.factor = direction(model, g, held if record.iterations == 0 else None)
         slope = float(g @ d)
         alpha = min(1.0, STEP_SAFETY * model.max_step(d))
         for _ in range(MAX_HALVINGS):
