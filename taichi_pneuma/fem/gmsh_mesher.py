@@ -32,7 +32,9 @@ cavity, i.e. (x1 - x0) x (x2 - x0) points from the air into the rubber, so that 
 
 is the cavity's volume; boundary (b, 3): the triangles of the body's outer surface (cavity walls
 excluded), oriented outward from the body; regions (m,) the tag of each tetrahedron, k >= 1 the k-th
-entry of Solid.regions (region_names).
+entry of Solid.regions (region_names); curved_edges (k, 2) and curved_points (k, 3): the edges on curved
+surfaces and curves of the solid and the places of their midside nodes on them (curving.edge_targets), for
+quadratic tetrahedra that follow the shapes.
 
 gmsh is a GPL-licensed optional dependency (pip install 'taichi-pneuma[3d]'); each call initialises it,
 works silently in a model of its own and finalises it (or, if the caller has gmsh initialised already,
@@ -60,6 +62,7 @@ import numpy as np
 
 from ..errors import PneumaInputError, require, require_distinct, require_finite
 from ..io import cache
+from .curving import edge_targets
 
 MAX_TETS = 200_000
 MAX_SHAPES = 64
@@ -92,6 +95,7 @@ MESHER_SOURCES = (
     "shapes.py",
     "polygons.py",
     "wall_thickness.py",
+    "curving.py",
 )  # the code a cached mesh depends on
 CACHE_BYTES_PER_TET = 256  # a cached mesh's arrays take about 50 bytes per tetrahedron: a larger file is not read
 
@@ -181,6 +185,8 @@ class SolidMesh:
     boundary: np.ndarray
     regions: np.ndarray
     region_names: tuple[str, ...] = field(default=())
+    curved_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
+    curved_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
 
 def _gmsh():
@@ -328,6 +334,8 @@ def mesh_solid(
             cached["boundary"],
             cached["regions"],
             tuple(name for name, _ in solid.regions),
+            cached["curved_edges"],
+            cached["curved_points"],
         )
     meshed, measures = _mesh(solid, sizes, max_tets, verbose, surface_meshers)
     cache.store(
@@ -339,6 +347,8 @@ def mesh_solid(
             "boundary": meshed.boundary,
             "regions": meshed.regions,
             "measures": measures,
+            "curved_edges": meshed.curved_edges,
+            "curved_points": meshed.curved_points,
             **{f"chamber{i}": meshed.chambers[name] for i, (name, _) in enumerate(solid.chambers)},
         },
     )
@@ -410,9 +420,20 @@ def _valid_mesh(arrays: dict, solid: Solid) -> bool:
     shape, finite vertices, node indices in range, tetrahedra positively oriented, region tags those of the
     solid's regions."""
     walls = [f"chamber{i}" for i in range(len(solid.chambers))]
-    if set(arrays) != {"vertices", "tets", "boundary", "regions", "measures", *walls} or not _valid_measures(arrays):
+    named = {"vertices", "tets", "boundary", "regions", "measures", "curved_edges", "curved_points", *walls}
+    if set(arrays) != named or not _valid_measures(arrays):
         return False
     vertices, tets, regions = arrays["vertices"], arrays["tets"], arrays["regions"]
+    edges, points = arrays["curved_edges"], arrays["curved_points"]
+    if not (
+        edges.dtype == np.int64
+        and edges.shape == (len(points), 2)
+        and points.dtype == np.float64
+        and points.shape[1:] == (3,)
+        and np.isfinite(points).all()
+        and (edges.size == 0 or (edges.min() >= 0 and edges.max() < len(vertices)))
+    ):
+        return False
     faces = [arrays[name] for name in ["boundary", *walls]]
     if not (
         vertices.dtype == np.float64
@@ -500,7 +521,7 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
     unique, first, counts = np.unique(keys, return_index=True, return_counts=True)
     outer = first[counts == 1]  # faces of one tetrahedron only: the body's surface, walls included
     index = {int(k): int(i) for k, i in zip(keys[outer], outer)}
-    local = np.full(int(used.max()) + 1, -1, dtype=np.int64)
+    local = np.full(len(position), -1, dtype=np.int64)
     local[used] = np.arange(len(used))
     chambers, on_wall = {}, set()
     for name, walls in pieces.walls.items():
@@ -512,8 +533,9 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
         chambers[name] = faces[rows][:, ::-1].copy()  # outward from the rubber = into the cavity: reversed
         on_wall.update(rows)
     boundary = faces[[i for i in outer if i not in on_wall]]
+    names = tuple(name for name, _ in solid.regions)
     return SolidMesh(
-        vertices, tets, chambers, boundary, regions.astype(np.int64), tuple(name for name, _ in solid.regions)
+        vertices, tets, chambers, boundary, regions.astype(np.int64), names, *edge_targets(gmsh, local, vertices)
     )
 
 

@@ -9,9 +9,10 @@ a scene names the chambers it drives by those groups (fem.meshfile.MeshSurface, 
 groups), and a generated chamber it does not name stays an empty, unloaded cavity.
 
 mesh() runs gmsh_mesher.mesh_solid (linear tetrahedra) and hands its arrays to tetmesh.tet_mesh, which
-orients each chamber wall out of the cavity and, for order 2, adds a straight midside node to every edge
-(the chamber walls stay the flat triangles gmsh made: a quadratic element gains accuracy in the body,
-not in the walls' shape). The tetrahedra's region tags are the volume groups' (region_groups: name -> tag).
+orients each chamber wall out of the cavity and, for order 2, adds a midside node to every edge: with `curved`
+(the default) those of the edges on the shapes' curved surfaces on the surfaces, where that folds no element
+(curving.py), so that a quadratic element follows a round wall; without it every one at its edge's middle (a
+round wall is then the polyhedron of gmsh's flat triangles). The tetrahedra's region tags are the volume groups' (region_groups: name -> tag).
 
 size_estimate() is the resource guard's count, before meshing: the tetrahedra estimated from the rubber's
 volume over the volume of a regular tetrahedron of the local edge length (gmsh_mesher.estimate_tets; gmsh
@@ -60,7 +61,8 @@ def is_solid_shape(shape) -> bool:
 @dataclass(frozen=True)
 class SolidGeometry(Body):
     """A 3D body from shapes (module docstring): body, chambers (name, shape) in order, mesh sizes, element
-    order (1: linear tetrahedra, 2: quadratic), clamp, tip and rollers (as planar.Geometry's)."""
+    order (1: linear tetrahedra, 2: quadratic), clamp, tip and rollers (as planar.Geometry's), and whether quadratic
+    tetrahedra follow the curved surfaces (curved)."""
 
     body: object
     chambers: tuple
@@ -69,6 +71,7 @@ class SolidGeometry(Body):
     clamp: PointSet | None = None
     tip: PointSet = field(default_factory=lambda: PointSet("right"))
     rollers: tuple = ()
+    curved: bool = True
 
     dim = 3
 
@@ -161,4 +164,5 @@ class SolidGeometry(Body):
             tip=self.tip,
             rollers=self.rollers,
             region_groups=groups,
+            curved=(meshed.curved_edges, meshed.curved_points) if self.curved else None,
         )
