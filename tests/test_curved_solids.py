@@ -72,7 +72,7 @@ def tube_errors(size: float) -> list[float]:
     """The relative errors of the inner wall's radial displacement, straight then curved (module docstring)."""
     mu, lam = lame_parameters(1.0, NU)
     p = 1e-5 * mu
-    exact = p  # lam' + G = lam * A**2 / (B**2 - A**2) * (A / (2 * lam) + B**2 / (2 * mu * A))
+    exact = p * A**2 / (B**2 - A**2) * (A / (2 * lam) + B**2 / (2 * mu * A))  # lam' + G = lam
     errors = []
     for curved in (False, True):
         geometry = SolidGeometry(QUARTER, (("main", BORE),), MeshSizes(size), 2, rollers=ROLLERS, curved=curved)
