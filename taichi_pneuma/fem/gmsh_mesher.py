@@ -156,11 +156,15 @@ class MeshSizes:
 class Solid:
     """A body shape with named chamber shapes (cavities) and named material-region shapes (the part of
     the body inside a region's shape gets that region's material; later regions win where they overlap). A shape
-    is any object with build(occ) -> the new volume's tag (fem.solids' shapes; __post_init__ checks it has one)."""
+    is any object with build(occ) -> the new volume's tag (fem.solids' shapes; __post_init__ checks it has one).
+    cuts: planes (unit normal, point) the mesh must carry nodes on (a roller's symmetry plane through the body):
+    each one that passes through the body's bounding box splits the body, so that the tetrahedra meet on it
+    (conforming: its faces are shared, no boundary) and its nodes lie on it."""
 
     body: Any
     chambers: tuple[tuple[str, Any], ...]
     regions: tuple[tuple[str, Any], ...] = ()
+    cuts: tuple[tuple[tuple[float, ...], tuple[float, ...]], ...] = ()
 
     def __post_init__(self):
         for what, entries in (("chambers", self.chambers), ("regions", self.regions)):
@@ -173,6 +177,11 @@ class Solid:
         require_distinct("chamber and region names", names)
         for what, shape in [("body", self.body)] + list(self.chambers + self.regions):
             require(callable(getattr(shape, "build", None)), f"{what}: {shape!r} is not a 3D shape")
+        for normal, point in self.cuts:
+            require(
+                np.shape(normal) == np.shape(point) == (3,) and np.isfinite([*normal, *point]).all() and any(normal),
+                f"cut plane {normal!r}, {point!r}: its normal (not zero) and point must be three finite numbers each",
+            )
 
 
 @dataclass(frozen=True, eq=False)
@@ -235,10 +244,12 @@ class _Pieces:
         occ = gmsh.model.occ
         body = solid.body.build(occ)
         tools = [shape.build(occ) for _, shape in solid.chambers + solid.regions]
+        tools += _half_spaces(occ, body, solid.cuts)  # their pieces are rubber (inside) or dropped (outside)
         _, pieces = occ.fragment([(3, body)], [(3, t) for t in tools])
         occ.synchronize()
         volumes = [{tag for _, tag in p} for p in pieces]
-        inside, chambers, regions = volumes[0], volumes[1 : 1 + len(solid.chambers)], volumes[1 + len(solid.chambers) :]
+        first = 1 + len(solid.chambers)  # the first region's pieces (the cut planes' after the regions')
+        inside, chambers, regions = volumes[0], volumes[1:first], volumes[first : first + len(solid.regions)]
         cavities = [c & inside for c in chambers]
         for (name, _), cavity in zip(solid.chambers, cavities):
             require(cavity, f"chamber {name!r} lies outside the body")
@@ -265,6 +276,32 @@ class _Pieces:
         occ.synchronize()
         self.volume = sum(occ.getMass(3, v) for v in self.rubber)
         self.wall_area = sum(occ.getMass(2, s) for walls in self.walls.values() for s in walls)
+
+
+def _half_spaces(occ, body: int, cuts) -> list[int]:
+    """For each cut plane (n, point) through the body's bounding box (its corners on both sides by more than 1e-9 of
+    its diagonal), a box holding the side n . (x - point) >= 0 of everything: a box [-s, s]^2 x [0, s] turned from
+    z to n about the origin, then moved to point."""
+    box = np.reshape(occ.getBoundingBox(3, body), (2, 3))
+    corners = np.array([[box[i, 0], box[j, 1], box[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    diagonal = float(np.linalg.norm(box[1] - box[0]))
+    tools = []
+    for normal, point in cuts:
+        n, p = np.asarray(normal, dtype=np.float64), np.asarray(point, dtype=np.float64)
+        n = n / np.linalg.norm(n)
+        side = (corners - p) @ n
+        if not (side.min() < -1e-9 * diagonal and side.max() > 1e-9 * diagonal):
+            continue
+        reach = 2 * (diagonal + float(np.linalg.norm(p - box.mean(axis=0))))
+        tag = occ.addBox(-reach, -reach, 0.0, 2 * reach, 2 * reach, reach)
+        axis, angle = np.cross([0.0, 0.0, 1.0], n), float(np.arccos(np.clip(n[2], -1.0, 1.0)))
+        if np.linalg.norm(axis) < 1e-12:
+            axis = np.array([1.0, 0.0, 0.0])  # n = +-z: no turn, or half a turn about x
+        if angle:
+            occ.rotate([(3, tag)], 0.0, 0.0, 0.0, *axis, angle)
+        occ.translate([(3, tag)], *p)
+        tools.append(tag)
+    return tools
 
 
 def _faces(gmsh, volumes, combined: bool = True) -> set[int]:

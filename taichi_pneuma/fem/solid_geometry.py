@@ -12,7 +12,9 @@ mesh() runs gmsh_mesher.mesh_solid (linear tetrahedra) and hands its arrays to t
 orients each chamber wall out of the cavity and, for order 2, adds a midside node to every edge: with `curved`
 (the default) those of the edges on the shapes' curved surfaces on the surfaces, where that folds no element
 (curving.py), so that a quadratic element follows a round wall; without it every one at its edge's middle (a
-round wall is then the polyhedron of gmsh's flat triangles). The tetrahedra's region tags are the volume groups' (region_groups: name -> tag).
+round wall is then the polyhedron of gmsh's flat triangles). Every roller plane (a roller with a point) that passes
+through the body splits it for gmsh (gmsh_mesher.Solid's cuts), so that the mesh carries nodes on it for the roller
+to hold: a symmetry plane through a full section, not only a face of a half model. The tetrahedra's region tags are the volume groups' (region_groups: name -> tag).
 
 size_estimate() is the resource guard's count, before meshing: the tetrahedra estimated from the rubber's
 volume over the volume of a regular tetrahedron of the local edge length (gmsh_mesher.estimate_tets; gmsh
@@ -30,7 +32,7 @@ refuses a mesh past it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 from ..errors import require, require_distinct
@@ -146,8 +148,8 @@ class SolidGeometry(Body):
         """Mesh with gmsh under the budget and build the Mesh (module docstring)."""
         weight = self.family.weight
         cap = budget.element_cap(weight)
-        solid = self.solid()
-        meshed = mesh_solid(solid, self.mesh_sizes, MAX_TETS if cap is None else cap)
+        cuts = tuple((roller.normal, roller.point) for roller in self.rollers if roller.point is not None)
+        meshed = mesh_solid(replace(self.solid(), cuts=cuts), self.mesh_sizes, MAX_TETS if cap is None else cap)
         budget.check_mesh(len(meshed.tets), weight, "gmsh")
         walls = {
             name: meshed.chambers[shape.group if isinstance(shape, MeshSurface) else name]
