@@ -189,10 +189,10 @@ def first_crossing(mesh, starts: np.ndarray, ends: np.ndarray) -> tuple[int, np.
     the body's bounding-box diagonal): the pieces of a curved surface (a quadratic facet split in four through
     midside nodes on the surface) need not be convex where the surface is, and a segment between points on two
     neighbouring pieces may pass the plane of one without leaving the body, by up to about the pieces' sag on the
-    surface, side^2 / (8 R): under a tenth of the side where the side is under 0.8 R. Where the first segment crosses more than
-    once, its crossing nearest its start; None: no segment crosses. Candidates: the facets whose ball about their
-    centroid through their corners meets the segment's ball about its midpoint (a k-d tree of the facets'
-    centroids), CHUNK segments at a time."""
+    surface, side^2 / (8 R): under a tenth of the side where the side is under 0.8 R. Where the first segment
+    crosses more than once, its crossing nearest its start; None: no segment crosses. Candidates: the facets whose
+    ball about their centroid through their corners meets the segment's ball about its midpoint (a k-d tree of the
+    facets' centroids), CHUNK segments at a time."""
     from scipy.spatial import cKDTree  # imported here, as in embed
 
     corners = mesh.vertices[surface_pieces(mesh)[:, : mesh.dim]]  # (f, d, d): a 2D piece (a, b, b) as (a, b)

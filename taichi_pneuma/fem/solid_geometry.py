@@ -14,7 +14,8 @@ orients each chamber wall out of the cavity and, for order 2, adds a midside nod
 (curving.py), so that a quadratic element follows a round wall; without it every one at its edge's middle (a
 round wall is then the polyhedron of gmsh's flat triangles). Every roller plane (a roller with a point) that passes
 through the body splits it for gmsh (gmsh_mesher.Solid's cuts), so that the mesh carries nodes on it for the roller
-to hold: a symmetry plane through a full section, not only a face of a half model. The tetrahedra's region tags are the volume groups' (region_groups: name -> tag).
+to hold: a symmetry plane through a full section, not only a face of a half model. The tetrahedra's region tags are
+the volume groups' (region_groups: name -> tag).
 
 size_estimate() is the resource guard's count, before meshing: the tetrahedra estimated from the rubber's
 volume over the volume of a regular tetrahedron of the local edge length (gmsh_mesher.estimate_tets; gmsh
