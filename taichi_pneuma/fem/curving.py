@@ -50,9 +50,9 @@ def edge_targets(gmsh, local: np.ndarray, vertices: np.ndarray) -> tuple[np.ndar
             nodes = gmsh.model.mesh.getElementsByType(kind, tag)[1].astype(np.int64).reshape(-1, dim + 1)
             pairs = np.sort(local[nodes][:, sides].reshape(-1, 2), axis=1)
             pairs = np.unique(pairs[pairs.min(axis=1) >= 0], axis=0)
-            fresh = np.array([k not in taken for k in (pairs[:, 0] * n + pairs[:, 1]).tolist()], dtype=bool)
-            pairs = pairs[fresh] if len(pairs) else pairs
-            taken.update((pairs[:, 0] * n + pairs[:, 1]).tolist())
+            keys = (pairs[:, 0] * n + pairs[:, 1]).tolist()
+            pairs = pairs[np.array([k not in taken for k in keys], dtype=bool)]  # a curve's edges are not redone
+            taken.update(keys)
             if not len(pairs) or gmsh.model.getType(dim, tag) in FLAT:
                 continue
             a, b = vertices[pairs[:, 0]], vertices[pairs[:, 1]]
