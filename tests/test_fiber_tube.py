@@ -31,13 +31,13 @@ balance sigma_rr(b) = 0 too: the free closed-end tube, which grows radially, and
 The simulation: a quarter of the tube (y >= 0, x >= 0: the half cylinder of radius B and half length 0.65 with the
 chamber of radius A and half length 0.5, cut by the symmetry planes y = 0 and x = 0, rollers on both, and u_z held
 on the plane z = 0, where symmetry makes it zero), quadratic tetrahedra (gmsh, edge 0.07: 1379 of them, 2639 nodes)
-with the midside nodes on the cylinders' surfaces put back onto the cylinders (straight-sided walls make the
-cavity's section a polygon of less area, and the pressure's axial force with it: p_FE / p(lambda) was then 2.3, 1.5
-and 0.8 % high), isochoric neo-Hookean with nu = 0.499 (K = 500 mu), and half rings every 0.05 (a third of the
-wall) at mid-wall R_f = (A + B) / 2, each of E_f A_f = 1e3 mu 0.05 (B - A). Ramped to p = 0.3, 0.6, 0.9 mu and
-measured over the middle third of the tube (x < 0.5 / 3): lambda the slope of the nodes' x against X, the hoop
-stretch at R_f from a linear fit of r / R across the fibre layer, a / A the mean r / R of the inner wall's corner
-nodes.
+with the midside nodes on the cylinders' surfaces (the mesher's curved quadratic tetrahedra, fem/curving.py;
+straight-sided walls make the cavity's section a polygon of less area, and the pressure's axial force with it:
+p_FE / p(lambda) was then 2.3, 1.5 and 0.8 % high), isochoric neo-Hookean with nu = 0.499 (K = 500 mu), and half
+rings every 0.05 (a third of the wall) at mid-wall R_f = (A + B) / 2, each of E_f A_f = 1e3 mu 0.05 (B - A). Ramped
+to p = 0.3, 0.6, 0.9 mu and measured over the middle third of the tube (x < 0.5 / 3): lambda the slope of the nodes'
+x against X, the hoop stretch at R_f from a linear fit of r / R across the fibre layer, a / A the mean r / R of the
+inner wall's corner nodes.
 
 Mesh refinement (once): p_FE / p(lambda_FE) - 1 at the three pressures, the largest r(R_f) / R_f - 1 and the largest
 |a / A - the closed form's|:
@@ -71,7 +71,6 @@ from taichi_pneuma.fem.mesh import Mesh
 from taichi_pneuma.fem.solid_geometry import SolidGeometry
 from taichi_pneuma.fem.solids import Cylinder, HalfCylinder
 from taichi_pneuma.fem.supports import Roller
-from taichi_pneuma.fem.tetmesh import tet_mesh
 from taichi_pneuma.materials import IsochoricMaterial
 from taichi_pneuma.scene.build import ChamberControl, Scene
 from taichi_pneuma.scene.schedule import ChamberSchedule
@@ -137,20 +136,6 @@ def test_the_closed_form_vanishes_at_rest_and_is_the_energys_derivative_over_the
         assert p > 0
 
 
-def curved(mesh: Mesh) -> Mesh:
-    """The quadratic mesh with the midside node of every edge of a surface facet on the cylinder R = A or R = B (all
-    three corners on it, not all at one x: not a flat end face) moved radially onto it."""
-    X, x = mesh.vertices, mesh.vertices.copy()
-    radius = np.hypot(X[:, 1], X[:, 2])
-    assert mesh.surface is not None
-    for cylinder in (A, B):
-        on = np.abs(radius - cylinder) < 1e-9
-        for facet in mesh.surface:
-            if on[facet[:3]].all() and np.ptp(X[facet[:3], 0]) > 1e-9:
-                x[facet[3:], 1:] = X[facet[3:], 1:] * (cylinder / radius[facet[3:]])[:, None]
-    return tet_mesh(x, mesh.elements, {"c": mesh.chambers[0]}, order=2, rollers=ROLLERS)
-
-
 def half_ring(x: float, points: int = 24) -> Polyline:
     angles = np.linspace(0.0, math.pi, points + 1)
     return Polyline(tuple((x, RF * math.sin(t), RF * math.cos(t)) for t in angles))
@@ -163,7 +148,7 @@ def tube() -> Mesh:
     body = HalfCylinder((HALF_LENGTH / 2, 0.0, 0.0), B, HALF_LENGTH, "x")
     chamber = Cylinder((0.0, 0.0, 0.0), A, 2 * HALF_CHAMBER, "x")
     geometry = SolidGeometry(body, (("c", chamber),), MeshSizes(EDGE), order=2, rollers=ROLLERS)
-    return curved(geometry.mesh())
+    return geometry.mesh()
 
 
 def inflate(mesh: Mesh, pressures, wound: bool) -> list[np.ndarray]:

@@ -126,10 +126,21 @@ def test_every_3d_shape_reads_writes_back_and_meshes_to_its_volume():
     assert np.allclose(mesh.vertices[mesh.pinned, 0], -1.75)
 
 
-def test_quadratic_order_adds_straight_midside_nodes():
+def test_quadratic_order_adds_midside_nodes_on_the_curved_chamber_wall_and_straight_ones_elsewhere():
+    """The reference beam's chamber is the ellipsoid (x / 0.85)^2 + ((y - 0.15) / 0.22)^2 + (z / 0.25)^2 = 1: its
+    wall's midside nodes lie on it (all but those whose move would fold an element), every other one at its
+    edge's middle; with mesh.curved = false every one at its edge's middle."""
+    straight = beam(order=2).with_values({"mesh.curved": False}).build().mesh
     mesh = beam(order=2).build().mesh
-    assert mesh.elements.shape[1] == 10
-    corners, middles = mesh.vertices[mesh.elements[:, [0, 1]]], mesh.vertices[mesh.elements[:, 4]]
+    assert mesh.elements.shape[1] == 10 and np.array_equal(mesh.elements, straight.elements)
+    ellipsoid = lambda x: (((x - [0.0, 0.15, 0.0]) / [0.85, 0.22, 0.25]) ** 2).sum(axis=1)
+    wall = np.unique(mesh.chambers[0][:, 3:])
+    assert np.all(ellipsoid(straight.vertices[wall]) < 1 - 1e-6)  # the chords' middles lie inside
+    on = np.abs(ellipsoid(mesh.vertices[wall]) - 1) < 1e-6
+    assert on.mean() > 0.95
+    moved = np.flatnonzero(np.any(mesh.vertices != straight.vertices, axis=1))
+    assert set(moved.tolist()) == set(wall[on].tolist())
+    corners, middles = straight.vertices[straight.elements[:, [0, 1]]], straight.vertices[straight.elements[:, 4]]
     assert np.allclose(middles, corners.mean(axis=1))
 
 

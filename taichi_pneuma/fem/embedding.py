@@ -30,6 +30,7 @@ from .self_intersection import surface_pieces
 
 TOLERANCE = 1e-9  # of the body's bounding-box diagonal
 SNAP = 0.25  # embed() snaps a point this close to the surface, in its nearest surface piece's shortest side
+GRAZE = 0.1  # first_crossing: a segment's end this near a facet's plane, in its shortest side, is not through it
 FIRST_CANDIDATES = 8
 MAX_CANDIDATES = 512  # pieces searched per point at most (the nearest by centroid)
 CHUNK = 1024  # fibre segments first_crossing tests at once: their candidate pairs' arrays stay small
@@ -180,21 +181,26 @@ def embed(mesh, points, what: str) -> tuple[np.ndarray, np.ndarray]:
 def first_crossing(mesh, starts: np.ndarray, ends: np.ndarray) -> tuple[int, np.ndarray] | None:
     """The first segment (its index and the crossing point) from starts[s] to ends[s] (s, d) that passes through the
     body's boundary (self_intersection.surface_pieces, its outer surface and every chamber's wall in straight
-    pieces): one end more than TOLERANCE times the body's bounding-box diagonal on either side of a facet's line or
-    plane (signed distances h_p > tol > -tol > h_q), and the point where it meets that plane, x = p + h_p / (h_p -
-    h_q) (q - p), within the facet (its barycentric coordinates in the facet's corners >= -1e-9). A segment between
-    two points of the body that does so leaves the body there (through a chamber's wall or the outer surface); one
-    that only touches the boundary, or runs along it, does not count. Where the first segment crosses more than
-    once, its crossing nearest its start; None: no segment crosses. Candidates: the facets whose ball about their
-    centroid through their corners meets the segment's ball about its midpoint (a k-d tree of the facets'
-    centroids), CHUNK segments at a time."""
+    pieces): one end farther than the facet's reach on either side of its line or plane (signed distances h_p > tol >
+    -tol > h_q), and the point where it meets that plane, x = p + h_p / (h_p - h_q) (q - p), within the facet (its
+    barycentric coordinates in the facet's corners >= -1e-9). A segment between two points of the body that does so
+    leaves the body there (through a chamber's wall or the outer surface); one that only touches the boundary, or
+    runs along it, does not count. The reach, tol, is GRAZE times the facet's shortest side (at least TOLERANCE times
+    the body's bounding-box diagonal): the pieces of a curved surface (a quadratic facet split in four through
+    midside nodes on the surface) need not be convex where the surface is, and a segment between points on two
+    neighbouring pieces may pass the plane of one without leaving the body, by up to about the pieces' sag on the
+    surface, side^2 / (8 R): under a tenth of the side where the side is under 0.8 R. Where the first segment
+    crosses more than once, its crossing nearest its start; None: no segment crosses. Candidates: the facets whose
+    ball about their centroid through their corners meets the segment's ball about its midpoint (a k-d tree of the
+    facets' centroids), CHUNK segments at a time."""
     from scipy.spatial import cKDTree  # imported here, as in embed
 
     corners = mesh.vertices[surface_pieces(mesh)[:, : mesh.dim]]  # (f, d, d): a 2D piece (a, b, b) as (a, b)
+    sides = np.linalg.norm(corners - np.roll(corners, 1, axis=1), axis=2)
     centroid = corners.mean(axis=1)
     radius = np.linalg.norm(corners - centroid[:, None], axis=2).max(axis=1)
     tree = cKDTree(centroid)
-    tol = TOLERANCE * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
+    reach = np.maximum(TOLERANCE * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0))), GRAZE * sides.min(axis=1))
     for first in range(0, len(starts), CHUNK):
         p, q = starts[first : first + CHUNK], ends[first : first + CHUNK]
         middle, half = (p + q) / 2, np.linalg.norm(q - p, axis=1) / 2
@@ -203,17 +209,17 @@ def first_crossing(mesh, starts: np.ndarray, ends: np.ndarray) -> tuple[int, np.
         facet = np.concatenate(near).astype(np.int64) if len(segment) else segment
         close = np.linalg.norm(centroid[facet] - middle[segment], axis=1) <= half[segment] + radius[facet]
         facet, segment = facet[close], segment[close]
-        found = _crossing(corners[facet], p[segment], q[segment], segment, tol)
+        found = _crossing(corners[facet], p[segment], q[segment], segment, reach[facet])
         if found is not None:
             k, x = found
             return first + k, x
     return None
 
 
-def _crossing(corners, p, q, segment, tol: float) -> tuple[int, np.ndarray] | None:
-    """Of the pairs (facet corners (c, d, d), segment number segment[c] from p to q (c, d)), the crossing
-    (first_crossing's test) of the lowest segment number, nearest that segment's start: (that number, the crossing
-    point); None if no pair crosses."""
+def _crossing(corners, p, q, segment, tol: np.ndarray) -> tuple[int, np.ndarray] | None:
+    """Of the pairs (facet corners (c, d, d), segment number segment[c] from p to q (c, d), the facet's reach tol
+    (c,)), the crossing (first_crossing's test) of the lowest segment number, nearest that segment's start: (that
+    number, the crossing point); None if no pair crosses."""
     d = p.shape[1]
     frame = corners[:, 1:] - corners[:, :1]  # (c, d - 1, d)
     normal = np.column_stack([-frame[:, 0, 1], frame[:, 0, 0]]) if d == 2 else np.cross(frame[:, 0], frame[:, 1])

@@ -32,7 +32,9 @@ cavity, i.e. (x1 - x0) x (x2 - x0) points from the air into the rubber, so that 
 
 is the cavity's volume; boundary (b, 3): the triangles of the body's outer surface (cavity walls
 excluded), oriented outward from the body; regions (m,) the tag of each tetrahedron, k >= 1 the k-th
-entry of Solid.regions (region_names).
+entry of Solid.regions (region_names); curved_edges (k, 2) and curved_points (k, 3): the edges on curved
+surfaces and curves of the solid and the places of their midside nodes on them (curving.edge_targets), for
+quadratic tetrahedra that follow the shapes.
 
 gmsh is a GPL-licensed optional dependency (pip install 'taichi-pneuma[3d]'); each call initialises it,
 works silently in a model of its own and finalises it (or, if the caller has gmsh initialised already,
@@ -60,6 +62,7 @@ import numpy as np
 
 from ..errors import PneumaInputError, require, require_distinct, require_finite
 from ..io import cache
+from .curving import edge_targets
 
 MAX_TETS = 200_000
 MAX_SHAPES = 64
@@ -92,6 +95,7 @@ MESHER_SOURCES = (
     "shapes.py",
     "polygons.py",
     "wall_thickness.py",
+    "curving.py",
 )  # the code a cached mesh depends on
 CACHE_BYTES_PER_TET = 256  # a cached mesh's arrays take about 50 bytes per tetrahedron: a larger file is not read
 
@@ -152,11 +156,15 @@ class MeshSizes:
 class Solid:
     """A body shape with named chamber shapes (cavities) and named material-region shapes (the part of
     the body inside a region's shape gets that region's material; later regions win where they overlap). A shape
-    is any object with build(occ) -> the new volume's tag (fem.solids' shapes; __post_init__ checks it has one)."""
+    is any object with build(occ) -> the new volume's tag (fem.solids' shapes; __post_init__ checks it has one).
+    cuts: planes (unit normal, point) the mesh must carry nodes on (a roller's symmetry plane through the body):
+    each one that passes through the body's bounding box splits the body, so that the tetrahedra meet on it
+    (conforming: its faces are shared, no boundary) and its nodes lie on it."""
 
     body: Any
     chambers: tuple[tuple[str, Any], ...]
     regions: tuple[tuple[str, Any], ...] = ()
+    cuts: tuple[tuple[tuple[float, ...], tuple[float, ...]], ...] = ()
 
     def __post_init__(self):
         for what, entries in (("chambers", self.chambers), ("regions", self.regions)):
@@ -169,6 +177,11 @@ class Solid:
         require_distinct("chamber and region names", names)
         for what, shape in [("body", self.body)] + list(self.chambers + self.regions):
             require(callable(getattr(shape, "build", None)), f"{what}: {shape!r} is not a 3D shape")
+        for normal, point in self.cuts:
+            require(
+                np.shape(normal) == np.shape(point) == (3,) and np.isfinite([*normal, *point]).all() and any(normal),
+                f"cut plane {normal!r}, {point!r}: its normal (not zero) and point must be three finite numbers each",
+            )
 
 
 @dataclass(frozen=True, eq=False)
@@ -181,6 +194,8 @@ class SolidMesh:
     boundary: np.ndarray
     regions: np.ndarray
     region_names: tuple[str, ...] = field(default=())
+    curved_edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), dtype=np.int64))
+    curved_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
 
 def _gmsh():
@@ -229,10 +244,12 @@ class _Pieces:
         occ = gmsh.model.occ
         body = solid.body.build(occ)
         tools = [shape.build(occ) for _, shape in solid.chambers + solid.regions]
+        tools += _half_spaces(occ, body, solid.cuts)  # their pieces are rubber (inside) or dropped (outside)
         _, pieces = occ.fragment([(3, body)], [(3, t) for t in tools])
         occ.synchronize()
         volumes = [{tag for _, tag in p} for p in pieces]
-        inside, chambers, regions = volumes[0], volumes[1 : 1 + len(solid.chambers)], volumes[1 + len(solid.chambers) :]
+        first = 1 + len(solid.chambers)  # the first region's pieces (the cut planes' after the regions')
+        inside, chambers, regions = volumes[0], volumes[1:first], volumes[first : first + len(solid.regions)]
         cavities = [c & inside for c in chambers]
         for (name, _), cavity in zip(solid.chambers, cavities):
             require(cavity, f"chamber {name!r} lies outside the body")
@@ -259,6 +276,32 @@ class _Pieces:
         occ.synchronize()
         self.volume = sum(occ.getMass(3, v) for v in self.rubber)
         self.wall_area = sum(occ.getMass(2, s) for walls in self.walls.values() for s in walls)
+
+
+def _half_spaces(occ, body: int, cuts) -> list[int]:
+    """For each cut plane (n, point) through the body's bounding box (its corners on both sides by more than 1e-9 of
+    its diagonal), a box holding the side n . (x - point) >= 0 of everything: a box [-s, s]^2 x [0, s] turned from
+    z to n about the origin, then moved to point."""
+    box = np.reshape(occ.getBoundingBox(3, body), (2, 3))
+    corners = np.array([[box[i, 0], box[j, 1], box[k, 2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+    diagonal = float(np.linalg.norm(box[1] - box[0]))
+    tools = []
+    for normal, point in cuts:
+        n, p = np.asarray(normal, dtype=np.float64), np.asarray(point, dtype=np.float64)
+        n = n / np.linalg.norm(n)
+        side = (corners - p) @ n
+        if not (side.min() < -1e-9 * diagonal and side.max() > 1e-9 * diagonal):
+            continue
+        reach = 2 * (diagonal + float(np.linalg.norm(p - box.mean(axis=0))))
+        tag = occ.addBox(-reach, -reach, 0.0, 2 * reach, 2 * reach, reach)
+        axis, angle = np.cross([0.0, 0.0, 1.0], n), float(np.arccos(np.clip(n[2], -1.0, 1.0)))
+        if np.linalg.norm(axis) < 1e-12:
+            axis = np.array([1.0, 0.0, 0.0])  # n = +-z: no turn, or half a turn about x
+        if angle:
+            occ.rotate([(3, tag)], 0.0, 0.0, 0.0, *axis, angle)
+        occ.translate([(3, tag)], *p)
+        tools.append(tag)
+    return tools
 
 
 def _faces(gmsh, volumes, combined: bool = True) -> set[int]:
@@ -328,6 +371,8 @@ def mesh_solid(
             cached["boundary"],
             cached["regions"],
             tuple(name for name, _ in solid.regions),
+            cached["curved_edges"],
+            cached["curved_points"],
         )
     meshed, measures = _mesh(solid, sizes, max_tets, verbose, surface_meshers)
     cache.store(
@@ -339,6 +384,8 @@ def mesh_solid(
             "boundary": meshed.boundary,
             "regions": meshed.regions,
             "measures": measures,
+            "curved_edges": meshed.curved_edges,
+            "curved_points": meshed.curved_points,
             **{f"chamber{i}": meshed.chambers[name] for i, (name, _) in enumerate(solid.chambers)},
         },
     )
@@ -410,9 +457,20 @@ def _valid_mesh(arrays: dict, solid: Solid) -> bool:
     shape, finite vertices, node indices in range, tetrahedra positively oriented, region tags those of the
     solid's regions."""
     walls = [f"chamber{i}" for i in range(len(solid.chambers))]
-    if set(arrays) != {"vertices", "tets", "boundary", "regions", "measures", *walls} or not _valid_measures(arrays):
+    named = {"vertices", "tets", "boundary", "regions", "measures", "curved_edges", "curved_points", *walls}
+    if set(arrays) != named or not _valid_measures(arrays):
         return False
     vertices, tets, regions = arrays["vertices"], arrays["tets"], arrays["regions"]
+    edges, points = arrays["curved_edges"], arrays["curved_points"]
+    if not (
+        edges.dtype == np.int64
+        and edges.shape == (len(points), 2)
+        and points.dtype == np.float64
+        and points.shape[1:] == (3,)
+        and np.isfinite(points).all()
+        and (edges.size == 0 or (edges.min() >= 0 and edges.max() < len(vertices)))
+    ):
+        return False
     faces = [arrays[name] for name in ["boundary", *walls]]
     if not (
         vertices.dtype == np.float64
@@ -500,7 +558,7 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
     unique, first, counts = np.unique(keys, return_index=True, return_counts=True)
     outer = first[counts == 1]  # faces of one tetrahedron only: the body's surface, walls included
     index = {int(k): int(i) for k, i in zip(keys[outer], outer)}
-    local = np.full(int(used.max()) + 1, -1, dtype=np.int64)
+    local = np.full(len(position), -1, dtype=np.int64)
     local[used] = np.arange(len(used))
     chambers, on_wall = {}, set()
     for name, walls in pieces.walls.items():
@@ -512,8 +570,9 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
         chambers[name] = faces[rows][:, ::-1].copy()  # outward from the rubber = into the cavity: reversed
         on_wall.update(rows)
     boundary = faces[[i for i in outer if i not in on_wall]]
+    names = tuple(name for name, _ in solid.regions)
     return SolidMesh(
-        vertices, tets, chambers, boundary, regions.astype(np.int64), tuple(name for name, _ in solid.regions)
+        vertices, tets, chambers, boundary, regions.astype(np.int64), names, *edge_targets(gmsh, local, vertices)
     )
 
 

@@ -9,9 +9,13 @@ a scene names the chambers it drives by those groups (fem.meshfile.MeshSurface, 
 groups), and a generated chamber it does not name stays an empty, unloaded cavity.
 
 mesh() runs gmsh_mesher.mesh_solid (linear tetrahedra) and hands its arrays to tetmesh.tet_mesh, which
-orients each chamber wall out of the cavity and, for order 2, adds a straight midside node to every edge
-(the chamber walls stay the flat triangles gmsh made: a quadratic element gains accuracy in the body,
-not in the walls' shape). The tetrahedra's region tags are the volume groups' (region_groups: name -> tag).
+orients each chamber wall out of the cavity and, for order 2, adds a midside node to every edge: with `curved`
+(the default) those of the edges on the shapes' curved surfaces on the surfaces, where that folds no element
+(curving.py), so that a quadratic element follows a round wall; without it every one at its edge's middle (a
+round wall is then the polyhedron of gmsh's flat triangles). Every roller plane (a roller with a point) that passes
+through the body splits it for gmsh (gmsh_mesher.Solid's cuts), so that the mesh carries nodes on it for the roller
+to hold: a symmetry plane through a full section, not only a face of a half model. The tetrahedra's region tags are
+the volume groups' (region_groups: name -> tag).
 
 size_estimate() is the resource guard's count, before meshing: the tetrahedra estimated from the rubber's
 volume over the volume of a regular tetrahedron of the local edge length (gmsh_mesher.estimate_tets; gmsh
@@ -29,7 +33,7 @@ refuses a mesh past it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 from ..errors import require, require_distinct
@@ -60,7 +64,8 @@ def is_solid_shape(shape) -> bool:
 @dataclass(frozen=True)
 class SolidGeometry(Body):
     """A 3D body from shapes (module docstring): body, chambers (name, shape) in order, mesh sizes, element
-    order (1: linear tetrahedra, 2: quadratic), clamp, tip and rollers (as planar.Geometry's)."""
+    order (1: linear tetrahedra, 2: quadratic), clamp, tip and rollers (as planar.Geometry's), and whether quadratic
+    tetrahedra follow the curved surfaces (curved)."""
 
     body: object
     chambers: tuple
@@ -69,6 +74,7 @@ class SolidGeometry(Body):
     clamp: PointSet | None = None
     tip: PointSet = field(default_factory=lambda: PointSet("right"))
     rollers: tuple = ()
+    curved: bool = True
 
     dim = 3
 
@@ -143,8 +149,8 @@ class SolidGeometry(Body):
         """Mesh with gmsh under the budget and build the Mesh (module docstring)."""
         weight = self.family.weight
         cap = budget.element_cap(weight)
-        solid = self.solid()
-        meshed = mesh_solid(solid, self.mesh_sizes, MAX_TETS if cap is None else cap)
+        cuts = tuple((roller.normal, roller.point) for roller in self.rollers if roller.point is not None)
+        meshed = mesh_solid(replace(self.solid(), cuts=cuts), self.mesh_sizes, MAX_TETS if cap is None else cap)
         budget.check_mesh(len(meshed.tets), weight, "gmsh")
         walls = {
             name: meshed.chambers[shape.group if isinstance(shape, MeshSurface) else name]
@@ -161,4 +167,5 @@ class SolidGeometry(Body):
             tip=self.tip,
             rollers=self.rollers,
             region_groups=groups,
+            curved=(meshed.curved_edges, meshed.curved_points) if self.curved else None,
         )

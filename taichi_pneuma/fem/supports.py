@@ -186,7 +186,8 @@ class Roller:
             require(
                 not (side.min() < 0 < side.max()),
                 f"{what} holds no mesh vertex: its plane cuts through the body, where the mesher puts nodes only by "
-                f"chance; model the part on one side of it, with the roller on the cut face (a half model: "
+                f"chance (a 3D body from shapes is meshed with nodes on every roller plane, a mesh file's or a 2D "
+                f"body's is not); model the part on one side of it, with the roller on the cut face (a half model: "
                 f"docs/3d.md), or put the roller on a face of the body",
             )
         require(len(nodes) > 0, f"{what} holds no mesh vertex")

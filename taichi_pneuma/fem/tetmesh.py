@@ -5,8 +5,9 @@ A mesh generator or a mesh file hands over vertices (n, 3), tetrahedra (m, 4) or
 order: corners, then the middles of edges 01, 12, 20, 03, 13, 23), each chamber's wall as triangles
 (f, 3) by their corners and, optionally, the outer boundary's triangles and a region tag per
 tetrahedron. tet_mesh() drops the nodes no tetrahedron uses, turns every tetrahedron to positive volume,
-adds straight midside nodes to a 4-node mesh for quadratic elements (order 2; a 10-node mesh is read as
-is and may be curved), finds the body's boundary facets (elements.boundary_facets) and takes each chamber
+adds midside nodes to a 4-node mesh for quadratic elements (order 2: at the edges' middles, or, for the
+edges given as curved, on the shapes' surfaces where that folds no element, curving.curve; a 10-node mesh is
+read as is and may be curved), finds the body's boundary facets (elements.boundary_facets) and takes each chamber
 wall as the facets with those corners, oriented outward from the cavity (into the rubber: the reverse of
 the body's outward facet), so that its enclosed volume
 
@@ -28,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import require
+from .curving import curve
 from .elements import ElementFamily, boundary_facets, family_for, family_of
 from .mesh import Mesh
 from .refine import with_edge_midpoints
@@ -143,12 +145,15 @@ def tet_mesh(
     tip: PointSet = PointSet("right"),
     rollers=(),
     region_groups: dict | None = None,
+    curved: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> Mesh:
     """The Mesh of plain arrays (module docstring): vertices (n, 3); tets (m, 4) or (m, 10); chambers: name ->
-    its wall's triangles (f, 3) (or (f, 6): the first three columns are used), in the scene's order;
-    boundary: the outer boundary's triangles (None: every boundary facet on no chamber wall); regions: (m,)
-    region tags (region_groups: the names of some, name -> tag); order 1 or 2; the clamp (None, the default:
-    no node clamped), the tip and the rollers select their nodes."""
+        its wall's triangles (f, 3) (or (f, 6): the first three columns are used), in the scene's order;
+        boundary: the outer boundary's triangles (None: every boundary facet on no chamber wall); regions: (m,)
+        region tags (region_groups: the names of some, name -> tag); order 1 or 2; the clamp (None, the default:
+        no node clamped), the tip and the rollers select their nodes; curved: (edges (k, 2) by their corners, points
+    (k, 3)), the places of those edges' midside nodes on the exact surfaces (gmsh_mesher.SolidMesh's curved_edges and
+    curved_points), for a 4-node mesh made quadratic."""
     vertices = np.asarray(vertices, dtype=np.float64)
     tets = np.asarray(tets)
     require(
@@ -173,14 +178,29 @@ def tet_mesh(
             faces.size == 0 or (faces.min() >= 0 and faces.max() < len(vertices)),
             f"{name}: a triangle names a vertex that does not exist",
         )
-    vertices, tets, given = used_nodes(vertices, tets.astype(np.int64), given)
+    edges, points = (np.zeros((0, 2), dtype=np.int64), np.zeros((0, 3))) if curved is None else curved
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    require(
+        edges.size == 0 or (edges.min() >= 0 and edges.max() < len(vertices) and np.shape(points) == (len(edges), 3)),
+        "curved: an edge names a vertex that does not exist, or its points are not one (x, y, z) per edge",
+    )
+    vertices, tets, given = used_nodes(vertices, tets.astype(np.int64), given + [edges])
+    edges = given.pop()
+    kept = edges.min(axis=1) >= 0  # edges of nodes no tetrahedron uses are dropped with them
+    edges, points = edges[kept], np.asarray(points, dtype=np.float64)[kept]
     family, given_family = family_for(3, order), family_of(tets, 3)
     tets = positively_oriented(vertices, tets, given_family)
     if given_family is family and family.edges:
         check_midside_nodes(vertices, tets, family)
-    elif given_family is not family:  # corners only: a straight midside node on every edge
+    elif given_family is not family:  # corners only: a midside node on every edge, curved ones on the surfaces
         vertices, mid = with_edge_midpoints(vertices, tets, family.edges)
         tets = np.column_stack([tets] + [mid(tets[:, i], tets[:, j]) for i, j in family.edges])
+        nodes = np.minimum(mid(edges[:, 0], edges[:, 1]), len(vertices) - 1)
+        require(
+            np.array_equal(vertices[nodes], 0.5 * (vertices[edges[:, 0]] + vertices[edges[:, 1]])),
+            "a curved edge is not an edge of the tetrahedra",
+        )
+        vertices = curve(vertices, tets, family, nodes, points)
     surface = boundary_facets(family, tets)
     n = len(vertices)
     keys = facet_keys(surface, n)

@@ -326,6 +326,11 @@ def scene_table(scene_class) -> Table:
         chambers, mesh = tuple((name, shape) for name, shape, _ in v["chambers"]), v["mesh"]
         sized = [k for k in MESH_SIZES if mesh[k] is not None]
         planar = ["max_area"] if mesh["max_area"] is not None else []
+        require(
+            mesh["curved"] or is_solid_shape(v["body"]),
+            "mesh.curved: only a 3D body from shapes takes it (a 2D body's quadratic triangles follow its curves "
+            "always, a mesh file's elements are the file's)",
+        )
         if is_solid_shape(v["body"]):
             require(
                 mesh["max_area"] is None,
@@ -336,7 +341,9 @@ def scene_table(scene_class) -> Table:
                 "missing key 'mesh.size': a 3D body from shapes needs the tetrahedra's edge length",
             )
             sizes = build("mesh", lambda: MeshSizes(*(mesh[k] for k in MESH_SIZES)))
-            geometry = SolidGeometry(v["body"], chambers, sizes, mesh["order"], clamp, v["tip"], v["rollers"])
+            geometry = SolidGeometry(
+                v["body"], chambers, sizes, mesh["order"], clamp, v["tip"], v["rollers"], mesh["curved"]
+            )
         elif isinstance(v["body"], MeshBody):
             require(
                 not planar + sized,
@@ -395,6 +402,7 @@ def scene_table(scene_class) -> Table:
             "max_area": getattr(geometry, "max_area", None),
             "order": geometry.order,
             **{k: getattr(sizes, k, None) for k in MESH_SIZES},
+            "curved": getattr(geometry, "curved", True),
             "volumetric": None if scene.volumetric == "element" else scene.volumetric,
         }  # default: not written
 
@@ -441,9 +449,15 @@ def scene_table(scene_class) -> Table:
                         int,
                         1,
                         "1: linear triangles (tetrahedra), 2: quadratic (2D: boundary nodes on "
-                        "the exact ellipses and rounded corners; 3D: straight midside nodes "
-                        "added)",
+                        "the exact ellipses and rounded corners; 3D: midside nodes added, see curved)",
                         ORDERS,
+                    ),
+                    "curved": Key(
+                        bool,
+                        True,
+                        "3D shapes, order 2: the midside nodes of the edges on the shapes' curved surfaces put on "
+                        "those surfaces, where that folds no element (false: every one at its edge's middle, a "
+                        "round wall a polyhedron)",
                     ),
                     "volumetric": Key(
                         str,
