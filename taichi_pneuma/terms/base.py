@@ -231,15 +231,14 @@ class Term:
         two pieces share one and gradient() holds each piece's own forces). Its `vertices` are the numbers of its
         nodes in this term's configuration. For a piecewise term; a kinked one's pieces start on their own
         branches (choose_branches)."""
-        from .model import Configuration
-
         pieces = np.asarray(pieces, dtype=np.int64)
         nodes = self.piece_nodes()[pieces]
         if apart:
             vertices, local = nodes.ravel(), np.arange(nodes.size)
         else:
             vertices, local = np.unique(nodes, return_inverse=True)
-        term = self.on_pieces(Configuration(self.config.rest[vertices]), pieces, local.reshape(nodes.shape))
+        config = type(self.config)(self.config.rest[vertices])  # a Configuration (terms/model.py) of those nodes
+        term = self.on_pieces(config, pieces, local.reshape(nodes.shape))
         term.scale_pieces(np.asarray(scale, dtype=np.float64))
         term.vertices = vertices
         return term
