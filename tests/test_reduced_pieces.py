@@ -11,7 +11,7 @@ from solid_meshes import box_with_cavity, scene_of
 
 from taichi_pneuma import runtime
 from taichi_pneuma.fem.fiber_paths import Crossed
-from taichi_pneuma.reduce.ecsw import ecsw, piecewise_terms
+from taichi_pneuma.reduce.ecsw import piecewise_terms, sample_terms
 from taichi_pneuma.reduce.exact import projected
 from taichi_pneuma.reduce.model import ReducedModel, every_piece
 from taichi_pneuma.reduce.train import ECSW_TOL, train
@@ -141,17 +141,16 @@ def test_the_reduced_model_with_every_piece_is_the_projected_full_model(built):
 
 
 def test_a_term_with_no_force_in_any_snapshot_gets_no_pieces(built):
-    """Snapshots of the body shrunk uniformly: every cord is slack and the wrinkling sheet slack, exactly no force:
-    ECSW gives them no pieces, and a reduced model leaves them out (not evaluated whole)."""
+    """Snapshots of the body shrunk uniformly: every cord is slack and the wrinkling sheet slack, exactly no force,
+    the rubber compressed: ECSW gives the cords and the sheet no pieces, and a reduced model leaves them out (not
+    evaluated whole)."""
     basis = np.linalg.qr(np.random.default_rng(7).standard_normal((built.model.n_dofs, MODES)))[0]
     shrunk = np.stack([-s * built.mesh.vertices.ravel() for s in (0.02, 0.05)])
-    terms = piecewise_terms(built.model.terms)
-    samples = every_piece(built)
+    sampling = sample_terms(built.model.terms, basis, shrunk, ECSW_TOL)
+    assert len(sampling["elastic"].pieces) > 0
     for name in ("fibers", "membrane"):
-        sampling = ecsw(terms[name], basis, shrunk, ECSW_TOL)
-        assert len(sampling.pieces) == 0 and sampling.error == 0.0
-        samples[name] = (sampling.pieces, sampling.weights)
-    model = ReducedModel(built, basis, samples)
+        assert len(sampling[name].pieces) == 0 and sampling[name].error == 0.0
+    model = ReducedModel(built, basis, {label: (s.pieces, s.weights) for label, s in sampling.items()})
     assert set(model.sampled) == {"elastic"} and not model.whole
 
 

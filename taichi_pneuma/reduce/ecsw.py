@@ -8,8 +8,9 @@ piece e's DOFs). ECSW looks for weights w >= 0, most of them zero, with
 
 to a relative tolerance tau: |G w - b| <= tau |b|, G the (S r, m) matrix of the c_se, b its row sums (w = 1 solves
 it exactly). Each snapshot's block is scaled by its own force |V^T f(u_s)| so that every snapshot counts alike
-(a state where the term has no force, as the rest state, is left out; a term with no force in any snapshot, a sheet
-that never stretches, gets no pieces). The greedy active-set method of Lawson and Hanson, stopped at the
+(a state where the term has no force, as the rest state, is left out: its projected force at most 1e-12 of the
+largest of any term's, round-off; a term with no force in any snapshot, a sheet that never stretches, gets no
+pieces). The greedy active-set method of Lawson and Hanson, stopped at the
 tolerance, gives a sparse w: add the piece whose column has the largest positive correlation with the residual,
 G_e^T (b - G w), solve the non-negative least squares problem on the pieces taken (scipy.optimize.nnls), drop
 those it gives weight zero, and repeat. The residual decreases strictly, so at most m pieces are ever taken. As each
@@ -101,15 +102,13 @@ def sparse_nnls(G: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
     return w
 
 
-def ecsw(term: Term, basis: np.ndarray, displacements: np.ndarray, tol: float) -> Sampling:
-    """The ECSW sampling (module docstring) of the piecewise term for the basis V (n d, r) over the snapshots
-    (S, n d), to the relative tolerance tol."""
-    C = projected_forces(term, basis, displacements)
-    totals = C.sum(axis=2)  # (S, r): V^T f(u_s)
-    norms = np.linalg.norm(totals, axis=1)
-    if not norms.max(initial=0.0) > 0:
+def fit(C: np.ndarray, tol: float, floor: float = 0.0) -> Sampling:
+    """The ECSW sampling (module docstring) of projected piece forces C (S, r, m) to the relative tolerance tol; a
+    snapshot whose projected force |V^T f(u_s)| is at most `floor` (or 1e-12 of the largest) has none."""
+    norms = np.linalg.norm(C.sum(axis=2), axis=1)  # |V^T f(u_s)|
+    loaded = norms > max(floor, 1e-12 * norms.max(initial=0.0))
+    if not loaded.any():
         return Sampling(np.zeros(0, dtype=np.int64), np.zeros(0), 0.0)
-    loaded = norms > 1e-12 * float(norms.max())
     G = (C[loaded] / norms[loaded, None, None]).reshape(-1, C.shape[2])
     b = G.sum(axis=1)
     w = sparse_nnls(G, b, tol)
@@ -119,5 +118,8 @@ def ecsw(term: Term, basis: np.ndarray, displacements: np.ndarray, tol: float) -
 
 
 def sample_terms(terms: list[Term], basis: np.ndarray, displacements: np.ndarray, tol: float) -> dict[str, Sampling]:
-    """The ECSW sampling of every piecewise term of `terms`, by label (piecewise_terms)."""
-    return {label: ecsw(term, basis, displacements, tol) for label, term in piecewise_terms(terms).items()}
+    """The ECSW sampling of every piecewise term of `terms`, by label (piecewise_terms). A term's projected force
+    in a snapshot counts as none (round-off) at or below 1e-12 of the largest of any term's in any snapshot."""
+    forces = {label: projected_forces(t, basis, displacements) for label, t in piecewise_terms(terms).items()}
+    largest = max((float(np.linalg.norm(C.sum(axis=2), axis=1).max(initial=0.0)) for C in forces.values()), default=0.0)
+    return {label: fit(C, tol, 1e-12 * largest) for label, C in forces.items()}
