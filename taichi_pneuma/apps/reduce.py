@@ -6,17 +6,20 @@ validate it against the full model on held-out commands, and save it as one .npz
 
 Trains on the scene's schedule and a Latin hypercube of --samples chamber commands in the schedule's range (each
 solved by the full model), keeps --modes POD modes or those keeping --energy of the snapshots' energy, and samples
-the pieces of each piecewise term (the elements; a fibre's segments, a sheet's cells) by ECSW to --ecsw-tol. Prints
-the modes and the kept energy, the pieces sampled per term, the training time, the errors at --held-out commands
-(the tip displacement's as % of the body's length, the bend angle's in degrees, the reduced state's full residual)
-and the time per equilibrium of the reduced and of the full model. Writes <out>/<stem>_reduced.npz (the model:
-pneuma_reduce's store refuses it for a changed scene) and <out>/<stem>_reduced.json (the figures printed). Exit
-codes: 0 done, 1 no equilibrium, 2 bad input (one `error:` line).
+the pieces of each piecewise term (the elements; a fibre's segments, a sheet's cells) by ECSW to --ecsw-tol.
+--workers N solves the hypercube points on N worker processes, --ray [ADDRESS] as Ray tasks (the schedule, a ramp,
+is solved here first). Prints the modes and the kept energy, the pieces sampled per term, the training time, the
+errors at --held-out commands (the tip displacement's as % of the body's length, the bend angle's in degrees, the
+reduced state's full residual) and the time per equilibrium of the reduced and of the full model. Writes
+<out>/<stem>_reduced.npz (the model: pneuma_reduce's store refuses it for a changed scene) and
+<out>/<stem>_reduced.json (the figures printed). Exit codes: 0 done, 1 no equilibrium, 2 bad input (one `error:`
+line).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 
 import numpy as np
@@ -48,6 +51,22 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--ecsw-tol", type=float, default=1e-4, help="relative tolerance of the ECSW fit of the projected forces"
     )
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="solve the hypercube points on this many worker processes (with --ray and no address: the local Ray's "
+        "CPUs); default: in this process",
+    )
+    p.add_argument(
+        "--ray",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="ADDRESS",
+        help="solve the hypercube points as Ray tasks (pip install 'taichi-pneuma[ray]'): a local Ray without "
+        "ADDRESS, else the cluster whose head is at ADDRESS (HOST:PORT, auto, ray://HOST:PORT)",
+    )
     add_ramp_arguments(p)
     return p
 
@@ -64,6 +83,21 @@ def check_reduce_flags(args: argparse.Namespace) -> None:
     require(0 < args.ecsw_tol < 1, f"--ecsw-tol = {args.ecsw_tol!r} must lie in (0, 1)")
 
 
+def executor_of(args: argparse.Namespace):
+    """Where the hypercube points are solved: a process pool (--workers), Ray (--ray), else here (a null context)."""
+    from ..study import LocalPool, RayCluster
+
+    if args.ray is not None:
+        return RayCluster(args.ray or None, args.workers)
+    return LocalPool(args.workers) if args.workers is not None else contextlib.nullcontext()
+
+
+def where_text(where: dict) -> str:
+    """An executor's describe() in words: 'process pool (workers 2)', 'this process'."""
+    details = ", ".join(f"{key} {value}" for key, value in where.items() if key != "executor")
+    return where["executor"] + (f" ({details})" if details else "")
+
+
 def run(args: argparse.Namespace) -> dict:
     from ..reduce.ecsw import piecewise_terms
     from ..reduce.store import save_reduced
@@ -77,7 +111,11 @@ def run(args: argparse.Namespace) -> dict:
     with lock_stem(out, stem):
         built = build(scene, args)
         options = newton_options(args)
-        training = train(built, args.modes, args.energy, args.samples, args.seed, options, args.ecsw_tol)
+        with executor_of(args) as executor:
+            where = executor.describe() if executor is not None else {"executor": "this process"}
+            training = train(
+                built, args.modes, args.energy, args.samples, args.seed, options, args.ecsw_tol, executor=executor
+            )
         model, snapshots = training.model, training.snapshots
         sizes = {label: term.n_pieces for label, term in piecewise_terms(built.model.terms).items()}
         sampled = {
@@ -88,7 +126,8 @@ def run(args: argparse.Namespace) -> dict:
         print(
             f"training: {len(snapshots.commands)} equilibria ({built.scene.increments + 1} of the schedule, "
             f"{len(snapshots.commands) - built.scene.increments - 1} of {args.samples} hypercube points; "
-            f"{snapshots.failed} found none) in {trained_seconds:.1f} s "
+            f"{snapshots.failed} found none; hypercube points solved in {where_text(where)}) "
+            f"in {trained_seconds:.1f} s "
             f"(full solves {training.seconds['snapshots']:.1f} s, POD {training.seconds['pod']:.2f} s, "
             f"ECSW {training.seconds['ecsw']:.2f} s)"
         )
@@ -126,6 +165,7 @@ def run(args: argparse.Namespace) -> dict:
             "snapshots": len(snapshots.commands),
             "failed_samples": snapshots.failed,
             "training_seconds": training.seconds,
+            "training_executor": where,
             "held_out": [
                 {
                     "commands": c.commands.tolist(),

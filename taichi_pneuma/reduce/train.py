@@ -53,12 +53,14 @@ def train(
     options: NewtonOptions | None = None,
     ecsw_tol: float = ECSW_TOL,
     snapshots: Snapshots | None = None,
+    executor=None,
 ) -> Training:
     """Train a reduced model of the built scene (the module docstring) with `modes` modes or those keeping the energy
     fraction `energy`, on the schedule and `samples` hypercube points (seed: the hypercube's), or on the snapshots
-    given (then samples and seed are not used)."""
+    given (then samples and seed are not used); the hypercube points solved on the executor's workers where one is
+    given (snapshots.py)."""
     require_elementwise(built)  # before the full solves
-    snapshots = snapshots or solve_snapshots(built, samples, seed, options)
+    snapshots = snapshots or solve_snapshots(built, samples, seed, options, executor)
     started = time.perf_counter()
     basis, sigma, kept = pod_basis(snapshots.displacements, modes, energy)
     pod_seconds = time.perf_counter() - started

@@ -4,6 +4,9 @@ yields (index, row) as runs finish, and describe() what they are for the study's
 
     with LocalPool(workers=2) as pool:          # or RayCluster(address, workers)
         for index, row in pool.run(tasks): ...
+
+run(tasks, function) runs another module-level function than a study's run_task on each task (plain data), as a
+reduced model's training does (reduce/snapshots.py solve_points); it too returns a dict and never raises.
 """
 
 from __future__ import annotations
@@ -61,6 +64,11 @@ def parent_watch(parent: int) -> None:
         os._exit(1)
 
 
+def failed_row(task, message: str) -> dict:
+    """The row of a task that could not run: a study run's varied values (a Task's) and the error."""
+    return {**(task.values if isinstance(task, Task) else {}), "error": message}
+
+
 class LocalPool:
     """Spawned worker processes on this machine, one Taichi runtime (one CPU thread) each."""
 
@@ -72,6 +80,10 @@ class LocalPool:
 
     def describe(self) -> dict:
         return {"executor": "process pool", "workers": self.workers}
+
+    def capacity(self) -> int:
+        """How many tasks run at once."""
+        return self.workers
 
     def __enter__(self):
         # workers are spawned as runs are submitted and inherit this environment (read as numpy loads)
@@ -90,14 +102,14 @@ class LocalPool:
             else:
                 os.environ[k] = v
 
-    def run(self, tasks: list[Task]):
+    def run(self, tasks: list, function=run_task):
         """Yield (index, row) as runs finish; row None for a run lost with a crashed worker process.
         On Ctrl-C: cancel the runs not started, yield those in flight as they finish, re-raise."""
         pool = self._pool
         assert pool is not None  # (entered)
         with signals.ignored():  # the first `workers` submissions start the workers: they inherit it
-            futures = {pool.submit(run_task, task): i for i, task in enumerate(tasks[: self.workers])}
-        futures.update({pool.submit(run_task, task): i for i, task in enumerate(tasks) if i >= self.workers})
+            futures = {pool.submit(function, task): i for i, task in enumerate(tasks[: self.workers])}
+        futures.update({pool.submit(function, task): i for i, task in enumerate(tasks) if i >= self.workers})
         pending = set(futures)
 
         def outcome(future):
@@ -107,8 +119,8 @@ class LocalPool:
                 return i, future.result()
             except BrokenProcessPool:
                 return i, None
-            except Exception as exc:  # noqa: BLE001 -- run_task does not raise; this is the pool failing
-                return i, {**tasks[i].values, "error": f"{type(exc).__name__}: {one_line(exc)}"}
+            except Exception as exc:  # noqa: BLE001 -- the function does not raise; this is the pool failing
+                return i, failed_row(tasks[i], f"{type(exc).__name__}: {one_line(exc)}")
 
         try:
             for future in as_completed(futures):
@@ -157,6 +169,12 @@ class RayCluster:
             "ray_nodes": len(ray.nodes()),
         }
 
+    def capacity(self) -> int:
+        """How many tasks run at once: the workers asked for, else the cluster's CPUs."""
+        import ray
+
+        return self.workers or max(int(ray.cluster_resources().get("CPU", 1)), 1)
+
     def __enter__(self):
         import ray
 
@@ -174,7 +192,6 @@ class RayCluster:
             except (ConnectionError, ValueError, RuntimeError) as exc:
                 raise PneumaInputError(f"--ray {self.address or ''}: {one_line(exc)}") from None
             self._started = True
-        self._remote = ray.remote(num_cpus=1)(run_task)
         return self
 
     def __exit__(self, *exc):
@@ -183,11 +200,12 @@ class RayCluster:
         if self._started:
             ray.shutdown()
 
-    def run(self, tasks: list[Task]):
+    def run(self, tasks: list, function=run_task):
         """Yield (index, row) as runs finish; a task Ray could not run (its worker died) gives an error row."""
         import ray
 
-        refs = {self._remote.remote(task): i for i, task in enumerate(tasks)}
+        remote = ray.remote(num_cpus=1)(function)
+        refs = {remote.remote(task): i for i, task in enumerate(tasks)}
         pending = list(refs)
         try:
             while pending:
@@ -196,7 +214,7 @@ class RayCluster:
                 try:
                     row = ray.get(done[0])
                 except ray.exceptions.RayError as exc:
-                    row = {**tasks[i].values, "error": f"ray: {one_line(exc)}"}
+                    row = failed_row(tasks[i], f"ray: {one_line(exc)}")
                 yield i, row
         finally:
             for ref in pending:
