@@ -10,6 +10,7 @@ import scipy.sparse as sp
 from solid_meshes import box_with_cavity, scene_of
 
 from taichi_pneuma import runtime
+from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.fiber_paths import Crossed
 from taichi_pneuma.reduce.ecsw import piecewise_terms, sample_terms
 from taichi_pneuma.reduce.exact import projected
@@ -152,6 +153,14 @@ def test_a_term_with_no_force_in_any_snapshot_gets_no_pieces(built):
         assert len(sampling[name].pieces) == 0 and sampling[name].error == 0.0
     model = ReducedModel(built, basis, {label: (s.pieces, s.weights) for label, s in sampling.items()})
     assert set(model.sampled) == {"elastic"} and not model.whole
+
+
+def test_pieces_of_another_term_or_past_a_terms_count_are_refused_in_one_line(built):
+    basis = np.eye(built.model.n_dofs)[:, :MODES]
+    fibers = piecewise_terms(built.model.terms)["fibers"]
+    for samples in ({"fibres": (np.array([0]), np.ones(1))}, {"fibers": (np.array([fibers.n_pieces]), np.ones(1))}):
+        with pytest.raises(PneumaInputError, match=r"^the sampled pieces of 'fib(er|re)s' do not fit this scene \(its "):
+            ReducedModel(built, basis, samples)
 
 
 @pytest.fixture(scope="module")
