@@ -159,7 +159,7 @@ def test_pieces_of_another_term_or_past_a_terms_count_are_refused_in_one_line(bu
     basis = np.eye(built.model.n_dofs)[:, :MODES]
     fibers = piecewise_terms(built.model.terms)["fibers"]
     for samples in ({"fibres": (np.array([0]), np.ones(1))}, {"fibers": (np.array([fibers.n_pieces]), np.ones(1))}):
-        with pytest.raises(PneumaInputError, match=r"^the sampled pieces of 'fib(er|re)s' do not fit this scene \(its "):
+        with pytest.raises(PneumaInputError, match=r"^the sampled pieces of 'fib(er|re)s' do not fit this scene \("):
             ReducedModel(built, basis, samples)
 
 
