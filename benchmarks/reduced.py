@@ -61,7 +61,7 @@ def run_case(scene_name: str, overrides: dict, samples: int, sizes: tuple) -> di
                 "modes": model.n_modes,
                 "kept_energy": training.kept_energy,
                 "elements": len(model.elements),
-                "ecsw_error": training.sampling.error,
+                "ecsw_error": training.sampling["elastic"].error,
                 "pod_ecsw_seconds": training.seconds["pod"] + training.seconds["ecsw"],
                 "tip_error_max": max(c.tip_error for c in compared),
                 "tip_error_mean": float(np.mean([c.tip_error for c in compared])),

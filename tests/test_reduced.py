@@ -9,7 +9,7 @@ from fd import check_reduced_derivatives
 
 import taichi_pneuma as tp
 from taichi_pneuma.errors import PneumaInputError
-from taichi_pneuma.reduce.model import ReducedModel
+from taichi_pneuma.reduce.model import ReducedModel, every_piece
 from taichi_pneuma.reduce.pod import pod_basis
 from taichi_pneuma.reduce.solve import equilibrium, indicator
 from taichi_pneuma.reduce.store import load_reduced, save_reduced
@@ -47,8 +47,8 @@ def full_equilibrium(built, ratio: float) -> np.ndarray:
 
 def test_all_modes_and_all_elements_reproduce_the_full_model(trained):
     built = trained.model.built
-    n, m = built.model.n_dofs, built.mesh.n_elements
-    whole = ReducedModel(built, np.eye(n), np.arange(m), np.ones(m))
+    n = built.model.n_dofs
+    whole = ReducedModel(built, np.eye(n), every_piece(built))
     rest = built.scene.schedule.rest_commands
     solved = equilibrium(whole, np.array([2.0]), (rest, np.zeros(n)), tol=1e-9)
     u = full_equilibrium(built, 2.0)
@@ -58,13 +58,10 @@ def test_all_modes_and_all_elements_reproduce_the_full_model(trained):
 
 def test_the_error_at_held_out_commands_falls_as_modes_are_added(trained):
     built, snapshots = trained.model.built, trained.snapshots
-    m = built.mesh.n_elements
     errors = []
     for modes in (2, 4, 8):
         basis, _, _ = pod_basis(snapshots.displacements, modes=modes)
-        model = ReducedModel(
-            built, basis, np.arange(m), np.ones(m), (snapshots.commands, snapshots.displacements @ basis)
-        )
+        model = ReducedModel(built, basis, every_piece(built), (snapshots.commands, snapshots.displacements @ basis))
         error = 0.0
         for ratio in HELD_OUT:
             reduced = equilibrium(model, np.array([ratio]), tol=1e-9)
@@ -79,12 +76,13 @@ def test_ecsw_reproduces_the_projected_snapshot_forces_with_fewer_elements(train
     model, snapshots = trained.model, trained.snapshots
     built = model.built
     assert 0 < len(model.elements) < built.mesh.n_elements
-    assert np.all(model.weights > 0)
+    assert np.all(model.samples["elastic"][1] > 0)
     fits = []
     for u in snapshots.displacements:
         built.model.set_displacements(u)
-        model.elastic.set_displacements(u)
-        fits.append((model.basis.T @ built.elastic.gradient().ravel(), model.elastic.gradient()))
+        sampled = model.sampled["elastic"]
+        sampled.set_displacements(u)
+        fits.append((model.basis.T @ built.elastic.gradient().ravel(), sampled.gradient()))
     largest = max(np.linalg.norm(full) for full, _ in fits)
     errors = [
         np.sum((sampled - full) ** 2) / np.sum(full**2)
@@ -92,7 +90,7 @@ def test_ecsw_reproduces_the_projected_snapshot_forces_with_fewer_elements(train
         if np.linalg.norm(full) > 1e-12 * largest
     ]
     assert len(errors) == len(fits) - 1  # all but the rest state, which has no force to fit
-    assert trained.sampling.error <= ECSW_TOL
+    assert trained.sampling["elastic"].error <= ECSW_TOL
     assert np.sqrt(np.mean(errors)) <= ECSW_TOL * (1 + 1e-6)
 
 
@@ -122,7 +120,14 @@ def test_a_changed_scene_refuses_an_old_reduced_model(trained, tmp_path):
     save_reduced(path, trained.model, trained.singular_values)
     loaded = load_reduced(path, trained.model.built)
     assert np.array_equal(loaded.basis, trained.model.basis)
-    assert np.array_equal(loaded.elements, trained.model.elements)
+    for saved, read in zip(trained.model.samples["elastic"], loaded.samples["elastic"], strict=True):
+        assert np.array_equal(saved, read)
+    with np.load(path) as data:  # the first format: the elastic term's elements and weights, no label
+        first = {name: data[name] for name in ("basis", "commands", "coordinates", "singular_values", "scene_sha256")}
+        first["elements"], first["weights"] = data["pieces_elastic"], data["weights_elastic"]
+    np.savez(tmp_path / "first.npz", **first)
+    old = load_reduced(tmp_path / "first.npz", trained.model.built)
+    assert np.array_equal(old.elements, trained.model.elements) and not old.whole
     changed = coarse_scene(**{"material.E": 2e4}).build()
     with pytest.raises(PneumaInputError, match="was trained for another scene"):
         load_reduced(path, changed)

@@ -11,7 +11,7 @@ from solid_meshes import box_with_cavity, scene_of, shell_octant
 
 from taichi_pneuma.materials import IsochoricMaterial, IsochoricPolynomial
 from taichi_pneuma.reduce.exact import ReducedChamber, projected
-from taichi_pneuma.reduce.model import ReducedModel
+from taichi_pneuma.reduce.model import ReducedModel, every_piece
 from taichi_pneuma.scene.build import Material
 from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms import VOLUMETRIC
@@ -105,8 +105,7 @@ def test_the_reduced_models_energy_gradient_and_hessian_agree_with_finite_differ
     built = scene_of(box, [ChamberSchedule("closed_gas", ((1, 0.3),))], 1, Material(1e4, 0.45)).build()
     built.set_commands(np.array([0.3]))
     basis = random_basis(built.model.n_dofs, 7)
-    m = built.mesh.n_elements
-    model = ReducedModel(built, basis, np.arange(m), np.ones(m))
+    model = ReducedModel(built, basis, every_piece(built))
     assert not model.whole  # the chamber and the clamp are exact: no term evaluated on the full field
     q = coordinates(built, basis, 0.02, 8)
     direction = np.random.default_rng(9).standard_normal(MODES)

@@ -1,16 +1,17 @@
-"""Train a reduced-order model of a scene (POD basis + ECSW hyper-reduction of its elasticity), validate it
-against the full model on held-out commands, and save it as one .npz file.
+"""Train a reduced-order model of a scene (POD basis + ECSW hyper-reduction of its elasticity, fibres and sheets),
+validate it against the full model on held-out commands, and save it as one .npz file.
 
     pneuma-reduce --scene pneunet_finger --energy 0.999999 --samples 24
     pneuma-reduce --scene reference_beam --modes 8 --set mesh.max_area=0.004
 
 Trains on the scene's schedule and a Latin hypercube of --samples chamber commands in the schedule's range (each
 solved by the full model), keeps --modes POD modes or those keeping --energy of the snapshots' energy, and samples
-the elements by ECSW to --ecsw-tol. --workers N solves the hypercube points on N worker processes, --ray [ADDRESS]
-as Ray tasks (the schedule, a ramp, is solved here first). Prints the modes and the kept energy, the elements
-sampled, the training time, the errors at --held-out commands (the tip displacement's as % of the body's length, the
-bend angle's in degrees, the reduced state's full residual) and the time per equilibrium of the reduced and of the
-full model. Writes <out>/<stem>_reduced.npz (the model: pneuma_reduce's store refuses it for a changed scene) and
+the pieces of each piecewise term (the elements; a fibre's segments, a sheet's cells) by ECSW to --ecsw-tol.
+--workers N solves the hypercube points on N worker processes, --ray [ADDRESS] as Ray tasks (the schedule, a ramp,
+is solved here first). Prints the modes and the kept energy, the pieces sampled per term, the training time, the
+errors at --held-out commands (the tip displacement's as % of the body's length, the bend angle's in degrees, the
+reduced state's full residual) and the time per equilibrium of the reduced and of the full model. Writes
+<out>/<stem>_reduced.npz (the model: pneuma_reduce's store refuses it for a changed scene) and
 <out>/<stem>_reduced.json (the figures printed). Exit codes: 0 done, 1 no equilibrium, 2 bad input (one `error:`
 line).
 """
@@ -92,6 +93,7 @@ def where_text(where: dict) -> str:
 
 
 def run(args: argparse.Namespace) -> dict:
+    from ..reduce.ecsw import piecewise_terms
     from ..reduce.store import save_reduced
     from ..reduce.train import train, validate
 
@@ -109,7 +111,11 @@ def run(args: argparse.Namespace) -> dict:
                 built, args.modes, args.energy, args.samples, args.seed, options, args.ecsw_tol, executor=executor
             )
         model, snapshots = training.model, training.snapshots
-        m, n_elements = len(model.elements), built.mesh.n_elements
+        sizes = {label: term.n_pieces for label, term in piecewise_terms(built.model.terms).items()}
+        sampled = {
+            label: {"pieces": len(s.pieces), "of": sizes[label], "fit_error": s.error}
+            for label, s in training.sampling.items()
+        }
         trained_seconds = sum(training.seconds.values())
         print(
             f"training: {len(snapshots.commands)} equilibria ({built.scene.increments + 1} of the schedule, "
@@ -123,10 +129,11 @@ def run(args: argparse.Namespace) -> dict:
             f"basis: {model.n_modes} modes keep {training.kept_energy:.10f} of the snapshots' energy "
             f"(1 - {1 - training.kept_energy:.2e})"
         )
-        print(
-            f"ECSW: {m} of {n_elements} elements ({100 * m / n_elements:.1f} %), projected force fit error "
-            f"{training.sampling.error:.2e} (tolerance {args.ecsw_tol:g})"
-        )
+        for label, s in sampled.items():
+            print(
+                f"ECSW {label}: {s['pieces']} of {s['of']} pieces ({100 * s['pieces'] / max(s['of'], 1):.1f} %), "
+                f"projected force fit error {s['fit_error']:.2e} (tolerance {args.ecsw_tol:g})"
+            )
         compared = validate(training, args.held_out, args.seed + 1, options)
         tip = np.array([c.tip_error for c in compared])
         angle = np.array([c.angle_error for c in compared])
@@ -148,9 +155,7 @@ def run(args: argparse.Namespace) -> dict:
             "scene": scene.name,
             "modes": model.n_modes,
             "kept_energy": training.kept_energy,
-            "elements": m,
-            "mesh_elements": n_elements,
-            "ecsw_error": training.sampling.error,
+            "sampled": sampled,
             "snapshots": len(snapshots.commands),
             "failed_samples": snapshots.failed,
             "training_seconds": training.seconds,

@@ -1,7 +1,7 @@
 """Training a reduced model of a built scene, and validating it against the full model.
 
 train: snapshots of the full model's equilibria (snapshots.py), the POD basis of their displacements (pod.py), the
-ECSW sampling of the elastic term on that basis (ecsw.py); the training coordinates q_s = V^T u_s, from which reduced
+ECSW sampling of each piecewise term on that basis (ecsw.py); the training coordinates q_s = V^T u_s, from which reduced
 solves start.
 
 validate: held-out commands (a Latin hypercube of another seed in the training box), each solved by the full model
@@ -22,7 +22,7 @@ from ..fem.tip import tip_measures
 from ..scene.build import BuiltScene
 from ..solve.newton import NewtonOptions, NewtonSolver
 from ..solve.simulate import settle
-from .ecsw import Sampling, ecsw
+from .ecsw import Sampling, sample_terms
 from .model import ReducedModel, require_elementwise
 from .pod import pod_basis
 from .snapshots import Snapshots, command_box, hypercube, nearest, solve_snapshots
@@ -34,13 +34,13 @@ ECSW_TOL = 1e-4  # the default relative tolerance of the ECSW fit of the project
 @dataclass
 class Training:
     """A trained reduced model and how it was made: the snapshots, all singular values, the kept energy fraction, the
-    ECSW sampling and the seconds of each phase (snapshots, pod, ecsw)."""
+    ECSW sampling of each piecewise term (by label) and the seconds of each phase (snapshots, pod, ecsw)."""
 
     model: ReducedModel
     snapshots: Snapshots
     singular_values: np.ndarray
     kept_energy: float
-    sampling: Sampling
+    sampling: dict[str, Sampling]
     seconds: dict[str, float]
 
 
@@ -65,11 +65,10 @@ def train(
     basis, sigma, kept = pod_basis(snapshots.displacements, modes, energy)
     pod_seconds = time.perf_counter() - started
     started = time.perf_counter()
-    sampling = ecsw(built.elastic, basis, snapshots.displacements, ecsw_tol)
+    sampling = sample_terms(built.model.terms, basis, snapshots.displacements, ecsw_tol)
     ecsw_seconds = time.perf_counter() - started
-    model = ReducedModel(
-        built, basis, sampling.elements, sampling.weights, (snapshots.commands, snapshots.displacements @ basis)
-    )
+    sampled = {label: (s.pieces, s.weights) for label, s in sampling.items()}
+    model = ReducedModel(built, basis, sampled, (snapshots.commands, snapshots.displacements @ basis))
     seconds = {"snapshots": snapshots.seconds, "pod": pod_seconds, "ecsw": ecsw_seconds}
     return Training(model, snapshots, sigma, kept, sampling, seconds)
 

@@ -8,7 +8,7 @@ so that a type checker reads them as annotations it cannot see into (Any), not a
 """
 
 import math
-from typing import TypeAlias
+from typing import Any, TypeAlias
 
 import numpy as np
 
@@ -27,7 +27,7 @@ def vectors(d: int):
     return ti.types.ndarray(dtype=ti.types.vector(d, ti.f64), ndim=1)
 
 
-Vec2s = vectors(2)  # (n, 2) float64, for the planar terms' kernels
+Vec2s: TypeAlias = vectors(2)  # (n, 2) float64, for the planar terms' kernels
 
 
 def vertex_dofs(vertices: np.ndarray, d: int) -> np.ndarray:
@@ -154,6 +154,10 @@ class Term:
     then that of its last hessian_values() call, and the model's fixed pattern leaves it out (EnergyModel.assemble).
     quadratic: whether its energy is a polynomial of degree <= 2 in u, the same at every command (a clamp, a roller,
     gravity): a reduced model projects it once (reduce/exact.py).
+    piecewise: whether its energy is a sum over pieces, E = sum_p E_p (an element, a cord segment, a sheet's cell),
+    each touching the nodes of its row of piece_nodes() only, with hessian_values() the pieces' dense blocks in piece
+    order on block_pattern(piece_nodes()): restricted() takes a weighted subset of the pieces, as a reduced model's
+    hyper-reduction samples them (reduce/ecsw.py).
     """
 
     name = "term"
@@ -161,6 +165,9 @@ class Term:
     kinked = False  # piecewise smooth: choose_branches may move pieces to other branches
     dynamic = False  # its Hessian's pattern changes with the state
     quadratic = False  # E(u) = E(0) + g(0).u + 1/2 u^T K u, K constant, whatever the commands
+    piecewise = False  # E = sum_p E_p over pieces: piece_nodes(), restricted(), scale_pieces()
+    config: Any  # the Configuration it is evaluated on (terms/model.py)
+    vertices: np.ndarray  # a restricted term's: the numbers of its configuration's nodes in the whole one
 
     @property
     def reported_as(self) -> str:
@@ -199,6 +206,42 @@ class Term:
         """The gradient at u of the chosen branches' energies minus the true gradient, (n, d) (None: zero, as for
         every smooth term and for a kinked one whose pieces are on their own branches at u)."""
         return None
+
+    def piece_nodes(self) -> np.ndarray:
+        """(P, k) the nodes each piece's energy depends on, in the order of its Hessian block (a piecewise term)."""
+        raise NotImplementedError
+
+    @property
+    def n_pieces(self) -> int:
+        """The number of pieces P (a piecewise term)."""
+        return len(self.piece_nodes())
+
+    def on_pieces(self, config, pieces: np.ndarray, nodes: np.ndarray) -> "Term":
+        """A term of the same class on config holding only `pieces` (indices), with nodes (len(pieces), k) their
+        rows of piece_nodes() numbered in config (a piecewise term; restricted() calls it)."""
+        raise NotImplementedError
+
+    def scale_pieces(self, scale: np.ndarray) -> None:
+        """Multiply each piece's energy by scale (P,) (a piecewise term)."""
+        raise NotImplementedError
+
+    def restricted(self, pieces: np.ndarray, scale: np.ndarray, apart: bool = False) -> "Term":
+        """The term on `pieces` only, piece p's energy times scale[p]: E = sum_p scale_p E_p, on a configuration of
+        its own holding those pieces' nodes alone, numbered afresh (apart: a copy of the nodes per piece, so that no
+        two pieces share one and gradient() holds each piece's own forces). Its `vertices` are the numbers of its
+        nodes in this term's configuration. For a piecewise term; a kinked one's pieces start on their own
+        branches (choose_branches)."""
+        pieces = np.asarray(pieces, dtype=np.int64)
+        nodes = self.piece_nodes()[pieces]
+        if apart:
+            vertices, local = nodes.ravel(), np.arange(nodes.size)
+        else:
+            vertices, local = np.unique(nodes, return_inverse=True)
+        config = type(self.config)(self.config.rest[vertices])  # a Configuration (terms/model.py) of those nodes
+        term = self.on_pieces(config, pieces, local.reshape(nodes.shape))
+        term.scale_pieces(np.asarray(scale, dtype=np.float64))
+        term.vertices = vertices
+        return term
 
     def fault(self) -> str | None:
         """Why no equilibrium can be found from the current state, in words, when this term is the cause (e.g. a

@@ -202,7 +202,7 @@ class Elasticity(Term):
     material law, with one parameter vector per element: parameters (m, len(law.parameter_names))."""
 
     name = "elastic"
-    elementwise = True  # its energy is a sum of one energy per element (restricted() takes a subset)
+    piecewise = True  # a sum of one energy per element (Term.restricted takes a subset)
 
     def __init__(self, config, elements: np.ndarray, law, parameters: np.ndarray):
         self.config = config
@@ -215,29 +215,15 @@ class Elasticity(Term):
         self.weights = np.ascontiguousarray(weights)
         self.parameters = np.ascontiguousarray(parameters, dtype=np.float64)
         self._rows, self._cols = block_pattern(self.nodes, self.dim)
-        self.vertices = np.arange(len(config.rest))  # the numbers of its nodes in the mesh (restricted())
 
-    def restricted(self, elements: np.ndarray, scale: np.ndarray, apart: bool = False) -> "Elasticity":
-        """The term on `elements` only, element e's energy times scale[e] (its quadrature weights scaled):
-        E = sum_e scale_e E_e, on a configuration of its own holding those elements' nodes alone, numbered afresh
-        (apart: a copy of the nodes per element, so that no two elements share one and gradient() holds each
-        element's own forces). Its `vertices` are the original numbers of its nodes. For an elementwise term."""
-        nodes = self.nodes[elements]
-        if apart:
-            vertices, local = nodes.ravel(), np.arange(nodes.size)
-        else:
-            vertices, local = np.unique(nodes, return_inverse=True)
-        term = type(self)(
-            type(self.config)(self.config.rest[vertices]),
-            local.reshape(nodes.shape),
-            self.law,
-            self.parameters[elements],
-        )
-        term.scale_elements(np.asarray(scale, dtype=np.float64))
-        term.vertices = vertices
-        return term
+    def piece_nodes(self) -> np.ndarray:
+        """The elements' nodes: an element is a piece."""
+        return self.nodes
 
-    def scale_elements(self, scale: np.ndarray) -> None:
+    def on_pieces(self, config, pieces: np.ndarray, nodes: np.ndarray) -> "Elasticity":
+        return type(self)(config, nodes, self.law, self.parameters[pieces])
+
+    def scale_pieces(self, scale: np.ndarray) -> None:
         """Scale each element's quadrature weights (its energy) by scale (m,)."""
         self.weights = np.ascontiguousarray(self.weights * scale[:, None])
 

@@ -137,6 +137,7 @@ class Cords(Term):
 
     name = "fibers"
     kinked = True
+    piecewise = True  # a sum of one energy per segment (Term.restricted takes a subset)
 
     def __init__(self, config, nodes, weights, segments, stiffness, rest_length):
         self.config = config
@@ -144,11 +145,26 @@ class Cords(Term):
         self.weights = np.ascontiguousarray(weights, dtype=np.float64)
         self.stiffness = np.ascontiguousarray(stiffness, dtype=np.float64)
         self.rest_length = np.ascontiguousarray(rest_length, dtype=np.float64)
-        blocks = np.hstack([self.nodes[self.segments[:, 0]], self.nodes[self.segments[:, 1]]])
-        self._pattern = block_pattern(blocks, config.dim)
+        self._pattern = block_pattern(self.piece_nodes(), config.dim)
         self._block = (2 * self.nodes.shape[1] * config.dim) ** 2
         self._own = np.full(len(self.segments), -1, dtype=np.int32)  # every segment on its own branch
         self.branch = self._own  # the branches the Hessian uses: -1 its own, 0 slack, 1 taut
+
+    def piece_nodes(self) -> np.ndarray:
+        """(s, 2 (d + 1)): a segment's first point's embedding nodes, then its second's (its Hessian block's)."""
+        return np.hstack([self.nodes[self.segments[:, 0]], self.nodes[self.segments[:, 1]]])
+
+    def on_pieces(self, config, pieces: np.ndarray, nodes: np.ndarray) -> "Cords":
+        """The segments `pieces`, each with its two points of its own: points 2 i and 2 i + 1 for segment i."""
+        k = self.nodes.shape[1]
+        ends = self.segments[pieces]
+        weights = np.stack([self.weights[ends[:, 0]], self.weights[ends[:, 1]]], axis=1).reshape(-1, k)
+        segments = np.arange(2 * len(pieces)).reshape(-1, 2)
+        return Cords(config, nodes.reshape(-1, k), weights, segments, self.stiffness[pieces], self.rest_length[pieces])
+
+    def scale_pieces(self, scale: np.ndarray) -> None:
+        """Scale each segment's stiffness E A (its energy) by scale (s,)."""
+        self.stiffness = np.ascontiguousarray(self.stiffness * scale)
 
     def _arguments(self) -> tuple:
         c = self.config

@@ -278,6 +278,7 @@ class Membrane(Term):
     goes slack) instead of carrying compression, the relaxed energy (module docstring)."""
 
     name = "membrane"
+    piecewise = True  # a sum of one energy per cell (Term.restricted takes a subset)
 
     def __init__(self, config, cells: np.ndarray, thickness: float, E: float, nu: float, wrinkles: bool = True):
         self.config = config
@@ -286,10 +287,22 @@ class Membrane(Term):
         assert self.cells.shape[1] == self.dim, "a membrane's cells have d nodes (3D: triangles, 2D: segments)"
         inverse, measures = rest_shapes(config.rest, self.cells)
         self.inverse = np.ascontiguousarray(inverse)
+        self.thickness, self.E, self.nu = thickness, E, nu
         self.weights = np.ascontiguousarray(thickness * measures)
         self.lam, self.mu = E * nu / (1.0 - nu**2), E / (2.0 * (1.0 + nu))
         self.wrinkles = bool(wrinkles)
         self._rows, self._cols = block_pattern(self.cells, self.dim)
+
+    def piece_nodes(self) -> np.ndarray:
+        """The cells' nodes: a cell is a piece."""
+        return self.cells
+
+    def on_pieces(self, config, pieces: np.ndarray, nodes: np.ndarray) -> "Membrane":
+        return Membrane(config, nodes, self.thickness, self.E, self.nu, self.wrinkles)
+
+    def scale_pieces(self, scale: np.ndarray) -> None:
+        """Scale each cell's weight W = t A0 (its energy) by scale (f,)."""
+        self.weights = np.ascontiguousarray(self.weights * scale)
 
     def _arguments(self):
         c = self.config

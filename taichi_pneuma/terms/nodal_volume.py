@@ -184,8 +184,8 @@ class PatchVolumeElasticity(Elasticity):
         self.share = np.ascontiguousarray(self.weights.sum(axis=1) / s)
         self.rest_volumes = np.bincount(self.patches.ravel(), np.repeat(self.share, s))
 
-    def scale_elements(self, scale: np.ndarray) -> None:
-        super().scale_elements(scale)
+    def scale_pieces(self, scale: np.ndarray) -> None:
+        super().scale_pieces(scale)
         self._patch_volumes()
 
     def patches_of(self) -> np.ndarray:
@@ -253,7 +253,7 @@ class NodalVolumeElasticity(PatchVolumeElasticity):
     patches are the nodes, the rank-1 parts extra blocks between the nodes two rings apart."""
 
     volumetric = "nodal"
-    elementwise = False  # a node's patch couples its elements
+    piecewise = False  # a node's patch couples its elements
 
     def __init__(self, config, elements: np.ndarray, law, parameters: np.ndarray):
         super().__init__(config, elements, law, parameters)
