@@ -182,7 +182,7 @@ def test_ecsw_fits_each_terms_projected_forces_with_fewer_pieces(trained):
         fits = []
         for u in snapshots.displacements:
             built.model.set_displacements(u)
-            sampled.u[:] = u.reshape(-1, 3)[sampled.vertices]
+            sampled.set_displacements(u)
             fits.append((model.basis.T @ terms[label].gradient().ravel(), sampled.gradient()))
         largest = max(np.linalg.norm(full) for full, _ in fits)
         errors = [np.sum((s - f) ** 2) / np.sum(f**2) for f, s in fits if np.linalg.norm(f) > 1e-12 * largest]
