@@ -487,23 +487,3 @@ def exit_code(app_run, args: argparse.Namespace) -> int:
     finally:
         signals.finished()
     return 0 if summary["all_converged"] else 1
-
-
-def add_executor_arguments(p: argparse.ArgumentParser, what: str, default: str) -> None:
-    """--workers and --ray: where `what` runs (study/executors.py), else `default`."""
-    p.add_argument(
-        "--workers",
-        type=int,
-        default=None,
-        help=f"run {what} on this many worker processes (default: {default}); with --ray and no address, the "
-        "local Ray's CPUs",
-    )
-    p.add_argument(
-        "--ray",
-        nargs="?",
-        const="",
-        default=None,
-        metavar="ADDRESS",
-        help=f"run {what} as Ray tasks (pip install 'taichi-pneuma[ray]'): a local Ray started for it without "
-        "ADDRESS, else the cluster whose head is at ADDRESS (HOST:PORT, auto, ray://HOST:PORT)",
-    )

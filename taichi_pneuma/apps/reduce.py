@@ -19,7 +19,6 @@ line).
 from __future__ import annotations
 
 import argparse
-import contextlib
 import sys
 
 import numpy as np
@@ -28,7 +27,6 @@ from .. import runtime
 from ..errors import require
 from ..io.output import lock_stem, prepare_directory, save_json
 from .cli import (
-    add_executor_arguments,
     add_ramp_arguments,
     app_parser,
     build,
@@ -37,6 +35,7 @@ from .cli import (
     result_stem,
     scene_of_flags,
 )
+from .workers import add_executor_arguments, executor_of
 
 
 def parser() -> argparse.ArgumentParser:
@@ -77,15 +76,6 @@ def check_reduce_flags(args: argparse.Namespace) -> None:
     require(0 < args.ecsw_tol < 1, f"--ecsw-tol = {args.ecsw_tol!r} must lie in (0, 1)")
 
 
-def executor_of(args: argparse.Namespace):
-    """Where the hypercube points are solved: a process pool (--workers), Ray (--ray), else here (a null context)."""
-    from ..study import LocalPool, RayCluster
-
-    if args.ray is not None:
-        return RayCluster(args.ray or None, args.workers)
-    return LocalPool(args.workers) if args.workers is not None else contextlib.nullcontext()
-
-
 def where_text(where: dict) -> str:
     """An executor's describe() in words: 'process pool (workers 2)', 'this process'."""
     details = ", ".join(f"{key} {value}" for key, value in where.items() if key != "executor")
@@ -105,7 +95,7 @@ def run(args: argparse.Namespace) -> dict:
     with lock_stem(out, stem):
         built = build(scene, args)
         options = newton_options(args)
-        with executor_of(args) as executor:
+        with executor_of(args, here=True) as executor:
             where = executor.describe() if executor is not None else {"executor": "this process"}
             training = train(
                 built, args.modes, args.energy, args.samples, args.seed, options, args.ecsw_tol, executor=executor

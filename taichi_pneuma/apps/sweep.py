@@ -27,7 +27,8 @@ import sys
 from .. import limits
 from ..io.keys import SHORT_KEYS
 from ..io.output import check_stem, lock_stem, prepare_directory
-from .cli import add_executor_arguments, add_ramp_arguments, app_parser, exit_code, scene_of_flags
+from .cli import add_ramp_arguments, app_parser, exit_code, scene_of_flags
+from .workers import add_executor_arguments, executor_of
 
 
 def parser() -> argparse.ArgumentParser:
@@ -90,11 +91,11 @@ def row_line(row: dict, keys: list[str], labels: list[str]) -> str:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from ..study import LocalPool, RayCluster, RunOptions, Sweep, parse_vary
+    from ..study import RunOptions, Sweep, parse_vary
 
     axes = [parse_vary(text) for text in args.vary]
     base = scene_of_flags(args)
-    executor = LocalPool(args.workers) if args.ray is None else RayCluster(args.ray or None, args.workers)
+    executor = executor_of(args, here=False)
     options = RunOptions(
         args.tol,
         args.max_iterations,
