@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import require, require_finite, shape_of
+from ..errors import require, require_finite, require_positive, shape_of
 from .shapes import Ellipse, Rectangle, RoundedRectangle
 
 AXES = ("x", "y", "z")
@@ -42,12 +42,6 @@ def _vector(name: str, value, positive: bool = False) -> tuple[float, float, flo
     if positive:
         require(min(vector) > 0, f"{name} = {list(value)!r} must be > 0 in each of x, y, z")
     return vector
-
-
-def _positive(name: str, value) -> float:
-    v = require_finite(name, value)
-    require(v > 0, f"{name} = {value!r} must be > 0")
-    return v
 
 
 @dataclass(frozen=True)
@@ -134,8 +128,8 @@ class Cylinder:
 
     def __post_init__(self):
         _vector("center", self.center)
-        _positive("radius", self.radius)
-        _positive("length", self.length)
+        require_positive("radius", self.radius)
+        require_positive("length", self.length)
         require(self.axis in AXES, f"axis = {self.axis!r} is not one of {', '.join(AXES)}")
 
     def build(self, occ) -> int:
@@ -161,8 +155,8 @@ class HalfCylinder:
 
     def __post_init__(self):
         _vector("center", self.center)
-        _positive("radius", self.radius)
-        _positive("length", self.length)
+        require_positive("radius", self.radius)
+        require_positive("length", self.length)
         require(
             self.axis in ("x", "z"),
             f"axis = {self.axis!r} is not one of x, z (a half cylinder's flat face is normal to y)",
@@ -212,7 +206,7 @@ class Extrusion:
             callable(getattr(self.profile, "polygon", None)),
             f"profile = {self.profile!r} is not a 2D shape (rectangle, ellipse, rounded_rectangle, polygon or union)",
         )
-        _positive("depth", self.depth)
+        require_positive("depth", self.depth)
         require_finite("z", self.z)
 
     def build(self, occ) -> int:
