@@ -38,7 +38,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import PneumaInputError
-from .output import read_input, write_atomic
+from .inputs import read_input
+from .output import write_atomic
 
 VARIABLE = "PNEUMA_CACHE_DIR"
 OFF = ("", "off")

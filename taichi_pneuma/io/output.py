@@ -1,5 +1,5 @@
-"""Result files: written whole or not at all, inside the output directory only, by one run per name at a time;
-input files read within a size limit.
+"""Result files: written whole or not at all, inside the output directory only, by one run per name at a time
+(input files are read by inputs.py).
 
 - A result file is written into a private folder made for it beside its target (mkdtemp: mode 0700, a
   random name `.<file>.<pid>.<random>.partial`, made by mkdir, so never a planted link or another's
@@ -12,8 +12,6 @@ input files read within a size limit.
   second run of the same stem is one error naming it (another run holds it), never an interleaving.
 - The private folders that runs killed outright (SIGKILL) left behind are removed by the next run that
   prepares the directory (those of processes no longer alive).
-- read_input reads an input file only if it is a regular file (a FIFO or a device such as /dev/zero is
-  refused without blocking), and at most a given number of bytes.
 
 Result files are named after the scene, so a scene name must be a plain file name (STEM): no
 separator, no leading dot, nothing that could lead outside the output directory. Chamber names head CSV
@@ -27,7 +25,6 @@ import json
 import os
 import re
 import shutil
-import stat
 import tempfile
 import weakref
 from contextlib import ExitStack, contextmanager, nullcontext
@@ -35,12 +32,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import PneumaInputError, quoted, require
+from ..errors import PneumaInputError, require
+from .inputs import NOFOLLOW
 
 MAX_NAME = 100
 STEM = re.compile(r"[A-Za-z0-9_+-][A-Za-z0-9_.+-]*")
 PARTIAL = re.compile(r"\..+\.(\d{1,9})\.[a-z0-9_]{8}\.partial")  # .<file>.<pid>.<random>.partial
-NOFOLLOW = getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
 FORMULA = ("=", "+", "-", "@", "\t", "\r")  # a spreadsheet reads a CSV cell starting so as a formula
 
 
@@ -274,25 +271,3 @@ def lock_stems(directory: str | os.PathLike, *stems: str):
 
 
 # --- input files -----------------------------------------------------------------------------------
-
-
-def read_input(path: str | os.PathLike, max_bytes: int, what: str, follow_links: bool = True) -> bytes:
-    """The bytes of the input file at path (`what` names it in errors: "scene file"), refused unless it is a
-    regular file of at most max_bytes bytes: a FIFO, a device or a folder is refused without reading or
-    waiting, and no more than max_bytes + 1 bytes are ever read. follow_links False: a link is refused."""
-    try:
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | (getattr(os, "O_CLOEXEC", 0) if follow_links else NOFOLLOW))
-    except OSError as exc:
-        raise PneumaInputError(f"{what} {quoted(path)} cannot be read ({exc.strerror})") from None
-    if not stat.S_ISREG(os.fstat(fd).st_mode):  # checked before open(fd), which refuses a folder with its own error
-        os.close(fd)
-        raise PneumaInputError(
-            f"{what} {quoted(path)} is not a regular file (a FIFO, a device or a folder cannot be read as one)"
-        )
-    with open(fd, "rb") as f:
-        try:
-            data = f.read(max_bytes + 1)
-        except OSError as exc:
-            raise PneumaInputError(f"{what} {str(path)!r} cannot be read ({exc.strerror})") from None
-    require(len(data) <= max_bytes, f"{path}: larger than {max_bytes} bytes, the most a {what} may be")
-    return data

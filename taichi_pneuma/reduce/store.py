@@ -15,7 +15,8 @@ import zipfile
 import numpy as np
 
 from ..errors import PneumaInputError, quoted, require
-from ..io.output import read_input, save_npz
+from ..io.inputs import read_input
+from ..io.output import save_npz
 from ..result import scene_sha256
 from ..scene.build import BuiltScene
 from .model import ReducedModel, Samples

@@ -39,7 +39,8 @@ from __future__ import annotations
 import os
 
 from ..errors import PneumaInputError
-from ..io.output import read_input, reduce_to_stem
+from ..io.inputs import read_input
+from ..io.output import reduce_to_stem
 from . import sceneformat
 from .build import Scene
 from .schema import KeyInfo, parse_toml

@@ -19,7 +19,7 @@ import os
 from dataclasses import dataclass
 
 from ..errors import PneumaInputError, parse_number, require, require_finite
-from ..io.output import read_input
+from ..io.inputs import read_input
 
 COLUMNS = ("x", "y", "z", "angle", "wx", "wy", "wz", "wangle")
 MAX_TARGETS = 1000

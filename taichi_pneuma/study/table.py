@@ -14,7 +14,8 @@ from pathlib import Path
 
 from ..errors import PneumaInputError, require
 from ..fem.tip import COLUMNS as TIP_COLUMNS
-from ..io.output import FORMULA, read_input, write_atomic
+from ..io.inputs import read_input
+from ..io.output import FORMULA, write_atomic
 
 MAX_CELL = 10_000  # characters of a varied value in the CSV (csv reads fields of at most 131,072)
 MAX_RECORD_BYTES = 256_000_000  # the most of a study's CSV or JSON read back
