@@ -32,12 +32,12 @@ def test_the_notebook_widget_shows_the_page_and_solves_between_cells(tmp_path):
     *printed, shown = notebook.cells[1].outputs
     html = shown["data"]["text/html"]
     assert "<iframe" in html and "websocket=ws://127.0.0.1:" in html and "token%3D" in html
-    # before the iframe, only lines printed to stdout: Taichi's start and the page's URL with its token, the one
-    # the iframe loads (no viser banner: rich shows it as display data in a kernel, without the token)
+    # before the iframe, only lines printed to stdout: the backend's start (Taichi or Quadrants) and the page's URL,
+    # the one the iframe loads (no viser banner: rich shows it as display data in a kernel, without the token)
     assert all(output["output_type"] == "stream" and output["name"] == "stdout" for output in printed), printed
     lines = "".join(output["text"] for output in printed).splitlines()
     url = re.search(r'src="([^"]+)"', html)[1].replace("&amp;", "&")
-    assert [line for line in lines if not line.startswith("[Taichi]")] == [
+    assert [line for line in lines if not line.startswith(("[Taichi]", "[Quadrants]"))] == [
         f"the live page (keep its token private): {url}"
     ]
     words = notebook.cells[3].outputs[-1]["text"].split()
