@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from ..reduce.model import ReducedModel
-from ..reduce.solve import Indicator, indicator, newton
+from ..reduce.solve import Indicator, indicator, newton, outside_training
 from ..solve.newton import CHORD_MAX_CONTRACTION, NewtonOptions
 from ..solve.simulate import state_fault
 from .equilibrium import LIVE_TOL, LiveEquilibrium
@@ -57,13 +57,8 @@ class ReducedLiveEquilibrium:
         return "equilibrium" if self.converged else "stuck" if self.stuck else "converging"
 
     def inside(self, commands: np.ndarray) -> bool:
-        """Whether the commands lie in the box of the training commands (to 1e-9 of its size)."""
-        train = self.model.training
-        if train is None:
-            return True
-        low, high = train[0].min(axis=0), train[0].max(axis=0)
-        slack = 1e-9 * np.maximum(high - low, np.abs(high))
-        return bool(np.all((commands >= low - slack) & (commands <= high + slack)))
+        """Whether the commands lie in the box of the training commands (reduce/solve.py outside_training)."""
+        return not outside_training(self.model, commands)
 
     def pressures(self) -> np.ndarray:
         return np.array([c.pressure() for c in self.model.chambers])
@@ -143,12 +138,11 @@ class ReducedOrFull:
         """Which model solves, in words, with the reduced state's indicator or the commands outside the box."""
         model = self.reduced.model
         if self.active is self.full:
-            assert model.training is not None and self.full.commands is not None  # else the full one is never active
-            low, high = model.training[0].min(axis=0), model.training[0].max(axis=0)
+            assert self.full.commands is not None  # set before the full one became active
+            names = self.reduced.built.scene.chamber_names
             outside = [
-                f"{name} {c:.4g} not in {lo:.4g} .. {hi:.4g}"
-                for name, c, lo, hi in zip(self.reduced.built.scene.chamber_names, self.full.commands, low, high)
-                if not lo <= c <= hi
+                f"{names[i]} {c:.4g} not in {lo:.4g} .. {hi:.4g}"
+                for i, c, lo, hi in outside_training(model, self.full.commands)
             ]
             return f"full model: commands outside the reduced model's training range ({'; '.join(outside)})"
         check = self.reduced.check

@@ -179,19 +179,27 @@ class Indicator:
         return not self.outside
 
 
+def outside_training(model: ReducedModel, commands: np.ndarray) -> list[tuple[int, float, float, float]]:
+    """The commands outside the box of the training commands (to 1e-9 of its size), as (index, value, low, high);
+    none for a model without training equilibria."""
+    if model.training is None:
+        return []
+    low, high = model.training[0].min(axis=0), model.training[0].max(axis=0)
+    slack = 1e-9 * np.maximum(high - low, np.abs(high))
+    return [
+        (i, float(c), float(lo), float(hi))
+        for i, (c, lo, hi, s) in enumerate(zip(commands, low, high, slack))
+        if c < lo - s or c > hi + s
+    ]
+
+
 def indicator(model: ReducedModel, commands: np.ndarray, q: np.ndarray) -> Indicator:
     """The error indicator of the reduced state q at commands (the module docstring); the full model is left at V q
     and those commands."""
     model.built.set_commands(commands)
     model.model.set_displacements(model.displacements(q))
     g, scale = model.model.gradient()
-    outside = []
-    if model.training is not None:
-        low, high = model.training[0].min(axis=0), model.training[0].max(axis=0)
-        slack = 1e-9 * np.maximum(high - low, np.abs(high))
-        for i, (c, lo, hi) in enumerate(zip(commands, low, high)):
-            if c < lo - slack[i] or c > hi + slack[i]:
-                outside.append((i, float(c), float(lo), float(hi)))
+    outside = outside_training(model, commands)
     return Indicator(float(np.linalg.norm(g)) / scale, outside)
 
 
