@@ -14,7 +14,7 @@ a piecewise term's part of each from its sampled pieces alone: sum_e w_e V_e^T f
 the full term's own class and kernels on the sampled pieces only: their nodes (numbered afresh) and each piece's
 energy times w_e (Term.restricted). A term sampled with no pieces (no force in any snapshot) is left out. With
 V = I and every piece at w = 1 it is the full model. A scene whose terms are all piecewise, exact or quadratic never
-touches the full field in a solve: the full model is put at V q only for an output (full_state).
+touches the full field in a solve: the full model is put at V q only to check a state (full_state).
 """
 
 from __future__ import annotations
@@ -179,7 +179,7 @@ class ReducedModel:
             self.model.set_displacements(self.displacements(q))
 
     def full_state(self, q: np.ndarray) -> np.ndarray:
-        """Put the full model (every term) at V q, for an output; return V q (n, d)."""
+        """Put the full model (every term) at V q, for a check of the state (solve.py indicator); return V q (n, d)."""
         u = self.displacements(q)
         self.model.set_displacements(u)
         return u

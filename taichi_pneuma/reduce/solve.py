@@ -197,7 +197,7 @@ def indicator(model: ReducedModel, commands: np.ndarray, q: np.ndarray) -> Indic
     """The error indicator of the reduced state q at commands (the module docstring); the full model is left at V q
     and those commands."""
     model.built.set_commands(commands)
-    model.model.set_displacements(model.displacements(q))
+    model.full_state(q)
     g, scale = model.model.gradient()
     outside = outside_training(model, commands)
     return Indicator(float(np.linalg.norm(g)) / scale, outside)
