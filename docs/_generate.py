@@ -12,7 +12,7 @@ Committed (readable in the repository, where the pages that include them are rea
 writes them again, tests/test_docs_generated.py checks they are current): the _generated/ pieces above, and
 
 - guide/scene_keys_2d.md and guide/scene_keys_3d.md: every key of the scene file, from
-  scene/scenefile.key_reference() (the format's one declaration, scene/sceneformat.py), the 3D body and chamber
+  scene/scenefile.key_reference() (the format's one declaration, scene/scene_keys.py), the 3D body and chamber
   shapes' keys in the second, every other key (those of every scene and of the 2D shapes) in the first.
 
 plain_docstring() reads the docstrings, written as plain text for help() and a terminal, as reStructuredText
@@ -311,7 +311,7 @@ def key_dimensions(keys: list) -> list[int]:
     """Each key's table: 3 for a key of a 3D body or chamber shape (a variant of body.shape or chambers[].shape
     other than the declaration's PLANAR_BODIES and PLANAR_CHAMBERS) or of a table inside one, 2 for the others
     (the 2D shapes' keys and those of every scene)."""
-    from taichi_pneuma.scene.sceneformat import PLANAR_BODIES, PLANAR_CHAMBERS
+    from taichi_pneuma.scene.shape_keys import PLANAR_BODIES, PLANAR_CHAMBERS
 
     planar = {"body.shape": PLANAR_BODIES, "chambers[].shape": PLANAR_CHAMBERS}
     enclosing: list[tuple[str, int]] = []  # the shape variant's keys this key lies inside, with their dimension
@@ -363,7 +363,7 @@ def scene_keys_page(dim: int) -> str:
         f"{other}."
     )
     return (
-        f"<!-- written by `{REGENERATE}` from the scene file's declaration (scene/sceneformat.py): do not edit -->\n\n"
+        f"<!-- written by `{REGENERATE}` from the scene file's declaration (scene/scene_keys.py): do not edit -->\n\n"
         f"{which} A key with a unit takes the scene's units (`units = ...`; the unit column gives the "
         f"SI one). Its default is in SI, converted into the scene's units; a numerical default (a penalty "
         f"stiffness, a barrier distance, a mesh size: 'unitless scenes only') is for unitless scenes, and a "

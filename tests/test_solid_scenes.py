@@ -15,11 +15,11 @@ from taichi_pneuma.apps.inflate import main as inflate
 from taichi_pneuma.backend import has_ggui
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem import sizing
+from taichi_pneuma.io.tomltext import parse_toml
 from taichi_pneuma.limits import Budget
 from taichi_pneuma.render.frames3d import FrameRenderer3D, Track3D
-from taichi_pneuma.scene.scenefile import read_scene
-from taichi_pneuma.scene.sceneformat import scene_data
-from taichi_pneuma.scene.schema import parse_toml, set_key
+from taichi_pneuma.scene.dotted_edits import set_key
+from taichi_pneuma.scene.scenefile import read_scene, scene_data
 
 pytest.importorskip("gmsh", reason="gmsh is not installed (pip install 'taichi-pneuma[3d]')")
 

@@ -441,7 +441,7 @@ def render_report(export, seconds_per_step: float) -> str:
 
 def apply_set(scene, assignments: list[str]):
     """The scene with every --set KEY=VALUE applied (validated once, like a scene file)."""
-    from ..scene.schema import parse_assignment
+    from ..scene.dotted_edits import parse_assignment
 
     if not assignments:
         return scene

@@ -11,7 +11,7 @@ force) pressure x length, an energy per unit depth pressure x length^2, a mass p
 that force = mass x acceleration: kg in mm-kPa, tonnes in mm-MPa). Angles are in degrees and times in seconds
 whatever the system.
 
-Defaults are stored in SI and converted into a scene's units: a key declares its dimension (scene/schema.Key's
+Defaults are stored in SI and converted into a scene's units: a key declares its dimension (scene/fileformat.Key's
 unit; a chamber kind's or an effect's field through unit()), and a default of dimension L^a P^b in 2D (or
 3D) is divided by factor() = metre^a pascal^b when read (material presets likewise: a modulus in Pa divided
 by the pressure unit in Pa). A unitless scene takes every number as it is, as SI. Some defaults are numerical

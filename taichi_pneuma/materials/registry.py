@@ -12,7 +12,7 @@ neo_hookean.py). A form is a frozen dataclass, the material itself, whose class 
 
 and whose methods turn keys into the material and back (from_keys, scene_values), check it (its __post_init__)
 and give its law and parameter vector in the scene's units (law_parameters). Decorate the class with
-@register_form to make scene files find it; the scene format (scene/sceneformat.py) reads, writes and
+@register_form to make scene files find it; the scene format (scene/material_keys.py) reads, writes and
 documents the union of every form's keys, all_keys().
 """
 
@@ -73,7 +73,7 @@ class MaterialForm:
     def form_keys(cls, values: dict) -> dict:
         """The keys of this form that a table's values choose (its selector first), each with the value a scene
         file writes for it when it is not given (None: none): editing the selector to another form drops the old
-        form's keys that the new one lacks or that hold that value (scene/schema.py's switched)."""
+        form's keys that the new one lacks or that hold that value (scene/dotted_edits.py's switched)."""
         return dict.fromkeys(([cls.selector] if cls.selector else []) + [key.name for key in cls.keys])
 
     @classmethod

@@ -24,74 +24,23 @@ from ..errors import require, require_finite
 from ..fem.mesh import Mesh
 from ..fem.planar import BeamGeometry, Geometry
 from ..fem.self_intersection import surface_crossing, surface_pieces
-from ..fem.supports import in_box, require_box, require_held
+from ..fem.supports import require_held
 from ..io.keys import dotted
 from ..io.output import check_stem
+from ..io.tomltext import dumps
 from ..io.units import NODAL_STIFFNESS, UNITLESS, Units, defaults, resolved, si_default
 from ..limits import Budget
 from ..materials import Material, MaterialForm, PresetMaterial
 from ..terms import VOLUMETRIC, Clamp, Elasticity, NormalClamp
 from ..terms.base import Term
-from ..terms.chambers import Chamber, ChamberKind
+from ..terms.chambers import Chamber
 from ..terms.effects import Effect
 from ..terms.model import EnergyModel
 from ..terms.nodal_volume import grouping_for, require_volumetric
-from . import sceneformat
-from .schedule import MAX_STRETCH, ChamberSchedule, Schedule, area_ramp
-
-
-@dataclass(frozen=True)
-class Region:
-    """A material for the elements whose centroid lies in box [x0, y0, x1, y1] ([x0, y0, z0, x1, y1, z1] in 3D),
-    or (3D) for the tetrahedra of a named volume group of the mesh (a mesh file's physical group, a PneuNet's
-    "layer"); later regions win."""
-
-    box: tuple[float, float, float, float] | None
-    material: MaterialForm
-    group: str | None = None
-
-    def __post_init__(self):
-        require((self.box is None) != (self.group is None), "give exactly one of 'box' and 'group'")
-        if self.box is not None:
-            require_box("box", self.box)
-        else:
-            require(isinstance(self.group, str) and self.group != "", f"group = {self.group!r} must name a group")
-
-    def contains(self, mesh: Mesh) -> np.ndarray:
-        """Which of the mesh's elements the region takes (a group the mesh lacks is refused, naming its groups)."""
-        if self.box is not None:
-            return in_box(mesh.vertices[mesh.elements].mean(axis=1), self.box, "material region")
-        groups = getattr(mesh, "region_groups", {})
-        require(
-            self.group in groups,
-            f"material region group = {self.group!r}: the mesh has no such volume group "
-            f"(its groups: {', '.join(groups) or 'none'})",
-        )
-        return mesh.regions == groups[self.group]
-
-
-@dataclass(frozen=True)
-class ChamberControl:
-    """How a chamber is driven: its schedule (whose kind carries the kind's parameters, e.g. the area
-    penalty's stiffness) and the (min, max) command bounds inverse control keeps to (None: the kind's
-    default_bounds of the schedule)."""
-
-    schedule: ChamberSchedule
-    bounds: tuple[float, float] | None = None
-
-    def __post_init__(self):
-        if self.bounds is not None:
-            require(len(self.bounds) == 2, f"bounds = {list(self.bounds)!r} must be [min, max]")
-            low, high = (require_finite("bounds", b) for b in self.bounds)
-            require(low < high, f"bounds = {list(self.bounds)!r}: min {low:g} must be < max {high:g}")
-            self.kind.check(f"bounds = {list(self.bounds)!r}:", [low, high])
-
-    @property
-    def kind(self) -> ChamberKind:
-        return self.schedule.kind  # type: ignore[return-value]
-
-    def term(self, config, loop: np.ndarray, name: str, order: int, origin: np.ndarray | None = None) -> Chamber:
-        return self.kind.term(config, loop, name, order, origin)
+from .dotted_edits import edited
+from .region import Region
+from .scene_keys import CLAMP_STIFFNESS, REPLACED, SCENE, scene_arguments
+from .schedule import MAX_STRETCH, ChamberControl, Schedule, area_ramp
 
 
 @dataclass(frozen=True)
@@ -116,7 +65,7 @@ class Scene:
     increments: int
     material: MaterialForm = field(default_factory=Material)
     regions: tuple[Region, ...] = ()
-    clamp_stiffness: float | None = si_default(sceneformat.CLAMP_STIFFNESS, NODAL_STIFFNESS)  # 1/2 K |u|^2 per node
+    clamp_stiffness: float | None = si_default(CLAMP_STIFFNESS, NODAL_STIFFNESS)  # 1/2 K |u|^2 per node
     effects: tuple[Effect, ...] = ()
     name: str = "scene"
     targets: tuple = ()  # targets.Target poses for inverse control (apps.reach), in order
@@ -193,7 +142,7 @@ class Scene:
 
     def to_toml(self) -> str:
         """This scene as a scene file (TOML); scenefile.load_scene reads it back to an equal scene."""
-        return sceneformat.to_toml(self)
+        return dumps(SCENE_FILE.write_table(self))
 
     def with_value(self, key: str, value) -> Scene:
         """A copy with one dotted scene-file key changed (e.g. "chambers[0].center[1]", 0.1, or a short name
@@ -213,7 +162,7 @@ class Scene:
 
     def with_values(self, values: dict) -> Scene:
         """A copy with several dotted keys (or short names) changed at once (validated once, after all are set)."""
-        return sceneformat.with_values(self, {dotted(key): value for key, value in values.items()})
+        return edited(SCENE_FILE, self, {dotted(key): value for key, value in values.items()}, REPLACED)
 
     @property
     def schedule(self) -> Schedule:
@@ -327,6 +276,10 @@ def describe_supports(mesh: Mesh, effects) -> str:
         for nodes, n in mesh.rollers
     ]
     return ", ".join([clamp] + rollers + [effect.name for effect in effects if effect.support])
+
+
+# The scene file's declaration (scene_keys.SCENE), whose values make a Scene
+SCENE_FILE = dataclasses.replace(SCENE, make=lambda values: Scene(**scene_arguments(values)), cls=Scene)
 
 
 @dataclass

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import require, require_finite, shape_of
-from ..terms.chambers import AreaControl, ChamberKind, default_kind
+from ..terms.chambers import AreaControl, Chamber, ChamberKind, default_kind
 
 # A run past this largest principal stretch warns (a scene's schedule.max_stretch replaces it). The presets are
 # fitted to uniaxial data up to 200 % strain (a stretch of 3; docs/materials.md): past that their stresses are
@@ -109,3 +109,27 @@ def area_ramp(growth: float, steps: int, stiffness: float = 1e5) -> ChamberSched
         f"steps = {steps!r} must be an integer >= 2 (the rest state and at least one increment)",
     )
     return ChamberSchedule(AreaControl(stiffness), ((0, 1.0), (steps - 1, float(growth))))
+
+
+@dataclass(frozen=True)
+class ChamberControl:
+    """How a chamber is driven: its schedule (whose kind carries the kind's parameters, e.g. the area
+    penalty's stiffness) and the (min, max) command bounds inverse control keeps to (None: the kind's
+    default_bounds of the schedule)."""
+
+    schedule: ChamberSchedule
+    bounds: tuple[float, float] | None = None
+
+    def __post_init__(self):
+        if self.bounds is not None:
+            require(len(self.bounds) == 2, f"bounds = {list(self.bounds)!r} must be [min, max]")
+            low, high = (require_finite("bounds", b) for b in self.bounds)
+            require(low < high, f"bounds = {list(self.bounds)!r}: min {low:g} must be < max {high:g}")
+            self.kind.check(f"bounds = {list(self.bounds)!r}:", [low, high])
+
+    @property
+    def kind(self) -> ChamberKind:
+        return self.schedule.kind  # type: ignore[return-value]
+
+    def term(self, config, loop: np.ndarray, name: str, order: int, origin: np.ndarray | None = None) -> Chamber:
+        return self.kind.term(config, loop, name, order, origin)

@@ -1,4 +1,4 @@
-"""The scene file's [[obstacles]] tables (terms/obstacles.py Obstacle), declared with schema.py's entries:
+"""The scene file's [[obstacles]] tables (terms/obstacles.py Obstacle), declared with fileformat.py's entries:
 
 [[obstacles]]
 name = "post"
@@ -17,7 +17,7 @@ release = 12
 from ..io.units import FORCE, LENGTH, NODAL_STIFFNESS
 from ..terms.obstacle_shapes import AXES, SHAPES, Box, Capsule, Cylinder, Plane, Sphere
 from ..terms.obstacles import Obstacle
-from .schema import Key, Table, Variant, record
+from .fileformat import Key, Table, Variant, record
 
 POINT = "[x, y] (2D) or [x, y, z]"
 
@@ -89,17 +89,7 @@ OBSTACLE = Table(
         ),
         "release": Key(int, 0, "the step from which an obstacle with a weight is free"),
     },
-    make=lambda v: Obstacle(
-        v["name"],
-        v["shape"],
-        v["dhat"],
-        v["stiffness"],
-        v["keyframes"] or (),
-        v["friction"],
-        v["friction_slip"],
-        v["weight"],
-        v["release"],
-    ),
+    make=lambda v: Obstacle(**{**v, "keyframes": v["keyframes"] or ()}),
     parts=lambda o: {
         "name": o.name,
         "shape": o.shape,
