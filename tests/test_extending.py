@@ -60,7 +60,7 @@ class TipForce(Effect):
 
 @pytest.fixture
 def tip_force_registered():
-    EFFECTS["tip_force"] = TipForce
+    EFFECTS.register(TipForce)
     yield
     del EFFECTS["tip_force"]
 

@@ -270,7 +270,8 @@ def record(cls, doc: str = "", **keys) -> Table:
 
 def dataclass_table(cls) -> Table:
     """A table of every field of the dataclass cls, typed by its annotation (float, int, str, bool, tuple, list;
-    X | None, a units.si_default field's, as X)."""
+    X | None, a units.si_default field's, as X), its doc, allowed values, unit and SI default the field's metadata
+    (io/registry.py key)."""
     hints = typing.get_type_hints(cls)
     keys = {}
     for f in dataclasses.fields(cls):
@@ -290,6 +291,8 @@ def dataclass_table(cls) -> Table:
         keys[f.name] = Key(
             kind,
             default,
+            f.metadata.get("doc", ""),
+            f.metadata.get("allowed", ()),
             unit=f.metadata.get("unit", ""),
             scaled=f.metadata.get("scaled", True),
             si=f.metadata.get("si"),

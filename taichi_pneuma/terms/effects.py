@@ -1,8 +1,9 @@
 """Effects a scene may name, each a small spec that builds its term(s) when (and only when) it is named.
 
-An effect is a frozen dataclass registered in EFFECTS under its name: its fields are the keys of its
-[effects.<name>] table in a scene file, read and written with the types their annotations declare
-(float: any number; int, str, bool; tuple or list: an array), a field's default being the key's.
+An effect is a frozen dataclass registered in EFFECTS under its name (@EFFECTS.register, io/registry.py): its
+fields are the keys of its [effects.<name>] table in a scene file, read and written with the types their
+annotations declare (float: any number; int, str, bool; tuple or list: an array), a field's default being the
+key's, its doc and unit the field's metadata (io/registry.py key).
 Its terms(config, mesh, lumped_area, budget) returns the terms it adds to the energy model, checking what they
 would allocate against the budget (limits.Budget: self-contact's pairs) before allocating it;
 lumped_area[i] is the integral of node i's shape function over the body (mesh.nodal_measures(): a third of
@@ -13,12 +14,14 @@ density x it).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
 from ..errors import require, require_finite, require_positive
 from ..fem.self_intersection import surface_pieces
 from ..fem.supports import PointSet
+from ..io.registry import Registry
 from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, PRESSURE, TIME, si_default, unit
 from ..limits import wall_pairs
 from .contact import SelfContact as SelfContactTerm
@@ -37,7 +40,7 @@ class Effect:
     a ground line the output draws (npz ground_height, the video), or None; support, whether the run's
     first line lists it among the supports; holds(), the rigid motions its terms hold."""
 
-    name = "effect"
+    name: ClassVar[str] = "effect"
     contact = False
     ground_height = None
     support = False
@@ -55,6 +58,10 @@ class Effect:
         return 0
 
 
+EFFECTS: Registry[type[Effect]] = Registry("effect")  # name -> the effect, filled by @EFFECTS.register
+
+
+@EFFECTS.register
 @dataclass(frozen=True)
 class Gravity(Effect):
     """Body weight: density rho (mass per unit area in 2D, per unit volume in 3D) under acceleration g along -y."""
@@ -71,6 +78,7 @@ class Gravity(Effect):
         return [GravityTerm(config, self.density * lumped_area, self.g)]  # type: ignore[arg-type]
 
 
+@EFFECTS.register
 @dataclass(frozen=True)
 class Ground(Effect):
     """Ground contact: a log barrier (threshold dhat, stiffness kappa) keeps the body's outer boundary above the line
@@ -116,6 +124,7 @@ class Ground(Effect):
         return frictional(contact, self.friction, self.friction_slip)
 
 
+@EFFECTS.register
 @dataclass(frozen=True)
 class SelfContact(Effect):
     """Self-contact of chamber walls: point-edge log barriers (threshold dhat, stiffness kappa) on every wall."""
@@ -147,6 +156,7 @@ class SelfContact(Effect):
         return wall_pairs(walls)
 
 
+@EFFECTS.register
 @dataclass(frozen=True)
 class SurfaceContact(Effect):
     """Contact of the body's whole surface with itself, 2D and 3D (terms/surface_contact.py): IPC barriers of
@@ -186,6 +196,7 @@ class SurfaceContact(Effect):
         return [term, SurfaceFriction(term, self.friction, slip_length(self.friction_slip, dhat))]
 
 
+@EFFECTS.register
 @dataclass(frozen=True)
 class Dynamics(Effect):
     """Motion instead of quasistatics: inertia of the lumped masses (density rho), backward Euler with
@@ -211,6 +222,3 @@ class Dynamics(Effect):
             "row-sum lumped mass vanishes at its corners",
         )
         return [Inertia(config, self.density * lumped_area, self.dt)]
-
-
-EFFECTS = {cls.name: cls for cls in (Gravity, Ground, SelfContact, SurfaceContact, Dynamics)}

@@ -249,7 +249,7 @@ class Fiber:
 
     @property
     def layout(self) -> str:
-        return next(name for name, cls in LAYOUTS.items() if type(self.path) is cls)
+        return self.path.name
 
     @property
     def what(self) -> str:

@@ -17,13 +17,13 @@ import numpy as np
 
 from ...errors import require, require_finite
 from ...io.units import MEASURE_STIFFNESS, si_default
-from .kind import ChamberKind, register
+from .kind import KINDS, ChamberKind
 from .wall import Chamber
 
 MAX_AREA_RATIO = 1e3  # far past any rubber (the hard cases reach 8); keeps (A - A*)^2 from overflowing
 
 
-@register
+@KINDS.register
 @dataclass(frozen=True)
 class AreaControl(ChamberKind):
     """Area control with penalty stiffness k > 0; commands are area ratios A* / A_rest in (0, MAX_AREA_RATIO]."""
