@@ -270,7 +270,8 @@ class Spiral(Layout):
     def section(self, arc: np.ndarray) -> np.ndarray:
         """The points (k, 3) of the D section (flat) at arc lengths `arc` from its top, counter-clockwise about
         +axis, relative to center: the quarter arcs, the sides and the bottom sampled finely and interpolated."""
-        r, flat = self.radius, float(self.flat)  # type: ignore[arg-type]
+        assert self.flat is not None, "a D section's depth (only a helix with flat has one)"
+        r, flat = self.radius, float(self.flat)
         up = np.eye(3)[1]
         side = np.cross(np.eye(3)[AXES.index(self.axis)], up)
         phi = np.linspace(0.0, math.pi / 2, 257)
@@ -286,7 +287,8 @@ class Spiral(Layout):
         """The axial advance per turn: pitch, or 2 pi radius / tan(angle)."""
         if self.pitch is not None:
             return self.pitch
-        return self.perimeter / math.tan(math.radians(self.angle))  # type: ignore[arg-type]
+        assert self.angle is not None, "__post_init__ takes exactly one of pitch and angle"
+        return self.perimeter / math.tan(math.radians(self.angle))
 
     @property
     def helix_length(self) -> float:
@@ -296,7 +298,10 @@ class Spiral(Layout):
     @property
     def count(self) -> float:
         """Its turns: turns, or extent / advance (its axial extent over the advance per turn)."""
-        return self.turns if self.turns is not None else self.extent / self.advance  # type: ignore[operator]
+        if self.turns is not None:
+            return self.turns
+        assert self.extent is not None, "__post_init__ takes exactly one of turns and extent"
+        return self.extent / self.advance
 
     def helix_points(self, spacing: float) -> int:
         """The points of each helix: max(2, ceil(helix_length / spacing)) + 1."""

@@ -29,8 +29,11 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 from ..errors import require
+
+T = TypeVar("T")
 
 LENGTH, AREA, PRESSURE, FORCE, ANGLE, TIME = "length", "area", "pressure", "force", "angle", "time"
 VOLUME = "volume"  # a 3D chamber's measure
@@ -75,6 +78,14 @@ def si_default(si, dimension: str, scaled: bool = True):
     scene's units (default_in) when the Scene resolves it (resolved); scaled=False: a numerical default for
     unitless scenes, which a scene with units must give."""
     return field(default=None, metadata={**unit(dimension, scaled), "si": si})
+
+
+def given(value: T | None, name: str) -> T:
+    """The value of a si_default field (None until the Scene sets it: resolved) once it is set: a term is built from
+    a resolved scene only, so None here is a bug in the program, not an input to refuse."""
+    if value is None:
+        raise ValueError(f"{name} is None: the Scene sets it (units.resolved) before any term is built")
+    return value
 
 
 def default_in(si, dimension: str, scaled: bool, units: Units, dim: int, key: str):

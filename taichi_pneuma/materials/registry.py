@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import PneumaInputError, require
 from ..io.units import PRESSURE
+from .law import Law
 
 # The keys that name a material's form, by priority (a table naming a preset and a law is read as the preset,
 # which refuses law), and what each means
@@ -64,6 +65,7 @@ ALTERNATIVES = (
 class MaterialForm:
     """The base of the forms: the class attributes and methods of the module docstring."""
 
+    __dataclass_fields__: ClassVar[dict]  # every form is a dataclass
     selector: ClassVar[str | None] = None
     names: ClassVar[tuple[str, ...]] = ()
     keys: ClassVar[tuple[MaterialKey, ...]] = ()
@@ -86,7 +88,7 @@ class MaterialForm:
         extra = [name for name in given if name not in own]
         if extra:
             raise PneumaInputError(cls.refusal(extra, values))
-        fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]  # every form is a dataclass
+        fields = {f.name: f for f in dataclasses.fields(cls)}
         for key in cls.keys:
             missing = fields[key.field].default is dataclasses.MISSING and values.get(key.name) is None
             require(not missing, f"{cls.selector} = {values.get(cls.selector)!r} needs {key.name}")
@@ -108,7 +110,7 @@ class MaterialForm:
         selector = {self.selector: getattr(self, self.selector, self.names[0])} if self.selector else {}
         return {**selector, **{key.name: getattr(self, key.field) for key in self.keys}}
 
-    def law_parameters(self, units) -> tuple[type, np.ndarray]:
+    def law_parameters(self, units) -> tuple[type[Law], np.ndarray]:
         """The law and its parameter vector in the scene's units (io/units.py; a unitless scene's name is None)."""
         raise NotImplementedError
 

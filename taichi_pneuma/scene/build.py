@@ -28,9 +28,9 @@ from ..fem.supports import require_held
 from ..io.keys import dotted
 from ..io.output import check_stem
 from ..io.tomltext import dumps
-from ..io.units import NODAL_STIFFNESS, UNITLESS, Units, defaults, resolved, si_default
+from ..io.units import NODAL_STIFFNESS, UNITLESS, Units, defaults, given, resolved, si_default
 from ..limits import Budget
-from ..materials import Material, MaterialForm, PresetMaterial
+from ..materials import Law, Material, MaterialForm, PresetMaterial
 from ..terms import VOLUMETRIC, Clamp, Elasticity, NormalClamp
 from ..terms.base import Term
 from ..terms.chambers import Chamber
@@ -177,7 +177,7 @@ class Scene:
     def chamber_names(self) -> list[str]:
         return [name for name, _ in self.geometry.chambers]
 
-    def law_parameters(self) -> tuple[type, list[np.ndarray]]:
+    def law_parameters(self) -> tuple[type[Law], list[np.ndarray]]:
         """The body's law and the parameter vector of the material and of each region, in the scene's units
         (PneumaInputError naming the region whose law differs: a body has one law)."""
         law, base = self.material.law_parameters(self.units)
@@ -186,14 +186,14 @@ class Scene:
             other, row = region.material.law_parameters(self.units)
             require(
                 other is law,
-                f"material.regions[{i}]: its law {other.name!r} is not the body's {law.name!r}: a "  # type: ignore[attr-defined]
+                f"material.regions[{i}]: its law {other.name!r} is not the body's {law.name!r}: a "
                 f"body has one law (E and nu: stable_neo_hookean; law = neo_hookean, mooney_rivlin, "
                 f"yeoh and presets: isochoric_polynomial)",
             )
             rows.append(row)
         return law, rows
 
-    def element_material(self, mesh: Mesh) -> tuple[type, np.ndarray]:
+    def element_material(self, mesh: Mesh) -> tuple[type[Law], np.ndarray]:
         """The material law of the body and its parameter vector for every element, (m, p): the base material's,
         then each region's for the elements it contains (Region.contains), in order; a region that contains no
         element is refused, naming it."""
@@ -224,7 +224,7 @@ class Scene:
         # Round-off scales, from the stiffest modulus (neo-Hookean: mu + lam, which grows without bound as
         # nu -> 1/2): forces below 1e-6 modulus (body measure)^((d - 1) / d) (a stress times the measure of a
         # cross-section: sqrt(area) in 2D, volume^(2/3) in 3D), energies below 1e-12 modulus (body measure).
-        modulus = float(np.max(law.modulus(parameters)))  # type: ignore[attr-defined]
+        modulus = float(np.max(law.modulus(parameters)))
         model = EnergyModel(
             mesh.vertices,
             force_floor=1e-6 * modulus * mesh.measure ** ((mesh.dim - 1) / mesh.dim),
@@ -238,10 +238,11 @@ class Scene:
             model.add(control.term(config, loop, name, mesh.order, origin))
             for control, loop, origin, name in zip(self.controls, mesh.chambers, mesh.wall_origins, self.chamber_names)
         ]
+        stiffness = given(self.clamp_stiffness, "clamp stiffness")
         if len(mesh.pinned):
-            model.add(Clamp(config, mesh.pinned, self.clamp_stiffness))  # type: ignore[arg-type]
+            model.add(Clamp(config, mesh.pinned, stiffness))
         for nodes, normal in mesh.rollers:
-            model.add(NormalClamp(config, nodes, normal, self.clamp_stiffness))  # type: ignore[arg-type]
+            model.add(NormalClamp(config, nodes, normal, stiffness))
         lumped_area = mesh.nodal_measures()
         effects = {
             effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area, budget)]
@@ -253,7 +254,7 @@ class Scene:
         obstacles = [[model.add(t) for t in spec.terms(config, mesh, lumped_area, budget)] for spec in self.obstacles]
         contacts = [terms[0] for terms in obstacles]
         parts = [t for terms in obstacles for t in terms[1:] if t.reports_contact]  # not a held object's weight
-        return BuiltScene(self, mesh, model, elastic, chambers, effects, contacts, parts)  # type: ignore[arg-type]
+        return BuiltScene(self, mesh, model, elastic, chambers, effects, contacts, parts)
 
 
 def support_rows(mesh: Mesh, effects) -> list:

@@ -30,6 +30,7 @@ the table's dotted path (``chambers[1]: ...``).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import types
 import typing
 from collections.abc import Callable
@@ -248,7 +249,8 @@ class Named:
     def write(self, value, name: str, data: dict) -> None:
         names = {cls: option for option, cls in self.registry.items()}
         if value:
-            data[name] = {names[type(item)]: dataclass_table(type(item)).write_table(item) for item in value}
+            options = [names[type(item)] for item in value]
+            data[name] = {o: dataclass_table(self.registry[o]).write_table(item) for o, item in zip(options, value)}
 
     def rows(self, path: str, name: str, when: str) -> list[KeyInfo]:
         key = join(path, name)
@@ -268,6 +270,7 @@ def record(cls, doc: str = "", **keys) -> Table:
     )
 
 
+@functools.cache  # a function of the class alone (a memo: nothing to invalidate when parts register)
 def dataclass_table(cls) -> Table:
     """A table of every field of the dataclass cls, typed by its annotation (float, int, str, bool, tuple, list;
     X | None, a units.si_default field's, as X), its doc, allowed values, unit and SI default the field's metadata

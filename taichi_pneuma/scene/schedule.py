@@ -25,19 +25,20 @@ from ..terms.chambers import AreaControl, Chamber, ChamberKind, default_kind
 MAX_STRETCH = 5.0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class ChamberSchedule:
     """Keyframes ((step, value), ...) of one chamber driven by `kind`, whose check() the values pass.
 
     kind: a ChamberKind with its parameters (e.g. AreaControl(stiffness=1e5)), or the name of a
-    registered kind for its default parameters ("area", "pressure")."""
+    registered kind for its default parameters ("area", "pressure"), which the constructor turns into that kind:
+    the field is a ChamberKind."""
 
-    kind: ChamberKind | str
+    kind: ChamberKind
     keyframes: tuple[tuple[float, float], ...]
 
-    def __post_init__(self):
-        if not isinstance(self.kind, ChamberKind):
-            object.__setattr__(self, "kind", default_kind(self.kind))
+    def __init__(self, kind: ChamberKind | str, keyframes: tuple[tuple[float, float], ...]):
+        object.__setattr__(self, "kind", kind if isinstance(kind, ChamberKind) else default_kind(kind))
+        object.__setattr__(self, "keyframes", keyframes)
         require(
             len(self.keyframes) >= 1 and all(shape_of(k) == (2,) for k in self.keyframes),
             f"keyframes = {self.keyframes!r} must be a non-empty list of [step, value] pairs",
@@ -57,8 +58,7 @@ class ChamberSchedule:
 
     def command(self, step: float) -> float:
         steps = [0.0] + [float(s) for s, _ in self.keyframes]
-        # kind is a ChamberKind from __post_init__ on
-        values = [self.kind.rest] + [float(v) for _, v in self.keyframes]  # type: ignore[union-attr]
+        values = [self.kind.rest] + [float(v) for _, v in self.keyframes]
         if steps[1] == 0.0:
             steps, values = steps[1:], values[1:]
         return float(np.interp(step, steps, values))
@@ -96,7 +96,7 @@ class Schedule:
 
     @property
     def rest_commands(self) -> np.ndarray:
-        rests = [float(c.kind.rest) for c in self.chambers]  # type: ignore[union-attr]
+        rests = [float(c.kind.rest) for c in self.chambers]
         return np.array(rests + [0.0] * (3 * len(self.moving)))
 
 
@@ -129,7 +129,7 @@ class ChamberControl:
 
     @property
     def kind(self) -> ChamberKind:
-        return self.schedule.kind  # type: ignore[return-value]
+        return self.schedule.kind
 
     def term(self, config, loop: np.ndarray, name: str, order: int, origin: np.ndarray | None = None) -> Chamber:
         return self.kind.term(config, loop, name, order, origin)

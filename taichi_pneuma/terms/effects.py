@@ -22,7 +22,7 @@ from ..errors import require, require_finite, require_positive
 from ..fem.self_intersection import surface_pieces
 from ..fem.supports import PointSet
 from ..io.registry import Registry
-from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, PRESSURE, TIME, si_default, unit
+from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, PRESSURE, TIME, given, si_default, unit
 from ..limits import wall_pairs
 from .contact import SelfContact as SelfContactTerm
 from .friction import frictional, slip_length
@@ -42,8 +42,11 @@ class Effect:
 
     name: ClassVar[str] = "effect"
     contact = False
-    ground_height = None
     support = False
+
+    @property
+    def ground_height(self) -> float | None:
+        return None
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
         raise NotImplementedError
@@ -75,7 +78,7 @@ class Gravity(Effect):
         require_positive("g", self.g, allow_none=True)
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
-        return [GravityTerm(config, self.density * lumped_area, self.g)]  # type: ignore[arg-type]
+        return [GravityTerm(config, self.density * lumped_area, given(self.g, "gravity g"))]
 
 
 @EFFECTS.register
@@ -95,7 +98,7 @@ class Ground(Effect):
     support = True
 
     @property
-    def ground_height(self) -> float:  # type: ignore[override]
+    def ground_height(self) -> float:
         return self.height
 
     def __post_init__(self):
@@ -120,7 +123,8 @@ class Ground(Effect):
             lowest > self.height, f"ground height = {self.height!r} must lie below the body (lowest point {lowest:.6g})"
         )
         ground = Plane((0.0, self.height, 0.0), (0.0, 1.0, 0.0))  # the body on its +y side
-        contact = ObstacleContact(config, mesh.boundary, ground, "ground", self.dhat, self.stiffness)  # type: ignore[arg-type]
+        dhat, stiffness = given(self.dhat, "ground dhat"), given(self.stiffness, "ground stiffness")
+        contact = ObstacleContact(config, mesh.boundary, ground, "ground", dhat, stiffness)
         return frictional(contact, self.friction, self.friction_slip)
 
 
@@ -150,7 +154,7 @@ class SelfContact(Effect):
         )
         walls = list(mesh.chambers)
         budget.check_pairs(self.pairs([len(wall) for wall in walls]), "self-contact")  # before allocating them
-        return [SelfContactTerm(config, walls, self.dhat, self.stiffness)]  # type: ignore[arg-type]
+        return [SelfContactTerm(config, walls, given(self.dhat, "dhat"), given(self.stiffness, "stiffness"))]
 
     def pairs(self, walls: list[int]) -> int:
         return wall_pairs(walls)
@@ -184,7 +188,7 @@ class SurfaceContact(Effect):
         from .surface_contact import SurfaceFriction
 
         dhat = self.dhat or self.DHAT_FRACTION * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
-        term = SurfaceContactTerm(config, surface_pieces(mesh), dhat, self.stiffness)  # type: ignore[arg-type]
+        term = SurfaceContactTerm(config, surface_pieces(mesh), dhat, given(self.stiffness, "stiffness"))
         nearest = term.min_distance()
         require(
             nearest == np.inf,

@@ -33,7 +33,8 @@ def vector(name: str, value, length: int | None = None) -> tuple[float, ...]:
 
 def axis_vector(axis: str) -> tuple[float, float, float]:
     require(axis in AXES, f"axis = {axis!r} is not one of {', '.join(AXES)}")
-    return tuple(float(k == AXES.index(axis)) for k in range(3))  # type: ignore[return-value]
+    k = AXES.index(axis)
+    return float(k == 0), float(k == 1), float(k == 2)
 
 
 class Shape:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import require, require_finite
-from ...io.units import MEASURE_STIFFNESS, si_default
+from ...io.units import MEASURE_STIFFNESS, given, si_default
 from .kind import KINDS, ChamberKind
 from .wall import Chamber
 
@@ -53,7 +53,7 @@ class AreaChamber(Chamber):
 
     def __init__(self, kind: AreaControl, config, loop: np.ndarray, name: str = "main", order: int = 1, origin=None):
         super().__init__(kind, config, loop, name, order, origin)
-        self.k = float(kind.stiffness)  # type: ignore[arg-type]
+        self.k = float(given(kind.stiffness, "area stiffness"))
         self.target_area = self.rest_area
 
     def set_command(self, ratio: float) -> None:
