@@ -73,8 +73,8 @@ def point_set(neither: str, **more) -> dict:
 def make_point_set(v: dict, default_side: str | None) -> PointSet | None:
     """The node set of the keys side and box; neither: the default side's, or None without one."""
     if v["side"] is None and v["box"] is None:
-        return None if default_side is None else PointSet(default_side)
-    return PointSet(v["side"], v["box"])
+        return None if default_side is None else PointSet(side=default_side)
+    return PointSet(side=v["side"], box=v["box"])
 
 
 CHAMBER = Table(
