@@ -30,7 +30,7 @@ import numpy as np
 from .. import limits
 from ..errors import PneumaInputError, quoted, require, require_distinct
 from ..limits import Budget
-from .body import Body
+from .body import Body, SizeEstimate
 from .elements import FAMILIES
 from .mesh import Mesh
 from .supports import PointSet
@@ -225,12 +225,16 @@ class MeshGeometry(Body):
         require(len(tets) > 0, f"mesh file {path!r} has no tetrahedra (4- or 10-node)")
         return source, tets, blocks
 
-    def size_estimate(self) -> tuple[int, int]:
-        """(tetrahedra, nodes) of the mesh mesh() builds (nodes: at most, before unused ones are dropped; a 4-node
-        mesh made quadratic gains a node per edge, about 7 per tetrahedron)."""
+    def size_estimate(self) -> SizeEstimate:
+        """The tetrahedra and nodes of the mesh mesh() builds (nodes: at most, before unused ones are dropped; a
+        4-node mesh made quadratic gains a node per edge, about 7 per tetrahedron)."""
         source, tets, _ = self.tetrahedra()
         nodes = len(np.unique(tets))
-        return len(tets), nodes + (7 * len(tets) if self.order == 2 and tets.shape[1] == 4 else 0)
+        return SizeEstimate(len(tets), nodes + (7 * len(tets) if self.order == 2 and tets.shape[1] == 4 else 0))
+
+    def mesh_values(self) -> dict:
+        """order: the file gives the rest."""
+        return {"order": self.order}
 
     def mesh(self, budget: Budget = Budget()) -> Mesh:
         """Read the file and build the Mesh; one past the budget (its tetrahedra, each worth its family's weight in
