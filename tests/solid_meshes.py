@@ -37,16 +37,19 @@ PLANES = tuple(Roller(tuple(n), (0.0, 0.0, 0.0)) for n in np.eye(3))
 
 @dataclass(frozen=True)
 class MeshOf(Body):
-    """A scene geometry whose mesh is ready: its chambers are the mesh's, named in order; its supports are the
-    mesh's node sets already."""
+    """A scene geometry whose mesh is ready (triangles or tetrahedra): its chambers are the mesh's, named in order;
+    its supports are the mesh's node sets already."""
 
     ready: Mesh
     names: tuple = ("main",)
 
-    dim = 3
     clamp = None
     tip = PointSet("right")
     rollers = ()
+
+    @property
+    def dim(self) -> int:  # a test double of either dimension
+        return self.ready.vertices.shape[1]
 
     @property
     def order(self) -> int:
