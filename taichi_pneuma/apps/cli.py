@@ -235,7 +235,7 @@ def rendering_flags(args: argparse.Namespace, dim: int = 2) -> tuple[int, int]:
     from ..io.output import prepare_directory
     from ..render.video import check_video, frame_size
 
-    check_video(args.video or "default.mp4", args.fps)  # type: ignore[arg-type]
+    check_video(args.video or "default.mp4", args.fps)
     width, height = frame_size(args.size, "--size")
     limits.check_frame(width, height, args.max_frame_pixels)
     if dim == 3 and not args.no_video:
@@ -428,7 +428,7 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
                 stop=interrupted.is_set,
             )
         except RampInterrupted as exc:
-            exc.signum = interrupted.signum  # type: ignore[attr-defined]  # read by signals.name_of()
+            exc.signum = interrupted.signum  # read by signals.name_of()
             raise
 
 

@@ -43,10 +43,10 @@ gmsh initialised already, removes only its own model and restores the options it
 Meshes are cached on disk (io/cache.py: the user's cache folder, PNEUMA_CACHE_DIR moves it or turns it off):
 the arrays of mesh_solid, and the rubber's volume and the walls' area that estimate_tets needs, each keyed by
 everything that decides them: the solid's shapes and their parameters, the sizes, the surface meshers, gmsh's
-version and this mesher's source (the files of gmsh_cache.MESHER_SOURCES). A hit runs no gmsh at all and returns the very
-arrays gmsh made; the limits are checked on it as on a fresh mesh. A cached file is checked before use (a regular
-file; its key's inputs, as text, those of this call; its content hash that of its arrays: io/cache.py; then shapes,
-dtypes, indices in range, positive tetrahedra) and a bad one is meshed afresh and replaced.
+version and this mesher's source (the files of gmsh_cache.MESHER_SOURCES). A hit runs no gmsh at all and returns
+the very arrays gmsh made; the limits are checked on it as on a fresh mesh. A cached file is checked before use (a
+regular file; its key's inputs, as text, those of this call; its content hash that of its arrays: io/cache.py; then
+shapes, dtypes, indices in range, positive tetrahedra) and a bad one is meshed afresh and replaced.
 """
 
 from __future__ import annotations

@@ -272,8 +272,11 @@ def write_mesh(path, mesh: Mesh, names: tuple[str, ...]) -> Path:
 
     path = Path(path)
     require(path.suffix in (".msh", ".inp"), f"{path}: write_mesh writes .msh (gmsh 2.2) or .inp (Abaqus) files")
-    walls = mesh.family.facet_family.meshio_cell  # type: ignore[union-attr]
-    cells = [(walls, wall) for wall in mesh.chambers] + [(mesh.family.meshio_cell, mesh.elements)]  # type: ignore[union-attr]
+    family = mesh.family
+    facets = None if family is None else family.facet_family
+    if family is None or facets is None:
+        raise PneumaInputError(f"write_mesh writes a 3D body's mesh, not one of {mesh.elements.shape[1]}-node elements")
+    cells = [(facets.meshio_cell, wall) for wall in mesh.chambers] + [(family.meshio_cell, mesh.elements)]
     if path.suffix == ".inp":
         sets = {
             name: [np.arange(len(data)) if i == j else np.zeros(0, dtype=np.int64) for j, (_, data) in enumerate(cells)]
