@@ -348,7 +348,7 @@ def _mesh(
                 model.addPhysicalGroup(3, tags, name=name)
         for name, walls in pieces.walls.items():
             model.addPhysicalGroup(2, walls, name=name)
-        _set_sizes(gmsh, sizes, [s for walls in pieces.walls.values() for s in walls])
+        set_sizes(gmsh, sizes, [s for walls in pieces.walls.values() for s in walls])
         for attempt, (algorithm, curvature) in enumerate(surface_meshers, start=1):
             gmsh.option.setNumber("Mesh.Algorithm", algorithm)
             gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", curvature)
@@ -361,7 +361,10 @@ def _mesh(
                 continue
             if _complete(gmsh, pieces):
                 break
-        return _read(gmsh, solid, pieces, max_tets), np.array([pieces.volume, pieces.wall_area])
+        names = tuple(name for name, _ in solid.regions)
+        return read_tetrahedra(gmsh, pieces.rubber, pieces.walls, names, max_tets), np.array(
+            [pieces.volume, pieces.wall_area]
+        )
 
 
 def _complete(gmsh, pieces: _Pieces) -> bool:
@@ -371,7 +374,7 @@ def _complete(gmsh, pieces: _Pieces) -> bool:
     )
 
 
-def _set_sizes(gmsh, sizes: MeshSizes, walls: list[int]) -> None:
+def set_sizes(gmsh, sizes: MeshSizes, walls: list[int]) -> None:
     """Edge length `size` everywhere, `near` within `near` of the walls, growing linearly to `size` over the
     grading distance beyond (gmsh Distance and Threshold fields; the walls sampled at about near / 2)."""
     option = gmsh.option.setNumber
@@ -402,17 +405,19 @@ def _elements(gmsh, dim: int, entities, kind: int, corners: int) -> np.ndarray:
     return np.concatenate(blocks).astype(np.int64).reshape(-1, corners) if blocks else np.zeros((0, corners), np.int64)
 
 
-def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
-    """The mesh's arrays: nodes renumbered 0..n-1 (those of tetrahedra only), tetrahedra oriented, faces
+def read_tetrahedra(
+    gmsh, rubber: dict[int, int], walls: dict[str, list[int]], region_names: tuple[str, ...], max_tets: int
+) -> SolidMesh:
+    """The mesh's arrays: rubber, volume tag -> region (0 the base material, k the k-th of region_names); walls,
+    chamber name -> its surface tags. Nodes renumbered 0..n-1 (those of tetrahedra only), tetrahedra oriented, faces
     matched to the tetrahedra's boundary faces for their orientation."""
     blocks = {
-        k: _elements(gmsh, 3, [v for v, r in pieces.rubber.items() if r == k], 4, 4)
-        for k in range(len(solid.regions) + 1)
+        k: _elements(gmsh, 3, [v for v, r in rubber.items() if r == k], 4, 4) for k in range(len(region_names) + 1)
     }
     tags = np.concatenate(list(blocks.values()))
     regions = np.concatenate([np.full(len(b), k) for k, b in blocks.items()])
     require(
-        all(len(b) for k, b in blocks.items() if any(r == k for r in pieces.rubber.values())),
+        all(len(b) for k, b in blocks.items() if any(r == k for r in rubber.values())),
         "gmsh left a part of the body without tetrahedra",
     )
     _check_count(len(tags), max_tets)
@@ -429,8 +434,8 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
     local = np.full(len(position), -1, dtype=np.int64)
     local[used] = np.arange(len(used))
     chambers, on_wall = {}, set()
-    for name, walls in pieces.walls.items():
-        triangles = local[_elements(gmsh, 2, walls, 2, 3)]
+    for name, surfaces in walls.items():
+        triangles = local[_elements(gmsh, 2, surfaces, 2, 3)]
         require(len(triangles) > 0, f"gmsh left the wall of chamber {name!r} without triangles")
         wall_keys = face_keys(triangles, len(vertices))
         rows = [index.get(int(k), -1) for k in wall_keys]
@@ -438,9 +443,8 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
         chambers[name] = faces[rows][:, ::-1].copy()  # outward from the rubber = into the cavity: reversed
         on_wall.update(rows)
     boundary = faces[[i for i in outer if i not in on_wall]]
-    names = tuple(name for name, _ in solid.regions)
     return SolidMesh(
-        vertices, tets, chambers, boundary, regions.astype(np.int64), names, *edge_targets(gmsh, local, vertices)
+        vertices, tets, chambers, boundary, regions.astype(np.int64), region_names, *edge_targets(gmsh, local, vertices)
     )
 
 
