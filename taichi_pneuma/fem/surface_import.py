@@ -22,8 +22,10 @@ it crosses the shell an odd number of times.
 Meshing: gmsh classifies the surface into patches at edges sharper than CLASSIFY_DEGREES, makes a geometry of them
 (each patch reparametrised), remeshes it at the scene's sizes (gmsh_mesher.MeshSizes, graded near the chamber walls
 as a body from shapes is) and fills the rubber with tetrahedra (Delaunay). A surface that crosses itself fails there,
-and is refused with gmsh's words. Quadratic tetrahedra have straight sides (an STL has no exact surface to curve
-them onto).
+and is refused with gmsh's words. The remeshed surface's triangles are chords of the file's facets: a curve is
+resolved by the file and by the mesh size near it, whichever is coarser. Quadratic tetrahedra put their boundary
+edges' midside nodes on the file's surface (gmsh's closest point on its patches, curving.edge_targets), not on the
+remeshed triangles' chords.
 """
 
 from __future__ import annotations
@@ -256,6 +258,7 @@ class SurfaceGeometry(Body):
             clamp=self.clamp,
             tip=self.tip,
             rollers=self.rollers,
+            curved=(meshed.curved_edges, meshed.curved_points),
         )
 
 
