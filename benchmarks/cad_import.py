@@ -54,7 +54,6 @@ def step_geometry(scene):
 
 def stl_scene(scene):
     from taichi_pneuma.fem.surface_import import Cavity, SurfaceBody, SurfaceGeometry
-    from taichi_pneuma.scene.build import Region
     from taichi_pneuma.scene.shipped import find
 
     g = scene.geometry
