@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 TIMINGS = ("seconds", "_s", "per_second", "sha256", "fps")
 
@@ -66,7 +67,7 @@ def main() -> int:
     p.add_argument("--rtol", type=float, default=1e-5)
     p.add_argument("--atol", type=float, default=1e-8, help="a fraction of the scene's largest figure")
     args = p.parse_args()
-    runs = [{r["scene"]: r for r in json.load(open(path))["runs"]} for path in (args.old, args.new)]
+    runs = [{r["scene"]: r for r in json.loads(Path(path).read_text())["runs"]} for path in (args.old, args.new)]
     differing = 0
     for scene in sorted(set(runs[0]) | set(runs[1])):
         if scene not in runs[0] or scene not in runs[1]:

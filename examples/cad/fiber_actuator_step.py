@@ -35,7 +35,8 @@ def actuator() -> Compound:
 
 
 if __name__ == "__main__":
-    out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[2] / "taichi_pneuma/scenes/fiber_actuator.step"
+    shipped = Path(__file__).parents[2] / "taichi_pneuma/scenes/fiber_actuator.step"
+    out = Path(sys.argv[1]) if len(sys.argv) > 1 else shipped
     part = actuator()
     export_step(part, str(out))
     print(f"wrote {out}: body {part.children[0].volume:.1f} mm^3, chamber {part.children[1].volume:.1f} mm^3")
