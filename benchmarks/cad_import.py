@@ -4,9 +4,9 @@ Cases, each the parametric scene and the same scene with its body and chambers r
 geometry replaced, every other key as shipped):
 
 - fiber_bending_3d against its STEP (taichi_pneuma/scenes/fiber_actuator.step, drawn by build123d:
-  examples/cad/fiber_actuator_step.py): the tip rotation at 120 kPa;
+  examples/cad_fiber_actuator_step.py): the tip rotation at 120 kPa;
 - pneunet_3d against its STL (taichi_pneuma/scenes/pneunet.stl, the generator's solid triangulated at 0.08:
-  examples/cad/pneunet_stl.py), its bottom layer a box region (an STL has no regions), meshed at 0.08 near the
+  examples/cad_pneunet_stl.py), its bottom layer a box region (an STL has no regions), meshed at 0.08 near the
   chambers (the STL's facets; the parametric scene's 0.12 chords a 0.08 corner radius once), ramped to its peak (900,
   10 increments): the tip's y there.
 

@@ -18,7 +18,7 @@ from taichi_pneuma.scene.shipped import find
 gmsh = pytest.importorskip("gmsh", reason="gmsh is not installed (pip install 'taichi-pneuma[3d]')")
 
 MM = 1e-3
-# examples/cad/fiber_actuator_step.py's actuator: a half-round bar of radius 8 on a 2 mm base, 100 mm long; its
+# examples/cad_fiber_actuator_step.py's actuator: a half-round bar of radius 8 on a 2 mm base, 100 mm long; its
 # half-round chamber of radius 6, 94 mm long
 BODY_VOLUME = np.pi * 8.0**2 / 2 * 100.0 + 2.0 * 16.0 * 100.0
 CHAMBER_VOLUME = np.pi * 6.0**2 / 2 * 94.0

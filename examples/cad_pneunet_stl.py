@@ -6,7 +6,7 @@ The surface is gmsh's triangulation of the generator's solid (fem/pneunet.py) at
 corners (radius 0.08) become facets, as in any STL export. The bottom layer, a region of the parametric body, is not
 a surface: the scene gives it by a box.
 
-    python examples/cad/pneunet_stl.py [OUT.stl]
+    python examples/cad_pneunet_stl.py [OUT.stl]
 """
 
 import sys
@@ -22,7 +22,7 @@ from taichi_pneuma.fem.solid_geometry import SolidGeometry
 EDGE = 0.08
 
 if __name__ == "__main__":
-    out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[2] / "taichi_pneuma/scenes/pneunet.stl"
+    out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parents[1] / "taichi_pneuma/scenes/pneunet.stl"
     body = PneuNet()
     chambers = tuple((f"c{k}", MeshSurface(f"c{k}")) for k in range(1, body.chambers + 1))
     mesh = SolidGeometry(body, chambers, MeshSizes(EDGE)).mesh()

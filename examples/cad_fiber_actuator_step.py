@@ -7,7 +7,7 @@ base's top face its floor. The two solids are labelled "body" and "chamber" in t
 chamber from the body. Lengths in millimetres (the file says so: a STEP file carries its unit).
 
     pip install build123d   # (not a dependency of taichi-pneuma: only this script needs it)
-    python examples/cad/fiber_actuator_step.py [OUT.step]
+    python examples/cad_fiber_actuator_step.py [OUT.step]
 """
 
 import sys
@@ -35,7 +35,7 @@ def actuator() -> Compound:
 
 
 if __name__ == "__main__":
-    shipped = Path(__file__).parents[2] / "taichi_pneuma/scenes/fiber_actuator.step"
+    shipped = Path(__file__).parents[1] / "taichi_pneuma/scenes/fiber_actuator.step"
     out = Path(sys.argv[1]) if len(sys.argv) > 1 else shipped
     part = actuator()
     export_step(part, str(out))
