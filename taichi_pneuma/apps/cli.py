@@ -54,6 +54,26 @@ def app_parser(prog: str, doc: str) -> argparse.ArgumentParser:
     return p
 
 
+def add_scene_arguments(p: argparse.ArgumentParser, what: str = "the scene", cy_help: str = "") -> None:
+    """--scene, --cy and --set, as every app that runs a scene reads them (cli.scene_for): a scene file or a shipped
+    scene's name, else the reference beam of the flags; --set KEY=VALUE changes `what` (repeatable)."""
+    p.add_argument(
+        "--scene",
+        help="a scene file (TOML) or the name of a shipped scene (--list-scenes lists them); without it the reference "
+        "beam of the flags (--cy --cx --growth --steps --E --nu --k --max-area --order), which are then ignored",
+    )
+    p.add_argument("--cy", type=float, default=0.15, help=cy_help or "reference beam: chamber centre height")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help=f"change a dotted scene-file key or a short name (cy cx E nu k max_area) of {what}, e.g. --set "
+        "chambers[0].center[1]=0.1 --set material.E=2e4 (repeatable; the reference beam's keys are those of the "
+        "shipped reference_beam.toml)",
+    )
+
+
 class ListScenes(argparse.Action):
     """--list-scenes: print every shipped scene with the first sentence of its description (scene/shipped.py), then
     exit 0, as --version does."""
@@ -235,7 +255,7 @@ def rendering_flags(args: argparse.Namespace, dim: int = 2) -> tuple[int, int]:
     from ..io.output import prepare_directory
     from ..render.video import check_video, frame_size
 
-    check_video(Path(args.video or "default.mp4"), args.fps)
+    check_video(args.video or "default.mp4", args.fps)
     width, height = frame_size(args.size, "--size")
     limits.check_frame(width, height, args.max_frame_pixels)
     if dim == 3 and not args.no_video:
@@ -428,7 +448,7 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
                 stop=interrupted.is_set,
             )
         except RampInterrupted as exc:
-            exc.signum = interrupted.signum  # type: ignore[attr-defined]  # read by signals.name_of()
+            exc.signum = interrupted.signum  # read by signals.name_of()
             raise
 
 

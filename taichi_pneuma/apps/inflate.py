@@ -44,6 +44,7 @@ from ..signals import holding
 from .cli import (
     MEASURE,
     add_ramp_arguments,
+    add_scene_arguments,
     add_video_arguments,
     app_parser,
     budget,
@@ -66,21 +67,7 @@ TURN_WORDS = {2: ("tip rotation", "rotation"), 3: ("bend angle", "bend angle")}
 
 def parser() -> argparse.ArgumentParser:
     p = app_parser("pneuma-inflate", __doc__)
-    p.add_argument(
-        "--scene",
-        help="a scene file (TOML) or the name of a shipped scene (--list-scenes lists them); the reference-beam flags "
-        "(--cy --cx --growth --steps --E --nu --k --max-area --order) are then ignored",
-    )
-    p.add_argument("--cy", type=float, default=0.15, help="chamber centre height (above the neutral axis curls down)")
-    p.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="change a dotted scene-file key or a short name (cy cx E nu k max_area), e.g. --set "
-        "chambers[0].center[1]=0.1 --set material.E=2e4 (repeatable; the reference beam's keys are "
-        "those of the shipped reference_beam.toml)",
-    )
+    add_scene_arguments(p, cy_help="chamber centre height (above the neutral axis curls down)")
     add_ramp_arguments(p)
     add_video_arguments(p, "960x384")
     p.add_argument(

@@ -50,6 +50,7 @@ if TYPE_CHECKING:
 
 from .cli import (
     add_ramp_arguments,
+    add_scene_arguments,
     add_video_arguments,
     app_parser,
     apply_set,
@@ -71,18 +72,7 @@ TIP_TOL, ANGLE_TOL, RESTARTS = 1e-3, 0.5, 4
 
 def parser() -> argparse.ArgumentParser:
     p = app_parser("pneuma-reach", __doc__)
-    p.add_argument(
-        "--scene",
-        help="a scene file (TOML) or the name of a shipped scene; default the reference beam of the flags below",
-    )
-    p.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="change a dotted scene-file key or a short name (cy cx E nu k max_area) of the scene (repeatable)",
-    )
-    p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
+    add_scene_arguments(p)
     p.add_argument(
         "--tip",
         nargs="+",

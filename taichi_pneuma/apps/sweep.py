@@ -27,7 +27,7 @@ import sys
 from .. import limits
 from ..io.keys import SHORT_KEYS
 from ..io.output import check_stem, lock_stem, prepare_directory
-from .cli import add_ramp_arguments, app_parser, exit_code, scene_of_flags
+from .cli import add_ramp_arguments, add_scene_arguments, app_parser, exit_code, scene_of_flags
 from .workers import add_executor_arguments, executor_of
 
 
@@ -57,19 +57,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--name", default="sweep", help="the result files are <out>/<name>.csv, .json and .png")
     p.add_argument("--retry-failed", action="store_true", help="run again the runs recorded with an error")
     p.add_argument("--max-runs", type=int, default=limits.MAX_RUNS, help="refuse a study of more runs")
-    p.add_argument(
-        "--scene",
-        help="the base scene file (TOML) or the name of a shipped scene; the reference-beam "
-        "flags (--cy --cx --growth --steps --E --nu --k --max-area --order) are then ignored",
-    )
-    p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
-    p.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="change a dotted key of the base scene for every run (repeatable)",
-    )
+    add_scene_arguments(p, "the base scene, for every run")
     add_ramp_arguments(p)
     p.set_defaults(max_frame_pixels=limits.MAX_FRAME_PIXELS)  # checked by cli.check_flags; no video here
     return p

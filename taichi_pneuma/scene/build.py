@@ -1,6 +1,7 @@
 """A scene as data, validated, and its builder: a scene -> an EnergyModel of exactly the terms it names.
 
-A scene is a body with chambers (fem.planar.Geometry: also the clamped nodes, the rollers and the tip),
+A scene is a body with chambers (fem/body.py's Body: 2D shapes, 3D shapes or a mesh file; also the clamped
+nodes, the rollers and the tip),
 a material (optionally one per region), a schedule of chamber commands, and a tuple of effects. The
 builder refuses supports that leave a rigid-body motion free (fem/supports.py), then adds elasticity, one
 chamber term per chamber (of the chamber's kind), the clamp (when there is one: no [clamp], no clamp), and a
@@ -21,8 +22,9 @@ import numpy as np
 
 from .. import runtime
 from ..errors import require, require_finite
+from ..fem.body import Body
 from ..fem.mesh import Mesh
-from ..fem.planar import BeamGeometry, Geometry
+from ..fem.planar import BeamGeometry
 from ..fem.self_intersection import surface_crossing, surface_pieces
 from ..fem.supports import require_held
 from ..io.keys import dotted
@@ -60,7 +62,7 @@ class Scene:
     a contact's dhat, a 2D geometry's max_area) left None in a scene with units is refused, naming its
     scene-file key."""
 
-    geometry: Geometry
+    geometry: Body
     controls: tuple[ChamberControl, ...]
     increments: int
     material: MaterialForm = field(default_factory=Material)
@@ -104,9 +106,9 @@ class Scene:
         require(not clash, f"obstacle name {clash[0] if clash else ''!r} is a chamber's, an effect's or the clamp's")
         _ = self.schedule  # validates the increments against the keyframes
         law, _ = self.law_parameters()  # resolves the presets, checks that the body has one law
-        grouping = grouping_for(self.volumetric, getattr(self.geometry, "order", 1))
+        grouping = grouping_for(self.volumetric, self.geometry.order)
         if grouping != "element":
-            require_volumetric(grouping, law, getattr(self.geometry, "order", 1))
+            require_volumetric(grouping, law, self.geometry.order)
 
     def resolve_defaults(self) -> None:
         """Set every default left None (units.si_default) of the scene, its geometry, its material and regions,
@@ -170,12 +172,12 @@ class Scene:
 
     @property
     def dim(self) -> int:
-        """The body's dimension: 3 for a geometry of tetrahedra (one that says dim = 3), else 2."""
-        return getattr(self.geometry, "dim", 2)
+        """The body's dimension (Body.dim): 2 for plane strain triangles, 3 for tetrahedra."""
+        return self.geometry.dim
 
     @property
     def chamber_names(self) -> list[str]:
-        return [name for name, _ in self.geometry.chambers]
+        return self.geometry.chamber_names
 
     def law_parameters(self) -> tuple[type[Law], list[np.ndarray]]:
         """The body's law and the parameter vector of the material and of each region, in the scene's units
