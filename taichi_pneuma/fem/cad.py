@@ -12,8 +12,9 @@ the body by the mesher's fragment: the cavity is what the chamber solid and the 
                 `solid` the file must hold exactly one solid. An IGES file has no names: one solid per file.
     its units   a STEP file states its length unit; OpenCASCADE converts the part to metres on reading
                 (Geometry.OCCTargetUnit = "M") and the part is scaled by 1 / metre into the scene's length unit
-                (metre: the scene's length unit in metres, 1e-3 for mm). A scene without units has no unit to
-                convert into and is refused. An IGES file's unit is its header's (millimetres when it states none).
+                (metre: the scene's length unit in metres, 1e-3 for mm; a scene file's parts are given its units').
+                A scene without units has no unit to convert into: a part without metre is refused when it is built.
+                An IGES file's unit is its header's (millimetres when it states none).
     its content the part's SHA-256 (content) is one of its fields, so the mesh cache (gmsh_cache.py) keys a mesh
                 by the file's bytes, not by its name: an edited file is meshed afresh.
 
@@ -53,11 +54,6 @@ class StepPart:
         require(
             path.lower().endswith(CAD_SUFFIXES),
             f"file = {quoted(self.file)}: a CAD part is read from a {', '.join(CAD_SUFFIXES)} file",
-        )
-        require(
-            self.metre is not None,
-            f"file = {quoted(self.file)}: a CAD file's lengths have units; give the scene units "
-            f'(units = "mm-kPa" or "SI") to read them in',
         )
         data = read_input(path, MAX_CAD_BYTES, "CAD file")
         object.__setattr__(self, "file", path)
@@ -106,8 +102,12 @@ class StepPart:
         dropped = [(dim, tag) for dim, tag in imported if (dim, tag) != (3, kept)]
         if dropped:
             occ.remove(dropped, recursive=True)
-        assert self.metre is not None  # (__post_init__ refused None)
-        scale = 1.0 / self.metre
+        require(
+            self.metre is not None,
+            f"file = {quoted(self.file)}: a CAD file's lengths have units; give the scene units "
+            f'(units = "mm-kPa" or "SI") to read them in',
+        )
+        scale = 1.0 / float(self.metre or 1.0)
         occ.dilate([(3, kept)], 0.0, 0.0, 0.0, scale, scale, scale)
         return kept
 

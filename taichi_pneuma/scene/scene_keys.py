@@ -6,13 +6,18 @@ the obstacles' in obstacle_keys.py, the fibres' and layers' in reinforcement_key
 
 from __future__ import annotations
 
+import dataclasses
+
 from ..errors import require
+from ..fem.body import Body
+from ..fem.cad import StepPart
 from ..fem.elements import ORDERS
 from ..fem.gmsh_mesher import MeshSizes
 from ..fem.meshfile import MeshBody, MeshGeometry
 from ..fem.planar import Geometry
 from ..fem.solid_geometry import SolidGeometry, is_solid_shape
 from ..fem.supports import SIDES, PointSet, Roller
+from ..fem.surface_import import SurfaceBody, SurfaceGeometry
 from ..io.units import LENGTH, NODAL_STIFFNESS, PLANE_AREA, UNITLESS, UNITS, default_in
 from ..terms import VOLUMETRIC
 from ..terms.chambers import KINDS
@@ -109,7 +114,9 @@ def scene_arguments(v: dict) -> dict:
         f"{len(v['targets'])} [[targets]]: at most {MAX_TARGETS} are allowed (each is a reach)",
     )
     (material, regions), (clamp, clamp_stiffness) = v["material"], v["clamp"]
-    chambers, mesh = tuple((name, shape) for name, shape, _ in v["chambers"]), v["mesh"]
+    units = UNITLESS if v["units"] is None else UNITS[v["units"]]
+    body = in_units(v["body"], units)
+    chambers, mesh = tuple((name, in_units(shape, units)) for name, shape, _ in v["chambers"]), v["mesh"]
     sized = [k for k in MESH_SIZES if mesh[k] is not None]
     planar = ["max_area"] if mesh["max_area"] is not None else []
     require(
@@ -117,8 +124,8 @@ def scene_arguments(v: dict) -> dict:
         "mesh.curved: only a 3D body from shapes takes it (a 2D body's quadratic triangles follow its curves "
         "always, a mesh file's elements are the file's)",
     )
-    geometry: SolidGeometry | MeshGeometry | Geometry
-    if is_solid_shape(v["body"]):
+    geometry: Body
+    if is_solid_shape(body):
         require(
             mesh["max_area"] is None,
             "mesh.max_area: a 3D body from shapes takes mesh.size (the tetrahedra's edge length), not max_area",
@@ -129,7 +136,7 @@ def scene_arguments(v: dict) -> dict:
         )
         sizes = build("mesh", lambda: MeshSizes(**{k: mesh[k] for k in MESH_SIZES}))
         geometry = SolidGeometry(
-            body=v["body"],
+            body=body,
             chambers=chambers,
             sizes=sizes,
             order=mesh["order"],
@@ -138,18 +145,34 @@ def scene_arguments(v: dict) -> dict:
             rollers=v["rollers"],
             curved=mesh["curved"],
         )
-    elif isinstance(v["body"], MeshBody):
+    elif isinstance(body, SurfaceBody):
+        require(
+            mesh["max_area"] is None and mesh["through_wall"] is None,
+            "mesh.max_area, mesh.through_wall: a surface body takes mesh.size and near_chambers (its walls are not "
+            "measured)",
+        )
+        require(mesh["size"] is not None, "missing key 'mesh.size': a surface body needs the tetrahedra's edge length")
+        geometry = SurfaceGeometry(
+            body=body,
+            chambers=chambers,
+            sizes=build("mesh", lambda: MeshSizes(**{k: mesh[k] for k in MESH_SIZES})),
+            order=mesh["order"],
+            clamp=clamp,
+            tip=v["tip"],
+            rollers=v["rollers"],
+        )
+    elif isinstance(body, MeshBody):
         require(
             not planar + sized,
             f"mesh.{(planar + sized + [''])[0]}: a mesh file's body keeps the file's elements (mesh.order only)",
         )
         geometry = MeshGeometry(
-            body=v["body"], chambers=chambers, order=mesh["order"], clamp=clamp, tip=v["tip"], rollers=v["rollers"]
+            body=body, chambers=chambers, order=mesh["order"], clamp=clamp, tip=v["tip"], rollers=v["rollers"]
         )
     else:
         require(not sized, f"mesh.{sized[0] if sized else ''}: a 2D body takes mesh.max_area")
         geometry = Geometry(
-            body=v["body"],
+            body=body,
             chambers=chambers,
             max_area=mesh["max_area"],
             clamp=clamp,
@@ -167,7 +190,7 @@ def scene_arguments(v: dict) -> dict:
         effects=v["effects"],
         name=v["name"],
         targets=v["targets"],
-        units=UNITLESS if v["units"] is None else UNITS[v["units"]],
+        units=units,
         max_stretch=v["schedule"]["max_stretch"],
         volumetric=mesh["volumetric"],
         fibers=v["fibers"],
@@ -175,6 +198,14 @@ def scene_arguments(v: dict) -> dict:
         obstacles=v["obstacles"],
         ends_at_limit_point=v["schedule"]["ends_at_limit_point"],
     )
+
+
+def in_units(shape, units):
+    """A CAD file's solid (fem/cad.py StepPart) read into the scene's length unit (None: a scene without units, which
+    is refused when the part is built); any other shape as it is."""
+    if isinstance(shape, StepPart):
+        return dataclasses.replace(shape, metre=None if units.name is None else units.metre)
+    return shape
 
 
 def clamp_parts(scene) -> dict:
@@ -190,18 +221,11 @@ def clamp_parts(scene) -> dict:
 
 def mesh_parts(scene) -> dict:
     """The [mesh] keys of a scene's geometry (and its volumetric key)."""
-    geometry = scene.geometry
-    refinements = getattr(geometry, "refinements", 0)
-    require(
-        refinements == 0,
-        f"a geometry refined {refinements} times has no scene-file form (scene files have no refinements key)",
-    )
-    sizes = getattr(geometry, "sizes", None)
     return {
-        "max_area": getattr(geometry, "max_area", None),
-        "order": geometry.order,
-        **{k: getattr(sizes, k, None) for k in MESH_SIZES},
-        "curved": getattr(geometry, "curved", True),
+        "max_area": None,
+        **dict.fromkeys(MESH_SIZES),
+        "curved": True,
+        **scene.geometry.mesh_values(),  # the keys this kind of geometry has (Body.mesh_values)
         "volumetric": None if scene.volumetric == "element" else scene.volumetric,
     }  # default: not written
 

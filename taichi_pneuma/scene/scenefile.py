@@ -75,9 +75,10 @@ def load_scene(path: str | os.PathLike) -> Scene:
     except UnicodeDecodeError as exc:
         raise PneumaInputError(f"{path}: not valid TOML (not UTF-8: {exc.reason} at byte {exc.start})") from None
     data = parse_toml(text, str(path))
-    body = data.get("body")
-    if isinstance(body, dict) and isinstance(body.get("file"), str):  # a mesh file, relative to the scene file
-        body["file"] = os.path.join(os.path.dirname(os.path.abspath(path)), body["file"])
+    chambers = data.get("chambers")
+    for table in [data.get("body")] + (chambers if isinstance(chambers, list) else []):
+        if isinstance(table, dict) and isinstance(table.get("file"), str):  # a mesh or CAD file, relative to it
+            table["file"] = os.path.join(os.path.dirname(os.path.abspath(path)), table["file"])
     try:
         return read_scene(data, reduce_to_stem(os.path.splitext(os.path.basename(path))[0]))
     except PneumaInputError as exc:

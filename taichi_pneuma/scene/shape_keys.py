@@ -3,10 +3,12 @@ fileformat.py's entries: the 2D outlines (fem/shapes.py), the 3D shapes bodies a
 a 2D shape swept along z, a mesh file's body and chamber walls (fem/meshfile.py) and the PneuNet generator.
 """
 
+from ..fem.cad import StepPart
 from ..fem.meshfile import MeshBody, MeshSurface
 from ..fem.pneunet import PneuNet
 from ..fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, HalfCylinder, RoundedBox
+from ..fem.surface_import import Cavity, SurfaceBody
 from ..io.units import LENGTH
 from .fileformat import Key, Table, Tables, Variant, record
 
@@ -105,6 +107,12 @@ SOLIDS = {  # the 3D shapes bodies and chambers share (fem/solids.py); with extr
         semi_axes=Key(tuple, doc="[a, b, c]", unit=LENGTH),
     ),
 }
+STEP = record(
+    StepPart,
+    "a solid of a STEP or IGES file, in the file's unit converted into the scene's (3D; fem/cad.py)",
+    file=Key(str, doc="the CAD file, relative to the scene file"),
+    solid=Key(str, None, "the solid's name (its label in the file); none: the file's only solid"),
+)
 BODY_SHAPES = Variant(
     {
         **PLANAR_BODIES,
@@ -116,8 +124,17 @@ BODY_SHAPES = Variant(
         **SOLIDS,
         "extrusion": extrusion(PLANAR_BODIES, "body"),
         "pneunet": PneuNet,
+        "step": STEP,
+        "surface": record(
+            SurfaceBody,
+            "a 3D body bounded by a triangle surface (STL, OBJ, PLY, OFF), repaired and filled with tetrahedra "
+            "(fem/surface_import.py)",
+            file=Key(str, doc="the surface file, relative to the scene file"),
+            scale=Key(float, doc="the length of one file unit in the scene's units (required: the file has none)"),
+        ),
     },
-    doc="the body's outline (2D), or a 3D body (a mesh file, a 3D shape meshed by gmsh, or the PneuNet generator)",
+    doc="the body's outline (2D), or a 3D body (a mesh file, a 3D shape meshed by gmsh, the PneuNet generator, a CAD "
+    "file's solid or a triangle surface)",
 )
 CHAMBER_SHAPES = Variant(
     {
@@ -130,6 +147,12 @@ CHAMBER_SHAPES = Variant(
         ),
         **SOLIDS,
         "extrusion": extrusion(PLANAR_CHAMBERS, "chamber"),
+        "step": STEP,
+        "cavity": record(
+            Cavity,
+            "a cavity of a surface body: the one enclosing the point inside",
+            inside=Key(tuple, doc=f"{TRIPLE}, a point in the cavity", unit=LENGTH),
+        ),
     },
     doc="the chamber's wall",
 )
