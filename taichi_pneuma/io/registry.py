@@ -32,6 +32,7 @@ class Named(Protocol):
     name: ClassVar[str]
 
 
+#: the class of a registered part (a dataclass with a class attribute `name`)
 Part = TypeVar("Part", bound=type[Named])
 
 
