@@ -4,6 +4,7 @@ its closed-form volumes, its units, and every refusal."""
 import numpy as np
 import pytest
 
+from taichi_pneuma.api import load_scene, simulate
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.cad import StepPart
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes, Solid, mesh_solid
@@ -104,7 +105,7 @@ def test_every_unusable_cad_file_is_one_clear_line(tmp_path):
     with pytest.raises(PneumaInputError, match=r"missing.step' cannot be read \(No such file or directory\)"):
         StepPart(str(tmp_path / "missing.step"), None, MM)
     with pytest.raises(PneumaInputError, match=r"give the scene units"):
-        StepPart(path, "body", None)
+        solid_of(StepPart(path, "body", None))
     assert not gmsh.isInitialized()
 
 
@@ -117,3 +118,29 @@ def test_one_unnamed_solid_is_the_part_and_the_cache_keys_its_content(tmp_path):
     assert np.linalg.det(x[:, 1:] - x[:, :1]).sum() / 6 == pytest.approx(1.0 - 0.2**3, rel=1e-9)
     gmsh_step(tmp_path / "box.step", 2)
     assert StepPart(one, None, 1.0).content != part.content
+
+
+def test_the_shipped_step_scene_reads_its_parts_in_millimetres_and_refuses_a_scene_without_units(tmp_path):
+    """fiber_bending_step: the body and chamber of the STEP file, the chamber's rest volume the half-round cavity's
+    (0.1 %); the same file in a scene without units is refused when meshed, naming the file."""
+    scene = load_scene("fiber_bending_step")
+    assert isinstance(scene.geometry.body, StepPart) and scene.geometry.body.metre == MM
+    assert scene.build().chambers[0].rest_area == pytest.approx(CHAMBER_VOLUME, rel=1e-3)
+    text = (find("fiber_bending_step", ".toml")).read_text().replace('units = "mm-kPa"\n', "")
+    text = text.replace('preset = "elastosil_m4601"', "E = 1.0\nnu = 0.45").replace('volumetric = "mixed"', "")
+    text = text.replace('file = "fiber_actuator.step"', f'file = "{actuator_file()}"')
+    (tmp_path / "unitless.toml").write_text(text)
+    with pytest.raises(PneumaInputError, match=r"fiber_actuator.step'?: a CAD file's lengths have units; give the"):
+        load_scene(tmp_path / "unitless.toml").build()
+
+
+@pytest.mark.slow
+def test_the_step_actuator_bends_as_the_parametric_one():
+    """fiber_bending_step against fiber_bending_3d on a short ramp (2 increments to 40 kPa): the same tip rotation to
+    1 % (the two meshes differ: gmsh meshes the file's solids, not the parametric shapes)."""
+    short = {"chambers[0].keyframes": [[0, 0.0], [2, 40.0]], "schedule.increments": 2}
+    angles = [
+        simulate(load_scene(name).with_values(short)).history["tip_rotation"][-1]
+        for name in ("fiber_bending_3d", "fiber_bending_step")
+    ]
+    assert angles[0] < -5.0 and angles[1] == pytest.approx(angles[0], rel=1e-2)

@@ -5,6 +5,7 @@ import meshio
 import numpy as np
 import pytest
 
+from taichi_pneuma.api import load_scene
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes
 from taichi_pneuma.fem.supports import PointSet
@@ -129,3 +130,15 @@ def test_the_shipped_pneunet_stl_is_the_parametric_pneunet_within_its_facets():
     mesh = SurfaceGeometry(SurfaceBody(path, 1.0), chambers, MeshSizes(0.3, 0.08)).mesh()
     assert len(mesh.chambers) == 6
     assert mesh.measure == pytest.approx(enclosed, rel=1e-2)
+
+
+def test_the_shipped_stl_scene_finds_its_six_cavities_and_needs_a_scale(tmp_path):
+    """pneunet_stl: six chambers, each the cavity around its point (the STL's rounded box less its facets' chords,
+    within 3 % of the exact rounded box); a scene file without body.scale is refused naming the key."""
+    scene = load_scene("pneunet_stl")
+    rest = [chamber.rest_area for chamber in scene.build().chambers]
+    assert rest == pytest.approx([rounded_box_volume((0.4, 0.5, 0.6), 0.08)] * 6, rel=3e-2)
+    text = find("pneunet_stl", ".toml").read_text().replace("scale = 1.0", "")
+    (tmp_path / "s.toml").write_text(text.replace('file = "pneunet.stl"', f'file = "{find("pneunet", ".stl")}"'))
+    with pytest.raises(PneumaInputError, match=r"body.scale"):
+        load_scene(tmp_path / "s.toml")
