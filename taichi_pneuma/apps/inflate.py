@@ -10,7 +10,7 @@ the states (npz), a summary (JSON), the scene as run (TOML) and the ParaView fil
 it is solved, indexed by a PVD) under --out, and, unless --no-video, a plot of the history (PNG), a
 video of the run (body coloured by --color beside its area/pressure trace) and a PNG of its most
 deformed frame. The files are named by the scene (inflate_cy+0.15 for the reference beam's flags) and what
-the run changed of it (cli.result_stem: '_order2_E2e4', or the scene's hash when that is long; '_high' for
+the run changed of it (stems.result_stem: '_order2_E2e4', or the scene's hash when that is long; '_high' for
 a --quality), so a different run never overwrites them and a re-run of the same one replaces only its own.
 --set KEY=VALUE changes any dotted scene-file key. --interactive instead opens a window with a slider
 for the commanded area (a 3D scene: a slider per chamber, and the camera turned by dragging the mouse).
@@ -53,10 +53,10 @@ from .cli import (
     newton_options,
     render_report,
     rendering_flags,
-    result_stem,
     scene_of_flags,
     solve,
 )
+from .stems import result_stem
 
 if TYPE_CHECKING:
     from ..result import Result

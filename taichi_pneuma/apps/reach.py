@@ -22,7 +22,7 @@ whole turn from rest, tip_twist, tip_dx, blocked_force, a contact force, ...; no
 residual, ...) equals V (control/outputs.py), prints `reached:` with the commands there (or `unreachable:` with the
 closest step, or the value found where the column jumps over V inside a step, exit 1) and writes
 <scene>_output_<COLUMN><V>_summary.json (COLUMN made a plain file name, with what the flags changed of the scene,
-cli.result_stem).
+stems.result_stem).
 --reduced MODEL.npz (a model pneuma-reduce trained for this scene; with --tip or --targets) searches on the reduced
 model, then polishes each answer with a few full Newton solves and Gauss-Newton steps (control/reduced.py): the
 answer is the full model's. Per target it prints a `reduced:` line: the reduced search's tip error and seconds, the
@@ -61,10 +61,10 @@ from .cli import (
     newton_options,
     render_report,
     rendering_flags,
-    result_stem,
     scene_file,
     scene_for,
 )
+from .stems import result_stem
 
 # ReachOptions' defaults (control/inverse.py; tests/test_reach.py checks they agree)
 TIP_TOL, ANGLE_TOL, RESTARTS = 1e-3, 0.5, 4

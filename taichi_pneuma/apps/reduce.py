@@ -33,9 +33,9 @@ from .cli import (
     build,
     exit_code,
     newton_options,
-    result_stem,
     scene_of_flags,
 )
+from .stems import result_stem
 from .workers import add_executor_arguments, executor_of
 
 

@@ -28,9 +28,9 @@ from .cli import (
     exit_code,
     locking_note,
     newton_options,
-    result_stem,
     scene_of_flags,
 )
+from .stems import result_stem
 
 
 def parser() -> argparse.ArgumentParser:

@@ -67,7 +67,7 @@ class GuardedConnection(ws_server.ServerConnection):
         super().__init__(*args, **kwargs)
         self.refusal = refusal
 
-    async def recv(self, decode: bool | None = None) -> Data:  # type: ignore[override]
+    async def recv(self, decode: bool | None = None) -> Data:  # type: ignore[override]  # (the base overloads on decode)
         refused = 0
         while True:
             message = await super().recv(decode)
