@@ -23,7 +23,9 @@ versions, machine), <name>_trace.png (best so far against evaluation) and, for t
 
 from __future__ import annotations
 
+import os
 import time
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -38,7 +40,7 @@ from .optimize_figure import pareto_figure, pareto_front, trace_figure
 from .sweep import DEFAULT_OPTIONS, machine, versions
 from .table import is_number, write_table
 from .task import RunOptions, Task
-from .vary import Axis, check_axes
+from .vary import Axis, check_axes, parse_vary
 
 SAMPLERS = ("tpe", "cmaes", "nsga2")
 MAX_TRIALS = 100_000
@@ -281,15 +283,18 @@ class Optimization:
             "updated": datetime.now(UTC).isoformat(timespec="seconds"),
         }
 
-    def write(self, study, status: str, executor: dict | None, ran: int, seconds: float) -> OptimizationReport:
-        """The CSV, the JSON and the pictures of every evaluation so far, each written whole."""
+    def write(
+        self, study, status: str, executor: dict | None, ran: int, seconds: float, pictures: bool = True
+    ) -> OptimizationReport:
+        """The CSV, the JSON and (with pictures) the trace and Pareto pictures of every evaluation so far, each
+        written whole."""
         rows = self.rows(study)
         with signals.holding():  # a signal meanwhile waits for the files
             files = [
                 write_table(self.csv, self.columns, rows),
                 save_json(self.json, self.record(status, rows, executor, ran, seconds)),
             ]
-        if any(r["error"] is None for r in rows):
+        if pictures and any(r["error"] is None for r in rows):
             labels, directions = self.goals.texts, list(self.goals.directions)
             figure = trace_figure(rows, labels, directions)
             files.append(write_atomic(self.trace_png, lambda tmp: figure.savefig(tmp, format="png", dpi=100)))
@@ -319,8 +324,45 @@ class Optimization:
                         if on_trial is not None:
                             rows = self.rows(study)
                             on_trial(next(r for r in rows if r["trial"] == asked[index].number), self.best(rows))
-                    self.write(study, "running", described, ran, time.perf_counter() - start)
+                    self.write(study, "running", described, ran, time.perf_counter() - start, pictures=False)
                 status = "done"
             finally:
                 report = self.write(study, status, described, ran, time.perf_counter() - start)
         return report
+
+
+def optimize(
+    scene: Scene,
+    variables,
+    *,
+    minimize: str | Sequence[str] = (),
+    maximize: str | Sequence[str] = (),
+    constraints: Sequence[str] = (),
+    trials: int = 30,
+    sampler: str = "tpe",
+    seed: int = 0,
+    out: str | os.PathLike = "out",
+    name: str = "optimize",
+    executor=None,
+    evaluate=None,
+):
+    """Optimise the scene's keys (pneuma-optimize; docs: Optimising a design) and return the report
+    (OptimizationReport: .best, the best feasible evaluation's row with its values by dotted key
+    and objective_0; .pareto, for two objectives; .rows, every evaluation; .files).
+
+    variables: {key: (low, high)} (integers if both are) or a list of pneuma-optimize's --vary texts
+    ("KEY=LO:HI", "KEY=v1,v2"); minimize, maximize: one expression each, or a list (the minimised first, two in
+    all at most); constraints: "EXPR<=VALUE" or "EXPR>=VALUE" texts; sampler: "tpe", "cmaes" or "nsga2". The study
+    is kept in <out>/<name>.db: the same call again goes on from it (to `trials` evaluations in all). executor: a
+    study.LocalPool(workers) or study.RayCluster(address) (not entered; this function enters it), or None: here,
+    one design after another. evaluate(task) -> a row like study/design.py evaluate_design's (the default), for a
+    cheap stand-in of the simulation."""
+    texts = (
+        [f"{k}={low!r}:{high!r}" for k, (low, high) in variables.items()] if isinstance(variables, dict) else variables
+    )
+    listed = [[e] if isinstance(e, str) else list(e) for e in (minimize, maximize)]
+    objectives = [("minimize", e) for e in listed[0]] + [("maximize", e) for e in listed[1]]
+    goals = Goals.parse(scene, objectives, list(constraints))
+    optimization = Optimization(scene, [parse_vary(t) for t in texts], goals, out, name, trials, sampler, seed)
+    with executor if executor is not None else InProcess() as entered:
+        return optimization.run(entered, evaluate or evaluate_design)
