@@ -4,6 +4,7 @@ alone, the app on the process pool and on a local Ray, resuming after a kill, an
 
 import csv
 import json
+import os
 import signal
 import sqlite3
 import subprocess
@@ -16,6 +17,7 @@ import pytest
 
 import taichi_pneuma as tp
 from taichi_pneuma.apps.optimize import main
+from taichi_pneuma.study import LocalPool
 from taichi_pneuma.study.goals import Goals, NoValue, crossing
 
 CY = "chambers[0].center[1]"
@@ -41,6 +43,10 @@ def test_at_interpolates_where_a_column_first_reaches_a_level():
     assert crossing(y, x, -2.0) == pytest.approx(10.0)  # reached exactly at step 1
     assert crossing(y, x, -7.0) == pytest.approx(30 + 10 * 4 / 6)  # first reached between steps 3 and 4
     assert crossing(y, x, -10.0) is None and crossing(y, x, 0.0) == 0.0
+    goals = Goals.parse(BEAM, [("minimize", "at(main.pressure, tip_rotation, -10)")])
+    with pytest.raises(NoValue, match=r"never reaches -10 \(it comes within 1\)") as short:
+        goals.evaluate(record(tip_rotation=x, **{"main.pressure": y}))
+    assert short.value.shortfall == pytest.approx(1.0)  # the closest approach, -9
 
 
 def test_goals_read_summary_values_history_columns_and_functions():
@@ -112,6 +118,56 @@ def test_two_objectives_give_a_pareto_front_of_designs_none_dominates(tmp_path):
             for r in report.rows
         )
     assert (tmp_path / "optimize_pareto.png").stat().st_size > 0 and (tmp_path / "optimize_trace.png").exists()
+
+
+def ramp(task):
+    """An analytic ramp: the tip turns to 100 cy degrees as the pressure goes to E / 10."""
+    cy, e = task.values[CY], task.values["material.E"]
+    run = {"summary": {}, "history": {"tip_rotation": [0.0, 100 * cy], "main.pressure": [0.0, e / 10]}}
+    return {"values": dict(task.values), "record": run, "files": {}, "error": None, "seconds": 0.0}
+
+
+def test_a_design_short_of_the_level_at_asks_for_is_infeasible_by_how_far(tmp_path):
+    """at(main.pressure, tip_rotation, 5) = (E / 10) 5 / (100 cy) where 100 cy >= 5; below, short by min(5, 5 - 100 cy)."""
+    report = tp.optimize(
+        BEAM, BOWL, minimize="at(main.pressure, tip_rotation, 5)", trials=30, out=tmp_path, evaluate=ramp
+    )
+    short = [r for r in report.rows if 100 * r[CY] < 5]
+    assert short and len(short) < len(report.rows)
+    for row in short:
+        assert not row["feasible"] and row["objective_0"] is None
+        assert f"it comes within {min(5, abs(5 - 100 * row[CY])):.4g}" in row["error"]  # (rest: 0 degrees)
+    for row in report.rows:
+        if row not in short:
+            assert row["feasible"] and row["objective_0"] == pytest.approx(row["material.E"] / 2 / (100 * row[CY]))
+    assert report.best["objective_0"] == min(r["objective_0"] for r in report.rows if r["feasible"])
+
+
+def crash_above(task):
+    """The bowl, but a worker process that is given cy > 0 dies."""
+    if task.values[CY] > 0:
+        os._exit(1)
+    return bowl(task)
+
+
+def test_designs_lost_with_a_crashed_worker_are_asked_again_by_the_next_run(tmp_path):
+    report = tp.optimize(
+        BEAM, BOWL, minimize="tip_rotation", trials=8, out=tmp_path, executor=LocalPool(2), evaluate=crash_above
+    )
+    assert report.lost >= 1 and len(report.rows) < 8 and all(r[CY] <= 0 for r in report.rows)
+    again = tp.optimize(BEAM, BOWL, minimize="tip_rotation", trials=8, out=tmp_path, evaluate=bowl)
+    assert again.lost == 0 and len(again.rows) == 8
+    assert all(row in again.rows for row in report.rows)  # kept as they were
+    import optuna
+
+    lost = [
+        t
+        for t in optuna.load_study(study_name="optimize", storage=f"sqlite:///{tmp_path / 'optimize.db'}").trials
+        if t.user_attrs.get("interrupted")
+    ]
+    assert len(lost) == report.lost
+    for trial in lost:  # each lost design run now, once
+        assert sum(r[CY] == trial.params[CY] and r["material.E"] == trial.params["material.E"] for r in again.rows) == 1
 
 
 # --- FEM designs ---------------------------------------------------------------------------------

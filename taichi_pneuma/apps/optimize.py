@@ -18,7 +18,8 @@ plot.png), <name>.csv and <name>.json (every evaluation; the best design or the 
 so far against evaluation) and, for two objectives, <name>_pareto.png. A design that fails (an invalid scene, no
 equilibrium, an objective it has no value for) is a failed trial with its error, never the end of the study.
 
-Exit codes: 0 when the evaluations asked for are recorded, 2 for bad input (one `error:` line; also when another
+Exit codes: 0 when the evaluations asked for are recorded, 1 when designs were lost with a crashed worker process
+(the same command runs them), 2 for bad input (one `error:` line; also when another
 run is writing the study of the same --name in --out), 130 on Ctrl-C, 143 on SIGTERM, 129 on SIGHUP (the designs in
 flight finish and are told; the same command resumes).
 """
@@ -166,8 +167,14 @@ def run_study(args: argparse.Namespace, optimization, executor) -> dict:
         )
     else:
         print("no feasible design found")
+    if report.lost:
+        print(
+            f"error: {report.lost} designs lost with a crashed worker process; the same command runs them",
+            file=sys.stderr,
+        )
     print("wrote " + ", ".join(str(p) for p in [optimization.db, optimization.folder, *report.files]))
-    return {"all_converged": True}
+    # exit_code's contract: 0 when "all_converged"; here, when no design was lost
+    return {"all_converged": report.lost == 0}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -14,7 +14,8 @@ An expression is arithmetic (+ - * / **, unary -, numbers, abs(x), sqrt(x)) on
 - final(C), min(C), max(C): the last, least or largest value of history column C over the run;
 - at(Y, X, v): the value of column Y where column X first reaches v, linearly interpolated between the two steps
   around it (at(chamber.pressure, tip_rotation, -90): the pressure at which the tip has turned through -90 degrees;
-  a run in which X never reaches v has no value: the evaluation fails with that said);
+  a run in which X never reaches v has no value: the optimiser records the design as infeasible, short by
+  min |X - v|, so that its sampler learns how far it fell short);
 - rms(C, v): sqrt(mean((C - v)^2)) over the steps after rest: how far a column stays from a target value.
 
 A constraint `A<=B` (or `A>=B`) holds when its violation A - B (B - A) is <= 0; Optuna's samplers take the violation.
@@ -76,7 +77,12 @@ COLUMN_ARGUMENTS = {"final": 1, "min": 1, "max": 1, "at": 2, "rms": 1}  # how ma
 
 class NoValue(Exception):
     """The run has no value for an expression (a column that never reaches the level at() asks for, a summary value
-    this run lacks); the evaluation fails with the message."""
+    this run lacks). shortfall: for at(), how far the column stayed from the level (min |X - v| over the run), which
+    the optimiser tells the sampler as the violation of a design that fell short; None otherwise."""
+
+    def __init__(self, message: str, shortfall: float | None = None):
+        super().__init__(message)
+        self.shortfall = shortfall
 
 
 def dotted_name(node: ast.expr) -> str | None:
@@ -167,7 +173,8 @@ def column_function(name: str, columns: list[np.ndarray], numbers: list[float], 
         return float(np.sqrt(np.mean((after_rest - numbers[0]) ** 2)))
     found = crossing(columns[0], columns[1], numbers[0])
     if found is None:
-        raise NoValue(f"{text}: the run never reaches {numbers[0]:g}")
+        shortfall = float(np.min(np.abs(columns[1] - numbers[0])))
+        raise NoValue(f"{text}: the run never reaches {numbers[0]:g} (it comes within {shortfall:.4g})", shortfall)
     return found
 
 

@@ -23,6 +23,7 @@ versions, machine), <name>_trace.png (best so far against evaluation) and, for t
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from collections.abc import Sequence
@@ -44,7 +45,6 @@ from .vary import Axis, check_axes, parse_vary
 
 SAMPLERS = ("tpe", "cmaes", "nsga2")
 MAX_TRIALS = 100_000
-LOST = "lost with a crashed worker process"
 
 
 def check_variables(base: Scene, axes: list[Axis]) -> list[Axis]:
@@ -115,12 +115,14 @@ class InProcess:
 class OptimizationReport:
     """What Optimization.run did: best (the best feasible evaluation's row, one objective; None if none), pareto
     (the rows of the feasible evaluations no other dominates, two objectives), rows (every evaluation, in order),
-    ran (evaluations run now), seconds, files written."""
+    ran (evaluations run now), lost (designs lost with a crashed worker process: asked again by the next run),
+    seconds, files written."""
 
     best: dict | None
     pareto: list[dict]
     rows: list[dict]
     ran: int
+    lost: int
     seconds: float
     files: list[Path]
 
@@ -214,9 +216,11 @@ class Optimization:
                 {
                     "trial": trial.number,
                     **{k: trial.params.get(k) for k in self.keys},
-                    **{f"objective_{i}": v for i, v in enumerate(trial.values or [])},
+                    **{f"objective_{i}": v if math.isfinite(v) else None for i, v in enumerate(trial.values or [])},
                     **{f"violation_{i}": v for i, v in enumerate(violations)},
-                    "feasible": trial.state.name == "COMPLETE" and all(v <= 0 for v in violations),
+                    "feasible": trial.state.name == "COMPLETE"
+                    and "error" not in attrs
+                    and all(v <= 0 for v in violations),
                     "seconds": attrs.get("seconds"),
                     "error": attrs.get("error"),
                     "folder": attrs.get("folder"),
@@ -233,11 +237,17 @@ class Optimization:
         return min(feasible, key=lambda r: sign * r["objective_0"], default=None), []
 
     def tell(self, study, trial, row: dict | None) -> None:
-        """Record an evaluation: its files under <name>/trial_NNNN/, its result told to the sampler."""
+        """Record an evaluation: its files under <name>/trial_NNNN/, its result told to the sampler. A design lost
+        with a crashed worker process (row None) is marked interrupted, to be asked again (open)."""
         from optuna.trial import TrialState
 
-        error = LOST if row is None else row["error"]
-        if row is not None and row["files"]:
+        if row is None:
+            trial.set_user_attr("interrupted", True)
+            study.tell(trial, state=TrialState.FAIL)
+            study.enqueue_trial(trial.params, user_attrs={"asked_again": trial.number})
+            return
+        error = row["error"]
+        if row["files"]:
             folder = self.folder / f"trial_{trial.number:04d}"
             folder.mkdir(parents=True, exist_ok=True)
             for name, content in row["files"].items():
@@ -246,24 +256,31 @@ class Optimization:
                     folder / name, lambda tmp, c=content, b=binary: tmp.write_bytes(c) if b else tmp.write_text(c)
                 )
             trial.set_user_attr("folder", str(folder.relative_to(self.out)))
-        trial.set_user_attr("seconds", None if row is None else row["seconds"])
+        trial.set_user_attr("seconds", row["seconds"])
         values = None
         if error is None:
-            assert row is not None
             try:
                 values, violations = self.goals.evaluate(row["record"])
-                trial.set_user_attr("violations", violations)
-                for i, violation in enumerate(violations):
-                    trial.set_constraint(f"constraint_{i}", violation)
             except NoValue as exc:
                 error = str(exc)
+                if exc.shortfall is not None and self.sampler_name != "cmaes":
+                    # short of a level an at() asks for: worse than every design that gets there (the worst
+                    # objective values), infeasible by how far it fell short (TPE and NSGA-II rank by that)
+                    trial.set_user_attr("error", error)
+                    trial.set_constraint("reached", exc.shortfall)
+                    study.tell(trial, [math.inf if d == "minimize" else -math.inf for d in self.goals.directions])
+                    return
         if error is not None:
             trial.set_user_attr("error", error)
             study.tell(trial, state=TrialState.FAIL)
-        else:
-            study.tell(trial, values)
+            return
+        trial.set_user_attr("violations", violations)
+        trial.set_constraint("reached", 0.0)
+        for i, violation in enumerate(violations):
+            trial.set_constraint(f"constraint_{i}", violation)
+        study.tell(trial, values)
 
-    def record(self, status: str, rows: list[dict], executor: dict | None, ran: int, seconds: float) -> dict:
+    def record(self, status: str, rows: list[dict], executor: dict | None, ran: int, seconds: float, lost: int) -> dict:
         best, pareto = self.best(rows)
         return {
             **self.identity,
@@ -276,6 +293,7 @@ class Optimization:
             "pareto": pareto,
             "rows": rows,
             "ran": ran,
+            "lost": lost,
             "seconds": seconds,
             "executor": executor,
             "versions": versions(ray=bool(executor and executor["executor"] == "ray")),
@@ -284,7 +302,7 @@ class Optimization:
         }
 
     def write(
-        self, study, status: str, executor: dict | None, ran: int, seconds: float, pictures: bool = True
+        self, study, status: str, executor: dict | None, ran: int, seconds: float, lost: int = 0, pictures: bool = True
     ) -> OptimizationReport:
         """The CSV, the JSON and (with pictures) the trace and Pareto pictures of every evaluation so far, each
         written whole."""
@@ -292,7 +310,7 @@ class Optimization:
         with signals.holding():  # a signal meanwhile waits for the files
             files = [
                 write_table(self.csv, self.columns, rows),
-                save_json(self.json, self.record(status, rows, executor, ran, seconds)),
+                save_json(self.json, self.record(status, rows, executor, ran, seconds, lost)),
             ]
         if pictures and any(r["error"] is None for r in rows):
             labels, directions = self.goals.texts, list(self.goals.directions)
@@ -302,32 +320,36 @@ class Optimization:
                 plane = pareto_figure(rows, labels, directions)
                 files.append(write_atomic(self.pareto_png, lambda tmp: plane.savefig(tmp, format="png", dpi=100)))
         best, pareto = self.best(rows)
-        return OptimizationReport(best, pareto, rows, ran, seconds, files)
+        return OptimizationReport(best, pareto, rows, ran, lost, seconds, files)
 
     def run(self, executor, function=evaluate_design, on_trial=None) -> OptimizationReport:
         """Evaluate designs on an entered executor until `trials` evaluations are recorded, in batches of its
         capacity(); on_trial(row, (best, pareto)) after each (the best so far: Optimization.best). function(task):
-        evaluate_design, or what returns rows like its (a test's analytic objective).
-        Ctrl-C: the evaluations in flight are told, the files written, then it re-raises."""
+        evaluate_design, or what returns rows like its (a test's analytic objective). A batch that lost designs
+        with a crashed worker process (a broken pool) is the last (report.lost; the same study run again asks them
+        again). Ctrl-C: the evaluations in flight are told, the files written, then it re-raises."""
         with lock_stem(self.out, self.name):  # no other run writes this study meanwhile
             study = self.open()
             described = executor.describe()
-            start, ran, status = time.perf_counter(), 0, "interrupted"
+            start, ran, lost, status = time.perf_counter(), 0, 0, "interrupted"
             done = len(self.rows(study))
             try:
-                while done < self.trials:
+                while done < self.trials and not lost:
                     asked = [study.ask(self.distributions) for _ in range(min(executor.capacity(), self.trials - done))]
                     tasks = [Task(self.scene_toml, {k: t.params[k] for k in self.keys}, self.options) for t in asked]
                     for index, row in executor.run(tasks, function):
                         self.tell(study, asked[index], row)
+                        if row is None:
+                            lost += 1
+                            continue
                         ran, done = ran + 1, done + 1
                         if on_trial is not None:
                             rows = self.rows(study)
                             on_trial(next(r for r in rows if r["trial"] == asked[index].number), self.best(rows))
-                    self.write(study, "running", described, ran, time.perf_counter() - start, pictures=False)
-                status = "done"
+                    self.write(study, "running", described, ran, time.perf_counter() - start, lost, pictures=False)
+                status = "done" if not lost else "incomplete"
             finally:
-                report = self.write(study, status, described, ran, time.perf_counter() - start)
+                report = self.write(study, status, described, ran, time.perf_counter() - start, lost)
         return report
 
 
