@@ -31,7 +31,7 @@ from dataclasses import asdict, dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
-from .. import signals
+from .. import runtime, signals
 from ..errors import require
 from ..io.output import check_stem, lock_stem, prepare_directory, save_json, write_atomic
 from ..scene.build import Scene
@@ -92,9 +92,12 @@ def make_sampler(name: str, goals: Goals, trials: int, seed: int):
 
 
 class InProcess:
-    """An executor that runs the tasks here, one after the other (a function that cannot be pickled, a test)."""
+    """An executor that runs the tasks here, one after the other (a function that cannot be pickled, a test). Entered,
+    it starts Taichi here as tp.simulate does (every core) unless it runs already, so that a design's runtime.init
+    (one thread, as in a worker) finds it started."""
 
     def __enter__(self):
+        runtime.ensure_initialised()
         return self
 
     def __exit__(self, *exc):

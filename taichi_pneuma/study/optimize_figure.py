@@ -55,7 +55,7 @@ def trace_figure(rows: list[dict], labels: list[str], directions: list[str]):
         failed = [n for n, r in zip(order, rows) if r.get("error") is not None]
         if failed:
             ax.plot(failed, np.zeros(len(failed)), "|", color="0.5", transform=ax.get_xaxis_transform(), ms=12)
-        ax.set(ylabel=f"{label} ({direction})")
+        ax.set_title(f"{direction} {label}", fontsize=9)
         ax.legend(fontsize=8)
     axes[-1].set(xlabel="evaluation")
     failed_count = sum(r.get("error") is not None for r in rows)
@@ -78,6 +78,7 @@ def pareto_figure(rows: list[dict], labels: list[str], directions: list[str]):
     front = pareto_front([r for r in done if r["feasible"]], directions)
     if front:
         ax.plot(*zip(*[objectives(r, 2) for r in front]), "-s", color="k", ms=5, label="Pareto front")
-    ax.set(xlabel=f"{labels[0]} ({directions[0]})", ylabel=f"{labels[1]} ({directions[1]})")
+    ax.set_xlabel(f"{labels[0]} ({directions[0]})", fontsize=8)
+    ax.set_ylabel(f"{labels[1]} ({directions[1]})", fontsize=8)
     ax.legend(fontsize=8)
     return figure
