@@ -128,7 +128,7 @@ def ramp(task):
 
 
 def test_a_design_short_of_the_level_at_asks_for_is_infeasible_by_how_far(tmp_path):
-    """at(main.pressure, tip_rotation, 5) = (E / 10) 5 / (100 cy) where 100 cy >= 5; below, short by min(5, 5 - 100 cy)."""
+    """at(main.pressure, tip_rotation, 5) = (E / 10) 5 / (100 cy) where 100 cy >= 5, else short by min(5, 5-100 cy)."""
     report = tp.optimize(
         BEAM, BOWL, minimize="at(main.pressure, tip_rotation, 5)", trials=30, out=tmp_path, evaluate=ramp
     )
@@ -187,6 +187,7 @@ def test_a_2d_scene_records_each_design_as_the_same_design_run_alone(tmp_path):
     assert report.best["objective_0"] == max(r["objective_0"] for r in report.rows)
 
 
+@pytest.mark.slow  # two studies, each spawning two workers: ~15 to 35 s
 def test_the_app_on_the_pool_continues_a_study_to_more_trials(tmp_path, capsys):
     out = tmp_path / "out"
     flags = ["--vary", "cy=-0.15:0.15", "--minimize", "tip_dy", *COARSE, "--workers", "2", "--out", str(out)]
@@ -202,6 +203,7 @@ def test_the_app_on_the_pool_continues_a_study_to_more_trials(tmp_path, capsys):
     assert "best: #" in capsys.readouterr().out
 
 
+@pytest.mark.slow  # a local Ray started and stopped: ~25 to 40 s
 def test_the_app_on_a_local_ray_records_the_designs_run_alone(tmp_path):
     pytest.importorskip("ray")
     out = tmp_path / "ray"

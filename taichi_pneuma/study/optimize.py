@@ -278,9 +278,10 @@ class Optimization:
             study.tell(trial, state=TrialState.FAIL)
             return
         trial.set_user_attr("violations", violations)
-        trial.set_constraint("reached", 0.0)
-        for i, violation in enumerate(violations):
-            trial.set_constraint(f"constraint_{i}", violation)
+        if self.sampler_name != "cmaes":  # (CMA-ES takes no constraints)
+            trial.set_constraint("reached", 0.0)
+            for i, violation in enumerate(violations):
+                trial.set_constraint(f"constraint_{i}", violation)
         study.tell(trial, values)
 
     def record(self, status: str, rows: list[dict], executor: dict | None, ran: int, seconds: float, lost: int) -> dict:
