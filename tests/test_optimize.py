@@ -69,6 +69,15 @@ def test_goals_read_summary_values_history_columns_and_functions():
         Goals.parse(BEAM, [("minimize", "at(main.pressure, tip_rotation, -9)")]).evaluate(run)
 
 
+def test_rms_measures_the_distance_from_a_target_value_or_trajectory():
+    run = record(tip_dy=[0.0, -0.1, -0.3])
+    assert Goals.parse(BEAM, [("minimize", "rms(tip_dy, -0.2)")]).evaluate(run)[0] == pytest.approx([0.1])
+    trajectory = Goals.parse(BEAM, [("minimize", "rms(tip_dy, [-0.1, -0.2])")])
+    assert trajectory.evaluate(run)[0] == pytest.approx([np.sqrt(0.01 / 2)])  # only the second step is off, by 0.1
+    with pytest.raises(NoValue, match="the trajectory has 2 values, the run 3 steps after rest"):
+        trajectory.evaluate(record(tip_dy=[0.0, -0.1, -0.2, -0.3]))
+
+
 def bowl(task):
     """An analytic stand-in of a simulation: f = ((cy - 0.05) / 0.1)^2 + ((E - 12000) / 4000)^2 as the final
     tip_rotation, and 'max_stretch' = 1 + cy (a constraint on it bounds cy)."""
@@ -295,6 +304,8 @@ def test_a_killed_optimisation_resumes_with_no_design_lost_or_run_twice(tmp_path
         (["--vary", "cy=0:0.2", "--minimize", "__import__('os')"], "the functions are abs, sqrt"),
         (["--vary", "cy=0:0.2", "--minimize", "at(main.pressure, tip_rotation)"], "at() takes 3 arguments"),
         (["--vary", "cy=0:0.2", "--minimize", "'x'"], "'x' is not a number"),
+        (["--vary", "cy=0:0.2", "--minimize", "rms(tip_dy, [])"], "a list of one number or more"),
+        (["--vary", "cy=0:0.2", "--minimize", "rms(tip_dy, [1, 'a'])"], "'a' is not a number"),
         (["--vary", "cy=0:0.2"], "one or two objectives"),
         (["--vary", "cy=0:0.2"] + ["--minimize", "tip_dy"] * 3, "one or two objectives"),
         (["--vary", "cy=0:0.2", "--minimize", "tip_dy", "--constraint", "max_stretch<="], "does not parse"),

@@ -4,12 +4,13 @@ every evaluation recorded, resumable.
 
     pneuma-optimize benchmarks/optimize_beam.toml --vary cy=0:0.2 --vary chambers[0].semi_axes[1]=0.08:0.18 \\
         --minimize "at(main.pressure, tip_rotation, 6)" --constraint "at(max_stretch, tip_rotation, 6)<=1.35"
-    pneuma-optimize fiber_bending_3d --vary chambers[0].radius=5:6.5 --vary fibers[0].path.pitch=3:6 \\
+    pneuma-optimize fiber_bending_3d --vary chambers[0].radius=5:6.5 --vary fibers[0].path.radius=6.6:7.4 \\
         --minimize "at(chamber.pressure, tip_rotation, -90)" --constraint "max_stretch<=2.5" --trials 30 --ray
 
 Objectives and constraints are expressions over the run's summary values (max_stretch, tip_rotation_deg,
 blocked_force, chambers.<name>.final_pressure, extremes.tip_rotation.min, ...) and history columns (a name alone:
-its final value; final(C), min(C), max(C); at(Y, X, v): Y where X first reaches v; rms(C, v)), with + - * / **,
+its final value; final(C), min(C), max(C); at(Y, X, v): Y where X first reaches v; rms(C, v): C's distance from a
+value or, v a list [v1, v2, ...] of a value per step after rest, from a trajectory), with + - * / **,
 abs() and sqrt(); a constraint is EXPR<=VALUE or EXPR>=VALUE (docs: Optimising a design).
 
 Writes under --out: <name>.db (the Optuna study, SQLite: the same command again goes on from it, asking again the

@@ -16,7 +16,9 @@ An expression is arithmetic (+ - * / **, unary -, numbers, abs(x), sqrt(x)) on
   around it (at(chamber.pressure, tip_rotation, -90): the pressure at which the tip has turned through -90 degrees;
   a run in which X never reaches v has no value: the optimiser records the design as infeasible, short by
   min |X - v|, so that its sampler learns how far it fell short);
-- rms(C, v): sqrt(mean((C - v)^2)) over the steps after rest: how far a column stays from a target value.
+- rms(C, v): sqrt(mean((C - v)^2)) over the steps after rest: how far a column stays from a target value, or, v a
+  list [v1, v2, ...] of one value per step after rest, from a target trajectory (rms(tip_dy, [-0.1, -0.2, -0.3]); a
+  run with another number of steps has no value).
 
 A constraint `A<=B` (or `A>=B`) holds when its violation A - B (B - A) is <= 0; Optuna's samplers take the violation.
 """
@@ -145,7 +147,12 @@ class Expression:
                 except ValueError as exc:
                     raise NoValue(f"{self.text}: {exc}") from None
             columns = [column_of(record, dotted_name(a) or "") for a in node.args[: COLUMN_ARGUMENTS[name]]]
-            numbers = [self._value(a, record) for a in node.args[COLUMN_ARGUMENTS[name] :]]
+            numbers = [
+                np.array([self._value(e, record) for e in a.elts])
+                if isinstance(a, ast.List)
+                else self._value(a, record)
+                for a in node.args[COLUMN_ARGUMENTS[name] :]
+            ]
             return column_function(name, columns, numbers, self.text)
         key = dotted_name(node)
         assert key is not None
@@ -163,14 +170,19 @@ def column_of(record: dict, name: str) -> np.ndarray:
     return np.asarray(record["history"][name], dtype=float)
 
 
-def column_function(name: str, columns: list[np.ndarray], numbers: list[float], text: str) -> float:
+def column_function(name: str, columns: list[np.ndarray], numbers: list, text: str) -> float:
     if name == "final":
         return float(columns[0][-1])
     if name in ("min", "max"):
         return float(getattr(np, name)(columns[0]))
     if name == "rms":
         after_rest = columns[0][1:] if len(columns[0]) > 1 else columns[0]
-        return float(np.sqrt(np.mean((after_rest - numbers[0]) ** 2)))
+        target = np.asarray(numbers[0])
+        if target.ndim and len(target) != len(after_rest):
+            raise NoValue(
+                f"{text}: the trajectory has {len(target)} values, the run {len(after_rest)} steps after rest"
+            )
+        return float(np.sqrt(np.mean((after_rest - target) ** 2)))
     found = crossing(columns[0], columns[1], numbers[0])
     if found is None:
         shortfall = float(np.min(np.abs(columns[1] - numbers[0])))
@@ -250,6 +262,11 @@ class Checker:
             column = dotted_name(argument)
             require(column in self.columns, f"{where}: {self.unknown(column or ast.unparse(argument), True)}")
         for argument in node.args[columns:]:
+            if name == "rms" and isinstance(argument, ast.List):  # a trajectory: a number per step after rest
+                require(argument.elts, f"{where}: rms()'s trajectory is a list of one number or more")
+                for item in argument.elts:
+                    self.check(item, where)
+                continue
             self.check(argument, where)
 
     def expression(self, text: str, where: str) -> Expression:
