@@ -32,7 +32,7 @@ from unittest import mock
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 RESULTS = ROOT / "benchmarks" / "results"
-APPS = ("inflate", "steer", "reach", "sweep", "bench", "serve", "reduce")
+APPS = ("inflate", "steer", "reach", "sweep", "optimize", "bench", "serve", "reduce")
 SCENE_KEYS = {2: "guide/scene_keys_2d.md", 3: "guide/scene_keys_3d.md"}  # under docs/, committed
 REGENERATE = "python docs/_generate.py"
 GENERATED = DOCS / "_generated"  # the pieces other pages include (committed)
@@ -106,6 +106,12 @@ RESULTS_PAGES = {
         "Design studies: throughput on a process pool and on Ray",
         ("benchmarks/sweep.py", None),
         "python benchmarks/sweep.py --out benchmarks/results",
+    ),
+    "optimize_vs_grid": (
+        "optimize",
+        "The design optimiser against a 100-point grid",
+        ("benchmarks/optimize_vs_grid.py", None),
+        "python benchmarks/optimize_vs_grid.py",
     ),
     "render3d": (
         "performance",
@@ -382,7 +388,7 @@ def docstring_of(path: str, function: str | None) -> str:
 
 
 def results_pages() -> dict[str, str]:
-    pages: dict[str, list[str]] = {"performance": [], "accuracy": [], "stability": [], "scenes": []}
+    pages: dict[str, list[str]] = {"performance": [], "accuracy": [], "stability": [], "scenes": [], "optimize": []}
     for path in sorted(RESULTS.glob("*.md")):
         page, title, (source, function), command = RESULTS_PAGES.get(
             path.stem, ("performance", path.stem, (None, None), "the script named in its JSON")

@@ -28,7 +28,7 @@ from .. import limits
 from ..io.keys import SHORT_KEYS
 from ..io.output import check_stem, lock_stem, prepare_directory
 from .cli import add_ramp_arguments, add_scene_arguments, app_parser, exit_code, scene_of_flags
-from .workers import add_executor_arguments, executor_of
+from .workers import add_executor_arguments, executor_of, run_options
 
 
 def parser() -> argparse.ArgumentParser:
@@ -79,21 +79,12 @@ def row_line(row: dict, keys: list[str], labels: list[str]) -> str:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from ..study import RunOptions, Sweep, parse_vary
+    from ..study import Sweep, parse_vary
 
     axes = [parse_vary(text) for text in args.vary]
     base = scene_of_flags(args)
     executor = executor_of(args, here=False)
-    options = RunOptions(
-        args.tol,
-        args.max_iterations,
-        args.max_cuts,
-        args.max_triangles,
-        args.max_increments,
-        args.max_fibers,
-        args.max_obstacles,
-        args.arch,
-    )
+    options = run_options(args)
     out = prepare_directory(args.out)
     with lock_stem(out, check_stem(args.name)):  # from reading the rows done to writing the last: this run's
         sweep = Sweep(base, axes, out, args.name, args.samples, args.seed, options, args.retry_failed, args.max_runs)
