@@ -114,7 +114,7 @@ def run_case(name: str, parametric, imported, column: str, converged: float, err
 
 def markdown(results: dict, machine: str, day: str) -> str:
     lines = [
-        f"Machine: {machine}; {day}. Written by `python benchmarks/cad_import.py` (its docstring says what is "
+        f"Machine: {machine}. Written by `python benchmarks/cad_import.py` (its docstring says what is "
         "measured); the mesh cache off.",
         "",
         "| scene | geometry | mesh s | tetrahedra | nodes | quality min | quality 1 % | rubber volume | answer | "

@@ -41,6 +41,12 @@ HELP_WIDTH = 120  # the columns argparse formats an app's usage in (COLUMNS), th
 # results table stem -> (page, title, (module file, function or None: the docstring that says what it measures),
 #                         the command that writes it again)
 RESULTS_PAGES = {
+    "cad_import": (
+        "accuracy",
+        "CAD files against the parametric scenes they were drawn from",
+        ("benchmarks/cad_import.py", None),
+        "python benchmarks/cad_import.py",
+    ),
     "reduced": (
         "performance",
         "A reduced-order model (POD + ECSW) against the full model",
