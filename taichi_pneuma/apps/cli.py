@@ -353,12 +353,11 @@ def build(scene, args: argparse.Namespace):
     """Mesh the scene and build its terms in the budget of --max-triangles, and print the mesh size, the supports,
     the terms (and, where a --quality preset of args made the mesh, its measured error: preset_note) and each
     chamber's rest area."""
-    from ..result import ELEMENTS
     from ..scene.build import describe_supports
 
     built = scene.build(budget(args))
     mesh = built.mesh
-    kind = ("" if mesh.order == 1 else "quadratic ") + ELEMENTS[mesh.dim]
+    kind = mesh.family.words
     print(
         f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
         f"{mesh.n_elements} {kind}; {describe_supports(mesh, scene.effects)}; "

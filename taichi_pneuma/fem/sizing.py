@@ -48,7 +48,7 @@ def check_solid(scene, max_elements: int) -> None:
     linear = tetrahedra * family.weight
     per_step = 2 if any(e.contact for e in scene.effects) else 1
     memory = limits.BYTES_PER_TETRAHEDRON * linear + 24 * per_step * nodes * (scene.increments + 1)
-    quadratic = f" quadratic tetrahedra, counted {family.weight} times" if family.order == 2 else " tetrahedra"
+    quadratic = f" {family.words}" + (f", counted {family.weight} times" if family.weight > 1 else "")
     require(
         linear <= max_elements,
         f"the mesh has {tetrahedra}{quadratic} and needs about {memory / 1e9:.3g} GB; "
@@ -72,7 +72,7 @@ def check_planar(scene, max_triangles: int) -> None:
     vertices = linear / 2 + points
     per_step = 2 if any(e.contact for e in scene.effects) else 1
     memory = limits.BYTES_PER_TRIANGLE * worth + 16 * per_step * vertices * (scene.increments + 1)
-    quadratic = f" quadratic triangles, counted {family.weight} times" if family.order == 2 else " triangles"
+    quadratic = f" {family.words}" + (f", counted {family.weight} times" if family.weight > 1 else "")
     contact = f" and {pairs} self-contact pairs (walls of {max(walls)} nodes)" if pairs else ""
     require(
         worth <= max_triangles,
