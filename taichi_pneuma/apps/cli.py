@@ -16,6 +16,7 @@ import sys
 from .. import __version__, environment, limits, runtime, signals
 from ..errors import PneumaInputError, require, require_finite
 from ..fem import sizing
+from ..fem.elements import FAMILIES
 from ..io.units import MEASURES
 from ..render import COLOR_FIELDS, RENDERERS
 from .progress import step_line
@@ -152,8 +153,9 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
         "--order",
         type=int,
         default=None,
-        choices=(1, 2),
-        help="1: linear triangles, 2: quadratic triangles (overrides --quality)",
+        choices=[f.order for f in FAMILIES if f.dim == 2],
+        help=", ".join(f"{f.order}: {f.adjective} triangles" for f in FAMILIES if f.dim == 2)
+        + " (overrides --quality)",
     )
     p.add_argument(
         "--tol", type=float, default=None, help="Newton tolerance on |gradient| / force scale (overrides --quality)"
