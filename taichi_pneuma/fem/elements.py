@@ -268,7 +268,7 @@ def barycentric(points: np.ndarray) -> np.ndarray:
 SEGMENT = Simplex(1, {}, "segments")
 SEGMENTS = tuple(
     ElementFamily(f"P{p} segment", SEGMENT, order=p, quadrature_degree=2 * p - 2, edges=((0, 1),) if p > 1 else ())
-    for p in (1, 2)
+    for p in (1, 2, 3)
 )
 TRIANGLE_P1 = ElementFamily(
     "P1 triangle",
@@ -293,6 +293,20 @@ TRIANGLE_P2 = ElementFamily(
     measure_degree=4,
     weight=4,
     adjective="quadratic",
+)
+TRIANGLE_P3 = ElementFamily(
+    "P3 triangle",
+    TRIANGLE,
+    order=3,
+    quadrature_degree=4,
+    edges=((0, 1), (1, 2), (2, 0)),
+    facet_corners=((0, 1), (1, 2), (2, 0)),
+    meshio_cell="triangle10",
+    vtk_cell=69,  # VTK_LAGRANGE_TRIANGLE
+    facet_family=SEGMENTS[2],
+    measure_degree=7,
+    weight=9,
+    adjective="cubic",
 )
 TET_EDGES = ((0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3))
 TET_FACETS = ((1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1))
@@ -332,7 +346,7 @@ TET_P2 = ElementFamily(
     ),
     adjective="quadratic",
 )
-FAMILIES = (TRIANGLE_P1, TRIANGLE_P2, TET_P1, TET_P2)
+FAMILIES = (TRIANGLE_P1, TRIANGLE_P2, TRIANGLE_P3, TET_P1, TET_P2)
 
 
 ORDERS = tuple(sorted({f.order for f in FAMILIES}))
