@@ -1,11 +1,14 @@
-"""Element families as data: Lagrange elements on a simplex, of order 1 or 2.
+"""Element families as data: Lagrange elements on a simplex, of any order on segments and triangles, up to 2 on
+tetrahedra (fem/lagrange.py builds them from the simplex lattice).
 
-A family is its reference cell (the unit simplex of dimension d, with its quadrature rules), its order
-and its node numbering: the d + 1 corners, then (order 2) one node at the middle of each listed edge.
-In barycentric coordinates L_0 = 1 - sum_i xi_i, L_i = xi_i (i = 1..d) its shape functions are
+A family is its reference cell (the unit simplex of dimension d, with its quadrature rules), its order p
+and its node numbering: the d + 1 corners, then each listed edge's p - 1 nodes from its first corner to its
+second, then (a triangle of order 3 or more) its interior nodes. In barycentric coordinates
+L_0 = 1 - sum_i xi_i, L_i = xi_i (i = 1..d) its shape functions are the lattice's (lagrange.py), e.g.
 
     order 1:  N_i = L_i,
     order 2:  N_i = L_i (2 L_i - 1) at corner i,   N_ij = 4 L_i L_j at the middle of edge ij,
+    order 3:  N_i = L_i (3 L_i - 1) (3 L_i - 2) / 2,   9/2 L_i L_j (3 L_i - 1) on edge ij near i,   27 L_0 L_1 L_2,
 
 and every quantity a solver needs follows from that: the reference nodes, the shape functions and
 their gradients dN/dxi, and, on a mesh with node positions X_a (isoparametric),
@@ -14,27 +17,36 @@ their gradients dN/dxi, and, on a mesh with node positions X_a (isoparametric),
     G_qa = dN_a/dX = (dN_a/dxi)(xi_q) (dX/dxi)^-1,
     W_q = w_q det dX/dxi / d!   (rule weights w_q sum to 1, the reference simplex has volume 1/d!).
 
-Rules are keyed by their degree (exact for every polynomial of that degree); a family integrates its
-energy with the rule of its quadrature_degree: 1 point for linear elements (F is constant), degree 2
-for quadratic ones (exact for their small-strain stiffness, whose integrand dN_a/dX . dN_b/dX is of
-degree 2). facets: each boundary facet's nodes, the facet's corners first, then its midside nodes,
-oriented so the outward normal follows: for a triangle (segment facets, element counter-clockwise) the
-outward normal lies to the right of the facet's direction; for a tetrahedron (triangle facets, element
-of positive volume det[X_1 - X_0, X_2 - X_0, X_3 - X_0] > 0) the facet's corners c_0, c_1, c_2 turn
-counter-clockwise seen from outside, (c_1 - c_0) x (c_2 - c_0) pointing out, and a quadratic facet is a
-6-node triangle in the triangle's own numbering (corners, then the middles of edges 01, 12, 20).
+Rules are keyed by their degree (exact for every polynomial of that degree; Simplex.rule gives the conical
+product rule of lagrange.py for a degree without a fixed one); a family integrates its energy with the rule
+of its quadrature_degree, 2 p - 2: 1 point for linear elements (F is constant), degree 2 for quadratic ones,
+4 for cubic ones (exact for their small-strain stiffness, whose integrand dN_a/dX . dN_b/dX is of degree
+2 p - 2 on a straight element). facets: each boundary facet's nodes, the facet's corners first, then its
+other nodes in its facet family's order, oriented so the outward normal follows: for a triangle (segment
+facets, element counter-clockwise) the outward normal lies to the right of the facet's direction; for a
+tetrahedron (triangle facets, element of positive volume det[X_1 - X_0, X_2 - X_0, X_3 - X_0] > 0) the
+facet's corners c_0, c_1, c_2 turn counter-clockwise seen from outside, (c_1 - c_0) x (c_2 - c_0) pointing
+out, and a quadratic facet is a 6-node triangle in the triangle's own numbering (corners, then the middles
+of edges 01, 12, 20).
 
-The families: triangles and tetrahedra, linear and quadratic. The tetrahedron's edges are numbered
-(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3), which is VTK's (and meshio's) 10-node tetrahedron.
+The families (FAMILIES, the registry every lookup reads: family_for, family_of, the orders a scene may ask):
+triangles of order 1, 2 and 3, tetrahedra of order 1 and 2; segments of order 1 to 3 are the triangles'
+facets. The tetrahedron's edges are numbered (0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3), which is VTK's
+(and meshio's) 10-node tetrahedron; the cubic triangle's numbering is VTK's Lagrange triangle's (meshio's and
+gmsh's triangle10).
 
-A family also answers what the code around the solver asks of an element, so that a new family is added here (and
-in the mesher that makes it): its cell names in files (meshio_cell, vtk_cell), the family of its boundary facets
-(facet_family: a tetrahedron's are triangles; a triangle's edges have none), the node permutation that reverses
-its orientation (mirror), the linear triangles it is drawn with (split, for a triangle family; a 3D body is drawn
-by its facets), the degree of the rule that integrates N_a det dX/dxi exactly (measure_degree: nodal measures, a
-wall's volume), and its cost (weight: linear elements' worth of memory and time, for the resource limits: a
-quadratic triangle 4, it has as many nodes as four linear ones and a Hessian block 4 times larger; a quadratic
-tetrahedron 8, its Hessian block 6.25 times a linear one's, its measured memory 6.2 times).
+A family also answers what the code around the solver asks of an element, so that a new family is one entry
+here: its cell names in files (meshio_cell, vtk_cell), the family of its boundary facets (facet_family: a
+tetrahedron's are triangles, a triangle's segments; a 2D chamber wall's area form is the segment's,
+terms/chambers/wall.py), the node permutation that reverses its orientation (mirror), the linear simplices it
+is cut into (split: drawing, the embedding of points; a 3D body is drawn by its facets), the mesh of its order
+made from a linear one (lift: edge nodes shared between neighbours, interior nodes; placed_interior puts those
+where a curved boundary says), the degree of the rule that integrates N_a det dX/dxi exactly (measure_degree:
+nodal measures, a wall's volume; 3 p - 2 on a curved triangle), its words in messages (adjective) and its cost
+(weight: linear elements' worth of memory and time, for the resource limits: a quadratic triangle 4, it has as
+many nodes as four linear ones and a Hessian block 4 times larger; a cubic one 9, as many nodes as nine linear
+ones, its Hessian block 11 times; a quadratic tetrahedron 8, its Hessian block 6.25 times a linear one's, its
+measured memory 6.2 times).
 """
 
 from __future__ import annotations
