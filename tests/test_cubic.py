@@ -167,3 +167,12 @@ def test_cubic_cells_are_written_as_vtk_lagrange_triangles(tmp_path):
     x, t = mesh.vertices, mesh.elements
     straight = ~np.isin(t[:, 3], np.concatenate([mesh.chambers[0], mesh.boundary]))
     assert np.allclose(x[t[straight, 3]], (2 * x[t[straight, 0]] + x[t[straight, 1]]) / 3, atol=1e-15)
+
+
+def test_the_quality_ladder_leaves_a_cubic_scene_its_mesh():
+    """--quality's 2D ladder is of linear and quadratic meshes: a cubic scene keeps its area and order at every rung
+    (only the Newton tolerance changes), where a quadratic one moves up and down the ladder."""
+    from taichi_pneuma.apps.quality import QUALITY_STEPS, planar_preset
+
+    assert all(planar_preset(q, 0.01, 3) == (0.01, 3) for q in QUALITY_STEPS)
+    assert planar_preset("draft", 0.01, 2)[0] > 0.01 and planar_preset("draft", 0.01, 1)[0] > 0.01
