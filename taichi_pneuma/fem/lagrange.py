@@ -102,13 +102,13 @@ def permuted(nodes: tuple, corners: tuple) -> tuple[int, ...]:
     return tuple(index[tuple(alpha[c] for c in corners)] for alpha in nodes)
 
 
-def facet_nodes(nodes: tuple, facet_nodes_: tuple, corners: tuple) -> tuple[int, ...]:
-    """The element's nodes (indices) on the facet with these corners, in the facet family's order (facet_nodes_:
+def facet_nodes(nodes: tuple, facet_lattice: tuple, corners: tuple) -> tuple[int, ...]:
+    """The element's nodes (indices) on the facet with these corners, in the facet family's order (facet_lattice:
     its lattice): the facet's lattice point beta is the element's alpha with alpha[corners[i]] = beta_i."""
     index = {alpha: a for a, alpha in enumerate(nodes)}
     size = len(nodes[0])
     out = []
-    for beta in facet_nodes_:
+    for beta in facet_lattice:
         alpha = [0] * size
         for c, b in zip(corners, beta):
             alpha[c] = b

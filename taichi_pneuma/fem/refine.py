@@ -28,14 +28,6 @@ def with_edge_nodes(vertices: np.ndarray, elements: np.ndarray, edges, order: in
     return np.vstack([vertices, new.reshape(-1, vertices.shape[1])]), along
 
 
-def with_edge_midpoints(vertices: np.ndarray, elements: np.ndarray, edges=((0, 1), (1, 2), (2, 0))):
-    """The vertices with the midpoint of every edge of the (corner) elements appended, and mid(a, b): the
-    index of the midpoint of edge (a, b), elementwise over index arrays (with_edge_nodes of order 2). edges: the
-    corner pairs of an element that are its edges (a triangle's by default)."""
-    vertices, along = with_edge_nodes(vertices, elements, edges, 2)
-    return vertices, lambda a, b: along(a, b)[..., 0]
-
-
 def subdivided(segments: np.ndarray, markers: np.ndarray, along) -> tuple[np.ndarray, np.ndarray]:
     """Boundary segments (s, 2) and their markers cut at their edge nodes along(a, b) (s, p - 1) into p pieces
     each: (p s, 2), (p s,), the first pieces of every segment, then the second ones, ..."""
