@@ -12,7 +12,7 @@ Committed (readable in the repository, where the pages that include them are rea
 writes them again, tests/test_docs_generated.py checks they are current): the _generated/ pieces above, and
 
 - guide/scene_keys_2d.md and guide/scene_keys_3d.md: every key of the scene file, from
-  scene/scenefile.key_reference() (the format's one declaration, scene/sceneformat.py), the 3D body and chamber
+  scene/scenefile.key_reference() (the format's one declaration, scene/scene_keys.py), the 3D body and chamber
   shapes' keys in the second, every other key (those of every scene and of the 2D shapes) in the first.
 
 plain_docstring() reads the docstrings, written as plain text for help() and a terminal, as reStructuredText
@@ -32,7 +32,7 @@ from unittest import mock
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 RESULTS = ROOT / "benchmarks" / "results"
-APPS = ("inflate", "steer", "reach", "sweep", "bench", "serve", "reduce")
+APPS = ("inflate", "steer", "reach", "sweep", "optimize", "bench", "serve", "reduce")
 SCENE_KEYS = {2: "guide/scene_keys_2d.md", 3: "guide/scene_keys_3d.md"}  # under docs/, committed
 REGENERATE = "python docs/_generate.py"
 GENERATED = DOCS / "_generated"  # the pieces other pages include (committed)
@@ -106,6 +106,12 @@ RESULTS_PAGES = {
         "Design studies: throughput on a process pool and on Ray",
         ("benchmarks/sweep.py", None),
         "python benchmarks/sweep.py --out benchmarks/results",
+    ),
+    "optimize_vs_grid": (
+        "optimize",
+        "The design optimiser against a 100-point grid",
+        ("benchmarks/optimize_vs_grid.py", None),
+        "python benchmarks/optimize_vs_grid.py",
     ),
     "render3d": (
         "performance",
@@ -311,7 +317,7 @@ def key_dimensions(keys: list) -> list[int]:
     """Each key's table: 3 for a key of a 3D body or chamber shape (a variant of body.shape or chambers[].shape
     other than the declaration's PLANAR_BODIES and PLANAR_CHAMBERS) or of a table inside one, 2 for the others
     (the 2D shapes' keys and those of every scene)."""
-    from taichi_pneuma.scene.sceneformat import PLANAR_BODIES, PLANAR_CHAMBERS
+    from taichi_pneuma.scene.shape_keys import PLANAR_BODIES, PLANAR_CHAMBERS
 
     planar = {"body.shape": PLANAR_BODIES, "chambers[].shape": PLANAR_CHAMBERS}
     enclosing: list[tuple[str, int]] = []  # the shape variant's keys this key lies inside, with their dimension
@@ -363,7 +369,7 @@ def scene_keys_page(dim: int) -> str:
         f"{other}."
     )
     return (
-        f"<!-- written by `{REGENERATE}` from the scene file's declaration (scene/sceneformat.py): do not edit -->\n\n"
+        f"<!-- written by `{REGENERATE}` from the scene file's declaration (scene/scene_keys.py): do not edit -->\n\n"
         f"{which} A key with a unit takes the scene's units (`units = ...`; the unit column gives the "
         f"SI one). Its default is in SI, converted into the scene's units; a numerical default (a penalty "
         f"stiffness, a barrier distance, a mesh size: 'unitless scenes only') is for unitless scenes, and a "
@@ -382,7 +388,7 @@ def docstring_of(path: str, function: str | None) -> str:
 
 
 def results_pages() -> dict[str, str]:
-    pages: dict[str, list[str]] = {"performance": [], "accuracy": [], "stability": [], "scenes": []}
+    pages: dict[str, list[str]] = {"performance": [], "accuracy": [], "stability": [], "scenes": [], "optimize": []}
     for path in sorted(RESULTS.glob("*.md")):
         page, title, (source, function), command = RESULTS_PAGES.get(
             path.stem, ("performance", path.stem, (None, None), "the script named in its JSON")

@@ -34,6 +34,7 @@ _EXPORTS = {
     "init": ".runtime",
     "live": ".realtime.web",
     "load_scene": ".api",
+    "optimize": ".study.optimize",
     "reference_scene": ".scene",
     "simulate": ".api",
 }
@@ -47,6 +48,7 @@ __all__ = [
     "init",
     "live",
     "load_scene",
+    "optimize",
     "reference_scene",
     "simulate",
 ]

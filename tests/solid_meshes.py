@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from taichi_pneuma.fem.body import Body, SizeEstimate
 from taichi_pneuma.fem.elements import TET_EDGES
 from taichi_pneuma.fem.layered import extrude, layered_tets, spherical_shell_octant
 from taichi_pneuma.fem.mesh import Mesh
@@ -35,13 +36,20 @@ PLANES = tuple(Roller(tuple(n), (0.0, 0.0, 0.0)) for n in np.eye(3))
 
 
 @dataclass(frozen=True)
-class MeshOf:
-    """A scene geometry whose mesh is ready: its chambers are the mesh's, named in order."""
+class MeshOf(Body):
+    """A scene geometry whose mesh is ready (triangles or tetrahedra): its chambers are the mesh's, named in order;
+    its supports are the mesh's node sets already."""
 
     ready: Mesh
     names: tuple = ("main",)
 
-    dim = 3
+    clamp = None
+    tip = PointSet("right")
+    rollers = ()
+
+    @property
+    def dim(self) -> int:  # a test double of either dimension
+        return self.ready.vertices.shape[1]
 
     @property
     def order(self) -> int:
@@ -51,8 +59,14 @@ class MeshOf:
     def chambers(self):
         return tuple((name, None) for name in self.names)
 
-    def mesh(self, budget: Budget) -> Mesh:
+    def mesh(self, budget: Budget = Budget()) -> Mesh:
         return self.ready  # made already, in no budget
+
+    def size_estimate(self) -> SizeEstimate:
+        return SizeEstimate(self.ready.n_elements, self.ready.n_vertices)
+
+    def mesh_values(self) -> dict:
+        return {"order": self.order}
 
 
 def extruded_beam(max_area: float, order: int = 1, layers: int = 1, chamber_points: int = 32, cy: float = 0.15):

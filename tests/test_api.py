@@ -13,8 +13,8 @@ from scenes import small_run
 
 import taichi_pneuma as tp
 from taichi_pneuma.render.plots import command_axis
-from taichi_pneuma.scene.sceneformat import scene_data
-from taichi_pneuma.scene.schema import parse_assignment
+from taichi_pneuma.scene.dotted_edits import parse_assignment
+from taichi_pneuma.scene.scenefile import scene_data
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = sorted((ROOT / "taichi_pneuma" / "scenes").glob("*.toml"))

@@ -30,7 +30,6 @@ from taichi_pneuma.terms.chambers import (
     ClosedGas,
     PressureControl,
     Syringe,
-    register,
 )
 
 ATMOSPHERE = 1e3  # a soft gas for the reference beam (E = 1e4): gauge pressures of a few hundred
@@ -339,7 +338,7 @@ def test_suction_with_allow_vacuum_and_a_taken_name():
         name = "area"
 
     with pytest.raises(ValueError, match="'area' is taken by AreaControl"):
-        register(Impostor)
+        KINDS.register(Impostor)
 
 
 def test_the_extending_page_shows_the_shipped_closed_gas_kind():

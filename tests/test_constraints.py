@@ -8,8 +8,7 @@ from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Rectangle
 from taichi_pneuma.fem.supports import PointSet, Roller
 from taichi_pneuma.scene.build import Scene, reference_scene
-from taichi_pneuma.scene.scenefile import read_scene
-from taichi_pneuma.scene.sceneformat import scene_data
+from taichi_pneuma.scene.scenefile import read_scene, scene_data
 from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms.constraints import Clamp, NormalClamp
 from taichi_pneuma.terms.model import Configuration

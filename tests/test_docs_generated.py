@@ -26,7 +26,7 @@ def test_each_committed_scene_key_table_is_what_the_generator_writes_now(dim):
 def test_each_committed_generated_piece_is_what_the_generator_writes_now():
     pages = generate.committed_pages()
     pieces = [path for path in pages if path.parent == generate.GENERATED]
-    assert len(pieces) == len(generate.APPS) + 4  # an app page each, four results pages
+    assert len(pieces) == len(generate.APPS) + 5  # an app page each, five results pages
     stale = [path.name for path in pieces if not path.exists() or path.read_text() != pages[path]]
     assert not stale, f"docs/_generated/{', '.join(stale)} out of date: run `{generate.REGENERATE}` and commit them"
 

@@ -21,7 +21,6 @@ from taichi_pneuma.materials.neo_hookean import YOUNGS_MODULUS
 from taichi_pneuma.materials.registry import NAMED, POISSON_RATIO, REGISTERED
 from taichi_pneuma.scene.build import Material, Scene
 from taichi_pneuma.scene.scenefile import key_reference, read_scene
-from taichi_pneuma.scene.sceneformat import scene_table
 from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms.base import Term
 from taichi_pneuma.terms.effects import EFFECTS, Effect
@@ -61,7 +60,7 @@ class TipForce(Effect):
 
 @pytest.fixture
 def tip_force_registered():
-    EFFECTS["tip_force"] = TipForce
+    EFFECTS.register(TipForce)
     yield
     del EFFECTS["tip_force"]
 
@@ -105,12 +104,10 @@ class SaintVenantKirchhoffMaterial(MaterialForm):
 
 @pytest.fixture
 def saint_venant_kirchhoff_registered():
-    register_form(SaintVenantKirchhoffMaterial)
-    scene_table.cache_clear()  # the scene format lists the forms registered when it is first declared
+    register_form(SaintVenantKirchhoffMaterial)  # the scene format lists the forms registered when it is used
     yield
     del NAMED["law", "saint_venant_kirchhoff"]
     REGISTERED.remove(SaintVenantKirchhoffMaterial)
-    scene_table.cache_clear()
 
 
 def test_a_registered_material_form_is_read_checked_written_and_listed_by_the_scene_format(

@@ -21,7 +21,7 @@ from renderers import SOFTWARE
 from scenes import SMALL_FLAGS, small_run
 
 import taichi_pneuma as tp
-from taichi_pneuma.apps import bench, inflate, reach, serve, steer, sweep
+from taichi_pneuma.apps import bench, inflate, optimize, reach, serve, steer, sweep
 from taichi_pneuma.render.colours import TIP_PATH
 from taichi_pneuma.render.frames import PIN_HALF_PX, FrameRenderer, Track
 from taichi_pneuma.render.text import label_box
@@ -146,7 +146,15 @@ def test_every_shipped_file_is_package_data():
 
 # --- the apps: --help, flags and output --------------------------------------------------------------
 
-APPS = {"inflate": inflate, "reach": reach, "steer": steer, "sweep": sweep, "bench": bench, "serve": serve}
+APPS = {
+    "inflate": inflate,
+    "reach": reach,
+    "steer": steer,
+    "sweep": sweep,
+    "optimize": optimize,
+    "bench": bench,
+    "serve": serve,
+}
 
 
 def test_help_is_complete_and_starts_without_taichi():
@@ -156,8 +164,8 @@ def test_help_is_complete_and_starts_without_taichi():
         description = module.parser().description
         assert description == " ".join(module.__doc__.split("\n\n")[0].split()) and description.endswith("."), name
     code = (
-        "import sys\nfrom taichi_pneuma.apps import inflate, reach, steer, sweep, bench, serve\n"
-        "[m.parser().format_help() for m in (inflate, reach, steer, sweep, bench, serve)]\n"
+        "import sys\nfrom taichi_pneuma.apps import inflate, reach, steer, sweep, optimize, bench, serve\n"
+        "[m.parser().format_help() for m in (inflate, reach, steer, sweep, optimize, bench, serve)]\n"
         "print(sorted(m for m in ('taichi', 'scipy', 'triangle', 'matplotlib') if m in sys.modules))"
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -56,8 +56,8 @@ def test_a_2d_run_without_video_loads_no_module_it_does_not_use(tmp_path):
 
 def counting_gmsh(monkeypatch) -> list:
     """Count gmsh sessions (each mesh or estimate made afresh opens one)."""
-    calls, session = [], gmsh_mesher._session
-    monkeypatch.setattr(gmsh_mesher, "_session", lambda *a, **k: calls.append(1) or session(*a, **k))
+    calls, session = [], gmsh_mesher.session
+    monkeypatch.setattr(gmsh_mesher, "session", lambda *a, **k: calls.append(1) or session(*a, **k))
     return calls
 
 

@@ -32,7 +32,7 @@ from solid_meshes import box_with_cavity, lzma_vtu, moved_up
 
 from taichi_pneuma.apps.inflate import main
 from taichi_pneuma.fem.meshfile import write_mesh
-from taichi_pneuma.scene.sceneformat import SOLIDS
+from taichi_pneuma.scene.shape_keys import SOLIDS
 
 SCENES = Path(__file__).resolve().parent.parent / "taichi_pneuma" / "scenes"
 INCREMENTS = 3

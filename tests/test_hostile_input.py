@@ -22,8 +22,8 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Polygon
 from taichi_pneuma.limits import Budget
+from taichi_pneuma.scene.dotted_edits import parse_assignment, parse_key
 from taichi_pneuma.scene.scenefile import load_scene
-from taichi_pneuma.scene.schema import parse_assignment, parse_key
 from taichi_pneuma.scene.targets import read_targets_csv
 from taichi_pneuma.study import Sweep, parse_vary, plan, run_task, study_figure
 

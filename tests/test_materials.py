@@ -9,7 +9,7 @@ from fd import dense_hessian, fd_gradient, fd_hessian
 from solid_meshes import shell_octant
 
 from taichi_pneuma.backend import ti
-from taichi_pneuma.materials import LAWS, Law, StableNeoHookean, lame_parameters, register
+from taichi_pneuma.materials import LAWS, Law, StableNeoHookean, lame_parameters
 from taichi_pneuma.materials.law import element_parameters, stress_eigensystem
 from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.solve.newton import NewtonSolver
@@ -21,7 +21,7 @@ Arrays1, Arrays2, Arrays3 = (ti.types.ndarray(dtype=ti.f64, ndim=n) for n in (1,
 MU, LAM = lame_parameters(1e4, 0.45)
 
 
-@register
+@LAWS.register
 class SaintVenantKirchhoff(Law):
     """psi = mu |E|^2 + lam/2 (tr E)^2, E = (F^T F - I) / 2 (the worked example of docs/extending.md)."""
 

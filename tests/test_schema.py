@@ -9,6 +9,7 @@ import copy
 import dataclasses
 import re
 import tomllib
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -21,13 +22,13 @@ from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 from taichi_pneuma.fem.supports import SIDES, PointSet, Roller
+from taichi_pneuma.io import registry
 from taichi_pneuma.io.output import FORMULA
-from taichi_pneuma.io.units import UNITLESS, UNITS
+from taichi_pneuma.io.units import LENGTH, UNITLESS, UNITS
 from taichi_pneuma.materials import FORMS, IsochoricMaterial
 from taichi_pneuma.materials.presets import PRESETS, PresetMaterial
 from taichi_pneuma.scene.build import ChamberControl, Material, Region, Scene
-from taichi_pneuma.scene.scenefile import key_reference, read_scene
-from taichi_pneuma.scene.sceneformat import scene_data
+from taichi_pneuma.scene.scenefile import key_reference, read_scene, scene_data
 from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.scene.targets import Target
 from taichi_pneuma.terms.chambers import KINDS, AreaControl, PressureControl
@@ -250,6 +251,45 @@ class Probe(Effect):
     name = "probe"
 
 
+def test_a_registered_part_is_read_written_converted_and_listed_from_its_one_declaration(monkeypatch):
+    """A part declared by io/registry.py's idiom (a dataclass, its keys' doc, unit, allowed values and SI default
+    declared once by key(), registered by name): the key reference lists each key with them, the reader refuses a
+    value outside allowed naming it, a scene with units converts the SI default (1 m = 1000 mm), the writer writes
+    it back, and a second part of the same name is refused."""
+
+    @dataclass(frozen=True)
+    class Reach(Effect):
+        length: float | None = registry.key(doc="how far it reaches", unit=LENGTH, si=2.0)
+        side: str = registry.key("left", "which side", allowed=("left", "right"))
+        name = "reach_probe"
+
+        def terms(self, config, mesh, lumped_area, budget) -> list:
+            return []
+
+    effects = registry.Registry("effect")
+    effects.register(Reach)
+    monkeypatch.setitem(EFFECTS, "reach_probe", Reach)
+    rows = {row.key: row for row in key_reference()}
+    length, side = rows["effects.reach_probe.length"], rows["effects.reach_probe.side"]
+    assert (length.doc, length.unit, length.default) == ("how far it reaches", LENGTH, "2.0")
+    assert (side.doc, side.allowed, side.default) == ("which side", "left, right", '"left"')
+    scene = tp.reference_scene().with_values({"effects.reach_probe.side": "right"})
+    assert scene.effects == (Reach(2.0, "right"),)
+    data = {**scene_data(tp.reference_scene()), "effects": {"reach_probe": {"side": "right"}}}
+    millimetres = read_scene({**data, "units": "mm-kPa"}, "x")
+    assert millimetres.effects == (Reach(2000.0, "right"),)
+    assert read_scene(tomllib.loads(millimetres.to_toml()), "x") == millimetres
+    with pytest.raises(PneumaInputError, match="effects.reach_probe.side = 'up' is not one of left, right"):
+        tp.reference_scene().with_values({"effects.reach_probe.side": "up"})
+
+    @dataclass(frozen=True)
+    class Impostor(Effect):
+        name = "reach_probe"
+
+    with pytest.raises(ValueError, match="effect name 'reach_probe' is taken by Reach"):
+        effects.register(Impostor)
+
+
 def test_effect_parameters_keep_their_declared_types(monkeypatch):
     monkeypatch.setitem(EFFECTS, "probe", Probe)
     probe = Probe(3, "two words", True, (0.5, -1.0), [2.0, [3, 4]], 7)
@@ -347,13 +387,7 @@ def covering_scenes() -> list[Scene]:
             controls=(
                 ChamberControl(
                     ChamberSchedule(
-                        kind(
-                            **{
-                                name: 3.0
-                                for name, (_, default) in kind.parameters().items()
-                                if default is dataclasses.MISSING
-                            }
-                        ),
+                        kind(**{f.name: 3.0 for f in dataclasses.fields(kind) if f.default is dataclasses.MISSING}),
                         ((4, 2.0),),
                     )
                 ),
@@ -547,7 +581,8 @@ def imports_of(path: Path) -> set[str]:
 
 
 def test_scene_reaches_no_module_that_imports_it_back():
-    """The circle scene -> scenetoml -> scenefile -> scene (hidden by function-level imports) is gone:
+    """The circle scene -> scenetoml -> scenefile -> scene (hidden by function-level imports) is gone: the key
+    tables give a Scene's keyword arguments (build.py makes the Scene of them), and
     counting every import, inside functions too, nothing scene.py imports leads back to it."""
     modules = {
         ".".join(p.relative_to(PACKAGE.parent).with_suffix("").parts).removesuffix(".__init__"): p
@@ -560,7 +595,7 @@ def test_scene_reaches_no_module_that_imports_it_back():
             if module not in reached:
                 reached.add(module)
                 todo.append(module)
-    assert "taichi_pneuma.scene.sceneformat" in reached and "taichi_pneuma.scene.build" not in reached
+    assert "taichi_pneuma.scene.scene_keys" in reached and "taichi_pneuma.scene.build" not in reached
 
 
 def test_setting_one_of_two_exclusive_keys_replaces_the_other_and_none_unsets_a_key():

@@ -15,11 +15,11 @@ from taichi_pneuma.apps.inflate import main as inflate
 from taichi_pneuma.backend import has_ggui
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem import sizing
+from taichi_pneuma.io.tomltext import parse_toml
 from taichi_pneuma.limits import Budget
 from taichi_pneuma.render.frames3d import FrameRenderer3D, Track3D
-from taichi_pneuma.scene.scenefile import read_scene
-from taichi_pneuma.scene.sceneformat import scene_data
-from taichi_pneuma.scene.schema import parse_toml, set_key
+from taichi_pneuma.scene.dotted_edits import set_key
+from taichi_pneuma.scene.scenefile import read_scene, scene_data
 
 pytest.importorskip("gmsh", reason="gmsh is not installed (pip install 'taichi-pneuma[3d]')")
 
@@ -216,14 +216,15 @@ def test_resource_guard_estimates_before_meshing_and_caps_gmsh():
     fine = beam(size=0.01)
     with pytest.raises(
         PneumaInputError,
-        match=r"the mesh has \d+ tetrahedra and needs about .* GB; the limit is "
+        match=r"the mesh would have about \S+ tetrahedra and need about .* GB; the limit is "
         r"200000 elements \(--max-triangles raises it\)",
     ):
         sizing.check_scene(fine)
-    tets, nodes = beam(size=0.3).geometry.size_estimate()
+    estimate = beam(size=0.3).geometry.size_estimate()
+    tets, nodes = estimate.elements, estimate.nodes
     assert 500 < tets < 3000 and 0 < nodes < tets
     coarse = beam(size=0.5)  # its ellipsoid meshed by the curvature fallback: ~10 times the estimate
-    assert coarse.geometry.size_estimate()[0] < 300
+    assert coarse.geometry.size_estimate().elements < 300
     with pytest.raises(PneumaInputError, match=r"the mesh has \d+ tetrahedra; the limit is 400 "):
         coarse.build(Budget(400))
     with pytest.raises(PneumaInputError, match=r"the mesh has \d+ tetrahedra; the limit is 300 "):

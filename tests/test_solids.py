@@ -313,7 +313,7 @@ def test_a_filleted_half_cylinder_loses_a_quarter_round_along_every_edge():
     edge and its quarter round, along the edge's length, about the half circle's at the radius of that
     cross-section's centroid, R - (10 - 3 pi) / (12 - 3 pi) f (Pappus); the corners, where the fillets meet,
     differ by O(f^3). A missed edge would lose 7 f^3 or more less."""
-    from taichi_pneuma.fem.gmsh_mesher import _session
+    from taichi_pneuma.fem.gmsh_session import session as _session
 
     R, L, f = 0.5, 2.0, 0.04
     corner = (1 - np.pi / 4) * f**2

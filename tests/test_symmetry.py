@@ -15,10 +15,9 @@ rollers (u_y = 0) on that edge, and the chamber closed by it. It must give the f
     cannot do.
 """
 
-from dataclasses import dataclass
-
 import numpy as np
 import pytest
+from solid_meshes import MeshOf
 
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.mesh import Mesh
@@ -26,7 +25,6 @@ from taichi_pneuma.fem.planar import BeamGeometry, Geometry
 from taichi_pneuma.fem.polygons import enclosed_area, signed_area
 from taichi_pneuma.fem.shapes import Ellipse, Rectangle
 from taichi_pneuma.fem.supports import PointSet, Roller
-from taichi_pneuma.limits import Budget
 from taichi_pneuma.scene.build import ChamberControl, Scene
 from taichi_pneuma.scene.schedule import area_ramp
 from taichi_pneuma.solve.newton import NewtonOptions
@@ -42,17 +40,6 @@ def half_geometry(**kwargs) -> Geometry:
     return Geometry(
         Rectangle((0.0, 0.2), (3.5, 0.4)), (("main", ELLIPSE),), MAX_AREA, PointSet("left"), rollers=(MIRROR,), **kwargs
     )
-
-
-@dataclass(frozen=True, eq=False)
-class GivenMesh:
-    """A geometry whose mesh is given (the mirrored one): what Scene.build asks of a geometry."""
-
-    given: Mesh
-    chambers: tuple
-
-    def mesh(self, budget: Budget) -> Mesh:
-        return self.given  # made already, in no budget
 
 
 def mirrored(half: Mesh) -> tuple[Mesh, np.ndarray]:
@@ -88,7 +75,7 @@ def ramp(geometry, stiffness: float, clamp_stiffness: float):
 def models():
     half = ramp(half_geometry(), 2 * K, 1e13)
     full_mesh, image = mirrored(half[0].mesh)
-    full = ramp(GivenMesh(full_mesh, (("main", None),)), K, 1e13)
+    full = ramp(MeshOf(full_mesh), K, 1e13)
     ordinary = ramp(BeamGeometry(max_area=MAX_AREA, chamber_points=POINTS).general(), K, 1e9)
     return half, full, ordinary, image
 

@@ -23,8 +23,7 @@ from taichi_pneuma.materials import IsochoricMaterial
 from taichi_pneuma.materials.isochoric import unstable_stretch
 from taichi_pneuma.materials.presets import PRESETS
 from taichi_pneuma.scene.build import ChamberControl, Material, Region, Scene
-from taichi_pneuma.scene.scenefile import key_reference, read_scene
-from taichi_pneuma.scene.sceneformat import scene_data
+from taichi_pneuma.scene.scenefile import key_reference, read_scene, scene_data
 from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms.chambers import KINDS as CHAMBER_KINDS
 from taichi_pneuma.terms.chambers import AreaControl, ClosedGas

@@ -92,7 +92,10 @@ def test_through_wall_makes_the_edge_length_near_the_chambers_the_wall_over_it()
     written = tomllib.loads(scene.to_toml())["mesh"]
     assert written["through_wall"] == 2.0 and "near_chambers" not in written
     coarse, fine = (
-        read_scene(actuator(through_wall=2.0), "a").with_values({"mesh.through_wall": t}).geometry.size_estimate()[0]
+        read_scene(actuator(through_wall=2.0), "a")
+        .with_values({"mesh.through_wall": t})
+        .geometry.size_estimate()
+        .elements
         for t in (0.5, 2.0)
     )
     assert fine > 4 * coarse

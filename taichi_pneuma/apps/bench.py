@@ -74,7 +74,7 @@ def main_command_process(cache_dir: str, out: str, flags: tuple = ()) -> tuple[f
     start = time.perf_counter()
     first = float("nan")
     with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env) as proc:
-        for line in proc.stdout:  # type: ignore[union-attr]
+        for line in proc.stdout or ():
             if first != first and FIRST_INCREMENT.search(line):
                 first = time.perf_counter() - start
     whole = time.perf_counter() - start
@@ -110,11 +110,16 @@ def startup() -> tuple[str, dict]:
     from ..scene.build import reference_scene
     from ..solve.simulate import run_schedule
 
-    rows, render_rows, data = [], [], {"process": {}, "rendering": {}, "scenes": []}  # type: ignore[var-annotated]
+    rows: list[list] = []
+    render_rows: list[list] = []
+    processes: dict[str, dict] = {}
+    rendering: dict[str, dict] = {}
+    scenes_data: list[dict] = []
+    data = {"process": processes, "rendering": rendering, "scenes": scenes_data}
     with tempfile.TemporaryDirectory() as cache, tempfile.TemporaryDirectory() as out:
         for label, flags in PROCESSES:
             first, whole, summary = main_command_process(cache, out, flags)
-            data["process"][label] = {"first_increment_s": first, "whole_s": whole, "ok": summary is not None}  # type: ignore[index]
+            processes[label] = {"first_increment_s": first, "whole_s": whole, "ok": summary is not None}
             if summary is None:
                 rows.append([f"main command {label}", "unavailable", "", ""])
                 continue
@@ -128,7 +133,7 @@ def startup() -> tuple[str, dict]:
             )
             if "renderer" in summary:
                 frame_ms, step_ms = summary["render_ms_per_frame"], 1e3 * summary["solve_seconds_per_step"]
-                data["rendering"][summary["renderer"]] = {  # type: ignore[index]
+                rendering[summary["renderer"]] = {
                     "ms_per_frame": frame_ms,
                     "solve_ms_per_step": step_ms,
                     "whole_s": whole,
@@ -169,7 +174,7 @@ def startup() -> tuple[str, dict]:
         built = make().build()
         build_seconds = time.perf_counter() - start
         first, typical = first_versus_typical(run_schedule(built))
-        data["scenes"].append(  # type: ignore[attr-defined]
+        scenes_data.append(
             {
                 "scene": label,
                 "vertices": built.mesh.n_vertices,
@@ -181,7 +186,7 @@ def startup() -> tuple[str, dict]:
         rows.append(
             [
                 label,
-                built.mesh.n_vertices,  # type: ignore[list-item]
+                built.mesh.n_vertices,
                 f"{1e3 * build_seconds:.0f}",
                 f"{1e3 * first:.0f}",
                 f"{1e3 * typical:.0f}",
@@ -216,7 +221,7 @@ def breakdown() -> tuple[str, dict]:
     start = time.perf_counter()
     result = run_schedule(built)
     ramp_seconds = time.perf_counter() - start
-    phases = collections.Counter()  # type: ignore[var-annotated]
+    phases: collections.Counter[str] = collections.Counter()
     for solve in result.solves:
         phases.update(solve.phase_seconds)
     iterations = int(result.history["iterations"].sum())

@@ -35,7 +35,6 @@ MEASURE = {2: "area", 3: "volume"}  # what a chamber encloses, by dimension
 MAX_ITERATIONS, MAX_CUTS = 40, 8  # the solver's defaults (NewtonOptions.max_iterations, simulate.MAX_CUTS)
 # the reference-beam flags' defaults (those of scene.build.reference_scene; tests/test_cli.py checks they agree)
 BEAM_DEFAULTS = {"cx": 0.0, "growth": 3.5, "steps": 36, "E": 1e4, "nu": 0.45, "k": 1e5}
-MAX_SUFFIX = 40  # a readable stem suffix longer than this is replaced by the scene's hash
 # Linear elements lock (too stiff in volume change) from this small-strain Poisson's ratio on: there locking costs a
 # chamber's growth 20 % on linear tetrahedra (5 % on triangles) beyond their error at nu = 0.3, 29 % (12 %) at 0.4999
 # (docs/3d.md, "The locking warning"); the run's first line says so (locking_note)
@@ -53,6 +52,25 @@ def app_parser(prog: str, doc: str) -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     p.add_argument("--list-scenes", action=ListScenes, help="list the shipped scenes, a line each, and exit")
     return p
+
+
+def add_scene_arguments(p: argparse.ArgumentParser, what: str = "the scene", cy_help: str = "") -> None:
+    """--scene, --cy and --set as every app that runs a scene reads them (scene_for); --set changes `what`."""
+    p.add_argument(
+        "--scene",
+        help="a scene file (TOML) or the name of a shipped scene (--list-scenes lists them); "
+        "without it the reference beam of the flags (--cy --cx --growth --steps --E --nu --k --max-area "
+        "--order), which are then ignored",
+    )
+    p.add_argument("--cy", type=float, default=0.15, help=cy_help or "reference beam: chamber centre height")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help=f"change a dotted scene-file key or a short name (cy cx E nu k max_area) of {what}, e.g. "
+        "--set chambers[0].center[1]=0.1 (repeatable; the reference beam's keys: reference_beam.toml)",
+    )
 
 
 class ListScenes(argparse.Action):
@@ -74,37 +92,6 @@ class GivenQuality(argparse.Action):
 
     def __call__(self, parser, namespace, values, option_string=None):
         namespace.quality, namespace.quality_given = values, True
-
-
-def quality_stem(args: argparse.Namespace) -> str:
-    """The suffix a --quality other than the default adds to the result file names ('' or '_high', ...), so
-    runs of one scene at two qualities do not overwrite each other."""
-    return "" if args.quality == "default" else f"_{args.quality}"
-
-
-def result_stem(base: str, args: argparse.Namespace, *scenes) -> str:
-    """The stem of a run's result files: base (a scene's name, or the reference beam's 'inflate_cy+0.15'), then
-    what the run changed of that scene, so that a different run never overwrites its files and a re-run of the
-    same one replaces only its own: the reference-beam flags that differ from their defaults (without --scene:
-    '_order2', '_E20000'; --max-area and --order against the --quality preset) and every --set as given
-    ('_E2e4_nu0.49'), made a valid stem (output.reduce_to_stem); past MAX_SUFFIX characters instead '_' and the
-    first 8 hex digits of scene_sha256 of the scenes as run; then quality_stem."""
-    from ..io.output import reduce_to_stem
-    from ..result import scene_sha256
-
-    parts = []
-    if not getattr(args, "scene", None):
-        parts += [f"{k}{getattr(args, k):g}" for k, v in BEAM_DEFAULTS.items() if getattr(args, k) != v]
-        preset_area, preset_order, _ = QUALITY[args.quality]
-        parts += [f"max_area{args.max_area:g}"] if args.max_area != preset_area else []
-        parts += [f"order{args.order}"] if args.order != preset_order else []
-    for text in args.set:
-        key, _, value = text.partition("=")
-        parts.append(key.strip() + value.strip())
-    suffix = reduce_to_stem("_".join(parts)) if parts else ""
-    if len(suffix) > MAX_SUFFIX:
-        suffix = scene_sha256(*scenes)[:8]
-    return base + (f"_{suffix}" if suffix else "") + quality_stem(args)
 
 
 def factors(table: dict) -> str:
@@ -237,7 +224,7 @@ def rendering_flags(args: argparse.Namespace, dim: int = 2) -> tuple[int, int]:
     from ..io.output import prepare_directory
     from ..render.video import check_video, frame_size
 
-    check_video(args.video or "default.mp4", args.fps)  # type: ignore[arg-type]
+    check_video(args.video or "default.mp4", args.fps)
     width, height = frame_size(args.size, "--size")
     limits.check_frame(width, height, args.max_frame_pixels)
     if dim == 3 and not args.no_video:
@@ -429,7 +416,7 @@ def solve(args: argparse.Namespace, built, label: str = "solving", vtk=None):
                 stop=interrupted.is_set,
             )
         except RampInterrupted as exc:
-            exc.signum = interrupted.signum  # type: ignore[attr-defined]  # read by signals.name_of()
+            exc.signum = interrupted.signum  # read by signals.name_of()
             raise
 
 
@@ -442,7 +429,7 @@ def render_report(export, seconds_per_step: float) -> str:
 
 def apply_set(scene, assignments: list[str]):
     """The scene with every --set KEY=VALUE applied (validated once, like a scene file)."""
-    from ..scene.schema import parse_assignment
+    from ..scene.dotted_edits import parse_assignment
 
     if not assignments:
         return scene

@@ -10,7 +10,7 @@ the states (npz), a summary (JSON), the scene as run (TOML) and the ParaView fil
 it is solved, indexed by a PVD) under --out, and, unless --no-video, a plot of the history (PNG), a
 video of the run (body coloured by --color beside its area/pressure trace) and a PNG of its most
 deformed frame. The files are named by the scene (inflate_cy+0.15 for the reference beam's flags) and what
-the run changed of it (cli.result_stem: '_order2_E2e4', or the scene's hash when that is long; '_high' for
+the run changed of it (stems.result_stem: '_order2_E2e4', or the scene's hash when that is long; '_high' for
 a --quality), so a different run never overwrites them and a re-run of the same one replaces only its own.
 --set KEY=VALUE changes any dotted scene-file key. --interactive instead opens a window with a slider
 for the commanded area (a 3D scene: a slider per chamber, and the camera turned by dragging the mouse).
@@ -44,6 +44,7 @@ from ..signals import holding
 from .cli import (
     MEASURE,
     add_ramp_arguments,
+    add_scene_arguments,
     add_video_arguments,
     app_parser,
     budget,
@@ -52,10 +53,10 @@ from .cli import (
     newton_options,
     render_report,
     rendering_flags,
-    result_stem,
     scene_of_flags,
     solve,
 )
+from .stems import result_stem
 
 if TYPE_CHECKING:
     from ..result import Result
@@ -66,21 +67,7 @@ TURN_WORDS = {2: ("tip rotation", "rotation"), 3: ("bend angle", "bend angle")}
 
 def parser() -> argparse.ArgumentParser:
     p = app_parser("pneuma-inflate", __doc__)
-    p.add_argument(
-        "--scene",
-        help="a scene file (TOML) or the name of a shipped scene (--list-scenes lists them); the reference-beam flags "
-        "(--cy --cx --growth --steps --E --nu --k --max-area --order) are then ignored",
-    )
-    p.add_argument("--cy", type=float, default=0.15, help="chamber centre height (above the neutral axis curls down)")
-    p.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="change a dotted scene-file key or a short name (cy cx E nu k max_area), e.g. --set "
-        "chambers[0].center[1]=0.1 --set material.E=2e4 (repeatable; the reference beam's keys are "
-        "those of the shipped reference_beam.toml)",
-    )
+    add_scene_arguments(p, cy_help="chamber centre height (above the neutral axis curls down)")
     add_ramp_arguments(p)
     add_video_arguments(p, "960x384")
     p.add_argument(

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 
 from ..fem.elements import FAMILIES
+from ..fem.solid_geometry import SolidGeometry
 from ..io.units import AREA, LENGTH
 
 # 2D: the rungs a preset lies above the scene's own on planar_preset's ladder, and the reference beam's mesh (its
@@ -125,7 +126,7 @@ def with_quality(scene, args: argparse.Namespace):
         return scene, (f"quality {quality}: {said}{tol}" if given else "")
     if not given:
         return scene, ""
-    if not hasattr(geometry, "sizes"):
+    if not isinstance(geometry, SolidGeometry):  # a mesh file: its own tetrahedra
         order = MESH_FILE_ORDER[quality] or geometry.order
         if order != geometry.order:
             scene = scene.with_values({"mesh.order": order})
@@ -172,7 +173,7 @@ def preset_note(scene, args: argparse.Namespace | None) -> str:
     if args is None or not hasattr(args, "quality") or getattr(args, "set", None):
         return ""
     given = getattr(args, "quality_given", False)
-    from_shapes = scene.dim == 3 and hasattr(scene.geometry, "sizes")
+    from_shapes = isinstance(scene.geometry, SolidGeometry)
     if scene.dim == 2:
         if getattr(args, "scene", None):  # a scene file's rung need not be the reference beam's of the same name
             return ""

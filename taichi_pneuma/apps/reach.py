@@ -22,7 +22,7 @@ whole turn from rest, tip_twist, tip_dx, blocked_force, a contact force, ...; no
 residual, ...) equals V (control/outputs.py), prints `reached:` with the commands there (or `unreachable:` with the
 closest step, or the value found where the column jumps over V inside a step, exit 1) and writes
 <scene>_output_<COLUMN><V>_summary.json (COLUMN made a plain file name, with what the flags changed of the scene,
-cli.result_stem).
+stems.result_stem).
 --reduced MODEL.npz (a model pneuma-reduce trained for this scene; with --tip or --targets) searches on the reduced
 model, then polishes each answer with a few full Newton solves and Gauss-Newton steps (control/reduced.py): the
 answer is the full model's. Per target it prints a `reduced:` line: the reduced search's tip error and seconds, the
@@ -50,6 +50,7 @@ if TYPE_CHECKING:
 
 from .cli import (
     add_ramp_arguments,
+    add_scene_arguments,
     add_video_arguments,
     app_parser,
     apply_set,
@@ -60,10 +61,10 @@ from .cli import (
     newton_options,
     render_report,
     rendering_flags,
-    result_stem,
     scene_file,
     scene_for,
 )
+from .stems import result_stem
 
 # ReachOptions' defaults (control/inverse.py; tests/test_reach.py checks they agree)
 TIP_TOL, ANGLE_TOL, RESTARTS = 1e-3, 0.5, 4
@@ -71,18 +72,7 @@ TIP_TOL, ANGLE_TOL, RESTARTS = 1e-3, 0.5, 4
 
 def parser() -> argparse.ArgumentParser:
     p = app_parser("pneuma-reach", __doc__)
-    p.add_argument(
-        "--scene",
-        help="a scene file (TOML) or the name of a shipped scene; default the reference beam of the flags below",
-    )
-    p.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="change a dotted scene-file key or a short name (cy cx E nu k max_area) of the scene (repeatable)",
-    )
-    p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
+    add_scene_arguments(p)
     p.add_argument(
         "--tip",
         nargs="+",

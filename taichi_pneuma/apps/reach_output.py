@@ -9,8 +9,9 @@ import sys
 from .. import runtime
 from ..errors import require, require_finite
 from ..io.output import lock_stems, prepare_directory, reduce_to_stem, save_json
-from .cli import apply_set, build, check_flags, newton_options, result_stem, scene_file, scene_for
+from .cli import apply_set, build, check_flags, newton_options, scene_file, scene_for
 from .progress import step_line
+from .stems import result_stem
 
 
 def run_output(args: argparse.Namespace) -> dict:

@@ -28,26 +28,20 @@ from ..errors import require
 from ..io.output import lock_stem, prepare_directory, save_json
 from .cli import (
     add_ramp_arguments,
+    add_scene_arguments,
     app_parser,
     build,
     exit_code,
     newton_options,
-    result_stem,
     scene_of_flags,
 )
+from .stems import result_stem
 from .workers import add_executor_arguments, executor_of
 
 
 def parser() -> argparse.ArgumentParser:
     p = app_parser("pneuma-reduce", __doc__)
-    p.add_argument(
-        "--scene",
-        help="the scene file (TOML) or the name of a shipped scene; without it the reference beam of the flags",
-    )
-    p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
-    p.add_argument(
-        "--set", action="append", default=[], metavar="KEY=VALUE", help="change a dotted key of the scene (repeatable)"
-    )
+    add_scene_arguments(p)
     size = p.add_mutually_exclusive_group()
     size.add_argument("--modes", type=int, default=None, help="POD modes kept")
     size.add_argument(

@@ -22,23 +22,20 @@ from ..errors import require
 from ..io.output import prepare_directory
 from .cli import (
     add_ramp_arguments,
+    add_scene_arguments,
     app_parser,
     budget,
     exit_code,
     locking_note,
     newton_options,
-    result_stem,
     scene_of_flags,
 )
+from .stems import result_stem
 
 
 def parser() -> argparse.ArgumentParser:
     p = app_parser("pneuma-serve", __doc__)
-    p.add_argument("--scene", help="a scene file (TOML) or the name of a shipped scene; default the reference beam")
-    p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
-    p.add_argument(
-        "--set", action="append", default=[], metavar="KEY=VALUE", help="change a dotted scene-file key (repeatable)"
-    )
+    add_scene_arguments(p)
     p.add_argument("--port", type=int, default=8080, help="the port to listen on (0: a free one; taken: the next)")
     p.add_argument(
         "--host",

@@ -5,7 +5,7 @@
 Solves the three ramps (cy = +0.15, 0, -0.15), prints their tip deflections and what each tip did (its
 caption: "chamber high (cy = +0.15): tip up to +0.27 (step 10), then down to -0.28 (step 35)", read off the
 run's tip history), writes each ramp's ParaView files (steer_cy+0.15.pvd, ...; a run whose flags or --set change
-the scenes adds them to the names, cli.result_stem) and, unless --no-video, plays them side by side in one video
+the scenes adds them to the names, stems.result_stem) and, unless --no-video, plays them side by side in one video
 (all panels in one frame of reference, bodies coloured by --color on one scale, each under its caption) with a PNG
 of the last frame. steer_summary.json has the captions and tip histories.
 A ramp stopped (Ctrl-C, SIGTERM, SIGHUP, or no equilibrium) still writes steer_summary.json with the
@@ -32,10 +32,10 @@ from .cli import (
     exit_code,
     render_report,
     rendering_flags,
-    result_stem,
     scene_for,
     solve,
 )
+from .stems import result_stem
 
 PLACEMENTS = ((0.15, "chamber high"), (0.0, "centred"), (-0.15, "chamber low"))
 STILL = 0.1  # a tip that never moves by more than this fraction of the largest |tip| of the runs compared "stays"

@@ -27,8 +27,8 @@ import sys
 from .. import limits
 from ..io.keys import SHORT_KEYS
 from ..io.output import check_stem, lock_stem, prepare_directory
-from .cli import add_ramp_arguments, app_parser, exit_code, scene_of_flags
-from .workers import add_executor_arguments, executor_of
+from .cli import add_ramp_arguments, add_scene_arguments, app_parser, exit_code, scene_of_flags
+from .workers import add_executor_arguments, executor_of, run_options
 
 
 def parser() -> argparse.ArgumentParser:
@@ -57,19 +57,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--name", default="sweep", help="the result files are <out>/<name>.csv, .json and .png")
     p.add_argument("--retry-failed", action="store_true", help="run again the runs recorded with an error")
     p.add_argument("--max-runs", type=int, default=limits.MAX_RUNS, help="refuse a study of more runs")
-    p.add_argument(
-        "--scene",
-        help="the base scene file (TOML) or the name of a shipped scene; the reference-beam "
-        "flags (--cy --cx --growth --steps --E --nu --k --max-area --order) are then ignored",
-    )
-    p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
-    p.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="change a dotted key of the base scene for every run (repeatable)",
-    )
+    add_scene_arguments(p, "the base scene, for every run")
     add_ramp_arguments(p)
     p.set_defaults(max_frame_pixels=limits.MAX_FRAME_PIXELS)  # checked by cli.check_flags; no video here
     return p
@@ -91,21 +79,12 @@ def row_line(row: dict, keys: list[str], labels: list[str]) -> str:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from ..study import RunOptions, Sweep, parse_vary
+    from ..study import Sweep, parse_vary
 
     axes = [parse_vary(text) for text in args.vary]
     base = scene_of_flags(args)
     executor = executor_of(args, here=False)
-    options = RunOptions(
-        args.tol,
-        args.max_iterations,
-        args.max_cuts,
-        args.max_triangles,
-        args.max_increments,
-        args.max_fibers,
-        args.max_obstacles,
-        args.arch,
-    )
+    options = run_options(args)
     out = prepare_directory(args.out)
     with lock_stem(out, check_stem(args.name)):  # from reading the rows done to writing the last: this run's
         sweep = Sweep(base, axes, out, args.name, args.samples, args.seed, options, args.retry_failed, args.max_runs)

@@ -1,5 +1,5 @@
-"""Where an app's independent tasks run: the --workers and --ray flags that pneuma-sweep and pneuma-reduce share, and
-the executor they name (study/executors.py)."""
+"""Where an app's independent tasks run: the --workers and --ray flags that pneuma-sweep, pneuma-optimize and
+pneuma-reduce share, the executor they name (study/executors.py), and the solver options every run of a study shares."""
 
 from __future__ import annotations
 
@@ -24,6 +24,22 @@ def add_executor_arguments(p: argparse.ArgumentParser, what: str, default: str) 
         metavar="ADDRESS",
         help=f"run {what} as Ray tasks (pip install 'taichi-pneuma[ray]'): a local Ray started for it without "
         "ADDRESS, else the cluster whose head is at ADDRESS (HOST:PORT, auto, ray://HOST:PORT)",
+    )
+
+
+def run_options(args: argparse.Namespace):
+    """What every run of a study shares besides the scene (study/task.py RunOptions), from the flags."""
+    from ..study import RunOptions
+
+    return RunOptions(
+        args.tol,
+        args.max_iterations,
+        args.max_cuts,
+        args.max_triangles,
+        args.max_increments,
+        args.max_fibers,
+        args.max_obstacles,
+        args.arch,
     )
 
 

@@ -31,23 +31,27 @@ is the right-handed frame (y, z, x), (z, x, y), (x, y, z) of axis x, y, z: a rig
 counter-clockwise seen from +axis (looking back down it) while it advances along +axis (the right-hand rule
 about +axis, as a common screw thread); a left-handed one clockwise.
 
-In 2D only line and polyline apply (a layer of cords per unit depth); PLANAR names them.
+In 2D only line and polyline apply (a layer of cords per unit depth); PLANAR names them. Each layout is registered
+in LAYOUTS under its name (io/registry.py).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
 from ..errors import require, require_finite, require_positive, shape_of
+from ..io.registry import Registry
 from ..io.units import LENGTH, unit
 
 AXES = ("x", "y", "z")
 FRAMES = {"x": (1, 2, 0), "y": (2, 0, 1), "z": (0, 1, 2)}  # (e_1, e_2, e_axis) indices: right-handed
 HANDEDNESS = ("right", "left")
 MAX_STRANDS = 256  # helices of one hand in a helix or crossed layout (a braid)
+LAYOUTS: Registry[type[Layout]] = Registry("fibre layout")  # name -> the layout, filled by @LAYOUTS.register
 
 
 def _point(name: str, value) -> np.ndarray:
@@ -80,9 +84,10 @@ def sampled(corners: np.ndarray, spacing: float, closed: bool = False) -> np.nda
 
 
 class Layout:
-    """A fibre's curves: curves(spacing) -> polylines; closed: whether each joins its last point to its first;
-    planar: whether it applies in 2D."""
+    """A fibre's curves: curves(spacing) -> polylines; name: its layout key's value; closed: whether each joins its
+    last point to its first; planar: whether it applies in 2D."""
 
+    name: ClassVar[str]
     closed = False
     planar = True
 
@@ -102,9 +107,12 @@ class Layout:
         return 3
 
 
+@LAYOUTS.register
 @dataclass(frozen=True)
 class Line(Layout):
     """A straight cord from start to end."""
+
+    name = "line"
 
     start: tuple = field(metadata=unit(LENGTH))
     end: tuple = field(metadata=unit(LENGTH))
@@ -125,9 +133,12 @@ class Line(Layout):
         return 1, sum(pieces(np.array([self.start, self.end], dtype=float), spacing)) + 1
 
 
+@LAYOUTS.register
 @dataclass(frozen=True)
 class Polyline(Layout):
     """A cord through points (at least 2), in order."""
+
+    name = "polyline"
 
     points: tuple = field(metadata=unit(LENGTH))
 
@@ -165,10 +176,13 @@ def _check_axis_center(center, axis) -> None:
     require(axis in AXES, f"axis = {axis!r} is not one of {', '.join(AXES)}")
 
 
+@LAYOUTS.register
 @dataclass(frozen=True)
 class Rings(Layout):
     """count closed circles of radius about the axis, the first centred at center, the next ones spacing apart
     along +axis."""
+
+    name = "rings"
 
     center: tuple = field(metadata=unit(LENGTH))
     radius: float = field(metadata=unit(LENGTH))
@@ -256,7 +270,8 @@ class Spiral(Layout):
     def section(self, arc: np.ndarray) -> np.ndarray:
         """The points (k, 3) of the D section (flat) at arc lengths `arc` from its top, counter-clockwise about
         +axis, relative to center: the quarter arcs, the sides and the bottom sampled finely and interpolated."""
-        r, flat = self.radius, float(self.flat)  # type: ignore[arg-type]
+        assert self.flat is not None, "a D section's depth (only a helix with flat has one)"
+        r, flat = self.radius, float(self.flat)
         up = np.eye(3)[1]
         side = np.cross(np.eye(3)[AXES.index(self.axis)], up)
         phi = np.linspace(0.0, math.pi / 2, 257)
@@ -272,7 +287,8 @@ class Spiral(Layout):
         """The axial advance per turn: pitch, or 2 pi radius / tan(angle)."""
         if self.pitch is not None:
             return self.pitch
-        return self.perimeter / math.tan(math.radians(self.angle))  # type: ignore[arg-type]
+        assert self.angle is not None, "__post_init__ takes exactly one of pitch and angle"
+        return self.perimeter / math.tan(math.radians(self.angle))
 
     @property
     def helix_length(self) -> float:
@@ -282,7 +298,10 @@ class Spiral(Layout):
     @property
     def count(self) -> float:
         """Its turns: turns, or extent / advance (its axial extent over the advance per turn)."""
-        return self.turns if self.turns is not None else self.extent / self.advance  # type: ignore[operator]
+        if self.turns is not None:
+            return self.turns
+        assert self.extent is not None, "__post_init__ takes exactly one of turns and extent"
+        return self.extent / self.advance
 
     def helix_points(self, spacing: float) -> int:
         """The points of each helix: max(2, ceil(helix_length / spacing)) + 1."""
@@ -308,9 +327,12 @@ class Spiral(Layout):
         )
 
 
+@LAYOUTS.register
 @dataclass(frozen=True)
 class Helix(Spiral):
     """One helix of the given handedness ("right": counter-clockwise seen from +axis as it advances along +axis)."""
+
+    name = "helix"
 
     handedness: str = "right"
 
@@ -327,9 +349,12 @@ class Helix(Spiral):
         return self.strands, self.strands * self.helix_points(spacing)
 
 
+@LAYOUTS.register
 @dataclass(frozen=True)
 class Crossed(Spiral):
     """Two helices of opposite handedness (right, then left) on the same axis, start and pitch."""
+
+    name = "crossed"
 
     def curves(self, spacing: float) -> list[np.ndarray]:
         return self.helices(1, spacing) + self.helices(-1, spacing)
@@ -338,11 +363,4 @@ class Crossed(Spiral):
         return 2 * self.strands, 2 * self.strands * self.helix_points(spacing)
 
 
-LAYOUTS: dict[str, type[Layout]] = {
-    "line": Line,
-    "polyline": Polyline,
-    "rings": Rings,
-    "helix": Helix,
-    "crossed": Crossed,
-}
 PLANAR = tuple(name for name, cls in LAYOUTS.items() if cls.planar)

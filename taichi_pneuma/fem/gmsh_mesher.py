@@ -36,49 +36,37 @@ entry of Solid.regions (region_names); curved_edges (k, 2) and curved_points (k,
 surfaces and curves of the solid and the places of their midside nodes on them (curving.edge_targets), for
 quadratic tetrahedra that follow the shapes.
 
-gmsh is a GPL-licensed optional dependency (pip install 'taichi-pneuma[3d]'); each call initialises it,
-works silently in a model of its own and finalises it (or, if the caller has gmsh initialised already,
-removes only its own model and restores the options it set).
+gmsh is a GPL-licensed optional dependency (pip install 'taichi-pneuma[3d]'); each call opens a session of it
+(gmsh_session.py): it initialises it, works silently in a model of its own and finalises it (or, if the caller has
+gmsh initialised already, removes only its own model and restores the options it set).
 
 Meshes are cached on disk (io/cache.py: the user's cache folder, PNEUMA_CACHE_DIR moves it or turns it off):
 the arrays of mesh_solid, and the rubber's volume and the walls' area that estimate_tets needs, each keyed by
 everything that decides them: the solid's shapes and their parameters, the sizes, the surface meshers, gmsh's
-version and this mesher's source (the files of MESHER_SOURCES). A hit runs no gmsh at all and returns the very
-arrays gmsh made; the limits are checked on it as on a fresh mesh. A cached file is checked before use (a regular
-file; its key's inputs, as text, those of this call; its content hash that of its arrays: io/cache.py; then shapes,
-dtypes, indices in range, positive tetrahedra) and a bad one is meshed afresh and replaced.
+version and this mesher's source (the files of gmsh_cache.MESHER_SOURCES). A hit runs no gmsh at all and returns
+the very arrays gmsh made; the limits are checked on it as on a fresh mesh. A cached file is checked before use (a
+regular file; its key's inputs, as text, those of this call; its content hash that of its arrays: io/cache.py; then
+shapes, dtypes, indices in range, positive tetrahedra) and a bad one is meshed afresh and replaced.
 """
 
 from __future__ import annotations
 
-import functools
-import hashlib
-from contextlib import contextmanager
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..errors import PneumaInputError, require, require_distinct, require_finite
+from ..errors import require, require_distinct, require_finite
 from ..io import cache
 from .curving import edge_targets
 from .elements import TET_P1, positively_oriented
+from .gmsh_cache import CACHE_BYTES_PER_TET, cache_key, valid_measures, valid_mesh
+from .gmsh_session import session
 
 MAX_TETS = 200_000
 MAX_SHAPES = 64
-INSTALL = "pip install 'taichi-pneuma[3d]'"
 REGULAR_TET = 1 / (6 * np.sqrt(2))  # volume of the regular tetrahedron of unit edge
 BODY_GROUP = "body"
-# the global gmsh options meshing sets; a caller's gmsh session gets its values back afterwards
-OPTIONS = (
-    "General.Terminal",
-    "Mesh.Algorithm",
-    "Mesh.MeshSizeMax",
-    "Mesh.MeshSizeFromPoints",
-    "Mesh.MeshSizeFromCurvature",
-    "Mesh.MeshSizeExtendFromBoundary",
-)
 # gmsh's surface meshers, (Mesh.Algorithm, Mesh.MeshSizeFromCurvature), tried in turn until every surface and
 # volume is meshed: Frontal-Delaunay with the sizes alone; then Delaunay with edges also shortened to 2 pi R / 12 on
 # surfaces of curvature radius R. Frontal-Delaunay leaves a coarsely meshed B-spline surface (an ellipsoid:
@@ -89,16 +77,6 @@ MAX_SAMPLING = 200  # points per direction on a wall surface for its distance fi
 WALL_DIGITS = 10  # significant digits of a measured thickness and the size from it: 2 mm, not 1.999999999999999
 # a tetrahedron's four faces (corners in its local numbering), each oriented outward for a positive tetrahedron
 TET_FACES = np.array([[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]])
-MESHER_SOURCES = (
-    "gmsh_mesher.py",
-    "solids.py",
-    "pneunet.py",
-    "shapes.py",
-    "polygons.py",
-    "wall_thickness.py",
-    "curving.py",
-)  # the code a cached mesh depends on
-CACHE_BYTES_PER_TET = 256  # a cached mesh's arrays take about 50 bytes per tetrahedron: a larger file is not read
 
 
 @dataclass(frozen=True)
@@ -199,45 +177,6 @@ class SolidMesh:
     curved_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
 
-def _gmsh():
-    try:
-        import gmsh
-    except ImportError:
-        raise PneumaInputError(f"3D bodies from shapes are meshed by gmsh, which is not installed: {INSTALL}") from None
-    return gmsh
-
-
-@contextmanager
-def _session(verbose: bool = False):
-    """gmsh with a model of its own, silent unless verbose; initialised and finalised around the block (in a
-    caller's gmsh session: its current model and the options set here are restored instead). A gmsh
-    exception becomes a PneumaInputError quoting gmsh's last error lines."""
-    gmsh = _gmsh()
-    owner = not gmsh.isInitialized()
-    if owner:
-        gmsh.initialize(readConfigFiles=False, interruptible=False)
-    callers = None if owner else (gmsh.model.getCurrent(), {name: gmsh.option.getNumber(name) for name in OPTIONS})
-    gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
-    gmsh.logger.start()
-    gmsh.model.add("taichi_pneuma_solid")
-    try:
-        yield gmsh
-    except Exception as exc:
-        if isinstance(exc, PneumaInputError):
-            raise
-        log = [line for line in gmsh.logger.get() if "Error" in line or "error" in line]
-        raise PneumaInputError(f"gmsh could not mesh the solid: {'; '.join(log[-3:]) or exc}") from None
-    finally:
-        gmsh.logger.stop()
-        if callers is None:  # gmsh initialised here
-            gmsh.finalize()
-        else:
-            gmsh.model.remove()
-            gmsh.model.setCurrent(callers[0])
-            for name, value in callers[1].items():
-                gmsh.option.setNumber(name, value)
-
-
 class _Pieces:
     """The fragmented solid: the rubber pieces with their region tags, and each chamber's wall surfaces."""
 
@@ -315,12 +254,12 @@ def _faces(gmsh, volumes, combined: bool = True) -> set[int]:
 def estimate_tets(solid: Solid, sizes: MeshSizes) -> float:
     """The estimated tetrahedron count of mesh_solid(solid, sizes) (module docstring), from the solid's
     geometry alone: gmsh builds it (or the cache has its measures), nothing is meshed."""
-    entry = _cache_key("measures", solid)
-    cached = cache.load("gmsh-measures", entry, _valid_measures, 4096)
+    entry = cache_key("measures", solid)
+    cached = cache.load("gmsh-measures", entry, valid_measures, 4096)
     if cached is not None:
         volume, wall_area = map(float, cached["measures"])
         return _estimate(volume, wall_area, sizes)
-    with _session() as gmsh:
+    with session() as gmsh:
         pieces = _Pieces(gmsh, solid)
     cache.store("gmsh-measures", entry, {"measures": np.array([pieces.volume, pieces.wall_area])})
     return _estimate(pieces.volume, pieces.wall_area, sizes)
@@ -357,9 +296,12 @@ def mesh_solid(
     gmsh failing (its error line quoted). surface_meshers: the (Mesh.Algorithm, Mesh.MeshSizeFromCurvature)
     pairs tried in turn (a study that must keep one mesh pins one). A mesh in the cache (module docstring) is
     returned without running gmsh."""
-    entry = _cache_key("mesh", solid, sizes, tuple(tuple(pair) for pair in surface_meshers))
+    entry = cache_key("mesh", solid, sizes, tuple(tuple(pair) for pair in surface_meshers))
     cached = cache.load(
-        "gmsh-mesh", entry, lambda arrays: _valid_mesh(arrays, solid), CACHE_BYTES_PER_TET * max(max_tets, 1) + 2**20
+        "gmsh-mesh",
+        entry,
+        lambda arrays: valid_mesh(arrays, len(solid.chambers), len(solid.regions)),
+        CACHE_BYTES_PER_TET * max(max_tets, 1) + 2**20,
     )
     if cached is not None:
         volume, wall_area = map(float, cached["measures"])
@@ -397,7 +339,7 @@ def _mesh(
     solid: Solid, sizes: MeshSizes, max_tets: int, verbose: bool, surface_meshers: tuple
 ) -> tuple[SolidMesh, np.ndarray]:
     """gmsh's mesh of the solid, and the rubber's volume and the walls' area."""
-    with _session(verbose) as gmsh:
+    with session(verbose) as gmsh:
         pieces = _Pieces(gmsh, solid)
         _check_estimate(pieces.volume, pieces.wall_area, sizes, max_tets)
         model = gmsh.model
@@ -407,7 +349,7 @@ def _mesh(
                 model.addPhysicalGroup(3, tags, name=name)
         for name, walls in pieces.walls.items():
             model.addPhysicalGroup(2, walls, name=name)
-        _set_sizes(gmsh, sizes, [s for walls in pieces.walls.values() for s in walls])
+        set_sizes(gmsh, sizes, [s for walls in pieces.walls.values() for s in walls])
         for attempt, (algorithm, curvature) in enumerate(surface_meshers, start=1):
             gmsh.option.setNumber("Mesh.Algorithm", algorithm)
             gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", curvature)
@@ -420,81 +362,10 @@ def _mesh(
                 continue
             if _complete(gmsh, pieces):
                 break
-        return _read(gmsh, solid, pieces, max_tets), np.array([pieces.volume, pieces.wall_area])
-
-
-@functools.cache
-def _mesher_version() -> str | None:
-    """gmsh's version and a hash of this mesher's source files (MESHER_SOURCES); None without gmsh."""
-    import importlib.metadata  # here: a 2D run does not need it
-
-    try:
-        version = importlib.metadata.version("gmsh")
-    except importlib.metadata.PackageNotFoundError:
-        try:
-            version = _gmsh().__version__
-        except PneumaInputError:
-            return None
-    sources = hashlib.sha256(b"".join(Path(__file__).with_name(name).read_bytes() for name in MESHER_SOURCES))
-    return f"gmsh {version}, mesher {sources.hexdigest()}"
-
-
-def _cache_key(kind: str, *parts) -> cache.Key | None:
-    """The cache entry of the parts (None when the cache is off, without gmsh, or for a part with no exact text)."""
-    version = None if cache.directory() is None else _mesher_version()
-    return None if version is None else cache.key(kind, version, *parts)
-
-
-def _valid_measures(arrays: dict) -> bool:
-    """A cached (volume, wall area): two finite positive doubles."""
-    measures = arrays["measures"]
-    return (
-        measures.dtype == np.float64 and measures.shape == (2,) and bool(np.all(np.isfinite(measures) & (measures > 0)))
-    )
-
-
-def _valid_mesh(arrays: dict, solid: Solid) -> bool:
-    """Whether cached arrays are a SolidMesh of this solid: the arrays named and no other, each of its dtype and
-    shape, finite vertices, node indices in range, tetrahedra positively oriented, region tags those of the
-    solid's regions."""
-    walls = [f"chamber{i}" for i in range(len(solid.chambers))]
-    named = {"vertices", "tets", "boundary", "regions", "measures", "curved_edges", "curved_points", *walls}
-    if set(arrays) != named or not _valid_measures(arrays):
-        return False
-    vertices, tets, regions = arrays["vertices"], arrays["tets"], arrays["regions"]
-    edges, points = arrays["curved_edges"], arrays["curved_points"]
-    if not (
-        edges.dtype == np.int64
-        and edges.shape == (len(points), 2)
-        and points.dtype == np.float64
-        and points.shape[1:] == (3,)
-        and np.isfinite(points).all()
-        and (edges.size == 0 or (edges.min() >= 0 and edges.max() < len(vertices)))
-    ):
-        return False
-    faces = [arrays[name] for name in ["boundary", *walls]]
-    if not (
-        vertices.dtype == np.float64
-        and vertices.ndim == 2
-        and vertices.shape[1] == 3
-        and len(vertices) >= 4
-        and np.isfinite(vertices).all()
-    ):
-        return False
-    shaped = [(tets, 4), *((f, 3) for f in faces)]
-    if not all(a.dtype == np.int64 and a.ndim == 2 and a.shape[1] == k and len(a) > 0 for a, k in shaped):
-        return False
-    if not all(a.min() >= 0 and a.max() < len(vertices) for a, _ in shaped):
-        return False
-    if not (
-        regions.dtype == np.int64
-        and regions.shape == (len(tets),)
-        and regions.min() >= 0
-        and regions.max() <= len(solid.regions)
-    ):
-        return False
-    x = vertices[tets]
-    return bool(np.all(np.linalg.det(x[:, 1:] - x[:, :1]) > 0))
+        names = tuple(name for name, _ in solid.regions)
+        return read_tetrahedra(gmsh, pieces.rubber, pieces.walls, names, max_tets), np.array(
+            [pieces.volume, pieces.wall_area]
+        )
 
 
 def _complete(gmsh, pieces: _Pieces) -> bool:
@@ -504,7 +375,7 @@ def _complete(gmsh, pieces: _Pieces) -> bool:
     )
 
 
-def _set_sizes(gmsh, sizes: MeshSizes, walls: list[int]) -> None:
+def set_sizes(gmsh, sizes: MeshSizes, walls: list[int]) -> None:
     """Edge length `size` everywhere, `near` within `near` of the walls, growing linearly to `size` over the
     grading distance beyond (gmsh Distance and Threshold fields; the walls sampled at about near / 2)."""
     option = gmsh.option.setNumber
@@ -535,17 +406,19 @@ def _elements(gmsh, dim: int, entities, kind: int, corners: int) -> np.ndarray:
     return np.concatenate(blocks).astype(np.int64).reshape(-1, corners) if blocks else np.zeros((0, corners), np.int64)
 
 
-def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
-    """The mesh's arrays: nodes renumbered 0..n-1 (those of tetrahedra only), tetrahedra oriented, faces
+def read_tetrahedra(
+    gmsh, rubber: dict[int, int], walls: dict[str, list[int]], region_names: tuple[str, ...], max_tets: int
+) -> SolidMesh:
+    """The mesh's arrays: rubber, volume tag -> region (0 the base material, k the k-th of region_names); walls,
+    chamber name -> its surface tags. Nodes renumbered 0..n-1 (those of tetrahedra only), tetrahedra oriented, faces
     matched to the tetrahedra's boundary faces for their orientation."""
     blocks = {
-        k: _elements(gmsh, 3, [v for v, r in pieces.rubber.items() if r == k], 4, 4)
-        for k in range(len(solid.regions) + 1)
+        k: _elements(gmsh, 3, [v for v, r in rubber.items() if r == k], 4, 4) for k in range(len(region_names) + 1)
     }
     tags = np.concatenate(list(blocks.values()))
     regions = np.concatenate([np.full(len(b), k) for k, b in blocks.items()])
     require(
-        all(len(b) for k, b in blocks.items() if any(r == k for r in pieces.rubber.values())),
+        all(len(b) for k, b in blocks.items() if any(r == k for r in rubber.values())),
         "gmsh left a part of the body without tetrahedra",
     )
     _check_count(len(tags), max_tets)
@@ -562,8 +435,8 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
     local = np.full(len(position), -1, dtype=np.int64)
     local[used] = np.arange(len(used))
     chambers, on_wall = {}, set()
-    for name, walls in pieces.walls.items():
-        triangles = local[_elements(gmsh, 2, walls, 2, 3)]
+    for name, surfaces in walls.items():
+        triangles = local[_elements(gmsh, 2, surfaces, 2, 3)]
         require(len(triangles) > 0, f"gmsh left the wall of chamber {name!r} without triangles")
         wall_keys = face_keys(triangles, len(vertices))
         rows = [index.get(int(k), -1) for k in wall_keys]
@@ -571,9 +444,8 @@ def _read(gmsh, solid: Solid, pieces: _Pieces, max_tets: int) -> SolidMesh:
         chambers[name] = faces[rows][:, ::-1].copy()  # outward from the rubber = into the cavity: reversed
         on_wall.update(rows)
     boundary = faces[[i for i in outer if i not in on_wall]]
-    names = tuple(name for name, _ in solid.regions)
     return SolidMesh(
-        vertices, tets, chambers, boundary, regions.astype(np.int64), names, *edge_targets(gmsh, local, vertices)
+        vertices, tets, chambers, boundary, regions.astype(np.int64), region_names, *edge_targets(gmsh, local, vertices)
     )
 
 

@@ -30,7 +30,7 @@ import numpy as np
 from .. import limits
 from ..errors import PneumaInputError, quoted, require, require_distinct
 from ..limits import Budget
-from .body import Body
+from .body import Body, SizeEstimate
 from .elements import FAMILIES
 from .mesh import Mesh
 from .supports import PointSet
@@ -225,12 +225,16 @@ class MeshGeometry(Body):
         require(len(tets) > 0, f"mesh file {path!r} has no tetrahedra (4- or 10-node)")
         return source, tets, blocks
 
-    def size_estimate(self) -> tuple[int, int]:
-        """(tetrahedra, nodes) of the mesh mesh() builds (nodes: at most, before unused ones are dropped; a 4-node
-        mesh made quadratic gains a node per edge, about 7 per tetrahedron)."""
+    def size_estimate(self) -> SizeEstimate:
+        """The tetrahedra and nodes of the mesh mesh() builds (nodes: at most, before unused ones are dropped; a
+        4-node mesh made quadratic gains a node per edge, about 7 per tetrahedron)."""
         source, tets, _ = self.tetrahedra()
         nodes = len(np.unique(tets))
-        return len(tets), nodes + (7 * len(tets) if self.order == 2 and tets.shape[1] == 4 else 0)
+        return SizeEstimate(len(tets), nodes + (7 * len(tets) if self.order == 2 and tets.shape[1] == 4 else 0))
+
+    def mesh_values(self) -> dict:
+        """order: the file gives the rest."""
+        return {"order": self.order}
 
     def mesh(self, budget: Budget = Budget()) -> Mesh:
         """Read the file and build the Mesh; one past the budget (its tetrahedra, each worth its family's weight in
@@ -268,8 +272,11 @@ def write_mesh(path, mesh: Mesh, names: tuple[str, ...]) -> Path:
 
     path = Path(path)
     require(path.suffix in (".msh", ".inp"), f"{path}: write_mesh writes .msh (gmsh 2.2) or .inp (Abaqus) files")
-    walls = mesh.family.facet_family.meshio_cell  # type: ignore[union-attr]
-    cells = [(walls, wall) for wall in mesh.chambers] + [(mesh.family.meshio_cell, mesh.elements)]  # type: ignore[union-attr]
+    family = mesh.family
+    facets = None if family is None else family.facet_family
+    if family is None or facets is None:
+        raise PneumaInputError(f"write_mesh writes a 3D body's mesh, not one of {mesh.elements.shape[1]}-node elements")
+    cells = [(facets.meshio_cell, wall) for wall in mesh.chambers] + [(family.meshio_cell, mesh.elements)]
     if path.suffix == ".inp":
         sets = {
             name: [np.arange(len(data)) if i == j else np.zeros(0, dtype=np.int64) for j, (_, data) in enumerate(cells)]

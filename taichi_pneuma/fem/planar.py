@@ -37,7 +37,7 @@ from ..errors import PneumaInputError, require, require_distinct, require_finite
 from ..io.output import check_heading
 from ..io.units import PLANE_AREA, si_default
 from ..limits import Budget
-from .body import Body
+from .body import Body, SizeEstimate
 from .elements import TRIANGLE_P1, TRIANGLE_P2, family_for, family_of, positively_oriented
 from .mesh import Mesh, triangle_areas
 from .polygons import (
@@ -48,6 +48,7 @@ from .polygons import (
     polygon_self_intersects,
     require_spaced,
     segments_cross,
+    signed_area,
 )
 from .refine import split_in_four, subdivided, with_edge_nodes
 from .shapes import MAX_SHAPES, MAX_WALL_POINTS, Ellipse, Rectangle
@@ -150,6 +151,30 @@ class Geometry(Body):
                 outline, markers = notch(outline, markers, wall, origin, OUTER_MARKER + c, tol, f"chamber {name!r}")
             walls.append((wall, origin))
         return outline, markers, walls
+
+    def size_estimate(self) -> SizeEstimate:
+        """The triangles and vertices estimated from the outlines (fem/sizing.py's fit), each uniform refinement
+        multiplying them by 4, and each wall's node count (max_area as the Scene resolved it)."""
+        assert self.max_area is not None, "a Scene resolves max_area"
+        loops = [self.body.polygon()] + [shape.polygon() for _, shape in self.chambers]
+        area = abs(signed_area(loops[0])) - sum(abs(signed_area(loop)) for loop in loops[1:])
+        points = sum(len(loop) for loop in loops)
+        nodes_per_point = 2**self.refinements * self.order
+        triangles = (1.6 * area / self.max_area + 3 * points) * 4**self.refinements
+        return SizeEstimate(
+            triangles,
+            triangles * self.family.weight / 2 + points,
+            tuple(len(loop) * nodes_per_point for loop in loops[1:]),
+            f"meshed area {area:.4g} / max_area {self.max_area:.3g}, {points} outline points",
+        )
+
+    def mesh_values(self) -> dict:
+        """max_area and order (a refined geometry has no scene-file form: it is refused)."""
+        require(
+            self.refinements == 0,
+            f"a geometry refined {self.refinements} times has no scene-file form (scene files have no refinements key)",
+        )
+        return {"max_area": self.max_area, "order": self.order}
 
     def mesh(self, budget: Budget = Budget()) -> Mesh:
         """Mesh the body minus its chambers with Triangle ('pqa<max_area>'), split every triangle in four

@@ -27,19 +27,20 @@ THIN_WALL times the thinnest wall brings the estimate to 0.97-1.71 times gmsh's 
 old shipped pneunet_3d, linear at 0.2: 1.24), erring towards refusing; graded finer near the chambers, GRADED_THIN_WALL
 times that (the shipped pneunet_3d, 0.12 near its chambers: 1.0). Meshing then runs
 under the budget's element_cap (mesh(budget), limits.Budget), gmsh's output is checked against it (a quadratic
-tetrahedron counted 8 times, its family's weight, as sizing.check_solid counts it), and the budget's check_mesh
+tetrahedron counted 8 times, its family's weight, as sizing.check_mesh_size counts it), and the budget's check_mesh
 refuses a mesh past it.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 from ..errors import require, require_distinct
 from ..io.output import check_heading
 from ..limits import Budget
-from .body import Body
+from .body import Body, SizeEstimate
 from .gmsh_mesher import MAX_TETS, MeshSizes, Solid, estimate_tets, mesh_solid
 from .mesh import Mesh
 from .meshfile import MeshSurface
@@ -138,12 +139,16 @@ class SolidGeometry(Body):
             return sizes
         return MeshSizes(sizes.size, near, sizes.size)
 
-    def size_estimate(self) -> tuple[int, int]:
-        """(tetrahedra, nodes) estimated before meshing (module docstring)."""
+    def size_estimate(self) -> SizeEstimate:
+        """Tetrahedra and nodes estimated before meshing (module docstring)."""
         graded = isinstance(self.body, PneuNet) and self.mesh_sizes.near < self.sizes.size
         tets = int(round(estimate_tets(self.solid(), self.estimate_sizes()) * (GRADED_THIN_WALL if graded else 1)))
         nodes = tets / TETS_PER_NODE + (EDGES_PER_TET * tets if self.family.edges else 0)
-        return tets, int(round(nodes))
+        return SizeEstimate(tets, int(round(nodes)))
+
+    def mesh_values(self) -> dict:
+        """order, the mesh sizes (MeshSizes' fields) and curved."""
+        return {"order": self.order, **dataclasses.asdict(self.sizes), "curved": self.curved}
 
     def mesh(self, budget: Budget = Budget()) -> Mesh:
         """Mesh with gmsh under the budget and build the Mesh (module docstring)."""

@@ -22,7 +22,9 @@ import numpy as np
 
 from ..errors import require
 from ..io import cache
-from .gmsh_mesher import WALL_DIGITS, Solid, _cache_key, _elements, _faces, _Pieces, _session, node_points
+from .gmsh_cache import cache_key
+from .gmsh_mesher import WALL_DIGITS, Solid, _elements, _faces, _Pieces, node_points
+from .gmsh_session import session
 
 CANDIDATES = 12  # triangles of the others tested exactly per wall point, the nearest by centroid
 WALL_SAMPLING = 1 / 50  # thinnest_wall's surface mesh: edges at most this fraction of the body's diagonal
@@ -77,11 +79,11 @@ def wall_points(wall: np.ndarray) -> np.ndarray:
 def thinnest_wall(solid: Solid) -> float:
     """The thinnest rubber around any of the solid's chambers (module docstring), or one PneumaInputError where no
     chamber has a boundary apart from its wall. Cached like the solid's measures."""
-    entry = _cache_key("wall", solid)
+    entry = cache_key("wall", solid)
     cached = cache.load("gmsh-wall", entry, _valid_wall, 4096)
     if cached is not None:
         return float(cached["thinnest"][0])
-    with _session() as gmsh:
+    with session() as gmsh:
         pieces = _Pieces(gmsh, solid)
         model = gmsh.model
         box = np.reshape(model.getBoundingBox(-1, -1), (2, 3))

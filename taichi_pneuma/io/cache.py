@@ -34,6 +34,7 @@ import os
 import sys
 import zipfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -167,8 +168,8 @@ def store(kind: str, entry: Key | None, arrays: dict[str, np.ndarray]) -> None:
 
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as f:
-            # NumPy's stubs take any keyword for savez's allow_pickle
-            np.savez(f, **arrays, **told)  # type: ignore[arg-type]
+            named: dict[str, Any] = {**arrays, **told}  # (NumPy's stubs read any keyword as savez's allow_pickle)
+            np.savez(f, **named)
 
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -11,7 +11,7 @@ force) pressure x length, an energy per unit depth pressure x length^2, a mass p
 that force = mass x acceleration: kg in mm-kPa, tonnes in mm-MPa). Angles are in degrees and times in seconds
 whatever the system.
 
-Defaults are stored in SI and converted into a scene's units: a key declares its dimension (scene/schema.Key's
+Defaults are stored in SI and converted into a scene's units: a key declares its dimension (scene/fileformat.Key's
 unit; a chamber kind's or an effect's field through unit()), and a default of dimension L^a P^b in 2D (or
 3D) is divided by factor() = metre^a pascal^b when read (material presets likewise: a modulus in Pa divided
 by the pressure unit in Pa). A unitless scene takes every number as it is, as SI. Some defaults are numerical
@@ -29,8 +29,11 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 from ..errors import require
+
+T = TypeVar("T")
 
 LENGTH, AREA, PRESSURE, FORCE, ANGLE, TIME = "length", "area", "pressure", "force", "angle", "time"
 VOLUME = "volume"  # a 3D chamber's measure
@@ -75,6 +78,14 @@ def si_default(si, dimension: str, scaled: bool = True):
     scene's units (default_in) when the Scene resolves it (resolved); scaled=False: a numerical default for
     unitless scenes, which a scene with units must give."""
     return field(default=None, metadata={**unit(dimension, scaled), "si": si})
+
+
+def given(value: T | None, name: str) -> T:
+    """The value of a si_default field (None until the Scene sets it: resolved) once it is set: a term is built from
+    a resolved scene only, so None here is a bug in the program, not an input to refuse."""
+    if value is None:
+        raise ValueError(f"{name} is None: the Scene sets it (units.resolved) before any term is built")
+    return value
 
 
 def default_in(si, dimension: str, scaled: bool, units: Units, dim: int, key: str):

@@ -54,7 +54,7 @@ from ..backend import ti
 from ..errors import require, require_finite
 from ..io.units import PRESSURE
 from .invariants import isochoric_gradients, isochoric_hessians, isochoric_invariants
-from .law import Law, register
+from .law import LAWS, Law
 from .registry import BULK_MODULUS, POISSON_RATIO, MaterialForm, MaterialKey, register_form
 
 FORMS = {"neo_hookean": ("C10",), "mooney_rivlin": ("C10", "C01"), "yeoh": ("C10", "C20", "C30")}
@@ -102,7 +102,7 @@ def bulk_modulus(shear_modulus, poisson_ratio):
     return 2.0 * shear_modulus * (1.0 + poisson_ratio) / (3.0 * (1.0 - 2.0 * poisson_ratio))
 
 
-@register
+@LAWS.register
 class IsochoricPolynomial(Law):
     name = "isochoric_polynomial"
     parameter_names = (*COEFFICIENTS, "K")
@@ -276,7 +276,7 @@ class IsochoricMaterial(MaterialForm):
         require(np.all(np.isfinite(row)), f"K = {row[-1]!r} from nu = {self.poisson_ratio!r} is not finite")
         return row
 
-    def law_parameters(self, units=None) -> tuple[type, np.ndarray]:
+    def law_parameters(self, units=None) -> tuple[type[Law], np.ndarray]:
         """The law and its parameter vector (the coefficients are in the scene's units already)."""
         return IsochoricPolynomial, self.row()
 

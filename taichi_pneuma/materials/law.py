@@ -26,10 +26,12 @@ plane strain), by the kernel cauchy_stresses.
 """
 
 import functools
+from typing import ClassVar
 
 import numpy as np
 
 from ..backend import ti
+from ..io.registry import Registry
 from .eigen import isotropic_eigensystem, symmetric_eigensystem
 from .invariants import cofactor, determinant_hessian, flat
 
@@ -44,7 +46,7 @@ class Law:
     (eigen.isotropic_eigensystem).
     """
 
-    name = "law"
+    name: ClassVar[str] = "law"
     parameter_names: tuple[str, ...] = ()
     analytic_dims: tuple[int, ...] = ()
     isotropic = True
@@ -66,13 +68,7 @@ class Law:
         return None
 
 
-LAWS: dict[str, type[Law]] = {}
-
-
-def register(law: type[Law]) -> type[Law]:
-    """Class decorator: add a law to LAWS under its name."""
-    LAWS[law.name] = law
-    return law
+LAWS: Registry[type[Law]] = Registry("law")  # name -> the law, filled by @LAWS.register (io/registry.py)
 
 
 @functools.cache

@@ -49,7 +49,7 @@ from ..errors import require, require_finite
 from ..io.units import PRESSURE, si_default
 from .eigen import SQRT_HALF, rotation_variant_svd, symmetric_eigensystem
 from .invariants import cofactor, determinant_hessian, flat
-from .law import Law, register
+from .law import LAWS, Law
 from .registry import POISSON_RATIO, MaterialForm, MaterialKey, register_form, selector_names
 
 
@@ -72,7 +72,7 @@ def plane_split(g, p, q):
     return a, uu, ww
 
 
-@register
+@LAWS.register
 class StableNeoHookean(Law):
     name = "stable_neo_hookean"
     parameter_names = ("mu", "lam")
@@ -207,6 +207,6 @@ class Material(MaterialForm):
         laws = " or ".join(selector_names("law"))
         return f"{', '.join(extra)} need law = {laws} (E and nu alone: stable neo-Hookean)"
 
-    def law_parameters(self, units) -> tuple[type, np.ndarray]:
+    def law_parameters(self, units) -> tuple[type[Law], np.ndarray]:
         """The law and its parameter vector (E and nu are in the scene's units already)."""
         return StableNeoHookean, StableNeoHookean.parameters(self.youngs_modulus, self.poisson_ratio)[0]

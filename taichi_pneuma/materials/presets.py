@@ -32,6 +32,7 @@ import numpy as np
 
 from ..errors import PneumaInputError, require, require_finite
 from .isochoric import IsochoricMaterial, IsochoricPolynomial
+from .law import Law
 from .registry import BULK_MODULUS, POISSON_RATIO, MaterialForm, register_form
 
 
@@ -142,6 +143,6 @@ class PresetMaterial(MaterialForm):
             base.law, base.C10, base.C01, base.C20, base.C30, self.bulk_modulus, self.poisson_ratio
         )
 
-    def law_parameters(self, units) -> tuple[type, np.ndarray]:
+    def law_parameters(self, units) -> tuple[type[Law], np.ndarray]:
         """The law and its parameter vector in the scene's units (io/units.py; a unitless scene's name is None)."""
         return IsochoricPolynomial, self.resolved(None if units.name is None else units.pascal).row()

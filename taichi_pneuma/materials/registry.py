@@ -12,7 +12,7 @@ neo_hookean.py). A form is a frozen dataclass, the material itself, whose class 
 
 and whose methods turn keys into the material and back (from_keys, scene_values), check it (its __post_init__)
 and give its law and parameter vector in the scene's units (law_parameters). Decorate the class with
-@register_form to make scene files find it; the scene format (scene/sceneformat.py) reads, writes and
+@register_form to make scene files find it; the scene format (scene/material_keys.py) reads, writes and
 documents the union of every form's keys, all_keys().
 """
 
@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import PneumaInputError, require
 from ..io.units import PRESSURE
+from .law import Law
 
 # The keys that name a material's form, by priority (a table naming a preset and a law is read as the preset,
 # which refuses law), and what each means
@@ -64,6 +65,7 @@ ALTERNATIVES = (
 class MaterialForm:
     """The base of the forms: the class attributes and methods of the module docstring."""
 
+    __dataclass_fields__: ClassVar[dict]  # every form is a dataclass
     selector: ClassVar[str | None] = None
     names: ClassVar[tuple[str, ...]] = ()
     keys: ClassVar[tuple[MaterialKey, ...]] = ()
@@ -73,7 +75,7 @@ class MaterialForm:
     def form_keys(cls, values: dict) -> dict:
         """The keys of this form that a table's values choose (its selector first), each with the value a scene
         file writes for it when it is not given (None: none): editing the selector to another form drops the old
-        form's keys that the new one lacks or that hold that value (scene/schema.py's switched)."""
+        form's keys that the new one lacks or that hold that value (scene/dotted_edits.py's switched)."""
         return dict.fromkeys(([cls.selector] if cls.selector else []) + [key.name for key in cls.keys])
 
     @classmethod
@@ -86,7 +88,7 @@ class MaterialForm:
         extra = [name for name in given if name not in own]
         if extra:
             raise PneumaInputError(cls.refusal(extra, values))
-        fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]  # every form is a dataclass
+        fields = {f.name: f for f in dataclasses.fields(cls)}
         for key in cls.keys:
             missing = fields[key.field].default is dataclasses.MISSING and values.get(key.name) is None
             require(not missing, f"{cls.selector} = {values.get(cls.selector)!r} needs {key.name}")
@@ -108,7 +110,7 @@ class MaterialForm:
         selector = {self.selector: getattr(self, self.selector, self.names[0])} if self.selector else {}
         return {**selector, **{key.name: getattr(self, key.field) for key in self.keys}}
 
-    def law_parameters(self, units) -> tuple[type, np.ndarray]:
+    def law_parameters(self, units) -> tuple[type[Law], np.ndarray]:
         """The law and its parameter vector in the scene's units (io/units.py; a unitless scene's name is None)."""
         raise NotImplementedError
 

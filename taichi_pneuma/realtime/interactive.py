@@ -46,7 +46,8 @@ def explore(
     mesh, solver = built.mesh, NewtonSolver(built.model, options)
     canvas = open_canvas(*size, backend, show=True)
     bounds = fixed_view(mesh)
-    u, ratio, renderer = np.zeros_like(mesh.vertices), None, None
+    u, ratio = np.zeros_like(mesh.vertices), None
+    renderer: FrameRenderer | None = None
     converged, solves, frames = True, 0, 0
     print(f"interactive: drag the slider (commanded area / rest area, 1 .. {growth:g}); close the window to quit")
     while canvas.running and (max_frames is None or frames < max_frames):
@@ -72,7 +73,8 @@ def explore(
                 f"{record.iterations} Newton it, converged {record.converged}",
                 flush=True,
             )
-        canvas.show_image(renderer.frame(0))  # type: ignore[union-attr]
+        if renderer is not None:  # (the first frame has solved)
+            canvas.show_image(renderer.frame(0))
         canvas.show()
         frames += 1
     return {"all_converged": bool(converged), "solves": solves}

@@ -315,7 +315,7 @@ class WebView:
                 slider.value = float(value)  # type: ignore[misc]  # (viser's setter takes more types than it gives)
             sliders = tuple(float(s.value) for s in self.sliders)  # as the handles hold them (viser may round)
         if playing != session.playing:
-            self.play.value = session.playing  # type: ignore[misc]
+            self.play.value = session.playing  # type: ignore[misc]  # (the same setter)
             playing = bool(self.play.value)
         # only what was set here counts as shown: a control the page moved meanwhile still differs, for the next frame
         self._shown = (sliders, playing, field, target)

@@ -23,10 +23,10 @@ def pod_basis(
     u, sigma, _ = np.linalg.svd(np.asarray(displacements, dtype=np.float64).T, full_matrices=False)
     cumulative = np.cumsum(sigma**2) / np.sum(sigma**2)
     nonzero = int(np.sum(sigma > sigma[0] * 1e-13))
-    if modes is None:
-        require(energy is not None and 0 < energy < 1, f"--energy = {energy!r} must lie in (0, 1)")
-        count = min(int(np.searchsorted(cumulative, float(energy))) + 1, nonzero)  # type: ignore[arg-type]
-    else:
+    if energy is not None:
+        require(0 < energy < 1, f"--energy = {energy!r} must lie in (0, 1)")
+        count = min(int(np.searchsorted(cumulative, float(energy))) + 1, nonzero)
+    elif modes is not None:
         count = modes
     require(
         1 <= count <= nonzero,

@@ -11,6 +11,7 @@ from __future__ import annotations
 import io
 import os
 import zipfile
+from pathlib import Path
 
 import numpy as np
 
@@ -33,7 +34,7 @@ def save_reduced(path: str | os.PathLike, model: ReducedModel, singular_values: 
     for label, (pieces, weights) in model.samples.items():
         sampled[PIECES + label], sampled[WEIGHTS + label] = pieces, weights
     save_npz(
-        path,  # type: ignore[arg-type]
+        Path(path),
         basis=model.basis,
         commands=model.training[0],
         coordinates=model.training[1],

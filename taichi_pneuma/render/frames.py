@@ -390,8 +390,8 @@ class FrameRenderer:
             return None
         import matplotlib
 
-        cycle = matplotlib.colormaps["tab10"].colors  # type: ignore[attr-defined]  # tab10 is a ListedColormap
-        return [tuple(cycle[k % len(cycle)]) for k in range(chambers)]
+        tab10 = matplotlib.colormaps["tab10"]  # a ListedColormap of 10 colours: tab10(k) is the k-th, RGBA
+        return [tuple(tab10(k % tab10.N)[:3]) for k in range(chambers)]
 
     def _draw_trace(self, i: int) -> list[Label]:
         """Area / rest area (left axis) and pressure (right axis) of every chamber against the step, on

@@ -27,7 +27,7 @@ FORMATS = {
 }
 
 
-def check_video(path: Path, fps: float) -> tuple[str, str, list[str]]:
+def check_video(path: str | Path, fps: float) -> tuple[str, str, list[str]]:
     """Raise PneumaInputError unless path has a known extension and fps > 0; return its encoder settings."""
     require(
         Path(path).suffix.lower() in FORMATS, f"video file {str(path)!r}: extension must be one of {', '.join(FORMATS)}"

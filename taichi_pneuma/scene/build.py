@@ -1,6 +1,7 @@
 """A scene as data, validated, and its builder: a scene -> an EnergyModel of exactly the terms it names.
 
-A scene is a body with chambers (fem.planar.Geometry: also the clamped nodes, the rollers and the tip),
+A scene is a body with chambers (fem/body.py's Body: 2D shapes, 3D shapes or a mesh file; also the clamped
+nodes, the rollers and the tip),
 a material (optionally one per region), a schedule of chamber commands, and a tuple of effects. The
 builder refuses supports that leave a rigid-body motion free (fem/supports.py), then adds elasticity, one
 chamber term per chamber (of the chamber's kind), the clamp (when there is one: no [clamp], no clamp), and a
@@ -21,77 +22,27 @@ import numpy as np
 
 from .. import runtime
 from ..errors import require, require_finite
+from ..fem.body import Body
 from ..fem.mesh import Mesh
-from ..fem.planar import BeamGeometry, Geometry
+from ..fem.planar import BeamGeometry
 from ..fem.self_intersection import surface_crossing, surface_pieces
-from ..fem.supports import in_box, require_box, require_held
+from ..fem.supports import require_held
 from ..io.keys import dotted
 from ..io.output import check_stem
-from ..io.units import NODAL_STIFFNESS, UNITLESS, Units, defaults, resolved, si_default
+from ..io.tomltext import dumps
+from ..io.units import NODAL_STIFFNESS, UNITLESS, Units, defaults, given, resolved, si_default
 from ..limits import Budget
-from ..materials import Material, MaterialForm, PresetMaterial
+from ..materials import Law, Material, MaterialForm, PresetMaterial
 from ..terms import VOLUMETRIC, Clamp, Elasticity, NormalClamp
 from ..terms.base import Term
-from ..terms.chambers import Chamber, ChamberKind
+from ..terms.chambers import Chamber
 from ..terms.effects import Effect
 from ..terms.model import EnergyModel
 from ..terms.nodal_volume import grouping_for, require_volumetric
-from . import sceneformat
-from .schedule import MAX_STRETCH, ChamberSchedule, Schedule, area_ramp
-
-
-@dataclass(frozen=True)
-class Region:
-    """A material for the elements whose centroid lies in box [x0, y0, x1, y1] ([x0, y0, z0, x1, y1, z1] in 3D),
-    or (3D) for the tetrahedra of a named volume group of the mesh (a mesh file's physical group, a PneuNet's
-    "layer"); later regions win."""
-
-    box: tuple[float, float, float, float] | None
-    material: MaterialForm
-    group: str | None = None
-
-    def __post_init__(self):
-        require((self.box is None) != (self.group is None), "give exactly one of 'box' and 'group'")
-        if self.box is not None:
-            require_box("box", self.box)
-        else:
-            require(isinstance(self.group, str) and self.group != "", f"group = {self.group!r} must name a group")
-
-    def contains(self, mesh: Mesh) -> np.ndarray:
-        """Which of the mesh's elements the region takes (a group the mesh lacks is refused, naming its groups)."""
-        if self.box is not None:
-            return in_box(mesh.vertices[mesh.elements].mean(axis=1), self.box, "material region")
-        groups = getattr(mesh, "region_groups", {})
-        require(
-            self.group in groups,
-            f"material region group = {self.group!r}: the mesh has no such volume group "
-            f"(its groups: {', '.join(groups) or 'none'})",
-        )
-        return mesh.regions == groups[self.group]
-
-
-@dataclass(frozen=True)
-class ChamberControl:
-    """How a chamber is driven: its schedule (whose kind carries the kind's parameters, e.g. the area
-    penalty's stiffness) and the (min, max) command bounds inverse control keeps to (None: the kind's
-    default_bounds of the schedule)."""
-
-    schedule: ChamberSchedule
-    bounds: tuple[float, float] | None = None
-
-    def __post_init__(self):
-        if self.bounds is not None:
-            require(len(self.bounds) == 2, f"bounds = {list(self.bounds)!r} must be [min, max]")
-            low, high = (require_finite("bounds", b) for b in self.bounds)
-            require(low < high, f"bounds = {list(self.bounds)!r}: min {low:g} must be < max {high:g}")
-            self.kind.check(f"bounds = {list(self.bounds)!r}:", [low, high])
-
-    @property
-    def kind(self) -> ChamberKind:
-        return self.schedule.kind  # type: ignore[return-value]
-
-    def term(self, config, loop: np.ndarray, name: str, order: int, origin: np.ndarray | None = None) -> Chamber:
-        return self.kind.term(config, loop, name, order, origin)
+from .dotted_edits import edited
+from .region import Region
+from .scene_keys import CLAMP_STIFFNESS, REPLACED, SCENE, scene_arguments
+from .schedule import MAX_STRETCH, ChamberControl, Schedule, area_ramp
 
 
 @dataclass(frozen=True)
@@ -111,12 +62,12 @@ class Scene:
     a contact's dhat, a 2D geometry's max_area) left None in a scene with units is refused, naming its
     scene-file key."""
 
-    geometry: Geometry
+    geometry: Body
     controls: tuple[ChamberControl, ...]
     increments: int
     material: MaterialForm = field(default_factory=Material)
     regions: tuple[Region, ...] = ()
-    clamp_stiffness: float | None = si_default(sceneformat.CLAMP_STIFFNESS, NODAL_STIFFNESS)  # 1/2 K |u|^2 per node
+    clamp_stiffness: float | None = si_default(CLAMP_STIFFNESS, NODAL_STIFFNESS)  # 1/2 K |u|^2 per node
     effects: tuple[Effect, ...] = ()
     name: str = "scene"
     targets: tuple = ()  # targets.Target poses for inverse control (apps.reach), in order
@@ -155,9 +106,9 @@ class Scene:
         require(not clash, f"obstacle name {clash[0] if clash else ''!r} is a chamber's, an effect's or the clamp's")
         _ = self.schedule  # validates the increments against the keyframes
         law, _ = self.law_parameters()  # resolves the presets, checks that the body has one law
-        grouping = grouping_for(self.volumetric, getattr(self.geometry, "order", 1))
+        grouping = grouping_for(self.volumetric, self.geometry.order)
         if grouping != "element":
-            require_volumetric(grouping, law, getattr(self.geometry, "order", 1))
+            require_volumetric(grouping, law, self.geometry.order)
 
     def resolve_defaults(self) -> None:
         """Set every default left None (units.si_default) of the scene, its geometry, its material and regions,
@@ -193,7 +144,7 @@ class Scene:
 
     def to_toml(self) -> str:
         """This scene as a scene file (TOML); scenefile.load_scene reads it back to an equal scene."""
-        return sceneformat.to_toml(self)
+        return dumps(SCENE_FILE.write_table(self))
 
     def with_value(self, key: str, value) -> Scene:
         """A copy with one dotted scene-file key changed (e.g. "chambers[0].center[1]", 0.1, or a short name
@@ -213,7 +164,7 @@ class Scene:
 
     def with_values(self, values: dict) -> Scene:
         """A copy with several dotted keys (or short names) changed at once (validated once, after all are set)."""
-        return sceneformat.with_values(self, {dotted(key): value for key, value in values.items()})
+        return edited(SCENE_FILE, self, {dotted(key): value for key, value in values.items()}, REPLACED)
 
     @property
     def schedule(self) -> Schedule:
@@ -221,14 +172,14 @@ class Scene:
 
     @property
     def dim(self) -> int:
-        """The body's dimension: 3 for a geometry of tetrahedra (one that says dim = 3), else 2."""
-        return getattr(self.geometry, "dim", 2)
+        """The body's dimension (Body.dim): 2 for plane strain triangles, 3 for tetrahedra."""
+        return self.geometry.dim
 
     @property
     def chamber_names(self) -> list[str]:
-        return [name for name, _ in self.geometry.chambers]
+        return self.geometry.chamber_names
 
-    def law_parameters(self) -> tuple[type, list[np.ndarray]]:
+    def law_parameters(self) -> tuple[type[Law], list[np.ndarray]]:
         """The body's law and the parameter vector of the material and of each region, in the scene's units
         (PneumaInputError naming the region whose law differs: a body has one law)."""
         law, base = self.material.law_parameters(self.units)
@@ -237,14 +188,14 @@ class Scene:
             other, row = region.material.law_parameters(self.units)
             require(
                 other is law,
-                f"material.regions[{i}]: its law {other.name!r} is not the body's {law.name!r}: a "  # type: ignore[attr-defined]
+                f"material.regions[{i}]: its law {other.name!r} is not the body's {law.name!r}: a "
                 f"body has one law (E and nu: stable_neo_hookean; law = neo_hookean, mooney_rivlin, "
                 f"yeoh and presets: isochoric_polynomial)",
             )
             rows.append(row)
         return law, rows
 
-    def element_material(self, mesh: Mesh) -> tuple[type, np.ndarray]:
+    def element_material(self, mesh: Mesh) -> tuple[type[Law], np.ndarray]:
         """The material law of the body and its parameter vector for every element, (m, p): the base material's,
         then each region's for the elements it contains (Region.contains), in order; a region that contains no
         element is refused, naming it."""
@@ -275,7 +226,7 @@ class Scene:
         # Round-off scales, from the stiffest modulus (neo-Hookean: mu + lam, which grows without bound as
         # nu -> 1/2): forces below 1e-6 modulus (body measure)^((d - 1) / d) (a stress times the measure of a
         # cross-section: sqrt(area) in 2D, volume^(2/3) in 3D), energies below 1e-12 modulus (body measure).
-        modulus = float(np.max(law.modulus(parameters)))  # type: ignore[attr-defined]
+        modulus = float(np.max(law.modulus(parameters)))
         model = EnergyModel(
             mesh.vertices,
             force_floor=1e-6 * modulus * mesh.measure ** ((mesh.dim - 1) / mesh.dim),
@@ -289,10 +240,11 @@ class Scene:
             model.add(control.term(config, loop, name, mesh.order, origin))
             for control, loop, origin, name in zip(self.controls, mesh.chambers, mesh.wall_origins, self.chamber_names)
         ]
+        stiffness = given(self.clamp_stiffness, "clamp stiffness")
         if len(mesh.pinned):
-            model.add(Clamp(config, mesh.pinned, self.clamp_stiffness))  # type: ignore[arg-type]
+            model.add(Clamp(config, mesh.pinned, stiffness))
         for nodes, normal in mesh.rollers:
-            model.add(NormalClamp(config, nodes, normal, self.clamp_stiffness))  # type: ignore[arg-type]
+            model.add(NormalClamp(config, nodes, normal, stiffness))
         lumped_area = mesh.nodal_measures()
         effects = {
             effect.name: [model.add(t) for t in effect.terms(config, mesh, lumped_area, budget)]
@@ -304,7 +256,7 @@ class Scene:
         obstacles = [[model.add(t) for t in spec.terms(config, mesh, lumped_area, budget)] for spec in self.obstacles]
         contacts = [terms[0] for terms in obstacles]
         parts = [t for terms in obstacles for t in terms[1:] if t.reports_contact]  # not a held object's weight
-        return BuiltScene(self, mesh, model, elastic, chambers, effects, contacts, parts)  # type: ignore[arg-type]
+        return BuiltScene(self, mesh, model, elastic, chambers, effects, contacts, parts)
 
 
 def support_rows(mesh: Mesh, effects) -> list:
@@ -327,6 +279,10 @@ def describe_supports(mesh: Mesh, effects) -> str:
         for nodes, n in mesh.rollers
     ]
     return ", ".join([clamp] + rollers + [effect.name for effect in effects if effect.support])
+
+
+# The scene file's declaration (scene_keys.SCENE), whose values make a Scene
+SCENE_FILE = dataclasses.replace(SCENE, make=lambda values: Scene(**scene_arguments(values)), cls=Scene)
 
 
 @dataclass

@@ -1,4 +1,5 @@
-"""Scene files (TOML) -> Scene, with one clear PneumaInputError naming the file, the key and the value.
+"""Scene files (TOML) read and written: TOML -> Scene, with one clear PneumaInputError naming the file, the key and
+the value, and Scene -> its data (scene_data; Scene.to_toml writes the text), read(write(x)) == x.
 
     name = "bidirectional"
     [body]       shape = "rectangle" (center, size) | "polygon" (points) | "union" (rectangles = [{center, size}, ...])
@@ -27,11 +28,12 @@
     [effects.dynamics] density, dt
     [[targets]]  tip = [x, y], angle (degrees, optional), weights = [w_x, w_y, w_angle]  (inverse control, in order)
 
-Every key is checked: an unknown key, a missing required one, or a value out of range is refused
-with its dotted path (e.g. ``chambers[1].semi_axes``). The format is declared once, in sceneformat.py;
-key_reference() lists every key with its type, default and allowed values. A file over MAX_SCENE_BYTES, or one
-that is not a regular file (a FIFO, a device), is refused unread;
-``name`` must be a plain file name (output.check_stem); without it the file's own name, reduced to one, is used.
+Every key is checked: an unknown key, a missing required one, or a value out of range is refused with its dotted
+path (e.g. ``chambers[1].semi_axes``). The format is declared once, in scene_keys.py (the tables; build.py SCENE_FILE
+makes the Scene of their values) with fileformat.py's entries; key_reference() lists every key with its type, default
+and allowed values. A file over MAX_SCENE_BYTES, or one that is not a regular file (a FIFO, a device), is refused
+unread; ``name`` must be a plain file name (output.check_stem); without it the file's own name, reduced to one, is
+used.
 """
 
 from __future__ import annotations
@@ -41,26 +43,31 @@ import os
 from ..errors import PneumaInputError
 from ..io.inputs import read_input
 from ..io.output import reduce_to_stem
-from . import sceneformat
-from .build import Scene
-from .schema import KeyInfo, parse_toml
+from ..io.tomltext import parse_toml
+from .build import SCENE_FILE, Scene
+from .fileformat import KeyInfo, key_rows
 
 MAX_SCENE_BYTES = 1_000_000
 
 
 def read_scene(data: dict, name: str) -> Scene:
     """A Scene from parsed TOML (named `name` unless it has a name key); every error names its dotted key."""
-    return sceneformat.read_scene(data, name, Scene)
+    return SCENE_FILE.read_table({"name": name, **data} if isinstance(data, dict) else data, "")
 
 
 def key_reference() -> list[KeyInfo]:
     """Every key a scene file may have: its type, default, allowed values, when it applies and what it means."""
-    return sceneformat.key_reference(Scene)
+    return key_rows(SCENE_FILE.entries(), "")
+
+
+def scene_data(scene: Scene) -> dict:
+    """The scene as the data of a scene file: every key explicit, defaults included, but absent optional ones."""
+    return SCENE_FILE.write_table(scene)
 
 
 def load_scene(path: str | os.PathLike) -> Scene:
     """Read and validate a scene file (a regular file of at most MAX_SCENE_BYTES: a FIFO or a device is
-    refused without waiting for it; TOML within schema.parse_toml's limits); errors are PneumaInputError
+    refused without waiting for it; TOML within tomltext.parse_toml's limits); errors are PneumaInputError
     prefixed with the file name."""
     raw = read_input(path, MAX_SCENE_BYTES, "scene file")
     try:
@@ -68,9 +75,10 @@ def load_scene(path: str | os.PathLike) -> Scene:
     except UnicodeDecodeError as exc:
         raise PneumaInputError(f"{path}: not valid TOML (not UTF-8: {exc.reason} at byte {exc.start})") from None
     data = parse_toml(text, str(path))
-    body = data.get("body")
-    if isinstance(body, dict) and isinstance(body.get("file"), str):  # a mesh file, relative to the scene file
-        body["file"] = os.path.join(os.path.dirname(os.path.abspath(path)), body["file"])
+    chambers = data.get("chambers")
+    for table in [data.get("body")] + (chambers if isinstance(chambers, list) else []):
+        if isinstance(table, dict) and isinstance(table.get("file"), str):  # a mesh or CAD file, relative to it
+            table["file"] = os.path.join(os.path.dirname(os.path.abspath(path)), table["file"])
     try:
         return read_scene(data, reduce_to_stem(os.path.splitext(os.path.basename(path))[0]))
     except PneumaInputError as exc:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import require, require_finite, shape_of
-from ..terms.chambers import AreaControl, ChamberKind, default_kind
+from ..terms.chambers import AreaControl, Chamber, ChamberKind, default_kind
 
 # A run past this largest principal stretch warns (a scene's schedule.max_stretch replaces it). The presets are
 # fitted to uniaxial data up to 200 % strain (a stretch of 3; docs/materials.md): past that their stresses are
@@ -25,19 +25,20 @@ from ..terms.chambers import AreaControl, ChamberKind, default_kind
 MAX_STRETCH = 5.0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class ChamberSchedule:
     """Keyframes ((step, value), ...) of one chamber driven by `kind`, whose check() the values pass.
 
     kind: a ChamberKind with its parameters (e.g. AreaControl(stiffness=1e5)), or the name of a
-    registered kind for its default parameters ("area", "pressure")."""
+    registered kind for its default parameters ("area", "pressure"), which the constructor turns into that kind:
+    the field is a ChamberKind."""
 
-    kind: ChamberKind | str
+    kind: ChamberKind
     keyframes: tuple[tuple[float, float], ...]
 
-    def __post_init__(self):
-        if not isinstance(self.kind, ChamberKind):
-            object.__setattr__(self, "kind", default_kind(self.kind))
+    def __init__(self, kind: ChamberKind | str, keyframes: tuple[tuple[float, float], ...]):
+        object.__setattr__(self, "kind", kind if isinstance(kind, ChamberKind) else default_kind(kind))
+        object.__setattr__(self, "keyframes", keyframes)
         require(
             len(self.keyframes) >= 1 and all(shape_of(k) == (2,) for k in self.keyframes),
             f"keyframes = {self.keyframes!r} must be a non-empty list of [step, value] pairs",
@@ -57,8 +58,7 @@ class ChamberSchedule:
 
     def command(self, step: float) -> float:
         steps = [0.0] + [float(s) for s, _ in self.keyframes]
-        # kind is a ChamberKind from __post_init__ on
-        values = [self.kind.rest] + [float(v) for _, v in self.keyframes]  # type: ignore[union-attr]
+        values = [self.kind.rest] + [float(v) for _, v in self.keyframes]
         if steps[1] == 0.0:
             steps, values = steps[1:], values[1:]
         return float(np.interp(step, steps, values))
@@ -96,7 +96,7 @@ class Schedule:
 
     @property
     def rest_commands(self) -> np.ndarray:
-        rests = [float(c.kind.rest) for c in self.chambers]  # type: ignore[union-attr]
+        rests = [float(c.kind.rest) for c in self.chambers]
         return np.array(rests + [0.0] * (3 * len(self.moving)))
 
 
@@ -109,3 +109,27 @@ def area_ramp(growth: float, steps: int, stiffness: float = 1e5) -> ChamberSched
         f"steps = {steps!r} must be an integer >= 2 (the rest state and at least one increment)",
     )
     return ChamberSchedule(AreaControl(stiffness), ((0, 1.0), (steps - 1, float(growth))))
+
+
+@dataclass(frozen=True)
+class ChamberControl:
+    """How a chamber is driven: its schedule (whose kind carries the kind's parameters, e.g. the area
+    penalty's stiffness) and the (min, max) command bounds inverse control keeps to (None: the kind's
+    default_bounds of the schedule)."""
+
+    schedule: ChamberSchedule
+    bounds: tuple[float, float] | None = None
+
+    def __post_init__(self):
+        if self.bounds is not None:
+            require(len(self.bounds) == 2, f"bounds = {list(self.bounds)!r} must be [min, max]")
+            low, high = (require_finite("bounds", b) for b in self.bounds)
+            require(low < high, f"bounds = {list(self.bounds)!r}: min {low:g} must be < max {high:g}")
+            self.kind.check(f"bounds = {list(self.bounds)!r}:", [low, high])
+
+    @property
+    def kind(self) -> ChamberKind:
+        return self.schedule.kind
+
+    def term(self, config, loop: np.ndarray, name: str, order: int, origin: np.ndarray | None = None) -> Chamber:
+        return self.kind.term(config, loop, name, order, origin)

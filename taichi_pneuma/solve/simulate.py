@@ -84,7 +84,10 @@ class RampFailed(RampStopped):
 
 
 class RampInterrupted(RampStopped):
-    """The caller's stop() asked the ramp to end after an increment (e.g. on Ctrl-C)."""
+    """The caller's stop() asked the ramp to end after an increment (e.g. on Ctrl-C); signum: the signal that asked,
+    where the caller knows it (signals.name_of reads it)."""
+
+    signum: int | None = None
 
 
 def describe_commands(built: BuiltScene, commands: np.ndarray, reached: np.ndarray) -> str:

@@ -19,8 +19,8 @@ from .. import limits
 from ..errors import PneumaInputError, require, require_finite
 from ..io.keys import dotted
 from ..scene.build import Scene
-from ..scene.sceneformat import scene_data
-from ..scene.schema import parse_key, parse_value
+from ..scene.dotted_edits import parse_key, parse_value
+from ..scene.scenefile import scene_data
 from .table import MAX_CELL, cell, is_number, run_key
 
 MAX_RUNS = limits.MAX_RUNS

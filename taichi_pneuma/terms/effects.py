@@ -1,8 +1,9 @@
 """Effects a scene may name, each a small spec that builds its term(s) when (and only when) it is named.
 
-An effect is a frozen dataclass registered in EFFECTS under its name: its fields are the keys of its
-[effects.<name>] table in a scene file, read and written with the types their annotations declare
-(float: any number; int, str, bool; tuple or list: an array), a field's default being the key's.
+An effect is a frozen dataclass registered in EFFECTS under its name (@EFFECTS.register, io/registry.py): its
+fields are the keys of its [effects.<name>] table in a scene file, read and written with the types their
+annotations declare (float: any number; int, str, bool; tuple or list: an array), a field's default being the
+key's, its doc and unit the field's metadata (io/registry.py key).
 Its terms(config, mesh, lumped_area, budget) returns the terms it adds to the energy model, checking what they
 would allocate against the budget (limits.Budget: self-contact's pairs) before allocating it;
 lumped_area[i] is the integral of node i's shape function over the body (mesh.nodal_measures(): a third of
@@ -13,13 +14,15 @@ density x it).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
 from ..errors import require, require_finite, require_positive
 from ..fem.self_intersection import surface_pieces
 from ..fem.supports import PointSet
-from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, PRESSURE, TIME, si_default, unit
+from ..io.registry import Registry
+from ..io.units import ACCELERATION, DENSITY, LENGTH, NODAL_STIFFNESS, PRESSURE, TIME, given, si_default, unit
 from ..limits import wall_pairs
 from .contact import SelfContact as SelfContactTerm
 from .friction import frictional, slip_length
@@ -37,10 +40,13 @@ class Effect:
     a ground line the output draws (npz ground_height, the video), or None; support, whether the run's
     first line lists it among the supports; holds(), the rigid motions its terms hold."""
 
-    name = "effect"
+    name: ClassVar[str] = "effect"
     contact = False
-    ground_height = None
     support = False
+
+    @property
+    def ground_height(self) -> float | None:
+        return None
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
         raise NotImplementedError
@@ -55,6 +61,10 @@ class Effect:
         return 0
 
 
+EFFECTS: Registry[type[Effect]] = Registry("effect")  # name -> the effect, filled by @EFFECTS.register
+
+
+@EFFECTS.register
 @dataclass(frozen=True)
 class Gravity(Effect):
     """Body weight: density rho (mass per unit area in 2D, per unit volume in 3D) under acceleration g along -y."""
@@ -68,9 +78,10 @@ class Gravity(Effect):
         require_positive("g", self.g, allow_none=True)
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
-        return [GravityTerm(config, self.density * lumped_area, self.g)]  # type: ignore[arg-type]
+        return [GravityTerm(config, self.density * lumped_area, given(self.g, "gravity g"))]
 
 
+@EFFECTS.register
 @dataclass(frozen=True)
 class Ground(Effect):
     """Ground contact: a log barrier (threshold dhat, stiffness kappa) keeps the body's outer boundary above the line
@@ -87,7 +98,7 @@ class Ground(Effect):
     support = True
 
     @property
-    def ground_height(self) -> float:  # type: ignore[override]
+    def ground_height(self) -> float:
         return self.height
 
     def __post_init__(self):
@@ -112,10 +123,12 @@ class Ground(Effect):
             lowest > self.height, f"ground height = {self.height!r} must lie below the body (lowest point {lowest:.6g})"
         )
         ground = Plane((0.0, self.height, 0.0), (0.0, 1.0, 0.0))  # the body on its +y side
-        contact = ObstacleContact(config, mesh.boundary, ground, "ground", self.dhat, self.stiffness)  # type: ignore[arg-type]
+        dhat, stiffness = given(self.dhat, "ground dhat"), given(self.stiffness, "ground stiffness")
+        contact = ObstacleContact(config, mesh.boundary, ground, "ground", dhat, stiffness)
         return frictional(contact, self.friction, self.friction_slip)
 
 
+@EFFECTS.register
 @dataclass(frozen=True)
 class SelfContact(Effect):
     """Self-contact of chamber walls: point-edge log barriers (threshold dhat, stiffness kappa) on every wall."""
@@ -141,12 +154,13 @@ class SelfContact(Effect):
         )
         walls = list(mesh.chambers)
         budget.check_pairs(self.pairs([len(wall) for wall in walls]), "self-contact")  # before allocating them
-        return [SelfContactTerm(config, walls, self.dhat, self.stiffness)]  # type: ignore[arg-type]
+        return [SelfContactTerm(config, walls, given(self.dhat, "dhat"), given(self.stiffness, "stiffness"))]
 
     def pairs(self, walls: list[int]) -> int:
         return wall_pairs(walls)
 
 
+@EFFECTS.register
 @dataclass(frozen=True)
 class SurfaceContact(Effect):
     """Contact of the body's whole surface with itself, 2D and 3D (terms/surface_contact.py): IPC barriers of
@@ -174,7 +188,7 @@ class SurfaceContact(Effect):
         from .surface_contact import SurfaceFriction
 
         dhat = self.dhat or self.DHAT_FRACTION * float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
-        term = SurfaceContactTerm(config, surface_pieces(mesh), dhat, self.stiffness)  # type: ignore[arg-type]
+        term = SurfaceContactTerm(config, surface_pieces(mesh), dhat, given(self.stiffness, "stiffness"))
         nearest = term.min_distance()
         require(
             nearest == np.inf,
@@ -186,6 +200,7 @@ class SurfaceContact(Effect):
         return [term, SurfaceFriction(term, self.friction, slip_length(self.friction_slip, dhat))]
 
 
+@EFFECTS.register
 @dataclass(frozen=True)
 class Dynamics(Effect):
     """Motion instead of quasistatics: inertia of the lumped masses (density rho), backward Euler with
@@ -211,6 +226,3 @@ class Dynamics(Effect):
             "row-sum lumped mass vanishes at its corners",
         )
         return [Inertia(config, self.density * lumped_area, self.dt)]
-
-
-EFFECTS = {cls.name: cls for cls in (Gravity, Ground, SelfContact, SurfaceContact, Dynamics)}

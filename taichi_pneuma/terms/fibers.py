@@ -249,7 +249,7 @@ class Fiber:
 
     @property
     def layout(self) -> str:
-        return next(name for name, cls in LAYOUTS.items() if type(self.path) is cls)
+        return self.path.name
 
     @property
     def what(self) -> str:
@@ -263,7 +263,10 @@ class Fiber:
             f"{self.what}: diameter = {self.diameter!r} is for a 3D body; a 2D fibre is a layer of cords per unit "
             f"depth: give area, its cross-section per unit depth",
         )
-        return self.area if self.diameter is None else math.pi * self.diameter**2 / 4  # type: ignore[return-value]
+        if self.diameter is not None:
+            return math.pi * self.diameter**2 / 4
+        assert self.area is not None, "__post_init__ takes exactly one of area and diameter"
+        return self.area
 
     def terms(self, config, mesh, lumped_area, budget) -> list:
         """One Cords term of this fibre's segments, embedded in the mesh. Refused before any point is made past

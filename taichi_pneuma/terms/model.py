@@ -8,10 +8,13 @@ under the attainable residual; from u it carries K * ulp(|u|), which is negligib
 from __future__ import annotations
 
 import math
+from typing import TypeVar
 
 import numpy as np
 
 from . import Term
+
+T = TypeVar("T", bound=Term)
 
 
 class Configuration:
@@ -49,7 +52,7 @@ class EnergyModel:
     def n_dofs(self) -> int:
         return self.config.dim * self.config.n_vertices
 
-    def add(self, term: Term) -> Term:
+    def add(self, term: T) -> T:
         self.terms.append(term)
         return term
 

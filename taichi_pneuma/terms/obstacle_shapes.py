@@ -1,17 +1,24 @@
-"""The rigid obstacles' shapes (an [[obstacles]] table's shape): plane, sphere, box, cylinder and capsule, each a
-frozen dataclass of its keys with kind (the kernels' shape index, terms/obstacles.py), parameters() (the floats the
-kernels read: a point, a vector, a radius, a half-length) and outline() (its boundary in the x-y plane, drawn in a
-2D scene's frames).
+"""The rigid obstacles' shapes (an [[obstacles]] table's shape): plane, box, sphere, cylinder and capsule, each a
+frozen dataclass of its keys (io/registry.py key: doc and unit), registered in OBSTACLE_SHAPES under its name, with
+kind (the kernels' shape index, terms/obstacle_distance.py), parameters() (the floats the kernels read: a point, a
+vector, a radius, a half-length) and outline() (its boundary in the x-y plane, drawn in a 2D scene's frames).
 """
 
+from __future__ import annotations
+
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from ..errors import require, require_finite, require_positive
+from ..io.registry import Registry, key
+from ..io.units import LENGTH
 
 PLANE, SPHERE, BOX, CYLINDER, CAPSULE = range(5)  # the kernels' shape kinds
 AXES = ("x", "y", "z")
+POINT = "[x, y] (2D) or [x, y, z]"
+OBSTACLE_SHAPES: Registry[type[Shape]] = Registry("obstacle shape")
 
 
 def vector(name: str, value, length: int | None = None) -> tuple[float, ...]:
@@ -26,13 +33,15 @@ def vector(name: str, value, length: int | None = None) -> tuple[float, ...]:
 
 def axis_vector(axis: str) -> tuple[float, float, float]:
     require(axis in AXES, f"axis = {axis!r} is not one of {', '.join(AXES)}")
-    return tuple(float(k == AXES.index(axis)) for k in range(3))  # type: ignore[return-value]
+    k = AXES.index(axis)
+    return float(k == 0), float(k == 1), float(k == 2)
 
 
 class Shape:
     """An obstacle shape: kind (its kernel's shape index), vectors (its keys that are points or vectors, which a
     3D scene must give with 3 numbers) and parameters(): the PARAMETERS floats the kernels read."""
 
+    name: ClassVar[str]  # its shape key's value
     kind = PLANE
     vectors: tuple[str, ...] = ("center",)
 
@@ -60,12 +69,14 @@ def stadium(center, half: np.ndarray, radius: float, points: int = 32) -> np.nda
     return np.vstack([c + half + cap, c - half - cap])
 
 
+@OBSTACLE_SHAPES.register
 @dataclass(frozen=True)
 class Plane(Shape):
     """The half-space on the normal's side of the plane (2D: the line) through point."""
 
-    point: tuple
-    normal: tuple
+    point: tuple = key(doc=f"a point of it, {POINT}", unit=LENGTH)
+    normal: tuple = key(doc="[nx, ny] or [nx, ny, nz], towards the body")
+    name = "plane"
     kind = PLANE
     vectors = ("point", "normal")
 
@@ -84,31 +95,14 @@ class Plane(Shape):
         return np.array([p - reach * along, p + reach * along]), False
 
 
-@dataclass(frozen=True)
-class Sphere(Shape):
-    """A ball (2D: a disc) of the given radius."""
-
-    center: tuple
-    radius: float
-    kind = SPHERE
-
-    def __post_init__(self):
-        vector("center", self.center)
-        require_positive("radius", self.radius)
-
-    def parameters(self) -> np.ndarray:
-        return np.array([*vector("center", self.center), 0.0, 0.0, 0.0, self.radius, 0.0])
-
-    def outline(self, reach: float) -> tuple[np.ndarray, bool]:
-        return circle(self.center, self.radius), True
-
-
+@OBSTACLE_SHAPES.register
 @dataclass(frozen=True)
 class Box(Shape):
     """An axis-aligned box; its size [w, h] in 2D ([w, h, depth] in 3D)."""
 
-    center: tuple
-    size: tuple
+    center: tuple = key(doc=POINT, unit=LENGTH)
+    size: tuple = key(doc="[w, h] (2D) or [w, h, depth]", unit=LENGTH)
+    name = "box"
     kind = BOX
     vectors = ("center", "size")
 
@@ -126,14 +120,37 @@ class Box(Shape):
         return c + np.array([[-w, -h], [w, -h], [w, h], [-w, h]]), True
 
 
+@OBSTACLE_SHAPES.register
+@dataclass(frozen=True)
+class Sphere(Shape):
+    """A ball (2D: a disc) of the given radius."""
+
+    center: tuple = key(doc=POINT, unit=LENGTH)
+    radius: float = key(unit=LENGTH)
+    name = "sphere"
+    kind = SPHERE
+
+    def __post_init__(self):
+        vector("center", self.center)
+        require_positive("radius", self.radius)
+
+    def parameters(self) -> np.ndarray:
+        return np.array([*vector("center", self.center), 0.0, 0.0, 0.0, self.radius, 0.0])
+
+    def outline(self, reach: float) -> tuple[np.ndarray, bool]:
+        return circle(self.center, self.radius), True
+
+
+@OBSTACLE_SHAPES.register
 @dataclass(frozen=True)
 class Cylinder(Shape):
     """A circular cylinder with flat caps, its axis along x, y or z (2D: along z a disc, along x or y a rectangle)."""
 
-    center: tuple
-    radius: float
-    length: float
-    axis: str = "z"
+    center: tuple = key(doc=POINT, unit=LENGTH)
+    radius: float = key(unit=LENGTH)
+    length: float = key(doc="its length along the axis (a capsule's: of its segment)", unit=LENGTH)
+    axis: str = key("z", "its axis (2D: z a circle)", allowed=AXES)
+    name = "cylinder"
     kind = CYLINDER
 
     def __post_init__(self):
@@ -154,16 +171,15 @@ class Cylinder(Shape):
         return np.array([c - along - across, c + along - across, c + along + across, c - along + across]), True
 
 
+@OBSTACLE_SHAPES.register
 @dataclass(frozen=True)
 class Capsule(Cylinder):
     """The points within radius of a segment of the given length along x, y or z (2D along x or y: a stadium)."""
 
+    name = "capsule"
     kind = CAPSULE
 
     def outline(self, reach: float) -> tuple[np.ndarray, bool]:
         if self.axis == "z":
             return circle(self.center, self.radius), True
         return stadium(self.center, np.array(axis_vector(self.axis)[:2]) * self.length / 2, self.radius), True
-
-
-SHAPES = {"plane": Plane, "sphere": Sphere, "box": Box, "cylinder": Cylinder, "capsule": Capsule}

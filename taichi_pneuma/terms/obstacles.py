@@ -39,7 +39,7 @@ from ..backend import kernel, ti
 from ..errors import require, require_finite, shape_of
 from ..fem.self_intersection import surface_pieces, winding
 from ..io.output import MAX_NAME, STEM, check_heading
-from ..io.units import FORCE, LENGTH, NODAL_STIFFNESS, si_default, unit
+from ..io.units import FORCE, LENGTH, NODAL_STIFFNESS, given, si_default, unit
 from .base import HUGE, Indices, Nodal, Scalars, Table, Term, block_pattern, int32s
 from .contact import barrier
 from .friction import frictional
@@ -393,7 +393,7 @@ class Obstacle:
                 f"obstacle {self.name!r}: keyframes offset {list(offset)!r} at step {step:g} must lie within "
                 f"+-{REACH * size:.4g} in each component ({REACH:g} times the body's size)",
             )
-        dhat, stiffness = float(self.dhat), float(self.stiffness)  # type: ignore[arg-type]  # the scene's: set
+        dhat, stiffness = float(given(self.dhat, "dhat")), float(given(self.stiffness, "stiffness"))
         pieces = surface_pieces(mesh)
         x = mesh.vertices[pieces]
         sides = np.linalg.norm(x - np.roll(x, 1, axis=1), axis=2)

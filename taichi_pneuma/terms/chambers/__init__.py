@@ -2,12 +2,12 @@
 kinds by name (kind.py), and one module per kind: area control (also named "volume"), pressure control
 (a pressure regulator), a closed gas chamber (a sealed amount of air) and a syringe pushing air through a tube.
 
-A new kind is one module: a @register'ed ChamberKind dataclass and its wall.Chamber term (docs/extending.md).
+A new kind is one module: a @KINDS.register'ed ChamberKind dataclass and its wall.Chamber term (docs/extending.md).
 """
 
 from .area import MAX_AREA_RATIO, AreaChamber, AreaControl
 from .closed_gas import ClosedGas, ClosedGasChamber
-from .kind import KINDS, ChamberKind, chamber_kind, default_kind, register
+from .kind import KINDS, ChamberKind, chamber_kind, default_kind
 from .pressure import PressureChamber, PressureControl
 from .syringe import Syringe, SyringeChamber
 from .wall import Chamber
@@ -27,5 +27,4 @@ __all__ = [
     "SyringeChamber",
     "chamber_kind",
     "default_kind",
-    "register",
 ]

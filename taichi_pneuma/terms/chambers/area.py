@@ -16,14 +16,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import require, require_finite
-from ...io.units import MEASURE_STIFFNESS, si_default
-from .kind import ChamberKind, register
+from ...io.units import MEASURE_STIFFNESS, given, si_default
+from .kind import KINDS, ChamberKind
 from .wall import Chamber
 
 MAX_AREA_RATIO = 1e3  # far past any rubber (the hard cases reach 8); keeps (A - A*)^2 from overflowing
 
 
-@register
+@KINDS.register
 @dataclass(frozen=True)
 class AreaControl(ChamberKind):
     """Area control with penalty stiffness k > 0; commands are area ratios A* / A_rest in (0, MAX_AREA_RATIO]."""
@@ -53,7 +53,7 @@ class AreaChamber(Chamber):
 
     def __init__(self, kind: AreaControl, config, loop: np.ndarray, name: str = "main", order: int = 1, origin=None):
         super().__init__(kind, config, loop, name, order, origin)
-        self.k = float(kind.stiffness)  # type: ignore[arg-type]
+        self.k = float(given(kind.stiffness, "area stiffness"))
         self.target_area = self.rest_area
 
     def set_command(self, ratio: float) -> None:

@@ -23,11 +23,11 @@ import numpy as np
 
 from ...errors import require, require_finite
 from ...io.units import PRESSURE, si_default
-from .kind import ChamberKind, register
+from .kind import KINDS, ChamberKind
 from .wall import Chamber
 
 
-@register
+@KINDS.register
 @dataclass(frozen=True)
 class ClosedGas(ChamberKind):
     """A sealed chamber of air at ambient pressure `atmosphere` (in the scene's pressure unit; its default None

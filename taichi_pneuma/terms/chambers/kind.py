@@ -1,8 +1,8 @@
 """What a chamber kind is (a way of driving a chamber), and the registry of kinds by name.
 
 A kind is a frozen dataclass whose fields are its parameters: the keys a scene file's chamber table
-takes besides its name, shape, control, keyframes and bounds, with their types and defaults (the
-scene schema asks parameters() for them). Its class attributes describe its command q:
+takes besides its name, shape, control, keyframes and bounds, with their types, defaults and units (the
+named parts' one idiom, io/registry.py). Its class attributes describe its command q:
 
     name       the scene file's `control = "..."`; aliases: other names it is read by
     quantity   what q is, in words, for labels and messages ("area ratio", "pressure")
@@ -13,33 +13,27 @@ scene schema asks parameters() for them). Its class attributes describe its comm
 and its methods do the rest: check() refuses values q cannot take, default_bounds() gives the range
 inverse control keeps to when the scene names none, term() builds the chamber's energy term (a
 wall.Chamber subclass: energy, pressure, and -d(residual)/dq for sensitivities). Decorate the class
-with @register to make scenes and scene files find it by name.
+with @KINDS.register to make scenes and scene files find it by name.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import typing
 from typing import ClassVar
 
 from ...errors import require
+from ...io.registry import Registry
 
 
 class ChamberKind:
     """The base of the kinds: the class attributes and methods described in the module docstring."""
 
+    __dataclass_fields__: ClassVar[dict]  # every kind is a dataclass
     name: ClassVar[str]
     aliases: ClassVar[tuple[str, ...]] = ()
     quantity: ClassVar[str]
     rest: ClassVar[float]
     dimension: ClassVar[str] = ""
-
-    @classmethod
-    def parameters(cls) -> dict[str, tuple[type, object]]:
-        """name -> (type, default) of the kind's parameters (its dataclass fields); default
-        dataclasses.MISSING where the parameter is required."""
-        types = typing.get_type_hints(cls)
-        return {f.name: (types[f.name], f.default) for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
 
     def check(self, what: str, values: list[float]) -> None:
         """Refuse (PneumaInputError naming `what` and the value) a command this kind cannot take;
@@ -57,16 +51,9 @@ class ChamberKind:
         raise NotImplementedError
 
 
-KINDS: dict[str, type[ChamberKind]] = {}
-
-
-def register(kind: type[ChamberKind]) -> type[ChamberKind]:
-    """Class decorator: make a kind known to scenes by its name and aliases."""
-    for name in (kind.name, *kind.aliases):
-        if KINDS.get(name, kind) is not kind:
-            raise ValueError(f"chamber kind name {name!r} is taken by {KINDS[name].__name__}")
-        KINDS[name] = kind
-    return kind
+KINDS: Registry[type[ChamberKind]] = Registry(
+    "chamber kind"
+)  # name -> the kind (a ChamberKind dataclass), filled by @KINDS.register
 
 
 def chamber_kind(name: str) -> type[ChamberKind]:
@@ -79,7 +66,7 @@ def default_kind(name: str) -> ChamberKind:
     """The kind registered under `name` with its default parameters (PneumaInputError naming the parameters
     it has no default for: such a kind is given with them, e.g. Syringe(syringe_volume=1.0))."""
     kind = chamber_kind(name)
-    required = [key for key, (_, default) in kind.parameters().items() if default is dataclasses.MISSING]
+    required = [f.name for f in dataclasses.fields(kind) if f.default is dataclasses.MISSING]
     require(
         not required,
         f"control = {name!r} has no default for {', '.join(required)}: "

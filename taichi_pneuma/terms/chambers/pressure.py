@@ -12,11 +12,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import require
-from .kind import ChamberKind, register
+from .kind import KINDS, ChamberKind
 from .wall import Chamber
 
 
-@register
+@KINDS.register
 @dataclass(frozen=True)
 class PressureControl(ChamberKind):
     """Pressure control; a pressure below zero (suction) is refused unless allow_vacuum is set."""

@@ -23,10 +23,10 @@ from dataclasses import dataclass, field
 from ...errors import require, require_finite
 from ...io.units import AREA, unit
 from .closed_gas import ClosedGas, ClosedGasChamber
-from .kind import register
+from .kind import KINDS
 
 
-@register
+@KINDS.register
 @dataclass(frozen=True, kw_only=True)
 class Syringe(ClosedGas):
     """A syringe of initial air volume syringe_volume (> 0) pushing through a tube of dead_volume (>= 0) into

@@ -1,5 +1,5 @@
 """The scene file's [[fibers]] and [[layers]] tables (terms/fibers.py Fiber, terms/sheets.py Layer): what
-reinforces the body, declared with schema.py's entries:
+reinforces the body, declared with fileformat.py's entries:
 
 [[fibers]]
 name = "thread"
@@ -24,7 +24,7 @@ from ..io.units import LENGTH, PRESSURE, SECTION
 from ..materials.presets import PRESETS
 from ..terms.fibers import Fiber
 from ..terms.sheets import Layer
-from .schema import Key, Table, Variant, record
+from .fileformat import Key, Table, Variant, record
 
 BOX = "[x0, y0, x1, y1]"
 

@@ -1,4 +1,4 @@
-"""The scene file's [[obstacles]] tables (terms/obstacles.py Obstacle), declared with schema.py's entries:
+"""The scene file's [[obstacles]] tables (terms/obstacles.py Obstacle), declared with fileformat.py's entries:
 
 [[obstacles]]
 name = "post"
@@ -15,48 +15,11 @@ release = 12
 """
 
 from ..io.units import FORCE, LENGTH, NODAL_STIFFNESS
-from ..terms.obstacle_shapes import AXES, SHAPES, Box, Capsule, Cylinder, Plane, Sphere
+from ..terms.obstacle_shapes import OBSTACLE_SHAPES
 from ..terms.obstacles import Obstacle
-from .schema import Key, Table, Variant, record
+from .fileformat import Key, Table, Variant
 
-POINT = "[x, y] (2D) or [x, y, z]"
-
-
-def round_shape(cls, doc: str) -> Table:
-    """A cylinder's or a capsule's keys."""
-    return record(
-        cls,
-        doc,
-        center=Key(tuple, doc=POINT, unit=LENGTH),
-        radius=Key(float, unit=LENGTH),
-        length=Key(float, doc="its length along the axis (a capsule's: of its segment)", unit=LENGTH),
-        axis=Key(str, "z", "its axis (2D: z a circle)", AXES),
-    )
-
-
-OBSTACLE_SHAPES = Variant(
-    {
-        "plane": record(
-            Plane,
-            "a half-space (2D: a half-plane), the body on its normal's side",
-            point=Key(tuple, doc=f"a point of it, {POINT}", unit=LENGTH),
-            normal=Key(tuple, doc="[nx, ny] or [nx, ny, nz], towards the body"),
-        ),
-        "box": record(
-            Box,
-            "an axis-aligned box (2D: a rectangle)",
-            center=Key(tuple, doc=POINT, unit=LENGTH),
-            size=Key(tuple, doc="[w, h] (2D) or [w, h, depth]", unit=LENGTH),
-        ),
-        "sphere": record(
-            Sphere, "a ball (2D: a disc)", center=Key(tuple, doc=POINT, unit=LENGTH), radius=Key(float, unit=LENGTH)
-        ),
-        "cylinder": round_shape(Cylinder, "a circular cylinder with flat caps"),
-        "capsule": round_shape(Capsule, "the points within radius of a segment"),
-    },
-    choose=lambda shape: {cls: name for name, cls in SHAPES.items()}[type(shape)],  # a Capsule is a Cylinder too
-    doc="the obstacle's shape",
-)
+SHAPE = Variant(OBSTACLE_SHAPES, choose=lambda shape: shape.name, doc="the obstacle's shape")
 OBSTACLE = Table(
     {
         "name": Key(
@@ -64,7 +27,7 @@ OBSTACLE = Table(
             doc="distinct, not a chamber's; a plain name (letters, digits, _ + - .) not starting with = + - @ (it "
             "heads the history's <name>.fx, ... columns, and with friction <name>.friction.fx, ...)",
         ),
-        "shape": OBSTACLE_SHAPES,
+        "shape": SHAPE,
         "dhat": Key(float, None, "the contact barrier's threshold distance", unit=LENGTH, scaled=False, si=0.01),
         "stiffness": Key(float, None, "the barrier's stiffness", unit=NODAL_STIFFNESS, scaled=False, si=1e3),
         "keyframes": Key(
@@ -89,17 +52,7 @@ OBSTACLE = Table(
         ),
         "release": Key(int, 0, "the step from which an obstacle with a weight is free"),
     },
-    make=lambda v: Obstacle(
-        v["name"],
-        v["shape"],
-        v["dhat"],
-        v["stiffness"],
-        v["keyframes"] or (),
-        v["friction"],
-        v["friction_slip"],
-        v["weight"],
-        v["release"],
-    ),
+    make=lambda v: Obstacle(**{**v, "keyframes": v["keyframes"] or ()}),
     parts=lambda o: {
         "name": o.name,
         "shape": o.shape,

@@ -1,0 +1,267 @@
+"""Bodies from triangle surfaces (STL, OBJ, PLY, OFF: what CAD tools export for 3D printing), repaired, remeshed and
+filled with tetrahedra by gmsh.
+
+A surface file is triangles only: no unit (SurfaceBody.scale, required, is the length of one file unit in the
+scene's units: 1 for a file in the scene's own unit, 0.001 for a file in mm read into a scene in m), no solids and no
+names. Its chambers are its cavities: a Cavity names the one that encloses its `inside` point.
+
+Repair, before gmsh (the readers' resource guards first: meshfile.read_mesh):
+
+    merged      vertices closer than MERGE_TOLERANCE times the surface's size are one (an exporter writes each
+                triangle's corners apart: an STL has no shared vertices)
+    dropped     a triangle with a repeated corner or of no area; a triangle given twice, in either orientation, once
+    orientation a facet's orientation is not read (gmsh's classification does not need it): flipped facets are fine
+    refused     an edge of one triangle only (a hole, naming how many and where the first is), an edge of more than
+                two (a surface through itself along an edge, or two shells sharing one)
+
+Shells: the surface's connected pieces. The one of the largest bounding box is the body's outer surface; every
+other one bounds a cavity, and each cavity must be a chamber's (a cavity no chamber names is refused, naming its
+place; so is a chamber whose point is in no cavity, or two chambers in one). A point is inside a shell when a ray from
+it crosses the shell an odd number of times.
+
+Meshing: gmsh classifies the surface into patches at edges sharper than CLASSIFY_DEGREES, makes a geometry of them
+(each patch reparametrised), remeshes it at the scene's sizes (gmsh_mesher.MeshSizes, graded near the chamber walls
+as a body from shapes is) and fills the rubber with tetrahedra (Delaunay). A surface that crosses itself fails there,
+and is refused with gmsh's words. The remeshed surface's triangles are chords of the file's facets: a curve is
+resolved by the file and by the mesh size near it, whichever is coarser. Quadratic tetrahedra put their boundary
+edges' midside nodes on the file's surface (gmsh's closest point on its patches, curving.edge_targets), not on the
+remeshed triangles' chords.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from ..errors import quoted, require, require_finite
+from ..limits import Budget
+from .body import Body, SizeEstimate
+from .gmsh_mesher import MAX_TETS, REGULAR_TET, MeshSizes, read_tetrahedra, set_sizes
+from .gmsh_session import session
+from .mesh import Mesh
+from .meshfile import TRIANGLES, cells_of, read_mesh
+from .supports import PointSet
+from .tetmesh import check_order, tet_mesh
+
+SURFACE_SUFFIXES = (".stl", ".obj", ".ply", ".off")
+MERGE_TOLERANCE = 1e-9
+CLASSIFY_DEGREES = 40.0
+
+
+@dataclass(frozen=True)
+class SurfaceBody:
+    """A body bounded by the triangles of a surface file (module docstring): file (an absolute path, a scene file's
+    relative to its folder) and scale (the length of one file unit in the scene's units)."""
+
+    file: str
+    scale: float
+
+    def __post_init__(self):
+        require(
+            isinstance(self.file, str) and self.file.lower().endswith(SURFACE_SUFFIXES),
+            f"file = {quoted(self.file)}: a surface body is read from a {', '.join(SURFACE_SUFFIXES)} file",
+        )
+        require(require_finite("scale", self.scale) > 0, f"scale = {self.scale!r} must be > 0")
+        object.__setattr__(self, "file", os.path.abspath(self.file))
+
+
+@dataclass(frozen=True)
+class Cavity:
+    """A chamber of a surface body: the cavity that encloses the point `inside` (in the scene's units)."""
+
+    inside: tuple[float, float, float]
+
+    def __post_init__(self):
+        require(
+            np.shape(self.inside) == (3,) and all(math.isfinite(float(v)) for v in self.inside),
+            f"inside = {self.inside!r} must be three numbers [x, y, z]",
+        )
+
+
+@dataclass(frozen=True)
+class Shells:
+    """A repaired surface: vertices (n, 3) in the scene's units, triangles (m, 3), and the shell of each triangle
+    (0: the outer one)."""
+
+    vertices: np.ndarray
+    triangles: np.ndarray
+    shell: np.ndarray
+
+    @property
+    def count(self) -> int:
+        return int(self.shell.max()) + 1
+
+    def encloses(self, k: int, point) -> bool:
+        """Whether shell k encloses the point: a ray along a slightly skew direction crosses it an odd number of
+        times (Moller-Trumbore on every triangle)."""
+        x = self.vertices[self.triangles[self.shell == k]]
+        direction = np.array([1.0, 1e-3 * math.sqrt(2), 1e-3 * math.sqrt(3)])
+        e1, e2 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
+        p = np.cross(direction, e2)
+        det = np.einsum("ij,ij->i", e1, p)
+        ok = np.abs(det) > 1e-300
+        t0 = np.asarray(point, dtype=np.float64) - x[:, 0]
+        u = np.einsum("ij,ij->i", t0, p) / np.where(ok, det, 1.0)
+        q = np.cross(t0, e1)
+        v = (q @ direction) / np.where(ok, det, 1.0)
+        t = np.einsum("ij,ij->i", e2, q) / np.where(ok, det, 1.0)
+        hits = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+        return bool(np.count_nonzero(hits) % 2)
+
+
+def repaired(points: np.ndarray, triangles: np.ndarray, path: str) -> Shells:
+    """The surface merged, cleaned and split into shells, the outer one first; refused where it is open or
+    non-manifold (module docstring)."""
+    require(len(triangles) > 0, f"surface file {quoted(path)} has no triangles")
+    size = float(np.ptp(points, axis=0).max())
+    require(size > 0, f"surface file {quoted(path)}: its triangles have no extent")
+    key = np.round((points - points.min(axis=0)) / (MERGE_TOLERANCE * size)).astype(np.int64)
+    _, first, merged = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    vertices, triangles = points[first], merged.reshape(-1)[triangles]
+    x = vertices[triangles]
+    area = np.linalg.norm(np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]), axis=1)
+    distinct = (triangles[:, 0] != triangles[:, 1]) & (triangles[:, 1] != triangles[:, 2])
+    triangles = triangles[distinct & (triangles[:, 0] != triangles[:, 2]) & (area > 1e-14 * size**2)]
+    _, once = np.unique(np.sort(triangles, axis=1), axis=0, return_index=True)
+    triangles = triangles[np.sort(once)]
+    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    unique, counts = np.unique(edges, axis=0, return_counts=True)
+    open_edges = unique[counts == 1]
+    require(
+        len(open_edges) == 0,
+        f"surface file {quoted(path)} has a hole: {len(open_edges)} edges of one triangle only, the first at "
+        f"{np.round(vertices[open_edges[0]].mean(axis=0), 6).tolist() if len(open_edges) else []} (close it in the "
+        f"CAD tool, or export a closed solid)",
+    )
+    crowded = unique[counts > 2]
+    require(
+        len(crowded) == 0,
+        f"surface file {quoted(path)} is not a solid's boundary: {len(crowded)} edges shared by more than two "
+        f"triangles, the first at {np.round(vertices[crowded[0]].mean(axis=0), 6).tolist() if len(crowded) else []}",
+    )
+    n = len(triangles)
+    rows = np.repeat(np.arange(n), 3)
+    adjacency = coo_matrix((np.ones(3 * n), (rows, triangles.reshape(-1))), shape=(n, len(vertices))).tocsr()
+    _, shell = connected_components(adjacency @ adjacency.T, directed=False)
+    extent = [np.prod(np.ptp(vertices[triangles[shell == k]].reshape(-1, 3), axis=0)) for k in range(shell.max() + 1)]
+    order = np.argsort(extent)[::-1]  # the largest bounding box first: the outer surface
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    used, triangles = np.unique(triangles, return_inverse=True)
+    return Shells(vertices[used], triangles.reshape(-1, 3), rank[shell])
+
+
+@dataclass(frozen=True)
+class SurfaceGeometry(Body):
+    """A 3D body from a surface file (module docstring): the body, its chambers (name, Cavity) in order, the mesh
+    sizes, the element order, the clamp, tip and rollers (as planar.Geometry's)."""
+
+    body: SurfaceBody
+    chambers: tuple
+    sizes: MeshSizes
+    order: int = 1
+    clamp: PointSet | None = None
+    tip: PointSet = field(default_factory=lambda: PointSet("right"))
+    rollers: tuple = ()
+
+    dim = 3
+
+    def __post_init__(self):
+        check_order(self.order)
+        self.check_supports()
+        require(
+            self.sizes.through_wall is None,
+            "mesh.through_wall: a surface body's walls are not measured; give mesh.near_chambers",
+        )
+        for name, shape in self.chambers:
+            require(
+                isinstance(shape, Cavity),
+                f'chamber {name!r}: a surface body\'s chambers are its cavities (shape = "cavity", inside = [x, y, z])',
+            )
+
+    def shells(self) -> Shells:
+        """The file's triangles, scaled into the scene's units and repaired."""
+        source = read_mesh(self.body.file)
+        triangles, _ = cells_of(source, TRIANGLES, None, self.body.file)
+        return repaired(np.asarray(source.points, dtype=np.float64)[:, :3] * self.body.scale, triangles, self.body.file)
+
+    def cavities(self, shells: Shells) -> dict[str, int]:
+        """name -> the shell of its cavity; every cavity a chamber's (module docstring)."""
+        found: dict[str, int] = {}
+        for name, cavity in self.chambers:
+            inside = [k for k in range(1, shells.count) if shells.encloses(k, cavity.inside)]
+            require(
+                len(inside) == 1, f"chamber {name!r}: inside = {list(cavity.inside)} lies in no cavity of the surface"
+            )
+            taken = [other for other, k in found.items() if k == inside[0]]
+            require(
+                not taken, f"chamber {name!r}: its point lies in the cavity of chamber {taken[0] if taken else ''!r}"
+            )
+            found[name] = inside[0]
+        for k in range(1, shells.count):
+            where = shells.vertices[shells.triangles[shells.shell == k]].reshape(-1, 3).mean(axis=0)
+            require(
+                k in found.values(),
+                f"the surface encloses {shells.count - 1} cavities; the one about {np.round(where, 6).tolist()} is no "
+                f"chamber's (add a [[chambers]] table with inside = a point in it)",
+            )
+        return found
+
+    def size_estimate(self) -> SizeEstimate:
+        """Tetrahedra: the enclosed volume over the regular tetrahedron of the bulk size (as gmsh_mesher's estimate,
+        the grading near the walls left out); nodes: a fifth of them (and one per edge when quadratic)."""
+        shells = self.shells()
+        x = shells.vertices[shells.triangles]
+        signed = np.einsum("ij,ij->i", x[:, 0], np.cross(x[:, 1], x[:, 2])) / 6
+        volume = sum(abs(signed[shells.shell == k].sum()) * (1 if k == 0 else -1) for k in range(shells.count))
+        tets = max(volume, 0.0) / (REGULAR_TET * self.sizes.size**3)
+        return SizeEstimate(tets, tets / 5 + (1.2 * tets if self.order == 2 else 0))
+
+    def mesh_values(self) -> dict:
+        """order and the mesh sizes."""
+        return {"order": self.order, **dataclasses.asdict(self.sizes)}
+
+    def mesh(self, budget: Budget = Budget()) -> Mesh:
+        """Repair, remesh and fill with tetrahedra (module docstring), under the budget."""
+        shells = self.shells()
+        cavities = self.cavities(shells)
+        cap = budget.element_cap(self.family.weight)
+        with session() as gmsh:
+            surface = gmsh.model.addDiscreteEntity(2)
+            gmsh.model.mesh.addNodes(2, surface, np.arange(1, len(shells.vertices) + 1), shells.vertices.ravel())
+            gmsh.model.mesh.addElementsByType(surface, 2, [], (shells.triangles + 1).ravel())
+            gmsh.model.mesh.classifySurfaces(math.radians(CLASSIFY_DEGREES), True, True, math.pi)
+            gmsh.model.mesh.createGeometry()
+            patches: dict[int, list[int]] = {}
+            for _, tag in gmsh.model.getEntities(2):
+                nodes = gmsh.model.mesh.getElementsByType(2, tag)[1]
+                patches.setdefault(int(shells.shell[shell_of_node(shells, int(nodes[0]))]), []).append(tag)
+            loops = [gmsh.model.geo.addSurfaceLoop(patches[k]) for k in range(shells.count)]
+            volume = gmsh.model.geo.addVolume(loops)
+            gmsh.model.geo.synchronize()
+            walls = {name: patches[k] for name, k in cavities.items()}
+            set_sizes(gmsh, self.sizes, [s for tags in walls.values() for s in tags])
+            gmsh.model.mesh.generate(3)
+            meshed = read_tetrahedra(gmsh, {volume: 0}, walls, (), MAX_TETS if cap is None else cap)
+        budget.check_mesh(len(meshed.tets), self.family.weight, "gmsh")
+        return tet_mesh(
+            meshed.vertices,
+            meshed.tets,
+            meshed.chambers,
+            order=self.order,
+            clamp=self.clamp,
+            tip=self.tip,
+            rollers=self.rollers,
+            curved=(meshed.curved_edges, meshed.curved_points),
+        )
+
+
+def shell_of_node(shells: Shells, tag: int) -> int:
+    """The triangle row of a node (gmsh tag = vertex row + 1): one triangle using that vertex."""
+    return int(np.flatnonzero((shells.triangles == tag - 1).any(axis=1))[0])
