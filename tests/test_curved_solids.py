@@ -22,7 +22,6 @@ import taichi_pneuma as tp
 from taichi_pneuma.fem.curving import FLOOR, curve, jacobian_ratios
 from taichi_pneuma.fem.elements import TET_P2
 from taichi_pneuma.fem.gmsh_mesher import MeshSizes
-from taichi_pneuma.fem.refine import with_edge_midpoints
 from taichi_pneuma.fem.solid_geometry import SolidGeometry
 from taichi_pneuma.fem.solids import Box, Cut, Cylinder
 from taichi_pneuma.fem.supports import Roller
@@ -42,8 +41,7 @@ BORE = Cylinder((0, 0, 0), A, 2 * L, "z")
 def reference_tet() -> tuple[np.ndarray, np.ndarray]:
     """(vertices, elements) of the unit reference tetrahedron made quadratic (straight)."""
     corners = np.vstack([np.zeros(3), np.eye(3)])
-    vertices, mid = with_edge_midpoints(corners, np.array([[0, 1, 2, 3]]), TET_P2.edges)
-    elements = np.array([[0, 1, 2, 3] + [int(mid(np.array([i]), np.array([j]))[0]) for i, j in TET_P2.edges]])
+    vertices, elements, _ = TET_P2.lift(corners, np.array([[0, 1, 2, 3]]))
     return vertices, elements
 
 

@@ -11,6 +11,7 @@ from solid_meshes import shell_octant
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.elements import (
     FAMILIES,
+    SEGMENTS,
     TET_P1,
     TET_P2,
     TRIANGLE_P1,
@@ -18,6 +19,7 @@ from taichi_pneuma.fem.elements import (
     boundary_facets,
     family_of,
 )
+from taichi_pneuma.fem.lagrange import conical_rule
 from taichi_pneuma.scene.build import reference_scene
 
 RNG = np.random.default_rng(7)
@@ -29,7 +31,7 @@ def random_reference_points(dim, count=20):
     return weights[:, 1:]
 
 
-@pytest.mark.parametrize("family", FAMILIES, ids=lambda f: f.name)
+@pytest.mark.parametrize("family", FAMILIES + SEGMENTS, ids=lambda f: f.name)
 def test_shape_functions_interpolate_and_sum_to_one(family):
     assert family.n_nodes == len(family.reference_nodes)
     assert np.allclose(family.shape_functions(family.reference_nodes), np.eye(family.n_nodes), atol=1e-15)
@@ -44,7 +46,7 @@ def test_shape_functions_interpolate_and_sum_to_one(family):
             assert np.allclose(family.shape_functions(points) @ nodal, exact, atol=1e-14)
 
 
-@pytest.mark.parametrize("family", FAMILIES, ids=lambda f: f.name)
+@pytest.mark.parametrize("family", FAMILIES + SEGMENTS, ids=lambda f: f.name)
 def test_shape_gradients_match_finite_differences(family):
     points, h = random_reference_points(family.dim), 1e-6
     gradients = family.shape_gradients(points)
@@ -70,6 +72,18 @@ def test_each_rule_is_exact_to_its_degree_and_no_further(family):
                 errors[powers] = abs(value - monomial_mean(powers))
         assert max(e for p, e in errors.items() if sum(p) <= degree) < 1e-15
         assert max(e for p, e in errors.items() if sum(p) == degree + 1) > 1e-4
+
+
+@pytest.mark.parametrize("dim, degree", [(1, 4), (2, 5), (2, 7), (3, 5)])
+def test_conical_rules_are_exact_to_their_degree(dim, degree):
+    """Simplex.rule's fallback for a degree without a fixed rule (the P3 triangle's nodal measures: degree 7) is
+    exact for every monomial of that degree, against the closed form of its mean over the simplex."""
+    points, weights = conical_rule(dim, degree)
+    assert weights.sum() == pytest.approx(1.0, abs=1e-15) and np.all(points >= 0) and np.all(points.sum(axis=1) <= 1)
+    for powers in product(range(degree + 1), repeat=dim):
+        if sum(powers) <= degree:
+            value = weights @ np.prod(points ** np.array(powers), axis=1)
+            assert value == pytest.approx(monomial_mean(powers), abs=1e-15)
 
 
 def body(order, dim):

@@ -14,7 +14,7 @@ from test_compile_once import compiled_instances
 from taichi_pneuma import runtime
 from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.elements import TET_P2
-from taichi_pneuma.fem.embedding import TET_P2_SPLIT, embed
+from taichi_pneuma.fem.embedding import embed
 from taichi_pneuma.fem.fiber_paths import Crossed, Helix, Line, Polyline, Rings
 from taichi_pneuma.fem.mesh import Mesh
 from taichi_pneuma.fem.tip import tip_twist
@@ -178,7 +178,7 @@ def test_embedded_points_are_reproduced_by_nonnegative_weights(dim, order):
 
 def test_the_quadratic_tetrahedron_splits_into_eight_positive_eighths():
     X = TET_P2.reference_nodes
-    volumes = [np.linalg.det(X[list(p)][1:] - X[list(p)][0]) / 6 for p in TET_P2_SPLIT]
+    volumes = [np.linalg.det(X[list(p)][1:] - X[list(p)][0]) / 6 for p in TET_P2.split]
     assert np.allclose(volumes, 1 / 48, rtol=1e-14)  # the reference tetrahedron's 1/6, in eight
 
 

@@ -172,13 +172,13 @@ def test_order_flag_quality_preset_and_scene_key(tmp_path, capsys):
         assert summary["vertices"] == BeamGeometry(cy=0.15, max_area=0.02, order=2).mesh().n_vertices
     assert QUALITY["default"][:2] == (0.0012, 1)  # the main command keeps the reference's linear mesh
     reference = (Path(__file__).resolve().parents[1] / "taichi_pneuma" / "scenes" / "reference_beam.toml").read_text()
-    for order in (2, 3):
+    for order in (2, 3, 4):
         path = tmp_path / f"order{order}.toml"
         path.write_text(reference.replace("[mesh]", f"[mesh]\norder = {order}"))
-        if order == 2:
-            assert load_scene(path).geometry.order == 2
+        if order < 4:
+            assert load_scene(path).geometry.order == order
         else:
-            with pytest.raises(PneumaInputError, match="order = 3"):
+            with pytest.raises(PneumaInputError, match="order = 4"):
                 load_scene(path)
 
 

@@ -16,6 +16,7 @@ import sys
 from .. import __version__, environment, limits, runtime, signals
 from ..errors import PneumaInputError, require, require_finite
 from ..fem import sizing
+from ..fem.elements import FAMILIES
 from ..io.units import MEASURES
 from ..render import COLOR_FIELDS, RENDERERS
 from .progress import step_line
@@ -139,8 +140,9 @@ def add_ramp_arguments(p: argparse.ArgumentParser) -> None:
         "--order",
         type=int,
         default=None,
-        choices=(1, 2),
-        help="1: linear triangles, 2: quadratic triangles (overrides --quality)",
+        choices=[f.order for f in FAMILIES if f.dim == 2],
+        help=", ".join(f"{f.order}: {f.adjective} triangles" for f in FAMILIES if f.dim == 2)
+        + " (overrides --quality)",
     )
     p.add_argument(
         "--tol", type=float, default=None, help="Newton tolerance on |gradient| / force scale (overrides --quality)"
@@ -340,12 +342,11 @@ def build(scene, args: argparse.Namespace):
     """Mesh the scene and build its terms in the budget of --max-triangles, and print the mesh size, the supports,
     the terms (and, where a --quality preset of args made the mesh, its measured error: preset_note) and each
     chamber's rest area."""
-    from ..result import ELEMENTS
     from ..scene.build import describe_supports
 
     built = scene.build(budget(args))
     mesh = built.mesh
-    kind = ("" if mesh.order == 1 else "quadratic ") + ELEMENTS[mesh.dim]
+    kind = mesh.family.words
     print(
         f"scene {scene.name}: mesh {mesh.n_vertices} {'vertices' if mesh.order == 1 else 'nodes'}, "
         f"{mesh.n_elements} {kind}; {describe_supports(mesh, scene.effects)}; "

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..fem.elements import FAMILIES
 from ..fem.solid_geometry import SolidGeometry
 from ..io.units import AREA, LENGTH
 
@@ -45,7 +46,7 @@ QUALITY_WALL: dict[str, tuple[float, float | None, int | None]] = {
 }
 # A mesh file's order at each preset: its tetrahedra cannot be remeshed, so high and accurate make them quadratic.
 MESH_FILE_ORDER = {"draft": 1, "default": None, "high": 2, "accurate": 2}
-ORDER_WORDS = {1: "linear", 2: "quadratic"}
+ORDER_WORDS = {f.order: f.adjective for f in FAMILIES}
 SIGNIFICANT = 12  # digits a preset's size keeps: the reference beams' presets come out as their exact decimals
 
 
@@ -61,6 +62,8 @@ def planar_preset(quality: str, max_area: float, order: int) -> tuple[float, int
     3; the preset is the rung QUALITY_STEPS[quality] above it: draft one below, default the scene as written, high
     one above, accurate two (a rung at A keeps the scene's area as it is written). On the reference beam (0.0012, P1):
     (0.005, P1), (0.0012, P1), (0.005, P2), (0.0012, P2), the accuracy study's presets."""
+    if order not in (1, 2):  # the ladder is of linear and quadratic meshes: a higher order keeps the scene's mesh
+        return max_area, order
     rung = (1 if order == 1 else 3) + QUALITY_STEPS[quality]
     exponent = 1 - rung % 2 if rung <= 3 else 3 - rung
     return (significant(max_area * AREA_STEP**exponent) if exponent else max_area), 1 if rung <= 1 else 2

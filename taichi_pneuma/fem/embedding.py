@@ -1,11 +1,11 @@
 """Points embedded in a mesh: each point written as barycentric weights of the corners of a linear simplex of the
 mesh that contains it, so that it follows the piecewise-linear interpolant of the nodes, p = sum_i w_i x_i.
 
-The linear simplices (pieces) of an element: a linear element is its own piece; a quadratic triangle is the four
-triangles through its midside nodes (its family's split); a quadratic tetrahedron (nodes 0-3 its corners, 4-9 the
-middles of edges 01, 12, 20, 03, 13, 23, fem/elements.py) the eight tetrahedra through its midside nodes
-(TET_P2_SPLIT, each of positive volume, an eighth of the element's on a straight one): one at each corner, and the
-inner octahedron cut along its diagonal from the middle of edge 20 (node 6) to that of edge 13 (node 8) into four.
+The linear simplices (pieces) of an element are its family's split (fem/elements.py): a linear element is its own
+piece; a triangle of order p the p^2 triangles of its node lattice (a quadratic one: four, through its midside
+nodes); a quadratic tetrahedron the eight tetrahedra through its midside nodes (each of positive volume, an eighth
+of the element's on a straight one): one at each corner, and the inner octahedron cut along its diagonal from the
+middle of edge 20 (node 6) to that of edge 13 (node 8) into four.
 
 Location: the pieces' centroids in a k-d tree; for each point the barycentric coordinates
 lambda = [1 - sum(T^-1 (p - X_0)), T^-1 (p - X_0)], T = [X_1 - X_0, ..., X_d - X_0], in its k nearest pieces
@@ -34,26 +34,11 @@ GRAZE = 0.1  # first_crossing: a segment's end this near a facet's plane, in its
 FIRST_CANDIDATES = 8
 MAX_CANDIDATES = 512  # pieces searched per point at most (the nearest by centroid)
 CHUNK = 1024  # fibre segments first_crossing tests at once: their candidate pairs' arrays stay small
-TET_P2_SPLIT = (
-    (0, 4, 6, 7),
-    (4, 1, 5, 8),
-    (6, 5, 2, 9),
-    (7, 8, 9, 3),
-    (6, 8, 7, 4),
-    (6, 8, 9, 7),
-    (6, 8, 5, 9),
-    (6, 8, 4, 5),
-)
 
 
 def pieces(mesh) -> np.ndarray:
     """The linear simplices (m p, d + 1) of the mesh's elements (see the module docstring)."""
-    family = mesh.family
-    if family.order == 1:
-        split: tuple = (tuple(range(family.dim + 1)),)
-    else:
-        split = family.split if family.dim == 2 else TET_P2_SPLIT
-    return np.vstack([mesh.elements[:, list(piece)] for piece in split])
+    return mesh.family.split_cells(mesh.elements)
 
 
 def _coordinates(inverse, origin, gradient_norms, points, candidates) -> tuple[np.ndarray, np.ndarray]:

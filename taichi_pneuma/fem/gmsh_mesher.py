@@ -59,6 +59,7 @@ import numpy as np
 from ..errors import require, require_distinct, require_finite
 from ..io import cache
 from .curving import edge_targets
+from .elements import TET_P1, positively_oriented
 from .gmsh_cache import CACHE_BYTES_PER_TET, cache_key, valid_measures, valid_mesh
 from .gmsh_session import session
 
@@ -425,7 +426,7 @@ def read_tetrahedra(
     used, tets = np.unique(tags, return_inverse=True)
     tets = tets.reshape(-1, 4)
     vertices = points[position[used]]
-    tets = positively_oriented(vertices, tets)
+    tets = positively_oriented(vertices, tets, TET_P1)
     faces = tets[:, TET_FACES].reshape(-1, 3)
     keys = face_keys(faces, len(vertices))
     unique, first, counts = np.unique(keys, return_index=True, return_counts=True)
@@ -454,15 +455,6 @@ def node_points(gmsh) -> tuple[np.ndarray, np.ndarray]:
     position = np.empty(int(node_tags.max()) + 1, dtype=np.int64)
     position[node_tags.astype(np.int64)] = np.arange(len(node_tags))
     return position, coords.reshape(-1, 3)
-
-
-def positively_oriented(vertices: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """tets with the last two corners swapped where det[x1 - x0, x2 - x0, x3 - x0] < 0."""
-    x = vertices[tets]
-    negative = np.linalg.det(x[:, 1:] - x[:, :1]) < 0
-    tets = tets.copy()
-    tets[negative, 2:] = tets[negative, 3:1:-1]
-    return tets
 
 
 def face_keys(faces: np.ndarray, n: int) -> np.ndarray:

@@ -105,7 +105,7 @@ class Mesh:
         quadratic tetrahedron's), and on a quadratic triangle with curved (parabolic) sides: the consistent nodal
         weights of a uniform load, exact for a load linear in x."""
         family = self._family
-        rule = family.cell.rules[family.measure_degree]
+        rule = family.cell.rule(family.measure_degree)
         _, weights = family.quadrature(self.vertices, self.elements, rule)
         out = np.zeros(self.n_vertices)
         np.add.at(out, self.elements, weights @ family.shape_functions(rule[0]))
@@ -116,10 +116,8 @@ class Mesh:
     def display_triangles(self) -> np.ndarray:
         """Linear triangles to draw: a 2D mesh's elements, a 3D one's surface facets, each split as its family's
         split says (a quadratic triangle in four at its midside nodes: corner triangles, then the middle one)."""
-        family, surface = self._family, self.surface
-        assert surface is not None  # __post_init__ found it where it was not given
-        drawn = family.facet_family or family
-        return drawn.split_cells(surface if drawn is not family else self.elements)
+        assert self.surface is not None  # __post_init__ found it where it was not given
+        return self._family.drawn(self.elements, self.surface)
 
 
 def triangle_areas(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:

@@ -38,7 +38,7 @@ from ..io.output import check_heading
 from ..io.units import PLANE_AREA, si_default
 from ..limits import Budget
 from .body import Body, SizeEstimate
-from .elements import ORDERS, TRIANGLE_P1, TRIANGLE_P2
+from .elements import TRIANGLE_P1, TRIANGLE_P2, family_for, family_of, positively_oriented
 from .mesh import Mesh, triangle_areas
 from .polygons import (
     distance_to_polygon,
@@ -50,7 +50,7 @@ from .polygons import (
     segments_cross,
     signed_area,
 )
-from .refine import halved, split_in_four, with_edge_midpoints
+from .refine import split_in_four, subdivided, with_edge_nodes
 from .shapes import MAX_SHAPES, MAX_WALL_POINTS, Ellipse, Rectangle
 from .supports import PointSet, Roller
 from .symmetry import CUT_TOLERANCE, OUTER_MARKER, cut_by_lines, notch, symmetry_lines
@@ -85,7 +85,7 @@ class Geometry(Body):
             self.max_area is None or require_finite("max_area", self.max_area) > 0,
             f"max_area = {self.max_area!r} must be > 0",
         )
-        require(self.order in ORDERS, f"order = {self.order!r} must be 1 (linear triangles) or 2 (quadratic)")
+        family_for(2, self.order)  # refuses an order without a triangle family, naming those there are
         require(
             self.refinements in range(MAX_REFINEMENTS + 1),
             f"refinements = {self.refinements!r} must be an integer from 0 to {MAX_REFINEMENTS}",
@@ -209,37 +209,34 @@ class Geometry(Body):
         added = len(out["vertices"]) - len(pslg["vertices"])
         budget.check_mesh(len(out["triangles"]), weight, "Triangle", cap if cap is not None and added >= cap else None)
         vertices = np.asarray(out["vertices"], dtype=np.float64)
-        triangles = orient_counter_clockwise(vertices, np.asarray(out["triangles"], dtype=np.int64))
+        triangles = positively_oriented(vertices, np.asarray(out["triangles"], dtype=np.int64), TRIANGLE_P1)
         segments, markers = np.asarray(out["segments"], dtype=np.int64), out["segment_markers"].ravel()
         shapes = [self.body] + [shape for _, shape in self.chambers]  # the shape of marker OUTER_MARKER + c
         curves = {OUTER_MARKER + c: shape.project for c, shape in enumerate(shapes) if hasattr(shape, "project")}
-        if self.family.edges or self.refinements:
+        family = self.family
+        if family.order > 1 or self.refinements:
             vertices = onto_curves(vertices, segments, markers, curves, triangles)
         for _ in range(self.refinements):
-            vertices, mid = with_edge_midpoints(vertices, triangles)
+            vertices, along = with_edge_nodes(vertices, triangles, TRIANGLE_P2.edges, 2)
             triangles = split_in_four(
-                np.column_stack([triangles, mid(triangles[:, [0, 1, 2]], triangles[:, [1, 2, 0]])])
+                np.column_stack([triangles] + [along(triangles[:, i], triangles[:, j]) for i, j in TRIANGLE_P2.edges])
             )
-            segments, markers = halved(segments, markers, mid)
+            segments, markers = subdivided(segments, markers, along)
             vertices = onto_curves(vertices, segments, markers, curves, triangles)
-        mid = None
-        if self.family.edges:  # quadratic: a midside node on every edge
-            vertices, mid = with_edge_midpoints(vertices, triangles, self.family.edges)
-            triangles = np.column_stack(
-                [triangles] + [mid(triangles[:, i], triangles[:, j]) for i, j in self.family.edges]
-            )
-            vertices = onto_curves(vertices, *halved(segments, markers, mid), curves, triangles)
+        vertices, triangles, along = family.lift(vertices, triangles)
+        if along is not None:  # the edge nodes on the curves, the interior ones where the boundary puts them
+            vertices = onto_curves(vertices, *subdivided(segments, markers, along), curves, triangles)
         chambers = []
         for c, (_, origin) in enumerate(walls, start=1):
             nodes = chain(segments[markers == OUTER_MARKER + c], closed=origin is None)
             nodes = nodes if enclosed_area(vertices[nodes], origin) > 0 else nodes[::-1].copy()
-            if mid is not None:  # corner, midside, corner, ...: each edge from its first corner
+            if along is not None:  # corner, its edge's nodes, corner, ...: each edge from its first corner
                 starts = nodes if origin is None else nodes[:-1]
-                edges = np.column_stack([starts, mid(starts, np.roll(nodes, -1)[: len(starts)])]).ravel()
+                edges = np.column_stack([starts, along(starts, np.roll(nodes, -1)[: len(starts)])]).ravel()
                 nodes = edges if origin is None else np.append(edges, nodes[-1])
             chambers.append(nodes)
         outer = segments[markers == OUTER_MARKER]
-        boundary = np.unique(outer if mid is None else np.column_stack([outer, mid(outer[:, 0], outer[:, 1])]))
+        boundary = np.unique(outer if along is None else np.column_stack([outer, along(outer[:, 0], outer[:, 1])]))
         pinned, tip, rollers = self.node_sets(vertices)
         return Mesh(
             vertices,
@@ -250,14 +247,15 @@ class Geometry(Body):
             tip,
             tuple(origin for _, origin in walls),
             rollers,
-            self.family,
+            family,
         )
 
 
 def jacobians(vertices: np.ndarray, triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """det dX/dxi (m, p) of quadratic triangles (m, 6) at reference points (p, 2), dX/dxi = sum_a X_a dN_a/dxi
+    """det dX/dxi (m, p) of triangles (m, k) of any family at reference points (p, 2), dX/dxi = sum_a X_a dN_a/dxi
     (isoparametric: twice the area of a straight-sided triangle, the same at every point)."""
-    j = np.swapaxes(vertices[triangles], 1, 2)[:, None] @ TRIANGLE_P2.shape_gradients(points)[None]  # (m, p, 2, 2)
+    family = family_of(triangles, 2)
+    j = np.swapaxes(vertices[triangles], 1, 2)[:, None] @ family.shape_gradients(points)[None]  # (m, p, 2, 2)
     return j[..., 0, 0] * j[..., 1, 1] - j[..., 0, 1] * j[..., 1, 0]
 
 
@@ -266,10 +264,11 @@ def onto_curves(
 ) -> np.ndarray:
     """The vertices with every node of the boundary segments of marker m moved onto the exact curve of the
     shape they came from, curves[m] (its project: an ellipse, a rounded corner; a marker without a curve, a
-    straight polygon, leaves its nodes). A node on segments of two markers stays: the end of a chamber wall
-    cut by a symmetry line, on the line. A triangle (linear (m, 3) or quadratic (m, 6)) the moves would fold
+    straight polygon, leaves its nodes), and the triangles' interior nodes (order 3 and up) where their boundary
+    nodes put them (ElementFamily.placed_interior). A node on segments of two markers stays: the end of a
+    chamber wall cut by a symmetry line, on the line. A triangle (of any family) the moves would fold
     (det dX/dxi <= 0 at one of its nodes, where the mesh is too coarse for the curve) keeps its nodes where
-    they were: a quadratic one's midside nodes at its edges' middles."""
+    they were: its edge nodes on its straight edges."""
     count = len(vertices)
     lowest, highest = np.full(count, np.iinfo(np.int64).max), np.full(count, -1)
     np.minimum.at(lowest, segments.ravel(), np.repeat(markers, 2))
@@ -278,15 +277,16 @@ def onto_curves(
     for marker, project in curves.items():
         nodes = np.flatnonzero((lowest == marker) & (highest == marker))
         moved[nodes] = project(vertices[nodes])
-    linear = triangles.shape[1] == 3
+    family = family_of(triangles, 2)
+    moved = family.placed_interior(moved, triangles)
     at_nodes = (
         triangle_areas(moved, triangles)[:, None]
-        if linear
-        else jacobians(moved, triangles, TRIANGLE_P2.reference_nodes)
+        if family.order == 1
+        else jacobians(moved, triangles, family.reference_nodes)
     )
     folded = triangles[np.min(at_nodes, axis=1) <= 0].ravel()
     moved[folded] = vertices[folded]
-    return moved
+    return family.placed_interior(moved, triangles)
 
 
 @dataclass(frozen=True)
@@ -337,12 +337,6 @@ class BeamGeometry:
 
     def mesh(self, budget: Budget = Budget()) -> Mesh:
         return self.general().mesh(budget)
-
-
-def orient_counter_clockwise(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Return triangles with every vertex triple ordered counter-clockwise."""
-    clockwise = triangle_areas(vertices, triangles) < 0
-    return TRIANGLE_P1.mirrored(triangles, clockwise)
 
 
 def chain(edges: np.ndarray, closed: bool = True) -> np.ndarray:

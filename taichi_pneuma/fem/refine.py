@@ -1,5 +1,5 @@
-"""Midside nodes and uniform refinement of simplex meshes: the midpoint of every edge of an element table, boundary
-segments split at those midpoints, and triangles split in four at them.
+"""Edge nodes and uniform refinement of simplex meshes: the nodes of every edge of an element table (its midpoint, or
+order - 1 evenly spaced ones), boundary segments split at those nodes, and triangles split in four at midpoints.
 """
 
 from __future__ import annotations
@@ -7,28 +7,33 @@ from __future__ import annotations
 import numpy as np
 
 
-def with_edge_midpoints(vertices: np.ndarray, elements: np.ndarray, edges=((0, 1), (1, 2), (2, 0))):
-    """The vertices with the midpoint of every edge of the (corner) elements appended, and mid(a, b): the
-    index of the midpoint of edge (a, b), elementwise over index arrays. edges: the corner pairs of an
-    element that are its edges (a triangle's by default)."""
+def with_edge_nodes(vertices: np.ndarray, elements: np.ndarray, edges, order: int):
+    """The vertices with order - 1 nodes on every edge of the (corner) elements appended, node t = 1..order - 1 of
+    edge (a, b), a < b, at ((order - t) X_a + t X_b) / order (the midpoint (X_a + X_b) / 2 at order 2), and
+    along(a, b): the indices (..., order - 1) of edge (a, b)'s nodes from a to b, elementwise over index arrays.
+    edges: the corner pairs of an element that are its edges."""
     unique = np.unique(np.sort(np.vstack([elements[:, list(e)] for e in edges]), axis=1), axis=0)
-    n = len(vertices)
+    n, inner = len(vertices), order - 1
     keys = unique[:, 0] * n + unique[:, 1]
+    t = np.arange(1, order)
 
-    def mid(a, b):
+    def along(a, b):
         lo, hi = np.minimum(a, b), np.maximum(a, b)
-        return n + np.searchsorted(keys, lo * n + hi)
+        first = n + inner * np.searchsorted(keys, lo * n + hi)
+        forward = np.asarray(a <= b)[..., None]
+        return np.where(forward, first[..., None] + t - 1, first[..., None] + inner - t)
 
-    return np.vstack([vertices, 0.5 * (vertices[unique[:, 0]] + vertices[unique[:, 1]])]), mid
+    lo, hi = vertices[unique[:, 0]][:, None], vertices[unique[:, 1]][:, None]
+    new = ((order - t)[None, :, None] * lo + t[None, :, None] * hi) / order
+    return np.vstack([vertices, new.reshape(-1, vertices.shape[1])]), along
 
 
-def halved(segments: np.ndarray, markers: np.ndarray, mid) -> tuple[np.ndarray, np.ndarray]:
-    """Boundary segments (s, 2) and their markers split at their midpoint nodes mid(a, b): (2 s, 2), (2 s,)."""
-    halves = mid(segments[:, 0], segments[:, 1])
-    return (
-        np.vstack([np.column_stack([segments[:, 0], halves]), np.column_stack([halves, segments[:, 1]])]),
-        np.concatenate([markers, markers]),
-    )
+def subdivided(segments: np.ndarray, markers: np.ndarray, along) -> tuple[np.ndarray, np.ndarray]:
+    """Boundary segments (s, 2) and their markers cut at their edge nodes along(a, b) (s, p - 1) into p pieces
+    each: (p s, 2), (p s,), the first pieces of every segment, then the second ones, ..."""
+    chain = np.column_stack([segments[:, :1], along(segments[:, 0], segments[:, 1]), segments[:, 1:]])
+    pieces = [chain[:, k : k + 2] for k in range(chain.shape[1] - 1)]
+    return np.vstack(pieces), np.tile(markers, len(pieces))
 
 
 def split_in_four(triangles: np.ndarray) -> np.ndarray:

@@ -53,11 +53,8 @@ def surface_pieces(mesh) -> np.ndarray:
     """The body's boundary (mesh.surface: the outer one and the chamber walls, oriented outward from the body) as
     straight pieces (f, 3) of node indices: in 3D triangles (a quadratic facet split at its midside nodes into
     four), in 2D segments (a, b) as (a, b, b) (a quadratic edge split at its middle node into two)."""
-    surface = mesh.surface
-    if mesh.dim == 3:
-        return (mesh.family.facet_family or mesh.family).split_cells(surface)
-    ends = [(0, 1)] if surface.shape[1] == 2 else [(0, 2), (2, 1)]  # a quadratic edge: (corner, corner, middle)
-    return np.vstack([surface[:, [i, j, j]] for i, j in ends])
+    pieces = mesh.family.facet_pieces(mesh.surface)  # an edge: (corner, corner, its nodes in between)
+    return pieces if mesh.dim == 3 else pieces[:, [0, 1, 1]]
 
 
 def box_pairs(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -54,7 +54,7 @@ def check_mesh_size(scene, max_elements: int) -> None:
     per_step = 2 if any(e.contact for e in scene.effects) else 1
     cells, unit, per_element = CELLS[geometry.dim]
     memory = per_element * worth + 8 * geometry.dim * per_step * estimate.nodes * (scene.increments + 1)
-    counted = f" quadratic {cells}, counted {family.weight} times" if family.order == 2 else f" {cells}"
+    counted = f" {family.adjective} {cells}, counted {family.weight} times" if family.order > 1 else f" {cells}"
     basis = f" ({estimate.basis})" if estimate.basis else ""
     contact = f" and {pairs} self-contact pairs (walls of {max(estimate.walls)} nodes)" if pairs else ""
     require(

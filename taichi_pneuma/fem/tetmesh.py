@@ -30,9 +30,8 @@ import numpy as np
 
 from ..errors import require
 from .curving import curve
-from .elements import ElementFamily, boundary_facets, family_for, family_of
+from .elements import ElementFamily, boundary_facets, family_for, family_of, positively_oriented
 from .mesh import Mesh
-from .refine import with_edge_midpoints
 from .supports import PointSet, node_sets
 
 PARALLEL = 1 - 1e-9  # |n1 . n2| above it: parallel planes
@@ -59,17 +58,6 @@ def used_nodes(vertices: np.ndarray, tets: np.ndarray, faces: list[np.ndarray]):
     number = np.full(len(vertices), -1, dtype=np.int64)
     number[used] = np.arange(len(used))
     return vertices[used], number[tets], [number[f] for f in faces]
-
-
-def positively_oriented(vertices: np.ndarray, tets: np.ndarray, family: ElementFamily) -> np.ndarray:
-    """The tetrahedra (of `family`) mirrored (corners 1 and 2 swapped) where det[X1 - X0, X2 - X0, X3 - X0] < 0; a
-    flat one (volume below 1e-12 of the bounding box's) is refused."""
-    x = vertices[tets[:, :4]]
-    det = np.linalg.det(np.stack([x[:, 1] - x[:, 0], x[:, 2] - x[:, 0], x[:, 3] - x[:, 0]], axis=2))
-    scale = float(np.ptp(vertices, axis=0).prod())
-    flat = np.abs(det) <= 1e-12 * scale
-    require(not flat.any(), f"tetrahedron {int(np.argmax(flat))} (nodes {tets[np.argmax(flat)].tolist()}) is flat")
-    return family.mirrored(tets, det < 0)
 
 
 def check_midside_nodes(vertices: np.ndarray, tets: np.ndarray, family: ElementFamily) -> None:
@@ -130,8 +118,8 @@ def closure(name: str, vertices: np.ndarray, wall: np.ndarray, rollers) -> Closu
 
 
 def check_order(order) -> None:
-    """Refuse an element order other than 1 (linear tetrahedra) or 2 (quadratic)."""
-    require(order in (1, 2), f"order = {order!r} must be 1 (linear tetrahedra) or 2 (quadratic)")
+    """Refuse an element order without a tetrahedron family (family_for names the orders there are)."""
+    family_for(3, order)
 
 
 def tet_mesh(
@@ -166,7 +154,11 @@ def tet_mesh(
     )
     require(tets.min() >= 0 and tets.max() < len(vertices), "a tetrahedron names a vertex that does not exist")
     check_order(order)
-    require(order == 2 or tets.shape[1] == 4, "the mesh has 10-node (quadratic) tetrahedra: set order = 2")
+    given_family = family_of(tets, 3)
+    require(
+        given_family.order in (1, order),
+        f"the mesh has {given_family.n_nodes}-node tetrahedra ({given_family.words}): set order = {given_family.order}",
+    )
     regions = np.zeros(len(tets), dtype=np.int64) if regions is None else np.asarray(regions, dtype=np.int64)
     require(regions.shape == (len(tets),), f"regions: {regions.shape} tags for {len(tets)} tetrahedra")
     names = list(chambers)
@@ -188,14 +180,13 @@ def tet_mesh(
     edges = given.pop()
     kept = edges.min(axis=1) >= 0  # edges of nodes no tetrahedron uses are dropped with them
     edges, points = edges[kept], np.asarray(points, dtype=np.float64)[kept]
-    family, given_family = family_for(3, order), family_of(tets, 3)
+    family = family_for(3, order)
     tets = positively_oriented(vertices, tets, given_family)
     if given_family is family and family.edges:
         check_midside_nodes(vertices, tets, family)
     elif given_family is not family:  # corners only: a midside node on every edge, curved ones on the surfaces
-        vertices, mid = with_edge_midpoints(vertices, tets, family.edges)
-        tets = np.column_stack([tets] + [mid(tets[:, i], tets[:, j]) for i, j in family.edges])
-        nodes = np.minimum(mid(edges[:, 0], edges[:, 1]), len(vertices) - 1)
+        vertices, tets, along = family.lift(vertices, tets)
+        nodes = np.minimum(along(edges[:, 0], edges[:, 1])[:, 0], len(vertices) - 1)
         require(
             np.array_equal(vertices[nodes], 0.5 * (vertices[edges[:, 0]] + vertices[edges[:, 1]])),
             "a curved edge is not an edge of the tetrahedra",

@@ -78,7 +78,9 @@ class VtkSeries:
         self.fields = mesh.fields
         self.points = pad3(mesh.vertices)
         self.cells = [(mesh.family, mesh.elements)]
-        walls = mesh.family.facet_family  # a 3D mesh's chamber walls are facets; a 2D one's are node loops
+        walls = (
+            mesh.family.facet_family if mesh.dim == 3 else None
+        )  # a 3D mesh's chamber walls are facets; a 2D one's are node loops
         self.walls = [] if walls is None else [(walls, np.vstack(mesh.chambers))]
         if self.walls:
             self.wall_chamber = np.concatenate([np.full(len(w), i) for i, w in enumerate(mesh.chambers)])

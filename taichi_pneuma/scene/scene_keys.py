@@ -283,7 +283,7 @@ SCENE = Table(
                     int,
                     1,
                     "1: linear triangles (tetrahedra), 2: quadratic (2D: boundary nodes on "
-                    "the exact ellipses and rounded corners; 3D: midside nodes added, see curved)",
+                    "the exact ellipses and rounded corners; 3D: midside nodes added, see curved), 3: cubic (2D)",
                     ORDERS,
                 ),
                 "curved": Key(

@@ -33,15 +33,12 @@ def outer_facets(mesh: Mesh) -> np.ndarray:
 
 
 def linear_pieces(mesh: Mesh, facets: np.ndarray) -> np.ndarray:
-    """The linear cells (triangles in 3D, segments in 2D) of facets of the mesh, a quadratic one split through its
-    midside nodes: a 6-node triangle into its family's 4 (ElementFamily.split), an edge (c0, c1, mid) into
-    (c0, mid) and (mid, c1)."""
+    """The linear cells (triangles in 3D, segments in 2D) of facets of the mesh, a higher-order one split through
+    its edge nodes as its facet family's split (ElementFamily.facet_pieces): a 6-node triangle into 4, an edge
+    (c0, c1, mid) into (c0, mid) and (mid, c1)."""
     family = mesh.family
     assert family is not None  # Mesh.__post_init__ tells it
-    if mesh.dim == 3:
-        assert family.facet_family is not None  # a tetrahedron's facets are triangles
-        return family.facet_family.split_cells(facets)
-    return facets if facets.shape[1] == 2 else np.vstack([facets[:, [0, 2]], facets[:, [2, 1]]])
+    return family.facet_pieces(facets)
 
 
 @dataclass(frozen=True)

@@ -2,8 +2,10 @@
 load stiffness, as Taichi kernels.
 
 In 2D (AreaForm) the chamber wall is a closed counter-clockwise loop of straight edges (linear elements: nodes
-x_0 .. x_{k-1}) or of quadratic edges (quadratic elements: corner a, midside m, corner b, ...). Its
-signed area, 1/2 the closed integral of x cross dx, is exact for either: per edge
+x_0 .. x_{k-1}) or of polynomial edges of the elements' order p (corner a, the edge's p - 1 nodes, corner b, ...).
+Its signed area, 1/2 the closed integral of x cross dx, is exact for any order: with x(s) = sum_a N_a(s) x_a along
+an edge (the segment's Lagrange shape functions), 1/2 int x cross x' ds = sum_{a < b} C_ab x_a x x_b with
+C_ab = 1/2 int_0^1 (N_a N_b' - N_b N_a') ds (lagrange.swept_area_weights, exact rationals); per edge
 
     straight (a, b):      1/2 a x b,
     quadratic (a, m, b):  1/6 (4 a x m + 4 m x b - a x b)     (the parabola through a, m, b; 1/2 a x b
@@ -41,6 +43,7 @@ import numpy as np
 
 from ...backend import kernel, ti
 from ...errors import require
+from ...fem.lagrange import swept_area_weights
 from ..base import Indices, Scalars, Term, Vec2s, int32s, position, vertex_dofs
 from .cavity import VolumeForm
 
@@ -65,15 +68,18 @@ def wall_area(rest: Vec2s, u: Vec2s, loop: Indices, pairs: Pairs, weights: Scala
 
 def area_form(k: int, order: int, closed: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """The (pairs (P, 2) of wall positions, weights (P,)) with A = sum_t w_t x_i x x_j for a wall of k nodes:
-    a closed loop, or an open chain (no edge from its last node back to its first)."""
-    ring = np.arange(k)
-    if order == 1:
-        pairs = np.column_stack([ring, np.roll(ring, -1)])[: k if closed else k - 1]
-        return pairs, np.full(len(pairs), 0.5)
-    a = ring[0::2] if closed else ring[0:-1:2]
-    m, b = a + 1, (a + 2) % k
-    pairs = np.vstack([np.column_stack(p) for p in ((a, m), (m, b), (a, b))])
-    return pairs, np.repeat([2 / 3, 2 / 3, -1 / 6], len(a))
+    a closed loop, or an open chain (no edge from its last node back to its first), of edges of `order`
+    (corner, its order - 1 edge nodes, the next corner, ...): per edge the pairs of lagrange.swept_area_weights,
+    exact for its polynomial arc (module docstring)."""
+    along = np.array([0, *range(2, order + 1), 1])  # the segment's node at each wall position of an edge
+    weights = swept_area_weights(order)[along][:, along]  # C in wall positions 0..order along the edge
+    weights = np.triu(weights - weights.T)  # p x q = -q x p: each pair once, the earlier position first
+    starts = np.arange(0, k if closed else k - 1, order)
+    pairs, values = [], []
+    for a, b in zip(*np.nonzero(weights)):
+        pairs.append(np.column_stack([starts + a, (starts + b) % k]))
+        values.append(np.full(len(starts), weights[a, b]))
+    return np.vstack(pairs), np.concatenate(values)
 
 
 def crossing_segments(points: np.ndarray, closed: bool) -> tuple[int, int] | None:
