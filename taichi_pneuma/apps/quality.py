@@ -11,6 +11,7 @@ import argparse
 
 from ..fem.elements import FAMILIES
 from ..fem.solid_geometry import SolidGeometry
+from ..fem.surface_import import SurfaceGeometry
 from ..io.units import AREA, LENGTH
 
 # 2D: the rungs a preset lies above the scene's own on planar_preset's ladder, and the reference beam's mesh (its
@@ -126,7 +127,7 @@ def with_quality(scene, args: argparse.Namespace):
         return scene, (f"quality {quality}: {said}{tol}" if given else "")
     if not given:
         return scene, ""
-    if not isinstance(geometry, SolidGeometry):  # a mesh file: its own tetrahedra
+    if not isinstance(geometry, SolidGeometry | SurfaceGeometry):  # a mesh file: its own tetrahedra
         order = MESH_FILE_ORDER[quality] or geometry.order
         if order != geometry.order:
             scene = scene.with_values({"mesh.order": order})
@@ -141,7 +142,7 @@ def with_quality(scene, args: argparse.Namespace):
     own_near = geometry.mesh_sizes.near
     close = size if near is None else significant(near * own_near)
     scenes = f"{own_near:g}{length}"
-    if sizes.through_wall is not None:
+    if isinstance(geometry, SolidGeometry) and sizes.through_wall is not None:  # (a surface body has none)
         scenes += f" ({sizes.through_wall:g} through its thinnest wall, {geometry.wall:g}{length})"
     scene = scene.with_values({**mesh_values(geometry, size, close, size), "mesh.order": order})
     near_chambers = (

@@ -258,21 +258,22 @@ def estimate_tets(solid: Solid, sizes: MeshSizes) -> float:
     cached = cache.load("gmsh-measures", entry, valid_measures, 4096)
     if cached is not None:
         volume, wall_area = map(float, cached["measures"])
-        return _estimate(volume, wall_area, sizes)
+        return estimate_from_measures(volume, wall_area, sizes)
     with session() as gmsh:
         pieces = _Pieces(gmsh, solid)
     cache.store("gmsh-measures", entry, {"measures": np.array([pieces.volume, pieces.wall_area])})
-    return _estimate(pieces.volume, pieces.wall_area, sizes)
+    return estimate_from_measures(pieces.volume, pieces.wall_area, sizes)
 
 
-def _estimate(volume: float, wall_area: float, sizes: MeshSizes) -> float:
+def estimate_from_measures(volume: float, wall_area: float, sizes: MeshSizes) -> float:
+    """The tetrahedra of a rubber volume whose chamber walls have this area, at these sizes (module docstring)."""
     area = min(wall_area, volume / sizes.shell) if sizes.shell else 0.0
     bulk = volume - area * sizes.shell
     return (bulk / sizes.size**3 + area * sizes.shell_density()) / REGULAR_TET
 
 
 def _check_estimate(volume: float, wall_area: float, sizes: MeshSizes, max_tets: int) -> None:
-    estimate = _estimate(volume, wall_area, sizes)
+    estimate = estimate_from_measures(volume, wall_area, sizes)
     require(
         estimate <= max_tets,
         f"the mesh would have about {estimate:.3g} tetrahedra (volume {volume:.4g}, size {sizes.size:g}, "

@@ -42,7 +42,7 @@ from scipy.sparse.csgraph import connected_components
 from ..errors import quoted, require, require_finite
 from ..limits import Budget
 from .body import Body, SizeEstimate
-from .gmsh_mesher import MAX_TETS, REGULAR_TET, MeshSizes, read_tetrahedra, set_sizes
+from .gmsh_mesher import MAX_TETS, MeshSizes, estimate_from_measures, read_tetrahedra, set_sizes
 from .gmsh_session import session
 from .mesh import Mesh
 from .meshfile import TRIANGLES, cells_of, read_mesh
@@ -213,14 +213,22 @@ class SurfaceGeometry(Body):
             )
         return found
 
+    @property
+    def mesh_sizes(self) -> MeshSizes:
+        """The sizes gmsh meshes at: the scene's (a surface body's walls are not measured: no through_wall)."""
+        return self.sizes
+
     def size_estimate(self) -> SizeEstimate:
-        """Tetrahedra: the enclosed volume over the regular tetrahedron of the bulk size (as gmsh_mesher's estimate,
-        the grading near the walls left out); nodes: a fifth of them (and one per edge when quadratic)."""
+        """Tetrahedra as a body from shapes estimates them (gmsh_mesher.estimate_from_measures), from the rubber's
+        volume (the shells' signed volumes) and the cavities' wall area; nodes: a fifth of them (and one per edge,
+        about 1.2 per tetrahedron, when quadratic)."""
         shells = self.shells()
         x = shells.vertices[shells.triangles]
+        cross = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
         signed = np.einsum("ij,ij->i", x[:, 0], np.cross(x[:, 1], x[:, 2])) / 6
         volume = sum(abs(signed[shells.shell == k].sum()) * (1 if k == 0 else -1) for k in range(shells.count))
-        tets = max(volume, 0.0) / (REGULAR_TET * self.sizes.size**3)
+        walls = float(np.linalg.norm(cross[shells.shell > 0], axis=1).sum() / 2)
+        tets = estimate_from_measures(max(volume, 0.0), walls, self.sizes)
         return SizeEstimate(tets, tets / 5 + (1.2 * tets if self.order == 2 else 0))
 
     def mesh_values(self) -> dict:
