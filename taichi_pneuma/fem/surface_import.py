@@ -36,8 +36,6 @@ import os
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from ..errors import quoted, require, require_finite
 from ..limits import Budget
@@ -118,6 +116,9 @@ class Shells:
 def repaired(points: np.ndarray, triangles: np.ndarray, path: str) -> Shells:
     """The surface merged, cleaned and split into shells, the outer one first; refused where it is open or
     non-manifold (module docstring)."""
+    from scipy.sparse import coo_matrix  # here: a run without a surface body does not load SciPy's graphs
+    from scipy.sparse.csgraph import connected_components
+
     require(len(triangles) > 0, f"surface file {quoted(path)} has no triangles")
     size = float(np.ptp(points, axis=0).max())
     require(size > 0, f"surface file {quoted(path)}: its triangles have no extent")
