@@ -4,7 +4,8 @@ Lame thick ring's closed form (against P1 and P2 on the same uniformly refined m
 
 import numpy as np
 import pytest
-from fd import dense_hessian, fd_hessian, random_state
+from fd import dense_hessian, fd_hessian
+from scenes import grounded_beam
 from test_curved_boundaries import INNER, LOAD, NU, OUTER
 from test_terms import assert_gradient_matches_finite_differences, assert_max_step_stops_before_inversion
 
@@ -15,27 +16,16 @@ from taichi_pneuma.fem.planar import Geometry, jacobians
 from taichi_pneuma.fem.shapes import Ellipse
 from taichi_pneuma.fem.supports import Roller
 from taichi_pneuma.materials import lame_parameters
-from taichi_pneuma.scene.build import ChamberControl, Material, Scene, reference_scene
+from taichi_pneuma.scene.build import ChamberControl, Material, Scene
 from taichi_pneuma.scene.schedule import ChamberSchedule
 from taichi_pneuma.terms.chambers import PressureControl
-from taichi_pneuma.terms.effects import Gravity, Ground
 from taichi_pneuma.terms.model import Configuration
 
 
 @pytest.fixture(scope="module")
 def coarse_p3():
     """A coarse cubic beam on the ground under gravity, chamber commanded to 1.5x, in a random state."""
-    scene = reference_scene(cy=0.15, chamber_points=16, max_area=0.08, order=3)
-    scene = Scene(
-        scene.geometry,
-        scene.controls,
-        scene.increments,
-        scene.material,
-        effects=(Gravity(2.0), Ground(-0.45, dhat=0.06, stiffness=50.0)),
-    )
-    built = scene.build()
-    built.set_commands([1.5])
-    return built, random_state(built, scale=0.01, seed=3)
+    return grounded_beam(3, 0.08, 3)
 
 
 @pytest.mark.parametrize("name", ["elastic", "chamber:main", "clamp", "gravity", "ground"])

@@ -6,16 +6,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from fd import dense_hessian, fd_hessian, random_state
+from fd import dense_hessian, fd_hessian
 from renderers import SOFTWARE
+from scenes import grounded_beam
 from test_terms import assert_gradient_matches_finite_differences, assert_max_step_stops_before_inversion
 
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Rectangle
-from taichi_pneuma.scene.build import Scene, reference_scene
+from taichi_pneuma.scene.build import reference_scene
 from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms.chambers import PressureControl
-from taichi_pneuma.terms.effects import Gravity, Ground
 from taichi_pneuma.terms.model import Configuration
 
 # scikit-fem (an independent code, same model): P2 on the reference mesh refined twice, 96,384 nodes
@@ -25,17 +25,7 @@ INDEPENDENT_CONVERGED_TIP = -0.2583
 @pytest.fixture(scope="module")
 def coarse_p2():
     """A coarse quadratic beam on the ground under gravity, chamber commanded to 1.5x, in a random state."""
-    scene = reference_scene(cy=0.15, chamber_points=16, max_area=0.05, order=2)
-    scene = Scene(
-        scene.geometry,
-        scene.controls,
-        scene.increments,
-        scene.material,
-        effects=(Gravity(2.0), Ground(-0.45, dhat=0.06, stiffness=50.0)),
-    )
-    built = scene.build()
-    built.set_commands([1.5])
-    return built, random_state(built, scale=0.01, seed=5)
+    return grounded_beam(2, 0.05, 5)
 
 
 def test_quadratic_mesh_has_midside_nodes_everywhere(coarse_p2):
