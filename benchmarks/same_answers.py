@@ -2,10 +2,11 @@
 each) compared, scene by scene.
 
 Each scene's summary JSON is walked and every number in it compared (timings, which differ from run to run, left
-out: any key with "seconds", "_s" or "per_second" in its name, and the scene's file hash), as
+out: any key under a key with "seconds", "_s" or "per_second" in its name, and the scene's file hash), as
 |new - old| <= rtol |old| + atol * (the largest magnitude of that scene's figures): the solver's tolerance (Newton
 stops at a relative residual of 1e-6; multi-threaded assembly changes the last digits from run to run). A figure in
-one run and not in the other, or a scene that exits differently, is a difference too.
+one run and not in the other, a scene that exits differently or one the new run lacks is a difference too (a scene
+only the new run has is listed as added).
 
     python benchmarks/scenes.py --out /tmp/old     (on the old tree)
     python benchmarks/scenes.py --out /tmp/new     (on the new tree)
@@ -29,7 +30,7 @@ def numbers(value, path: str = "") -> dict[str, float]:
     if isinstance(value, bool) or value is None or isinstance(value, str):
         return {path: value} if isinstance(value, bool | str) and "sha256" not in path else {}
     if isinstance(value, int | float):
-        return {} if any(t in path.rsplit(".", 1)[-1] for t in TIMINGS) else {path: float(value)}
+        return {} if any(t in part for part in path.split(".") for t in TIMINGS) else {path: float(value)}
     if isinstance(value, dict):
         return {k: v for key, item in value.items() for k, v in numbers(item, f"{path}.{key}" if path else key).items()}
     if isinstance(value, list):
@@ -70,8 +71,11 @@ def main() -> int:
     runs = [{r["scene"]: r for r in json.loads(Path(path).read_text())["runs"]} for path in (args.old, args.new)]
     differing = 0
     for scene in sorted(set(runs[0]) | set(runs[1])):
-        if scene not in runs[0] or scene not in runs[1]:
-            print(f"{scene}: only in the {'new' if scene in runs[1] else 'old'} run")
+        if scene not in runs[0]:
+            print(f"{scene}: only in the new run (a scene added)")
+            continue
+        if scene not in runs[1]:
+            print(f"{scene}: only in the old run (a scene lost)")
             differing += 1
             continue
         same, line = compare(runs[0][scene], runs[1][scene], args.rtol, args.atol)

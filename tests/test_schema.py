@@ -325,7 +325,7 @@ def covering_scenes() -> list[Scene]:
     """Scenes that between them have every key of the file: each body and chamber shape, both controls,
     both forms of the clamp, the tip and rollers, a region, every effect, targets with an angle, layers by side and
     by box, every unit system and every material key (presets, each form of the isochoric law, K and nu), every
-    obstacle shape."""
+    obstacle shape, and the bodies read from CAD files."""
     from taichi_pneuma.terms import obstacle_shapes as obstacles
     from taichi_pneuma.terms.obstacles import Obstacle
 
@@ -419,7 +419,8 @@ def covering_scenes() -> list[Scene]:
     mesh_body = MeshGeometry(MeshBody("beam_3d.msh"), (("main", MeshSurface("chamber")),))
     solid = dataclasses.replace(core, geometry=mesh_body)
     nodal = dataclasses.replace(silicones[0], volumetric="nodal")  # linear elements with nodal volumes
-    return [every, boxed, polygon, *kinds, *silicones, nodal, solid, *shaped_scenes(core)]
+    cad = [tp.load_scene("fiber_bending_step"), tp.load_scene("pneunet_stl")]  # a STEP part, a surface's cavities
+    return [every, boxed, polygon, *kinds, *silicones, nodal, solid, *shaped_scenes(core), *cad]
 
 
 def shaped_scenes(core: Scene) -> list[Scene]:
