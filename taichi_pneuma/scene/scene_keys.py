@@ -125,61 +125,24 @@ def scene_arguments(v: dict) -> dict:
         "always, a mesh file's elements are the file's)",
     )
     geometry: Body
+    supports = dict(clamp=clamp, tip=v["tip"], rollers=v["rollers"])
     if is_solid_shape(body):
-        require(
-            mesh["max_area"] is None,
-            "mesh.max_area: a 3D body from shapes takes mesh.size (the tetrahedra's edge length), not max_area",
-        )
-        require(
-            mesh["size"] is not None,
-            "missing key 'mesh.size': a 3D body from shapes needs the tetrahedra's edge length",
-        )
-        sizes = build("mesh", lambda: MeshSizes(**{k: mesh[k] for k in MESH_SIZES}))
+        sizes = tetrahedra_sizes(mesh, "a 3D body from shapes")
         geometry = SolidGeometry(
-            body=body,
-            chambers=chambers,
-            sizes=sizes,
-            order=mesh["order"],
-            clamp=clamp,
-            tip=v["tip"],
-            rollers=v["rollers"],
-            curved=mesh["curved"],
+            body=body, chambers=chambers, sizes=sizes, order=mesh["order"], curved=mesh["curved"], **supports
         )
     elif isinstance(body, SurfaceBody):
-        require(
-            mesh["max_area"] is None and mesh["through_wall"] is None,
-            "mesh.max_area, mesh.through_wall: a surface body takes mesh.size and near_chambers (its walls are not "
-            "measured)",
-        )
-        require(mesh["size"] is not None, "missing key 'mesh.size': a surface body needs the tetrahedra's edge length")
-        geometry = SurfaceGeometry(
-            body=body,
-            chambers=chambers,
-            sizes=build("mesh", lambda: MeshSizes(**{k: mesh[k] for k in MESH_SIZES})),
-            order=mesh["order"],
-            clamp=clamp,
-            tip=v["tip"],
-            rollers=v["rollers"],
-        )
+        sizes = tetrahedra_sizes(mesh, "a surface body", walls_measured=False)
+        geometry = SurfaceGeometry(body=body, chambers=chambers, sizes=sizes, order=mesh["order"], **supports)
     elif isinstance(body, MeshBody):
         require(
             not planar + sized,
             f"mesh.{(planar + sized + [''])[0]}: a mesh file's body keeps the file's elements (mesh.order only)",
         )
-        geometry = MeshGeometry(
-            body=body, chambers=chambers, order=mesh["order"], clamp=clamp, tip=v["tip"], rollers=v["rollers"]
-        )
+        geometry = MeshGeometry(body=body, chambers=chambers, order=mesh["order"], **supports)
     else:
         require(not sized, f"mesh.{sized[0] if sized else ''}: a 2D body takes mesh.max_area")
-        geometry = Geometry(
-            body=body,
-            chambers=chambers,
-            max_area=mesh["max_area"],
-            clamp=clamp,
-            order=mesh["order"],
-            tip=v["tip"],
-            rollers=v["rollers"],
-        )
+        geometry = Geometry(body=body, chambers=chambers, max_area=mesh["max_area"], order=mesh["order"], **supports)
     return dict(
         geometry=geometry,
         controls=tuple(control for *_, control in v["chambers"]),
@@ -198,6 +161,20 @@ def scene_arguments(v: dict) -> dict:
         obstacles=v["obstacles"],
         ends_at_limit_point=v["schedule"]["ends_at_limit_point"],
     )
+
+
+def tetrahedra_sizes(mesh: dict, what: str, walls_measured: bool = True) -> MeshSizes:
+    """The [mesh] sizes of a body gmsh fills with tetrahedra (`what` names it in errors): mesh.size required, no
+    max_area, and no through_wall where the body's walls are not measured."""
+    require(
+        mesh["max_area"] is None, f"mesh.max_area: {what} takes mesh.size (the tetrahedra's edge length), not max_area"
+    )
+    require(
+        walls_measured or mesh["through_wall"] is None,
+        f"mesh.through_wall: {what}'s walls are not measured; give mesh.near_chambers",
+    )
+    require(mesh["size"] is not None, f"missing key 'mesh.size': {what} needs the tetrahedra's edge length")
+    return build("mesh", lambda: MeshSizes(**{k: mesh[k] for k in MESH_SIZES}))
 
 
 def in_units(shape, units):
