@@ -42,7 +42,7 @@ class SizeEstimate:
     basis: str = ""
 
 
-class Body(abc.ABC):
+class Body(metaclass=abc.ABCMeta):
     """A scene's geometry (module docstring)."""
 
     dim: ClassVar[int]
