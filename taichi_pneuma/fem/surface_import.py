@@ -34,6 +34,7 @@ import dataclasses
 import math
 import os
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -186,8 +187,10 @@ class SurfaceGeometry(Body):
                 f'chamber {name!r}: a surface body\'s chambers are its cavities (shape = "cavity", inside = [x, y, z])',
             )
 
+    @cached_property
     def shells(self) -> Shells:
-        """The file's triangles, scaled into the scene's units and repaired."""
+        """The file's triangles, scaled into the scene's units and repaired (once: the size estimate and the mesh
+        read them both)."""
         source = read_mesh(self.body.file)
         triangles, _ = cells_of(source, TRIANGLES, None, self.body.file)
         return repaired(np.asarray(source.points, dtype=np.float64)[:, :3] * self.body.scale, triangles, self.body.file)
@@ -223,7 +226,7 @@ class SurfaceGeometry(Body):
         """Tetrahedra as a body from shapes estimates them (gmsh_mesher.estimate_from_measures), from the rubber's
         volume (the shells' signed volumes) and the cavities' wall area; nodes: a fifth of them (and one per edge,
         about 1.2 per tetrahedron, when quadratic)."""
-        shells = self.shells()
+        shells = self.shells
         x = shells.vertices[shells.triangles]
         cross = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
         signed = np.einsum("ij,ij->i", x[:, 0], np.cross(x[:, 1], x[:, 2])) / 6
@@ -238,7 +241,7 @@ class SurfaceGeometry(Body):
 
     def mesh(self, budget: Budget = Budget()) -> Mesh:
         """Repair, remesh and fill with tetrahedra (module docstring), under the budget."""
-        shells = self.shells()
+        shells = self.shells
         cavities = self.cavities(shells)
         cap = budget.element_cap(self.family.weight)
         with session() as gmsh:
