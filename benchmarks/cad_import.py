@@ -5,6 +5,8 @@ geometry replaced, every other key as shipped):
 
 - fiber_bending_3d against its STEP (taichi_pneuma/scenes/fiber_actuator.step, drawn by build123d:
   examples/cad_fiber_actuator_step.py): the tip rotation at 120 kPa;
+- fiber_bending_3d against the STL of the same actuator's rubber (fiber_actuator.stl, exported by build123d beside
+  the STEP, triangulated to 0.05 mm), meshed at 4 mm near the chamber;
 - pneunet_3d against its STL (taichi_pneuma/scenes/pneunet.stl, the generator's solid triangulated at 0.08:
   examples/cad_pneunet_stl.py), its bottom layer a box region (an STL has no regions), meshed at 0.08 near the
   chambers (the STL's facets; the parametric scene's 0.12 chords a 0.08 corner radius once), ramped to its peak (900,
@@ -50,6 +52,19 @@ def step_geometry(scene):
         body=StepPart(path, "body", metre),
         chambers=(("chamber", StepPart(path, "chamber", metre)),),
     )
+
+
+def fiber_stl_geometry(scene):
+    """fiber_bending_3d's body and chamber as the STL of its rubber (fiber_actuator.stl, triangulated to 0.05 mm by
+    build123d), meshed at the scene's 5 mm, 4 mm near the chamber (its 2 mm walls' through_wall = 0.5)."""
+    from taichi_pneuma.fem.gmsh_mesher import MeshSizes
+    from taichi_pneuma.fem.surface_import import Cavity, SurfaceBody, SurfaceGeometry
+    from taichi_pneuma.scene.shipped import find
+
+    g = scene.geometry
+    body = SurfaceBody(str(find("fiber_actuator", ".stl", "surface file")), 1.0)
+    chamber = (("chamber", Cavity((50.0, 4.0, 0.0))),)
+    return SurfaceGeometry(body, chamber, MeshSizes(5.0, 4.0, 4.0), g.order, g.clamp, g.tip)
 
 
 def stl_scene(scene):
@@ -150,6 +165,14 @@ def main() -> int:
             "fiber_bending_3d",
             fiber,
             dataclasses.replace(fiber, geometry=step_geometry(fiber)),
+            "tip_rotation",
+            -154.1,
+            2.7,
+        ),
+        "fiber_bending_3d / STL": run_case(
+            "fiber_bending_3d",
+            fiber,
+            dataclasses.replace(fiber, geometry=fiber_stl_geometry(fiber)),
             "tip_rotation",
             -154.1,
             2.7,

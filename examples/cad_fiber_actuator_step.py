@@ -1,5 +1,6 @@
 """The fibre-reinforced bending actuator of the shipped fiber_bending_3d scene, drawn in build123d (OpenCASCADE,
-not gmsh) and exported as STEP: taichi_pneuma/scenes/fiber_actuator.step, which fiber_bending_step.toml reads.
+not gmsh) and exported as STEP: taichi_pneuma/scenes/fiber_actuator.step, which fiber_bending_step.toml reads; and
+its rubber (the body less the chamber) as STL, triangulated to 0.05 mm: fiber_actuator.stl, beside it.
 
 Its body is a half-round bar, radius 8 mm over a flat base 2 mm thick, 100 mm long along x from x = 0 (the axis at
 y = 2 mm, z = 0); its chamber a half-round cavity of radius 6 mm, 94 mm long (3 mm end caps), on the same axis, the
@@ -7,13 +8,13 @@ base's top face its floor. The two solids are labelled "body" and "chamber" in t
 chamber from the body. Lengths in millimetres (the file says so: a STEP file carries its unit).
 
     pip install build123d   # (not a dependency of taichi-pneuma: only this script needs it)
-    python examples/cad_fiber_actuator_step.py [OUT.step]
+    python examples/cad_fiber_actuator_step.py [OUT.step]    (and OUT.stl)
 """
 
 import sys
 from pathlib import Path
 
-from build123d import Box, Compound, Cylinder, Location, export_step
+from build123d import Box, Compound, Cylinder, Location, export_step, export_stl
 
 LENGTH, RADIUS, BASE, CHAMBER_RADIUS, CAP = 100.0, 8.0, 2.0, 6.0, 3.0
 
@@ -39,4 +40,6 @@ if __name__ == "__main__":
     out = Path(sys.argv[1]) if len(sys.argv) > 1 else shipped
     part = actuator()
     export_step(part, str(out))
+    body, chamber = part.children
+    export_stl(body - chamber, str(out.with_suffix(".stl")), tolerance=0.05, angular_tolerance=0.2)
     print(f"wrote {out}: body {part.children[0].volume:.1f} mm^3, chamber {part.children[1].volume:.1f} mm^3")
