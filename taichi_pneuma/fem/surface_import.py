@@ -96,6 +96,13 @@ class Shells:
     def count(self) -> int:
         return int(self.shell.max()) + 1
 
+    @property
+    def vertex_shell(self) -> np.ndarray:
+        """The shell of each vertex (a vertex lies on the triangles of one shell only)."""
+        shell = np.empty(len(self.vertices), dtype=np.int64)
+        shell[self.triangles] = self.shell[:, None]
+        return shell
+
     def encloses(self, k: int, point) -> bool:
         """Whether shell k encloses the point: a ray along a slightly skew direction crosses it an odd number of
         times (Moller-Trumbore on every triangle)."""
@@ -251,9 +258,10 @@ class SurfaceGeometry(Body):
             gmsh.model.mesh.classifySurfaces(math.radians(CLASSIFY_DEGREES), True, True, math.pi)
             gmsh.model.mesh.createGeometry()
             patches: dict[int, list[int]] = {}
+            vertex_shell = shells.vertex_shell  # gmsh's node tag = vertex row + 1
             for _, tag in gmsh.model.getEntities(2):
                 nodes = gmsh.model.mesh.getElementsByType(2, tag)[1]
-                patches.setdefault(int(shells.shell[shell_of_node(shells, int(nodes[0]))]), []).append(tag)
+                patches.setdefault(int(vertex_shell[int(nodes[0]) - 1]), []).append(tag)
             loops = [gmsh.model.geo.addSurfaceLoop(patches[k]) for k in range(shells.count)]
             volume = gmsh.model.geo.addVolume(loops)
             gmsh.model.geo.synchronize()
@@ -272,8 +280,3 @@ class SurfaceGeometry(Body):
             rollers=self.rollers,
             curved=(meshed.curved_edges, meshed.curved_points),
         )
-
-
-def shell_of_node(shells: Shells, tag: int) -> int:
-    """The triangle row of a node (gmsh tag = vertex row + 1): one triangle using that vertex."""
-    return int(np.flatnonzero((shells.triangles == tag - 1).any(axis=1))[0])
