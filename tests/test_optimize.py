@@ -111,6 +111,18 @@ def test_a_constraint_moves_the_optimum_to_its_boundary(tmp_path):
     assert all(r["feasible"] == (r["violation_0"] <= 0) for r in report.rows)
 
 
+def test_a_local_refinement_reaches_the_constrained_bottom_exactly(tmp_path):
+    """The constrained bowl (its bottom cy = 0, E = 12000, f = 0.25, on the constraint's boundary): 15 TPE designs
+    then 15 of COBYQA land on it to 1e-5, where TPE alone with all 30 stays over 1 % off (the first test's 0.05)."""
+    common = dict(minimize="tip_rotation", constraints=["max_stretch<=1.0"], trials=30, evaluate=bowl)
+    refined = tp.optimize(BEAM, BOWL, refine=15, out=tmp_path / "refined", **common)
+    alone = tp.optimize(BEAM, BOWL, out=tmp_path / "alone", **common)
+    assert refined.best["objective_0"] == pytest.approx(0.25, abs=1e-5)
+    assert -1e-5 < refined.best[CY] <= 0 and refined.best["material.E"] == pytest.approx(12000, abs=0.1)
+    assert alone.best["objective_0"] > 0.25 * 1.01  # (what the refinement adds)
+    assert len(refined.rows) == 30 and refined.rows[:15] == alone.rows[:15]  # the same TPE designs before it
+
+
 def test_two_objectives_give_a_pareto_front_of_designs_none_dominates(tmp_path):
     """f1 = the bowl, f2 = tip_dy = cy - E / 1e5 (maximised): the front trades the two; none of its designs is
     dominated by any evaluated design."""
@@ -245,28 +257,41 @@ def slow_bowl(task):
     return {{"values": dict(task.values), "record": run, "files": {{}}, "error": None, "seconds": 0.4}}
 
 tp.optimize(tp.reference_scene(), {{"cy": (-0.15, 0.15)}}, minimize="tip_rotation", trials=10, out={out!r},
-            evaluate=slow_bowl)
+            evaluate=slow_bowl, refine={refine})
 """
 
 
 def evaluated(db) -> list[tuple]:
+    """The study's trials (number, state); none while Optuna has not yet made its tables."""
     with sqlite3.connect(db) as c:
-        return c.execute("SELECT number, state FROM trials ORDER BY number").fetchall()
+        try:
+            return c.execute("SELECT number, state FROM trials ORDER BY number").fetchall()
+        except sqlite3.OperationalError:
+            return []
 
 
-def test_a_killed_optimisation_resumes_with_no_design_lost_or_run_twice(tmp_path):
+def kill_midway(tmp_path, refine: int, complete: int):
+    """SCRIPT's study (10 trials, the last `refine` of them refining) killed by SIGKILL into the next design's
+    evaluation after `complete` designs; its out folder and script."""
     out = tmp_path / "out"
     script = tmp_path / "run.py"
-    script.write_text(textwrap.dedent(SCRIPT.format(out=str(out))))
+    script.write_text(textwrap.dedent(SCRIPT.format(out=str(out), refine=refine)))
     proc = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
         time.sleep(0.1)
-        if (out / "optimize.db").exists() and sum(s == "COMPLETE" for _, s in evaluated(out / "optimize.db")) >= 4:
+        if (out / "optimize.db").exists() and sum(
+            s == "COMPLETE" for _, s in evaluated(out / "optimize.db")
+        ) >= complete:
             break
     time.sleep(0.2)  # into the next design's evaluation
     proc.send_signal(signal.SIGKILL)
     proc.wait(timeout=30)
+    return out, script
+
+
+def test_a_killed_optimisation_resumes_with_no_design_lost_or_run_twice(tmp_path):
+    out, script = kill_midway(tmp_path, 0, 4)
     before = {n: s for n, s in evaluated(out / "optimize.db")}
     done_before = [n for n, s in before.items() if s == "COMPLETE"]
     assert 4 <= len(done_before) < 10 and "RUNNING" in before.values()
@@ -286,6 +311,34 @@ def test_a_killed_optimisation_resumes_with_no_design_lost_or_run_twice(tmp_path
     values = [float(r[CY]) for r in rows]
     assert values.count(killed[0].params[CY]) == 1  # the design it was running: asked again, evaluated once
     assert len(set(values)) == 10
+
+
+def line_bowl(task):
+    """SCRIPT's slow_bowl without its sleep."""
+    run = {"summary": {}, "history": {"tip_rotation": [0.0, (task.values[CY] - 0.05) ** 2]}}
+    return {"values": dict(task.values), "record": run, "files": {}, "error": None, "seconds": 0.0}
+
+
+def test_a_refinement_killed_midway_replays_its_path_and_goes_on(tmp_path):
+    """10 trials, the last 6 COBYQA's, killed after 6 designs (4 of TPE, 2 of the refinement) and run again: the
+    study holds the very designs, in order, of the same study run whole (COBYQA replayed from the start stored in
+    the study, the designs it had run looked up, the one in flight asked again), each evaluated once."""
+    out, script = kill_midway(tmp_path, 6, 6)
+    again = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120)
+    assert again.returncode == 0, again.stderr
+    resumed = [float(r[CY]) for r in read_rows(out / "optimize.csv")]
+    whole = tp.optimize(
+        tp.reference_scene(),
+        {"cy": (-0.15, 0.15)},
+        minimize="tip_rotation",
+        trials=10,
+        refine=6,
+        out=tmp_path / "whole",
+        evaluate=line_bowl,
+    )
+    assert resumed == [r[CY] for r in whole.rows]
+    explored = min(abs(r[CY] - 0.05) for r in whole.rows[:4])
+    assert abs(whole.best[CY] - 0.05) < explored / 10  # the refinement went 10 times closer to the bottom
 
 
 # --- refusals ------------------------------------------------------------------------------------

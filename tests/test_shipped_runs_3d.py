@@ -17,10 +17,12 @@ COARSER = {
     "beam_3d_ellipsoid": mesh(0.4, 0.2, 0.4, order=1),
     "blocked_force_3d": mesh(12, 6, 6, order=1),
     "fiber_bending_3d": mesh(12, 6, 6, order=1),  # near_chambers replaces the scene's through_wall
+    "fiber_bending_step": mesh(12, 6, 6, order=1),  # (the STEP part of fiber_bending_3d)
     "fiber_twist_3d": mesh(6, 4, 4, order=1),
     "gripper_3d": ["--set", "mesh.size=8"],
     "pneunet_3d": mesh(0.5, 0.5, 0.5, order=1),
     "pneunet_fast_3d": mesh(0.5, 0.5, 0.5, order=1),
+    "pneunet_stl": mesh(0.5, 0.5, 0.5, order=1),  # (the STL surface of pneunet_3d)
 }
 
 

@@ -83,6 +83,14 @@ def parser() -> argparse.ArgumentParser:
         "--sampler", default="tpe", help="Optuna's sampler: tpe, cmaes (one objective, no constraints) or nsga2"
     )
     p.add_argument("--seed", type=int, default=0, help="the sampler's seed")
+    p.add_argument(
+        "--refine",
+        type=int,
+        default=0,
+        metavar="N",
+        help="the last N of the trials refine the best design found by SciPy's COBYQA, a local derivative-free "
+        "method that keeps to the bounds and constraints (one objective; a third of --trials is a good share)",
+    )
     add_executor_arguments(p, "the designs", "every core")
     p.add_argument("--name", default="optimize", help="the result files are <out>/<name>.db, .csv, .json, ...")
     p.add_argument("--cy", type=float, default=0.15, help="reference beam: chamber centre height")
@@ -126,7 +134,7 @@ def run(args: argparse.Namespace) -> dict:
     out = prepare_directory(args.out)
     with lock_stem(out, check_stem(args.name)):
         optimization = Optimization(
-            base, axes, goals, out, args.name, args.trials, args.sampler, args.seed, run_options(args)
+            base, axes, goals, out, args.name, args.trials, args.sampler, args.seed, run_options(args), args.refine
         )
         return run_study(args, optimization, executor)
 
@@ -137,7 +145,9 @@ def run_study(args: argparse.Namespace, optimization, executor) -> dict:
     labels = [a.label for a in optimization.axes]
     goals = optimization.goals
     print(
-        f"optimisation {args.name}: {args.trials} evaluations by {args.sampler} over "
+        f"optimisation {args.name}: {args.trials} evaluations by {args.sampler}"
+        + (f" ({args.refine} of them refining by COBYQA)" if args.refine else "")
+        + " over "
         f"{', '.join(labels)}; {' and '.join(f'{d} {t}' for d, t in zip(goals.directions, goals.texts))}"
         + (f" subject to {', '.join(c.text for c in goals.constraints)}" if goals.constraints else "")
     )

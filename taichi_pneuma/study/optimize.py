@@ -23,6 +23,7 @@ versions, machine), <name>_trace.png (best so far against evaluation) and, for t
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import time
@@ -38,6 +39,7 @@ from ..scene.build import Scene
 from .design import evaluate_design
 from .goals import Goals, NoValue
 from .optimize_figure import pareto_figure, pareto_front, trace_figure
+from .refine import Refinement, start_of, worst_of
 from .sweep import DEFAULT_OPTIONS, machine, versions
 from .table import is_number, write_table
 from .task import RunOptions, Task
@@ -89,6 +91,10 @@ def make_sampler(name: str, goals: Goals, trials: int, seed: int):
         population = min(50, max(4, trials // 4))
         return optuna.samplers.NSGAIISampler(population_size=population, seed=seed)
     return optuna.samplers.TPESampler(seed=seed)
+
+
+class Lost(Exception):
+    """A design of the refinement was lost with a crashed worker process."""
 
 
 class InProcess:
@@ -145,9 +151,20 @@ class Optimization:
         sampler: str = "tpe",
         seed: int = 0,
         options: RunOptions = DEFAULT_OPTIONS,
+        refine: int = 0,
     ):
         require(isinstance(trials, int) and 1 <= trials <= MAX_TRIALS, f"--trials {trials!r}: 1 to {MAX_TRIALS}")
         self.axes = check_variables(base, axes)
+        require(
+            isinstance(refine, int) and 0 <= refine < trials,
+            f"--refine {refine!r}: 0 to {trials - 1} (fewer than --trials {trials})",
+        )
+        if refine:
+            require(len(goals.objectives) == 1, f"--refine {refine}: a local refinement takes one objective")
+            require(
+                any(a.is_range and not a.integer for a in self.axes),
+                f"--refine {refine}: a local refinement needs a variable that is a range of real numbers",
+            )
         self.base, self.goals, self.trials, self.options = base, goals, trials, options
         self.keys = [a.key for a in self.axes]
         self.name, self.out = check_stem(name), prepare_directory(out)
@@ -162,9 +179,10 @@ class Optimization:
             "seed": seed,
             "base_scene": self.scene_toml,
             "options": asdict(options),
+            **({"refine": refine} if refine else {}),  # (a study without one keeps its identity)
         }
         make_sampler(sampler, goals, trials, seed)  # refuses what the sampler cannot do, before any file
-        self.sampler_name, self.seed = sampler, seed
+        self.sampler_name, self.seed, self.refine = sampler, seed, refine
         self.folder = self.out / self.name
         self.db, self.csv, self.json = (self.out / f"{self.name}{s}" for s in (".db", ".csv", ".json"))
         self.trace_png, self.pareto_png = self.out / f"{self.name}_trace.png", self.out / f"{self.name}_pareto.png"
@@ -227,6 +245,7 @@ class Optimization:
                     "seconds": attrs.get("seconds"),
                     "error": attrs.get("error"),
                     "folder": attrs.get("folder"),
+                    "shortfall": attrs.get("shortfall"),
                 }
             )
         return sorted(rows, key=lambda row: row["trial"])
@@ -270,6 +289,7 @@ class Optimization:
                     # short of a level an at() asks for: worse than every design that gets there (the worst
                     # objective values), infeasible by how far it fell short (TPE and NSGA-II rank by that)
                     trial.set_user_attr("error", error)
+                    trial.set_user_attr("shortfall", exc.shortfall)
                     trial.set_constraint("reached", exc.shortfall)
                     study.tell(trial, [math.inf if d == "minimize" else -math.inf for d in self.goals.directions])
                     return
@@ -326,31 +346,81 @@ class Optimization:
         best, pareto = self.best(rows)
         return OptimizationReport(best, pareto, rows, ran, lost, seconds, files)
 
+    def refinement(self, study, evaluate, budget: int) -> Refinement | None:
+        """The local refinement (study/refine.py) from the best of the sampler's designs, at most `budget` new
+        evaluations; its start and its failed designs' score are stored in the study the first time, so a resumed
+        study replays the same refinement."""
+        sign = 1.0 if self.goals.directions[0] == "minimize" else -1.0
+        rows = self.rows(study)
+        if "refine_start" not in study.user_attrs:
+            start = start_of(rows, sign)
+            study.set_user_attr("refine_start", None if start is None else {k: start[k] for k in self.keys})
+            study.set_user_attr("refine_worst", worst_of(rows, sign))
+        start, worst = study.user_attrs["refine_start"], study.user_attrs["refine_worst"]
+        if start is None:
+            return None  # no design has an objective value to start from: the sampler goes on
+        reals = [a.key for a in self.axes if a.is_range and not a.integer]
+        return Refinement(
+            reals,
+            {a.key: a.ends for a in self.axes if a.key in reals},
+            start,
+            worst,
+            sign,
+            len(self.goals.constraints),
+            rows,
+            evaluate,
+            budget,
+        )
+
     def run(self, executor, function=evaluate_design, on_trial=None) -> OptimizationReport:
         """Evaluate designs on an entered executor until `trials` evaluations are recorded, in batches of its
         capacity(); on_trial(row, (best, pareto)) after each (the best so far: Optimization.best). function(task):
         evaluate_design, or what returns rows like its (a test's analytic objective). A batch that lost designs
         with a crashed worker process (a broken pool) is the last (report.lost; the same study run again asks them
         again). Ctrl-C: the evaluations in flight are told, the files written, then it re-raises."""
+        from optuna.trial import TrialState
+
         with lock_stem(self.out, self.name):  # no other run writes this study meanwhile
             study = self.open()
             described = executor.describe()
             start, ran, lost, status = time.perf_counter(), 0, 0, "interrupted"
             done = len(self.rows(study))
+            refined = False
+
+            def batch(asked: list) -> None:
+                nonlocal ran, done, lost
+                tasks = [Task(self.scene_toml, {k: t.params[k] for k in self.keys}, self.options) for t in asked]
+                for index, row in executor.run(tasks, function):
+                    self.tell(study, asked[index], row)
+                    if row is None:
+                        lost += 1
+                        continue
+                    ran, done = ran + 1, done + 1
+                    if on_trial is not None:
+                        rows = self.rows(study)
+                        on_trial(next(r for r in rows if r["trial"] == asked[index].number), self.best(rows))
+                self.write(study, "running", described, ran, time.perf_counter() - start, lost, pictures=False)
+
+            def evaluate(values: dict) -> dict:
+                """One design of the refinement, run and told; its row."""
+                study.enqueue_trial(values, user_attrs={"refine": True})
+                trial = study.ask(self.distributions)
+                batch([trial])
+                if lost:
+                    raise Lost
+                return next(r for r in self.rows(study) if r["trial"] == trial.number)
+
             try:
                 while done < self.trials and not lost:
-                    asked = [study.ask(self.distributions) for _ in range(min(executor.capacity(), self.trials - done))]
-                    tasks = [Task(self.scene_toml, {k: t.params[k] for k in self.keys}, self.options) for t in asked]
-                    for index, row in executor.run(tasks, function):
-                        self.tell(study, asked[index], row)
-                        if row is None:
-                            lost += 1
-                            continue
-                        ran, done = ran + 1, done + 1
-                        if on_trial is not None:
-                            rows = self.rows(study)
-                            on_trial(next(r for r in rows if r["trial"] == asked[index].number), self.best(rows))
-                    self.write(study, "running", described, ran, time.perf_counter() - start, lost, pictures=False)
+                    waiting = study.get_trials(deepcopy=False, states=(TrialState.WAITING,))
+                    if self.refine and not refined and not waiting and done >= self.trials - self.refine:
+                        refined = True  # (once a run: what a converged refinement leaves goes to the sampler)
+                        refinement = self.refinement(study, evaluate, self.trials - done)
+                        with contextlib.suppress(Lost):
+                            if refinement is not None:
+                                refinement.run()
+                        continue
+                    batch([study.ask(self.distributions) for _ in range(min(executor.capacity(), self.trials - done))])
                 status = "done" if not lost else "incomplete"
             finally:
                 report = self.write(study, status, described, ran, time.perf_counter() - start, lost)
@@ -367,6 +437,7 @@ def optimize(
     trials: int = 30,
     sampler: str = "tpe",
     seed: int = 0,
+    refine: int = 0,
     out: str | os.PathLike = "out",
     name: str = "optimize",
     executor=None,
@@ -378,7 +449,8 @@ def optimize(
 
     variables: {key: (low, high)} (integers if both are) or a list of pneuma-optimize's --vary texts
     ("KEY=LO:HI", "KEY=v1,v2"); minimize, maximize: one expression each, or a list (the minimised first, two in
-    all at most); constraints: "EXPR<=VALUE" or "EXPR>=VALUE" texts; sampler: "tpe", "cmaes" or "nsga2". The study
+    all at most); constraints: "EXPR<=VALUE" or "EXPR>=VALUE" texts; sampler: "tpe", "cmaes" or "nsga2"; refine:
+    how many of the trials end the search as a local refinement by SciPy's COBYQA (study/refine.py). The study
     is kept in <out>/<name>.db: the same call again goes on from it (to `trials` evaluations in all). executor: a
     study.LocalPool(workers) or study.RayCluster(address) (not entered; this function enters it), or None: here,
     one design after another. evaluate(task) -> a row like study/design.py evaluate_design's (the default), for a
@@ -389,6 +461,7 @@ def optimize(
     listed = [[e] if isinstance(e, str) else list(e) for e in (minimize, maximize)]
     objectives = [("minimize", e) for e in listed[0]] + [("maximize", e) for e in listed[1]]
     goals = Goals.parse(scene, objectives, list(constraints))
-    optimization = Optimization(scene, [parse_vary(t) for t in texts], goals, out, name, trials, sampler, seed)
+    axes = [parse_vary(t) for t in texts]
+    optimization = Optimization(scene, axes, goals, out, name, trials, sampler, seed, refine=refine)
     with executor if executor is not None else InProcess() as entered:
         return optimization.run(entered, evaluate or evaluate_design)
