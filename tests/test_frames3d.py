@@ -212,3 +212,17 @@ def test_the_header_gives_each_value_its_unit_in_a_mm_kpa_scene():
     captions = step_captions(np.array([[1.0], [1.3]]), np.array([[0.0], [120.0]]), history, UNITS["mm-kPa"])
     assert "p = 120 kPa" in captions[1][0] and "volume x1.30" in captions[1][0]
     assert captions[1][1].startswith("tip dy = -12.3 mm   dz = +0.04 mm   bend -20.0 deg")
+
+
+def test_the_glyph_and_colour_map_memos_are_read_only():
+    """The memos every frame shares (a label's glyph coverage, the colour map's table) refuse a write, so no caller
+    can change what the next one draws; a label drawn twice is the same pixels."""
+    from taichi_pneuma.render import colours, text
+
+    label = [text.Label("12 mm", 10.0, 10.0)]
+    first = text.draw_labels(np.zeros((40, 120, 3), np.uint8), label)
+    with pytest.raises(ValueError, match="read-only"):
+        text._coverage("12 mm", "la")[0][0, 0] = 1.0
+    with pytest.raises(ValueError, match="read-only"):
+        colours._colormap_table()[0] = 0.0
+    assert first.any() and np.array_equal(text.draw_labels(np.zeros((40, 120, 3), np.uint8), label), first)
