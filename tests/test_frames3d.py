@@ -17,6 +17,7 @@ from taichi_pneuma.render.frames3d import CLAMP, FrameRenderer3D, Track3D, body_
 from taichi_pneuma.render.section import section_of
 from taichi_pneuma.render.surface import AMBIENT, BACK_FACE, SPECULAR, shade_faces
 from taichi_pneuma.render.text import label_box
+from taichi_pneuma.terms.obstacle_shapes import Box
 
 LO, HI = np.array([-2.0, -0.4, -0.4]), np.array([2.0, 0.4, 0.4])
 
@@ -190,7 +191,7 @@ def test_the_clamp_an_obstacle_and_the_rest_ghost_are_drawn():
     rest the body hides its ghost."""
     nodes = block()[0]
     pinned = np.flatnonzero(nodes[:, 0] == LO[0])
-    plate = guides3d.box([-1.0, -1.2, -0.4], [1.0, -0.8, 0.4])
+    plate = guides3d.obstacle_triangles(Box((0.0, -1.0, 0.0), (2.0, 0.4, 0.8)), 1.0)  # -1.2 < y < -0.8
     obstacles = ((np.array([plate[0]] * 2), np.array([plate[1]] * 2)),)
     renderer = FrameRenderer3D(block_track(pinned=pinned, obstacles=obstacles), 640, 360, backend="numpy")
     frames = [renderer.compose(i)[0][renderer.header_px :, : renderer.canvas.width] for i in (0, 1)]
@@ -213,35 +214,15 @@ def test_the_header_gives_each_value_its_unit_in_a_mm_kpa_scene():
     assert captions[1][1].startswith("tip dy = -12.3 mm   dz = +0.04 mm   bend -20.0 deg")
 
 
-@pytest.mark.parametrize(
-    "kind, area",
-    [
-        ("sphere", 4 * np.pi * 0.5**2),
-        ("cylinder", 2 * np.pi * 0.5 * 2.0 + 2 * np.pi * 0.5**2),
-        ("capsule", 2 * np.pi * 0.5 * 2.0 + 4 * np.pi * 0.5**2),
-    ],
-)
-def test_round_obstacles_are_surfaces_of_their_shape_facing_out(kind, area):
-    """A sphere, cylinder or capsule of radius 0.5 (length 2 along y) about (1, 2, 3): every corner lies on the shape
-    (distance to its axis segment = the radius, or within it on a flat cap), the triangles' area is the closed
-    form's to 1.5 % (32 segments round), and every triangle faces away from the centre."""
-    from taichi_pneuma.terms.obstacle_shapes import Capsule, Cylinder, Sphere
+def test_the_glyph_and_colour_map_memos_are_read_only():
+    """The memos every frame shares (a label's glyph coverage, the colour map's table) refuse a write, so no caller
+    can change what the next one draws; a label drawn twice is the same pixels."""
+    from taichi_pneuma.render import colours, text
 
-    center, axis = np.array([1.0, 2.0, 3.0]), np.array([0.0, 1.0, 0.0])
-    shape = {"sphere": Sphere(tuple(center), 0.5), "cylinder": Cylinder(tuple(center), 0.5, 2.0, "y")}.get(
-        kind, Capsule(tuple(center), 0.5, 2.0, "y")
-    )
-    triangles, edges = guides3d.revolved(center, (1.0, 0.0, 0.0) if kind == "sphere" else axis, guides3d.profile(shape))
-    half = 0.0 if kind == "sphere" else 1.0
-    along = np.clip((triangles - center) @ (axis if kind != "sphere" else np.array([1.0, 0, 0])), -half, half)
-    nearest = center + along[..., None] * (axis if kind != "sphere" else np.array([1.0, 0, 0]))
-    distance = np.linalg.norm(triangles - nearest, axis=-1)
-    if kind == "cylinder":  # on the side (distance = radius) or on a cap (within it, at the end)
-        on_cap = np.isclose(np.abs((triangles - center) @ axis), 1.0)
-        assert np.all(np.isclose(distance, 0.5) | (on_cap & (distance <= 0.5 + 1e-12)))
-    else:
-        assert np.allclose(distance, 0.5)
-    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
-    assert 0.5 * np.linalg.norm(normals, axis=1).sum() == pytest.approx(area, rel=0.015)
-    outward = triangles.mean(axis=1) - center  # (each shape is convex about its centre)
-    assert np.all(np.einsum("ij,ij->i", normals, outward) > 0) and len(edges) == 0
+    label = [text.Label("12 mm", 10.0, 10.0)]
+    first = text.draw_labels(np.zeros((40, 120, 3), np.uint8), label)
+    with pytest.raises(ValueError, match="read-only"):
+        text._coverage("12 mm", "la")[0][0, 0] = 1.0
+    with pytest.raises(ValueError, match="read-only"):
+        colours._colormap_table()[0] = 0.0
+    assert first.any() and np.array_equal(text.draw_labels(np.zeros((40, 120, 3), np.uint8), label), first)

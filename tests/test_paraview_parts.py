@@ -10,11 +10,9 @@ import pytest
 
 import taichi_pneuma as tp
 from taichi_pneuma.fem.fiber_paths import Line
-from taichi_pneuma.render.obstacle_surfaces import surface
 from taichi_pneuma.render.paraview import VtkSeries, pressure_timesteps
 from taichi_pneuma.terms.fibers import Cords, Fiber
 from taichi_pneuma.terms.membrane import Membrane
-from taichi_pneuma.terms.obstacle_shapes import Box, Capsule, Cylinder, Plane, Sphere
 
 
 def read_pvd(path):
@@ -224,56 +222,6 @@ def test_3d_sheets_and_a_sphere_obstacle(tmp_path):
     centre = result.obstacle_positions()[-1, 0]
     assert np.linalg.norm(current(ball) - centre, axis=1) == pytest.approx(16.0, rel=1e-12)
     assert len(ball.cells_dict["triangle"]) > 100
-
-
-@pytest.mark.parametrize(
-    "shape",
-    [
-        Sphere(center=(1.0, 2.0, 3.0), radius=2.0),
-        Box(center=(1.0, 2.0, 3.0), size=(2.0, 4.0, 6.0)),
-        *(Cylinder(center=(1.0, 2.0, 3.0), radius=1.5, length=4.0, axis=a) for a in "xyz"),
-        *(Capsule(center=(1.0, 2.0, 3.0), radius=1.5, length=4.0, axis=a) for a in "xyz"),
-        Plane(point=(0.0, 1.0, 0.0), normal=(1.0, 2.0, 2.0)),
-    ],
-    ids=lambda s: f"{type(s).__name__}-{getattr(s, 'axis', '')}",
-)
-def test_obstacle_surfaces_lie_on_the_shape_and_close_outwards(shape):
-    """Every point on the shape's boundary; a solid's surface closed (each edge in two triangles, once each way)
-    and wound outwards: its enclosed volume positive, near the shape's."""
-    points, _, triangles = surface(shape, 5.0, np.array([3.0, 3.0, 3.0]))
-    c = np.array(getattr(shape, "center", (0.0, 0.0, 0.0)))
-    if isinstance(shape, Plane):
-        n = np.array(shape.normal) / 3.0
-        assert np.abs((points - shape.point) @ n).max() < 1e-12
-        assert np.linalg.norm(points.mean(axis=0) - (3.0, 3.0, 3.0)) == pytest.approx(
-            abs(n @ ((3, 3, 3) - np.array(shape.point)))
-        )
-        return
-    edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
-    assert len({tuple(e) for e in edges}) == len(edges)
-    assert {tuple(e) for e in edges} == {tuple(e) for e in edges[:, ::-1]}
-    a, b, d = (points[triangles[:, i]] - c for i in range(3))
-    volume = np.einsum("fi,fi->f", a, np.cross(b, d)).sum() / 6
-    if isinstance(shape, Sphere):
-        assert np.linalg.norm(points - c, axis=1) == pytest.approx(2.0, rel=1e-12)
-        exact = 4 / 3 * np.pi * 8
-    elif isinstance(shape, Box):
-        assert np.abs((points - c) / (1.0, 2.0, 3.0)).max(axis=1) == pytest.approx(1.0, rel=1e-12)
-        exact = 48.0
-    else:
-        axis = np.eye(3)["xyz".index(shape.axis)]
-        along = (points - c) @ axis
-        radial = np.linalg.norm(points - c - np.outer(along, axis), axis=1)
-        if isinstance(shape, Capsule):
-            nearest = np.clip(along, -2.0, 2.0)
-            assert np.hypot(radial, along - nearest) == pytest.approx(1.5, rel=1e-12)
-            exact = np.pi * 1.5**2 * 4 + 4 / 3 * np.pi * 1.5**3
-        else:
-            on_side = np.isclose(radial, 1.5, rtol=1e-12) & (np.abs(along) <= 2.0 + 1e-12)
-            on_cap = np.isclose(np.abs(along), 2.0, rtol=1e-12) & (radial <= 1.5 + 1e-12)
-            assert np.all(on_side | on_cap)
-            exact = np.pi * 1.5**2 * 4
-    assert volume == pytest.approx(exact, rel=0.02)
 
 
 def test_the_timestep_is_the_step_unless_a_pressure_rises_at_every_step():

@@ -29,7 +29,7 @@ MESHER_SOURCES = (
 CACHE_BYTES_PER_TET = 256  # a cached mesh's arrays take about 50 bytes per tetrahedron: a larger file is not read
 
 
-@functools.cache
+@functools.cache  # a memo: the installed gmsh and this package's sources stay what the process loaded
 def mesher_version() -> str | None:
     """gmsh's version and a hash of this mesher's source files (MESHER_SOURCES); None without gmsh."""
     import importlib.metadata  # here: a 2D run does not need it

@@ -19,6 +19,7 @@ tetrahedral Mesh (made in Python, e.g. by tetmesh.tet_mesh from a mesher's array
 from __future__ import annotations
 
 import functools
+import hashlib
 import os
 import tempfile
 from dataclasses import dataclass, field
@@ -69,8 +70,10 @@ class MeshSurface:
 
 
 def read_mesh(path: str) -> meshio.Mesh:
-    """meshio's reading of the file, every failure one PneumaInputError naming it (the last file read is kept:
-    the resource check and the build read it once)."""
+    """meshio's reading of the file, every failure one PneumaInputError naming it. The last file read is kept, by
+    its path and the SHA-256 of its bytes (read_file): the resource check and the build parse it once, and a file
+    rewritten since, whatever its size and time stamp, is parsed again. The mesh returned is shared: not to be
+    modified."""
     require(
         os.path.isfile(path),
         f"mesh file {quoted(path)} "
@@ -80,17 +83,19 @@ def read_mesh(path: str) -> meshio.Mesh:
             else "does not exist"
         ),
     )
-    stat = os.stat(path)
-    return read_file(path, stat.st_size, stat.st_mtime_ns)
+    size = os.stat(path).st_size
+    require(size <= MAX_MESH_BYTES, f"mesh file {path!r} has {size} bytes; at most {MAX_MESH_BYTES} are read")
+    with open(path, "rb") as f:
+        digest = hashlib.file_digest(f, "sha256").hexdigest()
+    return read_file(path, size, digest)
 
 
-@functools.lru_cache(maxsize=1)
-def read_file(path: str, size: int, modified: int) -> meshio.Mesh:
-    """meshio.read of a file of that size and modification time, bounded to limits.read_allowance(size) bytes of
-    memory."""
+@functools.lru_cache(maxsize=1)  # a memo of the file's content: its key is the path and the bytes' digest
+def read_file(path: str, size: int, digest: str) -> meshio.Mesh:
+    """meshio.read of the file, of that size and content (the SHA-256 digest, the memo's key), bounded to
+    limits.read_allowance(size) bytes of memory."""
     import meshio  # here and in write_mesh, not at the top: a scene without a mesh file does not load it
 
-    require(size <= MAX_MESH_BYTES, f"mesh file {path!r} has {size} bytes; at most {MAX_MESH_BYTES} are read")
     allowance = limits.read_allowance(size)
     try:
         with limits.memory_bound(allowance):

@@ -71,7 +71,7 @@ class Law:
 LAWS: Registry[type[Law]] = Registry("law")  # name -> the law, filled by @LAWS.register (io/registry.py)
 
 
-@functools.cache
+@functools.cache  # a memo of the class alone: one Split class per law, so its kernels compile once
 def volumetric_split(law: type[Law]) -> type[Law]:
     """The law without its volumetric part, plus a given pressure's work: one more parameter pbar (the last),
 

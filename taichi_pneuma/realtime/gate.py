@@ -50,7 +50,9 @@ class OneLine(logging.Filter):
 
 connections_log = logging.getLogger("taichi_pneuma.live.connections")  # the websockets library's, for viser's server
 connections_log.addFilter(OneLine())
-_serve_lock = threading.Lock()  # one ViserServer started at a time through the wrapped serve
+# one ViserServer started at a time through the wrapped serve: module-level as what it guards is, websockets' own
+# serve, which guarded_serve replaces for the whole process while viser starts
+_serve_lock = threading.Lock()
 
 
 def token_of(path: str) -> str:

@@ -241,7 +241,8 @@ class WebView:
     def _surroundings(self, rest: np.ndarray) -> None:
         """The ground and the rigid obstacles where they are placed: in 2D their outlines in the z = 0 plane, in 3D
         their surfaces (render/guides3d.py), each a node the frames move by its obstacle's offset."""
-        from ..render.guides3d import obstacle_triangles, square
+        from ..render.guides3d import obstacle_triangles
+        from ..terms.obstacle_shapes import Plane
 
         scene, spec, extent = self.server.scene, self.session.scene, self._extent()
         fill, edge = ((np.array(colour) * 255).round().astype(np.uint8) for colour in (OBSTACLE_FILL, OBSTACLE))
@@ -251,7 +252,8 @@ class WebView:
             ends = np.array([[[lo[0] - extent, ground, 0.0], [hi[0] + extent, ground, 0.0]]])
             scene.add_line_segments("/ground", ends, colors=edge, thickness=3.0)
         elif ground is not None:
-            triangles, _ = square(((lo[0] + hi[0]) / 2, ground, (lo[2] + hi[2]) / 2), (0.0, 1.0, 0.0), extent)
+            floor = Plane((float(lo[0] + hi[0]) / 2, float(ground), float(lo[2] + hi[2]) / 2), (0.0, 1.0, 0.0))
+            triangles, _ = obstacle_triangles(floor, extent)
             self._add_triangles("/ground", triangles, fill)
         self._obstacles = []
         for obstacle in spec.obstacles:
@@ -262,7 +264,7 @@ class WebView:
                 segments = np.stack([ring, np.roll(ring, -1, axis=0)], axis=1)[: len(ring) if closed else 1]
                 self._obstacles.append(scene.add_line_segments(name, segments, colors=edge, thickness=2.5))
             else:
-                triangles, edges = obstacle_triangles(obstacle, extent)
+                triangles, edges = obstacle_triangles(obstacle.shape, extent)
                 self._obstacles.append(self._add_triangles(name, triangles, fill))
                 if len(edges):
                     scene.add_line_segments(f"{name}/edges", edges, colors=edge, thickness=1.5)

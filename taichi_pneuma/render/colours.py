@@ -32,13 +32,15 @@ COLORMAP = "viridis"  # a colour field's map: one scale for all tracks and steps
 COLORBAR_PX = 96  # width of the colour bar strip beside the panels
 
 
-@cache
+@cache  # a memo of the one colour map, its array read-only: shared by every call
 def _colormap_table() -> np.ndarray:
-    """The colour map's table of RGB colours (matplotlib's, N entries)."""
+    """The colour map's table of RGB colours (matplotlib's, N entries), read-only."""
     import matplotlib
 
     cmap = matplotlib.colormaps[COLORMAP]
-    return cmap(np.arange(cmap.N))[:, :3]
+    table = cmap(np.arange(cmap.N))[:, :3]
+    table.flags.writeable = False
+    return table
 
 
 def colormap(values: np.ndarray, lo: float, hi: float) -> np.ndarray:

@@ -1,5 +1,6 @@
 """What a 3D frame draws besides the body, to be read: the x-y-z axes, a scale bar, the rest shape's ghost, and
-rigid obstacles (a box, a plane as a square, a sphere, cylinder or capsule as a surface of revolution).
+rigid obstacles (their Shape.surface: a box, a plane as a square, a sphere, cylinder or capsule as a surface of
+revolution).
 
 - axes: a triad in the view's bottom-left corner (top-left where fewer of the body's nodes lie: quiet_corners),
   each world axis e drawn as the segment (e . r, -(e . u)) AXIS_PX long from one point (r, u the camera's right
@@ -9,13 +10,15 @@ rigid obstacles (a box, a plane as a square, a sphere, cylinder or capsule as a 
   (or top-right, as the axes);
 - the ghost: the pixels the rest body (cut as the frames are) covers (rasterised once), tinted GHOST_FILL where
   the frame shows the background, and its outline (covered pixels with an uncovered 4-neighbour) GHOST_EDGE;
-- obstacles (obstacle_geometry: a box as its box, a plane as a square, a sphere, cylinder or capsule as its profile
-  revolved about its axis, revolved()): opaque shaded faces in the 3D scene (so the body hides them and they hide it
-  where they should) and the edges of boxes and squares as thin quads facing the eye (segment_triangles), nudged
-  towards it so they win over their faces.
+- obstacles (obstacle_geometry: each shape's Shape.surface, the triangles ParaView's files hold too: a box, a plane
+  as a square, a sphere, cylinder or capsule as a surface of revolution): opaque shaded faces in the 3D scene (so
+  the body hides them and they hide it where they should) and their edges (a box's, a square's sides) as thin quads
+  facing the eye (segment_triangles), nudged towards it so they win over their faces.
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -24,83 +27,21 @@ from .scalebar import scale_bar
 from .surface import rasterise
 from .text import MARGIN_PX, Label, label_box
 
+if TYPE_CHECKING:
+    from ..terms.obstacle_shapes import Shape
+
 AXIS_PX = 26
 AXIS_COLORS = ((0.8, 0.15, 0.1), (0.1, 0.55, 0.15), (0.1, 0.3, 0.85))
 GHOST_FILL, GHOST_EDGE = (0.93, 0.93, 0.93), (0.55, 0.55, 0.55)
 INK = (0.15, 0.15, 0.15)
-BOX_TRIANGLES = [(0, 1, 3), (0, 3, 2), (4, 6, 7), (4, 7, 5), (0, 4, 5), (0, 5, 1)]  # outward
-BOX_TRIANGLES += [(2, 3, 7), (2, 7, 6), (0, 2, 6), (0, 6, 4), (1, 5, 7), (1, 7, 3)]
-BOX_EDGES = ((0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7))
 
 
-def box(lo, hi) -> tuple[np.ndarray, np.ndarray]:
-    """The box lo..hi as triangles (12, 3, 3) and edges (12, 2, 3); corner k has bits (x, y, z) = k's (4, 2, 1)."""
-    corners = np.array([[(lo, hi)[k >> 2 & 1][0], (lo, hi)[k >> 1 & 1][1], (lo, hi)[k & 1][2]] for k in range(8)])
-    return corners[np.array(BOX_TRIANGLES)], corners[np.array(BOX_EDGES)]
-
-
-def square(point, normal, half: float) -> tuple[np.ndarray, np.ndarray]:
-    """The square of half-side `half` about point in the plane of normal: triangles (2, 3, 3) and edges (4, 2, 3)."""
-    n = np.asarray(normal, float) / np.linalg.norm(normal)
-    u = np.cross(n, np.eye(3)[int(np.argmin(np.abs(n)))])
-    u /= np.linalg.norm(u)
-    v = np.cross(n, u)
-    c = np.asarray(point, float) + half * np.array([-u - v, u - v, u + v, -u + v])
-    return c[np.array([[0, 1, 2], [0, 2, 3]])], c[np.array([[0, 1], [1, 2], [2, 3], [3, 0]])]
-
-
-SEGMENTS = 32  # around a surface of revolution
-NO_EDGES = np.zeros((0, 2, 3))
-
-
-def revolved(center, axis, profile: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The surface swept by profile (k, 2): points (a, r) at a along the unit axis and r from it, from one pole
-    (r = 0) to the other, turned SEGMENTS times about the axis through center: triangles (f, 3, 3), no edges."""
-    a = np.asarray(axis, float)
-    u = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
-    u /= np.linalg.norm(u)
-    v = np.cross(a, u)
-    turn = np.linspace(0.0, 2 * np.pi, SEGMENTS + 1)
-    rings = (
-        np.asarray(center, float)
-        + profile[:, None, :1] * a
-        + profile[:, None, 1:] * (np.cos(turn)[None, :, None] * u + np.sin(turn)[None, :, None] * v)
-    )  # (k, SEGMENTS + 1, 3)
-    p, q = rings[:-1, :-1], rings[:-1, 1:]  # each quad between two rings and two turns: two triangles
-    r, s = rings[1:, 1:], rings[1:, :-1]
-    triangles = np.concatenate([np.stack([p, q, r], axis=2), np.stack([p, r, s], axis=2)]).reshape(-1, 3, 3)
-    area = 0.5 * np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]), axis=1)
-    return triangles[area > 0], NO_EDGES  # (the poles' quads have a side of length 0)
-
-
-def profile(shape) -> np.ndarray:
-    """A sphere's, cylinder's or capsule's (a, r) profile from pole to pole (obstacle_shapes' shapes): a half circle;
-    the flat caps and the side; a quarter circle, the side and a quarter circle."""
-    from ..terms.obstacle_shapes import Capsule, Sphere
-
-    radius, half = shape.radius, 0.0 if isinstance(shape, Sphere) else 0.5 * shape.length
-    quarter = np.linspace(0.0, np.pi / 2, SEGMENTS // 4 + 1)
-    if isinstance(shape, Sphere | Capsule):
-        cap = np.stack([-half - radius * np.cos(quarter), radius * np.sin(quarter)], axis=1)
-        return np.concatenate([cap, cap[::-1] * (-1, 1)])
-    return np.array([[-half, 0.0], [-half, radius], [half, radius], [half, 0.0]])
-
-
-def obstacle_triangles(obstacle, reach: float) -> tuple[np.ndarray, np.ndarray]:
-    """A 3D obstacle where it is placed as triangles (t, 3, 3) and edges (e, 2, 3): a box its faces and edges; a
-    plane the square about its point of half-side reach; a sphere, cylinder or capsule revolved(), no edges."""
-    from ..terms.obstacle_shapes import Box, Cylinder, Plane, Sphere, axis_vector
-
-    shape = obstacle.shape
-    if isinstance(shape, Box):
-        p = shape.parameters()
-        return box(p[:3] - p[3:6], p[:3] + p[3:6])
-    if isinstance(shape, Plane):
-        return square(shape.point, shape.normal, reach)
-    if isinstance(shape, Sphere):
-        return revolved(shape.center, (1.0, 0.0, 0.0), profile(shape))
-    assert isinstance(shape, Cylinder), shape  # (and a Capsule: a Cylinder's subclass)
-    return revolved(shape.center, axis_vector(shape.axis), profile(shape))
+def obstacle_triangles(shape: Shape, reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """A 3D obstacle's shape where it is placed as triangles (t, 3, 3) and edges (e, 2, 3) (Shape.surface: a box
+    its faces and edges; a plane the square of half-side reach about its point and its sides; a sphere, cylinder or
+    capsule a surface of revolution, no edges)."""
+    surface = shape.surface(reach, shape.parameters()[:3])
+    return surface.points[surface.triangles], surface.points[surface.edges]
 
 
 def obstacle_geometry(result) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
@@ -109,7 +50,7 @@ def obstacle_geometry(result) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
     reach = float(np.ptp(result.mesh.vertices, axis=0).max())
     drawn = []
     for o in result.scene.obstacles:
-        triangles, edges = obstacle_triangles(o, reach)
+        triangles, edges = obstacle_triangles(o.shape, reach)
         offsets = np.array([o.offset(s.step) for s in result.steps])[:, None, None]
         drawn.append((triangles + offsets, edges + offsets))
     return tuple(drawn)

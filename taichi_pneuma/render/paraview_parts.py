@@ -9,7 +9,7 @@ array moves them to a step's positions, as the body's does: one Warp By Vector o
                pieces) on the body's nodes; cell data stress (the sheet's Cauchy stress, Membrane.stress, in the
                body's 6-component order), max_stretch (its largest principal stretch) and layer (the index in the
                scene's [[layers]])
-    obstacles  each obstacle's surface (3D) or outline (2D) (render/obstacle_surfaces.py); cell data obstacle (the
+    obstacles  each obstacle's surface (3D) or outline (2D) (obstacle_cells); cell data obstacle (the
                index in the scene's [[obstacles]]); displacement: its translation at the step (its keyframes', and
                a held object's height, the history's '<name>.dy')
 """
@@ -19,10 +19,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..io.units import FORCE, LENGTH, PRESSURE, in_dimension
-from ..io.vtk import LINE, TRIANGLE, pad3
+from ..io.vtk import LINE, POLYGON, TRIANGLE, VtkCell, pad3
 from ..terms.fibers import Cords
 from ..terms.membrane import Membrane
-from .obstacle_surfaces import outline, surface
 
 SYMMETRIC_TENSOR = ((0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (0, 2))  # ParaView's 6-component order
 
@@ -102,6 +101,17 @@ class Sheets(Part):
         }
 
 
+def obstacle_cells(shape, dim: int, reach: float, centre: np.ndarray) -> tuple[np.ndarray, VtkCell, np.ndarray]:
+    """(points (k, 3), cell type, cells) of an obstacle's shape where it is placed: in 3D the triangles of its
+    Shape.surface (reach and centre place a plane's patch), which the 3D frames draw too (render/guides3d.py); in 2D
+    its Shape.outline at z = 0, a closed one as a polygon, a plane's line as a segment of half-length reach."""
+    if dim == 3:
+        surface = shape.surface(reach, centre)
+        return surface.points, TRIANGLE, surface.triangles
+    points, closed = shape.outline(reach)
+    return pad3(points), POLYGON if closed else LINE, np.arange(len(points))[None, :]
+
+
 class Obstacles(Part):
     """Every obstacle's surface or outline, one dataset. A plane reaches twice the body's largest extent: in 3D
     its patch's half-size, about the point of the plane nearest the body's centre; in 2D its segment's half-length,
@@ -113,7 +123,7 @@ class Obstacles(Part):
         mesh, self.obstacles = built.mesh, built.scene.obstacles
         reach = 2 * float(np.ptp(mesh.vertices, axis=0).max())
         centre = pad3(mesh.vertices.mean(axis=0)[None, :])[0]
-        shapes = [surface(o.shape, reach, centre) if mesh.dim == 3 else outline(o.shape, reach) for o in self.obstacles]
+        shapes = [obstacle_cells(o.shape, mesh.dim, reach, centre) for o in self.obstacles]
         starts = np.cumsum([0] + [len(points) for points, _, _ in shapes])
         super().__init__(
             built.scene.units,

@@ -36,7 +36,7 @@ class Label:
     color: tuple = TEXT
 
 
-@cache
+@cache  # a memo: the font file matplotlib ships does not change
 def _font():
     import matplotlib
     from PIL import ImageFont
@@ -53,16 +53,19 @@ def label_box(label: Label) -> tuple[float, float, float, float]:
     )
 
 
-@lru_cache(maxsize=4096)
+@lru_cache(maxsize=4096)  # a memo of (text, anchor) in the one font, its array read-only: shared by every call
 def _coverage(text: str, anchor: str) -> tuple[np.ndarray, int, int]:
-    """The text's glyph coverage (h, w) in [0, 1], drawn with its anchor at the origin, and the offset of
-    its top-left pixel from the anchor point. Cached: most labels (axis numbers, titles) repeat every frame."""
+    """The text's glyph coverage (h, w) in [0, 1] (a read-only array), drawn with its anchor at the origin, and the
+    offset of its top-left pixel from the anchor point. Cached: most labels (axis numbers, titles) repeat every
+    frame."""
     from PIL import Image, ImageDraw
 
     left, top, right, bottom = _font().getbbox(text, anchor=anchor)
     mask = Image.new("L", (max(right - left, 1), max(bottom - top, 1)))
     ImageDraw.Draw(mask).text((-left, -top), text, fill=255, font=_font(), anchor=anchor)
-    return np.asarray(mask, dtype=np.float32) / 255, left, top
+    coverage = np.asarray(mask, dtype=np.float32) / 255
+    coverage.flags.writeable = False
+    return coverage, left, top
 
 
 def draw_labels(image: np.ndarray, labels: list[Label]) -> np.ndarray:

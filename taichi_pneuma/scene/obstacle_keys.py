@@ -2,7 +2,7 @@
 
 [[obstacles]]
 name = "post"
-shape = "sphere"               # plane, box, sphere, cylinder, capsule; the shape's keys follow
+shape = "sphere"               # one of OBSTACLE_SHAPES (plane, box, sphere, ...); the shape's keys follow
 center = [3.0, -0.6]
 radius = 0.3
 dhat = 0.01                    # the barrier's threshold and stiffness, as [effects.ground]'s

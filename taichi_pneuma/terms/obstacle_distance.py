@@ -13,7 +13,8 @@ sphere is a circle there, a cylinder or capsule along z a circle, one along x or
 Each is an exact Euclidean distance outside, so 1-Lipschitz.
 
 The shape's kind is a runtime integer and its parameters a small float array (PARAMETERS), so the kernels compile
-once whatever the scene.
+once whatever the scene. signed_distance is the one place the kernels tell the shapes apart: a new shape is its
+class (and kind) in terms/obstacle_shapes.py and its branch here.
 """
 
 import math

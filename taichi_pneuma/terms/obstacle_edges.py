@@ -2,7 +2,7 @@
 axis, corners or edges) against the body's straight surface pieces, so that no piece passes into the obstacle
 between its nodes (the nodes against the obstacle's surface: terms/obstacles.py ObstacleContact).
 
-Each convex obstacle O is the set of points within R of a feature set F:
+Each convex obstacle O is the set of points within R of a feature set F (Shape.features, terms/obstacle_shapes.py):
 
     sphere                        F = its centre c, R its radius (2D: a disc)
     capsule                       F = its axis, the segment c -+ h a, R its radius (2D along z: a disc)
@@ -42,33 +42,8 @@ from ..backend import kernel, ti
 from .base import Scalars, Table, Term, Triples, Vec2s, block_pattern, int32s
 from .contact import barrier, squared_distance
 from .obstacle_distance import obstacle_reach
-from .obstacle_shapes import BOX, CAPSULE, CYLINDER, SPHERE
 
 ADVANCES = 100  # 2D conservative advancement: at most this many advances
-SIGNS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
-BOX_EDGES = np.array([(i, j) for i in range(8) for j in range(i + 1, 8) if np.sum(SIGNS[i] != SIGNS[j]) == 1])
-
-
-def features(kind: int, p: np.ndarray, dim: int) -> tuple[np.ndarray, np.ndarray, float]:
-    """(points (k, dim), edges (m, 2, dim), R) of an obstacle of shape kind with kernel parameters p
-    (obstacle_distance.PARAMETERS): the feature set F within R of which the obstacle lies (module docstring); none for
-    a plane or a 3D cylinder."""
-    c, v, radius, half = p[:3], p[3:6], float(p[6]), float(p[7])
-    flat = dim == 2 and kind in (CYLINDER, CAPSULE) and abs(v[2]) == 1.0  # along z, in 2D: a disc
-    none = np.zeros((0, dim)), np.zeros((0, 2, dim)), 0.0
-    if kind == SPHERE or flat:
-        return c[None, :dim], none[1], radius
-    if kind == CAPSULE:
-        ends = np.array([c - half * v, c + half * v])[:, :dim]
-        return ends, (ends[None] if dim == 3 else none[1]), radius
-    if kind == BOX or (dim == 2 and kind == CYLINDER):
-        extent = v if kind == BOX else half * np.abs(v) + radius * (1.0 - np.abs(v))
-        if dim == 2:
-            corners = c[:2] + SIGNS[::2, :2] * extent[:2]
-            return corners, none[1], 0.0
-        corners = c + SIGNS * extent
-        return corners, corners[BOX_EDGES], 0.0
-    return none
 
 
 @kernel
@@ -122,9 +97,9 @@ class ObstacleEdges(Term):
         self._rows = self._cols = np.zeros(0, dtype=np.int64)
 
     @staticmethod
-    def needed(kind: int, dim: int) -> bool:
-        """Whether an obstacle of shape kind has features to keep the pieces from (module docstring)."""
-        return len(features(kind, np.array([0, 0, 0, 0, 0, 1.0, 1.0, 1.0]), dim)[0]) > 0
+    def needed(shape, dim: int) -> bool:
+        """Whether an obstacle of the shape has features to keep the pieces from (module docstring)."""
+        return len(shape.features(np.zeros(3), dim)[0]) > 0
 
     @property
     def reported_as(self) -> str:
@@ -132,7 +107,8 @@ class ObstacleEdges(Term):
         return self.contact.name
 
     def feature_set(self) -> tuple[np.ndarray, np.ndarray, float]:
-        return features(self.contact.kind, self.contact.parameters, self.dim)
+        """The obstacle's feature set where it is now (Shape.features at its moved position)."""
+        return self.contact.shape.features(self.contact.parameters[:3], self.dim)
 
     def reach(self, corners: np.ndarray) -> np.ndarray:
         """The least signed distance of the obstacle over each piece given by its corners (k, 3, d)

@@ -17,7 +17,7 @@ axis; all four are implemented, as one formula (I - n n^T - s t t^T) / r (s = 0,
 max_step(dx): for each node, the largest alpha at which x + alpha dx has not crossed the surface, by conservative
 advancement (t += d(x + t dx) / |dx|, never past the first contact since d is 1-Lipschitz), stopped when d falls
 below 1e-3 of its start (a bound just short of the contact) or t passes STEP_CAP (then inf: the solver never steps
-past 1); exact for the plane (d / -(dx . n)).
+past 1); exact, d / -(dx . n), for a shape whose d is affine in x (Shape.linear: the plane).
 
 The shape's kind is a runtime integer and its parameters a small float array (PARAMETERS), so the kernels compile
 once whatever the scene. A moving obstacle's translation from its placed position is set by set_offset.
@@ -46,7 +46,7 @@ from .friction import frictional
 from .held_object import HeldObject
 from .obstacle_distance import obstacle_reach, point_of, row3, signed_distance
 from .obstacle_edges import ObstacleEdges, ipctk_or_none
-from .obstacle_shapes import PLANE, Shape, vector
+from .obstacle_shapes import Shape, vector
 
 STEP_CAP = 4.0  # max_step's conservative advancement stops past this step fraction (inf)
 ADVANCES = 100  # and after this many advances (the bound reached, short of the contact)
@@ -105,18 +105,18 @@ def obstacle_derivatives(
 
 
 @kernel
-def obstacle_step(rest: Nodal, u: Nodal, dx: Nodal, verts: Indices, kind: ti.i32, p: Scalars) -> ti.f64:
+def obstacle_step(rest: Nodal, u: Nodal, dx: Nodal, verts: Indices, kind: ti.i32, p: Scalars, linear: ti.i32) -> ti.f64:
     """Largest alpha (a bound short of the contact; inf past STEP_CAP) at which no listed vertex moving along dx
-    has reached the obstacle."""
+    has reached the obstacle; linear: its d is affine in x, d(x + t m) = d(x) + t (m . n), the bound exact."""
     bound = ti.math.inf
     for k in range(verts.shape[0]):
         x = point_of(rest, u, verts[k])
         m = row3(dx, verts[k])
         speed = m.norm()
         if speed > 0:
-            d0 = signed_distance(x, kind, p)[0]
-            if kind == PLANE:
-                rate = m.dot(ti.Vector([p[3], p[4], p[5]]))
+            d0, n, _, _, _ = signed_distance(x, kind, p)
+            if linear:
+                rate = m.dot(n)
                 if rate < 0:
                     ti.atomic_min(bound, ti.max(d0, 0.0) / -rate)
             else:
@@ -149,7 +149,7 @@ class ObstacleContact(Term):
         """pieces: the body's surface as straight pieces (surface_pieces), which overlap() tests; sweep: the
         farthest it moves between two equilibria (the sub-steps of a run: BuiltScene.sweeps)."""
         self.config = config
-        self.name, self.kind = name, int(shape.kind)
+        self.name, self.shape, self.kind = name, shape, int(shape.kind)
         self.dhat, self.kappa, self.sweep = float(dhat), float(stiffness), float(sweep)
         self.placed = shape.parameters()
         self.parameters = self.placed.copy()
@@ -215,6 +215,7 @@ class ObstacleContact(Term):
             self.verts,
             self.kind,
             self.parameters,
+            int(self.shape.linear),
         )
         return math.inf if bound >= HUGE else float(bound)  # Taichi's inf comes back as the largest double
 
@@ -243,9 +244,10 @@ class ObstacleContact(Term):
 
     def overlap(self) -> str | None:
         """Where the obstacle overlaps the body in its current state, in words, or None. It does where m <= 0 (reach:
-        a piece of the surface touches or enters it), or where its centre c, inside it (d(c) < 0; a plane has
-        none), lies inside the body: winding(c) = 1 (the obstacle wholly inside the body, its surface crossing no
-        piece). A bounded convex obstacle meets the body's interior only so (its interior is connected)."""
+        a piece of the surface touches or enters it), or where its centre c (its parameters' position), inside it
+        (d(c) < 0), lies inside the body: winding(c) = 1 (the obstacle wholly inside the body, its surface crossing
+        no piece). A bounded convex obstacle meets the body's interior only so (its interior is connected); an
+        unbounded one cannot lie wholly inside the body, so m <= 0 finds it (a plane's point is on it: d(c) = 0)."""
         d = self.config.dim
         m, x = self.reach()
         where = ", ".join(f"{v:.4g}" for v in x[:d])
@@ -254,8 +256,6 @@ class ObstacleContact(Term):
                 f"obstacle {self.name!r} overlaps the body: the body's surface reaches {-m:.3g} into it at ({where})"
                 f"{self.moved}"
             )
-        if self.kind == PLANE:
-            return None
         centre = self.parameters[:3].copy()
         centre[d:] = 0.0  # a 2D scene's cross-section at z = 0: its point nearest the centre
         alone = (centre[None], np.zeros((1, 3)), int32s([0]))  # the centre as the one vertex of obstacle_energy
@@ -421,7 +421,7 @@ def obstacle_edges(contact: ObstacleContact, pieces: np.ndarray) -> list:
     """[ObstacleEdges]: the barrier between the obstacle's features and the body's surface pieces (their sides and
     faces, terms/obstacle_edges.py) where its shape has a feature set; [] for a plane, a 3D cylinder, or a 3D body
     where the IPC Toolkit is not installed (its nodes then hold the contact alone, with a warning)."""
-    if not ObstacleEdges.needed(contact.kind, contact.config.dim):
+    if not ObstacleEdges.needed(contact.shape, contact.config.dim):
         return []
     ipctk = ipctk_or_none() if contact.config.dim == 3 else None
     if contact.config.dim == 3 and ipctk is None:  # pragma: no cover - the [3d] extra installs it where it can
