@@ -19,6 +19,7 @@ import taichi_pneuma as tp
 from taichi_pneuma.apps.optimize import main
 from taichi_pneuma.study import LocalPool
 from taichi_pneuma.study.goals import Goals, NoValue, crossing
+from taichi_pneuma.study.optimize import InProcess
 
 CY = "chambers[0].center[1]"
 COARSE = ["--steps", "11", "--max-area", "0.01"]  # the reference beam in ~0.1 s a ramp (tests/test_study.py)
@@ -121,6 +122,25 @@ def test_a_local_refinement_reaches_the_constrained_bottom_exactly(tmp_path):
     assert -1e-5 < refined.best[CY] <= 0 and refined.best["material.E"] == pytest.approx(12000, abs=0.1)
     assert alone.best["objective_0"] > 0.25 * 1.01  # (what the refinement adds)
     assert len(refined.rows) == 30 and refined.rows[:15] == alone.rows[:15]  # the same TPE designs before it
+
+
+class ThreeAtOnce(InProcess):
+    """This process, asking the sampler for 3 designs a batch (as a pool of 3 workers would)."""
+
+    def capacity(self) -> int:
+        return 3
+
+
+def test_the_sampler_s_batches_stop_where_the_refinement_begins(tmp_path):
+    """10 trials, the last 5 refining, in batches of 3: the sampler runs exactly 5 designs (3 + 2), COBYQA the
+    other 5 (the bowl is not converged in 5), each refinement design marked so in the study."""
+    import optuna
+
+    tp.optimize(
+        BEAM, BOWL, minimize="tip_rotation", trials=10, refine=5, out=tmp_path, evaluate=bowl, executor=ThreeAtOnce()
+    )
+    trials = optuna.load_study(study_name="optimize", storage=f"sqlite:///{tmp_path / 'optimize.db'}").get_trials()
+    assert [bool(t.user_attrs.get("refine")) for t in trials] == [False] * 5 + [True] * 5
 
 
 def test_two_objectives_give_a_pareto_front_of_designs_none_dominates(tmp_path):
@@ -373,6 +393,13 @@ def test_a_refinement_killed_midway_replays_its_path_and_goes_on(tmp_path):
             "takes no --constraint",
         ),
         (["--vary", "cy=0:0.2", "--minimize", "tip_dy", "--workers", "0"], "--workers 0"),
+        (["--vary", "cy=0:0.2", "--minimize", "tip_dy", "--trials", "9", "--refine", "9"], "--refine 9: 0 to 8"),
+        (["--vary", "cy=0:0.2", "--minimize", "tip_dy", "--refine", "-1"], "--refine -1: 0 to 29"),
+        (
+            ["--vary", "cy=0:0.2", "--minimize", "tip_dy", "--maximize", "tip_dx", "--refine", "5"],
+            "--refine 5: a local refinement takes one objective",
+        ),
+        (["--vary", "cy=0,0.1", "--minimize", "tip_dy", "--refine", "5"], "a range of real numbers"),
         (["--vary", "cy=0:0.2", "--minimize", "tip_dy", "--name", "../x"], "cannot name the result files"),
     ],
 )

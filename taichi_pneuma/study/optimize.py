@@ -420,7 +420,11 @@ class Optimization:
                             if refinement is not None:
                                 refinement.run()
                         continue
-                    batch([study.ask(self.distributions) for _ in range(min(executor.capacity(), self.trials - done))])
+                    # the sampler's batches stop where the refinement's evaluations begin (the designs asked again
+                    # first, whatever the phase)
+                    limit = self.trials - (self.refine if not refined else 0)
+                    size = min(executor.capacity(), self.trials - done, max(limit - done, len(waiting), 1))
+                    batch([study.ask(self.distributions) for _ in range(size)])
                 status = "done" if not lost else "incomplete"
             finally:
                 report = self.write(study, status, described, ran, time.perf_counter() - start, lost)
