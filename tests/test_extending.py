@@ -16,9 +16,9 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Rectangle
 from taichi_pneuma.fem.supports import PointSet
-from taichi_pneuma.materials import MaterialForm, register_form
-from taichi_pneuma.materials.neo_hookean import YOUNGS_MODULUS
-from taichi_pneuma.materials.registry import NAMED, POISSON_RATIO, REGISTERED
+from taichi_pneuma.materials import LAW_FORMS, MaterialForm
+from taichi_pneuma.materials.neo_hookean import youngs_modulus_key
+from taichi_pneuma.materials.registry import poisson_ratio_key
 from taichi_pneuma.scene.build import Material, Scene
 from taichi_pneuma.scene.scenefile import key_reference, read_scene
 from taichi_pneuma.solve.simulate import run_schedule
@@ -88,11 +88,10 @@ def test_tip_load_bends_a_cantilever_as_timoshenko_predicts(tip_force_registered
 class SaintVenantKirchhoffMaterial(MaterialForm):
     """law = "saint_venant_kirchhoff": the Saint Venant-Kirchhoff law (tests/test_materials.py) of E and nu."""
 
-    youngs_modulus: float
-    poisson_ratio: float = 0.3
+    youngs_modulus: float = youngs_modulus_key()
+    poisson_ratio: float = poisson_ratio_key(0.3)
     selector = "law"
-    names = ("saint_venant_kirchhoff",)
-    keys = (YOUNGS_MODULUS, POISSON_RATIO)
+    name = "saint_venant_kirchhoff"
     summary = "a Saint Venant-Kirchhoff material (law = saint_venant_kirchhoff: E and nu)"
 
     def __post_init__(self):
@@ -104,10 +103,9 @@ class SaintVenantKirchhoffMaterial(MaterialForm):
 
 @pytest.fixture
 def saint_venant_kirchhoff_registered():
-    register_form(SaintVenantKirchhoffMaterial)  # the scene format lists the forms registered when it is used
+    LAW_FORMS.register(SaintVenantKirchhoffMaterial)  # the scene format lists the forms registered when it is used
     yield
-    del NAMED["law", "saint_venant_kirchhoff"]
-    REGISTERED.remove(SaintVenantKirchhoffMaterial)
+    del LAW_FORMS["saint_venant_kirchhoff"]
 
 
 def test_a_registered_material_form_is_read_checked_written_and_listed_by_the_scene_format(

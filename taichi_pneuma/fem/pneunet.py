@@ -38,6 +38,7 @@ class PneuNet:
     """The actuator's dimensions (see the module docstring); radius rounds the chambers' edges (0: sharp)."""
 
     chambers: int = 6
+    name = "pneunet"
     chamber_length: float = field(default=0.4, metadata=LENGTH_DEFAULT)
     chamber_height: float = field(default=0.5, metadata=LENGTH_DEFAULT)
     chamber_width: float = field(default=0.6, metadata=LENGTH_DEFAULT)
