@@ -66,6 +66,11 @@ def key(
     return dataclasses.field(default=default, metadata=metadata)
 
 
+def key_name(f: dataclasses.Field) -> str:
+    """The scene-file key of a dataclass field: its key(name=...), else the field's name."""
+    return f.metadata.get("name", f.name)
+
+
 def internal(default=None):
     """A dataclass field that is no scene-file key: the program sets it (default: its value until then)."""
     return dataclasses.field(default=default, metadata={"key": False})

@@ -34,7 +34,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..errors import PneumaInputError, require
-from ..io.registry import Registry, key
+from ..io.registry import Registry, key, key_name
 from ..io.units import PRESSURE
 from .law import Law
 
@@ -67,7 +67,7 @@ class MaterialForm:
     def key_fields(cls) -> dict[str, dataclasses.Field]:
         """Its scene-file keys but the selector, by name (key(name=...), else the field's), each its field, in the
         fields' order."""
-        keys = {f.metadata.get("name", f.name): f for f in dataclasses.fields(cls)}
+        keys = {key_name(f): f for f in dataclasses.fields(cls)}
         if cls.selector:
             keys.pop(cls.selector, None)
         return keys

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import PneumaInputError, require
+from ..io.registry import key_name
 from ..io.tomltext import dumps
 from ..io.units import UNITLESS, Units, default_in
 
@@ -294,11 +295,6 @@ def fields_table(cls, **entries) -> Table:
         cls=cls,
         doc=" ".join((cls.__doc__ or "").split("\n\n")[0].split()),
     )
-
-
-def key_name(f: dataclasses.Field) -> str:
-    """The scene-file key of a dataclass field: its key(name=...), else the field's name."""
-    return f.metadata.get("name", f.name)
 
 
 def field_entry(f: dataclasses.Field, hint, owner: str):
