@@ -115,9 +115,15 @@ RESULTS_PAGES = {
     ),
     "optimize_vs_grid": (
         "optimize",
-        "The design optimiser against a 100-point grid",
+        "The design optimiser against a 100-point grid: the 2D beam",
         ("benchmarks/optimize_vs_grid.py", None),
-        "python benchmarks/optimize_vs_grid.py",
+        "python benchmarks/optimize_vs_grid.py --problem 2d",
+    ),
+    "optimize_vs_grid_3d": (
+        "optimize",
+        "The design optimiser against a 100-point grid: the 3D fibre actuator (coarse mesh)",
+        ("benchmarks/optimize_vs_grid.py", None),
+        "python benchmarks/optimize_vs_grid.py --problem 3d --no-ray --refined-only",
     ),
     "render3d": (
         "performance",

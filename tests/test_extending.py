@@ -16,10 +16,12 @@ from taichi_pneuma.errors import PneumaInputError
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Rectangle
 from taichi_pneuma.fem.supports import PointSet
-from taichi_pneuma.materials import MaterialForm, register_form
-from taichi_pneuma.materials.neo_hookean import YOUNGS_MODULUS
-from taichi_pneuma.materials.registry import NAMED, POISSON_RATIO, REGISTERED
+from taichi_pneuma.io.registry import key
+from taichi_pneuma.materials import LAW_FORMS, MaterialForm
+from taichi_pneuma.materials.neo_hookean import youngs_modulus_key
+from taichi_pneuma.materials.registry import poisson_ratio_key
 from taichi_pneuma.scene.build import Material, Scene
+from taichi_pneuma.scene.material_keys import material_entries
 from taichi_pneuma.scene.scenefile import key_reference, read_scene
 from taichi_pneuma.solve.simulate import run_schedule
 from taichi_pneuma.terms.base import Term
@@ -88,11 +90,10 @@ def test_tip_load_bends_a_cantilever_as_timoshenko_predicts(tip_force_registered
 class SaintVenantKirchhoffMaterial(MaterialForm):
     """law = "saint_venant_kirchhoff": the Saint Venant-Kirchhoff law (tests/test_materials.py) of E and nu."""
 
-    youngs_modulus: float
-    poisson_ratio: float = 0.3
+    youngs_modulus: float = youngs_modulus_key()
+    poisson_ratio: float = poisson_ratio_key(0.3)
     selector = "law"
-    names = ("saint_venant_kirchhoff",)
-    keys = (YOUNGS_MODULUS, POISSON_RATIO)
+    name = "saint_venant_kirchhoff"
     summary = "a Saint Venant-Kirchhoff material (law = saint_venant_kirchhoff: E and nu)"
 
     def __post_init__(self):
@@ -104,10 +105,9 @@ class SaintVenantKirchhoffMaterial(MaterialForm):
 
 @pytest.fixture
 def saint_venant_kirchhoff_registered():
-    register_form(SaintVenantKirchhoffMaterial)  # the scene format lists the forms registered when it is used
+    LAW_FORMS.register(SaintVenantKirchhoffMaterial)  # the scene format lists the forms registered when it is used
     yield
-    del NAMED["law", "saint_venant_kirchhoff"]
-    REGISTERED.remove(SaintVenantKirchhoffMaterial)
+    del LAW_FORMS["saint_venant_kirchhoff"]
 
 
 def test_a_registered_material_form_is_read_checked_written_and_listed_by_the_scene_format(
@@ -129,6 +129,22 @@ def test_a_registered_material_form_is_read_checked_written_and_listed_by_the_sc
         scene.with_value("material.K", 1.0)
     with pytest.raises(PneumaInputError, match=r"nu = 0.5 must lie in \(-1, 0.5\)"):
         scene.with_value("material.nu", 0.5)
+
+
+def test_a_form_whose_key_differs_from_another_forms_key_of_that_name_is_refused(monkeypatch):
+    """Forms' keys of one name are one key (E, nu, K): a form declaring nu with another doc is refused, naming the
+    form and the key, when the [material] table lists its keys; the shipped forms agree (the table lists them)."""
+
+    @dataclass(frozen=True)
+    class OddRatio(MaterialForm):
+        poisson_ratio: float = key(0.3, "a ratio", name="nu")
+        selector = "law"
+        name = "odd_ratio"
+
+    assert list(material_entries()) == ["preset", "law", "E", "nu", "K", "C10", "C01", "C20", "C30"]
+    monkeypatch.setitem(LAW_FORMS, "odd_ratio", OddRatio)
+    with pytest.raises(ValueError, match="OddRatio: key 'nu' is Key.*doc='a ratio'.*the other forms'.*Poisson's ratio"):
+        material_entries()
 
 
 def test_every_python_block_of_the_page_is_code_the_tests_or_the_package_run():

@@ -113,7 +113,7 @@ def isochoric_materials(draw, presets: bool):
     """A form of the isochoric law with its coefficients, or (if presets) a preset, with K, nu or neither."""
     K, nu = draw(volumetric())
     if presets and draw(st.booleans()):
-        return PresetMaterial(draw(st.sampled_from(sorted(PRESETS))), K, nu)
+        return PresetMaterial(draw(st.sampled_from(sorted(PRESETS))), bulk_modulus=K, poisson_ratio=nu)
     law = draw(st.sampled_from(sorted(FORMS)))
     return IsochoricMaterial(law, **{c: draw(number(1e-3, 1e6)) for c in FORMS[law]}, bulk_modulus=K, poisson_ratio=nu)
 
@@ -288,6 +288,52 @@ def test_a_registered_part_is_read_written_converted_and_listed_from_its_one_dec
 
     with pytest.raises(ValueError, match="effect name 'reach_probe' is taken by Reach"):
         effects.register(Impostor)
+
+
+@dataclass(frozen=True)
+class Spot:
+    """A point of the Marks probe: the constructor requires it, a scene file leaving it out reads [1, 2]."""
+
+    at: tuple = registry.key(doc="[x, y]", omitted=(1.0, 2.0))
+
+
+@dataclass(frozen=True)
+class Marks(Effect):
+    """A probe of the idiom's other declarations: a tuple of dataclasses, a key named apart from its field, an
+    internal field."""
+
+    spots: tuple[Spot, ...] = ()
+    weight: float = registry.key(0.5, "how heavy", name="w")
+    seen: int = registry.internal(0)
+    name = "marks_probe"
+
+    def terms(self, config, mesh, lumped_area, budget) -> list:
+        return []
+
+
+def test_a_key_named_apart_from_its_field_read_otherwise_when_omitted_or_internal_is_read_as_declared(monkeypatch):
+    """key(name=...) is the scene-file key of a field of another name, key(omitted=...) what a file leaving the key
+    out reads where the constructor requires the field, internal() no key at all, and a tuple of dataclasses an
+    array of their tables: listed, read and written so (the scene reads back equal)."""
+    monkeypatch.setitem(EFFECTS, "marks_probe", Marks)
+    rows = {row.key: row for row in key_reference() if row.key.startswith("effects.marks_probe")}
+    assert sorted(rows) == [
+        "effects.marks_probe",
+        "effects.marks_probe.spots",
+        "effects.marks_probe.spots[].at",
+        "effects.marks_probe.w",
+    ]
+    assert (rows["effects.marks_probe.w"].doc, rows["effects.marks_probe.spots[].at"].default) == (
+        "how heavy",
+        "[1.0, 2.0]",
+    )
+    edits = {"effects.marks_probe.w": 2.0, "effects.marks_probe.spots": [{}, {"at": [3.0, 4.0]}]}
+    scene = tp.reference_scene().with_values(edits)
+    assert scene.effects == (Marks((Spot((1.0, 2.0)), Spot((3.0, 4.0))), 2.0),)
+    assert "w = 2.0" in scene.to_toml() and "weight" not in scene.to_toml() and "seen" not in scene.to_toml()
+    assert read_scene(tomllib.loads(scene.to_toml()), "x") == scene
+    with pytest.raises(TypeError, match="missing 1 required positional argument: 'at'"):
+        Spot()
 
 
 def test_effect_parameters_keep_their_declared_types(monkeypatch):

@@ -176,12 +176,16 @@ keyframes = [[2, 100.0]]
 [schedule]
 increments = 2
 """
+RECTANGLE = 'shape = "rectangle"\ncenter = [0.0, 0.0]\nsize = [3.5, 0.8]'
+UNION = 'shape = "union"\nrectangles = [{ center = [0.0, 0.0], size = [3.5, 0.8] }]'  # a rectangle's center, in a union
 BASES = [
     (tomllib.loads(text), dim)
     for text, dim in (
         (PLANAR, 2),
         *((PLANAR.replace('control = "area"\nstiffness = 1e5', kind), 2) for kind in KINDS.values()),
+        (PLANAR.replace(RECTANGLE, UNION), 2),
         (EXTRUDED, 3),
+        (EXTRUDED.replace(RECTANGLE, UNION), 3),
         (PNEUNET, 3),
         (HALF_CYLINDER, 3),
     )

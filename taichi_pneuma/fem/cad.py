@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 from ..errors import PneumaInputError, quoted, require
 from ..io.inputs import read_input
+from ..io.registry import internal, key
 from .gmsh_session import gmsh_module
 
 MAX_CAD_BYTES = 50_000_000
@@ -43,10 +44,11 @@ class StepPart:
     its folder), solid (its name; None: the file's only solid), metre (the scene's length unit in metres: the part
     is converted into it)."""
 
-    file: str
-    solid: str | None = None
-    metre: float | None = None
+    file: str = key(doc="the CAD file, relative to the scene file")
+    solid: str | None = key(None, "the solid's name (its label in the file); none: the file's only solid")
+    metre: float | None = internal()  # from the scene's units (scene/scene_keys.py in_units)
     content: str = field(init=False, default="")  # the file's SHA-256: the mesh cache's key reads it
+    name = "step"
 
     def __post_init__(self):
         require(isinstance(self.file, str) and self.file.strip() != "", f"file = {self.file!r} must name a CAD file")

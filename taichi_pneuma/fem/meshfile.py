@@ -30,6 +30,7 @@ import numpy as np
 
 from .. import limits
 from ..errors import PneumaInputError, quoted, require, require_distinct
+from ..io.registry import key
 from ..limits import Budget
 from .body import Body, SizeEstimate
 from .elements import FAMILIES
@@ -51,7 +52,8 @@ class MeshBody:
     """A body read from the mesh file `file` (kept as an absolute path: a relative one is taken from the
     current directory, a scene file's from the scene file's folder)."""
 
-    file: str
+    file: str = key(doc="the mesh file, relative to the scene file")
+    name = "mesh"
 
     def __post_init__(self):
         require(isinstance(self.file, str) and self.file.strip() != "", f"file = {self.file!r} must name a mesh file")
@@ -63,7 +65,8 @@ class MeshSurface:
     """A chamber wall: the triangles of the mesh file's group `group` (a closed cavity surface, or one left
     open on symmetry planes that roller planes hold)."""
 
-    group: str
+    group: str = key(doc="the group (gmsh physical group) of the wall's triangles")
+    name = "mesh_surface"
 
     def __post_init__(self):
         require(isinstance(self.group, str) and self.group != "", f"group = {self.group!r} must name a group")

@@ -21,16 +21,21 @@ The dataclass fields are the keys of the scene file's [body] table with shape = 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from ..errors import require, require_finite
-from ..io.units import LENGTH, unit
+from ..io.registry import key
+from ..io.units import LENGTH
 from .gmsh_mesher import MAX_SHAPES, Solid
 from .solids import Box, Cut, RoundedBox
 
 LAYER = "layer"
-# the defaults are the unitless pneunet_3d finger (4 long): a scene with units gives every length it uses
-LENGTH_DEFAULT = unit(LENGTH, scaled=False)
+
+
+def length(default: float):
+    """A length key whose default is the unitless pneunet_3d finger's (4 long): a scene with units gives every length
+    it uses (io/registry.py key, scaled=False)."""
+    return key(default, unit=LENGTH, scaled=False)
 
 
 @dataclass(frozen=True)
@@ -38,16 +43,17 @@ class PneuNet:
     """The actuator's dimensions (see the module docstring); radius rounds the chambers' edges (0: sharp)."""
 
     chambers: int = 6
-    chamber_length: float = field(default=0.4, metadata=LENGTH_DEFAULT)
-    chamber_height: float = field(default=0.5, metadata=LENGTH_DEFAULT)
-    chamber_width: float = field(default=0.6, metadata=LENGTH_DEFAULT)
-    radius: float = field(default=0.08, metadata=LENGTH_DEFAULT)
-    gap: float = field(default=0.1, metadata=LENGTH_DEFAULT)
-    wall: float = field(default=0.08, metadata=LENGTH_DEFAULT)
-    end: float = field(default=0.55, metadata=LENGTH_DEFAULT)
-    base: float = field(default=0.07, metadata=LENGTH_DEFAULT)
-    layer: float = field(default=0.15, metadata=LENGTH_DEFAULT)
-    slit: float = field(default=0.0, metadata=LENGTH_DEFAULT)
+    name = "pneunet"
+    chamber_length: float = length(0.4)
+    chamber_height: float = length(0.5)
+    chamber_width: float = length(0.6)
+    radius: float = length(0.08)
+    gap: float = length(0.1)
+    wall: float = length(0.08)
+    end: float = length(0.55)
+    base: float = length(0.07)
+    layer: float = length(0.15)
+    slit: float = length(0.0)
 
     def __post_init__(self):
         require(

@@ -8,6 +8,10 @@ mesh's boundary nodes there).
 Checking a geometry takes time and memory quadratic in its outline points, so a geometry has at most MAX_SHAPES
 chambers (a union at most MAX_SHAPES rectangles) and MAX_WALL_POINTS outline points in all (2000 points: 0.7 s and
 190 MB for the self-crossing test of one polygon).
+
+Each is a part of the scene file declared as every named part is (io/registry.py): its fields are the keys of its
+[body] or [[chambers]] table (key(): doc and unit), its class attribute name the table's `shape = "..."`, and it is
+registered in PLANAR_BODIES or PLANAR_CHAMBERS (a polygon in both), which scene/shape_keys.py reads.
 """
 
 from __future__ import annotations
@@ -17,10 +21,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import require, require_finite, shape_of
+from ..io.registry import Registry, key
+from ..io.units import LENGTH
 from .polygons import polygon_self_intersects, signed_area
 
 MAX_WALL_POINTS = 2000
 MAX_SHAPES = 64
+PAIR = "[x, y]"
+PLANAR_BODIES: Registry = Registry("2D body shape")  # shape = "..." of a 2D [body], in the order registered
+PLANAR_CHAMBERS: Registry = Registry("2D chamber shape")  # shape = "..." of a 2D [[chambers]]
 
 
 def _pair(name: str, value, positive: bool = False) -> tuple[float, float]:
@@ -31,12 +40,14 @@ def _pair(name: str, value, positive: bool = False) -> tuple[float, float]:
     return pair
 
 
+@PLANAR_BODIES.register
 @dataclass(frozen=True)
 class Rectangle:
     """An axis-aligned rectangle; its polygon starts at the bottom-left corner."""
 
-    center: tuple[float, float]
-    size: tuple[float, float]
+    center: tuple[float, float] = key(doc=PAIR, unit=LENGTH, omitted=(0.0, 0.0))
+    size: tuple[float, float] = key(doc="[width, height]", unit=LENGTH)
+    name = "rectangle"
 
     def __post_init__(self):
         _pair("center", self.center)
@@ -50,13 +61,15 @@ class Rectangle:
         )
 
 
+@PLANAR_CHAMBERS.register
 @dataclass(frozen=True)
 class Ellipse:
-    """Ellipse with semi-axes (a, b) about center, sampled at `points` angles from 0."""
+    """Ellipse with semi-axes (a, b) about center, sampled at `points` angles from 0 (128; a scene file's 64)."""
 
-    center: tuple[float, float]
-    semi_axes: tuple[float, float]
-    points: int = 128
+    center: tuple[float, float] = key(doc=PAIR, unit=LENGTH)
+    semi_axes: tuple[float, float] = key(doc="[a, b]", unit=LENGTH)
+    points: int = key(128, "wall points, 8 or more (2D)", omitted=64)
+    name = "ellipse"
 
     def __post_init__(self):
         _pair("center", self.center)
@@ -79,14 +92,16 @@ class Ellipse:
         return np.column_stack([cx + a * np.cos(t), cy + b * np.sin(t)])
 
 
+@PLANAR_CHAMBERS.register
 @dataclass(frozen=True)
 class RoundedRectangle:
     """Axis-aligned rectangle whose corners are quarter circles of `radius` (< half the shorter side)."""
 
-    center: tuple[float, float]
-    size: tuple[float, float]
-    radius: float
-    corner_points: int = 6
+    center: tuple[float, float] = key(doc=PAIR, unit=LENGTH)
+    size: tuple[float, float] = key(doc="[w, h]", unit=LENGTH)
+    radius: float = key(doc="corner radius, below half the shorter side", unit=LENGTH)
+    corner_points: int = key(6, "points per corner (2D)")
+    name = "rounded_rectangle"
 
     def __post_init__(self):
         _pair("center", self.center)
@@ -126,11 +141,14 @@ class RoundedRectangle:
         return o + r * d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
+@PLANAR_BODIES.register
+@PLANAR_CHAMBERS.register
 @dataclass(frozen=True)
 class Polygon:
     """A simple polygon given by its vertices (either orientation; stored counter-clockwise)."""
 
-    points: tuple
+    points: tuple = key(doc="[[x, y], ...], at least 3", unit=LENGTH)
+    name = "polygon"
 
     def __post_init__(self):
         pts = np.asarray(self.points, dtype=object)
@@ -150,11 +168,13 @@ class Polygon:
         return poly if signed_area(poly) > 0 else poly[::-1].copy()
 
 
+@PLANAR_BODIES.register
 @dataclass(frozen=True)
 class RectangleUnion:
     """The union of axis-aligned rectangles; it must form one region without holes."""
 
     rectangles: tuple[Rectangle, ...]
+    name = "union"
 
     def __post_init__(self):
         require(1 <= len(self.rectangles) <= MAX_SHAPES, f"rectangles must list 1 to {MAX_SHAPES} rectangles")

@@ -18,6 +18,10 @@ z the depth (a 2D shape in the x-y plane is extruded along z). Shapes are axis-a
   Rectangles, ellipses and rounded rectangles are built from their exact curves (the 2D shape's
   `points` sampling does not apply: the 3D mesh size does); any other shape from its polygon().
 
+The shapes a scene file names are parts declared as every named part is (io/registry.py): their fields its
+keys (key(): doc and unit), their class attribute name its `shape = "..."`, registered in SOLIDS (the shapes bodies
+and chambers share, in that order; scene/shape_keys.py reads them); the extrusion's profile is a 2D shape's table.
+
 Each shape's build(occ) adds it to the current gmsh model through gmsh.model.occ and returns the new
 volume's tag; gmsh itself is only imported by fem.gmsh_mesher, which calls these.
 """
@@ -30,9 +34,13 @@ from typing import Any
 import numpy as np
 
 from ..errors import require, require_finite, require_positive, shape_of
-from .shapes import Ellipse, Rectangle, RoundedRectangle
+from ..io.registry import Registry, key
+from ..io.units import LENGTH
+from .shapes import PLANAR_BODIES, PLANAR_CHAMBERS, Ellipse, Rectangle, RoundedRectangle
 
 AXES = ("x", "y", "z")
+TRIPLE = "[x, y, z]"
+SOLIDS: Registry = Registry("3D shape")  # shape = "..." of a 3D body or chamber, in the order registered
 
 
 def _vector(name: str, value, positive: bool = False) -> tuple[float, float, float]:
@@ -44,12 +52,14 @@ def _vector(name: str, value, positive: bool = False) -> tuple[float, float, flo
     return vector
 
 
+@SOLIDS.register
 @dataclass(frozen=True)
 class Box:
     """The axis-aligned box center +- size / 2."""
 
-    center: tuple[float, float, float]
-    size: tuple[float, float, float]
+    center: tuple[float, float, float] = key(doc=TRIPLE, unit=LENGTH)
+    size: tuple[float, float, float] = key(doc=TRIPLE, unit=LENGTH)
+    name = "box"
 
     def __post_init__(self):
         _vector("center", self.center)
@@ -60,14 +70,16 @@ class Box:
         return occ.addBox(*corner, *self.size)
 
 
+@SOLIDS.register
 @dataclass(frozen=True)
 class RoundedBox:
     """A box whose 12 edges are quarter cylinders and 8 corners eighth spheres of `radius`
     (0 < radius < half the shortest side)."""
 
-    center: tuple[float, float, float]
-    size: tuple[float, float, float]
-    radius: float
+    center: tuple[float, float, float] = key(doc=TRIPLE, unit=LENGTH)
+    size: tuple[float, float, float] = key(doc=TRIPLE, unit=LENGTH)
+    radius: float = key(doc="below half the shortest side", unit=LENGTH)
+    name = "rounded_box"
 
     def __post_init__(self):
         _vector("center", self.center)
@@ -100,31 +112,16 @@ class Cut:
         return cut[0][1]
 
 
-@dataclass(frozen=True)
-class Ellipsoid:
-    """The ellipsoid of semi-axes (a, b, c) along x, y, z about center."""
-
-    center: tuple[float, float, float]
-    semi_axes: tuple[float, float, float]
-
-    def __post_init__(self):
-        _vector("center", self.center)
-        _vector("semi_axes", self.semi_axes, positive=True)
-
-    def build(self, occ) -> int:
-        ball = occ.addSphere(*self.center, 1.0)
-        occ.dilate([(3, ball)], *self.center, *self.semi_axes)
-        return ball
-
-
+@SOLIDS.register
 @dataclass(frozen=True)
 class Cylinder:
     """A circular cylinder of `radius` and `length` along `axis` ('x', 'y' or 'z'), centred on center."""
 
-    center: tuple[float, float, float]
-    radius: float
-    length: float
-    axis: str = "z"
+    center: tuple[float, float, float] = key(doc=TRIPLE, unit=LENGTH)
+    radius: float = key(unit=LENGTH)
+    length: float = key(unit=LENGTH)
+    axis: str = key("z", "its axis", allowed=AXES)
+    name = "cylinder"
 
     def __post_init__(self):
         _vector("center", self.center)
@@ -137,6 +134,7 @@ class Cylinder:
         return occ.addCylinder(*(np.asarray(self.center) - direction / 2), *direction, self.radius)
 
 
+@SOLIDS.register
 @dataclass(frozen=True)
 class HalfCylinder:
     """The half y >= center y of the circular cylinder of `radius` and `length` along `axis` ('x' or 'z', normal to
@@ -146,12 +144,13 @@ class HalfCylinder:
     as a moulded chamber's are: a sharp edge of a pressurised chamber is a stress singularity whose elements
     fold first."""
 
-    center: tuple[float, float, float]
-    radius: float
-    length: float
-    axis: str = "x"
-    base: float = 0.0
-    fillet: float = 0.0
+    center: tuple[float, float, float] = key(doc=f"{TRIPLE}: the middle of the flat face", unit=LENGTH)
+    radius: float = key(unit=LENGTH)
+    length: float = key(unit=LENGTH)
+    axis: str = key("x", "its axis", allowed=("x", "z"))
+    base: float = key(0.0, "the height of a box under the flat face, as wide as the diameter", unit=LENGTH)
+    fillet: float = key(0.0, "the radius its edges are rounded to (0: sharp; with no base)", unit=LENGTH)
+    name = "half_cylinder"
 
     def __post_init__(self):
         _vector("center", self.center)
@@ -193,18 +192,38 @@ class HalfCylinder:
         return fused[1]
 
 
+@SOLIDS.register
+@dataclass(frozen=True)
+class Ellipsoid:
+    """The ellipsoid of semi-axes (a, b, c) along x, y, z about center."""
+
+    center: tuple[float, float, float] = key(doc=TRIPLE, unit=LENGTH)
+    semi_axes: tuple[float, float, float] = key(doc="[a, b, c]", unit=LENGTH)
+    name = "ellipsoid"
+
+    def __post_init__(self):
+        _vector("center", self.center)
+        _vector("semi_axes", self.semi_axes, positive=True)
+
+    def build(self, occ) -> int:
+        ball = occ.addSphere(*self.center, 1.0)
+        occ.dilate([(3, ball)], *self.center, *self.semi_axes)
+        return ball
+
+
 @dataclass(frozen=True)
 class Extrusion:
     """A 2D profile shape (in the x-y plane, with a polygon() method) swept along z over depth, centred on z."""
 
-    profile: object
-    depth: float
-    z: float = 0.0
+    profile: object  # its table is the 2D shapes' of the body or the chambers (scene/shape_keys.py extrusion)
+    depth: float = key(doc="its extent along z", unit=LENGTH)
+    z: float = key(0.0, "the z of its middle", unit=LENGTH)
+    name = "extrusion"
 
     def __post_init__(self):
         require(
             callable(getattr(self.profile, "polygon", None)),
-            f"profile = {self.profile!r} is not a 2D shape (rectangle, ellipse, rounded_rectangle, polygon or union)",
+            f"profile = {self.profile!r} is not a 2D shape ({', '.join({**PLANAR_BODIES, **PLANAR_CHAMBERS})})",
         )
         require_positive("depth", self.depth)
         require_finite("z", self.z)

@@ -39,12 +39,15 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import quoted, require, require_finite
+from ..io.registry import key
+from ..io.units import LENGTH
 from ..limits import Budget
 from .body import Body, SizeEstimate
 from .gmsh_mesher import MAX_TETS, MeshSizes, estimate_from_measures, read_tetrahedra, set_sizes
 from .gmsh_session import session
 from .mesh import Mesh
 from .meshfile import TRIANGLES, cells_of, read_mesh
+from .solids import TRIPLE
 from .supports import PointSet
 from .tetmesh import check_order, tet_mesh
 
@@ -58,8 +61,9 @@ class SurfaceBody:
     """A body bounded by the triangles of a surface file (module docstring): file (an absolute path, a scene file's
     relative to its folder) and scale (the length of one file unit in the scene's units)."""
 
-    file: str
-    scale: float
+    file: str = key(doc="the surface file, relative to the scene file")
+    scale: float = key(doc="the length of one file unit in the scene's units (required: the file has none)")
+    name = "surface"
 
     def __post_init__(self):
         require(
@@ -74,7 +78,8 @@ class SurfaceBody:
 class Cavity:
     """A chamber of a surface body: the cavity that encloses the point `inside` (in the scene's units)."""
 
-    inside: tuple[float, float, float]
+    inside: tuple[float, float, float] = key(doc=f"{TRIPLE}, a point in the cavity", unit=LENGTH)
+    name = "cavity"
 
     def __post_init__(self):
         require(

@@ -9,12 +9,16 @@ the name a scene file gives it; a Registry's decorator makes it known by that na
         center: tuple = key(doc="[x, y] (2D) or [x, y, z]", unit=LENGTH)
         radius: float = key(unit=LENGTH)
 
-A field's type is its annotation (float, int, str, bool, tuple or list; X | None as X) and key() declares the rest
-as the field's metadata: what it means (doc), the values it may take (allowed), its dimension (unit, io/units.py:
-a value in the scene's units) and the SI default that a default None stands for (si; scaled=False: a numerical
-default for unitless scenes, which a scene with units must give; units.si_default is key(si=..., unit=...) with no
-doc). The scene format's reader and writer (scene/fileformat.py dataclass_table), the Scene's unit conversion
-(units.defaults) and the key reference (docs/_generate.py) all read this one declaration.
+A field's type is its annotation (float, int, str, bool, tuple or list; X | None as X; a tuple of dataclasses,
+tuple[Rectangle, ...], an array of their tables) and key() declares the rest as the field's metadata: what it
+means (doc), the values it may take (allowed), its dimension (unit, io/units.py: a value in the scene's units), the
+SI default that a default None stands for (si; scaled=False: a numerical default for unitless scenes, which a scene
+with units must give; units.si_default is key(si=..., unit=...) with no doc), the key's name where it is not the
+field's (name: a material's "E" for youngs_modulus) and the value a scene file that leaves the key out reads where
+the constructor has none or another (omitted: a body rectangle's center). A field that is not a key (set by the
+program, as a CAD part's length unit from the scene's) is declared internal(). The scene format's reader and writer
+(scene/fileformat.py dataclass_table), the Scene's unit conversion (units.defaults) and the key reference
+(docs/_generate.py) all read this one declaration.
 
 A Registry is filled once, when the module defining its parts is imported (the registries are the package's only
 module-level tables that grow, and only by these decorators).
@@ -36,16 +40,40 @@ class Named(Protocol):
 Part = TypeVar("Part", bound=type[Named])
 
 
-def key(default=dataclasses.MISSING, doc: str = "", *, unit: str = "", scaled: bool = True, si=None, allowed=()):
+def key(
+    default=dataclasses.MISSING,
+    doc: str = "",
+    *,
+    unit: str = "",
+    scaled: bool = True,
+    si=None,
+    allowed=(),
+    name: str = "",
+    omitted=dataclasses.MISSING,
+):
     """A dataclass field declaring its scene-file key (the module docstring): default (none: the key is
-    required; with si, None), doc, unit, scaled, si and allowed as its metadata."""
+    required; with si, None), doc, unit, scaled, si, allowed, name and omitted as its metadata."""
     metadata: dict = {"doc": doc, "allowed": tuple(allowed)}
     if unit:
         metadata.update(unit_metadata(unit, scaled))
     if si is not None:
         metadata["si"] = si
         default = None
+    if name:
+        metadata["name"] = name
+    if omitted is not dataclasses.MISSING:
+        metadata["omitted"] = omitted
     return dataclasses.field(default=default, metadata=metadata)
+
+
+def key_name(f: dataclasses.Field) -> str:
+    """The scene-file key of a dataclass field: its key(name=...), else the field's name."""
+    return f.metadata.get("name", f.name)
+
+
+def internal(default=None):
+    """A dataclass field that is no scene-file key: the program sets it (default: its value until then)."""
+    return dataclasses.field(default=default, metadata={"key": False})
 
 
 class Registry(dict[str, Part]):

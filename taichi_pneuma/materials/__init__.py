@@ -7,30 +7,32 @@ by the elastic term's kernels and by the output fields alike.
 
 and the material forms by which a scene names them (registry.py): Material(E, nu) the stable neo-Hookean law,
 an IsochoricMaterial (a form of the polynomial law and its coefficients) or a silicone preset (presets.py) the
-polynomial one. A new law is a Law subclass decorated with @LAWS.register and a MaterialForm dataclass decorated with
-@register_form, in a module imported here; the tests check every registered law by finite differences.
+polynomial one. A new law is a Law subclass decorated with @LAWS.register and a MaterialForm dataclass, its fields
+its keys (io/registry.py key), decorated with @LAW_FORMS.register, in a module imported here; the tests check every
+registered law by finite differences.
 """
 
 from .isochoric import FORMS, IsochoricMaterial, IsochoricPolynomial, bulk_modulus
 from .law import LAWS, Law, cauchy_stresses
 from .neo_hookean import Material, StableNeoHookean, lame_parameters
 from .presets import PRESETS, PresetMaterial
-from .registry import MaterialForm, MaterialKey, register_form
+from .registry import LAW_FORMS, PRESET_FORMS, Compressible, MaterialForm
 
 __all__ = [
     "FORMS",
     "LAWS",
+    "LAW_FORMS",
     "PRESETS",
+    "PRESET_FORMS",
+    "Compressible",
     "IsochoricMaterial",
     "IsochoricPolynomial",
     "Law",
     "Material",
     "MaterialForm",
-    "MaterialKey",
     "PresetMaterial",
     "StableNeoHookean",
     "bulk_modulus",
     "cauchy_stresses",
     "lame_parameters",
-    "register_form",
 ]

@@ -46,30 +46,31 @@ or C30 may make it unstable, and such a law is refused naming the coefficient, t
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import MISSING, dataclass
 
 import numpy as np
 
 from ..backend import ti
 from ..errors import require, require_finite
+from ..io.registry import key
 from ..io.units import PRESSURE
 from .invariants import isochoric_gradients, isochoric_hessians, isochoric_invariants
 from .law import LAWS, Law
-from .registry import BULK_MODULUS, POISSON_RATIO, MaterialForm, MaterialKey, register_form
+from .registry import LAW_FORMS, Compressible
 
 FORMS = {"neo_hookean": ("C10",), "mooney_rivlin": ("C10", "C01"), "yeoh": ("C10", "C20", "C30")}
 COEFFICIENTS = ("C10", "C01", "C20", "C30")
 DEFAULT_POISSON_RATIO = 0.49  # when a material gives neither K nor nu: nearly incompressible, as silicones are
 STRETCHES = (1 / 3, 3.0)  # the principal stretches a law must be stable for (module docstring)
-COEFFICIENT_KEYS = tuple(
-    MaterialKey(
-        c,
-        c,
-        doc=f"coefficient of the isochoric law's {c} term (the forms taking it; none: 0, C10 required)",
+
+
+def coefficient_key(coefficient: str, default=MISSING):
+    """The field of the coefficient named `coefficient` (its key), in the scene's pressure unit."""
+    return key(
+        default,
+        f"coefficient of the isochoric law's {coefficient} term (the forms taking it; none: 0, C10 required)",
         unit=PRESSURE,
     )
-    for c in COEFFICIENTS
-)
 
 
 def path_invariants(lam: np.ndarray) -> dict:
@@ -175,23 +176,20 @@ def slopes(F, p):
     return p[0] + 2.0 * p[2] * a + 3.0 * p[3] * a * a, 2.0 * p[2] + 6.0 * p[3] * a, J
 
 
-@register_form
+@LAW_FORMS.register
 @dataclass(frozen=True)
-class IsochoricMaterial(MaterialForm):
+class IsochoricMaterial(Compressible):
     """A material of the isochoric law in one of its FORMS: coefficients in the scene's pressure unit (those
-    the form does not take are zero), and the bulk modulus K, or else Poisson's ratio nu (default 0.49).
-    A scene file names it by `law = "<form>"` (registry.py)."""
+    the form does not take are zero), and the bulk modulus K, or else Poisson's ratio nu (default 0.49; both
+    keyword-only, registry.py Compressible). A scene file names it by `law = "<form>"` (registry.py)."""
 
     law: str
-    C10: float
-    C01: float = 0.0
-    C20: float = 0.0
-    C30: float = 0.0
-    bulk_modulus: float | None = None
-    poisson_ratio: float | None = None
+    C10: float = coefficient_key("C10")
+    C01: float = coefficient_key("C01", 0.0)
+    C20: float = coefficient_key("C20", 0.0)
+    C30: float = coefficient_key("C30", 0.0)
     selector = "law"
-    names = tuple(FORMS)
-    keys = (POISSON_RATIO, BULK_MODULUS, *COEFFICIENT_KEYS)
+    name, aliases = tuple(FORMS)[0], tuple(FORMS)[1:]
     summary = (
         f"a form of the isochoric law (law = {', '.join(FORMS)}: C10, ... and K or nu, in the scene's pressure unit)"
     )
@@ -288,6 +286,6 @@ class IsochoricMaterial(MaterialForm):
             factor * self.C01,
             factor * self.C20,
             factor * self.C30,
-            None if self.bulk_modulus is None else factor * self.bulk_modulus,
-            self.poisson_ratio,
+            bulk_modulus=None if self.bulk_modulus is None else factor * self.bulk_modulus,
+            poisson_ratio=self.poisson_ratio,
         )

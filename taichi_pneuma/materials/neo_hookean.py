@@ -36,21 +36,24 @@ and three scaling modes U diag(a) V^T for the eigenvectors a of the 3 x 3 Hessia
 
 (at s = (s1, s2, 1) the twist and flip of axis z are the in-plane modes of the 2D system above).
 
-A scene names the law by Material(E, nu), the default material form (registry.py: a [material] table naming
-no law or preset).
+A scene names the law by Material(E, nu), the default material form (registry.py DEFAULT_FORM: a [material] table
+naming no law or preset).
 """
 
-from dataclasses import dataclass
+from dataclasses import MISSING, dataclass
 
 import numpy as np
 
 from ..backend import ti
 from ..errors import require, require_finite
-from ..io.units import PRESSURE, si_default
+from ..io.registry import key
+from ..io.units import PRESSURE
 from .eigen import SQRT_HALF, rotation_variant_svd, symmetric_eigensystem
 from .invariants import cofactor, determinant_hessian, flat
 from .law import LAWS, Law
-from .registry import POISSON_RATIO, MaterialForm, MaterialKey, register_form, selector_names
+from .registry import DEFAULT_FORM, MaterialForm, poisson_ratio_key, selector_names
+
+DEFAULT_YOUNGS_MODULUS = 1e4  # Pa: Material's E when a scene gives none (in the scene's units)
 
 
 def lame_parameters(youngs_modulus, poisson_ratio):
@@ -173,20 +176,21 @@ def solid_eigensystem(F, p):
     return values, vectors
 
 
-YOUNGS_MODULUS = MaterialKey(
-    "E", "youngs_modulus", doc="Young's modulus of the stable neo-Hookean material, > 0", unit=PRESSURE, si=1e4
-)
+def youngs_modulus_key(default=MISSING, si=None):
+    """The field of a form's Young's modulus, key E (default: none, the key is required; si: the SI value a
+    default None stands for, units.si_default)."""
+    return key(default, "Young's modulus of the stable neo-Hookean material, > 0", unit=PRESSURE, si=si, name="E")
 
 
-@register_form
+@DEFAULT_FORM.register
 @dataclass(frozen=True)
 class Material(MaterialForm):
     """Isotropic material of the stable neo-Hookean law: Young's modulus E > 0 (None: 1e4 Pa in the scene's
     units, set by the Scene), Poisson's ratio -1 < nu < 0.5."""
 
-    youngs_modulus: float | None = si_default(YOUNGS_MODULUS.si, YOUNGS_MODULUS.unit)
-    poisson_ratio: float = 0.45
-    keys = (YOUNGS_MODULUS, POISSON_RATIO)
+    youngs_modulus: float | None = youngs_modulus_key(si=DEFAULT_YOUNGS_MODULUS)
+    poisson_ratio: float = poisson_ratio_key(0.45)
+    name = StableNeoHookean.name
     summary = "the stable neo-Hookean one of E and nu (no law or preset)"
 
     def __post_init__(self):
@@ -200,7 +204,7 @@ class Material(MaterialForm):
     @classmethod
     def form_keys(cls, values: dict) -> dict:
         """E and nu, with the values a scene file that gives neither writes (unitless)."""
-        return {"E": YOUNGS_MODULUS.si, "nu": cls.poisson_ratio}
+        return {"E": DEFAULT_YOUNGS_MODULUS, "nu": cls.poisson_ratio}
 
     @classmethod
     def refusal(cls, extra: list[str], values: dict) -> str:

@@ -33,7 +33,7 @@ import numpy as np
 from ..errors import PneumaInputError, require, require_finite
 from .isochoric import IsochoricMaterial, IsochoricPolynomial
 from .law import Law
-from .registry import BULK_MODULUS, POISSON_RATIO, MaterialForm, register_form
+from .registry import PRESET_FORMS, Compressible
 
 
 @dataclass(frozen=True)
@@ -101,18 +101,16 @@ PRESETS = {
 }
 
 
-@register_form
+@PRESET_FORMS.register
 @dataclass(frozen=True)
-class PresetMaterial(MaterialForm):
+class PresetMaterial(Compressible):
     """A scene's material from a preset: its name, and optionally a bulk modulus (in the scene's pressure unit) or
-    a Poisson's ratio replacing the preset's own. A scene file names it by `preset = "<name>"` (registry.py)."""
+    a Poisson's ratio replacing the preset's own (keyword-only, registry.py Compressible). A scene file names it by
+    `preset = "<name>"` (registry.py)."""
 
     preset: str
-    bulk_modulus: float | None = None
-    poisson_ratio: float | None = None
     selector = "preset"
-    names = tuple(PRESETS)
-    keys = (POISSON_RATIO, BULK_MODULUS)
+    name, aliases = tuple(PRESETS)[0], tuple(PRESETS)[1:]
     summary = "a preset (docs/materials.md)"
 
     def __post_init__(self):
@@ -140,7 +138,13 @@ class PresetMaterial(MaterialForm):
         if self.bulk_modulus is None and self.poisson_ratio is None:
             return base
         return IsochoricMaterial(
-            base.law, base.C10, base.C01, base.C20, base.C30, self.bulk_modulus, self.poisson_ratio
+            base.law,
+            base.C10,
+            base.C01,
+            base.C20,
+            base.C30,
+            bulk_modulus=self.bulk_modulus,
+            poisson_ratio=self.poisson_ratio,
         )
 
     def law_parameters(self, units) -> tuple[type[Law], np.ndarray]:

@@ -21,7 +21,7 @@ keys; io/tomltext.py reads and writes the TOML text, within limits).
                                       dataclass) of further keys its table has; choose(object) names the
                                       option an object is written as
     Named(registry)                   optional tables named by a registry of dataclasses, in the file's order;
-                                      a dataclass's fields are its keys, typed by their annotations
+                                      a dataclass's fields are its keys, typed by their annotations (fields_table)
 
 Reading checks every key's type, refuses unknown keys, and prefixes an error a constructor raises with
 the table's dotted path (``chambers[1]: ...``).
@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import PneumaInputError, require
+from ..io.registry import key_name
 from ..io.tomltext import dumps
 from ..io.units import UNITLESS, Units, default_in
 
@@ -272,35 +273,61 @@ def record(cls, doc: str = "", **keys) -> Table:
 
 @functools.cache  # a function of the class alone (a memo: nothing to invalidate when parts register)
 def dataclass_table(cls) -> Table:
-    """A table of every field of the dataclass cls, typed by its annotation (float, int, str, bool, tuple, list;
-    X | None, a units.si_default field's, as X), its doc, allowed values, unit and SI default the field's metadata
-    (io/registry.py key)."""
+    """The table of the dataclass cls: fields_table(cls)."""
+    return fields_table(cls)
+
+
+def fields_table(cls, **entries) -> Table:
+    """A table whose keys are the fields of the dataclass cls (those the constructor takes, but internal() ones,
+    io/registry.py), each its field_entry, or the entry given for it in entries (a field whose table depends on
+    where it is used: an extrusion's profile); its doc the first paragraph of the class's docstring."""
     hints = typing.get_type_hints(cls)
-    keys = {}
-    for f in dataclasses.fields(cls):
-        hint = hints[f.name]
-        if isinstance(hint, types.UnionType):
-            (hint,) = (arg for arg in typing.get_args(hint) if arg is not type(None))
-        kind = typing.get_origin(hint) or hint
-        if kind not in TYPE_NAMES:
-            raise TypeError(f"{cls.__name__}.{f.name}: {hints[f.name]} has no scene-file form")
-        default = (
-            f.default
-            if f.default is not dataclasses.MISSING
-            else f.default_factory()
-            if f.default_factory is not dataclasses.MISSING
-            else REQUIRED
-        )
-        keys[f.name] = Key(
-            kind,
-            default,
-            f.metadata.get("doc", ""),
-            f.metadata.get("allowed", ()),
-            unit=f.metadata.get("unit", ""),
-            scaled=f.metadata.get("scaled", True),
-            si=f.metadata.get("si"),
-        )
-    return record(cls, " ".join((cls.__doc__ or "").split("\n\n")[0].split()), **keys)
+    fields = [f for f in dataclasses.fields(cls) if f.init and f.metadata.get("key", True)]
+    names = {f.name: key_name(f) for f in fields}
+    keys = {
+        names[f.name]: entries[f.name] if f.name in entries else field_entry(f, hints[f.name], cls.__name__)
+        for f in fields
+    }
+    return Table(
+        keys,
+        make=lambda values: cls(**{field: values[name] for field, name in names.items()}),
+        parts=lambda obj: {name: getattr(obj, field) for field, name in names.items()},
+        cls=cls,
+        doc=" ".join((cls.__doc__ or "").split("\n\n")[0].split()),
+    )
+
+
+def field_entry(f: dataclasses.Field, hint, owner: str):
+    """The entry of the dataclass field f of annotation hint (of the class named owner): an array of tables for a
+    tuple of dataclasses (tuple[Rectangle, ...]), else a Key typed by the annotation (float, int, str, bool, tuple,
+    list; X | None, a units.si_default field's, as X), its default the field's (key(omitted=...): the value a file
+    leaving it out reads), its doc, allowed values, unit and SI default the field's metadata (io/registry.py key)."""
+    if isinstance(hint, types.UnionType):
+        (hint,) = (arg for arg in typing.get_args(hint) if arg is not type(None))
+    kind, args = typing.get_origin(hint) or hint, typing.get_args(hint)
+    item = args[0] if kind is tuple and args[1:] == (Ellipsis,) else None
+    if isinstance(item, type) and dataclasses.is_dataclass(item):
+        return Tables(dataclass_table(item), f.metadata.get("doc", ""))
+    if kind not in TYPE_NAMES:
+        raise TypeError(f"{owner}.{f.name}: {hint} has no scene-file form")
+    default = (
+        f.metadata["omitted"]
+        if "omitted" in f.metadata
+        else f.default
+        if f.default is not dataclasses.MISSING
+        else f.default_factory()
+        if f.default_factory is not dataclasses.MISSING
+        else REQUIRED
+    )
+    return Key(
+        kind,
+        default,
+        f.metadata.get("doc", ""),
+        f.metadata.get("allowed", ()),
+        unit=f.metadata.get("unit", ""),
+        scaled=f.metadata.get("scaled", True),
+        si=f.metadata.get("si"),
+    )
 
 
 def read_keys(keys: dict, data: dict, path: str, known: set, system: System) -> dict:

@@ -1,17 +1,18 @@
 """The scene file's [material] table and its regions (material.regions = [{...}, ...]), declared with
-fileformat.py's entries: the union of the keys of every registered material form (materials/registry.py), listed
-when the table is used, so that a form registered after this module is imported is read, written, edited and
-documented like the others.
+fileformat.py's entries: the union of the keys of every registered material form (materials/registry.py), read off
+their fields (fileformat.field_entry, as every registered part's keys are) when the table is used, so that a form
+registered after this module is imported is read, written, edited and documented like the others.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
+import typing
 
 from ..io.units import LENGTH
-from ..materials.registry import SELECTORS, all_keys, form_of, forms, region_values
-from .fileformat import REQUIRED, Key, Table, Tables, build
+from ..materials.registry import SELECTORS, form_of, forms, region_values, selector_names
+from .fileformat import REQUIRED, Key, Table, Tables, build, field_entry
 from .region import Region
 from .shape_keys import BOX
 
@@ -19,9 +20,19 @@ MATERIAL_TAGS = tuple(SELECTORS)  # the keys choosing a material's form (materia
 
 
 def material_entries() -> dict[str, Key]:
-    """The [material] table's keys: those of every material form registered now (materials/registry.py), each
-    optional."""
-    return {name: Key(key.type, None, key.doc, key.allowed, key.unit, si=key.si) for name, key in all_keys().items()}
+    """The [material] table's keys, each optional: the selectors (their allowed values the names registered
+    under them), then the keys of every material form registered now (materials/registry.py), in the order of
+    forms() and of each form's fields; a key several forms take must be the same but for its default (a
+    ValueError names the form that differs)."""
+    keys = {s: Key(str, None, doc, selector_names(s)) for s, doc in SELECTORS.items()}
+    for form in forms():
+        hints = typing.get_type_hints(form)
+        for name, f in form.key_fields().items():
+            entry = dataclasses.replace(field_entry(f, hints[f.name], form.__name__), default=None)
+            known = keys.setdefault(name, entry)
+            if dataclasses.replace(known, si=None) != dataclasses.replace(entry, si=None):
+                raise ValueError(f"{form.__name__}: key {name!r} is {entry}, the other forms' {known}")
+    return keys
 
 
 def material_kind(keys: dict) -> dict:
@@ -42,7 +53,7 @@ def material_of(keys: dict):
 
 def material_keys(material) -> dict:
     """The [material] (or region) keys of a material, None where absent: material_of's inverse."""
-    return {**dict.fromkeys(all_keys()), **material.scene_values()}
+    return {**dict.fromkeys(material_entries()), **material.scene_values()}
 
 
 def region_entries() -> dict:
