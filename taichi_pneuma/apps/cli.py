@@ -427,13 +427,18 @@ def render_report(export, seconds_per_step: float) -> str:
     )
 
 
-def apply_set(scene, assignments: list[str]):
-    """The scene with every --set KEY=VALUE applied (validated once, like a scene file)."""
+def set_values(assignments: list[str]) -> dict:
+    """{dotted key: value} of every --set KEY=VALUE."""
     from ..scene.dotted_edits import parse_assignment
 
+    return dict(parse_assignment(text) for text in assignments)
+
+
+def apply_set(scene, assignments: list[str]):
+    """The scene with every --set KEY=VALUE applied (validated once, like a scene file)."""
     if not assignments:
         return scene
-    values = dict(parse_assignment(text) for text in assignments)
+    values = set_values(assignments)
     try:
         return scene.with_values(values)
     except PneumaInputError as exc:

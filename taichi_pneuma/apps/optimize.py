@@ -31,9 +31,18 @@ import argparse
 import sys
 
 from .. import limits
+from ..errors import require
 from ..io.keys import SHORT_KEYS
 from ..io.output import check_stem, lock_stem, prepare_directory
-from .cli import add_ramp_arguments, app_parser, exit_code, scene_of_flags
+from .cli import (
+    add_ramp_arguments,
+    app_parser,
+    check_flags,
+    check_scene,
+    exit_code,
+    scene_of_flags,
+    set_values,
+)
 from .workers import add_executor_arguments, executor_of, run_options
 
 
@@ -52,6 +61,12 @@ def parser() -> argparse.ArgumentParser:
         default=None,
         help="the base scene file (TOML) or the name of a shipped scene; without it the reference beam of the "
         "flags (--cy --cx --growth --steps --E --nu --k --max-area --order)",
+    )
+    p.add_argument(
+        "--template",
+        metavar="FILE.py",
+        help="instead of a scene: a Python file whose scene(**parameters) returns each design's Scene (a CAD part "
+        "written for the parameters, say); --vary names its parameters (docs: Optimising a design)",
     )
     p.add_argument(
         "--vary",
@@ -123,18 +138,36 @@ def trial_line(row: dict, labels: list[str], keys: list[str], objectives: list[s
 
 
 def run(args: argparse.Namespace) -> dict:
-    from ..study import parse_vary
+    from ..study import SceneTemplate, parse_vary
     from ..study.goals import Goals
     from ..study.optimize import Optimization
 
     axes = [parse_vary(text) for text in args.vary]
-    base = scene_of_flags(args)
+    template = None
+    if args.template is not None:
+        require(args.scene is None, f"--template {args.template} replaces the scene {args.scene!r}: give one of them")
+        check_flags(args)  # (the solver's flags, as a scene's)
+        template = SceneTemplate.read(args.template, set_values(args.set))
+        base = template.build({})
+        check_scene(base, args)
+    else:
+        base = scene_of_flags(args)
     goals = Goals.parse(base, args.objectives, args.constraint)
     executor = executor_of(args, here=False)
     out = prepare_directory(args.out)
     with lock_stem(out, check_stem(args.name)):
         optimization = Optimization(
-            base, axes, goals, out, args.name, args.trials, args.sampler, args.seed, run_options(args), args.refine
+            base,
+            axes,
+            goals,
+            out,
+            args.name,
+            args.trials,
+            args.sampler,
+            args.seed,
+            run_options(args),
+            args.refine,
+            template,
         )
         return run_study(args, optimization, executor)
 

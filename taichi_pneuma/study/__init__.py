@@ -7,13 +7,15 @@ each run a task on a local process pool or on Ray, one CSV row per run (pneuma-s
         report = sweep.run(pool, on_row=print)
 
 vary.py: the varied keys and the planned runs; task.py: one run; executors.py: the process pool and Ray;
-table.py: the CSV, written and read back to resume; figure.py: the plot; sweep.py: the study (Sweep).
+table.py: the CSV, written and read back to resume; figure.py: the plot; sweep.py: the study (Sweep);
+template.py: a Python file whose scene(**parameters) makes each design (an optimisation's CAD parameters).
 """
 
 from .executors import LocalPool, RayCluster
 from .figure import study_figure
 from .sweep import Report, Sweep
 from .task import RunOptions, Task, run_task
+from .template import SceneTemplate
 from .vary import Axis, check_axes, parse_vary, plan
 
 __all__ = [
@@ -22,6 +24,7 @@ __all__ = [
     "RayCluster",
     "Report",
     "RunOptions",
+    "SceneTemplate",
     "Sweep",
     "Task",
     "check_axes",

@@ -10,13 +10,11 @@ from __future__ import annotations
 import io
 import json
 import time
-import tomllib
 from contextlib import redirect_stdout
 
 from .. import runtime
 from ..errors import PneumaInputError
 from ..fem import sizing
-from ..scene.scenefile import read_scene
 from ..solve.simulate import RampStopped
 from .task import Task, one_line
 
@@ -49,7 +47,7 @@ def evaluate_design(task: Task) -> dict:
     try:
         with redirect_stdout(io.StringIO()):  # ti.init prints its arch, once per worker
             runtime.init(task.options.arch, cpu_threads=1)
-        scene = read_scene(tomllib.loads(task.scene), "scene").with_values(task.values)
+        scene = task.design()
         o = task.options
         sizing.check_scene(scene, o.max_triangles, o.max_increments, o.max_fibers, o.max_obstacles)
         result = simulate(

@@ -43,15 +43,17 @@ from .refine import Refinement, start_of, worst_of
 from .sweep import DEFAULT_OPTIONS, machine, versions
 from .table import is_number, write_table
 from .task import RunOptions, Task
+from .template import SceneTemplate
 from .vary import Axis, check_axes, parse_vary
 
 SAMPLERS = ("tpe", "cmaes", "nsga2")
 MAX_TRIALS = 100_000
 
 
-def check_variables(base: Scene, axes: list[Axis]) -> list[Axis]:
+def check_variables(base: Scene, axes: list[Axis], template: SceneTemplate | None = None) -> list[Axis]:
     """The axes as an optimiser's variables: each a range LO:HI (LO < HI; integers if both ends are) or a list of
-    choices (numbers, words, true/false), its key one the base scene takes (vary.check_axes)."""
+    choices (numbers, words, true/false), its key one the base scene takes (vary.check_axes) or, with a template,
+    one of its scene()'s parameters."""
     require(len(axes) >= 1, "an optimisation varies at least one key (--vary KEY=LO:HI)")
     for axis in axes:
         where = f"--vary {axis.key}={axis.spec}"
@@ -64,6 +66,10 @@ def check_variables(base: Scene, axes: list[Axis]) -> list[Axis]:
                 all(is_number(v) or isinstance(v, (str, bool)) for v in axis.items),
                 f"{where}: a list of choices holds numbers, words or true/false",
             )
+    if template is not None:
+        require(len({a.key for a in axes}) == len(axes), "a key is varied twice")
+        template.check([a.key for a in axes])
+        return axes
     return check_axes(base, axes)
 
 
@@ -152,9 +158,10 @@ class Optimization:
         seed: int = 0,
         options: RunOptions = DEFAULT_OPTIONS,
         refine: int = 0,
+        template: SceneTemplate | None = None,
     ):
         require(isinstance(trials, int) and 1 <= trials <= MAX_TRIALS, f"--trials {trials!r}: 1 to {MAX_TRIALS}")
-        self.axes = check_variables(base, axes)
+        self.axes = check_variables(base, axes, template)
         require(
             isinstance(refine, int) and 0 <= refine < trials,
             f"--refine {refine!r}: 0 to {trials - 1} (fewer than --trials {trials})",
@@ -180,9 +187,10 @@ class Optimization:
             "base_scene": self.scene_toml,
             "options": asdict(options),
             **({"refine": refine} if refine else {}),  # (a study without one keeps its identity)
+            **({"template_sha256": template.sha256} if template else {}),
         }
         make_sampler(sampler, goals, trials, seed)  # refuses what the sampler cannot do, before any file
-        self.sampler_name, self.seed, self.refine = sampler, seed, refine
+        self.sampler_name, self.seed, self.refine, self.template = sampler, seed, refine, template
         self.folder = self.out / self.name
         self.db, self.csv, self.json = (self.out / f"{self.name}{s}" for s in (".db", ".csv", ".json"))
         self.trace_png, self.pareto_png = self.out / f"{self.name}_trace.png", self.out / f"{self.name}_pareto.png"
@@ -389,7 +397,10 @@ class Optimization:
 
             def batch(asked: list) -> None:
                 nonlocal ran, done, lost
-                tasks = [Task(self.scene_toml, {k: t.params[k] for k in self.keys}, self.options) for t in asked]
+                tasks = [
+                    Task(self.scene_toml, {k: t.params[k] for k in self.keys}, self.options, self.template)
+                    for t in asked
+                ]
                 for index, row in executor.run(tasks, function):
                     self.tell(study, asked[index], row)
                     if row is None:
@@ -432,7 +443,7 @@ class Optimization:
 
 
 def optimize(
-    scene: Scene,
+    scene: Scene | SceneTemplate,
     variables,
     *,
     minimize: str | Sequence[str] = (),
@@ -451,6 +462,9 @@ def optimize(
     (OptimizationReport: .best, the best feasible evaluation's row with its values by dotted key
     and objective_0; .pareto, for two objectives; .rows, every evaluation; .files).
 
+    scene: the base scene, or a study.SceneTemplate (SceneTemplate.read("part.py"): the variables are its
+    scene()'s parameters, each design the Scene it returns; study/template.py).
+
     variables: {key: (low, high)} (integers if both are) or a list of pneuma-optimize's --vary texts
     ("KEY=LO:HI", "KEY=v1,v2"); minimize, maximize: one expression each, or a list (the minimised first, two in
     all at most); constraints: "EXPR<=VALUE" or "EXPR>=VALUE" texts; sampler: "tpe", "cmaes" or "nsga2"; refine:
@@ -464,8 +478,10 @@ def optimize(
     )
     listed = [[e] if isinstance(e, str) else list(e) for e in (minimize, maximize)]
     objectives = [("minimize", e) for e in listed[0]] + [("maximize", e) for e in listed[1]]
-    goals = Goals.parse(scene, objectives, list(constraints))
     axes = [parse_vary(t) for t in texts]
-    optimization = Optimization(scene, axes, goals, out, name, trials, sampler, seed, refine=refine)
+    template = scene if isinstance(scene, SceneTemplate) else None
+    base: Scene = scene.build({}) if isinstance(scene, SceneTemplate) else scene
+    goals = Goals.parse(base, objectives, list(constraints))
+    optimization = Optimization(base, axes, goals, out, name, trials, sampler, seed, refine=refine, template=template)
     with executor if executor is not None else InProcess() as entered:
         return optimization.run(entered, evaluate or evaluate_design)

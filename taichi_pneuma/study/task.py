@@ -20,6 +20,7 @@ from ..fem.tip import COLUMNS as TIP_COLUMNS
 from ..scene.scenefile import read_scene
 from ..solve.newton import NewtonOptions
 from ..solve.simulate import MAX_CUTS, RampStopped
+from .template import SceneTemplate
 
 MAX_ERROR = 1_000  # characters of a run's error kept in its row
 
@@ -41,8 +42,15 @@ class RunOptions:
 @dataclass(frozen=True)
 class Task:
     scene: str  # the base scene's TOML text
-    values: dict  # dotted key -> value
+    values: dict  # dotted key -> value (a template's: its parameter -> value)
     options: RunOptions = field(default_factory=RunOptions)
+    template: SceneTemplate | None = None  # the design is template.build(values), not the base scene edited
+
+    def design(self):
+        """The Scene of this run: the template's, or the base scene with the values set."""
+        if self.template is not None:
+            return self.template.build(self.values)
+        return read_scene(tomllib.loads(self.scene), "scene").with_values(self.values)
 
 
 def one_line(exc: BaseException) -> str:
