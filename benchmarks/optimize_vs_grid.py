@@ -101,6 +101,7 @@ def grid(base, goals: Goals, executor, variables: list[str]) -> dict:
         "feasible": len(feasible),
         "best": best,
         "wall_s": time.perf_counter() - start,
+        "designs": scored,
     }
 
 
@@ -125,6 +126,7 @@ def optimise(base, goals: Goals, executor, variables: list[str], seed: int, refi
         "as_good": best is not None and best["objective_0"] <= target + 1e-12,
         "reached_at": reached,
         "wall_s": wall,
+        "rows": [{k: r[k] for k in (*optimization.keys, "objective_0", "feasible", "error")} for r in report.rows],
     }
 
 
