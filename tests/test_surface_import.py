@@ -106,7 +106,7 @@ def test_an_unusable_surface_is_one_line(tmp_path):
         box_geometry(path, twice).mesh()
     with pytest.raises(PneumaInputError, match=r"scale = -1.0 must be > 0"):
         SurfaceBody(path, -1.0)
-    with pytest.raises(PneumaInputError, match=r"a surface body is read from a \.stl, \.obj, \.ply, \.off file"):
+    with pytest.raises(PneumaInputError, match=r"a surface is read from a \.stl, \.obj, \.ply, \.off file"):
         SurfaceBody(str(tmp_path / "part.step"), 1.0)
 
 

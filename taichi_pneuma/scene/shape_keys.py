@@ -8,7 +8,7 @@ from ..fem.meshfile import MeshBody, MeshSurface
 from ..fem.pneunet import PneuNet
 from ..fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 from ..fem.solids import AXES, Box, Cylinder, Ellipsoid, Extrusion, HalfCylinder, RoundedBox
-from ..fem.surface_import import Cavity, SurfaceBody
+from ..fem.surface_import import Cavity, SurfaceBody, SurfaceChamber
 from ..io.units import LENGTH
 from .fileformat import Key, Table, Tables, Variant, record
 
@@ -152,6 +152,12 @@ CHAMBER_SHAPES = Variant(
             Cavity,
             "a cavity of a surface body: the one enclosing the point inside",
             inside=Key(tuple, doc=f"{TRIPLE}, a point in the cavity", unit=LENGTH),
+        ),
+        "surface": record(
+            SurfaceChamber,
+            "a surface body's chamber drawn as a closed triangle surface of its own: the cavity it encloses",
+            file=Key(str, doc="the chamber's surface file, relative to the scene file"),
+            scale=Key(float, None, "the length of one file unit in the scene's units (none: the body's scale)"),
         ),
     },
     doc="the chamber's wall",
