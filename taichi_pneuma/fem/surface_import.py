@@ -19,9 +19,11 @@ Repair, before gmsh (the readers' resource guards first: meshfile.read_mesh):
     merged      vertices closer than MERGE_TOLERANCE times the surface's size are one (an exporter writes each
                 triangle's corners apart: an STL has no shared vertices)
     dropped     a triangle with a repeated corner or of no area; a triangle given twice, in either orientation, once
-    orientation a facet's orientation is not read (gmsh's classification does not need it): flipped facets are fine
     refused     an edge of one triangle only (a hole, naming how many and where the first is), an edge of more than
                 two (a surface through itself along an edge, or two shells sharing one)
+    oriented    then flipped facets are turned: each closed piece consistently, outward from what it encloses (gmsh's
+                reparametrisation of a curved patch refuses facets of mixed orientation; oriented()); a piece
+                that cannot be (one-sided: it passes through itself) is refused
 
 Shells: the surface's connected pieces. The one of the largest bounding box is the body's outer surface; every
 other one bounds a cavity, and each cavity must be a chamber's (a cavity no chamber names is refused, naming its
@@ -206,6 +208,7 @@ def repaired(points: np.ndarray, triangles: np.ndarray, path: str) -> Shells:
         f"surface file {quoted(path)} is not a solid's boundary: {len(crowded)} edges shared by more than two "
         f"triangles, the first at {np.round(vertices[crowded[0]].mean(axis=0), 6).tolist() if len(crowded) else []}",
     )
+    triangles = oriented(vertices, triangles, path)
     n = len(triangles)
     rows = np.repeat(np.arange(n), 3)
     adjacency = coo_matrix((np.ones(3 * n), (rows, triangles.reshape(-1))), shape=(n, len(vertices))).tocsr()
@@ -216,6 +219,45 @@ def repaired(points: np.ndarray, triangles: np.ndarray, path: str) -> Shells:
     rank[order] = np.arange(len(order))
     used, triangles = np.unique(triangles, return_inverse=True)
     return Shells(vertices[used], triangles.reshape(-1, 3), rank[shell])
+
+
+def oriented(vertices: np.ndarray, triangles: np.ndarray, path: str) -> np.ndarray:
+    """The triangles of a closed manifold surface turned so that each piece (triangles joined across edges) is
+    consistently oriented, outward from what it encloses: two triangles sharing an edge run along it in opposite
+    directions, and the piece's signed volume sum x0 . (x1 x x2) / 6 is positive. A breadth-first spanning tree of
+    the pieces (one virtual root joined to a triangle of each) carries the turns: a triangle turns if the tree edges
+    from it to the root hold an odd number of pairs that run their edge the same way (pointer doubling sums them). A
+    piece left inconsistent (a surface through itself, one-sided) is refused."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import breadth_first_order, connected_components
+
+    n = len(triangles)
+    directed = triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    _, key = np.unique(np.sort(directed, axis=1), axis=0, return_inverse=True)
+    order = np.argsort(key.reshape(-1), kind="stable")  # each edge's two triangles (closed, manifold) side by side
+    one, two = order[0::2], order[1::2]
+    same = directed[one, 0] == directed[two, 0]  # both run the edge the same way: one of the two must turn
+    t1, t2 = one // 3, two // 3
+    pieces, piece = connected_components(coo_matrix((np.ones(len(t1)), (t1, t2)), shape=(n, n)), directed=False)
+    roots = np.unique(piece, return_index=True)[1]
+    rows = np.concatenate([t1, t2, np.full(pieces, n)])
+    cols = np.concatenate([t2, t1, roots])
+    flags = coo_matrix((np.concatenate([same, same, np.zeros(pieces, bool)]) + 1.0, (rows, cols)), (n + 1, n + 1))
+    flags = flags.tocsr()
+    _, up = breadth_first_order(flags, n, directed=True, return_predecessors=True)
+    up[n] = n
+    turn = np.asarray(flags[up, np.arange(n + 1)]).ravel() == 2
+    while np.any(up != n):  # turn[v]: the parity from v up to up[v]; doubling the step until it reaches the root
+        turn, up = turn ^ turn[up], up[up]
+    require(
+        not np.any(same ^ turn[t1] ^ turn[t2]),
+        f"surface file {quoted(path)} cannot be oriented: a piece of it has no consistent inside (it passes through "
+        f"itself)",
+    )
+    triangles = np.where(turn[:n, None], triangles[:, ::-1], triangles)
+    x = vertices[triangles]
+    signed = np.bincount(piece, np.einsum("ij,ij->i", x[:, 0], np.cross(x[:, 1], x[:, 2])), pieces)
+    return np.where((signed[piece] < 0)[:, None], triangles[:, ::-1], triangles)
 
 
 @dataclass(frozen=True)
