@@ -215,10 +215,11 @@ def worker(tool: str, case: str, path: str) -> None:
     print("RESULT " + json.dumps(result), flush=True)
 
 
-def launch(python: str, tool: str, case: str, path: str) -> dict:
-    command = [python, os.path.abspath(__file__), "--worker", tool, case, path]
+def launch(python: str, tool: str, case: str, path: str, folder: str) -> dict:
+    """Run one case in a process of its own, in `folder` (fTetWild writes __tracked_surface.stl where it runs)."""
+    command = [python, os.path.abspath(__file__), "--worker", tool, case, os.path.abspath(path)]
     try:
-        done = subprocess.run(command, capture_output=True, text=True, timeout=TIMEOUT)
+        done = subprocess.run(command, capture_output=True, text=True, timeout=TIMEOUT, cwd=folder)
     except subprocess.TimeoutExpired:
         return {"outcome": f"did not finish in {TIMEOUT} s"}
     lines = [line for line in done.stdout.splitlines() if line.startswith("RESULT ")]
@@ -279,10 +280,10 @@ def main() -> int:
             if broken is not None:
                 path = os.path.join(folder, f"{len(results)}.stl")
                 write_stl(path, broken(read_stl(os.path.join(SCENES, f"{name}.stl"))))
-            results[case] = {"gmsh": launch(sys.executable, "gmsh", case, path)}
+            results[case] = {"gmsh": launch(sys.executable, "gmsh", case, path, folder)}
             print(f"{case}, gmsh: {results[case]['gmsh']}", flush=True)
             if found:
-                results[case]["fTetWild"] = launch(tetwild, "fTetWild", case, path)
+                results[case]["fTetWild"] = launch(tetwild, "fTetWild", case, path, folder)
                 print(f"{case}, fTetWild: {results[case]['fTetWild']}", flush=True)
     if not found:
         print(f"pytetwild does not import in {tetwild}: fTetWild left out (--tetwild-python names one that has it)")

@@ -21,9 +21,10 @@ Repair, before gmsh (the readers' resource guards first: meshfile.read_mesh):
     dropped     a triangle with a repeated corner or of no area; a triangle given twice, in either orientation, once
     refused     an edge of one triangle only (a hole, naming how many and where the first is), an edge of more than
                 two (a surface through itself along an edge, or two shells sharing one)
-    oriented    then flipped facets are turned: each closed piece consistently, outward from what it encloses (gmsh's
-                reparametrisation of a curved patch refuses facets of mixed orientation; oriented()); a piece
-                that cannot be (one-sided: it passes through itself) is refused
+    oriented    then flipped facets are turned: each closed piece consistently (gmsh's reparametrisation of a curved
+                patch refuses facets of mixed orientation; oriented()), out of the rubber as a solid's boundary
+                is (the outer shell outward, a cavity's wall into the cavity); a piece that cannot be (one-sided:
+                it passes through itself) is refused
 
 Shells: the surface's connected pieces. The one of the largest bounding box is the body's outer surface; every
 other one bounds a cavity, and each cavity must be a chamber's (a cavity no chamber names is refused, naming its
@@ -217,6 +218,7 @@ def repaired(points: np.ndarray, triangles: np.ndarray, path: str) -> Shells:
     order = np.argsort(extent)[::-1]  # the largest bounding box first: the outer surface
     rank = np.empty_like(order)
     rank[order] = np.arange(len(order))
+    triangles = np.where((rank[shell] > 0)[:, None], triangles[:, ::-1], triangles)  # a cavity's wall faces into it
     used, triangles = np.unique(triangles, return_inverse=True)
     return Shells(vertices[used], triangles.reshape(-1, 3), rank[shell])
 
