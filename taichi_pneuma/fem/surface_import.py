@@ -307,7 +307,8 @@ class SurfaceGeometry(Body):
     @cached_property
     def shells(self) -> Shells:
         """The files' triangles, scaled into the scene's units and repaired, joined: the body's shells, then one
-        shell of each SurfaceChamber's file (once: the size estimate and the mesh read them both)."""
+        shell of each SurfaceChamber's file, turned to face into its air as the body's cavities do (once: the size
+        estimate and the mesh read them both)."""
         parts = []
         for path, scale in self.files:
             points, triangles = read_surface(path)
@@ -317,7 +318,8 @@ class SurfaceGeometry(Body):
                 f"chamber surface file {quoted(path)} holds {parts[-1].count} closed surfaces; a chamber's file "
                 f"holds one (the air of one chamber)",
             )
-        return joined(parts)
+        own = [Shells(part.vertices, part.triangles[:, ::-1], part.shell) for part in parts[1:]]  # into the air
+        return joined(parts[:1] + own)
 
     def cavities(self, shells: Shells) -> dict[str, int]:
         """name -> the shell of its cavity, in the chambers' order: a SurfaceChamber's own shell (placed:
