@@ -47,6 +47,12 @@ RESULTS_PAGES = {
         ("benchmarks/cad_import.py", None),
         "python benchmarks/cad_import.py",
     ),
+    "surface_repair": (
+        "accuracy",
+        "Surface repair: gmsh with the project's repair against fTetWild",
+        ("benchmarks/surface_repair.py", None),
+        "python benchmarks/surface_repair.py --tetwild-python V/bin/python",
+    ),
     "reduced": (
         "performance",
         "A reduced-order model (POD + ECSW) against the full model",

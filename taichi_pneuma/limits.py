@@ -3,12 +3,12 @@ estimate, the limit and the command-line flag that raises it; before any work wh
 (fem/sizing.py estimates a scene's mesh), and by a budget the mesher and the terms keep to where it cannot.
 
 This module holds the limits, the measured costs they are counted in (BYTES_PER_TRIANGLE, BYTES_PER_TETRAHEDRON,
-BYTES_PER_PAIR, BYTES_PER_FIBER_ENTRY, READ_BYTES...: where each figure comes from is on the performance page,
-docs/performance.md, "The resource limits"), the budget (Budget: element_cap() for a mesher, check_mesh(),
-check_pairs() and check_entries() for what was made or is about to be; passed explicitly, Scene.build(budget) ->
-mesh(budget), terms(..., budget)) and the plain checks of counts (increments, fibres, obstacles, frame pixels:
-check_count) and of a file reader's memory (memory_bound, read_allowance). Budget() (library use that sets none)
-caps nothing.
+BYTES_PER_PAIR, BYTES_PER_FIBER_ENTRY, BYTES_PER_FACET, READ_BYTES...: where each figure comes from is on the
+performance page, docs/performance.md, "The resource limits"), the budget (Budget: element_cap() for a mesher,
+check_mesh(), check_pairs(), check_entries() and check_facets() for what was made or is about to be; passed
+explicitly, Scene.build(budget) -> mesh(budget), terms(..., budget)) and the plain checks of counts (increments,
+fibres, obstacles, frame pixels: check_count) and of a file reader's memory (memory_bound, read_allowance). Budget()
+(library use that sets none) caps nothing.
 """
 
 from __future__ import annotations
@@ -42,6 +42,11 @@ BYTES_PER_FIBER_ENTRY = 96
 # (docs/performance.md, "The resource limits")
 MAX_FIBERS = 100
 MAX_OBSTACLES = 400
+# a surface file's facet (a triangle of an STL; fem/surface_import.py) until gmsh has remeshed it: the peak resident
+# size of reading, repairing, classifying, reparametrising and meshing spheres of 43k, 173k and 691k facets at a
+# coarse size, above the process's before, was 1.70, 1.45 and 1.18 kB a facet (gmsh took 40-85 us a facet); 2 kB,
+# half a triangle's worth: the default limit passes 400,000 facets
+BYTES_PER_FACET = 2_000
 
 
 def refusal(what: str, triangles: float, limit: int | None) -> str:
@@ -91,6 +96,13 @@ class Budget:
         limit = self.triangles
         worth = entries * BYTES_PER_FIBER_ENTRY / BYTES_PER_TRIANGLE
         require(limit is None or worth <= limit, refusal(f"{what} would hold {entries} Hessian entries", worth, limit))
+
+    def check_facets(self, facets: int, what: str) -> None:
+        """Refuse a surface (what: its files) of `facets` triangles past the budget's memory before gmsh reads it,
+        BYTES_PER_FACET each."""
+        limit = self.triangles
+        worth = facets * BYTES_PER_FACET / BYTES_PER_TRIANGLE
+        require(limit is None or worth <= limit, refusal(f"{what} has {facets} facets", worth, limit))
 
 
 def wall_pairs(points: list[int]) -> int:

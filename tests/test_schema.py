@@ -22,6 +22,7 @@ from taichi_pneuma.fem.meshfile import MeshBody, MeshGeometry, MeshSurface
 from taichi_pneuma.fem.planar import Geometry
 from taichi_pneuma.fem.shapes import Ellipse, Polygon, Rectangle, RectangleUnion, RoundedRectangle
 from taichi_pneuma.fem.supports import SIDES, PointSet, Roller
+from taichi_pneuma.fem.surface_import import SurfaceChamber
 from taichi_pneuma.io import registry
 from taichi_pneuma.io.output import FORMULA
 from taichi_pneuma.io.units import LENGTH, UNITLESS, UNITS
@@ -466,6 +467,9 @@ def covering_scenes() -> list[Scene]:
     solid = dataclasses.replace(core, geometry=mesh_body)
     nodal = dataclasses.replace(silicones[0], volumetric="nodal")  # linear elements with nodal volumes
     cad = [tp.load_scene("fiber_bending_step"), tp.load_scene("pneunet_stl")]  # a STEP part, a surface's cavities
+    own = (("c6", SurfaceChamber("c6.stl", 1.0)),)  # a chamber drawn as a surface file of its own
+    chambered = dataclasses.replace(cad[1].geometry, chambers=own)
+    cad.append(dataclasses.replace(cad[1], geometry=chambered, controls=cad[1].controls[:1]))
     return [every, boxed, polygon, *kinds, *silicones, nodal, solid, *shaped_scenes(core), *cad]
 
 

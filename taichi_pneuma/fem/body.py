@@ -60,6 +60,11 @@ class Body(metaclass=abc.ABCMeta):
     def size_estimate(self) -> SizeEstimate:
         """The mesh mesh() would make, estimated without making it."""
 
+    def check_facets(self, budget: Budget) -> None:
+        """Refuse surface files whose triangles, as read, pass the budget before meshing reads them further
+        (limits.Budget.check_facets; a surface body's, fem/surface_import.py: no other body has any)."""
+        return None
+
     @abc.abstractmethod
     def mesh_values(self) -> dict:
         """Its [mesh] table's values by key (None: not written), as a scene file gives them."""

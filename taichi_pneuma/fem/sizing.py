@@ -42,10 +42,12 @@ def check_scene(
 
 
 def check_mesh_size(scene, max_elements: int) -> None:
-    """The geometry's size estimate (Body.size_estimate), each element counted as its family's weight in linear
-    elements and a wall's self-contact pairs (2D) as BYTES_PER_PAIR / BYTES_PER_TRIANGLE triangles; the memory adds
-    the stored states (module docstring)."""
+    """A surface body's facets against the limit first (Body.check_facets); then the geometry's size estimate
+    (Body.size_estimate), each element counted as its family's weight in linear elements and a wall's self-contact
+    pairs (2D) as BYTES_PER_PAIR / BYTES_PER_TRIANGLE triangles; the memory adds the stored states (module
+    docstring)."""
     geometry = scene.geometry
+    geometry.check_facets(limits.Budget(max_elements))
     estimate = geometry.size_estimate()
     family = geometry.family
     linear = estimate.elements * family.weight

@@ -3,16 +3,28 @@ filled with tetrahedra by gmsh.
 
 A surface file is triangles only: no unit (SurfaceBody.scale, required, is the length of one file unit in the
 scene's units: 1 for a file in the scene's own unit, 0.001 for a file in mm read into a scene in m), no solids and no
-names. Its chambers are its cavities: a Cavity names the one that encloses its `inside` point.
+names. Its chambers are its cavities: a Cavity names the one that encloses its `inside` point. A chamber may also be a
+closed surface file of its own (SurfaceChamber: the air it holds, drawn as a part of its own), read at its own scale or
+the body's, repaired as the body's file is and added to the body's shells as one more cavity: it must be one closed
+surface, inside the body's outer shell and in no other cavity, enclosing none, and apart from every other surface
+(surface_clearance.py: a gap of more than TOUCH_TOLERANCE times the body's size, else it touches or crosses).
+
+Size: a file is read within meshfile's limits (MAX_MESH_BYTES, a memory bound); its facets are then counted against
+the budget before anything else reads them (limits.Budget.check_facets: gmsh's classification and reparametrisation
+hold about BYTES_PER_FACET a facet, and take about 50 us each), so a huge export is refused in a line, not meshed for
+minutes.
 
 Repair, before gmsh (the readers' resource guards first: meshfile.read_mesh):
 
     merged      vertices closer than MERGE_TOLERANCE times the surface's size are one (an exporter writes each
                 triangle's corners apart: an STL has no shared vertices)
     dropped     a triangle with a repeated corner or of no area; a triangle given twice, in either orientation, once
-    orientation a facet's orientation is not read (gmsh's classification does not need it): flipped facets are fine
     refused     an edge of one triangle only (a hole, naming how many and where the first is), an edge of more than
                 two (a surface through itself along an edge, or two shells sharing one)
+    oriented    then flipped facets are turned: each closed piece consistently (gmsh's reparametrisation of a curved
+                patch refuses facets of mixed orientation; oriented()), out of the rubber as a solid's boundary
+                is (the outer shell outward, a cavity's wall into the cavity); a piece that cannot be (one-sided:
+                it passes through itself) is refused
 
 Shells: the surface's connected pieces. The one of the largest bounding box is the body's outer surface; every
 other one bounds a cavity, and each cavity must be a chamber's (a cavity no chamber names is refused, naming its
@@ -49,11 +61,22 @@ from .mesh import Mesh
 from .meshfile import TRIANGLES, cells_of, read_mesh
 from .solids import TRIPLE
 from .supports import PointSet
+from .surface_clearance import closest_approach, crosses
 from .tetmesh import check_order, tet_mesh
 
 SURFACE_SUFFIXES = (".stl", ".obj", ".ply", ".off")
 MERGE_TOLERANCE = 1e-9
+TOUCH_TOLERANCE = 1e-6  # a chamber's own surface closer than this times the body's size to another surface touches it
 CLASSIFY_DEGREES = 40.0
+
+
+def surface_file(file) -> str:
+    """The absolute path of a surface file (refused unless of SURFACE_SUFFIXES)."""
+    require(
+        isinstance(file, str) and file.lower().endswith(SURFACE_SUFFIXES),
+        f"file = {quoted(file)}: a surface is read from a {', '.join(SURFACE_SUFFIXES)} file",
+    )
+    return os.path.abspath(file)
 
 
 @dataclass(frozen=True)
@@ -66,12 +89,25 @@ class SurfaceBody:
     name = "surface"
 
     def __post_init__(self):
-        require(
-            isinstance(self.file, str) and self.file.lower().endswith(SURFACE_SUFFIXES),
-            f"file = {quoted(self.file)}: a surface body is read from a {', '.join(SURFACE_SUFFIXES)} file",
-        )
+        object.__setattr__(self, "file", surface_file(self.file))
         require(require_finite("scale", self.scale) > 0, f"scale = {self.scale!r} must be > 0")
-        object.__setattr__(self, "file", os.path.abspath(self.file))
+
+
+@dataclass(frozen=True)
+class SurfaceChamber:
+    """A chamber of a surface body drawn as a closed surface file of its own (module docstring): file (as
+    SurfaceBody's) and scale (the length of one file unit in the scene's units; None: the body's)."""
+
+    file: str = key(doc="the chamber's surface file, relative to the scene file")
+    scale: float | None = key(None, "the length of one file unit in the scene's units (none: the body's scale)")
+    name = "surface"
+
+    def __post_init__(self):
+        object.__setattr__(self, "file", surface_file(self.file))
+        require(
+            self.scale is None or require_finite("scale", self.scale) > 0,
+            f"scale = {self.scale!r} must be > 0 (or left out: the body's)",
+        )
 
 
 @dataclass(frozen=True)
@@ -108,22 +144,42 @@ class Shells:
         shell[self.triangles] = self.shell[:, None]
         return shell
 
+    def facets(self, k: int) -> np.ndarray:
+        """The triangles of shell k as (t, 3, 3) corners."""
+        return self.vertices[self.triangles[self.shell == k]]
+
     def encloses(self, k: int, point) -> bool:
-        """Whether shell k encloses the point: a ray along a slightly skew direction crosses it an odd number of
-        times (Moller-Trumbore on every triangle)."""
-        x = self.vertices[self.triangles[self.shell == k]]
+        """Whether shell k encloses the point: a ray along a slightly skew direction (a segment from the point out
+        past the shell's bounding box) crosses it an odd number of times (Moller-Trumbore on every triangle)."""
+        x = self.facets(k)
+        start = np.asarray(point, dtype=np.float64)
         direction = np.array([1.0, 1e-3 * math.sqrt(2), 1e-3 * math.sqrt(3)])
-        e1, e2 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
-        p = np.cross(direction, e2)
-        det = np.einsum("ij,ij->i", e1, p)
-        ok = np.abs(det) > 1e-300
-        t0 = np.asarray(point, dtype=np.float64) - x[:, 0]
-        u = np.einsum("ij,ij->i", t0, p) / np.where(ok, det, 1.0)
-        q = np.cross(t0, e1)
-        v = (q @ direction) / np.where(ok, det, 1.0)
-        t = np.einsum("ij,ij->i", e2, q) / np.where(ok, det, 1.0)
-        hits = ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+        reach = 2 * float(np.linalg.norm(np.ptp(x.reshape(-1, 3), axis=0))) + float(np.abs(x - start).max())
+        count = len(x)
+        hits = crosses(np.tile(start, (count, 1)), np.tile(start + reach * direction, (count, 1)), x)
         return bool(np.count_nonzero(hits) % 2)
+
+    def where(self, k: int) -> list[float]:
+        """A place to name shell k by in a message: the mean of its triangles' corners."""
+        return np.round(self.facets(k).reshape(-1, 3).mean(axis=0), 6).tolist()
+
+
+def joined(parts: list[Shells]) -> Shells:
+    """The shells of several repaired surfaces as one, in order (the first's outer shell stays shell 0)."""
+    offsets = np.cumsum([0] + [len(p.vertices) for p in parts])
+    counts = np.cumsum([0] + [p.count for p in parts])
+    return Shells(
+        np.concatenate([p.vertices for p in parts]),
+        np.concatenate([p.triangles + offsets[i] for i, p in enumerate(parts)]),
+        np.concatenate([p.shell + counts[i] for i, p in enumerate(parts)]),
+    )
+
+
+def read_surface(path: str) -> tuple[np.ndarray, np.ndarray]:
+    """A surface file's points (n, 3) and triangles (m, 3), as read (meshfile.read_mesh's limits and memo)."""
+    source = read_mesh(path)
+    triangles, _ = cells_of(source, TRIANGLES, None, path)
+    return np.asarray(source.points, dtype=np.float64)[:, :3], triangles
 
 
 def repaired(points: np.ndarray, triangles: np.ndarray, path: str) -> Shells:
@@ -159,6 +215,7 @@ def repaired(points: np.ndarray, triangles: np.ndarray, path: str) -> Shells:
         f"surface file {quoted(path)} is not a solid's boundary: {len(crowded)} edges shared by more than two "
         f"triangles, the first at {np.round(vertices[crowded[0]].mean(axis=0), 6).tolist() if len(crowded) else []}",
     )
+    triangles = oriented(vertices, triangles, path)
     n = len(triangles)
     rows = np.repeat(np.arange(n), 3)
     adjacency = coo_matrix((np.ones(3 * n), (rows, triangles.reshape(-1))), shape=(n, len(vertices))).tocsr()
@@ -167,14 +224,54 @@ def repaired(points: np.ndarray, triangles: np.ndarray, path: str) -> Shells:
     order = np.argsort(extent)[::-1]  # the largest bounding box first: the outer surface
     rank = np.empty_like(order)
     rank[order] = np.arange(len(order))
+    triangles = np.where((rank[shell] > 0)[:, None], triangles[:, ::-1], triangles)  # a cavity's wall faces into it
     used, triangles = np.unique(triangles, return_inverse=True)
     return Shells(vertices[used], triangles.reshape(-1, 3), rank[shell])
 
 
+def oriented(vertices: np.ndarray, triangles: np.ndarray, path: str) -> np.ndarray:
+    """The triangles of a closed manifold surface turned so that each piece (triangles joined across edges) is
+    consistently oriented, outward from what it encloses: two triangles sharing an edge run along it in opposite
+    directions, and the piece's signed volume sum x0 . (x1 x x2) / 6 is positive. A breadth-first spanning tree of
+    the pieces (one virtual root joined to a triangle of each) carries the turns: a triangle turns if the tree edges
+    from it to the root hold an odd number of pairs that run their edge the same way (pointer doubling sums them). A
+    piece left inconsistent (a surface through itself, one-sided) is refused."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import breadth_first_order, connected_components
+
+    n = len(triangles)
+    directed = triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    _, key = np.unique(np.sort(directed, axis=1), axis=0, return_inverse=True)
+    order = np.argsort(key.reshape(-1), kind="stable")  # each edge's two triangles (closed, manifold) side by side
+    one, two = order[0::2], order[1::2]
+    same = directed[one, 0] == directed[two, 0]  # both run the edge the same way: one of the two must turn
+    t1, t2 = one // 3, two // 3
+    pieces, piece = connected_components(coo_matrix((np.ones(len(t1)), (t1, t2)), shape=(n, n)), directed=False)
+    roots = np.unique(piece, return_index=True)[1]
+    rows = np.concatenate([t1, t2, np.full(pieces, n)])
+    cols = np.concatenate([t2, t1, roots])
+    flags = coo_matrix((np.concatenate([same, same, np.zeros(pieces, bool)]) + 1.0, (rows, cols)), (n + 1, n + 1))
+    flags = flags.tocsr()
+    _, up = breadth_first_order(flags, n, directed=True, return_predecessors=True)
+    up[n] = n
+    turn = np.asarray(flags[up, np.arange(n + 1)]).ravel() == 2
+    while np.any(up != n):  # turn[v]: the parity from v up to up[v]; doubling the step until it reaches the root
+        turn, up = turn ^ turn[up], up[up]
+    require(
+        not np.any(same ^ turn[t1] ^ turn[t2]),
+        f"surface file {quoted(path)} cannot be oriented: a piece of it has no consistent inside (it passes through "
+        f"itself)",
+    )
+    triangles = np.where(turn[:n, None], triangles[:, ::-1], triangles)
+    x = vertices[triangles]
+    signed = np.bincount(piece, np.einsum("ij,ij->i", x[:, 0], np.cross(x[:, 1], x[:, 2])), pieces)
+    return np.where((signed[piece] < 0)[:, None], triangles[:, ::-1], triangles)
+
+
 @dataclass(frozen=True)
 class SurfaceGeometry(Body):
-    """A 3D body from a surface file (module docstring): the body, its chambers (name, Cavity) in order, the mesh
-    sizes, the element order, the clamp, tip and rollers (as planar.Geometry's)."""
+    """A 3D body from a surface file (module docstring): the body, its chambers (name, Cavity or SurfaceChamber) in
+    order, the mesh sizes, the element order, the clamp, tip and rollers (as planar.Geometry's)."""
 
     body: SurfaceBody
     chambers: tuple
@@ -195,22 +292,51 @@ class SurfaceGeometry(Body):
         )
         for name, shape in self.chambers:
             require(
-                isinstance(shape, Cavity),
-                f'chamber {name!r}: a surface body\'s chambers are its cavities (shape = "cavity", inside = [x, y, z])',
+                isinstance(shape, Cavity | SurfaceChamber),
+                f'chamber {name!r}: a surface body\'s chambers are its cavities (shape = "cavity", inside = [x, y, z]) '
+                f'or closed surfaces of their own (shape = "surface", file = ...)',
             )
+
+    @property
+    def files(self) -> list[tuple[str, float]]:
+        """The surface files read, each with its scale: the body's, then each SurfaceChamber's in order."""
+        own = [shape for _, shape in self.chambers if isinstance(shape, SurfaceChamber)]
+        return [(self.body.file, self.body.scale)] + [
+            (shape.file, self.body.scale if shape.scale is None else shape.scale) for shape in own
+        ]
+
+    def check_facets(self, budget: Budget) -> None:
+        """Refuse its surface files past the budget by their triangles, as read (before repair)."""
+        facets = sum(len(read_surface(path)[1]) for path, _ in self.files)
+        budget.check_facets(facets, "the surface of " + " and ".join(quoted(path) for path, _ in self.files))
 
     @cached_property
     def shells(self) -> Shells:
-        """The file's triangles, scaled into the scene's units and repaired (once: the size estimate and the mesh
-        read them both)."""
-        source = read_mesh(self.body.file)
-        triangles, _ = cells_of(source, TRIANGLES, None, self.body.file)
-        return repaired(np.asarray(source.points, dtype=np.float64)[:, :3] * self.body.scale, triangles, self.body.file)
+        """The files' triangles, scaled into the scene's units and repaired, joined: the body's shells, then one
+        shell of each SurfaceChamber's file, turned to face into its air as the body's cavities do (once: the size
+        estimate and the mesh read them both)."""
+        parts = []
+        for path, scale in self.files:
+            points, triangles = read_surface(path)
+            parts.append(repaired(points * scale, triangles, path))
+            require(
+                len(parts) == 1 or parts[-1].count == 1,
+                f"chamber surface file {quoted(path)} holds {parts[-1].count} closed surfaces; a chamber's file "
+                f"holds one (the air of one chamber)",
+            )
+        own = [Shells(part.vertices, part.triangles[:, ::-1], part.shell) for part in parts[1:]]  # into the air
+        return joined(parts[:1] + own)
 
     def cavities(self, shells: Shells) -> dict[str, int]:
-        """name -> the shell of its cavity; every cavity a chamber's (module docstring)."""
-        found: dict[str, int] = {}
+        """name -> the shell of its cavity, in the chambers' order: a SurfaceChamber's own shell (placed:
+        check_placed), a Cavity's the one around its point; every cavity a chamber's (module docstring)."""
+        own = [name for name, shape in self.chambers if isinstance(shape, SurfaceChamber)]
+        first = shells.count - len(own)  # the first chamber file's shell
+        found = {name: first + i for i, name in enumerate(own)}
+        self.check_placed(shells, found, first)
         for name, cavity in self.chambers:
+            if not isinstance(cavity, Cavity):
+                continue
             inside = [k for k in range(1, shells.count) if shells.encloses(k, cavity.inside)]
             require(
                 len(inside) == 1, f"chamber {name!r}: inside = {list(cavity.inside)} lies in no cavity of the surface"
@@ -220,14 +346,41 @@ class SurfaceGeometry(Body):
                 not taken, f"chamber {name!r}: its point lies in the cavity of chamber {taken[0] if taken else ''!r}"
             )
             found[name] = inside[0]
-        for k in range(1, shells.count):
-            where = shells.vertices[shells.triangles[shells.shell == k]].reshape(-1, 3).mean(axis=0)
+        for k in range(1, first):
             require(
                 k in found.values(),
-                f"the surface encloses {shells.count - 1} cavities; the one about {np.round(where, 6).tolist()} is no "
-                f"chamber's (add a [[chambers]] table with inside = a point in it)",
+                f"the surface encloses {first - 1} cavities; the one about {shells.where(k)} is no chamber's (add a "
+                f"[[chambers]] table with inside = a point in it)",
             )
-        return found
+        return {name: found[name] for name, _ in self.chambers}  # in the chambers' order: the mesh's walls keep it
+
+    def check_placed(self, shells: Shells, own: dict[str, int], first: int) -> None:
+        """Refuse a chamber file's shell (own: name -> shell, from `first` on) that comes within TOUCH_TOLERANCE
+        times the body's size of another shell (it touches or crosses it), lies outside the body's outer shell, in
+        another cavity, or around one (the shells apart, one corner of each tells which encloses which)."""
+        size = float(np.ptp(shells.facets(0).reshape(-1, 3), axis=0).max())
+        names = {k: name for name, k in own.items()}
+        for name, k in own.items():
+            wall = shells.facets(k)
+            for j in range(k):
+                other = (
+                    "the body's outer surface"
+                    if j == 0
+                    else f"the body's cavity about {shells.where(j)}"
+                    if j < first
+                    else f"the cavity of chamber {names[j]!r}"
+                )
+                met = closest_approach(wall, shells.facets(j), TOUCH_TOLERANCE * size)
+                require(
+                    met is None,
+                    f"chamber {name!r}: its surface touches or crosses {other} at "
+                    f"{np.round(met[1], 6).tolist() if met else []} (a chamber's surface lies inside the body, apart "
+                    f"from every other surface)",
+                )
+                corner, others = wall[0, 0], shells.facets(j)[0, 0]
+                require(j > 0 or shells.encloses(0, corner), f"chamber {name!r}: its surface lies outside the body")
+                require(j == 0 or not shells.encloses(j, corner), f"chamber {name!r}: its surface lies inside {other}")
+                require(j == 0 or not shells.encloses(k, others), f"chamber {name!r}: its surface encloses {other}")
 
     @property
     def mesh_sizes(self) -> MeshSizes:
@@ -252,7 +405,8 @@ class SurfaceGeometry(Body):
         return {"order": self.order, **dataclasses.asdict(self.sizes)}
 
     def mesh(self, budget: Budget = Budget()) -> Mesh:
-        """Repair, remesh and fill with tetrahedra (module docstring), under the budget."""
+        """Repair, remesh and fill with tetrahedra (module docstring), under the budget (its facets counted first)."""
+        self.check_facets(budget)
         shells = self.shells
         cavities = self.cavities(shells)
         cap = budget.element_cap(self.family.weight)

@@ -10,7 +10,7 @@ from ..fem.meshfile import MeshBody, MeshSurface
 from ..fem.pneunet import PneuNet
 from ..fem.shapes import PLANAR_BODIES, PLANAR_CHAMBERS
 from ..fem.solids import SOLIDS, Extrusion
-from ..fem.surface_import import Cavity, SurfaceBody
+from ..fem.surface_import import Cavity, SurfaceBody, SurfaceChamber
 from .fileformat import Table, Variant, fields_table
 
 BOX = "[x0, y0, x1, y1]"
@@ -49,7 +49,7 @@ CHAMBER_SHAPES = Variant(
         **by_name(MeshSurface),
         **SOLIDS,
         Extrusion.name: extrusion(PLANAR_CHAMBERS, "chamber"),
-        **by_name(StepPart, Cavity),
+        **by_name(StepPart, Cavity, SurfaceChamber),
     },
     doc="the chamber's wall",
 )
