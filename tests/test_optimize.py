@@ -143,6 +143,22 @@ def test_the_sampler_s_batches_stop_where_the_refinement_begins(tmp_path):
     assert [bool(t.user_attrs.get("refine")) for t in trials] == [False] * 5 + [True] * 5
 
 
+def test_a_study_continued_to_more_trials_refines_afresh_from_its_best_design(tmp_path):
+    """10 trials (the last 4 refining), then the same study to 16: 2 more of TPE, then a new refinement of 4 from
+    the best of the 12 designs before it (the first refinement's included)."""
+    import optuna
+
+    common = dict(minimize="tip_rotation", refine=4, out=tmp_path, evaluate=bowl)
+    tp.optimize(BEAM, BOWL, trials=10, **common)
+    report = tp.optimize(BEAM, BOWL, trials=16, **common)
+    study = optuna.load_study(study_name="optimize", storage=f"sqlite:///{tmp_path / 'optimize.db'}")
+    refining = [bool(t.user_attrs.get("refine")) for t in study.get_trials()]
+    assert refining == [False] * 6 + [True] * 4 + [False] * 2 + [True] * 4
+    best_of_12 = min(report.rows[:12], key=lambda r: r["objective_0"])
+    assert study.user_attrs["refine_16"]["start"] == {CY: best_of_12[CY], "material.E": best_of_12["material.E"]}
+    assert report.best["objective_0"] <= best_of_12["objective_0"]
+
+
 def test_two_objectives_give_a_pareto_front_of_designs_none_dominates(tmp_path):
     """f1 = the bowl, f2 = tip_dy = cy - E / 1e5 (maximised): the front trades the two; none of its designs is
     dominated by any evaluated design."""

@@ -355,16 +355,18 @@ class Optimization:
         return OptimizationReport(best, pareto, rows, ran, lost, seconds, files)
 
     def refinement(self, study, evaluate, budget: int) -> Refinement | None:
-        """The local refinement (study/refine.py) from the best of the sampler's designs, at most `budget` new
-        evaluations; its start and its failed designs' score are stored in the study the first time, so a resumed
-        study replays the same refinement."""
+        """The local refinement (study/refine.py) from the best design so far, at most `budget` new evaluations;
+        its start and its failed designs' score are stored in the study the first time, under the study's number
+        of trials, so a resumed study replays the same refinement, and one continued to more trials refines
+        afresh from the best design after its further sampling (the earlier refinement's designs looked up)."""
         sign = 1.0 if self.goals.directions[0] == "minimize" else -1.0
         rows = self.rows(study)
-        if "refine_start" not in study.user_attrs:
+        stored = f"refine_{self.trials}"
+        if stored not in study.user_attrs:
             start = start_of(rows, sign)
-            study.set_user_attr("refine_start", None if start is None else {k: start[k] for k in self.keys})
-            study.set_user_attr("refine_worst", worst_of(rows, sign))
-        start, worst = study.user_attrs["refine_start"], study.user_attrs["refine_worst"]
+            chosen = None if start is None else {k: start[k] for k in self.keys}
+            study.set_user_attr(stored, {"start": chosen, "worst": worst_of(rows, sign)})
+        start, worst = study.user_attrs[stored]["start"], study.user_attrs[stored]["worst"]
         if start is None:
             return None  # no design has an objective value to start from: the sampler goes on
         reals = [a.key for a in self.axes if a.is_range and not a.integer]
