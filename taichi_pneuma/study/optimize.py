@@ -44,7 +44,7 @@ from .sweep import DEFAULT_OPTIONS, machine, versions
 from .table import is_number, write_table
 from .task import RunOptions, Task
 from .template import SceneTemplate
-from .vary import Axis, check_axes, parse_vary
+from .vary import Axis, check_axes, parse_vary, require_distinct_keys
 
 SAMPLERS = ("tpe", "cmaes", "nsga2")
 MAX_TRIALS = 100_000
@@ -67,7 +67,7 @@ def check_variables(base: Scene, axes: list[Axis], template: SceneTemplate | Non
                 f"{where}: a list of choices holds numbers, words or true/false",
             )
     if template is not None:
-        require(len({a.key for a in axes}) == len(axes), "a key is varied twice")
+        require_distinct_keys(axes)
         template.check([a.key for a in axes])
         return axes
     return check_axes(base, axes)

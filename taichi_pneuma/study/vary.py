@@ -150,6 +150,10 @@ def lookup(data: dict, key: str):
     return node
 
 
+def require_distinct_keys(axes: list[Axis]) -> None:
+    require(len({a.key for a in axes}) == len(axes), "a key is varied twice")
+
+
 def check_axes(base: Scene, axes: list[Axis]) -> list[Axis]:
     """The axes checked against the scene, numbers made floats where the scene holds a float (so
     cy=0:1:3 is 0.0, 0.5, 1.0, not integers). Refuses a key the scene does not have and a value of the
@@ -158,7 +162,7 @@ def check_axes(base: Scene, axes: list[Axis]) -> list[Axis]:
     A key present in the base scene's data takes values of its kind; a key that is not (a new effect's
     table, say) must be accepted by the scene reader for at least one of its values. Values that make
     an invalid scene (a chamber outside the body) are not refused here: those runs record the error."""
-    require(len({a.key for a in axes}) == len(axes), "a key is varied twice")
+    require_distinct_keys(axes)
     data, checked = scene_data(base), []
     for axis in axes:
         values = [axis.low, axis.high] if axis.is_range else list(axis.items)
