@@ -1,6 +1,6 @@
 """The local refinement that ends an optimisation (Optimization, --refine N): SciPy's COBYQA, a derivative-free
 trust-region method on quadratic models that keeps to bounds and nonlinear inequality constraints, started from the
-best design the sampler found.
+best design found so far.
 
 The range variables are scaled to x in [0, 1]^n (x_k = (v_k - low_k) / (high_k - low_k)); integer and list
 variables keep the start design's values. COBYQA minimises
